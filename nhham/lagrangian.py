@@ -1,0 +1,346 @@
+"""The Lagrangian side of the paper (Sections 2 and 4): geometry on TQ.
+
+Conventions are those of ``DESIGN.md`` §2, restated where each object is
+defined. Vectors on TQ are sympy column matrices of length 2n in the order
+(q^1..q^n, v^1..v^n); (1,1) tensors are 2n x 2n matrices acting on them; a
+2-form is the antisymmetric matrix Omega with omega(X, Y) = X^T Omega Y.
+
+Nothing is computed before it is asked for. The symbolic inverse of W is
+never written out: every product W^{-1} b is a linear solve, and the
+multipliers come from a solve with the m x m matrix C.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cached_property
+
+import sympy as sp
+
+from .onmanifold import Decision, Submanifold
+from .symbols import acceleration_symbol, multiplier_symbol
+
+__all__ = ["LagrangianGeometry", "lagrangian_geometry", "DynamicsIngredients"]
+
+
+@dataclass(frozen=True)
+class DynamicsIngredients:
+    """The pieces from which the constrained accelerations are solved.
+
+    With accelerations a and multipliers lambda, the constrained
+    Euler-Lagrange equations are the saddle-point system::
+
+        [ W   mu^T ] [ a      ]   [ forcing ]
+        [ mu  0    ] [ lambda ] = [ -drift  ]
+
+    Attributes
+    ----------
+    W : sympy.Matrix, shape (n, n)
+        Hessian d2L/dv^A dv^B.
+    forcing : sympy.Matrix, shape (n, 1)
+        F_B = dL/dq^B - (d2L/dq^C dv^B) v^C.
+    mu : sympy.Matrix, shape (m, n)
+        Constraint one-forms.
+    drift : sympy.Matrix, shape (m, 1)
+        (d phi_i / d q^A) v^A, so that xi(phi_i) = drift_i + mu_i . a.
+    """
+
+    W: sp.Matrix
+    forcing: sp.Matrix
+    mu: sp.Matrix
+    drift: sp.Matrix
+
+
+def lagrangian_geometry(system, precision: int | None = None, samples: int = 6,
+                        seed: int = 1996) -> "LagrangianGeometry":
+    """The Lagrangian-side objects of ``system``, computed lazily.
+
+    Parameters
+    ----------
+    system : nhham.System
+    precision : int or None, optional
+        Precision of sampled "on M_1" decisions (None: float64; an integer:
+        mpmath digits).
+    samples, seed : int, optional
+        Number and seed of the sample points of sampled decisions.
+    """
+    return LagrangianGeometry(system, precision=precision, samples=samples, seed=seed)
+
+
+class LagrangianGeometry:
+    """Lagrangian-side geometry of a constrained system (frozen, lazy).
+
+    Every attribute is computed on first access and then kept.
+    """
+
+    def __init__(self, system, precision=None, samples=6, seed=1996):
+        object.__setattr__(self, "system", system)
+        object.__setattr__(self, "precision", precision)
+        object.__setattr__(self, "samples", samples)
+        object.__setattr__(self, "seed", seed)
+
+    def __setattr__(self, key, value):
+        raise AttributeError(f"LagrangianGeometry is frozen; cannot set {key!r}")
+
+    def __repr__(self):
+        return f"LagrangianGeometry({self.system!r})"
+
+    # ------------------------------------------------------------ basics
+    @property
+    def n(self):
+        return self.system.n
+
+    @property
+    def m(self):
+        return self.system.m
+
+    @cached_property
+    def _q(self):
+        return sp.Matrix(self.system.coordinates)
+
+    @cached_property
+    def _v(self):
+        return sp.Matrix(self.system.velocities)
+
+    @cached_property
+    def momenta(self) -> sp.Matrix:
+        """Fibre derivative p_A = dL/dv^A, shape (n, 1)."""
+        L = self.system.lagrangian
+        return sp.Matrix([sp.diff(L, v) for v in self.system.velocities])
+
+    @cached_property
+    def energy(self) -> sp.Expr:
+        """E_L = v^A dL/dv^A - L."""
+        return sp.expand((self._v.T * self.momenta)[0] - self.system.lagrangian)
+
+    @cached_property
+    def hessian(self) -> sp.Matrix:
+        """W_AB = d2L/dv^A dv^B, shape (n, n)."""
+        return self.system.hessian
+
+    @cached_property
+    def mixed_hessian(self) -> sp.Matrix:
+        """M_AB = d2L/dv^A dq^B = d p_A / d q^B, shape (n, n)."""
+        return self.momenta.jacobian(self.system.coordinates)
+
+    @cached_property
+    def poincare_cartan_1form(self) -> sp.Matrix:
+        """alpha_L = J*(dL) = (dL/dv^A) dq^A as a 2n-vector of coefficients."""
+        return sp.Matrix.vstack(self.momenta, sp.zeros(self.n, 1))
+
+    @cached_property
+    def poincare_cartan_2form(self) -> sp.Matrix:
+        """omega_L = -d alpha_L = dq^A ^ d(dL/dv^A) as a 2n x 2n matrix Omega.
+
+        Blocks: Omega_qq = M - M^T, Omega_qv = W, Omega_vq = -W, Omega_vv = 0,
+        with omega(X, Y) = X^T Omega Y.
+        """
+        M, W, n = self.mixed_hessian, self.hessian, self.n
+        return sp.Matrix(sp.BlockMatrix([[M - M.T, W], [-W, sp.zeros(n, n)]]))
+
+    @cached_property
+    def liouville_field(self) -> sp.Matrix:
+        """Liouville field C = v^A d/dv^A as a 2n-vector."""
+        return sp.Matrix.vstack(sp.zeros(self.n, 1), self._v)
+
+    @cached_property
+    def almost_tangent_structure(self) -> sp.Matrix:
+        """J = d/dv^A (x) dq^A as a 2n x 2n matrix (maps d/dq^A to d/dv^A)."""
+        n = self.n
+        return sp.Matrix(sp.BlockMatrix([[sp.zeros(n, n), sp.zeros(n, n)],
+                                         [sp.eye(n), sp.zeros(n, n)]]))
+
+    # --------------------------------------------------------- solves with W
+    @cached_property
+    def _W_is_diagonal(self):
+        return self.hessian.is_diagonal()
+
+    def _solve_W(self, rhs: sp.Matrix) -> sp.Matrix:
+        """W^{-1} rhs by a linear solve (no symbolic inverse)."""
+        W = self.hessian
+        if self._W_is_diagonal:
+            return sp.Matrix(rhs.rows, rhs.cols, lambda i, j: rhs[i, j] / W[i, i])
+        return W.LUsolve(rhs).applyfunc(sp.cancel)
+
+    @cached_property
+    def forcing(self) -> sp.Matrix:
+        """F_B = dL/dq^B - (d2L/dq^C dv^B) v^C, shape (n, 1)."""
+        L = self.system.lagrangian
+        dLdq = sp.Matrix([sp.diff(L, q) for q in self.system.coordinates])
+        return dLdq - self.mixed_hessian * self._v
+
+    @cached_property
+    def ingredients(self) -> DynamicsIngredients:
+        """W, forcing, mu and drift: what numeric evaluation solves with."""
+        sysm = self.system
+        drift = sp.Matrix([
+            sum((sp.diff(f, q) * v for q, v in zip(sysm.coordinates, sysm.velocities)), sp.S.Zero)
+            for f in sysm.phi
+        ]) if sysm.phi else sp.zeros(0, 1)
+        return DynamicsIngredients(self.hessian, self.forcing, sysm.mu, drift)
+
+    # --------------------------------------------------- Euler-Lagrange field
+    @cached_property
+    def accelerations(self) -> sp.Matrix:
+        """xi^A = W^{AB} F_B: the free accelerations, shape (n, 1)."""
+        return self._solve_W(self.forcing)
+
+    @cached_property
+    def euler_lagrange_field(self) -> sp.Matrix:
+        """xi_L = v^A d/dq^A + xi^A d/dv^A (solution of i_X omega_L = dE_L)."""
+        return sp.Matrix.vstack(self._v, self.accelerations)
+
+    def gradient(self, f) -> sp.Matrix:
+        """df as a 2n-vector (d/dq, d/dv)."""
+        return sp.Matrix([sp.diff(f, s) for s in self.system.state])
+
+    def apply(self, field: sp.Matrix, f) -> sp.Expr:
+        """X(f) = df(X) for a vector field X given as a 2n-vector."""
+        return (self.gradient(f).T * field)[0]
+
+    def hamiltonian_field(self, f) -> sp.Matrix:
+        """X_f with i_{X_f} omega_L = df, shape (2n, 1).
+
+        X_f = (W^{-1} f_v, -W^{-1} f_q - W^{-1} A W^{-1} f_v) with A = M - M^T.
+        """
+        n = self.n
+        grad = self.gradient(f)
+        fq, fv = grad[:n, 0], grad[n:, 0]
+        a = self._solve_W(fv)
+        A = self.mixed_hessian - self.mixed_hessian.T
+        return sp.Matrix.vstack(a, -self._solve_W(fq + A * a))
+
+    def bracket(self, f, g) -> sp.Expr:
+        """{f, g}_L = omega_L(X_f, X_g); so that xi_L(f) = {f, E_L}_L.
+
+        Computed as f_q . W^{-1} g_v - W^{-1} f_v . g_q - (W^{-1} f_v)^T A (W^{-1} g_v).
+        """
+        n = self.n
+        gf, gg = self.gradient(f), self.gradient(g)
+        a = self._solve_W(gf[n:, 0])
+        b = self._solve_W(gg[n:, 0])
+        A = self.mixed_hessian - self.mixed_hessian.T
+        return sp.expand((gf[:n, 0].T * b)[0] - (a.T * gg[:n, 0])[0] - (a.T * A * b)[0])
+
+    # -------------------------------------------------------- constraints
+    @cached_property
+    def constraint_gradients(self) -> sp.Matrix:
+        """d phi_i as rows, shape (m, 2n)."""
+        if not self.system.phi:
+            return sp.zeros(0, 2 * self.n)
+        return sp.Matrix([self.gradient(f).T for f in self.system.phi])
+
+    @cached_property
+    def _W_inv_mu_T(self) -> sp.Matrix:
+        return self._solve_W(self.system.mu.T)
+
+    @cached_property
+    def vertical_fields(self) -> sp.Matrix:
+        """Z_i with i_{Z_i} omega_L = tau*mu_i, as rows: Z_i = -W^{AB} mu_iB d/dv^A.
+
+        Shape (m, 2n); the q-components are zero.
+        """
+        m, n = self.m, self.n
+        return sp.Matrix.hstack(sp.zeros(m, n), -self._W_inv_mu_T.T)
+
+    @cached_property
+    def constraint_matrix(self) -> sp.Matrix:
+        """C_ij = Z_i(phi_j) = -(mu W^{-1} mu^T)_ij, shape (m, m)."""
+        return (-(self.system.mu * self._W_inv_mu_T)).applyfunc(sp.cancel)
+
+    @cached_property
+    def constraint_derivatives(self) -> sp.Matrix:
+        """xi_L(phi_i) = {phi_i, E_L}_L, shape (m, 1)."""
+        ing = self.ingredients
+        return (ing.drift + ing.mu * self.accelerations).applyfunc(sp.cancel)
+
+    @cached_property
+    def multipliers(self) -> sp.Matrix:
+        """lambda^j = -C^{ij} xi_L(phi_i), from a solve with C^T (size m)."""
+        if self.m == 0:
+            return sp.zeros(0, 1)
+        C = self.constraint_matrix
+        return (-_solve(C.T, self.constraint_derivatives)).applyfunc(sp.cancel)
+
+    @cached_property
+    def multiplier_symbols(self) -> tuple[sp.Symbol, ...]:
+        """``lambda_1 .. lambda_m``."""
+        return tuple(multiplier_symbol(i + 1) for i in range(self.m))
+
+    @cached_property
+    def projected_field(self) -> sp.Matrix:
+        """P(xi_L) = xi_L - C^{ij} xi_L(phi_i) Z_j = xi_L + lambda^j Z_j."""
+        if self.m == 0:
+            return self.euler_lagrange_field
+        return (self.euler_lagrange_field + self.vertical_fields.T * self.multipliers).applyfunc(
+            sp.cancel)
+
+    @cached_property
+    def projector_Q(self) -> sp.Matrix:
+        """Q = C^{ij} Z_j (x) d phi_i as a 2n x 2n matrix: Z^T C^{-T} dphi."""
+        if self.m == 0:
+            return sp.zeros(2 * self.n, 2 * self.n)
+        C = self.constraint_matrix
+        return (self.vertical_fields.T * _solve(C.T, self.constraint_gradients)).applyfunc(
+            sp.cancel)
+
+    @cached_property
+    def projector_P(self) -> sp.Matrix:
+        """P = id - Q (P^2 = P); P(xi_L) is the constrained dynamics."""
+        return sp.eye(2 * self.n) - self.projector_Q
+
+    @cached_property
+    def acceleration_symbols(self) -> tuple[sp.Symbol, ...]:
+        """``<q>_ddot`` for every coordinate."""
+        return tuple(acceleration_symbol(q) for q in self.system.coordinates)
+
+    @cached_property
+    def equations_of_motion(self) -> tuple[sp.Expr, ...]:
+        """d/dt(dL/dv^A) - dL/dq^A + lambda^i mu_iA (each = 0).
+
+        In the acceleration symbols ``<q>_ddot`` and multiplier symbols
+        ``lambda_i``; d/dt(dL/dv) = W a + M v.
+        """
+        a = sp.Matrix(self.acceleration_symbols)
+        lam = sp.Matrix(self.multiplier_symbols)
+        eq = self.hessian * a - self.forcing
+        if self.m:
+            eq += self.system.mu.T * lam
+        return tuple(sp.expand(e) for e in eq)
+
+    @cached_property
+    def modified_lagrangian(self) -> sp.Expr:
+        """The paper's Section 4 Lagrangian 𝕃 = L - Lambda^i g_i.
+
+        Lambda^i are the multipliers of the complete lifts g_i^c (the first
+        len(holonomic) constraints); Z = L when there are no holonomic ones.
+        """
+        k = len(self.system.holonomic)
+        lam = self.multipliers
+        return self.system.lagrangian - sum(
+            (lam[i] * g for i, g in enumerate(self.system.holonomic)), sp.S.Zero) if k else \
+            self.system.lagrangian
+
+    # -------------------------------------------------------------- on M_1
+    @cached_property
+    def M1(self) -> Submanifold:
+        """M_1 = {phi_i = 0, g = 0} with this geometry's precision settings."""
+        return Submanifold(self.system, self.system.holonomic + self.system.phi,
+                           precision=self.precision, samples=self.samples, seed=self.seed)
+
+    @cached_property
+    def constraint_rank(self) -> Decision:
+        """rank of C on M_1 with how it was decided."""
+        return self.M1.rank(self.constraint_matrix)
+
+    @property
+    def regular(self) -> bool:
+        """True when C has full rank m on M_1."""
+        return self.constraint_rank.value == self.m
+
+
+def _solve(A: sp.Matrix, b: sp.Matrix) -> sp.Matrix:
+    """A^{-1} b by LU (A small); diagonal A divides entrywise."""
+    if A.is_diagonal():
+        return sp.Matrix(b.rows, b.cols, lambda i, j: b[i, j] / A[i, i])
+    return A.LUsolve(b)

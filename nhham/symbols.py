@@ -1,0 +1,46 @@
+"""Naming conventions for generated symbols (one home for each).
+
+A coordinate ``x`` has velocity ``x_dot``, acceleration ``x_ddot`` and
+momentum ``p_x``; the i-th Lagrange multiplier is ``lambda_i`` (1-based).
+"""
+
+from __future__ import annotations
+
+import sympy as sp
+
+__all__ = [
+    "velocity_symbol",
+    "acceleration_symbol",
+    "momentum_symbol",
+    "multiplier_symbol",
+    "as_symbol",
+]
+
+
+def as_symbol(name_or_symbol) -> sp.Symbol:
+    """Return a plain :class:`sympy.Symbol` for a name or a symbol."""
+    if isinstance(name_or_symbol, sp.Symbol):
+        return sp.Symbol(name_or_symbol.name)
+    if isinstance(name_or_symbol, str):
+        return sp.Symbol(name_or_symbol)
+    raise TypeError(f"expected a name or a sympy Symbol, got {name_or_symbol!r}")
+
+
+def velocity_symbol(q: sp.Symbol) -> sp.Symbol:
+    """Velocity symbol ``<q>_dot`` of coordinate ``q``."""
+    return sp.Symbol(f"{q.name}_dot")
+
+
+def acceleration_symbol(q: sp.Symbol) -> sp.Symbol:
+    """Acceleration symbol ``<q>_ddot`` of coordinate ``q``."""
+    return sp.Symbol(f"{q.name}_ddot")
+
+
+def momentum_symbol(q: sp.Symbol) -> sp.Symbol:
+    """Momentum symbol ``p_<q>`` of coordinate ``q``."""
+    return sp.Symbol(f"p_{q.name}")
+
+
+def multiplier_symbol(i: int) -> sp.Symbol:
+    """The i-th Lagrange multiplier ``lambda_<i>`` (1-based)."""
+    return sp.Symbol(f"lambda_{i}")
