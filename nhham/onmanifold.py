@@ -115,15 +115,20 @@ class Submanifold:
         Number of seeded sample points for sampled decisions.
     seed : int, optional
         Seed of the sample points (decisions are reproducible).
+    fibre : sequence of sympy.Symbol, optional
+        The fibre variables: the velocities (default, M in TQ) or the
+        momenta (M in T*Q). The variables are coordinates + fibre.
     """
 
     def __init__(self, system, equations: Sequence[sp.Expr], precision: int | None = None,
-                 samples: int = 6, seed: int = 1996):
+                 samples: int = 6, seed: int = 1996, fibre: Sequence[sp.Symbol] | None = None):
         self.system = system
         self.equations = tuple(sp.sympify(e) for e in equations)
         self.precision = precision
         self.samples = samples
         self.seed = seed
+        self.fibre = tuple(system.velocities if fibre is None else fibre)
+        self.variables = tuple(system.coordinates) + self.fibre
 
     @property
     def precision_label(self) -> str:
@@ -136,7 +141,7 @@ class Submanifold:
         sub: dict = {}
         pending = [e for e in self.equations]
         coords = list(self.system.coordinates)
-        vels = set(self.system.velocities)
+        vels = set(self.fibre)
         # Coordinates given linearly with a constant coefficient, repeatedly.
         progress = True
         while progress:
@@ -165,7 +170,7 @@ class Submanifold:
                     break
         pending = [sp.expand(e.xreplace(sub)) for e in pending]
         pending = [e for e in pending if e != 0]
-        affine = [e for e in pending if _is_affine(e, self.system.velocities) and e.free_symbols & vels]
+        affine = [e for e in pending if _is_affine(e, self.fibre) and e.free_symbols & vels]
         rest = [e for e in pending if e not in affine]
         vsub, leftover = self._solve_velocities(affine, sub)
         sub.update(vsub)
@@ -178,7 +183,7 @@ class Submanifold:
         """Solve independent affine rows for a well-conditioned velocity set."""
         if not affine:
             return {}, []
-        vels = list(self.system.velocities)
+        vels = list(self.fibre)
         mu = sp.Matrix([[sp.diff(e, v) for v in vels] for e in affine])
         rest = sp.Matrix([e.xreplace({v: 0 for v in vels}) for e in affine])
         samples = [self._numeric_matrix(mu, pt) for pt in self._raw_points(4)]
@@ -216,8 +221,7 @@ class Submanifold:
         reduced = self.reduce(expr)
         if reduced == 0:
             return Decision(True, "exact", "vanishes after exact reduction")
-        if _vanishes_modulo(reduced, self.reduction.residual, self.system.coordinates
-                            + self.system.velocities):
+        if _vanishes_modulo(reduced, self.reduction.residual, self.variables):
             return Decision(True, "exact",
                             "vanishes modulo sin^2+cos^2=1 and the remaining constraints")
         return self._sampled_vanishes(reduced, tol)
@@ -279,8 +283,7 @@ class Submanifold:
         square = reduced if reduced.rows == reduced.cols else (
             reduced * reduced.T if reduced.rows < reduced.cols else reduced.T * reduced)
         det = _cancel(square.det(method="berkowitz"))
-        if det == 0 or _vanishes_modulo(det, (), self.system.coordinates
-                                        + self.system.velocities):
+        if det == 0 or _vanishes_modulo(det, (), self.variables):
             return None
         return Decision(k, "exact", f"full rank {k}: the determinant reduces to the nonzero "
                                     f"function {_short(det)} on M")
@@ -326,7 +329,7 @@ class Submanifold:
 
     def _raw_points(self, count):
         rng = np.random.default_rng(self.seed)
-        syms = self.system.coordinates + self.system.velocities
+        syms = self.variables
         out = []
         for _ in range(count):
             pt = {s: float(rng.uniform(-1.3, 1.3)) for s in syms}
@@ -337,7 +340,7 @@ class Submanifold:
 
     def _project(self, raw, eqs):
         """Newton projection (minimum-norm steps) of a point onto M."""
-        syms = list(self.system.coordinates + self.system.velocities)
+        syms = list(self.variables)
         if not eqs:
             return self._convert(raw), 0.0
         F, J = self._residual_functions(tuple(eqs))
@@ -396,7 +399,7 @@ class Submanifold:
 
     def _residual_functions(self, eqs):
         if eqs not in self._residual_cache:
-            syms = list(self.system.coordinates + self.system.velocities)
+            syms = list(self.variables)
             args = syms + list(self.system.parameters)
             Fm = sp.Matrix(eqs)
             Jm = Fm.jacobian(syms)
@@ -407,12 +410,12 @@ class Submanifold:
         return self._residual_cache[eqs]
 
     def _lambdify(self, exprs):
-        args = list(self.system.coordinates + self.system.velocities + self.system.parameters)
+        args = list(self.variables + self.system.parameters)
         module = "numpy" if self.precision is None else "mpmath"
         return sp.lambdify(args, exprs, modules=module)
 
     def _evaluate(self, f, pt):
-        args = [pt[s] for s in self.system.coordinates + self.system.velocities
+        args = [pt[s] for s in self.variables
                 + self.system.parameters]
         if self.precision is None:
             with np.errstate(all="ignore"):
