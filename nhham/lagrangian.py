@@ -160,7 +160,7 @@ class LagrangianGeometry:
         W = self.hessian
         if self._W_is_diagonal:
             return sp.Matrix(rhs.rows, rhs.cols, lambda i, j: rhs[i, j] / W[i, i])
-        return W.LUsolve(rhs).applyfunc(sp.cancel)
+        return _solve(W, rhs)
 
     @cached_property
     def forcing(self) -> sp.Matrix:
@@ -246,13 +246,13 @@ class LagrangianGeometry:
     @cached_property
     def constraint_matrix(self) -> sp.Matrix:
         """C_ij = Z_i(phi_j) = -(mu W^{-1} mu^T)_ij, shape (m, m)."""
-        return (-(self.system.mu * self._W_inv_mu_T)).applyfunc(sp.cancel)
+        return -(self.system.mu * self._W_inv_mu_T)
 
     @cached_property
     def constraint_derivatives(self) -> sp.Matrix:
         """xi_L(phi_i) = {phi_i, E_L}_L, shape (m, 1)."""
         ing = self.ingredients
-        return (ing.drift + ing.mu * self.accelerations).applyfunc(sp.cancel)
+        return ing.drift + ing.mu * self.accelerations
 
     @cached_property
     def multipliers(self) -> sp.Matrix:
@@ -260,7 +260,7 @@ class LagrangianGeometry:
         if self.m == 0:
             return sp.zeros(0, 1)
         C = self.constraint_matrix
-        return (-_solve(C.T, self.constraint_derivatives)).applyfunc(sp.cancel)
+        return -_solve(C.T, self.constraint_derivatives)
 
     @cached_property
     def multiplier_symbols(self) -> tuple[sp.Symbol, ...]:
@@ -272,8 +272,7 @@ class LagrangianGeometry:
         """P(xi_L) = xi_L - C^{ij} xi_L(phi_i) Z_j = xi_L + lambda^j Z_j."""
         if self.m == 0:
             return self.euler_lagrange_field
-        return (self.euler_lagrange_field + self.vertical_fields.T * self.multipliers).applyfunc(
-            sp.cancel)
+        return self.euler_lagrange_field + self.vertical_fields.T * self.multipliers
 
     @cached_property
     def projector_Q(self) -> sp.Matrix:
@@ -281,8 +280,7 @@ class LagrangianGeometry:
         if self.m == 0:
             return sp.zeros(2 * self.n, 2 * self.n)
         C = self.constraint_matrix
-        return (self.vertical_fields.T * _solve(C.T, self.constraint_gradients)).applyfunc(
-            sp.cancel)
+        return self.vertical_fields.T * _solve(C.T, self.constraint_gradients)
 
     @cached_property
     def projector_P(self) -> sp.Matrix:
@@ -340,7 +338,15 @@ class LagrangianGeometry:
 
 
 def _solve(A: sp.Matrix, b: sp.Matrix) -> sp.Matrix:
-    """A^{-1} b by LU (A small); diagonal A divides entrywise."""
+    """A^{-1} b without simplification.
+
+    Diagonal A divides entrywise; up to 4 x 4 the adjugate over the
+    determinant (computed once) keeps expressions compact; larger systems
+    use LU.
+    """
     if A.is_diagonal():
         return sp.Matrix(b.rows, b.cols, lambda i, j: b[i, j] / A[i, i])
+    if A.rows <= 4:
+        det = sp.factor_terms(A.det(method="berkowitz"))
+        return (A.adjugate(method="berkowitz") * b) / det
     return A.LUsolve(b)

@@ -1,0 +1,149 @@
+"""System description: construction, affine extraction, validation messages."""
+
+import pytest
+import sympy as sp
+
+import nhham
+from nhham.errors import (
+    NonAffineConstraintError,
+    RedundantConstraintError,
+    SingularLagrangianError,
+    ValidationError,
+)
+
+x, y, z, th, ph = sp.symbols("x y z theta phi")
+xd, yd, zd, thd, phd = sp.symbols("x_dot y_dot z_dot theta_dot phi_dot")
+m, R, k = sp.symbols("m R k")
+L_free = m * (xd**2 + yd**2 + zd**2) / 2
+
+
+def make(**kw):
+    args = dict(coordinates=["x", "y", "z"], lagrangian=L_free, parameters={"m": 1.0})
+    args.update(kw)
+    return nhham.System(**args)
+
+
+def test_velocity_symbols_and_affine_parts():
+    s = make(constraints=[zd - y * xd + 3 * x], parameters={"m": 1.0})
+    assert s.velocities == (xd, yd, zd)
+    assert s.mu == sp.Matrix([[-y, 0, 1]])
+    assert s.h == sp.Matrix([3 * x])
+    assert s.n == 3 and s.m == 1
+    assert not s.is_linear
+
+
+def test_coordinates_accept_symbols_with_assumptions():
+    xr = sp.Symbol("x", real=True)
+    s = nhham.System([xr, "y"], (sp.Symbol("x_dot", real=True) ** 2 + yd**2) / 2)
+    assert s.coordinates == (x, y)
+    assert s.lagrangian == (xd**2 + yd**2) / 2
+
+
+def test_holonomic_constraint_complete_lift_comes_first():
+    s = make(constraints=[zd], holonomic=[x**2 + y**2 - 1])
+    assert s.phi[0] == 2 * x * xd + 2 * y * yd
+    assert s.phi[1] == zd
+    assert s.constraint_labels == ("holonomic[0]", "constraints[0]")
+
+
+def test_system_is_frozen():
+    s = make()
+    with pytest.raises(AttributeError):
+        s.lagrangian = 0
+
+
+def test_nonaffine_constraint_names_constraint_and_term():
+    with pytest.raises(NonAffineConstraintError) as err:
+        make(constraints=[zd - y * xd, xd * yd + z])
+    msg = str(err.value)
+    assert "constraints[1]" in msg and "x_dot*y_dot" in msg and "Chetaev" in msg
+
+
+def test_nonaffine_function_of_velocity():
+    with pytest.raises(NonAffineConstraintError, match=r"constraints\[0\].*sin\(x_dot\)"):
+        make(constraints=[sp.sin(xd)])
+
+
+def test_singular_hessian_reports_rank_and_null_direction():
+    with pytest.raises(SingularLagrangianError) as err:
+        nhham.System(["x", "y"], (xd + yd) ** 2 / 2)
+    msg = str(err.value)
+    assert "rank 1 of 2" in msg and "null direction" in msg and "lagrangian" in msg
+
+
+def test_singular_hessian_depending_on_q():
+    # W = [[y^2, x y], [x y, x^2]] has rank 1 everywhere.
+    with pytest.raises(SingularLagrangianError, match="rank 1 of 2"):
+        nhham.System(["x", "y"], (y * xd + x * yd) ** 2 / 2)
+
+
+def test_m_not_less_than_n():
+    with pytest.raises(ValidationError, match="m = 3.*n = 3"):
+        make(constraints=[xd, yd, zd - x])
+
+
+def test_unknown_symbol_named():
+    with pytest.raises(ValidationError, match=r"lagrangian: unknown symbol\(s\) k"):
+        make(lagrangian=L_free + k * x)
+
+
+def test_holonomic_with_velocity_named():
+    with pytest.raises(ValidationError, match=r"holonomic\[0\].*x_dot"):
+        make(holonomic=[x * xd])
+
+
+def test_all_problems_reported_at_once():
+    with pytest.raises(ValidationError) as err:
+        make(lagrangian=L_free + k, holonomic=[x * xd])
+    assert len(err.value.problems) == 2
+
+
+def test_duplicate_coordinates_and_clashing_parameters():
+    with pytest.raises(ValidationError) as err:
+        nhham.System(["x", "x"], xd**2 / 2, parameters={"x_dot": 1.0})
+    text = str(err.value)
+    assert "duplicate names x" in text and "x_dot" in text
+
+
+def test_parameter_values_must_be_finite_numbers():
+    with pytest.raises(ValidationError, match=r"parameters.m: value must be finite"):
+        make(parameters={"m": float("nan")})
+    with pytest.raises(ValidationError, match=r"parameters.m: value must be a real number"):
+        make(parameters={"m": "heavy"})
+
+
+def _disk(third, drop=False):
+    I1, I2 = sp.symbols("I1 I2")
+    L = m * (xd**2 + yd**2) / 2 + I1 * thd**2 / 2 + I2 * phd**2 / 2
+    cons = [xd - R * sp.cos(th) * phd, yd - R * sp.sin(th) * phd, third]
+    return nhham.System(["x", "y", "theta", "phi"], L, cons,
+                        parameters=["m", "I1", "I2", "R"], drop_redundant=drop)
+
+
+def test_redundant_constraint_reports_combination():
+    third = 2 * xd + sp.cos(th) * yd - R * (2 * sp.cos(th) + sp.cos(th) * sp.sin(th)) * phd
+    with pytest.raises(RedundantConstraintError) as err:
+        _disk(third)
+    msg = str(err.value)
+    assert "constraints[2]" in msg and "(2)*constraints[0]" in msg
+    assert "(cos(theta))*constraints[1]" in msg and "drop_redundant=True" in msg
+
+
+def test_redundant_constraint_dropped_on_request():
+    third = 2 * xd + sp.cos(th) * yd - R * (2 * sp.cos(th) + sp.cos(th) * sp.sin(th)) * phd
+    s = _disk(third, drop=True)
+    assert s.m == 2
+    assert [d.label for d in s.dropped] == ["constraints[2]"]
+    combo = s.dropped[0].combination
+    assert combo["constraints[0]"] == 2 and sp.simplify(combo["constraints[1]"] - sp.cos(th)) == 0
+
+
+def test_dependent_one_forms_with_different_h_imply_position_constraint():
+    with pytest.raises(RedundantConstraintError, match="position constraint"):
+        make(constraints=[xd, 2 * xd + y])
+
+
+def test_numeric_parameters_missing_value():
+    s = make(parameters=["m"])
+    with pytest.raises(nhham.MissingParameterValueError, match="no numeric value for m"):
+        s.numeric_parameters()
