@@ -359,8 +359,16 @@ def _sample_q(system, rng, count):
     return points
 
 
-def _numeric(matrix, sub):
-    return np.array(matrix.xreplace(sub).evalf(), dtype=complex).real.astype(float)
+def _numeric(matrix, sub, label="lagrangian"):
+    """Evaluate a symbolic matrix at a sample point; non-numeric results are input errors."""
+    try:
+        return np.array(matrix.xreplace(sub).evalf(), dtype=complex).real.astype(float)
+    except (TypeError, ValueError) as exc:
+        raise ValidationError([
+            f"{label}: cannot evaluate second derivatives at a sample point "
+            f"({' '.join(str(exc).split())}); the "
+            f"Lagrangian must be smooth in the velocities (no Abs, sign or other kinks)"
+        ]) from None
 
 
 def _check_dependence(system, cons, hols, drop_redundant):
@@ -396,16 +404,18 @@ def _check_dependence(system, cons, hols, drop_redundant):
     if not dependent:
         return tuple(cons), ()
     problems, dropped = [], []
+    points = _sample_q(system, np.random.default_rng(_VALIDATION_SEED + 2), _VALIDATION_SAMPLES)
     for i, coeffs in dependent:
         combo = " + ".join(f"({c})*{labels[j]}" for j, c in coeffs.items()) or "0"
         # Redundant only if h is the same combination; otherwise phi_i minus
         # the combination is a function of q alone: a hidden position constraint.
-        rest = sp.simplify(rows[i] - sum((c * rows[j] for j, c in coeffs.items()), sp.S.Zero))
-        if rest != 0 and not (rest.free_symbols & set(vels)):
+        rest = sp.expand(rows[i] - sum((c * rows[j] for j, c in coeffs.items()), sp.S.Zero))
+        position_part = rest.xreplace({v: 0 for v in vels})
+        if not _vanishes_at(position_part, points):
             problems.append(
                 f"{labels[i]}: its one-form is {combo} but the affine parts differ: together "
-                f"they imply the position constraint {rest} = 0; give that as a holonomic "
-                f"constraint instead"
+                f"they imply the position constraint {sp.trigsimp(position_part)} = 0; give "
+                f"that as a holonomic constraint instead"
             )
         elif labels[i].startswith("holonomic") or not drop_redundant:
             problems.append(
@@ -423,17 +433,39 @@ def _check_dependence(system, cons, hols, drop_redundant):
 
 
 def _combination(mu, rows, independent, i, vels):
-    """Coefficients c_j(q) with mu_i = sum_j c_j mu_j over the independent rows."""
+    """Coefficients c_j(q) with mu_i = sum_j c_j mu_j over the independent rows.
+
+    Solves the square subsystem on the k velocity columns where the rows are
+    best conditioned at a sample point (an overdetermined symbolic solve
+    would miss trigonometric identities), then tidies each coefficient.
+    """
     if not independent:
         return {}
-    A = mu.extract(independent, list(range(mu.cols))).T  # n x k
-    b = mu.row(i).T
-    cs = sp.symbols(f"c0:{len(independent)}")
-    sol = sp.solve(list(A * sp.Matrix(cs) - b), cs, dict=True)
-    if not sol:
-        return {j: sp.nan for j in independent}
-    return {j: sp.simplify(sol[0].get(c, 0)) for j, c in zip(independent, cs)
-            if sp.simplify(sol[0].get(c, 0)) != 0}
+    A = mu.extract(independent, list(range(mu.cols)))  # k x n
+    rng = np.random.default_rng(_VALIDATION_SEED + 3)
+    sample = {s: rng.uniform(-1.3, 1.3) for s in A.free_symbols}
+    An = np.array(A.xreplace(sample).evalf(), dtype=float)
+    import scipy.linalg
+
+    cols = sorted(scipy.linalg.qr(An, pivoting=True)[2][: len(independent)])
+    block = A.extract(list(range(len(independent))), cols)  # k x k, invertible
+    target = mu.extract([i], cols)
+    coeffs = block.T.LUsolve(target.T)
+    out = {}
+    for j, c in zip(independent, coeffs):
+        c = sp.trigsimp(sp.cancel(c))
+        if c != 0:
+            out[j] = c
+    return out
+
+
+def _vanishes_at(expr, points, tol=1e-9):
+    """True when ``expr`` is numerically zero at every sample point."""
+    for pt in points:
+        value = complex(sp.sympify(sp.sympify(expr).xreplace(pt)).evalf())
+        if abs(value) > tol * max(1.0, abs(value)):
+            return False
+    return True
 
 
 def _check_regular(system):
