@@ -176,16 +176,16 @@ def _derive_hamiltonian(args, steps, scene):
     system = scene.system
     with steps.step("Legendre map and Hamiltonian H = E_L o Leg^-1"):
         side = hamiltonian_side(system)
-        H = side.hamiltonian
+        H = side.H
     with steps.step("C^H and the projected Hamiltonian field"):
-        C = side.constraint_matrix
-        field = list(side.projected_field)
-        multipliers = list(side.multipliers)
+        C = side.constraint_matrix_H
+        field = list(side.projected_field_H)
+        multipliers = list(side.multipliers_H)
     with steps.step("display simplification"):
         field = [display_form(f) for f in field]
         multipliers = [display_form(f) for f in multipliers]
         C = C.applyfunc(display_form)
-    state = [s.name for s in side.state]
+    state = [s.name for s in side.variables]
     data = {
         "name": scene.name,
         "side": "hamiltonian",
@@ -241,7 +241,7 @@ def cmd_compare(args, steps):
     dirac = None
     with steps.step("Dirac-bracket flow of H against the projected field on M_f"):
         try:
-            from .hamiltonian import dirac_vs_projected
+            from .classification import dirac_vs_projected
 
             dirac = dirac_vs_projected(scene.system)
         except NhhamError as exc:

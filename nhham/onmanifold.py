@@ -1,9 +1,13 @@
 """Deciding things "on M_k": exact reduction first, seeded sampling second.
 
-A :class:`Submanifold` of TQ is the zero set of a list of constraint
-expressions in (q, v) (affine velocity constraints, holonomic constraints,
-secondary constraints of any form). To decide whether a function vanishes on
-it, or the rank of a matrix of functions on it, nhham
+A :class:`Submanifold` is the zero set of a list of constraint expressions
+in the coordinates and a fibre: (q, v) on TQ (default), (q, p) on T*Q
+(``fibre=momenta``) or q alone on Q (``fibre=()``); the constraints may be
+affine velocity constraints, holonomic constraints or secondary constraints of
+any form. To decide whether a function vanishes on it, or the rank of a matrix
+of functions on it (:meth:`Submanifold.vanishes`, :meth:`Submanifold.rank`,
+and :meth:`Submanifold.regular_block` for a well-conditioned regular block),
+nhham
 
 1. eliminates variables exactly: coordinates that a constraint gives linearly
    with a constant coefficient (``q1 = 0``), then dependent velocities from
@@ -15,7 +19,28 @@ it, or the rank of a matrix of functions on it, nhham
 3. otherwise evaluates at seeded random points of the submanifold found by
    Newton projection, in float64 or in mpmath with the requested digits.
 
-Every answer is a :class:`Decision` that records how it was reached.
+Every answer is a :class:`Decision` that records how it was reached. With
+``exact=False`` steps 1-2 are skipped for decisions (sampling only), which is
+how the two routes are compared.
+
+What "exact" means. An exact decision is a proof for *generic* values of the
+symbolic parameters (they are treated as indeterminates): "vanishes" means the
+reduced expression is zero as a function (rational cancellation, or a Groebner
+remainder modulo sin^2 + cos^2 = 1 and the constraints that could not be
+eliminated); "does not vanish" is claimed exactly only when the reduction
+parametrises M completely and the reduced expression is a nonzero polynomial
+or rational function of the remaining variables and of sines and cosines of
+them (such a function cannot vanish on an open set). Where a decisive nonzero
+expression happens to vanish at the *given* parameter values, the decision
+carries a warning.
+
+What "sampled" means. Values at seeded points of M found by Newton
+projection, in float64 (relative tolerance 1e-9) or mpmath with ``digits``
+(relative tolerance 10**(3 - digits)). A quantity is *clearly zero* below the
+zero level (1e-12 in float64, 10**(1 - digits) in mpmath, and never below
+100 times the residual of the points) and *clearly nonzero* above 1e3 times
+the tolerance; in between the decision is doubtful and says so in
+``Decision.warnings`` instead of choosing silently.
 """
 
 from __future__ import annotations
@@ -60,6 +85,9 @@ class Decision:
     warnings : tuple of str
         Reasons to distrust the answer (rank not constant, values near the
         tolerance).
+    points : tuple of tuple
+        The sample points of a sampled decision, each a tuple of
+        ``(variable name, float)`` pairs (rounded for the record).
     """
 
     value: object
@@ -71,13 +99,19 @@ class Decision:
     singular_values: tuple = ()
     point_residual: float | None = None
     warnings: tuple = ()
+    points: tuple = field(default=(), compare=False)
 
     def __bool__(self):
         return bool(self.value)
 
     def describe(self) -> str:
-        """One line saying what was decided and how."""
+        """One line saying what was decided and how (with the numeric evidence)."""
         text = f"{self.value} ({self.method}, {self.precision}): {self.detail}"
+        if self.singular_values:
+            smallest = [min(sv) if sv else 0.0 for sv in self.singular_values]
+            text += f"; smallest singular value per point {_floats(smallest)}"
+        if self.point_residual is not None and self.method == "sampled":
+            text += f"; point residual <= {self.point_residual:.2g}"
         if self.warnings:
             text += " WARNING: " + "; ".join(self.warnings)
         return text
@@ -117,11 +151,17 @@ class Submanifold:
         Seed of the sample points (decisions are reproducible).
     fibre : sequence of sympy.Symbol, optional
         The fibre variables: the velocities (default, M in TQ) or the
-        momenta (M in T*Q). The variables are coordinates + fibre.
+        momenta (M in T*Q), or ``()`` for a submanifold of Q. The variables
+        are coordinates + fibre.
+    exact : bool, optional
+        If False, :meth:`vanishes` and :meth:`rank` skip the exact reduction
+        and decide at sample points only (the reduction itself stays
+        available through :meth:`reduce`).
     """
 
     def __init__(self, system, equations: Sequence[sp.Expr], precision: int | None = None,
-                 samples: int = 6, seed: int = 1996, fibre: Sequence[sp.Symbol] | None = None):
+                 samples: int = 6, seed: int = 1996, fibre: Sequence[sp.Symbol] | None = None,
+                 exact: bool = True):
         self.system = system
         self.equations = tuple(sp.sympify(e) for e in equations)
         self.precision = precision
@@ -129,6 +169,22 @@ class Submanifold:
         self.seed = seed
         self.fibre = tuple(system.velocities if fibre is None else fibre)
         self.variables = tuple(system.coordinates) + self.fibre
+        self.exact = bool(exact)
+
+    def with_equations(self, equations: Sequence[sp.Expr], samples: int | None = None
+                       ) -> "Submanifold":
+        """A Submanifold of the same space and settings with other equations.
+
+        Parameters
+        ----------
+        equations : sequence of sympy.Expr
+            The constraints of the new submanifold (each = 0).
+        samples : int, optional
+            Number of sample points (default: this manifold's).
+        """
+        return Submanifold(self.system, equations, precision=self.precision,
+                           samples=self.samples if samples is None else samples,
+                           seed=self.seed, fibre=self.fibre, exact=self.exact)
 
     @property
     def precision_label(self) -> str:
@@ -217,38 +273,124 @@ class Submanifold:
         tol : float, optional
             Relative tolerance of the sampled test; default 1e-9 for float64
             and 10**(3 - digits) for mpmath.
+
+        Returns
+        -------
+        Decision
+            ``value`` True when it vanishes. Exact when the reduction decides
+            (either way, see the module docstring); otherwise sampled.
         """
+        if not self.exact:
+            return self._sampled_vanishes(_cancel(expr), tol)
         reduced = self.reduce(expr)
         if reduced == 0:
             return Decision(True, "exact", "vanishes after exact reduction")
-        if _vanishes_modulo(reduced, self.reduction.residual, self.variables):
+        verdict, warning = self._zero_test(reduced)
+        if verdict is True:
             return Decision(True, "exact",
-                            "vanishes modulo sin^2+cos^2=1 and the remaining constraints")
+                            "Groebner remainder 0 modulo sin^2+cos^2=1 and the equations the "
+                            "reduction could not eliminate")
+        if verdict is False:
+            return Decision(False, "exact",
+                            f"reduces to the nonzero function {_short(reduced)} on M",
+                            warnings=(warning,) if warning else ())
         return self._sampled_vanishes(reduced, tol)
 
     def rank(self, matrix: sp.Matrix, tol: float | None = None) -> Decision:
         """Decide the rank of a matrix of functions on M (generic rank).
 
-        Exact when every entry reduces to a number; otherwise the rank at
-        seeded sample points from singular values, with a warning where it
-        is not the same at every point.
+        Exact when every entry reduces to a number, when every entry
+        vanishes, when a maximal minor is a nonzero function on M, or when a
+        certificate is found (an r x r minor that is a nonzero function on M
+        whose Schur complement vanishes on M); otherwise the rank at seeded
+        sample points from singular values, with warnings where it is not the
+        same at every point or a singular value is neither clearly zero nor
+        clearly nonzero at this precision.
         """
         matrix = sp.Matrix(matrix)
         if 0 in matrix.shape:
             return Decision(0, "exact", "empty matrix")
+        if not self.exact:
+            return self._sampled_rank(matrix.applyfunc(_cancel), tol)
         reduced = matrix.applyfunc(self.reduce)
         if not reduced.free_symbols:
             r = reduced.rank()
             return Decision(r, "exact", f"entries reduce to numbers; rank {r}")
+        if all(self._zero_test(e)[0] is True for e in reduced):
+            return Decision(0, "exact", "every entry vanishes on M")
         exact_full = self._exact_full_rank(reduced)
         if exact_full is not None:
             return exact_full
+        sampled = self._sampled_rank(reduced, tol)
+        if 0 < sampled.value < min(reduced.shape):
+            certificate = self._rank_certificate(reduced, sampled)
+            if certificate is not None:
+                return certificate
+        return sampled
+
+    def regular_block(self, matrix: sp.Matrix, rank: int):
+        """Rows and columns of a best-conditioned regular rank x rank block.
+
+        Parameters
+        ----------
+        matrix : sympy.Matrix, shape (R, K)
+            A matrix of functions on M whose generic rank on M is ``rank``.
+        rank : int
+
+        Returns
+        -------
+        rows, cols : list of int
+            The block ``matrix[rows, cols]``, chosen to maximise the worst
+            ratio sigma_min(block) / ||matrix|| over the sample points of M
+            (or over the one numeric value when the reduced matrix is
+            constant): well conditioned and not small. A constant block
+            scores double, because it puts no function of the state in a
+            denominator. Ties go to the first block in lexicographic order.
+        evidence : Decision
+            ``value`` is ``(rows, cols)``; exact when the choice needed no
+            sample points (a square regular matrix, or constant entries).
+        """
+        matrix = sp.Matrix(matrix)
+        if rank == 0:
+            return [], [], Decision(([], []), "exact", "empty block (rank 0)")
+        if rank == matrix.rows == matrix.cols:
+            rows = list(range(rank))
+            return rows, list(rows), Decision((rows, list(rows)), "exact",
+                                              "the whole (square, regular) matrix")
+        reduced = matrix.applyfunc(self.reduce if self.exact else _cancel)
+        points = []
+        if not reduced.free_symbols:
+            samples = [np.array(reduced.evalf(), dtype=float)]
+        else:
+            points, _ = self.points()
+            f = self._lambdify([reduced])
+            samples = [np.array(self._matrix_at(f, pt, reduced.shape).astype(complex).real,
+                                dtype=float) for pt in points]
+        rows, cols, score = _best_block(samples, rank)
+        if rows is None:
+            raise ComputationError(
+                f"no regular {rank}x{rank} block found in a matrix of rank {rank} on M")
+        detail = (f"block rows {rows}, columns {cols}: worst sigma_min(block)/||matrix|| "
+                  f"{score:.3g} over {len(samples)} evaluation(s)")
+        if points:
+            return rows, cols, Decision((rows, cols), "sampled", detail,
+                                        precision=self.precision_label, samples=len(points),
+                                        points=_record(points, self.variables))
+        return rows, cols, Decision((rows, cols), "exact", detail + " (constant entries)")
+
+    def _zero_test(self, expr):
+        """Exact zero test of a reduced expression on M: (True | False | None, warning)."""
+        return _zero_test(expr, self.reduction.residual, self.system.parameters,
+                          self.system.parameter_values)
+
+    def _sampled_rank(self, reduced, tol):
         points, resid = self.points()
         f = self._lambdify([reduced])
         svals, ranks = [], []
         tol = self._tol(tol)
+        zero = self._zero_level(resid)
         for pt in points:
-            S = np.array(self._evaluate(f, pt)[0], dtype=object)
+            S = self._matrix_at(f, pt, reduced.shape)
             s = _singular_values(S, self.precision)
             svals.append(tuple(float(x) for x in s))
             top = max(float(s[0]) if len(s) else 0.0, 1e-300)
@@ -257,17 +399,25 @@ class Submanifold:
         warnings = []
         if len(set(ranks)) > 1:
             warnings.append(f"rank is not constant on M: ranks {ranks} at the samples")
-        gaps = [sv[r - 1] / max(sv[0], 1e-300) for sv in svals if r >= 1]
+        gaps = [sv[r - 1] / max(sv[0], 1.0) for sv in svals if r >= 1]
         if gaps and min(gaps) < 1e3 * tol:
             warnings.append(
                 f"smallest kept singular value ratio {min(gaps):.3g} is within 1e3 of the "
                 f"tolerance {tol:g}: the rank is doubtful at this precision"
+            )
+        dropped = [sv[r] / max(sv[0], 1.0) for sv in svals if r < len(sv)]
+        if dropped and max(dropped) > zero:
+            warnings.append(
+                f"largest dropped singular value ratio {max(dropped):.3g} is above the zero "
+                f"level {zero:.3g} but below the tolerance {tol:g}: near-singular at this "
+                f"precision, the rank may be higher (try more digits)"
             )
         return Decision(
             r, "sampled",
             f"rank {r} at {len(points)} seeded points (relative tolerance {tol:g})",
             precision=self.precision_label, samples=len(points), singular_values=tuple(svals),
             point_residual=resid, warnings=tuple(warnings),
+            points=_record(points, self.variables),
         )
 
     def _exact_full_rank(self, reduced):
@@ -283,10 +433,39 @@ class Submanifold:
         square = reduced if reduced.rows == reduced.cols else (
             reduced * reduced.T if reduced.rows < reduced.cols else reduced.T * reduced)
         det = _cancel(square.det(method="berkowitz"))
-        if det == 0 or _vanishes_modulo(det, (), self.variables):
+        verdict, warning = (False, None) if det.is_number and det != 0 else self._zero_test(det)
+        if verdict is not False:
             return None
         return Decision(k, "exact", f"full rank {k}: the determinant reduces to the nonzero "
-                                    f"function {_short(det)} on M")
+                                    f"function {_short(det)} on M",
+                        warnings=(warning,) if warning else ())
+
+    def _rank_certificate(self, reduced, sampled):
+        """Prove the sampled rank r exactly: a nonzero r x r minor, vanishing Schur complement."""
+        r = sampled.value
+        if r > 6 or self.reduction.residual:
+            return None
+        try:
+            rows, cols, _ = self.regular_block(reduced, r)
+        except ComputationError:
+            return None
+        B = reduced.extract(rows, cols)
+        det = _cancel(B.det(method="berkowitz"))
+        verdict, warning = (False, None) if det.is_number and det != 0 else self._zero_test(det)
+        if verdict is not False:
+            return None
+        other_rows = [i for i in range(reduced.rows) if i not in rows]
+        other_cols = [j for j in range(reduced.cols) if j not in cols]
+        X = B.LUsolve(reduced.extract(rows, other_cols))
+        schur = reduced.extract(other_rows, other_cols) - reduced.extract(other_rows, cols) * X
+        if not all(self._zero_test(_cancel(e))[0] is True for e in schur):
+            return None
+        return Decision(
+            r, "exact",
+            f"rank {r}: the minor (rows {rows}, columns {cols}) is the nonzero function "
+            f"{_short(det)} on M and its Schur complement vanishes on M",
+            singular_values=sampled.singular_values, warnings=(warning,) if warning else (),
+        )
 
     # ------------------------------------------------------------ sampling
     def points(self):
@@ -423,8 +602,21 @@ class Submanifold:
         with mpmath.workdps(self.precision):
             return f(*args)
 
+    def _matrix_at(self, f, pt, shape):
+        """A lambdified matrix evaluated at a point, as an object array of ``shape``."""
+        value = self._evaluate(f, pt)[0]
+        if isinstance(value, mpmath.matrix):
+            return np.array([[value[i, j] for j in range(value.cols)]
+                             for i in range(value.rows)], dtype=object).reshape(shape)
+        return np.array(value, dtype=object).reshape(shape)
+
     def _numeric_matrix(self, M, pt):
         return np.array(M.xreplace(pt).evalf(), dtype=complex).real.astype(float)
+
+    def _zero_level(self, residual=0.0):
+        """Below this relative size a sampled value is clearly zero."""
+        base = 1e-12 if self.precision is None else 10.0 ** (1 - self.precision)
+        return max(base, 100.0 * float(residual or 0.0))
 
     def _tol(self, tol):
         if tol is not None:
@@ -450,15 +642,20 @@ class Submanifold:
             worst_rel = max(worst_rel, a / max(float(abs(scale)), 1.0))
         vanishes = worst_rel <= tol
         warnings = ()
+        zero = self._zero_level(resid)
         if not vanishes and worst_rel <= 1e3 * tol:
             warnings = (f"largest relative value {worst_rel:.3g} is within 1e3 of the "
                         f"tolerance {tol:g}: the answer is doubtful at this precision",)
+        elif vanishes and worst_rel > zero:
+            warnings = (f"largest relative value {worst_rel:.3g} is below the tolerance {tol:g} "
+                        f"but above the zero level {zero:.3g}: it may not vanish (try more "
+                        f"digits)",)
         return Decision(
             vanishes, "sampled",
             f"largest |value| {worst:.3g} (relative {worst_rel:.3g}) at {len(points)} seeded "
             f"points, tolerance {tol:g}",
             precision=self.precision_label, samples=len(points), max_abs=worst,
-            point_residual=resid, warnings=warnings,
+            point_residual=resid, warnings=warnings, points=_record(points, self.variables),
         )
 
 
@@ -468,9 +665,23 @@ def _cancel(expr):
     if expr.is_number:
         return expr
     try:
-        return sp.cancel(sp.together(sp.expand(expr)))
+        # cancel() brings nested fractions over one denominator and cancels the
+        # polynomial gcd; expanding first only costs time.
+        return sp.cancel(expr)
     except (sp.PolynomialError, TypeError):  # pragma: no cover - exotic functions
         return sp.expand(expr)
+
+
+def _floats(values):
+    return "[" + ", ".join(f"{v:.3g}" for v in values) + "]"
+
+
+def _record(points, variables, limit=6):
+    """Sample points as tuples of (name, float) for a Decision's record."""
+    out = []
+    for pt in points[:limit]:
+        out.append(tuple((s.name, round(float(pt[s]), 12)) for s in variables))
+    return tuple(out)
 
 
 def _short(expr, limit=80):
@@ -528,46 +739,156 @@ def _best_columns(samples):
 
 
 def _solve_small(block, rhs):
-    """Solve block x = rhs symbolically (small, usually triangular or constant)."""
-    if not block.free_symbols and block.is_diagonal():
-        return [rhs[i] / block[i, i] for i in range(block.rows)]
+    """Solve block x = rhs symbolically (small, usually triangular or constant).
+
+    Diagonal blocks divide; up to 3 x 3 Cramer's rule with one cancelled
+    determinant (cheaper and tidier than LU on polynomial entries); else LU.
+    """
+    if block.is_diagonal():
+        return [_cancel(rhs[i] / block[i, i]) for i in range(block.rows)]
+    if block.rows <= 3:
+        det = _cancel(block.det(method="berkowitz"))
+        adj = block.adjugate(method="berkowitz")
+        return [_cancel(sp.expand((adj.row(i) * rhs)[0]) / det) for i in range(block.rows)]
     return list(block.LUsolve(rhs))
 
 
-def _vanishes_modulo(expr, residual, gens):
-    """Exact test: numerator of ``expr`` reduces to 0 modulo trig and polynomial relations."""
+def _vanishes_modulo(expr, residual, gens=None):
+    """True when ``expr`` is proved to vanish modulo trig and polynomial relations."""
+    return _zero_test(expr, residual)[0] is True
+
+
+def _zero_test(expr, residual=(), parameters=(), values=None):
+    """Exact zero test of a function on M given by its reduced expression.
+
+    Sines and cosines of symbols (after ``expand_trig``) become new variables
+    s, c with s^2 + c^2 = 1. The numerator must then be a polynomial in its
+    symbols; anything else (exp, sqrt, trig of non-symbols) is undecided.
+
+    Returns
+    -------
+    verdict : True, False or None
+        True: the numerator lies in the ideal of the trig relations and the
+        ``residual`` equations (it vanishes on M). False: only when there is
+        no residual (the reduction parametrises M) and the numerator is not
+        in the ideal of the trig relations, which is prime with a Zariski
+        dense set of real points, so the function is nonzero on an open set.
+        None: undecided.
+    warning : str or None
+        Set when the verdict is False but every coefficient of the numerator
+        (as a polynomial in the state) vanishes at the given parameter values.
+    """
+    expr = sp.sympify(expr)
+    if expr == 0:
+        return True, None
+    if expr.is_number:
+        return (None, None) if expr.has(sp.nan, sp.zoo, sp.oo) else (False, None)
     try:
         num = sp.numer(sp.together(sp.expand_trig(expr)))
-    except Exception:  # pragma: no cover
-        return False
-    trig = sorted(num.atoms(sp.sin, sp.cos), key=sp.default_sort_key)
-    args = sorted({t.args[0] for t in trig}, key=sp.default_sort_key)
-    if not args and not residual:
-        return False
-    rel, rep = [], {}
-    for a in args:
-        if not a.is_Symbol:
-            return False
-        s, c = sp.Dummy(f"s_{a}"), sp.Dummy(f"c_{a}")
-        rep[sp.sin(a)], rep[sp.cos(a)] = s, c
-        rel.append(s ** 2 + c ** 2 - 1)
+    except Exception:  # pragma: no cover - sympy failure on exotic input
+        return None, None
+    rep, rel = {}, []
+    for atom in num.atoms(sp.Function):
+        if not atom.free_symbols:
+            continue
+        if not isinstance(atom, (sp.sin, sp.cos)) or not atom.args[0].is_Symbol:
+            return None, None
+        a = atom.args[0]
+        if sp.sin(a) not in rep:
+            s, c = sp.Dummy(f"s_{a}"), sp.Dummy(f"c_{a}")
+            rep[sp.sin(a)], rep[sp.cos(a)] = s, c
+            rel.append(s ** 2 + c ** 2 - 1)
     num = sp.expand(num.xreplace(rep))
     extra = []
     for r in residual:
-        rn = sp.numer(sp.together(sp.expand_trig(r))).xreplace(rep)
-        extra.append(sp.expand(rn))
+        try:
+            rn = sp.numer(sp.together(sp.expand_trig(r)))
+        except Exception:  # pragma: no cover
+            return None, None
+        for atom in rn.atoms(sp.Function):
+            if atom.free_symbols and atom not in rep:
+                return None, None
+        extra.append(sp.expand(rn.xreplace(rep)))
     polys = rel + extra
     variables = sorted(num.free_symbols | set().union(*[p.free_symbols for p in polys]),
                        key=sp.default_sort_key)
+    if not variables:
+        return (num == 0), None
     try:
         for p in polys + [num]:
-            sp.Poly(p, *variables)  # raises when p is not polynomial in the variables
-        basis = sp.groebner(polys, *variables, order="grevlex")
-        _, remainder = sp.reduced(num, list(basis), *variables, order="grevlex")
+            if not p.is_polynomial(*variables):
+                return None, None
+        basis = sp.groebner(polys, *variables, order="grevlex") if extra else rel
+        remainder = sp.reduced(num, list(basis), *variables, order="grevlex")[1] \
+            if basis else num
     except (sp.PolynomialError, sp.polys.polyerrors.PolificationFailed, TypeError, ValueError,
             sp.polys.polyerrors.CoercionFailed):
-        return False
-    return sp.expand(remainder) == 0
+        return None, None
+    remainder = sp.expand(remainder)
+    if remainder == 0:
+        return True, None
+    if extra:
+        return None, None
+    return False, _parameter_warning(remainder, parameters, values or {})
+
+
+def _parameter_warning(poly_expr, parameters, values):
+    """Warn when a polynomial nonzero in the parameters vanishes at their values."""
+    params = [p for p in parameters if p in poly_expr.free_symbols]
+    if not params or any(p not in values for p in params):
+        return None
+    state = sorted(poly_expr.free_symbols - set(params), key=sp.default_sort_key)
+    try:
+        coeffs = sp.Poly(poly_expr, *state).coeffs() if state else [poly_expr]
+        at = {p: sp.Float(values[p]) for p in params}
+        at_abs = {p: sp.Float(abs(values[p])) for p in params}
+        nums = [abs(complex(sp.sympify(c).xreplace(at).evalf())) for c in coeffs]
+        scale = max(abs(complex(sum((abs(t) for t in sp.Add.make_args(sp.expand(c))),
+                                    sp.S.Zero).xreplace(at_abs).evalf())) for c in coeffs)
+    except (TypeError, ValueError, sp.PolynomialError):  # pragma: no cover
+        return None
+    if max(nums) <= 1e-12 * max(scale, 1.0):
+        return (f"the nonzero function {_short(poly_expr)} vanishes at the given parameter "
+                f"values (exact decisions treat parameters as generic)")
+    return None
+
+
+def _best_block(samples, r):
+    """(rows, cols, score) of the best r x r block over numeric samples.
+
+    The score of a block B of A is the worst over the samples of
+    sigma_min(B) / ||A||_2, doubled for a block that is the same at every sample.
+    """
+    R, K = samples[0].shape
+    row_sets = list(itertools.combinations(range(R), r))
+    col_sets = list(itertools.combinations(range(K), r))
+    if len(row_sets) * len(col_sets) > 400:
+        import scipy.linalg
+
+        col_sets = {tuple(sorted(scipy.linalg.qr(S, pivoting=True)[2][:r])) for S in samples}
+        pairs = set()
+        for cols in col_sets:
+            for S in samples:
+                rows = tuple(sorted(scipy.linalg.qr(S[:, cols].T, pivoting=True)[2][:r]))
+                pairs.add((rows, cols))
+        candidates = sorted(pairs)
+    else:
+        candidates = [(rows, cols) for rows in row_sets for cols in col_sets]
+    norms = [max(np.linalg.norm(S, 2), 1e-300) for S in samples]
+    best, best_score, best_raw = None, -1.0, 0.0
+    for rows, cols in candidates:
+        blocks = [S[np.ix_(rows, cols)] for S in samples]
+        # sigma_min(B) / ||A||: small when B is ill-conditioned *or* small compared
+        # with the matrix (for 1 x 1 blocks this prefers the largest entry).
+        ratios = [np.linalg.svd(B, compute_uv=False)[-1] / nrm for B, nrm in zip(blocks, norms)]
+        raw = min(ratios)
+        constant = all(np.allclose(B, blocks[0], rtol=1e-12, atol=1e-14) for B in blocks)
+        score = raw * (2.0 if constant and len(blocks) > 1 else 1.0)
+        if score > best_score * (1 + 1e-9) + 1e-15:
+            best, best_score, best_raw = (list(rows), list(cols)), score, raw
+    if best is None or best_raw <= 1e-14:
+        return None, None, 0.0
+    return best[0], best[1], best_raw
 
 
 def _singular_values(S, precision):
