@@ -284,9 +284,15 @@ def cmd_simulate(args, steps):
 
         with steps.step(f"plot {args.plot}"):
             plot_trajectory(result, args.plot)
-    summary = result.summary()
     if args.json:
-        return {k: _jsonable(v) for k, v in summary.items()}
+        data = {k: _jsonable(v) for k, v in result.summary().items()}
+        # The stable keys of the command's contract.
+        data.update(status=int(result.status), t_final=json_number(result.t[-1]),
+                    y_final=_jsonable(result.y[:, -1]), rhs_evals=int(result.nfev),
+                    constraint_residual_max=json_number(result.constraint_residual_max),
+                    energy_drift=json_number(result.energy_drift),
+                    wall_time_s=json_number(result.wall_time_s))
+        return data
     return result.describe()
 
 

@@ -20,6 +20,7 @@ __all__ = [
     "MissingParameterValueError",
     "InconsistentInitialDataError",
     "ComputationError",
+    "OptionalDependencyError",
 ]
 
 
@@ -76,6 +77,10 @@ class MissingParameterValueError(InputError):
 
 class InconsistentInitialDataError(InputError):
     """Initial data do not satisfy the constraints."""
+
+
+class OptionalDependencyError(InputError, ImportError):
+    """The requested output needs an optional extra that is not installed."""
 
 
 class ComputationError(NhhamError):

@@ -8,13 +8,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from .errors import NhhamError
+from .errors import OptionalDependencyError
 
 __all__ = ["OptionalDependencyError", "plot_work_precision", "plot_trajectory"]
-
-
-class OptionalDependencyError(NhhamError, ImportError):
-    """An optional dependency needed for this feature is not installed."""
 
 
 def _pyplot():
@@ -78,7 +74,8 @@ def plot_trajectory(result, path) -> str:
         axes[0].plot(result.t, series, label=name, linewidth=1)
     axes[0].legend(fontsize=7, ncol=4)
     axes[0].set_ylabel("state")
-    res = np.maximum(result.diagnostics.constraint_residual, 1e-300)
+    # Exact zeros (at t0, or after projection) would drag a log axis to 1e-300.
+    res = np.maximum(result.diagnostics.constraint_residual, 1e-17)
     axes[1].semilogy(result.t, res, linewidth=1)
     axes[1].set_ylabel("max |constraint residual|")
     axes[2].plot(result.t, result.energy - result.energy[0], label="E - E(0)", linewidth=1)

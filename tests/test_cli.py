@@ -212,3 +212,53 @@ def test_console_script_installed():
     proc = subprocess.run(["nhham", "classify", str(EXAMPLES / "rolling_disk.toml"), "--json"],
                           capture_output=True, text=True, timeout=300)
     assert proc.returncode == 0 and json.loads(proc.stdout)["status"] == "determined"
+
+
+# ---------------------------------------------------------------- simulate
+def _disk_closed_form(t, init, R):
+    """theta' and phi' are constant (lambda_1 cos + lambda_2 sin = 0, theta is
+    cyclic), so x' = R phi' cos(theta0 + theta' t) integrates to
+    x = x0 + (R phi'/theta') (sin(theta) - sin(theta0)), likewise y."""
+    th0, w, s = init["theta"], init["theta_dot"], init["phi_dot"]
+    th = th0 + w * t
+    r = R * s / w
+    return [init["x"] + r * (np.sin(th) - np.sin(th0)), init["y"] - r * (np.cos(th) - np.cos(th0)),
+            th, init["phi"] + s * t]
+
+
+@pytest.mark.parametrize("method", [[], ["--method", "rattle", "--step", "0.005"]])
+def test_simulate_rolling_disk_against_closed_form(method, tmp_path):
+    scene = tomllib.loads((EXAMPLES / "rolling_disk.toml").read_text())
+    d = run_json("simulate", EXAMPLES / "rolling_disk.toml", *method, "--output",
+                 tmp_path / "traj.csv")
+    for key in ("status", "t_final", "y_final", "constraint_residual_max", "energy_drift",
+                "rhs_evals", "wall_time_s"):
+        assert key in d
+    assert d["status"] == 0 and d["t_final"] == scene["simulate"]["t_end"]
+    expected = _disk_closed_form(d["t_final"], scene["initial"], scene["parameters"]["R"])
+    tol = 1e-7 if method else 1e-8
+    assert np.allclose(d["y_final"][:4], expected, atol=tol)
+    assert d["constraint_residual_max"] < (1e-12 if method else 1e-9)
+    rows = (tmp_path / "traj.csv").read_text().splitlines()
+    assert rows[0].startswith("t,x,y,theta,phi,x_dot")
+    assert len(rows) > 10
+
+
+def test_simulate_refuses_inconsistent_initial_data(tmp_path):
+    text = (EXAMPLES / "rolling_disk.toml").read_text().replace("x_dot = 2.0", "x_dot = 2.5")
+    scene = tmp_path / "bad_initial.toml"
+    scene.write_text(text)
+    proc = run("simulate", scene, check_status=2)
+    assert "constraints[0]" in proc.stderr and "residual" in proc.stderr
+    d = run_json("simulate", scene, "--project-initial")
+    assert d["status"] == 0 and d["constraint_residual_max"] < 1e-9
+
+
+def test_bench_quick_json():
+    d = run_json("bench", EXAMPLES / "chaplygin_sleigh.toml", "--quick")
+    methods = {r["method"] for r in d["rows"]}
+    assert {"DOP853", "rattle"} <= methods
+    for r in d["rows"]:
+        assert r["error"] is None or r["error"] >= 0
+    rattle = [r for r in d["rows"] if r["method"] == "rattle"]
+    assert max(r["constraint_residual"] for r in rattle) < 1e-12
