@@ -1,0 +1,221 @@
+"""Derivation cost: nhham's dynamics ingredients vs sympy's LagrangesMethod.
+
+For the N-link nonholonomic snake (:func:`nhham.models.snake`) this times, in
+the same process and on the same system:
+
+* ``system``: building and validating a fresh ``System`` from the snake's
+  expressions (validation computes the Hessian W and the one-forms mu);
+* ``ingredients``: ``lagrangian_geometry(system).ingredients`` -- W, the
+  forcing F = dL/dq - (d2L/dq dv) v (so xi_L), mu and the drift (so P(xi_L)),
+  every entry touched;
+* ``LagrangesMethod``: ``LagrangesMethod(L, q, nonhol_coneqs=...)`` followed by
+  ``form_lagranges_equations()`` (the comparable sympy step; converting the
+  expressions to dynamicsymbols happens outside the timing).
+
+L is written two ways (``--form``): ``compact`` (as nhham.models.snake
+writes it) and ``chain`` (the sum of the links' kinetic energies as a user
+would write it, unexpanded). sympy's global cache is cleared before every
+timed run, so no run profits from derivatives an earlier one computed.
+Times are CPU seconds of this process (``time.process_time``): both sides
+are single-threaded sympy, and CPU time stays meaningful on a shared,
+loaded machine where wall-clock time does not. Each figure is the median of the
+runs. The size of L is reported as ``sympy.count_ops`` and ``len(str(L))``,
+and a growth exponent k (time ~ size^k) is fitted by least squares on
+log-log data for N >= 2.
+
+Usage::
+
+    python bench/derive.py                # N = 1 2 4 8 12, 3 runs, both forms
+    python bench/derive.py --quick        # N <= 4, 1 run
+    python bench/derive.py --N 2 4 --runs 5
+    python bench/derive.py --profile 8 --form compact   # cProfile of the ingredients
+"""
+
+from __future__ import annotations
+
+import argparse
+import cProfile
+import os
+import platform
+import pstats
+import statistics
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import sympy as sp
+from sympy.core.cache import clear_cache
+from sympy.physics import mechanics as me
+
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+
+from nhham import System  # noqa: E402
+from nhham.lagrangian import lagrangian_geometry  # noqa: E402
+from nhham.mechanics import to_lagranges_method  # noqa: E402
+from nhham.models import snake, snake_centres  # noqa: E402
+
+DEFAULT_N = (1, 2, 4, 8, 12)
+QUICK_MAX_N = 4
+
+
+# ------------------------------------------------------------------ systems
+def snake_expressions(N, form):
+    """Coordinates, L, constraints and parameter values of the N-link snake.
+
+    ``compact``: L as nhham.models.snake writes it, v^T W v/2 expanded with
+    the closed-form W (cos(theta_j - theta_k) entries). ``chain``: L as a
+    user might write it, sum_i m |d/dt c_i|^2/2 + m l^2 theta_i'^2/24 with the
+    centres c_i of :func:`nhham.models.snake_centres`, not expanded. Same
+    physics (tests/test_models.py checks the identity), different sizes.
+    """
+    base = snake(N)
+    q, v = base.coordinates, base.velocities
+    if form == "compact":
+        L = base.lagrangian
+    elif form == "chain":
+        m, l = sp.symbols("m l")
+        L = sp.S.Zero
+        for X, Y in snake_centres(N):
+            dX = sum(X.diff(a) * w for a, w in zip(q, v))
+            dY = sum(Y.diff(a) * w for a, w in zip(q, v))
+            L += m * (dX**2 + dY**2) / 2
+        L += sum(m * l**2 / 24 * w**2 for w in v[2:])
+    else:
+        raise ValueError(f"unknown form {form!r}")
+    params = {p.name: value for p, value in base.parameter_values.items()}
+    return q, L, base.constraints, params
+
+
+# ------------------------------------------------------------------ timings
+def _touch(ingredients):
+    """Visit every entry so that nothing lazy escapes the timing."""
+    count = 0
+    for matrix in (ingredients.W, ingredients.forcing, ingredients.mu, ingredients.drift):
+        for entry in matrix:
+            count += entry is not None
+    return count
+
+
+def time_nhham(exprs):
+    """(seconds to build and validate the System, seconds for its ingredients).
+
+    One cold start (sympy cache cleared) per run; the two phases run in
+    sequence as they would in use.
+    """
+    q, L, cons, params = exprs
+    clear_cache()
+    start = time.process_time()
+    system = System(q, L, cons, parameters=params)
+    middle = time.process_time()
+    _touch(lagrangian_geometry(system).ingredients)
+    return middle - start, time.process_time() - middle
+
+
+def time_lagranges_method(exprs):
+    """Seconds for LagrangesMethod + form_lagranges_equations, from a cold cache."""
+    q, L, cons, params = exprs
+    lm, qs, _ = to_lagranges_method(System(q, L, cons, parameters=params))
+    L_dyn, cons_dyn = lm._L[0], list(lm.coneqs)
+    clear_cache()
+    start = time.process_time()
+    me.LagrangesMethod(L_dyn, list(qs), nonhol_coneqs=cons_dyn).form_lagranges_equations()
+    return time.process_time() - start
+
+
+def measure(Ns, runs, form, with_lm=True):
+    rows = []
+    for N in Ns:
+        exprs = snake_expressions(N, form)
+        L = exprs[1]
+        nh = [time_nhham(exprs) for _ in range(runs)]
+        t_sys = statistics.median(a for a, _ in nh)
+        t_ing = statistics.median(b for _, b in nh)
+        t_lm = statistics.median(time_lagranges_method(exprs) for _ in range(runs)) \
+            if with_lm else float("nan")
+        rows.append(dict(N=N, n=N + 2, m=N, ops=sp.count_ops(L), chars=len(str(L)),
+                         system=t_sys, ingredients=t_ing, lm=t_lm))
+        print(f"  [{form}] N={N:3d}: system {t_sys:.3f}s ingredients {t_ing:.3f}s "
+              f"LagrangesMethod {t_lm:.3f}s", file=sys.stderr, flush=True)
+    return rows
+
+
+# ------------------------------------------------------------------ report
+def growth_exponent(rows, key):
+    """Least-squares slope of log(time) against log(count_ops(L)), N >= 2."""
+    pts = [(r["ops"], r[key]) for r in rows if r["N"] >= 2 and r[key] == r[key] and r[key] > 0]
+    if len(pts) < 2:
+        return float("nan")
+    x = np.log([p[0] for p in pts])
+    y = np.log([p[1] for p in pts])
+    return float(np.polyfit(x, y, 1)[0])
+
+
+def table(rows):
+    lines = [
+        "| N | n | m | ops(L) | len(str(L)) | nhham system (s) | nhham ingredients (s) "
+        "| LagrangesMethod (s) | LM / ingredients | LM / (system + ingredients) |",
+        "|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|",
+    ]
+    for r in rows:
+        both = r["system"] + r["ingredients"]
+        lines.append(
+            f"| {r['N']} | {r['n']} | {r['m']} | {r['ops']} | {r['chars']} "
+            f"| {r['system']:.3f} | {r['ingredients']:.3f} | {r['lm']:.3f} "
+            f"| {r['lm'] / r['ingredients']:.1f}x | {r['lm'] / both:.1f}x |")
+    for r in rows:
+        r["total"] = r["system"] + r["ingredients"]
+    lines.append("")
+    lines.append("Fitted growth exponent k, time ~ count_ops(L)^k (N >= 2): "
+                 f"nhham ingredients {growth_exponent(rows, 'ingredients'):.2f}, "
+                 f"nhham system + ingredients {growth_exponent(rows, 'total'):.2f}, "
+                 f"LagrangesMethod {growth_exponent(rows, 'lm'):.2f}.")
+    return "\n".join(lines)
+
+
+def environment():
+    return (f"Python {platform.python_version()}, sympy {sp.__version__}, "
+            f"{platform.machine()} with {os.cpu_count()} CPU(s), {platform.system()}")
+
+
+def profile(N, form, limit=20):
+    q, L, cons, params = snake_expressions(N, form)
+    system = System(q, L, cons, parameters=params)
+    clear_cache()
+    prof = cProfile.Profile()
+    prof.enable()
+    _touch(lagrangian_geometry(system).ingredients)
+    prof.disable()
+    pstats.Stats(prof).sort_stats("cumulative").print_stats(limit)
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--N", type=int, nargs="+", default=list(DEFAULT_N),
+                        help="numbers of links (default 1 2 4 8 12)")
+    parser.add_argument("--runs", type=int, default=3, help="runs per N (median; default 3)")
+    parser.add_argument("--quick", action="store_true",
+                        help=f"cap N at {QUICK_MAX_N} and use one run")
+    parser.add_argument("--no-lm", action="store_true", help="skip LagrangesMethod")
+    parser.add_argument("--form", choices=("compact", "chain", "both"), default="both",
+                        help="how L is written (default both; see snake_expressions)")
+    parser.add_argument("--profile", type=int, metavar="N",
+                        help="profile the ingredients step for snake(N) and exit")
+    args = parser.parse_args(argv)
+    forms = ("compact", "chain") if args.form == "both" else (args.form,)
+    if args.profile:
+        profile(args.profile, forms[0])
+        return 0
+    Ns, runs = args.N, args.runs
+    if args.quick:
+        Ns, runs = [N for N in Ns if N <= QUICK_MAX_N], 1
+    print(f"derive benchmark: {environment()}; median of {runs} run(s), sympy cache "
+          f"cleared before every timed run, CPU seconds")
+    for form in forms:
+        print(f"\n### L written in {form} form\n")
+        print(table(measure(Ns, runs, form, with_lm=not args.no_lm)), flush=True)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
