@@ -149,25 +149,8 @@ def cmd_derive(args, steps):
         field = list(analysis.dynamics)
         free = analysis.free_multiplier_symbols
         multipliers = [analysis.multipliers.get(s, s) for s in G.multiplier_symbols]
-    with steps.step("display simplification"):
-        field = [display_form(f) for f in field]
-        multipliers = [display_form(f) for f in multipliers]
-        C = C.applyfunc(display_form)
-    state = [s.name for s in system.state]
-    data = {
-        "name": scene.name,
-        "side": "lagrangian",
-        "state": state,
-        "field": [expr_text(f) for f in field],
-        "multipliers": [expr_text(f) for f in multipliers],
-        "C": [[expr_text(C[i, j]) for j in range(C.cols)] for i in range(C.rows)],
-        "energy": expr_text(energy),
-        "free_multiplier_symbols": [s.name for s in free],
-    }
-    if args.json:
-        return data
-    return _render_derive(args, scene, data, field, multipliers, C, energy,
-                          [f"{n}'" for n in state])
+    return _derive_output(args, steps, scene, "lagrangian", system.state, field, multipliers,
+                          C, energy, free)
 
 
 def _derive_hamiltonian(args, steps, scene):
@@ -181,24 +164,30 @@ def _derive_hamiltonian(args, steps, scene):
         C = side.constraint_matrix_H
         field = list(side.projected_field_H)
         multipliers = list(side.multipliers_H)
+    return _derive_output(args, steps, scene, "hamiltonian", side.variables, field, multipliers,
+                          C, H, ())
+
+
+def _derive_output(args, steps, scene, side, variables, field, multipliers, C, energy, free):
+    """The derive result as JSON data or text, expressions simplified for display."""
     with steps.step("display simplification"):
         field = [display_form(f) for f in field]
         multipliers = [display_form(f) for f in multipliers]
         C = C.applyfunc(display_form)
-    state = [s.name for s in side.variables]
+    state = [s.name for s in variables]
     data = {
         "name": scene.name,
-        "side": "hamiltonian",
+        "side": side,
         "state": state,
         "field": [expr_text(f) for f in field],
         "multipliers": [expr_text(f) for f in multipliers],
         "C": [[expr_text(C[i, j]) for j in range(C.cols)] for i in range(C.rows)],
-        "energy": expr_text(H),
-        "free_multiplier_symbols": [],
+        "energy": expr_text(energy),
+        "free_multiplier_symbols": [s.name for s in free],
     }
     if args.json:
         return data
-    return _render_derive(args, scene, data, field, multipliers, C, H,
+    return _render_derive(args, scene, data, field, multipliers, C, energy,
                           [f"{n}'" for n in state])
 
 
