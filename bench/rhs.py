@@ -1,38 +1,56 @@
-"""Right-hand-side cost per state: nhham beside PyDy and LagrangesMethod + lambdify.
+"""Right-hand-side cost per state: nhham beside a hand-written C rhs, PyDy and Lagranges.
 
 The N-link snake (nhham.models.snake: N links with a knife edge each, n = N + 2,
 m = N) for N = 1, 2, 4, 8, 12, one state and batches of 10^4 states, all in
 this process:
 
 - nhham, compiled C backend: ``model.rhs(t, y)`` (the call an integrator makes),
-  the bare ctypes call underneath it (the fused generated C plus the call),
-  and a batch of 10^4 states (``model.rhs(t, Y)``, Y of shape (10^4, 2n));
+  the layers under it -- the CPython entry point alone (``compiled.ext.rhs``:
+  one C call that returns a new array) and the ctypes route
+  (``compiled.one``: copy into a scratch buffer + ctypes call) -- and a batch
+  of 10^4 states (``model.rhs(t, Y)``: one C call looping over the states, so
+  the per-state figure is the fused generated C itself);
+- a hand-fused C rhs of the same snake (bench/snake_hand.c: derived by hand
+  from the link Jacobians, one sincos per angle, O(N) recursions, the same
+  Cholesky/Schur solve), per state in a C loop over 10^4 states ("hand C",
+  the compute floor) and one state through a bare ctypes call with
+  preallocated buffers;
 - nhham, numpy backend: the same calls;
 - nhham closed form P(xi_L) compiled to C (symbolic solve, fused), N <= 2 only:
   deriving it symbolically gets expensive quickly;
 - PyDy: Kane's method + ``generate_ode_function(generator="cython")``;
-- sympy ``LagrangesMethod`` + ``lambdify`` + ``numpy.linalg.solve``.
+- sympy ``LagrangesMethod`` + ``lambdify`` + ``numpy.linalg.solve``;
+- with ``--baseline REV``: nhham's codegen.py and numeric.py of the git
+  revision REV (e.g. the last commit) loaded beside the current ones, the same
+  calls: before/after in one process.
 
-Run: ``python bench/rhs.py [--quick]`` (needs the ``bench`` extra: pydy, cython).
-Prints medians in microseconds per state and the ratios; no assertions.
+Run: ``python bench/rhs.py [--quick] [--baseline REV]`` (needs the ``bench``
+extra: pydy, cython). Prints medians in microseconds per state and the
+ratios; no assertions (but every variant is checked against nhham's values).
+``python bench/rhs.py --links 8 12 --flags=-O3 '--flags=-O3 -march=native'``
+compares compiler flags on the batched rhs instead.
 """
 
 from __future__ import annotations
 
 import argparse
+import ctypes
+import os
 import statistics
+import subprocess
 import sys
 import time
-
-import os
+import types
 
 import numpy as np
 import sympy as sp
 
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
-from nhham.codegen import numeric_model
+from nhham.codegen import compile_c, numeric_model
 from nhham.models import snake
+
+HERE = os.path.dirname(os.path.abspath(__file__))
 
 
 def median_time(fn, number, repeat=5):
@@ -137,8 +155,84 @@ def lagranges_rhs(N):
     return rhs
 
 
+# ------------------------------------------------------------- hand-fused C
+def hand_rhs(N):
+    """bench/snake_hand.c compiled for N links (same flags as nhham's code):
+    (single(y) -> out, batch(Y) -> OUT, the bare ctypes call for one state)."""
+    with open(os.path.join(HERE, "snake_hand.c")) as fh:
+        source = f"#define NL {N}\n" + fh.read()
+    lib = ctypes.CDLL(compile_c(source))
+    p = np.array([1.0, 1.0])  # m, l as in nhham.models.snake's defaults
+    pp = ctypes.c_void_p(p.ctypes.data)
+    n2 = 2 * (N + 2)
+    ybuf, obuf = np.zeros(n2), np.zeros(n2)
+    yp, op = ctypes.c_void_p(ybuf.ctypes.data), ctypes.c_void_p(obuf.ctypes.data)
+    f1, fk = lib.hand_rhs, lib.hand_rhs_batch
+
+    def single(y):
+        ybuf[:] = y
+        f1(yp, op, pp)
+        return obuf.copy()
+
+    def batch(Y):
+        OUT = np.empty_like(Y)
+        fk(ctypes.c_int(Y.shape[0]), ctypes.c_void_p(Y.ctypes.data),
+           ctypes.c_void_p(OUT.ctypes.data), pp)
+        return OUT
+
+    return single, batch, lambda: f1(yp, op, pp), (ybuf, obuf, p)
+
+
+# ------------------------------------------------------------------ baseline
+def load_baseline(rev):
+    """numeric_model of git revision ``rev``: its codegen.py and numeric.py
+    executed as nhham._baseline_codegen / nhham._baseline_numeric (the rest of
+    the package is the current one). Read-only git (``git show``)."""
+    root = os.path.dirname(HERE)
+
+    def show(path):
+        return subprocess.run(["git", "-C", root, "show", f"{rev}:{path}"], check=True,
+                              capture_output=True, text=True).stdout
+
+    sources = {"nhham._baseline_numeric": show("nhham/numeric.py"),
+               "nhham._baseline_codegen": show("nhham/codegen.py").replace(
+                   "from .numeric import", "from ._baseline_numeric import")}
+    for name, text in sources.items():
+        module = types.ModuleType(name)
+        module.__package__ = "nhham"
+        module.__file__ = f"<{rev}:{name}>"
+        sys.modules[name] = module
+        exec(compile(text, module.__file__, "exec"), module.__dict__)
+    return sys.modules["nhham._baseline_codegen"].numeric_model
+
+
+# ------------------------------------------------------------ compiler flags
+def compare_flags(N, variants, batch_k=10_000, rounds=15):
+    """The generated C of the N-link snake compiled with the default flags plus
+    each variant, batched rhs per state timed in interleaved rounds (so that
+    the machine's noise hits every variant alike); medians over the rounds."""
+    model = numeric_model(snake(N), backend="c")
+    Y = snake_states(model, batch_k)
+    pext = model._pext0
+    libs = {}
+    for flags in variants:
+        path = compile_c(model.c_source, flags=flags.split())
+        from nhham.numeric import CompiledRHS
+
+        libs[flags or "-O2 (default)"] = CompiledRHS.load(path, model.layout)
+    ref = model.rhs(0.0, Y)
+    times = {name: [] for name in libs}
+    for _ in range(rounds):
+        for name, lib in libs.items():
+            start = time.perf_counter()
+            OUT, bad = lib.batch(Y, pext)
+            times[name].append((time.perf_counter() - start) / batch_k)
+            assert not bad and np.allclose(OUT[:, :2 * model.n], ref, rtol=1e-10, atol=1e-10)
+    return {name: statistics.median(t) for name, t in times.items()}
+
+
 # ------------------------------------------------------------------ main
-def measure(N, batch_k=10_000, with_peers=True, number=2000):
+def measure(N, batch_k=10_000, with_peers=True, number=2000, baseline=None):
     row = {"N": N}
     system = snake(N)
     t0 = time.perf_counter()
@@ -147,13 +241,32 @@ def measure(N, batch_k=10_000, with_peers=True, number=2000):
     model_np = numeric_model(system, backend="numpy")
     Y = snake_states(model_c, batch_k)
     y = Y[0].copy()
-    row["nhham_c_single"] = median_time(lambda: model_c.rhs(0.0, y), number)
-    pext = model_c._pext0
-    row["nhham_c_ctypes"] = median_time(lambda: model_c.compiled.one(y, pext), number)
-    row["nhham_c_batch"] = median_time(lambda: model_c.rhs(0.0, Y), 3, repeat=3) / batch_k
+    ref = model_np.rhs(0.0, y)
+    assert np.allclose(model_c.rhs(0.0, y), ref, rtol=1e-11, atol=1e-11)
+    assert np.allclose(model_c.rhs(0.0, Y), model_np.rhs(0.0, Y), rtol=1e-10, atol=1e-10)
+    single, batch, bare, keep = hand_rhs(N)
+    assert np.allclose(single(y), ref, rtol=1e-11, atol=1e-11)
+    assert np.allclose(batch(Y), model_np.rhs(0.0, Y), rtol=1e-10, atol=1e-10)
+    pext, addr = model_c._pext0, model_c._paddr0
+    ext = model_c.compiled.ext
+    # The C-level figures first and last (the VM is noisy): medians of both passes.
+    c_batch = [median_time(lambda: model_c.rhs(0.0, Y), 3, repeat=5) / batch_k]
+    h_batch = [median_time(lambda: batch(Y), 3, repeat=5) / batch_k]
+    row["nhham_c_single"] = median_time(lambda: model_c.rhs(0.0, y), number, repeat=7)
+    if ext is not None:
+        row["nhham_c_ext"] = median_time(lambda: ext.rhs(y, addr), number, repeat=7)
+    row["nhham_c_ctypes"] = median_time(lambda: model_c.compiled.one(y, pext), number, repeat=7)
+    row["hand_single"] = median_time(bare, number, repeat=7)
+    c_batch.append(median_time(lambda: model_c.rhs(0.0, Y), 3, repeat=5) / batch_k)
+    h_batch.append(median_time(lambda: batch(Y), 3, repeat=5) / batch_k)
+    row["nhham_c_batch"], row["hand_batch"] = min(c_batch), min(h_batch)
     row["nhham_np_single"] = median_time(lambda: model_np.rhs(0.0, y), max(50, number // 20))
     row["nhham_np_batch"] = median_time(lambda: model_np.rhs(0.0, Y), 1, repeat=3) / batch_k
-    ref = model_c.rhs(0.0, y)
+    if baseline is not None:
+        old = baseline(system, backend="c")
+        assert np.allclose(old.rhs(0.0, y), ref, rtol=1e-10, atol=1e-10)
+        row["base_single"] = median_time(lambda: old.rhs(0.0, y), number, repeat=7)
+        row["base_batch"] = median_time(lambda: old.rhs(0.0, Y), 3, repeat=5) / batch_k
     if N <= 2:
         t0 = time.perf_counter()
         closed = numeric_model(system, backend="c", path="closed_form")
@@ -191,31 +304,55 @@ def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="N = 1, 2, 4 and fewer repeats")
     parser.add_argument("--no-peers", action="store_true", help="skip PyDy and LagrangesMethod")
+    parser.add_argument("--baseline", metavar="REV",
+                        help="also time codegen.py/numeric.py of this git revision")
+    parser.add_argument("--links", type=int, nargs="*", help="snake sizes (default 1 2 4 8 12)")
+    parser.add_argument("--flags", action="append", metavar="FLAGS",
+                        help="only compare extra compiler flags against the default on the "
+                             "batched rhs; repeat it: --flags=-O3 '--flags=-O3 -march=native'")
     args = parser.parse_args(argv)
-    Ns = (1, 2, 4) if args.quick else (1, 2, 4, 8, 12)
-    rows = [measure(N, with_peers=not args.no_peers, number=500 if args.quick else 2000)
-            for N in Ns]
+    if args.flags is not None:
+        variants = [""] + list(args.flags)
+        print("batched rhs, microseconds per state (median of 15 interleaved rounds of 10^4)")
+        print("| N | " + " | ".join(v or "-O2 (default)" for v in variants) + " |")
+        print("|---|" + "---|" * len(variants))
+        for N in args.links or (8, 12):
+            res = compare_flags(N, variants)
+            print(f"| {N} | " + " | ".join(f"{1e6 * v:.2f}" for v in res.values()) + " |")
+        return None
+    Ns = args.links or ((1, 2, 4) if args.quick else (1, 2, 4, 8, 12))
+    baseline = load_baseline(args.baseline) if args.baseline else None
+    rows = [measure(N, with_peers=not args.no_peers, number=500 if args.quick else 2000,
+                    baseline=baseline) for N in Ns]
     us = lambda v: "-" if v is None or v != v else f"{1e6 * v:.2f}"  # noqa: E731
     print("right-hand side, microseconds per state (median); snake with N links")
-    head = ["N", "nhham C rhs()", "bare C call", "nhham C batch", "nhham numpy rhs()",
-            "numpy batch", "closed-form C rhs()", "PyDy Cython", "PyDy batch",
-            "Lagranges+lambdify"]
-    print("| " + " | ".join(head) + " |")
-    print("|" + "---|" * len(head))
+    cols = [("N", None), ("nhham C rhs()", "nhham_c_single"),
+            ("CPython entry", "nhham_c_ext"), ("ctypes call", "nhham_c_ctypes"),
+            ("nhham C batch", "nhham_c_batch"), ("hand C (batch)", "hand_batch"),
+            ("hand C ctypes", "hand_single"), ("numpy rhs()", "nhham_np_single"),
+            ("numpy batch", "nhham_np_batch"), ("closed-form C rhs()", "closed_c_single"),
+            ("closed-form C batch", "closed_c_batch"),
+            ("PyDy Cython", "pydy_single"), ("PyDy batch", "pydy_batch"),
+            ("Lagranges+lambdify", "lagranges_single")]
+    if baseline is not None:
+        cols[1:1] = [(f"{args.baseline} rhs()", "base_single"),
+                     (f"{args.baseline} batch", "base_batch")]
+    print("| " + " | ".join(c for c, _ in cols) + " |")
+    print("|" + "---|" * len(cols))
     for r in rows:
-        vals = [str(r["N"]), us(r["nhham_c_single"]), us(r["nhham_c_ctypes"]),
-                us(r["nhham_c_batch"]), us(r["nhham_np_single"]), us(r["nhham_np_batch"]),
-                us(r.get("closed_c_single")), us(r.get("pydy_single")), us(r.get("pydy_batch")),
-                us(r.get("lagranges_single"))]
-        print("| " + " | ".join(vals) + " |")
+        print("| " + " | ".join([str(r["N"])] + [us(r.get(k)) for _, k in cols[1:]]) + " |")
     print()
     for r in rows:
-        ratios = []
+        ratios = [f"rhs()/hand-C {r['nhham_c_single'] / r['hand_batch']:.2f}x",
+                  f"batch/hand-C {r['nhham_c_batch'] / r['hand_batch']:.2f}x",
+                  f"rhs()/batch {r['nhham_c_single'] / r['nhham_c_batch']:.2f}x"]
+        if "base_single" in r:
+            ratios.append(f"{args.baseline}/now rhs() {r['base_single'] / r['nhham_c_single']:.1f}x"
+                          f", batch {r['base_batch'] / r['nhham_c_batch']:.1f}x")
         if "pydy_single" in r:
             ratios.append(f"PyDy/nhham-C {r['pydy_single'] / r['nhham_c_single']:.1f}x")
         if "lagranges_single" in r:
             ratios.append(f"Lagranges/nhham-C {r['lagranges_single'] / r['nhham_c_single']:.0f}x")
-        ratios.append(f"rhs()/bare-C {r['nhham_c_single'] / r['nhham_c_ctypes']:.2f}x")
         if "closed_c_single" in r:
             ratios.append(f"rhs()/closed-form-C {r['nhham_c_single'] / r['closed_c_single']:.2f}x")
         ratios.append(f"codegen {r['codegen_s']:.1f} s")

@@ -11,7 +11,14 @@ uses) -- at rtol = atol = 1e-3 .. 1e-13, with its error against the same
 reference and the constraint residual along its trajectory. Finally the time
 to reach relative error 1e-6 and 1e-10 for both, and the ratio.
 
-Run: ``python bench/work_precision.py [--quick] [--plot DIR]`` (``bench`` extra).
+RK23, RK45 and DOP853 run as one compiled loop when the model is compiled
+(``simulate(loop="auto")``); as the in-process baseline for that, DOP853 (with
+and without projection) is also run through scipy's Python loop
+(``loop="scipy"``, the previous path) on the same model. A summary table of
+all problems closes the output.
+
+Run: ``python bench/work_precision.py [--quick] [--plot DIR] [--repeats K]``
+(``bench`` extra).
 """
 
 from __future__ import annotations
@@ -164,6 +171,7 @@ def main(argv=None):
     parser.add_argument("--repeats", type=int, default=3)
     args = parser.parse_args(argv)
     peer_tols = [10.0 ** -k for k in range(3, 14)]
+    summary = []
     for name, system, y0, t_end, peer, extra in problems(args.quick):
         print(f"\n## {name}, t in [0, {t_end}]\n", flush=True)
         model = numeric_model(system)
@@ -178,6 +186,15 @@ def main(argv=None):
             os.makedirs(args.plot, exist_ok=True)
             path = os.path.join(args.plot, name.replace(" ", "_") + ".png")
             print("diagram:", plot_work_precision(wp, path))
+        base = None
+        if model.backend == "c":
+            base = work_precision(model, y0, (0.0, t_end), methods=["DOP853"], loop="scipy",
+                                  repeats=args.repeats, reference_digits=wp.reference_digits,
+                                  tolerances=(1e-5, 1e-8, 1e-11) if args.quick else
+                                  (1e-4, 1e-6, 1e-8, 1e-10, 1e-12))
+            print("\nDOP853 through scipy's Python loop (loop='scipy', the previous path; same "
+                  "model, same process):\n")
+            print(base.table())
         ref = reference_solution(model, y0, (0.0, t_end), digits=wp.reference_digits,
                                  t_eval=[t_end])
         try:
@@ -206,10 +223,28 @@ def main(argv=None):
             line += (f"nhham best {best[0]} {1e3 * best[1]:.2f} ms" if best else "nhham: none")
             if best_exact:
                 line += f"; best with residual <= 1e-12: {best_exact[0]} {1e3 * best_exact[1]:.2f} ms"
+            slow = None
+            if base is not None:
+                slow_ok = [v for v in base.time_to_solution(target).values() if v is not None]
+                slow = min(slow_ok) if slow_ok else None
+                line += (f"; DOP853 with scipy's loop {1e3 * slow:.2f} ms" if slow
+                         else "; scipy loop: not reached")
             line += f"; PyDy {1e3 * peer_t:.2f} ms" if peer_t else "; PyDy: not reached"
             if best and peer_t:
                 line += f"; ratio PyDy/nhham = {peer_t / best[1]:.1f}x"
             print(line, flush=True)
+            summary.append((name, target, best, best_exact, slow, peer_t))
+    print("\nSummary: time to solution (medians of the repeats; ratio = PyDy / nhham best)\n")
+    print("| problem | rel. error | nhham best | best with residual <= 1e-12 | "
+          "DOP853, scipy's loop | PyDy | PyDy / nhham | scipy loop / nhham |")
+    print("|---|---|---|---|---|---|---|---|")
+    ms = lambda kv: f"{kv[0]} {1e3 * kv[1]:.2f} ms" if kv else "-"  # noqa: E731
+    for name, target, best, best_exact, slow, peer_t in summary:
+        ratio = f"{peer_t / best[1]:.1f}x" if best and peer_t else "-"
+        speed = f"{slow / best[1]:.1f}x" if best and slow else "-"
+        print(f"| {name} | {target:.0e} | {ms(best)} | {ms(best_exact)} | "
+              f"{'-' if slow is None else f'{1e3 * slow:.2f} ms'} | "
+              f"{'-' if peer_t is None else f'{1e3 * peer_t:.2f} ms'} | {ratio} | {speed} |")
 
 
 if __name__ == "__main__":

@@ -4,7 +4,12 @@ Methods
 -------
 ``"RK23"``, ``"RK45"``, ``"DOP853"``, ``"Radau"``, ``"BDF"``, ``"LSODA"``
     The :mod:`scipy.integrate` solvers on the projected field (stepped here,
-    so that a failure keeps the trajectory computed so far). Options:
+    so that a failure keeps the trajectory computed so far). With the
+    compiled backend, RK23, RK45 and DOP853 run as one compiled loop instead
+    (``loop="auto"``): scipy's algorithm (its coefficients, initial step,
+    error norm, step-size control and dense output) with the projection and
+    the storage done in C too, so no Python runs per step; ``loop="scipy"``
+    keeps scipy's own Python loop (same steps up to round-off). Options:
     ``projection=True`` projects onto M_1 after every step (velocities in the
     kinetic metric, position constraints by Newton iteration);
     ``baumgarte=(alpha, beta)`` replaces d(phi)/dt = 0 by
@@ -40,8 +45,8 @@ from .errors import InconsistentInitialDataError, InputError
 from .integrators import FIXED_STEP_METHODS, run_fixed_step
 from .numeric import NumericModel, NumericsWarning, ProjectionOutcome
 
-__all__ = ["simulate", "SimulationResult", "SCIPY_METHODS", "METHODS", "work_precision",
-           "plot_trajectory", "plot_work_precision"]
+__all__ = ["simulate", "SimulationResult", "SCIPY_METHODS", "COMPILED_METHODS", "METHODS",
+           "work_precision", "plot_trajectory", "plot_work_precision"]
 
 
 def __getattr__(name):
@@ -59,6 +64,9 @@ def __getattr__(name):
 
 SCIPY_METHODS = {"RK23": RK23, "RK45": RK45, "DOP853": DOP853, "Radau": Radau, "BDF": BDF,
                  "LSODA": LSODA}
+#: scipy methods that also run as one compiled loop (``loop="compiled"``).
+COMPILED_METHODS = ("RK23", "RK45", "DOP853")
+_LOOPS = ("auto", "compiled", "scipy")
 METHODS = tuple(SCIPY_METHODS) + tuple(FIXED_STEP_METHODS) + ("reference",)
 
 # The work integral rides along as an extra state; it must not steer the
@@ -226,8 +234,8 @@ def simulate(system_or_model, y0, t_span, *, method: str = "DOP853", rtol: float
              projection: bool = False, baumgarte=None, project_initial: bool = False,
              initial_tol: float = 1e-10, residual_tol: float | None = None,
              reference_digits: int | None = None, save_every: int = 1,
-             backend: str = "auto", warn: bool = True, progress: bool = False
-             ) -> SimulationResult:
+             backend: str = "auto", warn: bool = True, progress: bool = False,
+             loop: str = "auto") -> SimulationResult:
     """Integrate the constrained dynamics from ``y0`` over ``t_span``.
 
     Parameters
@@ -270,6 +278,12 @@ def simulate(system_or_model, y0, t_span, *, method: str = "DOP853", rtol: float
         Issue the diagnostics' warnings as :class:`NumericsWarning`.
     progress : bool
         Report progress of the adaptive methods on stderr (every 10% of t_span).
+    loop : {"auto", "compiled", "scipy"}
+        RK23, RK45, DOP853: ``"auto"`` runs the whole integration as one
+        compiled loop when the model has the compiled backend (saddle path),
+        else scipy's Python loop; ``"compiled"`` insists (InputError if
+        impossible); ``"scipy"`` always uses scipy's loop. Both give the same
+        steps up to round-off. ``result.settings["loop"]`` says which ran.
 
     Returns
     -------
@@ -288,6 +302,7 @@ def simulate(system_or_model, y0, t_span, *, method: str = "DOP853", rtol: float
     if not (math.isfinite(t0) and math.isfinite(t1)) or t1 == t0:
         raise InputError(f"t_span: need two different finite times, got {t_span!r}")
     _check_options(method, step, projection, baumgarte, model)
+    compiled_loop = _use_compiled_loop(model, method, loop)
     y_init, initial = _initial_state(model, y0, project_initial, initial_tol)
     settings = {"rtol": rtol, "atol": atol, "step": step, "projection": projection,
                 "baumgarte": None if baumgarte is None else tuple(map(float, baumgarte)),
@@ -297,7 +312,12 @@ def simulate(system_or_model, y0, t_span, *, method: str = "DOP853", rtol: float
         residual_tol = 1e-11 if exact else 1e-8
 
     start = time.perf_counter()
-    if method in SCIPY_METHODS:
+    if compiled_loop:
+        settings["loop"] = "compiled"
+        run = _run_compiled(model, y_init, t0, t1, method, rtol, atol, max_step, first_step,
+                            t_eval, projection, baumgarte, progress)
+    elif method in SCIPY_METHODS:
+        settings["loop"] = "scipy"
         run = _run_scipy(model, y_init, t0, t1, method, rtol, atol, max_step, first_step,
                          t_eval, projection, baumgarte, progress)
     elif method in FIXED_STEP_METHODS:
@@ -370,6 +390,20 @@ def _check_options(method, step, projection, baumgarte, model):
             raise InputError("baumgarte: needs the saddle path (path='saddle')")
 
 
+def _use_compiled_loop(model, method, loop) -> bool:
+    if loop not in _LOOPS:
+        raise InputError(f"loop: expected one of {', '.join(_LOOPS)}, got {loop!r}")
+    possible = (method in COMPILED_METHODS and model.compiled is not None
+                and model.path == "saddle")
+    if loop == "compiled" and not possible:
+        why = (f"it is for {', '.join(COMPILED_METHODS)}, not {method!r}"
+               if method not in COMPILED_METHODS else
+               f"the model has no compiled C backend ({model.backend_note})"
+               if model.compiled is None else "the compiled loop needs the saddle path")
+        raise InputError(f"loop: 'compiled' is not possible: {why}")
+    return possible and loop != "scipy"
+
+
 def _initial_state(model, y0, project_initial, tol):
     y = model.state(y0)
     if not np.all(np.isfinite(y)):
@@ -397,16 +431,14 @@ class _Stop(Exception):
 
 def _make_fun(model, baumgarte, counter):
     n2 = 2 * model.n
+    field = model.field_function(baumgarte)
 
     def fun(t, z):
         if z.ndim == 1:
-            dy, _, P, status = model.evaluate(z[:n2], baumgarte)
+            out = field(z)
             counter[0] += 1
-            if status:
-                raise _Stop(*_eval_failure(status, t, z[:n2]))
-            out = np.empty(n2 + 1)
-            out[:n2] = dy
-            out[n2] = P
+            if type(out) is int:
+                raise _Stop(*_eval_failure(out, t, z[:n2]))
             return out
         # Vectorised call (scipy's finite-difference Jacobian): z is (2n+1, k).
         dY, _, P, status = model.evaluate(np.ascontiguousarray(z[:n2].T), baumgarte)
@@ -483,6 +515,122 @@ def _run_scipy(model, y0, t0, t1, method, rtol, atol, max_step, first_step, t_ev
     Z = np.array(zs) if zs else np.zeros((0, n2 + 1))
     return _Run(np.array(ts), Z[:, :n2], Z[:, n2], status, message, counter[0], njev, nlu,
                 nsteps)
+
+
+_TABLEAUX: dict = {}
+_EXTRA_STAGES = 16  # DOP853's stages with the dense-output extras (SEXT in the C source)
+
+
+def _tableau(method):
+    """(info, coefficients) of scipy's class for ``nhham_erk`` (see its C comment)."""
+    if method not in _TABLEAUX:
+        cls = SCIPY_METHODS[method]
+        s = cls.n_stages
+        A = np.zeros((s, s))
+        A0 = np.asarray(cls.A, dtype=float)
+        A[:, :A0.shape[1]] = A0[:s]
+        B, C = np.asarray(cls.B, dtype=float), np.asarray(cls.C, dtype=float)[:s]
+        if method == "DOP853":
+            E, E3, P = cls.E5, cls.E3, np.zeros((s + 1, 0))
+            Aext, Cext, D = cls.A_EXTRA, cls.C_EXTRA, cls.D
+        else:
+            E, E3, P = cls.E, np.zeros(s + 1), np.asarray(cls.P, dtype=float)
+            Aext, Cext, D = (np.zeros((3, _EXTRA_STAGES)), np.zeros(3),
+                             np.zeros((4, _EXTRA_STAGES)))
+        tab = np.concatenate([A.ravel(), B, C, np.asarray(E, dtype=float), E3, P.ravel(),
+                              np.asarray(Aext, dtype=float).ravel(), Cext,
+                              np.asarray(D, dtype=float).ravel()])
+        info = np.array([s, method == "DOP853", P.shape[1], cls.error_estimator_order, 1],
+                        dtype=np.intc)
+        _TABLEAUX[method] = (info, np.ascontiguousarray(tab))
+    info, tab = _TABLEAUX[method]
+    return info.copy(), tab
+
+
+def _run_compiled(model, y0, t0, t1, method, rtol, atol, max_step, first_step, t_eval,
+                  projection, baumgarte, progress=False) -> _Run:
+    """RK23/RK45/DOP853 as one compiled loop (``nhham_erk``): scipy's algorithm,
+    projection and storage in C; Python only between chunks of stored steps."""
+    n2 = 2 * model.n
+    nz = n2 + 1
+    # scipy's validation of the options
+    if not max_step > 0:
+        raise ValueError("`max_step` must be positive.")
+    if first_step is not None:
+        if first_step <= 0:
+            raise ValueError("`first_step` must be positive.")
+        if first_step > abs(t1 - t0):
+            raise ValueError("`first_step` exceeds bounds.")
+    eps = np.finfo(float).eps
+    rtol = float(rtol)
+    if rtol < 100 * eps:
+        warnings.warn("At least one element of `rtol` is too small. "
+                      f"Setting `rtol = np.maximum(rtol, {100 * eps})`.", stacklevel=3)
+        rtol = 100 * eps
+    atol_z = np.ascontiguousarray(np.append(np.broadcast_to(np.asarray(atol, dtype=float), (n2,)),
+                                            _WORK_ATOL))
+    if np.any(atol_z < 0):
+        raise ValueError("`atol` must be positive.")
+    info, tab = _tableau(method)
+    a2, b2 = (0.0, 0.0) if baumgarte is None else (2.0 * baumgarte[0], baumgarte[1] ** 2)
+    pext = model._pext(a2, b2)
+    z0 = np.append(y0, 0.0)
+    state = np.zeros(2 + 2 * nz)
+    state[0], state[1] = t0, (-1.0 if first_step is None else float(first_step))
+    state[2:2 + nz] = z0
+    ts, zs = [np.array([t0])], [z0[None, :]]
+    if t_eval is not None:
+        t_eval = np.ascontiguousarray(t_eval, dtype=float)
+        if not np.isclose(t_eval[0], t0):
+            ts, zs = [], []
+        cap = max(1, len(t_eval))
+    else:
+        cap = 256
+    i_eval = np.array([len(ts)], dtype=np.int64)
+    nout, counts = np.zeros(1, dtype=np.int64), np.zeros(2, dtype=np.int64)
+    fail = np.zeros(1 + nz)
+    out_t, out_z = np.empty(cap), np.empty((cap, nz))
+    reported = 0
+    while True:
+        t_pause = t1 if not progress else t0 + (t1 - t0) * min(1.0, (reported + 1) / 10)
+        status = model.compiled.erk(info, tab, state, t1, rtol, atol_z, float(max_step),
+                                    projection, 1e-14, 50, t_eval, i_eval, out_t, out_z, nout,
+                                    t_pause, pext, counts, fail)
+        info[4] = 0
+        if t_eval is None:
+            k = int(nout[0])
+            ts.append(out_t[:k].copy())
+            zs.append(out_z[:k].copy())
+            nout[0] = 0
+            if k == cap and cap < 65536:
+                cap *= 4
+                out_t, out_z = np.empty(cap), np.empty((cap, nz))
+        if progress:
+            reported = _report(state[0], t0, t1, reported)
+        if status != 1:
+            break
+    if t_eval is not None:
+        ts.append(out_t[:int(nout[0])])
+        zs.append(out_z[:int(nout[0])])
+    t_now = float(state[0])
+    message = STATUS[0]
+    if status == -1:
+        status, message = -1, (f"{method} failed at t = {t_now:.6g}: Required step size is "
+                               f"less than spacing between numbers.")
+    elif status == -2:
+        message = f"non-finite or overflowing state at t = {t_now:.6g}; the run was stopped"
+    elif status in (-3, -5):
+        status, message = _eval_failure(1 if status == -3 else 2, fail[0], fail[1:1 + n2])
+    elif status == -4:
+        message = (f"projection onto M_1 failed at t = {t_now:.6g}: the Newton iteration for "
+                   f"the position constraints did not converge")
+    elif status == -6:
+        status, message = -3, (f"singular linear system in the projection onto M_1 at "
+                               f"t = {t_now:.6g}")
+    T = np.concatenate(ts) if ts else np.zeros(0)
+    Z = np.concatenate(zs) if zs else np.zeros((0, nz))
+    return _Run(T, Z[:, :n2], Z[:, n2], int(status), message, int(counts[0]), 0, 0,
+                int(counts[1]))
 
 
 def _report(t, t0, t1, reported):

@@ -420,15 +420,16 @@ def rk4(model, y0, t0, t1, h, *, projection: bool = False, baumgarte=None,
     """
     n2 = 2 * model.n
     counter = {"nfev": 0}
+    field = model.field_function(baumgarte)  # z (2n + 1) -> [dy, power] or a status
 
     def f(z):
-        dy, _, P, status = model.evaluate(z[:n2], baumgarte)
+        out = field(z)
         counter["nfev"] += 1
-        if status:
-            raise _Failure(-3 if status == 1 else -2,
-                           "singular saddle-point system" if status == 1 else
+        if type(out) is int:
+            raise _Failure(-3 if out == 1 else -2,
+                           "singular saddle-point system" if out == 1 else
                            "non-finite right-hand side (NaN or overflow)")
-        return np.append(dy, P)
+        return out
 
     def step(z, h):
         k1 = f(z)

@@ -8,6 +8,19 @@ defined. Vectors on TQ are sympy column matrices of length 2n in the order
 Nothing is computed before it is asked for. The symbolic inverse of W is
 never written out: every product W^{-1} b is a linear solve, and the
 multipliers come from a solve with the m x m matrix C.
+
+Fast path: when L is quadratic in the velocities, L = v^T W(q) v / 2 +
+b(q) . v - V(q) (every natural Lagrangian), W, b and V are read from the
+terms of L (:func:`nhham.system.quadratic_parts`) and the momenta, the mixed
+Hessian and the forcing are assembled from derivatives of the small entries
+of W, b and V instead of differentiating L twice::
+
+    F_B = 1/2 v^T (dW/dq^B) v - (dW_BA/dq^C) v^A v^C
+          + (db_A/dq^B - db_B/dq^A) v^A - dV/dq^B.
+
+Each entry is differentiated term by term and only by the coordinates the
+term contains. Other Lagrangians take the general path (derivatives of L);
+both give the same expressions up to algebraic rearrangement.
 """
 
 from __future__ import annotations
@@ -19,6 +32,7 @@ import sympy as sp
 
 from .onmanifold import Decision, Submanifold
 from .symbols import acceleration_symbol, multiplier_symbol
+from .system import quadratic_parts
 
 __all__ = ["LagrangianGeometry", "lagrangian_geometry", "DynamicsIngredients"]
 
@@ -70,14 +84,20 @@ def lagrangian_geometry(system, precision: int | None = None, samples: int = 6,
 class LagrangianGeometry:
     """Lagrangian-side geometry of a constrained system (frozen, lazy).
 
-    Every attribute is computed on first access and then kept.
+    Every attribute is computed on first access and then kept. Arguments as
+    :func:`lagrangian_geometry`, plus ``fast`` (default True): use the
+    quadratic fast path when L is quadratic in the velocities; False always
+    differentiates L (the general path, for comparisons).
     """
 
-    def __init__(self, system, precision=None, samples=6, seed=1996):
+    def __init__(self, system, precision=None, samples=6, seed=1996, fast=True):
         object.__setattr__(self, "system", system)
         object.__setattr__(self, "precision", precision)
         object.__setattr__(self, "samples", samples)
         object.__setattr__(self, "seed", seed)
+        # fast=False forces the general path (differentiate L) even for a
+        # Lagrangian quadratic in the velocities: for tests and comparisons.
+        object.__setattr__(self, "fast", bool(fast))
 
     def __setattr__(self, key, value):
         raise AttributeError(f"LagrangianGeometry is frozen; cannot set {key!r}")
@@ -103,8 +123,51 @@ class LagrangianGeometry:
         return sp.Matrix(self.system.velocities)
 
     @cached_property
+    def _parts(self):
+        """QuadraticParts of L (fast path) or None (general path)."""
+        if not self.fast:
+            return None
+        if getattr(type(self.system), "quadratic_parts", None) is not None:
+            return self.system.quadratic_parts
+        return quadratic_parts(self.system.lagrangian, self.system.velocities)
+
+    @cached_property
+    def _qidx(self):
+        return {q: i for i, q in enumerate(self.system.coordinates)}
+
+    @cached_property
+    def _dW(self):
+        """{(A, C): {B: dW_AC/dq^B}} for A <= C, nonzero derivatives only."""
+        W, n = self._parts.W, self.n
+        out = {}
+        for A in range(n):
+            for C in range(A, n):
+                if W[A, C] != 0:
+                    d = _coordinate_derivatives(W[A, C], self._qidx)
+                    if d:
+                        out[A, C] = d
+        return out
+
+    @cached_property
+    def _db(self):
+        """{A: {B: db_A/dq^B}}, nonzero derivatives only."""
+        out = {}
+        for A, bA in enumerate(self._parts.b):
+            if bA != 0:
+                d = _coordinate_derivatives(bA, self._qidx)
+                if d:
+                    out[A] = d
+        return out
+
+    @cached_property
     def momenta(self) -> sp.Matrix:
         """Fibre derivative p_A = dL/dv^A, shape (n, 1)."""
+        parts = self._parts
+        if parts is not None:
+            W, v = parts.W, self.system.velocities
+            return sp.Matrix([
+                sp.Add(parts.b[A], *[W[A, C] * v[C] for C in range(self.n) if W[A, C] != 0])
+                for A in range(self.n)])
         L = self.system.lagrangian
         return sp.Matrix([sp.diff(L, v) for v in self.system.velocities])
 
@@ -116,12 +179,29 @@ class LagrangianGeometry:
     @cached_property
     def hessian(self) -> sp.Matrix:
         """W_AB = d2L/dv^A dv^B, shape (n, n)."""
+        if not self.fast:
+            return sp.hessian(self.system.lagrangian, self.system.velocities)
         return self.system.hessian
 
     @cached_property
     def mixed_hessian(self) -> sp.Matrix:
-        """M_AB = d2L/dv^A dq^B = d p_A / d q^B, shape (n, n)."""
-        return self.momenta.jacobian(self.system.coordinates)
+        """M_AB = d2L/dv^A dq^B = d p_A / d q^B, shape (n, n).
+
+        Fast path: M_AB = (dW_AC/dq^B) v^C + db_A/dq^B.
+        """
+        if self._parts is None:
+            return self.momenta.jacobian(self.system.coordinates)
+        n, v = self.n, self.system.velocities
+        terms = [[[] for _ in range(n)] for _ in range(n)]
+        for (A, C), dW in self._dW.items():
+            for B, d in dW.items():
+                terms[A][B].append(d * v[C])
+                if A != C:
+                    terms[C][B].append(d * v[A])
+        for A, db in self._db.items():
+            for B, d in db.items():
+                terms[A][B].append(d)
+        return sp.Matrix(n, n, lambda A, B: sp.Add(*terms[A][B]))
 
     @cached_property
     def poincare_cartan_1form(self) -> sp.Matrix:
@@ -164,20 +244,69 @@ class LagrangianGeometry:
 
     @cached_property
     def forcing(self) -> sp.Matrix:
-        """F_B = dL/dq^B - (d2L/dq^C dv^B) v^C, shape (n, 1)."""
-        L = self.system.lagrangian
-        dLdq = sp.Matrix([sp.diff(L, q) for q in self.system.coordinates])
-        return dLdq - self.mixed_hessian * self._v
+        """F_B = dL/dq^B - (d2L/dq^C dv^B) v^C, shape (n, 1).
+
+        Fast path (L quadratic in v), collected by velocity monomial::
+
+            F_B = 1/2 d_B W_AC v^A v^C - d_C W_BA v^A v^C
+                  + (d_B b_A - d_A b_B) v^A - d_B V
+        """
+        if self._parts is None:
+            L = self.system.lagrangian
+            dLdq = sp.Matrix([sp.diff(L, q) for q in self.system.coordinates])
+            return dLdq - self.mixed_hessian * self._v
+        return self._quadratic_forcing()
+
+    def _quadratic_forcing(self) -> sp.Matrix:
+        n, v, half = self.n, self.system.velocities, sp.Rational(1, 2)
+        # quad[B][(A, C)]: summands of the coefficient of v^A v^C (A <= C) in F_B
+        quad = [dict() for _ in range(n)]
+        lin = [dict() for _ in range(n)]
+
+        def put(table, key, value):
+            table.setdefault(key, []).append(value)
+
+        for (P, Q), dW in self._dW.items():
+            for B, d in dW.items():
+                # 1/2 d_B W_AC v^A v^C: (P, Q) and (Q, P) for P != Q
+                put(quad[B], (P, Q), d if P != Q else half * d)
+                # - d_C W_{B'A} v^A v^C with C = B, {B', A} = {P, Q}
+                put(quad[P], tuple(sorted((Q, B))), -d)
+                if P != Q:
+                    put(quad[Q], tuple(sorted((P, B))), -d)
+        for A, db in self._db.items():
+            for B, d in db.items():
+                put(lin[B], A, d)     # d_B b_A v^A in F_B
+                put(lin[A], B, -d)    # -d_A' b_B' v^A' in F_B' (B' = A, A' = B)
+        dV = _coordinate_derivatives(self._parts.V, self._qidx)
+        out = []
+        for B in range(n):
+            terms = [sp.Add(*c) * v[A] * v[C] for (A, C), c in sorted(quad[B].items())]
+            terms += [sp.Add(*c) * v[A] for A, c in sorted(lin[B].items())]
+            if B in dV:
+                terms.append(-dV[B])
+            out.append(sp.Add(*terms))
+        return sp.Matrix(out)
+
+    @cached_property
+    def drift(self) -> sp.Matrix:
+        """(d phi_i / d q^A) v^A, shape (m, 1) (term by term, only by the q a term has)."""
+        sysm = self.system
+        if not sysm.phi:
+            return sp.zeros(0, 1)
+        v = sysm.velocities
+        if not self.fast:
+            return sp.Matrix([
+                sum((sp.diff(f, q) * w for q, w in zip(sysm.coordinates, v)), sp.S.Zero)
+                for f in sysm.phi])
+        return sp.Matrix([
+            sp.Add(*[d * v[A] for A, d in sorted(_coordinate_derivatives(f, self._qidx).items())])
+            for f in sysm.phi])
 
     @cached_property
     def ingredients(self) -> DynamicsIngredients:
         """W, forcing, mu and drift: what numeric evaluation solves with."""
-        sysm = self.system
-        drift = sp.Matrix([
-            sum((sp.diff(f, q) * v for q, v in zip(sysm.coordinates, sysm.velocities)), sp.S.Zero)
-            for f in sysm.phi
-        ]) if sysm.phi else sp.zeros(0, 1)
-        return DynamicsIngredients(self.hessian, self.forcing, sysm.mu, drift)
+        return DynamicsIngredients(self.hessian, self.forcing, self.system.mu, self.drift)
 
     # --------------------------------------------------- Euler-Lagrange field
     @cached_property
@@ -335,6 +464,54 @@ class LagrangianGeometry:
     def regular(self) -> bool:
         """True when C has full rank m on M_1."""
         return self.constraint_rank.value == self.m
+
+
+def _coordinate_derivatives(expr, qidx) -> dict:
+    """{B: d expr / d q^B} for the coordinates expr depends on, nonzero only.
+
+    Term by term, each term differentiated only by the coordinates it
+    contains (no derivative of a term by a symbol it lacks).
+    """
+    parts: dict = {}
+    for term in sp.Add.make_args(expr):
+        for q in term.free_symbols & qidx.keys():
+            d = _derivative(term, q)
+            if d != 0:
+                parts.setdefault(qidx[q], []).append(d)
+    out = {}
+    for B, ds in parts.items():
+        d = sp.Add(*ds)
+        if d != 0:
+            out[B] = d
+    return out
+
+
+def _derivative(expr, x):
+    """d expr / d x by the sum, product, power and chain rules.
+
+    The same derivative as ``expr.diff(x)`` (which it falls back to for any
+    other node), without what makes sympy's ``diff`` slow on these small
+    entries: a ``Derivative`` object per factor (also for factors free of x,
+    whose zero derivative then multiplies the others and queries their
+    assumptions) and an ``is_zero`` assumption query on every result. Only
+    the factors that contain x are differentiated.
+    """
+    if expr.is_Symbol:
+        return sp.S.One if expr == x else sp.S.Zero
+    if expr.is_Add:
+        return sp.Add(*[_derivative(a, x) for a in expr.args if x in a.free_symbols])
+    if expr.is_Mul:
+        args = expr.args
+        return sp.Add(*[sp.Mul(*args[:i], _derivative(a, x), *args[i + 1:])
+                        for i, a in enumerate(args) if x in a.free_symbols])
+    if expr.is_Pow and x not in expr.exp.free_symbols:
+        base, k = expr.args
+        return k * base ** (k - 1) * _derivative(base, x)
+    if isinstance(expr, sp.sin):
+        return sp.cos(expr.args[0]) * _derivative(expr.args[0], x)
+    if isinstance(expr, sp.cos):
+        return -sp.sin(expr.args[0]) * _derivative(expr.args[0], x)
+    return expr.diff(x)
 
 
 def _solve(A: sp.Matrix, b: sp.Matrix) -> sp.Matrix:

@@ -32,6 +32,7 @@ import numpy as np
 import sympy as sp
 
 from .errors import ComputationError
+from .onmanifold import _cancel
 from .symbols import momentum_symbol
 
 __all__ = ["LegendreMap", "legendre_map", "NoClosedFormInverseError", "canonical_form_matrix"]
@@ -357,15 +358,9 @@ def _close(cand, v, p, pA, pt):
     return abs(back.imag) < 1e-9 and abs(back.real - pt[v]) < 1e-9 * (1 + abs(pt[v]))
 
 
-def _tidy(expr):
-    """Cancel rational expressions (identically zero ones become 0); shared by the modules."""
-    expr = sp.sympify(expr)
-    if expr.is_number:
-        return expr
-    try:
-        return sp.cancel(expr)
-    except (sp.PolynomialError, TypeError):  # pragma: no cover
-        return sp.expand(expr)
+# Cancel rational expressions (identically zero ones become 0); one home, in
+# onmanifold, shared by the Hamiltonian-side modules.
+_tidy = _cancel
 
 
 # ======================================================================

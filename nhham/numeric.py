@@ -19,8 +19,12 @@ evaluates, on one state ``y`` of shape (2n,) or on a batch of shape (k, 2n)
   balance for affine constraints (zero for linear ones). With the opposite
   sign convention for lambda it reads dE/dt = -lambda . h.
 
-The small linear systems are solved at run time after a symmetric scaling
-(unit diagonal of W, unit rows of mu); nothing is inverted symbolically.
+The small linear systems are solved at run time; nothing is inverted
+symbolically. The numpy path solves the saddle matrix by LU after a symmetric
+scaling (unit diagonal of W, unit rows of mu); the compiled path by Cholesky
+of W and of the Schur complement mu W^-1 mu^T, falling back to that scaled LU
+when W is indefinite or nearly singular (see ``ksolve`` in
+:mod:`nhham.codegen`).
 
 This module must not import sympy (``DESIGN.md`` §4).
 """
@@ -109,30 +113,46 @@ class GeneratedKernels:
 
 
 class CompiledRHS:
-    """The right-hand side compiled from generated C, called through ctypes.
+    """The right-hand side compiled from generated C.
 
-    C entry points: ``nhham_rhs(y, out, pext)`` and
+    C entry points (ctypes): ``nhham_rhs(y, out, pext)`` and
     ``nhham_rhs_batch(k, Y, OUT, pext)`` (``nhham_closed*`` for the
     closed-form path) with ``pext = [parameters, 2 alpha, beta^2]`` and
-    ``out = [dy (2n), lambda (m), power]``. The single-state call copies into
-    per-thread scratch buffers whose ctypes pointers are made once: the call
-    overhead then is about a microsecond.
+    ``out = [dy (2n), lambda (m), power]``; ``nhham_rattle`` (the RATTLE loop
+    for constant W) and ``nhham_erk`` (scipy's explicit Runge-Kutta methods
+    with projection, :meth:`erk`).
+
+    When the library was also built as a CPython extension (``ext``, the
+    saddle path with the Python and numpy headers present) the single-state
+    calls go through it: one C call that reads the state's buffer and returns
+    a new array, without ctypes argument conversion or copies.
     """
 
-    def __init__(self, lib, path, layout):
+    def __init__(self, lib, path, layout, ext=None):
         self.path = path
         self.n, self.m = layout["n"], layout["m"]
         self.width = 2 * self.n + self.m + 1
         self._lib = lib
+        self.ext = ext
         self._rhs, self._rhs_batch = lib.nhham_rhs, lib.nhham_rhs_batch
         self._closed = getattr(lib, "nhham_closed", None)
         self._closed_batch = getattr(lib, "nhham_closed_batch", None)
         self._local = threading.local()
         lib.nhham_rattle.restype = ctypes.c_int
+        lib.nhham_erk.restype = ctypes.c_int
 
     @classmethod
-    def load(cls, path, layout) -> "CompiledRHS":
-        return cls(ctypes.CDLL(path), path, layout)
+    def load(cls, path, layout, extension=False) -> "CompiledRHS":
+        ext = None
+        if extension:
+            import importlib.machinery
+            import importlib.util
+
+            loader = importlib.machinery.ExtensionFileLoader("nhham_ext", path)
+            spec = importlib.util.spec_from_file_location("nhham_ext", path, loader=loader)
+            ext = importlib.util.module_from_spec(spec)
+            loader.exec_module(ext)
+        return cls(ctypes.CDLL(path), path, layout, ext)
 
     def has_closed(self) -> bool:
         return self._closed is not None
@@ -146,7 +166,8 @@ class CompiledRHS:
         return s
 
     def one(self, y, pext, closed=False):
-        """out = [dy, lam, power] (a scratch view: copy before keeping) and status."""
+        """out = [dy, lam, power] (a scratch view: copy before keeping) and status,
+        through ctypes."""
         ybuf, obuf, yp, op = self._scratch()
         np.copyto(ybuf, y)
         status = (self._closed if closed else self._rhs)(yp, op, pext)
@@ -166,6 +187,25 @@ class CompiledRHS:
             c.c_void_p(lam.ctypes.data), c.c_double(tol), c.c_int(maxiter),
             c.c_void_p(info.ctypes.data))
         return out[:int(info[2])], int(info[0]), int(info[1]), int(status)
+
+    def erk(self, info, tab, state, t_bound, rtol, atol, max_step, projection, proj_tol,
+            proj_maxiter, t_eval, i_eval, out_t, out_z, nout, t_pause, pext, counts, fail):
+        """One call of the compiled explicit Runge-Kutta loop (``nhham_erk``).
+
+        Arrays are updated in place: ``state`` = [t, h_abs, z, f], ``i_eval``,
+        ``nout``, ``counts`` = [nfev, nsteps] (int64 arrays of length 1 or 2),
+        ``out_t``/``out_z`` from row ``nout``, ``fail`` = [t, z] of a failed
+        evaluation. Returns the status (see the C source).
+        """
+        c = ctypes
+        p = lambda a: c.c_void_p(a.ctypes.data)  # noqa: E731
+        n_eval = 0 if t_eval is None else len(t_eval)
+        return self._lib.nhham_erk(
+            p(info), p(tab), p(state), c.c_double(t_bound), c.c_double(rtol), p(atol),
+            c.c_double(max_step), c.c_int(int(projection)), c.c_double(proj_tol),
+            c.c_int(proj_maxiter), None if t_eval is None else p(t_eval), c.c_long(n_eval),
+            p(i_eval), p(out_t), p(out_z), c.c_long(out_t.shape[0]), p(nout),
+            c.c_double(t_pause), pext, p(counts), p(fail))
 
     def batch(self, Y, pext, closed=False):
         """OUT (k, 2n+m+1) at k states and the number of failed states."""
@@ -288,6 +328,11 @@ class NumericModel:
         object.__setattr__(self, "_plist", [float(x) for x in self.parameter_values])
         object.__setattr__(self, "_pext_cache", {})
         object.__setattr__(self, "_pext0", self._pext(0.0, 0.0))
+        object.__setattr__(self, "_paddr0", self._pext_address(0.0, 0.0))
+        ext = None
+        if self.compiled is not None and self.path == "saddle":
+            ext = self.compiled.ext
+        object.__setattr__(self, "_ext", ext)
         object.__setattr__(self, "_one", _SingleStateSolver(self.layout))
         if self.path == "closed_form" and "closed" not in self.kernels.functions:
             raise ValueError("closed_form path requested but no closed-form kernel generated")
@@ -390,11 +435,19 @@ class NumericModel:
             0 on success; nonzero when a linear system was singular or the
             result is not finite (the values are then not to be used).
         """
+        a2, b2 = (0.0, 0.0) if baumgarte is None else (2.0 * baumgarte[0], baumgarte[1] ** 2)
+        if self._ext is not None:
+            out = self._ext.evaluate(y, self._paddr0 if baumgarte is None
+                                     else self._pext_address(a2, b2))
+            if out is not None:  # None: not one contiguous float state (handled below)
+                n2 = 2 * self.n
+                if type(out) is int:
+                    return (np.full(n2, np.nan), np.full(self.m, np.nan), math.nan, out)
+                return out[:n2], out[n2:n2 + self.m], float(out[-1]), 0
         if type(y) is not np.ndarray or y.dtype != np.float64:
             y = np.asarray(y, dtype=float)
         if y.shape[-1] != 2 * self.n or y.ndim not in (1, 2):
             self._check(y)
-        a2, b2 = (0.0, 0.0) if baumgarte is None else (2.0 * baumgarte[0], baumgarte[1] ** 2)
         if self.path == "closed_form":
             if baumgarte is not None:
                 raise ValueError("Baumgarte stabilisation needs the saddle path")
@@ -413,14 +466,49 @@ class NumericModel:
             return self._one(out, y, a2, b2)
         return self._evaluate_numpy(y, a2, b2)
 
-    def _pext(self, a2, b2):
-        """ctypes pointer to [parameters, 2 alpha, beta^2] (kept alive in a cache)."""
+    def _pext_entry(self, a2, b2):
         key = (a2, b2)
         cache = self._pext_cache
         if key not in cache:
             arr = np.array(list(self._plist) + [a2, b2])
-            cache[key] = (arr, ctypes.c_void_p(arr.ctypes.data))
-        return cache[key][1]
+            cache[key] = (arr, ctypes.c_void_p(arr.ctypes.data), int(arr.ctypes.data))
+        return cache[key]
+
+    def _pext(self, a2, b2):
+        """ctypes pointer to [parameters, 2 alpha, beta^2] (kept alive in a cache)."""
+        return self._pext_entry(a2, b2)[1]
+
+    def _pext_address(self, a2, b2):
+        """The same array's address as an int (for the CPython entry points)."""
+        return self._pext_entry(a2, b2)[2]
+
+    def field_function(self, baumgarte=None):
+        """f(z) -> [dy, power] (2n + 1) at one state z of length 2n or 2n + 1
+        (the last entry, e.g. the work of the constraint forces, is ignored), or
+        the failure status (int). Through the CPython entry point when there is
+        one (what the scipy solvers call at every stage), else through
+        :meth:`evaluate`."""
+        n2 = 2 * self.n
+
+        def f_slow(z):
+            dy, _, P, status = self.evaluate(np.asarray(z, dtype=float)[:n2], baumgarte)
+            if status:
+                return status
+            out = np.empty(n2 + 1)
+            out[:n2] = dy
+            out[n2] = P
+            return out
+
+        if self._ext is None:
+            return f_slow
+        a2, b2 = (0.0, 0.0) if baumgarte is None else (2.0 * baumgarte[0], baumgarte[1] ** 2)
+        field, addr = self._ext.field, self._pext_address(a2, b2)
+
+        def f(z):
+            out = field(z, addr)
+            return f_slow(z) if out is None else out
+
+        return f
 
     def rhs(self, t, y, baumgarte=None) -> np.ndarray:
         """y' = f(t, y) for y of shape (2n,) or (k, 2n). The system is autonomous.
@@ -430,6 +518,14 @@ class NumericModel:
         ComputationError
             If the saddle-point system is singular or the value is not finite.
         """
+        ext = self._ext
+        if ext is not None and baumgarte is None:
+            # The hot path (what an integrator calls): one C call, a new array.
+            out = ext.rhs(y, self._paddr0)
+            if out is not None:  # None: not one contiguous float state (handled below)
+                if type(out) is int:
+                    raise ComputationError(_status_message(out, y))
+                return out
         if (baumgarte is None and self.backend == "c"
                 and type(y) is np.ndarray and y.ndim == 1 and y.shape[0] == 2 * self.n):
             # The hot path (what an integrator calls): no extras.

@@ -31,7 +31,7 @@ from .errors import (
 )
 from .symbols import as_symbol, velocity_symbol
 
-__all__ = ["System", "DroppedConstraint"]
+__all__ = ["System", "DroppedConstraint", "QuadraticParts", "quadratic_parts", "velocity_polynomial"]
 
 # Random points used for generic-rank decisions are drawn from this seed so
 # that validation is reproducible run to run.
@@ -57,6 +57,25 @@ class DroppedConstraint:
     label: str
     expression: sp.Expr
     combination: Mapping[str, sp.Expr]
+
+
+@dataclass(frozen=True)
+class QuadraticParts:
+    """L = v^T W(q) v / 2 + b(q) . v - V(q), read from the terms of L.
+
+    Attributes
+    ----------
+    W : sympy.ImmutableMatrix, shape (n, n)
+        d2L/dv^A dv^B (free of velocities).
+    b : tuple of sympy.Expr, length n
+        The coefficients of the terms linear in the velocities.
+    V : sympy.Expr
+        Minus the velocity-free part of L.
+    """
+
+    W: sp.ImmutableMatrix
+    b: tuple
+    V: sp.Expr
 
 
 class System:
@@ -166,7 +185,10 @@ class System:
         object.__setattr__(self, "holonomic", hols)
         object.__setattr__(self, "_symbol_table", MappingProxyType(table))
 
-        kept, dropped = _check_dependence(self, cons, hols, drop_redundant)
+        kept, dropped, mu = _check_dependence(self, cons, hols, drop_redundant)
+        if mu is not None and not dropped:
+            # the one-forms of phi = lifts + constraints, already read; keep them
+            self.__dict__["mu"] = mu
         object.__setattr__(self, "constraints", kept)
         object.__setattr__(self, "dropped", dropped)
         object.__setattr__(
@@ -231,8 +253,7 @@ class System:
     @cached_property
     def mu(self) -> sp.Matrix:
         """The m x n matrix of one-form coefficients mu_iA(q) = d phi_i / d v^A."""
-        return sp.Matrix([[sp.diff(f, v) for v in self.velocities] for f in self.phi]) \
-            if self.phi else sp.zeros(0, self.n)
+        return _one_forms(self.phi, self.velocities) if self.phi else sp.zeros(0, self.n)
 
     @cached_property
     def h(self) -> sp.Matrix:
@@ -246,8 +267,24 @@ class System:
         return all(sp.simplify(x) == 0 for x in self.h)
 
     @cached_property
+    def quadratic_parts(self) -> QuadraticParts | None:
+        """W, b, V with L = v^T W v / 2 + b . v - V, or None.
+
+        None when L is not (structurally) a polynomial of degree <= 2 in the
+        velocities; see :func:`quadratic_parts`.
+        """
+        return quadratic_parts(self.lagrangian, self.velocities)
+
+    @cached_property
     def hessian(self) -> sp.Matrix:
-        """W_AB = d2L / dv^A dv^B (n x n)."""
+        """W_AB = d2L / dv^A dv^B (n x n).
+
+        Read from the terms of L when L is quadratic in the velocities (no
+        differentiation of L); otherwise ``sympy.hessian``.
+        """
+        parts = self.quadratic_parts
+        if parts is not None:
+            return sp.Matrix(parts.W)
         return sp.hessian(self.lagrangian, self.velocities)
 
     def numeric_parameters(self, required=None) -> dict[sp.Symbol, float]:
@@ -272,6 +309,217 @@ class System:
                 f"parameters: no numeric value for {', '.join(missing)} (needed for numbers)"
             )
         return dict(self.parameter_values)
+
+
+# ------------------------------------------------- polynomial structure in v
+class _NotPolynomial(Exception):
+    """Raised inside :func:`velocity_polynomial` when the structure does not fit."""
+
+
+def velocity_polynomial(expr, velocities, max_degree: int = 2):
+    """The coefficients of ``expr`` as a polynomial in the velocities, or None.
+
+    One pass over the expression tree: sums and products are distributed only
+    where a velocity is involved, so velocity-free factors (sin, cos, sums in
+    q) stay as they are and nothing is differentiated or fully expanded.
+
+    Parameters
+    ----------
+    expr : sympy.Expr
+    velocities : sequence of sympy.Symbol
+    max_degree : int
+        Largest total degree accepted.
+
+    Returns
+    -------
+    dict or None
+        ``{key: coefficient}`` where ``key`` is the sorted tuple of velocity
+        indices of the monomial (``()``, ``(A,)``, ``(A, C)``, ...), with
+        coefficients free of the velocities and structurally nonzero; None
+        when ``expr`` is not structurally such a polynomial (a velocity inside
+        a function, a negative or fractional power of a velocity, or a product
+        of degree > ``max_degree`` before cancellation), so the caller falls
+        back to differentiation.
+    """
+    vidx = {v: i for i, v in enumerate(velocities)}
+    try:
+        terms = _poly(sp.sympify(expr), vidx, max_degree)
+    except _NotPolynomial:
+        return None
+    out = {}
+    for key, summands in terms.items():
+        c = sp.Add(*summands)
+        if c != 0:
+            out[key] = c
+    return out
+
+
+def _poly(expr, vidx, max_degree):
+    """{monomial key: list of summands of its coefficient}."""
+    if not (expr.free_symbols & vidx.keys()):
+        return {(): [expr]}
+    if expr.is_Symbol:
+        return {(vidx[expr],): [sp.S.One]}
+    if expr.is_Add:
+        out: dict = {}
+        for a in expr.args:
+            for key, summands in _poly(a, vidx, max_degree).items():
+                out.setdefault(key, []).extend(summands)
+        return out
+    if expr.is_Mul:
+        cur = {(): [sp.S.One]}
+        for a in expr.args:
+            cur = _poly_mul(cur, _poly(a, vidx, max_degree), max_degree)
+        return cur
+    if expr.is_Pow and expr.exp.is_Integer and expr.exp > 0 and expr.exp <= max_degree:
+        base = _poly(expr.base, vidx, max_degree)
+        cur = base
+        for _ in range(int(expr.exp) - 1):
+            cur = _poly_mul(cur, base, max_degree)
+        return cur
+    raise _NotPolynomial
+
+
+def _poly_mul(p1, p2, max_degree):
+    out: dict = {}
+    for k1, c1 in p1.items():
+        for k2, c2 in p2.items():
+            if len(k1) + len(k2) > max_degree:
+                raise _NotPolynomial
+            lst = out.setdefault(tuple(sorted(k1 + k2)), [])
+            lst.extend(a * b for a in c1 for b in c2)
+    return out
+
+
+def quadratic_parts(lagrangian, velocities) -> QuadraticParts | None:
+    """W, b, V of L = v^T W v / 2 + b . v - V(q), read from the terms of L.
+
+    Returns None when L is not structurally of degree <= 2 in the velocities
+    (see :func:`velocity_polynomial`); W, b and V are then undefined and the
+    callers differentiate L instead.
+    """
+    poly = velocity_polynomial(lagrangian, velocities, 2)
+    if poly is None:
+        return None
+    n = len(velocities)
+    W = [[sp.S.Zero] * n for _ in range(n)]
+    b = [sp.S.Zero] * n
+    V = sp.S.Zero
+    for key, c in poly.items():
+        if len(key) == 2:
+            A, C = key
+            if A == C:
+                W[A][A] = 2 * c
+            else:
+                W[A][C] = W[C][A] = c
+        elif len(key) == 1:
+            b[key[0]] = c
+        else:
+            V = -c
+    return QuadraticParts(sp.ImmutableMatrix(W), tuple(b), V)
+
+
+def _one_forms(rows, vels) -> sp.Matrix:
+    """mu_iA = d phi_i / d v^A, read from the terms of affine phi_i when possible."""
+    out = []
+    for f in rows:
+        poly = velocity_polynomial(f, vels, 1)
+        if poly is None:
+            out.append([sp.diff(f, v) for v in vels])
+        else:
+            out.append([poly.get((A,), sp.S.Zero) for A in range(len(vels))])
+    return sp.Matrix(out)
+
+
+# ----------------------------------------------------- numeric sample values
+class _NoFastEvaluation(Exception):
+    """The fast evaluator met something it does not handle; use sympy's evalf."""
+
+
+_NUMPY_FUNCTIONS = {
+    sp.sin: np.sin, sp.cos: np.cos, sp.tan: np.tan, sp.exp: np.exp, sp.log: np.log,
+    sp.sinh: np.sinh, sp.cosh: np.cosh, sp.tanh: np.tanh,
+    sp.asin: np.arcsin, sp.acos: np.arccos, sp.atan: np.arctan,
+    sp.cot: lambda z: 1 / np.tan(z), sp.sec: lambda z: 1 / np.cos(z),
+    sp.csc: lambda z: 1 / np.sin(z),
+}
+
+
+def _evaluate_at(exprs, points):
+    """Values of ``exprs`` at all ``points`` at once, shape (len(exprs), len(points)).
+
+    Complex float64 arithmetic over one walk of the expression trees (shared
+    subexpressions evaluated once). Raises :class:`_NoFastEvaluation` for any
+    node it does not know and for non-finite values, so that the caller falls
+    back to ``xreplace(...).evalf()`` and keeps its exact behaviour there.
+    """
+    symbols = set().union(*(p.keys() for p in points)) if points else set()
+    env = {s: np.array([complex(p[s]) for p in points]) for s in symbols}
+    memo: dict = {}
+
+    def ev(e):
+        hit = memo.get(e)
+        if hit is not None:
+            return hit
+        if e.is_Symbol:
+            if e not in env:
+                raise _NoFastEvaluation
+            val = env[e]
+        elif e.is_Atom:
+            if not e.is_number:
+                raise _NoFastEvaluation
+            try:
+                val = np.complex128(complex(e))
+            except (TypeError, ValueError, OverflowError):
+                raise _NoFastEvaluation from None
+        elif e.is_Add:
+            val = ev(e.args[0])
+            for a in e.args[1:]:
+                val = val + ev(a)
+        elif e.is_Mul:
+            val = ev(e.args[0])
+            for a in e.args[1:]:
+                val = val * ev(a)
+        elif e.is_Pow:
+            base, exp = ev(e.base), e.exp
+            if exp.is_Integer and abs(int(exp)) <= 64:
+                k = int(exp)
+                val = base ** k if k >= 0 else 1 / base ** (-k)
+            else:
+                val = base ** ev(exp)
+        elif e.func in _NUMPY_FUNCTIONS and len(e.args) == 1:
+            val = _NUMPY_FUNCTIONS[e.func](ev(e.args[0]))
+        else:
+            raise _NoFastEvaluation
+        memo[e] = val
+        return val
+
+    try:
+        with np.errstate(all="ignore"):
+            out = np.array([np.broadcast_to(ev(sp.sympify(e)), (len(points),)) for e in exprs],
+                           dtype=complex).reshape(len(exprs), len(points))
+    except (ArithmeticError, TypeError, ValueError):
+        raise _NoFastEvaluation from None
+    if not np.all(np.isfinite(out)):
+        raise _NoFastEvaluation
+    return out
+
+
+def _numeric_samples(matrix, points, label="lagrangian"):
+    """``[_numeric(matrix, p, label) for p in points]``, by one fast numeric pass.
+
+    Falls back to :func:`_numeric` (sympy evalf, with its error messages)
+    whenever the fast pass cannot give finite values.
+    """
+    rows, cols = matrix.shape
+    if rows * cols and points:
+        try:
+            values = _evaluate_at(list(matrix), points).real
+        except _NoFastEvaluation:
+            pass
+        else:
+            return [values[:, k].reshape(rows, cols).astype(float) for k in range(len(points))]
+    return [_numeric(matrix, p, label) for p in points]
 
 
 # ---------------------------------------------------------------- helpers
@@ -334,6 +582,9 @@ def _to_expr(value, table, label, problems):
 
 def _non_affine_terms(expr, vels):
     """Terms of ``expr`` whose velocity derivatives still involve velocities."""
+    poly = velocity_polynomial(expr, vels, 1)
+    if poly is not None and not expr.has(sp.Derivative):
+        return []  # a polynomial of degree <= 1 in v: no term can be offending
     vset = set(vels)
     bad = []
     for term in sp.Add.make_args(sp.expand(expr)):
@@ -377,6 +628,9 @@ def _check_dependence(system, cons, hols, drop_redundant):
     The generic rank over functions of q is decided at seeded random points
     (a row is dependent when it is dependent at every sample); the exact
     combination is then solved symbolically to name it.
+
+    Returns (kept constraints, dropped, mu of lifts + constraints or None
+    when a row was dropped or there are none).
     """
     lifts = tuple(
         sum((sp.diff(g, q) * v for q, v in zip(system.coordinates, system.velocities)), sp.S.Zero)
@@ -387,11 +641,11 @@ def _check_dependence(system, cons, hols, drop_redundant):
         f"constraints[{i}]" for i in range(len(cons))
     ]
     if not rows:
-        return tuple(cons), ()
+        return tuple(cons), (), None
     vels = system.velocities
-    mu = sp.Matrix([[sp.diff(f, v) for v in vels] for f in rows])
+    mu = _one_forms(rows, vels)
     rng = np.random.default_rng(_VALIDATION_SEED)
-    samples = [_numeric(mu, s) for s in _sample_q(system, rng, _VALIDATION_SAMPLES)]
+    samples = _numeric_samples(mu, _sample_q(system, rng, _VALIDATION_SAMPLES))
     independent: list[int] = []
     dependent: list[tuple[int, dict]] = []
     for i in range(len(rows)):
@@ -402,7 +656,7 @@ def _check_dependence(system, cons, hols, drop_redundant):
             continue
         dependent.append((i, _combination(mu, rows, independent, i, vels)))
     if not dependent:
-        return tuple(cons), ()
+        return tuple(cons), (), mu
     problems, dropped = [], []
     points = _sample_q(system, np.random.default_rng(_VALIDATION_SEED + 2), _VALIDATION_SAMPLES)
     for i, coeffs in dependent:
@@ -429,7 +683,7 @@ def _check_dependence(system, cons, hols, drop_redundant):
         raise RedundantConstraintError(problems)
     gone = {d.label for d in dropped}
     kept = tuple(c for k, c in enumerate(cons) if f"constraints[{k}]" not in gone)
-    return kept, tuple(dropped)
+    return kept, tuple(dropped), None
 
 
 def _combination(mu, rows, independent, i, vels):
@@ -475,11 +729,14 @@ def _check_regular(system):
     if not W.free_symbols:
         rank = W.rank()
         if rank < n:
+            W = sp.hessian(system.lagrangian, system.velocities)  # as the message always showed it
             raise SingularLagrangianError([_singular_message(W, rank, W.nullspace())])
         return
     rng = np.random.default_rng(_VALIDATION_SEED + 1)
-    ranks = [np.linalg.matrix_rank(_numeric(W, s)) for s in _sample_q(system, rng, _VALIDATION_SAMPLES)]
+    ranks = [np.linalg.matrix_rank(S)
+             for S in _numeric_samples(W, _sample_q(system, rng, _VALIDATION_SAMPLES))]
     if max(ranks) < n:
+        W = sp.hessian(system.lagrangian, system.velocities)  # as the message always showed it
         try:
             null = W.nullspace(simplify=True)
         except Exception:  # pragma: no cover - sympy failure; message still useful

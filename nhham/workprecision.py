@@ -144,7 +144,7 @@ class WorkPrecisionResult:
 def work_precision(system_or_model, y0, t_span, *, methods=None, tolerances=DEFAULT_TOLERANCES,
                    steps=None, projection_variants: bool = True, reference_digits: int = 30,
                    repeats: int = 1, backend: str = "auto", quick: bool = False,
-                   progress: bool = False) -> WorkPrecisionResult:
+                   progress: bool = False, loop: str = "auto") -> WorkPrecisionResult:
     """Run every method at every setting and measure error and cost.
 
     Parameters
@@ -172,6 +172,10 @@ def work_precision(system_or_model, y0, t_span, *, methods=None, tolerances=DEFA
         settings each, 25-digit reference.
     progress : bool
         Print each method on stderr as it starts.
+    loop : {"auto", "compiled", "scipy"}
+        Passed to :func:`~nhham.integrate.simulate` for the scipy methods
+        (RK23, RK45 and DOP853 run as one compiled loop by default when the
+        model is compiled; ``"scipy"`` measures scipy's Python loop instead).
     """
     import time
 
@@ -209,7 +213,7 @@ def work_precision(system_or_model, y0, t_span, *, methods=None, tolerances=DEFA
             settings = steps if method in ("rattle", "rattle4", "rk4") else tolerances
             for s in settings:
                 rows.append(_one_row(model, y_init, (t0, t1), method, label, s, projection,
-                                     y_ref, repeats))
+                                     y_ref, repeats, loop))
     finite = [r.error for r in rows if r.status == 0 and r.error > 0]
     if finite and ref.error_estimate * 100 > min(finite):
         warnings.warn(f"the reference error estimate {ref.error_estimate:.1e} is not 100 times "
@@ -225,8 +229,11 @@ def _model(system, backend):
     return numeric_model(system, backend=backend)
 
 
-def _one_row(model, y0, t_span, method, label, setting, projection, y_ref, repeats):
+def _one_row(model, y0, t_span, method, label, setting, projection, y_ref, repeats,
+             loop="auto"):
     kw = {"warn": False, "projection": projection}
+    if method in SCIPY_METHODS:
+        kw["loop"] = loop
     if method in ("rattle", "rattle4", "rk4"):
         kw["step"] = setting
         text = f"h={setting:.3g}"

@@ -244,3 +244,170 @@ def test_projection_onto_M1_holonomic_and_affine():
     yb = ball_state(ball) + 0.01
     pb = ball.project(yb)
     assert pb.newton_iterations == 0 and pb.residual_after <= 1e-14
+
+
+# ------------------------------------------------- compiled solver and entries
+def _lorentzian():
+    """Indefinite W (a Lorentzian metric, as in the paper's examples) with a
+    non-null constraint: the saddle matrix is regular, W has no Cholesky factor
+    (the compiled solve falls back to LU)."""
+    return nhham.System(["q1", "q2", "q3"],
+                        "(q1_dot**2 + q2_dot**2 - q3_dot**2)/2 - q1**2/2 + q1*q3",
+                        ["q1_dot + 2*q3_dot + q2*q2_dot"], name="Lorentzian")
+
+
+def _nearly_singular_W(c=1 - 1e-12):
+    """W = [[1, c, 0], [c, 1, 0], [0, 0, 1]] (cond ~ 2/(1 - c)) but positive
+    definite on ker mu: the saddle matrix is well conditioned, the range-space
+    method would not be (the compiled solve falls back to LU)."""
+    return nhham.System(["x", "y", "z"],
+                        f"(x_dot**2 + 2*{c!r}*x_dot*y_dot + y_dot**2 + z_dot**2)/2 - x**2/2 "
+                        f"+ cos(y)", ["y_dot - z_dot + x*z_dot/3"], name="nearly singular W")
+
+
+def _saddle_reference(system, ing, y):
+    """(v, a) and lambda from the symbolic W, F, mu, drift at y, the saddle
+    system solved in 40-digit mpmath (independent of the generated code)."""
+    import mpmath
+
+    sub = dict(zip(system.state, [sp.Float(float(v), 40) for v in y]))
+    sub.update({p: sp.Float(float(v), 40) for p, v in system.parameter_values.items()})
+    n, m = system.n, system.m
+    ev = lambda M: [[mpmath.mpf(str(sp.N(e.xreplace(sub), 40))) for e in row]  # noqa: E731
+                    for row in M.tolist()]
+    with mpmath.workdps(40):
+        W, mu = ev(ing.W), ev(ing.mu)
+        F, drift = ev(sp.Matrix(ing.forcing)), ev(sp.Matrix(ing.drift))
+        K = mpmath.zeros(n + m, n + m)
+        b = mpmath.zeros(n + m, 1)
+        for i in range(n):
+            b[i] = F[i][0]
+            for j in range(n):
+                K[i, j] = W[i][j]
+            for c in range(m):
+                K[i, n + c] = K[n + c, i] = mu[c][i]
+        for c in range(m):
+            b[n + c] = -drift[c][0]
+        z = mpmath.lu_solve(K, b)
+        return (np.array([float(v) for v in y[n:]] + [float(z[i]) for i in range(n)]),
+                np.array([float(z[n + c]) for c in range(m)]))
+
+
+@pytest.mark.parametrize("builder", [lambda: nhham.models.snake(4), _lorentzian,
+                                     _nearly_singular_W], ids=["snake4", "Lorentzian",
+                                                                "nearly-singular-W"])
+def test_compiled_solver_every_branch_matches_symbolic_and_numpy(builder):
+    """The compiled saddle solve (Cholesky + Schur complement for positive
+    definite W; LU when W is indefinite or nearly singular) and the numpy path
+    give the symbolic field P(xi_L) and multipliers at points of M_1; batches
+    give the single-state values."""
+    system = builder()
+    ing = lagrangian_geometry(system).ingredients
+    models = [numeric_model(system, backend="numpy")]
+    if HAVE_CC:
+        models.append(numeric_model(system, backend="c"))
+    rng = np.random.default_rng(11)
+    n = system.n
+    states = []
+    for _ in range(3):
+        y = np.concatenate([rng.uniform(-0.6, 0.6, n), rng.normal(size=n)])
+        states.append(models[0].project(y).y)
+    Y = np.array(states)
+    for y in states:
+        field, lam = _saddle_reference(system, ing, y)
+        scale = 1.0 + np.max(np.abs(field))
+        for model in models:
+            assert np.allclose(model.rhs(0.0, y), field, rtol=1e-11, atol=1e-11 * scale), (
+                model.backend)
+            assert np.allclose(model.multipliers(y), lam, rtol=1e-10, atol=1e-10 * scale)
+    for model in models:
+        assert np.allclose(model.rhs(0.0, Y), [model.rhs(0.0, y) for y in states],
+                           rtol=1e-13, atol=1e-13)
+
+
+def test_angle_sums_expanded_only_when_no_new_calls():
+    """sin/cos(theta_i - theta_j) become products of the sin/cos of the angles
+    when those are computed anyway (the snake: one sincos per angle instead of
+    one per pair); otherwise (the snakeboard's theta +- phi) they are kept."""
+    from nhham.codegen import _expand_angle_sums
+
+    a, b, c = sp.symbols("a b c", real=True)
+    out = _expand_angle_sums([sp.sin(a - b) + sp.cos(a) * sp.sin(b)], [a, b])
+    assert out[0].atoms(sp.sin, sp.cos) <= {sp.sin(a), sp.cos(a), sp.sin(b), sp.cos(b)}
+    assert sp.simplify(out[0] - sp.sin(a - b) - sp.cos(a) * sp.sin(b)) == 0
+    kept = [sp.sin(a + b) * sp.cos(b)]  # sin(a) / cos(a) not computed: no gain
+    assert _expand_angle_sums(kept, [a, b]) == kept
+    three = _expand_angle_sums([sp.cos(a + b - c), sp.sin(a), sp.cos(b), sp.sin(c)], [a, b, c])
+    assert sp.simplify(three[0] - sp.cos(a + b - c)) == 0
+    if HAVE_CC:
+        snake = numeric_model(nhham.models.snake(5), backend="c")
+        saddle = snake.c_source.split("static void saddle(")[1].split("\n}\n")[0]
+        calls = saddle.count("sin(") + saddle.count("cos(")
+        assert calls == 2 * 5  # one sin and one cos per link angle
+
+
+def test_cpython_entry_points_and_their_fallbacks():
+    """The single-state calls through the CPython entry points return fresh
+    arrays equal to the ctypes route; inputs they do not take (lists, strided
+    or float32 arrays, batches, wrong lengths) go through the general path
+    with the same values and errors."""
+    system = chaplygin_sleigh()
+    ref_model = numeric_model(system, backend="numpy")
+    model = numeric_model(system)
+    y = sleigh_state()
+    ref = ref_model.rhs(0, y)
+    a, b = model.rhs(0, y), model.rhs(0, y)
+    assert a is not b and np.allclose(a, ref, rtol=1e-13, atol=1e-14)
+    a[:] = 0.0
+    assert np.allclose(model.rhs(0, y), ref, rtol=1e-13, atol=1e-14)
+    strided = np.zeros((6, 2))
+    strided[:, 0] = y
+    for variant in (list(y), strided[:, 0], y.astype(np.float32)):
+        assert np.allclose(model.rhs(0, variant), ref_model.rhs(0, np.asarray(variant, float)),
+                           rtol=1e-12, atol=1e-13)
+    assert model.rhs(0, np.array([y, y])).shape == (2, 6)
+    with pytest.raises(ValueError, match="2n = 6"):
+        model.rhs(0, np.zeros(5))
+    dy, lam, P, status = model.evaluate(y)
+    dy0, lam0, P0, _ = ref_model.evaluate(y)
+    assert status == 0 and np.allclose(dy, dy0) and np.allclose(lam, lam0)
+    assert P == pytest.approx(P0, abs=1e-13)
+    for m in (model, ref_model):
+        f = m.field_function()
+        z = np.append(y, 123.0)  # the last entry (the work) is ignored
+        assert np.allclose(f(z), np.append(ref, P0), rtol=1e-13, atol=1e-13)
+        assert np.allclose(f(y), np.append(ref, P0), rtol=1e-13, atol=1e-13)
+        fb = m.field_function((1.0, 2.0))
+        dyb = ref_model.evaluate(y, (1.0, 2.0))[0]
+        assert np.allclose(fb(z)[:6], dyb, rtol=1e-13, atol=1e-13)
+    if HAVE_CC and model.compiled.ext is not None:
+        out, status = model.compiled.one(y, model._pext0)
+        assert status == 0 and np.allclose(model.compiled.ext.rhs(y, model._paddr0), out[:6])
+        assert "CPython" in model.backend_note
+    singular = numeric_model(nhham.System(["x", "y"], "(x_dot**2 + y_dot**2)/2",
+                                          ["x*x_dot + y*y_dot"]))
+    assert type(singular.field_function()(np.zeros(4))) is int
+
+
+@pytest.mark.skipif(not HAVE_CC, reason="no C compiler on this machine")
+def test_without_python_headers_the_plain_library_is_used(monkeypatch, tmp_path):
+    """When the CPython entry points cannot be built (no Python.h, say), the
+    plain ctypes library is built instead, says so, gives the same values, and
+    later models do not try again."""
+    import nhham.codegen as codegen
+    from nhham.integrate import simulate
+
+    monkeypatch.setattr(codegen, "_PYEXT_FAILURE", [])
+    monkeypatch.setattr(codegen, "_pyext_flags",
+                        lambda: (["-DNHHAM_PYEXT", "-I/nonexistent-include"], "none"))
+    model = numeric_model(chaplygin_sleigh(), cache_dir=str(tmp_path))
+    assert model.backend == "c" and model.compiled.ext is None
+    assert "CPython entry points unavailable" in model.backend_note
+    assert codegen._PYEXT_FAILURE
+    y = sleigh_state()
+    ref = numeric_model(chaplygin_sleigh(), backend="numpy")
+    assert np.allclose(model.rhs(0, y), ref.rhs(0, y), rtol=1e-13, atol=1e-14)
+    res = simulate(model, y, (0, 1), warn=False)
+    assert res.settings["loop"] == "compiled" and res.success
+    again = numeric_model(chaplygin_sleigh(m=2.0), cache_dir=str(tmp_path))
+    assert again.compiled.ext is None and "unavailable" in again.backend_note

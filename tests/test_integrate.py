@@ -198,3 +198,120 @@ def test_plots_need_matplotlib_or_say_so(tmp_path, sleigh):
     else:
         path = plot_trajectory(res, tmp_path / "t.png")
         assert (tmp_path / "t.png").exists() and path.endswith("t.png")
+
+
+# ------------------------------------------------------------ compiled loop
+HAVE_CC = numeric_model(chaplygin_sleigh()).backend == "c"
+needs_cc = pytest.mark.skipif(not HAVE_CC, reason="no C compiler on this machine")
+
+
+@needs_cc
+@pytest.mark.parametrize("method", ["RK23", "RK45", "DOP853"])
+@pytest.mark.parametrize("options", [{}, {"projection": True}, {"t_eval": True},
+                                     {"t_eval": True, "projection": True},
+                                     {"baumgarte": (1.0, 2.0)}],
+                         ids=["plain", "projection", "t_eval", "t_eval+projection", "baumgarte"])
+def test_compiled_loop_matches_scipy_loop_on_the_numpy_path(method, options):
+    """RK23/RK45/DOP853 as one compiled loop against scipy's own loop on the
+    numpy backend (the pre-existing path), on the Cartesian pendulum (holonomic:
+    the projection runs Newton in C): same number of steps, the same states at
+    the t_eval points and at t_end up to round-off, the same work integral;
+    projected runs keep the residual at round-off."""
+    system = pendulum()
+    compiled, numpy_model = numeric_model(system), numeric_model(system, backend="numpy")
+    kw = dict(options)
+    if kw.pop("t_eval", False):
+        kw["t_eval"] = np.linspace(0.0, 3.0, 13)[1:]  # t0 not requested
+    runs = [simulate(m, pendulum_state(), (0, 3.0), method=method, rtol=1e-8, atol=1e-10,
+                     warn=False, loop=loop, **kw)
+            for m, loop in ((compiled, "compiled"), (numpy_model, "auto"))]
+    fast, ref = runs
+    assert fast.settings["loop"] == "compiled" and ref.settings["loop"] == "scipy"
+    assert fast.success and ref.success
+    assert abs(fast.nsteps - ref.nsteps) <= 2
+    assert fast.t[-1] == ref.t[-1] == 3.0
+    assert np.allclose(fast.y[:, -1], ref.y[:, -1], rtol=1e-11, atol=1e-11)
+    assert fast.work[-1] == pytest.approx(ref.work[-1], abs=1e-10)
+    if "t_eval" in kw:
+        assert np.array_equal(fast.t, kw["t_eval"]) and np.array_equal(ref.t, kw["t_eval"])
+        assert np.allclose(fast.y, ref.y, rtol=1e-11, atol=1e-11)
+        assert fast.nfev == ref.nfev
+    else:
+        assert fast.t[0] == 0.0 and np.all(np.diff(fast.t) > 0)
+        assert len(fast.t) == fast.nsteps + 1
+    if kw.get("projection"):
+        assert fast.constraint_residual_max <= 1e-14
+
+
+@needs_cc
+def test_compiled_loop_against_exact_solutions():
+    """Chaplygin sleigh (closed form) and the rolling disk (exact state) with the
+    compiled DOP853 / RK45, also with projection and across several chunks of
+    stored steps (RK23 at a tight tolerance: thousands of steps)."""
+    from test_exact_solutions import rolling_disk, rolling_disk_exact
+
+    sleigh = numeric_model(chaplygin_sleigh())
+    t = np.linspace(0.5, 6.0, 12)
+    for method, rtol, tol in (("DOP853", 1e-11, 1e-9), ("RK45", 1e-10, 1e-8)):
+        for projection in (False, True):
+            res = simulate(sleigh, sleigh_state(), (0, 6.0), method=method, rtol=rtol,
+                           atol=1e-13, t_eval=t, projection=projection, loop="compiled",
+                           warn=False)
+            u_ex, w_ex, th_ex = sleigh_exact(res.t)
+            u = np.cos(res["theta"]) * res["x_dot"] + np.sin(res["theta"]) * res["y_dot"]
+            err = max(np.max(np.abs(u - u_ex)), np.max(np.abs(res["theta_dot"] - w_ex)),
+                      np.max(np.abs(res["theta"] - th_ex)))
+            assert err < tol, (method, projection, err)
+    disk = numeric_model(rolling_disk())
+    y0, _ = rolling_disk_exact(np.array(0.0))
+    res = simulate(disk, y0, (0, 5.0), method="RK23", rtol=1e-9, atol=1e-12, projection=True,
+                   loop="compiled", warn=False)
+    assert res.nsteps > 1000 and len(res.t) == res.nsteps + 1  # several C calls
+    assert np.max(np.abs(res.y - rolling_disk_exact(res.t)[0])) < 1e-6
+    assert res.constraint_residual_max <= 1e-14
+
+
+@needs_cc
+def test_compiled_loop_failures_progress_and_options(capsys):
+    """Failure statuses and messages as in scipy's loop (the finite part kept),
+    scipy's option checks, max_step honoured, progress reported."""
+    blowup = numeric_model(blowup_system())
+    for loop in ("compiled", "scipy"):
+        res = simulate(blowup, [1.0, 0.0, 1.0, 0.0], (0, 10), method="DOP853", loop=loop,
+                       warn=False)
+        assert res.status in (-1, -2) and 2.0 < res.t[-1] < 3.0 and np.all(np.isfinite(res.y))
+    singular = numeric_model(nhham.System(["x", "y"], "(x_dot**2 + y_dot**2)/2 - x",
+                                          ["x*x_dot + y*y_dot"]))
+    msgs = []
+    for loop in ("compiled", "scipy"):
+        res = simulate(singular, np.zeros(4), (0, 1), method="RK45", loop=loop, warn=False)
+        assert res.status == -3 and len(res.t) == 1
+        msgs.append(res.message)
+    assert msgs[0] == msgs[1] and "singular saddle-point system at t = 0" in msgs[0]
+    sleigh = numeric_model(chaplygin_sleigh())
+    for bad in ({"max_step": 0.0}, {"first_step": -1.0}, {"first_step": 5.0}):
+        with pytest.raises(ValueError, match="step"):
+            simulate(sleigh, sleigh_state(), (0, 1), loop="compiled", **bad)
+    with pytest.warns(UserWarning, match="rtol"):
+        simulate(sleigh, sleigh_state(), (0, 1), rtol=1e-20, loop="compiled", warn=False)
+    res = simulate(sleigh, sleigh_state(), (0, 1), max_step=0.01, first_step=1e-3,
+                   loop="compiled", warn=False)
+    assert np.max(np.diff(res.t)) <= 0.01 + 1e-15 and res.t[1] == pytest.approx(1e-3)
+    capsys.readouterr()
+    simulate(sleigh, sleigh_state(), (0, 1), loop="compiled", progress=True, warn=False)
+    err = capsys.readouterr().err
+    assert "(50%)" in err and "(100%)" in err
+
+
+def test_loop_option_is_checked(sleigh):
+    numpy_model = numeric_model(chaplygin_sleigh(), backend="numpy")
+    with pytest.raises(InputError, match="loop"):
+        simulate(sleigh, sleigh_state(), (0, 1), loop="fortran")
+    with pytest.raises(InputError, match="no compiled C backend"):
+        simulate(numpy_model, sleigh_state(), (0, 1), loop="compiled")
+    with pytest.raises(InputError, match="for RK23, RK45, DOP853, not 'Radau'"):
+        simulate(sleigh, sleigh_state(), (0, 1), method="Radau", loop="compiled")
+    res = simulate(sleigh, sleigh_state(), (0, 1), loop="scipy", warn=False)
+    assert res.settings["loop"] == "scipy"
+    auto = simulate(sleigh, sleigh_state(), (0, 1), warn=False)
+    assert auto.settings["loop"] == ("compiled" if sleigh.backend == "c" else "scipy")

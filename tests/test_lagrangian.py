@@ -214,3 +214,207 @@ def test_energy_not_conserved_for_affine_constraint():
         assert abs(dE - 0.8**2 * pt[x] * pt[xd]) < 1e-10
         assert abs(dE) > 1e-6 or abs(pt[x] * pt[xd]) < 1e-6
     assert evaluate(G.multipliers[0], {xd: 2.0, system.parameters[0]: 0.8}) == pytest.approx(-1.6)
+
+
+# ------------------------------------------- quadratic fast path vs general
+from nhham.lagrangian import LagrangianGeometry, _derivative  # noqa: E402
+from nhham.models import MODELS, snake_centres  # noqa: E402
+from nhham.system import quadratic_parts, velocity_polynomial  # noqa: E402
+
+
+def _magnetic_knife_edge():
+    """b != 0: a charged skate in a magnetic field B with an extra gyroscopic
+    term e x sin(theta) theta' and a potential; knife-edge constraint and a
+    holonomic-free affine one (drift from both mu(q) and h(q))."""
+    x, y, th = sp.symbols("x y theta")
+    xd, yd, thd = sp.symbols("x_dot y_dot theta_dot")
+    m, I, B, e, k = sp.symbols("m I B e k")
+    L = (m * (xd**2 + yd**2) / 2 + I * thd**2 / 2 + B * (x * yd - y * xd) / 2
+         + e * x * sp.sin(th) * thd - k * (x**2 + y**2) / 2 - sp.cos(th))
+    return nhham.System(["x", "y", "theta"], L,
+                        [sp.sin(th) * xd - sp.cos(th) * yd + e * y * sp.cos(x)],
+                        parameters={"m": 1.3, "I": 0.4, "B": 0.7, "e": 0.9, "k": 1.1},
+                        name="magnetic knife edge")
+
+
+def _rotating_frame_particle():
+    """b != 0 and W, b, V all depending on q: L = |r' + Omega x r|^2 m(z)/2 - g z."""
+    x, y, z = sp.symbols("x y z")
+    xd, yd, zd = sp.symbols("x_dot y_dot z_dot")
+    Om, g = sp.symbols("Omega g")
+    mass = 1 + z**2 / 4
+    L = mass * ((xd - Om * y) ** 2 + (yd + Om * x) ** 2 + zd**2) / 2 - g * z
+    return nhham.System(["x", "y", "z"], L, [zd - x * yd],
+                        parameters={"Omega": 0.8, "g": 9.81}, name="rotating frame")
+
+
+def _quartic_particle():
+    """Not quadratic in v: L = |v|^2/2 + eps (x'^4)/12 + cos(y) x' y'^2 - V."""
+    x, y, th = sp.symbols("x y theta")
+    xd, yd, thd = sp.symbols("x_dot y_dot theta_dot")
+    eps = sp.Symbol("eps")
+    L = ((xd**2 + yd**2 + thd**2) / 2 + eps * xd**4 / 12 + sp.cos(y) * xd * yd**2 / 5
+         - sp.sin(x) * y)
+    return nhham.System(["x", "y", "theta"], L, [xd - sp.cos(th) * thd],
+                        parameters={"eps": 0.3}, name="quartic")
+
+
+def _snake_chain(N):
+    """The snake with L written as the sum of link kinetic energies (unexpanded)."""
+    base = MODELS["snake"](N)
+    q, v = base.coordinates, base.velocities
+    m, l = sp.symbols("m l")
+    L = sp.S.Zero
+    for X, Y in snake_centres(N):
+        dX = sum(X.diff(a) * w for a, w in zip(q, v))
+        dY = sum(Y.diff(a) * w for a, w in zip(q, v))
+        L += m * (dX**2 + dY**2) / 2
+    L += sum(m * l**2 / 24 * w**2 for w in v[2:])
+    return nhham.System(q, L, base.constraints,
+                        parameters={p.name: x for p, x in base.parameter_values.items()})
+
+
+FAST_PATH_SYSTEMS = {
+    "magnetic_knife_edge": _magnetic_knife_edge,
+    "rotating_frame": _rotating_frame_particle,
+    "quartic": _quartic_particle,
+    "snake3": lambda: MODELS["snake"](3),
+    "snake3_chain": lambda: _snake_chain(3),
+    "rolling_ball": MODELS["rolling_ball"],
+    "snakeboard": MODELS["snakeboard"],
+    "two_particle_rod": MODELS["two_particle_rod"],
+}
+
+
+def _max_abs_at_random_points(matrix, system, rng, count=6):
+    """max |entry| of a symbolic matrix at random (q, v, parameters)."""
+    syms = list(system.state) + list(system.parameters)
+    f = sp.lambdify(syms, sp.Matrix(matrix), "numpy")
+    worst = 0.0
+    for _ in range(count):
+        value = np.asarray(f(*rng.uniform(-1.3, 1.3, len(syms))), dtype=float)
+        worst = max(worst, float(np.abs(value).max()) if value.size else 0.0)
+    return worst
+
+
+@pytest.mark.parametrize("name", sorted(FAST_PATH_SYSTEMS))
+def test_quadratic_fast_path_agrees_with_general_path(name):
+    """W, momenta, mixed Hessian, forcing, drift, E_L and a bracket: both paths equal."""
+    system = FAST_PATH_SYSTEMS[name]()
+    fast, general = LagrangianGeometry(system), LagrangianGeometry(system, fast=False)
+    assert general._parts is None
+    assert (fast._parts is None) == (name == "quartic")
+    rng = np.random.default_rng(RNG_SEED)
+    q, v = system.coordinates, system.velocities
+    f = sp.sin(q[0]) * v[1] + q[-1] * v[0] ** 2
+    pairs = [(fast.hessian, general.hessian), (fast.momenta, general.momenta),
+             (fast.mixed_hessian, general.mixed_hessian), (fast.forcing, general.forcing),
+             (fast.ingredients.drift, general.ingredients.drift),
+             (fast.poincare_cartan_2form, general.poincare_cartan_2form),
+             (sp.Matrix([fast.energy]), sp.Matrix([general.energy]))]
+    if system.n <= 3:  # the bracket solves with W symbolically: keep it small
+        pairs.append((sp.Matrix([fast.bracket(f, fast.energy)]),
+                      sp.Matrix([general.bracket(f, general.energy)])))
+    for a, b in pairs:
+        assert a.shape == b.shape
+        assert _max_abs_at_random_points(a - b, system, rng) < 1e-12
+    assert fast.ingredients.mu == system.mu
+
+
+def test_fast_forcing_expands_to_the_general_one_for_b_nonzero():
+    """Exact agreement (expand of the difference is 0) on polynomial/trig input."""
+    system = _magnetic_knife_edge()
+    fast, general = LagrangianGeometry(system), LagrangianGeometry(system, fast=False)
+    assert any(b != 0 for b in fast._parts.b)
+    assert sp.expand(fast.forcing - general.forcing) == sp.zeros(system.n, 1)
+    assert sp.expand(fast.mixed_hessian - general.mixed_hessian) == sp.zeros(system.n, system.n)
+    assert sp.expand(sp.Matrix(system.hessian) - sp.hessian(system.lagrangian, system.velocities)) \
+        == sp.zeros(system.n, system.n)
+
+
+def test_magnetic_forcing_by_hand():
+    """F_B = (d_B b_A - d_A b_B) v^A - d_B V here (W constant): the Lorentz
+    force B (y', -x'), the gyroscopic pair +-e sin(theta) from
+    d_x b_theta - d_theta b_x = e sin(theta), and -k r, + sin(theta) from V."""
+    system = _magnetic_knife_edge()
+    x, y, th, xd, yd, thd = system.state
+    m, I, B, e, k = system.parameters
+    expected = sp.Matrix([B * yd + e * sp.sin(th) * thd - k * x,
+                          -B * xd - k * y,
+                          -e * sp.sin(th) * xd + sp.sin(th)])
+    assert sp.expand(LagrangianGeometry(system).forcing - expected) == sp.zeros(3, 1)
+
+
+def test_quadratic_parts_read_W_b_V():
+    x, y = sp.symbols("x y")
+    xd, yd = sp.symbols("x_dot y_dot")
+    a = sp.Symbol("a")
+    L = (1 + x**2) * (xd + a * yd) ** 2 / 2 + sp.sin(y) * xd - sp.cos(x) * y
+    parts = quadratic_parts(L, (xd, yd))
+    W = sp.Matrix([[1 + x**2, a * (1 + x**2)], [a * (1 + x**2), a**2 * (1 + x**2)]])
+    assert sp.expand(sp.Matrix(parts.W) - W) == sp.zeros(2, 2)
+    assert parts.b == (sp.sin(y), 0)
+    assert sp.expand(parts.V - sp.cos(x) * y) == 0
+
+
+@pytest.mark.parametrize("L", ["sin(x_dot)", "x_dot**3", "x_dot**2 * y_dot", "1/x_dot",
+                               "sqrt(x_dot**2 + 1)", "exp(x*x_dot)", "Abs(x_dot)**2"])
+def test_non_quadratic_lagrangians_take_the_general_path(L):
+    x, y, xd, yd = sp.symbols("x y x_dot y_dot")
+    expr = sp.sympify(L, locals={"x_dot": xd, "y_dot": yd, "x": x})
+    assert velocity_polynomial(expr, (xd, yd), 2) is None
+    assert quadratic_parts(expr, (xd, yd)) is None
+
+
+def test_velocity_polynomial_keeps_degree_before_cancellation_out():
+    xd, yd, x = sp.symbols("x_dot y_dot x")
+    poly = velocity_polynomial((xd + x) * (xd - x) - xd**2 + yd * sp.cos(x), (xd, yd), 2)
+    assert poly == {(): -x**2, (1,): sp.cos(x)}
+    assert velocity_polynomial(xd * yd, (xd, yd), 1) is None
+
+
+@pytest.mark.parametrize("expr", [
+    "a*sin(x - y)**3*cos(2*x)/(1 + x**2)", "exp(x*y) + log(1 + x**2)*y", "x**y + sqrt(x)",
+    "atan2(y, x)*x", "Abs(x)*y", "cos(sin(x*y))"])
+def test_derivative_matches_sympy_diff(expr):
+    x, y, a = sp.symbols("x y a")
+    e = sp.sympify(expr, locals={"x": x, "y": y, "a": a})
+    for s in (x, y, a):
+        assert sp.simplify(_derivative(e, s) - e.diff(s)) == 0
+
+
+# ------------------------------------------------ System validation numerics
+def test_fast_sample_values_match_evalf():
+    """Validation's one-pass numeric evaluation equals xreplace + evalf."""
+    from nhham.system import _VALIDATION_SAMPLES, _numeric, _numeric_samples, _sample_q
+
+    system = _snake_chain(3)
+    x, y = system.coordinates[:2]
+    extra = sp.Matrix([[sp.sqrt(2 + sp.sin(x)) * sp.exp(y), sp.log(1 + x**2) / (3 + sp.cos(y)),
+                        sp.atan(x) * sp.tanh(y), (x - 2) ** sp.Rational(1, 3), sp.pi * sp.I * x]])
+    for matrix in (system.hessian, system.mu, extra):
+        points = _sample_q(system, np.random.default_rng(3), _VALIDATION_SAMPLES)
+        fast = _numeric_samples(matrix, points)
+        slow = [_numeric(matrix, p) for p in points]
+        assert all(np.allclose(a, b, rtol=1e-12, atol=1e-12) for a, b in zip(fast, slow))
+
+
+def test_fast_sample_values_fall_back_for_unknown_nodes():
+    """Derivative objects (non-smooth L) take sympy's path and its error message."""
+    from nhham.errors import ValidationError
+    from nhham.system import _numeric_samples
+
+    x, xd = sp.symbols("x x_dot")
+    W = sp.hessian(sp.Abs(xd) ** 2 + x, (xd,))
+    with pytest.raises(ValidationError, match="smooth in the velocities"):
+        _numeric_samples(W, [{x: 0.3, xd: 0.4}])
+
+
+@pytest.mark.parametrize("name", sorted(FAST_PATH_SYSTEMS))
+def test_system_W_and_mu_read_from_terms_equal_derivatives(name):
+    system = FAST_PATH_SYSTEMS[name]()
+    W = sp.hessian(system.lagrangian, system.velocities)
+    mu = sp.Matrix([[sp.diff(f, v) for v in system.velocities] for f in system.phi])
+    rng = np.random.default_rng(RNG_SEED)
+    assert _max_abs_at_random_points(system.hessian - W, system, rng) < 1e-12
+    assert sp.expand(system.mu - mu) == sp.zeros(*mu.shape)
