@@ -567,17 +567,19 @@ def _run_compiled(model, y0, t0, t1, method, rtol, atol, max_step, first_step, t
         warnings.warn("At least one element of `rtol` is too small. "
                       f"Setting `rtol = np.maximum(rtol, {100 * eps})`.", stacklevel=3)
         rtol = 100 * eps
-    atol_z = np.ascontiguousarray(np.append(np.broadcast_to(np.asarray(atol, dtype=float), (n2,)),
-                                            _WORK_ATOL))
-    if np.any(atol_z < 0):
-        raise ValueError("`atol` must be positive.")
     info, tab = _tableau(method)
     a2, b2 = (0.0, 0.0) if baumgarte is None else (2.0 * baumgarte[0], baumgarte[1] ** 2)
     pext = model._pext(a2, b2)
-    z0 = np.append(y0, 0.0)
-    state = np.zeros(2 + 2 * nz)
-    state[0], state[1] = t0, (-1.0 if first_step is None else float(first_step))
-    state[2:2 + nz] = z0
+    # ws = [t, h_abs, z, f | fail: t, z | atol]; iw = [t_eval index, stored, nfev, nsteps]
+    ws = np.zeros(2 + 2 * nz + 1 + nz + nz)
+    ws[0], ws[1] = t0, (-1.0 if first_step is None else float(first_step))
+    ws[2:2 + n2] = y0
+    ws[-nz:-1] = atol
+    ws[-1] = _WORK_ATOL
+    if np.any(ws[-nz:] < 0):
+        raise ValueError("`atol` must be positive.")
+    state, fail = ws[:2 + 2 * nz], ws[2 + 2 * nz:2 + 2 * nz + 1 + nz]
+    z0 = state[2:2 + nz].copy()
     ts, zs = [np.array([t0])], [z0[None, :]]
     if t_eval is not None:
         t_eval = np.ascontiguousarray(t_eval, dtype=float)
@@ -586,22 +588,19 @@ def _run_compiled(model, y0, t0, t1, method, rtol, atol, max_step, first_step, t
         cap = max(1, len(t_eval))
     else:
         cap = 256
-    i_eval = np.array([len(ts)], dtype=np.int64)
-    nout, counts = np.zeros(1, dtype=np.int64), np.zeros(2, dtype=np.int64)
-    fail = np.zeros(1 + nz)
+    iw = np.array([len(ts), 0, 0, 0], dtype=np.int64)
     out_t, out_z = np.empty(cap), np.empty((cap, nz))
     reported = 0
     while True:
         t_pause = t1 if not progress else t0 + (t1 - t0) * min(1.0, (reported + 1) / 10)
-        status = model.compiled.erk(info, tab, state, t1, rtol, atol_z, float(max_step),
-                                    projection, 1e-14, 50, t_eval, i_eval, out_t, out_z, nout,
-                                    t_pause, pext, counts, fail)
+        status = model.compiled.erk(info, tab, ws, iw, t1, rtol, float(max_step), projection,
+                                    1e-14, 50, t_eval, out_t, out_z, t_pause, pext)
         info[4] = 0
         if t_eval is None:
-            k = int(nout[0])
+            k = int(iw[1])
             ts.append(out_t[:k].copy())
             zs.append(out_z[:k].copy())
-            nout[0] = 0
+            iw[1] = 0
             if k == cap and cap < 65536:
                 cap *= 4
                 out_t, out_z = np.empty(cap), np.empty((cap, nz))
@@ -610,8 +609,8 @@ def _run_compiled(model, y0, t0, t1, method, rtol, atol, max_step, first_step, t
         if status != 1:
             break
     if t_eval is not None:
-        ts.append(out_t[:int(nout[0])])
-        zs.append(out_z[:int(nout[0])])
+        ts.append(out_t[:int(iw[1])])
+        zs.append(out_z[:int(iw[1])])
     t_now = float(state[0])
     message = STATUS[0]
     if status == -1:
@@ -629,8 +628,7 @@ def _run_compiled(model, y0, t0, t1, method, rtol, atol, max_step, first_step, t
                                f"t = {t_now:.6g}")
     T = np.concatenate(ts) if ts else np.zeros(0)
     Z = np.concatenate(zs) if zs else np.zeros((0, nz))
-    return _Run(T, Z[:, :n2], Z[:, n2], int(status), message, int(counts[0]), 0, 0,
-                int(counts[1]))
+    return _Run(T, Z[:, :n2], Z[:, n2], int(status), message, int(iw[2]), 0, 0, int(iw[3]))
 
 
 def _report(t, t0, t1, reported):

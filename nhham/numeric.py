@@ -188,24 +188,27 @@ class CompiledRHS:
             c.c_void_p(info.ctypes.data))
         return out[:int(info[2])], int(info[0]), int(info[1]), int(status)
 
-    def erk(self, info, tab, state, t_bound, rtol, atol, max_step, projection, proj_tol,
-            proj_maxiter, t_eval, i_eval, out_t, out_z, nout, t_pause, pext, counts, fail):
+    def erk(self, info, tab, ws, iw, t_bound, rtol, max_step, projection, proj_tol,
+            proj_maxiter, t_eval, out_t, out_z, t_pause, pext):
         """One call of the compiled explicit Runge-Kutta loop (``nhham_erk``).
 
-        Arrays are updated in place: ``state`` = [t, h_abs, z, f], ``i_eval``,
-        ``nout``, ``counts`` = [nfev, nsteps] (int64 arrays of length 1 or 2),
-        ``out_t``/``out_z`` from row ``nout``, ``fail`` = [t, z] of a failed
-        evaluation. Returns the status (see the C source).
+        ``ws`` (float64) = [state = (t, h_abs, z (2n+1), f (2n+1)), fail = (t, z),
+        atol (2n+1)] and ``iw`` (int64) = [next t_eval index, rows stored, nfev,
+        nsteps] are updated in place; ``out_t``/``out_z`` receive the stored rows.
+        Returns the status (see the C source).
         """
         c = ctypes
-        p = lambda a: c.c_void_p(a.ctypes.data)  # noqa: E731
+        nz = 2 * self.n + 1
+        w, i = ws.ctypes.data, iw.ctypes.data
         n_eval = 0 if t_eval is None else len(t_eval)
         return self._lib.nhham_erk(
-            p(info), p(tab), p(state), c.c_double(t_bound), c.c_double(rtol), p(atol),
+            c.c_void_p(info.ctypes.data), c.c_void_p(tab.ctypes.data), c.c_void_p(w),
+            c.c_double(t_bound), c.c_double(rtol), c.c_void_p(w + 8 * (2 + 2 * nz + 1 + nz)),
             c.c_double(max_step), c.c_int(int(projection)), c.c_double(proj_tol),
-            c.c_int(proj_maxiter), None if t_eval is None else p(t_eval), c.c_long(n_eval),
-            p(i_eval), p(out_t), p(out_z), c.c_long(out_t.shape[0]), p(nout),
-            c.c_double(t_pause), pext, p(counts), p(fail))
+            c.c_int(proj_maxiter), None if t_eval is None else c.c_void_p(t_eval.ctypes.data),
+            c.c_long(n_eval), c.c_void_p(i), c.c_void_p(out_t.ctypes.data),
+            c.c_void_p(out_z.ctypes.data), c.c_long(out_t.shape[0]), c.c_void_p(i + 8),
+            c.c_double(t_pause), pext, c.c_void_p(i + 16), c.c_void_p(w + 8 * (2 + 2 * nz)))
 
     def batch(self, Y, pext, closed=False):
         """OUT (k, 2n+m+1) at k states and the number of failed states."""
