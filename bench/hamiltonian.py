@@ -11,7 +11,7 @@ time limit, and writes a Markdown table.
 
 Usage::
 
-    python bench/hamiltonian.py                  # everything, write bench/RESULTS-hamiltonian.md
+    python bench/hamiltonian.py                  # everything; the section of bench/RESULTS.md
     python bench/hamiltonian.py --quick          # small subset, print only
     python bench/hamiltonian.py --limit 120      # seconds per measurement
 """
@@ -116,7 +116,8 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="a few systems, print only")
     ap.add_argument("--limit", type=float, default=180.0, help="seconds per measurement")
-    ap.add_argument("--out", default=str(HERE / "RESULTS-hamiltonian.md"))
+    ap.add_argument("--out", default=None,
+                    help="also write the Markdown section to this file (default: print only)")
     args = ap.parse_args(argv)
     if args.quick:
         names = ["rolling_disk", "pendulum_cartesian", "snake(3)", "snake(8)"]
@@ -139,8 +140,10 @@ def main(argv=None):
                f"{os.getloadavg()[0]:.1f}")
     text = RESULTS_TEMPLATE.format(machine=machine, limit=args.limit, table=table(rows),
                                    total=total)
-    Path(args.out).write_text(text)
-    print(f"wrote {args.out} ({total:.0f} s)")
+    print(text)
+    if args.out:
+        Path(args.out).write_text(text)
+        print(f"wrote {args.out} ({total:.0f} s)")
 
 
 RESULTS_TEMPLATE = """# Hamiltonian side: classification and cross-check timings
