@@ -126,6 +126,16 @@ def drifting_particle():
     return system, point
 
 
+def pendulum():
+    """Pendulum in Cartesian coordinates: x^2 + y^2 = l^2, gravity along -y."""
+    x, y = sp.symbols("x y")
+    xd, yd = sp.symbols("x_dot y_dot")
+    m, g, l = sp.symbols("m g l")
+    return nhham.System(["x", "y"], m * (xd**2 + yd**2) / 2 - m * g * y,
+                        holonomic=[x**2 + y**2 - l**2],
+                        parameters={"m": 1.2, "g": 9.81, "l": 0.8})
+
+
 IDENTITY_SYSTEMS = {
     "rolling disk": rolling_disk,
     "knife edge": knife_edge_inclined,

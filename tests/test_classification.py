@@ -12,18 +12,15 @@ import pytest
 import sympy as sp
 
 import nhham
+
+import handmade
 from nhham.classification import classify_constraints, dirac_bracket, dirac_vs_projected
 
 S = sp.Symbol
 
 
 def pendulum():
-    x, y = sp.symbols("x y")
-    xd, yd = sp.symbols("x_dot y_dot")
-    m, g, l = sp.symbols("m g l")
-    return nhham.System(["x", "y"], m * (xd**2 + yd**2) / 2 - m * g * y,
-                        holonomic=[x**2 + y**2 - l**2],
-                        parameters={"m": 1.2, "g": 9.81, "l": 0.8})
+    return handmade.pendulum()
 
 
 def sphere_with_knife():

@@ -9,6 +9,8 @@ import pytest
 import sympy as sp
 
 import nhham
+
+import handmade
 from nhham.errors import ComputationError, NhhamError
 from nhham.lagrangian import LagrangianGeometry
 from nhham.legendre import (
@@ -23,13 +25,7 @@ S = sp.Symbol
 
 
 def disk():
-    x, y, th, ph = sp.symbols("x y theta phi")
-    xd, yd, thd, phd = sp.symbols("x_dot y_dot theta_dot phi_dot")
-    m, I1, I2, R = sp.symbols("m I1 I2 R")
-    L = m * (xd**2 + yd**2) / 2 + I1 * thd**2 / 2 + I2 * phd**2 / 2
-    return nhham.System(["x", "y", "theta", "phi"], L,
-                        [xd - R * sp.cos(th) * phd, yd - R * sp.sin(th) * phd],
-                        parameters={"m": 1.3, "I1": 0.5, "I2": 0.25, "R": 0.7})
+    return handmade.rolling_disk()[0]
 
 
 def magnetic():
