@@ -56,7 +56,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 from nhham import System  # noqa: E402
 from nhham.lagrangian import lagrangian_geometry  # noqa: E402
 from nhham.mechanics import to_lagranges_method  # noqa: E402
-from nhham.models import snake, snake_centres  # noqa: E402
+from nhham.models import snake, snake_chain_lagrangian  # noqa: E402
 
 DEFAULT_N = (1, 2, 4, 8, 12)
 QUICK_MAX_N = 4
@@ -69,7 +69,7 @@ def snake_expressions(N, form):
     ``compact``: L as nhham.models.snake writes it, v^T W v/2 expanded with
     the closed-form W (cos(theta_j - theta_k) entries). ``chain``: L as a
     user might write it, sum_i m |d/dt c_i|^2/2 + m l^2 theta_i'^2/24 with the
-    centres c_i of :func:`nhham.models.snake_centres`, not expanded. Same
+    centres c_i of :func:`nhham.models.snake_chain_lagrangian`, not expanded. Same
     physics (tests/test_models.py checks the identity), different sizes.
     """
     base = snake(N)
@@ -77,13 +77,7 @@ def snake_expressions(N, form):
     if form == "compact":
         L = base.lagrangian
     elif form == "chain":
-        m, l = sp.symbols("m l")
-        L = sp.S.Zero
-        for X, Y in snake_centres(N):
-            dX = sum(X.diff(a) * w for a, w in zip(q, v))
-            dY = sum(Y.diff(a) * w for a, w in zip(q, v))
-            L += m * (dX**2 + dY**2) / 2
-        L += sum(m * l**2 / 24 * w**2 for w in v[2:])
+        L = snake_chain_lagrangian(N)
     else:
         raise ValueError(f"unknown form {form!r}")
     params = {p.name: value for p, value in base.parameter_values.items()}

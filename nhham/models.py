@@ -38,6 +38,7 @@ __all__ = [
     "paper_example_3_2",
     "snake",
     "snake_centres",
+    "snake_chain_lagrangian",
     "MODELS",
 ]
 
@@ -550,6 +551,23 @@ def _snake_link_weights(N):
         k[i][i - 1] += 1
         k[i][i] += 1
     return k
+
+
+def snake_chain_lagrangian(N: int):
+    """The snake's L written as the sum of its links' kinetic energies, unexpanded.
+
+    m |c_i'|^2 / 2 + m l^2 theta_i'^2 / 24 per link, as a sympy.physics.mechanics
+    user writes it from the chain geometry; the same function as ``snake(N).lagrangian``.
+    """
+    base = snake(N, symbolic=True)
+    q, v = base.coordinates, base.velocities
+    m, l = sp.symbols("m l")
+    L = sp.S.Zero
+    for X, Y in snake_centres(N):
+        dX = sum(X.diff(a) * w for a, w in zip(q, v))
+        dY = sum(Y.diff(a) * w for a, w in zip(q, v))
+        L += m * (dX**2 + dY**2) / 2
+    return L + sum(m * l**2 / 24 * w**2 for w in v[2:])
 
 
 def snake_centres(N: int, l=None):

@@ -218,7 +218,7 @@ def test_energy_not_conserved_for_affine_constraint():
 
 # ------------------------------------------- quadratic fast path vs general
 from nhham.lagrangian import LagrangianGeometry, _derivative  # noqa: E402
-from nhham.models import MODELS, snake_centres  # noqa: E402
+from nhham.models import MODELS, snake_chain_lagrangian  # noqa: E402
 from nhham.system import quadratic_parts, velocity_polynomial  # noqa: E402
 
 
@@ -262,15 +262,7 @@ def _quartic_particle():
 def _snake_chain(N):
     """The snake with L written as the sum of link kinetic energies (unexpanded)."""
     base = MODELS["snake"](N)
-    q, v = base.coordinates, base.velocities
-    m, l = sp.symbols("m l")
-    L = sp.S.Zero
-    for X, Y in snake_centres(N):
-        dX = sum(X.diff(a) * w for a, w in zip(q, v))
-        dY = sum(Y.diff(a) * w for a, w in zip(q, v))
-        L += m * (dX**2 + dY**2) / 2
-    L += sum(m * l**2 / 24 * w**2 for w in v[2:])
-    return nhham.System(q, L, base.constraints,
+    return nhham.System(base.coordinates, snake_chain_lagrangian(N), base.constraints,
                         parameters={p.name: x for p, x in base.parameter_values.items()})
 
 
