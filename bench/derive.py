@@ -54,9 +54,9 @@ from sympy.physics import mechanics as me
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from nhham import System  # noqa: E402
-from nhham.lagrangian import lagrangian_geometry  # noqa: E402
-from nhham.mechanics import to_lagranges_method  # noqa: E402
-from nhham.models import snake, snake_chain_lagrangian  # noqa: E402
+from nhham.lagrangian.geometry import lagrangian_geometry  # noqa: E402
+from nhham.system.mechanics import to_lagranges_method  # noqa: E402
+from nhham.system.models import snake, snake_chain_lagrangian  # noqa: E402
 
 DEFAULT_N = (1, 2, 4, 8, 12)
 QUICK_MAX_N = 4

@@ -29,8 +29,8 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from nhham import models  # noqa: E402
-from nhham.classification import classify_constraints  # noqa: E402
-from nhham.crosscheck import cross_check  # noqa: E402
+from nhham.hamiltonian.classification import classify_constraints  # noqa: E402
+from nhham.hamiltonian.crosscheck import cross_check  # noqa: E402
 
 HERE = Path(__file__).resolve().parent
 

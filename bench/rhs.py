@@ -47,8 +47,8 @@ import sympy as sp
 
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
-from nhham.codegen import compile_c, numeric_model
-from nhham.models import snake
+from nhham.numerics.codegen import compile_c, numeric_model
+from nhham.system.models import snake
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 
@@ -217,7 +217,7 @@ def compare_flags(N, variants, batch_k=10_000, rounds=15):
     libs = {}
     for flags in variants:
         path = compile_c(model.c_source, flags=flags.split())
-        from nhham.numeric import CompiledRHS
+        from nhham.numerics.model import CompiledRHS
 
         libs[flags or "-O2 (default)"] = CompiledRHS.load(path, model.layout)
     ref = model.rhs(0.0, Y)

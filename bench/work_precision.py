@@ -38,9 +38,9 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import sympy as sp  # noqa: E402
 
 from nhham import models  # noqa: E402
-from nhham.codegen import numeric_model  # noqa: E402
-from nhham.reference import reference_solution  # noqa: E402
-from nhham.workprecision import work_precision  # noqa: E402
+from nhham.numerics.codegen import numeric_model  # noqa: E402
+from nhham.numerics.reference import reference_solution  # noqa: E402
+from nhham.numerics.workprecision import work_precision  # noqa: E402
 
 
 # ------------------------------------------------------------ PyDy models
@@ -181,7 +181,7 @@ def main(argv=None):
         print(wp.describe())
         print(f"(study took {time.perf_counter() - start:.0f} s)")
         if args.plot:
-            from nhham.plotting import plot_work_precision
+            from nhham.cli.plotting import plot_work_precision
 
             os.makedirs(args.plot, exist_ok=True)
             path = os.path.join(args.plot, name.replace(" ", "_") + ".png")

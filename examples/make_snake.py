@@ -22,7 +22,7 @@ import sympy as sp
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
-from nhham.models import snake  # noqa: E402
+from nhham.system.models import snake  # noqa: E402
 
 SIMULATE = {"t_end": 10.0, "method": "DOP853", "rtol": 1e-10}
 
@@ -78,7 +78,7 @@ def scene_text(N):
     state = initial_state(N)
     check_initial(system, state)
     try:
-        from nhham.scene import dump_scene
+        from nhham.system.scene import dump_scene
     except ImportError:  # scene.py not there yet: write the TOML here
         body = _dump(system, state)
     else:
@@ -88,7 +88,7 @@ def scene_text(N):
 
 def _dump(system, state):
     """Minimal TOML writer (DESIGN.md §3) for when nhham.scene is unavailable."""
-    from nhham.expressions import to_text
+    from nhham.system.expressions import to_text
 
     def string(s):
         return '"' + s.replace("\\", "\\\\").replace('"', '\\"') + '"'

@@ -1,13 +1,28 @@
 """nhham: mechanical systems with non-holonomic constraints.
 
+The package is layered; each layer imports only from those beneath it:
+
+``nhham.system``
+    what the user describes: :class:`System`, the safe expression parser,
+    scene files, the sympy.physics.mechanics adapter, ready-made models;
+``nhham.lagrangian``
+    the paper on TQ: decisions on M_k, the geometry of Sections 2 and 4, the
+    constraint algorithm of Section 3, integrability, Section 5 symmetries;
+``nhham.hamiltonian``
+    Section 6 on T*Q: Legendre map, brackets, first/second class, Dirac and
+    nonholonomic brackets, the Lagrangian/Hamiltonian cross-check;
+``nhham.numerics``
+    numbers without sympy (generated kernels, integrators, reference,
+    diagnostics, work-precision); its ``codegen`` is the one bridge in;
+``nhham.cli``
+    the ``nhham`` command, its text and JSON reports, and the plots.
+
 Public names are re-exported here explicitly. All but the system description
 and the exceptions are imported on first use (PEP 562), so that a command
 which only classifies never imports the numerical integrators.
 """
 
-from importlib import import_module
-
-from .errors import (
+from nhham.errors import (
     ComputationError,
     InconsistentInitialDataError,
     InputError,
@@ -21,56 +36,57 @@ from .errors import (
     SingularLagrangianError,
     ValidationError,
 )
-from .system import DroppedConstraint, System
+from nhham.lazy import lazy_exports
+from nhham.system.description import DroppedConstraint, System
 
 __version__ = "0.1.0"
 
 # name -> module that defines it
 _LAZY = {
     # Lagrangian side (paper Sections 2, 4, 5)
-    "lagrangian_geometry": "lagrangian",
-    "LagrangianGeometry": "lagrangian",
-    "DynamicsIngredients": "lagrangian",
-    "Submanifold": "onmanifold",
-    "Decision": "onmanifold",
-    "constant_of_motion": "symmetries",
-    "cyclic_constants": "symmetries",
-    "lie_symmetry": "symmetries",
-    "complete_lift": "symmetries",
+    "lagrangian_geometry": "lagrangian.geometry",
+    "LagrangianGeometry": "lagrangian.geometry",
+    "DynamicsIngredients": "lagrangian.geometry",
+    "Submanifold": "lagrangian.submanifold",
+    "Decision": "lagrangian.submanifold",
+    "constant_of_motion": "lagrangian.symmetries",
+    "cyclic_constants": "lagrangian.symmetries",
+    "lie_symmetry": "lagrangian.symmetries",
+    "complete_lift": "lagrangian.symmetries",
     # constraint algorithm (Section 3)
-    "analyze_constraints": "algorithm",
-    "ConstraintAnalysis": "algorithm",
-    "run_algorithm": "algorithm",
-    "integrability": "integrability",
+    "analyze_constraints": "lagrangian.algorithm",
+    "ConstraintAnalysis": "lagrangian.algorithm",
+    "run_algorithm": "lagrangian.algorithm",
+    "integrability": "lagrangian.integrability",
     # Hamiltonian side (Section 6)
-    "legendre_map": "legendre",
-    "LegendreMap": "legendre",
-    "canonical_bracket": "brackets",
-    "BracketAlgebra": "brackets",
-    "hamiltonian_side": "hamiltonian",
-    "HamiltonianSide": "hamiltonian",
-    "nonholonomic_bracket": "hamiltonian",
-    "classify_constraints": "classification",
-    "ConstraintClasses": "classification",
-    "dirac_bracket": "classification",
-    "dirac_vs_projected": "classification",
-    "cross_check": "crosscheck",
-    "CrossCheckReport": "crosscheck",
+    "legendre_map": "hamiltonian.legendre",
+    "LegendreMap": "hamiltonian.legendre",
+    "canonical_bracket": "hamiltonian.brackets",
+    "BracketAlgebra": "hamiltonian.brackets",
+    "hamiltonian_side": "hamiltonian.side",
+    "HamiltonianSide": "hamiltonian.side",
+    "nonholonomic_bracket": "hamiltonian.side",
+    "classify_constraints": "hamiltonian.classification",
+    "ConstraintClasses": "hamiltonian.classification",
+    "dirac_bracket": "hamiltonian.classification",
+    "dirac_vs_projected": "hamiltonian.classification",
+    "cross_check": "hamiltonian.crosscheck",
+    "CrossCheckReport": "hamiltonian.crosscheck",
     # numbers
-    "numeric_model": "codegen",
-    "NumericModel": "numeric",
-    "simulate": "integrate",
-    "SimulationResult": "integrate",
-    "work_precision": "workprecision",
+    "numeric_model": "numerics.codegen",
+    "NumericModel": "numerics.model",
+    "simulate": "numerics.integrate",
+    "SimulationResult": "numerics.integrate",
+    "work_precision": "numerics.workprecision",
     # input and output
-    "load_scene": "scene",
-    "loads_scene": "scene",
-    "dump_scene": "scene",
-    "Scene": "scene",
-    "parse_expression": "expressions",
-    "from_mechanics": "mechanics",
-    "from_lagranges_method": "mechanics",
-    "models": None,
+    "load_scene": "system.scene",
+    "loads_scene": "system.scene",
+    "dump_scene": "system.scene",
+    "Scene": "system.scene",
+    "parse_expression": "system.expressions",
+    "from_mechanics": "system.mechanics",
+    "from_lagranges_method": "system.mechanics",
+    "models": "system.models",
 }
 
 __all__ = [
@@ -91,17 +107,4 @@ __all__ = [
     *_LAZY,
 ]
 
-
-def __getattr__(name):
-    if name not in _LAZY:
-        raise AttributeError(f"module 'nhham' has no attribute {name!r}")
-    module = _LAZY[name]
-    value = import_module(f".{name}" if module is None else f".{module}", __name__)
-    if module is not None:
-        value = getattr(value, name)
-    globals()[name] = value
-    return value
-
-
-def __dir__():
-    return sorted(set(globals()) | set(_LAZY))
+__getattr__, __dir__ = lazy_exports(__name__, _LAZY, globals())

@@ -1,7 +1,7 @@
-"""``python -m nhham`` runs the command."""
+"""``python -m nhham``: the command (see :mod:`nhham.cli`)."""
 
 import sys
 
-from .cli import main
+from nhham.cli import main
 
 sys.exit(main())

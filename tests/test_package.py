@@ -20,6 +20,6 @@ def test_unknown_attribute_raises():
 
 def test_classify_path_does_not_import_the_integrators():
     code = ("import sys, nhham; nhham.analyze_constraints; "
-            "print('nhham.integrate' in sys.modules, 'scipy.integrate' in sys.modules)")
+            "print('nhham.numerics.integrate' in sys.modules, 'scipy.integrate' in sys.modules)")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True).stdout
     assert out.split() == ["False", "False"]

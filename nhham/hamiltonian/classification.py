@@ -1,0 +1,752 @@
+"""First- and second-class final constraints, the Dirac bracket, Dirac vs projected.
+
+Conventions (``DESIGN.md`` §2): the final constraints chi_a (a = 1..k) of M_f
+are transported to T*Q (chi_a o Leg^{-1}); B_ab = {chi_a, chi_b} with the
+canonical bracket. On M_f:
+
+* rank B = r is the number of second-class constraints (B is antisymmetric,
+  so r is even), k - r the number of first-class ones;
+* a *maximal second-class set* is an index set R (|R| = r) with B_RR
+  invertible on M_f; one always exists among principal submatrices, and it is
+  grown two indices at a time (if B_RR is invertible and rank B > |R|, the
+  Schur complement of B_RR is a nonzero antisymmetric matrix, so some pair
+  (a, b) has S_ab != 0, and det B_{R+ab} = det B_RR S_ab^2);
+* every index k outside R gives a first-class combination
+  gamma_k = chi_k - sum_{a in R} (B_RR^{-1} B_Rk)_a chi_a, which brackets to
+  zero with every chi on M_f (rows in R by construction, the others because
+  rank B = |R|). These k - r combinations are independent (each has its own
+  unit coefficient) and are reported as expressions in (q, p); a constraint
+  may be second class on its own while such a combination of several is first
+  class.
+
+Decisions on M_f follow the rule of :mod:`nhham.onmanifold` (exact reduction
+first, seeded sampling second), each recorded as a Decision.
+
+The Dirac bracket {f, g}_D = {f, g} - {f, chi_a} (B^{-1})^{ab} {chi_b, g} is
+taken over the second-class set, block by block
+(:class:`nhham.brackets.DiracBracket`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Sequence
+
+import numpy as np
+import sympy as sp
+
+from nhham.settings import SEED
+from nhham.hamiltonian.brackets import DiracBracket, connected_blocks
+from nhham.errors import ComputationError, InputError
+from nhham.hamiltonian.side import HamiltonianSide, hamiltonian_side
+from nhham.hamiltonian.legendre import Backend, Lambdified
+from nhham.lagrangian.algebra import block_inverse, cancel
+from nhham.lagrangian.algorithm import ConstraintAnalysis, analyze_constraints
+from nhham.lagrangian.submanifold import Decision, Submanifold
+
+__all__ = [
+    "ConstraintClasses",
+    "classify_constraints",
+    "dirac_bracket",
+    "DiracProjectedReport",
+    "dirac_vs_projected",
+    "final_constraints_of",
+]
+
+
+# ---------------------------------------------------------------- inputs
+def final_constraints_of(source, precision: int | None = None, samples: int = 6,
+                         seed: int = SEED):
+    """(system, final constraints on TQ, labels, analysis) for a source.
+
+    Parameters
+    ----------
+    source : System, HamiltonianSide or ConstraintAnalysis
+        A system (or a side, for its system) runs the constraint algorithm
+        (:func:`nhham.lagrangian.algorithm.analyze_constraints` with these
+        precision, samples and seed); an analysis is used as it is.
+
+    Raises
+    ------
+    ComputationError
+        When the analysis is inconsistent: there is no M_f to classify on.
+    """
+    if isinstance(source, HamiltonianSide):
+        source = source.system
+    analysis = source if isinstance(source, ConstraintAnalysis) else analyze_constraints(
+        source, precision=precision, samples=samples, seed=seed)
+    if analysis.status == "inconsistent":
+        raise ComputationError(
+            f"classify: the constraint algorithm found no dynamics (inconsistent: "
+            f"{analysis.inconsistency}); there is no M_f to classify on")
+    cons = tuple(sp.sympify(c) for c in analysis.final_constraints)
+    return analysis.system, cons, tuple(analysis.final_labels), analysis
+
+
+def _default_labels(system):
+    k = len(system.holonomic)
+    return tuple(f"holonomic[{i}]" for i in range(k)) + tuple(
+        f"{lab}.lift" if lab.startswith("holonomic") else lab
+        for lab in system.constraint_labels)
+
+
+def _is_on_tq(expr, system):
+    return bool(sp.sympify(expr).free_symbols & set(system.velocities))
+
+
+# --------------------------------------------------------------- results
+@dataclass(frozen=True)
+class ConstraintClasses:
+    """Classification of the final constraints chi_a on M_f (in T*Q).
+
+    Attributes
+    ----------
+    labels : tuple of str
+        Names of the chi_a.
+    constraints_TQ : tuple of sympy.Expr
+        chi_a on TQ, functions of (q, v).
+    constraints : tuple of sympy.Expr or None
+        chi_a o Leg^{-1} in (q, p) (None in sampled mode without a symbolic inverse).
+    bracket_matrix : sympy.Matrix or None
+        B_ab = {chi_a, chi_b} reduced on M_f (exact mode), shape (k, k).
+    bracket_samples : tuple of numpy.ndarray
+        B at the sample points of M_f (sampled mode, or the pivot evidence).
+    rank : int
+        rank B on M_f = number of second-class constraints.
+    first_class, second_class : int
+    second_class_set : tuple of str
+        Labels of a maximal second-class set R (B_RR invertible on M_f).
+    first_class_combinations : tuple of sympy.Expr or None
+        A basis gamma_k = chi_k - sum_{a in R} (B_RR^{-1} B_Rk)_a chi_a (in
+        (q, p)), one per constraint outside R.
+    combination_coefficients : tuple of dict
+        ``{label: coefficient}`` of each gamma_k (expressions on M_f in
+        exact mode; in sampled mode a tuple of values, one per sample point).
+    individually_first_class : tuple of str
+        Labels whose whole row of B vanishes on M_f.
+    blocks : tuple of tuple of str
+        Connected components of the nonzero pattern of B on M_f.
+    decisions : dict
+        Named :class:`Decision` objects: ``"rank"``, ``"B[a,b]"`` per entry,
+        ``"gamma[k]"`` for the check that each combination is first class.
+    method : str
+        ``"exact"`` or ``"sampled"``.
+    manifold : Submanifold or None
+        M_f in T*Q (exact mode).
+    side : HamiltonianSide
+    analysis : object or None
+        The ConstraintAnalysis the constraints came from.
+    """
+
+    labels: tuple
+    constraints_TQ: tuple
+    constraints: tuple | None
+    bracket_matrix: sp.Matrix | None
+    bracket_samples: tuple
+    rank: int
+    first_class: int
+    second_class: int
+    second_class_set: tuple
+    first_class_combinations: tuple | None
+    combination_coefficients: tuple
+    individually_first_class: tuple
+    blocks: tuple
+    decisions: dict
+    method: str
+    manifold: Submanifold | None
+    side: HamiltonianSide
+    analysis: object = None
+
+    @property
+    def second_class_indices(self) -> tuple:
+        return tuple(self.labels.index(lab) for lab in self.second_class_set)
+
+    @property
+    def second_class_constraints(self) -> tuple | None:
+        """The chi_a of the maximal second-class set, in (q, p)."""
+        if self.constraints is None:
+            return None
+        return tuple(self.constraints[a] for a in self.second_class_indices)
+
+    @property
+    def rank_decision(self) -> Decision:
+        return self.decisions["rank"]
+
+    @property
+    def warnings(self) -> tuple:
+        """Warnings of every decision, prefixed by what was decided."""
+        return tuple(f"{name}: {w}" for name, d in self.decisions.items() for w in d.warnings)
+
+    def describe(self) -> str:
+        lines = [f"{len(self.labels)} final constraints: {self.second_class} second class, "
+                 f"{self.first_class} first class (rank of the bracket matrix on M_f: "
+                 f"{self.rank_decision.describe()})"]
+        if self.second_class_set:
+            lines.append("maximal second-class set: " + ", ".join(self.second_class_set))
+        if self.first_class_combinations is not None:
+            for g in self.first_class_combinations:
+                lines.append(f"first class: {g}")
+        return "\n".join(lines)
+
+    def to_dict(self) -> dict:
+        """JSON-ready summary (expressions as sympy-parsable strings)."""
+        def coeffs(c):
+            return {k: (str(v) if isinstance(v, sp.Basic) else [float(x) for x in v])
+                    for k, v in c.items()}
+        return {
+            "constraints": [str(c) for c in self.constraints] if self.constraints else None,
+            "labels": list(self.labels),
+            "rank": self.rank,
+            "first_class": self.first_class,
+            "second_class": self.second_class,
+            "second_class_set": list(self.second_class_set),
+            "first_class_combinations": (None if self.first_class_combinations is None
+                                         else [str(g) for g in self.first_class_combinations]),
+            "combination_coefficients": [coeffs(c) for c in self.combination_coefficients],
+            "individually_first_class": list(self.individually_first_class),
+            "blocks": [list(b) for b in self.blocks],
+            "method": self.method,
+            "decisions": {k: {"value": d.value if isinstance(d.value, (bool, int)) else str(d.value),
+                              "method": d.method, "detail": d.detail, "precision": d.precision,
+                              "warnings": list(d.warnings)}
+                          for k, d in self.decisions.items()},
+        }
+
+
+# ------------------------------------------------------------ classify
+def classify_constraints(source, constraints: Sequence | None = None,
+                         labels: Sequence[str] | None = None, *, precision: int | None = None,
+                         samples: int = 6, seed: int = SEED, method: str = "auto",
+                         tol: float | None = None) -> ConstraintClasses:
+    """Classify the final constraints of a system into first and second class.
+
+    Parameters
+    ----------
+    source : System, HamiltonianSide or ConstraintAnalysis
+    constraints : sequence of sympy.Expr, optional
+        The final constraints, given directly: functions of (q, v) (they are
+        transported by Leg^{-1}) or of (q, p). Default: from the constraint
+        algorithm (or M_1 when the algorithm is unavailable).
+    labels : sequence of str, optional
+        Names of ``constraints`` (default ``chi[a]``).
+    precision : int or None
+        None for float64 sampling, an integer for mpmath digits.
+    samples, seed : int
+        Sample points of sampled decisions.
+    method : {"auto", "exact", "sampled"}
+        ``"exact"``: symbolic brackets reduced on M_f, exact decisions where
+        they exist, sampled otherwise; ``"sampled"``: numeric brackets at seeded
+        points of M_f only (no symbolic Legendre inverse); ``"auto"``: exact
+        when :attr:`HamiltonianSide.symbolic_affordable`, sampled otherwise.
+    tol : float, optional
+        Relative tolerance of sampled decisions (default 1e-9 / 10**(3-digits)).
+
+    Returns
+    -------
+    ConstraintClasses
+    """
+    if method not in ("auto", "exact", "sampled"):
+        raise InputError(f"classify: method must be 'auto', 'exact' or 'sampled', got {method!r}")
+    side_in = source if isinstance(source, HamiltonianSide) else None
+    system = source.system if isinstance(source, HamiltonianSide) else getattr(
+        source, "system", source)
+    side = side_in if side_in is not None else hamiltonian_side(
+        system, precision=precision, samples=samples, seed=seed)
+    if method == "auto":
+        method = "exact" if _exact_affordable(side) else "sampled"
+    if constraints is None:
+        if method == "sampled" and not isinstance(source, ConstraintAnalysis) \
+                and _numerically_regular(side, precision, samples, seed, tol):
+            # C has full rank at the samples of M_1: M_f = M_1, no symbolic algorithm run.
+            cons, labs, analysis = (tuple(system.holonomic) + tuple(system.phi),
+                                    _default_labels(system), None)
+        else:
+            system, cons, labs, analysis = final_constraints_of(source, precision, samples, seed)
+    else:
+        cons = tuple(sp.sympify(c) for c in constraints)
+        labs = tuple(labels) if labels is not None else tuple(f"chi[{a}]" for a in range(len(cons)))
+        analysis = None if source is system or source is side_in else source
+    if len(labs) != len(cons):
+        raise InputError(f"classify: {len(labs)} labels for {len(cons)} constraints")
+    if method == "exact":
+        return _classify_exact(side, cons, labs, analysis, tol)
+    return _classify_sampled(side, cons, labs, analysis, tol, precision, samples, seed)
+
+
+def _numerically_regular(side, precision, samples, seed, tol) -> bool:
+    """C^H has full rank m at every seeded point of M_1 (numeric layer)."""
+    system = side.system
+    if not system.m:
+        return True
+    M1 = Submanifold(system, tuple(system.holonomic) + tuple(system.phi), precision=precision,
+                     samples=samples, seed=seed, exact=False)
+    be = Backend(precision)
+    tol = be.default_tol() if tol is None else tol
+    with be.context():
+        for x in M1.points()[0]:
+            C = side.numeric.point_from_tq(be, x).C
+            s = np.linalg.svd(np.asarray(C, dtype=float), compute_uv=False)
+            if s[-1] <= tol * max(s[0], 1.0):
+                return False
+    return True
+
+
+def _exact_affordable(side: HamiltonianSide) -> bool:
+    return side.symbolic_affordable
+
+
+def _to_hamiltonian(side, cons):
+    system = side.system
+    out_tq, out_h = [], []
+    for c in cons:
+        if _is_on_tq(c, system):
+            out_tq.append(c)
+            out_h.append(side.legendre.transport(c))
+        else:
+            out_h.append(cancel(c))
+            out_tq.append(side.legendre.pullback(c))
+    return tuple(out_tq), tuple(out_h)
+
+
+def _classify_exact(side, cons, labels, analysis, tol):
+    cons_tq, chi = _to_hamiltonian(side, cons)
+    k = len(chi)
+    Mf = side.submanifold(chi)
+    B = side.algebra.bracket_matrix(chi).matrix
+    decisions: dict = {}
+    Br = sp.zeros(k, k)
+    nonzero = np.zeros((k, k), dtype=bool)
+    for a in range(k):
+        for b in range(a + 1, k):
+            d = Mf.vanishes(B[a, b], tol=tol)
+            decisions[f"B[{labels[a]},{labels[b]}]"] = d
+            if not d.value:
+                Br[a, b] = Mf.reduce(B[a, b])
+                Br[b, a] = -Br[a, b]
+                nonzero[a, b] = nonzero[b, a] = True
+    rank_d = Mf.rank(Br, tol=tol) if k else Decision(0, "exact", "no constraints")
+    decisions["rank"] = rank_d
+    r = int(rank_d.value)
+    samples_B = _sample_matrix(Mf, Br) if r else ()
+    R = _principal_pivots(Br, samples_B, r, tol)
+    gammas, coeff_dicts = [], []
+    inv = block_inverse(Br.extract(R, R)) if R else sp.zeros(0, 0)
+    for kk in (i for i in range(k) if i not in R):
+        c = sp.zeros(k, 1)
+        c[kk] = 1
+        if R:
+            cR = (-(inv * Br.extract(R, [kk]))).applyfunc(cancel)
+            for i, a in enumerate(R):
+                c[a] = cR[i]
+        gamma = cancel(sum((c[a] * chi[a] for a in range(k)), sp.S.Zero))
+        gammas.append(gamma)
+        coeff_dicts.append({labels[a]: c[a] for a in range(k) if c[a] != 0})
+        residual = (Br * c).applyfunc(cancel)
+        decisions[f"gamma[{labels[kk]}]"] = _all_vanish(Mf, residual, tol)
+    alone = tuple(labels[a] for a in range(k) if not nonzero[a].any())
+    blocks = tuple(tuple(labels[a] for a in blk) for blk in connected_blocks(nonzero)) if k else ()
+    return ConstraintClasses(
+        labels=tuple(labels), constraints_TQ=cons_tq, constraints=chi, bracket_matrix=Br,
+        bracket_samples=tuple(samples_B), rank=r, first_class=k - r, second_class=r,
+        second_class_set=tuple(labels[a] for a in R),
+        first_class_combinations=tuple(gammas), combination_coefficients=tuple(coeff_dicts),
+        individually_first_class=alone, blocks=blocks, decisions=decisions, method="exact",
+        manifold=Mf, side=side, analysis=analysis)
+
+
+def _all_vanish(Mf, column, tol):
+    """One Decision: every entry of ``column`` vanishes on M_f."""
+    worst = None
+    for e in column:
+        d = Mf.vanishes(e, tol=tol)
+        if not d.value:
+            return d
+        if worst is None or d.method == "sampled":
+            worst = d
+    return worst or Decision(True, "exact", "no entries")
+
+
+def _sample_matrix(Mf: Submanifold, matrix: sp.Matrix):
+    """numpy float matrices of ``matrix`` at M_f's sample points."""
+    points, _ = Mf.points()
+    args = list(Mf.variables) + list(Mf.system.parameters)
+    f = Lambdified(args, list(matrix), matrix.shape)
+    be = Backend(None)
+    out = []
+    for pt in points:
+        out.append(f(be, [float(pt[s]) for s in args]))
+    return out
+
+
+def _principal_pivots(Br: sp.Matrix, samples, r: int, tol) -> list:
+    """A principal index set R, |R| = r, with B_RR invertible (grown two at a time)."""
+    if r == 0:
+        return []
+    k = Br.rows
+    exact = not Br.free_symbols
+    tol = 1e-9 if tol is None else tol
+
+    # Only samples where B has its generic rank r decide (Newton projection can
+    # land on a singular set, e.g. the snakeboard at phi = +-pi/2).
+    def generic_rank(S):
+        s = np.linalg.svd(S, compute_uv=False)
+        return int(sum(x > tol * max(np.abs(S).max(), 1.0) for x in s))
+
+    samples = [S for S in samples if generic_rank(S) == r] or list(samples)
+
+    def invertible(idx):
+        if exact:
+            return Br.extract(idx, idx).rank() == len(idx)
+        for S in samples:
+            sub = S[np.ix_(idx, idx)]
+            s = np.linalg.svd(sub, compute_uv=False)
+            scale = max(np.abs(S).max(), 1.0)
+            if s[-1] <= tol * scale:
+                return False
+        return True
+
+    R: list = []
+    while len(R) < r:
+        grown = False
+        for a in range(k):
+            if a in R:
+                continue
+            for b in range(a + 1, k):
+                if b in R:
+                    continue
+                trial = sorted(R + [a, b])
+                if invertible(trial):
+                    R = trial
+                    grown = True
+                    break
+            if grown:
+                break
+        if not grown:
+            raise ComputationError(
+                f"classification: no principal {len(R) + 2}x{len(R) + 2} block of the bracket "
+                f"matrix is invertible at the samples although its rank on M_f is {r}")
+    return R
+
+
+def _classify_sampled(side, cons, labels, analysis, tol, precision, samples, seed):
+    """Numeric classification: B at seeded points of M_f from the numeric layer."""
+    system = side.system
+    cons_tq = tuple(c if _is_on_tq(c, system) or not (sp.sympify(c).free_symbols
+                                                      & set(side.momenta))
+                    else side.legendre.pullback(c) for c in cons)
+    k = len(cons_tq)
+    be = Backend(precision)
+    Mtq = Submanifold(system, cons_tq, precision=precision, samples=samples, seed=seed,
+                      exact=False)
+    points, resid = Mtq.points()
+    num = side.numeric
+    mats = []
+    with be.context():
+        for x in points:
+            pt = num.point_from_tq(be, x)
+            mats.append(num.bracket_matrix(be, pt, cons_tq))
+    tol_ = be.default_tol() if tol is None else tol
+    fmats = [np.array(S, dtype=float) for S in mats]
+    ranks, svals = [], []
+    for S in mats:
+        s = _svals(S, be)
+        svals.append(tuple(float(x) for x in s))
+        top = max(float(s[0]) if len(s) else 0.0, 1.0)
+        ranks.append(int(sum(float(x) > tol_ * top for x in s)))
+    r = max(ranks) if ranks else 0
+    warnings = []
+    if len(set(ranks)) > 1:
+        warnings.append(f"rank is not constant on M_f: ranks {ranks} at the samples")
+    decisions = {"rank": Decision(
+        r, "sampled", f"rank {r} of the numeric bracket matrix at {len(points)} seeded points "
+                      f"of M_f (relative tolerance {tol_:g})",
+        precision=be.label, samples=len(points), singular_values=tuple(svals),
+        point_residual=resid, warnings=tuple(warnings))}
+    scale = max([np.abs(S).max() for S in fmats] + [1.0])
+    nonzero = np.zeros((k, k), dtype=bool)
+    for S in fmats:
+        nonzero |= np.abs(S) > tol_ * scale
+    R = _principal_pivots(sp.Matrix(k, k, lambda a, b: sp.Symbol("b")), fmats, r, tol_) \
+        if r else []
+    coeff_dicts = []
+    for kk in (i for i in range(k) if i not in R):
+        per_point = []
+        worst = 0.0
+        for S in mats:
+            c = be.zeros(k)
+            c[kk] = be.scalar(1)
+            if R:
+                cR = -be.solve(S[np.ix_(R, R)], S[np.ix_(R, [kk])].reshape(len(R)))
+                for i, a in enumerate(R):
+                    c[a] = cR[i]
+            worst = max(worst, float(be.norm(S @ c)))
+            per_point.append(c)
+        coeff_dicts.append({labels[a]: tuple(float(c[a]) for c in per_point)
+                            for a in range(k) if any(c[a] != 0 for c in per_point)})
+        decisions[f"gamma[{labels[kk]}]"] = Decision(
+            worst <= tol_ * scale, "sampled",
+            f"largest |B c| {worst:.3g} at {len(points)} seeded points of M_f",
+            precision=be.label, samples=len(points), max_abs=worst, point_residual=resid)
+    alone = tuple(labels[a] for a in range(k) if not nonzero[a].any())
+    blocks = tuple(tuple(labels[a] for a in blk) for blk in connected_blocks(nonzero)) if k else ()
+    return ConstraintClasses(
+        labels=tuple(labels), constraints_TQ=cons_tq, constraints=None, bracket_matrix=None,
+        bracket_samples=tuple(fmats), rank=r, first_class=k - r, second_class=r,
+        second_class_set=tuple(labels[a] for a in R), first_class_combinations=None,
+        combination_coefficients=tuple(coeff_dicts), individually_first_class=alone,
+        blocks=blocks, decisions=decisions, method="sampled", manifold=None, side=side,
+        analysis=analysis)
+
+
+def _svals(S, be):
+    if be.precision is None:
+        return np.linalg.svd(np.asarray(S, dtype=float), compute_uv=False) if S.size else []
+    import mpmath
+    with mpmath.workdps(be.precision):
+        A = mpmath.matrix(S.tolist())
+        if not S.size:
+            return []
+        return sorted((abs(x) for x in mpmath.svd_r(A, compute_uv=False)), reverse=True)
+
+
+# ---------------------------------------------------------------- Dirac
+def dirac_bracket(source, classes: ConstraintClasses | None = None, *,
+                  on_manifold: bool = False, **classify_options) -> DiracBracket:
+    """The Dirac bracket over the maximal second-class set of the final constraints.
+
+    Parameters
+    ----------
+    source : System, HamiltonianSide, ConstraintAnalysis or ConstraintClasses
+    classes : ConstraintClasses, optional
+        A classification to use (default: computed, exact mode).
+    on_manifold : bool
+        False (default): B = {chi_a, chi_b} as functions on T*Q, blocks from
+        its identically nonzero entries, so the Dirac bracket is a Poisson
+        bracket wherever B is invertible. True: B reduced on M_f and blocks
+        from the decisions on M_f (cheaper; valid on M_f only).
+    **classify_options
+        Passed to :func:`classify_constraints`.
+
+    Returns
+    -------
+    DiracBracket
+    """
+    if isinstance(source, ConstraintClasses):
+        classes = source
+    if classes is None:
+        classify_options.setdefault("method", "exact")
+        classes = classify_constraints(source, **classify_options)
+    if classes.constraints is None:
+        raise ComputationError("the Dirac bracket needs the constraints in (q, p): classify "
+                               "with method='exact'")
+    side = classes.side
+    R = list(classes.second_class_indices)
+    chi = [classes.constraints[a] for a in R]
+    if on_manifold:
+        B = classes.bracket_matrix.extract(R, R)
+        label_index = {lab: i for i, lab in enumerate(classes.second_class_set)}
+        blocks = [[label_index[lab] for lab in blk if lab in label_index]
+                  for blk in classes.blocks]
+        blocks = [b for b in blocks if b]
+        return DiracBracket(side.algebra, chi, blocks=blocks, matrix=B)
+    return DiracBracket(side.algebra, chi)
+
+
+@dataclass(frozen=True)
+class DiracProjectedReport:
+    """The Dirac-bracket flow of H against the projected field X on M_f.
+
+    Attributes
+    ----------
+    equal : bool
+        True when X_D - X vanishes on M_f (every component).
+    difference : sympy.Matrix, shape (2n, 1), or None
+        X_D - X reduced on M_f, in (q, p) (None in sampled mode).
+    dirac_field, projected_field : sympy.Matrix, shape (2n, 1), or None
+        X_D = (z -> {z, H}_D) and X = X_H + lambda^j Z_j^H on M_f (None in
+        sampled mode).
+    decisions : tuple of Decision
+        Per component of the difference: does it vanish on M_f.
+    max_abs_difference : float
+        Largest |X_D - X| at the seeded sample points of M_f.
+    samples : int
+    notes : tuple of str
+        Caveats (first-class constraints make the Dirac flow a gauge family).
+    classes : ConstraintClasses
+    """
+
+    equal: bool
+    difference: sp.Matrix | None
+    dirac_field: sp.Matrix | None
+    projected_field: sp.Matrix | None
+    decisions: tuple
+    max_abs_difference: float
+    samples: int
+    notes: tuple
+    classes: ConstraintClasses
+
+    def describe(self) -> str:
+        if self.equal:
+            return ("the Dirac-bracket flow of H equals the projected (nonholonomic) field on "
+                    "M_f")
+        if self.difference is None:
+            return ("the Dirac-bracket flow of H is NOT the true dynamics on M_f: "
+                    + self.decisions[0].detail)
+        comps = [f"d/d{z}: {d}" for z, d in zip(self.classes.side.variables, self.difference)
+                 if d != 0]
+        return ("the Dirac-bracket flow of H is NOT the true dynamics on M_f; X_D - X = "
+                + "; ".join(comps) + f" (max |X_D - X| = {self.max_abs_difference:.3g} at "
+                f"{self.samples} sample points)")
+
+    def to_dict(self) -> dict:
+        return {"equal": self.equal,
+                "difference": (None if self.difference is None
+                               else [str(d) for d in self.difference]),
+                "max_abs_difference": self.max_abs_difference,
+                "samples": self.samples, "notes": list(self.notes)}
+
+
+def dirac_vs_projected(system, *, precision=None, samples=6, seed=SEED,
+                       classes: ConstraintClasses | None = None, method: str = "auto",
+                       tol: float | None = None) -> DiracProjectedReport:
+    """Compare the Dirac-bracket flow of H with the true (projected) dynamics on M_f.
+
+    For holonomic constraints the two agree on M_f; for truly nonholonomic
+    constraints they do not (nonholonomic dynamics is not variational). The
+    Dirac flow is taken over the maximal second-class set of the final
+    constraints. Exact mode: the difference X_D - X is reduced on M_f and
+    decided per component, and evaluated at seeded points. Sampled mode (large
+    systems): both fields are evaluated numerically at seeded points of M_f
+    and the difference is decided there (``difference`` is then None).
+
+    Parameters
+    ----------
+    system : nhham.System
+        A regular system (C^H invertible on M_1).
+    precision, samples, seed
+        Settings of the sampled decisions.
+    classes : ConstraintClasses, optional
+        A classification to use; its method decides the mode.
+    method : {"auto", "exact", "sampled"}
+        As for :func:`classify_constraints`.
+    tol : float, optional
+        Relative tolerance of sampled decisions.
+
+    Returns
+    -------
+    DiracProjectedReport
+    """
+    side = classes.side if classes is not None else hamiltonian_side(
+        system, precision=precision, samples=samples, seed=seed)
+    if classes is None:
+        classes = classify_constraints(side, precision=precision, samples=samples, seed=seed,
+                                       method=method, tol=tol)
+    if classes.method == "sampled":
+        return _dirac_vs_projected_sampled(side, classes, precision, samples, seed, tol)
+    if not side.regular:
+        raise ComputationError(
+            "dirac_vs_projected: C^H is singular on M_1; the projected field is a family "
+            "(see nhham.algorithm) and the comparison is defined for regular systems only")
+    XD, X, diff = _fields_on_Mf(side, classes)
+    Mf = classes.manifold
+    decisions = tuple(Mf.vanishes(d, tol=tol) for d in diff)
+    reduced = sp.Matrix([0 if d.value else e for d, e in zip(decisions, diff)])
+    sampled = _sample_matrix(Mf, reduced) if reduced.rows else []
+    worst = max((float(np.max(np.abs(S))) for S in sampled), default=0.0)
+    return DiracProjectedReport(
+        equal=all(d.value for d in decisions), difference=reduced, dirac_field=XD,
+        projected_field=X, decisions=decisions, max_abs_difference=worst,
+        samples=len(sampled), notes=_gauge_note(classes), classes=classes)
+
+
+def _gauge_note(classes) -> tuple:
+    if not classes.first_class:
+        return ()
+    return (f"{classes.first_class} first-class constraint(s): the Dirac flow is then only "
+            f"defined up to adding multiples of their Hamiltonian fields (gauge); the field "
+            f"compared is {{z, H}}_D without such terms",)
+
+
+def _dirac_vs_projected_sampled(side, classes, precision, samples, seed, tol):
+    """X_D - X at seeded points of M_f from the numeric layer (no symbolic inverse).
+
+    X_D = X_H - X_{chi_a} (B_RR^{-1})^{ab} {chi_b, H} with X_chi = (chi_p, -chi_q),
+    X = X_H + lambda^j Z_j^H; R the maximal second-class set of ``classes``.
+    """
+    system = side.system
+    be = Backend(precision)
+    tol_ = be.default_tol() if tol is None else tol
+    R = list(classes.second_class_indices)
+    chis = [classes.constraints_TQ[a] for a in R]
+    Mtq = Submanifold(system, classes.constraints_TQ, precision=precision, samples=samples,
+                      seed=seed, exact=False)
+    points, resid = Mtq.points()
+    num = side.numeric
+    worst, worst_rel, used = 0.0, 0.0, 0
+    with be.context():
+        for x in points:
+            hp = num.point_from_tq(be, x)
+            try:
+                X, _ = num.projected_field(be, hp)
+            except (np.linalg.LinAlgError, ZeroDivisionError):
+                continue  # C singular at this point: outside the domain of X
+            XD = hp.X_H.copy()
+            if R:
+                _, Gq, Gp = num.gradients(be, hp, chis)
+                B = Gq @ Gp.T - Gp @ Gq.T
+                s_H = Gq @ hp.Hp - Gp @ hp.Hq
+                y = be.solve(B, s_H)
+                XD = XD - np.concatenate([Gp.T @ y, -(Gq.T @ y)])
+            d = float(be.norm(XD - X))
+            scale = max(1.0, float(be.norm(X)), float(be.norm(XD)))
+            worst, worst_rel, used = max(worst, d), max(worst_rel, d / scale), used + 1
+    if not used:
+        raise ComputationError("dirac_vs_projected: C^H is singular at every sample point")
+    equal = worst_rel <= tol_
+    decision = Decision(
+        equal, "sampled",
+        f"largest |X_D - X| {worst:.3g} (relative {worst_rel:.3g}) at {used} seeded points "
+        f"of M_f, tolerance {tol_:g}", precision=be.label, samples=used, max_abs=worst,
+        point_residual=resid)
+    return DiracProjectedReport(
+        equal=equal, difference=None, dirac_field=None, projected_field=None,
+        decisions=(decision,), max_abs_difference=worst, samples=used,
+        notes=_gauge_note(classes), classes=classes)
+
+
+def _fields_on_Mf(side: HamiltonianSide, classes: ConstraintClasses):
+    """X_D, X and X_D - X on M_f, assembled from factors reduced on M_f first.
+
+    {z, H}_D = {z, H} - {z, chi_a} (B^{-1})^{ab} {chi_b, H} and
+    X = X_H + Z_j^H lambda^j; reducing the small factors before multiplying
+    keeps the expressions small (reducing the assembled fields is far slower).
+    """
+    Mf = classes.manifold
+    alg = side.algebra
+    R = list(classes.second_class_indices)
+    chi = [classes.constraints[a] for a in R]
+    B = classes.bracket_matrix.extract(R, R)
+    label_index = {lab: i for i, lab in enumerate(classes.second_class_set)}
+    blocks = [[label_index[lab] for lab in blk if lab in label_index] for blk in classes.blocks]
+    blocks = [b for b in blocks if b]
+    inverses = [(blk, block_inverse(B.extract(blk, blk))) for blk in blocks]
+    s = [Mf.reduce(alg.bracket(c, side.H)) for c in chi]
+    XH = [Mf.reduce(e) for e in side.X_H]
+    lam = [Mf.reduce(e) for e in side.multipliers_H]
+    Z = side.vertical_fields_H
+    XD, X, diff = [], [], []
+    for i, z in enumerate(side.variables):
+        t = [Mf.reduce(alg.bracket(z, c)) for c in chi]
+        corr = sp.S.Zero
+        for blk, inv in inverses:
+            for ia, a in enumerate(blk):
+                if t[a] == 0:
+                    continue
+                for ib, b in enumerate(blk):
+                    if inv[ia, ib] != 0 and s[b] != 0:
+                        corr += t[a] * inv[ia, ib] * s[b]
+        force = sum((Z[j, i] * lam[j] for j in range(side.m)), sp.S.Zero)
+        XD.append(cancel(XH[i] - corr))
+        X.append(cancel(XH[i] + force))
+        diff.append(cancel(-corr - force))
+    return sp.Matrix(XD), sp.Matrix(X), sp.Matrix(diff)

@@ -1,0 +1,495 @@
+"""The Legendre map Leg : TQ -> T*Q, its inverse, and transport of objects.
+
+Conventions (``DESIGN.md`` §2): Leg(q, v) = (q, p) with p_A = dL/dv^A;
+H = E_L o Leg^{-1}; omega_Q = dq^A ^ dp_A. Vectors on TQ are columns in the
+order (q, v), on T*Q in the order (q, p); a 2-form is the antisymmetric
+matrix Omega with omega(X, Y) = X^T Omega Y.
+
+The inverse v(q, p) is
+
+* ``"linear"`` when L is at most quadratic in v: p = W(q) v + a(q) is solved
+  by one linear solve, v = W^{-1} (p - a), written without a symbolic
+  inverse of W (an LU solve, or division when W is diagonal);
+* ``"closed-form"`` when every p_A depends on v^A alone and sympy solves the
+  n one-dimensional equations, keeping the branch that inverts Leg at seeded
+  points (a round trip v -> p -> v);
+* ``"numeric"`` otherwise: there is no symbolic inverse, and asking for one
+  raises :class:`NoClosedFormInverseError` saying so; :meth:`LegendreMap.numeric_inverse`
+  solves p = dL/dv(q, v) by Newton's method at given (q, p).
+
+The numeric helpers at the end of the module (lambdify with a float64 or
+mpmath backend, dense solves on numpy float or object arrays) are shared by
+the Hamiltonian side, the classification and the cross-check.
+"""
+
+from __future__ import annotations
+
+from functools import cached_property
+from typing import Sequence
+
+import mpmath
+import numpy as np
+import sympy as sp
+
+from nhham.settings import PARAMETER_BOX, SEED, Precision
+from nhham.errors import ComputationError
+from nhham.lagrangian.algebra import cancel
+from nhham.system.naming import momentum_symbol
+
+__all__ = ["LegendreMap", "legendre_map", "NoClosedFormInverseError", "canonical_form_matrix"]
+
+# Seed of the round-trip points that pick a branch of a closed-form inverse.
+_BRANCH_SEED = SEED
+
+
+class NoClosedFormInverseError(ComputationError):
+    """p = dL/dv cannot be solved for v in closed form: only a numeric inverse exists."""
+
+
+def legendre_map(system) -> "LegendreMap":
+    """The Legendre map of ``system``'s Lagrangian (frozen, lazy).
+
+    Parameters
+    ----------
+    system : nhham.System
+
+    Returns
+    -------
+    LegendreMap
+    """
+    return LegendreMap(system)
+
+
+def canonical_form_matrix(n: int) -> sp.Matrix:
+    """Omega_Q of omega_Q = dq^A ^ dp_A in the basis (q, p): [[0, I], [-I, 0]], shape (2n, 2n)."""
+    return sp.Matrix(sp.BlockMatrix([[sp.zeros(n, n), sp.eye(n)], [-sp.eye(n), sp.zeros(n, n)]]))
+
+
+class LegendreMap:
+    """Leg(q, v) = (q, dL/dv) for a regular Lagrangian (frozen; everything lazy).
+
+    Parameters
+    ----------
+    system : nhham.System
+
+    Attributes
+    ----------
+    coordinates, velocities : tuple of sympy.Symbol
+        q^A and v^A of the system.
+    momentum_symbols : tuple of sympy.Symbol
+        p_A, named ``p_<q>``.
+    """
+
+    def __init__(self, system):
+        object.__setattr__(self, "system", system)
+        object.__setattr__(self, "coordinates", tuple(system.coordinates))
+        object.__setattr__(self, "velocities", tuple(system.velocities))
+        object.__setattr__(self, "momentum_symbols",
+                           tuple(momentum_symbol(q) for q in system.coordinates))
+
+    def __setattr__(self, key, value):
+        raise AttributeError(f"LegendreMap is frozen; cannot set {key!r}")
+
+    def __repr__(self):
+        return f"LegendreMap({self.system!r}, inverse={self.inverse_kind!r})"
+
+    @property
+    def n(self) -> int:
+        return len(self.coordinates)
+
+    # ------------------------------------------------------------ the map
+    @cached_property
+    def momenta(self) -> sp.Matrix:
+        """p_A = dL/dv^A as functions of (q, v), shape (n, 1)."""
+        L = self.system.lagrangian
+        return sp.Matrix([sp.diff(L, v) for v in self.velocities])
+
+    @cached_property
+    def hessian(self) -> sp.Matrix:
+        """W_AB = d p_A / d v^B, shape (n, n)."""
+        return self.system.hessian
+
+    @cached_property
+    def mixed_hessian(self) -> sp.Matrix:
+        """M_AB = d p_A / d q^B, shape (n, n)."""
+        return self.momenta.jacobian(self.coordinates)
+
+    @cached_property
+    def jacobian(self) -> sp.Matrix:
+        """d Leg in the bases (q, v) -> (q, p): [[I, 0], [M, W]], shape (2n, 2n)."""
+        n = self.n
+        return sp.Matrix(sp.BlockMatrix([[sp.eye(n), sp.zeros(n, n)],
+                                         [self.mixed_hessian, self.hessian]]))
+
+    @cached_property
+    def _to_momenta(self) -> dict:
+        return dict(zip(self.momentum_symbols, self.momenta))
+
+    # ------------------------------------------------------------ inverse
+    @cached_property
+    def is_quadratic(self) -> bool:
+        """True when L is a polynomial of degree <= 2 in the velocities."""
+        try:
+            poly = sp.Poly(sp.expand(self.system.lagrangian), *self.velocities)
+        except sp.PolynomialError:
+            return False
+        return poly.total_degree() <= 2
+
+    @cached_property
+    def _closed_form(self):
+        return None if self.is_quadratic else self._closed_form_inverse()
+
+    @property
+    def inverse_kind(self) -> str:
+        """``"linear"``, ``"closed-form"`` or ``"numeric"`` (see the module docstring).
+
+        Deciding the kind never forms the linear inverse (that is done on
+        first use of :attr:`inverse`).
+        """
+        if self.is_quadratic:
+            return "linear"
+        return "closed-form" if self._closed_form is not None else "numeric"
+
+    @property
+    def has_exact_inverse(self) -> bool:
+        """True when v(q, p) is available as expressions."""
+        return self.inverse_kind != "numeric"
+
+    @property
+    def inverse_statement(self) -> str:
+        """One sentence on how Leg is inverted."""
+        kind = self.inverse_kind
+        if kind == "linear":
+            return "L is quadratic in v: v = W^{-1}(p - a(q)) by one linear solve (exact)"
+        if kind == "closed-form":
+            return ("p_A depends on v^A alone and each equation was solved in closed form; the "
+                    "branch was chosen by a round trip at seeded points (exact)")
+        return ("p = dL/dv could not be solved for v in closed form: the inverse of the Legendre "
+                "map is only available numerically (Newton's method, LegendreMap.numeric_inverse)")
+
+    @cached_property
+    def inverse(self) -> dict:
+        """v^A(q, p) as ``{v^A: expr}``.
+
+        Raises
+        ------
+        NoClosedFormInverseError
+            When the inverse is only available numerically.
+        """
+        kind = self.inverse_kind
+        if kind == "linear":
+            return self._linear_inverse()
+        if kind == "closed-form":
+            return self._closed_form
+        raise NoClosedFormInverseError(self.inverse_statement)
+
+    def _linear_inverse(self) -> dict:
+        zero = {v: 0 for v in self.velocities}
+        a = self.momenta.xreplace(zero)
+        rhs = sp.Matrix(self.momentum_symbols) - a
+        W = self.hessian
+        if W.is_diagonal():
+            sol = [rhs[i] / W[i, i] for i in range(self.n)]
+        else:
+            sol = list(W.LUsolve(rhs))
+        return {v: sp.cancel(s) for v, s in zip(self.velocities, sol)}
+
+    def _closed_form_inverse(self):
+        """Per-component closed-form solve when p_A depends on v^A only."""
+        vels = self.velocities
+        for A, pA in enumerate(self.momenta):
+            if (pA.free_symbols & set(vels)) - {vels[A]}:
+                return None
+        rng = np.random.default_rng(_BRANCH_SEED)
+        checks = self._round_trip_points(rng, 3)
+        out = {}
+        for A, (v, p, pA) in enumerate(zip(vels, self.momentum_symbols, self.momenta)):
+            try:
+                candidates = sp.solve(sp.Eq(pA, p), v, dict=False)
+            except (NotImplementedError, ValueError, TypeError):
+                return None
+            chosen = None
+            for cand in candidates:
+                if all(_close(cand, v, p, pA, pt) for pt in checks):
+                    chosen = cand
+                    break
+            if chosen is None:
+                return None
+            out[v] = chosen
+        return out
+
+    def _round_trip_points(self, rng, count):
+        pts = []
+        for _ in range(count):
+            pt = {s: float(rng.uniform(-0.6, 0.6)) for s in self.coordinates + self.velocities}
+            for par in self.system.parameters:
+                pt[par] = self.system.parameter_values.get(par, float(rng.uniform(*PARAMETER_BOX)))
+            pts.append(pt)
+        return pts
+
+    # ----------------------------------------------------- numeric inverse
+    @cached_property
+    def _numeric_fibre(self):
+        args = list(self.coordinates) + list(self.velocities) + list(self.system.parameters)
+        return {
+            "numpy": (sp.lambdify(args, list(self.momenta), "numpy"),
+                      sp.lambdify(args, self.hessian.tolist(), "numpy")),
+            "mpmath": (sp.lambdify(args, list(self.momenta), "mpmath"),
+                       sp.lambdify(args, self.hessian.tolist(), "mpmath")),
+        }
+
+    def numeric_inverse(self, q, p, params=None, precision: int | None = None,
+                        tol: float | None = None, maxiter: int = 50) -> np.ndarray:
+        """Solve p = dL/dv(q, v) for v by Newton's method.
+
+        Parameters
+        ----------
+        q, p : sequence of float, shape (n,)
+        params : sequence of float, optional
+            Values of ``system.parameters`` in order; default the system's values.
+        precision : int or None
+            None for float64, an integer for mpmath with that many digits.
+        tol : float, optional
+            Convergence tolerance on |p - dL/dv| (relative to 1 + |p|);
+            default 1e-13 (float64) or 10**(2 - digits).
+        maxiter : int
+
+        Returns
+        -------
+        numpy.ndarray, shape (n,)
+            float64, or object array of mpmath.mpf.
+
+        Raises
+        ------
+        ComputationError
+            If Newton's method does not converge (W singular or no solution).
+        """
+        if params is None:
+            params = [self.system.numeric_parameters()[s] for s in self.system.parameters]
+        be = Backend(precision)
+        F, J = self._numeric_fibre[be.module]
+        with be.context():
+            q = be.vector(q)
+            p = be.vector(p)
+            params = list(be.vector(params)) if len(params) else []
+            v = be.zeros(self.n)
+            tol = be.scalar(1e-13 if precision is None and tol is None else
+                            (tol if tol is not None else 10.0 ** (2 - precision)))
+            scale = 1 + be.norm(p)
+            for _ in range(maxiter):
+                r = be.vector(F(*q, *v, *params)) - p
+                if be.norm(r) <= tol * scale:
+                    return v
+                Wn = be.matrix(J(*q, *v, *params))
+                try:
+                    v = v - be.solve(Wn, r)
+                except (np.linalg.LinAlgError, ZeroDivisionError) as exc:
+                    raise ComputationError(
+                        f"numeric Legendre inverse: W is singular at q={list(q)}, v={list(v)}"
+                    ) from exc
+            raise ComputationError(
+                f"numeric Legendre inverse did not converge in {maxiter} Newton steps at "
+                f"q={list(q)}, p={list(p)} (residual {float(be.norm(r)):.3g})")
+
+    # --------------------------------------------------------- transport
+    @cached_property
+    def hamiltonian(self) -> sp.Expr:
+        """H = E_L o Leg^{-1} as an expression in (q, p) (needs an exact inverse)."""
+        L = self.system.lagrangian
+        v = sp.Matrix(self.velocities)
+        energy = (v.T * self.momenta)[0] - L
+        return self.transport(energy)
+
+    def pullback(self, f) -> sp.Expr:
+        """Leg* f = f o Leg: a function of (q, p) made a function of (q, v)."""
+        return sp.sympify(f).xreplace(self._to_momenta)
+
+    def transport(self, f) -> sp.Expr:
+        """f o Leg^{-1}: a function of (q, v) made a function of (q, p).
+
+        Rational expressions are cancelled; needs an exact inverse.
+        """
+        out = sp.sympify(f).xreplace(self.inverse)
+        if self.inverse_kind == "closed-form":
+            # Radicals from a closed-form branch only collapse under simplify.
+            return sp.simplify(out)
+        return cancel(out)
+
+    def tangent_map(self, field: sp.Matrix) -> sp.Matrix:
+        """Leg_* X at Leg(x), as functions of x = (q, v), shape (2n, 1).
+
+        Parameters
+        ----------
+        field : sympy.Matrix, shape (2n, 1)
+            Components of X on TQ in the basis (d/dq, d/dv).
+        """
+        return (self.jacobian * sp.Matrix(field)).applyfunc(sp.expand)
+
+    def pushforward(self, field: sp.Matrix) -> sp.Matrix:
+        """Leg_* X as a vector field on T*Q in (q, p) (needs an exact inverse)."""
+        return self.tangent_map(field).applyfunc(self.transport)
+
+    def pullback_field(self, field: sp.Matrix) -> sp.Matrix:
+        """Leg^* Y = (Leg_*)^{-1}(Y o Leg) on TQ, shape (2n, 1).
+
+        The q-components are those of Y o Leg; the v-components solve
+        W dv = Y^p - M Y^q (a linear solve, no symbolic inverse).
+        """
+        n = self.n
+        Y = sp.Matrix(field).applyfunc(self.pullback)
+        yq, yp = Y[:n, 0], Y[n:, 0]
+        rhs = yp - self.mixed_hessian * yq
+        W = self.hessian
+        yv = sp.Matrix([rhs[i] / W[i, i] for i in range(n)]) if W.is_diagonal() else W.LUsolve(rhs)
+        return sp.Matrix.vstack(yq, yv.applyfunc(sp.cancel))
+
+    def pullback_form(self, omega: sp.Matrix) -> sp.Matrix:
+        """Leg^* omega for a 2-form on T*Q given by its matrix: J^T (Omega o Leg) J."""
+        O = sp.Matrix(omega).applyfunc(self.pullback)
+        return (self.jacobian.T * O * self.jacobian).applyfunc(sp.expand)
+
+
+def _close(cand, v, p, pA, pt):
+    """Round trip: v0 -> p0 = pA(v0) -> cand(p0) == v0 at a point."""
+    try:
+        p0 = complex(pA.xreplace(pt).evalf())
+        back = complex(cand.xreplace({**pt, p: p0.real}).evalf())
+    except (TypeError, ValueError, ZeroDivisionError):
+        return False
+    return abs(back.imag) < 1e-9 and abs(back.real - pt[v]) < 1e-9 * (1 + abs(pt[v]))
+
+
+# ======================================================================
+# Numeric backend shared by the Hamiltonian side, classification and
+# cross-check: float64 numpy arrays, or numpy object arrays of mpmath.mpf.
+# ======================================================================
+class Backend:
+    """Dense linear algebra in float64 (``precision=None``) or mpmath digits.
+
+    Arrays are numpy arrays: ``float`` dtype, or ``object`` dtype holding
+    ``mpmath.mpf`` (object arrays support ``@`` through Python arithmetic).
+    """
+
+    def __init__(self, precision: int | None):
+        self.precision = precision
+        self.module = "numpy" if precision is None else "mpmath"
+
+    @property
+    def label(self) -> str:
+        return Precision(self.precision).label
+
+    def context(self):
+        if self.precision is None:
+            return np.errstate(all="ignore")
+        return mpmath.workdps(self.precision + 5)
+
+    def default_tol(self) -> float:
+        return Precision(self.precision).tolerance
+
+    def scalar(self, x):
+        return float(x) if self.precision is None else mpmath.mpf(x)
+
+    def vector(self, xs) -> np.ndarray:
+        if self.precision is None:
+            return np.asarray(_flatten(xs), dtype=float)
+        return np.array([mpmath.mpf(x) for x in _flatten(xs)], dtype=object)
+
+    def matrix(self, rows, shape=None) -> np.ndarray:
+        if isinstance(rows, mpmath.matrix):
+            rows = rows.tolist()
+        if self.precision is None:
+            out = np.asarray(rows, dtype=float)
+        else:
+            out = np.array([[mpmath.mpf(x) for x in row] for row in rows], dtype=object) \
+                if len(rows) else np.zeros((0, 0), dtype=object)
+        if shape is not None:
+            out = out.reshape(shape)
+        return out
+
+    def zeros(self, *shape) -> np.ndarray:
+        if self.precision is None:
+            return np.zeros(shape)
+        out = np.empty(shape, dtype=object)
+        out.fill(mpmath.mpf(0))
+        return out
+
+    def norm(self, x):
+        if x.size == 0:
+            return self.scalar(0)
+        if self.precision is None:
+            return float(np.max(np.abs(x)))
+        return max(abs(e) for e in x.ravel())
+
+    def solve(self, A: np.ndarray, B: np.ndarray) -> np.ndarray:
+        """A^{-1} B for a square A (vector or matrix B)."""
+        if self.precision is None:
+            return np.linalg.solve(A, B)
+        return _object_solve(A, B)
+
+
+def _flatten(xs):
+    if isinstance(xs, mpmath.matrix):
+        return [xs[i, j] for i in range(xs.rows) for j in range(xs.cols)]
+    if isinstance(xs, np.ndarray):
+        return list(xs.ravel())
+    out = []
+    for x in xs:
+        if isinstance(x, (list, tuple, np.ndarray, mpmath.matrix)):
+            out.extend(_flatten(x))
+        else:
+            out.append(x)
+    return out
+
+
+def _object_solve(A, B):
+    """Gaussian elimination with partial pivoting on object (mpmath) arrays."""
+    n = A.shape[0]
+    vec = B.ndim == 1
+    M = np.concatenate([A.astype(object), (B.reshape(n, 1) if vec else B).astype(object)], axis=1)
+    for k in range(n):
+        piv = max(range(k, n), key=lambda i: abs(M[i, k]))
+        if M[piv, k] == 0:
+            raise ZeroDivisionError("singular matrix")
+        if piv != k:
+            M[[k, piv]] = M[[piv, k]]
+        for i in range(k + 1, n):
+            f = M[i, k] / M[k, k]
+            if f != 0:
+                M[i, k:] = M[i, k:] - f * M[k, k:]
+    X = np.empty((n, M.shape[1] - n), dtype=object)
+    for i in range(n - 1, -1, -1):
+        X[i] = (M[i, n:] - M[i, i + 1:n] @ X[i + 1:]) / M[i, i] if i + 1 < n else M[i, n:] / M[i, i]
+    return X[:, 0] if vec else X
+
+
+class Lambdified:
+    """A list of expressions compiled once per backend, evaluated to an array.
+
+    Parameters
+    ----------
+    args : sequence of sympy.Symbol
+    exprs : sequence of sympy.Expr
+    shape : tuple
+        Shape of the result array.
+    """
+
+    def __init__(self, args: Sequence, exprs: Sequence, shape: tuple):
+        self.args = tuple(args)
+        self.exprs = [sp.sympify(e) for e in exprs]
+        self.shape = shape
+        self._compiled = {}
+
+    def __call__(self, backend: Backend, values: Sequence) -> np.ndarray:
+        fn = self._compiled.get(backend.module)
+        if fn is None:
+            fn = sp.lambdify(self.args, self.exprs, backend.module, cse=len(self.exprs) > 4)
+            self._compiled[backend.module] = fn
+        if not self.exprs:
+            return backend.zeros(*self.shape)
+        out = fn(*values)
+        # Real parts: sqrt of a negative number on a bad sample is complex;
+        # such samples are rejected by finiteness checks of the callers.
+        if backend.precision is None:
+            return np.array([complex(o).real for o in out], dtype=float).reshape(self.shape)
+        return np.array([mpmath.mpf(mpmath.re(mpmath.mpmathify(o))) for o in out],
+                        dtype=object).reshape(self.shape)

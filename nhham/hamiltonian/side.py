@@ -1,0 +1,593 @@
+"""The Hamiltonian side (paper Section 6): constrained dynamics on T*Q.
+
+Conventions (``DESIGN.md`` §2): H = E_L o Leg^{-1}; omega_Q = dq^A ^ dp_A;
+{f, g} = df/dq dg/dp - df/dp dg/dq; X_H(f) = {f, H}, so X_H = (dH/dp, -dH/dq);
+constraints phi_i^H = phi_i o Leg^{-1}; vertical fields Z_i^H = -mu_iA d/dp_A
+(i_{Z_i^H} omega_Q = pi^* mu_i); C^H_ij = Z_i^H(phi_j^H); multipliers
+lambda^j = -(C^H)^{ij} X_H(phi_i^H); projected field
+X = X_H - (C^H)^{ij} X_H(phi_i^H) Z_j^H = X_H + lambda^j Z_j^H, i.e.
+
+    dq/dt = dH/dp,   dp/dt = -dH/dq - lambda^i mu_i.
+
+Fields on T*Q are columns of length 2n in the order (q, p); families of
+fields (vertical fields) are matrices whose row i is the i-th field.
+
+Two layers, both lazy:
+
+* symbolic (:class:`HamiltonianSide` attributes): needs an exact Legendre
+  inverse; C^H is solved with, never inverted symbolically;
+* numeric (:attr:`HamiltonianSide.numeric`): evaluates every object at a
+  point of T*Q from symbolic *derivatives* only (no symbolic inverse of W):
+  v = Leg^{-1}(q, p) numerically, and for a function chi(q, v) on TQ the
+  gradient of chi o Leg^{-1} by the chain rule dv = W^{-1}(dp - M dq). This
+  is what large systems (the N-link snake) use.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cached_property
+from typing import Sequence
+
+import numpy as np
+import sympy as sp
+
+from nhham.settings import SEED
+from nhham.hamiltonian.brackets import BivectorBracket, BracketAlgebra, numeric_bracket_matrix
+from nhham.errors import ComputationError
+from nhham.hamiltonian.legendre import Backend, Lambdified, LegendreMap, canonical_form_matrix
+from nhham.lagrangian.algebra import cancel, solve_linear
+from nhham.lagrangian.submanifold import Decision, Submanifold
+
+__all__ = [
+    "HamiltonianSide",
+    "hamiltonian_side",
+    "NumericHamiltonian",
+    "HamiltonianPoint",
+    "NonholonomicBracket",
+    "nonholonomic_bracket",
+    "JacobiatorReport",
+]
+
+
+def hamiltonian_side(system, precision: int | None = None, samples: int = 6,
+                     seed: int = SEED, exact: bool = True) -> "HamiltonianSide":
+    """The Hamiltonian-side objects of ``system`` (frozen, lazy).
+
+    Parameters
+    ----------
+    system : nhham.System
+    precision : int or None, optional
+        Precision of sampled decisions on T*Q (None: float64; int: mpmath digits).
+    samples, seed : int, optional
+        Number and seed of the sample points of sampled decisions.
+    exact : bool, optional
+        False: decisions on submanifolds of T*Q are taken at sample points only.
+    """
+    return HamiltonianSide(system, precision=precision, samples=samples, seed=seed, exact=exact)
+
+
+class HamiltonianSide:
+    """Constrained Hamiltonian dynamics of a system on T*Q (frozen, lazy)."""
+
+    def __init__(self, system, precision=None, samples=6, seed=SEED, exact=True):
+        object.__setattr__(self, "system", system)
+        object.__setattr__(self, "precision", precision)
+        object.__setattr__(self, "samples", samples)
+        object.__setattr__(self, "seed", seed)
+        object.__setattr__(self, "exact", bool(exact))
+
+    def __setattr__(self, key, value):
+        raise AttributeError(f"HamiltonianSide is frozen; cannot set {key!r}")
+
+    def __repr__(self):
+        return f"HamiltonianSide({self.system!r})"
+
+    # --------------------------------------------------------------- basics
+    @property
+    def n(self) -> int:
+        return self.system.n
+
+    @property
+    def m(self) -> int:
+        return self.system.m
+
+    @cached_property
+    def legendre(self) -> LegendreMap:
+        return LegendreMap(self.system)
+
+    @property
+    def coordinates(self) -> tuple:
+        return self.legendre.coordinates
+
+    @property
+    def momenta(self) -> tuple:
+        """Momentum symbols p_A (``p_<q>``)."""
+        return self.legendre.momentum_symbols
+
+    @property
+    def variables(self) -> tuple:
+        """(q^1..q^n, p_1..p_n)."""
+        return self.coordinates + self.momenta
+
+    @cached_property
+    def symbolic_affordable(self) -> bool:
+        """True when symbolic work on T*Q is cheap: an exact Legendre inverse and W
+        diagonal, independent of q, or n <= 3.
+
+        A q-dependent, non-diagonal W (the N-link snake, the rolling ball)
+        makes W^{-1} and everything transported by it large; the "auto"
+        methods of the classification and the cross-check then go numeric.
+        """
+        leg = self.legendre
+        if not leg.has_exact_inverse:
+            return False
+        W = leg.hessian
+        return W.is_diagonal() or not (W.free_symbols & set(self.coordinates)) or self.n <= 3
+
+    @cached_property
+    def algebra(self) -> BracketAlgebra:
+        """Canonical brackets on T*Q (cached)."""
+        return BracketAlgebra(self.coordinates, self.momenta)
+
+    @cached_property
+    def numeric(self) -> "NumericHamiltonian":
+        """Point evaluation without symbolic inverses (see the module docstring)."""
+        return NumericHamiltonian(self)
+
+    # ------------------------------------------------------------ H and X_H
+    @cached_property
+    def H(self) -> sp.Expr:
+        """H = E_L o Leg^{-1} in (q, p)."""
+        return self.legendre.hamiltonian
+
+    @cached_property
+    def X_H(self) -> sp.Matrix:
+        """X_H = (dH/dp, -dH/dq), shape (2n, 1)."""
+        return self.algebra.hamiltonian_field(self.H).applyfunc(cancel)
+
+    # ------------------------------------------------------------ constraints
+    @property
+    def holonomic(self) -> tuple:
+        """Holonomic constraints g(q) (functions on Q, the same on T*Q)."""
+        return tuple(self.system.holonomic)
+
+    @cached_property
+    def constraints_H(self) -> tuple:
+        """phi_i^H = phi_i o Leg^{-1}, in the order of ``system.phi``."""
+        return tuple(self.legendre.transport(f) for f in self.system.phi)
+
+    @cached_property
+    def vertical_fields_H(self) -> sp.Matrix:
+        """Z_i^H = -mu_iA d/dp_A as rows, shape (m, 2n); q-components zero."""
+        return sp.Matrix.hstack(sp.zeros(self.m, self.n), -self.system.mu)
+
+    @cached_property
+    def constraint_gradients_H(self) -> sp.Matrix:
+        """d phi_i^H as rows in the basis (dq, dp), shape (m, 2n)."""
+        if not self.m:
+            return sp.zeros(0, 2 * self.n)
+        return sp.Matrix([[sp.diff(f, z) for z in self.variables] for f in self.constraints_H])
+
+    @cached_property
+    def constraint_matrix_H(self) -> sp.Matrix:
+        """C^H_ij = Z_i^H(phi_j^H) = -mu_iA d phi_j^H / d p_A, shape (m, m)."""
+        if not self.m:
+            return sp.zeros(0, 0)
+        return (self.vertical_fields_H * self.constraint_gradients_H.T).applyfunc(cancel)
+
+    @cached_property
+    def constraint_derivatives_H(self) -> sp.Matrix:
+        """X_H(phi_i^H) = {phi_i^H, H}, shape (m, 1)."""
+        return sp.Matrix([self.algebra.bracket(f, self.H) for f in self.constraints_H]) \
+            if self.m else sp.zeros(0, 1)
+
+    @cached_property
+    def multipliers_H(self) -> sp.Matrix:
+        """lambda^j = -(C^H)^{ij} X_H(phi_i^H): a solve with (C^H)^T, shape (m, 1).
+
+        Defined where C^H is invertible (the regular case); singular systems
+        go through :meth:`analysis`.
+        """
+        if not self.m:
+            return sp.zeros(0, 1)
+        return (-solve_linear(self.constraint_matrix_H.T, self.constraint_derivatives_H)).applyfunc(
+            cancel)
+
+    @cached_property
+    def projected_field_H(self) -> sp.Matrix:
+        """X = X_H + lambda^j Z_j^H, shape (2n, 1)."""
+        if not self.m:
+            return self.X_H
+        return (self.X_H + self.vertical_fields_H.T * self.multipliers_H).applyfunc(cancel)
+
+    @cached_property
+    def projector_Q_H(self) -> sp.Matrix:
+        """Q = (C^H)^{ij} Z_j^H (x) d phi_i^H as a (2n, 2n) matrix acting on columns."""
+        if not self.m:
+            return sp.zeros(2 * self.n, 2 * self.n)
+        return (self.vertical_fields_H.T
+                * solve_linear(self.constraint_matrix_H.T, self.constraint_gradients_H)).applyfunc(cancel)
+
+    @cached_property
+    def projector_P_H(self) -> sp.Matrix:
+        """P = id - Q on T*Q; P(X_H) is the projected field."""
+        return sp.eye(2 * self.n) - self.projector_Q_H
+
+    @cached_property
+    def equations_of_motion(self) -> tuple:
+        """(dq/dt, dp/dt) = (dH/dp, -dH/dq - lambda^i mu_i) as a 2n-tuple of expressions."""
+        return tuple(self.projected_field_H)
+
+    # --------------------------------------------------------------- on M_1
+    @cached_property
+    def M1(self) -> Submanifold:
+        """M_1 on T*Q = {g = 0, phi^H = 0} (decisions with this side's precision)."""
+        return self.submanifold(self.holonomic + self.constraints_H)
+
+    def submanifold(self, equations: Sequence) -> Submanifold:
+        """A submanifold of T*Q given by equations in (q, p)."""
+        return Submanifold(self.system, tuple(equations), precision=self.precision,
+                           samples=self.samples, seed=self.seed, fibre=self.momenta,
+                           exact=self.exact)
+
+    @cached_property
+    def constraint_rank(self) -> Decision:
+        """rank C^H on M_1, with how it was decided."""
+        return self.M1.rank(self.constraint_matrix_H)
+
+    @property
+    def regular(self) -> bool:
+        return self.constraint_rank.value == self.m
+
+    # ------------------------------------------------------ almost-Poisson
+    @cached_property
+    def nonholonomic_bracket(self) -> "NonholonomicBracket":
+        """{f, g}_nh = omega_Q(P X_f, P X_g) (see :class:`NonholonomicBracket`)."""
+        return NonholonomicBracket(self)
+
+    # ------------------------------------------------- the constraint algorithm
+    def analysis(self, max_stages: int | None = None):
+        """The constraint algorithm run on T*Q (X_H, Z^H, phi^H, M_k in T*Q).
+
+        Primary constraints (in this order, as on TQ): the holonomic g, then
+        phi^H (complete lifts first); multipliers ``lambda_i`` as on TQ.
+
+        Parameters
+        ----------
+        max_stages : int, optional
+            Default 2n, as on the Lagrangian side.
+
+        Returns
+        -------
+        nhham.algorithm.AlgorithmRun
+            :func:`nhham.crosscheck.cross_check` compares its stages, ranks
+            and multipliers with the Lagrangian run (checked, not assumed).
+        """
+        return self._analysis(2 * self.n if max_stages is None else int(max_stages))
+
+    @cached_property
+    def _analysis_cache(self) -> dict:
+        return {}
+
+    def _analysis(self, max_stages):
+        if max_stages not in self._analysis_cache:
+            self._analysis_cache[max_stages] = _hamiltonian_analysis(self, max_stages)
+        return self._analysis_cache[max_stages]
+
+
+def _hamiltonian_analysis(side: HamiltonianSide, max_stages: int):
+    from nhham.lagrangian.algorithm import run_algorithm
+
+    return run_algorithm(**_algorithm_arguments(side, max_stages))
+
+
+def _algorithm_arguments(side: HamiltonianSide, max_stages: int) -> dict:
+    """Keyword arguments of run_algorithm for the T*Q side (kept in one place)."""
+    from nhham.system.naming import multiplier_symbol
+
+    sysm = side.system
+    nh = len(sysm.holonomic)
+    # The labels of analyze_constraints: g's, then lifts ("holonomic[i].lift"),
+    # then the affine constraints.
+    labels = tuple(f"holonomic[{i}]" for i in range(nh)) + tuple(
+        f"{lab}.lift" if k < nh else lab for k, lab in enumerate(sysm.constraint_labels))
+    return dict(
+        base_field=side.X_H,
+        vertical_fields=side.vertical_fields_H,
+        primary=side.holonomic + side.constraints_H,
+        labels=labels,
+        manifold_factory=side.submanifold,
+        max_stages=max_stages,
+        multiplier_symbols=[multiplier_symbol(i + 1) for i in range(side.m)],
+        variables=side.variables,
+    )
+
+
+# ======================================================================
+# Numeric layer
+# ======================================================================
+@dataclass(frozen=True)
+class HamiltonianPoint:
+    """Hamiltonian objects evaluated at one point of T*Q.
+
+    Attributes
+    ----------
+    q, p, v : array, shape (n,)
+        The point, and v = Leg^{-1}(q, p).
+    params : list
+        Parameter values in ``system.parameters`` order.
+    W, M : array, shape (n, n)
+        d p / d v and d p / d q at (q, v).
+    Hq, Hp : array, shape (n,)
+        Gradient of H.
+    phi : array, shape (m,)
+        phi_i^H.
+    Phiq, Phip : array, shape (m, n)
+        Gradients of the phi_i^H.
+    mu : array, shape (m, n)
+    round_trip : float
+        |Leg(Leg^{-1}(q, p)) - p|: how well the numeric inverse did.
+    """
+
+    q: np.ndarray
+    p: np.ndarray
+    v: np.ndarray
+    params: list
+    W: np.ndarray
+    M: np.ndarray
+    Hq: np.ndarray
+    Hp: np.ndarray
+    phi: np.ndarray
+    Phiq: np.ndarray
+    Phip: np.ndarray
+    mu: np.ndarray
+    round_trip: float
+
+    @property
+    def X_H(self) -> np.ndarray:
+        """(dH/dp, -dH/dq), shape (2n,)."""
+        return np.concatenate([self.Hp, -self.Hq])
+
+    @property
+    def C(self) -> np.ndarray:
+        """C^H_ij = -mu_i . d phi_j / dp, shape (m, m)."""
+        return -(self.mu @ self.Phip.T)
+
+    @property
+    def X_H_phi(self) -> np.ndarray:
+        """X_H(phi_i^H) = {phi_i^H, H}, shape (m,)."""
+        return self.Phiq @ self.Hp - self.Phip @ self.Hq
+
+    def vertical(self) -> np.ndarray:
+        """Z_i^H as rows (0, -mu_i), shape (m, 2n)."""
+        return np.concatenate([self.mu * 0, -self.mu], axis=1)
+
+
+class NumericHamiltonian:
+    """Evaluate the Hamiltonian side at points without symbolic inverses.
+
+    All functions of T*Q are handled as functions chi(q, v) on TQ composed
+    with Leg^{-1}: values and (q, v)-gradients are compiled once, and the
+    (q, p)-gradient at a point is d chi/dp = chi_v W^{-1},
+    d chi/dq = chi_q - chi_v W^{-1} M (chain rule through dv = W^{-1}(dp - M dq)).
+    """
+
+    def __init__(self, side: HamiltonianSide):
+        self.side = side
+        sysm = side.system
+        self.args = tuple(sysm.coordinates) + tuple(sysm.velocities) + tuple(sysm.parameters)
+        n, m = sysm.n, sysm.m
+        leg = side.legendre
+        self._W = Lambdified(self.args, list(leg.hessian), (n, n))
+        self._M = Lambdified(self.args, list(leg.mixed_hessian), (n, n))
+        self._p = Lambdified(self.args, list(leg.momenta), (n,))
+        self._mu = Lambdified(self.args, list(sysm.mu), (m, n))
+        v = sp.Matrix(sysm.velocities)
+        energy = sp.expand((v.T * leg.momenta)[0] - sysm.lagrangian)
+        self._energy = self.functions([energy])
+        self._phi = self.functions(list(sysm.phi))
+        self._functions: dict = {}
+
+    def functions(self, exprs: Sequence) -> "TransportedFunctions":
+        """Compiled values and gradients of functions chi(q, v) (cached by tuple)."""
+        key = tuple(sp.sympify(e) for e in exprs)
+        cache = self.__dict__.setdefault("_functions", {})
+        if key not in cache:
+            cache[key] = TransportedFunctions(self.args, key, self.side.system)
+        return cache[key]
+
+    def momenta_at(self, backend: Backend, q, v, params) -> np.ndarray:
+        """p = dL/dv(q, v)."""
+        return self._p(backend, list(q) + list(v) + list(params))
+
+    def inverse_at(self, backend: Backend, q, p, params) -> np.ndarray:
+        """v = Leg^{-1}(q, p) numerically (one linear solve for quadratic L)."""
+        leg = self.side.legendre
+        if leg.is_quadratic:
+            zero = [backend.scalar(0)] * len(q)
+            a = self._p(backend, list(q) + zero + list(params))
+            W = self._W(backend, list(q) + zero + list(params))
+            return backend.solve(W, backend.vector(p) - a)
+        return leg.numeric_inverse(q, p, params=params, precision=backend.precision)
+
+    def point(self, backend: Backend, q, p, params) -> HamiltonianPoint:
+        """Everything the projected field needs at (q, p)."""
+        q, p = backend.vector(q), backend.vector(p)
+        params = list(backend.vector(params)) if len(params) else []
+        v = self.inverse_at(backend, q, p, params)
+        vals = list(q) + list(v) + list(params)
+        W, M = self._W(backend, vals), self._M(backend, vals)
+        round_trip = float(backend.norm(self._p(backend, vals) - p))
+        _, Hq, Hp = self._energy.gradients(backend, vals, W, M)
+        phi, Phiq, Phip = self._phi.gradients(backend, vals, W, M)
+        mu = self._mu(backend, vals)
+        return HamiltonianPoint(q, p, v, params, W, M, Hq[0], Hp[0], phi, Phiq, Phip, mu,
+                                round_trip)
+
+    def point_from_tq(self, backend: Backend, x: dict) -> HamiltonianPoint:
+        """The point Leg(x) for x a dict (coordinates, velocities, parameters) on TQ.
+
+        p is computed from x and then inverted again, so the round trip is
+        part of every evaluation.
+        """
+        sysm = self.side.system
+        q = [x[s] for s in sysm.coordinates]
+        v = [x[s] for s in sysm.velocities]
+        params = [x[s] for s in sysm.parameters]
+        p = self.momenta_at(backend, backend.vector(q), backend.vector(v),
+                            backend.vector(params) if params else [])
+        return self.point(backend, q, p, params)
+
+    def projected_field(self, backend: Backend, pt: HamiltonianPoint, rank_tol=None):
+        """X = X_H + lambda^j Z_j^H at a point; returns (X, lambda).
+
+        Raises
+        ------
+        numpy.linalg.LinAlgError or ZeroDivisionError
+            When C^H is singular at the point.
+        """
+        if not len(pt.phi):
+            return pt.X_H, backend.zeros(0)
+        lam = -backend.solve(pt.C.T, pt.X_H_phi)
+        X = pt.X_H + pt.vertical().T @ lam
+        return X, lam
+
+    def gradients(self, backend: Backend, pt: HamiltonianPoint, exprs: Sequence):
+        """(values, d/dq, d/dp) of chi o Leg^{-1} for chi(q, v) in ``exprs`` at ``pt``."""
+        vals = list(pt.q) + list(pt.v) + list(pt.params)
+        return self.functions(exprs).gradients(backend, vals, pt.W, pt.M)
+
+    def bracket_matrix(self, backend: Backend, pt: HamiltonianPoint, exprs: Sequence):
+        """{chi_a o Leg^{-1}, chi_b o Leg^{-1}} at ``pt``, shape (k, k)."""
+        _, Gq, Gp = self.gradients(backend, pt, exprs)
+        return numeric_bracket_matrix(Gq, Gp)
+
+
+class TransportedFunctions:
+    """Values and (q, p)-gradients of chi_a o Leg^{-1} for chi_a(q, v) given on TQ."""
+
+    def __init__(self, args, exprs, system):
+        n = system.n
+        q, v = system.coordinates, system.velocities
+        self.exprs = exprs
+        k = len(exprs)
+        self._val = Lambdified(args, list(exprs), (k,))
+        self._dq = Lambdified(args, [sp.diff(e, s) for e in exprs for s in q], (k, n))
+        self._dv = Lambdified(args, [sp.diff(e, s) for e in exprs for s in v], (k, n))
+
+    def gradients(self, backend: Backend, vals, W, M):
+        """(values (k,), d/dq (k, n), d/dp (k, n)) at (q, v) with W, M given there."""
+        val = self._val(backend, vals)
+        gq = self._dq(backend, vals)
+        gv = self._dv(backend, vals)
+        if gv.shape[0] == 0:
+            return val, gq, gv
+        # Y = gv W^{-1} (W symmetric): solve W Y^T = gv^T.
+        Y = backend.solve(W, gv.T).T
+        return val, gq - Y @ M, Y
+
+
+# ======================================================================
+# The nonholonomic (almost-Poisson) bracket
+# ======================================================================
+@dataclass(frozen=True)
+class JacobiatorReport:
+    """The Jacobiator of the nonholonomic bracket as an integrability diagnostic.
+
+    Attributes
+    ----------
+    vanishes : bool
+        True when every Jacobiator component on coordinate functions vanishes
+        on M_1 (then the bracket is Poisson on M_1).
+    components : dict
+        ``{(z_i, z_j, z_k): expr}`` for the components that are not
+        identically zero (as functions on T*Q, before restriction).
+    on_M1 : dict
+        ``{(z_i, z_j, z_k): Decision}``: does the component vanish on M_1.
+    witness : tuple or None
+        A triple whose component does not vanish on M_1, with its value.
+    """
+
+    vanishes: bool
+    components: dict
+    on_M1: dict
+    witness: tuple | None
+
+    def describe(self) -> str:
+        if self.vanishes:
+            return "the nonholonomic bracket satisfies the Jacobi identity on M_1"
+        (i, j, k), value = self.witness
+        return (f"the nonholonomic bracket fails the Jacobi identity on M_1: "
+                f"Jac({i}, {j}, {k}) = {value}")
+
+
+class NonholonomicBracket(BivectorBracket):
+    """{f, g}_nh = omega_Q(P X_f, P X_g) on T*Q, with P = id - (C^H)^{ij} Z_j^H (x) d phi_i^H.
+
+    The bivector is Lambda = Omega^T P^T Omega P Omega (X_f = Omega grad f,
+    omega_Q(X, Y) = X^T Omega Y, Omega = [[0, I], [-I, 0]]).
+
+    Equations of motion: for every f, exactly on T*Q,
+
+        X(f) = {f, H}_nh + (C^H)^{ij} (h_j - phi_j^H) {f, phi_i^H},
+
+    so on M_1 dot f = {f, H}_nh + (C^H)^{ij} h_j {f, phi_i^H}: the second
+    term is the extra term of affine constraints (it vanishes when h = 0).
+    (Derivation: df(P X_H) = omega(X_f, P X_H) = {f, H}_nh + omega(Q X_f, P X_H)
+    and omega(Z_j, Y) = mu_j(pi_* Y), with pi_* P X_H = dH/dp = v, mu_j v = phi_j - h_j.)
+    """
+
+    def __init__(self, side: HamiltonianSide):
+        if side.m and not side.regular:
+            raise ComputationError(
+                f"the nonholonomic bracket needs C^H invertible on M_1; here rank C^H = "
+                f"{side.constraint_rank.value} < m = {side.m} "
+                f"({side.constraint_rank.describe()})")
+        Omega = canonical_form_matrix(side.n)
+        P = side.projector_P_H
+        tensor = (Omega.T * P.T * Omega * P * Omega).applyfunc(cancel)
+        super().__init__(tensor, side.variables)
+        self.side = side
+
+    @cached_property
+    def extra_coefficients(self) -> sp.Matrix:
+        """k_i = (C^H)^{ij} (h_j - phi_j^H), shape (m, 1): dot f = {f, H}_nh + k_i {f, phi_i^H}."""
+        side = self.side
+        if not side.m:
+            return sp.zeros(0, 1)
+        rhs = sp.Matrix([side.system.h[j] - side.constraints_H[j] for j in range(side.m)])
+        return solve_linear(side.constraint_matrix_H, rhs).applyfunc(cancel)
+
+    def extra_term(self, f) -> sp.Expr:
+        """(C^H)^{ij} (h_j - phi_j^H) {f, phi_i^H} (zero on M_1 for linear constraints)."""
+        side = self.side
+        return cancel(sum((self.extra_coefficients[i] * side.algebra.bracket(f, phi)
+                          for i, phi in enumerate(side.constraints_H)), sp.S.Zero))
+
+    def time_derivative(self, f) -> sp.Expr:
+        """d f/dt along the projected field: {f, H}_nh + extra term."""
+        return cancel(self(f, self.side.H) + self.extra_term(f))
+
+    def equations_of_motion(self) -> tuple:
+        """(dq/dt, dp/dt) from the bracket: z -> {z, H}_nh + extra term, as a 2n-tuple."""
+        return tuple(self.time_derivative(z) for z in self.side.variables)
+
+    def jacobiator_report(self, manifold: Submanifold | None = None) -> JacobiatorReport:
+        """Jacobiator components on coordinate triples and whether they vanish on M_1."""
+        M = self.side.M1 if manifold is None else manifold
+        names = self.variables
+        comps, decisions, witness = {}, {}, None
+        for (i, j, k), value in self.jacobiator_tensor().items():
+            key = (names[i], names[j], names[k])
+            comps[key] = value
+            d = M.vanishes(value)
+            decisions[key] = d
+            if not d.value and witness is None:
+                witness = (key, value)
+        return JacobiatorReport(witness is None, comps, decisions, witness)
+
+
+def nonholonomic_bracket(system, precision=None, samples=6, seed=SEED) -> NonholonomicBracket:
+    """The nonholonomic bracket of ``system`` on T*Q (see :class:`NonholonomicBracket`)."""
+    return hamiltonian_side(system, precision, samples, seed).nonholonomic_bracket

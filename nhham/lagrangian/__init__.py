@@ -1,0 +1,28 @@
+"""The paper on TQ (Sections 2-5): the exact geometry layer.
+
+Modules: ``submanifold`` (deciding ranks and vanishing on M_k, with a
+:class:`Decision` recording how), ``geometry`` (E_L, omega_L, xi_L, Z_i, C,
+P(xi_L)), ``algorithm`` (the constraint algorithm of Section 3),
+``integrability`` (Frobenius test of the constraint distribution),
+``symmetries`` (Section 5).
+"""
+
+from nhham.lazy import lazy_exports
+
+_LAZY = {
+    "lagrangian_geometry": "geometry",
+    "LagrangianGeometry": "geometry",
+    "DynamicsIngredients": "geometry",
+    "Submanifold": "submanifold",
+    "Decision": "submanifold",
+    "analyze_constraints": "algorithm",
+    "ConstraintAnalysis": "algorithm",
+    "run_algorithm": "algorithm",
+    "integrability": "integrability",
+    "constant_of_motion": "symmetries",
+    "cyclic_constants": "symmetries",
+    "lie_symmetry": "symmetries",
+    "complete_lift": "symmetries",
+}
+__all__ = list(_LAZY)
+__getattr__, __dir__ = lazy_exports(__name__, _LAZY, globals())

@@ -1,0 +1,516 @@
+"""The Lagrangian side of the paper (Sections 2 and 4): geometry on TQ.
+
+Conventions are those of ``DESIGN.md`` §2, restated where each object is
+defined. Vectors on TQ are sympy column matrices of length 2n in the order
+(q^1..q^n, v^1..v^n); (1,1) tensors are 2n x 2n matrices acting on them; a
+2-form is the antisymmetric matrix Omega with omega(X, Y) = X^T Omega Y.
+
+Nothing is computed before it is asked for. The symbolic inverse of W is
+never written out: every product W^{-1} b is a linear solve, and the
+multipliers come from a solve with the m x m matrix C.
+
+Fast path: when L is quadratic in the velocities, L = v^T W(q) v / 2 +
+b(q) . v - V(q) (every natural Lagrangian), W, b and V are read from the
+terms of L (:func:`nhham.system.quadratic_parts`) and the momenta, the mixed
+Hessian and the forcing are assembled from derivatives of the small entries
+of W, b and V instead of differentiating L twice::
+
+    F_B = 1/2 v^T (dW/dq^B) v - (dW_BA/dq^C) v^A v^C
+          + (db_A/dq^B - db_B/dq^A) v^A - dV/dq^B.
+
+Each entry is differentiated term by term and only by the coordinates the
+term contains. Other Lagrangians take the general path (derivatives of L);
+both give the same expressions up to algebraic rearrangement.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cached_property
+
+import sympy as sp
+
+from nhham.settings import SEED
+from nhham.lagrangian.algebra import solve_linear
+from nhham.lagrangian.submanifold import Decision, Submanifold
+from nhham.system.naming import acceleration_symbol, multiplier_symbol
+from nhham.system.description import quadratic_parts
+
+__all__ = ["LagrangianGeometry", "lagrangian_geometry", "DynamicsIngredients"]
+
+
+@dataclass(frozen=True)
+class DynamicsIngredients:
+    """The pieces from which the constrained accelerations are solved.
+
+    With accelerations a and multipliers lambda, the constrained
+    Euler-Lagrange equations are the saddle-point system::
+
+        [ W   mu^T ] [ a      ]   [ forcing ]
+        [ mu  0    ] [ lambda ] = [ -drift  ]
+
+    Attributes
+    ----------
+    W : sympy.Matrix, shape (n, n)
+        Hessian d2L/dv^A dv^B.
+    forcing : sympy.Matrix, shape (n, 1)
+        F_B = dL/dq^B - (d2L/dq^C dv^B) v^C.
+    mu : sympy.Matrix, shape (m, n)
+        Constraint one-forms.
+    drift : sympy.Matrix, shape (m, 1)
+        (d phi_i / d q^A) v^A, so that xi(phi_i) = drift_i + mu_i . a.
+    """
+
+    W: sp.Matrix
+    forcing: sp.Matrix
+    mu: sp.Matrix
+    drift: sp.Matrix
+
+
+def lagrangian_geometry(system, precision: int | None = None, samples: int = 6,
+                        seed: int = SEED) -> "LagrangianGeometry":
+    """The Lagrangian-side objects of ``system``, computed lazily.
+
+    Parameters
+    ----------
+    system : nhham.System
+    precision : int or None, optional
+        Precision of sampled "on M_1" decisions (None: float64; an integer:
+        mpmath digits).
+    samples, seed : int, optional
+        Number and seed of the sample points of sampled decisions.
+    """
+    return LagrangianGeometry(system, precision=precision, samples=samples, seed=seed)
+
+
+class LagrangianGeometry:
+    """Lagrangian-side geometry of a constrained system (frozen, lazy).
+
+    Every attribute is computed on first access and then kept. Arguments as
+    :func:`lagrangian_geometry`, plus ``fast`` (default True): use the
+    quadratic fast path when L is quadratic in the velocities; False always
+    differentiates L (the general path, for comparisons).
+    """
+
+    def __init__(self, system, precision=None, samples=6, seed=SEED, fast=True):
+        object.__setattr__(self, "system", system)
+        object.__setattr__(self, "precision", precision)
+        object.__setattr__(self, "samples", samples)
+        object.__setattr__(self, "seed", seed)
+        # fast=False forces the general path (differentiate L) even for a
+        # Lagrangian quadratic in the velocities: for tests and comparisons.
+        object.__setattr__(self, "fast", bool(fast))
+
+    def __setattr__(self, key, value):
+        raise AttributeError(f"LagrangianGeometry is frozen; cannot set {key!r}")
+
+    def __repr__(self):
+        return f"LagrangianGeometry({self.system!r})"
+
+    # ------------------------------------------------------------ basics
+    @property
+    def n(self):
+        return self.system.n
+
+    @property
+    def m(self):
+        return self.system.m
+
+    @cached_property
+    def _q(self):
+        return sp.Matrix(self.system.coordinates)
+
+    @cached_property
+    def _v(self):
+        return sp.Matrix(self.system.velocities)
+
+    @cached_property
+    def _parts(self):
+        """QuadraticParts of L (fast path) or None (general path)."""
+        if not self.fast:
+            return None
+        if getattr(type(self.system), "quadratic_parts", None) is not None:
+            return self.system.quadratic_parts
+        return quadratic_parts(self.system.lagrangian, self.system.velocities)
+
+    @cached_property
+    def _qidx(self):
+        return {q: i for i, q in enumerate(self.system.coordinates)}
+
+    @cached_property
+    def _dW(self):
+        """{(A, C): {B: dW_AC/dq^B}} for A <= C, nonzero derivatives only."""
+        W, n = self._parts.W, self.n
+        out = {}
+        for A in range(n):
+            for C in range(A, n):
+                if W[A, C] != 0:
+                    d = _coordinate_derivatives(W[A, C], self._qidx)
+                    if d:
+                        out[A, C] = d
+        return out
+
+    @cached_property
+    def _db(self):
+        """{A: {B: db_A/dq^B}}, nonzero derivatives only."""
+        out = {}
+        for A, bA in enumerate(self._parts.b):
+            if bA != 0:
+                d = _coordinate_derivatives(bA, self._qidx)
+                if d:
+                    out[A] = d
+        return out
+
+    @cached_property
+    def momenta(self) -> sp.Matrix:
+        """Fibre derivative p_A = dL/dv^A, shape (n, 1)."""
+        parts = self._parts
+        if parts is not None:
+            W, v = parts.W, self.system.velocities
+            return sp.Matrix([
+                sp.Add(parts.b[A], *[W[A, C] * v[C] for C in range(self.n) if W[A, C] != 0])
+                for A in range(self.n)])
+        L = self.system.lagrangian
+        return sp.Matrix([sp.diff(L, v) for v in self.system.velocities])
+
+    @cached_property
+    def energy(self) -> sp.Expr:
+        """E_L = v^A dL/dv^A - L."""
+        return sp.expand((self._v.T * self.momenta)[0] - self.system.lagrangian)
+
+    @cached_property
+    def hessian(self) -> sp.Matrix:
+        """W_AB = d2L/dv^A dv^B, shape (n, n)."""
+        if not self.fast:
+            return sp.hessian(self.system.lagrangian, self.system.velocities)
+        return self.system.hessian
+
+    @cached_property
+    def mixed_hessian(self) -> sp.Matrix:
+        """M_AB = d2L/dv^A dq^B = d p_A / d q^B, shape (n, n).
+
+        Fast path: M_AB = (dW_AC/dq^B) v^C + db_A/dq^B.
+        """
+        if self._parts is None:
+            return self.momenta.jacobian(self.system.coordinates)
+        n, v = self.n, self.system.velocities
+        terms = [[[] for _ in range(n)] for _ in range(n)]
+        for (A, C), dW in self._dW.items():
+            for B, d in dW.items():
+                terms[A][B].append(d * v[C])
+                if A != C:
+                    terms[C][B].append(d * v[A])
+        for A, db in self._db.items():
+            for B, d in db.items():
+                terms[A][B].append(d)
+        return sp.Matrix(n, n, lambda A, B: sp.Add(*terms[A][B]))
+
+    @cached_property
+    def poincare_cartan_1form(self) -> sp.Matrix:
+        """alpha_L = J*(dL) = (dL/dv^A) dq^A as a 2n-vector of coefficients."""
+        return sp.Matrix.vstack(self.momenta, sp.zeros(self.n, 1))
+
+    @cached_property
+    def poincare_cartan_2form(self) -> sp.Matrix:
+        """omega_L = -d alpha_L = dq^A ^ d(dL/dv^A) as a 2n x 2n matrix Omega.
+
+        Blocks: Omega_qq = M - M^T, Omega_qv = W, Omega_vq = -W, Omega_vv = 0,
+        with omega(X, Y) = X^T Omega Y.
+        """
+        M, W, n = self.mixed_hessian, self.hessian, self.n
+        return sp.Matrix(sp.BlockMatrix([[M - M.T, W], [-W, sp.zeros(n, n)]]))
+
+    @cached_property
+    def liouville_field(self) -> sp.Matrix:
+        """Liouville field C = v^A d/dv^A as a 2n-vector."""
+        return sp.Matrix.vstack(sp.zeros(self.n, 1), self._v)
+
+    @cached_property
+    def almost_tangent_structure(self) -> sp.Matrix:
+        """J = d/dv^A (x) dq^A as a 2n x 2n matrix (maps d/dq^A to d/dv^A)."""
+        n = self.n
+        return sp.Matrix(sp.BlockMatrix([[sp.zeros(n, n), sp.zeros(n, n)],
+                                         [sp.eye(n), sp.zeros(n, n)]]))
+
+    # --------------------------------------------------------- solves with W
+    @cached_property
+    def _W_is_diagonal(self):
+        return self.hessian.is_diagonal()
+
+    def _solve_W(self, rhs: sp.Matrix) -> sp.Matrix:
+        """W^{-1} rhs by a linear solve (no symbolic inverse)."""
+        W = self.hessian
+        if self._W_is_diagonal:
+            return sp.Matrix(rhs.rows, rhs.cols, lambda i, j: rhs[i, j] / W[i, i])
+        return solve_linear(W, rhs, simplify=None)
+
+    @cached_property
+    def forcing(self) -> sp.Matrix:
+        """F_B = dL/dq^B - (d2L/dq^C dv^B) v^C, shape (n, 1).
+
+        Fast path (L quadratic in v), collected by velocity monomial::
+
+            F_B = 1/2 d_B W_AC v^A v^C - d_C W_BA v^A v^C
+                  + (d_B b_A - d_A b_B) v^A - d_B V
+        """
+        if self._parts is None:
+            L = self.system.lagrangian
+            dLdq = sp.Matrix([sp.diff(L, q) for q in self.system.coordinates])
+            return dLdq - self.mixed_hessian * self._v
+        return self._quadratic_forcing()
+
+    def _quadratic_forcing(self) -> sp.Matrix:
+        n, v, half = self.n, self.system.velocities, sp.Rational(1, 2)
+        # quad[B][(A, C)]: summands of the coefficient of v^A v^C (A <= C) in F_B
+        quad = [dict() for _ in range(n)]
+        lin = [dict() for _ in range(n)]
+
+        def put(table, key, value):
+            table.setdefault(key, []).append(value)
+
+        for (P, Q), dW in self._dW.items():
+            for B, d in dW.items():
+                # 1/2 d_B W_AC v^A v^C: (P, Q) and (Q, P) for P != Q
+                put(quad[B], (P, Q), d if P != Q else half * d)
+                # - d_C W_{B'A} v^A v^C with C = B, {B', A} = {P, Q}
+                put(quad[P], tuple(sorted((Q, B))), -d)
+                if P != Q:
+                    put(quad[Q], tuple(sorted((P, B))), -d)
+        for A, db in self._db.items():
+            for B, d in db.items():
+                put(lin[B], A, d)     # d_B b_A v^A in F_B
+                put(lin[A], B, -d)    # -d_A' b_B' v^A' in F_B' (B' = A, A' = B)
+        dV = _coordinate_derivatives(self._parts.V, self._qidx)
+        out = []
+        for B in range(n):
+            terms = [sp.Add(*c) * v[A] * v[C] for (A, C), c in sorted(quad[B].items())]
+            terms += [sp.Add(*c) * v[A] for A, c in sorted(lin[B].items())]
+            if B in dV:
+                terms.append(-dV[B])
+            out.append(sp.Add(*terms))
+        return sp.Matrix(out)
+
+    @cached_property
+    def drift(self) -> sp.Matrix:
+        """(d phi_i / d q^A) v^A, shape (m, 1) (term by term, only by the q a term has)."""
+        sysm = self.system
+        if not sysm.phi:
+            return sp.zeros(0, 1)
+        v = sysm.velocities
+        if not self.fast:
+            return sp.Matrix([
+                sum((sp.diff(f, q) * w for q, w in zip(sysm.coordinates, v)), sp.S.Zero)
+                for f in sysm.phi])
+        return sp.Matrix([
+            sp.Add(*[d * v[A] for A, d in sorted(_coordinate_derivatives(f, self._qidx).items())])
+            for f in sysm.phi])
+
+    @cached_property
+    def ingredients(self) -> DynamicsIngredients:
+        """W, forcing, mu and drift: what numeric evaluation solves with."""
+        return DynamicsIngredients(self.hessian, self.forcing, self.system.mu, self.drift)
+
+    # --------------------------------------------------- Euler-Lagrange field
+    @cached_property
+    def accelerations(self) -> sp.Matrix:
+        """xi^A = W^{AB} F_B: the free accelerations, shape (n, 1)."""
+        return self._solve_W(self.forcing)
+
+    @cached_property
+    def euler_lagrange_field(self) -> sp.Matrix:
+        """xi_L = v^A d/dq^A + xi^A d/dv^A (solution of i_X omega_L = dE_L)."""
+        return sp.Matrix.vstack(self._v, self.accelerations)
+
+    def gradient(self, f) -> sp.Matrix:
+        """df as a 2n-vector (d/dq, d/dv)."""
+        return sp.Matrix([sp.diff(f, s) for s in self.system.state])
+
+    def apply(self, field: sp.Matrix, f) -> sp.Expr:
+        """X(f) = df(X) for a vector field X given as a 2n-vector."""
+        return (self.gradient(f).T * field)[0]
+
+    def hamiltonian_field(self, f) -> sp.Matrix:
+        """X_f with i_{X_f} omega_L = df, shape (2n, 1).
+
+        X_f = (W^{-1} f_v, -W^{-1} f_q - W^{-1} A W^{-1} f_v) with A = M - M^T.
+        """
+        n = self.n
+        grad = self.gradient(f)
+        fq, fv = grad[:n, 0], grad[n:, 0]
+        a = self._solve_W(fv)
+        A = self.mixed_hessian - self.mixed_hessian.T
+        return sp.Matrix.vstack(a, -self._solve_W(fq + A * a))
+
+    def bracket(self, f, g) -> sp.Expr:
+        """{f, g}_L = omega_L(X_f, X_g); so that xi_L(f) = {f, E_L}_L.
+
+        Computed as f_q . W^{-1} g_v - W^{-1} f_v . g_q - (W^{-1} f_v)^T A (W^{-1} g_v).
+        """
+        n = self.n
+        gf, gg = self.gradient(f), self.gradient(g)
+        a = self._solve_W(gf[n:, 0])
+        b = self._solve_W(gg[n:, 0])
+        A = self.mixed_hessian - self.mixed_hessian.T
+        return sp.expand((gf[:n, 0].T * b)[0] - (a.T * gg[:n, 0])[0] - (a.T * A * b)[0])
+
+    # -------------------------------------------------------- constraints
+    @cached_property
+    def constraint_gradients(self) -> sp.Matrix:
+        """d phi_i as rows, shape (m, 2n)."""
+        if not self.system.phi:
+            return sp.zeros(0, 2 * self.n)
+        return sp.Matrix([self.gradient(f).T for f in self.system.phi])
+
+    @cached_property
+    def _W_inv_mu_T(self) -> sp.Matrix:
+        return self._solve_W(self.system.mu.T)
+
+    @cached_property
+    def vertical_fields(self) -> sp.Matrix:
+        """Z_i with i_{Z_i} omega_L = tau*mu_i, as rows: Z_i = -W^{AB} mu_iB d/dv^A.
+
+        Shape (m, 2n); the q-components are zero.
+        """
+        m, n = self.m, self.n
+        return sp.Matrix.hstack(sp.zeros(m, n), -self._W_inv_mu_T.T)
+
+    @cached_property
+    def constraint_matrix(self) -> sp.Matrix:
+        """C_ij = Z_i(phi_j) = -(mu W^{-1} mu^T)_ij, shape (m, m)."""
+        return -(self.system.mu * self._W_inv_mu_T)
+
+    @cached_property
+    def constraint_derivatives(self) -> sp.Matrix:
+        """xi_L(phi_i) = {phi_i, E_L}_L, shape (m, 1)."""
+        ing = self.ingredients
+        return ing.drift + ing.mu * self.accelerations
+
+    @cached_property
+    def multipliers(self) -> sp.Matrix:
+        """lambda^j = -C^{ij} xi_L(phi_i), from a solve with C^T (size m)."""
+        if self.m == 0:
+            return sp.zeros(0, 1)
+        C = self.constraint_matrix
+        return -solve_linear(C.T, self.constraint_derivatives, simplify=None)
+
+    @cached_property
+    def multiplier_symbols(self) -> tuple[sp.Symbol, ...]:
+        """``lambda_1 .. lambda_m``."""
+        return tuple(multiplier_symbol(i + 1) for i in range(self.m))
+
+    @cached_property
+    def projected_field(self) -> sp.Matrix:
+        """P(xi_L) = xi_L - C^{ij} xi_L(phi_i) Z_j = xi_L + lambda^j Z_j."""
+        if self.m == 0:
+            return self.euler_lagrange_field
+        return self.euler_lagrange_field + self.vertical_fields.T * self.multipliers
+
+    @cached_property
+    def projector_Q(self) -> sp.Matrix:
+        """Q = C^{ij} Z_j (x) d phi_i as a 2n x 2n matrix: Z^T C^{-T} dphi."""
+        if self.m == 0:
+            return sp.zeros(2 * self.n, 2 * self.n)
+        C = self.constraint_matrix
+        return self.vertical_fields.T * solve_linear(C.T, self.constraint_gradients, simplify=None)
+
+    @cached_property
+    def projector_P(self) -> sp.Matrix:
+        """P = id - Q (P^2 = P); P(xi_L) is the constrained dynamics."""
+        return sp.eye(2 * self.n) - self.projector_Q
+
+    @cached_property
+    def acceleration_symbols(self) -> tuple[sp.Symbol, ...]:
+        """``<q>_ddot`` for every coordinate."""
+        return tuple(acceleration_symbol(q) for q in self.system.coordinates)
+
+    @cached_property
+    def equations_of_motion(self) -> tuple[sp.Expr, ...]:
+        """d/dt(dL/dv^A) - dL/dq^A + lambda^i mu_iA (each = 0).
+
+        In the acceleration symbols ``<q>_ddot`` and multiplier symbols
+        ``lambda_i``; d/dt(dL/dv) = W a + M v.
+        """
+        a = sp.Matrix(self.acceleration_symbols)
+        lam = sp.Matrix(self.multiplier_symbols)
+        eq = self.hessian * a - self.forcing
+        if self.m:
+            eq += self.system.mu.T * lam
+        return tuple(sp.expand(e) for e in eq)
+
+    @cached_property
+    def modified_lagrangian(self) -> sp.Expr:
+        """The paper's Section 4 Lagrangian 𝕃 = L - Lambda^i g_i.
+
+        Lambda^i are the multipliers of the complete lifts g_i^c (the first
+        len(holonomic) constraints); Z = L when there are no holonomic ones.
+        """
+        k = len(self.system.holonomic)
+        lam = self.multipliers
+        return self.system.lagrangian - sum(
+            (lam[i] * g for i, g in enumerate(self.system.holonomic)), sp.S.Zero) if k else \
+            self.system.lagrangian
+
+    # -------------------------------------------------------------- on M_1
+    @cached_property
+    def M1(self) -> Submanifold:
+        """M_1 = {phi_i = 0, g = 0} with this geometry's precision settings."""
+        return Submanifold(self.system, self.system.holonomic + self.system.phi,
+                           precision=self.precision, samples=self.samples, seed=self.seed)
+
+    @cached_property
+    def constraint_rank(self) -> Decision:
+        """rank of C on M_1 with how it was decided."""
+        return self.M1.rank(self.constraint_matrix)
+
+    @property
+    def regular(self) -> bool:
+        """True when C has full rank m on M_1."""
+        return self.constraint_rank.value == self.m
+
+
+def _coordinate_derivatives(expr, qidx) -> dict:
+    """{B: d expr / d q^B} for the coordinates expr depends on, nonzero only.
+
+    Term by term, each term differentiated only by the coordinates it
+    contains (no derivative of a term by a symbol it lacks).
+    """
+    parts: dict = {}
+    for term in sp.Add.make_args(expr):
+        for q in term.free_symbols & qidx.keys():
+            d = _derivative(term, q)
+            if d != 0:
+                parts.setdefault(qidx[q], []).append(d)
+    out = {}
+    for B, ds in parts.items():
+        d = sp.Add(*ds)
+        if d != 0:
+            out[B] = d
+    return out
+
+
+def _derivative(expr, x):
+    """d expr / d x by the sum, product, power and chain rules.
+
+    The same derivative as ``expr.diff(x)`` (which it falls back to for any
+    other node), without what makes sympy's ``diff`` slow on these small
+    entries: a ``Derivative`` object per factor (also for factors free of x,
+    whose zero derivative then multiplies the others and queries their
+    assumptions) and an ``is_zero`` assumption query on every result. Only
+    the factors that contain x are differentiated.
+    """
+    if expr.is_Symbol:
+        return sp.S.One if expr == x else sp.S.Zero
+    if expr.is_Add:
+        return sp.Add(*[_derivative(a, x) for a in expr.args if x in a.free_symbols])
+    if expr.is_Mul:
+        args = expr.args
+        return sp.Add(*[sp.Mul(*args[:i], _derivative(a, x), *args[i + 1:])
+                        for i, a in enumerate(args) if x in a.free_symbols])
+    if expr.is_Pow and x not in expr.exp.free_symbols:
+        base, k = expr.args
+        return k * base ** (k - 1) * _derivative(base, x)
+    if isinstance(expr, sp.sin):
+        return sp.cos(expr.args[0]) * _derivative(expr.args[0], x)
+    if isinstance(expr, sp.cos):
+        return -sp.sin(expr.args[0]) * _derivative(expr.args[0], x)
+    return expr.diff(x)

@@ -1,0 +1,219 @@
+"""Frobenius integrability of the constraint distribution (is it secretly holonomic?).
+
+The constraints φ_i = μ_iA(q) v^A + h_i(q) confine the velocities at q to the affine
+space {v : μ(q) v = −h(q)}, a translate of the linear space D_q = ker μ(q). The
+*distribution* D = ker μ ⊂ TQ is what Frobenius' theorem is about:
+
+- D is integrable (involutive) iff for every pair of fields X, Y in D the bracket
+  [X, Y] is in D, iff dμ_i ∧ μ_1 ∧ ... ∧ μ_m = 0 for every i. Since
+  μ_i([X, Y]) = −dμ_i(X, Y) for X, Y in ker μ, it is tested as
+  dμ_i(X_a, X_b) = 0 on a basis X_1..X_{n−m} of D (all i, a < b).
+- Every row of μ is used, complete lifts of holonomic constraints included: their
+  one-forms dg are closed and add nothing to the obstruction, and the test runs on
+  Q_1 = {g = 0} (exact reduction, else seeded samples of Q_1), because only there
+  does the motion take place.
+- Integrable linear constraints (h = 0) are holonomic in disguise: locally
+  D = ker(dF_1, ..., dF_m) and the motion keeps F constant (the leaf is fixed by the
+  initial data). With h ≠ 0 the answer concerns the linear part only: the motion
+  then satisfies d/dt F = (a function of q fixed by h), i.e. it crosses the leaves
+  of D at a prescribed rate (for ẋ = 1: x = t + c, a rheonomic holonomic
+  constraint), and "integrable" means exactly that, not that the affine
+  constraint set is the tangent bundle of a submanifold.
+
+``integrable`` is True / False when every decision was clear, and None when a
+sampled decision was doubtful at the chosen precision (see :mod:`nhham.onmanifold`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cached_property
+
+import sympy as sp
+
+from nhham.settings import SEED
+from nhham.errors import ComputationError
+from nhham.lagrangian.algebra import cancel
+from nhham.lagrangian.submanifold import Decision, Submanifold
+from nhham.system.expressions import short
+
+__all__ = ["Integrability", "integrability", "frobenius"]
+
+
+@dataclass(frozen=True)
+class Integrability:
+    """Frobenius test of D = ker μ on Q_1.
+
+    Attributes
+    ----------
+    integrable : bool or None
+        True when D is involutive, False when it is not, None when undecidable at
+        the chosen precision.
+    rank : int
+        Rank n − m of D.
+    basis : sympy.Matrix or None, shape (n, n − m)
+        Columns X_a spanning D (solved for the m best-conditioned dependent
+        components; denominators may vanish on a thin set).
+    obstructions : tuple of (str, int, int, sympy.Expr)
+        ``(constraint label, a, b, dμ_i(X_a, X_b))`` for every term found not to
+        vanish on Q_1.
+    decisions : tuple of (str, Decision)
+        Every vanishing decision with its evidence.
+    method : str
+        ``"exact"`` when every decision was exact, else ``"sampled"``.
+    warnings : tuple of str
+    mu : sympy.Matrix, shape (m, n)
+    coordinates : tuple of sympy.Symbol
+    labels : tuple of str
+    """
+
+    integrable: bool | None
+    rank: int
+    basis: sp.Matrix | None
+    obstructions: tuple
+    decisions: tuple
+    method: str
+    warnings: tuple
+    mu: sp.Matrix
+    coordinates: tuple
+    labels: tuple
+
+    def __bool__(self):
+        return bool(self.integrable)
+
+    @cached_property
+    def first_integrals(self) -> tuple:
+        """``(label, F)`` with dF = μ_i for every closed row μ_i (F None otherwise).
+
+        Best effort (sympy's ``integrate``); a row that is integrable only after
+        combination with others, or with an integrating factor, gets None.
+        """
+        out = []
+        for i, lab in enumerate(self.labels):
+            out.append((lab, _potential(self.mu.row(i), self.coordinates)))
+        return tuple(out)
+
+    def describe(self) -> str:
+        """One line: the verdict and how it was reached."""
+        if self.integrable is None:
+            verdict = "undecided"
+        else:
+            verdict = "integrable (holonomic in disguise)" if self.integrable else \
+                "not integrable (truly nonholonomic)"
+        text = f"{verdict} ({self.method}; D of rank {self.rank})"
+        if self.obstructions:
+            lab, a, b, expr = self.obstructions[0]
+            text += f"; e.g. d{lab}(X_{a + 1}, X_{b + 1}) = {short(expr)}"
+        if self.warnings:
+            text += " WARNING: " + "; ".join(self.warnings)
+        return text
+
+
+def integrability(system, *, precision: int | None = None, samples: int = 6,
+                  seed: int = SEED, exact: bool = True) -> Integrability:
+    """Frobenius test of the distribution annihilated by all the μ rows of ``system``.
+
+    Parameters
+    ----------
+    system : nhham.System
+    precision, samples, seed, exact
+        As in :func:`nhham.algorithm.analyze_constraints` (the decisions are made on
+        Q_1 = {g = 0}).
+
+    Returns
+    -------
+    Integrability
+    """
+    Q1 = Submanifold(system, system.holonomic, precision=precision, samples=samples,
+                     seed=seed, fibre=(), exact=exact)
+    labels = tuple(f"{lab}.lift" if i < len(system.holonomic) else lab
+                   for i, lab in enumerate(system.constraint_labels))
+    return frobenius(system.mu, system.coordinates, Q1, labels)
+
+
+def frobenius(mu, coordinates, manifold: Submanifold, labels=None) -> Integrability:
+    """Frobenius test of ker μ for one-forms μ (rows, shape (m, n)) on a Submanifold of Q.
+
+    Parameters
+    ----------
+    mu : sympy.Matrix, shape (m, n)
+        Coefficients μ_iA(q) of m independent one-forms.
+    coordinates : sequence of sympy.Symbol
+        q^1..q^n.
+    manifold : Submanifold
+        Where the decisions are made (Q itself, or Q_1), with ``fibre=()``.
+    labels : sequence of str, optional
+        Names of the rows (default ``mu[i]``).
+    """
+    mu = sp.Matrix(mu)
+    q = tuple(coordinates)
+    m, n = mu.rows, len(q)
+    labels = tuple(labels) if labels is not None else tuple(f"mu[{i}]" for i in range(m))
+    common = dict(mu=mu, coordinates=q, labels=labels)
+    if m == 0:
+        return Integrability(True, n, sp.eye(n), (), (), "exact", (), **common)
+    if n - m <= 1:
+        return Integrability(True, n - m, None, (), (("rank of D", Decision(
+            True, "exact", f"D has rank {n - m} <= 1: always integrable")),), "exact", (),
+            **common)
+    basis = _kernel_basis(mu, manifold)
+    K = [sp.Matrix(n, n, lambda B, A: sp.diff(mu[i, A], q[B])) for i in range(m)]
+    decisions, obstructions, doubtful = [], [], False
+    for i in range(m):
+        for a in range(n - m):
+            for b in range(a + 1, n - m):
+                X, Y = basis[:, a], basis[:, b]
+                w = cancel((X.T * K[i] * Y)[0] - (Y.T * K[i] * X)[0])
+                dec = manifold.vanishes(w)
+                decisions.append((f"d{labels[i]}(X_{a + 1}, X_{b + 1})", dec))
+                doubtful |= bool(dec.warnings)
+                if not dec.value:
+                    obstructions.append((labels[i], a, b, manifold.reduce(w)
+                                         if manifold.exact else w))
+    if obstructions:
+        bad = [d for _, d in decisions if not d.value]
+        integrable = False if any(not d.warnings for d in bad) else None
+    else:
+        integrable = None if doubtful else True
+    method = "exact" if all(d.method == "exact" for _, d in decisions) else "sampled"
+    warnings = tuple(f"{s}: {w}" for s, d in decisions for w in d.warnings)
+    return Integrability(integrable, n - m, basis, tuple(obstructions), tuple(decisions),
+                         method, warnings, **common)
+
+
+def _kernel_basis(mu, manifold):
+    """Columns X_a spanning ker μ: free components e_a, dependent ones solved."""
+    m, n = mu.shape
+    try:
+        _, dep, _ = manifold.regular_block(mu, m)
+    except ComputationError:
+        dep = list(range(m))
+    free = [j for j in range(n) if j not in dep]
+    sol = manifold.solve(mu.extract(list(range(m)), dep),
+                    -mu.extract(list(range(m)), free))
+    basis = sp.zeros(n, len(free))
+    for a, j in enumerate(free):
+        basis[j, a] = 1
+        for t, d in enumerate(dep):
+            basis[d, a] = sol[t, a]
+    return basis
+
+
+def _potential(row, q):
+    """F with dF = row (one-form coefficients), or None when the form is not closed."""
+    n = len(q)
+    for A in range(n):
+        for B in range(A + 1, n):
+            if cancel(sp.diff(row[A], q[B]) - sp.diff(row[B], q[A])) != 0:
+                return None
+    F = sp.S.Zero
+    try:
+        for A in range(n):
+            rest = cancel(row[A] - sp.diff(F, q[A]))
+            if rest != 0:
+                F += sp.integrate(rest, q[A])
+        if any(cancel(sp.diff(F, q[A]) - row[A]) != 0 for A in range(n)):
+            return None
+    except Exception:  # pragma: no cover - sympy integration failure
+        return None
+    return sp.simplify(F) if sp.count_ops(F) < 40 else F

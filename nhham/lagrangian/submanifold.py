@@ -1,0 +1,880 @@
+"""Deciding things "on M_k": exact reduction first, seeded sampling second.
+
+A :class:`Submanifold` is the zero set of a list of constraint expressions
+in the coordinates and a fibre: (q, v) on TQ (default), (q, p) on T*Q
+(``fibre=momenta``) or q alone on Q (``fibre=()``); the constraints may be
+affine velocity constraints, holonomic constraints or secondary constraints of
+any form. To decide whether a function vanishes on it, or the rank of a matrix
+of functions on it (:meth:`Submanifold.vanishes`, :meth:`Submanifold.rank`,
+and :meth:`Submanifold.regular_block` for a well-conditioned regular block),
+nhham
+
+1. eliminates variables exactly: coordinates that a constraint gives linearly
+   with a constant coefficient (``q1 = 0``), then dependent velocities from
+   the affine constraints, choosing the velocity set whose block of mu is best
+   conditioned at sampled points (not simply the first columns);
+2. cancels rationally, and where sines and cosines remain reduces modulo
+   sin^2 + cos^2 - 1 (and modulo any polynomial constraints that could not be
+   eliminated) with a Groebner-basis remainder;
+3. otherwise evaluates at seeded random points of the submanifold found by
+   Newton projection, in float64 or in mpmath with the requested digits.
+
+Every answer is a :class:`Decision` that records how it was reached. With
+``exact=False`` steps 1-2 are skipped for decisions (sampling only), which is
+how the two routes are compared.
+
+What "exact" means. An exact decision is a proof for *generic* values of the
+symbolic parameters (they are treated as indeterminates): "vanishes" means the
+reduced expression is zero as a function (rational cancellation, or a Groebner
+remainder modulo sin^2 + cos^2 = 1 and the constraints that could not be
+eliminated); "does not vanish" is claimed exactly only when the reduction
+parametrises M completely and the reduced expression is a nonzero polynomial
+or rational function of the remaining variables and of sines and cosines of
+them (such a function cannot vanish on an open set). Where a decisive nonzero
+expression happens to vanish at the *given* parameter values, the decision
+carries a warning.
+
+What "sampled" means. Values at seeded points of M found by Newton
+projection, in float64 (relative tolerance 1e-9) or mpmath with ``digits``
+(relative tolerance 10**(3 - digits)). A quantity is *clearly zero* below the
+zero level (1e-12 in float64, 10**(1 - digits) in mpmath, and never below
+100 times the residual of the points) and *clearly nonzero* above 1e3 times
+the tolerance; in between the decision is doubtful and says so in
+``Decision.warnings`` instead of choosing silently.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from dataclasses import dataclass, field
+from functools import cached_property
+from typing import Sequence
+
+import mpmath
+import numpy as np
+import sympy as sp
+
+from nhham.settings import PARAMETER_BOX, SEED, STATE_BOX, Precision
+from nhham.errors import ComputationError
+from nhham.lagrangian.algebra import cancel, solve_linear
+from nhham.system.expressions import short
+
+__all__ = ["Decision", "Submanifold"]
+
+
+@dataclass(frozen=True)
+class Decision:
+    """How a vanishing or rank question on a submanifold was answered.
+
+    Attributes
+    ----------
+    value : bool or int
+        ``True``/``False`` for "vanishes on M", or the rank for rank questions.
+    method : {"exact", "sampled"}
+        Exact reduction, or evaluation at sample points.
+    detail : str
+        Human-readable evidence.
+    precision : str
+        ``"exact"``, ``"float64"`` or ``"mpmath:<digits>"``.
+    samples : int
+        Number of sample points used (0 for exact decisions).
+    max_abs : float or None
+        Largest absolute value found at the samples (vanishing questions).
+    singular_values : tuple of tuple of float
+        Singular values at each sample (rank questions).
+    point_residual : float or None
+        Largest constraint residual of the sample points.
+    warnings : tuple of str
+        Reasons to distrust the answer (rank not constant, values near the
+        tolerance).
+    points : tuple of tuple
+        The sample points of a sampled decision, each a tuple of
+        ``(variable name, float)`` pairs (rounded for the record).
+    """
+
+    value: object
+    method: str
+    detail: str
+    precision: str = "exact"
+    samples: int = 0
+    max_abs: float | None = None
+    singular_values: tuple = ()
+    point_residual: float | None = None
+    warnings: tuple = ()
+    points: tuple = field(default=(), compare=False)
+
+    def __bool__(self):
+        return bool(self.value)
+
+    def describe(self) -> str:
+        """One line saying what was decided and how (with the numeric evidence)."""
+        text = f"{self.value} ({self.method}, {self.precision}): {self.detail}"
+        if self.singular_values:
+            smallest = [min(sv) if sv else 0.0 for sv in self.singular_values]
+            text += f"; smallest singular value per point {_floats(smallest)}"
+        if self.point_residual is not None and self.method == "sampled":
+            text += f"; point residual <= {self.point_residual:.2g}"
+        if self.warnings:
+            text += " WARNING: " + "; ".join(self.warnings)
+        return text
+
+
+@dataclass(frozen=True)
+class Reduction:
+    """An exact partial solution of the constraint equations.
+
+    Attributes
+    ----------
+    substitution : dict
+        Solved variable -> expression in the remaining variables.
+    residual : tuple of sympy.Expr
+        Equations that could not be eliminated (reduced by the substitution).
+    """
+
+    substitution: dict
+    residual: tuple
+
+
+class Submanifold:
+    """The zero set M of constraint expressions in TQ.
+
+    Parameters
+    ----------
+    system : nhham.System
+        Supplies coordinates, velocities, parameters and their values.
+    equations : sequence of sympy.Expr
+        The constraints defining M (each = 0).
+    precision : int or None, optional
+        ``None`` for float64 sampling; an integer for mpmath with that many
+        significant digits (slower, more reliable near singular cases).
+    samples : int, optional
+        Number of seeded sample points for sampled decisions.
+    seed : int, optional
+        Seed of the sample points (decisions are reproducible).
+    fibre : sequence of sympy.Symbol, optional
+        The fibre variables: the velocities (default, M in TQ) or the
+        momenta (M in T*Q), or ``()`` for a submanifold of Q. The variables
+        are coordinates + fibre.
+    exact : bool, optional
+        If False, :meth:`vanishes` and :meth:`rank` skip the exact reduction
+        and decide at sample points only (the reduction itself stays
+        available through :meth:`reduce`).
+    """
+
+    def __init__(self, system, equations: Sequence[sp.Expr], precision: int | None = None,
+                 samples: int = 6, seed: int = SEED, fibre: Sequence[sp.Symbol] | None = None,
+                 exact: bool = True):
+        self.system = system
+        self.equations = tuple(sp.sympify(e) for e in equations)
+        self.precision = precision
+        self.samples = samples
+        self.seed = seed
+        self.fibre = tuple(system.velocities if fibre is None else fibre)
+        self.variables = tuple(system.coordinates) + self.fibre
+        self.exact = bool(exact)
+
+    def with_equations(self, equations: Sequence[sp.Expr], samples: int | None = None
+                       ) -> "Submanifold":
+        """A Submanifold of the same space and settings with other equations.
+
+        Parameters
+        ----------
+        equations : sequence of sympy.Expr
+            The constraints of the new submanifold (each = 0).
+        samples : int, optional
+            Number of sample points (default: this manifold's).
+        """
+        return Submanifold(self.system, equations, precision=self.precision,
+                           samples=self.samples if samples is None else samples,
+                           seed=self.seed, fibre=self.fibre, exact=self.exact)
+
+    @property
+    def precision_label(self) -> str:
+        return Precision(self.precision).label
+
+    # ---------------------------------------------------------- reduction
+    @cached_property
+    def reduction(self) -> Reduction:
+        """Exact elimination of coordinates and dependent velocities."""
+        sub: dict = {}
+        pending = [e for e in self.equations]
+        coords = list(self.system.coordinates)
+        vels = set(self.fibre)
+        # Coordinates given linearly with a constant coefficient, repeatedly.
+        progress = True
+        while progress:
+            progress = False
+            for eq in list(pending):
+                e = sp.expand(eq.xreplace(sub)) if sub else sp.expand(eq)
+                if e == 0:
+                    pending.remove(eq)
+                    progress = True
+                    continue
+                if e.free_symbols & vels:
+                    continue
+                for q in coords:
+                    if q in sub or q not in e.free_symbols:
+                        continue
+                    coeff = e.coeff(q, 1)
+                    if coeff.free_symbols or coeff == 0 or sp.expand(e - coeff * q).has(q):
+                        continue
+                    value = sp.expand(-(e - coeff * q) / coeff)
+                    sub = {k: sp.expand(v.xreplace({q: value})) for k, v in sub.items()}
+                    sub[q] = value
+                    pending.remove(eq)
+                    progress = True
+                    break
+                if progress:
+                    break
+        pending = [sp.expand(e.xreplace(sub)) for e in pending]
+        pending = [e for e in pending if e != 0]
+        affine = [e for e in pending if _is_affine(e, self.fibre) and e.free_symbols & vels]
+        rest = [e for e in pending if e not in affine]
+        vsub, leftover = self._solve_velocities(affine, sub)
+        sub.update(vsub)
+        residual = tuple(
+            r for r in (cancel(e.xreplace(sub)) for e in rest + leftover) if r != 0
+        )
+        return Reduction(substitution=sub, residual=residual)
+
+    def _solve_velocities(self, affine, qsub):
+        """Solve independent affine rows for a well-conditioned velocity set."""
+        if not affine:
+            return {}, []
+        vels = list(self.fibre)
+        mu = sp.Matrix([[sp.diff(e, v) for v in vels] for e in affine])
+        rest = sp.Matrix([e.xreplace({v: 0 for v in vels}) for e in affine])
+        samples = [self._numeric_matrix(mu, pt) for pt in self._raw_points(4)]
+        rows = _independent_rows(samples)
+        cols = _best_columns([S[rows] for S in samples])
+        if cols is None:
+            return {}, affine
+        dep = [vels[c] for c in cols]
+        free = [v for v in vels if v not in dep]
+        block = mu.extract(rows, cols)
+        rhs = -(mu.extract(rows, [vels.index(v) for v in free]) * sp.Matrix(free)
+                + rest.extract(rows, [0])) if free else -rest.extract(rows, [0])
+        sol = list(solve_linear(block, rhs))
+        vsub = {v: cancel(s) for v, s in zip(dep, sol)}
+        leftover = [affine[i] for i in range(len(affine)) if i not in rows]
+        return vsub, leftover
+
+    def solve(self, B: sp.Matrix, rhs: sp.Matrix) -> sp.Matrix:
+        """B^{-1} rhs for a small square B of functions regular on M.
+
+        LU pivots are accepted only where the entry does not reduce to zero on
+        M (sympy's own pivot test could pick an entry that is a nonzero
+        expression but vanishes on M); see :func:`nhham.lagrangian.algebra.solve_linear`.
+        """
+        iszero = (lambda e: self.reduce(e) == 0) if self.exact else None
+        return solve_linear(B, rhs, iszero=iszero)
+
+    def reduce(self, expr) -> sp.Expr:
+        """``expr`` with solved variables substituted and rationally cancelled."""
+        red = self.reduction
+        return cancel(sp.sympify(expr).xreplace(red.substitution))
+
+    # ------------------------------------------------------------ decisions
+    def vanishes(self, expr, tol: float | None = None) -> Decision:
+        """Decide whether ``expr`` vanishes identically on M.
+
+        Parameters
+        ----------
+        expr : sympy.Expr
+            A function of (q, v) and parameters.
+        tol : float, optional
+            Relative tolerance of the sampled test; default 1e-9 for float64
+            and 10**(3 - digits) for mpmath.
+
+        Returns
+        -------
+        Decision
+            ``value`` True when it vanishes. Exact when the reduction decides
+            (either way, see the module docstring); otherwise sampled.
+        """
+        if not self.exact:
+            return self._sampled_vanishes(cancel(expr), tol)
+        reduced = self.reduce(expr)
+        if reduced == 0:
+            return Decision(True, "exact", "vanishes after exact reduction")
+        verdict, warning = self._zero_test(reduced)
+        if verdict is True:
+            return Decision(True, "exact",
+                            "Groebner remainder 0 modulo sin^2+cos^2=1 and the equations the "
+                            "reduction could not eliminate")
+        if verdict is False:
+            return Decision(False, "exact",
+                            f"reduces to the nonzero function {short(reduced)} on M",
+                            warnings=(warning,) if warning else ())
+        return self._sampled_vanishes(reduced, tol)
+
+    def rank(self, matrix: sp.Matrix, tol: float | None = None) -> Decision:
+        """Decide the rank of a matrix of functions on M (generic rank).
+
+        Exact when every entry reduces to a number, when every entry
+        vanishes, when a maximal minor is a nonzero function on M, or when a
+        certificate is found (an r x r minor that is a nonzero function on M
+        whose Schur complement vanishes on M); otherwise the rank at seeded
+        sample points from singular values, with warnings where it is not the
+        same at every point or a singular value is neither clearly zero nor
+        clearly nonzero at this precision.
+        """
+        matrix = sp.Matrix(matrix)
+        if 0 in matrix.shape:
+            return Decision(0, "exact", "empty matrix")
+        if not self.exact:
+            return self._sampled_rank(matrix.applyfunc(cancel), tol)
+        reduced = matrix.applyfunc(self.reduce)
+        if not reduced.free_symbols:
+            r = reduced.rank()
+            return Decision(r, "exact", f"entries reduce to numbers; rank {r}")
+        if all(self._zero_test(e)[0] is True for e in reduced):
+            return Decision(0, "exact", "every entry vanishes on M")
+        exact_full = self._exact_full_rank(reduced)
+        if exact_full is not None:
+            return exact_full
+        sampled = self._sampled_rank(reduced, tol)
+        if 0 < sampled.value < min(reduced.shape):
+            certificate = self._rank_certificate(reduced, sampled)
+            if certificate is not None:
+                return certificate
+        return sampled
+
+    def regular_block(self, matrix: sp.Matrix, rank: int):
+        """Rows and columns of a best-conditioned regular rank x rank block.
+
+        Parameters
+        ----------
+        matrix : sympy.Matrix, shape (R, K)
+            A matrix of functions on M whose generic rank on M is ``rank``.
+        rank : int
+
+        Returns
+        -------
+        rows, cols : list of int
+            The block ``matrix[rows, cols]``, chosen to maximise the worst
+            ratio sigma_min(block) / ||matrix|| over the sample points of M
+            (or over the one numeric value when the reduced matrix is
+            constant): well conditioned and not small. A constant block
+            scores double, because it puts no function of the state in a
+            denominator. Ties go to the first block in lexicographic order.
+        evidence : Decision
+            ``value`` is ``(rows, cols)``; exact when the choice needed no
+            sample points (a square regular matrix, or constant entries).
+        """
+        matrix = sp.Matrix(matrix)
+        if rank == 0:
+            return [], [], Decision(([], []), "exact", "empty block (rank 0)")
+        if rank == matrix.rows == matrix.cols:
+            rows = list(range(rank))
+            return rows, list(rows), Decision((rows, list(rows)), "exact",
+                                              "the whole (square, regular) matrix")
+        reduced = matrix.applyfunc(self.reduce if self.exact else cancel)
+        points = []
+        if not reduced.free_symbols:
+            samples = [np.array(reduced.evalf(), dtype=float)]
+        else:
+            points, _ = self.points()
+            f = self._lambdify([reduced])
+            samples = [np.array(self._matrix_at(f, pt, reduced.shape).astype(complex).real,
+                                dtype=float) for pt in points]
+        rows, cols, score = _best_block(samples, rank)
+        if rows is None:
+            raise ComputationError(
+                f"no regular {rank}x{rank} block found in a matrix of rank {rank} on M")
+        detail = (f"block rows {rows}, columns {cols}: worst sigma_min(block)/||matrix|| "
+                  f"{score:.3g} over {len(samples)} evaluation(s)")
+        if points:
+            return rows, cols, Decision((rows, cols), "sampled", detail,
+                                        precision=self.precision_label, samples=len(points),
+                                        points=_record(points, self.variables))
+        return rows, cols, Decision((rows, cols), "exact", detail + " (constant entries)")
+
+    def _zero_test(self, expr):
+        """Exact zero test of a reduced expression on M: (True | False | None, warning)."""
+        return _zero_test(expr, self.reduction.residual, self.system.parameters,
+                          self.system.parameter_values)
+
+    def _sampled_rank(self, reduced, tol):
+        points, resid = self.points()
+        f = self._lambdify([reduced])
+        svals, ranks = [], []
+        tol = self._tol(tol)
+        zero = self._zero_level(resid)
+        for pt in points:
+            S = self._matrix_at(f, pt, reduced.shape)
+            s = _singular_values(S, self.precision)
+            svals.append(tuple(float(x) for x in s))
+            top = max(float(s[0]) if len(s) else 0.0, 1e-300)
+            ranks.append(int(sum(float(x) > tol * max(top, 1.0) for x in s)))
+        r = max(ranks)
+        warnings = []
+        if len(set(ranks)) > 1:
+            warnings.append(f"rank is not constant on M: ranks {ranks} at the samples")
+        gaps = [sv[r - 1] / max(sv[0], 1.0) for sv in svals if r >= 1]
+        if gaps and min(gaps) < 1e3 * tol:
+            warnings.append(
+                f"smallest kept singular value ratio {min(gaps):.3g} is within 1e3 of the "
+                f"tolerance {tol:g}: the rank is doubtful at this precision"
+            )
+        dropped = [sv[r] / max(sv[0], 1.0) for sv in svals if r < len(sv)]
+        if dropped and max(dropped) > zero:
+            warnings.append(
+                f"largest dropped singular value ratio {max(dropped):.3g} is above the zero "
+                f"level {zero:.3g} but below the tolerance {tol:g}: near-singular at this "
+                f"precision, the rank may be higher (try more digits)"
+            )
+        return Decision(
+            r, "sampled",
+            f"rank {r} at {len(points)} seeded points (relative tolerance {tol:g})",
+            precision=self.precision_label, samples=len(points), singular_values=tuple(svals),
+            point_residual=resid, warnings=tuple(warnings),
+            points=_record(points, self.variables),
+        )
+
+    def _exact_full_rank(self, reduced):
+        """Full rank proved exactly: a maximal minor is a nonzero function on M.
+
+        Only for small matrices and when the reduction parametrises M
+        completely (no residual equations), so that a nonzero reduced
+        expression is a nonzero function on M.
+        """
+        k = min(reduced.shape)
+        if k > 6 or self.reduction.residual:
+            return None
+        square = reduced if reduced.rows == reduced.cols else (
+            reduced * reduced.T if reduced.rows < reduced.cols else reduced.T * reduced)
+        det = cancel(square.det(method="berkowitz"))
+        verdict, warning = (False, None) if det.is_number and det != 0 else self._zero_test(det)
+        if verdict is not False:
+            return None
+        return Decision(k, "exact", f"full rank {k}: the determinant reduces to the nonzero "
+                                    f"function {short(det)} on M",
+                        warnings=(warning,) if warning else ())
+
+    def _rank_certificate(self, reduced, sampled):
+        """Prove the sampled rank r exactly: a nonzero r x r minor, vanishing Schur complement."""
+        r = sampled.value
+        if r > 6 or self.reduction.residual:
+            return None
+        try:
+            rows, cols, _ = self.regular_block(reduced, r)
+        except ComputationError:
+            return None
+        B = reduced.extract(rows, cols)
+        det = cancel(B.det(method="berkowitz"))
+        verdict, warning = (False, None) if det.is_number and det != 0 else self._zero_test(det)
+        if verdict is not False:
+            return None
+        other_rows = [i for i in range(reduced.rows) if i not in rows]
+        other_cols = [j for j in range(reduced.cols) if j not in cols]
+        X = B.LUsolve(reduced.extract(rows, other_cols))
+        schur = reduced.extract(other_rows, other_cols) - reduced.extract(other_rows, cols) * X
+        if not all(self._zero_test(cancel(e))[0] is True for e in schur):
+            return None
+        return Decision(
+            r, "exact",
+            f"rank {r}: the minor (rows {rows}, columns {cols}) is the nonzero function "
+            f"{short(det)} on M and its Schur complement vanishes on M",
+            singular_values=sampled.singular_values, warnings=(warning,) if warning else (),
+        )
+
+    # ------------------------------------------------------------ sampling
+    def points(self):
+        """Seeded sample points on M as a list of substitution dicts.
+
+        Returns
+        -------
+        points : list of dict
+            Symbol -> number (float, or mpmath.mpf at higher precision),
+            covering coordinates, velocities and parameters.
+        residual : float
+            Largest constraint residual over the points.
+        """
+        return self._points
+
+    @cached_property
+    def _points(self):
+        pts, worst = [], 0.0
+        attempts = 0
+        eqs = list(self.equations)
+        for raw in self._raw_points(self.samples * 4):
+            if len(pts) == self.samples:
+                break
+            attempts += 1
+            try:
+                pt, res = self._project(raw, eqs)
+            except (ZeroDivisionError, ValueError, OverflowError, ArithmeticError,
+                    np.linalg.LinAlgError):
+                continue
+            if res is None:
+                continue
+            pts.append(pt)
+            worst = max(worst, res)
+        if not pts:
+            raise ComputationError(
+                f"could not find points on the submanifold defined by {list(self.equations)} "
+                f"(Newton projection failed from {attempts} seeded starts; it may be empty)"
+            )
+        return pts, worst
+
+    def _raw_points(self, count):
+        rng = np.random.default_rng(self.seed)
+        syms = self.variables
+        out = []
+        for _ in range(count):
+            pt = {s: float(rng.uniform(*STATE_BOX)) for s in syms}
+            for p in self.system.parameters:
+                pt[p] = self.system.parameter_values.get(p, float(rng.uniform(*PARAMETER_BOX)))
+            out.append(pt)
+        return out
+
+    def _project(self, raw, eqs):
+        """Newton projection (minimum-norm steps) of a point onto M."""
+        syms = list(self.variables)
+        if not eqs:
+            return self._convert(raw), 0.0
+        F, J = self._residual_functions(tuple(eqs))
+        params = [raw[p] for p in self.system.parameters]
+        z = [raw[s] for s in syms]
+        if self.precision is None:
+            z = np.array(z, dtype=float)
+            for _ in range(60):
+                r = np.array(F(*z, *params), dtype=float).ravel()
+                if not np.all(np.isfinite(r)):
+                    return None, None
+                if np.max(np.abs(r)) < 1e-14 * (1 + np.max(np.abs(z))):
+                    break
+                Jz = np.array(J(*z, *params), dtype=float)
+                z = z - np.linalg.lstsq(Jz, r, rcond=None)[0]
+            r = np.array(F(*z, *params), dtype=float).ravel()
+            res = float(np.max(np.abs(r)))
+            if not np.isfinite(res) or res > 1e-10 * (1 + float(np.max(np.abs(z)))):
+                return None, None
+            pt = dict(zip(syms, map(float, z)))
+            pt.update({p: float(raw[p]) for p in self.system.parameters})
+            return pt, res
+        with mpmath.workdps(self.precision + 10):
+            z = mpmath.matrix([mpmath.mpf(x) for x in z])
+            params = [mpmath.mpf(x) for x in params]
+            target = mpmath.mpf(10) ** (-(self.precision + 5))
+            for _ in range(80):
+                r = mpmath.matrix(F(*z, *params))
+                if mpmath.norm(r, mpmath.inf) < target * (1 + mpmath.norm(z, mpmath.inf)):
+                    break
+                Jz = mpmath.matrix(J(*z, *params))
+                # Minimum-norm step: dz = J^T (J J^T)^+ r.
+                JJt = Jz * Jz.T
+                try:
+                    y = mpmath.lu_solve(JJt, r)
+                except ZeroDivisionError:
+                    y = mpmath.qr_solve(JJt, r)[0]
+                z = z - Jz.T * y
+            r = mpmath.matrix(F(*z, *params))
+            res = mpmath.norm(r, mpmath.inf)
+            if res > mpmath.mpf(10) ** (-self.precision) * (1 + mpmath.norm(z, mpmath.inf)):
+                return None, None
+            pt = dict(zip(syms, [z[i] for i in range(len(syms))]))
+            pt.update({p: mpmath.mpf(raw[p]) for p in self.system.parameters})
+            return pt, float(res)
+
+    def _convert(self, raw):
+        if self.precision is None:
+            return dict(raw)
+        with mpmath.workdps(self.precision + 10):
+            return {k: mpmath.mpf(v) for k, v in raw.items()}
+
+    @cached_property
+    def _residual_cache(self):
+        return {}
+
+    def _residual_functions(self, eqs):
+        if eqs not in self._residual_cache:
+            syms = list(self.variables)
+            args = syms + list(self.system.parameters)
+            Fm = sp.Matrix(eqs)
+            Jm = Fm.jacobian(syms)
+            module = "numpy" if self.precision is None else "mpmath"
+            self._residual_cache[eqs] = (
+                sp.lambdify(args, Fm, modules=module), sp.lambdify(args, Jm, modules=module)
+            )
+        return self._residual_cache[eqs]
+
+    def _lambdify(self, exprs):
+        args = list(self.variables + self.system.parameters)
+        module = "numpy" if self.precision is None else "mpmath"
+        return sp.lambdify(args, exprs, modules=module)
+
+    def _evaluate(self, f, pt):
+        args = [pt[s] for s in self.variables
+                + self.system.parameters]
+        if self.precision is None:
+            with np.errstate(all="ignore"):
+                return f(*args)
+        with mpmath.workdps(self.precision):
+            return f(*args)
+
+    def _matrix_at(self, f, pt, shape):
+        """A lambdified matrix evaluated at a point, as an object array of ``shape``."""
+        value = self._evaluate(f, pt)[0]
+        if isinstance(value, mpmath.matrix):
+            return np.array([[value[i, j] for j in range(value.cols)]
+                             for i in range(value.rows)], dtype=object).reshape(shape)
+        return np.array(value, dtype=object).reshape(shape)
+
+    def _numeric_matrix(self, M, pt):
+        return np.array(M.xreplace(pt).evalf(), dtype=complex).real.astype(float)
+
+    def _zero_level(self, residual=0.0):
+        """Below this relative size a sampled value is clearly zero."""
+        base = Precision(self.precision).zero_level
+        return max(base, 100.0 * float(residual or 0.0))
+
+    def _tol(self, tol):
+        if tol is not None:
+            return tol
+        return Precision(self.precision).tolerance
+
+    def _sampled_vanishes(self, expr, tol):
+        points, resid = self.points()
+        tol = self._tol(tol)
+        f = self._lambdify([expr])
+        scale_f = self._lambdify([sum((abs(t) for t in sp.Add.make_args(sp.expand(expr))),
+                                      sp.S.Zero)])
+        worst, worst_rel = 0.0, 0.0
+        for pt in points:
+            value = self._evaluate(f, pt)[0]
+            scale = self._evaluate(scale_f, pt)[0]
+            a = abs(complex(value))
+            if not math.isfinite(a):
+                return Decision(False, "sampled", f"not finite at a sample point {pt}",
+                                precision=self.precision_label, samples=len(points),
+                                point_residual=resid)
+            worst = max(worst, a)
+            worst_rel = max(worst_rel, a / max(float(abs(scale)), 1.0))
+        vanishes = worst_rel <= tol
+        warnings = ()
+        zero = self._zero_level(resid)
+        if not vanishes and worst_rel <= 1e3 * tol:
+            warnings = (f"largest relative value {worst_rel:.3g} is within 1e3 of the "
+                        f"tolerance {tol:g}: the answer is doubtful at this precision",)
+        elif vanishes and worst_rel > zero:
+            warnings = (f"largest relative value {worst_rel:.3g} is below the tolerance {tol:g} "
+                        f"but above the zero level {zero:.3g}: it may not vanish (try more "
+                        f"digits)",)
+        return Decision(
+            vanishes, "sampled",
+            f"largest |value| {worst:.3g} (relative {worst_rel:.3g}) at {len(points)} seeded "
+            f"points, tolerance {tol:g}",
+            precision=self.precision_label, samples=len(points), max_abs=worst,
+            point_residual=resid, warnings=warnings, points=_record(points, self.variables),
+        )
+
+
+# ------------------------------------------------------------------ helpers
+def _floats(values):
+    return "[" + ", ".join(f"{v:.3g}" for v in values) + "]"
+
+
+def _record(points, variables, limit=6):
+    """Sample points as tuples of (name, float) for a Decision's record."""
+    out = []
+    for pt in points[:limit]:
+        out.append(tuple((s.name, round(float(pt[s]), 12)) for s in variables))
+    return tuple(out)
+
+
+def _is_affine(expr, vels):
+    vset = set(vels)
+    return all(not sp.diff(expr, v).free_symbols & vset for v in vels)
+
+
+def _independent_rows(samples):
+    """Indices of rows independent at the sample points (greedy)."""
+    rows = []
+    for i in range(samples[0].shape[0]):
+        trial = rows + [i]
+        if max(np.linalg.matrix_rank(S[trial], tol=1e-9 * max(1.0, np.abs(S).max()))
+               for S in samples) == len(trial):
+            rows.append(i)
+    return rows
+
+
+def _best_columns(samples):
+    """Column set of a k x n matrix whose k x k block is best conditioned.
+
+    Scores every column subset (when there are few) by the worst ratio of
+    smallest to largest singular value over the samples; ties go to blocks
+    that are the same at every sample (often constant, so no division by a
+    function of q appears).
+    """
+    k, n = samples[0].shape
+    if k == 0:
+        return None
+    if math.comb(n, k) <= 400:
+        candidates = itertools.combinations(range(n), k)
+    else:
+        import scipy.linalg
+
+        candidates = {tuple(sorted(scipy.linalg.qr(S, pivoting=True)[2][:k])) for S in samples}
+    best, best_score = None, -1.0
+    for cols in candidates:
+        blocks = [S[:, cols] for S in samples]
+        ratios = []
+        for B in blocks:
+            s = np.linalg.svd(B, compute_uv=False)
+            ratios.append(s[-1] / s[0] if s[0] > 0 else 0.0)
+        constant = all(np.allclose(B, blocks[0], atol=1e-12) for B in blocks)
+        score = min(ratios) + (1.0 if constant and min(ratios) > 1e-8 else 0.0)
+        if score > best_score + 1e-12:
+            best, best_score = cols, score
+    if best_score <= 1e-10:
+        return None
+    return list(best)
+
+
+def _zero_test(expr, residual=(), parameters=(), values=None):
+    """Exact zero test of a function on M given by its reduced expression.
+
+    Sines and cosines of symbols (after ``expand_trig``) become new variables
+    s, c with s^2 + c^2 = 1. The numerator must then be a polynomial in its
+    symbols; anything else (exp, sqrt, trig of non-symbols) is undecided.
+
+    Returns
+    -------
+    verdict : True, False or None
+        True: the numerator lies in the ideal of the trig relations and the
+        ``residual`` equations (it vanishes on M). False: only when there is
+        no residual (the reduction parametrises M) and the numerator is not
+        in the ideal of the trig relations, which is prime with a Zariski
+        dense set of real points, so the function is nonzero on an open set.
+        None: undecided.
+    warning : str or None
+        Set when the verdict is False but every coefficient of the numerator
+        (as a polynomial in the state) vanishes at the given parameter values.
+    """
+    expr = sp.sympify(expr)
+    if expr == 0:
+        return True, None
+    if expr.is_number:
+        return (None, None) if expr.has(sp.nan, sp.zoo, sp.oo) else (False, None)
+    try:
+        num = sp.numer(sp.together(sp.expand_trig(expr)))
+    except Exception:  # pragma: no cover - sympy failure on exotic input
+        return None, None
+    rep, rel = {}, []
+    for atom in num.atoms(sp.Function):
+        if not atom.free_symbols:
+            continue
+        if not isinstance(atom, (sp.sin, sp.cos)) or not atom.args[0].is_Symbol:
+            return None, None
+        a = atom.args[0]
+        if sp.sin(a) not in rep:
+            s, c = sp.Dummy(f"s_{a}"), sp.Dummy(f"c_{a}")
+            rep[sp.sin(a)], rep[sp.cos(a)] = s, c
+            rel.append(s ** 2 + c ** 2 - 1)
+    num = sp.expand(num.xreplace(rep))
+    extra = []
+    for r in residual:
+        try:
+            rn = sp.numer(sp.together(sp.expand_trig(r)))
+        except Exception:  # pragma: no cover
+            return None, None
+        for atom in rn.atoms(sp.Function):
+            if atom.free_symbols and atom not in rep:
+                return None, None
+        extra.append(sp.expand(rn.xreplace(rep)))
+    polys = rel + extra
+    variables = sorted(num.free_symbols | set().union(*[p.free_symbols for p in polys]),
+                       key=sp.default_sort_key)
+    if not variables:
+        return (num == 0), None
+    try:
+        for p in polys + [num]:
+            if not p.is_polynomial(*variables):
+                return None, None
+        basis = sp.groebner(polys, *variables, order="grevlex") if extra else rel
+        remainder = sp.reduced(num, list(basis), *variables, order="grevlex")[1] \
+            if basis else num
+    except (sp.PolynomialError, sp.polys.polyerrors.PolificationFailed, TypeError, ValueError,
+            sp.polys.polyerrors.CoercionFailed):
+        return None, None
+    remainder = sp.expand(remainder)
+    if remainder == 0:
+        return True, None
+    if extra:
+        return None, None
+    return False, _parameter_warning(remainder, parameters, values or {})
+
+
+def _parameter_warning(poly_expr, parameters, values):
+    """Warn when a polynomial nonzero in the parameters vanishes at their values."""
+    params = [p for p in parameters if p in poly_expr.free_symbols]
+    if not params or any(p not in values for p in params):
+        return None
+    state = sorted(poly_expr.free_symbols - set(params), key=sp.default_sort_key)
+    try:
+        coeffs = sp.Poly(poly_expr, *state).coeffs() if state else [poly_expr]
+        at = {p: sp.Float(values[p]) for p in params}
+        at_abs = {p: sp.Float(abs(values[p])) for p in params}
+        nums = [abs(complex(sp.sympify(c).xreplace(at).evalf())) for c in coeffs]
+        scale = max(abs(complex(sum((abs(t) for t in sp.Add.make_args(sp.expand(c))),
+                                    sp.S.Zero).xreplace(at_abs).evalf())) for c in coeffs)
+    except (TypeError, ValueError, sp.PolynomialError):  # pragma: no cover
+        return None
+    if max(nums) <= 1e-12 * max(scale, 1.0):
+        return (f"the nonzero function {short(poly_expr)} vanishes at the given parameter "
+                f"values (exact decisions treat parameters as generic)")
+    return None
+
+
+def _best_block(samples, r):
+    """(rows, cols, score) of the best r x r block over numeric samples.
+
+    The score of a block B of A is the worst over the samples of
+    sigma_min(B) / ||A||_2, doubled for a block that is the same at every sample.
+    """
+    R, K = samples[0].shape
+    row_sets = list(itertools.combinations(range(R), r))
+    col_sets = list(itertools.combinations(range(K), r))
+    if len(row_sets) * len(col_sets) > 400:
+        import scipy.linalg
+
+        col_sets = {tuple(sorted(scipy.linalg.qr(S, pivoting=True)[2][:r])) for S in samples}
+        pairs = set()
+        for cols in col_sets:
+            for S in samples:
+                rows = tuple(sorted(scipy.linalg.qr(S[:, cols].T, pivoting=True)[2][:r]))
+                pairs.add((rows, cols))
+        candidates = sorted(pairs)
+    else:
+        candidates = [(rows, cols) for rows in row_sets for cols in col_sets]
+    norms = [max(np.linalg.norm(S, 2), 1e-300) for S in samples]
+    best, best_score, best_raw = None, -1.0, 0.0
+    for rows, cols in candidates:
+        blocks = [S[np.ix_(rows, cols)] for S in samples]
+        # sigma_min(B) / ||A||: small when B is ill-conditioned *or* small compared
+        # with the matrix (for 1 x 1 blocks this prefers the largest entry).
+        ratios = [np.linalg.svd(B, compute_uv=False)[-1] / nrm for B, nrm in zip(blocks, norms)]
+        raw = min(ratios)
+        constant = all(np.allclose(B, blocks[0], rtol=1e-12, atol=1e-14) for B in blocks)
+        score = raw * (2.0 if constant and len(blocks) > 1 else 1.0)
+        if score > best_score * (1 + 1e-9) + 1e-15:
+            best, best_score, best_raw = (list(rows), list(cols)), score, raw
+    if best is None or best_raw <= 1e-14:
+        return None, None, 0.0
+    return best[0], best[1], best_raw
+
+
+def _singular_values(S, precision):
+    if precision is None:
+        A = np.array(S, dtype=complex)
+        if np.allclose(A.imag, 0):
+            A = A.real.astype(float)
+        return np.linalg.svd(A, compute_uv=False)
+    with mpmath.workdps(precision):
+        A = mpmath.matrix([[mpmath.mpmathify(x) for x in row] for row in S])
+        s = mpmath.svd_r(A, compute_uv=False) if A.rows and A.cols else []
+        vals = sorted((abs(x) for x in s), reverse=True)
+        return vals

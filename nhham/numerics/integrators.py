@@ -1,0 +1,457 @@
+"""Fixed-step integrators: nonholonomic RATTLE, its 4th-order composition, RK4.
+
+All work on a :class:`~nhham.numeric.NumericModel` (no sympy) and return a
+:class:`FixedStepRun` (grid, states, counts, status). :func:`nhham.integrate.simulate`
+wraps them with diagnostics.
+
+The nonholonomic RATTLE scheme
+------------------------------
+For L = 1/2 v^T W(q) v - V(q) with momenta p = W(q) v, constraints
+phi_i = mu_i(q) v + h_i(q) (complete lifts of holonomic g_a first), one step
+(q0, v0) -> (q1, v1) of size h solves::
+
+    p_h = p0 + h/2 [ L_q(q0, W(q0)^{-1} p_h) - mu(q0)^T lam0 ]
+    q1  = q0 + h/2 [ W(q0)^{-1} + W(q1)^{-1} ] p_h
+    0   = mu_i(qm) (q1 - q0)/h + h_i(qm),  qm = (q0 + q1)/2   (nonholonomic rows)
+    0   = g_a(q1)                                              (holonomic rows)
+    p1  = p_h + h/2 [ L_q(q1, W(q1)^{-1} p_h) - mu(q1)^T lam1 ]
+    0   = mu(q1) W(q1)^{-1} p1 + h(q1)                          (all rows)
+
+i.e. the Lobatto IIIA-IIIB pair (generalised Stoermer-Verlet; for constant W
+the velocity Verlet / RATTLE scheme) with multipliers, the constraints
+discretised at the midpoint inside the step and imposed exactly on (q1, v1)
+at the grid points. This is the RATTLE-type nonholonomic integrator of
+R. I. McLachlan and M. Perlmutter, "Integrators for nonholonomic mechanical
+systems", J. Nonlinear Sci. 16 (2006) 283-328, in the form of the SPARK
+(Lobatto IIIA-B) methods of L. O. Jay, "Structure preservation for
+constrained dynamics with super partitioned additive Runge-Kutta methods",
+SIAM J. Sci. Comput. 20 (1998) 416-446; for holonomic rows it is RATTLE
+(H. C. Andersen 1983; Hairer, Lubich, Wanner, *Geometric Numerical
+Integration*, VII.1). It is symmetric (time-reversible: the step with -h
+from (q1, v1) returns to (q0, v0)), second order, keeps phi = 0 and g = 0 to
+round-off at every grid point, and for linear constraints with constant W and
+a quadratic L has the good long-time energy behaviour of reversible methods on
+reversible integrable problems (Modin & Verdier, "What makes nonholonomic
+integrators work?", Numer. Math. 145 (2020) 405-435, explain why and show
+problems where it fails).
+
+Restrictions: L must be quadratic in v without linear terms
+(``model.quadratic``); otherwise :class:`~nhham.errors.InputError` is raised.
+The nonlinear equations are solved by Newton's method: for constant W only
+for lam0 (m unknowns, analytic Jacobian); otherwise for (p_h, q1, lam0) with a
+finite-difference Jacobian evaluated in one batched call.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from nhham.errors import InputError
+from nhham.numerics.model import solve_saddle
+
+__all__ = ["FixedStepRun", "rattle", "rattle4", "rk4", "rattle_step", "FIXED_STEP_METHODS"]
+
+#: Fixed-step methods and their classical order.
+FIXED_STEP_METHODS = {"rattle": 2, "rattle4": 4, "rk4": 4}
+
+# Yoshida / Suzuki triple jump: a symmetric method of order 2 composed with
+# these substeps is symmetric of order 4.
+_G1 = 1.0 / (2.0 - 2.0 ** (1.0 / 3.0))
+_G2 = 1.0 - 2.0 * _G1
+
+
+@dataclass(frozen=True)
+class FixedStepRun:
+    """Raw output of a fixed-step integrator.
+
+    Attributes
+    ----------
+    t : ndarray (K,); y : ndarray (K, 2n)
+    work : ndarray (K,) or None
+        Work of the constraint forces when the scheme carries it (RK4).
+    status : int
+        0 reached the end; -2 non-finite state; -3 singular linear system;
+        -4 Newton iteration did not converge.
+    message : str
+    nfev : int
+        Right-hand-side evaluations in states (batched calls count each state);
+        for RATTLE: one per (sub)step plus one per Newton iteration (each costs
+        about one field evaluation).
+    nsteps : int
+    newton_iterations : int
+    step : float
+        The step actually used ((t1 - t0)/N).
+    """
+
+    t: np.ndarray
+    y: np.ndarray
+    work: np.ndarray | None
+    status: int
+    message: str
+    nfev: int
+    nsteps: int
+    newton_iterations: int
+    step: float
+
+
+class _Failure(Exception):
+    def __init__(self, status, message):
+        super().__init__(message)
+        self.status = status
+
+
+def _grid(t0, t1, h):
+    if not (h > 0 and math.isfinite(h)):
+        raise InputError(f"step: a positive finite step is required for fixed-step methods, got {h!r}")
+    span = t1 - t0
+    N = max(1, int(math.ceil(abs(span) / h - 1e-9)))
+    return N, span / N
+
+
+def _check_quadratic(model):
+    if not model.quadratic:
+        raise InputError(
+            "method 'rattle' needs L = 1/2 v^T W(q) v - V(q) (no terms linear in the "
+            "velocities, W independent of v); use a scipy method for this system")
+
+
+# ------------------------------------------------------------------ RATTLE
+class _RattleStepper:
+    """One nonholonomic RATTLE step; keeps counters and the last multiplier."""
+
+    def __init__(self, model, tol=None, maxiter=30):
+        _check_quadratic(model)
+        self.model = model
+        self.n, self.m, self.k = model.n, model.m, model.k
+        self.tol = tol if tol is not None else 4 * np.finfo(float).eps
+        self.maxiter = maxiter
+        self.nfev = 0
+        self.newton = 0
+        self.lam_guess = None
+        if model.constant_W:
+            self.W = model.geometry(np.zeros(model.n))[0]
+
+    def step(self, y0, h):
+        if self.model.constant_W:
+            return self._step_constant(y0, h)
+        return self._step_general(y0, h)
+
+    # ---------------------------------------------------- residual pieces
+    def _r3(self, q0, q1, h):
+        """Discrete constraints: midpoint rows (nonholonomic), g(q1) (holonomic)."""
+        n, k = self.n, self.k
+        qm = 0.5 * (q0 + q1)
+        _, mu_m, h_m, _ = self.model.geometry(qm)
+        r = mu_m @ ((q1 - q0) / h) + h_m
+        if k:
+            r[:k] = self.model.geometry(q1)[3]
+        return r
+
+    def _r3_jac_q1(self, q0, q1, h):
+        """d r3 / d q1 (m x n)."""
+        n, k = self.n, self.k
+        qm = 0.5 * (q0 + q1)
+        u = (q1 - q0) / h
+        _, mu_m, _, _ = self.model.geometry(qm)
+        J = mu_m / h + 0.5 * self.model.constraint_jacobian_q(np.concatenate([qm, u]))
+        if k:
+            J[:k] = self.model.geometry(q1)[1][:k]
+        return J
+
+    def _guess_lambda(self, y0):
+        if self.lam_guess is None:
+            dy, lam, _, status = self.model.evaluate(y0)
+            self.nfev += 1
+            if status:
+                raise _Failure(-3, "singular saddle-point system at the initial state")
+            return lam
+        return self.lam_guess
+
+    def _finish(self, q1, p_h, h):
+        """Second half kick and the exact end constraint: (v1, lam1)."""
+        W1, mu1, h1, _ = self.model.geometry(q1)
+        u1 = np.linalg.solve(W1, p_h) if not self.model.constant_W else self._Winv(p_h)
+        Lq1 = self.model.lagrangian_q(np.concatenate([q1, u1]))
+        # W1 v1 + (h/2) mu1^T lam1 = p_h + h/2 Lq1,  mu1 v1 = -h1
+        v1, nu = solve_saddle(W1, mu1, p_h + 0.5 * h * Lq1, -h1)
+        # One step of iterative refinement of the constraint rows: LU is only
+        # normwise backward stable, and with extreme mass ratios the rows of
+        # mu would otherwise keep a residual far above round-off.
+        r = mu1 @ v1 + h1
+        if self.m and np.any(r):
+            dv, dnu = solve_saddle(W1, mu1, np.zeros(self.n), -r)
+            v1, nu = v1 + dv, nu + dnu
+        return v1, nu * (2.0 / h)
+
+    def _Winv(self, p):
+        return np.linalg.solve(self.W, p)
+
+    # ------------------------------------------------------- constant W
+    def _step_constant(self, y0, h):
+        n, m = self.n, self.m
+        q0, v0 = y0[:n], y0[n:]
+        W = self.W
+        p0 = W @ v0
+        _, mu0, _, _ = self.model.geometry(q0)
+        Lq0 = self.model.lagrangian_q(y0)  # independent of v for constant W
+        base = p0 + 0.5 * h * Lq0
+        if m == 0:
+            q1 = q0 + h * self._Winv(base)
+            v1, lam1 = self._finish(q1, base, h)
+            return np.concatenate([q1, v1]), lam1
+        WinvMuT = np.linalg.solve(W, mu0.T)  # n x m
+        lam = self._guess_lambda(y0).copy()
+        q_free = q0 + h * self._Winv(base)
+        dq_dlam = -0.5 * h * h * WinvMuT
+        best = np.inf
+        for it in range(self.maxiter):
+            q1 = q_free + dq_dlam @ lam
+            r = self._r3(q0, q1, h)
+            err = float(np.max(np.abs(r)))
+            scale = 1.0 + float(np.max(np.abs((q1 - q0) / h)))
+            if err <= self.tol * scale:
+                break
+            if it > 2 and err >= best:
+                _floor_or_fail(err, scale)
+                break
+            best = min(best, err)
+            J = self._r3_jac_q1(q0, q1, h) @ dq_dlam
+            lam = lam - np.linalg.solve(J, r)
+            self.newton += 1
+        else:
+            raise _Failure(-4, f"Newton iteration of the RATTLE step did not converge "
+                               f"(residual {err:.3g}); reduce the step")
+        q1 = q_free + dq_dlam @ lam
+        p_h = base - 0.5 * h * (mu0.T @ lam)
+        v1, lam1 = self._finish(q1, p_h, h)
+        self.lam_guess = lam1
+        return np.concatenate([q1, v1]), lam1
+
+    # -------------------------------------------------------- general W
+    def _residual(self, Z, q0, p0, W0, mu0, h):
+        """Residuals of (p_h, q1, lam0) for a batch Z (K, 2n+m) in one call each."""
+        n, m, k = self.n, self.m, self.k
+        P, Q1, Lam = Z[:, :n], Z[:, n:2 * n], Z[:, 2 * n:]
+        U0 = np.linalg.solve(W0, P.T).T
+        Lq0 = self.model.lagrangian_q(np.concatenate([np.broadcast_to(q0, U0.shape), U0], axis=1))
+        W1, mu1, h1, g1 = self.model.geometry(Q1)
+        U1 = np.linalg.solve(W1, P[..., None])[..., 0]
+        R1 = P - p0 - 0.5 * h * (Lq0 - Lam @ mu0)
+        R2 = Q1 - q0 - 0.5 * h * (U0 + U1)
+        Qm = 0.5 * (q0 + Q1)
+        _, mu_m, h_m, _ = self.model.geometry(Qm)
+        R3 = np.einsum("kij,kj->ki", mu_m, (Q1 - q0) / h) + h_m
+        if k:
+            R3[:, :k] = g1
+        return np.concatenate([R1, R2, R3], axis=1)
+
+    def _step_general(self, y0, h):
+        n, m = self.n, self.m
+        q0, v0 = y0[:n], y0[n:]
+        W0, mu0, _, _ = self.model.geometry(q0)
+        p0 = W0 @ v0
+        lam = self._guess_lambda(y0)
+        Lq = self.model.lagrangian_q(y0)
+        p_h = p0 + 0.5 * h * (Lq - mu0.T @ lam)
+        q1 = q0 + h * np.linalg.solve(W0, p_h)
+        z = np.concatenate([p_h, q1, lam])
+        scale = np.concatenate([np.full(n, 1.0 + np.max(np.abs(p0))),
+                                np.full(n, 1.0 + np.max(np.abs(q0))),
+                                np.full(m, 1.0 + np.max(np.abs(lam), initial=0.0))])
+        J = None
+        best = np.inf
+        for it in range(self.maxiter):
+            r = self._residual(z[None], q0, p0, W0, mu0, h)[0]
+            err = float(np.max(np.abs(r[:2 * n]) / scale[:2 * n]))
+            err = max(err, float(np.max(np.abs(r[2 * n:]), initial=0.0))
+                      / (1.0 + float(np.max(np.abs(p0)))))
+            if err <= self.tol:
+                break
+            if it > 3 and err >= best:
+                _floor_or_fail(err, 1.0)
+                break
+            if J is None or err > 0.1 * best:
+                J = self._fd_jacobian(z, r, q0, p0, W0, mu0, h, scale)
+            best = min(best, err)
+            z = z - np.linalg.solve(J, r)
+            self.newton += 1
+        else:
+            raise _Failure(-4, f"Newton iteration of the RATTLE step did not converge "
+                               f"(residual {err:.3g}); reduce the step")
+        p_h, q1 = z[:n], z[n:2 * n]
+        v1, lam1 = self._finish(q1, p_h, h)
+        self.lam_guess = lam1
+        return np.concatenate([q1, v1]), lam1
+
+    def _fd_jacobian(self, z, r, q0, p0, W0, mu0, h, scale):
+        d = z.size
+        eps = np.sqrt(np.finfo(float).eps) * np.maximum(np.abs(z), scale)
+        Z = z[None, :] + np.diag(eps)
+        R = self._residual(Z, q0, p0, W0, mu0, h)
+        return ((R - r[None, :]) / eps[:, None]).T
+
+
+def _floor_or_fail(err, scale):
+    """Newton stalled: accept at the round-off floor, fail if far from it."""
+    if err > 1e-9 * scale:
+        raise _Failure(-4, f"Newton iteration of the RATTLE step stalled at residual "
+                           f"{err:.3g}; reduce the step")
+
+
+def rattle_step(model, y0, h):
+    """One nonholonomic RATTLE step from y0 (2n,) with step h; returns y1 (2n,).
+
+    Exposed for tests of symmetry (a step with -h from y1 returns to y0).
+    """
+    y1, _ = _RattleStepper(model).step(np.asarray(y0, dtype=float), h)
+    return y1
+
+
+def _run_fixed(step_fn, stepper, y0, t0, t1, h, save_every):
+    N, h = _grid(t0, t1, h)
+    y = np.asarray(y0, dtype=float).copy()
+    ts, ys = [t0], [y.copy()]
+    status, message = 0, "reached the end of the interval"
+    t = t0
+    i = 0
+    try:
+        for i in range(1, N + 1):
+            y = step_fn(y, h)
+            t = t0 + i * h
+            if not np.all(np.isfinite(y)) or np.max(np.abs(y)) > 1e150:
+                raise _Failure(-2, f"non-finite or overflowing state at t = {t:.6g} "
+                                   f"(step {i}); the run was stopped")
+            if i % save_every == 0 or i == N:
+                ts.append(t)
+                ys.append(y.copy())
+    except _Failure as exc:
+        status, message = exc.status, str(exc)
+    except np.linalg.LinAlgError as exc:
+        status, message = -3, f"singular linear system at t = {t:.6g}: {exc}"
+    return np.array(ts), np.array(ys), status, message, i if status == 0 else i - 1, h
+
+
+def rattle(model, y0, t0, t1, h, *, save_every: int = 1, tol=None) -> FixedStepRun:
+    """Integrate with the nonholonomic RATTLE scheme (see the module docstring).
+
+    Parameters
+    ----------
+    model : NumericModel
+    y0 : ndarray, shape (2n,)
+        A state on M_1.
+    t0, t1 : float
+    h : float
+        Requested step; the grid uses (t1 - t0)/N with N = ceil((t1 - t0)/h).
+    save_every : int
+        Store every j-th step (and the last).
+    tol : float, optional
+        Newton tolerance (default 4 eps, relative).
+    """
+    st = _RattleStepper(model, tol=tol)
+    if _compiled_ok(model):
+        return _compiled_rattle(model, st, y0, t0, t1, h, save_every, 0)
+    t, y, status, msg, nsteps, hh = _run_fixed(lambda y, h: st.step(y, h)[0], st, y0, t0, t1, h,
+                                               save_every)
+    return FixedStepRun(t, y, None, status, msg, st.nfev + nsteps + st.newton, nsteps, st.newton,
+                        hh)
+
+
+def rattle4(model, y0, t0, t1, h, *, save_every: int = 1, tol=None) -> FixedStepRun:
+    """Fourth order: RATTLE composed with the triple jump (g1, g2, g1) h.
+
+    g1 = 1/(2 - 2^(1/3)), g2 = 1 - 2 g1 (Yoshida 1990; Suzuki 1990): the
+    composition of a symmetric method is symmetric of order 4. Constraints
+    hold at every substep, hence at every grid point.
+    """
+    st = _RattleStepper(model, tol=tol)
+    if _compiled_ok(model):
+        return _compiled_rattle(model, st, y0, t0, t1, h, save_every, 1)
+
+    def step(y, h):
+        y = st.step(y, _G1 * h)[0]
+        y = st.step(y, _G2 * h)[0]
+        return st.step(y, _G1 * h)[0]
+
+    t, y, status, msg, nsteps, hh = _run_fixed(step, st, y0, t0, t1, h, save_every)
+    return FixedStepRun(t, y, None, status, msg, st.nfev + 3 * nsteps + st.newton, nsteps,
+                        st.newton, hh)
+
+
+def _compiled_ok(model):
+    """The compiled loop handles constant W (the common case); else Python."""
+    return model.compiled is not None and model.constant_W and model.path == "saddle"
+
+
+_STATUS_TEXT = {-2: "non-finite or overflowing state", -3: "singular linear system",
+                -4: "Newton iteration of the RATTLE step did not converge; reduce the step"}
+
+
+def _compiled_rattle(model, st, y0, t0, t1, h, save_every, composition):
+    N, h = _grid(t0, t1, h)
+    y0 = np.asarray(y0, dtype=float)
+    lam0 = st._guess_lambda(y0)
+    Y, done, newton, status = model.compiled.rattle(
+        y0, h, N, int(save_every), composition, model._pext0, lam0, st.tol, st.maxiter)
+    steps = [0] + [min(i * save_every, N) for i in range(1, len(Y))]
+    if status == 0:
+        steps[-1] = N
+    else:
+        steps = [0] + [i * save_every for i in range(1, len(Y))]
+    t = t0 + h * np.array(steps, dtype=float)
+    msg = "reached the end of the interval" if status == 0 else (
+        f"{_STATUS_TEXT.get(status, 'failure')} at t = {t0 + (done + 1) * h:.6g} "
+        f"(step {done + 1}); the run was stopped")
+    # A step costs about one field evaluation plus one per Newton iteration.
+    return FixedStepRun(t, Y, None, status, msg, st.nfev + done * (1 + composition * 2) + newton,
+                        done, newton, h)
+
+
+# --------------------------------------------------------------------- RK4
+def rk4(model, y0, t0, t1, h, *, projection: bool = False, baumgarte=None,
+        save_every: int = 1) -> FixedStepRun:
+    """Classical fourth-order Runge-Kutta on the projected field.
+
+    With ``projection`` every step ends with :meth:`NumericModel.project`
+    (Newton for g, kinetic-metric projection of v). The work of the
+    constraint forces is integrated with the same weights as the state.
+    """
+    n2 = 2 * model.n
+    counter = {"nfev": 0}
+    field = model.field_function(baumgarte)  # z (2n + 1) -> [dy, power] or a status
+
+    def f(z):
+        out = field(z)
+        counter["nfev"] += 1
+        if type(out) is int:
+            raise _Failure(-3 if out == 1 else -2,
+                           "singular saddle-point system" if out == 1 else
+                           "non-finite right-hand side (NaN or overflow)")
+        return out
+
+    def step(z, h):
+        k1 = f(z)
+        k2 = f(z + 0.5 * h * k1)
+        k3 = f(z + 0.5 * h * k2)
+        k4 = f(z + h * k3)
+        z = z + (h / 6.0) * (k1 + 2 * k2 + 2 * k3 + k4)
+        if projection:
+            z[:n2] = model.project(z[:n2]).y
+        return z
+
+    z0 = np.append(np.asarray(y0, dtype=float), 0.0)
+    t, z, status, msg, nsteps, hh = _run_fixed(step, None, z0, t0, t1, h, save_every)
+    return FixedStepRun(t, z[:, :n2], z[:, n2], status, msg, counter["nfev"], nsteps, 0, hh)
+
+
+def run_fixed_step(method, model, y0, t0, t1, h, **options) -> FixedStepRun:
+    """Dispatch by name to :func:`rattle`, :func:`rattle4` or :func:`rk4`."""
+    if method == "rattle":
+        return rattle(model, y0, t0, t1, h, **options)
+    if method == "rattle4":
+        return rattle4(model, y0, t0, t1, h, **options)
+    if method == "rk4":
+        return rk4(model, y0, t0, t1, h, **options)
+    raise InputError(f"method: unknown fixed-step method {method!r}")

@@ -1,0 +1,753 @@
+"""The system description: coordinates, Lagrangian, constraints, parameters.
+
+A :class:`System` is frozen and validated on construction. Every problem found
+is collected and raised once as a :class:`~nhham.errors.ValidationError`
+subclass whose message names the offending key (``lagrangian``,
+``constraints[1]``, ``holonomic[0]``, ``parameters``) or expression.
+
+Conventions (``DESIGN.md`` §2): coordinates q^A (A = 1..n) with velocities
+``<q>_dot``; affine constraints phi_i = mu_iA(q) v^A + h_i(q); a holonomic
+constraint g(q) = 0 contributes its complete lift g^c = (dg/dq^A) v^A as an
+affine constraint (paper §4) and g = 0 is imposed on Q. In :attr:`System.phi`
+the complete lifts come first (the paper's Example 4.1 order), then the user's
+affine constraints in the order given.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cached_property
+from types import MappingProxyType
+from typing import Mapping, Sequence
+
+import numpy as np
+import sympy as sp
+
+from nhham.errors import (
+    NonAffineConstraintError,
+    RedundantConstraintError,
+    SingularLagrangianError,
+    ValidationError,
+)
+from nhham.settings import PARAMETER_BOX, STATE_BOX
+from nhham.system.naming import as_symbol, velocity_symbol
+
+__all__ = ["System", "DroppedConstraint", "QuadraticParts", "quadratic_parts", "velocity_polynomial"]
+
+# Random points used for generic-rank decisions are drawn from this seed so
+# that validation is reproducible run to run.
+_VALIDATION_SEED = 20261121
+_VALIDATION_SAMPLES = 4
+
+
+@dataclass(frozen=True)
+class DroppedConstraint:
+    """A constraint removed because its one-form is a combination of others.
+
+    Attributes
+    ----------
+    label : str
+        Key path of the dropped constraint (``constraints[2]``).
+    expression : sympy.Expr
+        The dropped phi.
+    combination : dict
+        ``{label: coefficient}`` with phi_dropped = sum coefficient * phi_label
+        (coefficients are functions of q).
+    """
+
+    label: str
+    expression: sp.Expr
+    combination: Mapping[str, sp.Expr]
+
+
+@dataclass(frozen=True)
+class QuadraticParts:
+    """L = v^T W(q) v / 2 + b(q) . v - V(q), read from the terms of L.
+
+    Attributes
+    ----------
+    W : sympy.ImmutableMatrix, shape (n, n)
+        d2L/dv^A dv^B (free of velocities).
+    b : tuple of sympy.Expr, length n
+        The coefficients of the terms linear in the velocities.
+    V : sympy.Expr
+        Minus the velocity-free part of L.
+    """
+
+    W: sp.ImmutableMatrix
+    b: tuple
+    V: sp.Expr
+
+
+class System:
+    """A Lagrangian system with affine and holonomic constraints.
+
+    Parameters
+    ----------
+    coordinates : sequence of str or sympy.Symbol
+        Names of the n coordinates q^A. Velocities ``<q>_dot`` are made for them.
+    lagrangian : sympy.Expr or str
+        L(q, v) in coordinates, velocities and parameters. Strings are parsed
+        against the symbol table, never evaluated as Python.
+    constraints : sequence of sympy.Expr or str, optional
+        Affine constraints phi_i = mu_i(q).v + h_i(q) (each = 0).
+    holonomic : sequence of sympy.Expr or str, optional
+        Holonomic constraints g(q) = 0; no velocities allowed.
+    parameters : mapping or sequence, optional
+        Parameter names, or ``{name: value}`` where value is a float or
+        ``None`` (symbolic; a value is needed only for numbers later).
+    name : str, optional
+        A human-readable name.
+    drop_redundant : bool, optional
+        If True, affine constraints whose one-form is a combination of the
+        previous ones (and whose h is the same combination) are dropped and
+        recorded in :attr:`dropped`; if False (default) they are an error.
+
+    Raises
+    ------
+    ValidationError
+        With every problem found: unknown symbols, non-affine constraints,
+        holonomic constraints with velocities, m >= n, dependent constraint
+        one-forms, a singular Hessian W.
+    """
+
+    def __init__(
+        self,
+        coordinates: Sequence,
+        lagrangian,
+        constraints: Sequence = (),
+        holonomic: Sequence = (),
+        parameters: Mapping | Sequence = (),
+        name: str = "",
+        drop_redundant: bool = False,
+    ):
+        problems: list[str] = []
+        coords = tuple(as_symbol(q) for q in coordinates)
+        if not coords:
+            problems.append("coordinates: at least one coordinate is needed")
+        dupes = sorted({q.name for q in coords if coords.count(q) > 1})
+        if dupes:
+            problems.append(f"coordinates: duplicate names {', '.join(dupes)}")
+        vels = tuple(velocity_symbol(q) for q in coords)
+        params, values = _normalise_parameters(parameters, problems)
+        clash = sorted({p.name for p in params} & {s.name for s in coords + vels})
+        if clash:
+            problems.append(
+                "parameters: names also used as coordinates or velocities: " + ", ".join(clash)
+            )
+        table = {s.name: s for s in coords + vels + params}
+
+        lag = _to_expr(lagrangian, table, "lagrangian", problems)
+        cons = tuple(
+            _to_expr(c, table, f"constraints[{i}]", problems) for i, c in enumerate(constraints)
+        )
+        hols = tuple(
+            _to_expr(g, table, f"holonomic[{i}]", problems) for i, g in enumerate(holonomic)
+        )
+        if problems:
+            raise ValidationError(problems)
+
+        known = set(table.values())
+        for label, expr in [("lagrangian", lag)] + _labelled(cons, hols):
+            unknown = sorted(s.name for s in expr.free_symbols - known)
+            if unknown:
+                problems.append(
+                    f"{label}: unknown symbol(s) {', '.join(unknown)} in {expr} "
+                    f"(declare parameters explicitly)"
+                )
+        for i, g in enumerate(hols):
+            used = sorted(v.name for v in g.free_symbols & set(vels))
+            if used:
+                problems.append(
+                    f"holonomic[{i}]: a holonomic constraint must not involve velocities; "
+                    f"{g} uses {', '.join(used)} (give it as an affine constraint instead)"
+                )
+        if problems:
+            raise ValidationError(problems)
+
+        nonaffine = []
+        for i, c in enumerate(cons):
+            bad = _non_affine_terms(c, vels)
+            if bad:
+                nonaffine.append(
+                    f"constraints[{i}]: {c} is not affine in the velocities "
+                    f"(offending term {bad[0]}); nonlinear (Chetaev-type) constraints are "
+                    f"outside nhham's scope"
+                )
+        if nonaffine:
+            raise NonAffineConstraintError(nonaffine)
+
+        object.__setattr__(self, "name", str(name))
+        object.__setattr__(self, "coordinates", coords)
+        object.__setattr__(self, "velocities", vels)
+        object.__setattr__(self, "parameters", params)
+        object.__setattr__(self, "parameter_values", MappingProxyType(dict(values)))
+        object.__setattr__(self, "lagrangian", lag)
+        object.__setattr__(self, "holonomic", hols)
+        object.__setattr__(self, "_symbol_table", MappingProxyType(table))
+
+        kept, dropped, mu = _check_dependence(self, cons, hols, drop_redundant)
+        if mu is not None and not dropped:
+            # the one-forms of phi = lifts + constraints, already read; keep them
+            self.__dict__["mu"] = mu
+        object.__setattr__(self, "constraints", kept)
+        object.__setattr__(self, "dropped", dropped)
+        object.__setattr__(
+            self, "constraint_labels",
+            tuple(f"holonomic[{i}]" for i in range(len(hols)))
+            + tuple(_kept_labels(cons, dropped)),
+        )
+        m, n = len(self.phi), len(coords)
+        if m >= n:
+            raise ValidationError(
+                [f"constraints: m = {m} independent velocity constraints (holonomic ones "
+                 f"counted by their complete lifts) but n = {n} coordinates; nhham needs m < n"]
+            )
+        _check_regular(self)
+
+    # Frozen: attributes are set once in __init__.
+    def __setattr__(self, key, value):
+        raise AttributeError(f"System is frozen; cannot set {key!r}")
+
+    def __delattr__(self, key):
+        raise AttributeError(f"System is frozen; cannot delete {key!r}")
+
+    def __repr__(self):
+        label = f"{self.name!r}, " if self.name else ""
+        return f"System({label}n={self.n}, m={self.m}, holonomic={len(self.holonomic)})"
+
+    # ----------------------------------------------------------------- sizes
+    @property
+    def n(self) -> int:
+        """Number of coordinates."""
+        return len(self.coordinates)
+
+    @property
+    def m(self) -> int:
+        """Number of affine constraints phi_i (complete lifts included)."""
+        return len(self.phi)
+
+    @property
+    def state(self) -> tuple[sp.Symbol, ...]:
+        """Coordinates on TQ in order (q^1..q^n, v^1..v^n)."""
+        return self.coordinates + self.velocities
+
+    @property
+    def symbol_table(self) -> Mapping[str, sp.Symbol]:
+        """Names -> symbols for coordinates, velocities and parameters."""
+        return self._symbol_table
+
+    # ----------------------------------------------------- constraint pieces
+    @cached_property
+    def complete_lifts(self) -> tuple[sp.Expr, ...]:
+        """g^c = (dg/dq^A) v^A for every holonomic constraint g."""
+        return tuple(
+            sum((sp.diff(g, q) * v for q, v in zip(self.coordinates, self.velocities)), sp.S.Zero)
+            for g in self.holonomic
+        )
+
+    @cached_property
+    def phi(self) -> tuple[sp.Expr, ...]:
+        """All affine constraints phi_i: complete lifts first, then the user's."""
+        return self.complete_lifts + self.constraints
+
+    @cached_property
+    def mu(self) -> sp.Matrix:
+        """The m x n matrix of one-form coefficients mu_iA(q) = d phi_i / d v^A."""
+        return _one_forms(self.phi, self.velocities) if self.phi else sp.zeros(0, self.n)
+
+    @cached_property
+    def h(self) -> sp.Matrix:
+        """The m-vector h_i(q) = phi_i at v = 0."""
+        zero = {v: 0 for v in self.velocities}
+        return sp.Matrix([f.subs(zero) for f in self.phi]) if self.phi else sp.zeros(0, 1)
+
+    @cached_property
+    def is_linear(self) -> bool:
+        """True when every h_i vanishes (constraints linear in v)."""
+        return all(sp.simplify(x) == 0 for x in self.h)
+
+    @cached_property
+    def quadratic_parts(self) -> QuadraticParts | None:
+        """W, b, V with L = v^T W v / 2 + b . v - V, or None.
+
+        None when L is not (structurally) a polynomial of degree <= 2 in the
+        velocities; see :func:`quadratic_parts`.
+        """
+        return quadratic_parts(self.lagrangian, self.velocities)
+
+    @cached_property
+    def hessian(self) -> sp.Matrix:
+        """W_AB = d2L / dv^A dv^B (n x n).
+
+        Read from the terms of L when L is quadratic in the velocities (no
+        differentiation of L); otherwise ``sympy.hessian``.
+        """
+        parts = self.quadratic_parts
+        if parts is not None:
+            return sp.Matrix(parts.W)
+        return sp.hessian(self.lagrangian, self.velocities)
+
+    def numeric_parameters(self, required=None) -> dict[sp.Symbol, float]:
+        """Parameter values as ``{symbol: float}``.
+
+        Parameters
+        ----------
+        required : iterable of sympy.Symbol, optional
+            Parameters that must have a value; default all.
+
+        Raises
+        ------
+        MissingParameterValueError
+            Naming every required parameter without a value.
+        """
+        from nhham.errors import MissingParameterValueError
+
+        need = self.parameters if required is None else tuple(required)
+        missing = [p.name for p in need if p not in self.parameter_values]
+        if missing:
+            raise MissingParameterValueError(
+                f"parameters: no numeric value for {', '.join(missing)} (needed for numbers)"
+            )
+        return dict(self.parameter_values)
+
+
+# ------------------------------------------------- polynomial structure in v
+class _NotPolynomial(Exception):
+    """Raised inside :func:`velocity_polynomial` when the structure does not fit."""
+
+
+def velocity_polynomial(expr, velocities, max_degree: int = 2):
+    """The coefficients of ``expr`` as a polynomial in the velocities, or None.
+
+    One pass over the expression tree: sums and products are distributed only
+    where a velocity is involved, so velocity-free factors (sin, cos, sums in
+    q) stay as they are and nothing is differentiated or fully expanded.
+
+    Parameters
+    ----------
+    expr : sympy.Expr
+    velocities : sequence of sympy.Symbol
+    max_degree : int
+        Largest total degree accepted.
+
+    Returns
+    -------
+    dict or None
+        ``{key: coefficient}`` where ``key`` is the sorted tuple of velocity
+        indices of the monomial (``()``, ``(A,)``, ``(A, C)``, ...), with
+        coefficients free of the velocities and structurally nonzero; None
+        when ``expr`` is not structurally such a polynomial (a velocity inside
+        a function, a negative or fractional power of a velocity, or a product
+        of degree > ``max_degree`` before cancellation), so the caller falls
+        back to differentiation.
+    """
+    vidx = {v: i for i, v in enumerate(velocities)}
+    try:
+        terms = _poly(sp.sympify(expr), vidx, max_degree)
+    except _NotPolynomial:
+        return None
+    out = {}
+    for key, summands in terms.items():
+        c = sp.Add(*summands)
+        if c != 0:
+            out[key] = c
+    return out
+
+
+def _poly(expr, vidx, max_degree):
+    """{monomial key: list of summands of its coefficient}."""
+    if not (expr.free_symbols & vidx.keys()):
+        return {(): [expr]}
+    if expr.is_Symbol:
+        return {(vidx[expr],): [sp.S.One]}
+    if expr.is_Add:
+        out: dict = {}
+        for a in expr.args:
+            for key, summands in _poly(a, vidx, max_degree).items():
+                out.setdefault(key, []).extend(summands)
+        return out
+    if expr.is_Mul:
+        cur = {(): [sp.S.One]}
+        for a in expr.args:
+            cur = _poly_mul(cur, _poly(a, vidx, max_degree), max_degree)
+        return cur
+    if expr.is_Pow and expr.exp.is_Integer and expr.exp > 0 and expr.exp <= max_degree:
+        base = _poly(expr.base, vidx, max_degree)
+        cur = base
+        for _ in range(int(expr.exp) - 1):
+            cur = _poly_mul(cur, base, max_degree)
+        return cur
+    raise _NotPolynomial
+
+
+def _poly_mul(p1, p2, max_degree):
+    out: dict = {}
+    for k1, c1 in p1.items():
+        for k2, c2 in p2.items():
+            if len(k1) + len(k2) > max_degree:
+                raise _NotPolynomial
+            lst = out.setdefault(tuple(sorted(k1 + k2)), [])
+            lst.extend(a * b for a in c1 for b in c2)
+    return out
+
+
+def quadratic_parts(lagrangian, velocities) -> QuadraticParts | None:
+    """W, b, V of L = v^T W v / 2 + b . v - V(q), read from the terms of L.
+
+    Returns None when L is not structurally of degree <= 2 in the velocities
+    (see :func:`velocity_polynomial`); W, b and V are then undefined and the
+    callers differentiate L instead.
+    """
+    poly = velocity_polynomial(lagrangian, velocities, 2)
+    if poly is None:
+        return None
+    n = len(velocities)
+    W = [[sp.S.Zero] * n for _ in range(n)]
+    b = [sp.S.Zero] * n
+    V = sp.S.Zero
+    for key, c in poly.items():
+        if len(key) == 2:
+            A, C = key
+            if A == C:
+                W[A][A] = 2 * c
+            else:
+                W[A][C] = W[C][A] = c
+        elif len(key) == 1:
+            b[key[0]] = c
+        else:
+            V = -c
+    return QuadraticParts(sp.ImmutableMatrix(W), tuple(b), V)
+
+
+def _one_forms(rows, vels) -> sp.Matrix:
+    """mu_iA = d phi_i / d v^A, read from the terms of affine phi_i when possible."""
+    out = []
+    for f in rows:
+        poly = velocity_polynomial(f, vels, 1)
+        if poly is None:
+            out.append([sp.diff(f, v) for v in vels])
+        else:
+            out.append([poly.get((A,), sp.S.Zero) for A in range(len(vels))])
+    return sp.Matrix(out)
+
+
+# ----------------------------------------------------- numeric sample values
+class _NoFastEvaluation(Exception):
+    """The fast evaluator met something it does not handle; use sympy's evalf."""
+
+
+_NUMPY_FUNCTIONS = {
+    sp.sin: np.sin, sp.cos: np.cos, sp.tan: np.tan, sp.exp: np.exp, sp.log: np.log,
+    sp.sinh: np.sinh, sp.cosh: np.cosh, sp.tanh: np.tanh,
+    sp.asin: np.arcsin, sp.acos: np.arccos, sp.atan: np.arctan,
+    sp.cot: lambda z: 1 / np.tan(z), sp.sec: lambda z: 1 / np.cos(z),
+    sp.csc: lambda z: 1 / np.sin(z),
+}
+
+
+def _evaluate_at(exprs, points):
+    """Values of ``exprs`` at all ``points`` at once, shape (len(exprs), len(points)).
+
+    Complex float64 arithmetic over one walk of the expression trees (shared
+    subexpressions evaluated once). Raises :class:`_NoFastEvaluation` for any
+    node it does not know and for non-finite values, so that the caller falls
+    back to ``xreplace(...).evalf()`` and keeps its exact behaviour there.
+    """
+    symbols = set().union(*(p.keys() for p in points)) if points else set()
+    env = {s: np.array([complex(p[s]) for p in points]) for s in symbols}
+    memo: dict = {}
+
+    def ev(e):
+        hit = memo.get(e)
+        if hit is not None:
+            return hit
+        if e.is_Symbol:
+            if e not in env:
+                raise _NoFastEvaluation
+            val = env[e]
+        elif e.is_Atom:
+            if not e.is_number:
+                raise _NoFastEvaluation
+            try:
+                val = np.complex128(complex(e))
+            except (TypeError, ValueError, OverflowError):
+                raise _NoFastEvaluation from None
+        elif e.is_Add:
+            val = ev(e.args[0])
+            for a in e.args[1:]:
+                val = val + ev(a)
+        elif e.is_Mul:
+            val = ev(e.args[0])
+            for a in e.args[1:]:
+                val = val * ev(a)
+        elif e.is_Pow:
+            base, exp = ev(e.base), e.exp
+            if exp.is_Integer and abs(int(exp)) <= 64:
+                k = int(exp)
+                val = base ** k if k >= 0 else 1 / base ** (-k)
+            else:
+                val = base ** ev(exp)
+        elif e.func in _NUMPY_FUNCTIONS and len(e.args) == 1:
+            val = _NUMPY_FUNCTIONS[e.func](ev(e.args[0]))
+        else:
+            raise _NoFastEvaluation
+        memo[e] = val
+        return val
+
+    try:
+        with np.errstate(all="ignore"):
+            out = np.array([np.broadcast_to(ev(sp.sympify(e)), (len(points),)) for e in exprs],
+                           dtype=complex).reshape(len(exprs), len(points))
+    except (ArithmeticError, TypeError, ValueError):
+        raise _NoFastEvaluation from None
+    if not np.all(np.isfinite(out)):
+        raise _NoFastEvaluation
+    return out
+
+
+def _numeric_samples(matrix, points, label="lagrangian"):
+    """``[_numeric(matrix, p, label) for p in points]``, by one fast numeric pass.
+
+    Falls back to :func:`_numeric` (sympy evalf, with its error messages)
+    whenever the fast pass cannot give finite values.
+    """
+    rows, cols = matrix.shape
+    if rows * cols and points:
+        try:
+            values = _evaluate_at(list(matrix), points).real
+        except _NoFastEvaluation:
+            pass
+        else:
+            return [values[:, k].reshape(rows, cols).astype(float) for k in range(len(points))]
+    return [_numeric(matrix, p, label) for p in points]
+
+
+# ---------------------------------------------------------------- helpers
+def _labelled(cons, hols):
+    return [(f"constraints[{i}]", c) for i, c in enumerate(cons)] + [
+        (f"holonomic[{i}]", g) for i, g in enumerate(hols)
+    ]
+
+
+def _kept_labels(cons, dropped):
+    gone = {d.label for d in dropped}
+    return [f"constraints[{i}]" for i in range(len(cons)) if f"constraints[{i}]" not in gone]
+
+
+def _normalise_parameters(parameters, problems):
+    params, values = [], {}
+    items = parameters.items() if isinstance(parameters, Mapping) else [(p, None) for p in parameters]
+    for key, value in items:
+        try:
+            sym = as_symbol(key)
+        except TypeError as exc:
+            problems.append(f"parameters: {exc}")
+            continue
+        if sym in params:
+            problems.append(f"parameters: duplicate parameter {sym.name}")
+            continue
+        params.append(sym)
+        if value is None:
+            continue
+        if isinstance(value, bool) or not isinstance(value, (int, float, np.floating, np.integer)):
+            problems.append(f"parameters.{sym.name}: value must be a real number, got {value!r}")
+        elif not np.isfinite(float(value)):
+            problems.append(f"parameters.{sym.name}: value must be finite, got {value!r}")
+        else:
+            values[sym] = float(value)
+    return tuple(params), values
+
+
+def _to_expr(value, table, label, problems):
+    """Turn user input into a sympy expression; strings go through the safe parser."""
+    if isinstance(value, str):
+        from nhham.system.expressions import parse_expression
+        from nhham.errors import ParseError
+
+        try:
+            return parse_expression(value, table, where=label)
+        except ParseError as exc:
+            problems.append(str(exc))
+            return sp.S.Zero
+    if isinstance(value, (int, float)) and not isinstance(value, bool):
+        return sp.sympify(value)
+    if isinstance(value, sp.Basic) and isinstance(value, sp.Expr):
+        # Symbols from elsewhere may carry assumptions; map them by name.
+        subs = {s: table[s.name] for s in value.free_symbols
+                if isinstance(s, sp.Symbol) and s.name in table and s != table[s.name]}
+        return value.xreplace(subs) if subs else value
+    problems.append(f"{label}: expected an expression, got {type(value).__name__} {value!r}")
+    return sp.S.Zero
+
+
+def _non_affine_terms(expr, vels):
+    """Terms of ``expr`` whose velocity derivatives still involve velocities."""
+    poly = velocity_polynomial(expr, vels, 1)
+    if poly is not None and not expr.has(sp.Derivative):
+        return []  # a polynomial of degree <= 1 in v: no term can be offending
+    vset = set(vels)
+    bad = []
+    for term in sp.Add.make_args(sp.expand(expr)):
+        if not term.free_symbols & vset:
+            continue
+        for v in vels:
+            d = sp.diff(term, v)
+            if d.free_symbols & vset or d.has(sp.Derivative):
+                bad.append(term)
+                break
+    return bad
+
+
+def _sample_q(system, rng, count):
+    """Random numeric substitutions for coordinates and parameters."""
+    points = []
+    for _ in range(count):
+        sub = {q: rng.uniform(*STATE_BOX) for q in system.coordinates}
+        sub.update({v: rng.uniform(*STATE_BOX) for v in system.velocities})
+        for p in system.parameters:
+            sub[p] = system.parameter_values.get(p, rng.uniform(*PARAMETER_BOX))
+        points.append(sub)
+    return points
+
+
+def _numeric(matrix, sub, label="lagrangian"):
+    """Evaluate a symbolic matrix at a sample point; non-numeric results are input errors."""
+    try:
+        return np.array(matrix.xreplace(sub).evalf(), dtype=complex).real.astype(float)
+    except (TypeError, ValueError) as exc:
+        raise ValidationError([
+            f"{label}: cannot evaluate second derivatives at a sample point "
+            f"({' '.join(str(exc).split())}); the "
+            f"Lagrangian must be smooth in the velocities (no Abs, sign or other kinks)"
+        ]) from None
+
+
+def _check_dependence(system, cons, hols, drop_redundant):
+    """Find affine constraints whose mu row is a combination of earlier rows.
+
+    The generic rank over functions of q is decided at seeded random points
+    (a row is dependent when it is dependent at every sample); the exact
+    combination is then solved symbolically to name it.
+
+    Returns (kept constraints, dropped, mu of lifts + constraints or None
+    when a row was dropped or there are none).
+    """
+    lifts = tuple(
+        sum((sp.diff(g, q) * v for q, v in zip(system.coordinates, system.velocities)), sp.S.Zero)
+        for g in hols
+    )
+    rows = list(lifts) + list(cons)
+    labels = [f"holonomic[{i}]" for i in range(len(hols))] + [
+        f"constraints[{i}]" for i in range(len(cons))
+    ]
+    if not rows:
+        return tuple(cons), (), None
+    vels = system.velocities
+    mu = _one_forms(rows, vels)
+    rng = np.random.default_rng(_VALIDATION_SEED)
+    samples = _numeric_samples(mu, _sample_q(system, rng, _VALIDATION_SAMPLES))
+    independent: list[int] = []
+    dependent: list[tuple[int, dict]] = []
+    for i in range(len(rows)):
+        trial = independent + [i]
+        ranks = [np.linalg.matrix_rank(S[trial], tol=1e-9 * max(1.0, np.abs(S).max())) for S in samples]
+        if max(ranks) == len(trial):
+            independent.append(i)
+            continue
+        dependent.append((i, _combination(mu, rows, independent, i, vels)))
+    if not dependent:
+        return tuple(cons), (), mu
+    problems, dropped = [], []
+    points = _sample_q(system, np.random.default_rng(_VALIDATION_SEED + 2), _VALIDATION_SAMPLES)
+    for i, coeffs in dependent:
+        combo = " + ".join(f"({c})*{labels[j]}" for j, c in coeffs.items()) or "0"
+        # Redundant only if h is the same combination; otherwise phi_i minus
+        # the combination is a function of q alone: a hidden position constraint.
+        rest = sp.expand(rows[i] - sum((c * rows[j] for j, c in coeffs.items()), sp.S.Zero))
+        position_part = rest.xreplace({v: 0 for v in vels})
+        if not _vanishes_at(position_part, points):
+            problems.append(
+                f"{labels[i]}: its one-form is {combo} but the affine parts differ: together "
+                f"they imply the position constraint {sp.trigsimp(position_part)} = 0; give "
+                f"that as a holonomic constraint instead"
+            )
+        elif labels[i].startswith("holonomic") or not drop_redundant:
+            problems.append(
+                f"{labels[i]}: {rows[i]} is redundant, a combination of the others: "
+                f"{labels[i]} = {combo} (pass drop_redundant=True to drop it)"
+            )
+        else:
+            dropped.append(DroppedConstraint(labels[i], rows[i],
+                                             MappingProxyType({labels[j]: c for j, c in coeffs.items()})))
+    if problems:
+        raise RedundantConstraintError(problems)
+    gone = {d.label for d in dropped}
+    kept = tuple(c for k, c in enumerate(cons) if f"constraints[{k}]" not in gone)
+    return kept, tuple(dropped), None
+
+
+def _combination(mu, rows, independent, i, vels):
+    """Coefficients c_j(q) with mu_i = sum_j c_j mu_j over the independent rows.
+
+    Solves the square subsystem on the k velocity columns where the rows are
+    best conditioned at a sample point (an overdetermined symbolic solve
+    would miss trigonometric identities), then tidies each coefficient.
+    """
+    if not independent:
+        return {}
+    A = mu.extract(independent, list(range(mu.cols)))  # k x n
+    rng = np.random.default_rng(_VALIDATION_SEED + 3)
+    sample = {s: rng.uniform(*STATE_BOX) for s in A.free_symbols}
+    An = np.array(A.xreplace(sample).evalf(), dtype=float)
+    import scipy.linalg
+
+    cols = sorted(scipy.linalg.qr(An, pivoting=True)[2][: len(independent)])
+    block = A.extract(list(range(len(independent))), cols)  # k x k, invertible
+    target = mu.extract([i], cols)
+    coeffs = block.T.LUsolve(target.T)
+    out = {}
+    for j, c in zip(independent, coeffs):
+        c = sp.trigsimp(sp.cancel(c))
+        if c != 0:
+            out[j] = c
+    return out
+
+
+def _vanishes_at(expr, points, tol=1e-9):
+    """True when ``expr`` is numerically zero at every sample point."""
+    for pt in points:
+        value = complex(sp.sympify(sp.sympify(expr).xreplace(pt)).evalf())
+        if abs(value) > tol * max(1.0, abs(value)):
+            return False
+    return True
+
+
+def _check_regular(system):
+    """Raise if W is singular at every sampled point (generic rank < n)."""
+    W = system.hessian
+    n = system.n
+    if not W.free_symbols:
+        rank = W.rank()
+        if rank < n:
+            W = sp.hessian(system.lagrangian, system.velocities)  # as the message always showed it
+            raise SingularLagrangianError([_singular_message(W, rank, W.nullspace())])
+        return
+    rng = np.random.default_rng(_VALIDATION_SEED + 1)
+    ranks = [np.linalg.matrix_rank(S)
+             for S in _numeric_samples(W, _sample_q(system, rng, _VALIDATION_SAMPLES))]
+    if max(ranks) < n:
+        W = sp.hessian(system.lagrangian, system.velocities)  # as the message always showed it
+        try:
+            null = W.nullspace(simplify=True)
+        except Exception:  # pragma: no cover - sympy failure; message still useful
+            null = []
+        raise SingularLagrangianError([_singular_message(W, max(ranks), null)])
+
+
+def _singular_message(W, rank, null):
+    direction = f"; null direction {list(null[0])}" if null else ""
+    return (
+        f"lagrangian: the Hessian W = d2L/dv dv is singular (rank {rank} of {W.rows}"
+        f"{direction}); singular Lagrangians are outside the paper's scope"
+    )

@@ -1,0 +1,572 @@
+"""Safe parsing of expressions from untrusted text.
+
+Scene files carry the Lagrangian and the constraints as strings. They are
+never evaluated as Python: :func:`parse_expression` parses the text with
+:func:`ast.parse` and builds the sympy expression by walking the syntax tree
+with a strict whitelist (numbers, names from an explicit symbol table, the
+functions in :data:`FUNCTIONS`, ``pi``, ``+ - * / **`` and unary signs).
+Anything else is a :class:`~nhham.errors.ParseError` whose message starts
+with the key path it came from and quotes the offending fragment.
+
+Names are ordinary symbols: ``I``, ``E``, ``S``, ``N``, ``beta``, ``gamma``,
+``lambda`` mean whatever the symbol table says, never sympy's imaginary unit,
+Euler's number and so on.
+
+The work done on hostile input is bounded: the text length, the nesting
+depth, the size of exact numbers and numeric powers are all capped, and every
+failure of the Python parser itself is reported as a ``ParseError``.
+
+:func:`to_text` is the inverse: it prints an expression in the scene's own
+names so that :func:`parse_expression` reads it back to an equal expression.
+"""
+
+from __future__ import annotations
+
+import ast
+import difflib
+import io
+import keyword
+import math
+import tokenize
+import warnings
+from typing import Mapping
+
+import sympy as sp
+from sympy.printing.str import StrPrinter
+
+from nhham.errors import ParseError
+
+__all__ = [
+    "FUNCTIONS",
+    "CONSTANTS",
+    "RESERVED_NAMES",
+    "MAX_EXPRESSION_LENGTH",
+    "parse_expression",
+    "to_text",
+    "short",
+]
+
+#: Functions an expression may call: name -> (sympy function, allowed arities).
+FUNCTIONS: Mapping[str, object] = {
+    "sin": sp.sin,
+    "cos": sp.cos,
+    "tan": sp.tan,
+    "exp": sp.exp,
+    "log": sp.log,
+    "sqrt": sp.sqrt,
+    "sinh": sp.sinh,
+    "cosh": sp.cosh,
+    "tanh": sp.tanh,
+    "asin": sp.asin,
+    "acos": sp.acos,
+    "atan": sp.atan,
+    "atan2": sp.atan2,
+    "Abs": sp.Abs,
+    "sign": sp.sign,
+}
+
+#: Number of positional arguments each function takes.
+_ARITY: Mapping[str, int] = {name: 1 for name in FUNCTIONS} | {"atan2": 2}
+
+#: Named constants an expression may use.
+CONSTANTS: Mapping[str, sp.Expr] = {"pi": sp.pi}
+
+#: Names a symbol table should not use: functions, constants and the Python
+#: literals ``True``/``False``/``None`` (which the parser never sees as names).
+RESERVED_NAMES = frozenset(FUNCTIONS) | frozenset(CONSTANTS) | {"True", "False", "None"}
+
+#: Longest expression text accepted (characters).
+MAX_EXPRESSION_LENGTH = 100_000
+
+# Deepest nesting of sub-expressions the tree walker follows. Sums, products
+# and sign chains are flattened iteratively, so only genuinely nested input
+# (parentheses, calls, towers of powers) counts; Python's own tokenizer stops
+# at 200 nested parentheses already.
+_MAX_DEPTH = 200
+
+# Largest numeric exponent accepted, and the largest exact number (in bits)
+# that a sum, product or power may produce: bounded memory and time on input
+# such as 10**10**10 or 9**999*9**999*... .
+_MAX_EXPONENT = 1000
+_MAX_NUMBER_BITS = 100_000
+# sympy factors exact numbers to simplify their roots (sqrt(n), n**(1/3));
+# beyond this size that takes seconds to minutes.
+_MAX_ROOT_BITS = 256
+
+# Longest fragment quoted in an error message.
+_QUOTE_LIMIT = 60
+
+_NONFINITE = (sp.zoo, sp.nan, sp.oo, -sp.oo)
+
+
+# --------------------------------------------------------------------- parse
+def parse_expression(text: str, symbols: Mapping[str, sp.Symbol], where: str) -> sp.Expr:
+    """Parse untrusted text into a sympy expression without evaluating Python.
+
+    Parameters
+    ----------
+    text : str
+        The expression, in Python syntax restricted to numbers, names,
+        ``+ - * / **``, unary signs and calls of :data:`FUNCTIONS`. Line
+        breaks count as spaces, so a long expression may span several lines.
+    symbols : mapping of str to sympy.Symbol
+        The symbol table: every name the expression may use besides the
+        functions and ``pi``. Python keywords (``lambda``) may be table names.
+    where : str
+        Key path of the text (``constraints[1]``); every error message
+        starts with it.
+
+    Returns
+    -------
+    sympy.Expr
+        The expression. Integer literals stay exact, ``1/2`` is
+        ``Rational(1, 2)``, float literals become :class:`sympy.Float`.
+
+    Raises
+    ------
+    ParseError
+        On a syntax error, a construct outside the whitelist, an unknown name
+        (with the closest known name suggested), a wrong number of function
+        arguments, a division by zero, or input too large or too deeply
+        nested to handle in bounded time and memory.
+    """
+    if not isinstance(text, str):
+        raise ParseError(f"{where}: expected an expression string, got {type(text).__name__}")
+    if len(text) > MAX_EXPRESSION_LENGTH:
+        raise ParseError(
+            f"{where}: expression too long ({len(text)} characters; "
+            f"at most {MAX_EXPRESSION_LENGTH} are accepted)"
+        )
+    if "#" in text:
+        # Comments would silently swallow the rest of a multi-line expression.
+        raise ParseError(f"{where}: '#' is not allowed in an expression "
+                         f"({_position(text, text.index('#'))})")
+    # Line breaks become spaces (same length, so positions stay valid);
+    # leading blanks would otherwise be an "unexpected indent".
+    flat = text.replace("\r", " ").replace("\n", " ")
+    body = flat.lstrip()
+    lead = len(flat) - len(body)
+    if not body.strip():
+        raise ParseError(f"{where}: empty expression")
+    source, renamed = _rename_keywords(body, symbols, where)
+    tree = _ast_parse(source, text, lead, where)
+    builder = _Builder(body, symbols, renamed, where)
+    expr = builder.build(tree.body)
+    if expr.has(*_NONFINITE):
+        raise ParseError(f"{where}: the expression is not finite ({_quote(body)} gives {expr})")
+    _check_float_range(expr, where)
+    return expr
+
+
+def _check_float_range(expr: sp.Expr, where: str) -> None:
+    """Refuse floats that sympy computed beyond double precision's range.
+
+    sympy's floats have unbounded exponents (exp(1000.0) is 1.97e434); such a
+    number cannot be used numerically nor written back as a literal.
+    """
+    for number in expr.atoms(sp.Float):
+        value = float(number)
+        if not math.isfinite(value) or (value == 0.0 and number != 0):
+            raise ParseError(f"{where}: the number {sp.sstr(number)} is outside the range "
+                             f"of double precision (about 1e-308 to 1e308)")
+
+
+def _ast_parse(source: str, original: str, lead: int, where: str) -> ast.Expression:
+    """Run :func:`ast.parse`, turning each of its failures into a ParseError."""
+    try:
+        with warnings.catch_warnings():
+            # Input such as "'\\d'" or "1 is 1" makes the compiler warn on
+            # stderr; the expression is refused later anyway.
+            warnings.simplefilter("ignore")
+            return ast.parse(source, mode="eval")
+    except SyntaxError as exc:
+        # Single line after flattening: offset is a 1-based character column.
+        offset = lead + max((exc.offset or 1) - 1, 0)
+        raise ParseError(
+            f"{where}: syntax error {_position(original, offset)}: {exc.msg}"
+        ) from None
+    except (RecursionError, MemoryError):
+        # The parser's own limits: deep nesting, or a flat sum of several
+        # thousand terms (Python builds it as a deeply nested tree).
+        raise ParseError(f"{where}: expression too deeply nested or too many terms "
+                         f"in one sum to parse") from None
+    except ValueError as exc:  # e.g. integer literal with too many digits
+        raise ParseError(f"{where}: cannot parse: {exc}") from None
+
+
+def _position(text: str, offset: int) -> str:
+    """Describe a 0-based character offset as ``at column N`` (1-based)."""
+    offset = min(max(offset, 0), len(text))
+    line = text.count("\n", 0, offset) + 1
+    column = offset - (text.rfind("\n", 0, offset) + 1) + 1
+    if "\n" in text:
+        return f"at line {line}, column {column}"
+    return f"at column {column}"
+
+
+def _rename_keywords(text: str, symbols: Mapping[str, sp.Symbol], where: str) -> tuple[str, dict]:
+    """Replace table names that are Python keywords by same-length placeholders.
+
+    ``lambda`` is a natural parameter name but ``ast.parse`` cannot read it
+    as a name. Each keyword that is also a table name is replaced, token by
+    token, with an identifier of the same length that occurs nowhere else, so
+    every column offset stays valid for error messages.
+
+    Returns
+    -------
+    text : str
+        The text to give to ``ast.parse``.
+    renamed : dict
+        Placeholder -> original table name.
+    """
+    wanted = {name for name in symbols if keyword.iskeyword(name)}
+    if not wanted or not any(name in text for name in wanted):
+        return text, {}
+    try:
+        tokens = list(tokenize.generate_tokens(io.StringIO(text).readline))
+    except (tokenize.TokenError, SyntaxError, RecursionError, MemoryError):
+        return text, {}  # ast.parse will report the syntax error properly
+    used = {tok.string for tok in tokens if tok.type == tokenize.NAME}
+    placeholders: dict[str, str] = {}
+    chars = list(text)
+    for tok in tokens:
+        if tok.type != tokenize.NAME or tok.string not in wanted:
+            continue
+        if tok.string not in placeholders:
+            taken = used | set(symbols) | set(FUNCTIONS) | set(CONSTANTS) | set(placeholders.values())
+            placeholders[tok.string] = _placeholder(tok.string, taken, where)
+        start = tok.start[1]  # text is a single line
+        chars[start:start + len(tok.string)] = placeholders[tok.string]
+    return "".join(chars), {new: old for old, new in placeholders.items()}
+
+
+def _placeholder(word: str, taken: set, where: str) -> str:
+    """An identifier as long as ``word`` that is not a keyword nor in ``taken``."""
+    alphabet = "abcdefghijklmnopqrstuvwxyz0123456789"
+    n = len(word)
+    for first in "_ZQXJK":
+        for i in range(len(alphabet) ** min(n - 1, 2)):
+            tail = ""
+            j = i
+            for _ in range(min(n - 1, 2)):
+                tail += alphabet[j % len(alphabet)]
+                j //= len(alphabet)
+            candidate = (first + tail + "_" * n)[:n]
+            if candidate.isidentifier() and not keyword.iskeyword(candidate) \
+                    and candidate not in taken and not candidate.startswith("__"):
+                return candidate
+    raise ParseError(f"{where}: too many names to rename the keyword name {word!r}")
+
+
+# ------------------------------------------------------------------ builder
+class _Builder:
+    """Turn a whitelisted Python AST into a sympy expression.
+
+    Parameters
+    ----------
+    text : str
+        The text the AST positions refer to (for quoting fragments).
+    symbols : mapping
+        The symbol table.
+    renamed : dict
+        Placeholder -> table name for keyword names (see _rename_keywords).
+    where : str
+        Key path prefix for error messages.
+    """
+
+    def __init__(self, text, symbols, renamed, where):
+        self.text = text
+        self.symbols = symbols
+        self.renamed = renamed
+        self.where = where
+
+    # Errors ---------------------------------------------------------------
+    def fragment(self, node) -> str:
+        """The source text of ``node``, quoted and shortened for messages."""
+        try:
+            segment = ast.get_source_segment(self.text, node)
+        except Exception:  # positions missing or odd: quote nothing rather than fail
+            segment = None
+        return _quote(segment if segment else type(node).__name__)
+
+    def error(self, node, message: str) -> ParseError:
+        return ParseError(f"{self.where}: {message} in {self.fragment(node)}")
+
+    # Dispatch -------------------------------------------------------------
+    def build(self, node, depth: int = 0) -> sp.Expr:
+        if depth > _MAX_DEPTH:
+            raise ParseError(f"{self.where}: expression nested too deeply "
+                             f"(more than {_MAX_DEPTH} levels)")
+        handler = self._HANDLERS.get(type(node))
+        if handler is None:
+            raise self.error(node, f"{_describe(node)} is not allowed")
+        try:
+            return handler(self, node, depth)
+        except RecursionError:
+            # sympy itself may recurse on deep input; report, do not crash.
+            raise ParseError(f"{self.where}: expression nested too deeply") from None
+
+    def constant(self, node, depth):
+        value = node.value
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise self.error(node, f"{_describe(node)} is not allowed (only real numbers)")
+        if isinstance(value, int):
+            return sp.Integer(value)
+        if not math.isfinite(value):
+            raise self.error(node, "number out of range")
+        return sp.Float(value)
+
+    def name(self, node, depth):
+        ident = self.renamed.get(node.id, node.id)
+        if ident.startswith("__"):
+            raise self.error(node, f"name {ident!r} is not allowed")
+        if ident in self.symbols:
+            return self.symbols[ident]
+        if ident in CONSTANTS:
+            return CONSTANTS[ident]
+        if ident in FUNCTIONS:
+            raise self.error(node, f"{ident!r} is a function; call it as {ident}(...)")
+        raise ParseError(f"{self.where}: unknown name {ident!r}{self.suggest(ident)}")
+
+    def suggest(self, ident: str) -> str:
+        known = list(self.symbols) + list(CONSTANTS) + list(FUNCTIONS)
+        close = difflib.get_close_matches(ident, known, n=1)
+        return f"; did you mean {close[0]!r}?" if close else ""
+
+    def unary(self, node, depth):
+        # Sign chains (- - - x) are counted iteratively, not recursed into.
+        negative = False
+        while isinstance(node, ast.UnaryOp):
+            if isinstance(node.op, ast.USub):
+                negative = not negative
+            elif not isinstance(node.op, ast.UAdd):
+                raise self.error(node, f"operator {_describe(node.op)} is not allowed")
+            node = node.operand
+        value = self.build(node, depth + 1)
+        return -value if negative else value
+
+    def binop(self, node, depth):
+        if isinstance(node.op, (ast.Add, ast.Sub)):
+            return self.sum_chain(node, depth)
+        if isinstance(node.op, (ast.Mult, ast.Div)):
+            return self.product_chain(node, depth)
+        if isinstance(node.op, ast.Pow):
+            return self.power(node, depth)
+        raise self.error(node, f"operator {_describe(node.op)} is not allowed")
+
+    def chain(self, node, ops):
+        """Operands of a left-leaning chain a op b op c ..., with their operators.
+
+        Returns ``[(None, a), (op, b), (op, c), ...]``; found iteratively so
+        that a sum of 50 000 terms does not recurse 50 000 levels.
+        """
+        items = []
+        while isinstance(node, ast.BinOp) and isinstance(node.op, ops):
+            items.append((node.op, node.right))
+            node = node.left
+        items.append((None, node))
+        items.reverse()
+        return items
+
+    def sum_chain(self, node, depth):
+        terms = []
+        for op, operand in self.chain(node, (ast.Add, ast.Sub)):
+            value = self.build(operand, depth + 1)
+            terms.append(-value if isinstance(op, ast.Sub) else value)
+        self.check_number_size(node, terms)
+        return sp.Add(*terms)
+
+    def product_chain(self, node, depth):
+        factors = []
+        for op, operand in self.chain(node, (ast.Mult, ast.Div)):
+            value = self.build(operand, depth + 1)
+            if isinstance(op, ast.Div):
+                if value == 0:
+                    raise self.error(node, "division by zero")
+                value = sp.Pow(value, -1)
+            factors.append(value)
+        self.check_number_size(node, factors)
+        return sp.Mul(*factors)
+
+    def power(self, node, depth):
+        base = self.build(node.left, depth + 1)
+        exponent = self.build(node.right, depth + 1)
+        if exponent.is_Number:
+            if abs(exponent) > _MAX_EXPONENT:
+                raise self.error(node, f"numeric exponent {exponent} is too large "
+                                       f"(at most {_MAX_EXPONENT} in absolute value)")
+            coefficient = base.as_coeff_Mul()[0] if not base.is_Number else base
+            if _bits(coefficient) * float(abs(exponent)) > _MAX_NUMBER_BITS:
+                raise self.error(node, "numeric power too large to compute exactly")
+            if base == 0 and exponent.is_negative:
+                raise self.error(node, "division by zero")
+            self.check_root(node, base, exponent)
+        return sp.Pow(base, exponent)
+
+    def check_root(self, node, base, exponent):
+        """Refuse roots of huge exact numbers: sympy would try to factor them."""
+        if isinstance(exponent, sp.Rational) and not exponent.is_Integer:
+            coefficient = base if base.is_Number else base.as_coeff_Mul()[0]
+            if isinstance(coefficient, sp.Rational) and \
+                    max(int(coefficient.p).bit_length(), int(coefficient.q).bit_length()) > _MAX_ROOT_BITS:
+                raise self.error(node, f"root of an exact number with more than "
+                                       f"{_MAX_ROOT_BITS} bits (write it as a float)")
+
+    def call(self, node, depth):
+        func = node.func
+        if not isinstance(func, ast.Name):
+            raise self.error(node, "only calls of the functions "
+                                   f"{', '.join(FUNCTIONS)} are allowed")
+        ident = self.renamed.get(func.id, func.id)
+        if ident not in FUNCTIONS:
+            if ident in self.symbols or ident in CONSTANTS:
+                raise self.error(node, f"{ident!r} is not a function")
+            if ident.startswith("__"):
+                raise self.error(node, f"name {ident!r} is not allowed")
+            raise ParseError(f"{self.where}: unknown function {ident!r}"
+                             f"{_suggest_from(ident, FUNCTIONS)} in {self.fragment(node)}")
+        if node.keywords:
+            raise self.error(node, "keyword arguments are not allowed")
+        for arg in node.args:
+            if isinstance(arg, ast.Starred):
+                raise self.error(node, "starred arguments are not allowed")
+        if len(node.args) != _ARITY[ident]:
+            count = _ARITY[ident]
+            raise self.error(node, f"{ident} takes {count} argument{'s' if count > 1 else ''}, "
+                                   f"got {len(node.args)}")
+        args = [self.build(arg, depth + 1) for arg in node.args]
+        if ident == "sqrt":
+            self.check_root(node, args[0], sp.S.Half)
+        return FUNCTIONS[ident](*args)
+
+    def check_number_size(self, node, items):
+        """Refuse sums/products whose exact numbers could grow past the cap."""
+        total = sum(_bits(item.as_coeff_Mul()[0]) for item in items)
+        if total > _MAX_NUMBER_BITS:
+            raise self.error(node, "exact numbers too large to compute")
+
+    _HANDLERS = {
+        ast.Constant: constant,
+        ast.Name: name,
+        ast.UnaryOp: unary,
+        ast.BinOp: binop,
+        ast.Call: call,
+    }
+
+
+def _bits(number) -> int:
+    """Size in bits of an exact rational (0 for floats and non-numbers)."""
+    if isinstance(number, sp.Rational):
+        return int(number.p).bit_length() + int(number.q).bit_length()
+    return 0
+
+
+def _suggest_from(ident: str, names) -> str:
+    close = difflib.get_close_matches(ident, list(names), n=1)
+    return f"; did you mean {close[0]!r}?" if close else ""
+
+
+def _quote(fragment: str) -> str:
+    fragment = " ".join(fragment.split())
+    if len(fragment) > _QUOTE_LIMIT:
+        fragment = fragment[:_QUOTE_LIMIT - 3] + "..."
+    return repr(fragment)
+
+
+# Readable names for the constructs that are refused.
+_NODE_NAMES = {
+    ast.Attribute: "attribute access",
+    ast.Subscript: "subscripting",
+    ast.Lambda: "lambda",
+    ast.ListComp: "a comprehension",
+    ast.SetComp: "a comprehension",
+    ast.DictComp: "a comprehension",
+    ast.GeneratorExp: "a generator expression",
+    ast.JoinedStr: "an f-string",
+    ast.FormattedValue: "an f-string",
+    ast.Compare: "comparison",
+    ast.BoolOp: "a boolean operator",
+    ast.IfExp: "a conditional expression",
+    ast.NamedExpr: "assignment (:=)",
+    ast.Starred: "starred expression",
+    ast.Tuple: "a tuple",
+    ast.List: "a list",
+    ast.Set: "a set",
+    ast.Dict: "a dict",
+    ast.Await: "await",
+    ast.Yield: "yield",
+    ast.YieldFrom: "yield",
+    ast.Slice: "slicing",
+    ast.MatMult: "'@'",
+    ast.Mod: "'%'",
+    ast.FloorDiv: "'//'",
+    ast.LShift: "'<<'",
+    ast.RShift: "'>>'",
+    ast.BitOr: "'|'",
+    ast.BitXor: "'^' (use ** for powers)",
+    ast.BitAnd: "'&'",
+    ast.Invert: "'~'",
+    ast.Not: "'not'",
+}
+
+
+def _describe(node) -> str:
+    if isinstance(node, ast.Constant):
+        kind = type(node.value).__name__
+        return {"str": "a string", "bytes": "bytes", "complex": "a complex number",
+                "bool": "a boolean", "NoneType": "None", "ellipsis": "'...'"}.get(
+                    kind, f"a {kind} constant")
+    return _NODE_NAMES.get(type(node), type(node).__name__)
+
+
+# --------------------------------------------------------------------- print
+class _ScenePrinter(StrPrinter):
+    """sympy's str printer, adjusted so the output parses back exactly.
+
+    Floats print with ``repr`` of the double (17 significant digits when
+    needed), and constants that sympy creates on its own print in terms of
+    the allowed functions: ``exp(1)`` instead of ``E``, ``sqrt(-1)`` instead
+    of ``I`` -- in a scene, ``E`` and ``I`` are ordinary names.
+    """
+
+    def _print_Float(self, expr):
+        if expr._prec == 53:  # a double: repr is the shortest exact form
+            value = float(expr)
+            if math.isfinite(value):
+                return repr(value)
+        return super()._print_Float(expr)
+
+    def _print_Exp1(self, expr):
+        return "exp(1)"
+
+    def _print_ImaginaryUnit(self, expr):
+        return "sqrt(-1)"
+
+
+_PRINTER = _ScenePrinter({"full_prec": True})
+
+
+def to_text(expr) -> str:
+    """Print an expression so that :func:`parse_expression` reads it back.
+
+    Parameters
+    ----------
+    expr : sympy.Expr
+        An expression in the scene's symbols and the functions of
+        :data:`FUNCTIONS`.
+
+    Returns
+    -------
+    str
+        Text in the scene's own names (``Abs``, ``atan2``, ``sqrt``...);
+        ``parse_expression(to_text(e), table, ...) == e`` and, for names that
+        are not Python keywords or sympy constants, ``sympy.sympify`` reads it
+        back too.
+    """
+    return _PRINTER.doprint(sp.sympify(expr))
+
+
+def short(expr, limit: int = 80) -> str:
+    """``str(expr)`` cut to ``limit`` characters (with ``...``), for messages."""
+    text = str(expr)
+    return text if len(text) <= limit else text[:limit - 3] + "..."

@@ -1,0 +1,775 @@
+"""Scene files: a system, its parameters and optional initial data, in TOML.
+
+A scene (``DESIGN.md`` §3) looks like::
+
+    name = "vertical rolling disk"
+    description = "optional free text"
+    coordinates = ["x", "y", "theta", "phi"]
+    parameters = { m = 1.0, I1 = 0.5, I2 = 0.25, R = 1.0 }
+    symbolic_parameters = []            # parameters without a numeric value
+    lagrangian = "m*(x_dot**2 + y_dot**2)/2 + I1*theta_dot**2/2 + I2*phi_dot**2/2"
+    constraints = ["x_dot - R*cos(theta)*phi_dot", "y_dot - R*sin(theta)*phi_dot"]
+    holonomic = []
+    [initial]        # optional: a value for every coordinate and velocity
+    x = 0.0
+    ...
+    [simulate]       # optional defaults: t_end, method, rtol, atol, step, max_step
+    t_end = 10.0
+
+Loading happens in layers, each of which reports every problem it finds at
+once: the file itself (size, encoding, TOML syntax), the structure (keys,
+types, names), the expressions (parsed with
+:func:`nhham.expressions.parse_expression`, never evaluated as Python), the
+system (:class:`nhham.system.System` checks the mechanics) and finally the
+initial data against the constraints. Every message names the key path
+(``parameters.m``, ``constraints[1]``, ``initial.x_dot``). Nothing the user
+gave is silently changed.
+"""
+
+from __future__ import annotations
+
+import difflib
+import math
+import os
+import re
+import tomllib
+import unicodedata
+from dataclasses import dataclass, fields
+from types import MappingProxyType
+from typing import Mapping
+
+import sympy as sp
+
+from nhham.errors import (
+    InconsistentInitialDataError,
+    MissingParameterValueError,
+    ParseError,
+    SceneError,
+)
+from nhham.system.expressions import RESERVED_NAMES, parse_expression, to_text
+from nhham.system.naming import acceleration_symbol, momentum_symbol, velocity_symbol
+
+__all__ = [
+    "Scene",
+    "SimulateOptions",
+    "load_scene",
+    "loads_scene",
+    "check_initial",
+    "dump_scene",
+    "MAX_SCENE_BYTES",
+    "INITIAL_TOLERANCE",
+]
+
+#: Largest scene file accepted, checked before parsing.
+MAX_SCENE_BYTES = 2 * 1024 * 1024
+
+#: Relative tolerance on constraint residuals at the initial state.
+INITIAL_TOLERANCE = 1e-9
+
+_TOP_KEYS = (
+    "name", "description", "coordinates", "parameters", "symbolic_parameters",
+    "lagrangian", "constraints", "holonomic", "initial", "simulate",
+)
+_REQUIRED_KEYS = ("coordinates", "lagrangian")
+
+# Names people reach for that difflib would not match (a hint, never applied).
+_TOP_ALIASES = {
+    "L": "lagrangian", "coords": "coordinates", "q": "coordinates",
+    "params": "parameters", "initial_conditions": "initial", "ic": "initial",
+    "nonholonomic": "constraints", "sim": "simulate", "simulation": "simulate",
+}
+_SIMULATE_ALIASES = {"dt": "step", "h": "step", "t_final": "t_end", "tmax": "t_end",
+                     "t_max": "t_end", "integrator": "method"}
+
+# Names generated elsewhere in nhham for the i-th Lagrange multiplier.
+_MULTIPLIER_NAME = re.compile(r"lambda_\d+")
+_BARE_KEY = re.compile(r"[A-Za-z0-9_-]+")
+
+
+# ------------------------------------------------------------------ results
+@dataclass(frozen=True)
+class SimulateOptions:
+    """Defaults for ``nhham simulate`` given in a scene's ``[simulate]`` table.
+
+    Every attribute is ``None`` when the scene does not give it.
+
+    Attributes
+    ----------
+    t_end : float or None
+        Final time (> 0).
+    method : str or None
+        Integration method name (checked by the simulator, not here).
+    rtol, atol : float or None
+        Relative and absolute tolerances (> 0).
+    step : float or None
+        Fixed step size dt for fixed-step methods (> 0).
+    max_step : float or None
+        Largest step an adaptive method may take (> 0).
+    """
+
+    t_end: float | None = None
+    method: str | None = None
+    rtol: float | None = None
+    atol: float | None = None
+    step: float | None = None
+    max_step: float | None = None
+
+    def given(self) -> dict:
+        """The options the scene gave, as ``{key: value}``."""
+        return {f.name: getattr(self, f.name) for f in fields(self)
+                if getattr(self, f.name) is not None}
+
+
+_SIMULATE_KEYS = tuple(f.name for f in fields(SimulateOptions))
+
+
+@dataclass(frozen=True)
+class Scene:
+    """A loaded scene.
+
+    Attributes
+    ----------
+    name : str
+        The scene's ``name`` ("" if not given).
+    description : str
+        The scene's ``description`` ("" if not given).
+    system : nhham.system.System
+        The validated system.
+    initial : mapping of str to float, or None
+        Initial value of every coordinate and velocity, or None.
+    simulate : SimulateOptions
+        Simulation defaults (all None if the scene has no ``[simulate]``).
+    source : str
+        Where the scene came from (a path or ``"<string>"``).
+    """
+
+    name: str
+    description: str
+    system: object
+    initial: Mapping[str, float] | None
+    simulate: SimulateOptions
+    source: str
+
+
+# -------------------------------------------------------------------- load
+def load_scene(path, *, check_initial: bool = True, drop_redundant: bool = False) -> Scene:
+    """Load a scene file.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The TOML file (UTF-8, at most :data:`MAX_SCENE_BYTES` bytes; a UTF-8
+        byte-order mark is accepted).
+    check_initial : bool, optional
+        Check that the initial data satisfy the constraints (default True).
+    drop_redundant : bool, optional
+        Passed to :class:`~nhham.system.System`: drop affine constraints that
+        are combinations of the others instead of raising (default False).
+
+    Returns
+    -------
+    Scene
+
+    Raises
+    ------
+    SceneError
+        The file cannot be read, is too large, is not UTF-8 text, is empty,
+        is not valid TOML, or has structural problems (all listed at once).
+    ParseError
+        An expression cannot be parsed (all such problems listed at once).
+    ValidationError
+        The system is mechanically invalid (raised by :class:`System`).
+    InconsistentInitialDataError, MissingParameterValueError
+        From the initial-data check, see :func:`check_initial`.
+    """
+    source = os.fspath(path)
+    try:
+        with open(path, "rb") as handle:
+            # Read one byte past the limit rather than trusting the size on
+            # disk (special files report 0).
+            data = handle.read(MAX_SCENE_BYTES + 1)
+    except OSError as exc:
+        raise SceneError(f"{source}: cannot read scene file: {exc.strerror or exc}") from None
+    if len(data) > MAX_SCENE_BYTES:
+        raise SceneError(f"{source}: scene file too large (more than {MAX_SCENE_BYTES} bytes)")
+    try:
+        text = data.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        raise SceneError(
+            f"{source}: not a UTF-8 text file (invalid byte at offset {exc.start}); "
+            f"is it a binary file?"
+        ) from None
+    return loads_scene(text, source=source, check_initial=check_initial,
+                       drop_redundant=drop_redundant)
+
+
+def loads_scene(text: str, source: str = "<string>", *, check_initial: bool = True,
+                drop_redundant: bool = False) -> Scene:
+    """Load a scene from TOML text.
+
+    Parameters
+    ----------
+    text : str
+        The scene.
+    source : str, optional
+        Name used in error messages.
+    check_initial : bool, optional
+        Check that the initial data satisfy the constraints (default True).
+    drop_redundant : bool, optional
+        Passed to :class:`~nhham.system.System` (default False).
+
+    Returns
+    -------
+    Scene
+
+    Raises
+    ------
+    SceneError, ParseError, ValidationError, InconsistentInitialDataError, MissingParameterValueError
+        As for :func:`load_scene`.
+    """
+    data = _parse_toml(text, source)
+    spec = _validate_structure(data, source)
+    expressions = _parse_expressions(spec)
+    system = _build_system(spec, expressions, drop_redundant)
+    scene = Scene(
+        name=spec.name,
+        description=spec.description,
+        system=system,
+        initial=spec.initial,
+        simulate=spec.simulate,
+        source=source,
+    )
+    if check_initial and scene.initial is not None:
+        _check_initial(scene)
+    return scene
+
+
+def _parse_toml(text, source) -> dict:
+    """TOML text -> dict, with every failure as a SceneError."""
+    if not isinstance(text, str):
+        raise SceneError(f"{source}: expected scene text, got {type(text).__name__}")
+    if len(text) > MAX_SCENE_BYTES:
+        raise SceneError(f"{source}: scene too large (more than {MAX_SCENE_BYTES} characters)")
+    if not text.strip():
+        raise SceneError(f"empty scene: {source} contains no data")
+    if "\x00" in text:
+        raise SceneError(f"{source}: contains NUL bytes; is it a binary file?")
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        # The message carries tomllib's "(at line L, column C)".
+        raise SceneError(f"{source}: TOML syntax error: {exc}") from None
+    except (RecursionError, MemoryError):
+        raise SceneError(f"{source}: TOML nested too deeply to read") from None
+    except ValueError as exc:  # e.g. an integer with too many digits
+        raise SceneError(f"{source}: TOML value cannot be read: {exc}") from None
+    if not data:
+        raise SceneError(f"empty scene: {source} contains only comments or blank lines")
+    return data
+
+
+# --------------------------------------------------------------- structure
+@dataclass(frozen=True)
+class _Spec:
+    """The validated, still unparsed content of a scene."""
+
+    source: str
+    name: str
+    description: str
+    coordinates: tuple
+    parameters: dict  # name -> float or None, numeric ones first
+    lagrangian: str
+    constraints: tuple
+    holonomic: tuple
+    initial: Mapping[str, float] | None
+    simulate: SimulateOptions
+
+
+def _validate_structure(data: dict, source: str) -> _Spec:
+    """Check keys, types and names; raise one SceneError listing every problem."""
+    problems: list[str] = []
+    _check_keys(data, "", _TOP_KEYS, _TOP_ALIASES, problems)
+    for key in _REQUIRED_KEYS:
+        if key not in data:
+            problems.append(f"{key}: required key is missing")
+
+    name = _optional_string(data, "name", problems)
+    description = _optional_string(data, "description", problems)
+    coordinates = _name_list(data, "coordinates", problems, required=True)
+    values = _parameter_table(data.get("parameters"), problems)
+    symbolic = _name_list(data, "symbolic_parameters", problems)
+    lagrangian = _optional_string(data, "lagrangian", problems) if "lagrangian" in data else ""
+    constraints = _string_list(data, "constraints", problems)
+    holonomic = _string_list(data, "holonomic", problems)
+
+    parameters = dict(values)
+    for i, p in enumerate(symbolic):
+        if p in parameters:
+            problems.append(f"symbolic_parameters[{i}]: {p!r} is also given a value in parameters")
+        parameters.setdefault(p, None)
+    _check_name_clashes(coordinates, values, symbolic, problems)
+
+    initial = _initial_table(data.get("initial"), coordinates, problems)
+    simulate = _simulate_table(data.get("simulate"), problems)
+    if problems:
+        raise _scene_error(source, problems)
+    return _Spec(source, name, description, tuple(coordinates), parameters, lagrangian,
+                 tuple(constraints), tuple(holonomic), initial, simulate)
+
+
+def _scene_error(source: str, problems: list[str]) -> SceneError:
+    if len(problems) == 1:
+        message = f"{source}: {problems[0]}"
+    else:
+        message = f"{source}: {len(problems)} problems:\n" + "\n".join(f"  - {p}" for p in problems)
+    error = SceneError(message)
+    error.problems = tuple(problems)
+    return error
+
+
+def _key_path(prefix: str, key) -> str:
+    """``prefix.key`` with the key quoted when it is not a bare TOML key."""
+    text = key if isinstance(key, str) and _BARE_KEY.fullmatch(key) else _toml_string(str(key))
+    return f"{prefix}.{text}" if prefix else text
+
+
+def _check_keys(table: dict, prefix: str, known, aliases, problems) -> None:
+    for key in table:
+        if key in known:
+            continue
+        hint = aliases.get(key) or next(iter(difflib.get_close_matches(key, known, n=1)), None)
+        suggestion = f"; did you mean {hint!r}?" if hint else f" (known keys: {', '.join(known)})"
+        problems.append(f"{_key_path(prefix, key)}: unknown key{suggestion}")
+
+
+def _type_name(value) -> str:
+    """How a TOML value's type is called in messages."""
+    if isinstance(value, bool):
+        return "a boolean"
+    if isinstance(value, int):
+        return "an integer"
+    if isinstance(value, float):
+        return "a float"
+    if isinstance(value, str):
+        return "a string"
+    if isinstance(value, list):
+        return "an array"
+    if isinstance(value, dict):
+        return "a table"
+    return "a date/time"
+
+
+def _optional_string(data, key, problems) -> str:
+    value = data.get(key, "")
+    if not isinstance(value, str):
+        problems.append(f"{key}: expected a string, got {_type_name(value)}")
+        return ""
+    return value
+
+
+def _string_list(data, key, problems) -> list[str]:
+    """An optional array of strings (empty when absent)."""
+    value = data.get(key, [])
+    if not isinstance(value, list):
+        problems.append(f"{key}: expected an array of strings, got {_type_name(value)}")
+        return []
+    good = []
+    for i, item in enumerate(value):
+        if isinstance(item, str):
+            good.append(item)
+        else:
+            problems.append(f"{key}[{i}]: expected a string, got {_type_name(item)}")
+    return good
+
+
+def _name_list(data, key, problems, required=False) -> list[str]:
+    """An array of distinct valid names."""
+    if required and key in data and data[key] == []:
+        problems.append(f"{key}: at least one name is needed")
+    names = _string_list(data, key, problems)
+    seen = set()
+    good = []
+    for i, name in enumerate(names):
+        if not _check_name(name, f"{key}[{i}]", problems):
+            continue
+        if name in seen:
+            problems.append(f"{key}[{i}]: duplicate name {name!r}")
+            continue
+        seen.add(name)
+        good.append(name)
+    return good
+
+
+def _check_name(name: str, path: str, problems) -> bool:
+    """Whether ``name`` can be a coordinate or parameter name; record why not."""
+    if not name.isidentifier():
+        problems.append(f"{path}: {name!r} is not a valid name (letters, digits, underscores; "
+                        f"not starting with a digit)")
+        return False
+    if unicodedata.normalize("NFKC", name) != name:
+        problems.append(f"{path}: {name!r} is not in Unicode normal form NFKC "
+                        f"(write {unicodedata.normalize('NFKC', name)!r})")
+        return False
+    if name.startswith("__"):
+        problems.append(f"{path}: {name!r} is not allowed (names may not start with '__')")
+        return False
+    if name in RESERVED_NAMES:
+        problems.append(f"{path}: {name!r} is reserved (a function or constant)")
+        return False
+    if _MULTIPLIER_NAME.fullmatch(name):
+        problems.append(f"{path}: {name!r} is reserved for Lagrange multipliers")
+        return False
+    return True
+
+
+def _parameter_table(value, problems) -> dict:
+    """``parameters = {name = number}`` -> {name: float}."""
+    if value is None:
+        return {}
+    if not isinstance(value, dict):
+        hint = (" (for parameters without a value use symbolic_parameters = [...])"
+                if isinstance(value, list) else "")
+        problems.append(f"parameters: expected a table of name = number, got "
+                        f"{_type_name(value)}{hint}")
+        return {}
+    result = {}
+    for key, item in value.items():
+        path = _key_path("parameters", key)
+        if not _check_name(key, path, problems):
+            continue
+        number = _finite_number(item, path, problems)
+        if number is not None:
+            result[key] = number
+    return result
+
+
+def _finite_number(value, path, problems) -> float | None:
+    """A finite real number (TOML integer or float, not boolean) as float."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        hint = (" (for a parameter without a value use symbolic_parameters)"
+                if path.startswith("parameters.") and isinstance(value, str) else "")
+        problems.append(f"{path}: expected a number, got {_type_name(value)}{hint}")
+        return None
+    try:
+        number = float(value)
+    except OverflowError:
+        number = math.inf
+    if not math.isfinite(number):
+        problems.append(f"{path}: expected a finite number, got {value!r}")
+        return None
+    return number
+
+
+def _check_name_clashes(coordinates, values, symbolic, problems) -> None:
+    """Coordinates, parameters and generated names must all be distinct."""
+    generated = {}
+    for q in coordinates:
+        sym = sp.Symbol(q)
+        generated[velocity_symbol(sym).name] = f"the velocity of coordinate {q!r}"
+        generated[acceleration_symbol(sym).name] = f"the acceleration of coordinate {q!r}"
+        generated[momentum_symbol(sym).name] = f"the momentum of coordinate {q!r}"
+    for i, q in enumerate(coordinates):
+        if q in generated:
+            problems.append(f"coordinates[{i}]: {q!r} clashes with {generated[q]}")
+    coordinate_set = set(coordinates)
+    for path, p in [(_key_path("parameters", p), p) for p in values] + [
+        (f"symbolic_parameters[{i}]", p) for i, p in enumerate(symbolic)
+    ]:
+        if p in coordinate_set:
+            problems.append(f"{path}: {p!r} is also a coordinate")
+        elif p in generated:
+            problems.append(f"{path}: {p!r} clashes with {generated[p]}")
+
+
+def _initial_table(value, coordinates, problems):
+    """``[initial]``: a finite value for exactly every coordinate and velocity."""
+    if value is None:
+        return None
+    if not isinstance(value, dict):
+        problems.append(f"initial: expected a table, got {_type_name(value)}")
+        return None
+    wanted = list(coordinates) + [velocity_symbol(sp.Symbol(q)).name for q in coordinates]
+    result = {}
+    for key, item in value.items():
+        path = _key_path("initial", key)
+        if key not in wanted:
+            close = difflib.get_close_matches(key, wanted, n=1)
+            hint = f"; did you mean {close[0]!r}?" if close else ""
+            problems.append(f"{path}: unknown name (not a coordinate or velocity){hint}")
+            continue
+        number = _finite_number(item, path, problems)
+        if number is not None:
+            result[key] = number
+    missing = [name for name in wanted if name not in value]
+    if missing:
+        problems.append(f"initial: missing value for {', '.join(map(repr, missing))} "
+                        f"(every coordinate and velocity needs one)")
+    return MappingProxyType({name: result[name] for name in wanted if name in result})
+
+
+def _simulate_table(value, problems) -> SimulateOptions:
+    if value is None:
+        return SimulateOptions()
+    if not isinstance(value, dict):
+        problems.append(f"simulate: expected a table, got {_type_name(value)}")
+        return SimulateOptions()
+    _check_keys(value, "simulate", _SIMULATE_KEYS, _SIMULATE_ALIASES, problems)
+    options = {}
+    for key in _SIMULATE_KEYS:
+        if key not in value:
+            continue
+        path = f"simulate.{key}"
+        if key == "method":
+            if isinstance(value[key], str) and value[key].strip():
+                options[key] = value[key]
+            else:
+                problems.append(f"{path}: expected a method name, got {_type_name(value[key])}"
+                                if not isinstance(value[key], str) else f"{path}: empty method name")
+            continue
+        number = _finite_number(value[key], path, problems)
+        if number is None:
+            continue
+        if number <= 0:
+            problems.append(f"{path}: must be positive, got {value[key]!r}")
+            continue
+        options[key] = number
+    return SimulateOptions(**options)
+
+
+# ------------------------------------------------------------- expressions
+def _symbol_table(spec: _Spec) -> dict:
+    table = {}
+    for q in spec.coordinates:
+        sym = sp.Symbol(q)
+        table[q] = sym
+        table[velocity_symbol(sym).name] = velocity_symbol(sym)
+    for p in spec.parameters:
+        table[p] = sp.Symbol(p)
+    return table
+
+
+def _parse_expressions(spec: _Spec) -> dict:
+    """Parse every expression; raise one ParseError listing every failure."""
+    table = _symbol_table(spec)
+    items = [("lagrangian", spec.lagrangian)]
+    items += [(f"constraints[{i}]", c) for i, c in enumerate(spec.constraints)]
+    items += [(f"holonomic[{i}]", g) for i, g in enumerate(spec.holonomic)]
+    parsed, problems = {}, []
+    for path, text in items:
+        try:
+            parsed[path] = parse_expression(text, table, where=path)
+        except ParseError as exc:
+            problems.append(str(exc))
+    if problems:
+        if len(problems) == 1:
+            error = ParseError(problems[0])
+        else:
+            error = ParseError(f"{len(problems)} problems:\n"
+                               + "\n".join(f"  - {p}" for p in problems))
+        error.problems = tuple(problems)
+        raise error
+    return parsed
+
+
+def _build_system(spec: _Spec, parsed: dict, drop_redundant: bool):
+    # Imported here: system.py imports the expression parser, and a scene is
+    # the only place that needs both.
+    from nhham.system.description import System
+
+    return System(
+        coordinates=list(spec.coordinates),
+        lagrangian=parsed["lagrangian"],
+        constraints=[parsed[f"constraints[{i}]"] for i in range(len(spec.constraints))],
+        holonomic=[parsed[f"holonomic[{i}]"] for i in range(len(spec.holonomic))],
+        parameters=dict(spec.parameters),
+        name=spec.name,
+        drop_redundant=drop_redundant,
+    )
+
+
+# ------------------------------------------------------------ initial data
+def check_initial(scene: Scene) -> dict:
+    """Residuals of every constraint at the scene's initial state.
+
+    Each affine constraint, each holonomic constraint g and its time
+    derivative (dg/dq) v (the state must lie on T Q_1) is evaluated at the
+    initial coordinates and velocities with the parameter values.
+
+    Parameters
+    ----------
+    scene : Scene
+
+    Returns
+    -------
+    dict
+        ``{key path: residual}``, e.g. ``{"constraints[0]": 0.0,
+        "holonomic[0]": 0.0, "holonomic[0] (time derivative)": 0.0}``;
+        empty when the scene has no initial data.
+
+    Raises
+    ------
+    InconsistentInitialDataError
+        A residual exceeds ``INITIAL_TOLERANCE * max(1, |largest term|)``,
+        or is not a finite real number; the message names the constraint
+        and shows the residual.
+    MissingParameterValueError
+        A constraint uses a parameter that has no numeric value.
+    """
+    if scene.initial is None:
+        return {}
+    return _check_initial(scene)
+
+
+def _check_initial(scene: Scene) -> dict:
+    system = scene.system
+    point = {sp.Symbol(name): sp.Float(value) for name, value in scene.initial.items()}
+    point.update({p: sp.Float(v) for p, v in system.parameter_values.items()})
+    residuals, problems = {}, []
+    for path, expr in _labelled_constraints(system):
+        missing = sorted(s.name for s in expr.free_symbols if s not in point)
+        if missing:
+            raise MissingParameterValueError(
+                f"{path}: no numeric value for parameter {', '.join(map(repr, missing))}, "
+                f"needed to check the initial data (give it in parameters)"
+            )
+        residual, scale = _evaluate(expr, point)
+        if residual is None:
+            problems.append(f"{path}: {to_text(expr)} is not a finite real number "
+                            f"at the initial state")
+            continue
+        residuals[path] = residual
+        tolerance = INITIAL_TOLERANCE * scale
+        if abs(residual) > tolerance:
+            problems.append(f"{path}: {to_text(expr)} = {residual:.6g} at the initial state "
+                            f"(residual {abs(residual):.3g} exceeds tolerance {tolerance:.1g})")
+    if problems:
+        intro = f"{scene.source}: initial data violate the constraints: "
+        raise InconsistentInitialDataError(intro + "; ".join(problems))
+    return residuals
+
+
+def _labelled_constraints(system):
+    """(key path, expression) for every constraint the initial state must meet."""
+    items = []
+    for i, g in enumerate(system.holonomic):
+        lift = sum((sp.diff(g, q) * v for q, v in zip(system.coordinates, system.velocities)),
+                   sp.S.Zero)
+        items.append((f"holonomic[{i}]", g))
+        items.append((f"holonomic[{i}] (time derivative)", lift))
+    labels = getattr(system, "constraint_labels", ())
+    affine = [label for label in labels if label.startswith("constraints[")]
+    if len(affine) != len(system.constraints):
+        affine = [f"constraints[{i}]" for i in range(len(system.constraints))]
+    items.extend(zip(affine, system.constraints))
+    return items
+
+
+def _evaluate(expr, point):
+    """(residual, scale) of ``expr`` at ``point``; residual None if not finite real."""
+    def value(e):
+        try:
+            z = complex(sp.sympify(e.xreplace(point)).evalf())
+        except (TypeError, ValueError, OverflowError, ZeroDivisionError):
+            return None
+        if not (math.isfinite(z.real) and math.isfinite(z.imag)):
+            return None
+        return z
+
+    total = value(expr)
+    if total is None or abs(total.imag) > INITIAL_TOLERANCE * max(1.0, abs(total.real)):
+        return None, 1.0
+    # Scale: the largest term of the constraint as written, so that a
+    # residual of 1e-12 on terms of size 1e6 counts as zero.
+    terms = [value(t) for t in sp.Add.make_args(expr)]
+    scale = max([1.0] + [abs(t) for t in terms if t is not None])
+    return total.real, scale
+
+
+# -------------------------------------------------------------------- dump
+def dump_scene(system, initial=None, simulate=None, *, description: str = "") -> str:
+    """Write a system (and optional initial data and options) as scene TOML.
+
+    Parameters
+    ----------
+    system : nhham.system.System
+    initial : mapping of str to float, optional
+        Initial value of every coordinate and velocity.
+    simulate : SimulateOptions or mapping, optional
+        Simulation defaults.
+    description : str, optional
+
+    Returns
+    -------
+    str
+        TOML text that :func:`loads_scene` reads back to an equal system.
+
+    Raises
+    ------
+    SceneError
+        A value cannot be written (non-finite number).
+    """
+    lines = []
+    if system.name:
+        lines.append(f"name = {_toml_string(system.name)}")
+    if description:
+        lines.append(f"description = {_toml_string(description)}")
+    lines.append(f"coordinates = {_toml_array([q.name for q in system.coordinates])}")
+    values = {p.name: v for p, v in system.parameter_values.items()}
+    numeric = [p.name for p in system.parameters if p.name in values]
+    symbolic = [p.name for p in system.parameters if p.name not in values]
+    if numeric:
+        items = ", ".join(f"{_toml_key(p)} = {_toml_float(values[p], p)}" for p in numeric)
+        lines.append(f"parameters = {{ {items} }}")
+    if symbolic:
+        lines.append(f"symbolic_parameters = {_toml_array(symbolic)}")
+    lines.append(f"lagrangian = {_toml_string(to_text(system.lagrangian))}")
+    lines.append(f"constraints = {_toml_array([to_text(c) for c in system.constraints])}")
+    lines.append(f"holonomic = {_toml_array([to_text(g) for g in system.holonomic])}")
+    if initial is not None:
+        lines.append("")
+        lines.append("[initial]")
+        lines.extend(f"{_toml_key(k)} = {_toml_float(v, k)}" for k, v in initial.items())
+    options = simulate.given() if isinstance(simulate, SimulateOptions) else dict(simulate or {})
+    if options:
+        lines.append("")
+        lines.append("[simulate]")
+        for key, value in options.items():
+            text = _toml_string(value) if isinstance(value, str) else _toml_float(value, key)
+            lines.append(f"{_toml_key(key)} = {text}")
+    return "\n".join(lines) + "\n"
+
+
+def _toml_string(text: str) -> str:
+    """A TOML basic string."""
+    out = []
+    for ch in text:
+        if ch == '"':
+            out.append('\\"')
+        elif ch == "\\":
+            out.append("\\\\")
+        elif ch in "\b\t\n\f\r":
+            out.append({"\b": "\\b", "\t": "\\t", "\n": "\\n", "\f": "\\f", "\r": "\\r"}[ch])
+        elif ord(ch) < 0x20 or ord(ch) == 0x7F:
+            out.append(f"\\u{ord(ch):04X}")
+        else:
+            out.append(ch)
+    return '"' + "".join(out) + '"'
+
+
+def _toml_key(key: str) -> str:
+    return key if _BARE_KEY.fullmatch(key) else _toml_string(key)
+
+
+def _toml_float(value, key) -> str:
+    number = float(value)
+    if not math.isfinite(number):
+        raise SceneError(f"{key}: cannot write the non-finite value {value!r}")
+    return repr(number)  # shortest text that reads back to the same double
+
+
+def _toml_array(items) -> str:
+    if not items:
+        return "[]"
+    if sum(len(i) for i in items) < 60:
+        return "[" + ", ".join(_toml_string(i) for i in items) + "]"
+    return "[\n" + "".join(f"    {_toml_string(i)},\n" for i in items) + "]"

@@ -1,0 +1,148 @@
+"""Lagrangian <-> Hamiltonian cross-check on every model; the projected Hamiltonian field
+of every model is tangent to M_f; the check detects a wrong sign."""
+
+import json
+from functools import cached_property
+
+import numpy as np
+import pytest
+import sympy as sp
+
+from nhham import models
+from nhham.hamiltonian.classification import classify_constraints
+from nhham.hamiltonian.crosscheck import CrossCheckReport, _Sampler, cross_check
+from nhham.hamiltonian.side import HamiltonianSide, hamiltonian_side
+from nhham.hamiltonian.legendre import Backend
+
+MODELS = {name: ctor for name, ctor in models.MODELS.items() if name != "snake"}
+MODELS["snake3"] = lambda: models.snake(3)
+# Exact checks of these take tens of seconds (the symbolic algorithm on both sides);
+# the bench measures them, the tests use the numeric path.
+SAMPLED = {"snakeboard", "rolling_ball", "ball_on_turntable", "snake3"}
+
+CHECKS = {"stages", "legendre inverse", "field", "multipliers", "symplectic form", "Poisson map"}
+
+
+@pytest.mark.parametrize("name", sorted(MODELS))
+def test_cross_check_passes(name):
+    system = MODELS[name]()
+    report = cross_check(system, method="sampled" if name in SAMPLED else "auto")
+    assert isinstance(report, CrossCheckReport)
+    assert report.agree, report.describe()
+    assert set(report.detail) == CHECKS
+    assert report.samples >= 3
+    assert report.max_rel_difference <= report.tolerance
+    assert report.statuses[0] == report.statuses[1]
+    assert report.lagrangian_stages == report.hamiltonian_stages or report.method == "exact"
+    if report.method == "exact":
+        assert report.exact, report.describe()
+        assert [s["rank"] for s in report.lagrangian_stages] == \
+            [s["rank"] for s in report.hamiltonian_stages]
+
+
+@pytest.mark.parametrize("name", sorted(MODELS))
+def test_projected_hamiltonian_field_is_tangent_to_M_f(name):
+    """X = X_H + lambda^j Z_j^H satisfies X(chi) = 0 on M_f: numerically at points of M_f
+    (numeric layer, no symbolic inverse), and symbolically where that is affordable."""
+    system = MODELS[name]()
+    side = hamiltonian_side(system)
+    classes = classify_constraints(side)
+    be = Backend(None)
+    cons = classes.constraints_TQ
+    from nhham.lagrangian.submanifold import Submanifold
+
+    points = Submanifold(system, cons, exact=False).points()[0]
+    regular = side.regular if side.symbolic_affordable else True
+    checked = 0
+    for x in points:
+        hp = side.numeric.point_from_tq(be, x)
+        if np.linalg.svd(hp.C, compute_uv=False)[-1] < 1e-8 if system.m else False:
+            continue  # a point where C drops rank (snakeboard at phi = +-pi/2)
+        if not regular:
+            break
+        X, lam = side.numeric.projected_field(be, hp)
+        _, Gq, Gp = side.numeric.gradients(be, hp, cons)
+        tangency = Gq @ X[:system.n] + Gp @ X[system.n:]
+        assert np.max(np.abs(tangency)) < 1e-9 * max(1.0, np.max(np.abs(X)))
+        checked += 1
+    if regular:
+        assert checked >= 3
+    else:
+        # Singular C (paper Examples 3.1, 3.2): the dynamics is the T*Q algorithm's family.
+        run = side.analysis()
+        for chi in run.final_constraints:
+            dchi = side.algebra.apply(run.dynamics, chi)
+            assert run.manifold.vanishes(dchi).value
+
+
+def test_exact_report_values_and_json():
+    report = cross_check(models.two_particle_rod())
+    assert report.method == "exact" and report.exact and report.agree
+    assert report.tolerance == 1e-9 and report.precision == "float64"
+    d = json.loads(json.dumps(report.to_dict()))
+    for key in ("agree", "exact", "max_abs_difference", "samples", "tolerance"):
+        assert key in d
+    assert d["checks"]["field"]["agree"]
+    assert "cancels" in report.detail["Poisson map"].detail
+    assert "Leg_* xi_L = X_H o Leg" in report.detail["field"].detail
+
+
+def test_singular_systems_compare_stages_and_multipliers():
+    report = cross_check(models.paper_example_3_2())
+    assert report.agree and report.exact
+    assert report.statuses == ("determined", "determined")
+    assert [(s["rank"], s["augmented_rank"], s["constraints"]) for s in report.hamiltonian_stages] \
+        == [(0, 1, 1), (0, 1, 2), (1, 1, 3)]
+    assert report.lagrangian_stages == report.hamiltonian_stages
+    free = cross_check(models.paper_example_3_1(), method="sampled")
+    # C = 0: the numeric path cannot decide the stages and falls back to the algorithm.
+    assert free.method == "exact" and free.statuses == ("underdetermined", "underdetermined")
+    assert free.agree
+
+
+def test_mpmath_precision():
+    report = cross_check(models.rolling_disk(), precision=30, method="sampled")
+    assert report.precision == "mpmath:30" and report.tolerance == pytest.approx(1e-27)
+    assert report.agree and report.max_abs_difference < 1e-25
+
+
+def test_snake_sampled_cross_check():
+    report = cross_check(models.snake(4))
+    assert report.method == "sampled" and report.agree and not report.exact
+    assert report.max_rel_difference < 1e-12
+
+
+def test_a_wrong_sign_is_detected(monkeypatch):
+    """Flip the sign of Z^H: the field, the multipliers and C disagree."""
+    def wrong(self):
+        return sp.Matrix.hstack(sp.zeros(self.m, self.n), self.system.mu)
+
+    monkeypatch.setattr(HamiltonianSide, "vertical_fields_H", cached_property(wrong))
+    HamiltonianSide.vertical_fields_H.__set_name__(HamiltonianSide, "vertical_fields_H")
+    report = cross_check(models.chaplygin_sleigh(), method="exact")
+    assert not report.agree
+    assert not report.detail["field"].agree
+
+
+def test_sampler_comparison_tolerance():
+    s = _Sampler(models.rolling_disk(), (), None, 3, 1, 1e-9)
+    assert s.compare([(np.array([1.0, 2.0]), np.array([1.0, 2.0 + 1e-12]))])[2]
+    ab, rel, ok = s.compare([(np.array([100.0]), np.array([100.0 + 1e-6]))])
+    assert not ok and ab == pytest.approx(1e-6) and rel == pytest.approx(1e-8)
+    ab, rel, ok = s.compare([(np.array([np.inf]), np.array([1.0])),
+                             (np.array([1.0]), np.array([1.0]))])
+    assert ok and s.skipped == 1
+
+
+def test_non_quadratic_lagrangian_uses_the_numeric_inverse():
+    import nhham
+
+    th = sp.Symbol("theta")
+    xd, yd, thd = sp.symbols("x_dot y_dot theta_dot")
+    L = (xd**2 + yd**2) / 2 + (xd**2 + yd**2) ** 2 / 20 + thd**2 / 2 + sp.cos(th) * xd * thd / 5
+    s = nhham.System(["x", "y", "theta"], L, [sp.sin(th) * xd - sp.cos(th) * yd])
+    side = hamiltonian_side(s)
+    assert side.legendre.inverse_kind == "numeric" and not side.symbolic_affordable
+    report = cross_check(s)
+    assert report.method == "sampled" and report.agree
+    assert report.detail["legendre inverse"].max_abs_difference < 1e-12

@@ -1,0 +1,317 @@
+"""``simulate``: the result object, initial data, failure statuses, options,
+warnings, the reference method and the work-precision driver."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+import nhham
+from nhham.numerics.codegen import numeric_model
+from nhham.errors import InconsistentInitialDataError, InputError
+from nhham.numerics.integrate import METHODS, simulate
+from nhham.numerics.model import NumericsWarning
+from nhham.numerics.workprecision import work_precision
+
+from test_codegen import pendulum, pendulum_state
+from test_exact_solutions import (ball_on_turntable, ball_state, chaplygin_sleigh, sleigh_exact,
+                                  sleigh_state)
+
+
+@pytest.fixture(scope="module")
+def sleigh():
+    return numeric_model(chaplygin_sleigh())
+
+
+def test_result_object_in_the_style_of_oderesult(sleigh):
+    res = simulate(sleigh, sleigh_state(), (0, 3), t_eval=np.linspace(0, 3, 7), warn=False)
+    assert res.success and res.status == 0 and "end" in res.message
+    assert res.y.shape == (6, 7) and res.t.shape == (7,)
+    assert res.states.shape == (7, 6)
+    assert np.allclose(res["theta_dot"], res.y[5])
+    assert res.nfev > 0 and res.nsteps > 0 and res.wall_time_s > 0
+    assert res.multipliers.shape == (1, 7)
+    assert res.energy.shape == (7,) and res.work.shape == (7,)
+    for key in ("constraint_residual_max", "energy_drift", "energy_balance_residual",
+                "cond_C_max", "cond_W_max"):
+        assert np.isfinite(getattr(res, key))
+    json.dumps(res.summary())  # plain numbers only
+    with pytest.raises(Exception):
+        res.status = 1  # frozen
+
+
+def test_system_is_accepted_directly():
+    res = simulate(chaplygin_sleigh(), sleigh_state(), (0, 1), warn=False)
+    assert res.success and res.model.backend in ("c", "numpy")
+
+
+def test_initial_data_violating_constraints_are_refused_with_the_residual(sleigh):
+    y = sleigh_state()
+    y[3] += 0.01
+    with pytest.raises(InconsistentInitialDataError, match=r"constraints\[0\] = "):
+        simulate(sleigh, y, (0, 1), warn=False)
+
+
+def test_initial_data_projected_when_asked():
+    model = numeric_model(pendulum())
+    y = pendulum_state() + np.array([0.01, 0.02, -0.05, 0.0])
+    res = simulate(model, y, (0, 1), project_initial=True, projection=True, warn=False)
+    p = res.initial_projection
+    assert p.residual_before > 1e-3 and p.residual_after <= 1e-14
+    assert p.displacement_q > 0 and p.displacement_v > 0
+    assert res.constraint_residual_max <= 1e-12
+    assert res.summary()["initial_projection"]["residual_before"] == p.residual_before
+
+
+def test_initial_data_by_name_and_missing_names(sleigh):
+    names = dict(zip(sleigh.names, sleigh_state()))
+    assert simulate(sleigh, names, (0, 0.5), warn=False).success
+    del names["theta_dot"]
+    with pytest.raises(InconsistentInitialDataError, match="missing theta_dot"):
+        simulate(sleigh, names, (0, 0.5), warn=False)
+
+
+def test_options_are_checked(sleigh):
+    y = sleigh_state()
+    with pytest.raises(InputError, match="unknown method"):
+        simulate(sleigh, y, (0, 1), method="Euler")
+    with pytest.raises(InputError, match="needs step"):
+        simulate(sleigh, y, (0, 1), method="rattle")
+    with pytest.raises(InputError, match="not applicable"):
+        simulate(sleigh, y, (0, 1), method="rattle", step=0.1, projection=True)
+    with pytest.raises(InputError, match="alpha, beta"):
+        simulate(sleigh, y, (0, 1), baumgarte=(1.0, -1.0))
+    with pytest.raises(InputError, match="t_span"):
+        simulate(sleigh, y, (1, 1))
+    assert set(METHODS) >= {"RK23", "RK45", "DOP853", "Radau", "BDF", "LSODA", "rattle",
+                            "rattle4", "rk4", "reference"}
+
+
+def blowup_system():
+    """x'' = x^2 (V = -x^3/3) blows up in finite time; one trivial constraint."""
+    return nhham.System(["x", "y"], "(x_dot**2 + y_dot**2)/2 + x**3/3", ["y_dot"],
+                        name="blow-up")
+
+
+@pytest.mark.parametrize("method,kw", [("rk4", {"step": 0.05}), ("DOP853", {}),
+                                       ("rattle", {"step": 0.05}), ("LSODA", {})])
+def test_nan_or_overflow_stops_with_a_clear_status(method, kw):
+    """From x = 1, x' = 1: x'^2 = 2 x^3/3 + 1/3, so x reaches infinity at
+    t* = int_1^inf dx / sqrt(2x^3/3 + 1/3) = 2.3759. The run stops with status
+    -2 (non-finite) or -1 (step failure) soon after (fixed steps overshoot by a
+    few steps), keeps the finite part, and is never reported as a success."""
+    model = numeric_model(blowup_system())
+    with pytest.warns(NumericsWarning, match="run stopped"):
+        res = simulate(model, [1.0, 0.0, 1.0, 0.0], (0, 10), method=method, **kw)
+    assert not res.success
+    assert res.status in (-1, -2, -4)
+    assert np.all(np.isfinite(res.y))
+    assert 2.0 < res.t[-1] < 3.0
+    if res.status == -2:
+        assert "non-finite" in res.message
+
+
+def test_baumgarte_reduces_drift_of_the_position_constraint():
+    """Pendulum, loose tolerance, no projection: g drifts; Baumgarte damps it."""
+    model = numeric_model(pendulum())
+    y0 = pendulum_state()
+    plain = simulate(model, y0, (0, 20), method="RK45", rtol=1e-5, atol=1e-7, warn=False)
+    stab = simulate(model, y0, (0, 20), method="RK45", rtol=1e-5, atol=1e-7,
+                    baumgarte=(5.0, 5.0), warn=False)
+    g_plain = np.max(np.abs(model.residuals(plain.states)[:, 1]))
+    g_stab = np.max(np.abs(model.residuals(stab.states)[:, 1]))
+    assert g_stab < 0.1 * g_plain
+    assert stab.settings["baumgarte"] == (5.0, 5.0)
+
+
+def test_residual_past_tolerance_warns(sleigh):
+    with pytest.warns(NumericsWarning, match="constraint residual"):
+        res = simulate(sleigh, sleigh_state(), (0, 20), method="RK23", rtol=1e-3, atol=1e-6,
+                       residual_tol=1e-9)
+    assert any("constraint residual" in w for w in res.warnings)
+
+
+def test_energy_balance_for_affine_constraints():
+    """Ball on turntable: E changes by O(1) but E - E0 - work stays at the
+    integration error (dE/dt = lambda . h)."""
+    model = numeric_model(ball_on_turntable())
+    res = simulate(model, ball_state(model), (0, 10), rtol=1e-11, atol=1e-13, warn=False)
+    assert res.energy_drift > 0.1
+    assert res.energy_balance_residual < 1e-8
+
+
+@pytest.mark.parametrize("method", ["RK45", "DOP853", "Radau", "BDF", "LSODA"])
+def test_projection_keeps_solver_history(sleigh, method):
+    """Projecting after each step must not restart the solver: the number of
+    steps stays close to the unprojected run."""
+    plain = simulate(sleigh, sleigh_state(), (0, 10), method=method, warn=False)
+    proj = simulate(sleigh, sleigh_state(), (0, 10), method=method, projection=True, warn=False)
+    assert proj.nsteps <= 1.3 * plain.nsteps + 5
+    assert proj.constraint_residual_max <= 1e-14
+
+
+def test_reference_method_through_simulate(sleigh):
+    res = simulate(sleigh, sleigh_state(), (0, 1.0), method="reference", reference_digits=25,
+                   t_eval=[0.5, 1.0], warn=False)
+    assert res.success and np.allclose(res.t, [0.5, 1.0])
+    u, w, th = sleigh_exact(np.array(1.0))
+    assert abs(res["theta_dot"][-1] - w) < 1e-15
+    assert res.settings["digits"] == 25 and res.settings["error_estimate"] < 1e-18
+
+
+def test_backward_integration(sleigh):
+    fwd = simulate(sleigh, sleigh_state(), (0, 2), rtol=1e-12, atol=1e-14, warn=False)
+    back = simulate(sleigh, fwd.y[:, -1], (2, 0), rtol=1e-12, atol=1e-14, warn=False)
+    assert np.max(np.abs(back.y[:, -1] - sleigh_state())) < 1e-9
+
+
+def test_work_precision_rows_and_time_to_solution(sleigh):
+    wp = work_precision(sleigh, sleigh_state(), (0, 2.0), methods=["DOP853", "rattle"],
+                        tolerances=(1e-6, 1e-10), steps=(0.05, 0.01), reference_digits=25)
+    labels = [(r.method, r.setting) for r in wp.rows]
+    assert ("DOP853", "rtol=1e-06") in labels and ("DOP853+projection", "rtol=1e-10") in labels
+    assert ("rattle", "h=0.01") in labels
+    errs = {(r.method, r.setting): r.error for r in wp.rows}
+    assert errs[("DOP853", "rtol=1e-10")] < errs[("DOP853", "rtol=1e-06")] < 1e-4
+    assert errs[("rattle", "h=0.01")] < errs[("rattle", "h=0.05")]
+    for r in wp.rows:
+        if r.method in ("rattle", "DOP853+projection"):
+            assert r.constraint_residual <= 1e-12
+    tts = wp.time_to_solution(1e-6)
+    assert tts["DOP853"] is not None
+    assert "| method |" in wp.table()
+    assert wp.reference_error_estimate < 1e-18
+
+
+def test_plots_need_matplotlib_or_say_so(tmp_path, sleigh):
+    from nhham.cli.plotting import OptionalDependencyError, plot_trajectory
+
+    res = simulate(sleigh, sleigh_state(), (0, 1), warn=False)
+    try:
+        import matplotlib  # noqa: F401
+    except ImportError:
+        with pytest.raises(OptionalDependencyError, match="pip install"):
+            plot_trajectory(res, tmp_path / "t.png")
+    else:
+        path = plot_trajectory(res, tmp_path / "t.png")
+        assert (tmp_path / "t.png").exists() and path.endswith("t.png")
+
+
+# ------------------------------------------------------------ compiled loop
+HAVE_CC = numeric_model(chaplygin_sleigh()).backend == "c"
+needs_cc = pytest.mark.skipif(not HAVE_CC, reason="no C compiler on this machine")
+
+
+@needs_cc
+@pytest.mark.parametrize("method", ["RK23", "RK45", "DOP853"])
+@pytest.mark.parametrize("options", [{}, {"projection": True}, {"t_eval": True},
+                                     {"t_eval": True, "projection": True},
+                                     {"baumgarte": (1.0, 2.0)}],
+                         ids=["plain", "projection", "t_eval", "t_eval+projection", "baumgarte"])
+def test_compiled_loop_matches_scipy_loop_on_the_numpy_path(method, options):
+    """RK23/RK45/DOP853 as one compiled loop against scipy's own loop on the
+    numpy backend (the pre-existing path), on the Cartesian pendulum (holonomic:
+    the projection runs Newton in C): same number of steps, the same states at
+    the t_eval points and at t_end up to round-off, the same work integral;
+    projected runs keep the residual at round-off."""
+    system = pendulum()
+    compiled, numpy_model = numeric_model(system), numeric_model(system, backend="numpy")
+    kw = dict(options)
+    if kw.pop("t_eval", False):
+        kw["t_eval"] = np.linspace(0.0, 3.0, 13)[1:]  # t0 not requested
+    runs = [simulate(m, pendulum_state(), (0, 3.0), method=method, rtol=1e-8, atol=1e-10,
+                     warn=False, loop=loop, **kw)
+            for m, loop in ((compiled, "compiled"), (numpy_model, "auto"))]
+    fast, ref = runs
+    assert fast.settings["loop"] == "compiled" and ref.settings["loop"] == "scipy"
+    assert fast.success and ref.success
+    assert abs(fast.nsteps - ref.nsteps) <= 2
+    assert fast.t[-1] == ref.t[-1] == 3.0
+    assert np.allclose(fast.y[:, -1], ref.y[:, -1], rtol=1e-11, atol=1e-11)
+    assert fast.work[-1] == pytest.approx(ref.work[-1], abs=1e-10)
+    if "t_eval" in kw:
+        assert np.array_equal(fast.t, kw["t_eval"]) and np.array_equal(ref.t, kw["t_eval"])
+        assert np.allclose(fast.y, ref.y, rtol=1e-11, atol=1e-11)
+        assert fast.nfev == ref.nfev
+    else:
+        assert fast.t[0] == 0.0 and np.all(np.diff(fast.t) > 0)
+        assert len(fast.t) == fast.nsteps + 1
+    if kw.get("projection"):
+        assert fast.constraint_residual_max <= 1e-14
+
+
+@needs_cc
+def test_compiled_loop_against_exact_solutions():
+    """Chaplygin sleigh (closed form) and the rolling disk (exact state) with the
+    compiled DOP853 / RK45, also with projection and across several chunks of
+    stored steps (RK23 at a tight tolerance: thousands of steps)."""
+    from test_exact_solutions import rolling_disk, rolling_disk_exact
+
+    sleigh = numeric_model(chaplygin_sleigh())
+    t = np.linspace(0.5, 6.0, 12)
+    for method, rtol, tol in (("DOP853", 1e-11, 1e-9), ("RK45", 1e-10, 1e-8)):
+        for projection in (False, True):
+            res = simulate(sleigh, sleigh_state(), (0, 6.0), method=method, rtol=rtol,
+                           atol=1e-13, t_eval=t, projection=projection, loop="compiled",
+                           warn=False)
+            u_ex, w_ex, th_ex = sleigh_exact(res.t)
+            u = np.cos(res["theta"]) * res["x_dot"] + np.sin(res["theta"]) * res["y_dot"]
+            err = max(np.max(np.abs(u - u_ex)), np.max(np.abs(res["theta_dot"] - w_ex)),
+                      np.max(np.abs(res["theta"] - th_ex)))
+            assert err < tol, (method, projection, err)
+    disk = numeric_model(rolling_disk())
+    y0, _ = rolling_disk_exact(np.array(0.0))
+    res = simulate(disk, y0, (0, 5.0), method="RK23", rtol=1e-9, atol=1e-12, projection=True,
+                   loop="compiled", warn=False)
+    assert res.nsteps > 1000 and len(res.t) == res.nsteps + 1  # several C calls
+    assert np.max(np.abs(res.y - rolling_disk_exact(res.t)[0])) < 1e-6
+    assert res.constraint_residual_max <= 1e-14
+
+
+@needs_cc
+def test_compiled_loop_failures_progress_and_options(capsys):
+    """Failure statuses and messages as in scipy's loop (the finite part kept),
+    scipy's option checks, max_step honoured, progress reported."""
+    blowup = numeric_model(blowup_system())
+    for loop in ("compiled", "scipy"):
+        res = simulate(blowup, [1.0, 0.0, 1.0, 0.0], (0, 10), method="DOP853", loop=loop,
+                       warn=False)
+        assert res.status in (-1, -2) and 2.0 < res.t[-1] < 3.0 and np.all(np.isfinite(res.y))
+    singular = numeric_model(nhham.System(["x", "y"], "(x_dot**2 + y_dot**2)/2 - x",
+                                          ["x*x_dot + y*y_dot"]))
+    msgs = []
+    for loop in ("compiled", "scipy"):
+        res = simulate(singular, np.zeros(4), (0, 1), method="RK45", loop=loop, warn=False)
+        assert res.status == -3 and len(res.t) == 1
+        msgs.append(res.message)
+    assert msgs[0] == msgs[1] and "singular saddle-point system at t = 0" in msgs[0]
+    sleigh = numeric_model(chaplygin_sleigh())
+    for bad in ({"max_step": 0.0}, {"first_step": -1.0}, {"first_step": 5.0}):
+        with pytest.raises(ValueError, match="step"):
+            simulate(sleigh, sleigh_state(), (0, 1), loop="compiled", **bad)
+    with pytest.warns(UserWarning, match="rtol"):
+        simulate(sleigh, sleigh_state(), (0, 1), rtol=1e-20, loop="compiled", warn=False)
+    res = simulate(sleigh, sleigh_state(), (0, 1), max_step=0.01, first_step=1e-3,
+                   loop="compiled", warn=False)
+    assert np.max(np.diff(res.t)) <= 0.01 + 1e-15 and res.t[1] == pytest.approx(1e-3)
+    capsys.readouterr()
+    simulate(sleigh, sleigh_state(), (0, 1), loop="compiled", progress=True, warn=False)
+    err = capsys.readouterr().err
+    assert "(50%)" in err and "(100%)" in err
+
+
+def test_loop_option_is_checked(sleigh):
+    numpy_model = numeric_model(chaplygin_sleigh(), backend="numpy")
+    with pytest.raises(InputError, match="loop"):
+        simulate(sleigh, sleigh_state(), (0, 1), loop="fortran")
+    with pytest.raises(InputError, match="no compiled C backend"):
+        simulate(numpy_model, sleigh_state(), (0, 1), loop="compiled")
+    with pytest.raises(InputError, match="for RK23, RK45, DOP853, not 'Radau'"):
+        simulate(sleigh, sleigh_state(), (0, 1), method="Radau", loop="compiled")
+    res = simulate(sleigh, sleigh_state(), (0, 1), loop="scipy", warn=False)
+    assert res.settings["loop"] == "scipy"
+    auto = simulate(sleigh, sleigh_state(), (0, 1), warn=False)
+    assert auto.settings["loop"] == ("compiled" if sleigh.backend == "c" else "scipy")
