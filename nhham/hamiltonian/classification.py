@@ -42,7 +42,19 @@ from nhham.hamiltonian.side import HamiltonianSide, hamiltonian_side
 from nhham.hamiltonian.legendre import Backend, Lambdified
 from nhham.lagrangian.algebra import block_inverse, cancel
 from nhham.lagrangian.algorithm import ConstraintAnalysis, analyze_constraints
+from nhham.lagrangian.points import (
+    SAMPLE_BITS,
+    NotExact,
+    PointSampler,
+    evaluate,
+    exact_rank,
+    exact_solve,
+    jacobian_row,
+    minor_degree,
+    solve_degrees,
+)
 from nhham.lagrangian.submanifold import Decision, Submanifold
+from nhham.lagrangian.tangency import MAX_POINTS, TARGET_ERROR
 
 __all__ = [
     "ConstraintClasses",
@@ -130,7 +142,9 @@ class ConstraintClasses:
         Named :class:`Decision` objects: ``"rank"``, ``"B[a,b]"`` per entry,
         ``"gamma[k]"`` for the check that each combination is first class.
     method : str
-        ``"exact"`` or ``"sampled"``.
+        ``"exact"`` (symbolic B reduced on M_f), ``"exact at points"`` (B at
+        exact points of M_f: each decision says whether it is a proof or carries
+        a Schwartz–Zippel error bound; no symbolic B) or ``"sampled"``.
     manifold : Submanifold or None
         M_f in T*Q (exact mode).
     side : HamiltonianSide
@@ -237,7 +251,9 @@ def classify_constraints(source, constraints: Sequence | None = None,
         ``"exact"``: symbolic brackets reduced on M_f, exact decisions where
         they exist, sampled otherwise; ``"sampled"``: numeric brackets at seeded
         points of M_f only (no symbolic Legendre inverse); ``"auto"``: exact
-        when :attr:`HamiltonianSide.symbolic_affordable`, sampled otherwise.
+        when :attr:`HamiltonianSide.symbolic_affordable`, otherwise at exact
+        points of M_f when M_f = M_1 has them (proofs, or Schwartz–Zippel
+        bounds), sampled as the last resort.
     tol : float, optional
         Relative tolerance of sampled decisions (default 1e-9 / 10**(3-digits)).
 
@@ -252,6 +268,7 @@ def classify_constraints(source, constraints: Sequence | None = None,
         source, "system", source)
     side = side_in if side_in is not None else hamiltonian_side(
         system, precision=precision, samples=samples, seed=seed)
+    requested = method
     if method == "auto":
         method = "exact" if _exact_affordable(side) else "sampled"
     if constraints is None:
@@ -270,7 +287,163 @@ def classify_constraints(source, constraints: Sequence | None = None,
         raise InputError(f"classify: {len(labs)} labels for {len(cons)} constraints")
     if method == "exact":
         return _classify_exact(side, cons, labs, analysis, tol)
+    if requested == "auto" and set(cons) == set(system.holonomic) | set(system.phi):
+        # M_f = M_1: the brackets can be decided at exact points of M_1.
+        try:
+            return _classify_at_points(side, cons, labs, analysis, seed)
+        except NotExact:
+            pass
     return _classify_sampled(side, cons, labs, analysis, tol, precision, samples, seed)
+
+
+def _classify_at_points(side, cons, labels, analysis, seed, target=TARGET_ERROR):
+    """B_ab = {chi_a, chi_b} at random exact points of M_f = M_1, through the
+    Lagrangian bracket (the pull-back of the canonical one by Leg):
+
+        {f, g}_L = f_q . W^{-1} g_v - W^{-1} f_v . g_q - (W^{-1} f_v)^T (M - M^T) W^{-1} g_v
+
+    with M the mixed Hessian d2L/dq dv. rank B at an exact point is proved; a
+    deficiency seen at k points carries the Schwartz–Zippel bound.
+    """
+    from nhham.lagrangian.geometry import LagrangianGeometry
+
+    system = side.system
+    geo = analysis.geometry if isinstance(analysis, ConstraintAnalysis) else \
+        LagrangianGeometry(system)
+    q, v = system.coordinates, system.velocities
+    cons = [sp.sympify(c) for c in cons]
+    k = len(cons)
+    mu = [list(system.mu.row(i)) for i in range(system.m)]
+    sampler = PointSampler(q, v, system.parameters, dict(system.parameter_values),
+                           system.holonomic, system.phi, seed, mu=mu)
+    Jq = [jacobian_row(c, q) for c in cons]
+    Jv = [jacobian_row(c, v) for c in cons]
+    W = [list(geo.hessian.row(i)) for i in range(system.n)]
+    Mx = [list(geo.mixed_hessian.row(i)) for i in range(system.n)]
+    proof = _full_rank_modulo_p(side, cons, labels, analysis, seed, mu, W, Mx, Jq, Jv)
+    if proof is not None:
+        return proof
+    best, count, pivots, mats, degrees, error = -1, 0, [], [], None, 0.0
+    while count < MAX_POINTS:
+        pt = sampler.point()
+        try:
+            Bp = _bracket_at(pt.env, W, Mx, Jq, Jv)
+        except ZeroDivisionError:
+            continue
+        count += 1
+        mats.append(Bp)
+        r, rows, _ = exact_rank(Bp) if k else (0, [], [])
+        if r > best:
+            best, pivots = r, rows
+        if degrees is None:
+            degrees = _bracket_at(pt.degrees, W, Mx, Jq, Jv, solve=_degree_solve)
+        if best >= k:
+            break
+        error = (minor_degree(degrees, best + 1) / 2 ** SAMPLE_BITS) ** count
+        if error < target:
+            break
+    r = best
+    if r >= k:
+        rank_d = Decision(r, "exact", f"bracket matrix of full rank {r} at an exact point of "
+                          f"M_f (proof)", samples=count, error_bound=0.0)
+    else:
+        rank_d = Decision(r, "exact at points", f"rank {r} of the bracket matrix at {count} "
+                          f"random exact points of M_f", samples=count, error_bound=error)
+    decisions = {"rank": rank_d}
+    R = list(pivots) if r else []
+    nonzero = np.zeros((k, k), dtype=bool)
+    for Bp in mats:
+        nonzero |= np.array([[x != 0 for x in row] for row in Bp], dtype=bool).reshape(k, k)
+    coeff_dicts = []
+    for kk in (i for i in range(k) if i not in R):
+        per_point = []
+        for Bp in mats:
+            c = [0] * k
+            c[kk] = 1
+            if R:
+                cR = exact_solve([[Bp[a][b] for b in R] for a in R], [[-Bp[a][kk]] for a in R])
+                for i, a in enumerate(R):
+                    c[a] = cR[i][0]
+            per_point.append(c)
+        coeff_dicts.append({labels[a]: tuple(float(c[a]) for c in per_point)
+                            for a in range(k) if any(c[a] != 0 for c in per_point)})
+        decisions[f"gamma[{labels[kk]}]"] = Decision(
+            True, "exact", "B c = 0 exactly at each point (c solved from the regular block "
+            "of B at that point); the coefficients depend on the point", samples=count)
+    alone = tuple(labels[a] for a in range(k) if not nonzero[a].any())
+    blocks = tuple(tuple(labels[a] for a in blk) for blk in connected_blocks(nonzero)) if k else ()
+    cons_tq = tuple(cons)
+    return ConstraintClasses(
+        labels=tuple(labels), constraints_TQ=cons_tq, constraints=None, bracket_matrix=None,
+        bracket_samples=tuple(np.array([[float(x) for x in row] for row in Bp], dtype=float)
+                              .reshape(k, k) for Bp in mats),
+        rank=r, first_class=k - r, second_class=r,
+        second_class_set=tuple(labels[a] for a in R), first_class_combinations=None,
+        combination_coefficients=tuple(coeff_dicts), individually_first_class=alone,
+        blocks=blocks, decisions=decisions, method="exact at points", manifold=None,
+        side=side, analysis=analysis)
+
+
+def _full_rank_modulo_p(side, cons, labels, analysis, seed, mu, W, Mx, Jq, Jv, tries=3):
+    """All constraints second class, proved at a point over F_p; else None.
+
+    B of full rank modulo p at a point of M_1 has full rank over Q at a rational
+    point (no inverse taken was of a multiple of p), hence on M_1 generically.
+    """
+    system = side.system
+    k = len(cons)
+    if k == 0 or k % 2:
+        return None  # B is antisymmetric: full rank needs k even
+    sampler = PointSampler(system.coordinates, system.velocities, system.parameters,
+                           dict(system.parameter_values), system.holonomic, system.phi,
+                           seed, mu=mu, modular=True)
+    for _ in range(tries):
+        try:
+            Bp = _bracket_at(sampler.point().env, W, Mx, Jq, Jv)
+        except (ZeroDivisionError, NotExact):
+            continue
+        if exact_rank(Bp)[0] < k:
+            continue
+        rank_d = Decision(k, "exact", f"bracket matrix of full rank {k} at a random point of "
+                          f"M_f modulo the prime 2^61 - 1 (proof)", samples=1, error_bound=0.0)
+        nonzero = np.array([[bool(x) for x in row] for row in Bp], dtype=bool).reshape(k, k)
+        blocks = tuple(tuple(labels[a] for a in blk) for blk in connected_blocks(nonzero))
+        return ConstraintClasses(
+            labels=tuple(labels), constraints_TQ=tuple(cons), constraints=None,
+            bracket_matrix=None, bracket_samples=(), rank=k, first_class=0, second_class=k,
+            second_class_set=tuple(labels), first_class_combinations=(),
+            combination_coefficients=(), individually_first_class=(), blocks=blocks,
+            decisions={"rank": rank_d}, method="exact at points", manifold=None, side=side,
+            analysis=analysis)
+    return None
+
+
+def _degree_solve(A, B):
+    return solve_degrees(A, B)
+
+
+def _bracket_at(env, W, Mx, Jq, Jv, solve=exact_solve):
+    """The bracket matrix {chi_a, chi_b}_L at one point (values or Degree bounds)."""
+    cache = {}
+    Wp = [evaluate(r, env, cache) for r in W]
+    Mp = [evaluate(r, env, cache) for r in Mx]
+    Jqp = [evaluate(r, env, cache) for r in Jq]
+    Jvp = [evaluate(r, env, cache) for r in Jv]
+    n, k = len(Wp), len(Jqp)
+    if not k:
+        return []
+    U = solve(Wp, [[Jvp[a][i] for a in range(k)] for i in range(n)])  # n x k: W^-1 Jv^T
+    A = [[Mp[i][j] - Mp[j][i] for j in range(n)] for i in range(n)]
+    AU = [[sum((A[i][j] * U[j][b] for j in range(n)), 0) for b in range(k)] for i in range(n)]
+    out = []
+    for a in range(k):
+        row = []
+        for b in range(k):
+            val = sum((Jqp[a][i] * U[i][b] - U[i][a] * Jqp[b][i] - U[i][a] * AU[i][b]
+                       for i in range(n)), 0)
+            row.append(val)
+        out.append(row)
+    return out
 
 
 def _numerically_regular(side, precision, samples, seed, tol) -> bool:
@@ -641,7 +814,7 @@ def dirac_vs_projected(system, *, precision=None, samples=6, seed=SEED,
     if classes is None:
         classes = classify_constraints(side, precision=precision, samples=samples, seed=seed,
                                        method=method, tol=tol)
-    if classes.method == "sampled":
+    if classes.method != "exact":
         return _dirac_vs_projected_sampled(side, classes, precision, samples, seed, tol)
     if not side.regular:
         raise ComputationError(

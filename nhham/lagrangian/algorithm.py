@@ -186,7 +186,7 @@ class AlgorithmRun:
         functions (valid on M_f); empty when inconsistent.
     dynamics : sympy.Matrix or None, shape (N, 1) (computed on first use)
         ξ + λ^i Z_i with the determined λ substituted and the free λ^α as symbols.
-    tangency_matrix, tangency_rhs : sympy.Matrix
+    tangency_matrix, tangency_rhs : sympy.Matrix (computed on first use)
         A_ji = Z_i(χ_j) and b_j = ξ(χ_j) over the final constraints.
     provenance : networkx.DiGraph
         Constraint labels as nodes (attributes ``expr``, ``stage``, ``kind``); an
@@ -200,8 +200,12 @@ class AlgorithmRun:
         appearing (the status is then provisional).
     dimension : int or None
         dim M_f (N minus the rank of the Jacobian of the final constraints on M_f).
-    base_field, vertical_fields, variables
-        The inputs (ξ, the rows Z_i, the N variables).
+    variables : tuple
+        The N variables.
+    fields : callable
+        ``fields() -> (ξ, Z)``: the base field and the rows Z_i, formed only when
+        ``base_field``/``vertical_fields`` (or what needs them: multipliers,
+        dynamics, projectors) are asked for.
     manifold : Submanifold or None
         M_f (the last M_k), for further decisions on it.
     """
@@ -219,12 +223,32 @@ class AlgorithmRun:
     warnings: tuple
     converged: bool
     dimension: int | None
-    base_field: sp.Matrix
-    vertical_fields: sp.Matrix
     variables: tuple
-    tangency_matrix: sp.Matrix
-    tangency_rhs: sp.Matrix
+    fields: Callable = field(compare=False, repr=False)
     manifold: Submanifold | None = field(default=None, compare=False, repr=False)
+
+    @cached_property
+    def base_field(self) -> sp.Matrix:
+        """ξ (N x 1); formed on first use (W⁻¹ in closed form on the Lagrangian side)."""
+        return self.fields()[0]
+
+    @cached_property
+    def vertical_fields(self) -> sp.Matrix:
+        """The rows Z_i (m x N); formed on first use."""
+        return self.fields()[1]
+
+    @cached_property
+    def tangency_matrix(self) -> sp.Matrix:
+        """A_ji = Z_i(χ_j) over the final constraints."""
+        return _tangency_matrix(self.final_constraints, self.vertical_fields, self.variables)
+
+    @cached_property
+    def tangency_rhs(self) -> sp.Matrix:
+        """b_j = ξ(χ_j) over the final constraints."""
+        if not self.final_constraints:
+            return sp.zeros(0, 1)
+        return sp.Matrix([cancel((sp.Matrix([[sp.diff(c, s) for s in self.variables]])
+                                  * self.base_field)[0]) for c in self.final_constraints])
 
     @cached_property
     def multipliers(self) -> Mapping:
@@ -624,7 +648,6 @@ class _Loop:
         free = ()
         if inconsistency is None:
             free = tuple(self.lam[i] for i in range(m) if i not in cols)
-        A, b = self.matrices(chis)
         status = "inconsistent" if inconsistency else (
             "underdetermined" if free else "determined")
         if not converged and status != "inconsistent":
@@ -635,8 +658,8 @@ class _Loop:
             multiplier_symbols=self.lam, free_multiplier_symbols=free,
             provenance=self.graph, inconsistency=inconsistency,
             warnings=tuple(dict.fromkeys(self.warnings)), converged=converged,
-            dimension=dimension, base_field=self.xi, vertical_fields=self.Z,
-            variables=self.variables, tangency_matrix=A, tangency_rhs=b, manifold=M,
+            dimension=dimension, variables=self.variables,
+            fields=_constant_fields(self.xi, self.Z), manifold=M,
         )
 
     def _dimension(self, M, chis, k):
@@ -676,6 +699,10 @@ class _Loop:
 
 
 # ================================================================= small helpers
+def _constant_fields(xi, Z):
+    return lambda: (xi, Z)
+
+
 def _kind(label: str) -> str:
     if label.endswith(".lift"):
         return "lift"
@@ -840,6 +867,9 @@ class ConstraintAnalysis:
         empty or was not reached).
     options : Mapping
         precision, samples, seed, exact, max_stages as used.
+    geometry : LagrangianGeometry
+        The Lagrangian geometry of the whole system (W, F, ... formed on first use),
+        shared with later questions about the same system.
 
     Derived on first use: ``multipliers``, ``dynamics``, ``free_multipliers``,
     ``integrability`` / ``integrable``
@@ -863,6 +893,7 @@ class ConstraintAnalysis:
     converged: bool
     dimension: int | None
     options: Mapping
+    geometry: object = field(default=None, compare=False, repr=False)
 
     @property
     def free_multipliers(self) -> int:
@@ -995,12 +1026,15 @@ def analyze_constraints(system, *, precision: int | None = None, samples: int = 
                                  max_stages=max_stages, exact=exact))
     specs = _decompose(system) if decompose else [_whole(system)]
     blocks, start = [], 0
+    from nhham.lagrangian.geometry import LagrangianGeometry
+
+    geometry = LagrangianGeometry(system, precision=precision, samples=samples, seed=seed)
     for spec in specs:
-        run = _run_block(system, spec, opts, start)
+        run = _run_block(system, spec, opts, start, geometry)
         start += sum(1 for _, d in run.provenance.nodes(data=True) if d["kind"] == "secondary")
         blocks.append(Block(tuple(system.coordinates[i] for i in spec["coords"]),
                             tuple(spec["labels"]), run))
-    return _merge(system, blocks, opts)
+    return _merge(system, blocks, opts, geometry)
 
 
 # ------------------------------------------------------------- blocks and merging
@@ -1099,24 +1133,27 @@ class _BlockSystem:
         return f"_BlockSystem({[q.name for q in self.coordinates]})"
 
 
-def _run_block(system, spec, opts, start):
+def _run_block(system, spec, opts, start, geometry):
     from nhham.lagrangian.geometry import LagrangianGeometry
 
     whole = len(spec["coords"]) == system.n
     view = system if whole else _BlockSystem(system, spec)
-    geo = LagrangianGeometry(view, precision=opts["precision"], samples=opts["samples"],
-                             seed=opts["seed"])
+    geo = geometry if whole else LagrangianGeometry(
+        view, precision=opts["precision"], samples=opts["samples"], seed=opts["seed"])
     exprs, labels = _m1_parts(system, spec["hol"], spec["phi"])
 
     def factory(eqs):
         return Submanifold(view, eqs, precision=opts["precision"], samples=opts["samples"],
                            seed=opts["seed"], exact=opts["exact"])
 
+    lam = [multiplier_symbol(p + 1) for p in spec["phi"]]
+    run = _stage_one_at_points(view, geo, exprs, labels, lam, factory, opts) \
+        if opts["exact"] else None
     bound = opts["max_stages"] if opts["max_stages"] is not None else 2 * len(spec["coords"])
-    run = run_algorithm(
+    run = run or run_algorithm(
         geo.euler_lagrange_field, geo.vertical_fields, exprs, labels, factory,
-        max_stages=bound, multiplier_symbols=[multiplier_symbol(p + 1) for p in spec["phi"]],
-        variables=view.state, secondary_start=start,
+        max_stages=bound, multiplier_symbols=lam, variables=view.state,
+        secondary_start=start,
     )
     for i in spec["hol"]:
         lift = f"holonomic[{i}].lift"
@@ -1129,13 +1166,77 @@ def _run_block(system, spec, opts, start):
     return run
 
 
+# Blocks up to this size (n + m) get the symbolic check of where rank C drops on M_1.
+RANK_DROP_CHECK_SIZE = 6
+
+
+def _stage_one_at_points(view, geo, exprs, labels, lam, factory, opts):
+    """The run when stage 1 decides everything at exact points, else None.
+
+    When C is regular on M_1 and every λ-free condition vanishes there (decided by
+    :func:`nhham.lagrangian.tangency.tangency_at_points`, no W⁻¹ formed), M_f = M_1
+    and every multiplier is determined. Otherwise (no exact points, C singular,
+    secondary constraints) the caller runs the symbolic algorithm, which produces
+    the secondary constraints as expressions.
+    """
+    from nhham.lagrangian.points import NotExact
+    from nhham.lagrangian.tangency import tangency_at_points
+
+    m = len(view.phi)
+    try:
+        verdict = tangency_at_points(view, geo.hessian, geo.forcing, exprs, seed=opts["seed"])
+    except NotExact:
+        return None
+    r = int(verdict.rank.value)
+    if r != m or not verdict.consistent.value:
+        return None
+    rows, cols = verdict.rows, verdict.cols
+    others = [j for j in range(len(exprs)) if j not in rows]
+    v = sp.Matrix(view.velocities)
+    # Rows outside the block have dchi/dv = 0 (holonomic g): their condition is dg/dq . v.
+    conditions = tuple((labels[j], sp.expand((sp.Matrix([[sp.diff(exprs[j], q) for q in
+                                                           view.coordinates]]) * v)[0]))
+                       for j in others)
+    evidence = (
+        Evidence("rank of (Z_i(chi_j)) on M_1", verdict.rank, f"rank {r}"),
+        Evidence("lambda-free conditions on M_1", verdict.consistent, "add nothing"),
+    )
+    stage = Stage(index=1, constraints=tuple(exprs), labels=tuple(labels), new_constraints=(),
+                  new_labels=(), rank=r, augmented_rank=r,
+                  block=(tuple(labels[j] for j in rows), tuple(lam[i] for i in cols)),
+                  conditions=conditions, decisions=evidence)
+    graph = nx.DiGraph()
+    for lab, chi in zip(labels, exprs):
+        graph.add_node(lab, expr=chi, stage=1, kind=_kind(lab))
+    warnings = [w for d in (verdict.rank, verdict.consistent, verdict.jacobian_rank)
+                for w in d.warnings]
+    M = factory(tuple(exprs))
+    if r and view.n + m <= RANK_DROP_CHECK_SIZE:
+        # Where the rank of C drops on M_1 (the paper assumes it does not): the
+        # symbolic check needs A = (Z_i(chi_j)), affordable only for small blocks.
+        loop = _Loop(geo.euler_lagrange_field, geo.vertical_fields, tuple(view.state), lam,
+                     factory, nx.DiGraph(), 0, "secondary")
+        A = _tangency_matrix(list(exprs), geo.vertical_fields, tuple(view.state))
+        loop._rank_drop_check(1, M, A, list(rows), list(cols), list(exprs))
+        warnings += loop.warnings
+    dimension = 2 * view.n - int(verdict.jacobian_rank.value)
+    return AlgorithmRun(
+        status="determined", stages=(stage,), final_constraints=tuple(exprs),
+        final_labels=tuple(labels), rank=r, block=(tuple(rows), tuple(cols)),
+        multiplier_symbols=tuple(lam), free_multiplier_symbols=(), provenance=graph,
+        inconsistency=None, warnings=tuple(warnings), converged=True, dimension=dimension,
+        variables=tuple(view.state),
+        fields=lambda: (geo.euler_lagrange_field, geo.vertical_fields), manifold=M,
+    )
+
+
 def _state_positions(system, coords):
     pos = {q: i for i, q in enumerate(system.coordinates)}
     idx = [pos[q] for q in coords]
     return idx + [system.n + i for i in idx]
 
 
-def _merge(system, blocks, opts) -> ConstraintAnalysis:
+def _merge(system, blocks, opts, geometry) -> ConstraintAnalysis:
     runs = [b.run for b in blocks]
     K = max((len(r.stages) for r in runs), default=0)
     stages = []
@@ -1184,7 +1285,7 @@ def _merge(system, blocks, opts) -> ConstraintAnalysis:
         dropped=tuple(getattr(system, "dropped", ())), provenance=provenance,
         blocks=tuple(blocks), inconsistency=inconsistency, warnings=tuple(warnings),
         converged=all(r.converged for r in runs),
-        dimension=None if None in dims else sum(dims), options=opts,
+        dimension=None if None in dims else sum(dims), options=opts, geometry=geometry,
     )
 
 

@@ -34,10 +34,22 @@ import sympy as sp
 from nhham.settings import SEED
 from nhham.errors import ComputationError
 from nhham.lagrangian.algebra import cancel
+from nhham.lagrangian.points import (
+    SAMPLE_BITS,
+    Degree,
+    NotExact,
+    PointSampler,
+    evaluate,
+    exact_rank,
+    exact_solve,
+    jacobian_row,
+    minor_degree,
+)
 from nhham.lagrangian.submanifold import Decision, Submanifold
+from nhham.lagrangian.tangency import MAX_POINTS, TARGET_ERROR
 from nhham.system.expressions import short
 
-__all__ = ["Integrability", "integrability", "frobenius"]
+__all__ = ["Integrability", "integrability", "frobenius", "frobenius_at_points"]
 
 
 @dataclass(frozen=True)
@@ -109,6 +121,11 @@ class Integrability:
         return text
 
 
+# Up to this many coordinates the kernel basis and the obstructions are written out
+# symbolically (cheap, and they are worth reading); above, decisions at exact points.
+SYMBOLIC_SIZE = 4
+
+
 def integrability(system, *, precision: int | None = None, samples: int = 6,
                   seed: int = SEED, exact: bool = True) -> Integrability:
     """Frobenius test of the distribution annihilated by all the μ rows of ``system``.
@@ -124,11 +141,112 @@ def integrability(system, *, precision: int | None = None, samples: int = 6,
     -------
     Integrability
     """
-    Q1 = Submanifold(system, system.holonomic, precision=precision, samples=samples,
-                     seed=seed, fibre=(), exact=exact)
     labels = tuple(f"{lab}.lift" if i < len(system.holonomic) else lab
                    for i, lab in enumerate(system.constraint_labels))
+    if exact and system.n > SYMBOLIC_SIZE:
+        try:
+            return frobenius_at_points(system, labels, seed=seed)
+        except NotExact:
+            pass  # no exact points of Q_1: exact reduction, then samples
+    Q1 = Submanifold(system, system.holonomic, precision=precision, samples=samples,
+                     seed=seed, fibre=(), exact=exact)
     return frobenius(system.mu, system.coordinates, Q1, labels)
+
+
+def frobenius_at_points(system, labels, *, seed: int = SEED,
+                        target: float = TARGET_ERROR) -> Integrability:
+    """Frobenius test of ker μ decided at random exact points of Q_1.
+
+    At each point the kernel basis X_a (dependent components by Cramer's rule,
+    the same dependent set at every point) and dμ_i(X_a, X_b) are computed in
+    exact arithmetic. One nonzero value proves non-integrability; values that
+    vanish at k points give "integrable" with the Schwartz–Zippel bound (union
+    over the terms) computed from the degrees of the terms, and the basis is not
+    written out symbolically.
+
+    Raises
+    ------
+    NotExact
+        When Q_1 has no exact points or μ cannot be evaluated exactly.
+    """
+    mu = sp.Matrix(system.mu)
+    q = tuple(system.coordinates)
+    m, n = mu.rows, len(q)
+    common = dict(mu=mu, coordinates=q, labels=tuple(labels))
+    if m == 0 or n - m <= 1:
+        return frobenius(mu, q, Submanifold(system, (), fibre=()), labels)
+    sampler = PointSampler(q, (), system.parameters, dict(system.parameter_values),
+                           system.holonomic, (), seed)
+    rows = [list(mu.row(i)) for i in range(m)]
+    grads = [[jacobian_row(mu[i, A], q) for A in range(n)] for i in range(m)]
+    dmu = [[[grads[i][A][B] - grads[i][B][A] for A in range(n)] for B in range(n)]
+           for i in range(m)]
+    dep = None
+    count, terms, worst = 0, 0, 0
+    while count < MAX_POINTS:
+        pt = sampler.point()
+        try:
+            values, dep = _frobenius_terms(pt.env, rows, dmu, dep)
+        except ZeroDivisionError:
+            continue
+        count += 1
+        for (i, a, b), w in values.items():
+            if w != 0:
+                dec = Decision(False, "exact", f"d{labels[i]}(X_{a + 1}, X_{b + 1}) = {w} "
+                               f"at an exact point of Q_1 (proof)", samples=count,
+                               error_bound=0.0)
+                return Integrability(False, n - m, None, ((labels[i], a, b, sp.Rational(
+                    int(w.numerator), int(w.denominator))),),
+                    ((f"d{labels[i]}(X_{a + 1}, X_{b + 1})", dec),), "exact", (), **common)
+        if count == 1:
+            degrees, _ = _frobenius_terms(pt.degrees, rows, dmu, dep, exact=False)
+            terms = len(degrees)
+            worst = max((Degree.of(d).num for d in degrees.values()), default=0)
+        error = terms * (worst / 2 ** SAMPLE_BITS) ** count
+        if error < target:
+            break
+    dec = Decision(True, "exact at points",
+                   f"all {terms} terms dmu_i(X_a, X_b) vanish at {count} random exact points "
+                   f"of Q_1 (degree <= {worst})", samples=count, error_bound=error)
+    return Integrability(True, n - m, None, (), (("dmu_i(X_a, X_b) on Q_1", dec),),
+                         "exact at points", (), **common)
+
+
+def _frobenius_terms(env, rows, dmu, dep, exact=True):
+    """{(i, a, b): dμ_i(X_a, X_b)} at one point (exact values or Degree bounds)."""
+    cache = {}
+    M = [evaluate(r, env, cache) for r in rows]
+    D = [[evaluate(r, env, cache) for r in dmu_i] for dmu_i in dmu]
+    m, n = len(M), len(M[0])
+    if dep is None:
+        rank, _, dep = exact_rank(M)
+        if rank < m:
+            raise NotExact("mu is rank deficient at a random point")
+    free = [j for j in range(n) if j not in dep]
+    if exact:
+        sol = exact_solve([[r[j] for j in dep] for r in M],
+                          [[-r[j] for j in free] for r in M])
+    else:
+        block = [[r[j] for j in dep] + [sum((r[j] for j in free), 0)] for r in M]
+        top = minor_degree(block, m)
+        den = minor_degree([b[:m] for b in block], m)
+        x = Degree(top, {("denominator", id(block)): (den, 1)})
+        sol = [[x] * len(free) for _ in dep]
+    basis = []
+    for a, j in enumerate(free):
+        col = [0] * n
+        col[j] = 1
+        for t, d in enumerate(dep):
+            col[d] = sol[t][a]
+        basis.append(col)
+    out = {}
+    for i in range(m):
+        for a in range(len(free)):
+            for b in range(a + 1, len(free)):
+                X, Y = basis[a], basis[b]
+                out[(i, a, b)] = sum((X[A] * D[i][B][A] * Y[B] for A in range(n)
+                                      for B in range(n) if D[i][B][A] != 0), 0)
+    return out, dep
 
 
 def frobenius(mu, coordinates, manifold: Submanifold, labels=None) -> Integrability:

@@ -71,8 +71,10 @@ class Decision:
     ----------
     value : bool or int
         ``True``/``False`` for "vanishes on M", or the rank for rank questions.
-    method : {"exact", "sampled"}
-        Exact reduction, or evaluation at sample points.
+    method : {"exact", "exact at points", "sampled"}
+        Exact reduction (or a rank proved at an exact point), exact evaluation at
+        random exact points (a probabilistic verdict with ``error_bound``), or
+        evaluation at floating-point sample points (``precision``).
     detail : str
         Human-readable evidence.
     precision : str
@@ -91,6 +93,9 @@ class Decision:
     points : tuple of tuple
         The sample points of a sampled decision, each a tuple of
         ``(variable name, float)`` pairs (rounded for the record).
+    error_bound : float or None
+        For "exact at points": the Schwartz–Zippel bound on the probability that
+        the verdict is wrong (0.0 for a proof); None for other methods.
     """
 
     value: object
@@ -103,13 +108,16 @@ class Decision:
     point_residual: float | None = None
     warnings: tuple = ()
     points: tuple = field(default=(), compare=False)
+    error_bound: float | None = None
 
     def __bool__(self):
         return bool(self.value)
 
     def describe(self) -> str:
         """One line saying what was decided and how (with the numeric evidence)."""
-        text = f"{self.value} ({self.method}, {self.precision}): {self.detail}"
+        how = self.method if self.method != "exact at points" else (
+            f"exact at {self.samples} points, error <= {self.error_bound:.1e}")
+        text = f"{self.value} ({how}, {self.precision}): {self.detail}"
         if self.singular_values:
             smallest = [min(sv) if sv else 0.0 for sv in self.singular_values]
             text += f"; smallest singular value per point {_floats(smallest)}"

@@ -1,0 +1,716 @@
+"""Exact points of M_1 and degree bounds: what decisions "exact at points" rest on.
+
+A function on TQ built from polynomials, quotients, sines and cosines of the
+coordinates is evaluated *exactly* at random rational points: every coordinate q
+carries a rational value r (where it appears polynomially) and a rational point of
+the unit circle (c, s) = ((1 − t²)/(1 + t²), 2t/(1 + t²)) (where it appears inside
+sin/cos), with r and t drawn independently. This is legitimate for questions about
+functions — vanishing identically, generic rank — because q is algebraically
+independent of (cos q, sin q): a polynomial in (q, cos q, sin q) vanishes as a
+function exactly when it vanishes at every (r, c, s) with c² + s² = 1. Integer
+combinations of coordinates inside sin/cos (θ1 − θ2, 2φ) are exact through
+(c + i s) products. Parameters with values take their exact decimal value
+(``Rational(str(value))``); parameters without values are drawn like coordinates.
+Dependent velocities are solved exactly from the affine constraints; holonomic
+constraints are eliminated when a coordinate enters one linearly with a constant
+coefficient. Anything else (``sqrt``, ``exp``, a parameter with a value inside
+sin, a holonomic constraint that is not linear) raises :class:`NotExact`, and the
+caller decides at sampled points instead, saying so.
+
+Every evaluation can be repeated with :class:`Degree` objects in place of the
+numbers: the same arithmetic then yields an upper bound on the degree of the
+numerator of each quantity as a rational function of the drawn variables
+(r, t, free velocities, free parameters). That is the "degree" of the
+Schwartz–Zippel lemma: a nonzero rational function whose numerator has degree
+at most D vanishes at a uniformly random point of S^N with probability at most
+D/|S|. So "vanishes at k random exact points" is reported with the computed
+error bound (D/(|S| − D_den))^k (points where a denominator vanishes are drawn
+again, which the D_den term accounts for), and "nonzero at one exact point" is
+a proof.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+import random
+from dataclasses import dataclass
+
+import sympy as sp
+from sympy import QQ
+from sympy.external.gmpy import MPQ
+from sympy.matrices.exceptions import NonInvertibleMatrixError
+from sympy.polys.matrices import DomainMatrix
+from sympy.polys.matrices.exceptions import DMNonInvertibleMatrixError
+
+from nhham.errors import NhhamError
+
+__all__ = [
+    "NotExact",
+    "Angle",
+    "Degree",
+    "SAMPLE_BITS",
+    "evaluate",
+    "exact_rank",
+    "exact_solve",
+    "rank_bound",
+    "minor_degree",
+    "solve_degrees",
+    "jacobian_row",
+    "ExactPoint",
+    "PointSampler",
+    "ModP",
+    "PRIME",
+]
+
+# Sample set S = {1, ..., 2**SAMPLE_BITS}: large enough that a handful of points
+# gives Schwartz–Zippel bounds far below 1e-30, small enough for quick rationals.
+SAMPLE_BITS = 62
+
+
+class NotExact(NhhamError):
+    """The expression cannot be evaluated exactly at rational points."""
+
+
+# ------------------------------------------------------------------ values
+class Angle:
+    """A coordinate's value at an exact point: polynomial value ``r`` and the point
+    ``(c, s)`` of the unit circle standing for (cos q, sin q).
+
+    Sums and integer multiples of angles stay angles (the circle points multiply
+    as unit complex numbers); any other arithmetic uses ``r``. ``r``, ``c``, ``s``
+    are exact rationals or :class:`Degree` bounds (the same code serves both).
+    """
+
+    __slots__ = ("r", "c", "s")
+
+    def __init__(self, r, c, s):
+        self.r, self.c, self.s = r, c, s
+
+    def _rotate(self, other):
+        return Angle(self.r + other.r, self.c * other.c - self.s * other.s,
+                     self.s * other.c + self.c * other.s)
+
+    def _times(self, k: int):
+        out = Angle(0, 1, 0)
+        base = self if k >= 0 else Angle(-self.r, self.c, -self.s)
+        for _ in range(abs(k)):
+            out = out._rotate(base)
+        return out
+
+    def __add__(self, other):
+        if isinstance(other, Angle):
+            return self._rotate(other)
+        if isinstance(other, int) and other == 0:
+            return self
+        return self.r + other
+
+    __radd__ = __add__
+
+    def __neg__(self):
+        return Angle(-self.r, self.c, -self.s)
+
+    def __sub__(self, other):
+        return self + (-other)
+
+    def __rsub__(self, other):
+        return (-self) + other
+
+    def __mul__(self, other):
+        if isinstance(other, int):
+            return self._times(other)
+        if isinstance(other, Angle):
+            return self.r * other.r
+        return self.r * other
+
+    __rmul__ = __mul__
+
+    def __truediv__(self, other):
+        return self.r / (other.r if isinstance(other, Angle) else other)
+
+    def __rtruediv__(self, other):
+        return other / self.r
+
+    def __pow__(self, k):
+        return self.r ** k
+
+
+# A Mersenne prime: reduction is cheap and 1/|F_p| is about 4e-19.
+PRIME = 2 ** 61 - 1
+
+
+class ModP:
+    """An element of the field F_p (p = :data:`PRIME`).
+
+    Used for proofs of full rank and of non-vanishing: a value computed from the
+    expression tree modulo p (every inverse taken exists) that is nonzero shows
+    that the rational value — hence the function — is nonzero. Mixed arithmetic
+    with ints and exact rationals reduces them modulo p.
+    """
+
+    __slots__ = ("v",)
+
+    def __init__(self, v: int):
+        self.v = v % PRIME
+
+    @staticmethod
+    def lift(x) -> "ModP":
+        if isinstance(x, ModP):
+            return x
+        if isinstance(x, int):
+            return ModP(x)
+        q = MPQ(x)
+        den = int(q.denominator) % PRIME
+        if den == 0:
+            raise ZeroDivisionError("denominator divisible by p")
+        return ModP(int(q.numerator) * pow(den, -1, PRIME))
+
+    def __add__(self, other):
+        if isinstance(other, (Angle, Degree)):
+            return NotImplemented
+        return ModP(self.v + ModP.lift(other).v)
+
+    __radd__ = __add__
+
+    def __sub__(self, other):
+        if isinstance(other, (Angle, Degree)):
+            return NotImplemented
+        return ModP(self.v - ModP.lift(other).v)
+
+    def __rsub__(self, other):
+        return ModP(ModP.lift(other).v - self.v)
+
+    def __neg__(self):
+        return ModP(-self.v)
+
+    def __mul__(self, other):
+        if isinstance(other, (Angle, Degree)):
+            return NotImplemented
+        return ModP(self.v * ModP.lift(other).v)
+
+    __rmul__ = __mul__
+
+    def inverse(self) -> "ModP":
+        if self.v == 0:
+            raise ZeroDivisionError("division by zero modulo p")
+        return ModP(pow(self.v, -1, PRIME))
+
+    def __truediv__(self, other):
+        if isinstance(other, (Angle, Degree)):
+            return NotImplemented
+        return self * ModP.lift(other).inverse()
+
+    def __rtruediv__(self, other):
+        return ModP.lift(other) * self.inverse()
+
+    def __pow__(self, k: int):
+        return ModP(pow(self.v, k, PRIME)) if k >= 0 else self.inverse() ** (-k)
+
+    def __eq__(self, other):
+        if isinstance(other, (ModP, int)):
+            return self.v == ModP.lift(other).v
+        return NotImplemented
+
+    def __hash__(self):
+        return hash(self.v)
+
+    def __bool__(self):
+        return self.v != 0
+
+    def __repr__(self):
+        return f"ModP({self.v})"
+
+
+def _sin(x):
+    if isinstance(x, Angle):
+        return x.s
+    if _is_zero_constant(x):
+        return 0
+    raise NotExact("sin of a number that is not an angle variable")
+
+
+def _cos(x):
+    if isinstance(x, Angle):
+        return x.c
+    if _is_zero_constant(x):
+        return 1
+    raise NotExact("cos of a number that is not an angle variable")
+
+
+def _inverse(x):
+    if isinstance(x, (Degree, ModP)):
+        return x.inverse()
+    return MPQ(1) / x  # ZeroDivisionError at a bad point: the caller draws again
+
+
+def _is_zero_constant(x) -> bool:
+    return isinstance(x, (int, MPQ)) and x == 0
+
+
+_FUNCTIONS = {
+    sp.sin: _sin,
+    sp.cos: _cos,
+    sp.tan: lambda x: _sin(x) / _cos(x),
+    sp.cot: lambda x: _cos(x) / _sin(x),
+}
+
+
+def evaluate(exprs, env: dict, cache: dict | None = None) -> list:
+    """Values of sympy expressions with symbols replaced by ``env`` values.
+
+    Parameters
+    ----------
+    exprs : sequence of sympy.Expr
+    env : dict
+        Symbol -> value (exact rational, :class:`Angle`, or :class:`Degree`).
+    cache : dict, optional
+        Shared memo of subexpression values (for several calls at one point).
+
+    Returns
+    -------
+    list
+        One value per expression (``int``, ``MPQ``, ``Degree`` ...).
+
+    Raises
+    ------
+    NotExact
+        On a symbol missing from ``env``, a transcendental constant, a function
+        other than sin/cos/tan/cot, or a non-integer power.
+    """
+    memo = {} if cache is None else cache
+    values = [_value(sp.sympify(e), env, memo) for e in exprs]
+    return [x.r if isinstance(x, Angle) else x for x in values]
+
+
+def _value(e, env, memo):
+    if e in memo:
+        return memo[e]
+    if e.is_Symbol:
+        if e not in env:
+            raise NotExact(f"no exact value for {e}")
+        out = env[e]
+    elif e.is_Integer:
+        out = int(e)
+    elif e.is_Rational:
+        out = MPQ(int(e.p), int(e.q))
+    elif e.is_Float:
+        r = sp.Rational(str(e))
+        out = MPQ(int(r.p), int(r.q))
+    elif e.is_Add:
+        out = 0
+        for a in e.args:
+            out = out + _value(a, env, memo)
+    elif e.is_Mul:
+        out = 1
+        for a in e.args:
+            out = out * _value(a, env, memo)
+    elif e.is_Pow:
+        if not e.exp.is_Integer:
+            raise NotExact(f"non-integer power in {e}")
+        base = _value(e.base, env, memo)
+        k = int(e.exp)
+        if isinstance(base, Angle):
+            base = base.r
+        out = base ** k if k >= 0 else _inverse(base ** (-k))
+    elif e.func in _FUNCTIONS:
+        out = _FUNCTIONS[e.func](_value(e.args[0], env, memo))
+    else:
+        raise NotExact(f"{e.func} cannot be evaluated exactly")
+    memo[e] = out
+    return out
+
+
+# ----------------------------------------------------------------- degrees
+class Degree:
+    """Upper bound on a rational function N/D of the drawn variables.
+
+    ``num`` bounds deg N; ``den`` maps each denominator factor (a key) to
+    ``(degree, exponent)``. Circle factors (1 + t²) are shared keys, so sums of
+    trigonometric terms keep one common denominator; every other denominator
+    gets a fresh key. Arithmetic mirrors the exact evaluation.
+    """
+
+    __slots__ = ("num", "den")
+    _fresh = itertools.count()
+
+    def __init__(self, num: int = 0, den: dict | None = None):
+        self.num, self.den = num, dict(den or {})
+
+    @staticmethod
+    def of(x) -> "Degree":
+        if isinstance(x, Angle):
+            x = x.r
+        return x if isinstance(x, Degree) else Degree(0)
+
+    @property
+    def den_degree(self) -> int:
+        return sum(d * k for d, k in self.den.values())
+
+    def __add__(self, other):
+        if _is_zero_constant(other):
+            return self
+        a, b = self, Degree.of(other)
+        common = dict(a.den)
+        for key, (d, k) in b.den.items():
+            if key not in common or common[key][1] < k:
+                common[key] = (d, k)
+        total = sum(d * k for d, k in common.values())
+        num = max(a.num + total - a.den_degree, b.num + total - b.den_degree)
+        return Degree(num, common)
+
+    __radd__ = __add__
+
+    def __neg__(self):
+        return self
+
+    def __sub__(self, other):
+        return self + other
+
+    def __rsub__(self, other):
+        return self + other
+
+    def __mul__(self, other):
+        if _is_zero_constant(other):
+            return 0
+        b = Degree.of(other)
+        den = dict(self.den)
+        for key, (d, k) in b.den.items():
+            den[key] = (d, den[key][1] + k) if key in den else (d, k)
+        return Degree(self.num + b.num, den)
+
+    __rmul__ = __mul__
+
+    def inverse(self) -> "Degree":
+        if self.num == 0 and not self.den:
+            return Degree(0)
+        return Degree(self.den_degree, {("denominator", next(Degree._fresh)): (self.num, 1)})
+
+    def __truediv__(self, other):
+        return self * Degree.of(other).inverse()
+
+    def __rtruediv__(self, other):
+        return self.inverse() * other
+
+    def __pow__(self, k: int):
+        out = Degree(0)
+        for _ in range(k):
+            out = out * self
+        return out
+
+    def __repr__(self):
+        return f"Degree(num={self.num}, den={self.den_degree})"
+
+
+def rank_bound(rows) -> list[int]:
+    """Per-row numerator degree contributions of a matrix of :class:`Degree` bounds.
+
+    The numerator of any minor using rows I (over the product of those rows'
+    common denominators) has degree at most the sum of the contributions of I.
+    """
+    out = []
+    for row in rows:
+        entries = [Degree.of(x) for x in row if not _is_zero_constant(x)]
+        if not entries:
+            out.append(0)
+            continue
+        lcm = Degree(0)
+        for x in entries:
+            lcm = lcm + Degree(0, x.den)  # LCM of the denominators
+        total = lcm.den_degree
+        out.append(max(x.num + total - x.den_degree for x in entries))
+    return out
+
+
+def minor_degree(rows, size: int) -> int:
+    """Bound on the numerator degree of every ``size`` x ``size`` minor."""
+    contributions = sorted(rank_bound(rows), reverse=True)
+    return sum(contributions[:size])
+
+
+# ------------------------------------------------------------ exact linear algebra
+def _domain_matrix(rows):
+    M = [[x if isinstance(x, MPQ) else QQ(x) for x in row] for row in rows]
+    shape = (len(M), len(M[0]) if M else 0)
+    return DomainMatrix(M, shape, QQ)
+
+
+def exact_rank(rows) -> tuple[int, list[int], list[int]]:
+    """Rank of a matrix of exact rationals with its pivot rows and columns.
+
+    sympy's DomainMatrix over QQ (reduced row echelon form); the pivot columns
+    are the first independent columns in order, the pivot rows those of the
+    transpose.
+    """
+    if not rows or not rows[0]:
+        return 0, [], []
+    if any(isinstance(x, ModP) for row in rows for x in row):
+        return _rank_mod_p(rows)
+    dm = _domain_matrix(rows)
+    _, cols = dm.rref(method="GJ")
+    if not cols:
+        return 0, [], []
+    _, prow = dm.extract(list(range(dm.shape[0])), list(cols)).transpose().rref(method="GJ")
+    return len(cols), list(prow), list(cols)
+
+
+def exact_solve(A, b):
+    """X with A X = B for a square nonsingular exact matrix A (lists of rationals).
+
+    Raises
+    ------
+    ZeroDivisionError
+        When A is singular.
+    """
+    n = len(A)
+    if n == 0:
+        return []
+    if any(isinstance(x, ModP) for row in list(A) + list(b) for x in row):
+        return _solve_mod_p(A, b)
+    dA, dB = _domain_matrix(A), _domain_matrix(b)
+    try:
+        X = dA.lu_solve(dB)
+    except (ZeroDivisionError, NonInvertibleMatrixError, DMNonInvertibleMatrixError) as exc:
+        raise ZeroDivisionError("singular block") from exc
+    return X.to_list()
+
+
+def _ints_mod_p(rows):
+    return [[ModP.lift(x).v for x in row] for row in rows]
+
+
+def _rank_mod_p(rows):
+    """Rank, pivot rows and pivot columns over F_p (Gaussian elimination on ints)."""
+    M = _ints_mod_p(rows)
+    nrows, ncols = len(M), len(M[0])
+    order = list(range(nrows))
+    prow, pcol, r = [], [], 0
+    for c in range(ncols):
+        p = next((i for i in range(r, nrows) if M[i][c]), None)
+        if p is None:
+            continue
+        M[r], M[p] = M[p], M[r]
+        order[r], order[p] = order[p], order[r]
+        inv = pow(M[r][c], -1, PRIME)
+        pivot = M[r]
+        for i in range(r + 1, nrows):
+            if M[i][c]:
+                f = M[i][c] * inv % PRIME
+                M[i] = [(a - f * b) % PRIME for a, b in zip(M[i], pivot)]
+        prow.append(order[r])
+        pcol.append(c)
+        r += 1
+        if r == nrows:
+            break
+    return r, sorted(prow), pcol
+
+
+def _solve_mod_p(A, b):
+    n = len(A)
+    M = _ints_mod_p([list(A[i]) + list(b[i]) for i in range(n)])
+    for c in range(n):
+        p = next((i for i in range(c, n) if M[i][c]), None)
+        if p is None:
+            raise ZeroDivisionError("singular block modulo p")
+        M[c], M[p] = M[p], M[c]
+        inv = pow(M[c][c], -1, PRIME)
+        M[c] = [x * inv % PRIME for x in M[c]]
+        for i in range(n):
+            if i != c and M[i][c]:
+                f = M[i][c]
+                M[i] = [(a - f * bb) % PRIME for a, bb in zip(M[i], M[c])]
+    return [[ModP(x) for x in row[n:]] for row in M]
+
+
+def solve_degrees(A, B) -> list:
+    """Degree bounds of X = A⁻¹ B (Cramer's rule) for Degree matrices A (square), B.
+
+    Every entry is a ratio of minors of [A | B]: numerator bounded by the minors
+    of [A | B], one shared fresh denominator factor for det A.
+    """
+    size = len(A)
+    widths = len(B[0]) if B else 0
+    aug = [list(a) + [sum((Degree.of(x) for x in b), Degree(0))] for a, b in zip(A, B)]
+    top = minor_degree(aug, size)
+    den = minor_degree([list(a) for a in A], size)
+    x = Degree(top, {("denominator", next(Degree._fresh)): (den, 1)})
+    return [[x] * widths for _ in range(size)]
+
+
+# ------------------------------------------------------------------ points
+@dataclass(frozen=True)
+class ExactPoint:
+    """One exact point of M_1 with the matching degree bounds.
+
+    Attributes
+    ----------
+    env : dict
+        Symbol -> exact value (``Angle`` for coordinates and free parameters,
+        ``MPQ`` for velocities and parameters with values).
+    degrees : dict
+        Symbol -> :class:`Degree` (or ``Angle`` of degrees) for the same symbols.
+    """
+
+    env: dict
+    degrees: dict
+
+
+class PointSampler:
+    """Random exact points of M_1 = {g(q) = 0, φ(q, v) = 0}.
+
+    Parameters
+    ----------
+    coordinates, velocities : sequence of sympy.Symbol
+    parameters : sequence of sympy.Symbol
+        All parameters; those in ``values`` are fixed, the others drawn.
+    values : dict
+        Parameter -> value (numbers; taken as exact decimals).
+    holonomic : sequence of sympy.Expr
+        g(q) = 0; each must be linear, with a constant coefficient, in a
+        coordinate not yet eliminated (else :class:`NotExact`).
+    affine : sequence of sympy.Expr
+        Constraints affine in the velocities (φ = μ(q) v + h(q), lifts included).
+    seed : int
+    mu : list of list of sympy.Expr, optional
+        The velocity coefficients of ``affine`` when the caller has them.
+    modular : bool, optional
+        Points over F_p (:class:`ModP` values, for proofs of full rank and of
+        non-vanishing) instead of rational points.
+    """
+
+    def __init__(self, coordinates, velocities, parameters, values, holonomic, affine, seed,
+                 mu=None, modular=False):
+        self.coordinates = tuple(coordinates)
+        self.velocities = tuple(velocities)
+        self.fixed = {p: _exact_number(p, values[p]) for p in parameters if p in values}
+        self.drawn = tuple(p for p in parameters if p not in values)
+        self.rng = random.Random(seed)
+        self.solved = _eliminate_coordinates(self.coordinates, holonomic)
+        self.affine = tuple(sp.sympify(e) for e in affine)
+        vels = self.velocities
+        self.mu = mu if mu is not None else [jacobian_row(e, vels) for e in self.affine]
+        self.h = [e.xreplace({v: 0 for v in vels}) for e in self.affine]
+        self.dependent: tuple | None = None
+        self.rejected = 0
+        self.modular = modular
+        if modular:
+            self.fixed = {p: ModP.lift(x) for p, x in self.fixed.items()}
+
+    # Degree bookkeeping for the denominators that may vanish at a drawn point
+    # (they are drawn again): the bound of their numerators.
+    @property
+    def denominator_degree(self) -> int:
+        return self._den_degree
+
+    def _draw(self):
+        if self.modular:
+            return ModP(self.rng.randrange(1, PRIME))
+        return MPQ(self.rng.randint(1, 2 ** SAMPLE_BITS))
+
+    def point(self) -> ExactPoint:
+        """A random exact point of M_1 (raises NotExact when there is no exact route)."""
+        for _ in range(50):
+            pt = self._try_point()
+            if pt is not None:
+                return pt
+            self.rejected += 1
+        raise NotExact("no exact point found: the affine constraints are singular at "
+                       "every point tried")
+
+    def _try_point(self):
+        env, deg = dict(self.fixed), {p: 0 for p in self.fixed}
+        for s in self.drawn + tuple(q for q in self.coordinates if q not in self.solved):
+            t = self._draw()
+            one = 1 + t * t
+            if not one:
+                return None
+            env[s] = Angle(self._draw(), (1 - t * t) / one, 2 * t / one)
+            key = ("circle", s)
+            circ = Degree(2, {key: (2, 1)})
+            deg[s] = Angle(Degree(1), circ, circ)
+        for q, expr in self.solved.items():
+            try:
+                env[q], = evaluate([expr], env)
+            except ZeroDivisionError:
+                return None
+            deg[q], = evaluate([expr], deg)
+        vels = self.velocities
+        if not self.affine:
+            for v in vels:
+                env[v], deg[v] = self._draw(), Degree(1)
+            self._den_degree = 0
+            return ExactPoint(env, deg)
+        cache, dcache = {}, {}
+        try:
+            mu = [evaluate(row, env, cache) for row in self.mu]
+            h = evaluate(self.h, env, cache)
+        except ZeroDivisionError:
+            return None
+        if self.dependent is None:
+            r, rows, cols = exact_rank(mu)
+            if r < len(self.affine):
+                raise NotExact("the affine constraints are dependent at a random point")
+            self.dependent = tuple(cols)
+        dep = list(self.dependent)
+        free = [i for i in range(len(vels)) if i not in dep]
+        for i in free:
+            env[vels[i]], deg[vels[i]] = self._draw(), Degree(1)
+        block = [[row[j] for j in dep] for row in mu]
+        rhs = [[-(h[k] + sum((mu[k][i] * env[vels[i]] for i in free), 0))]
+               for k in range(len(mu))]
+        # Degrees of the dependent velocities (Cramer): numerator and denominator
+        # are minors of [block | rhs].
+        dmu = [evaluate(row, deg, dcache) for row in self.mu]
+        dh = evaluate(self.h, deg, dcache)
+        dblock = [[row[j] for j in dep] + [dh[k] + sum((row[i] * Degree(1) for i in free), 0)]
+                  for k, row in enumerate(dmu)]
+        size = len(dep)
+        top = minor_degree(dblock, size)
+        self._den_degree = minor_degree([r[:size] for r in dblock], size)
+        try:
+            sol = exact_solve(block, rhs)
+        except ZeroDivisionError:
+            return None
+        fresh = ("denominator", next(Degree._fresh))
+        for pos, j in enumerate(dep):
+            env[vels[j]] = sol[pos][0]
+            deg[vels[j]] = Degree(top, {fresh: (self._den_degree, 1)})
+        return ExactPoint(env, deg)
+
+
+def jacobian_row(expr, symbols) -> list:
+    """[d expr / d s for s in symbols], differentiating only where s occurs."""
+    expr = sp.sympify(expr)
+    present = expr.free_symbols
+    return [expr.diff(s) if s in present else sp.S.Zero for s in symbols]
+
+
+def _exact_number(name, value):
+    try:
+        r = sp.Rational(str(value))
+    except (TypeError, ValueError, sp.SympifyError) as exc:
+        raise NotExact(f"parameter {name} = {value!r} is not an exact number") from exc
+    return MPQ(int(r.p), int(r.q))
+
+
+def _eliminate_coordinates(coordinates, holonomic) -> dict:
+    """Coordinates solved from holonomic constraints linear in them (constant coefficient)."""
+    solved: dict = {}
+    for g in holonomic:
+        e = sp.expand(sp.sympify(g).xreplace(solved))
+        if e == 0:
+            continue
+        for q in coordinates:
+            if q in solved or q not in e.free_symbols:
+                continue
+            coeff = e.coeff(q, 1)
+            rest = sp.expand(e - coeff * q)
+            if coeff.free_symbols or coeff == 0 or rest.has(q):
+                continue
+            value = sp.expand(-rest / coeff)
+            solved = {k: sp.expand(v.xreplace({q: value})) for k, v in solved.items()}
+            solved[q] = value
+            break
+        else:
+            raise NotExact(f"the holonomic constraint {g} = 0 is not linear in a coordinate "
+                           f"with a constant coefficient")
+    return solved
