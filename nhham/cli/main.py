@@ -2,7 +2,8 @@
 
 Contract (``DESIGN.md`` §3): ``--json`` prints exactly one JSON object on
 stdout; exit status 0 on success, 2 on bad input (one line on stderr, no
-traceback), 1 on an internal failure (traceback only with ``--debug``).
+traceback), 1 on an internal failure (traceback only with ``--debug``), 3 when
+``--budget`` ran out (one line: the step that was running, the steps finished).
 Each command derives only what its output needs; ``--verbose`` lists what
 was derived, how each decision on M_k was made, and how long each step took.
 """
@@ -14,8 +15,12 @@ import json
 import sys
 import traceback
 
+import sympy as sp
+
 from nhham.errors import InputError, NhhamError
+from nhham.cli.budget import BudgetExceeded, time_budget
 from nhham.cli.report import Steps, display_form, expr_text, json_number, table
+from nhham.lagrangian.algorithm import CLOSED_FORM_SIZE
 
 __all__ = ["main"]
 
@@ -38,7 +43,7 @@ def cmd_classify(args, steps):
 
     scene = _load(args, steps, drop_redundant=True)
     system = scene.system
-    with steps.step("constraint algorithm (stages, ranks, multipliers)"):
+    with steps.step("constraint algorithm (stages, ranks, decisions at exact points)"):
         analysis = analyze_constraints(system, precision=args.precision)
     for stage in analysis.stages:
         for d in stage.decisions:
@@ -128,6 +133,10 @@ def cmd_derive(args, steps):
     G = lagrangian_geometry(system, precision=args.precision)
     with steps.step("energy E_L"):
         energy = G.energy
+    with steps.step("implicit form: W, F, mu and mu a = -(dphi/dq) v"):
+        implicit = _implicit_form(G)
+    if not (args.explicit or system.n <= CLOSED_FORM_SIZE):
+        return _derive_implicit(args, steps, scene, G, implicit, energy)
     with steps.step("constraint matrix C = Z_i(phi_j)"):
         C = G.constraint_matrix
     with steps.step("rank of C on M_1"):
@@ -149,8 +158,75 @@ def cmd_derive(args, steps):
         field = list(analysis.dynamics)
         free = analysis.free_multiplier_symbols
         multipliers = [analysis.multipliers.get(s, s) for s in G.multiplier_symbols]
-    return _derive_output(args, steps, scene, "lagrangian", system.state, field, multipliers,
-                          C, energy, free)
+    out = _derive_output(args, steps, scene, "lagrangian", system.state, field, multipliers,
+                         C, energy, free)
+    if args.json:
+        out.update(form="explicit", **implicit)
+    return out
+
+
+def _implicit_form(G) -> dict:
+    """The dynamics as W a + mu^T lambda = F, mu a = -(dphi/dq) v (JSON-ready)."""
+    system = G.system
+    rhs = -G.drift if system.m else sp.zeros(0, 1)
+    return {
+        "mass_matrix": [[expr_text(G.hessian[i, j]) for j in range(system.n)]
+                        for i in range(system.n)],
+        "forcing": [expr_text(f) for f in G.forcing],
+        "constraint_jacobian": [[expr_text(system.mu[i, j]) for j in range(system.n)]
+                                for i in range(system.m)],
+        "constraint_rhs": [expr_text(r) for r in rhs],
+    }
+
+
+def _derive_implicit(args, steps, scene, G, implicit, energy):
+    """derive without closed forms: the mass-matrix form and the verdict on M_f."""
+    from nhham.lagrangian.algorithm import analyze_constraints
+
+    system = scene.system
+    with steps.step("constraint algorithm at exact points (M_f, free multipliers)"):
+        analysis = analyze_constraints(system, precision=args.precision)
+    if analysis.status == "inconsistent":
+        raise InputError(f"{args.scene}: the constraints are inconsistent "
+                         f"({analysis.inconsistency}); there is no dynamics to derive")
+    primary = set(system.holonomic) | set(system.phi)
+    secondary = [c for c in analysis.final_constraints if c not in primary]
+    data = {
+        "name": scene.name, "side": "lagrangian", "form": "implicit",
+        "state": [s.name for s in system.state],
+        "field": None, "multipliers": None, "C": None,
+        "energy": expr_text(energy),
+        "free_multiplier_symbols": [s.name for s in analysis.free_multiplier_symbols],
+        **implicit,
+        "accelerations": [s.name for s in G.acceleration_symbols],
+        "multiplier_symbols": [s.name for s in G.multiplier_symbols],
+        "secondary_constraints": [expr_text(c) for c in secondary],
+        "status": analysis.status,
+        "note": (f"closed forms of P(xi_L), lambda and C need W^-1 of a {system.n} x "
+                 f"{system.n} matrix of functions: not formed; --explicit forms them"),
+    }
+    if args.json:
+        return data
+    a = [f"{s}''" for s in (q.name for q in system.coordinates)]
+    lines = [f"{scene.name or args.scene}: dynamics in implicit form "
+             f"(W a + mu^T lambda = F, mu a = rhs), a = ({', '.join(data['accelerations'])})"]
+    lines.append("mass matrix W:")
+    lines.append(table(data["mass_matrix"]))
+    lines.append("forcing F:")
+    lines.append(table([(n, "=", f) for n, f in zip(a, data["forcing"])]))
+    if system.m:
+        lines.append("constraint rows mu (mu a = rhs):")
+        lines.append(table([row + ["|", r] for row, r in zip(data["constraint_jacobian"],
+                                                            data["constraint_rhs"])]))
+    if secondary:
+        lines.append("secondary constraints (M_f):")
+        lines.append(table([(c,) for c in data["secondary_constraints"]]))
+    if data["free_multiplier_symbols"]:
+        lines.append("free multipliers: " + ", ".join(data["free_multiplier_symbols"]))
+    lines.append(f"status: {analysis.status}")
+    lines.append(f"energy: {data['energy']}")
+    lines.append(f"note: {data['note']}")
+    return "\n".join(lines)
 
 
 def _derive_hamiltonian(args, steps, scene):
@@ -352,6 +428,8 @@ def build_parser() -> argparse.ArgumentParser:
         p.add_argument("--verbose", action="store_true",
                        help="list what was derived, how decisions were made, and timings")
         p.add_argument("--debug", action="store_true", help="tracebacks for internal errors")
+        p.add_argument("--budget", type=float, default=None, metavar="SECONDS",
+                       help="stop after SECONDS and say what was decided so far (exit 3)")
         p.add_argument("--precision", type=int, default=None, metavar="DIGITS",
                        help="decide on M_k with mpmath at DIGITS digits (default float64)")
         if name in ("derive", "compare", "simulate", "bench"):
@@ -360,6 +438,10 @@ def build_parser() -> argparse.ArgumentParser:
         if name == "derive":
             p.add_argument("--latex", action="store_true", help="print LaTeX")
             p.add_argument("--side", choices=("lagrangian", "hamiltonian"), default="lagrangian")
+            p.add_argument("--explicit", action="store_true",
+                           help="form the closed forms P(xi_L), lambda and C (default: only "
+                                f"for n <= {CLOSED_FORM_SIZE}; the implicit mass-matrix form "
+                                "otherwise)")
         if name == "compare":
             p.add_argument("--samples", type=int, default=6, help="seeded points of M_f")
         if name in ("simulate", "bench"):
@@ -386,7 +468,12 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
     steps = Steps(progress=sys.stderr.isatty() and not args.json)
     try:
-        out = COMMANDS[args.command](args, steps)
+        with time_budget(args.budget, steps):
+            out = COMMANDS[args.command](args, steps)
+    except BudgetExceeded as exc:
+        print(f"nhham: {_one_line(exc)}; finished before it: {steps.decided()}",
+              file=sys.stderr)
+        return 3
     except InputError as exc:
         print(f"nhham: error: {_one_line(exc)}", file=sys.stderr)
         return 2

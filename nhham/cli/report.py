@@ -80,16 +80,25 @@ class Steps:
 
     progress: bool = False
     records: list = field(default_factory=list)
+    current: str | None = None
 
     @contextmanager
     def step(self, what: str):
         if self.progress:
             print(f"nhham: {what} ...", file=sys.stderr, flush=True)
         start = time.perf_counter()
+        outer, self.current = self.current, what
         try:
             yield
         finally:
-            self.records.append((what, time.perf_counter() - start))
+            self.current = outer
+        # Only finished steps are recorded (a budget that runs out interrupts one).
+        self.records.append((what, time.perf_counter() - start))
+
+    def decided(self) -> str:
+        """The steps finished and the notes recorded so far, on one line."""
+        done = [what for what, t in self.records]
+        return "; ".join(done) if done else "nothing yet"
 
     def note(self, what: str):
         """Record a fact (a decision and how it was made) without timing."""

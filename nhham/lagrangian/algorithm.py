@@ -1166,6 +1166,10 @@ def _run_block(system, spec, opts, start, geometry):
     return run
 
 
+# Systems up to this many coordinates get their closed forms (lambda, P(xi_L)) printed
+# by report(); beyond, W^-1 written out is too large to be worth forming unasked.
+CLOSED_FORM_SIZE = 4
+
 # Blocks up to this size (n + m) get the symbolic check of where rank C drops on M_1.
 RANK_DROP_CHECK_SIZE = 6
 
@@ -1308,6 +1312,12 @@ def _frozen_stage(run, k):
 
 
 # ------------------------------------------------------------------------ report
+def _small(res) -> bool:
+    """Closed forms are printed by the report only for small systems."""
+    N = len(res.variables) if isinstance(res, AlgorithmRun) else 2 * res.system.n
+    return N <= 2 * CLOSED_FORM_SIZE
+
+
 def _report_lines(res, header):
     lines = [f"{header}: {res.status}"]
     if isinstance(res, ConstraintAnalysis):
@@ -1333,11 +1343,16 @@ def _report_lines(res, header):
     else:
         lines.append(f"M_f: {len(res.final_constraints)} constraint(s), dimension "
                      f"{res.dimension}")
-        for s, e in res.multipliers.items():
-            lines.append(f"  {s} = {e}")
+        closed = "multipliers" in res.__dict__ or _small(res)
+        if closed:
+            for s, e in res.multipliers.items():
+                lines.append(f"  {s} = {e}")
+        else:
+            lines.append("  multipliers and dynamics: not formed in closed form (W^-1 of a "
+                         "large system); ask for .multipliers / .dynamics")
         lines.append("free multipliers: " + (", ".join(str(s) for s in
                                                     res.free_multiplier_symbols) or "none"))
-        if res.dynamics is not None:
+        if closed and res.dynamics is not None:
             lines.append(f"dynamics: {list(res.dynamics)}")
     if not res.converged:
         lines.append("NOT CONVERGED: the stage bound was hit")
