@@ -397,7 +397,7 @@ def rk4(model, y0, t0, t1, h, *, projection: bool = False, baumgarte=None,
     def f(z):
         out = field(z)
         counter["nfev"] += 1
-        if type(out) is int:
+        if isinstance(out, int):
             raise NumericalFailure(out)
         return out
 

@@ -298,7 +298,7 @@ class NumericModel:
     def field_function(self, baumgarte=None):
         """f(z) -> [dy, power] (2n + 1) at one state z of length 2n or 2n + 1
         (the last entry, e.g. the work of the constraint forces, is ignored), or
-        the failure status (int). Through the CPython entry point when there is
+        the failure status (an int: a Status or the C code). Through the CPython entry point when there is
         one (what the scipy solvers call at every stage), else through
         :meth:`evaluate`."""
         n2 = 2 * self.n
@@ -306,7 +306,7 @@ class NumericModel:
         def f_slow(z):
             dy, _, P, status = self.evaluate(np.asarray(z, dtype=float)[:n2], baumgarte)
             if status:
-                return status
+                return status  # a Status (an int): callers test isinstance(out, int)
             out = np.empty(n2 + 1)
             out[:n2] = dy
             out[n2] = P

@@ -74,7 +74,7 @@ def _make_fun(model, baumgarte, counter):
         if z.ndim == 1:
             out = field(z)
             counter[0] += 1
-            if type(out) is int:
+            if isinstance(out, int):
                 raise eval_failure(out, t, z[:n2])
             return out
         # Vectorised call (scipy's finite-difference Jacobian): z is (2n+1, k).
@@ -108,11 +108,11 @@ class _Events:
             direction = getattr(e, "direction", 0)
             if (up and direction >= 0 and g_new[i] != self.g[i]) or (
                     down and direction <= 0 and g_new[i] != self.g[i]):
-                root = brentq(lambda s: e(s, dense(s)[:n2]), t_old, t,
+                root = brentq(lambda s: e(s, dense(s)[:n2]), min(t_old, t), max(t_old, t),
                               xtol=4 * np.finfo(float).eps, rtol=4 * np.finfo(float).eps)
                 found.append((root, i))
         self.g = g_new
-        found.sort(reverse=t < t_old)
+        found.sort(reverse=bool(t < t_old))
         for root, i in found:
             self.count[i] += 1
             self.t_events[i].append(root)

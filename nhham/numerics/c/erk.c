@@ -106,7 +106,10 @@ static void erk_dense(int dop, int s, int np_, const double *K, const double *P,
    (non-finite or overflowing state or field), NHHAM_SINGULAR (singular saddle
    matrix, or singular matrix in the projection), NHHAM_NOT_CONVERGED (projection
    failed). A failure of the field (not of the projection or the state) also
-   writes its time and state to `fail`, whose time is NaN until then. */
+   writes its time and state to `fail`, whose time is NaN until then.
+   Long on purpose: it follows scipy's RungeKutta step by step (initial step, stages,
+   error norm, step-size control, dense output) so that the two can be compared line by
+   line, and keeps the stage buffers on this function's stack. */
 int nhham_erk(const int *info, const double *tab, double *st, double t_bound, double rtol,
               const double *atol, double max_step, int projection, double proj_tol,
               int proj_maxiter, const double *t_eval, long n_eval, long *i_eval,

@@ -82,7 +82,9 @@ static int lu_solve(int mm, const double *W, const double *mu, const double *d,
    not numerically positive definite, e.g. mu rank deficient): LU with partial
    pivoting on the symmetrically scaled saddle matrix (unit diagonal of W,
    unit rows of mu), which makes extreme mass ratios harmless.
-   Returns 0, or 1 when the matrix is singular. */
+   Returns 0, or 1 when the matrix is singular.
+   One function (and forced inline) on purpose: it is the innermost call of every field
+   evaluation, and the Cholesky factors live on its stack for the LU fallback's decision. */
 HOT int ksolve(int mm, const double *W, const double *mu, const double *top,
                const double *bottom, double *x, double *y) {
     enum { M1 = NCX + 1 };

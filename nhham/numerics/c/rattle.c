@@ -3,7 +3,9 @@
 
 /* One step (q, v) -> (q1, v1) in place; lam: in = guess for lam0, out = lam1.
    Returns NHHAM_SUCCESS, NHHAM_NOT_CONVERGED (Newton failed), NHHAM_SINGULAR or
-   NHHAM_NONFINITE. */
+   NHHAM_NONFINITE. One function on purpose: the Newton iteration for lam0, the half
+   kick and the end constraint share the step's arrays (on the stack), in the order of
+   the equations of nhham.numerics.integrators' module docstring. */
 static int rattle_step(double *q, double *v, double h, double *lam, const double *p,
                        const double *W, const double *Winv, double tol, int maxiter,
                        long *newton) {
