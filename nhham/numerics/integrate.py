@@ -86,11 +86,11 @@ class SimulationResult:
     wall_time_s : float
         Integration time (without diagnostics and code generation).
     diagnostics : Diagnostics
-        See :class:`nhham.diagnostics.Diagnostics`; its main fields are also
+        See :class:`nhham.numerics.diagnostics.Diagnostics`; its main fields are also
         attributes here (``constraint_residual_max``, ``energy_drift``,
         ``energy_balance_residual``, ``cond_C_max``, ``cond_W_max``).
     warnings : tuple of str
-        Also issued as :class:`~nhham.numeric.NumericsWarning` unless
+        Also issued as :class:`~nhham.numerics.model.NumericsWarning` unless
         ``warn=False`` was passed.
     initial_projection : ProjectionOutcome or None
         When the initial data were projected onto M_1: by how much.
@@ -261,7 +261,7 @@ def simulate(system_or_model, t_span, y0, *, method: str = "DOP853", rtol: float
     save_every : int
         Fixed-step methods: store every j-th step.
     backend : str
-        Backend when a System is given (see :func:`nhham.codegen.numeric_model`).
+        Backend when a System is given (see :func:`nhham.numerics.codegen.numeric_model`).
     warn : bool
         Issue the diagnostics' warnings as :class:`NumericsWarning`.
     progress : bool

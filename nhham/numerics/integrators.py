@@ -75,7 +75,8 @@ FixedStepRun = Run
 
 def _grid(t0, t1, h):
     if not (h > 0 and math.isfinite(h)):
-        raise InputError(f"step: a positive finite step is required for fixed-step methods, got {h!r}")
+        raise InputError(f"step: a positive finite step is required for fixed-step methods, "
+                         f"got {h!r}")
     span = t1 - t0
     N = max(1, int(math.ceil(abs(span) / h - 1e-9)))
     return N, span / N

@@ -298,9 +298,9 @@ class NumericModel:
     def field_function(self, baumgarte=None):
         """f(z) -> [dy, power] (2n + 1) at one state z of length 2n or 2n + 1
         (the last entry, e.g. the work of the constraint forces, is ignored), or
-        the failure status (an int: a Status or the C code). Through the CPython entry point when there is
-        one (what the scipy solvers call at every stage), else through
-        :meth:`evaluate`."""
+        the failure status (an int: a Status or the C code). Through the CPython
+        entry point when there is one (what the scipy solvers call at every
+        stage), else through :meth:`evaluate`."""
         n2 = 2 * self.n
 
         def f_slow(z):
@@ -527,7 +527,8 @@ class NumericModel:
         Raises
         ------
         NumericalFailure
-            With ``Status.NOT_CONVERGED`` if Newton does not reach ``tol`` (scaled by 1 + |q|) in ``maxiter``.
+            With ``Status.NOT_CONVERGED`` if Newton does not reach ``tol`` (scaled by
+            1 + |q|) in ``maxiter``.
         """
         y = self._check(y).copy()
         if y.ndim != 1:

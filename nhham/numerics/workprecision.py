@@ -5,7 +5,7 @@ problem and measures, for each run, the error at t_end against the mpmath
 reference (:mod:`nhham.numerics.reference`), the wall time, the evaluations, the
 constraint residual and the energy drift. The reference must be far more
 accurate than the tightest setting; its own error estimate is recorded and a
-:class:`~nhham.numeric.NumericsWarning` is issued if it is not at least 100
+:class:`~nhham.numerics.model.NumericsWarning` is issued if it is not at least 100
 times below the smallest error measured.
 """
 
@@ -173,7 +173,7 @@ def work_precision(system_or_model, y0, t_span, *, methods=None, tolerances=DEFA
     progress : bool
         Print each method on stderr as it starts.
     loop : {"auto", "compiled", "scipy"}
-        Passed to :func:`~nhham.integrate.simulate` for the scipy methods
+        Passed to :func:`~nhham.numerics.integrate.simulate` for the scipy methods
         (RK23, RK45 and DOP853 run as one compiled loop by default when the
         model is compiled; ``"scipy"`` measures scipy's Python loop instead).
     """

@@ -413,3 +413,23 @@ def test_without_python_headers_the_plain_library_is_used(monkeypatch, tmp_path)
     assert res.settings["loop"] == "compiled" and res.success
     again = numeric_model(chaplygin_sleigh(m=2.0), cache_dir=str(tmp_path))
     assert again.compiled.ext is None and "unavailable" in again.backend_note
+
+
+def test_generated_sources_are_kept_by_content_not_by_identity():
+    """Equal systems share their generated sources; a system is not kept alive by them;
+    a different system, or another path, gets its own."""
+    import gc
+    import weakref
+
+    from nhham.numerics.codegen.emit import generate_sources, system_fingerprint
+
+    a, b = chaplygin_sleigh(), chaplygin_sleigh()
+    assert a is not b and system_fingerprint(a) == system_fingerprint(b)
+    assert generate_sources(a) is generate_sources(b)
+    assert system_fingerprint(a) != system_fingerprint(a, "closed_form")
+    assert system_fingerprint(rolling_disk()) != system_fingerprint(a)
+    ref = weakref.ref(a)
+    numeric_model(a, backend="numpy")
+    del a
+    gc.collect()
+    assert ref() is None

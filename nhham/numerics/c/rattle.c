@@ -1,4 +1,4 @@
-/* ---- nonholonomic RATTLE for constant W (see nhham.integrators) ---- */
+/* ---- nonholonomic RATTLE for constant W (see nhham.numerics.integrators) ---- */
 #define NGEO (NQ * NQ + NC * NQ + NC + NH)
 
 /* One step (q, v) -> (q1, v1) in place; lam: in = guess for lam0, out = lam1.
