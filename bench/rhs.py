@@ -213,11 +213,11 @@ def compare_flags(N, variants, batch_k=10_000, rounds=15):
     the machine's noise hits every variant alike); medians over the rounds."""
     model = numeric_model(snake(N), backend="c")
     Y = snake_states(model, batch_k)
-    pext = model._pext0
+    pext = model.parameter_block().pointer
     libs = {}
     for flags in variants:
         path = compile_c(model.c_source, flags=flags.split())
-        from nhham.numerics.model import CompiledRHS
+        from nhham.numerics.kernels import CompiledRHS
 
         libs[flags or "-O2 (default)"] = CompiledRHS.load(path, model.layout)
     ref = model.rhs(0.0, Y)
@@ -247,7 +247,8 @@ def measure(N, batch_k=10_000, with_peers=True, number=2000, baseline=None):
     single, batch, bare, keep = hand_rhs(N)
     assert np.allclose(single(y), ref, rtol=1e-11, atol=1e-11)
     assert np.allclose(batch(Y), model_np.rhs(0.0, Y), rtol=1e-10, atol=1e-10)
-    pext, addr = model_c._pext0, model_c._paddr0
+    block = model_c.parameter_block()
+    pext, addr = block.pointer, block.address
     ext = model_c.compiled.ext
     # The C-level figures first and last (the VM is noisy): medians of both passes.
     c_batch = [median_time(lambda: model_c.rhs(0.0, Y), 3, repeat=5) / batch_k]

@@ -202,7 +202,7 @@ def main(argv=None):
         except ImportError as exc:
             print(f"PyDy unavailable ({exc}); pip install pydy cython")
             continue
-        rows = pydy_runs(f, values, perm, model, y0, t_end, ref.y[-1], peer_tols, args.repeats)
+        rows = pydy_runs(f, values, perm, model, y0, t_end, ref.y[:, -1], peer_tols, args.repeats)
         print("\nPyDy (Kane + Cython + odeint/LSODA):\n")
         print("| rtol=atol | error at t_end | wall time [ms] | evaluations | constraint residual |")
         print("|---|---|---|---|---|")

@@ -339,7 +339,7 @@ def cmd_simulate(args, steps):
             opts[key] = value
     t_end = opts.pop("t_end", 10.0)
     with steps.step(f"simulate with {opts.get('method', 'default method')}"):
-        result = simulate(scene.system, dict(scene.initial), (0.0, t_end),
+        result = simulate(scene.system, (0.0, t_end), dict(scene.initial),
                           project_initial=args.project_initial, progress=steps.progress, **opts)
     if args.output:
         with steps.step(f"write {args.output}"):

@@ -1,11 +1,18 @@
 """Numbers: no sympy here, apart from ``codegen``, the one bridge in.
 
-Modules: ``codegen`` (turns a System into a :class:`NumericModel`: generated
-kernels in Python, numpy, mpmath and C), ``model`` (the numeric model behind
-an array API), ``integrate`` (:func:`simulate`), ``integrators`` (fixed-step
-RATTLE and RK4), ``reference`` (the mpmath reference integrator),
-``diagnostics`` (residual, energy, conditioning along a trajectory),
-``workprecision`` (the speed/accuracy study).
+``codegen/`` (a System in, a :class:`NumericModel` out: ``emit`` prints the kernels as
+Python, numpy, mpmath and C, ``build`` compiles and caches the C), ``c/`` (the C runtime
+the kernels are compiled with, package data), ``kernels`` (the generated code behind
+Python calls), ``saddle`` (the saddle-point solve in numpy), ``model`` (the numeric model
+behind an array API), ``status`` (the one status vocabulary and failure exception),
+``run`` (the raw output of an integration loop), ``scipy_loop`` and ``compiled_loop``
+(scipy's solvers stepped here; the explicit Runge-Kutta methods as one compiled loop),
+``integrators`` (fixed-step RATTLE and RK4), ``reference`` (the mpmath reference
+integrator), ``diagnostics`` (residual, energy, conditioning along a trajectory),
+``integrate`` (:func:`simulate`), ``workprecision`` (the speed/accuracy study).
+
+A new integrator goes beside ``integrators`` (fixed step) or ``scipy_loop`` (adaptive),
+returns a :class:`~nhham.numerics.run.Run` and is dispatched by ``integrate.simulate``.
 """
 
 from nhham.lazy import lazy_exports
@@ -17,6 +24,8 @@ _LAZY = {
     "SimulationResult": "integrate",
     "work_precision": "workprecision",
     "reference_solution": "reference",
+    "Status": "status",
+    "NumericalFailure": "status",
 }
 __all__ = list(_LAZY)
 __getattr__, __dir__ = lazy_exports(__name__, _LAZY, globals())

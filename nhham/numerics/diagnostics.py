@@ -3,7 +3,7 @@
 Everything is evaluated on the stored states in one batch per quantity (no
 Python loop over states). The energy balance uses the exact identity of the
 constrained field dE_L/dt = -lambda . (mu v) (= lambda . h on M_1, see
-:mod:`nhham.numeric`): the integrators carry its time integral W(t) (the work
+:mod:`nhham.numerics.model`): the integrators carry its time integral W(t) (the work
 of the constraint forces), and the residual max |E(t) - E(0) - W(t)| measures
 integration error alone, also for affine constraints where E is not
 conserved.
@@ -71,15 +71,15 @@ class Diagnostics:
     warnings: tuple
 
 
-def trajectory_diagnostics(model, t, Y, work=None, *, residual_tol: float = 1e-8,
+def trajectory_diagnostics(model, t, y, work=None, *, residual_tol: float = 1e-8,
                            cond_warn: float = COND_C_WARN) -> Diagnostics:
-    """Diagnostics of states ``Y`` (shape (K, 2n)) at times ``t`` (K,).
+    """Diagnostics of states ``y`` (shape (2n, K), as in scipy) at times ``t`` (K,).
 
     Parameters
     ----------
     model : NumericModel
     t : ndarray, shape (K,)
-    Y : ndarray, shape (K, 2n)
+    y : ndarray, shape (2n, K)
     work : ndarray, shape (K,), optional
         Work of the constraint forces carried by the integrator; if None it is
         the trapezoidal integral of the power at the stored states (second
@@ -91,7 +91,7 @@ def trajectory_diagnostics(model, t, Y, work=None, *, residual_tol: float = 1e-8
         cond(C) above which a warning is given (errors grow like cond(C) eps).
     """
     t = np.asarray(t, dtype=float)
-    Y = np.asarray(Y, dtype=float)
+    Y = np.asarray(y, dtype=float).T  # states as rows: what the model's batch calls take
     notes = []
     finite = np.all(np.isfinite(Y), axis=1)
     if not np.all(finite):

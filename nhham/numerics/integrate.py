@@ -4,28 +4,33 @@ Methods
 -------
 ``"RK23"``, ``"RK45"``, ``"DOP853"``, ``"Radau"``, ``"BDF"``, ``"LSODA"``
     The :mod:`scipy.integrate` solvers on the projected field (stepped here,
-    so that a failure keeps the trajectory computed so far). With the
-    compiled backend, RK23, RK45 and DOP853 run as one compiled loop instead
-    (``loop="auto"``): scipy's algorithm (its coefficients, initial step,
-    error norm, step-size control and dense output) with the projection and
-    the storage done in C too, so no Python runs per step; ``loop="scipy"``
-    keeps scipy's own Python loop (same steps up to round-off). Options:
+    so that a failure keeps the trajectory computed so far:
+    :mod:`nhham.numerics.scipy_loop`; ``dense_output`` and ``events`` as in
+    :func:`scipy.integrate.solve_ivp`). With the compiled backend, RK23, RK45
+    and DOP853 run as one compiled loop instead (``loop="auto"``,
+    :mod:`nhham.numerics.compiled_loop`): scipy's algorithm (its coefficients,
+    initial step, error norm, step-size control and dense output) with the
+    projection and the storage done in C too, so no Python runs per step;
+    ``loop="scipy"`` keeps scipy's own Python loop (same steps up to
+    round-off), and so do ``dense_output`` and ``events``. Options:
     ``projection=True`` projects onto M_1 after every step (velocities in the
     kinetic metric, position constraints by Newton iteration);
     ``baumgarte=(alpha, beta)`` replaces d(phi)/dt = 0 by
     d(phi)/dt = -2 alpha phi - beta^2 g. Implicit methods get their
     finite-difference Jacobian from one batched evaluation.
 ``"rattle"``, ``"rattle4"``, ``"rk4"``
-    Fixed step ``step`` (:mod:`nhham.integrators`): the structure-preserving
+    Fixed step ``step`` (:mod:`nhham.numerics.integrators`): the structure-preserving
     nonholonomic RATTLE scheme (order 2), its triple-jump composition
     (order 4), classical RK4 (with ``projection``/``baumgarte`` if asked).
 ``"reference"``
     High-precision extrapolation in mpmath with ``reference_digits`` digits
-    (:mod:`nhham.reference`), for measuring errors.
+    (:mod:`nhham.numerics.reference`), for measuring errors.
 
 The integrators never import sympy: a System is turned into a
-:class:`~nhham.numeric.NumericModel` by :func:`nhham.codegen.numeric_model`
-(the one bridge), or a model is passed directly.
+:class:`~nhham.numerics.model.NumericModel` by
+:func:`nhham.numerics.codegen.numeric_model` (the one bridge), or a model is
+passed directly. Every result's ``status`` is a
+:class:`~nhham.numerics.status.Status`.
 """
 
 from __future__ import annotations
@@ -38,35 +43,20 @@ from functools import cached_property
 from types import MappingProxyType
 
 import numpy as np
-from scipy.integrate import BDF, DOP853, LSODA, RK23, RK45, Radau
 
-from nhham.numerics.diagnostics import Diagnostics, trajectory_diagnostics
 from nhham.errors import InconsistentInitialDataError, InputError
+from nhham.numerics.compiled_loop import COMPILED_METHODS, run_compiled
+from nhham.numerics.diagnostics import Diagnostics, trajectory_diagnostics
 from nhham.numerics.integrators import FIXED_STEP_METHODS, run_fixed_step
 from nhham.numerics.model import NumericModel, NumericsWarning, ProjectionOutcome
+from nhham.numerics.run import Run
+from nhham.numerics.scipy_loop import SCIPY_METHODS, DenseOutput, run_scipy
+from nhham.numerics.status import Status
 
 __all__ = ["simulate", "SimulationResult", "SCIPY_METHODS", "COMPILED_METHODS", "METHODS"]
 
-
-SCIPY_METHODS = {"RK23": RK23, "RK45": RK45, "DOP853": DOP853, "Radau": Radau, "BDF": BDF,
-                 "LSODA": LSODA}
-#: scipy methods that also run as one compiled loop (``loop="compiled"``).
-COMPILED_METHODS = ("RK23", "RK45", "DOP853")
 _LOOPS = ("auto", "compiled", "scipy")
 METHODS = tuple(SCIPY_METHODS) + tuple(FIXED_STEP_METHODS) + ("reference",)
-
-# The work integral rides along as an extra state; it must not steer the
-# step size, so its absolute tolerance is huge (finite: scipy's numerical
-# Jacobian scales its perturbation by atol).
-_WORK_ATOL = 1e100
-
-STATUS = MappingProxyType({
-    0: "reached the end of the interval",
-    -1: "integration step failed",
-    -2: "non-finite or overflowing state",
-    -3: "singular saddle-point system",
-    -4: "nonlinear iteration or projection failed",
-})
 
 
 @dataclass(frozen=True, eq=False)
@@ -79,12 +69,13 @@ class SimulationResult:
     y : ndarray, shape (2n, K)
         As in scipy: ``y[i]`` is the i-th state variable over time (names in
         :attr:`names`: coordinates then velocities). ``states`` gives (K, 2n).
-    status : int
-        0 success; -1 step failure; -2 NaN/overflow (run stopped); -3 singular
-        saddle-point system; -4 Newton/projection failure. The trajectory up to
-        the failure is kept.
+    status : Status
+        An int-valued enum: 0 success; 1 a terminal event stopped the run; -1 step
+        failure; -2 NaN/overflow (run stopped); -3 singular saddle-point system; -4
+        Newton/projection failure. The trajectory up to the failure is kept.
     message : str
     success : bool
+        ``status >= 0``, as in scipy.
     method : str
     settings : mapping
         The options that determined the run (rtol, atol, step, ...).
@@ -95,19 +86,24 @@ class SimulationResult:
     wall_time_s : float
         Integration time (without diagnostics and code generation).
     diagnostics : Diagnostics
-        See :class:`nhham.diagnostics.Diagnostics`; its main fields are also
+        See :class:`nhham.numerics.diagnostics.Diagnostics`; its main fields are also
         attributes here (``constraint_residual_max``, ``energy_drift``,
         ``energy_balance_residual``, ``cond_C_max``, ``cond_W_max``).
     warnings : tuple of str
-        Also issued as :class:`~nhham.numeric.NumericsWarning` unless
+        Also issued as :class:`~nhham.numerics.model.NumericsWarning` unless
         ``warn=False`` was passed.
     initial_projection : ProjectionOutcome or None
         When the initial data were projected onto M_1: by how much.
+    sol : DenseOutput or None
+        With ``dense_output=True`` (scipy methods): ``sol(t)`` is the state at t.
+    t_events, y_events : list of ndarray or None
+        With ``events`` (scipy methods): per event function, its times (k,) and
+        states (k, 2n), as in scipy.
     """
 
     t: np.ndarray
     y: np.ndarray
-    status: int
+    status: Status
     message: str
     method: str
     settings: MappingProxyType
@@ -121,10 +117,13 @@ class SimulationResult:
     warnings: tuple
     initial_projection: ProjectionOutcome | None = None
     model: NumericModel | None = field(default=None, repr=False)
+    sol: DenseOutput | None = field(default=None, repr=False)
+    t_events: list | None = None
+    y_events: list | None = None
 
     @property
     def success(self) -> bool:
-        return self.status == 0
+        return self.status >= 0
 
     @property
     def states(self) -> np.ndarray:
@@ -194,7 +193,7 @@ class SimulationResult:
         """Plain numbers for JSON output."""
         d = self.diagnostics
         out = {
-            "method": self.method, "status": self.status, "message": self.message,
+            "method": self.method, "status": int(self.status), "message": self.message,
             "success": self.success, "t_end": float(self.t[-1]), "steps": self.nsteps,
             "nfev": self.nfev, "njev": self.njev, "nlu": self.nlu,
             "wall_time_s": self.wall_time_s,
@@ -214,8 +213,9 @@ class SimulationResult:
         return out
 
 
-def simulate(system_or_model, y0, t_span, *, method: str = "DOP853", rtol: float = 1e-9,
+def simulate(system_or_model, t_span, y0, *, method: str = "DOP853", rtol: float = 1e-9,
              atol: float = 1e-12, step: float | None = None, t_eval=None,
+             dense_output: bool = False, events=None,
              max_step: float = np.inf, first_step: float | None = None,
              projection: bool = False, baumgarte=None, project_initial: bool = False,
              initial_tol: float = 1e-10, residual_tol: float | None = None,
@@ -227,9 +227,11 @@ def simulate(system_or_model, y0, t_span, *, method: str = "DOP853", rtol: float
     Parameters
     ----------
     system_or_model : nhham.System or NumericModel
+    t_span : (float, float)
+        Start and end (as in :func:`scipy.integrate.solve_ivp`: ``t_span`` before
+        ``y0``).
     y0 : mapping or array_like
         ``{name: value}`` for every coordinate and velocity, or shape (2n,).
-    t_span : (float, float)
     method : str
         One of :data:`METHODS` (see the module docstring).
     rtol, atol : float
@@ -259,7 +261,7 @@ def simulate(system_or_model, y0, t_span, *, method: str = "DOP853", rtol: float
     save_every : int
         Fixed-step methods: store every j-th step.
     backend : str
-        Backend when a System is given (see :func:`nhham.codegen.numeric_model`).
+        Backend when a System is given (see :func:`nhham.numerics.codegen.numeric_model`).
     warn : bool
         Issue the diagnostics' warnings as :class:`NumericsWarning`.
     progress : bool
@@ -270,6 +272,14 @@ def simulate(system_or_model, y0, t_span, *, method: str = "DOP853", rtol: float
         else scipy's Python loop; ``"compiled"`` insists (InputError if
         impossible); ``"scipy"`` always uses scipy's loop. Both give the same
         steps up to round-off. ``result.settings["loop"]`` says which ran.
+    dense_output : bool
+        scipy methods: keep the continuous solution, ``result.sol(t)`` (runs
+        scipy's loop).
+    events : callable or sequence of callables, optional
+        scipy methods: ``event(t, y) -> float`` on the state y (2n,), located as
+        in :func:`scipy.integrate.solve_ivp` (``terminal`` and ``direction``
+        attributes); times and states in ``result.t_events``/``y_events``; a
+        terminal event ends the run with ``Status.EVENT`` (runs scipy's loop).
 
     Returns
     -------
@@ -281,14 +291,16 @@ def simulate(system_or_model, y0, t_span, *, method: str = "DOP853", rtol: float
         If ``y0`` violates the constraints (the residuals are shown) and
         ``project_initial`` is False, or names are missing.
     InputError
-        For an unknown method or inconsistent options.
+        For an unknown method or inconsistent options (``dense_output`` or
+        ``events`` with a method that is not a scipy one, for instance).
     """
     model = _as_model(system_or_model, backend)
     t0, t1 = (float(t_span[0]), float(t_span[1]))
     if not (math.isfinite(t0) and math.isfinite(t1)) or t1 == t0:
         raise InputError(f"t_span: need two different finite times, got {t_span!r}")
     _check_options(method, step, projection, baumgarte, model)
-    compiled_loop = _use_compiled_loop(model, method, loop)
+    _check_scipy_only(method, dense_output, events)
+    compiled_loop = _use_compiled_loop(model, method, loop, dense_output or events is not None)
     y_init, initial = _initial_state(model, y0, project_initial, initial_tol)
     settings = {"rtol": rtol, "atol": atol, "step": step, "projection": projection,
                 "baumgarte": None if baumgarte is None else tuple(map(float, baumgarte)),
@@ -296,61 +308,59 @@ def simulate(system_or_model, y0, t_span, *, method: str = "DOP853", rtol: float
     if residual_tol is None:
         exact = projection or method in ("rattle", "rattle4", "reference")
         residual_tol = 1e-11 if exact else 1e-8
+    adaptive = dict(rtol=rtol, atol=atol, max_step=max_step, first_step=first_step,
+                    t_eval=t_eval, projection=projection, baumgarte=baumgarte,
+                    progress=progress)
 
     start = time.perf_counter()
     if compiled_loop:
         settings["loop"] = "compiled"
-        run = _run_compiled(model, y_init, t0, t1, method, rtol, atol, max_step, first_step,
-                            t_eval, projection, baumgarte, progress)
+        run = run_compiled(model, y_init, t0, t1, method, **adaptive)
     elif method in SCIPY_METHODS:
         settings["loop"] = "scipy"
-        run = _run_scipy(model, y_init, t0, t1, method, rtol, atol, max_step, first_step,
-                         t_eval, projection, baumgarte, progress)
+        run = run_scipy(model, y_init, t0, t1, method, dense_output=dense_output,
+                        events=events, **adaptive)
     elif method in FIXED_STEP_METHODS:
         opts = {"save_every": int(save_every)}
         if method == "rk4":
             opts.update(projection=projection, baumgarte=baumgarte)
-        fs = run_fixed_step(method, model, y_init, t0, t1, float(step), **opts)
-        settings["step"] = fs.step
-        run = _Run(fs.t, fs.y, fs.work, fs.status, fs.message, fs.nfev, 0, 0, fs.nsteps)
-        settings["newton_iterations"] = fs.newton_iterations
+        run = run_fixed_step(method, model, y_init, t0, t1, float(step), **opts)
+        settings.update(step=run.step, newton_iterations=run.newton_iterations)
     else:
-        from nhham.numerics.reference import reference_solution
-
-        digits = 30 if reference_digits is None else int(reference_digits)
-        ref = reference_solution(model, y_init, (t0, t1), digits=digits, t_eval=t_eval)
-        settings.update(digits=digits, tol=ref.tol, error_estimate=ref.error_estimate)
-        run = _Run(ref.t, ref.y, ref.work, ref.status, ref.message, ref.nfev, 0, 0, ref.nsteps)
+        run = _run_reference(model, y_init, t0, t1, reference_digits, t_eval, settings)
     wall = time.perf_counter() - start
+    return _result(model, run, method, settings, wall, residual_tol, initial, warn)
 
+
+def _run_reference(model, y0, t0, t1, digits, t_eval, settings) -> Run:
+    from nhham.numerics.reference import reference_solution
+
+    digits = 30 if digits is None else int(digits)
+    ref = reference_solution(model, y0, (t0, t1), digits=digits, t_eval=t_eval)
+    settings.update(digits=digits, tol=ref.tol, error_estimate=ref.error_estimate)
+    return Run(ref.t, ref.y, ref.work, ref.status, ref.message, ref.nfev, ref.nsteps)
+
+
+def _result(model, run, method, settings, wall, residual_tol, initial, warn):
+    """The diagnostics of ``run`` and the result (warnings issued here: stacklevel 3
+    points at the caller of :func:`simulate`)."""
     diag = trajectory_diagnostics(model, run.t, run.y, run.work, residual_tol=residual_tol)
     notes = list(diag.warnings)
-    if run.status != 0:
+    if run.status < 0:
         notes.insert(0, f"run stopped: {run.message}")
     if warn:
         for note in notes:
-            warnings.warn(note, NumericsWarning, stacklevel=2)
+            warnings.warn(note, NumericsWarning, stacklevel=3)
     return SimulationResult(
-        t=run.t, y=run.y.T.copy(), status=run.status, message=run.message, method=method,
-        settings=MappingProxyType(settings), names=model.names, nfev=run.nfev,
-        njev=run.njev, nlu=run.nlu, nsteps=run.nsteps, wall_time_s=wall, diagnostics=diag,
-        warnings=tuple(notes), initial_projection=initial, model=model)
+        t=run.t, y=np.array(run.y, dtype=float), status=Status(run.status),
+        message=run.message, method=method, settings=MappingProxyType(settings),
+        names=model.names, nfev=run.nfev, njev=run.njev, nlu=run.nlu, nsteps=run.nsteps,
+        wall_time_s=wall, diagnostics=diag, warnings=tuple(notes),
+        initial_projection=initial, model=model, sol=run.sol, t_events=run.t_events,
+        y_events=run.y_events)
 
 
 # ------------------------------------------------------------------ helpers
-@dataclass
-class _Run:
-    t: np.ndarray
-    y: np.ndarray
-    work: np.ndarray | None
-    status: int
-    message: str
-    nfev: int
-    njev: int
-    nlu: int
-    nsteps: int
-
-
 def _as_model(obj, backend) -> NumericModel:
     if isinstance(obj, NumericModel):
         return obj
@@ -376,16 +386,23 @@ def _check_options(method, step, projection, baumgarte, model):
             raise InputError("baumgarte: needs the saddle path (path='saddle')")
 
 
-def _use_compiled_loop(model, method, loop) -> bool:
+def _check_scipy_only(method, dense_output, events):
+    if (dense_output or events is not None) and method not in SCIPY_METHODS:
+        raise InputError(f"dense_output/events: only with the scipy methods "
+                         f"({', '.join(SCIPY_METHODS)}), not {method!r}")
+
+
+def _use_compiled_loop(model, method, loop, scipy_features=False) -> bool:
     if loop not in _LOOPS:
         raise InputError(f"loop: expected one of {', '.join(_LOOPS)}, got {loop!r}")
     possible = (method in COMPILED_METHODS and model.compiled is not None
-                and model.path == "saddle")
+                and model.path == "saddle" and not scipy_features)
     if loop == "compiled" and not possible:
         why = (f"it is for {', '.join(COMPILED_METHODS)}, not {method!r}"
                if method not in COMPILED_METHODS else
                f"the model has no compiled C backend ({model.backend_note})"
-               if model.compiled is None else "the compiled loop needs the saddle path")
+               if model.compiled is None else "the compiled loop needs the saddle path"
+               if model.path != "saddle" else "dense_output and events run scipy's loop")
         raise InputError(f"loop: 'compiled' is not possible: {why}")
     return possible and loop != "scipy"
 
@@ -407,278 +424,3 @@ def _initial_state(model, y0, project_initial, tol):
             f"onto M_1")
     outcome = model.project(y)
     return outcome.y, outcome
-
-
-class _Stop(Exception):
-    def __init__(self, status, message):
-        super().__init__(message)
-        self.status = status
-
-
-def _make_fun(model, baumgarte, counter):
-    n2 = 2 * model.n
-    field = model.field_function(baumgarte)
-
-    def fun(t, z):
-        if z.ndim == 1:
-            out = field(z)
-            counter[0] += 1
-            if type(out) is int:
-                raise _Stop(*_eval_failure(out, t, z[:n2]))
-            return out
-        # Vectorised call (scipy's finite-difference Jacobian): z is (2n+1, k).
-        dY, _, P, status = model.evaluate(np.ascontiguousarray(z[:n2].T), baumgarte)
-        counter[0] += z.shape[1]
-        if status:
-            raise _Stop(*_eval_failure(status, t, z[:n2, 0]))
-        return np.vstack([dY.T, np.atleast_1d(P)[None, :]])
-
-    return fun
-
-
-def _eval_failure(status, t, y):
-    if status == 1:
-        return -3, f"singular saddle-point system at t = {t:.6g} (cond(C) is infinite)"
-    return -2, (f"non-finite right-hand side (NaN or overflow) at t = {t:.6g}; the run was "
-                f"stopped (state max |y| = {float(np.max(np.abs(y))):.3g})")
-
-
-def _run_scipy(model, y0, t0, t1, method, rtol, atol, max_step, first_step, t_eval,
-               projection, baumgarte, progress=False) -> _Run:
-    n2 = 2 * model.n
-    counter = [0]
-    fun = _make_fun(model, baumgarte, counter)
-    atol_z = np.append(np.broadcast_to(np.asarray(atol, dtype=float), (n2,)), _WORK_ATOL)
-    cls = SCIPY_METHODS[method]
-    opts = {"rtol": rtol, "atol": atol_z, "max_step": max_step}
-    if method in ("Radau", "BDF"):
-        opts["vectorized"] = True
-    if first_step is not None:
-        opts["first_step"] = first_step
-    z0 = np.append(y0, 0.0)
-    t_eval = None if t_eval is None else np.asarray(t_eval, dtype=float)
-    ts, zs = [t0], [z0.copy()]
-    if t_eval is not None:
-        ts, zs = ([t0], [z0.copy()]) if np.isclose(t_eval[0], t0) else ([], [])
-        next_eval = len(ts)
-    status, message, nsteps = 0, STATUS[0], 0
-    njev = nlu = 0
-    reported = 0
-    try:
-        solver = cls(fun, t0, z0, t1, **opts)
-        while solver.status == "running":
-            msg = solver.step()
-            if solver.status == "failed":
-                status, message = -1, f"{method} failed at t = {solver.t:.6g}: {msg}"
-                break
-            nsteps += 1
-            z = solver.y
-            if not np.all(np.isfinite(z[:n2])) or np.max(np.abs(z[:n2])) > 1e150:
-                raise _Stop(-2, f"non-finite or overflowing state at t = {solver.t:.6g}; "
-                                f"the run was stopped")
-            if projection:
-                solver = _project_solver(solver, model, fun, cls, t1, opts)
-            if t_eval is None:
-                ts.append(solver.t)
-                zs.append(solver.y.copy())
-            else:
-                next_eval = _collect_eval(solver, t_eval, next_eval, ts, zs, model, projection,
-                                          t0, t1)
-            njev = max(njev, getattr(solver, "njev", 0))
-            nlu = max(nlu, getattr(solver, "nlu", 0))
-            if progress:
-                reported = _report(solver.t, t0, t1, reported)
-    except _Stop as exc:
-        status, message = exc.status, str(exc)
-    except np.linalg.LinAlgError as exc:
-        status, message = -3, f"singular linear system: {exc}"
-    except Exception as exc:  # projection Newton failure and the like
-        from nhham.errors import ComputationError
-
-        if not isinstance(exc, ComputationError):
-            raise
-        status, message = -4, str(exc)
-    Z = np.array(zs) if zs else np.zeros((0, n2 + 1))
-    return _Run(np.array(ts), Z[:, :n2], Z[:, n2], status, message, counter[0], njev, nlu,
-                nsteps)
-
-
-_TABLEAUX: dict = {}
-_EXTRA_STAGES = 16  # DOP853's stages with the dense-output extras (SEXT in the C source)
-
-
-def _tableau(method):
-    """(info, coefficients) of scipy's class for ``nhham_erk`` (see its C comment)."""
-    if method not in _TABLEAUX:
-        cls = SCIPY_METHODS[method]
-        s = cls.n_stages
-        A = np.zeros((s, s))
-        A0 = np.asarray(cls.A, dtype=float)
-        A[:, :A0.shape[1]] = A0[:s]
-        B, C = np.asarray(cls.B, dtype=float), np.asarray(cls.C, dtype=float)[:s]
-        if method == "DOP853":
-            E, E3, P = cls.E5, cls.E3, np.zeros((s + 1, 0))
-            Aext, Cext, D = cls.A_EXTRA, cls.C_EXTRA, cls.D
-        else:
-            E, E3, P = cls.E, np.zeros(s + 1), np.asarray(cls.P, dtype=float)
-            Aext, Cext, D = (np.zeros((3, _EXTRA_STAGES)), np.zeros(3),
-                             np.zeros((4, _EXTRA_STAGES)))
-        tab = np.concatenate([A.ravel(), B, C, np.asarray(E, dtype=float), E3, P.ravel(),
-                              np.asarray(Aext, dtype=float).ravel(), Cext,
-                              np.asarray(D, dtype=float).ravel()])
-        info = np.array([s, method == "DOP853", P.shape[1], cls.error_estimator_order, 1],
-                        dtype=np.intc)
-        _TABLEAUX[method] = (info, np.ascontiguousarray(tab))
-    info, tab = _TABLEAUX[method]
-    return info.copy(), tab
-
-
-def _run_compiled(model, y0, t0, t1, method, rtol, atol, max_step, first_step, t_eval,
-                  projection, baumgarte, progress=False) -> _Run:
-    """RK23/RK45/DOP853 as one compiled loop (``nhham_erk``): scipy's algorithm,
-    projection and storage in C; Python only between chunks of stored steps."""
-    n2 = 2 * model.n
-    nz = n2 + 1
-    # scipy's validation of the options
-    if not max_step > 0:
-        raise ValueError("`max_step` must be positive.")
-    if first_step is not None:
-        if first_step <= 0:
-            raise ValueError("`first_step` must be positive.")
-        if first_step > abs(t1 - t0):
-            raise ValueError("`first_step` exceeds bounds.")
-    eps = np.finfo(float).eps
-    rtol = float(rtol)
-    if rtol < 100 * eps:
-        warnings.warn("At least one element of `rtol` is too small. "
-                      f"Setting `rtol = np.maximum(rtol, {100 * eps})`.", stacklevel=3)
-        rtol = 100 * eps
-    info, tab = _tableau(method)
-    a2, b2 = (0.0, 0.0) if baumgarte is None else (2.0 * baumgarte[0], baumgarte[1] ** 2)
-    pext = model._pext(a2, b2)
-    # ws = [t, h_abs, z, f | fail: t, z | atol]; iw = [t_eval index, stored, nfev, nsteps]
-    ws = np.zeros(2 + 2 * nz + 1 + nz + nz)
-    ws[0], ws[1] = t0, (-1.0 if first_step is None else float(first_step))
-    ws[2:2 + n2] = y0
-    ws[-nz:-1] = atol
-    ws[-1] = _WORK_ATOL
-    if np.any(ws[-nz:] < 0):
-        raise ValueError("`atol` must be positive.")
-    state, fail = ws[:2 + 2 * nz], ws[2 + 2 * nz:2 + 2 * nz + 1 + nz]
-    z0 = state[2:2 + nz].copy()
-    ts, zs = [np.array([t0])], [z0[None, :]]
-    if t_eval is not None:
-        t_eval = np.ascontiguousarray(t_eval, dtype=float)
-        if not np.isclose(t_eval[0], t0):
-            ts, zs = [], []
-        cap = max(1, len(t_eval))
-    else:
-        cap = 256
-    iw = np.array([len(ts), 0, 0, 0], dtype=np.int64)
-    out_t, out_z = np.empty(cap), np.empty((cap, nz))
-    reported = 0
-    while True:
-        t_pause = t1 if not progress else t0 + (t1 - t0) * min(1.0, (reported + 1) / 10)
-        status = model.compiled.erk(info, tab, ws, iw, t1, rtol, float(max_step), projection,
-                                    1e-14, 50, t_eval, out_t, out_z, t_pause, pext)
-        info[4] = 0
-        if t_eval is None:
-            k = int(iw[1])
-            ts.append(out_t[:k].copy())
-            zs.append(out_z[:k].copy())
-            iw[1] = 0
-            if k == cap and cap < 65536:
-                cap *= 4
-                out_t, out_z = np.empty(cap), np.empty((cap, nz))
-        if progress:
-            reported = _report(state[0], t0, t1, reported)
-        if status != 1:
-            break
-    if t_eval is not None:
-        ts.append(out_t[:int(iw[1])])
-        zs.append(out_z[:int(iw[1])])
-    t_now = float(state[0])
-    message = STATUS[0]
-    if status == -1:
-        status, message = -1, (f"{method} failed at t = {t_now:.6g}: Required step size is "
-                               f"less than spacing between numbers.")
-    elif status == -2:
-        message = f"non-finite or overflowing state at t = {t_now:.6g}; the run was stopped"
-    elif status in (-3, -5):
-        status, message = _eval_failure(1 if status == -3 else 2, fail[0], fail[1:1 + n2])
-    elif status == -4:
-        message = (f"projection onto M_1 failed at t = {t_now:.6g}: the Newton iteration for "
-                   f"the position constraints did not converge")
-    elif status == -6:
-        status, message = -3, (f"singular linear system in the projection onto M_1 at "
-                               f"t = {t_now:.6g}")
-    T = np.concatenate(ts) if ts else np.zeros(0)
-    Z = np.concatenate(zs) if zs else np.zeros((0, nz))
-    return _Run(T, Z[:, :n2], Z[:, n2], int(status), message, int(iw[2]), 0, 0, int(iw[3]))
-
-
-def _report(t, t0, t1, reported):
-    """Print each passed tenth of the interval on stderr; returns the tenths done."""
-    import sys
-
-    tenths = int(10 * (t - t0) / (t1 - t0))
-    if tenths > reported:
-        print(f"  t = {t:.6g} ({10 * tenths}%)", file=sys.stderr, flush=True)
-    return max(reported, tenths)
-
-
-def _collect_eval(solver, t_eval, i, ts, zs, model, projection, t0, t1):
-    """Store the t_eval points inside the last step (from its dense output)."""
-    forward = t1 > t0
-    dense = None
-    while i < len(t_eval) and ((t_eval[i] <= solver.t) if forward else (t_eval[i] >= solver.t)):
-        if dense is None:
-            dense = solver.dense_output()
-        z = np.asarray(dense(t_eval[i]), dtype=float)
-        if projection:
-            z[:-1] = model.project(z[:-1]).y
-        ts.append(float(t_eval[i]))
-        zs.append(z)
-        i += 1
-    return i
-
-
-def _project_solver(solver, model, fun, cls, t1, opts):
-    """Project the solver's current state onto M_1 and make the solver consistent."""
-    n2 = 2 * model.n
-    z = solver.y.copy()
-    z[:n2] = model.project(z[:n2]).y
-    if isinstance(solver, LSODA):
-        return _reset_lsoda(solver, z, fun, cls, t1, opts)
-    solver.y = z
-    if isinstance(solver, BDF):
-        solver.D[0] = z
-    if hasattr(solver, "f"):
-        solver.f = fun(solver.t, z)
-    return solver
-
-
-def _reset_lsoda(solver, z, fun, cls, t1, opts):
-    """Put a projected state into LSODA.
-
-    LSODA keeps its Nordsieck history in the Fortran work array; its first
-    column (rwork[20:20+N], the ODEPACK layout) is the current state. Replacing
-    it keeps the history (order and step size) as for the other solvers. If the
-    private layout is not there, restart from the projected state instead
-    (correct, slower: the order drops to 1).
-    """
-    try:
-        inner = solver._lsoda_solver
-        work = inner._integrator.rwork
-        if work.shape[0] < 20 + z.size:
-            raise AttributeError("unexpected LSODA work array")
-        work[20:20 + z.size] = z
-        inner._y = z.copy()
-        solver.y = z
-        return solver
-    except AttributeError:
-        if solver.status != "running":
-            solver.y = z
-            return solver
-        step = min(2 * solver.step_size, abs(t1 - solver.t))
-        return cls(fun, solver.t, z, t1, **dict(opts, first_step=step))

@@ -1,8 +1,11 @@
 """Fixed-step integrators: nonholonomic RATTLE, its 4th-order composition, RK4.
 
-All work on a :class:`~nhham.numeric.NumericModel` (no sympy) and return a
-:class:`FixedStepRun` (grid, states, counts, status). :func:`nhham.integrate.simulate`
-wraps them with diagnostics.
+All work on a :class:`~nhham.numerics.model.NumericModel` (no sympy) and return a
+:class:`FixedStepRun` (grid, states, counts, status: a
+:class:`~nhham.numerics.status.Status`). :func:`nhham.numerics.integrate.simulate` wraps
+them with diagnostics. A failed step raises
+:class:`~nhham.numerics.status.NumericalFailure` inside; the run then stops and keeps
+what it computed.
 
 The nonholonomic RATTLE scheme
 ------------------------------
@@ -45,12 +48,13 @@ finite-difference Jacobian evaluated in one batched call.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 
 import numpy as np
 
 from nhham.errors import InputError
-from nhham.numerics.model import solve_saddle
+from nhham.numerics.run import Run
+from nhham.numerics.saddle import solve_saddle
+from nhham.numerics.status import NumericalFailure, Status
 
 __all__ = ["FixedStepRun", "rattle", "rattle4", "rk4", "rattle_step", "FIXED_STEP_METHODS"]
 
@@ -63,49 +67,16 @@ _G1 = 1.0 / (2.0 - 2.0 ** (1.0 / 3.0))
 _G2 = 1.0 - 2.0 * _G1
 
 
-@dataclass(frozen=True)
-class FixedStepRun:
-    """Raw output of a fixed-step integrator.
-
-    Attributes
-    ----------
-    t : ndarray (K,); y : ndarray (K, 2n)
-    work : ndarray (K,) or None
-        Work of the constraint forces when the scheme carries it (RK4).
-    status : int
-        0 reached the end; -2 non-finite state; -3 singular linear system;
-        -4 Newton iteration did not converge.
-    message : str
-    nfev : int
-        Right-hand-side evaluations in states (batched calls count each state);
-        for RATTLE: one per (sub)step plus one per Newton iteration (each costs
-        about one field evaluation).
-    nsteps : int
-    newton_iterations : int
-    step : float
-        The step actually used ((t1 - t0)/N).
-    """
-
-    t: np.ndarray
-    y: np.ndarray
-    work: np.ndarray | None
-    status: int
-    message: str
-    nfev: int
-    nsteps: int
-    newton_iterations: int
-    step: float
-
-
-class _Failure(Exception):
-    def __init__(self, status, message):
-        super().__init__(message)
-        self.status = status
+#: Raw output of a fixed-step integrator: a :class:`~nhham.numerics.run.Run` with
+#: ``y`` of shape (2n, K) (as in scipy), ``newton_iterations`` and ``step`` (the step
+#: actually used, (t1 - t0)/N); ``work`` is carried by RK4 only.
+FixedStepRun = Run
 
 
 def _grid(t0, t1, h):
     if not (h > 0 and math.isfinite(h)):
-        raise InputError(f"step: a positive finite step is required for fixed-step methods, got {h!r}")
+        raise InputError(f"step: a positive finite step is required for fixed-step methods, "
+                         f"got {h!r}")
     span = t1 - t0
     N = max(1, int(math.ceil(abs(span) / h - 1e-9)))
     return N, span / N
@@ -161,12 +132,13 @@ class _RattleStepper:
             J[:k] = self.model.geometry(q1)[1][:k]
         return J
 
-    def _guess_lambda(self, y0):
+    def guess_lambda(self, y0):
         if self.lam_guess is None:
             dy, lam, _, status = self.model.evaluate(y0)
             self.nfev += 1
             if status:
-                raise _Failure(-3, "singular saddle-point system at the initial state")
+                raise NumericalFailure(Status.SINGULAR,
+                                       "singular saddle-point system at the initial state")
             return lam
         return self.lam_guess
 
@@ -203,7 +175,7 @@ class _RattleStepper:
             v1, lam1 = self._finish(q1, base, h)
             return np.concatenate([q1, v1]), lam1
         WinvMuT = np.linalg.solve(W, mu0.T)  # n x m
-        lam = self._guess_lambda(y0).copy()
+        lam = self.guess_lambda(y0).copy()
         q_free = q0 + h * self._Winv(base)
         dq_dlam = -0.5 * h * h * WinvMuT
         best = np.inf
@@ -222,8 +194,8 @@ class _RattleStepper:
             lam = lam - np.linalg.solve(J, r)
             self.newton += 1
         else:
-            raise _Failure(-4, f"Newton iteration of the RATTLE step did not converge "
-                               f"(residual {err:.3g}); reduce the step")
+            raise NumericalFailure(Status.NOT_CONVERGED, f"Newton iteration of the RATTLE step "
+                                   f"did not converge (residual {err:.3g}); reduce the step")
         q1 = q_free + dq_dlam @ lam
         p_h = base - 0.5 * h * (mu0.T @ lam)
         v1, lam1 = self._finish(q1, p_h, h)
@@ -253,7 +225,7 @@ class _RattleStepper:
         q0, v0 = y0[:n], y0[n:]
         W0, mu0, _, _ = self.model.geometry(q0)
         p0 = W0 @ v0
-        lam = self._guess_lambda(y0)
+        lam = self.guess_lambda(y0)
         Lq = self.model.lagrangian_q(y0)
         p_h = p0 + 0.5 * h * (Lq - mu0.T @ lam)
         q1 = q0 + h * np.linalg.solve(W0, p_h)
@@ -279,8 +251,8 @@ class _RattleStepper:
             z = z - np.linalg.solve(J, r)
             self.newton += 1
         else:
-            raise _Failure(-4, f"Newton iteration of the RATTLE step did not converge "
-                               f"(residual {err:.3g}); reduce the step")
+            raise NumericalFailure(Status.NOT_CONVERGED, f"Newton iteration of the RATTLE step "
+                                   f"did not converge (residual {err:.3g}); reduce the step")
         p_h, q1 = z[:n], z[n:2 * n]
         v1, lam1 = self._finish(q1, p_h, h)
         self.lam_guess = lam1
@@ -297,8 +269,8 @@ class _RattleStepper:
 def _floor_or_fail(err, scale):
     """Newton stalled: accept at the round-off floor, fail if far from it."""
     if err > 1e-9 * scale:
-        raise _Failure(-4, f"Newton iteration of the RATTLE step stalled at residual "
-                           f"{err:.3g}; reduce the step")
+        raise NumericalFailure(Status.NOT_CONVERGED, f"Newton iteration of the RATTLE step "
+                               f"stalled at residual {err:.3g}; reduce the step")
 
 
 def rattle_step(model, y0, h):
@@ -314,7 +286,7 @@ def _run_fixed(step_fn, stepper, y0, t0, t1, h, save_every):
     N, h = _grid(t0, t1, h)
     y = np.asarray(y0, dtype=float).copy()
     ts, ys = [t0], [y.copy()]
-    status, message = 0, "reached the end of the interval"
+    status, message = Status.SUCCESS, Status.SUCCESS.message
     t = t0
     i = 0
     try:
@@ -322,16 +294,16 @@ def _run_fixed(step_fn, stepper, y0, t0, t1, h, save_every):
             y = step_fn(y, h)
             t = t0 + i * h
             if not np.all(np.isfinite(y)) or np.max(np.abs(y)) > 1e150:
-                raise _Failure(-2, f"non-finite or overflowing state at t = {t:.6g} "
-                                   f"(step {i}); the run was stopped")
+                raise NumericalFailure(Status.NONFINITE, f"non-finite or overflowing state at "
+                                       f"t = {t:.6g} (step {i}); the run was stopped")
             if i % save_every == 0 or i == N:
                 ts.append(t)
                 ys.append(y.copy())
-    except _Failure as exc:
+    except NumericalFailure as exc:
         status, message = exc.status, str(exc)
     except np.linalg.LinAlgError as exc:
-        status, message = -3, f"singular linear system at t = {t:.6g}: {exc}"
-    return np.array(ts), np.array(ys), status, message, i if status == 0 else i - 1, h
+        status, message = Status.SINGULAR, f"singular linear system at t = {t:.6g}: {exc}"
+    return np.array(ts), np.array(ys).T, status, message, i if status == 0 else i - 1, h
 
 
 def rattle(model, y0, t0, t1, h, *, save_every: int = 1, tol=None) -> FixedStepRun:
@@ -355,8 +327,8 @@ def rattle(model, y0, t0, t1, h, *, save_every: int = 1, tol=None) -> FixedStepR
         return _compiled_rattle(model, st, y0, t0, t1, h, save_every, 0)
     t, y, status, msg, nsteps, hh = _run_fixed(lambda y, h: st.step(y, h)[0], st, y0, t0, t1, h,
                                                save_every)
-    return FixedStepRun(t, y, None, status, msg, st.nfev + nsteps + st.newton, nsteps, st.newton,
-                        hh)
+    return Run(t, y, None, status, msg, st.nfev + nsteps + st.newton, nsteps,
+               newton_iterations=st.newton, step=hh)
 
 
 def rattle4(model, y0, t0, t1, h, *, save_every: int = 1, tol=None) -> FixedStepRun:
@@ -376,8 +348,8 @@ def rattle4(model, y0, t0, t1, h, *, save_every: int = 1, tol=None) -> FixedStep
         return st.step(y, _G1 * h)[0]
 
     t, y, status, msg, nsteps, hh = _run_fixed(step, st, y0, t0, t1, h, save_every)
-    return FixedStepRun(t, y, None, status, msg, st.nfev + 3 * nsteps + st.newton, nsteps,
-                        st.newton, hh)
+    return Run(t, y, None, status, msg, st.nfev + 3 * nsteps + st.newton, nsteps,
+               newton_iterations=st.newton, step=hh)
 
 
 def _compiled_ok(model):
@@ -385,28 +357,29 @@ def _compiled_ok(model):
     return model.compiled is not None and model.constant_W and model.path == "saddle"
 
 
-_STATUS_TEXT = {-2: "non-finite or overflowing state", -3: "singular linear system",
-                -4: "Newton iteration of the RATTLE step did not converge; reduce the step"}
+_REDUCE_THE_STEP = {Status.NOT_CONVERGED: "; reduce the step"}
 
 
 def _compiled_rattle(model, st, y0, t0, t1, h, save_every, composition):
     N, h = _grid(t0, t1, h)
     y0 = np.asarray(y0, dtype=float)
-    lam0 = st._guess_lambda(y0)
+    lam0 = st.guess_lambda(y0)
     Y, done, newton, status = model.compiled.rattle(
-        y0, h, N, int(save_every), composition, model._pext0, lam0, st.tol, st.maxiter)
+        y0, h, N, int(save_every), composition, model.parameter_block().pointer, lam0, st.tol,
+        st.maxiter)
+    status = Status(status)
     steps = [0] + [min(i * save_every, N) for i in range(1, len(Y))]
     if status == 0:
         steps[-1] = N
     else:
         steps = [0] + [i * save_every for i in range(1, len(Y))]
     t = t0 + h * np.array(steps, dtype=float)
-    msg = "reached the end of the interval" if status == 0 else (
-        f"{_STATUS_TEXT.get(status, 'failure')} at t = {t0 + (done + 1) * h:.6g} "
-        f"(step {done + 1}); the run was stopped")
+    msg = status.message if status == 0 else (
+        f"{status.message} in the RATTLE step at t = {t0 + (done + 1) * h:.6g} "
+        f"(step {done + 1}){_REDUCE_THE_STEP.get(status, '')}; the run was stopped")
     # A step costs about one field evaluation plus one per Newton iteration.
-    return FixedStepRun(t, Y, None, status, msg, st.nfev + done * (1 + composition * 2) + newton,
-                        done, newton, h)
+    return Run(t, Y.T, None, status, msg, st.nfev + done * (1 + composition * 2) + newton,
+               done, newton_iterations=newton, step=h)
 
 
 # --------------------------------------------------------------------- RK4
@@ -425,10 +398,8 @@ def rk4(model, y0, t0, t1, h, *, projection: bool = False, baumgarte=None,
     def f(z):
         out = field(z)
         counter["nfev"] += 1
-        if type(out) is int:
-            raise _Failure(-3 if out == 1 else -2,
-                           "singular saddle-point system" if out == 1 else
-                           "non-finite right-hand side (NaN or overflow)")
+        if isinstance(out, int):
+            raise NumericalFailure(out)
         return out
 
     def step(z, h):
@@ -443,7 +414,7 @@ def rk4(model, y0, t0, t1, h, *, projection: bool = False, baumgarte=None,
 
     z0 = np.append(np.asarray(y0, dtype=float), 0.0)
     t, z, status, msg, nsteps, hh = _run_fixed(step, None, z0, t0, t1, h, save_every)
-    return FixedStepRun(t, z[:, :n2], z[:, n2], status, msg, counter["nfev"], nsteps, 0, hh)
+    return Run(t, z[:n2], z[n2], status, msg, counter["nfev"], nsteps, step=hh)
 
 
 def run_fixed_step(method, model, y0, t0, t1, h, **options) -> FixedStepRun:

@@ -1,7 +1,7 @@
 """High-precision reference solutions in mpmath (for measuring errors).
 
 The field is the generated mpmath kernel (same expressions as the float
-kernels, printed for mpmath by :mod:`nhham.codegen`) with the saddle-point
+kernels, printed for mpmath by :mod:`nhham.numerics.codegen.emit`) with the saddle-point
 system solved by Gaussian elimination with partial pivoting in mpmath. The
 integrator is Gragg-Bulirsch-Stoer extrapolation: the modified midpoint rule
 with step numbers 2, 4, 6, ... and Aitken-Neville extrapolation in h^2
@@ -23,6 +23,8 @@ from dataclasses import dataclass
 import mpmath
 import numpy as np
 
+from nhham.numerics.status import Status
+
 
 __all__ = ["ReferenceSolution", "reference_solution"]
 
@@ -36,17 +38,18 @@ class ReferenceSolution:
     Attributes
     ----------
     t : ndarray (K,)
-    y : ndarray (K, 2n)
-        float64 rounding of the high-precision states.
+    y : ndarray (2n, K)
+        float64 rounding of the high-precision states (``y[i]`` is the i-th state
+        variable over time, as in scipy).
     y_mp : list of list of mpf
-        The states at full precision.
+        The states at full precision, one list per stored time.
     work : ndarray (K,)
         Work of the constraint forces (integrated with the state).
     digits, tol : int, float
     error_estimate : float
         Sum of the accepted local error estimates (relative).
     nfev, nsteps, rejected : int
-    status : int; message : str
+    status : Status; message : str
     """
 
     t: np.ndarray
@@ -59,7 +62,7 @@ class ReferenceSolution:
     nfev: int
     nsteps: int
     rejected: int
-    status: int
+    status: Status
     message: str
 
 
@@ -142,11 +145,11 @@ def _integrate(model, y0, t0, t1, digits, t_eval, tol, kmax, max_steps):
     oi = len(ts) if outputs is not None else 0
     err_sum = mpmath.mpf(0)
     nsteps = rejected = 0
-    status, message = 0, "reached the end of the interval"
+    status, message = Status.SUCCESS, Status.SUCCESS.message
     try:
         while direction * (T1 - t) > 0:
             if nsteps + rejected > max_steps:
-                status, message = -1, f"more than {max_steps} steps"
+                status, message = Status.STEP_FAILED, f"more than {max_steps} steps"
                 break
             target = T1 if outputs is None or oi >= len(outputs) else outputs[oi]
             clipped = direction * (t + H - target) >= 0
@@ -156,7 +159,8 @@ def _integrate(model, y0, t0, t1, digits, t_eval, tol, kmax, max_steps):
                 H = Hs / 2
                 rejected += 1
                 if abs(H) < abs(T1 - T0) * mpmath.mpf(10) ** (-digits):
-                    status, message = -1, "step size underflow in the reference integrator"
+                    status = Status.STEP_FAILED
+                    message = "step size underflow in the reference integrator"
                     break
                 continue
             z, err, col = result
@@ -173,9 +177,9 @@ def _integrate(model, y0, t0, t1, digits, t_eval, tol, kmax, max_steps):
                 elif col >= kmax - 1:
                     H = Hs * mpmath.mpf("0.6")
     except ZeroDivisionError as exc:
-        status, message = -3, str(exc)
+        status, message = Status.SINGULAR, f"singular saddle-point system: {exc}"
     n2 = 2 * model.n
-    y = np.array([[float(v) for v in zz[:n2]] for zz in zs]) if zs else np.zeros((0, n2))
+    y = np.array([[float(v) for v in zz[:n2]] for zz in zs]).T if zs else np.zeros((n2, 0))
     work = np.array([float(zz[n2]) for zz in zs])
     return ReferenceSolution(
         t=np.array([float(x) for x in ts]), y=y, y_mp=[zz[:n2] for zz in zs], work=work,
@@ -209,9 +213,3 @@ def _gbs_step(f, z, H, kmax, tol):
             if err <= tol:
                 return a, err, j
     return None
-
-
-def to_float(values) -> np.ndarray:
-    """mpf sequence -> float64 array."""
-    return np.array([float(v) for v in values])
-

@@ -2,10 +2,10 @@
 
 :func:`work_precision` runs every method at a ladder of settings on one
 problem and measures, for each run, the error at t_end against the mpmath
-reference (:mod:`nhham.reference`), the wall time, the evaluations, the
+reference (:mod:`nhham.numerics.reference`), the wall time, the evaluations, the
 constraint residual and the energy drift. The reference must be far more
 accurate than the tightest setting; its own error estimate is recorded and a
-:class:`~nhham.numeric.NumericsWarning` is issued if it is not at least 100
+:class:`~nhham.numerics.model.NumericsWarning` is issued if it is not at least 100
 times below the smallest error measured.
 """
 
@@ -173,7 +173,7 @@ def work_precision(system_or_model, y0, t_span, *, methods=None, tolerances=DEFA
     progress : bool
         Print each method on stderr as it starts.
     loop : {"auto", "compiled", "scipy"}
-        Passed to :func:`~nhham.integrate.simulate` for the scipy methods
+        Passed to :func:`~nhham.numerics.integrate.simulate` for the scipy methods
         (RK23, RK45 and DOP853 run as one compiled loop by default when the
         model is compiled; ``"scipy"`` measures scipy's Python loop instead).
     """
@@ -195,7 +195,7 @@ def work_precision(system_or_model, y0, t_span, *, methods=None, tolerances=DEFA
     start = time.perf_counter()
     ref = reference_solution(model, y_init, (t0, t1), digits=reference_digits, t_eval=[t1])
     ref_time = time.perf_counter() - start
-    y_ref = ref.y[-1]
+    y_ref = ref.y[:, -1]
     if methods is None:
         methods = list(SCIPY_METHODS) + (["rattle", "rattle4"] if model.quadratic else []) + ["rk4"]
     if steps is None:
@@ -247,7 +247,7 @@ def _one_row(model, y0, t_span, method, label, setting, projection, y_ref, repea
     times = []
     res = None
     for _ in range(max(1, repeats)):
-        res = simulate(model, y0, t_span, method=method, **kw)
+        res = simulate(model, t_span, y0, method=method, **kw)
         times.append(res.wall_time_s)
     y_end = res.y[:, -1]
     scale = float(np.linalg.norm(y_ref)) or 1.0

@@ -21,6 +21,7 @@ from nhham.numerics.codegen import c_compiler, numeric_model
 from nhham.errors import ComputationError, MissingParameterValueError
 from nhham.lagrangian.geometry import lagrangian_geometry
 from nhham.numerics.model import NumericsWarning
+from nhham.numerics.status import Status
 
 from test_exact_solutions import (ball_on_turntable, ball_state, chaplygin_sleigh, rolling_disk,
                                   sleigh_state)
@@ -329,19 +330,19 @@ def test_angle_sums_expanded_only_when_no_new_calls():
     """sin/cos(theta_i - theta_j) become products of the sin/cos of the angles
     when those are computed anyway (the snake: one sincos per angle instead of
     one per pair); otherwise (the snakeboard's theta +- phi) they are kept."""
-    from nhham.numerics.codegen import _expand_angle_sums
+    from nhham.numerics.codegen.emit import expand_angle_sums
 
     a, b, c = sp.symbols("a b c", real=True)
-    out = _expand_angle_sums([sp.sin(a - b) + sp.cos(a) * sp.sin(b)], [a, b])
+    out = expand_angle_sums([sp.sin(a - b) + sp.cos(a) * sp.sin(b)], [a, b])
     assert out[0].atoms(sp.sin, sp.cos) <= {sp.sin(a), sp.cos(a), sp.sin(b), sp.cos(b)}
     assert sp.simplify(out[0] - sp.sin(a - b) - sp.cos(a) * sp.sin(b)) == 0
     kept = [sp.sin(a + b) * sp.cos(b)]  # sin(a) / cos(a) not computed: no gain
-    assert _expand_angle_sums(kept, [a, b]) == kept
-    three = _expand_angle_sums([sp.cos(a + b - c), sp.sin(a), sp.cos(b), sp.sin(c)], [a, b, c])
+    assert expand_angle_sums(kept, [a, b]) == kept
+    three = expand_angle_sums([sp.cos(a + b - c), sp.sin(a), sp.cos(b), sp.sin(c)], [a, b, c])
     assert sp.simplify(three[0] - sp.cos(a + b - c)) == 0
     if HAVE_CC:
         snake = numeric_model(nhham.models.snake(5), backend="c")
-        saddle = snake.c_source.split("static void saddle(")[1].split("\n}\n")[0]
+        saddle = snake.c_source.split("static void saddle(")[-1].split("\n}\n")[0]
         calls = saddle.count("sin(") + saddle.count("cos(")
         assert calls == 2 * 5  # one sin and one cos per link angle
 
@@ -381,33 +382,54 @@ def test_cpython_entry_points_and_their_fallbacks():
         dyb = ref_model.evaluate(y, (1.0, 2.0))[0]
         assert np.allclose(fb(z)[:6], dyb, rtol=1e-13, atol=1e-13)
     if HAVE_CC and model.compiled.ext is not None:
-        out, status = model.compiled.one(y, model._pext0)
-        assert status == 0 and np.allclose(model.compiled.ext.rhs(y, model._paddr0), out[:6])
+        block = model.parameter_block()
+        out, status = model.compiled.one(y, block.pointer)
+        assert status == 0 and np.allclose(model.compiled.ext.rhs(y, block.address), out[:6])
         assert "CPython" in model.backend_note
     singular = numeric_model(nhham.System(["x", "y"], "(x_dot**2 + y_dot**2)/2",
                                           ["x*x_dot + y*y_dot"]))
-    assert type(singular.field_function()(np.zeros(4))) is int
+    assert singular.field_function()(np.zeros(4)) == Status.SINGULAR
 
 
 @pytest.mark.skipif(not HAVE_CC, reason="no C compiler on this machine")
 def test_without_python_headers_the_plain_library_is_used(monkeypatch, tmp_path):
     """When the CPython entry points cannot be built (no Python.h, say), the
     plain ctypes library is built instead, says so, gives the same values, and
-    later models do not try again."""
-    import nhham.numerics.codegen as codegen
+    later models with the same source do not try again (the failure is kept in the
+    cache, beside where the library would be)."""
+    import nhham.numerics.codegen.build as build
     from nhham.numerics.integrate import simulate
 
-    monkeypatch.setattr(codegen, "_PYEXT_FAILURE", [])
-    monkeypatch.setattr(codegen, "_pyext_flags",
+    monkeypatch.setattr(build, "pyext_flags",
                         lambda: (["-DNHHAM_PYEXT", "-I/nonexistent-include"], "none"))
     model = numeric_model(chaplygin_sleigh(), cache_dir=str(tmp_path))
     assert model.backend == "c" and model.compiled.ext is None
     assert "CPython entry points unavailable" in model.backend_note
-    assert codegen._PYEXT_FAILURE
+    assert [f for f in os.listdir(tmp_path) if f.endswith(".failed")]
     y = sleigh_state()
     ref = numeric_model(chaplygin_sleigh(), backend="numpy")
     assert np.allclose(model.rhs(0, y), ref.rhs(0, y), rtol=1e-13, atol=1e-14)
-    res = simulate(model, y, (0, 1), warn=False)
+    res = simulate(model, (0, 1), y, warn=False)
     assert res.settings["loop"] == "compiled" and res.success
     again = numeric_model(chaplygin_sleigh(m=2.0), cache_dir=str(tmp_path))
     assert again.compiled.ext is None and "unavailable" in again.backend_note
+
+
+def test_generated_sources_are_kept_by_content_not_by_identity():
+    """Equal systems share their generated sources; a system is not kept alive by them;
+    a different system, or another path, gets its own."""
+    import gc
+    import weakref
+
+    from nhham.numerics.codegen.emit import generate_sources, system_fingerprint
+
+    a, b = chaplygin_sleigh(), chaplygin_sleigh()
+    assert a is not b and system_fingerprint(a) == system_fingerprint(b)
+    assert generate_sources(a) is generate_sources(b)
+    assert system_fingerprint(a) != system_fingerprint(a, "closed_form")
+    assert system_fingerprint(rolling_disk()) != system_fingerprint(a)
+    ref = weakref.ref(a)
+    numeric_model(a, backend="numpy")
+    del a
+    gc.collect()
+    assert ref() is None

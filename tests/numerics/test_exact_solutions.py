@@ -221,7 +221,7 @@ def test_rolling_disk_every_scipy_method(disk_model, method):
     t = np.linspace(0, 6, 13)
     exact, _ = rolling_disk_exact(t)
     for projection in (False, True):
-        res = simulate(disk_model, ex0, (0, 6), method=method, rtol=1e-10, atol=1e-12,
+        res = simulate(disk_model, (0, 6), ex0, method=method, rtol=1e-10, atol=1e-12,
                        t_eval=t, projection=projection, warn=False)
         assert res.success, res.message
         err = np.max(np.abs(res.y - exact))
@@ -234,7 +234,7 @@ def test_rolling_disk_every_scipy_method(disk_model, method):
 def test_rolling_disk_multipliers_match_closed_form(disk_model):
     t = np.linspace(0, 3, 7)
     exact, lam = rolling_disk_exact(t)
-    res = simulate(disk_model, exact[:, 0], (0, 3), t_eval=t, rtol=1e-11, atol=1e-13, warn=False)
+    res = simulate(disk_model, (0, 3), exact[:, 0], t_eval=t, rtol=1e-11, atol=1e-13, warn=False)
     assert np.max(np.abs(res.multipliers - lam)) < 1e-8
 
 
@@ -242,7 +242,7 @@ def test_rolling_disk_multipliers_match_closed_form(disk_model):
                                              ("rk4", 0.01, 1e-7)])
 def test_rolling_disk_fixed_step(disk_model, method, step, tol):
     ex0, _ = rolling_disk_exact(np.array(0.0))
-    res = simulate(disk_model, ex0, (0, 6), method=method, step=step, warn=False)
+    res = simulate(disk_model, (0, 6), ex0, method=method, step=step, warn=False)
     exact, _ = rolling_disk_exact(res.t)
     assert res.success
     assert np.max(np.abs(res.y - exact)) < tol
@@ -261,7 +261,7 @@ def test_chaplygin_sleigh_closed_form(method, kw, tol):
     """u(t), w(t), th(t) against the tanh/sech closed form."""
     model = numeric_model(chaplygin_sleigh())
     t_end = 8.0
-    res = simulate(model, sleigh_state(), (0, t_end), method=method, warn=False, **kw)
+    res = simulate(model, (0, t_end), sleigh_state(), method=method, warn=False, **kw)
     assert res.success, res.message
     th, xd, yd, w = res["theta"], res["x_dot"], res["y_dot"], res["theta_dot"]
     u_num = np.cos(th) * xd + np.sin(th) * yd
@@ -310,7 +310,7 @@ def test_chaplygin_sleigh_reference_integrator():
 def test_nonholonomic_particle_closed_form(method, kw, tol):
     model = numeric_model(nonholonomic_particle())
     y0 = particle_exact(np.array(0.0))
-    res = simulate(model, y0, (0, 5.0), method=method, warn=False, **kw)
+    res = simulate(model, (0, 5.0), y0, method=method, warn=False, **kw)
     assert res.success
     err = np.max(np.abs(res.y - particle_exact(res.t)))
     assert err < tol, err
@@ -325,7 +325,7 @@ def test_nonholonomic_particle_closed_form(method, kw, tol):
 def test_knife_edge_inclined_closed_form(method, kw, tol):
     model = numeric_model(knife_edge())
     y0 = knife_exact(np.array(0.0))
-    res = simulate(model, y0, (0, 4.0), method=method, warn=False, **kw)
+    res = simulate(model, (0, 4.0), y0, method=method, warn=False, **kw)
     assert res.success
     exact = knife_exact(res.t)
     scale = 1 + np.max(np.abs(exact))
@@ -344,7 +344,7 @@ def test_ball_on_turntable_circle(method, kw, tol):
     model = numeric_model(ball_on_turntable())
     y0 = ball_state(model)
     period = 2 * math.pi / (2 * 3.0 / 7)
-    res = simulate(model, y0, (0, period), method=method, warn=False, **kw)
+    res = simulate(model, (0, period), y0, method=method, warn=False, **kw)
     assert res.success, res.message
     x, y, vx, vy = ball_exact(res.t)
     err = max(np.max(np.abs(res["x"] - x)), np.max(np.abs(res["y"] - y)),

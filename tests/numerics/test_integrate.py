@@ -27,7 +27,7 @@ def sleigh():
 
 
 def test_result_object_in_the_style_of_oderesult(sleigh):
-    res = simulate(sleigh, sleigh_state(), (0, 3), t_eval=np.linspace(0, 3, 7), warn=False)
+    res = simulate(sleigh, (0, 3), sleigh_state(), t_eval=np.linspace(0, 3, 7), warn=False)
     assert res.success and res.status == 0 and "end" in res.message
     assert res.y.shape == (6, 7) and res.t.shape == (7,)
     assert res.states.shape == (7, 6)
@@ -44,7 +44,7 @@ def test_result_object_in_the_style_of_oderesult(sleigh):
 
 
 def test_system_is_accepted_directly():
-    res = simulate(chaplygin_sleigh(), sleigh_state(), (0, 1), warn=False)
+    res = simulate(chaplygin_sleigh(), (0, 1), sleigh_state(), warn=False)
     assert res.success and res.model.backend in ("c", "numpy")
 
 
@@ -52,13 +52,13 @@ def test_initial_data_violating_constraints_are_refused_with_the_residual(sleigh
     y = sleigh_state()
     y[3] += 0.01
     with pytest.raises(InconsistentInitialDataError, match=r"constraints\[0\] = "):
-        simulate(sleigh, y, (0, 1), warn=False)
+        simulate(sleigh, (0, 1), y, warn=False)
 
 
 def test_initial_data_projected_when_asked():
     model = numeric_model(pendulum())
     y = pendulum_state() + np.array([0.01, 0.02, -0.05, 0.0])
-    res = simulate(model, y, (0, 1), project_initial=True, projection=True, warn=False)
+    res = simulate(model, (0, 1), y, project_initial=True, projection=True, warn=False)
     p = res.initial_projection
     assert p.residual_before > 1e-3 and p.residual_after <= 1e-14
     assert p.displacement_q > 0 and p.displacement_v > 0
@@ -68,24 +68,24 @@ def test_initial_data_projected_when_asked():
 
 def test_initial_data_by_name_and_missing_names(sleigh):
     names = dict(zip(sleigh.names, sleigh_state()))
-    assert simulate(sleigh, names, (0, 0.5), warn=False).success
+    assert simulate(sleigh, (0, 0.5), names, warn=False).success
     del names["theta_dot"]
     with pytest.raises(InconsistentInitialDataError, match="missing theta_dot"):
-        simulate(sleigh, names, (0, 0.5), warn=False)
+        simulate(sleigh, (0, 0.5), names, warn=False)
 
 
 def test_options_are_checked(sleigh):
     y = sleigh_state()
     with pytest.raises(InputError, match="unknown method"):
-        simulate(sleigh, y, (0, 1), method="Euler")
+        simulate(sleigh, (0, 1), y, method="Euler")
     with pytest.raises(InputError, match="needs step"):
-        simulate(sleigh, y, (0, 1), method="rattle")
+        simulate(sleigh, (0, 1), y, method="rattle")
     with pytest.raises(InputError, match="not applicable"):
-        simulate(sleigh, y, (0, 1), method="rattle", step=0.1, projection=True)
+        simulate(sleigh, (0, 1), y, method="rattle", step=0.1, projection=True)
     with pytest.raises(InputError, match="alpha, beta"):
-        simulate(sleigh, y, (0, 1), baumgarte=(1.0, -1.0))
+        simulate(sleigh, (0, 1), y, baumgarte=(1.0, -1.0))
     with pytest.raises(InputError, match="t_span"):
-        simulate(sleigh, y, (1, 1))
+        simulate(sleigh, (1, 1), y)
     assert set(METHODS) >= {"RK23", "RK45", "DOP853", "Radau", "BDF", "LSODA", "rattle",
                             "rattle4", "rk4", "reference"}
 
@@ -105,7 +105,7 @@ def test_nan_or_overflow_stops_with_a_clear_status(method, kw):
     few steps), keeps the finite part, and is never reported as a success."""
     model = numeric_model(blowup_system())
     with pytest.warns(NumericsWarning, match="run stopped"):
-        res = simulate(model, [1.0, 0.0, 1.0, 0.0], (0, 10), method=method, **kw)
+        res = simulate(model, (0, 10), [1.0, 0.0, 1.0, 0.0], method=method, **kw)
     assert not res.success
     assert res.status in (-1, -2, -4)
     assert np.all(np.isfinite(res.y))
@@ -118,8 +118,8 @@ def test_baumgarte_reduces_drift_of_the_position_constraint():
     """Pendulum, loose tolerance, no projection: g drifts; Baumgarte damps it."""
     model = numeric_model(pendulum())
     y0 = pendulum_state()
-    plain = simulate(model, y0, (0, 20), method="RK45", rtol=1e-5, atol=1e-7, warn=False)
-    stab = simulate(model, y0, (0, 20), method="RK45", rtol=1e-5, atol=1e-7,
+    plain = simulate(model, (0, 20), y0, method="RK45", rtol=1e-5, atol=1e-7, warn=False)
+    stab = simulate(model, (0, 20), y0, method="RK45", rtol=1e-5, atol=1e-7,
                     baumgarte=(5.0, 5.0), warn=False)
     g_plain = np.max(np.abs(model.residuals(plain.states)[:, 1]))
     g_stab = np.max(np.abs(model.residuals(stab.states)[:, 1]))
@@ -129,7 +129,7 @@ def test_baumgarte_reduces_drift_of_the_position_constraint():
 
 def test_residual_past_tolerance_warns(sleigh):
     with pytest.warns(NumericsWarning, match="constraint residual"):
-        res = simulate(sleigh, sleigh_state(), (0, 20), method="RK23", rtol=1e-3, atol=1e-6,
+        res = simulate(sleigh, (0, 20), sleigh_state(), method="RK23", rtol=1e-3, atol=1e-6,
                        residual_tol=1e-9)
     assert any("constraint residual" in w for w in res.warnings)
 
@@ -138,7 +138,7 @@ def test_energy_balance_for_affine_constraints():
     """Ball on turntable: E changes by O(1) but E - E0 - work stays at the
     integration error (dE/dt = lambda . h)."""
     model = numeric_model(ball_on_turntable())
-    res = simulate(model, ball_state(model), (0, 10), rtol=1e-11, atol=1e-13, warn=False)
+    res = simulate(model, (0, 10), ball_state(model), rtol=1e-11, atol=1e-13, warn=False)
     assert res.energy_drift > 0.1
     assert res.energy_balance_residual < 1e-8
 
@@ -147,14 +147,14 @@ def test_energy_balance_for_affine_constraints():
 def test_projection_keeps_solver_history(sleigh, method):
     """Projecting after each step must not restart the solver: the number of
     steps stays close to the unprojected run."""
-    plain = simulate(sleigh, sleigh_state(), (0, 10), method=method, warn=False)
-    proj = simulate(sleigh, sleigh_state(), (0, 10), method=method, projection=True, warn=False)
+    plain = simulate(sleigh, (0, 10), sleigh_state(), method=method, warn=False)
+    proj = simulate(sleigh, (0, 10), sleigh_state(), method=method, projection=True, warn=False)
     assert proj.nsteps <= 1.3 * plain.nsteps + 5
     assert proj.constraint_residual_max <= 1e-14
 
 
 def test_reference_method_through_simulate(sleigh):
-    res = simulate(sleigh, sleigh_state(), (0, 1.0), method="reference", reference_digits=25,
+    res = simulate(sleigh, (0, 1.0), sleigh_state(), method="reference", reference_digits=25,
                    t_eval=[0.5, 1.0], warn=False)
     assert res.success and np.allclose(res.t, [0.5, 1.0])
     u, w, th = sleigh_exact(np.array(1.0))
@@ -163,8 +163,8 @@ def test_reference_method_through_simulate(sleigh):
 
 
 def test_backward_integration(sleigh):
-    fwd = simulate(sleigh, sleigh_state(), (0, 2), rtol=1e-12, atol=1e-14, warn=False)
-    back = simulate(sleigh, fwd.y[:, -1], (2, 0), rtol=1e-12, atol=1e-14, warn=False)
+    fwd = simulate(sleigh, (0, 2), sleigh_state(), rtol=1e-12, atol=1e-14, warn=False)
+    back = simulate(sleigh, (2, 0), fwd.y[:, -1], rtol=1e-12, atol=1e-14, warn=False)
     assert np.max(np.abs(back.y[:, -1] - sleigh_state())) < 1e-9
 
 
@@ -189,7 +189,7 @@ def test_work_precision_rows_and_time_to_solution(sleigh):
 def test_plots_need_matplotlib_or_say_so(tmp_path, sleigh):
     from nhham.cli.plotting import OptionalDependencyError, plot_trajectory
 
-    res = simulate(sleigh, sleigh_state(), (0, 1), warn=False)
+    res = simulate(sleigh, (0, 1), sleigh_state(), warn=False)
     try:
         import matplotlib  # noqa: F401
     except ImportError:
@@ -222,7 +222,7 @@ def test_compiled_loop_matches_scipy_loop_on_the_numpy_path(method, options):
     kw = dict(options)
     if kw.pop("t_eval", False):
         kw["t_eval"] = np.linspace(0.0, 3.0, 13)[1:]  # t0 not requested
-    runs = [simulate(m, pendulum_state(), (0, 3.0), method=method, rtol=1e-8, atol=1e-10,
+    runs = [simulate(m, (0, 3.0), pendulum_state(), method=method, rtol=1e-8, atol=1e-10,
                      warn=False, loop=loop, **kw)
             for m, loop in ((compiled, "compiled"), (numpy_model, "auto"))]
     fast, ref = runs
@@ -254,7 +254,7 @@ def test_compiled_loop_against_exact_solutions():
     t = np.linspace(0.5, 6.0, 12)
     for method, rtol, tol in (("DOP853", 1e-11, 1e-9), ("RK45", 1e-10, 1e-8)):
         for projection in (False, True):
-            res = simulate(sleigh, sleigh_state(), (0, 6.0), method=method, rtol=rtol,
+            res = simulate(sleigh, (0, 6.0), sleigh_state(), method=method, rtol=rtol,
                            atol=1e-13, t_eval=t, projection=projection, loop="compiled",
                            warn=False)
             u_ex, w_ex, th_ex = sleigh_exact(res.t)
@@ -264,7 +264,7 @@ def test_compiled_loop_against_exact_solutions():
             assert err < tol, (method, projection, err)
     disk = numeric_model(rolling_disk())
     y0, _ = rolling_disk_exact(np.array(0.0))
-    res = simulate(disk, y0, (0, 5.0), method="RK23", rtol=1e-9, atol=1e-12, projection=True,
+    res = simulate(disk, (0, 5.0), y0, method="RK23", rtol=1e-9, atol=1e-12, projection=True,
                    loop="compiled", warn=False)
     assert res.nsteps > 1000 and len(res.t) == res.nsteps + 1  # several C calls
     assert np.max(np.abs(res.y - rolling_disk_exact(res.t)[0])) < 1e-6
@@ -277,28 +277,28 @@ def test_compiled_loop_failures_progress_and_options(capsys):
     scipy's option checks, max_step honoured, progress reported."""
     blowup = numeric_model(blowup_system())
     for loop in ("compiled", "scipy"):
-        res = simulate(blowup, [1.0, 0.0, 1.0, 0.0], (0, 10), method="DOP853", loop=loop,
+        res = simulate(blowup, (0, 10), [1.0, 0.0, 1.0, 0.0], method="DOP853", loop=loop,
                        warn=False)
         assert res.status in (-1, -2) and 2.0 < res.t[-1] < 3.0 and np.all(np.isfinite(res.y))
     singular = numeric_model(nhham.System(["x", "y"], "(x_dot**2 + y_dot**2)/2 - x",
                                           ["x*x_dot + y*y_dot"]))
     msgs = []
     for loop in ("compiled", "scipy"):
-        res = simulate(singular, np.zeros(4), (0, 1), method="RK45", loop=loop, warn=False)
+        res = simulate(singular, (0, 1), np.zeros(4), method="RK45", loop=loop, warn=False)
         assert res.status == -3 and len(res.t) == 1
         msgs.append(res.message)
     assert msgs[0] == msgs[1] and "singular saddle-point system at t = 0" in msgs[0]
     sleigh = numeric_model(chaplygin_sleigh())
     for bad in ({"max_step": 0.0}, {"first_step": -1.0}, {"first_step": 5.0}):
         with pytest.raises(ValueError, match="step"):
-            simulate(sleigh, sleigh_state(), (0, 1), loop="compiled", **bad)
+            simulate(sleigh, (0, 1), sleigh_state(), loop="compiled", **bad)
     with pytest.warns(UserWarning, match="rtol"):
-        simulate(sleigh, sleigh_state(), (0, 1), rtol=1e-20, loop="compiled", warn=False)
-    res = simulate(sleigh, sleigh_state(), (0, 1), max_step=0.01, first_step=1e-3,
+        simulate(sleigh, (0, 1), sleigh_state(), rtol=1e-20, loop="compiled", warn=False)
+    res = simulate(sleigh, (0, 1), sleigh_state(), max_step=0.01, first_step=1e-3,
                    loop="compiled", warn=False)
     assert np.max(np.diff(res.t)) <= 0.01 + 1e-15 and res.t[1] == pytest.approx(1e-3)
     capsys.readouterr()
-    simulate(sleigh, sleigh_state(), (0, 1), loop="compiled", progress=True, warn=False)
+    simulate(sleigh, (0, 1), sleigh_state(), loop="compiled", progress=True, warn=False)
     err = capsys.readouterr().err
     assert "(50%)" in err and "(100%)" in err
 
@@ -306,12 +306,64 @@ def test_compiled_loop_failures_progress_and_options(capsys):
 def test_loop_option_is_checked(sleigh):
     numpy_model = numeric_model(chaplygin_sleigh(), backend="numpy")
     with pytest.raises(InputError, match="loop"):
-        simulate(sleigh, sleigh_state(), (0, 1), loop="fortran")
+        simulate(sleigh, (0, 1), sleigh_state(), loop="fortran")
     with pytest.raises(InputError, match="no compiled C backend"):
-        simulate(numpy_model, sleigh_state(), (0, 1), loop="compiled")
+        simulate(numpy_model, (0, 1), sleigh_state(), loop="compiled")
     with pytest.raises(InputError, match="for RK23, RK45, DOP853, not 'Radau'"):
-        simulate(sleigh, sleigh_state(), (0, 1), method="Radau", loop="compiled")
-    res = simulate(sleigh, sleigh_state(), (0, 1), loop="scipy", warn=False)
+        simulate(sleigh, (0, 1), sleigh_state(), method="Radau", loop="compiled")
+    res = simulate(sleigh, (0, 1), sleigh_state(), loop="scipy", warn=False)
     assert res.settings["loop"] == "scipy"
-    auto = simulate(sleigh, sleigh_state(), (0, 1), warn=False)
+    auto = simulate(sleigh, (0, 1), sleigh_state(), warn=False)
     assert auto.settings["loop"] == ("compiled" if sleigh.backend == "c" else "scipy")
+
+
+def test_dense_output_against_the_exact_solution():
+    """The rolling disk: theta = theta0 + w t, x and y on a circle (closed form)."""
+    from test_exact_solutions import rolling_disk, rolling_disk_exact
+
+    model = numeric_model(rolling_disk())
+    y0, _ = rolling_disk_exact(np.array(0.0))
+    for method in ("DOP853", "Radau"):
+        res = simulate(model, (0, 4), y0, method=method, rtol=1e-10, atol=1e-12,
+                       dense_output=True, warn=False)
+        assert res.settings["loop"] == "scipy" and res.sol is not None
+        t = np.linspace(0, 4, 41)
+        exact, _ = rolling_disk_exact(t)
+        assert res.sol(t).shape == (8, 41) and res.sol(1.3).shape == (8,)
+        assert np.max(np.abs(res.sol(t) - exact)) < 1e-6, method
+        assert (res.sol.t_min, res.sol.t_max) == (0.0, 4.0)
+    assert simulate(model, (0, 1), y0, warn=False).sol is None
+
+
+def test_events_located_and_terminal():
+    """theta = 0.3 + 1.1 t crosses 1 at t = 0.7/1.1 and 2 at t = 1.7/1.1 (closed form);
+    cos(theta) changes sign downwards at theta = pi/2."""
+    from test_exact_solutions import rolling_disk, rolling_disk_exact
+
+    model = numeric_model(rolling_disk())
+    y0, _ = rolling_disk_exact(np.array(0.0))
+
+    def theta_is_1(t, y):
+        return y[2] - 1.0
+
+    def cos_theta(t, y):
+        return np.cos(y[2])
+
+    def theta_is_2(t, y):
+        return y[2] - 2.0
+
+    cos_theta.direction = -1
+    theta_is_2.terminal = True
+    res = simulate(model, (0, 5), y0, rtol=1e-11, atol=1e-12,
+                   events=[theta_is_1, cos_theta, theta_is_2], warn=False)
+    assert res.status == 1 and res.success and "termination event" in res.message
+    assert res.t_events[0] == pytest.approx([0.7 / 1.1], abs=1e-9)
+    assert res.t_events[1] == pytest.approx([(np.pi / 2 - 0.3) / 1.1], abs=1e-9)
+    assert res.t[-1] == pytest.approx(1.7 / 1.1, abs=1e-9)
+    exact, _ = rolling_disk_exact(np.array(res.t_events[0]))
+    assert res.y_events[0].shape == (1, 8)
+    assert np.allclose(res.y_events[0][0], exact[:, 0], atol=1e-8)
+    with pytest.raises(InputError, match="dense_output/events"):
+        simulate(model, (0, 1), y0, method="rattle", step=0.1, events=theta_is_1)
+    with pytest.raises(InputError, match="dense_output and events"):
+        simulate(model, (0, 1), y0, loop="compiled", dense_output=True)

@@ -26,7 +26,7 @@ def _order(steps, errors):
 
 
 def _sleigh_error(model, method, h, t_end=2.0, **kw):
-    res = simulate(model, sleigh_state(), (0, t_end), method=method, step=h, warn=False, **kw)
+    res = simulate(model, (0, t_end), sleigh_state(), method=method, step=h, warn=False, **kw)
     assert res.success
     th, xd, yd, w = res["theta"][-1], res["x_dot"][-1], res["y_dot"][-1], res["theta_dot"][-1]
     u, w_ex, th_ex = sleigh_exact(np.array(t_end))
@@ -55,7 +55,7 @@ def test_empirical_order_state_dependent_W_affine_constraints(method, order):
     steps = np.array([0.4, 0.2, 0.1, 0.05])
     errors = []
     for h in steps:
-        res = simulate(model, y0, (0, 2.0), method=method, step=h, warn=False)
+        res = simulate(model, (0, 2.0), y0, method=method, step=h, warn=False)
         x, y, vx, vy = ball_exact(np.array(2.0))
         errors.append(max(abs(res["x"][-1] - x), abs(res["y"][-1] - y),
                           abs(res["x_dot"][-1] - vx), abs(res["y_dot"][-1] - vy)))
@@ -68,10 +68,10 @@ def test_empirical_order_holonomic_rattle():
     order; the reference is a tight DOP853 run (no closed form in time)."""
     model = numeric_model(pendulum())
     y0 = pendulum_state()
-    ref = simulate(model, y0, (0, 1.0), method="DOP853", rtol=1e-13, atol=1e-14,
+    ref = simulate(model, (0, 1.0), y0, method="DOP853", rtol=1e-13, atol=1e-14,
                    projection=True, warn=False).y[:, -1]
     steps = np.array([0.02, 0.01, 0.005, 0.0025])
-    errors = [np.max(np.abs(simulate(model, y0, (0, 1.0), method="rattle", step=h,
+    errors = [np.max(np.abs(simulate(model, (0, 1.0), y0, method="rattle", step=h,
                                      warn=False).y[:, -1] - ref)) for h in steps]
     assert abs(_order(steps, errors) - 2) < 0.2
 
@@ -94,8 +94,8 @@ def test_rattle_is_time_reversible(builder, state):
 
 def test_compiled_rattle_runs_backward_to_the_start():
     model = numeric_model(chaplygin_sleigh())
-    fwd = simulate(model, sleigh_state(), (0, 5), method="rattle", step=0.05, warn=False)
-    back = simulate(model, fwd.y[:, -1], (5, 0), method="rattle", step=0.05, warn=False)
+    fwd = simulate(model, (0, 5), sleigh_state(), method="rattle", step=0.05, warn=False)
+    back = simulate(model, (5, 0), fwd.y[:, -1], method="rattle", step=0.05, warn=False)
     assert back.t[-1] == 0.0
     assert np.max(np.abs(back.y[:, -1] - sleigh_state())) < 1e-11
 
@@ -126,7 +126,7 @@ def test_constraint_residual_of_projected_and_structure_preserving_methods(probl
     model = numeric_model(builder())
     y0 = state(model)
     for method, kw in EXACT_METHODS:
-        res = simulate(model, y0, (0, 1.5), method=method, warn=False, **kw)
+        res = simulate(model, (0, 1.5), y0, method=method, warn=False, **kw)
         assert res.success, (problem, method, res.message)
         assert res.constraint_residual_max <= 1e-12, (problem, method,
                                                       res.constraint_residual_max)
@@ -137,14 +137,14 @@ def test_rattle_refuses_non_quadratic_lagrangian():
 
     system = nhham.System(["x", "y"], "(x_dot**2 + y_dot**2)/2 + x*y_dot", ["y_dot - x*x_dot"])
     with pytest.raises(InputError, match="1/2 v\\^T W"):
-        simulate(system, [0.0, 0.0, 1.0, 0.0], (0, 1), method="rattle", step=0.1, warn=False)
+        simulate(system, (0, 1), [0.0, 0.0, 1.0, 0.0], method="rattle", step=0.1, warn=False)
     # the scipy methods are fine with it
-    assert simulate(system, [0.0, 0.0, 1.0, 0.0], (0, 1), warn=False).success
+    assert simulate(system, (0, 1), [0.0, 0.0, 1.0, 0.0], warn=False).success
 
 
 def test_fixed_step_grid_and_save_every():
     model = numeric_model(chaplygin_sleigh())
-    res = simulate(model, sleigh_state(), (0, 1.0), method="rattle", step=0.03, save_every=5,
+    res = simulate(model, (0, 1.0), sleigh_state(), method="rattle", step=0.03, save_every=5,
                    warn=False)
     N = math.ceil(1.0 / 0.03)
     assert res.settings["step"] == pytest.approx(1.0 / N)

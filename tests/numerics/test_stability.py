@@ -97,13 +97,13 @@ def test_rolling_disk_mass_and_inertia_ratios(parameter):
     y0, _ = rolling_disk_exact(np.array(0.0))
     for ratio in RATIOS:
         model = base.with_parameters(**{parameter: ratio})
-        res = simulate(model, y0, (0, 3), rtol=1e-11, atol=1e-13, projection=True, warn=False)
+        res = simulate(model, (0, 3), y0, rtol=1e-11, atol=1e-13, projection=True, warn=False)
         exact, lam = rolling_disk_exact(res.t, m=model.parameters["m"])
         assert np.max(np.abs(res.y - exact)) <= 1e-9 + 20 * res.cond_C_max * EPS, ratio
         assert not res.warnings
         assert res.constraint_residual_max <= 1e-12
         assert np.allclose(res.multipliers, lam, rtol=1e-7, atol=1e-9 * model.parameters["m"])
-        rat = simulate(model, y0, (0, 3), method="rattle", step=0.01, warn=False)
+        rat = simulate(model, (0, 3), y0, method="rattle", step=0.01, warn=False)
         assert np.max(np.abs(rat.y - rolling_disk_exact(rat.t)[0])) <= 1e-4, ratio
         assert rat.constraint_residual_max <= 1e-12
 
@@ -117,7 +117,7 @@ def test_chaplygin_sleigh_inertia_ratios(which):
         m, I = (1.0, ratio * a * a) if which == "I" else (0.3 / (ratio * a * a), 0.3)
         model = numeric_model(chaplygin_sleigh(m=m, I=I, a=a))
         y0 = sleigh_state(a=a)
-        res = simulate(model, y0, (0, 4.0), rtol=1e-11, atol=1e-14, warn=False)
+        res = simulate(model, (0, 4.0), y0, rtol=1e-11, atol=1e-14, warn=False)
         th, xd, yd, w = res["theta"], res["x_dot"], res["y_dot"], res["theta_dot"]
         u_ex, w_ex, _ = sleigh_exact(res.t, m=m, I=I, a=a)
         u = np.cos(th) * xd + np.sin(th) * yd
@@ -155,7 +155,7 @@ def test_snakeboard_near_singular_C_errors_grow_like_cond_and_warn_in_time():
             assert err <= 10 * cond * EPS + 1e-14, (delta, cond, err)
             if cond <= 1e10:
                 assert err < 1e-6
-        res = simulate(models[1], y0, (0, 0.2), rtol=1e-10, atol=1e-13, warn=False)
+        res = simulate(models[1], (0, 0.2), y0, rtol=1e-10, atol=1e-13, warn=False)
         warned = any("cond(C)" in w for w in res.warnings)
         assert warned == (res.cond_C_max > 1e10), (delta, res.cond_C_max)
         if warned and first_warned_error is None:
@@ -164,7 +164,7 @@ def test_snakeboard_near_singular_C_errors_grow_like_cond_and_warn_in_time():
             assert delta == 1e-5
     assert first_warned_error < 1e-6
     with pytest.warns(NumericsWarning, match="cond\\(C\\)"):
-        simulate(models[1], snakeboard_state(1e-6), (0, 0.1))
+        simulate(models[1], (0, 0.1), snakeboard_state(1e-6))
 
 
 # ----------------------------------------------------------- long horizons
@@ -178,7 +178,7 @@ def test_long_horizon_reversible_problem_energy_error_bounded():
     model = numeric_model(nonholonomic_particle("harmonic"))
     y0 = np.array([1.0, 0.5, 0.0, 0.3, 0.8, 0.5 * 0.3])
     P = 2 * math.pi
-    res = simulate(model, y0, (0, 1e5 * P), method="rattle", step=P / 16, save_every=16,
+    res = simulate(model, (0, 1e5 * P), y0, method="rattle", step=P / 16, save_every=16,
                    warn=False)
     assert res.success and res.nsteps == 1_600_000
     dE = np.abs(res.energy - res.energy[0])
@@ -205,7 +205,7 @@ def test_long_horizon_non_reversible_problem_conserved_quantity_drifts():
     P = 2 * math.pi / math.sqrt((Om - w) ** 2 - R * kappa)
     x, y, s = 0.3, 0.1, 0.4
     y0 = np.array([x, y, 0.0, 0.0, R * s - Om * y, Om * x, w, s])
-    res = simulate(model, y0, (0, 1e5 * P), method="rattle", step=P / 16, save_every=16,
+    res = simulate(model, (0, 1e5 * P), y0, method="rattle", step=P / 16, save_every=16,
                    warn=False)
     assert res.success
     Y = res.states
@@ -232,8 +232,8 @@ def test_very_small_and_very_large_velocities(scale):
         model = numeric_model(chaplygin_sleigh())
         y0 = sleigh_state(u0=0.4 * s, w0=1.5 * s)
         atol = np.array([1e-13] * 3 + [1e-13 * s] * 3)
-        a = simulate(model, y0, (0, 4.0 / s), rtol=1e-11, atol=atol, warn=False)
-        b = simulate(model, y0, (0, 4.0 / s), method="rattle", step=0.01 / s, warn=False)
+        a = simulate(model, (0, 4.0 / s), y0, rtol=1e-11, atol=atol, warn=False)
+        b = simulate(model, (0, 4.0 / s), y0, method="rattle", step=0.01 / s, warn=False)
         u, w, th = sleigh_exact(np.array(4.0 / s), u0=0.4 * s, w0=1.5 * s)
         errs = []
         for res in (a, b):
@@ -267,19 +267,19 @@ def test_step_sizes_near_the_stability_limit():
     model = numeric_model(nonholonomic_particle("y-harmonic"))
     still = np.array([1.0, 0.5, 0.0, 0.0, 0.8, 0.0])
     moving = np.array([1.0, 0.5, 0.0, 0.3, 0.8, 0.15])
-    ok = simulate(model, still, (0, 2000 * 1.99), method="rattle", step=1.99, warn=False)
+    ok = simulate(model, (0, 2000 * 1.99), still, method="rattle", step=1.99, warn=False)
     dE = np.abs(ok.energy - ok.energy[0])
     assert ok.success and dE[1000:].max() <= 1.2 * dE[:1000].max()
     for h in (2.01, 2.1):
         with pytest.warns(NumericsWarning, match="run stopped"):
-            bad = simulate(model, still, (0, 2000 * h), method="rattle", step=h)
+            bad = simulate(model, (0, 2000 * h), still, method="rattle", step=h)
         assert bad.status == -2 and "non-finite or overflow" in bad.message
         assert np.all(np.isfinite(bad.y))
-    assert simulate(model, moving, (0, 2000.0), method="rattle", step=1.0, warn=False).success
-    stuck = simulate(model, moving, (0, 2000 * 1.9), method="rattle", step=1.9, warn=False)
+    assert simulate(model, (0, 2000.0), moving, method="rattle", step=1.0, warn=False).success
+    stuck = simulate(model, (0, 2000 * 1.9), moving, method="rattle", step=1.9, warn=False)
     assert stuck.status == -4 and "reduce the step" in stuck.message
-    ok4 = simulate(model, moving, (0, 2000 * 2.7), method="rk4", step=2.7, warn=False)
+    ok4 = simulate(model, (0, 2000 * 2.7), moving, method="rk4", step=2.7, warn=False)
     assert ok4.success and ok4.energy[-1] < ok4.energy[0]
     with pytest.warns(NumericsWarning, match="run stopped"):
-        bad4 = simulate(model, moving, (0, 2000 * 2.95), method="rk4", step=2.95)
+        bad4 = simulate(model, (0, 2000 * 2.95), moving, method="rk4", step=2.95)
     assert bad4.status == -2 and np.all(np.isfinite(bad4.y))

@@ -1,0 +1,174 @@
+/* ---- small dense linear algebra (row-major) ---- */
+
+/* Solve A x = b (d x d) in place by LU with partial pivoting.
+   Returns 0 on success, 1 if a pivot is exactly zero. */
+static int gsolve(int d, double *A, double *b) {
+    for (int c = 0; c < d; ++c) {
+        int piv = c;
+        double best = fabs(A[c * d + c]);
+        for (int r = c + 1; r < d; ++r) if (fabs(A[r * d + c]) > best) { best = fabs(A[r * d + c]); piv = r; }
+        if (best == 0.0) return 1;
+        if (piv != c) {
+            for (int j = 0; j < d; ++j) { double t = A[c * d + j]; A[c * d + j] = A[piv * d + j]; A[piv * d + j] = t; }
+            double t = b[c]; b[c] = b[piv]; b[piv] = t;
+        }
+        double inv = 1.0 / A[c * d + c];
+        for (int r = c + 1; r < d; ++r) {
+            double f = A[r * d + c] * inv;
+            if (f == 0.0) continue;
+            for (int j = c + 1; j < d; ++j) A[r * d + j] -= f * A[c * d + j];
+            b[r] -= f * b[c];
+        }
+    }
+    for (int r = d - 1; r >= 0; --r) {
+        double s = b[r];
+        for (int j = r + 1; j < d; ++j) s -= A[r * d + j] * b[j];
+        b[r] = s / A[r * d + r];
+    }
+    return 0;
+}
+
+/* The scaled saddle matrix [[D W D, (E M D)^T], [E M D, 0]] by LU with partial
+   pivoting (the fallback of ksolve). */
+static int lu_solve(int mm, const double *W, const double *mu, const double *d,
+                     const double *e, const double *top, const double *bottom,
+                     double *x, double *y) {
+    const int nn = NQ + mm;
+    double K[NNX * NNX], b[NNX];
+    for (int i = 0; i < NQ; ++i) {
+        for (int j = 0; j < NQ; ++j) K[i * nn + j] = W[i * NQ + j] * d[i] * d[j];
+        for (int c = 0; c < mm; ++c) {
+            double t = mu[c * NQ + i] * d[i] * e[c];
+            K[i * nn + NQ + c] = t;
+            K[(NQ + c) * nn + i] = t;
+        }
+        b[i] = top[i] * d[i];
+    }
+    for (int c = 0; c < mm; ++c) {
+        for (int k = 0; k < mm; ++k) K[(NQ + c) * nn + NQ + k] = 0.0;
+        b[NQ + c] = bottom[c] * e[c];
+    }
+    if (gsolve(nn, K, b)) return 1;
+    for (int i = 0; i < NQ; ++i) x[i] = b[i] * d[i];
+    for (int c = 0; c < mm; ++c) y[c] = b[NQ + c] * e[c];
+    return 0;
+}
+
+/* Smallest accepted Cholesky pivot of W relative to its diagonal entry (a
+   pivot of the unit-diagonal scaled W; the smallest pivot bounds the
+   smallest eigenvalue from above, a cheap condition estimate): below it W
+   is indefinite or nearly singular and the saddle matrix is solved by LU
+   instead. The range-space method loses about log10 cond(W) digits, LU on
+   the scaled saddle matrix does not depend on cond(W). The N-link snake's
+   smallest pivots are 0.4 (N = 2) .. 0.04 (N = 16). */
+#define CHOL_MIN 1e-4
+#if defined(__GNUC__)
+#define HOT static inline __attribute__((always_inline))
+#else
+#define HOT static inline
+#endif
+
+/* [[W, mu^T], [mu, 0]] [x; y] = [top; bottom] with the first mm rows of mu
+   (row stride NQ); W symmetric.
+
+   When W = L L^T (Cholesky, every pivot above CHOL_MIN times its diagonal
+   entry) the range-space method: [Z | u] = L^-1 [mu^T | top], the Schur
+   complement S = Z^T Z = mu W^-1 mu^T (positive definite when mu has full
+   rank) by Cholesky, S y = Z^T u - bottom, L^T x = u - Z y. That is about
+   n^3/6 + (m+1) n^2/2 + (m+1)^2 n/2 multiply-adds against (n+m)^3/3 for LU,
+   with no pivot search; Cholesky and the triangular solves are invariant
+   under the diagonal scaling that LU needs, so none is applied.
+   Otherwise (W indefinite, e.g. a Lorentzian metric, or nearly singular; S
+   not numerically positive definite, e.g. mu rank deficient): LU with partial
+   pivoting on the symmetrically scaled saddle matrix (unit diagonal of W,
+   unit rows of mu), which makes extreme mass ratios harmless.
+   Returns 0, or 1 when the matrix is singular.
+   One function (and forced inline) on purpose: it is the innermost call of every field
+   evaluation, and the Cholesky factors live on its stack for the LU fallback's decision. */
+HOT int ksolve(int mm, const double *W, const double *mu, const double *top,
+               const double *bottom, double *x, double *y) {
+    enum { M1 = NCX + 1 };
+    double L[NQ * NQ], Z[M1 * NQ], G[M1 * M1], r[NCX];
+    /* Cholesky W = L L^T; the diagonal of L holds 1 / L_jj. */
+    for (int j = 0; j < NQ; ++j) {
+        const double wjj = W[j * NQ + j];
+        double s = wjj;
+        for (int k = 0; k < j; ++k) s -= L[j * NQ + k] * L[j * NQ + k];
+        if (!(s > CHOL_MIN * wjj)) goto lu;
+        const double inv = 1.0 / sqrt(s);
+        L[j * NQ + j] = inv;
+        for (int i = j + 1; i < NQ; ++i) {
+            double t = W[i * NQ + j];
+            for (int k = 0; k < j; ++k) t -= L[i * NQ + k] * L[j * NQ + k];
+            L[i * NQ + j] = t * inv;
+        }
+    }
+    /* [Z | u] = L^-1 [mu^T | top]: row c of Z holds column c (c = mm: u). */
+    for (int c = 0; c <= mm; ++c) {
+        double *zc = Z + c * NQ;
+        const double *b = c < mm ? mu + c * NQ : top;
+        for (int i = 0; i < NQ; ++i) {
+            double s = b[i];
+            for (int k = 0; k < i; ++k) s -= L[i * NQ + k] * zc[k];
+            zc[i] = s * L[i * NQ + i];
+        }
+    }
+    /* G = [Z | u]^T [Z | u] (lower part): S = G[:mm, :mm], Z^T u = G[mm, :mm]. */
+    for (int c = 0; c <= mm; ++c)
+        for (int e = 0; e <= c && e < mm; ++e) {
+            const double *zc = Z + c * NQ, *ze = Z + e * NQ;
+            double s = 0.0;
+            for (int i = 0; i < NQ; ++i) s += zc[i] * ze[i];
+            G[c * M1 + e] = s;
+        }
+    /* Cholesky of S in place (diagonal holds 1 / R_jj); S y = Z^T u - bottom. */
+    for (int j = 0; j < mm; ++j) {
+        double s = G[j * M1 + j];
+        for (int k = 0; k < j; ++k) s -= G[j * M1 + k] * G[j * M1 + k];
+        if (!(s > 0.0) || !isfinite(s)) goto lu;
+        const double inv = 1.0 / sqrt(s);
+        G[j * M1 + j] = inv;
+        for (int i = j + 1; i < mm; ++i) {
+            double t = G[i * M1 + j];
+            for (int k = 0; k < j; ++k) t -= G[i * M1 + k] * G[j * M1 + k];
+            G[i * M1 + j] = t * inv;
+        }
+    }
+    for (int i = 0; i < mm; ++i) {
+        double s = G[mm * M1 + i] - bottom[i];
+        for (int k = 0; k < i; ++k) s -= G[i * M1 + k] * r[k];
+        r[i] = s * G[i * M1 + i];
+    }
+    for (int i = mm - 1; i >= 0; --i) {
+        double s = r[i];
+        for (int k = i + 1; k < mm; ++k) s -= G[k * M1 + i] * r[k];
+        r[i] = s * G[i * M1 + i];
+        y[i] = r[i];
+    }
+    /* x = L^-T (u - Z y), column-oriented back substitution. */
+    for (int i = 0; i < NQ; ++i) x[i] = Z[mm * NQ + i];
+    for (int c = 0; c < mm; ++c) {
+        const double *zc = Z + c * NQ, rc = r[c];
+        for (int i = 0; i < NQ; ++i) x[i] -= zc[i] * rc;
+    }
+    for (int i = NQ - 1; i >= 0; --i) {
+        const double xi = x[i] * L[i * NQ + i];
+        x[i] = xi;
+        for (int k = 0; k < i; ++k) x[k] -= L[i * NQ + k] * xi;
+    }
+    return 0;
+lu:
+    {
+        double d[NQ], e[NCX];
+        for (int i = 0; i < NQ; ++i) {
+            double a = fabs(W[i * NQ + i]);
+            d[i] = a > 0.0 ? 1.0 / sqrt(a) : 1.0;
+        }
+        for (int c = 0; c < mm; ++c) {
+            double s = 0.0;
+            for (int j = 0; j < NQ; ++j) { double t = mu[c * NQ + j] * d[j]; s += t * t; }
+            e[c] = s > 0.0 ? 1.0 / sqrt(s) : 1.0;
+        }
+        return lu_solve(mm, W, mu, d, e, top, bottom, x, y);
+    }
+}

@@ -1,0 +1,381 @@
+"""C and Python text from the symbolic pieces of a System (the sympy half of the bridge).
+
+:func:`generate_sources` turns a :class:`~nhham.System` (``DESIGN.md`` §2,
+:class:`~nhham.lagrangian.geometry.DynamicsIngredients`) into source texts and a layout;
+:mod:`nhham.numerics.codegen.build` compiles the C and :mod:`nhham.numerics.kernels` loads
+both. What is generated ("kernels"; each one is a single ``sympy.cse`` over all of its
+outputs, so common subexpressions are shared; sin/cos of sums of coordinates whose own
+sin/cos are computed anyway are expanded first, see :func:`expand_angle_sums`):
+
+``saddle(q, v)``
+    W (n x n), forcing F (n), mu (m x n), drift (m), h (m), g (k holonomic).
+    The right-hand side solves ``[[W, mu^T], [mu, 0]] [a; lambda] = [F; -drift]`` at run
+    time: no symbolic inverse is ever formed.
+``geometry(q)``
+    W, mu, h, g: what projection onto M_1 and the structure-preserving integrator need.
+``energy(q, v)``
+    E_L.
+``lq(q, v)``, ``jphi(q, v)``
+    dL/dq (n) and d(phi)/dq (m x n), for the Newton iterations of the nonholonomic RATTLE
+    scheme.
+``closed(q, v)``
+    Only for ``path="closed_form"``: the accelerations of the symbolic projected field
+    P(xi_L) and the symbolic multipliers, so the two paths can be compared.
+
+The one evaluation route from sympy to numbers in the numerics layer
+--------------------------------------------------------------------
+Every number the numerics layer computes from a sympy expression goes through here:
+``cse`` once per kernel, then one printer per target over the same reduced expressions —
+scalar Python on floats (``math``; the fastest pure-Python single-state path), numpy on
+columns of a batch (no Python loop over states), mpmath (the high-precision reference
+integrator) and C99 (the compiled backend). So the four agree expression by expression,
+and nothing in the numerics layer calls ``sympy.lambdify`` or evaluates sympy objects.
+(The exact layers' own sampled decisions evaluate with ``lambdify``, below this layer.)
+
+The C text is the generated kernels followed by the C runtime, which lives in real files
+under ``nhham/numerics/c/`` (package data, see ``nhham.h`` there for the order).
+Parameters stay symbolic in the generated code and are passed at run time (``p``), so a
+parameter sweep reuses one compiled library.
+"""
+
+from __future__ import annotations
+
+import hashlib
+from collections import OrderedDict
+from importlib import resources
+
+import sympy as sp
+from sympy.printing.c import C99CodePrinter
+from sympy.printing.numpy import NumPyPrinter
+from sympy.printing.pycode import MpmathPrinter, PythonCodePrinter
+
+from nhham.lagrangian.geometry import lagrangian_geometry
+from nhham.numerics.status import c_defines
+
+__all__ = ["generate_sources", "system_fingerprint", "expand_angle_sums", "runtime_source",
+           "RUNTIME_FILES"]
+
+#: The runtime files, in the order they follow the generated kernels (``nhham.h`` first).
+RUNTIME_FILES = ("linalg.c", "rhs.c", "rattle.c", "erk.c")
+
+
+def generate_sources(system, path: str = "saddle") -> dict:
+    """Generated source texts and the layout describing them.
+
+    Sources are kept for the last 64 distinct systems, keyed by
+    :func:`system_fingerprint` (the system's content, not its identity: equal systems
+    share them, and no system is kept alive).
+
+    Returns
+    -------
+    dict
+        ``python`` (module text with scalar, batch and mpmath kernels), ``c`` (the whole C
+        translation unit), ``layout`` (plain dict: sizes, names and flags that
+        :class:`~nhham.numerics.model.NumericModel` needs).
+    """
+    key = system_fingerprint(system, path)
+    cached = _SOURCES.get(key)
+    if cached is None:
+        cached = _generate(system, path)
+        _SOURCES[key] = cached
+        while len(_SOURCES) > _SOURCES_KEPT:
+            _SOURCES.popitem(last=False)
+    else:
+        _SOURCES.move_to_end(key)
+    return cached
+
+
+#: Generated sources by system fingerprint (strings and plain data only).
+_SOURCES: OrderedDict = OrderedDict()
+_SOURCES_KEPT = 64
+
+
+def system_fingerprint(system, path: str = "saddle") -> str:
+    """A hash of everything the generated sources depend on.
+
+    The coordinates, parameters (with their assumptions: ``srepr``), the Lagrangian, the
+    affine constraints phi (complete lifts first), the holonomic constraints, their labels,
+    the name and the path.
+    """
+    parts = [path, system.name, repr(tuple(system.constraint_labels)),
+             *(sp.srepr(e) for e in (tuple(system.coordinates), tuple(system.parameters),
+                                     system.lagrangian, tuple(system.phi),
+                                     tuple(system.holonomic)))]
+    return hashlib.sha256("\0".join(parts).encode()).hexdigest()
+
+
+def _generate(system, path: str) -> dict:
+    geom = lagrangian_geometry(system)
+    ing = geom.ingredients
+    n, m, k = system.n, system.m, len(system.holonomic)
+    rename = _renaming(system)
+
+    def R(expr):
+        return sp.sympify(expr).xreplace(rename)
+
+    W = [R(ing.W[i, j]) for i in range(n) for j in range(n)]
+    F = [R(e) for e in ing.forcing]
+    mu = [R(ing.mu[i, j]) for i in range(m) for j in range(n)]
+    drift = [R(e) for e in ing.drift]
+    h = [R(e) for e in system.h]
+    g = [R(e) for e in system.holonomic]
+    qs = [rename[q] for q in system.coordinates]
+    vs = [rename[v] for v in system.velocities]
+    L = R(system.lagrangian)
+    lq = [sp.diff(L, q) for q in qs]
+    phi = [R(e) for e in system.phi]
+    jphi = [sp.diff(f, q) for f in phi for q in qs]
+
+    kernels = {
+        "saddle": ("qv", W + F + mu + drift + h + g),
+        "geometry": ("q", W + mu + h + g),
+        "energy": ("qv", [R(geom.energy)]),
+        "lq": ("qv", lq),
+        "jphi": ("qv", jphi),
+    }
+    if path == "closed_form":
+        field = geom.projected_field
+        acc = [R(field[n + i]) for i in range(n)]
+        lam = [R(e) for e in geom.multipliers]
+        kernels["closed"] = ("qv", acc + lam)
+
+    printed = {name: _cse(expand_angle_sums(outputs, qs))
+               for name, (_, outputs) in kernels.items()}
+    python = _python_module(kernels, printed, n, len(system.parameters))
+    c = _c_module(printed, n, m, k, len(system.parameters), path)
+    layout = {
+        "n": n, "m": m, "k": k,
+        "coordinate_names": tuple(q.name for q in system.coordinates),
+        "velocity_names": tuple(v.name for v in system.velocities),
+        "parameter_names": tuple(p.name for p in system.parameters),
+        "constraint_labels": tuple(system.constraint_labels),
+        "holonomic_labels": tuple(f"holonomic[{i}]" for i in range(k)),
+        "constant_W": not any(e.free_symbols & set(qs) for e in W),
+        "quadratic": _is_quadratic(system),
+        "linear_constraints": all(sp.simplify(e) == 0 for e in h),
+        "name": system.name,
+        "kernels": tuple(kernels),
+    }
+    return {"python": python, "c": c, "layout": layout}
+
+
+def _renaming(system) -> dict:
+    """Map user symbols to safe generated names q0.., v0.., p0..
+
+    User names may be Python keywords or C identifiers in use (``lambda``,
+    ``I``); the generated code never sees them.
+    """
+    rename = {q: sp.Symbol(f"q{i}", real=True) for i, q in enumerate(system.coordinates)}
+    rename.update({v: sp.Symbol(f"v{i}", real=True) for i, v in enumerate(system.velocities)})
+    rename.update({p: sp.Symbol(f"p{i}", real=True) for i, p in enumerate(system.parameters)})
+    return rename
+
+
+def _is_quadratic(system) -> bool:
+    """True when L = 1/2 v^T W(q) v - V(q) (no linear-in-v terms, W free of v)."""
+    W = system.hessian
+    vs = set(system.velocities)
+    if any(e.free_symbols & vs for e in W):
+        return False
+    v = sp.Matrix(system.velocities)
+    p = sp.Matrix([sp.diff(system.lagrangian, s) for s in system.velocities])
+    return all(sp.simplify(e) == 0 for e in (p - W * v))
+
+
+def expand_angle_sums(outputs, coordinates, max_terms=3):
+    """sin/cos of sums of coordinates by the addition formulas, when that saves calls.
+
+    A chain of N links has sin and cos of every theta_i and also of every
+    difference theta_i - theta_j: N (N + 1) sincos calls per evaluation where N
+    suffice. ``sin(a +- b)`` and ``cos(a +- b)`` (up to ``max_terms`` summands,
+    coefficients +-1) are rewritten as sums of products of sin and cos of the
+    summands, but only when every summand's own sin or cos is computed anyway
+    (so no new call appears). Exact in exact arithmetic; in floating point the
+    result has an absolute error of a few ulps instead of a relative one, which
+    is what the saddle solve needs (its backward error is normwise).
+    """
+    coords = set(coordinates)
+    trig = set()
+    for e in outputs:
+        trig |= sp.sympify(e).atoms(sp.sin, sp.cos)
+    base = {f.args[0] for f in trig if f.args[0] in coords}
+
+    def split(arg):
+        if not isinstance(arg, sp.Add) or len(arg.args) > max_terms:
+            return None
+        terms = []
+        for t in arg.args:
+            c, s = t.as_coeff_Mul()
+            if s not in base or c not in (1, -1):
+                return None
+            terms.append((int(c), s))
+        return terms
+
+    def sc(terms):
+        """(sin, cos) of sum(c * s) by the addition formulas."""
+        c, s = terms[0]
+        sin, cos = c * sp.sin(s), sp.cos(s)
+        for c, s in terms[1:]:
+            sin2, cos2 = c * sp.sin(s), sp.cos(s)
+            sin, cos = sin * cos2 + cos * sin2, cos * cos2 - sin * sin2
+        return sin, cos
+
+    rules = {}
+    for f in trig:
+        terms = split(f.args[0])
+        if terms:
+            sin, cos = sc(terms)
+            rules[f] = sin if isinstance(f, sp.sin) else cos
+    if not rules:
+        return list(outputs)
+    return [sp.sympify(e).xreplace(rules) for e in outputs]
+
+
+def _cse(outputs):
+    """Common subexpressions shared by all outputs of one kernel."""
+    temps, reduced = sp.cse(list(outputs), symbols=sp.numbered_symbols("_t"), order="none")
+    return temps, reduced
+
+
+# ------------------------------------------------------------- python text
+class _ScalarPrinter(PythonCodePrinter):
+    """Floats via ``math``; integer powers stay ``**`` (fast on floats)."""
+
+
+class _BatchPrinter(NumPyPrinter):
+    """Columns of a batch via ``numpy`` ufuncs."""
+
+
+def _python_module(kernels, printed, n, npar) -> str:
+    lines = [
+        '"""Generated by nhham.numerics.codegen; do not edit. Kernels on scalars, batches, '
+        'mpmath."""',
+        "import math",
+        "import numpy",
+        "import mpmath",
+        "",
+    ]
+    unpack_qv = _unpack(n, "qv")
+    unpack_q = _unpack(n, "q")
+    for name, (args, _) in kernels.items():
+        temps, reduced = printed[name]
+        unpack = unpack_qv if args == "qv" else unpack_q
+        lines += _py_scalar(name, unpack, npar, temps, reduced, _ScalarPrinter(
+            {"fully_qualified_modules": True}), suffix="scalar")
+        lines += _py_scalar(name, unpack, npar, temps, reduced, MpmathPrinter(
+            {"fully_qualified_modules": True}), suffix="mp")
+        lines += _py_batch(name, unpack, npar, temps, reduced)
+    return "\n".join(lines) + "\n"
+
+
+def _unpack(n, args):
+    names = [f"q{i}" for i in range(n)]
+    if args == "qv":
+        names += [f"v{i}" for i in range(n)]
+    return names
+
+
+def _param_line(npar, indent="    "):
+    if npar == 0:
+        return []
+    return [indent + ", ".join(f"p{i}" for i in range(npar)) + (",  = p" if npar == 1 else " = p")]
+
+
+def _py_scalar(name, unpack, npar, temps, reduced, printer, suffix):
+    out = [f"def {name}_{suffix}(y, p):"]
+    out.append("    " + ", ".join(unpack) + (",  = y" if len(unpack) == 1 else " = y")
+               + f"[:{len(unpack)}]")
+    out += _param_line(npar)
+    for sym, expr in temps:
+        out.append(f"    {sym} = {printer.doprint(expr)}")
+    out.append("    return [" + ", ".join(printer.doprint(e) for e in reduced) + "]")
+    out.append("")
+    return out
+
+
+def _py_batch(name, unpack, npar, temps, reduced):
+    printer = _BatchPrinter({"fully_qualified_modules": True})
+    out = [f"def {name}_batch(Y, p, out):",
+           "    # Y: (2n or n, k) contiguous rows; out: (len(outputs), k), zero on entry."]
+    for i, s in enumerate(unpack):
+        out.append(f"    {s} = Y[{i}]")
+    out += _param_line(npar)
+    for sym, expr in temps:
+        out.append(f"    {sym} = {printer.doprint(expr)}")
+    for j, e in enumerate(reduced):
+        if e == 0:
+            continue  # out is zero on entry
+        out.append(f"    out[{j}] = {printer.doprint(e)}")
+    out.append("    return out")
+    out.append("")
+    return out
+
+
+# ------------------------------------------------------------------ C text
+class _CPrinter(C99CodePrinter):
+    """C99 with small integer powers expanded to products (exact, faster)."""
+
+    def _print_Pow(self, expr):
+        b, e = expr.as_base_exp()
+        if e.is_Integer and 2 <= int(e) <= 4:
+            base = self.parenthesize(b, 100)
+            return "(" + "*".join([base] * int(e)) + ")"
+        if e.is_Integer and -4 <= int(e) <= -1:
+            base = self.parenthesize(b, 100)
+            return "(1.0/(" + "*".join([base] * -int(e)) + "))"
+        return super()._print_Pow(expr)
+
+
+def _c_kernel(fname, printed, n, npar, with_v=True):
+    temps, reduced = printed
+    pr = _CPrinter()
+    body = [f"static void {fname}(const double *y, const double *p, double *out) {{"]
+    for i in range(npar):
+        body.append(f"    const double p{i} = p[{i}]; (void)p{i};")
+    for i in range(n):
+        body.append(f"    const double q{i} = y[{i}]; (void)q{i};")
+    if with_v:
+        for i in range(n):
+            body.append(f"    const double v{i} = y[{n + i}]; (void)v{i};")
+    for sym, expr in temps:
+        body.append(f"    const double {sym} = {pr.doprint(expr)};")
+    for j, e in enumerate(reduced):
+        body.append(f"    out[{j}] = {pr.doprint(e)};")
+    body.append("}")
+    return body
+
+
+def _c_module(printed, n, m, k, npar, path) -> str:
+    """The C translation unit: generated definitions and kernels, then the runtime files.
+
+    Layout of the saddle kernel outputs (``out``): W (n*n, row-major), F (n), mu (m*n),
+    drift (m), h (m), g (k).
+    """
+    head = [
+        "/* Generated by nhham.numerics.codegen; do not edit. The runtime below it comes from",
+        "   nhham/numerics/c/ (see nhham.h there). */",
+        f"#define NQ {n}",
+        f"#define NC {m}",
+        f"#define NH {k}",
+        f"#define NN {n + m}",
+        f"#define NOUT {n * n + n + m * n + 3 * m + k}",
+        f"#define NPAR {npar}",
+    ]
+    if path == "closed_form":
+        head.append("#define NHHAM_CLOSED_FORM 1")
+    lines = ["\n".join(head), c_defines(), runtime_source("nhham.h")]
+    # Parameters may be unused; the (void) casts in the kernels keep compilers quiet.
+    lines += _c_kernel("saddle", printed["saddle"], n, npar)
+    lines += _c_kernel("geometry", printed["geometry"], n, npar, with_v=False)
+    lines += _c_kernel("lagr_q", printed["lq"], n, npar)
+    lines += _c_kernel("jphi", printed["jphi"], n, npar)
+    if path == "closed_form":
+        lines += _c_kernel("closed", printed["closed"], n, npar)
+    lines += [runtime_source(name) for name in RUNTIME_FILES]
+    lines.append(runtime_source("closed.c" if path == "closed_form" else "pyext.c"))
+    return "\n".join(lines) + "\n"
+
+
+def runtime_source(name: str) -> str:
+    """The text of one file of the C runtime (``nhham/numerics/c/<name>``, package data)."""
+    return resources.files("nhham.numerics").joinpath("c", name).read_text(encoding="utf-8")

@@ -1,0 +1,72 @@
+"""The raw output of one integration loop, before diagnostics: :class:`Run`.
+
+Every loop (scipy's solvers, the compiled Runge-Kutta loop, the fixed-step schemes, the
+mpmath reference) returns a :class:`Run`; :func:`nhham.numerics.integrate.simulate` adds
+the diagnostics and returns a :class:`~nhham.numerics.integrate.SimulationResult`. States
+are columns, as in scipy: ``y`` has shape (2n, K). No sympy here.
+"""
+
+from __future__ import annotations
+
+import sys
+from dataclasses import dataclass
+
+import numpy as np
+
+from nhham.numerics.status import Status
+
+__all__ = ["Run", "report_progress"]
+
+
+@dataclass(frozen=True)
+class Run:
+    """Raw output of an integration loop.
+
+    Attributes
+    ----------
+    t : ndarray (K,)
+    y : ndarray (2n, K)
+        ``y[i]`` is the i-th state variable over time.
+    work : ndarray (K,) or None
+        Work of the constraint forces when the loop carries it.
+    status : Status
+    message : str
+    nfev : int
+        Right-hand-side evaluations in states (batched calls count each state); for
+        RATTLE: one per (sub)step plus one per Newton iteration.
+    nsteps : int
+    njev, nlu : int
+        Jacobian evaluations and LU decompositions (implicit scipy methods).
+    newton_iterations : int
+        Newton iterations of the RATTLE schemes.
+    step : float or None
+        The step actually used by a fixed-step scheme ((t1 - t0)/N).
+    sol : DenseOutput or None
+        The continuous solution (scipy methods with ``dense_output=True``).
+    t_events, y_events : list of ndarray or None
+        Event times and states, one entry per event function (scipy methods with
+        ``events``).
+    """
+
+    t: np.ndarray
+    y: np.ndarray
+    work: np.ndarray | None
+    status: Status
+    message: str
+    nfev: int
+    nsteps: int
+    njev: int = 0
+    nlu: int = 0
+    newton_iterations: int = 0
+    step: float | None = None
+    sol: object = None
+    t_events: list | None = None
+    y_events: list | None = None
+
+
+def report_progress(t, t0, t1, reported):
+    """Print each passed tenth of the interval on stderr; returns the tenths done."""
+    tenths = int(10 * (t - t0) / (t1 - t0))
+    if tenths > reported:
+        print(f"  t = {t:.6g} ({10 * tenths}%)", file=sys.stderr, flush=True)
+    return max(reported, tenths)

@@ -1,0 +1,215 @@
+"""The saddle-point solve of the constrained field, in numpy and for one state.
+
+``[[W, mu^T], [mu, 0]] [x; y] = [top; bottom]`` after a symmetric scaling (unit diagonal
+of W, unit rows of mu): :func:`solve_saddle` for any batch shape,
+:class:`SingleStateSolver` for one state with as few numpy calls as possible. The compiled
+path solves the same system in C (``ksolve`` in ``nhham/numerics/c/linalg.c``). No sympy
+here.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from scipy.linalg.lapack import dgesv
+
+from nhham.numerics.status import Status
+
+__all__ = ["solve_saddle", "SingleStateSolver", "gauss", "cond_each"]
+
+
+def solve_saddle(W, mu, top, bottom):
+    """Solve [[W, mu^T], [mu, 0]] [x; y] = [top; bottom] after symmetric scaling.
+
+    Parameters
+    ----------
+    W : ndarray, shape (..., n, n)
+    mu : ndarray, shape (..., m, n)
+    top : ndarray, shape (..., n)
+    bottom : ndarray, shape (..., m)
+
+    Returns
+    -------
+    x : ndarray, shape (..., n)
+    y : ndarray, shape (..., m)
+
+    Notes
+    -----
+    With S = diag(d, e), d_A = |W_AA|^{-1/2} and e_i = 1/|mu_i diag(d)|, the
+    scaled matrix S K S has unit diagonal in its W block and unit rows in its
+    mu block; LU with partial pivoting on it is what makes mass ratios of
+    1e-8..1e8 harmless. Raises numpy.linalg.LinAlgError if exactly singular.
+    """
+    n, m = W.shape[-1], mu.shape[-2]
+    diag = np.abs(np.diagonal(W, axis1=-2, axis2=-1))
+    d = np.where(diag > 0, 1.0 / np.sqrt(np.where(diag > 0, diag, 1.0)), 1.0)
+    Ws = W * d[..., :, None] * d[..., None, :]
+    rhs_top = top * d
+    if m == 0:
+        x = np.linalg.solve(Ws, rhs_top[..., None])[..., 0]
+        return x * d, np.zeros(top.shape[:-1] + (0,))
+    mus = mu * d[..., None, :]
+    norms = np.sqrt(np.sum(mus * mus, axis=-1))
+    e = np.where(norms > 0, 1.0 / np.where(norms > 0, norms, 1.0), 1.0)
+    mus = mus * e[..., :, None]
+    K = np.zeros(W.shape[:-2] + (n + m, n + m))
+    K[..., :n, :n] = Ws
+    K[..., :n, n:] = np.swapaxes(mus, -1, -2)
+    K[..., n:, :n] = mus
+    rhs = np.concatenate([rhs_top, bottom * e], axis=-1)
+    z = np.linalg.solve(K, rhs[..., None])[..., 0]
+    return z[..., :n] * d, z[..., n:] * e
+
+
+
+class SingleStateSolver:
+    """The saddle solve for one state with as few numpy calls as possible.
+
+    Index maps place the flat kernel output (W, F, mu, drift, h, g) into the
+    (n+m) x (n+m) saddle matrix once; the scaling is that of
+    :func:`solve_saddle`.
+    """
+
+    def __init__(self, layout):
+        n, m, k = layout["n"], layout["m"], layout["k"]
+        N = n + m
+        self.n, self.m, self.k, self.N = n, m, k, N
+        src, dst = [], []
+        for i in range(n):
+            for j in range(n):
+                src.append(i * n + j)
+                dst.append(i * N + j)
+        base = n * n + n
+        for c in range(m):
+            for j in range(n):
+                src += [base + c * n + j, base + c * n + j]
+                dst += [(n + c) * N + j, j * N + n + c]
+        self.src, self.dst = np.array(src, dtype=np.intp), np.array(dst, dtype=np.intp)
+        self.diag = np.arange(n) * (n + 1)
+        self.F = slice(n * n, n * n + n)
+        self.mu = slice(base, base + m * n)
+        self.drift = slice(base + m * n, base + m * n + m)
+        self.h = slice(base + m * n + m, base + m * n + 2 * m)
+        self.g = slice(base + m * n + 2 * m, base + m * n + 2 * m + k)
+
+    def __call__(self, flat, y, a2, b2):
+        if self.N <= 10:
+            return self._python(flat, y, a2, b2)
+        return self._numpy(flat, y, a2, b2)
+
+    def _python(self, out, y, a2, b2):
+        """Pure-Python scaled elimination: for small systems each numpy call on a
+        tiny array costs more than the whole solve."""
+        n, m, k, N = self.n, self.m, self.k, self.N
+        v = y[n:].tolist()
+        d = [0.0] * N
+        for i in range(n):
+            w = abs(out[i * n + i])
+            d[i] = 1.0 / math.sqrt(w) if w > 0 else 1.0
+        base = n * n + n
+        K = [[0.0] * (N + 1) for _ in range(N)]  # last column: right-hand side
+        for i in range(n):
+            row, di = K[i], d[i]
+            for j in range(n):
+                row[j] = out[i * n + j] * di * d[j]
+            row[N] = out[n * n + i] * di
+        muv = [0.0] * m
+        for c in range(m):
+            r = out[base + c * n: base + (c + 1) * n]
+            s = math.sqrt(sum((r[j] * d[j]) ** 2 for j in range(n)))
+            e = 1.0 / s if s > 0 else 1.0
+            d[n + c] = e
+            muv[c] = sum(r[j] * v[j] for j in range(n))
+            rhs = -out[base + m * n + c]
+            if a2:
+                rhs -= a2 * (muv[c] + out[base + m * n + m + c])
+            if b2 and c < k:
+                rhs -= b2 * out[base + m * n + 2 * m + c]
+            row = K[n + c]
+            for j in range(n):
+                t = r[j] * d[j] * e
+                row[j] = t
+                K[j][n + c] = t
+            row[N] = rhs * e
+        z = gauss(K, N)
+        if z is None:
+            return np.full(2 * n, np.nan), np.full(m, np.nan), math.nan, Status.SINGULAR
+        a = [z[i] * d[i] for i in range(n)]
+        lam = [z[n + c] * d[n + c] for c in range(m)]
+        power = -sum(lam[c] * muv[c] for c in range(m))
+        dy = np.array(v + a)
+        ok = math.isfinite(power) and all(math.isfinite(x) for x in a)
+        return dy, np.array(lam), power, (Status.SUCCESS if ok else Status.NONFINITE)
+
+    def _numpy(self, flat, y, a2, b2):
+        n, m, N = self.n, self.m, self.N
+        out = np.array(flat, dtype=float)
+        w = np.abs(out[self.diag])
+        w[w == 0] = 1.0
+        d = np.ones(N)
+        d[:n] = 1.0 / np.sqrt(w)
+        v = y[n:]
+        mu = out[self.mu].reshape(m, n)
+        muv = mu @ v
+        rhs = np.empty(N)
+        rhs[:n] = out[self.F]
+        bottom = -out[self.drift]
+        if a2:
+            bottom -= a2 * (muv + out[self.h])
+        if b2 and self.k:
+            bottom[:self.k] -= b2 * out[self.g]
+        rhs[n:] = bottom
+        if m:
+            norms = np.sqrt(((mu * d[:n]) ** 2).sum(axis=1))
+            norms[norms == 0] = 1.0
+            d[n:] = 1.0 / norms
+        K = np.zeros(N * N)
+        K[self.dst] = out[self.src]
+        K = K.reshape(N, N) * np.multiply.outer(d, d)
+        _, _, z, info = dgesv(K, rhs * d)
+        if info != 0:
+            return np.full(2 * n, np.nan), np.full(m, np.nan), np.nan, Status.SINGULAR
+        z = z * d
+        dy = np.concatenate((v, z[:n]))
+        lam = z[n:]
+        power = -float(lam @ muv)
+        return dy, lam, power, (Status.SUCCESS if np.isfinite(dy).all() else Status.NONFINITE)
+
+
+def gauss(K, N):
+    """Solve the augmented N x (N+1) list-of-lists system in place; None if singular."""
+    for c in range(N):
+        piv = max(range(c, N), key=lambda r: abs(K[r][c]))
+        if K[piv][c] == 0.0:
+            return None
+        if piv != c:
+            K[c], K[piv] = K[piv], K[c]
+        rc = K[c]
+        inv = 1.0 / rc[c]
+        for r in range(c + 1, N):
+            row = K[r]
+            f = row[c] * inv
+            if f != 0.0:
+                for j in range(c + 1, N + 1):
+                    row[j] -= f * rc[j]
+    z = [0.0] * N
+    for r in range(N - 1, -1, -1):
+        row = K[r]
+        s = row[N]
+        for j in range(r + 1, N):
+            s -= row[j] * z[j]
+        z[r] = s / row[r]
+    return z
+
+
+def cond_each(W, mu):
+    out = np.empty(W.shape[0])
+    for i in range(W.shape[0]):  # only after a batched solve failed: isolate bad states
+        try:
+            C = -mu[i] @ np.linalg.solve(W[i], mu[i].T)
+            out[i] = np.linalg.cond(C)
+        except np.linalg.LinAlgError:
+            out[i] = np.inf
+    return out
+
