@@ -1184,13 +1184,19 @@ def _stage_one_at_points(view, geo, exprs, labels, lam, factory, opts):
     the secondary constraints as expressions.
     """
     from nhham.lagrangian.points import NotExact
-    from nhham.lagrangian.tangency import tangency_at_points
+    from nhham.lagrangian.tangency import tangency_at_points, tangency_sampled
 
     m = len(view.phi)
     try:
         verdict = tangency_at_points(view, geo.hessian, geo.forcing, exprs, seed=opts["seed"])
     except NotExact:
-        return None
+        if view.n <= CLOSED_FORM_SIZE:
+            return None  # small: the symbolic route decides exactly
+        sampled = Submanifold(view, tuple(exprs), precision=opts["precision"],
+                              samples=opts["samples"], seed=opts["seed"], exact=False)
+        verdict = tangency_sampled(view, geo.hessian, geo.forcing, exprs, sampled)
+        if any(d.warnings for d in (verdict.rank, verdict.consistent)):
+            return None  # doubtful at this precision: leave it to the full algorithm
     r = int(verdict.rank.value)
     if r != m or not verdict.consistent.value:
         return None

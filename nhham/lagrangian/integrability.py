@@ -29,9 +29,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 from functools import cached_property
 
+import numpy as np
 import sympy as sp
 
-from nhham.settings import SEED
+from nhham.settings import SEED, Precision
 from nhham.errors import ComputationError
 from nhham.lagrangian.algebra import cancel
 from nhham.lagrangian.points import (
@@ -49,7 +50,8 @@ from nhham.lagrangian.submanifold import Decision, Submanifold
 from nhham.lagrangian.tangency import MAX_POINTS, TARGET_ERROR
 from nhham.system.expressions import short
 
-__all__ = ["Integrability", "integrability", "frobenius", "frobenius_at_points"]
+__all__ = ["Integrability", "integrability", "frobenius", "frobenius_at_points",
+           "frobenius_sampled"]
 
 
 @dataclass(frozen=True)
@@ -65,7 +67,9 @@ class Integrability:
         Rank n − m of D.
     basis : sympy.Matrix or None, shape (n, n − m)
         Columns X_a spanning D (solved for the m best-conditioned dependent
-        components; denominators may vanish on a thin set).
+        components; denominators may vanish on a thin set). None when the test
+        ran at exact points (the basis is then never written out, and an
+        obstruction is its value at the point that proved it).
     obstructions : tuple of (str, int, int, sympy.Expr)
         ``(constraint label, a, b, dμ_i(X_a, X_b))`` for every term found not to
         vanish on Q_1.
@@ -115,7 +119,8 @@ class Integrability:
         text = f"{verdict} ({self.method}; D of rank {self.rank})"
         if self.obstructions:
             lab, a, b, expr = self.obstructions[0]
-            text += f"; e.g. d{lab}(X_{a + 1}, X_{b + 1}) = {short(expr)}"
+            where = "" if self.basis is not None else " at an exact point of Q_1"
+            text += f"; e.g. d{lab}(X_{a + 1}, X_{b + 1}) = {short(expr)}{where}"
         if self.warnings:
             text += " WARNING: " + "; ".join(self.warnings)
         return text
@@ -143,11 +148,15 @@ def integrability(system, *, precision: int | None = None, samples: int = 6,
     """
     labels = tuple(f"{lab}.lift" if i < len(system.holonomic) else lab
                    for i, lab in enumerate(system.constraint_labels))
-    if exact and system.n > SYMBOLIC_SIZE:
-        try:
-            return frobenius_at_points(system, labels, seed=seed)
-        except NotExact:
-            pass  # no exact points of Q_1: exact reduction, then samples
+    if system.n > SYMBOLIC_SIZE:
+        if exact:
+            try:
+                return frobenius_at_points(system, labels, seed=seed)
+            except NotExact:
+                pass  # no exact points of Q_1
+        # Large: a symbolic kernel basis is out of reach; decide at sample points.
+        return frobenius_sampled(system, labels, precision=precision, samples=samples,
+                                 seed=seed)
     Q1 = Submanifold(system, system.holonomic, precision=precision, samples=samples,
                      seed=seed, fibre=(), exact=exact)
     return frobenius(system.mu, system.coordinates, Q1, labels)
@@ -210,6 +219,67 @@ def frobenius_at_points(system, labels, *, seed: int = SEED,
                    f"of Q_1 (degree <= {worst})", samples=count, error_bound=error)
     return Integrability(True, n - m, None, (), (("dmu_i(X_a, X_b) on Q_1", dec),),
                          "exact at points", (), **common)
+
+
+def frobenius_sampled(system, labels, *, precision: int | None = None, samples: int = 6,
+                      seed: int = SEED) -> Integrability:
+    """Frobenius test of ker μ at seeded floating-point points of Q_1.
+
+    At each point a kernel basis X_a of μ(q) (orthonormal, from the SVD) and
+    dμ_i(X_a, X_b) are computed numerically; a term is nonzero when it exceeds
+    the tolerance relative to |dμ_i| (so "not integrable" is read off one clear
+    value), zero when every term is below the zero level at every point, and the
+    verdict is None (undecided) in between. Used where Q_1 has no exact points
+    and the system is too large for a symbolic kernel basis.
+    """
+    mu = sp.Matrix(system.mu)
+    q = tuple(system.coordinates)
+    m, n = mu.rows, len(q)
+    common = dict(mu=mu, coordinates=q, labels=tuple(labels))
+    if m == 0 or n - m <= 1:
+        return frobenius(mu, q, Submanifold(system, (), fibre=()), labels)
+    Q1 = Submanifold(system, system.holonomic, precision=precision, samples=samples,
+                     seed=seed, fibre=(), exact=False)
+    points, residual = Q1.points()
+    args = list(q) + list(system.parameters)
+    grads = [[jacobian_row(mu[i, A], q) for A in range(n)] for i in range(m)]
+    dmu = sp.Matrix([[grads[i][A][B] - grads[i][B][A] for A in range(n) for B in range(n)]
+                     for i in range(m)])
+    f_mu, f_dmu = sp.lambdify(args, mu, "numpy"), sp.lambdify(args, dmu, "numpy")
+    prec = Precision(precision)
+    worst, doubtful, found = 0.0, False, None
+    for pt in points:
+        vals = [float(pt[s]) for s in args]
+        M = np.array(f_mu(*vals), dtype=float)
+        D = np.array(f_dmu(*vals), dtype=float).reshape(m, n, n)
+        X = np.linalg.svd(M)[2][m:].T          # orthonormal basis of ker mu(q)
+        for i in range(m):
+            T = X.T @ D[i] @ X                  # T[a, b] = dmu_i(X_a, X_b) (up to sign)
+            scale = max(1.0, float(np.abs(D[i]).max()))
+            value = float(np.abs(T).max()) / scale
+            worst = max(worst, value)
+            if value > 1e3 * prec.tolerance and found is None:
+                a, b = np.unravel_index(np.argmax(np.abs(T)), T.shape)
+                found = (i, int(min(a, b)), int(max(a, b)), float(T[a, b]))
+            elif value > prec.zero_level:
+                doubtful = True
+    how = (f"{len(points)} seeded points of Q_1 ({prec.label}); largest |dmu_i(X_a, X_b)| / "
+           f"|dmu_i| = {worst:.3g}")
+    if found is not None:
+        i, a, b, value = found
+        dec = Decision(False, "sampled", "a term is clearly nonzero at " + how,
+                       precision=prec.label, samples=len(points), max_abs=worst,
+                       point_residual=residual)
+        return Integrability(False, n - m, None, ((labels[i], a, b, sp.Float(value, 6)),),
+                             ((f"d{labels[i]}(X_{a + 1}, X_{b + 1})", dec),), "sampled", (),
+                             **common)
+    warn = (f"terms neither clearly zero nor clearly nonzero at {prec.label}",) \
+        if doubtful else ()
+    dec = Decision(True if not doubtful else False, "sampled", "every term vanishes at " + how,
+                   precision=prec.label, samples=len(points), max_abs=worst,
+                   point_residual=residual, warnings=warn)
+    return Integrability(None if doubtful else True, n - m, None, (),
+                         (("dmu_i(X_a, X_b) on Q_1", dec),), "sampled", warn, **common)
 
 
 def _frobenius_terms(env, rows, dmu, dep, exact=True):

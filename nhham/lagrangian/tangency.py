@@ -38,7 +38,7 @@ from nhham.lagrangian.points import (
 )
 from nhham.lagrangian.submanifold import Decision
 
-__all__ = ["TangencyVerdict", "tangency_at_points", "TARGET_ERROR"]
+__all__ = ["TangencyVerdict", "tangency_at_points", "tangency_sampled", "TARGET_ERROR"]
 
 # Default bound on the probability that a "vanishes"/"rank deficient" verdict is wrong.
 TARGET_ERROR = 1e-30
@@ -222,6 +222,10 @@ def _rank_decision(rank, full, error, count, what) -> Decision:
     if rank >= full:
         return Decision(rank, "exact", f"{what}: full rank {rank} at an exact point (proof)",
                         precision="exact", samples=count, error_bound=0.0)
+    if error == 0.0:
+        # The minors have degree 0: constant entries, so one point decides.
+        return Decision(rank, "exact", f"{what}: rank {rank}; the minors are constants",
+                        precision="exact", samples=count, error_bound=0.0)
     return Decision(rank, "exact at points",
                     f"{what}: rank {rank} at {count} random exact points",
                     precision="exact", samples=count, error_bound=error)
@@ -282,3 +286,48 @@ def _block(K, n):
     # the independent rows restricted to those columns: pivot columns of the transpose
     _, _, rows = exact_rank([[A[j][i] for j in range(len(A))] for i in cols])
     return tuple(rows), tuple(cols)
+
+
+def tangency_sampled(system, hessian, forcing, primary, manifold) -> TangencyVerdict:
+    """Stage 1 decided at floating-point sample points of M_1 (no exact points).
+
+    For M_1 without exact points (a holonomic constraint that is not linear in a
+    coordinate, a parameter with a value inside sin/cos) the same bordered
+    matrices are handed to the manifold's sampled rank decision (Newton-projected
+    points in float64 or mpmath, singular values, doubtful values warned about).
+    Still no W⁻¹: the entries of K are W, μ and dχ/dv.
+
+    Parameters
+    ----------
+    manifold : Submanifold
+        M_1 with ``exact=False`` and the caller's precision, samples and seed.
+    """
+    q, v = tuple(system.coordinates), tuple(system.velocities)
+    n, m = len(q), len(system.phi)
+    chis = [sp.sympify(c) for c in primary]
+    mu = system.mu
+    Jv = sp.Matrix([jacobian_row(c, v) for c in chis]) if chis else sp.zeros(0, n)
+    Jq = sp.Matrix([jacobian_row(c, q) for c in chis]) if chis else sp.zeros(0, n)
+    K = sp.Matrix.vstack(sp.Matrix.hstack(hessian, mu.T),
+                         sp.Matrix.hstack(Jv, sp.zeros(len(chis), m)))
+    c = sp.Matrix.vstack(forcing, -Jq * sp.Matrix(v))
+    rK = manifold.rank(K)
+    rAug = manifold.rank(sp.Matrix.hstack(K, c))
+    rank = _shifted(rK, -n, "rank (Z_i(chi_j)) = rank [[W, mu^T], [dchi/dv, 0]] - n")
+    consistent = Decision(rAug.value == rK.value, rAug.method,
+                          f"rank [K | c] = {rAug.value}, rank K = {rK.value} at the sample points",
+                          precision=rAug.precision, samples=rAug.samples,
+                          singular_values=rAug.singular_values,
+                          point_residual=rAug.point_residual,
+                          warnings=tuple(rK.warnings) + tuple(rAug.warnings))
+    jac = manifold.rank(sp.Matrix.hstack(Jq, Jv)) if chis else Decision(0, "exact", "none")
+    moving = [j for j in range(len(chis)) if any(x != 0 for x in Jv.row(j))]
+    return TangencyVerdict(rank, consistent, jac, tuple(moving), tuple(range(m)),
+                           rK.samples)
+
+
+def _shifted(decision: Decision, shift: int, what: str) -> Decision:
+    return Decision(int(decision.value) + shift, decision.method, f"{what}: {decision.detail}",
+                    precision=decision.precision, samples=decision.samples,
+                    singular_values=decision.singular_values,
+                    point_residual=decision.point_residual, warnings=decision.warnings)
