@@ -24,11 +24,22 @@ sympy, meaningful on a shared machine) with the wall-clock median beside them.
 ``cold`` is the CPU (wall) time of the first full analysis in a fresh interpreter
 (after ``import nhham``), which includes one-off costs (lambdify's namespaces).
 
+Scaling (``--scaling``): the commands a user runs, ``nhham classify``, ``nhham
+derive`` (implicit form) and ``nhham compare``, as whole processes on the N-link
+snake (N = 2, 4, 8, 12, 16, scenes written by ``examples/make_snake.py``) and the
+rolling disc in 3-D (built from sympy.physics.mechanics bodies,
+``tests/rolling_disc_3d.py``), with wall and CPU seconds (medians) and the peak
+memory of each process; beside them, in this process, sympy's
+``LagrangesMethod.form_lagranges_equations`` on the same system
+(:func:`nhham.system.mechanics.to_lagranges_method`) and nhham's classify work
+(analysis, integrability, classes) for the ratio LM / nhham.
+
 Usage::
 
     python bench/classify.py              # 5 runs per cell, with cold starts
     python bench/classify.py --runs 9
     python bench/classify.py --quick      # 1 run, no cold starts
+    python bench/classify.py --scaling    # the scaling table (3 runs per cell)
 """
 
 from __future__ import annotations
@@ -166,11 +177,133 @@ def cold_start(name):
     return cpu, wall
 
 
+# ------------------------------------------------------------------ scaling
+ROOT = Path(__file__).resolve().parents[1]
+SNAKES = (2, 4, 8, 12, 16)
+COMMANDS = {"classify": [], "derive": [], "compare": []}
+
+
+def _scene_text(system) -> str:
+    """A scene file for a System (names, L, constraints, parameter values)."""
+    from nhham.system.expressions import to_text
+
+    def quoted(e):
+        return '"' + to_text(e) + '"'
+    params = ", ".join(f"{p.name} = {float(system.parameter_values[p])!r}"
+                       for p in system.parameters)
+    return "\n".join([
+        f'name = "{system.name}"',
+        "coordinates = [" + ", ".join(f'"{q.name}"' for q in system.coordinates) + "]",
+        f"parameters = {{ {params} }}",
+        f"lagrangian = {quoted(system.lagrangian)}",
+        "constraints = [" + ", ".join(quoted(c) for c in system.constraints) + "]",
+        "holonomic = [" + ", ".join(quoted(g) for g in system.holonomic) + "]",
+    ]) + "\n"
+
+
+def _scaling_systems(tmp: Path):
+    """(label, scene path, System) for the snakes and the 3-D disc."""
+    sys.path.insert(0, str(ROOT / "tests"))
+    from rolling_disc_3d import rolling_disc_3d
+
+    from nhham.system.scene import load_scene
+
+    out = []
+    for N in SNAKES:
+        path = tmp / f"snake_{N}.toml"
+        subprocess.run([sys.executable, str(ROOT / "examples" / "make_snake.py"), str(N),
+                        str(path)], check=True, capture_output=True)
+        out.append((f"snake N={N} (n={N + 2}, m={N})", path, load_scene(path).system))
+    disc, _ = rolling_disc_3d()
+    path = tmp / "rolling_disc_3d.toml"
+    path.write_text(_scene_text(disc))
+    out.append(("3-D rolling disc (n=5, m=2)", path, load_scene(path).system))
+    return out
+
+
+def _run_command(argv, timeout):
+    """(wall s, CPU s, peak MB) of one whole process; None on timeout or failure."""
+    w0 = time.perf_counter()
+    proc = subprocess.Popen(argv, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    deadline = w0 + timeout
+    while True:
+        pid, status, usage = os.wait4(proc.pid, os.WNOHANG)
+        if pid:
+            break
+        if time.perf_counter() > deadline:
+            proc.kill()
+            os.wait4(proc.pid, 0)
+            return None
+        time.sleep(0.01)
+    wall = time.perf_counter() - w0
+    if os.waitstatus_to_exitcode(status) != 0:
+        return None
+    return wall, usage.ru_utime + usage.ru_stime, usage.ru_maxrss / 1024
+
+
+def _median_command(argv, runs, timeout):
+    rows = [_run_command(argv, timeout) for _ in range(runs)]
+    if any(r is None for r in rows):
+        return None
+    return tuple(statistics.median(r[i] for r in rows) for i in range(3))
+
+
+def _lagranges(system, runs):
+    from nhham.system.mechanics import to_lagranges_method
+
+    def once():
+        lm = to_lagranges_method(system).lm
+        lm.form_lagranges_equations()
+    cpu, _, _ = timed(once, runs)
+    return cpu
+
+
+def _nhham_classify_work(system, runs):
+    from nhham.hamiltonian.classification import classify_constraints
+
+    def once():
+        a = analyze_constraints(system)
+        return a.integrable, classify_constraints(a)
+    cpu, _, _ = timed(once, runs)
+    return cpu
+
+
+def scaling(runs: int, timeout: float = 120.0):
+    import tempfile
+
+    load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
+    print(f"# nhham scaling: {platform.python_version()}, sympy {sp.__version__}, "
+          f"{os.cpu_count()} CPUs, load average {load:.1f}; whole commands, median of {runs} "
+          f"runs: wall s / CPU s / peak MB; LM = LagrangesMethod.form_lagranges_equations "
+          f"(CPU s, in process); nhham = analysis + integrability + classes (CPU s, in "
+          f"process)")
+    header = ["system"] + [f"nhham {c}" for c in COMMANDS] + ["LM", "nhham (in process)",
+                                                              "LM / nhham"]
+    print("| " + " | ".join(header) + " |")
+    print("|" + "---|" * len(header))
+    with tempfile.TemporaryDirectory() as tmp:
+        for label, path, system in _scaling_systems(Path(tmp)):
+            cells = [label]
+            for cmd, extra in COMMANDS.items():
+                res = _median_command([sys.executable, "-m", "nhham", cmd, str(path), "--json",
+                                       *extra], runs, timeout)
+                cells.append("> %g s" % timeout if res is None else
+                             f"{res[0]:.2f} / {res[1]:.2f} / {res[2]:.0f}")
+            lm = _lagranges(system, runs)
+            work = _nhham_classify_work(system, runs)
+            cells += [f"{lm:.2f}", f"{work:.2f}", f"{lm / work:.1f}"]
+            print("| " + " | ".join(cells) + " |", flush=True)
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--runs", type=int, default=5)
     ap.add_argument("--quick", action="store_true", help="1 run, no cold starts")
+    ap.add_argument("--scaling", action="store_true",
+                    help="the scaling table of the commands on the snakes and the 3-D disc")
     args = ap.parse_args(argv)
+    if args.scaling:
+        return scaling(3 if args.runs == 5 else args.runs)
     runs = 1 if args.quick else args.runs
 
     load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")

@@ -292,7 +292,8 @@ def classify_constraints(source, constraints: Sequence | None = None,
         try:
             return _classify_at_points(side, cons, labs, analysis, seed)
         except NotExact:
-            pass
+            return _classify_lagrangian_sampled(side, cons, labs, analysis, tol, precision,
+                                                samples, seed)
     return _classify_sampled(side, cons, labs, analysis, tol, precision, samples, seed)
 
 
@@ -416,6 +417,42 @@ def _full_rank_modulo_p(side, cons, labels, analysis, seed, mu, W, Mx, Jq, Jv, t
             decisions={"rank": rank_d}, method="exact at points", manifold=None, side=side,
             analysis=analysis)
     return None
+
+
+def _classify_lagrangian_sampled(side, cons, labels, analysis, tol, precision, samples,
+                                 seed):
+    """B = {chi_a, chi_b}_L at seeded float points of M_f = M_1 (no exact points).
+
+    The Lagrangian bracket needs only W, the mixed Hessian and the gradients of
+    the constraints at each point (numbers), never H or Leg^-1 symbolically.
+    """
+    from nhham.lagrangian.geometry import LagrangianGeometry
+
+    system = side.system
+    geo = analysis.geometry if isinstance(analysis, ConstraintAnalysis) else \
+        LagrangianGeometry(system)
+    q, v = system.coordinates, system.velocities
+    cons = [sp.sympify(c) for c in cons]
+    k, n = len(cons), system.n
+    Mtq = Submanifold(system, tuple(cons), precision=precision, samples=samples, seed=seed,
+                      exact=False)
+    points, resid = Mtq.points()
+    args = list(system.state) + list(system.parameters)
+    J = sp.Matrix([jacobian_row(c, list(q) + list(v)) for c in cons])
+    fW = sp.lambdify(args, geo.hessian, "numpy")
+    fM = sp.lambdify(args, geo.mixed_hessian, "numpy")
+    fJ = sp.lambdify(args, J, "numpy")
+    mats = []
+    for pt in points:
+        vals = [float(pt[s]) for s in args]
+        W = np.array(fW(*vals), dtype=float)
+        Mx = np.array(fM(*vals), dtype=float)
+        Jp = np.array(fJ(*vals), dtype=float).reshape(k, 2 * n)
+        Jq, Jv = Jp[:, :n], Jp[:, n:]
+        U = np.linalg.solve(W, Jv.T)
+        mats.append(Jq @ U - U.T @ Jq.T - U.T @ (Mx - Mx.T) @ U)
+    return _classes_from_samples(side, tuple(cons), labels, analysis, mats, Backend(None), tol,
+                                 resid, "the bracket matrix {chi_a, chi_b}_L")
 
 
 def _degree_solve(A, B):
@@ -618,6 +655,14 @@ def _classify_sampled(side, cons, labels, analysis, tol, precision, samples, see
         for x in points:
             pt = num.point_from_tq(be, x)
             mats.append(num.bracket_matrix(be, pt, cons_tq))
+    return _classes_from_samples(side, cons_tq, labels, analysis, mats, be, tol, resid,
+                                 "the numeric bracket matrix")
+
+
+def _classes_from_samples(side, cons_tq, labels, analysis, mats, be, tol, resid, what):
+    """ConstraintClasses from the bracket matrix B at seeded points of M_f."""
+    k = len(cons_tq)
+    points = mats
     tol_ = be.default_tol() if tol is None else tol
     fmats = [np.array(S, dtype=float) for S in mats]
     ranks, svals = [], []
@@ -631,7 +676,7 @@ def _classify_sampled(side, cons, labels, analysis, tol, precision, samples, see
     if len(set(ranks)) > 1:
         warnings.append(f"rank is not constant on M_f: ranks {ranks} at the samples")
     decisions = {"rank": Decision(
-        r, "sampled", f"rank {r} of the numeric bracket matrix at {len(points)} seeded points "
+        r, "sampled", f"rank {r} of {what} at {len(points)} seeded points "
                       f"of M_f (relative tolerance {tol_:g})",
         precision=be.label, samples=len(points), singular_values=tuple(svals),
         point_residual=resid, warnings=tuple(warnings))}

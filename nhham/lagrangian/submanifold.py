@@ -332,7 +332,9 @@ class Submanifold:
         if 0 in matrix.shape:
             return Decision(0, "exact", "empty matrix")
         if not self.exact:
-            return self._sampled_rank(matrix.applyfunc(_cancel_fractions), tol)
+            # No cancellation: a quotient is 0/0 only on a thin set the seeded
+            # points miss, and bringing large entries over one denominator costs.
+            return self._sampled_rank(matrix, tol)
         reduced = matrix.applyfunc(self.reduce)
         if not reduced.free_symbols:
             r = reduced.rank()
@@ -681,16 +683,6 @@ class Submanifold:
 
 
 # ------------------------------------------------------------------ helpers
-def _cancel_fractions(expr):
-    """cancel() only where a quotient could be 0/0 at a point (polynomials pass as they are:
-    bringing large ones over one denominator is what would cost)."""
-    expr = sp.sympify(expr)
-    if any(a.is_Pow and a.exp.is_negative and not a.base.is_number
-           for a in sp.preorder_traversal(expr)):
-        return cancel(expr)
-    return expr
-
-
 def _floats(values):
     return "[" + ", ".join(f"{v:.3g}" for v in values) + "]"
 
