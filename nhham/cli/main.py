@@ -20,7 +20,6 @@ import sympy as sp
 from nhham.errors import InputError, NhhamError
 from nhham.cli.budget import BudgetExceeded, time_budget
 from nhham.cli.report import Steps, display_form, expr_text, json_number, table
-from nhham.lagrangian.algorithm import CLOSED_FORM_SIZE
 
 __all__ = ["main"]
 
@@ -135,7 +134,7 @@ def cmd_derive(args, steps):
         energy = G.energy
     with steps.step("implicit form: W, F, mu and mu a = -(dphi/dq) v"):
         implicit = _implicit_form(G)
-    if not (args.explicit or system.n <= CLOSED_FORM_SIZE):
+    if not (args.explicit or G.closed_form_affordable):
         return _derive_implicit(args, steps, scene, G, implicit, energy)
     with steps.step("constraint matrix C = Z_i(phi_j)"):
         C = G.constraint_matrix
@@ -440,8 +439,8 @@ def build_parser() -> argparse.ArgumentParser:
             p.add_argument("--side", choices=("lagrangian", "hamiltonian"), default="lagrangian")
             p.add_argument("--explicit", action="store_true",
                            help="form the closed forms P(xi_L), lambda and C (default: only "
-                                f"for n <= {CLOSED_FORM_SIZE}; the implicit mass-matrix form "
-                                "otherwise)")
+                                "when W is diagonal, constant or n <= 3; the implicit "
+                                "mass-matrix form otherwise)")
         if name == "compare":
             p.add_argument("--samples", type=int, default=6, help="seeded points of M_f")
         if name in ("simulate", "bench"):

@@ -1170,10 +1170,6 @@ def _run_block(system, spec, opts, start, geometry):
 # by report(); beyond, W^-1 written out is too large to be worth forming unasked.
 CLOSED_FORM_SIZE = 4
 
-def _symbolic_affordable(geo) -> bool:
-    """W^-1 in closed form is cheap: W diagonal, independent of q, or n <= 3."""
-    W = geo.hessian
-    return geo.n <= 3 or W.is_diagonal() or not (W.free_symbols & set(geo.system.coordinates))
 
 
 def _stage_one_at_points(view, geo, exprs, labels, lam, factory, opts):
@@ -1223,7 +1219,7 @@ def _stage_one_at_points(view, geo, exprs, labels, lam, factory, opts):
     warnings = [w for d in (verdict.rank, verdict.consistent, verdict.jacobian_rank)
                 for w in d.warnings]
     M = factory(tuple(exprs))
-    if r and _symbolic_affordable(geo):
+    if r and geo.closed_form_affordable:
         # Where the rank of C drops on M_1 (the paper assumes it does not): the
         # symbolic check needs A = (Z_i(chi_j)), affordable only for small blocks.
         loop = _Loop(geo.euler_lagrange_field, geo.vertical_fields, tuple(view.state), lam,

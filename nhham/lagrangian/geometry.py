@@ -234,6 +234,17 @@ class LagrangianGeometry:
 
     # --------------------------------------------------------- solves with W
     @cached_property
+    def closed_form_affordable(self) -> bool:
+        """True when W^-1 in closed form is cheap: W diagonal, independent of q, or n <= 3.
+
+        Beyond, the closed forms (ξ_L, Z_i, C, λ, P(ξ_L)) are formed only when asked
+        for; decisions are made at points.
+        """
+        W = self.hessian
+        return self.n <= 3 or self._W_is_diagonal or not (
+            W.free_symbols & set(self.system.coordinates))
+
+    @cached_property
     def _W_is_diagonal(self):
         return self.hessian.is_diagonal()
 
