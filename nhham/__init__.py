@@ -87,6 +87,11 @@ _LAZY = {
     "from_mechanics": "system.mechanics",
     "from_lagranges_method": "system.mechanics",
     "models": "system.models",
+    # reports, figures and the command's JSON contract
+    "report": "cli.display",
+    "plot_trajectory": "cli.plotting",
+    "plot_work_precision": "cli.plotting",
+    "output_schema": "cli.envelope",
 }
 
 __all__ = [

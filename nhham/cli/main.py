@@ -358,10 +358,18 @@ _EXIT_TEXT = ("exit status: 0 success; 1 internal failure; 2 bad input or usage;
               "computation did not succeed (one line on stderr says why and what to do)")
 
 
+class _Parser(argparse.ArgumentParser):
+    """Usage errors as one line on stderr (exit status 2), pointing to --help."""
+
+    def error(self, message):
+        self.exit(EXIT_INPUT, f"{self.prog}: error: {one_line(message)} "
+                              f"(see `{self.prog} --help`)\n")
+
+
 def build_parser() -> argparse.ArgumentParser:
     from nhham import __version__
 
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="nhham",
         description="Mechanical systems with non-holonomic constraints: classify a scene's "
                     "constraint set, derive its dynamics, compare the Lagrangian and "
@@ -428,6 +436,26 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _unknown_options(parser, command, extra) -> str:
+    """Name the options ``command`` does not take, and which commands do."""
+    subparsers = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+    words = []
+    after_option = False
+    for item in extra:
+        opt = item.split("=")[0]
+        if not opt.startswith("-"):
+            if not after_option:  # a value of the unknown option before it is no news
+                words.append(f"unexpected argument {item!r}")
+            after_option = False
+            continue
+        after_option = True
+        having = [name for name, p in subparsers.choices.items()
+                  if opt in p._option_string_actions]
+        words.append(f"{command} has no option {opt}" + (
+            f" (it is an option of {', '.join(having)})" if having else ""))
+    return "; ".join(dict.fromkeys(words))
+
+
 def add_common_arguments(p: argparse.ArgumentParser) -> None:
     """The arguments every subcommand has (for new subcommands too)."""
     p.add_argument("scene", help="scene file (TOML); see examples/")
@@ -442,7 +470,11 @@ def add_common_arguments(p: argparse.ArgumentParser) -> None:
 def main(argv=None) -> int:
     """Run the command; returns the exit status."""
     parser = build_parser()
-    args = parser.parse_args(argv)
+    args, extra = parser.parse_known_args(argv)
+    if extra:
+        print(f"nhham {args.command}: error: {_unknown_options(parser, args.command, extra)} "
+              f"(see `nhham {args.command} --help`)", file=sys.stderr)
+        return EXIT_INPUT
     use_json = getattr(args, "json", False)
     steps = Steps(progress=sys.stderr.isatty() and not use_json)
     try:

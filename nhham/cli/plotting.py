@@ -45,7 +45,7 @@ def series_styles(count: int) -> list:
     """
     from matplotlib import colormaps
 
-    colours = colormaps["tab10"].colors
+    colours = getattr(colormaps["tab10"], "colors")  # a ListedColormap
     out = []
     for k in range(count):
         out.append({"color": colours[k % 10], "marker": _MARKERS[(k + k // 10) % len(_MARKERS)],

@@ -52,8 +52,8 @@ def classify_data(analysis, classes=None) -> dict:
             "rank": int(s.rank),
             "decisions": [_decision_data(d) for d in s.decisions],
         })
-    first_rank = stages[0]["decisions"][0]["method"] if stages and stages[0]["decisions"] \
-        else "exact"
+    first = analysis.stages[0].decisions if analysis.stages else ()
+    first_rank = str(first[0].method) if first else "exact"
     return {
         "n": int(system.n),
         "m": int(system.m),
@@ -143,10 +143,14 @@ def classify_latex(title: str, data: dict, parse) -> str:
             (r"\operatorname{rank} C|_{M_1}", f"{data['rank_c']}"
              + (r"\ (\text{regular})" if data["regular"] else r"\ (\text{singular})")),
             (tex.text("status"), tex.text(data["status"]))]
+    defined: set = set()
     for s in data["stages"]:
-        cons = r",\ ".join(f"{_label_latex(lab)} = {tex.latex(parse(c))}"
-                           for lab, c in zip(s["labels"], s["constraints"]))
-        rows.append((f"M_{{{s['index']}}}", r"\{" + cons + r" = 0\},\ "
+        for lab, c in zip(s["labels"], s["constraints"]):
+            if lab not in defined:
+                defined.add(lab)
+                rows.append((_label_latex(lab), tex.latex(parse(c))))
+        zero = " = ".join(_label_latex(lab) for lab in s["labels"]) or r"\emptyset"
+        rows.append((f"M_{{{s['index']}}}", r"\{" + zero + r" = 0\},\quad "
                      + rf"\operatorname{{rank}} (Z_i(\chi_j)) = {s['rank']}"))
     if data["free_multiplier_symbols"]:
         rows.append((tex.text("free multipliers"),
@@ -268,7 +272,7 @@ def compare_data(report, dirac=None) -> dict:
         data["dirac_vs_projected"] = {
             "equal": bool(dirac.equal),
             "state": [str(z) for z in dirac.classes.side.variables],
-            "difference": None if diff is None else [expr_text(d) for d in diff],
+            "difference": None if diff is None else [expr_text(display_form(d)) for d in diff],
             "max_abs_difference": json_number(dirac.max_abs_difference),
             "samples": int(dirac.samples),
             "notes": [str(n) for n in dirac.notes],

@@ -6,7 +6,6 @@ user runs it.
 """
 
 import json
-import os
 import shutil
 import subprocess
 import sys

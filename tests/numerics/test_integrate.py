@@ -4,7 +4,6 @@ warnings, the reference method and the work-precision driver."""
 from __future__ import annotations
 
 import json
-import math
 
 import numpy as np
 import pytest
