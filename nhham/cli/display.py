@@ -141,15 +141,15 @@ def report(obj) -> Report:
         data = R.simulation_data(obj, (obj.t[0], obj.t[-1]))
         keys = ("method", "status", "t_final", "steps", "nfev", "wall_time_s",
                 "constraint_residual_max", "energy_drift", "cond_c_max")
-        rows = [(k, data[k]) for k in keys]
+        rows: list = [(k, data[k]) for k in keys]
         rows += [(n, f"{v:.10g}") for n, v in zip(data["state"], data["y_final"])]
         return Report(obj.method, obj.describe(), None, _html_table(rows, ("", "value")))
     if kind == "WorkPrecisionResult":
         data = R.bench_data(obj)
-        rows = [(r["method"], r["setting"], f"{r['error']:.2e}" if r["error"] is not None
+        wp_rows = [(r["method"], r["setting"], f"{r['error']:.2e}" if r["error"] is not None
                  else "-", f"{1e3 * r['wall_time_s']:.3f}", r["nfev"],
                  f"{r['constraint_residual']:.1e}") for r in data["rows"]]
         return Report(obj.name, obj.describe(), None, _html_table(
-            rows, ("method", "setting", "error", "wall time [ms]", "evaluations",
+            wp_rows, ("method", "setting", "error", "wall time [ms]", "evaluations",
                    "constraint residual")))
     raise TypeError(f"nhham.report: no report for {kind} objects")
