@@ -39,7 +39,7 @@ from nhham.errors import (
 from nhham.lazy import lazy_exports
 from nhham.system.description import DroppedConstraint, System
 
-__version__ = "0.1.0"
+from nhham.settings import __version__ as __version__
 
 # name -> module that defines it
 _LAZY = {

@@ -122,7 +122,7 @@ def envelope(command: str, result: dict, *, scene: dict | None = None,
     >>> sorted(env)
     ['command', 'nhham_version', 'result', 'scene', 'warnings']
     """
-    from nhham import __version__
+    from nhham.settings import __version__
 
     return {"command": command, "nhham_version": __version__, "scene": scene,
             "result": jsonable(result), "warnings": _dedupe(warnings)}

@@ -4,8 +4,9 @@ Contract (see :mod:`nhham.cli.envelope` and ``docs/cli.rst``): ``--json``
 prints exactly one JSON envelope ``{command, nhham_version, scene, result,
 warnings}`` on stdout. Exit status 0 on success, 1 on an internal failure
 (traceback only with ``--debug``), 2 on bad input or usage (one line on
-stderr), 3 when the command ran but its computation did not succeed (one line
-on stderr saying why and what to do; the JSON envelope is still printed).
+stderr), 3 when the command ran but its computation did not succeed or
+``--budget`` ran out (one line on stderr saying why and what to do; a
+simulation's JSON envelope is still printed).
 Warnings are one line each: in the envelope with ``--json``, else on stderr.
 
 Each command derives only what its output needs; ``--verbose`` lists what
@@ -21,6 +22,7 @@ import json
 import sys
 import traceback
 
+from nhham.cli.budget import BudgetExceeded, time_budget
 from nhham.cli.envelope import (
     EXIT_INPUT,
     EXIT_INTERNAL,
@@ -34,6 +36,7 @@ from nhham.cli.envelope import (
 )
 from nhham.cli.report import Steps
 from nhham.errors import InputError, NhhamError
+from nhham.lagrangian.algorithm import CLOSED_FORM_SIZE
 
 __all__ = ["main", "build_parser", "COMMANDS", "METHODS"]
 
@@ -73,7 +76,7 @@ def cmd_classify(args, steps) -> CommandOutput:
     from nhham.lagrangian.algorithm import analyze_constraints
 
     scene = _load(args, steps, drop_redundant=True)
-    with steps.step("constraint algorithm (stages, ranks, multipliers)"):
+    with steps.step("constraint algorithm (stages, ranks, decisions at exact points)"):
         analysis = analyze_constraints(scene.system, precision=args.precision)
     for stage in analysis.stages:
         for d in stage.decisions:
@@ -115,6 +118,10 @@ def cmd_derive(args, steps) -> CommandOutput:
     G = lagrangian_geometry(system, precision=args.precision)
     with steps.step("energy E_L"):
         energy = G.energy
+    with steps.step("implicit form: W, F, mu and mu a = -(dphi/dq) v"):
+        implicit = _implicit_form(G)
+    if not (args.explicit or system.n <= CLOSED_FORM_SIZE):
+        return _derive_implicit(args, steps, scene, G, implicit, energy)
     with steps.step("constraint matrix C = Z_i(phi_j)"):
         C = G.constraint_matrix
     with steps.step("rank of C on M_1"):
@@ -139,8 +146,68 @@ def cmd_derive(args, steps) -> CommandOutput:
         free = analysis.free_multiplier_symbols
         multipliers = [analysis.multipliers.get(s, s) for s in G.multiplier_symbols]
         warnings += list(analysis.warnings)
-    return _derive_output(args, steps, scene, "lagrangian", system.state, field, multipliers,
-                          C, energy, free, warnings)
+    out = _derive_output(args, steps, scene, "lagrangian", system.state, field, multipliers,
+                         C, energy, free, warnings)
+    out.result.update(form="explicit", **implicit)
+    return out
+
+
+def _implicit_form(G) -> dict:
+    """The dynamics as W a + mu^T lambda = F, mu a = -(dphi/dq) v (JSON-ready)."""
+    import sympy as sp
+
+    from nhham.cli.report import expr_text
+
+    system = G.system
+    rhs = -G.drift if system.m else sp.zeros(0, 1)
+    return {
+        "mass_matrix": [[expr_text(G.hessian[i, j]) for j in range(system.n)]
+                        for i in range(system.n)],
+        "forcing": [expr_text(f) for f in G.forcing],
+        "constraint_jacobian": [[expr_text(system.mu[i, j]) for j in range(system.n)]
+                                for i in range(system.m)],
+        "constraint_rhs": [expr_text(r) for r in rhs],
+    }
+
+
+def _derive_implicit(args, steps, scene, G, implicit, energy):
+    """derive without closed forms: the mass-matrix form and the verdict on M_f."""
+    from nhham.cli.report import expr_text
+    from nhham.cli.results import implicit_latex, implicit_text
+    from nhham.lagrangian.algorithm import analyze_constraints
+
+    system = scene.system
+    with steps.step("constraint algorithm at exact points (M_f, free multipliers)"):
+        analysis = analyze_constraints(system, precision=args.precision)
+    if analysis.status == "inconsistent":
+        raise InputError(f"{args.scene}: the constraints are inconsistent "
+                         f"({analysis.inconsistency}); there is no dynamics to derive "
+                         f"(run `nhham classify {args.scene}` for the stages)")
+    primary = set(system.holonomic) | set(system.phi)
+    secondary = [c for c in analysis.final_constraints if c not in primary]
+    data = {
+        "side": "lagrangian", "form": "implicit",
+        "state": [s.name for s in system.state],
+        "field": None, "multipliers": None, "constraint_matrix": None,
+        "energy": expr_text(energy), "energy_name": "E_L",
+        "free_multiplier_symbols": [s.name for s in analysis.free_multiplier_symbols],
+        **implicit,
+        "accelerations": [s.name for s in G.acceleration_symbols],
+        "multiplier_symbols": [s.name for s in G.multiplier_symbols],
+        "secondary_constraints": [expr_text(c) for c in secondary],
+        "status": analysis.status,
+        "note": (f"closed forms of P(xi_L), lambda and C need W^-1 of a {system.n} x "
+                 f"{system.n} matrix of functions: not formed; --explicit forms them"),
+    }
+    title = _title(scene, args)
+    if args.latex:
+        def text():
+            return implicit_latex(data, _parser_for(scene))
+    else:
+        def text():
+            return implicit_text(title, data)
+    return CommandOutput(result=data, text=text, scene=scene_info(scene),
+                         warnings=list(analysis.warnings))
 
 
 def _derive_hamiltonian(args, steps, scene):
@@ -367,7 +434,7 @@ class _Parser(argparse.ArgumentParser):
 
 
 def build_parser() -> argparse.ArgumentParser:
-    from nhham import __version__
+    from nhham.settings import __version__
 
     parser = _Parser(
         prog="nhham",
@@ -395,6 +462,10 @@ def build_parser() -> argparse.ArgumentParser:
         if name == "derive":
             p.add_argument("--side", choices=("lagrangian", "hamiltonian"), default="lagrangian",
                            help="TQ with (q, v) or T*Q with (q, p) (default: lagrangian)")
+            p.add_argument("--explicit", action="store_true",
+                           help="form the closed forms P(xi_L), lambda and C (default: only "
+                                f"for n <= {CLOSED_FORM_SIZE}; the implicit mass-matrix form "
+                                "otherwise)")
         if name == "compare":
             p.add_argument("--samples", type=int, default=6, metavar="K",
                            help="seeded points of M_f for sampled checks (default: 6)")
@@ -465,6 +536,9 @@ def add_common_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--verbose", action="store_true",
                    help="list on stderr what was derived, how decisions were made, and timings")
     p.add_argument("--debug", action="store_true", help="tracebacks for internal errors")
+    p.add_argument("--budget", type=float, default=None, metavar="SECONDS",
+                   help="stop after SECONDS and say what was decided so far (exit 3; "
+                        "default: no bound)")
 
 
 def main(argv=None) -> int:
@@ -478,12 +552,16 @@ def main(argv=None) -> int:
     use_json = getattr(args, "json", False)
     steps = Steps(progress=sys.stderr.isatty() and not use_json)
     try:
-        with capture_warnings() as caught:
+        with capture_warnings() as caught, time_budget(getattr(args, "budget", None), steps):
             out = COMMANDS[args.command](args, steps)
             if not isinstance(out, CommandOutput):  # a plain dict (JSON) or text
                 out = CommandOutput(result=out if isinstance(out, dict) else {},
                                     text=out if isinstance(out, str) else "")
             text = None if use_json else out.render_text()
+    except BudgetExceeded as exc:
+        print(f"nhham: {one_line(exc)}; finished before it: {steps.decided()}; "
+              f"allow more with a larger --budget", file=sys.stderr)
+        return EXIT_NOT_SUCCEEDED
     except InputError as exc:
         print(f"nhham: error: {one_line(exc)}", file=sys.stderr)
         return EXIT_INPUT

@@ -229,6 +229,46 @@ def derive_latex(data: dict, parse) -> str:
     return tex.aligned(rows)
 
 
+def implicit_text(title: str, data: dict) -> str:
+    """derive without closed forms: W a + mu^T lambda = F, mu a = rhs, and M_f."""
+    a = [f"{n[:-4]}''" for n in data["state"][len(data["state"]) // 2:]]
+    lines = [f"{title}: dynamics in implicit form (W a + mu^T lambda = F, mu a = rhs), "
+             f"a = ({', '.join(data['accelerations'])})"]
+    lines.append("mass matrix W:")
+    lines.append(table(data["mass_matrix"]))
+    lines.append("forcing F:")
+    lines.append(table([(n, "=", f) for n, f in zip(a, data["forcing"])]))
+    if data["constraint_jacobian"]:
+        lines.append("constraint rows mu (mu a = rhs):")
+        lines.append(table([list(row) + ["|", r] for row, r in zip(data["constraint_jacobian"],
+                                                                  data["constraint_rhs"])]))
+    if data["secondary_constraints"]:
+        lines.append("secondary constraints (M_f):")
+        lines.append(table([(c,) for c in data["secondary_constraints"]]))
+    if data["free_multiplier_symbols"]:
+        lines.append("free multipliers: " + ", ".join(data["free_multiplier_symbols"]))
+    lines.append(f"status: {data['status']}")
+    lines.append(f"energy E_L: {data['energy']}")
+    lines.append(f"note: {data['note']}")
+    return "\n".join(lines)
+
+
+def implicit_latex(data: dict, parse) -> str:
+    """W a + mu^T lambda = F, mu a = rhs (a the accelerations), with W, F, mu, rhs and E_L."""
+    def mat(rows):
+        return tex.matrix_latex([[parse(c) for c in row] for row in rows])
+
+    rows = [(r"W \ddot{q} + \mu^{T} \lambda", "F"), (r"\mu \ddot{q}", r"-\frac{\partial \phi}"
+            r"{\partial q} \dot{q}"), ("W", mat(data["mass_matrix"])),
+            ("F", mat([[f] for f in data["forcing"]]))]
+    if data["constraint_jacobian"]:
+        rows.append((r"\mu", mat(data["constraint_jacobian"])))
+        rows.append((r"-\frac{\partial \phi}{\partial q} \dot{q}",
+                     mat([[r] for r in data["constraint_rhs"]])))
+    rows.append(("E_L", tex.latex(parse(data["energy"]))))
+    return tex.aligned(rows)
+
+
 # ----------------------------------------------------------------- compare
 def _snake(name: str) -> str:
     import re
@@ -315,17 +355,17 @@ def compare_latex(title: str, data: dict, parse) -> str:
 
 
 # ---------------------------------------------------------------- simulate
-_STATUS_NAMES = {0: "success", -1: "step_failed", -2: "non_finite",
-                 -3: "singular_constraint_matrix", -4: "projection_failed"}
+# The names of nhham.numerics.status.Status, for results that carry a plain int.
+_STATUS_NAMES = {0: "success", 1: "event", -1: "step_failed", -2: "nonfinite", -3: "singular",
+                 -4: "not_converged"}
 
 
 def status_name(status) -> str:
-    """A stable snake_case name for a numerics status code."""
-    code = int(status)
-    if code in _STATUS_NAMES:
-        return _STATUS_NAMES[code]
+    """The snake_case name of a numerics status (``Status.SINGULAR`` -> ``"singular"``)."""
     name = getattr(status, "name", None)
-    return name.lower() if isinstance(name, str) else f"failed_{abs(code)}"
+    if isinstance(name, str):
+        return name.lower()
+    return _STATUS_NAMES.get(int(status), f"status_{int(status)}".replace("-", "minus_"))
 
 
 def simulation_data(result, t_span) -> dict:

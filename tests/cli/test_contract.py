@@ -124,10 +124,14 @@ def _expressions(command, result):
         yield from result["final_constraints"]
         yield from result["first_class_combinations"]
     elif command == "derive":
-        yield from result["field"]
-        yield from result["multipliers"]
-        for row in result["constraint_matrix"]:
+        yield from result["field"] or ()
+        yield from result["multipliers"] or ()
+        for row in (result["constraint_matrix"] or []) + result["mass_matrix"] + \
+                result["constraint_jacobian"]:
             yield from row
+        yield from result["forcing"]
+        yield from result["constraint_rhs"]
+        yield from result.get("secondary_constraints", ())
         yield result["energy"]
     elif command == "compare":
         d = result["dirac_vs_projected"]

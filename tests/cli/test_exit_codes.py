@@ -47,7 +47,7 @@ def test_failed_simulation_json_still_has_the_envelope():
     assert proc.returncode == 3
     env = json.loads(proc.stdout)
     r = env["result"]
-    assert r["success"] is False and r["status"] == "singular_constraint_matrix"
+    assert r["success"] is False and r["status"] == "singular"
     assert r["status_code"] == -3 and r["t_final"] == 0.0
     assert env["warnings"] and all("\n" not in w for w in env["warnings"])
     assert len(proc.stderr.strip().splitlines()) == 1  # the reason; warnings are in the JSON
