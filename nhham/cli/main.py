@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 import traceback
 
@@ -577,7 +578,15 @@ def main(argv=None) -> int:
               file=sys.stderr)
         return EXIT_INTERNAL
     warnings = list(out.warnings) + [w for w in caught if w not in out.warnings]
-    if use_json:
+    try:
+        return _print_output(args, out, text, warnings, steps)
+    except BrokenPipeError:  # the reader stopped early (| head): not an error of ours
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return EXIT_OK
+
+
+def _print_output(args, out, text, warnings, steps) -> int:
+    if getattr(args, "json", False):
         print(json.dumps(envelope(args.command, out.result, scene=out.scene, warnings=warnings),
                          indent=2, allow_nan=False))
     else:

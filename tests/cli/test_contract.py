@@ -54,8 +54,12 @@ def test_every_example_output_matches_the_schema(command, example, schema):
 
 def test_bench_output_matches_the_schema(bench_envelope, schema):
     jsonschema.validate(bench_envelope, schema)
-    methods = {r["method"] for r in bench_envelope["result"]["rows"]}
-    assert {"DOP853", "rattle"} <= methods
+    rows = bench_envelope["result"]["rows"]
+    assert {"DOP853", "rattle"} <= {r["method"] for r in rows}
+    for r in rows:
+        assert r["error"] is None or r["error"] >= 0
+    # RATTLE keeps the constraint to round-off at every step
+    assert max(r["constraint_residual"] for r in rows if r["method"] == "rattle") < 1e-12
 
 
 def test_the_schema_is_a_valid_draft_2020_12_schema(schema):

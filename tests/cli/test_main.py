@@ -29,9 +29,17 @@ def run(*args, check_status=0, cwd=None):
 
 
 def run_json(*args, check_status=0):
-    """The ``result`` of the command's JSON envelope (exactly one JSON object)."""
-    proc = run(*args, "--json", check_status=check_status)
-    env = json.loads(proc.stdout)
+    """The ``result`` of the command's JSON envelope (exactly one JSON object).
+
+    In-process and cached (conftest.run_inprocess): the contract tests run the same
+    commands; the subprocess path is covered by ``run`` below.
+    """
+    from conftest import run_inprocess
+
+    rc, out, err = run_inprocess(*map(str, args), "--json")
+    assert rc == check_status, (rc, out, err)
+    assert "Traceback" not in err
+    env = json.loads(out)
     assert env["command"] == args[0]
     return env["result"]
 
@@ -252,11 +260,3 @@ def test_simulate_refuses_inconsistent_initial_data(tmp_path):
     assert d["success"] and d["constraint_residual_max"] < 1e-9
 
 
-def test_bench_quick_json():
-    d = run_json("bench", EXAMPLES / "chaplygin_sleigh.toml", "--quick")
-    methods = {r["method"] for r in d["rows"]}
-    assert {"DOP853", "rattle"} <= methods
-    for r in d["rows"]:
-        assert r["error"] is None or r["error"] >= 0
-    rattle = [r for r in d["rows"] if r["method"] == "rattle"]
-    assert max(r["constraint_residual"] for r in rattle) < 1e-12
