@@ -80,3 +80,27 @@ def test_packaging_files():
     pyproject = (ROOT / "pyproject.toml").read_text()
     assert 'license = { text = "BSD-3-Clause" }' in pyproject
     assert '"schemas/*.json"' in pyproject and '"py.typed"' in pyproject
+
+
+def test_readme_command_transcripts_are_what_the_command_prints():
+    """Each ``$ nhham ...`` block of the README shows the command's real output."""
+    import shlex
+
+    from nhham.cli.main import main
+
+    readme = (ROOT / "README.md").read_text()
+    blocks = re.findall(r"```\n\$ (nhham [^\n]+)\n(.*?)```", readme, re.S)
+    assert len(blocks) >= 3
+    for command, shown in blocks:
+        import contextlib
+        import io
+
+        out = io.StringIO()
+        cwd = os.getcwd()
+        os.chdir(ROOT)
+        try:
+            with contextlib.redirect_stdout(out), contextlib.redirect_stderr(io.StringIO()):
+                assert main(shlex.split(command)[1:]) == 0, command
+        finally:
+            os.chdir(cwd)
+        assert out.getvalue().strip() == shown.strip(), command
