@@ -181,11 +181,11 @@ def main(argv=None):
         print(wp.describe())
         print(f"(study took {time.perf_counter() - start:.0f} s)")
         if args.plot:
-            from nhham.cli.plotting import plot_work_precision
+            from nhham.cli.plotting import plot_work_precision, save_figure
 
             os.makedirs(args.plot, exist_ok=True)
             path = os.path.join(args.plot, name.replace(" ", "_") + ".png")
-            print("diagram:", plot_work_precision(wp, path))
+            print("diagram:", save_figure(plot_work_precision(wp), path))
         base = None
         if model.backend == "c":
             base = work_precision(model, y0, (0.0, t_end), methods=["DOP853"], loop="scipy",

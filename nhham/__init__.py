@@ -39,7 +39,7 @@ from nhham.errors import (
 from nhham.lazy import lazy_exports
 from nhham.system.description import DroppedConstraint, System
 
-__version__ = "0.1.0"
+from nhham.settings import __version__ as __version__
 
 # name -> module that defines it
 _LAZY = {
@@ -87,6 +87,11 @@ _LAZY = {
     "from_mechanics": "system.mechanics",
     "from_lagranges_method": "system.mechanics",
     "models": "system.models",
+    # reports, figures and the command's JSON contract
+    "report": "cli.display",
+    "plot_trajectory": "cli.plotting",
+    "plot_work_precision": "cli.plotting",
+    "output_schema": "cli.envelope",
 }
 
 __all__ = [

@@ -14,7 +14,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-__all__ = ["SEED", "STATE_BOX", "PARAMETER_BOX", "Precision"]
+__all__ = ["__version__", "SEED", "STATE_BOX", "PARAMETER_BOX", "Precision"]
+
+#: The version of nhham (the package, the command's --version and its JSON read it here).
+__version__ = "0.1.0"
 
 #: Default seed of seeded sample points (the year of the paper).
 SEED = 1996

@@ -12,7 +12,7 @@ import signal
 import threading
 from contextlib import contextmanager
 
-from nhham.errors import NhhamError
+from nhham.errors import InputError, NhhamError
 
 __all__ = ["BudgetExceeded", "time_budget"]
 
@@ -33,11 +33,11 @@ def time_budget(seconds: float | None, steps):
     """
     usable = (seconds is not None and hasattr(signal, "setitimer")
               and threading.current_thread() is threading.main_thread())
-    if not usable:
+    if seconds is not None and seconds <= 0:
+        raise InputError(f"--budget must be a positive number of seconds, got {seconds:g}")
+    if not usable or seconds is None:
         yield
         return
-    if seconds <= 0:
-        raise BudgetExceeded(f"--budget must be positive, got {seconds}")
 
     def expire(signum, frame):
         raise BudgetExceeded(f"the budget of {seconds:g} s ran out during "

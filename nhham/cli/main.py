@@ -1,30 +1,51 @@
 """The ``nhham`` command: classify, derive, compare, simulate, bench.
 
-Contract (``DESIGN.md`` §3): ``--json`` prints exactly one JSON object on
-stdout; exit status 0 on success, 2 on bad input (one line on stderr, no
-traceback), 1 on an internal failure (traceback only with ``--debug``), 3 when
-``--budget`` ran out (one line: the step that was running, the steps finished).
+Contract (see :mod:`nhham.cli.envelope` and ``docs/cli.rst``): ``--json``
+prints exactly one JSON envelope ``{command, nhham_version, scene, result,
+warnings}`` on stdout. Exit status 0 on success, 1 on an internal failure
+(traceback only with ``--debug``), 2 on bad input or usage (one line on
+stderr), 3 when the command ran but its computation did not succeed or
+``--budget`` ran out (one line on stderr saying why and what to do; a
+simulation's JSON envelope is still printed).
+Warnings are one line each: in the envelope with ``--json``, else on stderr.
+
 Each command derives only what its output needs; ``--verbose`` lists what
 was derived, how each decision on M_k was made, and how long each step took.
+A new subcommand adds a function ``cmd_<name>(args, steps) -> CommandOutput``
+to :data:`COMMANDS` and its options in :func:`build_parser`.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 import traceback
 
-import sympy as sp
-
-from nhham.errors import InputError, NhhamError
 from nhham.cli.budget import BudgetExceeded, time_budget
-from nhham.cli.report import Steps, display_form, expr_text, json_number, table
+from nhham.cli.envelope import (
+    EXIT_INPUT,
+    EXIT_INTERNAL,
+    EXIT_NOT_SUCCEEDED,
+    EXIT_OK,
+    CommandOutput,
+    capture_warnings,
+    envelope,
+    one_line,
+    scene_info,
+)
+from nhham.cli.report import Steps
+from nhham.errors import InputError, NhhamError
 
-__all__ = ["main"]
+__all__ = ["main", "build_parser", "COMMANDS", "METHODS"]
+
+#: Integration methods of ``nhham simulate`` (those of :func:`nhham.simulate`).
+METHODS = ("DOP853", "RK45", "RK23", "Radau", "BDF", "LSODA", "rattle", "rattle4", "rk4",
+           "reference")
+FIXED_STEP = ("rattle", "rattle4", "rk4")
 
 
-# ---------------------------------------------------------------- classify
 def _load(args, steps, drop_redundant=False):
     from nhham.system.scene import load_scene
 
@@ -35,82 +56,47 @@ def _load(args, steps, drop_redundant=False):
                           or getattr(args, "drop_redundant", False))
 
 
-def cmd_classify(args, steps):
+def _title(scene, args) -> str:
+    return scene.name or str(args.scene)
+
+
+def _parser_for(scene):
+    """Read an expression string of the output back with the scene's names."""
+    from nhham.system.expressions import parse_expression
+
+    names = scene_info(scene)["names"]
+    return lambda text: parse_expression(text, names)
+
+
+# ---------------------------------------------------------------- classify
+def cmd_classify(args, steps) -> CommandOutput:
     """The constraint-set verdict: algorithm, integrability, classes."""
-    from nhham.lagrangian.algorithm import analyze_constraints
+    from nhham.cli.results import classify_data, classify_latex, classify_text, classify_warnings
     from nhham.hamiltonian.classification import classify_constraints
+    from nhham.lagrangian.algorithm import analyze_constraints
 
     scene = _load(args, steps, drop_redundant=True)
-    system = scene.system
     with steps.step("constraint algorithm (stages, ranks, decisions at exact points)"):
-        analysis = analyze_constraints(system, precision=args.precision)
+        analysis = analyze_constraints(scene.system, precision=args.precision)
     for stage in analysis.stages:
         for d in stage.decisions:
             steps.note(f"stage {stage.index}: {_evidence_text(d)}")
     with steps.step("Frobenius integrability of the constraint distribution"):
-        integrable = analysis.integrable
+        analysis.integrable
     classes = None
     if analysis.status != "inconsistent":
         with steps.step("Poisson brackets of the final constraints on M_f (T*Q)"):
             classes = classify_constraints(analysis, precision=args.precision)
-    data = {
-        "name": scene.name,
-        "n": system.n,
-        "m": system.m,
-        "regular": bool(analysis.regular),
-        "rank_C": int(analysis.rank_C),
-        "status": analysis.status,
-        "stages": [{"index": s.index, "constraints": [expr_text(c) for c in s.constraints],
-                    "rank": int(s.rank)} for s in analysis.stages],
-        "final_constraints": [expr_text(c) for c in analysis.final_constraints],
-        "free_multipliers": int(analysis.free_multipliers),
-        "free_multiplier_symbols": [s.name for s in analysis.free_multiplier_symbols],
-        "redundant": [d.label for d in analysis.dropped],
-        "integrable": integrable,
-        "first_class": None if classes is None else int(classes.first_class),
-        "second_class": None if classes is None else int(classes.second_class),
-        "first_class_combinations": [] if classes is None or classes.first_class_combinations
-        is None else [expr_text(c) for c in classes.first_class_combinations],
-        "inconsistency": analysis.inconsistency,
-        "warnings": list(analysis.warnings) + ([] if classes is None else
-                                               list(getattr(classes, "warnings", ()))),
-    }
-    if args.json:
-        return data
-    lines = [f"{scene.name or args.scene}: n = {system.n} coordinates, "
-             f"m = {system.m} velocity constraints"]
-    rows = [
-        ("C regular on M_1", "yes" if data["regular"] else "no"),
-        ("rank C on M_1", f"{data['rank_C']} ({analysis.stages[0].decisions[0].method if analysis.stages and analysis.stages[0].decisions else 'exact'})"),
-        ("status", data["status"]),
-        ("stages", str(len(data["stages"]))),
-        ("free multipliers", f"{data['free_multipliers']}"
-         + (f" ({', '.join(data['free_multiplier_symbols'])})" if data["free_multipliers"] else "")),
-        ("redundant (dropped)", ", ".join(data["redundant"]) or "none"),
-        ("integrable (holonomic)", {True: "yes", False: "no", None: "undecided"}[integrable]),
-    ]
-    if classes is not None:
-        rows += [("first class", str(data["first_class"])),
-                 ("second class", str(data["second_class"]))]
-    lines.append(table(rows))
-    lines.append("stages:")
-    stage_rows = []
-    for s in analysis.stages:
-        for k, c in enumerate(s.constraints):
-            stage_rows.append((f"M_{s.index}" if k == 0 else "", s.labels[k] if k < len(s.labels)
-                               else "", expr_text(c), f"rank {s.rank}" if k == 0 else ""))
-    lines.append(table(stage_rows))
-    lines.append("final constraints:")
-    lines.append(table([(lab, expr_text(c)) for lab, c in
-                        zip(analysis.final_labels, analysis.final_constraints)]))
-    if data["first_class_combinations"]:
-        lines.append("first-class combinations (in q, p):")
-        lines.append(table([(c,) for c in data["first_class_combinations"]]))
-    if data["inconsistency"]:
-        lines.append(f"inconsistent: {data['inconsistency']}")
-    for w in data["warnings"]:
-        lines.append(f"warning: {w}")
-    return "\n".join(lines)
+    data = classify_data(analysis, classes)
+    title = _title(scene, args)
+    if args.latex:
+        def text():
+            return classify_latex(title, data, _parser_for(scene))
+    else:
+        def text():
+            return classify_text(title, data)
+    return CommandOutput(result=data, text=text, scene=scene_info(scene),
+                         warnings=classify_warnings(analysis, classes))
 
 
 def _evidence_text(d):
@@ -121,7 +107,7 @@ def _evidence_text(d):
 
 
 # ------------------------------------------------------------------ derive
-def cmd_derive(args, steps):
+def cmd_derive(args, steps) -> CommandOutput:
     """The projected field, multipliers, C and energy (Lagrangian or Hamiltonian side)."""
     scene = _load(args, steps)
     system = scene.system
@@ -141,7 +127,8 @@ def cmd_derive(args, steps):
     with steps.step("rank of C on M_1"):
         rank = G.constraint_rank
     steps.note(f"rank C on M_1: {rank.describe()}")
-    free = ()
+    free: tuple = ()
+    warnings = list(getattr(rank, "warnings", ()))
     if rank.value == system.m:
         with steps.step("multipliers lambda = -C^{-T} xi_L(phi) and P(xi_L)"):
             field, multipliers = list(G.projected_field), list(G.multipliers)
@@ -153,19 +140,24 @@ def cmd_derive(args, steps):
             analysis = analyze_constraints(system, precision=args.precision)
         if analysis.dynamics is None:
             raise InputError(f"{args.scene}: the constraints are inconsistent "
-                             f"({analysis.inconsistency}); there is no dynamics to derive")
+                             f"({analysis.inconsistency}); there is no dynamics to derive "
+                             f"(run `nhham classify {args.scene}` for the stages)")
         field = list(analysis.dynamics)
         free = analysis.free_multiplier_symbols
         multipliers = [analysis.multipliers.get(s, s) for s in G.multiplier_symbols]
+        warnings += list(analysis.warnings)
     out = _derive_output(args, steps, scene, "lagrangian", system.state, field, multipliers,
-                         C, energy, free)
-    if args.json:
-        out.update(form="explicit", **implicit)
+                         C, energy, free, warnings)
+    out.result.update(form="explicit", **implicit)
     return out
 
 
 def _implicit_form(G) -> dict:
     """The dynamics as W a + mu^T lambda = F, mu a = -(dphi/dq) v (JSON-ready)."""
+    import sympy as sp
+
+    from nhham.cli.report import expr_text
+
     system = G.system
     rhs = -G.drift if system.m else sp.zeros(0, 1)
     return {
@@ -180,6 +172,8 @@ def _implicit_form(G) -> dict:
 
 def _derive_implicit(args, steps, scene, G, implicit, energy):
     """derive without closed forms: the mass-matrix form and the verdict on M_f."""
+    from nhham.cli.report import expr_text
+    from nhham.cli.results import implicit_latex, implicit_text
     from nhham.lagrangian.algorithm import analyze_constraints
 
     system = scene.system
@@ -187,14 +181,15 @@ def _derive_implicit(args, steps, scene, G, implicit, energy):
         analysis = analyze_constraints(system, precision=args.precision)
     if analysis.status == "inconsistent":
         raise InputError(f"{args.scene}: the constraints are inconsistent "
-                         f"({analysis.inconsistency}); there is no dynamics to derive")
+                         f"({analysis.inconsistency}); there is no dynamics to derive "
+                         f"(run `nhham classify {args.scene}` for the stages)")
     primary = set(system.holonomic) | set(system.phi)
     secondary = [c for c in analysis.final_constraints if c not in primary]
     data = {
-        "name": scene.name, "side": "lagrangian", "form": "implicit",
+        "side": "lagrangian", "form": "implicit",
         "state": [s.name for s in system.state],
-        "field": None, "multipliers": None, "C": None,
-        "energy": expr_text(energy),
+        "field": None, "multipliers": None, "constraint_matrix": None,
+        "energy": expr_text(energy), "energy_name": "E_L",
         "free_multiplier_symbols": [s.name for s in analysis.free_multiplier_symbols],
         **implicit,
         "accelerations": [s.name for s in G.acceleration_symbols],
@@ -204,196 +199,190 @@ def _derive_implicit(args, steps, scene, G, implicit, energy):
         "note": (f"closed forms of P(xi_L), lambda and C need W^-1 of a {system.n} x "
                  f"{system.n} matrix of functions: not formed; --explicit forms them"),
     }
-    if args.json:
-        return data
-    a = [f"{s}''" for s in (q.name for q in system.coordinates)]
-    lines = [f"{scene.name or args.scene}: dynamics in implicit form "
-             f"(W a + mu^T lambda = F, mu a = rhs), a = ({', '.join(data['accelerations'])})"]
-    lines.append("mass matrix W:")
-    lines.append(table(data["mass_matrix"]))
-    lines.append("forcing F:")
-    lines.append(table([(n, "=", f) for n, f in zip(a, data["forcing"])]))
-    if system.m:
-        lines.append("constraint rows mu (mu a = rhs):")
-        lines.append(table([row + ["|", r] for row, r in zip(data["constraint_jacobian"],
-                                                            data["constraint_rhs"])]))
-    if secondary:
-        lines.append("secondary constraints (M_f):")
-        lines.append(table([(c,) for c in data["secondary_constraints"]]))
-    if data["free_multiplier_symbols"]:
-        lines.append("free multipliers: " + ", ".join(data["free_multiplier_symbols"]))
-    lines.append(f"status: {analysis.status}")
-    lines.append(f"energy: {data['energy']}")
-    lines.append(f"note: {data['note']}")
-    return "\n".join(lines)
+    title = _title(scene, args)
+    if args.latex:
+        def text():
+            return implicit_latex(data, _parser_for(scene))
+    else:
+        def text():
+            return implicit_text(title, data)
+    return CommandOutput(result=data, text=text, scene=scene_info(scene),
+                         warnings=list(analysis.warnings))
 
 
 def _derive_hamiltonian(args, steps, scene):
     from nhham.hamiltonian.side import hamiltonian_side
 
-    system = scene.system
     with steps.step("Legendre map and Hamiltonian H = E_L o Leg^-1"):
-        side = hamiltonian_side(system)
+        side = hamiltonian_side(scene.system, precision=args.precision)
         H = side.H
     with steps.step("C^H and the projected Hamiltonian field"):
         C = side.constraint_matrix_H
         field = list(side.projected_field_H)
         multipliers = list(side.multipliers_H)
     return _derive_output(args, steps, scene, "hamiltonian", side.variables, field, multipliers,
-                          C, H, ())
+                          C, H, (), [])
 
 
-def _derive_output(args, steps, scene, side, variables, field, multipliers, C, energy, free):
-    """The derive result as JSON data or text, expressions simplified for display."""
+def _derive_output(args, steps, scene, side, variables, field, multipliers, C, energy, free,
+                   warnings):
+    from nhham.cli.results import derive_data, derive_latex, derive_text
+
     with steps.step("display simplification"):
-        field = [display_form(f) for f in field]
-        multipliers = [display_form(f) for f in multipliers]
-        C = C.applyfunc(display_form)
-    state = [s.name for s in variables]
-    data = {
-        "name": scene.name,
-        "side": side,
-        "state": state,
-        "field": [expr_text(f) for f in field],
-        "multipliers": [expr_text(f) for f in multipliers],
-        "C": [[expr_text(C[i, j]) for j in range(C.cols)] for i in range(C.rows)],
-        "energy": expr_text(energy),
-        "free_multiplier_symbols": [s.name for s in free],
-    }
-    if args.json:
-        return data
-    return _render_derive(args, scene, data, field, multipliers, C, energy,
-                          [f"{n}'" for n in state])
-
-
-def _render_derive(args, scene, data, field, multipliers, C, energy, lhs):
-    import sympy as sp
-
+        data = derive_data(side, variables, field, multipliers, C, energy, free)
+    title = _title(scene, args)
     if args.latex:
-        lines = [r"\begin{aligned}"]
-        lines += [rf"\dot{{{sp.latex(sp.Symbol(n))}}} &= {sp.latex(f)} \\"
-                  for n, f in zip(data["state"], field)]
-        lines += [rf"{sp.latex(sp.Symbol(f'lambda_{i + 1}'))} &= {sp.latex(f)} \\"
-                  for i, f in enumerate(multipliers)]
-        lines.append(rf"E &= {sp.latex(energy)}")
-        lines.append(r"\end{aligned}")
-        lines.append(rf"C = {sp.latex(C)}")
-        return "\n".join(lines)
-    side = "Hamiltonian field on T*Q" if data["side"] == "hamiltonian" else \
-        "projected field P(xi_L) on TQ"
-    lines = [f"{scene.name or args.scene}: {side}"]
-    lines.append(table([(a, "=", t) for a, t in zip(lhs, data["field"])]))
-    if data["multipliers"]:
-        lines.append("multipliers:")
-        lines.append(table([(f"lambda_{i + 1}", "=", t) for i, t in enumerate(data["multipliers"])]))
-        lines.append("constraint matrix C:")
-        lines.append(table([[t for t in row] for row in data["C"]]))
-    if data["free_multiplier_symbols"]:
-        lines.append("free multipliers: " + ", ".join(data["free_multiplier_symbols"]))
-    lines.append(f"energy: {data['energy']}")
-    return "\n".join(lines)
+        def text():
+            return derive_latex(data, _parser_for(scene))
+    else:
+        def text():
+            return derive_text(title, data)
+    return CommandOutput(result=data, text=text, scene=scene_info(scene), warnings=warnings)
 
 
 # ----------------------------------------------------------------- compare
-def cmd_compare(args, steps):
+def cmd_compare(args, steps) -> CommandOutput:
     """Lagrangian/Hamiltonian cross-check and the Dirac-versus-projected difference."""
+    from nhham.cli.results import compare_data, compare_latex, compare_text
     from nhham.hamiltonian.crosscheck import cross_check
 
     scene = _load(args, steps)
     with steps.step("cross-check through the Legendre map"):
         report = cross_check(scene.system, precision=args.precision, samples=args.samples)
     dirac = None
+    warnings = []
     with steps.step("Dirac-bracket flow of H against the projected field on M_f"):
         try:
             from nhham.hamiltonian.classification import dirac_vs_projected
 
-            dirac = dirac_vs_projected(scene.system)
+            dirac = dirac_vs_projected(scene.system, precision=args.precision,
+                                       samples=args.samples)
         except NhhamError as exc:
-            steps.note(f"Dirac comparison not available: {exc}")
-    data = dict(report.to_dict())
-    data.setdefault("name", scene.name)
-    if dirac is not None:
-        data["dirac_vs_projected"] = dirac.to_dict() if hasattr(dirac, "to_dict") else str(dirac)
-    if args.json:
-        return data
-    lines = [f"{scene.name or args.scene}: Lagrangian vs Hamiltonian", report.describe()]
-    if dirac is not None:
-        lines.append(dirac.describe() if hasattr(dirac, "describe") else str(dirac))
-    return "\n".join(lines)
+            warnings.append(f"Dirac comparison not available: {one_line(exc)}")
+    data = compare_data(report, dirac)
+    title = _title(scene, args)
+    if args.latex:
+        def text():
+            return compare_latex(title, data, _parser_for(scene))
+    else:
+        def text():
+            return compare_text(title, report, dirac)
+    failure = None if data["agree"] else (
+        "the Lagrangian and Hamiltonian sides disagree (see the checks); please report this "
+        "scene as a bug")
+    return CommandOutput(result=data, text=text, scene=scene_info(scene), warnings=warnings,
+                         failure=failure)
 
 
 # ---------------------------------------------------------------- simulate
-def cmd_simulate(args, steps):
+def _simulate_options(args, scene):
+    """The scene's [simulate] table overridden by the command line, checked."""
+    opts = scene.simulate.given()
+    given = {k: getattr(args, k) for k in ("method", "rtol", "atol", "step", "t_end", "max_step")
+             if getattr(args, k, None) is not None}
+    opts.update(given)
+    method = opts.get("method", "DOP853")
+    if method not in METHODS:
+        raise InputError(f"method {method!r} (from the scene's [simulate] table) is not one of "
+                         f"{', '.join(METHODS)}")
+    if method in FIXED_STEP and opts.get("step") is None:
+        raise InputError(f"--method {method} is a fixed-step method and needs --step DT "
+                         f"(e.g. --step 0.01)")
+    if method not in FIXED_STEP and "step" in given:
+        raise InputError(f"--step applies to the fixed-step methods ({', '.join(FIXED_STEP)}), "
+                         f"not to {method}; use --max-step to bound its steps")
+    if method in FIXED_STEP:
+        for key in ("rtol", "atol", "max_step"):
+            if key in given:
+                raise InputError(f"--{key.replace('_', '-')} applies to the adaptive methods, "
+                                 f"not to the fixed-step {method}; choose its --step instead")
+            opts.pop(key, None)
+    else:
+        opts.pop("step", None)
+    if getattr(args, "projection", False):
+        if method in ("rattle", "rattle4", "reference"):
+            raise InputError(f"--projection: {method} keeps the constraints itself; "
+                             f"use it without --projection")
+        opts["projection"] = True
+    t_end = opts.pop("t_end", 10.0)
+    return t_end, opts
+
+
+def cmd_simulate(args, steps) -> CommandOutput:
     """Integrate the constrained dynamics from the scene's initial data."""
+    from nhham.cli.results import simulation_data, simulation_failure
     from nhham.numerics.integrate import simulate
 
     scene = _load(args, steps)
     if scene.initial is None:
         raise InputError(f"{args.scene}: simulate needs an [initial] table with a value for "
                          f"every coordinate and velocity")
-    opts = scene.simulate.given()
-    for key in ("method", "rtol", "atol", "step", "t_end", "max_step"):
-        value = getattr(args, key)
-        if value is not None:
-            opts[key] = value
-    t_end = opts.pop("t_end", 10.0)
-    with steps.step(f"simulate with {opts.get('method', 'default method')}"):
-        result = simulate(scene.system, (0.0, t_end), dict(scene.initial),
-                          project_initial=args.project_initial, progress=steps.progress, **opts)
+    t_end, opts = _simulate_options(args, scene)
+    t_span = (0.0, float(t_end))
+    with capture_warnings() as caught:
+        with steps.step(f"simulate with {opts.get('method', 'DOP853')}"):
+            result = simulate(scene.system, t_span=t_span, y0=dict(scene.initial),
+                              project_initial=args.project_initial, progress=steps.progress,
+                              **opts)
+    data = simulation_data(result, t_span)
+    data["output"] = None
+    data["plot"] = None
     if args.output:
         with steps.step(f"write {args.output}"):
-            result.save(args.output)
+            data["output"] = str(result.save(args.output))
     if args.plot:
-        from nhham.cli.plotting import plot_trajectory
+        from nhham.cli.plotting import plot_trajectory, save_figure
 
         with steps.step(f"plot {args.plot}"):
-            plot_trajectory(result, args.plot)
-    if args.json:
-        data = {k: _jsonable(v) for k, v in result.summary().items()}
-        # The stable keys of the command's contract.
-        data.update(status=int(result.status), t_final=json_number(result.t[-1]),
-                    y_final=_jsonable(result.y[:, -1]), rhs_evals=int(result.nfev),
-                    constraint_residual_max=json_number(result.constraint_residual_max),
-                    energy_drift=json_number(result.energy_drift),
-                    wall_time_s=json_number(result.wall_time_s))
-        return data
-    return result.describe()
+            fig = plot_trajectory(result, title=f"{_title(scene, args)}: {result.method}")
+            data["plot"] = save_figure(fig, args.plot)
+    warnings = [w for w in list(result.warnings) + caught if not w.startswith("run stopped")]
+    failure = None
+    if not result.success:
+        free = ()
+        if int(result.status) == -3:
+            free = _free_multipliers(scene.system)
+        failure = simulation_failure(result, str(args.scene), free)
+    def text():  # the warnings go to stderr, one line each
+        return "\n".join(line for line in result.describe().splitlines()
+                         if not line.lstrip().startswith("warning:"))
+    return CommandOutput(result=data, text=text, scene=scene_info(scene),
+                         warnings=warnings, failure=failure)
 
 
-def cmd_bench(args, steps):
+def _free_multipliers(system) -> tuple:
+    """Names of the free multipliers (for the failure message), or () if unknown."""
+    try:
+        from nhham.lagrangian.algorithm import analyze_constraints
+
+        return tuple(s.name for s in analyze_constraints(system).free_multiplier_symbols)
+    except Exception:  # the message is a hint; never fail while writing it
+        return ()
+
+
+def cmd_bench(args, steps) -> CommandOutput:
     """Work-precision study of the scene's system."""
-    from nhham.cli.plotting import plot_work_precision
+    from nhham.cli.results import bench_data
     from nhham.numerics.workprecision import work_precision
 
     scene = _load(args, steps)
     if scene.initial is None:
         raise InputError(f"{args.scene}: bench needs an [initial] table")
     t_end = args.t_end if args.t_end is not None else (scene.simulate.t_end or 10.0)
-    with steps.step("work-precision study"):
-        result = work_precision(scene.system, dict(scene.initial), (0.0, t_end),
-                                quick=args.quick, progress=steps.progress)
+    with capture_warnings() as caught:
+        with steps.step("work-precision study"):
+            result = work_precision(scene.system, dict(scene.initial), (0.0, t_end),
+                                    quick=args.quick, progress=steps.progress,
+                                    reference_digits=args.reference_digits)
+    data = bench_data(result)
+    data["plot"] = None
     if args.plot:
+        from nhham.cli.plotting import plot_work_precision, save_figure
+
         with steps.step(f"plot {args.plot}"):
-            plot_work_precision(result, args.plot)
-    if args.json:
-        return {k: _jsonable(v) for k, v in result.to_dict().items()}
-    return result.describe()
-
-
-def _jsonable(value):
-    import numpy as np
-
-    if isinstance(value, dict):
-        return {k: _jsonable(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple, np.ndarray)):
-        return [_jsonable(v) for v in (value.tolist() if isinstance(value, np.ndarray) else value)]
-    if isinstance(value, (bool, np.bool_)):
-        return bool(value)
-    if isinstance(value, (int, np.integer)):
-        return int(value)
-    if isinstance(value, (float, np.floating)):
-        return json_number(value)
-    return value
+            data["plot"] = save_figure(plot_work_precision(result), args.plot)
+    return CommandOutput(result=data, text=result.describe, scene=scene_info(scene),
+                         warnings=caught)
 
 
 # -------------------------------------------------------------------- main
@@ -405,95 +394,207 @@ COMMANDS = {
     "bench": cmd_bench,
 }
 
+_HELP = {
+    "classify": ("the constraint-set verdict (stages, ranks, classes)",
+                 "Run the constraint algorithm (stages M_k, rank of C, free multipliers, "
+                 "inconsistency), test integrability and sort the final constraints into "
+                 "first and second class on T*Q.",
+                 "nhham classify examples/paper_3_2.toml"),
+    "derive": ("the projected field, multipliers, C and energy",
+               "Derive the constrained dynamics: the projected field P(xi_L) on TQ (or, with "
+               "--side hamiltonian, the projected Hamiltonian field on T*Q), the multipliers "
+               "lambda_i, the constraint matrix C and the energy E_L (or H).",
+               "nhham derive examples/rolling_disk.toml --latex"),
+    "compare": ("the Lagrangian/Hamiltonian cross-check",
+                "Cross-check both sides through the Legendre map (fields, multipliers, "
+                "symplectic forms, brackets, stages) and compare the Dirac-bracket flow of H "
+                "with the true projected dynamics on M_f.",
+                "nhham compare examples/chaplygin_sleigh.toml --json"),
+    "simulate": ("integrate from the scene's [initial] data",
+                 "Integrate the projected field from the scene's [initial] data; options "
+                 "default to the scene's [simulate] table, then to the values shown.",
+                 "nhham simulate examples/rolling_disk.toml --method rattle --step 0.01 "
+                 "--plot disk.png"),
+    "bench": ("work-precision study over methods and tolerances",
+              "Measure every method against a high-precision mpmath reference: error at "
+              "t_end against wall time, constraint residual and energy drift.",
+              "nhham bench examples/chaplygin_sleigh.toml --quick --plot wp.png"),
+}
+
+_EXIT_TEXT = ("exit status: 0 success; 1 internal failure; 2 bad input or usage; 3 the "
+              "computation did not succeed (one line on stderr says why and what to do)")
+
+
+class _Parser(argparse.ArgumentParser):
+    """Usage errors as one line on stderr (exit status 2), pointing to --help."""
+
+    def error(self, message):
+        self.exit(EXIT_INPUT, f"{self.prog}: error: {one_line(message)} "
+                              f"(see `{self.prog} --help`)\n")
+
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    from nhham.settings import __version__
+
+    parser = _Parser(
         prog="nhham",
         description="Mechanical systems with non-holonomic constraints: classify a scene's "
                     "constraint set, derive its dynamics, compare the Lagrangian and "
-                    "Hamiltonian sides, simulate and benchmark.")
+                    "Hamiltonian sides, simulate and benchmark.",
+        epilog=_EXIT_TEXT + ". Run `nhham COMMAND --help` for a command's options.")
+    parser.add_argument("--version", action="version", version=f"nhham {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
-    helps = {
-        "classify": "the constraint-set verdict (stages, ranks, classes)",
-        "derive": "the projected field, multipliers, C and energy",
-        "compare": "the Lagrangian/Hamiltonian cross-check",
-        "simulate": "integrate from the scene's [initial] data",
-        "bench": "work-precision study over methods and tolerances",
-    }
-    for name, text in helps.items():
-        p = sub.add_parser(name, help=text, description=text)
-        p.add_argument("scene", help="scene file (TOML)")
-        p.add_argument("--json", action="store_true", help="print one JSON object on stdout")
-        p.add_argument("--verbose", action="store_true",
-                       help="list what was derived, how decisions were made, and timings")
-        p.add_argument("--debug", action="store_true", help="tracebacks for internal errors")
-        p.add_argument("--budget", type=float, default=None, metavar="SECONDS",
-                       help="stop after SECONDS and say what was decided so far (exit 3)")
-        p.add_argument("--precision", type=int, default=None, metavar="DIGITS",
-                       help="decide on M_k with mpmath at DIGITS digits (default float64)")
+    for name, (short, long, example) in _HELP.items():
+        p = sub.add_parser(name, help=short, description=long,
+                           epilog=f"example: {example}\n{_EXIT_TEXT}",
+                           formatter_class=argparse.RawDescriptionHelpFormatter)
+        add_common_arguments(p)
+        if name in ("classify", "derive", "compare"):
+            p.add_argument("--precision", type=int, default=None, metavar="DIGITS",
+                           help="decide ranks and vanishings that need sampling with mpmath at "
+                                "DIGITS digits (default: float64)")
+            p.add_argument("--latex", action="store_true",
+                           help="print LaTeX in the paper's notation instead of text")
         if name in ("derive", "compare", "simulate", "bench"):
             p.add_argument("--drop-redundant", action="store_true",
-                           help="drop constraints whose one-form is a combination of others")
+                           help="drop constraints whose one-form is a combination of the others "
+                                "(default: refuse them; classify always drops and reports them)")
         if name == "derive":
-            p.add_argument("--latex", action="store_true", help="print LaTeX")
-            p.add_argument("--side", choices=("lagrangian", "hamiltonian"), default="lagrangian")
+            p.add_argument("--side", choices=("lagrangian", "hamiltonian"), default="lagrangian",
+                           help="TQ with (q, v) or T*Q with (q, p) (default: lagrangian)")
             p.add_argument("--explicit", action="store_true",
                            help="form the closed forms P(xi_L), lambda and C (default: only "
                                 "when W is diagonal, constant or n <= 3; the implicit "
                                 "mass-matrix form otherwise)")
         if name == "compare":
-            p.add_argument("--samples", type=int, default=6, help="seeded points of M_f")
+            p.add_argument("--samples", type=int, default=6, metavar="K",
+                           help="seeded points of M_f for sampled checks (default: 6)")
         if name in ("simulate", "bench"):
-            p.add_argument("--t-end", dest="t_end", type=float, default=None)
-            p.add_argument("--plot", metavar="PNG", default=None)
+            p.add_argument("--t-end", dest="t_end", type=float, default=None, metavar="T",
+                           help="final time (default: the scene's [simulate] t_end, else 10)")
+            p.add_argument("--plot", metavar="FILE", default=None,
+                           help="save a figure (.png, .pdf, .svg); needs the plot extra: "
+                                "pip install 'nhham[plot]'")
         if name == "simulate":
-            p.add_argument("--method", default=None)
-            p.add_argument("--rtol", type=float, default=None)
-            p.add_argument("--atol", type=float, default=None)
-            p.add_argument("--step", type=float, default=None, help="fixed step size")
-            p.add_argument("--max-step", dest="max_step", type=float, default=None)
+            p.add_argument("--method", default=None, choices=METHODS, metavar="METHOD",
+                           help="one of " + ", ".join(METHODS) + " (default: the scene's, else "
+                                "DOP853); rattle, rattle4 and rk4 need --step")
+            p.add_argument("--rtol", type=float, default=None,
+                           help="relative tolerance of adaptive methods (default: scene's, else "
+                                "1e-9)")
+            p.add_argument("--atol", type=float, default=None,
+                           help="absolute tolerance of adaptive methods (default: scene's, else "
+                                "1e-12)")
+            p.add_argument("--step", type=float, default=None, metavar="DT",
+                           help="step size of the fixed-step methods rattle, rattle4, rk4")
+            p.add_argument("--max-step", dest="max_step", type=float, default=None, metavar="DT",
+                           help="largest step of adaptive methods (default: unbounded)")
+            p.add_argument("--projection", action="store_true",
+                           help="project onto the constraints after every step (adaptive "
+                                "methods and rk4): residual at round-off for a small cost")
             p.add_argument("--output", metavar="FILE", default=None,
-                           help="trajectory as .csv or .npz")
+                           help="write the trajectory: .npz (numpy) or otherwise CSV")
             p.add_argument("--project-initial", action="store_true",
-                           help="project initial data onto M_f instead of refusing them")
+                           help="project [initial] data that violate the constraints onto "
+                                "M_1 (the constraints as given, velocity and holonomic) "
+                                "instead of refusing them; the result says by how much")
         if name == "bench":
-            p.add_argument("--quick", action="store_true", help="fewer methods and settings")
+            p.add_argument("--quick", action="store_true",
+                           help="fewer methods and settings (seconds instead of minutes)")
+            p.add_argument("--reference-digits", dest="reference_digits", type=int, default=30,
+                           metavar="DIGITS",
+                           help="digits of the mpmath reference solution (default: 30)")
     return parser
+
+
+def _unknown_options(parser, command, extra) -> str:
+    """Name the options ``command`` does not take, and which commands do."""
+    subparsers = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+    words = []
+    after_option = False
+    for item in extra:
+        opt = item.split("=")[0]
+        if not opt.startswith("-"):
+            if not after_option:  # a value of the unknown option before it is no news
+                words.append(f"unexpected argument {item!r}")
+            after_option = False
+            continue
+        after_option = True
+        having = [name for name, p in subparsers.choices.items()
+                  if opt in p._option_string_actions]
+        words.append(f"{command} has no option {opt}" + (
+            f" (it is an option of {', '.join(having)})" if having else ""))
+    return "; ".join(dict.fromkeys(words))
+
+
+def add_common_arguments(p: argparse.ArgumentParser) -> None:
+    """The arguments every subcommand has (for new subcommands too)."""
+    p.add_argument("scene", help="scene file (TOML); see examples/")
+    p.add_argument("--json", action="store_true",
+                   help="print one JSON envelope {command, nhham_version, scene, result, "
+                        "warnings} on stdout")
+    p.add_argument("--verbose", action="store_true",
+                   help="list on stderr what was derived, how decisions were made, and timings")
+    p.add_argument("--debug", action="store_true", help="tracebacks for internal errors")
+    p.add_argument("--budget", type=float, default=None, metavar="SECONDS",
+                   help="stop after SECONDS and say what was decided so far (exit 3; "
+                        "default: no bound)")
 
 
 def main(argv=None) -> int:
     """Run the command; returns the exit status."""
     parser = build_parser()
-    args = parser.parse_args(argv)
-    steps = Steps(progress=sys.stderr.isatty() and not args.json)
+    args, extra = parser.parse_known_args(argv)
+    if extra:
+        print(f"nhham {args.command}: error: {_unknown_options(parser, args.command, extra)} "
+              f"(see `nhham {args.command} --help`)", file=sys.stderr)
+        return EXIT_INPUT
+    use_json = getattr(args, "json", False)
+    steps = Steps(progress=sys.stderr.isatty() and not use_json)
     try:
-        with time_budget(args.budget, steps):
+        with capture_warnings() as caught, time_budget(getattr(args, "budget", None), steps):
             out = COMMANDS[args.command](args, steps)
+            if not isinstance(out, CommandOutput):  # a plain dict (JSON) or text
+                out = CommandOutput(result=out if isinstance(out, dict) else {},
+                                    text=out if isinstance(out, str) else "")
+            text = None if use_json else out.render_text()
     except BudgetExceeded as exc:
-        print(f"nhham: {_one_line(exc)}; finished before it: {steps.decided()}",
-              file=sys.stderr)
-        return 3
+        print(f"nhham: {one_line(exc)}; finished before it: {steps.decided()}; "
+              f"allow more with a larger --budget", file=sys.stderr)
+        return EXIT_NOT_SUCCEEDED
     except InputError as exc:
-        print(f"nhham: error: {_one_line(exc)}", file=sys.stderr)
-        return 2
+        print(f"nhham: error: {one_line(exc)}", file=sys.stderr)
+        return EXIT_INPUT
     except KeyboardInterrupt:
         print("nhham: interrupted", file=sys.stderr)
-        return 1
+        return EXIT_INTERNAL
     except Exception as exc:  # internal failure: say so, traceback on request
-        if args.debug:
+        if getattr(args, "debug", False):
             traceback.print_exc()
         kind = "internal error" if not isinstance(exc, NhhamError) else "failed"
-        print(f"nhham: {kind}: {type(exc).__name__}: {_one_line(exc)}"
-              + ("" if args.debug else " (run with --debug for a traceback)"), file=sys.stderr)
-        return 1
-    if args.json:
-        print(json.dumps(out, indent=2, allow_nan=False))
+        print(f"nhham: {kind}: {type(exc).__name__}: {one_line(exc)}"
+              + ("" if getattr(args, "debug", False) else " (run with --debug for a traceback)"),
+              file=sys.stderr)
+        return EXIT_INTERNAL
+    warnings = list(out.warnings) + [w for w in caught if w not in out.warnings]
+    try:
+        return _print_output(args, out, text, warnings, steps)
+    except BrokenPipeError:  # the reader stopped early (| head): not an error of ours
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return EXIT_OK
+
+
+def _print_output(args, out, text, warnings, steps) -> int:
+    if getattr(args, "json", False):
+        print(json.dumps(envelope(args.command, out.result, scene=out.scene, warnings=warnings),
+                         indent=2, allow_nan=False))
     else:
-        print(out)
-    if args.verbose:
+        print(text)
+        for w in dict.fromkeys(one_line(w) for w in warnings):
+            print(f"nhham: warning: {w}", file=sys.stderr)
+    if getattr(args, "verbose", False):
         print(steps.render(), file=sys.stderr)
-    return 0
-
-
-def _one_line(exc) -> str:
-    return " ".join(str(exc).split()) or type(exc).__name__
+    if out.failure:
+        print(f"nhham: {one_line(out.failure)}", file=sys.stderr)
+        return EXIT_NOT_SUCCEEDED
+    return EXIT_OK

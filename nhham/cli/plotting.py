@@ -1,90 +1,214 @@
-"""Plots of results (matplotlib, an optional extra: ``pip install nhham[plot]``).
+"""Figures of results (matplotlib, an optional extra: ``pip install 'nhham[plot]'``).
 
-matplotlib is imported only when a plot is asked for; without it a
-:class:`OptionalDependencyError` says how to install it.
+Every function takes an optional ``ax`` (or ``axes``) to draw into and returns
+the :class:`matplotlib.figure.Figure`; without one it makes a new Figure
+*without pyplot*, so no backend is chosen or changed here: in a notebook the
+figure shows inline, and :func:`save_figure` writes it to a file. matplotlib
+is imported only when a plot is asked for; without it an
+:class:`~nhham.errors.OptionalDependencyError` says how to install it.
+
+>>> fig = plot_trajectory(result)                     # doctest: +SKIP
+>>> save_figure(fig, "trajectory.png")                # doctest: +SKIP
 """
 
 from __future__ import annotations
+
+import re
 
 import numpy as np
 
 from nhham.errors import OptionalDependencyError
 
-__all__ = ["OptionalDependencyError", "plot_work_precision", "plot_trajectory"]
+__all__ = ["OptionalDependencyError", "plot_work_precision", "plot_trajectory", "save_figure",
+           "series_styles"]
+
+_LINESTYLES = ("-", "--", "-.", ":")
+_MARKERS = ("o", "s", "^", "D", "v", "P", "X", "*", "<", ">")
 
 
-def _pyplot():
+def _figure_class():
     try:
-        import matplotlib
-
-        matplotlib.use("Agg")  # files only: never needs a display
-        import matplotlib.pyplot as plt
+        from matplotlib.figure import Figure
     except ImportError as exc:
         raise OptionalDependencyError(
             "plotting needs matplotlib, an optional extra: pip install 'nhham[plot]' "
             "(or pip install matplotlib)") from exc
-    return plt
+    return Figure
 
 
-def plot_work_precision(result, path) -> str:
-    """Error at t_end versus wall time, one line per method (log-log); saved to ``path``.
+def series_styles(count: int) -> list:
+    """``count`` distinguishable styles: dicts of colour, marker and line style.
 
-    Parameters
-    ----------
-    result : WorkPrecisionResult
-    path : str or path-like
-
-    Returns
-    -------
-    str
-        The path written.
+    The first 10 use the 10 colours of matplotlib's "tab10" cycle with distinct
+    markers; beyond 10 the markers and line styles change too, so no two series
+    look alike however many there are.
     """
-    plt = _pyplot()
-    fig, ax = plt.subplots(figsize=(7, 5))
-    for method in result.methods():
-        rows = [r for r in result.rows if r.method == method and r.status == 0
-                and np.isfinite(r.error) and r.error > 0]
-        if not rows:
-            continue
-        rows.sort(key=lambda r: r.wall_time_s)
-        ax.loglog([r.wall_time_s for r in rows], [r.error for r in rows], "o-", label=method,
-                  markersize=3)
-    ax.set_xlabel("wall time [s]")
-    ax.set_ylabel("relative error at t_end")
-    ax.set_title(f"work-precision: {result.name or 'system'}")
-    ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=7, ncol=2)
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
+    from matplotlib import colormaps
+
+    colours = getattr(colormaps["tab10"], "colors")  # a ListedColormap
+    out = []
+    for k in range(count):
+        out.append({"color": colours[k % 10], "marker": _MARKERS[(k + k // 10) % len(_MARKERS)],
+                    "linestyle": _LINESTYLES[(k // 10) % len(_LINESTYLES)]})
+    return out
+
+
+def save_figure(fig, path, dpi: int = 150) -> str:
+    """Write a Figure to ``path`` (format from the suffix); returns the path."""
+    fig.savefig(path, dpi=dpi, bbox_inches="tight")
     return str(path)
 
 
-def plot_trajectory(result, path) -> str:
-    """States over time, constraint residual and energy; saved to ``path``.
+def _new_axes(nrows, figsize, sharex=True):
+    Figure = _figure_class()
+    fig = Figure(figsize=figsize, layout="constrained")
+    axes = fig.subplots(nrows, 1, sharex=sharex, squeeze=False)[:, 0]
+    return fig, list(axes)
+
+
+# -------------------------------------------------------------- trajectory
+def plot_trajectory(result, axes=None, *, title: str | None = None):
+    """Coordinates, velocities, constraint residual and energy over time, one panel each.
 
     Parameters
     ----------
     result : SimulationResult
-    path : str or path-like
+    axes : sequence of 4 matplotlib Axes, optional
+        Where to draw (coordinates, velocities, residual, energy); default a
+        new Figure with four panels sharing the time axis.
+    title : str, optional
+        Figure title; default the method and the run's settings.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+
+    Notes
+    -----
+    The scene gives no units, so axes are labelled with the quantities only
+    (coordinates in the scene's units, velocities per unit time). Where the
+    constraint residual is exactly zero (at t0, or after a projection) it is
+    left out of the log-scale panel rather than clamped to a fake value.
     """
-    plt = _pyplot()
-    fig, axes = plt.subplots(3, 1, figsize=(7, 8), sharex=True)
-    for name, series in zip(result.names, result.y):
-        axes[0].plot(result.t, series, label=name, linewidth=1)
-    axes[0].legend(fontsize=7, ncol=4)
-    axes[0].set_ylabel("state")
-    # Exact zeros (at t0, or after projection) would drag a log axis to 1e-300.
-    res = np.maximum(result.diagnostics.constraint_residual, 1e-17)
-    axes[1].semilogy(result.t, res, linewidth=1)
-    axes[1].set_ylabel("max |constraint residual|")
-    axes[2].plot(result.t, result.energy - result.energy[0], label="E - E(0)", linewidth=1)
-    axes[2].plot(result.t, result.work, "--", label="work of constraint forces", linewidth=1)
-    axes[2].legend(fontsize=7)
-    axes[2].set_ylabel("energy")
-    axes[2].set_xlabel("t")
-    axes[0].set_title(f"{result.method}: {result.message}")
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return str(path)
+    if axes is None:
+        fig, axes = _new_axes(4, (7.5, 9.0))
+    else:
+        axes = list(axes)
+        if len(axes) != 4:
+            raise ValueError("plot_trajectory: axes must be 4 Axes (coordinates, velocities, "
+                             "constraint residual, energy)")
+        fig = axes[0].figure
+    names = list(result.names)
+    n = len(names) // 2
+    t = np.asarray(result.t)
+    Y = np.asarray(result.y)
+    for ax, rows, label in ((axes[0], range(n), "coordinates q"),
+                            (axes[1], range(n, 2 * n), "velocities dq/dt")):
+        styles = series_styles(len(rows))
+        every = max(1, len(t) // 12)
+        for style, i in zip(styles, rows):
+            ax.plot(t, Y[i], label=names[i], linewidth=1.2, markersize=4, markevery=every,
+                    **style)
+        ax.set_ylabel(label)
+        ax.legend(fontsize=8, ncol=min(4, len(rows)), loc="best")
+        ax.grid(True, alpha=0.3)
+    res = np.asarray(result.diagnostics.constraint_residual, dtype=float)
+    ax = axes[2]
+    positive = res > 0
+    if positive.any():
+        ax.semilogy(t, np.where(positive, res, np.nan), color="black", linewidth=1)
+        if not positive.all():
+            ax.text(0.01, 0.04, f"exactly 0 at {int((~positive).sum())} of {len(res)} points "
+                    "(not drawn)", transform=ax.transAxes, fontsize=7)
+    else:
+        ax.text(0.5, 0.5, "constraint residual exactly 0 at every stored point",
+                transform=ax.transAxes, ha="center", va="center", fontsize=9)
+    ax.set_ylabel("max |constraint\nresidual|")
+    ax.grid(True, which="both", alpha=0.3)
+    ax = axes[3]
+    energy = np.asarray(result.energy, dtype=float)
+    ax.plot(t, energy - energy[0], label="E(t) - E(0)", color="tab:blue", linewidth=1.2)
+    if result.work is not None:
+        ax.plot(t, np.asarray(result.work, dtype=float), "--", color="tab:red", linewidth=1.2,
+                label="work of the constraint forces")
+    ax.set_ylabel("energy change")
+    ax.set_xlabel("time t")
+    ax.legend(fontsize=8)
+    ax.grid(True, alpha=0.3)
+    if title is None:
+        title = f"{result.method}: {_settings_text(result)}"
+    fig.suptitle(title)
+    return fig
+
+
+def _settings_text(result) -> str:
+    s = dict(result.settings)
+    if result.method in ("rattle", "rattle4", "rk4"):
+        return f"step {s.get('step')}"
+    if result.method == "reference":
+        return f"mpmath {s.get('digits')} digits"
+    text = f"rtol {s.get('rtol'):g}" if s.get("rtol") is not None else ""
+    return text + (", projection" if s.get("projection") else "")
+
+
+# ---------------------------------------------------------- work-precision
+def _setting_value(setting: str) -> float:
+    """The number in ``"rtol=1e-08"`` or ``"h=0.01"`` (nan if none)."""
+    m = re.search(r"=\s*([-+0-9.eE]+)", setting)
+    try:
+        return float(m.group(1)) if m else float("nan")
+    except ValueError:
+        return float("nan")
+
+
+def plot_work_precision(result, ax=None, *, title: str | None = None):
+    """Error at t_end against wall time, log-log: one colour per method.
+
+    Parameters
+    ----------
+    result : WorkPrecisionResult
+    ax : matplotlib Axes, optional
+        Where to draw; default a new Figure.
+    title : str, optional
+        Default ``"work-precision: <system name>"``.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+
+    Notes
+    -----
+    A method and its ``+projection`` variant share a colour and a marker; the
+    variant is dashed. Each line joins the runs in the order of their
+    setting (tolerance or step, coarse to fine), so a line never zig-zags
+    because two runs happened to take the same time. Runs that failed or
+    whose error is not positive and finite are not drawn.
+    """
+    if ax is None:
+        Figure = _figure_class()
+        fig = Figure(figsize=(7.5, 5.5), layout="constrained")
+        ax = fig.subplots()
+    fig = ax.figure
+    labels = list(result.methods())
+    bases = list(dict.fromkeys(m.split("+")[0] for m in labels))
+    styles = dict(zip(bases, series_styles(len(bases))))
+    drawn = 0
+    for label in labels:
+        rows = [r for r in result.rows if r.method == label and r.status == 0
+                and np.isfinite(r.error) and r.error > 0]
+        if not rows:
+            continue
+        rows.sort(key=lambda r: -_setting_value(r.setting))
+        style = dict(styles[label.split("+")[0]])
+        if "+" in label:
+            style.update(linestyle="--", markerfacecolor="none")
+        ax.loglog([r.wall_time_s for r in rows], [r.error for r in rows], label=label,
+                  linewidth=1.3, markersize=5, **style)
+        drawn += 1
+    ax.set_xlabel("wall time [s]")
+    ax.set_ylabel("relative error at t_end")
+    ax.set_title(title or f"work-precision: {result.name or 'system'}")
+    ax.grid(True, which="both", alpha=0.3)
+    if drawn:
+        ax.legend(fontsize=7, ncol=2, title="dashed: + projection", title_fontsize=7)
+    return fig

@@ -644,7 +644,6 @@ def _classify_sampled(side, cons, labels, analysis, tol, precision, samples, see
     cons_tq = tuple(c if _is_on_tq(c, system) or not (sp.sympify(c).free_symbols
                                                       & set(side.momenta))
                     else side.legendre.pullback(c) for c in cons)
-    k = len(cons_tq)
     be = Backend(precision)
     Mtq = Submanifold(system, cons_tq, precision=precision, samples=samples, seed=seed,
                       exact=False)

@@ -32,7 +32,6 @@ a proof.
 from __future__ import annotations
 
 import itertools
-import math
 import random
 from dataclasses import dataclass
 

@@ -204,7 +204,7 @@ def _proof_modulo_p(system, chis, W, F, mu, Jq, Jv, seed, tries: int = 3):
         rK, _, _ = exact_rank(Kmov)
         rJ, _, _ = exact_rank(J)
         if rK == n + m and rJ == len(chis):
-            how = f"at a random point modulo the prime 2^61 - 1 (proof)"
+            how = "at a random point modulo the prime 2^61 - 1 (proof)"
             rank = Decision(m, "exact", f"rank (Z_i(chi_j)) = rank [[W, mu^T], [mu, 0]] - n = "
                             f"{m}, full, {how}", precision="exact", samples=1, error_bound=0.0)
             cons = Decision(True, "exact", "no lambda-free condition: the rows of the "

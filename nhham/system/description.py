@@ -540,7 +540,9 @@ def _normalise_parameters(parameters, problems):
     items = parameters.items() if isinstance(parameters, Mapping) else [(p, None) for p in parameters]
     for key, value in items:
         try:
-            sym = as_symbol(key)
+            # A user's Symbol keeps its assumptions (positive=True lets sympy simplify
+            # sqrt(m**2) to m); names become plain symbols.
+            sym = key if isinstance(key, sp.Symbol) else as_symbol(key)
         except TypeError as exc:
             problems.append(f"parameters: {exc}")
             continue

@@ -29,7 +29,7 @@ import keyword
 import math
 import tokenize
 import warnings
-from typing import Mapping
+from typing import Iterable, Mapping
 
 import sympy as sp
 from sympy.printing.str import StrPrinter
@@ -100,8 +100,18 @@ _NONFINITE = (sp.zoo, sp.nan, sp.oo, -sp.oo)
 
 
 # --------------------------------------------------------------------- parse
-def parse_expression(text: str, symbols: Mapping[str, sp.Symbol], where: str) -> sp.Expr:
+def parse_expression(text: str, symbols: Mapping[str, sp.Symbol] | Iterable,
+                     where: str = "expression") -> sp.Expr:
     """Parse untrusted text into a sympy expression without evaluating Python.
+
+    This is how to read back any expression nhham prints (scene files, the
+    JSON of the ``nhham`` command, :func:`to_text`): with the names it may
+    use, a parameter called ``I`` is a real symbol, not sympy's imaginary unit.
+
+    >>> parse_expression("I*theta_dot**2/2", ["theta", "theta_dot", "I"])
+    I*theta_dot**2/2
+    >>> _.has(sp.I)
+    False
 
     Parameters
     ----------
@@ -109,10 +119,13 @@ def parse_expression(text: str, symbols: Mapping[str, sp.Symbol], where: str) ->
         The expression, in Python syntax restricted to numbers, names,
         ``+ - * / **``, unary signs and calls of :data:`FUNCTIONS`. Line
         breaks count as spaces, so a long expression may span several lines.
-    symbols : mapping of str to sympy.Symbol
+    symbols : mapping of str to sympy.Symbol, or iterable of names or Symbols
         The symbol table: every name the expression may use besides the
-        functions and ``pi``. Python keywords (``lambda``) may be table names.
-    where : str
+        functions and ``pi`` (a list of names makes plain real-unassumed
+        symbols; Symbols keep their assumptions). Python keywords (``lambda``)
+        may be table names. The ``nhham`` command's JSON lists them in
+        ``scene.names``.
+    where : str, optional
         Key path of the text (``constraints[1]``); every error message
         starts with it.
 
@@ -132,6 +145,7 @@ def parse_expression(text: str, symbols: Mapping[str, sp.Symbol], where: str) ->
     """
     if not isinstance(text, str):
         raise ParseError(f"{where}: expected an expression string, got {type(text).__name__}")
+    symbols = _symbol_table(symbols)
     if len(text) > MAX_EXPRESSION_LENGTH:
         raise ParseError(
             f"{where}: expression too long ({len(text)} characters; "
@@ -156,6 +170,17 @@ def parse_expression(text: str, symbols: Mapping[str, sp.Symbol], where: str) ->
         raise ParseError(f"{where}: the expression is not finite ({_quote(body)} gives {expr})")
     _check_float_range(expr, where)
     return expr
+
+
+def _symbol_table(symbols) -> Mapping[str, sp.Symbol]:
+    """A name -> Symbol table from a mapping or an iterable of names/Symbols."""
+    if isinstance(symbols, Mapping):
+        return symbols
+    table: dict[str, sp.Symbol] = {}
+    for item in symbols:
+        sym = item if isinstance(item, sp.Symbol) else sp.Symbol(str(item))
+        table[sym.name] = sym
+    return table
 
 
 def _check_float_range(expr: sp.Expr, where: str) -> None:

@@ -150,6 +150,30 @@ class Scene:
     simulate: SimulateOptions
     source: str
 
+    def simulate_options(self, **overrides) -> dict:
+        """Keyword arguments for :func:`nhham.simulate` from the scene.
+
+        ``t_span`` runs from 0 to the ``[simulate]`` table's ``t_end`` (10 if
+        it gives none), ``y0`` is the ``[initial]`` table, and the table's
+        ``method``, ``rtol``, ``atol``, ``step``, ``max_step`` follow; any
+        keyword given here (``t_end`` too) replaces the scene's value.
+
+        >>> scene = load_scene("examples/rolling_disk.toml")       # doctest: +SKIP
+        >>> result = nhham.simulate(scene.system, **scene.simulate_options(rtol=1e-6))
+        ...                                                         # doctest: +SKIP
+
+        Raises
+        ------
+        SceneError
+            If the scene has no ``[initial]`` table.
+        """
+        if self.initial is None:
+            raise SceneError(f"{self.source}: simulating needs an [initial] table with a value "
+                             f"for every coordinate and velocity")
+        opts = self.simulate.given() | overrides
+        t_end = float(opts.pop("t_end", 10.0))
+        return {"t_span": (0.0, t_end), "y0": dict(self.initial), **opts}
+
 
 # -------------------------------------------------------------------- load
 def load_scene(path, *, check_initial: bool = True, drop_redundant: bool = False) -> Scene:

@@ -6,7 +6,6 @@ user runs it.
 """
 
 import json
-import os
 import shutil
 import subprocess
 import sys
@@ -29,12 +28,24 @@ def run(*args, check_status=0, cwd=None):
     return proc
 
 
-def run_json(*args):
-    proc = run(*args, "--json")
-    return json.loads(proc.stdout)  # exactly one JSON object
+def run_json(*args, check_status=0):
+    """The ``result`` of the command's JSON envelope (exactly one JSON object).
+
+    In-process and cached (conftest.run_inprocess): the contract tests run the same
+    commands; the subprocess path is covered by ``run`` below.
+    """
+    from conftest import run_inprocess
+
+    rc, out, err = run_inprocess(*map(str, args), "--json")
+    assert rc == check_status, (rc, out, err)
+    assert "Traceback" not in err
+    env = json.loads(out)
+    assert env["command"] == args[0]
+    return env["result"]
 
 
 def parse(text):
+    """Scene names are plain symbols here (no parameter named I, E, S or N)."""
     return sp.sympify(text)
 
 
@@ -45,7 +56,7 @@ def test_classify_rolling_disk():
     depend on theta but not on p_theta, so {phi_1, phi_2} = 0: both first class.
     The distribution is not involutive (the disk can reach any x, y, theta, phi)."""
     d = run_json("classify", EXAMPLES / "rolling_disk.toml")
-    assert (d["n"], d["m"], d["regular"], d["rank_C"]) == (4, 2, True, 2)
+    assert (d["n"], d["m"], d["regular"], d["rank_c"]) == (4, 2, True, 2)
     assert d["status"] == "determined" and d["free_multipliers"] == 0
     assert len(d["stages"]) == 1 and len(d["final_constraints"]) == 2
     assert d["integrable"] is False and d["redundant"] == []
@@ -56,7 +67,7 @@ def test_classify_paper_3_1():
     """Z(phi) = 0 and xi_L(phi) = 0: C = 0, the multiplier stays free, one stage;
     phi = v2 + v3 = d(q2 + q3)/dt is integrable; alone, phi is first class."""
     d = run_json("classify", EXAMPLES / "paper_3_1.toml")
-    assert (d["regular"], d["rank_C"], d["status"], d["free_multipliers"]) == \
+    assert (d["regular"], d["rank_c"], d["status"], d["free_multipliers"]) == \
         (False, 0, "underdetermined", 1)
     assert d["integrable"] is True
     assert (d["first_class"], d["second_class"]) == (1, 0)
@@ -106,7 +117,7 @@ def test_classify_paper_4_1():
 def test_classify_redundant_disk_reports_and_drops():
     d = run_json("classify", EXAMPLES / "redundant_disk.toml")
     assert d["redundant"] == ["constraints[2]"]
-    assert (d["m"], d["rank_C"], d["status"]) == (2, 2, "determined")
+    assert (d["m"], d["rank_c"], d["status"]) == (2, 2, "determined")
 
 
 def test_classify_nonholonomic_particle():
@@ -151,7 +162,7 @@ def test_derive_rolling_disk_json_matches_hand_values():
         assert np.allclose(lam, [m * R * pt[thd] * pt[phd] * np.sin(pt[th]),
                                  -m * R * pt[thd] * pt[phd] * np.cos(pt[th])], atol=1e-12)
     assert d["free_multiplier_symbols"] == []
-    assert len(d["C"]) == 2 and len(d["C"][0]) == 2
+    assert len(d["constraint_matrix"]) == 2 and len(d["constraint_matrix"][0]) == 2
 
 
 def test_derive_paper_3_1_has_free_multiplier():
@@ -201,12 +212,6 @@ def test_usage_error_exits_2():
     assert proc.returncode == 2
 
 
-def test_every_example_classifies():
-    for scene in sorted(EXAMPLES.glob("*.toml")):
-        d = run_json("classify", scene)
-        assert d["status"] in ("determined", "underdetermined", "inconsistent"), scene
-
-
 @pytest.mark.skipif(shutil.which("nhham") is None, reason="console script not installed")
 def test_console_script_installed():
     proc = subprocess.run(["nhham", "classify", str(EXAMPLES / "rolling_disk.toml"), "--json"],
@@ -232,9 +237,10 @@ def test_simulate_rolling_disk_against_closed_form(method, tmp_path):
     d = run_json("simulate", EXAMPLES / "rolling_disk.toml", *method, "--output",
                  tmp_path / "traj.csv")
     for key in ("status", "t_final", "y_final", "constraint_residual_max", "energy_drift",
-                "rhs_evals", "wall_time_s"):
+                "nfev", "wall_time_s"):
         assert key in d
-    assert d["status"] == 0 and d["t_final"] == scene["simulate"]["t_end"]
+    assert d["success"] is True and d["status"] == "success" and d["status_code"] == 0
+    assert d["t_final"] == scene["simulate"]["t_end"]
     expected = _disk_closed_form(d["t_final"], scene["initial"], scene["parameters"]["R"])
     tol = 1e-7 if method else 1e-8
     assert np.allclose(d["y_final"][:4], expected, atol=tol)
@@ -251,14 +257,6 @@ def test_simulate_refuses_inconsistent_initial_data(tmp_path):
     proc = run("simulate", scene, check_status=2)
     assert "constraints[0]" in proc.stderr and "residual" in proc.stderr
     d = run_json("simulate", scene, "--project-initial")
-    assert d["status"] == 0 and d["constraint_residual_max"] < 1e-9
+    assert d["success"] and d["constraint_residual_max"] < 1e-9
 
 
-def test_bench_quick_json():
-    d = run_json("bench", EXAMPLES / "chaplygin_sleigh.toml", "--quick")
-    methods = {r["method"] for r in d["rows"]}
-    assert {"DOP853", "rattle"} <= methods
-    for r in d["rows"]:
-        assert r["error"] is None or r["error"] >= 0
-    rattle = [r for r in d["rows"] if r["method"] == "rattle"]
-    assert max(r["constraint_residual"] for r in rattle) < 1e-12

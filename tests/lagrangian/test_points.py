@@ -5,7 +5,6 @@ sympy's own rank and linear solve, and the true degree of a numerator found by
 sympy after substituting the circle parametrisation.
 """
 
-import math
 import random
 
 import mpmath

@@ -4,7 +4,6 @@ warnings, the reference method and the work-precision driver."""
 from __future__ import annotations
 
 import json
-import math
 
 import numpy as np
 import pytest
@@ -187,16 +186,16 @@ def test_work_precision_rows_and_time_to_solution(sleigh):
 
 
 def test_plots_need_matplotlib_or_say_so(tmp_path, sleigh):
-    from nhham.cli.plotting import OptionalDependencyError, plot_trajectory
+    from nhham.cli.plotting import OptionalDependencyError, plot_trajectory, save_figure
 
     res = simulate(sleigh, (0, 1), sleigh_state(), warn=False)
     try:
         import matplotlib  # noqa: F401
     except ImportError:
         with pytest.raises(OptionalDependencyError, match="pip install"):
-            plot_trajectory(res, tmp_path / "t.png")
+            plot_trajectory(res)
     else:
-        path = plot_trajectory(res, tmp_path / "t.png")
+        path = save_figure(plot_trajectory(res), tmp_path / "t.png")
         assert (tmp_path / "t.png").exists() and path.endswith("t.png")
 
 

@@ -1,0 +1,155 @@
+"""Rich displays of nhham's results: ``nhham.report(obj)`` in a notebook.
+
+:func:`report` wraps a result (a constraint analysis or classification, the
+Lagrangian geometry, the Hamiltonian side, a cross-check, a simulation, a
+work-precision study, or any sympy expression or matrix) in a
+:class:`Report` whose ``_repr_latex_`` / ``_repr_html_`` Jupyter shows, with
+the same data, labels and notation as the ``nhham`` command (the builders of
+:mod:`nhham.cli.results`), and whose ``repr`` is one short line.
+
+>>> import nhham
+>>> disk = nhham.models.rolling_disk(symbolic=True)
+>>> r = nhham.report(nhham.analyze_constraints(disk))
+>>> r
+<nhham report: vertical rolling disk: n = 4 coordinates, m = 2 velocity constraints>
+>>> r.latex.splitlines()[0]
+'\\\\begin{aligned}'
+"""
+
+from __future__ import annotations
+
+import html as _html
+
+import sympy as sp
+
+from nhham.cli import latex as tex
+
+__all__ = ["Report", "report"]
+
+
+class Report:
+    """Text, LaTeX and HTML of one result.
+
+    Attributes
+    ----------
+    title : str
+    text : str
+        What the ``nhham`` command prints.
+    latex : str or None
+        Math-mode LaTeX (no ``$$``), or None for numeric results.
+    html : str or None
+        An HTML table, for numeric results.
+    """
+
+    def __init__(self, title: str, text: str, latex: str | None = None,
+                 html: str | None = None):
+        self.title, self.text, self.latex, self.html = title, text, latex, html
+
+    def __repr__(self) -> str:
+        first = self.text.splitlines()[0] if self.text else self.title
+        return f"<nhham report: {first}>"
+
+    def __str__(self) -> str:
+        return self.text
+
+    def _repr_latex_(self):
+        return None if self.latex is None else f"$$\n{self.latex}\n$$"
+
+    def _repr_html_(self):
+        if self.html is not None:
+            return self.html
+        return None if self.latex is not None else f"<pre>{_html.escape(self.text)}</pre>"
+
+
+def _names(system) -> list:
+    from nhham.system.naming import momentum_symbol, multiplier_symbol
+
+    return ([q.name for q in system.coordinates] + [v.name for v in system.velocities]
+            + [momentum_symbol(q).name for q in system.coordinates]
+            + [p.name for p in system.parameters]
+            + [multiplier_symbol(i + 1).name for i in range(max(system.m, 1))])
+
+
+def _parser(system):
+    from nhham.system.expressions import parse_expression
+
+    names = _names(system)
+    return lambda text: parse_expression(text, names)
+
+
+def _title(system) -> str:
+    return getattr(system, "name", "") or "system"
+
+
+def _html_table(rows, header=None) -> str:
+    def cells(row, tag):
+        return "".join(f"<{tag}>{_html.escape(str(c))}</{tag}>" for c in row)
+    head = f"<tr>{cells(header, 'th')}</tr>" if header else ""
+    body = "".join(f"<tr>{cells(r, 'td')}</tr>" for r in rows)
+    return f"<table>{head}{body}</table>"
+
+
+def report(obj) -> Report:
+    """A :class:`Report` of ``obj`` for notebooks and printing.
+
+    Parameters
+    ----------
+    obj
+        ConstraintAnalysis, ConstraintClasses, LagrangianGeometry,
+        HamiltonianSide, CrossCheckReport, SimulationResult,
+        WorkPrecisionResult, or a sympy expression or matrix.
+
+    Raises
+    ------
+    TypeError
+        For anything else.
+    """
+    from nhham.cli import results as R
+
+    kind = type(obj).__name__
+    if isinstance(obj, (sp.MatrixBase, sp.Basic)):
+        return Report("expression", sp.sstr(obj), tex.matrix_latex(obj)
+                      if isinstance(obj, sp.MatrixBase) else tex.latex(obj))
+    if kind == "ConstraintClasses" and getattr(obj, "analysis", None) is not None:
+        analysis, classes = obj.analysis, obj
+    elif kind == "ConstraintAnalysis":
+        analysis, classes = obj, None
+    else:
+        analysis = classes = None
+    if analysis is not None:
+        data = R.classify_data(analysis, classes)
+        title = _title(analysis.system)
+        return Report(title, R.classify_text(title, data),
+                      R.classify_latex(title, data, _parser(analysis.system)))
+    if kind == "LagrangianGeometry":
+        system = obj.system
+        data = R.derive_data("lagrangian", system.state, list(obj.projected_field),
+                             list(obj.multipliers), obj.constraint_matrix, obj.energy, ())
+        title = _title(system)
+        return Report(title, R.derive_text(title, data), R.derive_latex(data, _parser(system)))
+    if kind == "HamiltonianSide":
+        system = obj.system
+        data = R.derive_data("hamiltonian", obj.variables, list(obj.projected_field_H),
+                             list(obj.multipliers_H), obj.constraint_matrix_H, obj.H, ())
+        title = _title(system)
+        return Report(title, R.derive_text(title, data), R.derive_latex(data, _parser(system)))
+    if kind == "CrossCheckReport":
+        data = R.compare_data(obj, None)
+        title = "cross-check"
+        return Report(title, obj.describe(), R.compare_latex(title, data, lambda t: sp.S(t)))
+    if kind == "SimulationResult":
+        data = R.simulation_data(obj, (obj.t[0], obj.t[-1]))
+        keys = ("method", "status", "t_final", "steps", "nfev", "wall_time_s",
+                "constraint_residual_max", "energy_drift", "cond_c_max")
+        rows: list = [(k, data[k]) for k in keys]
+        rows += [(n, f"{v:.10g}") for n, v in zip(data["state"], data["y_final"])]
+        return Report(obj.method, obj.describe(), None, _html_table(rows, ("", "value")))
+    if kind == "WorkPrecisionResult":
+        data = R.bench_data(obj)
+        wp_rows = [(r["method"], r["setting"], f"{r['error']:.2e}" if r["error"] is not None
+                 else "-", f"{1e3 * r['wall_time_s']:.3f}", r["nfev"],
+                 f"{r['constraint_residual']:.1e}") for r in data["rows"]]
+        return Report(obj.name, obj.describe(), None, _html_table(
+            wp_rows, ("method", "setting", "error", "wall time [ms]", "evaluations",
+                   "constraint residual")))
+    raise TypeError(f"nhham.report: no report for {kind} objects")

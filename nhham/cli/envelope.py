@@ -1,0 +1,206 @@
+"""The one JSON contract of the ``nhham`` command.
+
+Every subcommand run with ``--json`` prints exactly one object, the envelope::
+
+    {
+      "command": "classify",             # the subcommand
+      "nhham_version": "0.1.0",
+      "scene": {...},                    # where the input came from, and its names
+      "result": {...},                   # the subcommand's own result
+      "warnings": ["one line", ...]      # each warning one line, no Python text
+    }
+
+Keys are snake_case and each key has one JSON type in every command (numbers
+as numbers, ``null`` for "not available"). Expressions are strings printed
+by :func:`nhham.system.expressions.to_text`; read them back with
+``nhham.parse_expression(text, envelope["scene"]["names"])`` (``I``, ``E``,
+``S``, ``N`` are then the scene's parameters, not sympy's constants). The
+JSON Schema is :func:`output_schema` (the file ``nhham/cli/schemas/output.schema.json``).
+
+Exit status: :data:`EXIT_OK` (0) success, :data:`EXIT_INTERNAL` (1) an
+internal failure, :data:`EXIT_INPUT` (2) bad input or usage,
+:data:`EXIT_NOT_SUCCEEDED` (3) the command ran but its computation did not
+succeed (a simulation that stopped early); in that case the envelope is still
+printed, with ``result.success`` false, and stderr has one line saying why
+and what to do.
+
+Any subcommand (present or future) builds its output with :func:`envelope`
+and :func:`scene_info`, and gathers warnings with :func:`capture_warnings`.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import warnings as _warnings
+from contextlib import contextmanager
+from dataclasses import dataclass, field
+from functools import lru_cache
+from importlib import resources
+from typing import Any, Callable, Iterator
+
+__all__ = [
+    "EXIT_OK",
+    "EXIT_INTERNAL",
+    "EXIT_INPUT",
+    "EXIT_NOT_SUCCEEDED",
+    "CommandOutput",
+    "envelope",
+    "scene_info",
+    "one_line",
+    "capture_warnings",
+    "output_schema",
+    "jsonable",
+    "json_number",
+]
+
+EXIT_OK = 0
+EXIT_INTERNAL = 1
+EXIT_INPUT = 2
+EXIT_NOT_SUCCEEDED = 3
+
+
+@dataclass
+class CommandOutput:
+    """What a subcommand hands to :func:`nhham.cli.main.main`.
+
+    Attributes
+    ----------
+    result : dict
+        The ``result`` of the JSON envelope.
+    text : callable returning str, or str
+        The human-readable output (built only when no ``--json`` was asked).
+    scene : dict or None
+        :func:`scene_info` of the input.
+    warnings : list of str
+        Warnings of the computation (one line each).
+    failure : str or None
+        When the computation did not succeed: one line saying why and what to
+        do. The command then exits :data:`EXIT_NOT_SUCCEEDED`.
+    """
+
+    result: dict
+    text: Callable[[], str] | str = ""
+    scene: dict | None = None
+    warnings: list = field(default_factory=list)
+    failure: str | None = None
+
+    def render_text(self) -> str:
+        return self.text() if callable(self.text) else str(self.text)
+
+
+def one_line(message) -> str:
+    """A message as one line (whitespace runs, including newlines, become one space)."""
+    return " ".join(str(message).split())
+
+
+def _dedupe(lines) -> list:
+    out: list[str] = []
+    for line in lines:
+        line = one_line(line)
+        if line and line not in out:
+            out.append(line)
+    return out
+
+
+def envelope(command: str, result: dict, *, scene: dict | None = None,
+             warnings=()) -> dict:
+    """The JSON object printed by ``nhham COMMAND --json``.
+
+    Parameters
+    ----------
+    command : str
+        The subcommand's name.
+    result : dict
+        Its result (JSON-ready; see :func:`jsonable`).
+    scene : dict, optional
+        :func:`scene_info` of the scene it ran on.
+    warnings : iterable of str
+        Warnings; each becomes one line, duplicates are dropped.
+
+    >>> env = envelope("classify", {"status": "determined"})
+    >>> sorted(env)
+    ['command', 'nhham_version', 'result', 'scene', 'warnings']
+    """
+    from nhham.settings import __version__
+
+    return {"command": command, "nhham_version": __version__, "scene": scene,
+            "result": jsonable(result), "warnings": _dedupe(warnings)}
+
+
+def scene_info(scene) -> dict:
+    """Where the input came from and every name an expression in the output may use.
+
+    ``names`` lists coordinates, velocities, momenta, parameters and the
+    multipliers ``lambda_i``: pass it to :func:`nhham.parse_expression`.
+    """
+    from nhham.system.naming import momentum_symbol, multiplier_symbol
+
+    system = scene.system
+    coords = [q.name for q in system.coordinates]
+    vels = [v.name for v in system.velocities]
+    momenta = [momentum_symbol(q).name for q in system.coordinates]
+    values = {p: v for p, v in getattr(system, "parameter_values", {}).items()}
+    params = [{"name": p.name, "value": json_number(values[p]) if p in values else None}
+              for p in system.parameters]
+    multipliers = [multiplier_symbol(i + 1).name for i in range(max(system.m, len(
+        getattr(system, "constraints", ()))))]
+    names = coords + vels + momenta + [p["name"] for p in params] + multipliers
+    return {"path": str(scene.source), "name": scene.name, "coordinates": coords,
+            "velocities": vels, "momenta": momenta, "parameters": params,
+            "names": list(dict.fromkeys(names))}
+
+
+@contextmanager
+def capture_warnings() -> Iterator[list]:
+    """Collect Python warnings issued inside the block as one-line messages.
+
+    Nothing is printed: the command reports them itself (in the envelope, or
+    one ``nhham: warning:`` line each on stderr).
+    """
+    caught: list[str] = []
+    with _warnings.catch_warnings(record=True) as records:
+        _warnings.simplefilter("always")
+        try:
+            yield caught
+        finally:
+            caught.extend(one_line(r.message) for r in records)
+
+
+def json_number(x) -> float | None:
+    """A float for JSON: finite numbers as numbers, others (nan, inf) as null."""
+    if x is None:
+        return None
+    x = float(x)
+    return x if math.isfinite(x) else None
+
+
+def jsonable(value: Any) -> Any:
+    """Plain JSON data: numpy scalars and arrays, tuples and mappings converted."""
+    import numpy as np
+
+    if isinstance(value, dict) or hasattr(value, "items"):
+        return {str(k): jsonable(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple, np.ndarray)):
+        seq = value.tolist() if isinstance(value, np.ndarray) else value
+        return [jsonable(v) for v in seq]
+    if isinstance(value, (bool, np.bool_)):
+        return bool(value)
+    if isinstance(value, (int, np.integer)):
+        return int(value)
+    if isinstance(value, (float, np.floating)):
+        return json_number(value)
+    if value is None or isinstance(value, str):
+        return value
+    return str(value)
+
+
+@lru_cache(maxsize=1)
+def _schema_text() -> str:
+    return resources.files("nhham.cli").joinpath("schemas/output.schema.json").read_text(
+        encoding="utf-8")
+
+
+def output_schema() -> dict:
+    """The JSON Schema (draft 2020-12) of the envelope and of each command's result."""
+    return json.loads(_schema_text())

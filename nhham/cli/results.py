@@ -1,0 +1,450 @@
+"""The results of the commands as data, text and LaTeX, built in one place.
+
+Each ``*_data`` function turns library results into the JSON-ready ``result``
+of the envelope (see :mod:`nhham.cli.envelope` and the schema); ``*_text``
+and ``*_latex`` render the same data for people. The commands and the
+notebook displays (:func:`nhham.report`) both use these, so a key, a label
+or a notation is defined once.
+"""
+
+from __future__ import annotations
+
+import sympy as sp
+
+from nhham.cli import latex as tex
+from nhham.cli.envelope import json_number, jsonable
+from nhham.cli.report import display_form, expr_text, table
+
+__all__ = [
+    "classify_data", "classify_text", "classify_latex",
+    "derive_data", "derive_text", "derive_latex",
+    "compare_data", "compare_text", "compare_latex",
+    "simulation_data", "simulation_failure", "status_name",
+    "bench_data",
+]
+
+
+# ---------------------------------------------------------------- classify
+def _decision_data(evidence) -> dict:
+    d = getattr(evidence, "decision", evidence)
+    return {
+        "subject": str(getattr(evidence, "subject", "")),
+        "outcome": str(getattr(evidence, "outcome", "")),
+        "method": str(getattr(d, "method", "")),
+        "precision": str(getattr(d, "precision", "")),
+        "samples": int(getattr(d, "samples", 0) or 0),
+        "error_bound": json_number(getattr(d, "error_bound", None)),
+        "detail": str(getattr(d, "detail", "")),
+    }
+
+
+def classify_data(analysis, classes=None) -> dict:
+    """The ``result`` of ``nhham classify`` from a ConstraintAnalysis (and ConstraintClasses)."""
+    system = analysis.system
+    combos = [] if classes is None or classes.first_class_combinations is None else \
+        [expr_text(c) for c in classes.first_class_combinations]
+    stages = []
+    for s in analysis.stages:
+        stages.append({
+            "index": int(s.index),
+            "labels": list(s.labels),
+            "constraints": [expr_text(c) for c in s.constraints],
+            "rank": int(s.rank),
+            "decisions": [_decision_data(d) for d in s.decisions],
+        })
+    first = analysis.stages[0].decisions if analysis.stages else ()
+    first_rank = str(first[0].method) if first else "exact"
+    return {
+        "n": int(system.n),
+        "m": int(system.m),
+        "regular": bool(analysis.regular),
+        "rank_c": int(analysis.rank_C),
+        "rank_c_method": first_rank,
+        "status": str(analysis.status),
+        "stages": stages,
+        "final_labels": list(analysis.final_labels),
+        "final_constraints": [expr_text(c) for c in analysis.final_constraints],
+        "free_multipliers": int(analysis.free_multipliers),
+        "free_multiplier_symbols": [s.name for s in analysis.free_multiplier_symbols],
+        "redundant": [d.label for d in analysis.dropped],
+        "integrable": analysis.integrable,
+        "first_class": None if classes is None else int(classes.first_class),
+        "second_class": None if classes is None else int(classes.second_class),
+        "second_class_set": [] if classes is None else list(classes.second_class_set),
+        "first_class_combinations": combos,
+        "inconsistency": analysis.inconsistency,
+    }
+
+
+def classify_warnings(analysis, classes=None) -> list:
+    return list(analysis.warnings) + ([] if classes is None else
+                                      list(getattr(classes, "warnings", ())))
+
+
+def classify_text(title: str, data: dict) -> str:
+    lines = [f"{title}: n = {data['n']} coordinates, m = {data['m']} velocity constraints"]
+    free = data["free_multipliers"]
+    rows = [
+        ("C regular on M_1", "yes" if data["regular"] else "no"),
+        ("rank C on M_1", f"{data['rank_c']} ({data['rank_c_method']})"),
+        ("status", data["status"]),
+        ("stages", str(len(data["stages"]))),
+        ("free multipliers", f"{free}" + (f" ({', '.join(data['free_multiplier_symbols'])})"
+                                          if free else "")),
+        ("redundant (dropped)", ", ".join(data["redundant"]) or "none"),
+        ("integrable (holonomic)", {True: "yes", False: "no", None: "undecided"}[
+            data["integrable"]]),
+    ]
+    if data["first_class"] is not None:
+        rows += [("first class", str(data["first_class"])),
+                 ("second class", str(data["second_class"]))]
+    lines.append(table(rows))
+    lines.append("stages:")
+    stage_rows = []
+    for s in data["stages"]:
+        for k, c in enumerate(s["constraints"]):
+            label = s["labels"][k] if k < len(s["labels"]) else ""
+            stage_rows.append((f"M_{s['index']}" if k == 0 else "", label, c,
+                               f"rank {s['rank']}" if k == 0 else ""))
+    lines.append(table(stage_rows))
+    lines.append("final constraints:")
+    lines.append(table(list(zip(data["final_labels"], data["final_constraints"]))))
+    if data["first_class_combinations"]:
+        lines.append("first-class combinations (in q, p):")
+        lines.append(table([(c,) for c in data["first_class_combinations"]]))
+    if data["inconsistency"]:
+        lines.append(f"inconsistent: {data['inconsistency']}")
+    return "\n".join(lines)
+
+
+def _label_latex(label: str) -> str:
+    """``constraints[0]`` -> phi_1, ``secondary[1]`` -> chi^{(2)}, others as text."""
+    import re
+
+    m = re.fullmatch(r"constraints\[(\d+)\]", label)
+    if m:
+        return rf"\phi_{{{int(m.group(1)) + 1}}}"
+    m = re.fullmatch(r"secondary\[(\d+)\]", label)
+    if m:
+        return rf"\psi_{{{int(m.group(1)) + 1}}}"
+    m = re.fullmatch(r"holonomic\[(\d+)\](\.lift)?", label)
+    if m:
+        base = rf"g_{{{int(m.group(1)) + 1}}}"
+        return base + "^{c}" if m.group(2) else base
+    return tex.text(label)
+
+
+def classify_latex(title: str, data: dict, parse) -> str:
+    """The verdict, the stages M_k, the final constraints and first-class combinations.
+
+    ``parse`` reads an expression string of ``data`` back (the scene's names).
+    """
+    rows = [(tex.text(f"{title}: ") + rf"n = {data['n']},\ m = {data['m']}", None),
+            (r"\operatorname{rank} C|_{M_1}", f"{data['rank_c']}"
+             + (r"\ (\text{regular})" if data["regular"] else r"\ (\text{singular})")),
+            (tex.text("status"), tex.text(data["status"]))]
+    defined: set = set()
+    for s in data["stages"]:
+        for lab, c in zip(s["labels"], s["constraints"]):
+            if lab not in defined:
+                defined.add(lab)
+                rows.append((_label_latex(lab), tex.latex(parse(c))))
+        zero = " = ".join(_label_latex(lab) for lab in s["labels"]) or r"\emptyset"
+        rows.append((f"M_{{{s['index']}}}", r"\{" + zero + r" = 0\},\quad "
+                     + rf"\operatorname{{rank}} (Z_i(\chi_j)) = {s['rank']}"))
+    if data["free_multiplier_symbols"]:
+        rows.append((tex.text("free multipliers"),
+                     ", ".join(tex.name_latex(n) for n in data["free_multiplier_symbols"])))
+    if data["first_class"] is not None:
+        rows.append((tex.text("first / second class"),
+                     f"{data['first_class']}\\ /\\ {data['second_class']}"))
+    for c in data["first_class_combinations"]:
+        rows.append((tex.text("first class (T*Q)"), tex.latex(parse(c))))
+    if data["inconsistency"]:
+        rows.append((tex.text("inconsistent"), tex.text(data["inconsistency"])))
+    return tex.aligned(rows)
+
+
+# ------------------------------------------------------------------ derive
+def derive_data(side: str, variables, field, multipliers, C, energy, free) -> dict:
+    """The ``result`` of ``nhham derive`` (expressions simplified for display)."""
+    field = [display_form(f) for f in field]
+    multipliers = [display_form(f) for f in multipliers]
+    C = sp.Matrix(C).applyfunc(display_form)
+    return {
+        "side": side,
+        "state": [s.name for s in variables],
+        "field": [expr_text(f) for f in field],
+        "multipliers": [expr_text(f) for f in multipliers],
+        "constraint_matrix": [[expr_text(C[i, j]) for j in range(C.cols)]
+                              for i in range(C.rows)],
+        "energy": expr_text(energy),
+        "energy_name": "H" if side == "hamiltonian" else "E_L",
+        "free_multiplier_symbols": [s.name for s in free],
+    }
+
+
+def derive_text(title: str, data: dict) -> str:
+    what = "Hamiltonian field on T*Q" if data["side"] == "hamiltonian" else \
+        "projected field P(xi_L) on TQ"
+    lines = [f"{title}: {what}"]
+    lines.append(table([(f"{n}'", "=", t) for n, t in zip(data["state"], data["field"])]))
+    if data["multipliers"]:
+        lines.append("multipliers:")
+        lines.append(table([(f"lambda_{i + 1}", "=", t)
+                            for i, t in enumerate(data["multipliers"])]))
+        lines.append("constraint matrix C:")
+        lines.append(table([list(row) for row in data["constraint_matrix"]]))
+    if data["free_multiplier_symbols"]:
+        lines.append("free multipliers: " + ", ".join(data["free_multiplier_symbols"]))
+    label = "Hamiltonian H" if data["side"] == "hamiltonian" else "energy E_L"
+    lines.append(f"{label}: {data['energy']}")
+    return "\n".join(lines)
+
+
+def derive_latex(data: dict, parse) -> str:
+    """Equations of motion in the paper's notation.
+
+    Lagrangian side: the second-order part, ẍ = ... (q̇ = v is implied); Hamiltonian
+    side: q̇ and ṗ. Then λ_i, the energy E_L or H, and C.
+    """
+    state = data["state"]
+    rows = []
+    if data["side"] == "hamiltonian":
+        for name, f in zip(state, data["field"]):
+            rows.append((rf"\dot{{{tex.name_latex(name)}}}" if not name.startswith("p_")
+                         else rf"\dot{{p}}_{{{tex.name_latex(name[2:])}}}",
+                         tex.latex(parse(f))))
+    else:
+        half = len(state) // 2
+        for name, f in zip(state[half:], data["field"][half:]):
+            rows.append((tex.name_latex(name[:-4] + "_ddot"), tex.latex(parse(f))))
+    for i, f in enumerate(data["multipliers"]):
+        rows.append((rf"\lambda_{{{i + 1}}}", tex.latex(parse(f))))
+    rows.append(("H" if data["side"] == "hamiltonian" else "E_L",
+                 tex.latex(parse(data["energy"]))))
+    if data["constraint_matrix"]:
+        C = [[parse(c) for c in row] for row in data["constraint_matrix"]]
+        rows.append(("C^{H}" if data["side"] == "hamiltonian" else "C", tex.matrix_latex(C)))
+    return tex.aligned(rows)
+
+
+def implicit_text(title: str, data: dict) -> str:
+    """derive without closed forms: W a + mu^T lambda = F, mu a = rhs, and M_f."""
+    a = [f"{n[:-4]}''" for n in data["state"][len(data["state"]) // 2:]]
+    lines = [f"{title}: dynamics in implicit form (W a + mu^T lambda = F, mu a = rhs), "
+             f"a = ({', '.join(data['accelerations'])})"]
+    lines.append("mass matrix W:")
+    lines.append(table(data["mass_matrix"]))
+    lines.append("forcing F:")
+    lines.append(table([(n, "=", f) for n, f in zip(a, data["forcing"])]))
+    if data["constraint_jacobian"]:
+        lines.append("constraint rows mu (mu a = rhs):")
+        lines.append(table([list(row) + ["|", r] for row, r in zip(data["constraint_jacobian"],
+                                                                  data["constraint_rhs"])]))
+    if data["secondary_constraints"]:
+        lines.append("secondary constraints (M_f):")
+        lines.append(table([(c,) for c in data["secondary_constraints"]]))
+    if data["free_multiplier_symbols"]:
+        lines.append("free multipliers: " + ", ".join(data["free_multiplier_symbols"]))
+    lines.append(f"status: {data['status']}")
+    lines.append(f"energy E_L: {data['energy']}")
+    lines.append(f"note: {data['note']}")
+    return "\n".join(lines)
+
+
+def implicit_latex(data: dict, parse) -> str:
+    """W a + mu^T lambda = F, mu a = rhs (a the accelerations), with W, F, mu, rhs and E_L."""
+    def mat(rows):
+        return tex.matrix_latex([[parse(c) for c in row] for row in rows])
+
+    rows = [(r"W \ddot{q} + \mu^{T} \lambda", "F"), (r"\mu \ddot{q}", r"-\frac{\partial \phi}"
+            r"{\partial q} \dot{q}"), ("W", mat(data["mass_matrix"])),
+            ("F", mat([[f] for f in data["forcing"]]))]
+    if data["constraint_jacobian"]:
+        rows.append((r"\mu", mat(data["constraint_jacobian"])))
+        rows.append((r"-\frac{\partial \phi}{\partial q} \dot{q}",
+                     mat([[r] for r in data["constraint_rhs"]])))
+    rows.append(("E_L", tex.latex(parse(data["energy"]))))
+    return tex.aligned(rows)
+
+
+# ----------------------------------------------------------------- compare
+def _snake(name: str) -> str:
+    import re
+
+    return re.sub(r"[^0-9a-z]+", "_", name.lower()).strip("_")
+
+
+def compare_data(report, dirac=None) -> dict:
+    """The ``result`` of ``nhham compare`` from a CrossCheckReport (and Dirac report)."""
+    raw = report.to_dict()
+    checks = []
+    for name, c in raw.get("checks", {}).items():
+        checks.append({"name": _snake(name), "agree": bool(c["agree"]),
+                       "exact": bool(c["exact"]),
+                       "max_abs_difference": json_number(c["max_abs_difference"]),
+                       "max_rel_difference": json_number(c["max_rel_difference"]),
+                       "samples": int(c["samples"]), "detail": str(c["detail"])})
+
+    def stages(rows):
+        return [{"index": int(s["index"]), "constraint_count": int(s["constraints"]),
+                 "rank": int(s["rank"]), "augmented_rank": int(s["augmented_rank"]),
+                 "labels": list(s.get("labels", []))} for s in rows]
+
+    statuses = list(raw.get("statuses", [])) + [None, None]
+    data = {
+        "agree": bool(raw["agree"]), "exact": bool(raw["exact"]),
+        "max_abs_difference": json_number(raw["max_abs_difference"]),
+        "max_rel_difference": json_number(raw["max_rel_difference"]),
+        "samples": int(raw["samples"]), "tolerance": json_number(raw["tolerance"]),
+        "precision": str(raw["precision"]), "method": str(raw["method"]),
+        "checks": checks,
+        "lagrangian_stages": stages(raw.get("lagrangian_stages", [])),
+        "hamiltonian_stages": stages(raw.get("hamiltonian_stages", [])),
+        "lagrangian_status": statuses[0], "hamiltonian_status": statuses[1],
+        "wall_time_s": json_number(raw.get("seconds")),
+        "skipped_points": int(raw.get("skipped_points", 0)),
+        "dirac_vs_projected": None,
+    }
+    if dirac is not None:
+        diff = dirac.difference
+        data["dirac_vs_projected"] = {
+            "equal": bool(dirac.equal),
+            "state": [str(z) for z in dirac.classes.side.variables],
+            "difference": None if diff is None else [expr_text(display_form(d)) for d in diff],
+            "max_abs_difference": json_number(dirac.max_abs_difference),
+            "samples": int(dirac.samples),
+            "notes": [str(n) for n in dirac.notes],
+        }
+    return data
+
+
+def compare_text(title: str, report, dirac) -> str:
+    lines = [f"{title}: Lagrangian vs Hamiltonian", report.describe()]
+    if dirac is not None:
+        lines.append(dirac.describe())
+    return "\n".join(lines)
+
+
+def compare_latex(title: str, data: dict, parse) -> str:
+    """The checks through the Legendre map, and X_D - X on M_f."""
+    def num(x):
+        return "-" if x is None else f"{x:.2g}"
+
+    head = (r"\begin{array}{lccc}" + "\n" + tex.text("check") + r" & "
+            + tex.text("agree") + r" & " + tex.text("decided") + r" & \max|\Delta| \\ \hline")
+    body = [f"{tex.text(c['name'].replace('_', ' '))} & {tex.text('yes' if c['agree'] else 'NO')}"
+            f" & {tex.text('exactly' if c['exact'] else 'at samples')} & "
+            f"{num(c['max_abs_difference'])} \\\\" for c in data["checks"]]
+    parts = [tex.text(f"{title}: ") + r"\mathrm{Leg}_*(P(\xi_L)) = X \circ \mathrm{Leg}"
+             + (r"\ \text{holds}" if data["agree"] else r"\ \text{FAILS}"),
+             head + "\n" + "\n".join(body) + "\n" + r"\end{array}"]
+    d = data.get("dirac_vs_projected")
+    if d is not None:
+        if d["equal"]:
+            parts.append(r"X_D = X\ \text{on}\ M_f")
+        elif d["difference"] is not None:
+            rows = [(rf"(X_D - X)({tex.name_latex(z)})", tex.latex(parse(e)))
+                    for z, e in zip(d["state"], d["difference"]) if e != "0"]
+            parts.append(tex.aligned(rows))
+        else:
+            parts.append(rf"X_D \neq X\ \text{{on}}\ M_f\ (\max|X_D - X| = "
+                         rf"{num(d['max_abs_difference'])})")
+    return "\n".join(parts)
+
+
+# ---------------------------------------------------------------- simulate
+# The names of nhham.numerics.status.Status, for results that carry a plain int.
+_STATUS_NAMES = {0: "success", 1: "event", -1: "step_failed", -2: "nonfinite", -3: "singular",
+                 -4: "not_converged"}
+
+
+def status_name(status) -> str:
+    """The snake_case name of a numerics status (``Status.SINGULAR`` -> ``"singular"``)."""
+    name = getattr(status, "name", None)
+    if isinstance(name, str):
+        return name.lower()
+    return _STATUS_NAMES.get(int(status), f"status_{int(status)}".replace("-", "minus_"))
+
+
+def simulation_data(result, t_span) -> dict:
+    """The ``result`` of ``nhham simulate`` from a SimulationResult."""
+    d = result.diagnostics
+    data = {
+        "method": str(result.method),
+        "success": bool(result.success),
+        "status": status_name(result.status),
+        "status_code": int(result.status),
+        "message": str(result.message),
+        "t_span": [float(t_span[0]), float(t_span[1])],
+        "t_final": json_number(result.t[-1]),
+        "state": list(result.names),
+        "y_final": jsonable(result.y[:, -1]),
+        "steps": int(result.nsteps),
+        "nfev": int(result.nfev),
+        "njev": int(result.njev),
+        "nlu": int(result.nlu),
+        "wall_time_s": json_number(result.wall_time_s),
+        "constraint_residual_max": json_number(d.constraint_residual_max),
+        "constraint_residual_rel_max": json_number(d.constraint_residual_rel_max),
+        "energy_drift": json_number(d.energy_drift),
+        "energy_drift_rel": json_number(d.energy_drift_rel),
+        "energy_balance_residual": json_number(d.energy_balance_residual),
+        "cond_c_max": json_number(d.cond_C_max),
+        "cond_w_max": json_number(d.cond_W_max),
+        "settings": jsonable(dict(result.settings)),
+        "initial_projection": None,
+    }
+    p = result.initial_projection
+    if p is not None:
+        data["initial_projection"] = {
+            "residual_before": json_number(p.residual_before),
+            "residual_after": json_number(p.residual_after),
+            "displacement_q": json_number(p.displacement_q),
+            "displacement_v": json_number(p.displacement_v)}
+    return data
+
+
+def simulation_failure(result, scene_path: str, free_multipliers=()) -> str:
+    """One line: why the run stopped, and what to do."""
+    t = float(result.t[-1])
+    code = int(result.status)
+    where = f"at t = {t:.6g}"
+    if code == -3:
+        why = (f"free multiplier {', '.join(free_multipliers)}: " if free_multipliers else "")
+        return (f"simulation stopped {where}: {why}the constraint matrix C is singular, so the "
+                f"multipliers are not determined; run `nhham classify {scene_path}` to see the "
+                f"free multipliers or secondary constraints")
+    if code == -2:
+        return (f"simulation stopped {where}: the state became non-finite; check the "
+                f"parameters and [initial] data, or try a smaller --max-step")
+    if code == -4:
+        return (f"simulation stopped {where}: the projection onto the constraints did not "
+                f"converge; try a smaller --step or --rtol")
+    return (f"simulation stopped {where}: {result.message}; try --method Radau or a looser "
+            f"--rtol")
+
+
+# ------------------------------------------------------------------- bench
+def bench_data(result) -> dict:
+    """The ``result`` of ``nhham bench`` from a WorkPrecisionResult."""
+    rows = []
+    for r in result.rows:
+        rows.append({"method": str(r.method), "setting": str(r.setting),
+                     "error": json_number(r.error), "wall_time_s": json_number(r.wall_time_s),
+                     "nfev": int(r.nfev),
+                     "constraint_residual": json_number(r.constraint_residual),
+                     "energy_drift": json_number(r.energy_drift),
+                     "energy_balance_residual": json_number(r.energy_balance_residual),
+                     "success": int(r.status) == 0,
+                     "status": status_name(r.status), "status_code": int(r.status)})
+    tts = []
+    for target in (1e-6, 1e-10):
+        for method, wall in result.time_to_solution(target).items():
+            tts.append({"target": target, "method": method, "wall_time_s": json_number(wall)})
+    return {"t_span": [float(x) for x in result.t_span], "backend": str(result.backend),
+            "reference_digits": int(result.reference_digits),
+            "reference_error_estimate": json_number(result.reference_error_estimate),
+            "reference_wall_time_s": json_number(result.reference_wall_time_s),
+            "rows": rows, "time_to_solution": tts}

@@ -1,0 +1,49 @@
+"""nhham.report: short reprs, LaTeX and HTML of the main results."""
+
+import pytest
+
+import nhham
+from nhham.system.scene import load_scene
+
+from conftest import EXAMPLES
+
+
+@pytest.fixture(scope="module")
+def disk():
+    return nhham.models.rolling_disk(symbolic=True)
+
+
+def test_reports_of_symbolic_results(disk):
+    G = nhham.lagrangian_geometry(disk)
+    for obj, must in [(G, r"\ddot{x} &="), (nhham.hamiltonian_side(disk), r"H &="),
+                      (nhham.analyze_constraints(disk), r"M_{1} &="),
+                      (nhham.cross_check(disk), r"\begin{array}"),
+                      (G.constraint_matrix, r"\begin{bmatrix}")]:
+        r = nhham.report(obj)
+        assert len(repr(r)) < 200 and "\n" not in repr(r)
+        latex = r._repr_latex_()
+        assert latex.startswith("$$") and must in latex, (type(obj).__name__, latex[:300])
+
+
+def test_reports_of_numeric_results():
+    scene = load_scene(EXAMPLES / "chaplygin_sleigh.toml")
+    run = nhham.simulate(scene.system, **scene.simulate_options(t_end=1.0))
+    r = nhham.report(run)
+    assert r._repr_latex_() is None and "<table>" in r._repr_html_()
+    assert "theta_dot" in r._repr_html_() and "DOP853" in repr(r)
+
+
+def test_report_refuses_other_objects():
+    with pytest.raises(TypeError, match="no report for"):
+        nhham.report(object())
+
+
+def test_scene_simulate_options():
+    """The [simulate] table of the sleigh (t_end 20, DOP853, rtol 1e-10) as keywords,
+    each overridable."""
+    scene = load_scene(EXAMPLES / "chaplygin_sleigh.toml")
+    opts = scene.simulate_options()
+    assert opts["t_span"] == (0.0, 20.0) and opts["method"] == "DOP853"
+    assert opts["rtol"] == 1e-10 and opts["y0"]["theta_dot"] == 1.0
+    assert scene.simulate_options(t_end=2.0, rtol=1e-6)["t_span"] == (0.0, 2.0)
+    assert scene.simulate_options(rtol=1e-6)["rtol"] == 1e-6

@@ -1,0 +1,101 @@
+"""Figures: a panel per kind, honest data, distinguishable series, no backend chosen."""
+
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+pytest.importorskip("matplotlib")
+
+import nhham  # noqa: E402
+from nhham.cli.plotting import plot_trajectory, plot_work_precision, series_styles  # noqa: E402
+from nhham.numerics.workprecision import WorkPrecisionResult, WorkPrecisionRow  # noqa: E402
+
+from conftest import EXAMPLES  # noqa: E402
+
+
+@pytest.fixture(scope="module")
+def disk_run():
+    scene = nhham.load_scene(EXAMPLES / "rolling_disk.toml")
+    return nhham.simulate(scene.system, **scene.simulate_options(t_end=2.0, method="rattle",
+                                                                  step=0.01))
+
+
+def test_trajectory_has_a_panel_per_kind(disk_run):
+    fig = plot_trajectory(disk_run, title="vertical rolling disk")
+    axes = fig.axes
+    assert [ax.get_ylabel() for ax in axes] == [
+        "coordinates q", "velocities dq/dt", "max |constraint\nresidual|", "energy change"]
+    assert fig._suptitle.get_text() == "vertical rolling disk"
+    assert [t.get_text() for t in axes[0].get_legend().get_texts()] == ["x", "y", "theta", "phi"]
+    assert [t.get_text() for t in axes[1].get_legend().get_texts()] == [
+        "x_dot", "y_dot", "theta_dot", "phi_dot"]
+    # The data drawn are the run's own: no clamped fake residual at t = 0.
+    (line,) = axes[2].get_lines()
+    drawn = np.asarray(line.get_ydata(), dtype=float)
+    res = disk_run.diagnostics.constraint_residual
+    assert np.all(np.isnan(drawn[res == 0])) and np.allclose(drawn[res > 0], res[res > 0])
+    x = axes[0].get_lines()[0]
+    assert np.array_equal(x.get_xdata(), disk_run.t) and np.array_equal(x.get_ydata(),
+                                                                         disk_run["x"])
+
+
+def test_trajectory_draws_into_given_axes(disk_run):
+    from matplotlib.figure import Figure
+
+    fig = Figure()
+    axes = fig.subplots(2, 2).ravel()
+    assert plot_trajectory(disk_run, axes=axes) is fig
+    with pytest.raises(ValueError):
+        plot_trajectory(disk_run, axes=axes[:2])
+
+
+def test_more_than_ten_series_stay_distinguishable():
+    styles = series_styles(25)
+    keys = {(s["color"], s["marker"], s["linestyle"]) for s in styles}
+    assert len(keys) == 25
+
+
+def _row(method, setting, error, wall):
+    return WorkPrecisionRow(method, setting, error, wall, 100, 1e-12, 1e-10, 1e-10, 0)
+
+
+def test_work_precision_lines_in_tolerance_order_one_colour_per_method():
+    """Runs listed out of order, with wall times that do not follow the tolerance:
+    each line still joins the runs from the loosest to the tightest setting."""
+    rows = [_row("DOP853", "rtol=1e-08", 1e-9, 0.002), _row("DOP853", "rtol=1e-04", 1e-5, 0.003),
+            _row("DOP853", "rtol=1e-06", 1e-7, 0.001),
+            _row("DOP853+projection", "rtol=1e-06", 2e-7, 0.002),
+            _row("DOP853+projection", "rtol=1e-04", 2e-5, 0.001),
+            _row("rattle", "h=0.1", 1e-3, 0.001), _row("rattle", "h=0.01", 1e-5, 0.01),
+            WorkPrecisionRow("rk4", "h=0.1", float("nan"), 0.001, 1, 1, 1, 1, -2)]
+    result = WorkPrecisionResult(tuple(rows), "test", (0.0, 1.0), 30, 1e-30, 0.1, "numpy")
+    fig = plot_work_precision(result)
+    (ax,) = fig.axes
+    lines = {ln.get_label(): ln for ln in ax.get_lines()}
+    assert set(lines) == {"DOP853", "DOP853+projection", "rattle"}  # failed rk4 not drawn
+    assert list(lines["DOP853"].get_ydata()) == [1e-5, 1e-7, 1e-9]
+    assert list(lines["rattle"].get_ydata()) == [1e-3, 1e-5]
+    assert lines["DOP853"].get_color() == lines["DOP853+projection"].get_color()
+    assert lines["DOP853+projection"].get_linestyle() == "--"
+    assert lines["DOP853"].get_color() != lines["rattle"].get_color()
+
+
+def test_plotting_never_chooses_the_backend():
+    code = ("import matplotlib, sys; b = matplotlib.get_backend(); "
+            "import nhham.cli.plotting as p; from nhham.cli.main import main; "
+            "print(matplotlib.get_backend() == b, 'matplotlib.pyplot' in sys.modules)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         env={"MPLBACKEND": "svg", "PATH": ""}).stdout.split()
+    assert out == ["True", "False"]
+
+
+def test_simulate_plot_option_writes_the_figure(tmp_path):
+    from conftest import run_inprocess
+
+    path = tmp_path / "disk.png"
+    rc, out, err = run_inprocess("simulate", str(EXAMPLES / "rolling_disk.toml"), "--t-end", "1",
+                                 "--plot", str(path), "--json")
+    assert rc == 0, err
+    assert path.stat().st_size > 10_000 and path.read_bytes()[:4] == b"\x89PNG"
