@@ -246,9 +246,14 @@ def cmd_compare(args, steps) -> CommandOutput:
     from nhham.cli.results import compare_data, compare_latex, compare_text
     from nhham.hamiltonian.crosscheck import cross_check
 
+    from nhham.hamiltonian.side import hamiltonian_side
+
     scene = _load(args, steps)
+    # One T*Q side for both checks: its numeric layer is built once.
+    side = hamiltonian_side(scene.system, precision=args.precision, samples=args.samples)
     with steps.step("cross-check through the Legendre map"):
-        report = cross_check(scene.system, precision=args.precision, samples=args.samples)
+        report = cross_check(scene.system, precision=args.precision, samples=args.samples,
+                             side=side)
     dirac = None
     warnings = []
     with steps.step("Dirac-bracket flow of H against the projected field on M_f"):
@@ -256,7 +261,7 @@ def cmd_compare(args, steps) -> CommandOutput:
             from nhham.hamiltonian.classification import dirac_vs_projected
 
             dirac = dirac_vs_projected(scene.system, precision=args.precision,
-                                       samples=args.samples)
+                                       samples=args.samples, side=side)
         except NhhamError as exc:
             warnings.append(f"Dirac comparison not available: {one_line(exc)}")
     data = compare_data(report, dirac)

@@ -825,7 +825,8 @@ class DiracProjectedReport:
 
 def dirac_vs_projected(system, *, precision=None, samples=6, seed=SEED,
                        classes: ConstraintClasses | None = None, method: str = "auto",
-                       tol: float | None = None) -> DiracProjectedReport:
+                       tol: float | None = None,
+                       side: HamiltonianSide | None = None) -> DiracProjectedReport:
     """Compare the Dirac-bracket flow of H with the true (projected) dynamics on M_f.
 
     For holonomic constraints the two agree on M_f; for truly nonholonomic
@@ -848,13 +849,16 @@ def dirac_vs_projected(system, *, precision=None, samples=6, seed=SEED,
         As for :func:`classify_constraints`.
     tol : float, optional
         Relative tolerance of sampled decisions.
+    side : HamiltonianSide, optional
+        The T*Q side of ``system`` when the caller has it.
 
     Returns
     -------
     DiracProjectedReport
     """
-    side = classes.side if classes is not None else hamiltonian_side(
-        system, precision=precision, samples=samples, seed=seed)
+    if side is None:
+        side = classes.side if classes is not None else hamiltonian_side(
+            system, precision=precision, samples=samples, seed=seed)
     if classes is None:
         classes = classify_constraints(side, precision=precision, samples=samples, seed=seed,
                                        method=method, tol=tol)

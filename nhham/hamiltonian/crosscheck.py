@@ -308,7 +308,8 @@ class _NumericLagrangian:
 # ------------------------------------------------------------- the driver
 def cross_check(system, precision: int | None = None, samples: int = 6, seed: int = SEED,
                 tol: float | None = None, method: str = "auto",
-                max_stages: int | None = None) -> CrossCheckReport:
+                max_stages: int | None = None,
+                side: HamiltonianSide | None = None) -> CrossCheckReport:
     """Check that the Lagrangian and Hamiltonian sides agree through the Legendre map.
 
     Parameters
@@ -333,6 +334,9 @@ def cross_check(system, precision: int | None = None, samples: int = 6, seed: in
         diagonal, q-independent or n <= 3), sampled otherwise.
     max_stages : int, optional
         Bound of the constraint algorithm (default 2n).
+    side : HamiltonianSide, optional
+        The T*Q side of ``system`` when the caller has it (its numeric layer is
+        built once for several checks).
 
     Returns
     -------
@@ -344,7 +348,8 @@ def cross_check(system, precision: int | None = None, samples: int = 6, seed: in
     start = time.perf_counter()
     be = Backend(precision)
     tol = be.default_tol() if tol is None else float(tol)
-    side = hamiltonian_side(system, precision=precision, samples=samples, seed=seed)
+    if side is None:
+        side = hamiltonian_side(system, precision=precision, samples=samples, seed=seed)
     if method == "auto":
         method = "exact" if side.symbolic_affordable else "sampled"
     if method == "exact":

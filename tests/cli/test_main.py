@@ -216,7 +216,7 @@ def test_usage_error_exits_2():
 def test_console_script_installed():
     proc = subprocess.run(["nhham", "classify", str(EXAMPLES / "rolling_disk.toml"), "--json"],
                           capture_output=True, text=True, timeout=300)
-    assert proc.returncode == 0 and json.loads(proc.stdout)["status"] == "determined"
+    assert proc.returncode == 0 and json.loads(proc.stdout)["result"]["status"] == "determined"
 
 
 # ---------------------------------------------------------------- simulate
