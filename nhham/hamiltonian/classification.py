@@ -191,6 +191,21 @@ class ConstraintClasses:
         """Warnings of every decision, prefixed by what was decided."""
         return tuple(f"{name}: {w}" for name, d in self.decisions.items() for w in d.warnings)
 
+    def __repr__(self) -> str:
+        return (f"<ConstraintClasses: {len(self.labels)} final constraint(s), "
+                f"{self.second_class} second class, {self.first_class} first class "
+                f"({self.method})>")
+
+    def _repr_latex_(self) -> str:
+        """The classification table (for notebooks)."""
+        kinds = {lab: "in the maximal second-class set" for lab in self.second_class_set}
+        rows = [rf"\text{{{lab}}} & \text{{{kinds.get(lab, 'gives a first-class combination')}}}"
+                for lab in self.labels]
+        head = (rf"\operatorname{{rank}} \{{\chi_a, \chi_b\}} = {self.rank}:\ "
+                rf"{self.second_class}\ \text{{second class}},\ {self.first_class}\ "
+                rf"\text{{first class}}")
+        return "$$" + head + r"\\ \begin{array}{ll}" + r" \\ ".join(rows) + r"\end{array}$$"
+
     def describe(self) -> str:
         lines = [f"{len(self.labels)} final constraints: {self.second_class} second class, "
                  f"{self.first_class} first class (rank of the bracket matrix on M_f: "

@@ -325,6 +325,15 @@ class AlgorithmRun:
             raise ComputationError("the problem is inconsistent: there is no projector")
         return (P * sp.Matrix(X)).applyfunc(cancel)
 
+    def __repr__(self) -> str:
+        return (f"<AlgorithmRun: {self.status}, rank {self.rank}, {len(self.stages)} stage(s), "
+                f"{len(self.final_constraints)} final constraint(s)>")
+
+    def _repr_latex_(self) -> str:
+        return _latex_summary(self.status, self.rank, self.final_labels,
+                              self.final_constraints, self.free_multiplier_symbols,
+                              len(self.stages))
+
     def report(self) -> str:
         """Stages, ranks, decisions with their evidence, and the outcome."""
         return "\n".join(_report_lines(self, header="Constraint algorithm"))
@@ -966,6 +975,18 @@ class ConstraintAnalysis:
                     out[ia, ic] = part[a, c]
         return out
 
+    def __repr__(self) -> str:
+        name = getattr(self.system, "name", "") or "system"
+        return (f"<ConstraintAnalysis of {name}: {self.status}, rank C = {self.rank_C}, "
+                f"{len(self.stages)} stage(s), {len(self.final_constraints)} final "
+                f"constraint(s), {self.free_multipliers} free multiplier(s)>")
+
+    def _repr_latex_(self) -> str:
+        """M_f and the verdict in the paper's notation (for notebooks)."""
+        return _latex_summary(self.status, self.rank_C, self.final_labels,
+                              self.final_constraints, self.free_multiplier_symbols,
+                              len(self.stages), _dot_names(self.system))
+
     def report(self) -> str:
         """Stages, ranks, decisions with their evidence, outcome, warnings."""
         lines = _report_lines(self, header=f"Constraint analysis of {self.system!r}")
@@ -1316,6 +1337,23 @@ def _frozen_stage(run, k):
 
 
 # ------------------------------------------------------------------------ report
+def _dot_names(system) -> dict:
+    """LaTeX names \\dot{q} for the velocity symbols q_dot."""
+    return {v: rf"\dot{{{sp.latex(q)}}}" for q, v in zip(system.coordinates,
+                                                          system.velocities)}
+
+
+def _latex_summary(status, rank, labels, constraints, free, stages, names=None) -> str:
+    """$$-wrapped LaTeX: the verdict line and the constraints defining M_f."""
+    names = names or {}
+    rows = [rf"\text{{{status}}},\ \operatorname{{rank}} = {rank},\ {stages}"
+            rf"\ \text{{stage(s)}},\ \text{{free}}: "
+            + (", ".join(sp.latex(s) for s in free) or r"\text{none}")]
+    rows += [rf"\text{{{lab}}}: &\ {sp.latex(c, symbol_names=names)} = 0"
+             for lab, c in zip(labels, constraints)]
+    return "$$\\begin{aligned}" + r" \\ ".join(rows) + "\\end{aligned}$$"
+
+
 def _small(res) -> bool:
     """Closed forms are printed by the report only for small systems."""
     N = len(res.variables) if isinstance(res, AlgorithmRun) else 2 * res.system.n

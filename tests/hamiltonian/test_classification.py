@@ -270,3 +270,11 @@ def test_dirac_vs_projected_sampled_mode(make, equal):
     assert report.equal is equal and report.difference is None
     assert report.decisions[0].method == "sampled" and report.samples >= 3
     json.dumps(report.to_dict())
+
+
+def test_compact_repr_and_latex_of_the_classes():
+    from nhham.system.models import rolling_disk
+
+    c = classify_constraints(rolling_disk(symbolic=True))
+    assert len(repr(c)) < 200 and "2 first class" in repr(c)
+    assert r"\operatorname{rank}" in c._repr_latex_()

@@ -515,3 +515,12 @@ def test_report_prints_stages_ranks_and_evidence():
         assert piece in text
     sampled = analyze_constraints(ex32(), exact=False, precision=30).report()
     assert "sampled, mpmath:30" in sampled and "seeded points" in sampled
+
+
+def test_compact_repr_and_latex_of_the_analysis():
+    from nhham.system.models import rolling_disk
+
+    a = analyze_constraints(rolling_disk(symbolic=True))
+    assert len(repr(a)) < 200 and "determined" in repr(a)
+    tex = a._repr_latex_()
+    assert tex.startswith("$$") and r"\dot{x}" in tex and r"\dot{\phi}" in tex
