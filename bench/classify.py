@@ -59,7 +59,7 @@ from sympy.core.cache import clear_cache
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from nhham import System  # noqa: E402
-from nhham.lagrangian.algorithm import analyze_constraints  # noqa: E402
+from nhham.lagrangian.analysis import analyze_constraints  # noqa: E402
 from nhham.errors import RedundantConstraintError  # noqa: E402
 
 MODES = {

@@ -54,8 +54,8 @@ _LAZY = {
     "lie_symmetry": "lagrangian.symmetries",
     "complete_lift": "lagrangian.symmetries",
     # constraint algorithm (Section 3)
-    "analyze_constraints": "lagrangian.algorithm",
-    "ConstraintAnalysis": "lagrangian.algorithm",
+    "analyze_constraints": "lagrangian.analysis",
+    "ConstraintAnalysis": "lagrangian.analysis",
     "run_algorithm": "lagrangian.algorithm",
     "integrability": "lagrangian.integrability",
     # Hamiltonian side (Section 6)

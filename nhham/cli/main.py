@@ -73,7 +73,7 @@ def cmd_classify(args, steps) -> CommandOutput:
     """The constraint-set verdict: algorithm, integrability, classes."""
     from nhham.cli.results import classify_data, classify_latex, classify_text, classify_warnings
     from nhham.hamiltonian.classification import classify_constraints
-    from nhham.lagrangian.algorithm import analyze_constraints
+    from nhham.lagrangian.analysis import analyze_constraints
 
     scene = _load(args, steps, drop_redundant=True)
     with steps.step("constraint algorithm (stages, ranks, decisions at exact points)"):
@@ -133,7 +133,7 @@ def cmd_derive(args, steps) -> CommandOutput:
         with steps.step("multipliers lambda = -C^{-T} xi_L(phi) and P(xi_L)"):
             field, multipliers = list(G.projected_field), list(G.multipliers)
     else:
-        from nhham.lagrangian.algorithm import analyze_constraints
+        from nhham.lagrangian.analysis import analyze_constraints
 
         # C is singular: the dynamics is whatever the constraint algorithm leaves.
         with steps.step("C singular: constraint algorithm for the dynamics on M_f"):
@@ -174,7 +174,7 @@ def _derive_implicit(args, steps, scene, G, implicit, energy):
     """derive without closed forms: the mass-matrix form and the verdict on M_f."""
     from nhham.cli.report import expr_text
     from nhham.cli.results import implicit_latex, implicit_text
-    from nhham.lagrangian.algorithm import analyze_constraints
+    from nhham.lagrangian.analysis import analyze_constraints
 
     system = scene.system
     with steps.step("constraint algorithm at exact points (M_f, free multipliers)"):
@@ -358,7 +358,7 @@ def cmd_simulate(args, steps) -> CommandOutput:
 def _free_multipliers(system) -> tuple:
     """Names of the free multipliers (for the failure message), or () if unknown."""
     try:
-        from nhham.lagrangian.algorithm import analyze_constraints
+        from nhham.lagrangian.analysis import analyze_constraints
 
         return tuple(s.name for s in analyze_constraints(system).free_multiplier_symbols)
     except Exception:  # the message is a hint; never fail while writing it

@@ -41,7 +41,7 @@ from nhham.errors import ComputationError, InputError
 from nhham.hamiltonian.side import HamiltonianSide, hamiltonian_side
 from nhham.hamiltonian.legendre import Backend, Lambdified
 from nhham.lagrangian.algebra import block_inverse, cancel
-from nhham.lagrangian.algorithm import ConstraintAnalysis, analyze_constraints
+from nhham.lagrangian.analysis import ConstraintAnalysis, analyze_constraints
 from nhham.lagrangian.points import (
     SAMPLE_BITS,
     NotExact,
@@ -75,7 +75,7 @@ def final_constraints_of(source, precision: int | None = None, samples: int = 6,
     ----------
     source : System, HamiltonianSide or ConstraintAnalysis
         A system (or a side, for its system) runs the constraint algorithm
-        (:func:`nhham.lagrangian.algorithm.analyze_constraints` with these
+        (:func:`nhham.lagrangian.analysis.analyze_constraints` with these
         precision, samples and seed); an analysis is used as it is.
 
     Raises
@@ -452,17 +452,14 @@ def _classify_lagrangian_sampled(side, cons, labels, analysis, tol, precision, s
     Mtq = Submanifold(system, tuple(cons), precision=precision, samples=samples, seed=seed,
                       exact=False)
     points, resid = Mtq.points()
-    args = list(system.state) + list(system.parameters)
     J = sp.Matrix([jacobian_row(c, list(q) + list(v)) for c in cons])
-    fW = sp.lambdify(args, geo.hessian, "numpy")
-    fM = sp.lambdify(args, geo.mixed_hessian, "numpy")
-    fJ = sp.lambdify(args, J, "numpy")
+    fW, fM, fJ = (Mtq.evaluator(geo.hessian), Mtq.evaluator(geo.mixed_hessian),
+                  Mtq.evaluator(J))
     mats = []
     for pt in points:
-        vals = [float(pt[s]) for s in args]
-        W = np.array(fW(*vals), dtype=float)
-        Mx = np.array(fM(*vals), dtype=float)
-        Jp = np.array(fJ(*vals), dtype=float).reshape(k, 2 * n)
+        W = np.array(fW(pt), dtype=float)
+        Mx = np.array(fM(pt), dtype=float)
+        Jp = np.array(fJ(pt), dtype=float).reshape(k, 2 * n)
         Jq, Jv = Jp[:, :n], Jp[:, n:]
         U = np.linalg.solve(W, Jv.T)
         mats.append(Jq @ U - U.T @ Jq.T - U.T @ (Mx - Mx.T) @ U)

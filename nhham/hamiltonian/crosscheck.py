@@ -379,7 +379,7 @@ def _stage_summaries(stages) -> tuple:
 
 # ---------------------------------------------------------------- exact
 def _exact(system, side: HamiltonianSide, precision, samples, seed, tol, max_stages):
-    from nhham.lagrangian.algorithm import analyze_constraints
+    from nhham.lagrangian.analysis import analyze_constraints
 
     leg = side.legendre
     analysis = analyze_constraints(system, precision=precision, samples=samples, seed=seed,

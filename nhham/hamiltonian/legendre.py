@@ -31,6 +31,7 @@ import mpmath
 import numpy as np
 import sympy as sp
 
+from nhham.system.evaluation import numeric_function
 from nhham.settings import PARAMETER_BOX, SEED, Precision
 from nhham.errors import ComputationError
 from nhham.lagrangian.algebra import cancel
@@ -232,10 +233,10 @@ class LegendreMap:
     def _numeric_fibre(self):
         args = list(self.coordinates) + list(self.velocities) + list(self.system.parameters)
         return {
-            "numpy": (sp.lambdify(args, list(self.momenta), "numpy"),
-                      sp.lambdify(args, self.hessian.tolist(), "numpy")),
-            "mpmath": (sp.lambdify(args, list(self.momenta), "mpmath"),
-                       sp.lambdify(args, self.hessian.tolist(), "mpmath")),
+            "numpy": (numeric_function(args, list(self.momenta)),
+                      numeric_function(args, self.hessian.tolist())),
+            "mpmath": (numeric_function(args, list(self.momenta), precision=30),
+                       numeric_function(args, self.hessian.tolist(), precision=30)),
         }
 
     def numeric_inverse(self, q, p, params=None, precision: int | None = None,
@@ -482,7 +483,8 @@ class Lambdified:
     def __call__(self, backend: Backend, values: Sequence) -> np.ndarray:
         fn = self._compiled.get(backend.module)
         if fn is None:
-            fn = sp.lambdify(self.args, self.exprs, backend.module, cse=len(self.exprs) > 4)
+            fn = numeric_function(self.args, self.exprs, backend.precision,
+                                  cse=len(self.exprs) > 4)
             self._compiled[backend.module] = fn
         if not self.exprs:
             return backend.zeros(*self.shape)

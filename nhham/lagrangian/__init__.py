@@ -2,7 +2,8 @@
 
 Modules: ``submanifold`` (deciding ranks and vanishing on M_k, with a
 :class:`Decision` recording how), ``geometry`` (E_L, omega_L, xi_L, Z_i, C,
-P(xi_L)), ``algorithm`` (the constraint algorithm of Section 3),
+P(xi_L)), ``algorithm`` (the loop of the constraint algorithm of Section 3), ``analysis``
+(:func:`analyze_constraints`, the Lagrangian entry point),
 ``integrability`` (Frobenius test of the constraint distribution),
 ``symmetries`` (Section 5).
 """
@@ -15,8 +16,8 @@ _LAZY = {
     "DynamicsIngredients": "geometry",
     "Submanifold": "submanifold",
     "Decision": "submanifold",
-    "analyze_constraints": "algorithm",
-    "ConstraintAnalysis": "algorithm",
+    "analyze_constraints": "analysis",
+    "ConstraintAnalysis": "analysis",
     "run_algorithm": "algorithm",
     "integrability": "integrability",
     "constant_of_motion": "symmetries",

@@ -26,14 +26,13 @@ the rows of an m x N matrix; the i-th multiplier is ``lambda_<i>`` (1-based, the
 index of the constraint φ_i in ``System.phi``, see :mod:`nhham.symbols`).
 
 :func:`run_algorithm` is the generic loop (used by both the Lagrangian and the
-Hamiltonian side); :func:`analyze_constraints` is the Lagrangian entry point, which
-also splits the system into independent blocks, reports dropped redundant constraints
-and the Frobenius integrability of the constraint distribution.
+Hamiltonian side) with its records and its report;
+:func:`nhham.lagrangian.analysis.analyze_constraints` is the Lagrangian entry point.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from functools import cached_property
 from types import MappingProxyType
 from typing import Callable, Mapping, Sequence
@@ -42,7 +41,6 @@ import networkx as nx
 import numpy as np
 import sympy as sp
 
-from nhham.settings import SEED
 from nhham.errors import ComputationError
 from nhham.lagrangian.algebra import cancel, solve_linear, tidy, tidy_light
 from nhham.lagrangian.submanifold import Decision, Submanifold
@@ -53,10 +51,14 @@ __all__ = [
     "Evidence",
     "Stage",
     "AlgorithmRun",
-    "Block",
-    "ConstraintAnalysis",
     "run_algorithm",
-    "analyze_constraints",
+    "tangency_matrix",
+    "constraint_kind",
+    "rank_drop_warnings",
+    "report_lines",
+    "latex_summary",
+    "dot_names",
+    "CLOSED_FORM_SIZE",
 ]
 
 
@@ -240,7 +242,7 @@ class AlgorithmRun:
     @cached_property
     def tangency_matrix(self) -> sp.Matrix:
         """A_ji = Z_i(χ_j) over the final constraints."""
-        return _tangency_matrix(self.final_constraints, self.vertical_fields, self.variables)
+        return tangency_matrix(self.final_constraints, self.vertical_fields, self.variables)
 
     @cached_property
     def tangency_rhs(self) -> sp.Matrix:
@@ -291,7 +293,7 @@ class AlgorithmRun:
         rows, cols = self.block
         grads = sp.Matrix([[sp.diff(self.final_constraints[j], s) for s in self.variables]
                            for j in rows]) if rows else sp.zeros(0, len(self.variables))
-        A = _tangency_matrix([self.final_constraints[j] for j in rows], self.vertical_fields,
+        A = tangency_matrix([self.final_constraints[j] for j in rows], self.vertical_fields,
                              self.variables)
         B = A.extract(list(range(len(rows))), list(cols)) if rows else sp.zeros(0, 0)
         return _solve_on(self.manifold, B, grads) if rows else grads
@@ -330,13 +332,14 @@ class AlgorithmRun:
                 f"{len(self.final_constraints)} final constraint(s)>")
 
     def _repr_latex_(self) -> str:
-        return _latex_summary(self.status, self.rank, self.final_labels,
+        return latex_summary(self.status, self.rank, self.final_labels,
                               self.final_constraints, self.free_multiplier_symbols,
                               len(self.stages))
 
     def report(self) -> str:
         """Stages, ranks, decisions with their evidence, and the outcome."""
-        return "\n".join(_report_lines(self, header="Constraint algorithm"))
+        return "\n".join(report_lines(self, header="Constraint algorithm",
+                                       variables=len(self.variables)))
 
     def __str__(self):
         return self.report()
@@ -429,7 +432,7 @@ def run_algorithm(base_field, vertical_fields, primary: Sequence, labels: Sequen
 
     graph = nx.DiGraph()
     for lab, chi in zip(labels, primary):
-        graph.add_node(lab, expr=chi, stage=1, kind=_kind(lab))
+        graph.add_node(lab, expr=chi, stage=1, kind=constraint_kind(lab))
     loop = _Loop(xi, Z, variables, lam, manifold_factory, graph, secondary_start,
                  secondary_prefix)
     return loop.run(primary, labels, bound)
@@ -608,14 +611,15 @@ class _Loop:
             # Constant on M (e.g. a multiple of sin^2 + cos^2): every derivative in the
             # variables left free by the reduction vanishes.
             left = [s for s in red.free_symbols if s in self.variables]
-            if all(M._zero_test(cancel(sp.diff(red, s)))[0] is True for s in left):
+            exact_zero = [M.vanishes(cancel(sp.diff(red, s))) for s in left]
+            if all(d.value and d.method == "exact" for d in exact_zero):
                 return
         try:
             points, _ = M.points()
         except ComputationError:
             return
-        f = M._lambdify([red])
-        values = [complex(M._evaluate(f, pt)[0]) for pt in points]
+        f = M.evaluator(sp.Matrix([red]))
+        values = [complex(f(pt)[0, 0]) for pt in points]
         if max(abs(v - values[0]) for v in values) <= 1e-9 * max(1.0, abs(values[0])):
             return  # numerically constant on M_k (e.g. sin^2 + cos^2)
         try:
@@ -623,9 +627,9 @@ class _Loop:
                                         samples=2).points()
         except ComputationError:
             return
-        fA = M._lambdify([A])
+        fA = M.evaluator(A)
         for pt in zeros:
-            S = np.array(M._matrix_at(fA, pt, A.shape).astype(complex).real, dtype=float)
+            S = np.array(np.asarray(fA(pt)).astype(complex).real, dtype=float)
             s = np.linalg.svd(S, compute_uv=False) if S.size else np.zeros(0)
             rank = int(np.sum(s > 1e-8 * max(1.0, s[0] if s.size else 0.0)))
             if rank < len(rows):
@@ -707,12 +711,22 @@ class _Loop:
         return dim, None
 
 
+def rank_drop_warnings(k, manifold, base_field, vertical_fields, variables, multipliers, A,
+                       rows, cols, chis) -> list:
+    """Warnings where the rank of A = (Z_i(chi_j)) drops on M_k (the paper assumes it does
+    not): the symbolic check of the loop, for callers that decided the rank elsewhere."""
+    loop = _Loop(base_field, vertical_fields, tuple(variables), tuple(multipliers),
+                 lambda eqs: manifold.with_equations(eqs), nx.DiGraph(), 0, "secondary")
+    loop._rank_drop_check(k, manifold, A, list(rows), list(cols), list(chis))
+    return loop.warnings
+
+
 # ================================================================= small helpers
 def _constant_fields(xi, Z):
     return lambda: (xi, Z)
 
 
-def _kind(label: str) -> str:
+def constraint_kind(label: str) -> str:
     if label.endswith(".lift"):
         return "lift"
     if label.startswith("holonomic"):
@@ -722,7 +736,7 @@ def _kind(label: str) -> str:
     return "primary"
 
 
-def _tangency_matrix(chis, Z, variables):
+def tangency_matrix(chis, Z, variables) -> sp.Matrix:
     """A_ji = Z_i(χ_j) for the listed constraints."""
     rows = []
     for chi in chis:
@@ -809,541 +823,14 @@ def _essential(expr, state):
     return sp.expand(out) if sp.count_ops(out) < 60 else out
 
 
-# ================================================================ Lagrangian side
-@dataclass(frozen=True)
-class Block:
-    """An independent block: constraints and coordinates that do not interact with
-    the rest (a connected component of the constraint–coordinate graph).
-
-    Attributes
-    ----------
-    coordinates : tuple of sympy.Symbol
-    constraint_labels : tuple of str
-        Labels of its primary constraints.
-    run : AlgorithmRun
-        The algorithm run on this block alone.
-    """
-
-    coordinates: tuple
-    constraint_labels: tuple
-    run: AlgorithmRun
-
-
-@dataclass(frozen=True)
-class ConstraintAnalysis:
-    """What the constraint algorithm says about a Lagrangian system.
-
-    Attributes
-    ----------
-    system : nhham.System
-    status : {"determined", "underdetermined", "inconsistent"}
-    stages : tuple of Stage
-        Stage k of the whole system: ``constraints`` is the cumulative list
-        defining M_k (the product of the blocks' M_k; a block that stopped earlier
-        contributes its M_f), ``new_constraints`` the ones found on M_k, ``rank`` the
-        rank of (Z_i(χ_j)) on M_k (summed over blocks), ``decisions`` every decision
-        of every block at that stage (prefixed by the block's coordinates when there
-        are several blocks).
-    final_constraints, final_labels : tuple
-        The constraints defining M_f.
-    rank_C : int
-        rank of C = (Z_i(φ_j)) on M_1.
-    regular : bool
-        True when C is regular on M_1 (rank_C == m).
-    free_multiplier_symbols : tuple of sympy.Symbol
-        The free λ^α (``lambda_<i>``, i the 1-based index in ``System.phi``).
-    multipliers : Mapping (computed on first use)
-        Determined ``{lambda_i: expression}`` in the state and the free λ^α.
-    dynamics : sympy.Matrix or None, shape (2n, 1) (computed on first use)
-        The family ξ_L + λ^i Z_i (determined λ substituted, free ones as symbols),
-        in the order (q, v); None when inconsistent.
-    dropped : tuple of nhham.DroppedConstraint
-        Redundant constraints dropped before the algorithm ran
-        (``System(..., drop_redundant=True)``).
-    provenance : networkx.DiGraph
-        Nodes: constraint labels (``holonomic[0]``, ``holonomic[0].lift``,
-        ``constraints[1]``, ``secondary[0]``) with attributes ``expr``, ``stage``,
-        ``kind`` and ``block``; edges labelled by ``stage``: primary -> secondary -> ...
-    blocks : tuple of Block
-        The independent blocks, each analysed on its own.
-    inconsistency : str or None
-        Stage and reason when there is no solution.
-    warnings : tuple of str
-    converged : bool
-        False when the stage bound was hit.
-    dimension : int or None
-        dim M_f (0 for the inconsistent "isolated points" case, None when M_f is
-        empty or was not reached).
-    options : Mapping
-        precision, samples, seed, exact, max_stages as used.
-    geometry : LagrangianGeometry
-        The Lagrangian geometry of the whole system (W, F, ... formed on first use),
-        shared with later questions about the same system.
-
-    Derived on first use: ``multipliers``, ``dynamics``, ``free_multipliers``,
-    ``integrability`` / ``integrable``
-    (Frobenius test of the constraint distribution), ``projector_Q``,
-    ``projector_P`` and :meth:`project` (the almost product structure on M_f).
-    """
-
-    system: object
-    status: str
-    stages: tuple
-    final_constraints: tuple
-    final_labels: tuple
-    rank_C: int
-    regular: bool
-    free_multiplier_symbols: tuple
-    dropped: tuple
-    provenance: nx.DiGraph
-    blocks: tuple
-    inconsistency: str | None
-    warnings: tuple
-    converged: bool
-    dimension: int | None
-    options: Mapping
-    geometry: object = field(default=None, compare=False, repr=False)
-
-    @property
-    def free_multipliers(self) -> int:
-        """Number of free multipliers."""
-        return len(self.free_multiplier_symbols)
-
-    @cached_property
-    def multipliers(self) -> Mapping:
-        """Determined ``{lambda_i: expression}`` over all blocks (computed on first use)."""
-        out = {}
-        for blk in self.blocks:
-            out.update(blk.run.multipliers)
-        return MappingProxyType(out)
-
-    @cached_property
-    def dynamics(self) -> sp.Matrix | None:
-        """ξ_L + λ^i Z_i (2n x 1, free λ^α as symbols); None when inconsistent."""
-        if self.status == "inconsistent":
-            return None
-        out = sp.zeros(2 * self.system.n, 1)
-        for blk in self.blocks:
-            for a, i in enumerate(_state_positions(self.system, blk.coordinates)):
-                out[i] = blk.run.dynamics[a]
-        return out
-
-    @cached_property
-    def integrability(self):
-        """:class:`nhham.integrability.Integrability` of the constraint distribution."""
-        from nhham.lagrangian.integrability import integrability
-
-        opts = self.options
-        return integrability(self.system, precision=opts["precision"],
-                             samples=opts["samples"], seed=opts["seed"],
-                             exact=opts["exact"])
-
-    @cached_property
-    def integrable(self) -> bool | None:
-        """Whether ker μ is involutive (the constraints are secretly holonomic); None if
-        undecidable."""
-        return self.integrability.integrable
-
-    @cached_property
-    def projector_Q(self) -> sp.Matrix | None:
-        """The paper's Q on M_f as a 2n x 2n matrix (block-diagonal over the blocks)."""
-        return self._assemble("projector_Q")
-
-    @cached_property
-    def projector_P(self) -> sp.Matrix | None:
-        """P = id − Q on M_f (2n x 2n); P(X) solves the problem for every solution X."""
-        Q = self.projector_Q
-        return None if Q is None else sp.eye(2 * self.system.n) - Q
-
-    def project(self, X) -> sp.Matrix:
-        """P(X) for a field X = ξ_L + λ^i Z_i (any λ), shape (2n, 1)."""
-        P = self.projector_P
-        if P is None:
-            raise ComputationError("the problem is inconsistent: there is no projector")
-        return (P * sp.Matrix(X)).applyfunc(cancel)
-
-    def _assemble(self, name):
-        n = self.system.n
-        out = sp.zeros(2 * n, 2 * n)
-        for blk in self.blocks:
-            part = getattr(blk.run, name)
-            if part is None:
-                return None
-            idx = _state_positions(self.system, blk.coordinates)
-            for a, ia in enumerate(idx):
-                for c, ic in enumerate(idx):
-                    out[ia, ic] = part[a, c]
-        return out
-
-    def __repr__(self) -> str:
-        name = getattr(self.system, "name", "") or "system"
-        return (f"<ConstraintAnalysis of {name}: {self.status}, rank C = {self.rank_C}, "
-                f"{len(self.stages)} stage(s), {len(self.final_constraints)} final "
-                f"constraint(s), {self.free_multipliers} free multiplier(s)>")
-
-    def _repr_latex_(self) -> str:
-        """M_f and the verdict in the paper's notation (for notebooks)."""
-        return _latex_summary(self.status, self.rank_C, self.final_labels,
-                              self.final_constraints, self.free_multiplier_symbols,
-                              len(self.stages), _dot_names(self.system))
-
-    def report(self) -> str:
-        """Stages, ranks, decisions with their evidence, outcome, warnings."""
-        lines = _report_lines(self, header=f"Constraint analysis of {self.system!r}")
-        if self.dropped:
-            lines.insert(1, "dropped redundant constraints: " + "; ".join(
-                f"{d.label} = " + " + ".join(f"({c})*{k}" for k, c in d.combination.items())
-                for d in self.dropped))
-        if len(self.blocks) > 1:
-            lines.insert(1, f"{len(self.blocks)} independent blocks: " + "; ".join(
-                f"[{', '.join(q.name for q in b.coordinates)}] with "
-                f"{', '.join(b.constraint_labels) or 'no constraints'}: {b.run.status}"
-                for b in self.blocks))
-        try:
-            integ = self.integrability.describe()
-        except Exception as exc:  # pragma: no cover - report must not fail
-            integ = f"not decided ({exc})"
-        lines.append(f"integrability of the constraint distribution: {integ}")
-        return "\n".join(lines)
-
-    def __str__(self):
-        return self.report()
-
-
-def analyze_constraints(system, *, precision: int | None = None, samples: int = 6,
-                        seed: int = SEED, max_stages: int | None = None, exact: bool = True,
-                        decompose: bool = True) -> ConstraintAnalysis:
-    """Run the paper's constraint algorithm on a Lagrangian system.
-
-    M_1 = {g = 0, g^c = 0, φ = 0} (holonomic constraints, their complete lifts, the
-    affine constraints); the base field is ξ_L and the vertical fields are
-    Z_i = −W^{AB} μ_iB ∂/∂v^A, one per φ_i (see :func:`run_algorithm`).
-
-    Parameters
-    ----------
-    system : nhham.System
-        Redundant constraints must already be dropped
-        (``System(..., drop_redundant=True)``); they are reported in ``dropped``.
-    precision : int or None, optional
-        Precision of sampled decisions: None for float64, an integer for mpmath with
-        that many digits (slower, decides near-singular cases).
-    samples, seed : int, optional
-        Number and seed of the sample points of sampled decisions.
-    max_stages : int, optional
-        Bound on the number of stages (default 2n of each block).
-    exact : bool, optional
-        True: decide by exact reduction where possible and sample otherwise;
-        False: decide every rank and vanishing at sample points only.
-    decompose : bool, optional
-        Split into independent blocks (constraints and coordinates that do not
-        interact, the Lagrangian being a sum over the blocks) and analyse each on
-        its own; False analyses the system as one block.
-
-    Returns
-    -------
-    ConstraintAnalysis
-    """
-    opts = MappingProxyType(dict(precision=precision, samples=samples, seed=seed,
-                                 max_stages=max_stages, exact=exact))
-    specs = _decompose(system) if decompose else [_whole(system)]
-    blocks, start = [], 0
-    from nhham.lagrangian.geometry import LagrangianGeometry
-
-    geometry = LagrangianGeometry(system, precision=precision, samples=samples, seed=seed)
-    for spec in specs:
-        run = _run_block(system, spec, opts, start, geometry)
-        start += sum(1 for _, d in run.provenance.nodes(data=True) if d["kind"] == "secondary")
-        blocks.append(Block(tuple(system.coordinates[i] for i in spec["coords"]),
-                            tuple(spec["labels"]), run))
-    return _merge(system, blocks, opts, geometry)
-
-
-# ------------------------------------------------------------- blocks and merging
-def _m1_parts(system, hol_idx, phi_idx):
-    """Primary constraints of M_1 with labels: g's, then the φ rows (lifts first)."""
-    labels_phi = system.constraint_labels
-    nh = len(system.holonomic)
-    exprs, labels = [], []
-    for i in hol_idx:
-        exprs.append(system.holonomic[i])
-        labels.append(f"holonomic[{i}]")
-    for p in phi_idx:
-        exprs.append(system.phi[p])
-        labels.append(f"{labels_phi[p]}.lift" if p < nh else labels_phi[p])
-    return exprs, labels
-
-
-def _whole(system):
-    nh = len(system.holonomic)
-    return {"coords": list(range(system.n)), "hol": list(range(nh)),
-            "phi": list(range(system.m)), "lagrangian": system.lagrangian,
-            "labels": _m1_parts(system, range(nh), range(system.m))[1]}
-
-
-def _decompose(system):
-    """Connected components of the constraint–coordinate graph.
-
-    A coordinate is joined to the coordinates it shares a term of the expanded
-    Lagrangian with (W, mixed Hessian or potential couplings), and every
-    constraint to the coordinates whose q or v it involves. Components without
-    constraints are merged into one free block. Each block's Lagrangian is the sum
-    of the terms of L in its coordinates, so L is a sum over the blocks by
-    construction.
-    """
-    n, nh = system.n, len(system.holonomic)
-    index = {}
-    for i, (q, v) in enumerate(zip(system.coordinates, system.velocities)):
-        index[q] = index[v] = i
-    G = nx.Graph()
-    G.add_nodes_from(("q", i) for i in range(n))
-    terms = sp.Add.make_args(sp.expand(system.lagrangian))
-    term_sets = []
-    for t in terms:
-        idx = sorted({index[s] for s in t.free_symbols if s in index})
-        term_sets.append((t, idx))
-        for a, b in zip(idx, idx[1:]):
-            G.add_edge(("q", a), ("q", b))
-    for k, g in enumerate(system.holonomic):
-        for s in g.free_symbols:
-            if s in index:
-                G.add_edge(("g", k), ("q", index[s]))
-    for p in range(nh, system.m):
-        for s in system.phi[p].free_symbols:
-            if s in index:
-                G.add_edge(("c", p), ("q", index[s]))
-    comps = [sorted(c, key=lambda x: (x[0] != "q", x[1])) for c in nx.connected_components(G)]
-    constrained, free = [], []
-    for c in comps:
-        coords = sorted(i for kind, i in c if kind == "q")
-        hol = sorted(i for kind, i in c if kind == "g")
-        phi = sorted(hol + [i for kind, i in c if kind == "c"])
-        (constrained if phi else free).append((coords, hol, phi))
-    if free:
-        constrained.append((sorted(i for c in free for i in c[0]), [], []))
-    if len(constrained) == 1:
-        return [_whole(system)]
-    specs = []
-    for coords, hol, phi in sorted(constrained, key=lambda c: c[0][0]):
-        cset = set(coords)
-        L = sp.Add(*[t for t, idx in term_sets if idx and set(idx) <= cset])
-        specs.append({"coords": coords, "hol": hol, "phi": phi, "lagrangian": L,
-                      "labels": _m1_parts(system, hol, phi)[1]})
-    return specs
-
-
-class _BlockSystem:
-    """A system-like view of one block (the attributes LagrangianGeometry and
-    Submanifold read), without System's validation (a block may have m = n)."""
-
-    def __init__(self, system, spec):
-        self.name = f"{system.name} block" if system.name else "block"
-        self.coordinates = tuple(system.coordinates[i] for i in spec["coords"])
-        self.velocities = tuple(system.velocities[i] for i in spec["coords"])
-        self.parameters = system.parameters
-        self.parameter_values = system.parameter_values
-        self.lagrangian = spec["lagrangian"]
-        self.holonomic = tuple(system.holonomic[i] for i in spec["hol"])
-        self.phi = tuple(system.phi[p] for p in spec["phi"])
-        self.n, self.m = len(self.coordinates), len(self.phi)
-        self.state = self.coordinates + self.velocities
-        self.mu = (sp.Matrix([[sp.diff(f, v) for v in self.velocities] for f in self.phi])
-                   if self.phi else sp.zeros(0, self.n))
-        self.hessian = sp.hessian(self.lagrangian, self.velocities)
-
-    def __repr__(self):
-        return f"_BlockSystem({[q.name for q in self.coordinates]})"
-
-
-def _run_block(system, spec, opts, start, geometry):
-    from nhham.lagrangian.geometry import LagrangianGeometry
-
-    whole = len(spec["coords"]) == system.n
-    view = system if whole else _BlockSystem(system, spec)
-    geo = geometry if whole else LagrangianGeometry(
-        view, precision=opts["precision"], samples=opts["samples"], seed=opts["seed"])
-    exprs, labels = _m1_parts(system, spec["hol"], spec["phi"])
-
-    def factory(eqs):
-        return Submanifold(view, eqs, precision=opts["precision"], samples=opts["samples"],
-                           seed=opts["seed"], exact=opts["exact"])
-
-    lam = [multiplier_symbol(p + 1) for p in spec["phi"]]
-    run = _stage_one_at_points(view, geo, exprs, labels, lam, factory, opts) \
-        if opts["exact"] else None
-    bound = opts["max_stages"] if opts["max_stages"] is not None else 2 * len(spec["coords"])
-    run = run or run_algorithm(
-        geo.euler_lagrange_field, geo.vertical_fields, exprs, labels, factory,
-        max_stages=bound, multiplier_symbols=lam, variables=view.state,
-        secondary_start=start,
-    )
-    for i in spec["hol"]:
-        lift = f"holonomic[{i}].lift"
-        if run.provenance.has_node(lift):
-            run.provenance.add_edge(f"holonomic[{i}]", lift, stage=1,
-                                    label="stage 1 (complete lift)")
-    block_name = ",".join(q.name for q in view.coordinates)
-    for node in run.provenance.nodes:
-        run.provenance.nodes[node]["block"] = block_name
-    return run
-
-
-# Systems up to this many coordinates get their closed forms (lambda, P(xi_L)) printed
-# by report(); beyond, W^-1 written out is too large to be worth forming unasked.
-CLOSED_FORM_SIZE = 4
-
-
-
-def _stage_one_at_points(view, geo, exprs, labels, lam, factory, opts):
-    """The run when stage 1 decides everything at exact points, else None.
-
-    When C is regular on M_1 and every λ-free condition vanishes there (decided by
-    :func:`nhham.lagrangian.tangency.tangency_at_points`, no W⁻¹ formed), M_f = M_1
-    and every multiplier is determined. Otherwise (no exact points, C singular,
-    secondary constraints) the caller runs the symbolic algorithm, which produces
-    the secondary constraints as expressions.
-    """
-    from nhham.lagrangian.points import NotExact
-    from nhham.lagrangian.tangency import tangency_at_points, tangency_sampled
-
-    m = len(view.phi)
-    try:
-        verdict = tangency_at_points(view, geo.hessian, geo.forcing, exprs, seed=opts["seed"])
-    except NotExact:
-        if view.n <= CLOSED_FORM_SIZE:
-            return None  # small: the symbolic route decides exactly
-        sampled = Submanifold(view, tuple(exprs), precision=opts["precision"],
-                              samples=opts["samples"], seed=opts["seed"], exact=False)
-        verdict = tangency_sampled(view, geo.hessian, geo.forcing, exprs, sampled)
-        if any(d.warnings for d in (verdict.rank, verdict.consistent)):
-            return None  # doubtful at this precision: leave it to the full algorithm
-    r = int(verdict.rank.value)
-    if r != m or not verdict.consistent.value:
-        return None
-    rows, cols = verdict.rows, verdict.cols
-    others = [j for j in range(len(exprs)) if j not in rows]
-    v = sp.Matrix(view.velocities)
-    # Rows outside the block have dchi/dv = 0 (holonomic g): their condition is dg/dq . v.
-    conditions = tuple((labels[j], sp.expand((sp.Matrix([[sp.diff(exprs[j], q) for q in
-                                                           view.coordinates]]) * v)[0]))
-                       for j in others)
-    evidence = (
-        Evidence("rank of (Z_i(chi_j)) on M_1", verdict.rank, f"rank {r}"),
-        Evidence("lambda-free conditions on M_1", verdict.consistent, "add nothing"),
-    )
-    stage = Stage(index=1, constraints=tuple(exprs), labels=tuple(labels), new_constraints=(),
-                  new_labels=(), rank=r, augmented_rank=r,
-                  block=(tuple(labels[j] for j in rows), tuple(lam[i] for i in cols)),
-                  conditions=conditions, decisions=evidence)
-    graph = nx.DiGraph()
-    for lab, chi in zip(labels, exprs):
-        graph.add_node(lab, expr=chi, stage=1, kind=_kind(lab))
-    warnings = [w for d in (verdict.rank, verdict.consistent, verdict.jacobian_rank)
-                for w in d.warnings]
-    M = factory(tuple(exprs))
-    if r and geo.closed_form_affordable:
-        # Where the rank of C drops on M_1 (the paper assumes it does not): the
-        # symbolic check needs A = (Z_i(chi_j)), affordable only for small blocks.
-        loop = _Loop(geo.euler_lagrange_field, geo.vertical_fields, tuple(view.state), lam,
-                     factory, nx.DiGraph(), 0, "secondary")
-        A = _tangency_matrix(list(exprs), geo.vertical_fields, tuple(view.state))
-        loop._rank_drop_check(1, M, A, list(rows), list(cols), list(exprs))
-        warnings += loop.warnings
-    dimension = 2 * view.n - int(verdict.jacobian_rank.value)
-    return AlgorithmRun(
-        status="determined", stages=(stage,), final_constraints=tuple(exprs),
-        final_labels=tuple(labels), rank=r, block=(tuple(rows), tuple(cols)),
-        multiplier_symbols=tuple(lam), free_multiplier_symbols=(), provenance=graph,
-        inconsistency=None, warnings=tuple(warnings), converged=True, dimension=dimension,
-        variables=tuple(view.state),
-        fields=lambda: (geo.euler_lagrange_field, geo.vertical_fields), manifold=M,
-    )
-
-
-def _state_positions(system, coords):
-    pos = {q: i for i, q in enumerate(system.coordinates)}
-    idx = [pos[q] for q in coords]
-    return idx + [system.n + i for i in idx]
-
-
-def _merge(system, blocks, opts, geometry) -> ConstraintAnalysis:
-    runs = [b.run for b in blocks]
-    K = max((len(r.stages) for r in runs), default=0)
-    stages = []
-    tags = [f"[{', '.join(q.name for q in b.coordinates)}] " if len(blocks) > 1 else ""
-            for b in blocks]
-    for k in range(1, K + 1):
-        parts = [_tagged(r.stages[k - 1], tag) if k <= len(r.stages) else _frozen_stage(r, k)
-                 for r, tag in zip(runs, tags)]
-        parts = [p for p in parts if p is not None]
-        stages.append(Stage(
-            index=k,
-            constraints=sum((p.constraints for p in parts), ()),
-            labels=sum((p.labels for p in parts), ()),
-            new_constraints=sum((p.new_constraints for p in parts), ()),
-            new_labels=sum((p.new_labels for p in parts), ()),
-            rank=sum(p.rank for p in parts),
-            augmented_rank=sum(p.augmented_rank for p in parts),
-            block=(sum((p.block[0] for p in parts), ()), sum((p.block[1] for p in parts), ())),
-            conditions=sum((p.conditions for p in parts), ()),
-            decisions=sum((p.decisions for p in parts), ()),
-        ))
-    bad = [(b, r) for b, r in zip(blocks, runs) if r.status == "inconsistent"]
-    prefix = len(blocks) > 1
-    inconsistency = None
-    if bad:
-        inconsistency = "; ".join(
-            (f"block [{', '.join(q.name for q in b.coordinates)}]: " if prefix else "")
-            + r.inconsistency for b, r in bad)
-    free = sum((r.free_multiplier_symbols for r in runs), ())
-    free = tuple(sorted(free, key=lambda s: int(s.name.split("_")[-1])
-                        if s.name.split("_")[-1].isdigit() else 0))
-    status = "inconsistent" if bad else ("underdetermined" if free else "determined")
-    warnings = []
-    for tag, r in zip(tags, runs):
-        warnings += [(f"block {tag.strip()}: " if tag else "") + w for w in r.warnings]
-    first = stages[0] if stages else None
-    rank_C = first.rank if first else 0
-    provenance = nx.compose_all([r.provenance for r in runs]) if runs else nx.DiGraph()
-    dims = [r.dimension for r in runs]
-    return ConstraintAnalysis(
-        system=system, status=status, stages=tuple(stages),
-        final_constraints=sum((r.final_constraints for r in runs), ()),
-        final_labels=sum((r.final_labels for r in runs), ()),
-        rank_C=rank_C, regular=(rank_C == system.m),
-        free_multiplier_symbols=free,
-        dropped=tuple(getattr(system, "dropped", ())), provenance=provenance,
-        blocks=tuple(blocks), inconsistency=inconsistency, warnings=tuple(warnings),
-        converged=all(r.converged for r in runs),
-        dimension=None if None in dims else sum(dims), options=opts, geometry=geometry,
-    )
-
-
-def _tagged(stage, tag):
-    """The stage with its decisions' subjects prefixed by the block they belong to."""
-    if not tag:
-        return stage
-    return replace(stage, decisions=tuple(replace(e, subject=tag + e.subject)
-                                          for e in stage.decisions))
-
-
-def _frozen_stage(run, k):
-    """A finished block seen at a later stage k: its M_f, nothing new."""
-    if not run.stages or run.status == "inconsistent":
-        return None
-    last = run.stages[-1]
-    return Stage(index=k, constraints=last.constraints, labels=last.labels,
-                 new_constraints=(), new_labels=(), rank=last.rank,
-                 augmented_rank=last.rank, block=last.block, conditions=(), decisions=())
-
-
 # ------------------------------------------------------------------------ report
-def _dot_names(system) -> dict:
+def dot_names(system) -> dict:
     """LaTeX names \\dot{q} for the velocity symbols q_dot."""
     return {v: rf"\dot{{{sp.latex(q)}}}" for q, v in zip(system.coordinates,
                                                           system.velocities)}
 
 
-def _latex_summary(status, rank, labels, constraints, free, stages, names=None) -> str:
+def latex_summary(status, rank, labels, constraints, free, stages, names=None) -> str:
     """$$-wrapped LaTeX: the verdict line and the constraints defining M_f."""
     names = names or {}
     rows = [rf"\text{{{status}}},\ \operatorname{{rank}} = {rank},\ {stages}"
@@ -1354,19 +841,26 @@ def _latex_summary(status, rank, labels, constraints, free, stages, names=None) 
     return "$$\\begin{aligned}" + r" \\ ".join(rows) + "\\end{aligned}$$"
 
 
-def _small(res) -> bool:
-    """Closed forms are printed by the report only for small systems."""
-    N = len(res.variables) if isinstance(res, AlgorithmRun) else 2 * res.system.n
-    return N <= 2 * CLOSED_FORM_SIZE
+# Systems up to this many coordinates get their closed forms (lambda, P(xi_L)) printed
+# by report(); beyond, W^-1 written out is too large to be worth forming unasked.
+CLOSED_FORM_SIZE = 4
 
 
-def _report_lines(res, header):
-    lines = [f"{header}: {res.status}"]
-    if isinstance(res, ConstraintAnalysis):
-        sysm = res.system
-        lines.append(f"n = {sysm.n}, m = {sysm.m}; rank C on M_1 = {res.rank_C} "
-                     f"({'regular' if res.regular else 'singular'}); options: "
-                     + ", ".join(f"{k}={v}" for k, v in res.options.items()))
+def report_lines(res, header: str, preamble=(), variables: int | None = None) -> list:
+    """The report of a run or an analysis as lines: stages, decisions, outcome, warnings.
+
+    Parameters
+    ----------
+    res : AlgorithmRun or ConstraintAnalysis
+        Anything with stages, status, final constraints, multipliers and warnings.
+    header : str
+    preamble : sequence of str
+        Lines printed after the header.
+    variables : int, optional
+        Number of variables N (closed forms are printed only for N <= 2 CLOSED_FORM_SIZE).
+    """
+    lines = [f"{header}: {res.status}", *preamble]
+    small = variables is not None and variables <= 2 * CLOSED_FORM_SIZE
     for st in res.stages:
         lines.append(f"Stage {st.index}: M_{st.index} defined by {len(st.constraints)} "
                      f"constraint(s); rank (Z_i(chi_j)) = {st.rank}, augmented rank "
@@ -1385,7 +879,7 @@ def _report_lines(res, header):
     else:
         lines.append(f"M_f: {len(res.final_constraints)} constraint(s), dimension "
                      f"{res.dimension}")
-        closed = "multipliers" in res.__dict__ or _small(res)
+        closed = "multipliers" in res.__dict__ or small
         if closed:
             for s, e in res.multipliers.items():
                 lines.append(f"  {s} = {e}")

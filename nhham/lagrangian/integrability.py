@@ -139,7 +139,7 @@ def integrability(system, *, precision: int | None = None, samples: int = 6,
     ----------
     system : nhham.System
     precision, samples, seed, exact
-        As in :func:`nhham.algorithm.analyze_constraints` (the decisions are made on
+        As in :func:`nhham.lagrangian.analysis.analyze_constraints` (the decisions are made on
         Q_1 = {g = 0}).
 
     Returns
@@ -241,17 +241,15 @@ def frobenius_sampled(system, labels, *, precision: int | None = None, samples: 
     Q1 = Submanifold(system, system.holonomic, precision=precision, samples=samples,
                      seed=seed, fibre=(), exact=False)
     points, residual = Q1.points()
-    args = list(q) + list(system.parameters)
     grads = [[jacobian_row(mu[i, A], q) for A in range(n)] for i in range(m)]
     dmu = sp.Matrix([[grads[i][A][B] - grads[i][B][A] for A in range(n) for B in range(n)]
                      for i in range(m)])
-    f_mu, f_dmu = sp.lambdify(args, mu, "numpy"), sp.lambdify(args, dmu, "numpy")
+    f_mu, f_dmu = Q1.evaluator(mu), Q1.evaluator(dmu)
     prec = Precision(precision)
     worst, doubtful, found = 0.0, False, None
     for pt in points:
-        vals = [float(pt[s]) for s in args]
-        M = np.array(f_mu(*vals), dtype=float)
-        D = np.array(f_dmu(*vals), dtype=float).reshape(m, n, n)
+        M = np.array(f_mu(pt), dtype=float)
+        D = np.array(f_dmu(pt), dtype=float).reshape(m, n, n)
         X = np.linalg.svd(M)[2][m:].T          # orthonormal basis of ker mu(q)
         for i in range(m):
             T = X.T @ D[i] @ X                  # T[a, b] = dmu_i(X_a, X_b) (up to sign)

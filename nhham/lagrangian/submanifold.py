@@ -58,6 +58,7 @@ import sympy as sp
 from nhham.settings import PARAMETER_BOX, SEED, STATE_BOX, Precision
 from nhham.errors import ComputationError
 from nhham.lagrangian.algebra import cancel, solve_linear
+from nhham.system.evaluation import numeric_function
 from nhham.system.expressions import short
 
 __all__ = ["Decision", "Submanifold"]
@@ -605,16 +606,28 @@ class Submanifold:
             args = syms + list(self.system.parameters)
             Fm = sp.Matrix(eqs)
             Jm = Fm.jacobian(syms)
-            module = "numpy" if self.precision is None else "mpmath"
-            self._residual_cache[eqs] = (
-                sp.lambdify(args, Fm, modules=module), sp.lambdify(args, Jm, modules=module)
-            )
+            self._residual_cache[eqs] = (numeric_function(args, Fm, self.precision),
+                                         numeric_function(args, Jm, self.precision))
         return self._residual_cache[eqs]
 
+    def evaluator(self, matrix: sp.Matrix):
+        """A function of a point of M (as from :meth:`points`) giving ``matrix`` there.
+
+        The one route from expressions to numbers on the exact layers: compiled once
+        (numpy in float64, mpmath at the manifold's precision); the result is a float
+        array (float64) or an object array of mpf, of the matrix's shape.
+        """
+        matrix = sp.Matrix(matrix)
+        f = self._lambdify([matrix])
+        shape = matrix.shape
+
+        def at(point):
+            value = self._matrix_at(f, point, shape)
+            return value.astype(float) if self.precision is None else value
+        return at
+
     def _lambdify(self, exprs):
-        args = list(self.variables + self.system.parameters)
-        module = "numpy" if self.precision is None else "mpmath"
-        return sp.lambdify(args, exprs, modules=module)
+        return numeric_function(self.variables + self.system.parameters, exprs, self.precision)
 
     def _evaluate(self, f, pt):
         args = [pt[s] for s in self.variables

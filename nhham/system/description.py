@@ -121,6 +121,8 @@ class System:
         name: str = "",
         drop_redundant: bool = False,
     ):
+        # Long on purpose: every check appends to one list of problems, so that the
+        # user sees them all at once, in the order the pieces were given.
         problems: list[str] = []
         coords = tuple(as_symbol(q) for q in coordinates)
         if not coords:

@@ -234,7 +234,7 @@ def test_dirac_flow_differs_on_the_chaplygin_sleigh():
 
 
 def test_classify_accepts_an_analysis():
-    from nhham.lagrangian.algorithm import analyze_constraints
+    from nhham.lagrangian.analysis import analyze_constraints
 
     s = example_3_2()
     analysis = analyze_constraints(s)

@@ -14,7 +14,8 @@ import pytest
 import sympy as sp
 
 from nhham import System
-from nhham.lagrangian.algorithm import ConstraintAnalysis, analyze_constraints, run_algorithm
+from nhham.lagrangian.algorithm import run_algorithm
+from nhham.lagrangian.analysis import ConstraintAnalysis, analyze_constraints
 from nhham.errors import RedundantConstraintError
 from nhham.lagrangian.submanifold import Submanifold
 

@@ -136,3 +136,24 @@ def test_tiny_obstruction_is_undecided_in_float64():
     assert f64.integrable is None and f64.warnings
     assert "undecided" in f64.describe()
     assert integrability(s, exact=False, precision=30).integrable is False
+
+
+def _with_circle(constraints):
+    """Six coordinates, a holonomic circle a^2 + b^2 = 1 (no exact points of Q_1)."""
+    names = ["x", "y", "theta", "phi", "a", "b"]
+    L = " + ".join(f"{n}_dot**2/2" for n in names)
+    return System(names, L, constraints, holonomic=["a**2 + b**2 - 1"], parameters={"R": 1.0})
+
+
+def test_sampled_frobenius_where_there_are_no_exact_points():
+    """The rolling disk's distribution beside a circle: not integrable (dmu_1 = R sin(theta)
+    dtheta ^ dphi on D, as in the symbolic test above); x_dot - y_dot beside it: closed,
+    integrable. Both decided at sampled points of Q_1 (the circle has no exact points)."""
+    from nhham.lagrangian.integrability import frobenius_sampled
+
+    rolling = _with_circle(["x_dot - R*cos(theta)*phi_dot", "y_dot - R*sin(theta)*phi_dot"])
+    res = integrability(rolling)
+    assert res.integrable is False and res.method == "sampled"
+    closed = _with_circle(["x_dot - y_dot"])
+    res = frobenius_sampled(closed, ("holonomic[0].lift", "constraints[0]"))
+    assert res.integrable is True and res.method == "sampled"

@@ -18,7 +18,8 @@ from sympy.physics import mechanics as me
 
 from nhham import System
 from nhham.hamiltonian.classification import classify_constraints
-from nhham.lagrangian.algorithm import analyze_constraints, run_algorithm
+from nhham.lagrangian.algorithm import run_algorithm
+from nhham.lagrangian.analysis import analyze_constraints
 from nhham.lagrangian.geometry import LagrangianGeometry
 from nhham.lagrangian.points import SAMPLE_BITS, NotExact
 from nhham.lagrangian.submanifold import Submanifold
