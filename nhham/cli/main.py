@@ -35,6 +35,8 @@ from nhham.cli.envelope import (
     one_line,
     scene_info,
 )
+from nhham.cli.linearize import LINEARIZE_HELP, cmd_linearize
+from nhham.cli.linearize import add_arguments as add_linearize_arguments
 from nhham.cli.report import Steps
 from nhham.errors import InputError, NhhamError
 
@@ -397,6 +399,7 @@ COMMANDS = {
     "compare": cmd_compare,
     "simulate": cmd_simulate,
     "bench": cmd_bench,
+    "linearize": cmd_linearize,
 }
 
 _HELP = {
@@ -424,6 +427,7 @@ _HELP = {
               "Measure every method against a high-precision mpmath reference: error at "
               "t_end against wall time, constraint residual and energy drift.",
               "nhham bench examples/chaplygin_sleigh.toml --quick --plot wp.png"),
+    "linearize": LINEARIZE_HELP,
 }
 
 _EXIT_TEXT = ("exit status: 0 success; 1 internal failure; 2 bad input or usage; 3 the "
@@ -509,6 +513,8 @@ def build_parser() -> argparse.ArgumentParser:
             p.add_argument("--reference-digits", dest="reference_digits", type=int, default=30,
                            metavar="DIGITS",
                            help="digits of the mpmath reference solution (default: 30)")
+        if name == "linearize":
+            add_linearize_arguments(p)
     return parser
 
 

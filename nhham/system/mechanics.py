@@ -73,14 +73,41 @@ class MechanicsForm(NamedTuple):
 
 
 # ------------------------------------------------------------------- into
-def from_mechanics(lagrangian, q: Sequence, hol_coneqs: Sequence = (),
-                   nonhol_coneqs: Sequence = (), parameters=None, name: str = "") -> System:
+def from_mechanics(lagrangian=None, q: Sequence | None = None, hol_coneqs: Sequence = (),
+                   nonhol_coneqs: Sequence = (), parameters=None, name: str = "", *,
+                   bodies: Sequence = (), loads: Sequence = (), frame=None, origin=None,
+                   u: Sequence | None = None, kd_eqs: Sequence = (),
+                   velocity_constraints: Sequence = (),
+                   configuration_constraints: Sequence = ()) -> System:
     """Build a :class:`System` from a ``sympy.physics.mechanics`` description.
+
+    Three ways in, which may be combined:
+
+    1. a Lagrangian: ``from_mechanics(L, q, hol_coneqs, nonhol_coneqs)``
+       (as ``LagrangesMethod`` takes them);
+    2. bodies and loads: ``from_mechanics(q=q, bodies=..., loads=...,
+       frame=N, origin=O)``; L = T - V with T the kinetic energy of every
+       body in ``frame`` and V the potential of every constant force
+       (gravity type);
+    3. a ``sympy.physics.mechanics.System`` as the first argument: its
+       frame, fixed point, bodies, loads, coordinates ``q``, speeds ``u``,
+       kinematic differential equations ``kdes``, ``holonomic_constraints``
+       and ``nonholonomic_constraints`` are read as in 2.
+
+    Constraints written in generalized speeds u, with kinematic differential
+    equations ``kd_eqs`` as ``KanesMethod`` takes them (affine in u and in
+    q'; e.g. ``q1' - u1``), are brought to nhham's (q, q') form by solving
+    the ``kd_eqs`` for u; ``velocity_constraints`` (affine in u) become
+    affine constraints, ``configuration_constraints`` holonomic ones.
+    Angular velocities and point velocities given in u are converted the
+    same way.
 
     Parameters
     ----------
-    lagrangian : sympy.Expr
-        L in the dynamicsymbols ``q`` and their first time derivatives.
+    lagrangian : sympy.Expr or sympy.physics.mechanics.System, optional
+        L in the dynamicsymbols ``q`` and their first time derivatives (and
+        u when ``kd_eqs`` are given), or a ``System`` (then every other
+        argument but ``parameters`` and ``name`` must be left out).
     q : sequence of dynamicsymbols
         Generalized coordinates, each an undefined function of time
         (``dynamicsymbols('x')``); ``x(t)`` becomes coordinate ``x`` with
@@ -94,6 +121,30 @@ def from_mechanics(lagrangian, q: Sequence, hol_coneqs: Sequence = (),
         Passed to :class:`System`. Default: every remaining free symbol
         except time, sorted by name, without values.
     name : str, optional
+    bodies : sequence of RigidBody or Particle, optional
+        Their kinetic energies in ``frame`` are added to L. A mass centre's
+        velocity is taken as the time derivative of its position from
+        ``origin``: the free velocity, never one that a constraint was
+        substituted into.
+    loads : sequence, optional
+        ``Force(point, vector)`` or ``(point, vector)`` with a vector
+        constant in ``frame`` (gravity type): potential -F . r(point).
+        Anything else (torques, forces depending on the state or on time,
+        actuators) is refused with an error naming the load.
+    frame : ReferenceFrame, optional
+        The inertial frame (needed with ``bodies`` or ``loads``).
+    origin : Point, optional
+        A point fixed in ``frame`` from which positions are measured.
+    u : sequence of dynamicsymbols, optional
+        Generalized speeds; default: every function of time in ``kd_eqs``
+        that is not a coordinate.
+    kd_eqs : sequence of sympy.Expr, optional
+        Kinematic differential equations (each = 0), affine in u and q',
+        one per speed.
+    velocity_constraints : sequence of sympy.Expr, optional
+        Constraints affine in u (or q'), each = 0.
+    configuration_constraints : sequence of sympy.Expr, optional
+        Holonomic constraints in q.
 
     Returns
     -------
@@ -104,16 +155,63 @@ def from_mechanics(lagrangian, q: Sequence, hol_coneqs: Sequence = (),
     ValidationError
         (an :class:`InputError`) naming each term nhham cannot express:
         explicit time dependence, accelerations, functions of time that are
-        not coordinates, plain symbols named like a coordinate or velocity;
+        not coordinates, speeds that no kinematic equation defines, plain
+        symbols named like a coordinate or velocity, a constraint or
+        kinematic equation not affine in u, a load that is not a constant
+        force, a body whose mass centre has no position from the origin;
         then whatever :class:`System` finds (non-affine constraints...).
     """
+    if isinstance(lagrangian, me.System):
+        given = dict(q=q, hol_coneqs=hol_coneqs, nonhol_coneqs=nonhol_coneqs, bodies=bodies,
+                     loads=loads, frame=frame, origin=origin, u=u, kd_eqs=kd_eqs,
+                     velocity_constraints=velocity_constraints,
+                     configuration_constraints=configuration_constraints)
+        extra = [k for k, v in given.items() if v is not None and v != ()]
+        if extra:
+            raise InputError(f"from_mechanics: with a sympy.physics.mechanics.System give only "
+                             f"parameters and name (also given: {', '.join(extra)})")
+        return _from_me_system(lagrangian, parameters, name)
+    if q is None:
+        raise InputError("from_mechanics: the coordinates q are required")
     coords = _coordinate_functions(q)
+    t = me.dynamicsymbols._t
+    problems: list[str] = []
+    to_q = _speed_substitution(coords, u, kd_eqs, t, problems)
+    if lagrangian is None:
+        if not bodies and not loads:
+            raise InputError("from_mechanics: give a Lagrangian, or bodies (and loads)")
+        lagrangian = sp.S.Zero
+    else:
+        lagrangian = _as_expr("lagrangian", lagrangian)
+    if bodies or loads:
+        lagrangian = lagrangian + _lagrangian_of(bodies, loads, frame, origin, problems)
+    speeds = tuple(to_q) if to_q else ()
+    vcons = []
+    for i, c in enumerate(velocity_constraints):
+        c = _as_expr(f"velocity_constraints[{i}]", c)
+        _check_affine(f"velocity_constraints[{i}]", c, speeds, problems)
+        vcons.append(c)
+    if problems:
+        raise ValidationError(problems)
+    if to_q:
+        lagrangian = lagrangian.xreplace(to_q)
+        vcons = [c.xreplace(to_q) for c in vcons]
+    return _from_lagrangian(lagrangian, coords, list(hol_coneqs) + list(configuration_constraints),
+                            list(nonhol_coneqs) + vcons, parameters, name,
+                            hol_labels=[f"hol_coneqs[{i}]" for i in range(len(hol_coneqs))]
+                            + [f"configuration_constraints[{i}]"
+                               for i in range(len(configuration_constraints))],
+                            nonhol_labels=[f"nonhol_coneqs[{i}]" for i in range(len(nonhol_coneqs))]
+                            + [f"velocity_constraints[{i}]" for i in range(len(vcons))])
+
+
+def _from_lagrangian(lagrangian, coords, hols, nonhols, parameters, name, hol_labels,
+                     nonhol_labels) -> System:
     t = me.dynamicsymbols._t
     to_plain = _plain_map(coords, t)
     reserved = {s.name for s in to_plain.values()}
     items = [("lagrangian", lagrangian)]
-    items += [(f"hol_coneqs[{i}]", g) for i, g in enumerate(hol_coneqs)]
-    items += [(f"nonhol_coneqs[{i}]", c) for i, c in enumerate(nonhol_coneqs)]
+    items += list(zip(hol_labels, hols)) + list(zip(nonhol_labels, nonhols))
     problems, converted = [], {}
     for label, expr in items:
         converted[label] = _convert(label, _as_expr(label, expr), to_plain, reserved, t, problems)
@@ -124,11 +222,152 @@ def from_mechanics(lagrangian, q: Sequence, hol_coneqs: Sequence = (),
     return System(
         [to_plain[f] for f in coords],
         converted["lagrangian"],
-        constraints=[converted[f"nonhol_coneqs[{i}]"] for i in range(len(nonhol_coneqs))],
-        holonomic=[converted[f"hol_coneqs[{i}]"] for i in range(len(hol_coneqs))],
+        constraints=[converted[label] for label in nonhol_labels],
+        holonomic=[converted[label] for label in hol_labels],
         parameters=parameters,
         name=name,
     )
+
+
+def _from_me_system(msys, parameters, name) -> System:
+    """Read a ``sympy.physics.mechanics.System`` (see :func:`from_mechanics`)."""
+    problems = []
+    actuators = list(getattr(msys, "actuators", ()) or ())
+    for i, act in enumerate(actuators):
+        problems.append(f"actuators[{i}]: {short(act, _QUOTE)} is an actuator; nhham takes "
+                        f"conservative loads only (forces are not supported yet)")
+    if problems:
+        raise ValidationError(problems)
+    q = list(msys.q)
+    if not q:
+        raise InputError("from_mechanics: the System has no coordinates (add_coordinates)")
+    u = list(msys.u)
+    return from_mechanics(
+        None, q, parameters=parameters, name=name,
+        bodies=list(msys.bodies), loads=list(msys.loads), frame=msys.frame,
+        origin=msys.fixed_point, u=u or None, kd_eqs=list(msys.kdes),
+        velocity_constraints=list(msys.nonholonomic_constraints),
+        configuration_constraints=list(msys.holonomic_constraints),
+    )
+
+
+def _speed_substitution(coords, u, kd_eqs, t, problems) -> dict:
+    """{u_k: expression in q, q'} from the kinematic differential equations."""
+    if not kd_eqs:
+        if u:
+            problems.append("kd_eqs: speeds u were given but no kinematic differential "
+                            "equations define them")
+        return {}
+    qset = set(coords) | {f.diff(t) for f in coords}
+    eqs = [_as_expr(f"kd_eqs[{i}]", e) for i, e in enumerate(kd_eqs)]
+    if u is None:
+        found = set()
+        for e in eqs:
+            found |= {f for f in e.atoms(AppliedUndef) if f.args == (t,) and f not in qset}
+        u = sorted(found, key=lambda f: f.func.__name__)
+    u = list(u)
+    bad = [f for f in u if not (isinstance(f, AppliedUndef) and f.args == (t,))]
+    for f in bad:
+        problems.append(f"u: {f} is not a dynamicsymbol")
+    if bad:
+        return {}
+    if len(eqs) != len(u):
+        problems.append(f"kd_eqs: {len(eqs)} kinematic differential equations for {len(u)} "
+                        f"speeds {', '.join(map(str, u))}; one per speed is needed")
+        return {}
+    for i, e in enumerate(eqs):
+        _check_affine(f"kd_eqs[{i}]", e, tuple(u), problems)
+    if problems:
+        return {}
+    B = sp.Matrix([[sp.diff(e, s) for s in u] for e in eqs])
+    rest = sp.Matrix([e.xreplace({s: 0 for s in u}) for e in eqs])
+    try:
+        sol = B.LUsolve(-rest)
+    except (ValueError, ZeroDivisionError, sp.matrices.exceptions.NonInvertibleMatrixError):
+        problems.append(f"kd_eqs: cannot be solved for the speeds {', '.join(map(str, u))} "
+                        f"(the coefficient matrix of u is singular)")
+        return {}
+    return {s: sp.simplify(x) if B != -sp.eye(len(u)) else sp.expand(x) for s, x in zip(u, sol)}
+
+
+def _check_affine(label, expr, speeds, problems) -> None:
+    """Record the terms of ``expr`` that are not affine in the speeds."""
+    if not speeds:
+        return
+    sset = set(speeds)
+    for term in sp.Add.make_args(sp.expand(expr)):
+        for s in speeds:
+            d = sp.diff(term, s)
+            if d.atoms(AppliedUndef) & sset:
+                problems.append(f"{label}: the term {short(term, _QUOTE)} is not affine in the "
+                                f"speeds ({s} appears nonlinearly); nhham needs constraints "
+                                f"affine in u")
+                return
+
+
+def _lagrangian_of(bodies, loads, frame, origin, problems) -> sp.Expr:
+    """T - V of rigid bodies/particles and constant (gravity-type) forces."""
+    if frame is None or origin is None:
+        problems.append("frame, origin: bodies and loads need the inertial frame and a point "
+                        "fixed in it (frame=N, origin=O)")
+        return sp.S.Zero
+    T = sp.S.Zero
+    for i, body in enumerate(bodies):
+        label = f"bodies[{i}] ({getattr(body, 'name', body)})"
+        point = getattr(body, "masscenter", None) or getattr(body, "point", None)
+        if point is None or not hasattr(body, "mass"):
+            problems.append(f"{label}: not a RigidBody or Particle")
+            continue
+        vel = _free_velocity(label, point, frame, origin, problems)
+        if vel is None:
+            continue
+        T += body.mass * vel.dot(vel) / 2
+        body_frame = getattr(body, "frame", None)
+        if body_frame is not None and hasattr(body, "central_inertia"):
+            w = body_frame.ang_vel_in(frame)
+            T += w.dot(body.central_inertia.dot(w)) / 2
+    V = sp.S.Zero
+    for i, load in enumerate(loads):
+        label = f"loads[{i}]"
+        where, vector = (load.location, load.vector) if hasattr(load, "location") else (
+            tuple(load) if isinstance(load, (tuple, list)) and len(load) == 2 else (None, None))
+        if where is None:
+            problems.append(f"{label}: {short(load, _QUOTE)} is not a load (point, force)")
+            continue
+        if isinstance(where, me.ReferenceFrame):
+            problems.append(f"{label}: the torque {short(vector, _QUOTE)} on frame {where} is not "
+                            f"a potential force; nhham takes gravity-type loads only (forces are "
+                            f"not supported yet)")
+            continue
+        comps = vector.to_matrix(frame) if vector != 0 else sp.zeros(3, 1)
+        moving = sorted({str(f) for f in comps.atoms(AppliedUndef)}
+                        | ({str(me.dynamicsymbols._t)} if comps.has(me.dynamicsymbols._t) else set()))
+        if moving:
+            problems.append(f"{label}: the force {short(vector, _QUOTE)} on {where} depends on "
+                            f"{', '.join(moving)}; only forces constant in the inertial frame "
+                            f"(gravity type) have a potential; other loads are not supported yet")
+            continue
+        try:
+            r = where.pos_from(origin)
+        except ValueError:
+            problems.append(f"{label}: the point {where} has no position from the origin "
+                            f"{origin}; locate it from there (locatenew)")
+            continue
+        V -= vector.dot(r)
+    return T - V
+
+
+def _free_velocity(label, point, frame, origin, problems):
+    """d/dt of the position of ``point`` from ``origin`` in ``frame``."""
+    try:
+        r = point.pos_from(origin)
+    except ValueError:
+        problems.append(f"{label}: its mass centre {point} has no position from the origin "
+                        f"{origin}; nhham needs the free velocity d/dt(position), not a "
+                        f"velocity with constraints already substituted (set_vel): locate "
+                        f"the point from the origin")
+        return None
+    return r.dt(frame)
 
 
 def from_lagranges_method(lm: me.LagrangesMethod, parameters=None, name: str = "") -> System:

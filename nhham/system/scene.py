@@ -48,6 +48,7 @@ from nhham.errors import (
 )
 from nhham.system.expressions import RESERVED_NAMES, parse_expression, to_text
 from nhham.system.naming import acceleration_symbol, momentum_symbol, velocity_symbol
+from nhham.system.steady import parse_steady, steady_structure
 
 __all__ = [
     "Scene",
@@ -68,7 +69,7 @@ INITIAL_TOLERANCE = 1e-9
 
 _TOP_KEYS = (
     "name", "description", "coordinates", "parameters", "symbolic_parameters",
-    "lagrangian", "constraints", "holonomic", "initial", "simulate",
+    "lagrangian", "constraints", "holonomic", "initial", "simulate", "steady",
 )
 _REQUIRED_KEYS = ("coordinates", "lagrangian")
 
@@ -141,6 +142,8 @@ class Scene:
         Simulation defaults (all None if the scene has no ``[simulate]``).
     source : str
         Where the scene came from (a path or ``"<string>"``).
+    steady : nhham.system.steady.SteadyState or None
+        The ``[steady]`` motion (expressions in the parameters), or None.
     """
 
     name: str
@@ -149,6 +152,7 @@ class Scene:
     initial: Mapping[str, float] | None
     simulate: SimulateOptions
     source: str
+    steady: object = None
 
     def simulate_options(self, **overrides) -> dict:
         """Keyword arguments for :func:`nhham.simulate` from the scene.
@@ -262,6 +266,7 @@ def loads_scene(text: str, source: str = "<string>", *, check_initial: bool = Tr
         initial=spec.initial,
         simulate=spec.simulate,
         source=source,
+        steady=expressions.get("[steady]"),
     )
     if check_initial and scene.initial is not None:
         _check_initial(scene)
@@ -307,6 +312,7 @@ class _Spec:
     holonomic: tuple
     initial: Mapping[str, float] | None
     simulate: SimulateOptions
+    steady: Mapping | None = None
 
 
 def _validate_structure(data: dict, source: str) -> _Spec:
@@ -335,10 +341,11 @@ def _validate_structure(data: dict, source: str) -> _Spec:
 
     initial = _initial_table(data.get("initial"), coordinates, problems)
     simulate = _simulate_table(data.get("simulate"), problems)
+    steady = steady_structure(data.get("steady"), coordinates, problems)
     if problems:
         raise _scene_error(source, problems)
     return _Spec(source, name, description, tuple(coordinates), parameters, lagrangian,
-                 tuple(constraints), tuple(holonomic), initial, simulate)
+                 tuple(constraints), tuple(holonomic), initial, simulate, steady)
 
 
 def _scene_error(source: str, problems: list[str]) -> SceneError:
@@ -584,6 +591,10 @@ def _parse_expressions(spec: _Spec) -> dict:
             parsed[path] = parse_expression(text, table, where=path)
         except ParseError as exc:
             problems.append(str(exc))
+    steady, steady_problems = parse_steady(spec.steady, spec.parameters)
+    problems.extend(steady_problems)
+    if steady is not None:
+        parsed["[steady]"] = steady
     if problems:
         if len(problems) == 1:
             error = ParseError(problems[0])
@@ -710,7 +721,8 @@ def _evaluate(expr, point):
 
 
 # -------------------------------------------------------------------- dump
-def dump_scene(system, initial=None, simulate=None, *, description: str = "") -> str:
+def dump_scene(system, initial=None, simulate=None, *, description: str = "",
+               steady=None) -> str:
     """Write a system (and optional initial data and options) as scene TOML.
 
     Parameters
@@ -721,6 +733,8 @@ def dump_scene(system, initial=None, simulate=None, *, description: str = "") ->
     simulate : SimulateOptions or mapping, optional
         Simulation defaults.
     description : str, optional
+    steady : SteadyState or mapping of str to (float or str), optional
+        The ``[steady]`` table (numbers, or expressions in the parameters).
 
     Returns
     -------
@@ -753,6 +767,14 @@ def dump_scene(system, initial=None, simulate=None, *, description: str = "") ->
         lines.append("")
         lines.append("[initial]")
         lines.extend(f"{_toml_key(k)} = {_toml_float(v, k)}" for k, v in initial.items())
+    if steady is not None:
+        table = steady.to_toml_table() if hasattr(steady, "to_toml_table") else dict(steady)
+        lines.append("")
+        lines.append("[steady]")
+        for k, v in table.items():
+            text = _toml_string(to_text(sp.sympify(v))) if isinstance(v, (str, sp.Basic)) \
+                else _toml_float(v, k)
+            lines.append(f"{_toml_key(k)} = {text}")
     options = simulate.given() if isinstance(simulate, SimulateOptions) else dict(simulate or {})
     if options:
         lines.append("")

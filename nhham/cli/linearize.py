@@ -1,0 +1,280 @@
+"""``nhham linearize SCENE``: stability of the scene's ``[steady]`` motion.
+
+Usage::
+
+    nhham linearize SCENE [--json] [--exact | --numeric] [--sweep P=START:STOP:COUNT]
+                          [--plot FILE]
+
+The steady motion is linearised in independent coordinates on M_1
+(:mod:`nhham.numerics.linearize`): state matrix, eigenvalues, verdict. Small
+systems (n <= :data:`EXACT_MAX_N`) get the exact Jacobian
+(:mod:`nhham.lagrangian.linearize`) in the same chart, eigenvalues from it at
+:data:`EXACT_DIGITS` digits; larger ones the complex-step Jacobian. With
+``--sweep`` the parameter P takes COUNT values from START to STOP (the steady
+state moves with it when its ``[steady]`` entries use P), and the crossings of
+the imaginary axis are located by Brent's method. ``--plot`` draws the root
+locus (needs the optional matplotlib extra; no global backend is set).
+
+JSON (the ``result`` of the envelope, schema ``$defs/linearize``):
+``coordinates``, ``matrix``, ``eigenvalues`` ([re, im] pairs), ``stable``
+(bool or null), ``spectrally_stable``, ``method``, ``precision``, ``neutral``,
+``dependent``, ``chart``, ``steady_state``; ``sweep`` (null without
+``--sweep``) = {``parameter``, ``values``, ``eigenvalues``, ``crossings``
+[{``value``, ``kind``}]}; ``plot`` (the file written, or null).
+"""
+
+from __future__ import annotations
+
+import re
+
+import numpy as np
+
+from nhham.errors import InputError, OptionalDependencyError
+from nhham.cli.report import table
+
+__all__ = ["add_arguments", "cmd_linearize", "linearize_scene", "parse_sweep", "plot_root_locus",
+           "EXACT_MAX_N", "EXACT_DIGITS", "LINEARIZE_HELP"]
+
+#: (short help, description, example) for ``nhham linearize --help``.
+LINEARIZE_HELP = (
+    "stability of the [steady] motion: state matrix, eigenvalues, sweeps",
+    "Linearise the constrained dynamics about the scene's [steady] motion (an equilibrium or "
+    "a steady motion, checked to lie on M_1 and to be steady) in independent coordinates, "
+    "neutral directions divided out: state matrix, eigenvalues and a stability verdict "
+    "(exact for small systems, complex-step otherwise). --sweep moves a parameter (and the "
+    "steady motion with it) and locates where an eigenvalue crosses the imaginary axis.",
+    "nhham linearize examples/whipple_bicycle.toml --sweep v=0:10:101 --plot locus.png")
+
+#: Largest number of coordinates for which ``auto`` uses the exact Jacobian.
+EXACT_MAX_N = 4
+
+#: Digits of the eigenvalues computed from an exact state matrix.
+EXACT_DIGITS = 30
+
+_SWEEP = re.compile(r"^\s*([A-Za-z_][A-Za-z0-9_]*)\s*=\s*([^:]+):([^:]+):([^:]+)\s*$")
+
+
+def add_arguments(parser) -> None:
+    """The command's own options (the common ones are added by ``main``)."""
+    group = parser.add_mutually_exclusive_group()
+    group.add_argument("--exact", dest="method", action="store_const", const="exact",
+                       help="exact (symbolic) Jacobian whatever the size")
+    group.add_argument("--numeric", dest="method", action="store_const", const="complex-step",
+                       help="complex-step Jacobian whatever the size")
+    parser.set_defaults(method="auto")
+    parser.add_argument("--sweep", metavar="P=START:STOP:COUNT", default=None,
+                        help="eigenvalues along parameter P, with crossings located")
+    parser.add_argument("--plot", metavar="FILE", default=None,
+                        help="root-locus plot of the sweep (needs matplotlib)")
+
+
+def parse_sweep(text: str):
+    """``"v=0:10:101"`` -> ``("v", array of 101 values)``.
+
+    Raises
+    ------
+    InputError
+        Naming what is wrong with the option.
+    """
+    match = _SWEEP.match(text or "")
+    if not match:
+        raise InputError(f"--sweep: expected PARAMETER=START:STOP:COUNT (e.g. v=0:10:101), "
+                         f"got {text!r}")
+    name, a, b, c = match.groups()
+    try:
+        start, stop = float(a), float(b)
+        count = int(c)
+    except ValueError:
+        raise InputError(f"--sweep: START and STOP must be numbers and COUNT an integer, "
+                         f"got {text!r}") from None
+    if not (np.isfinite(start) and np.isfinite(stop)) or count < 2 or stop <= start:
+        raise InputError(f"--sweep: need finite START < STOP and COUNT >= 2, got {text!r}")
+    if count > 100000:
+        raise InputError(f"--sweep: COUNT {count} is too large (at most 100000)")
+    return name, np.linspace(start, stop, count)
+
+
+def linearize_scene(scene, method: str = "auto", sweep=None, model=None):
+    """Linearise a scene's ``[steady]`` motion (and sweep a parameter).
+
+    Parameters
+    ----------
+    scene : nhham.system.scene.Scene
+        With a ``[steady]`` table.
+    method : {"auto", "exact", "complex-step"}
+    sweep : (str, array) or None
+        Parameter name and values.
+    model : NumericModel, optional
+        Reuse a model of ``scene.system``.
+
+    Returns
+    -------
+    (Linearization, Sweep or None)
+    """
+    from nhham.numerics.codegen import numeric_model
+    from nhham.numerics.linearize import linearize, sweep_steady
+
+    if scene.steady is None:
+        raise InputError(f"{scene.source}: linearize needs a [steady] table with a value (or an "
+                         f"expression in the parameters) for every coordinate and velocity")
+    if method not in ("auto", "exact", "complex-step"):
+        raise InputError(f"linearize: unknown method {method!r}")
+    model = numeric_model(scene.system) if model is None else model
+    state = scene.steady.values(model.parameters)
+    lin = linearize(model, state)
+    if method == "exact" or (method == "auto" and scene.system.n <= EXACT_MAX_N):
+        lin = _exact(scene, model, lin)
+    result_sweep = None
+    if sweep is not None:
+        name, values = sweep
+        result_sweep = sweep_steady(model, scene.steady.values, name, values,
+                                    independent=lin.chart)
+    return lin, result_sweep
+
+
+def _exact(scene, model, lin):
+    """The same linearisation with the exact Jacobian in the numeric chart."""
+    import mpmath
+    import sympy as sp
+
+    from nhham.lagrangian.linearize import exact_jacobian, exact_number
+    from nhham.numerics.linearize import linearization_result
+
+    params = {p.name: exact_number(v) for p, v in scene.system.parameter_values.items()}
+    point = {sp.Symbol(k): v for k, v in params.items()}
+    state = {}
+    for name, expr in scene.steady.expressions.items():
+        value = sp.sympify(expr).xreplace(point)
+        state[name] = value if value.is_number else exact_number(float(value.evalf()))
+    ej = exact_jacobian(scene.system, state, params, lin.chart)
+    keep = [i for i, s in enumerate(ej.chart) if s not in lin.neutral]
+    A = ej.matrix.extract(keep, keep)
+    with mpmath.workdps(EXACT_DIGITS + 10):
+        M = mpmath.matrix([[mpmath.mpmathify(sp.N(e, EXACT_DIGITS + 10)) for e in A.row(i)]
+                           for i in range(A.rows)]) if A.rows else None
+        ev = [complex(z) for z in mpmath.eig(M, left=False, right=False)] if A.rows else []
+    Af = np.array([[float(sp.N(e, 20)) for e in A.row(i)] for i in range(A.rows)]).reshape(
+        A.rows, A.rows)
+    scale = max(1.0, float(np.abs(Af).max(initial=0.0)))
+    return linearization_result(
+        Af, tuple(ej.chart[i] for i in keep), "exact",
+        f"exact symbolic Jacobian (implicit differentiation of the saddle-point system, "
+        f"exact arithmetic on the parameter values as decimals), eigenvalues by mpmath at "
+        f"{EXACT_DIGITS} digits", ej.chart,
+        np.array([[float(sp.N(e, 20)) for e in ej.matrix.row(i)] for i in range(ej.matrix.rows)]),
+        lin.neutral, lin.dependent, dict(lin.state), dict(lin.residuals),
+        lin.acceleration_residual, tol=10.0 ** (-EXACT_DIGITS + 5) * scale, eigenvalues=ev,
+        exact_matrix=A)
+
+
+def cmd_linearize(args, steps):
+    """The command: load, linearise, sweep; a :class:`~nhham.cli.envelope.CommandOutput`."""
+    from nhham.cli.envelope import CommandOutput, capture_warnings, scene_info
+    from nhham.numerics.codegen import numeric_model
+    from nhham.system.scene import load_scene
+
+    with steps.step(f"load scene {args.scene}"):
+        scene = load_scene(args.scene)
+    sweep = parse_sweep(args.sweep) if args.sweep else None
+    if args.plot and sweep is None:
+        raise InputError("--plot draws the root locus of a sweep: give --sweep too")
+    if args.plot:
+        _matplotlib()  # fail before the work when the extra is missing
+    with capture_warnings() as caught:
+        with steps.step("numeric model (generated kernels)"):
+            model = numeric_model(scene.system)
+        with steps.step(f"linearise ({args.method})"
+                        + (f", sweep {args.sweep}" if sweep else "")):
+            lin, swept = linearize_scene(scene, args.method, sweep, model=model)
+    data = lin.to_dict()
+    data["sweep"] = None if swept is None else swept.to_dict()
+    data["plot"] = None
+    if args.plot:
+        with steps.step(f"plot {args.plot}"):
+            data["plot"] = plot_root_locus(swept, args.plot, title=scene.name)
+    return CommandOutput(result=data, text=lambda: _text(scene, lin, swept, args),
+                         scene=scene_info(scene), warnings=caught)
+
+
+def _text(scene, lin, swept, args) -> str:
+    lines = [f"{scene.name or args.scene}: linearisation about the [steady] motion"]
+    rows = [
+        ("method", lin.method),
+        ("independent (chart)", ", ".join(lin.chart)),
+        ("dependent", ", ".join(lin.dependent) or "none"),
+        ("neutral (removed)", ", ".join(lin.neutral) or "none"),
+        ("coordinates", ", ".join(lin.coordinates)),
+        ("verdict", lin.verdict),
+        ("precision", lin.precision),
+    ]
+    lines.append(table(rows))
+    if lin.matrix.size:
+        lines.append("state matrix:")
+        lines.append(table([[f"{x:.10g}" for x in row] for row in lin.matrix],
+                           header=list(lin.coordinates)))
+    lines.append("eigenvalues:")
+    lines.append(table([(f"{z.real:.12g}", f"{z.imag:+.12g}i") for z in lin.eigenvalues]
+                       or [("none",)]))
+    if swept is not None:
+        lines.append(f"sweep over {swept.parameter}: {len(swept.values)} values from "
+                     f"{swept.values[0]:g} to {swept.values[-1]:g}")
+        stable = [v for v, s in zip(swept.values, swept.stable) if s]
+        lines.append(f"  stable at {len(stable)} of them"
+                     + (f" (from {min(stable):g} to {max(stable):g})" if stable else ""))
+        if swept.crossings:
+            lines.append("crossings (Re of an eigenvalue changes sign):")
+            lines.append(table([(f"{swept.parameter} = {c.value:.10f}", c.kind,
+                                 "to Re > 0" if c.direction > 0 else "to Re < 0",
+                                 f"lambda = {c.eigenvalue.real:.1e} {c.eigenvalue.imag:+.6f}i")
+                                for c in swept.crossings]))
+        else:
+            lines.append("  no crossings")
+    return "\n".join(lines)
+
+
+def _matplotlib():
+    try:
+        from matplotlib.backends.backend_agg import FigureCanvasAgg
+        from matplotlib.figure import Figure
+    except ImportError as exc:
+        raise OptionalDependencyError(
+            "plotting needs matplotlib, an optional extra: pip install 'nhham[plot]' "
+            "(or pip install matplotlib)") from exc
+    return Figure, FigureCanvasAgg
+
+
+def plot_root_locus(swept, path, title: str = "") -> str:
+    """Real and imaginary parts of the eigenvalues against the parameter; saved to ``path``.
+
+    Uses matplotlib's object API with the Agg canvas for this figure only
+    (the user's pyplot backend is left alone).
+    """
+    Figure, FigureCanvasAgg = _matplotlib()
+    fig = Figure(figsize=(7, 5))
+    FigureCanvasAgg(fig)
+    ax = fig.add_subplot(1, 1, 1)
+    vals = swept.values
+    re_pts = [(v, z.real) for v, ev in zip(vals, swept.eigenvalues) for z in ev]
+    im_pts = [(v, abs(z.imag)) for v, ev in zip(vals, swept.eigenvalues) for z in ev if z.imag]
+    if re_pts:
+        x, y = zip(*re_pts)
+        ax.plot(x, y, ".", markersize=3, color="k", label="Re(eigenvalue)")
+    if im_pts:
+        x, y = zip(*im_pts)
+        ax.plot(x, y, ".", markersize=2, color="tab:gray", alpha=0.6, label="|Im(eigenvalue)|")
+    for c in swept.crossings:
+        ax.axvline(c.value, color="tab:red" if c.kind == "complex" else "tab:blue",
+                   linewidth=0.8, label=f"{c.kind} crossing {swept.parameter} = {c.value:.6f}")
+    ax.axhline(0.0, color="k", linewidth=0.5)
+    ax.set_xlabel(swept.parameter)
+    ax.set_ylabel("eigenvalue")
+    finite = [y for _, y in re_pts if np.isfinite(y)]
+    if finite:
+        lo = max(min(finite), -10.0 * max(1.0, max(abs(y) for _, y in im_pts) if im_pts else 1.0))
+        ax.set_ylim(lo - 1.0, max(max(finite), max((y for _, y in im_pts), default=0.0)) + 1.0)
+    ax.set_title(f"root locus: {title}" if title else "root locus")
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    return str(path)

@@ -1,0 +1,629 @@
+"""Linearisation about a steady motion on M_1, by complex-step differentiation (no sympy).
+
+A state y0 = (q0, v0) on M_1 = {g(q) = 0, mu(q) v + h(q) = 0} is *steady* when
+the constrained accelerations vanish there and every coordinate that moves
+(v^A != 0) is one the dynamics does not depend on (a cyclic coordinate): an
+equilibrium (v0 = 0) or a relative equilibrium such as a bicycle rolling
+upright at constant speed.
+
+Independent coordinates on M_1 (the chart): k of the coordinates are
+dependent, solved from g(q) = 0 by Newton's method; m of the velocities are
+dependent, solved from mu(q) v + h(q) = 0. The others, (q_I, u_I), are the
+chart's coordinates, and the reduced field is
+
+    F(q_I, u_I) = (q_I', u_I') = (v_I(q, v), a_I(q, v))
+
+at the lifted state. Its Jacobian at the steady state is computed column by
+column by the complex step dF/dx_j = Im F(x0 + i h e_j) / h (h = 1e-30): every
+operation (the generated numpy kernel of W, F, mu, drift, h, g; the Newton
+iteration of the lift; the saddle-point solve) is analytic, so there is no
+subtractive cancellation and the derivative is exact to rounding, unlike a
+finite difference.
+
+Neutral directions: a chart coordinate whose Jacobian column vanishes is a
+direction nothing depends on (a cyclic coordinate such as a position or a
+wheel angle, or a rate such as the forward speed whose change only moves to a
+neighbouring steady motion). Its eigenvalue is 0 with eigenvector e_j; it is
+removed (repeatedly), and stability is decided on what remains: stability of
+the steady motion modulo its symmetries and its family, the notion used for
+relative equilibria (and by the bicycle benchmark: lean and steer only).
+
+Verdict: asymptotically stable when every remaining eigenvalue has real part
+< -tol, unstable when one has real part > tol, undecided (None) otherwise;
+"spectrally stable" says that no real part exceeds tol (e.g. a conservative
+system's purely imaginary spectrum, where linearisation cannot decide).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from types import MappingProxyType
+from typing import Callable, Mapping, Sequence
+
+import numpy as np
+
+from nhham.errors import ComputationError, InconsistentInitialDataError, InputError
+
+__all__ = ["Linearization", "Sweep", "Crossing", "linearize", "sweep", "sweep_steady", "STEP",
+           "ON_TOLERANCE"]
+
+#: |Re lambda| <= this * max(1, max |A|) counts as zero in a stability verdict.
+EIGENVALUE_TOLERANCE = 1e-9
+
+#: Imaginary step of the complex-step derivative.
+STEP = 1e-30
+
+#: Relative tolerance for "on M_1" and "steady" (residual / natural size).
+ON_TOLERANCE = 1e-9
+
+# A Jacobian column is zero (a neutral direction) below this, relative to max |J|.
+_NEUTRAL_TOL = 1e-10
+
+
+# ------------------------------------------------------------------ results
+@dataclass(frozen=True)
+class Linearization:
+    """The linearised constrained dynamics about a steady state.
+
+    Attributes
+    ----------
+    coordinates : tuple of str
+        Names of the state variables of :attr:`matrix` (independent
+        coordinates and velocities on M_1, neutral directions removed).
+    matrix : ndarray, shape (d, d)
+        State matrix A of x' = A x in those variables.
+    eigenvalues : ndarray of complex, shape (d,)
+        Eigenvalues of A, sorted by decreasing real part, then imaginary part.
+    stable : bool or None
+        True: every real part < -tol (asymptotically stable); False: one
+        real part > tol (unstable); None: undecided by linearisation.
+    spectrally_stable : bool
+        No real part exceeds tol.
+    verdict : str
+        The verdict in words.
+    method : str
+        ``"complex-step"`` or ``"exact"``.
+    precision : str
+        How the numbers were obtained and the tolerance of the verdict.
+    tolerance : float
+        |Re lambda| at or below this counts as zero.
+    chart : tuple of str
+        All independent coordinates and velocities (before removing neutral
+        directions).
+    full_matrix : ndarray
+        The Jacobian in the full chart.
+    neutral : tuple of str
+        Chart variables removed as neutral directions (eigenvalue 0 each).
+    dependent : tuple of str
+        Coordinates and velocities solved from the constraints.
+    state : mapping of str to float
+        The steady state (every coordinate and velocity).
+    residuals : mapping of str to float
+        Constraint residuals at the state.
+    acceleration_residual : float
+        max |a| at the state (zero for a steady motion).
+    exact_matrix : sympy.Matrix or None
+        The state matrix with exact entries (``method == "exact"``).
+    """
+
+    coordinates: tuple
+    matrix: np.ndarray
+    eigenvalues: np.ndarray
+    stable: bool | None
+    spectrally_stable: bool
+    verdict: str
+    method: str
+    precision: str
+    tolerance: float
+    chart: tuple
+    full_matrix: np.ndarray
+    neutral: tuple
+    dependent: tuple
+    state: Mapping[str, float]
+    residuals: Mapping[str, float] = field(default_factory=dict)
+    acceleration_residual: float = 0.0
+    exact_matrix: object = None
+
+    def to_dict(self) -> dict:
+        """JSON-ready: ``coordinates``, ``matrix``, ``eigenvalues`` ([re, im]), ``stable``..."""
+        return {
+            "coordinates": list(self.coordinates),
+            "matrix": [[float(x) for x in row] for row in self.matrix],
+            "eigenvalues": [[float(z.real), float(z.imag)] for z in self.eigenvalues],
+            "stable": self.stable,
+            "spectrally_stable": self.spectrally_stable,
+            "verdict": self.verdict,
+            "method": self.method,
+            "precision": self.precision,
+            "tolerance": self.tolerance,
+            "chart": list(self.chart),
+            "neutral": list(self.neutral),
+            "dependent": list(self.dependent),
+            "steady_state": dict(self.state),
+            "residuals": dict(self.residuals),
+            "acceleration_residual": self.acceleration_residual,
+            **({} if self.exact_matrix is None else
+               {"matrix_exact": [[str(x) for x in self.exact_matrix.row(i)]
+                                 for i in range(self.exact_matrix.rows)]}),
+        }
+
+
+@dataclass(frozen=True)
+class Crossing:
+    """A parameter value where an eigenvalue's real part changes sign.
+
+    Attributes
+    ----------
+    value : float
+        Located by Brent's method on the real part of the crossing branch.
+    kind : {"real", "complex"}
+        A real eigenvalue through 0, or a complex pair through the imaginary axis.
+    eigenvalue : complex
+        The crossing eigenvalue at ``value`` (real part ~ 0).
+    direction : int
+        +1 when the real part becomes positive with increasing parameter.
+    """
+
+    value: float
+    kind: str
+    eigenvalue: complex
+    direction: int
+
+
+@dataclass(frozen=True)
+class Sweep:
+    """Eigenvalues of the linearisation along a parameter.
+
+    Attributes
+    ----------
+    parameter : str
+    values : ndarray, shape (N,)
+    eigenvalues : tuple of ndarray
+        One array of complex eigenvalues per value (sorted as in
+        :class:`Linearization`).
+    stable : tuple of bool or None
+    crossings : tuple of Crossing
+    coordinates : tuple of str
+        The variables of the state matrices.
+    """
+
+    parameter: str
+    values: np.ndarray
+    eigenvalues: tuple
+    stable: tuple
+    crossings: tuple
+    coordinates: tuple
+
+    def to_dict(self) -> dict:
+        """``parameter``, ``values``, ``eigenvalues`` (lists of [re, im]), ``crossings``."""
+        return {
+            "parameter": self.parameter,
+            "values": [float(v) for v in self.values],
+            "eigenvalues": [[[float(z.real), float(z.imag)] for z in ev] for ev in self.eigenvalues],
+            "stable_at": list(self.stable),
+            "crossings": [{"value": c.value, "kind": c.kind,
+                           "eigenvalue": [c.eigenvalue.real, c.eigenvalue.imag],
+                           "direction": c.direction} for c in self.crossings],
+            "coordinates": list(self.coordinates),
+        }
+
+
+def linearization_result(A, coords, method, precision, chart_names, J, removed, dependent,
+                         state, residuals, worst, tol=None, eigenvalues=None,
+                         exact_matrix=None) -> "Linearization":
+    """Eigenvalues and the stability verdict of a state matrix, as a :class:`Linearization`.
+
+    ``A`` is the state matrix in the variables ``coords``; ``eigenvalues``
+    may be given (e.g. computed with more digits), otherwise LAPACK's.
+    ``tol`` (default 1e-9 max(1, max |A|)) is the real part counted as zero.
+    The other arguments are stored as the attributes of the same names.
+    """
+    if eigenvalues is not None:
+        ev = np.asarray(eigenvalues, dtype=complex)
+    else:
+        ev = np.linalg.eigvals(A) if A.size else np.zeros(0, dtype=complex)
+    ev = _sorted(ev)
+    tol = EIGENVALUE_TOLERANCE * max(1.0, float(np.abs(A).max(initial=0.0))) if tol is None else tol
+    top = float(ev.real.max()) if ev.size else -math.inf
+    if not ev.size:
+        stable, verdict = None, "no non-neutral directions: linearisation cannot decide"
+    elif top < -tol:
+        stable, verdict = True, "asymptotically stable (every eigenvalue has Re < 0)"
+    elif top > tol:
+        stable, verdict = False, "unstable (an eigenvalue has Re > 0)"
+    else:
+        stable = None
+        verdict = ("spectrally stable: the largest real part is 0 to the tolerance; "
+                   "linearisation cannot decide")
+    return Linearization(
+        coordinates=coords, matrix=A, eigenvalues=ev, stable=stable,
+        spectrally_stable=bool(top <= tol), verdict=verdict, method=method,
+        precision=f"{precision}; |Re| <= {tol:.1e} counts as 0", tolerance=tol,
+        chart=tuple(chart_names), full_matrix=J, neutral=tuple(removed),
+        dependent=tuple(dependent), state=MappingProxyType(state),
+        residuals=MappingProxyType(residuals), acceleration_residual=worst,
+        exact_matrix=exact_matrix)
+
+
+def _sorted(ev):
+    ev = np.asarray(ev, dtype=complex)
+    order = np.lexsort((-ev.imag, -np.round(ev.real, 12)))
+    return ev[order]
+
+
+def _sorted(ev):
+    ev = np.asarray(ev, dtype=complex)
+    order = np.lexsort((-ev.imag, -np.round(ev.real, 12)))
+    return ev[order]
+
+
+# ------------------------------------------------------------------ kernels
+class _ComplexField:
+    """The constrained field on complex states, through the generated numpy kernel."""
+
+    def __init__(self, model):
+        self.n, self.m, self.k = model.n, model.m, model.k
+        try:
+            self._batch = model.kernels.functions["saddle"][1]
+        except (AttributeError, KeyError, IndexError, TypeError):  # pragma: no cover
+            raise ComputationError("linearize: the numeric model has no numpy saddle kernel "
+                                   "for complex-step differentiation") from None
+        self._p = [float(x) for x in model.parameter_values]
+        n, m, k = self.n, self.m, self.k
+        self.size = n * n + n + m * n + 3 * m + k
+
+    def pieces(self, Q, V):
+        """W, F, mu, drift, h, g at complex states (rows of Q, V: shape (K, n))."""
+        n, m, k = self.n, self.m, self.k
+        Y = np.ascontiguousarray(np.concatenate([Q, V], axis=1).T.astype(complex))
+        out = np.zeros((self.size, Y.shape[1]), dtype=complex)
+        with np.errstate(all="ignore"):
+            self._batch(Y, self._p, out)
+        out = out.T
+        i = 0
+        W = out[:, i:i + n * n].reshape(-1, n, n); i += n * n
+        F = out[:, i:i + n]; i += n
+        mu = out[:, i:i + m * n].reshape(-1, m, n); i += m * n
+        drift = out[:, i:i + m]; i += m
+        h = out[:, i:i + m]; i += m
+        g = out[:, i:i + k]
+        return W, F, mu, drift, h, g
+
+    def accelerations(self, Q, V):
+        W, F, mu, drift, _, _ = self.pieces(Q, V)
+        n, m = self.n, self.m
+        K = np.zeros((Q.shape[0], n + m, n + m), dtype=complex)
+        K[:, :n, :n] = W
+        K[:, :n, n:] = np.swapaxes(mu, 1, 2)
+        K[:, n:, :n] = mu
+        rhs = np.concatenate([F, -drift], axis=1)
+        try:
+            sol = np.linalg.solve(K, rhs[..., None])[..., 0]
+        except np.linalg.LinAlgError:
+            raise ComputationError("linearize: the saddle-point matrix [[W, mu^T], [mu, 0]] is "
+                                   "singular at the state (C singular: M_f is not M_1 here)") from None
+        return sol[:, :n]
+
+
+@dataclass(frozen=True)
+class _Chart:
+    iq: tuple   # independent coordinate indices
+    dq: tuple   # dependent coordinate indices
+    iv: tuple   # independent velocity indices
+    dv: tuple   # dependent velocity indices
+
+
+def _greedy_columns(M, count, order, tol=1e-8):
+    """``count`` columns of M (tried in ``order``) that are independent."""
+    chosen = []
+    scale = max(1.0, float(np.abs(M).max(initial=0.0)))
+    for j in order:
+        trial = chosen + [j]
+        s = np.linalg.svd(M[:, trial], compute_uv=False)
+        if s.size and s[-1] > tol * scale:
+            chosen.append(j)
+        if len(chosen) == count:
+            break
+    return chosen
+
+
+def _choose_chart(model, y0, independent) -> _Chart:
+    n, m, k = model.n, model.m, model.k
+    names = model.names
+    _, mu, _, _ = model.geometry(y0)
+    G = mu[:k]  # rows of the complete lifts: dg/dq
+    if independent is not None:
+        unknown = [s for s in independent if s not in names]
+        if unknown:
+            raise InputError(f"linearize: independent: unknown name(s) {', '.join(unknown)} "
+                             f"(state names: {', '.join(names)})")
+        iq = [i for i in range(n) if names[i] in independent]
+        iv = [i for i in range(n) if names[n + i] in independent]
+        dq = [i for i in range(n) if i not in iq]
+        dv = [i for i in range(n) if i not in iv]
+        if len(dq) != k or len(dv) != m:
+            raise InputError(f"linearize: independent: need {n - k} coordinates and {n - m} "
+                             f"velocities, got {len(iq)} and {len(iv)}")
+        if k and np.linalg.matrix_rank(G[:, dq]) < k or m and np.linalg.matrix_rank(mu[:, dv]) < m:
+            raise InputError("linearize: independent: the constraints cannot be solved for the "
+                             "other coordinates or velocities at this state")
+        return _Chart(tuple(iq), tuple(dq), tuple(iv), tuple(dv))
+    dq = _greedy_columns(G, k, range(n)) if k else []
+    if len(dq) < k:
+        raise ComputationError("linearize: the holonomic constraints are singular at the state")
+    order = list(dq) + [i for i in range(n) if i not in dq]
+    dv = _greedy_columns(mu, m, order) if m else []
+    if len(dv) < m:
+        raise ComputationError("linearize: the constraint one-forms are dependent at the state")
+    iq = [i for i in range(n) if i not in dq]
+    iv = [i for i in range(n) if i not in dv]
+    return _Chart(tuple(iq), tuple(sorted(dq)), tuple(iv), tuple(sorted(dv)))
+
+
+def _reduced_field(cf, chart, q0, X):
+    """F(x) for chart points X (K, d) complex, lifted onto M_1."""
+    n = cf.n
+    K = X.shape[0]
+    iq, dq, iv, dv = (list(a) for a in (chart.iq, chart.dq, chart.iv, chart.dv))
+    Q = np.tile(q0.astype(complex), (K, 1))
+    Q[:, iq] = X[:, :len(iq)]
+    V = np.zeros((K, n), dtype=complex)
+    V[:, iv] = X[:, len(iq):]
+    if dq:
+        for _ in range(30):
+            _, _, mu, _, _, g = cf.pieces(Q, V)
+            G = mu[:, :cf.k, :][:, :, dq]
+            step = np.linalg.solve(G, g[..., None])[..., 0]
+            Q[:, dq] -= step
+            if np.abs(step).max() <= 1e-15 * max(1.0, np.abs(Q[:, dq].real).max()):
+                break
+        else:
+            raise ComputationError("linearize: Newton iteration for the dependent coordinates "
+                                   "did not converge")
+    if dv:
+        _, _, mu, _, h, _ = cf.pieces(Q, V)
+        rhs = -(np.einsum("kij,kj->ki", mu[:, :, iv], V[:, iv]) + h)
+        V[:, dv] = np.linalg.solve(mu[:, :, dv], rhs[..., None])[..., 0]
+    a = cf.accelerations(Q, V)
+    return np.concatenate([V[:, iq], a[:, iv]], axis=1)
+
+
+# ------------------------------------------------------------------ public
+def linearize(model, state, *, independent: Sequence[str] | None = None,
+              neutral: bool | Sequence[str] = True, step: float = STEP) -> Linearization:
+    """Linearise the constrained dynamics about a steady state on M_1.
+
+    Parameters
+    ----------
+    model : nhham.numerics.NumericModel
+        From :func:`nhham.numerics.codegen.numeric_model` (parameter values
+        as in the model; use ``model.with_parameters`` to change them).
+    state : mapping of str to float, or sequence
+        Every coordinate and velocity (see ``model.state``).
+    independent : sequence of str, optional
+        Names of the chart's independent coordinates and velocities; default:
+        dependent ones chosen greedily from the left among well-conditioned
+        columns of dg/dq and mu (velocities of dependent coordinates first).
+    neutral : bool or sequence of str, optional
+        True (default): remove every neutral direction (zero Jacobian
+        column); False: keep all; a sequence: remove those names (checked to
+        be neutral).
+    step : float, optional
+        The imaginary step (default 1e-30).
+
+    Returns
+    -------
+    Linearization
+
+    Raises
+    ------
+    InconsistentInitialDataError
+        The state is not on M_1 or not steady (the message shows the
+        residuals).
+    ComputationError
+        A constraint or the saddle-point matrix is singular at the state.
+    """
+    y0 = model.state(state)
+    n = model.n
+    names = model.names
+    residuals = _check_on_manifold(model, y0)
+    dy = model.rhs(0.0, y0)
+    acc = dy[n:]
+    scale = max(1.0, float(np.abs(y0).max()))
+    worst = float(np.abs(acc).max(initial=0.0))
+    if worst > ON_TOLERANCE * scale ** 2:
+        listed = ", ".join(f"{names[n + i]}' = {acc[i]:.3g}" for i in np.argsort(-np.abs(acc))[:4]
+                           if abs(acc[i]) > ON_TOLERANCE * scale ** 2)
+        raise InconsistentInitialDataError(
+            f"steady: the state is not steady: accelerations {listed} (largest {worst:.3g}; "
+            f"a steady motion has every acceleration zero)")
+    chart = _choose_chart(model, y0, independent)
+    cf = _ComplexField(model)
+    q0 = y0[:n]
+    x0 = np.concatenate([y0[list(chart.iq)], y0[n + np.array(chart.iv, dtype=int)]])
+    d = x0.size
+    X = np.tile(x0.astype(complex), (d, 1)) + 1j * step * np.eye(d)
+    J = _reduced_field(cf, chart, q0, X).imag.T / step
+    chart_names = tuple(names[i] for i in chart.iq) + tuple(names[n + i] for i in chart.iv)
+    dependent = tuple(names[i] for i in chart.dq) + tuple(names[n + i] for i in chart.dv)
+    keep, removed = _neutral_directions(J, chart_names, neutral)
+    moving = [names[i] for i in range(n) if abs(y0[n + i]) > ON_TOLERANCE * scale]
+    not_cyclic = [s for s in moving if s not in removed]
+    if not_cyclic:
+        raise InconsistentInitialDataError(
+            f"steady: the coordinates {', '.join(not_cyclic)} move at the state but the dynamics "
+            f"depends on them (or they are dependent), so the motion is not steady")
+    A = J[np.ix_(keep, keep)]
+    return linearization_result(A, tuple(chart_names[i] for i in keep), "complex-step",
+                   f"float64, complex-step Jacobian (step {step:g}i, exact to rounding), "
+                   f"LAPACK eigenvalues", chart_names, J, removed, dependent,
+                   dict(zip(names, map(float, y0))), residuals, worst)
+
+
+def _check_on_manifold(model, y0) -> dict:
+    res = model.residuals(y0)
+    scaled = model.scaled_residuals(y0)
+    names = model.residual_names
+    bad = [(nm, r) for nm, r, s in zip(names, res, scaled) if not s <= ON_TOLERANCE]
+    if bad:
+        listed = "; ".join(f"{nm} = {r:.3g}" for nm, r in bad)
+        raise InconsistentInitialDataError(f"steady: the state is not on M_1: {listed}")
+    return {nm: float(r) for nm, r in zip(names, res)}
+
+
+def _neutral_directions(J, chart_names, neutral):
+    d = J.shape[0]
+    keep = list(range(d))
+    scale = max(1.0, float(np.abs(J).max(initial=0.0)))
+    if neutral is False:
+        return keep, ()
+    if neutral is True:
+        removed = []
+        changed = True
+        while changed:
+            changed = False
+            for j in list(keep):
+                if np.abs(J[np.ix_(keep, [j])]).max(initial=0.0) <= _NEUTRAL_TOL * scale:
+                    keep.remove(j)
+                    removed.append(chart_names[j])
+                    changed = True
+        return keep, tuple(removed)
+    wanted = list(neutral)
+    unknown = [s for s in wanted if s not in chart_names]
+    if unknown:
+        raise InputError(f"linearize: neutral: {', '.join(unknown)} not in the chart "
+                         f"({', '.join(chart_names)})")
+    for s in wanted:
+        j = chart_names.index(s)
+        if np.abs(J[np.ix_(keep, [j])]).max(initial=0.0) > _NEUTRAL_TOL * scale:
+            raise InputError(f"linearize: neutral: the dynamics depends on {s} at this state; "
+                             f"it is not a neutral direction")
+        keep.remove(j)
+    return keep, tuple(wanted)
+
+
+def sweep(linearize_at: Callable[[float], Linearization], parameter: str,
+          values: Sequence[float], *, xtol: float = 1e-12) -> Sweep:
+    """Eigenvalues along a parameter, with the crossings of the imaginary axis.
+
+    Parameters
+    ----------
+    linearize_at : callable
+        ``value -> Linearization`` (the caller moves the steady state and the
+        parameter together; the same chart at every value).
+    parameter : str
+    values : sequence of float
+        Increasing values.
+    xtol : float, optional
+        Absolute tolerance of the located crossings.
+
+    Returns
+    -------
+    Sweep
+        Crossings are where the number of eigenvalues with positive real
+        part changes between consecutive values; each is located by Brent's
+        method on the real part of the crossing branch: the real eigenvalue
+        nearest to 0 ("real") or the complex eigenvalue of smallest |Re|
+        ("complex"), after bisecting on the count until one of them brackets.
+    """
+    values = np.asarray(values, dtype=float)
+    lins = [linearize_at(float(v)) for v in values]
+    coords = lins[0].coordinates if lins else ()
+    counts = [_n_positive(lin) for lin in lins]
+    crossings = []
+    for i in range(len(values) - 1):
+        if counts[i] != counts[i + 1]:
+            crossings.extend(_locate(linearize_at, values[i], values[i + 1], lins[i],
+                                     lins[i + 1], xtol))
+    return Sweep(parameter, values, tuple(lin.eigenvalues for lin in lins),
+                 tuple(lin.stable for lin in lins), tuple(crossings), tuple(coords))
+
+
+def _n_positive(lin):
+    return int(np.sum(lin.eigenvalues.real > lin.tolerance))
+
+
+def _branch(lin, kind):
+    ev = lin.eigenvalues
+    pick = ev[ev.imag == 0] if kind == "real" else ev[ev.imag > 0]
+    if not pick.size:
+        return None
+    return pick[np.argmin(np.abs(pick.real))]
+
+
+def _locate(linearize_at, a, b, lin_a, lin_b, xtol):
+    from scipy.optimize import brentq
+
+    found = []
+    for _ in range(60):
+        for kind in ("real", "complex"):
+            za, zb = _branch(lin_a, kind), _branch(lin_b, kind)
+            if za is None or zb is None or not (za.real * zb.real < 0):
+                continue
+
+            def f(p, kind=kind):
+                z = _branch(linearize_at(p), kind)
+                return math.nan if z is None else z.real
+
+            try:
+                root = brentq(f, a, b, xtol=xtol, rtol=4 * np.finfo(float).eps)
+            except ValueError:
+                continue
+            z = _branch(linearize_at(root), kind)
+            found.append(Crossing(float(root), kind, complex(z), 1 if zb.real > za.real else -1))
+        if found:
+            return found
+        if b - a <= xtol:
+            break
+        mid = 0.5 * (a + b)
+        lin_m = linearize_at(mid)
+        if _n_positive(lin_m) != _n_positive(lin_a):
+            b, lin_b = mid, lin_m
+        else:
+            a, lin_a = mid, lin_m
+    kind = "real" if abs(_n_positive(lin_a) - _n_positive(lin_b)) % 2 else "complex"
+    z = _branch(lin_b, kind)
+    return [Crossing(float(0.5 * (a + b)), kind, complex(z if z is not None else 0),
+                     1 if _n_positive(lin_b) > _n_positive(lin_a) else -1)]
+
+
+def sweep_steady(model, state_of: Callable[[Mapping[str, float]], Mapping[str, float]],
+                 parameter: str, values: Sequence[float], *, independent=None,
+                 xtol: float = 1e-12) -> Sweep:
+    """:func:`sweep` of a steady motion that moves with a parameter.
+
+    Parameters
+    ----------
+    model : NumericModel
+    state_of : callable
+        ``{parameter name: value} -> {state name: value}``, e.g. the
+        ``values`` method of a scene's :class:`~nhham.system.steady.SteadyState`.
+    parameter : str
+        A parameter of the model.
+    values : sequence of float
+    independent : sequence of str, optional
+        As for :func:`linearize`; default: the chart chosen at the first value,
+        kept for every value (with the neutral directions found there).
+    xtol : float, optional
+
+    Returns
+    -------
+    Sweep
+    """
+    if parameter not in model.parameter_names:
+        raise InputError(f"--sweep: {parameter!r} is not a parameter of the scene "
+                         f"(parameters: {', '.join(model.parameter_names) or 'none'})")
+    fixed = {}
+
+    def at(value):
+        m = model.with_parameters(**{parameter: value})
+        state = state_of(m.parameters)
+        if not fixed:
+            first = linearize(m, state, independent=independent)
+            fixed["independent"] = first.chart
+            fixed["neutral"] = first.neutral
+            return first
+        return linearize(m, state, independent=fixed["independent"], neutral=fixed["neutral"])
+
+    return sweep(at, parameter, values, xtol=xtol)

@@ -1,0 +1,151 @@
+"""Steady motions stated in a scene: the ``[steady]`` table.
+
+A scene may give a steady motion (an equilibrium or a relative equilibrium,
+e.g. a bicycle rolling upright at speed v) about which ``nhham linearize``
+linearises::
+
+    [steady]
+    x = 0.0
+    phi = 0
+    x_dot = "v"              # an expression in the parameters
+    thetaR_dot = "v/rR"
+    ...
+
+Every coordinate and every velocity needs a value: a number, or a string
+parsed (never evaluated as Python) against a symbol table holding only the
+parameters, ``pi`` and the usual functions. Because the entries are
+expressions in the parameters, a parameter sweep moves the steady motion with
+the parameter. Whether the state lies on M_1 and is steady is checked where it
+is used (:func:`nhham.numerics.linearize.linearize`), with the residuals in
+the message.
+"""
+
+from __future__ import annotations
+
+import difflib
+import math
+from dataclasses import dataclass
+from types import MappingProxyType
+from typing import Mapping
+
+import sympy as sp
+
+from nhham.errors import MissingParameterValueError, ParseError
+from nhham.system.expressions import parse_expression
+from nhham.system.naming import velocity_symbol
+
+__all__ = ["SteadyState", "steady_structure", "parse_steady"]
+
+
+@dataclass(frozen=True)
+class SteadyState:
+    """A steady motion: each coordinate and velocity as an expression in the parameters.
+
+    Attributes
+    ----------
+    expressions : mapping of str to sympy.Expr
+        State name -> value, in the order coordinates, velocities.
+    """
+
+    expressions: Mapping[str, sp.Expr]
+
+    def values(self, parameters: Mapping[str, float]) -> dict:
+        """The state as ``{name: float}`` at the given parameter values.
+
+        Parameters
+        ----------
+        parameters : mapping of str to float
+            A value for every parameter the expressions use.
+
+        Raises
+        ------
+        MissingParameterValueError
+            A parameter used has no value (the key is named).
+        ParseError
+            An entry is not a finite real number at these values.
+        """
+        point = {sp.Symbol(k): sp.Float(float(v), 30) for k, v in parameters.items()}
+        out = {}
+        for name, expr in self.expressions.items():
+            missing = sorted(s.name for s in expr.free_symbols if s not in point)
+            if missing:
+                raise MissingParameterValueError(
+                    f"steady.{name}: no numeric value for parameter {', '.join(missing)}")
+            try:
+                z = complex(expr.xreplace(point).evalf(20))
+            except (TypeError, ValueError, ZeroDivisionError, OverflowError):
+                z = complex(math.nan)
+            if not (math.isfinite(z.real) and abs(z.imag) <= 1e-12 * max(1.0, abs(z.real))):
+                raise ParseError(f"steady.{name}: {expr} is not a finite real number at the "
+                                 f"parameter values")
+            out[name] = z.real
+        return out
+
+    def to_toml_table(self) -> dict:
+        """``{name: str}`` as a scene's ``[steady]`` table would hold it."""
+        return {k: str(v) for k, v in self.expressions.items()}
+
+
+def state_names(coordinates) -> list:
+    """Coordinates then their velocities, as names."""
+    return list(coordinates) + [velocity_symbol(sp.Symbol(q)).name for q in coordinates]
+
+
+def steady_structure(value, coordinates, problems) -> Mapping | None:
+    """Check a raw ``[steady]`` table: a number or string for exactly every state name.
+
+    Problems are appended to ``problems`` (each naming ``steady.<key>``); the
+    raw values are returned (or None when there is no table).
+    """
+    if value is None:
+        return None
+    if not isinstance(value, dict):
+        problems.append("steady: expected a table of name = number or expression")
+        return None
+    wanted = state_names(coordinates)
+    raw = {}
+    for key, item in value.items():
+        path = f"steady.{key}"
+        if key not in wanted:
+            close = difflib.get_close_matches(str(key), wanted, n=1)
+            hint = f"; did you mean {close[0]!r}?" if close else ""
+            problems.append(f"{path}: unknown name (not a coordinate or velocity){hint}")
+            continue
+        if isinstance(item, bool) or not isinstance(item, (int, float, str)):
+            problems.append(f"{path}: expected a number or an expression string")
+            continue
+        if isinstance(item, float) and not math.isfinite(item):
+            problems.append(f"{path}: expected a finite number, got {item!r}")
+            continue
+        raw[key] = item
+    missing = [name for name in wanted if name not in value]
+    if missing:
+        problems.append(f"steady: missing value for {', '.join(map(repr, missing))} "
+                        f"(every coordinate and velocity needs one)")
+    return MappingProxyType({name: raw[name] for name in wanted if name in raw})
+
+
+def parse_steady(raw: Mapping, parameters) -> tuple[SteadyState | None, list]:
+    """Parse the entries of a checked ``[steady]`` table against the parameters.
+
+    Returns
+    -------
+    (SteadyState or None, list of str)
+        The steady state and the problems found (each naming its key).
+    """
+    if raw is None:
+        return None, []
+    table = {p: sp.Symbol(p) for p in parameters}
+    exprs, problems = {}, []
+    for name, item in raw.items():
+        path = f"steady.{name}"
+        if isinstance(item, str):
+            try:
+                exprs[name] = parse_expression(item, table, where=path)
+            except ParseError as exc:
+                problems.append(str(exc))
+        else:
+            exprs[name] = sp.Float(float(item)) if isinstance(item, float) else sp.Integer(item)
+    if problems:
+        return None, problems
+    return SteadyState(MappingProxyType(exprs)), []
