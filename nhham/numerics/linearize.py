@@ -494,12 +494,17 @@ def _neutral_directions(J, chart_names, neutral):
     if unknown:
         raise InputError(f"linearize: neutral: {', '.join(unknown)} not in the chart "
                          f"({', '.join(chart_names)})")
-    for s in wanted:
-        j = chart_names.index(s)
-        if np.abs(J[np.ix_(keep, [j])]).max(initial=0.0) > _NEUTRAL_TOL * scale:
-            raise InputError(f"linearize: neutral: the dynamics depends on {s} at this state; "
-                             f"it is not a neutral direction")
-        keep.remove(j)
+    pending = [chart_names.index(s) for s in wanted]
+    while pending:
+        zero = [j for j in pending
+                if np.abs(J[np.ix_(keep, [j])]).max(initial=0.0) <= _NEUTRAL_TOL * scale]
+        if not zero:
+            raise InputError(f"linearize: neutral: the dynamics depends on "
+                             f"{', '.join(chart_names[j] for j in pending)} at this state; "
+                             f"not neutral directions")
+        for j in zero:
+            keep.remove(j)
+            pending.remove(j)
     return keep, tuple(wanted)
 
 
@@ -544,12 +549,20 @@ def _n_positive(lin):
     return int(np.sum(lin.eigenvalues.real > lin.tolerance))
 
 
-def _branch(lin, kind):
+def _branch(lin, kind, target=None):
+    """The eigenvalue of ``kind`` nearest to ``target``; without a target, the one
+    of smallest |Re| among those with |Re| above the tolerance (a structural zero
+    eigenvalue is no branch)."""
     ev = lin.eigenvalues
     pick = ev[ev.imag == 0] if kind == "real" else ev[ev.imag > 0]
+    if target is None:
+        pick = pick[np.abs(pick.real) > lin.tolerance]
+        if not pick.size:
+            return None
+        return pick[np.argmin(np.abs(pick.real))]
     if not pick.size:
         return None
-    return pick[np.argmin(np.abs(pick.real))]
+    return pick[np.argmin(np.abs(pick - target))]
 
 
 def _locate(linearize_at, a, b, lin_a, lin_b, xtol):
@@ -562,15 +575,15 @@ def _locate(linearize_at, a, b, lin_a, lin_b, xtol):
             if za is None or zb is None or not (za.real * zb.real < 0):
                 continue
 
-            def f(p, kind=kind):
-                z = _branch(linearize_at(p), kind)
+            def f(p, kind=kind, a=a, b=b, za=za, zb=zb):
+                z = _branch(linearize_at(p), kind, za + (zb - za) * (p - a) / (b - a))
                 return math.nan if z is None else z.real
 
             try:
                 root = brentq(f, a, b, xtol=xtol, rtol=4 * np.finfo(float).eps)
             except ValueError:
                 continue
-            z = _branch(linearize_at(root), kind)
+            z = _branch(linearize_at(root), kind, za + (zb - za) * (root - a) / (b - a))
             found.append(Crossing(float(root), kind, complex(z), 1 if zb.real > za.real else -1))
         if found:
             return found
@@ -614,16 +627,24 @@ def sweep_steady(model, state_of: Callable[[Mapping[str, float]], Mapping[str, f
     if parameter not in model.parameter_names:
         raise InputError(f"--sweep: {parameter!r} is not a parameter of the scene "
                          f"(parameters: {', '.join(model.parameter_names) or 'none'})")
-    fixed = {}
+    def model_and_state(value):
+        m = model.with_parameters(**{parameter: value})
+        return m, state_of(m.parameters)
+
+    # One chart and one set of neutral directions for every value: those
+    # found neutral at the first, middle and last values (a direction can be
+    # neutral at an isolated value only, e.g. the yaw rate of a disc at rest).
+    values = np.asarray(values, dtype=float)
+    probes = [values[0], values[len(values) // 2], values[-1]] if len(values) else []
+    first = None
+    neutral = None
+    for value in probes:
+        lin = linearize(*model_and_state(value),
+                        independent=independent if first is None else first.chart)
+        first = first or lin
+        neutral = [s for s in (lin.neutral if neutral is None else neutral) if s in lin.neutral]
 
     def at(value):
-        m = model.with_parameters(**{parameter: value})
-        state = state_of(m.parameters)
-        if not fixed:
-            first = linearize(m, state, independent=independent)
-            fixed["independent"] = first.chart
-            fixed["neutral"] = first.neutral
-            return first
-        return linearize(m, state, independent=fixed["independent"], neutral=fixed["neutral"])
+        return linearize(*model_and_state(value), independent=first.chart, neutral=neutral)
 
     return sweep(at, parameter, values, xtol=xtol)
