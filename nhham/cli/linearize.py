@@ -121,14 +121,15 @@ def linearize_scene(scene, method: str = "auto", sweep=None, model=None):
         raise InputError(f"linearize: unknown method {method!r}")
     model = numeric_model(scene.system) if model is None else model
     state = scene.steady.values(model.parameters)
-    lin = linearize(model, state)
+    family = scene.steady.family(model.parameters)
+    lin = linearize(model, state, family=family)
     if method == "exact" or (method == "auto" and scene.system.n <= EXACT_MAX_N):
         lin = _exact(scene, model, lin)
     result_sweep = None
     if sweep is not None:
         name, values = sweep
         result_sweep = sweep_steady(model, scene.steady.values, name, values,
-                                    independent=lin.chart)
+                                    independent=lin.chart, family_of=scene.steady.family)
     return lin, result_sweep
 
 
@@ -149,15 +150,31 @@ def _exact(scene, model, lin):
     ej = exact_jacobian(scene.system, state, params, lin.chart)
     keep = [i for i, s in enumerate(ej.chart) if s not in lin.neutral]
     A = ej.matrix.extract(keep, keep)
+    names = [ej.chart[i] for i in keep]
+    for label in lin.neutral:
+        if not label.startswith("d/d"):
+            continue
+        p = sp.Symbol(label[3:])   # a tangent of the steady family, divided out exactly
+        t = sp.Matrix([sp.diff(scene.steady.expressions[s], p).xreplace(point) for s in names])
+        j = max(range(len(names)), key=lambda i: abs(float(t[i])))
+        T = sp.eye(len(names))
+        T[:, j] = t
+        B = T.LUsolve(A * T)
+        rest = [i for i in range(len(names)) if i != j]
+        A, names = B.extract(rest, rest), [names[i] for i in rest]
     with mpmath.workdps(EXACT_DIGITS + 10):
         M = mpmath.matrix([[mpmath.mpmathify(sp.N(e, EXACT_DIGITS + 10)) for e in A.row(i)]
                            for i in range(A.rows)]) if A.rows else None
-        ev = [complex(z) for z in mpmath.eig(M, left=False, right=False)] if A.rows else []
+        ev = []
+        if A.rows:
+            E = mpmath.eig(M, left=False, right=False)
+            # mpmath returns (E, ER, EL) for a 1 x 1 matrix
+            ev = [complex(z) for z in (E[0] if isinstance(E, tuple) else E)]
     Af = np.array([[float(sp.N(e, 20)) for e in A.row(i)] for i in range(A.rows)]).reshape(
         A.rows, A.rows)
     scale = max(1.0, float(np.abs(Af).max(initial=0.0)))
     return linearization_result(
-        Af, tuple(ej.chart[i] for i in keep), "exact",
+        Af, tuple(names), "exact",
         f"exact symbolic Jacobian (implicit differentiation of the saddle-point system, "
         f"exact arithmetic on the parameter values as decimals), eigenvalues by mpmath at "
         f"{EXACT_DIGITS} digits", ej.chart,

@@ -391,7 +391,8 @@ def _reduced_field(cf, chart, q0, X):
 
 # ------------------------------------------------------------------ public
 def linearize(model, state, *, independent: Sequence[str] | None = None,
-              neutral: bool | Sequence[str] = True, step: float = STEP) -> Linearization:
+              neutral: bool | Sequence[str] = True, step: float = STEP,
+              family: Mapping[str, Mapping[str, float]] | None = None) -> Linearization:
     """Linearise the constrained dynamics about a steady state on M_1.
 
     Parameters
@@ -411,6 +412,13 @@ def linearize(model, state, *, independent: Sequence[str] | None = None,
         be neutral).
     step : float, optional
         The imaginary step (default 1e-30).
+    family : mapping of str to mapping of str to float, optional
+        Tangents of the family of steady motions the state belongs to:
+        ``{parameter: {state name: d(value)/d(parameter)}}`` (e.g. the
+        derivative of a scene's ``[steady]`` entries in the forward speed).
+        A tangent that the state matrix maps to zero is a neutral direction
+        (a neighbouring steady motion) and is divided out as well; it is
+        listed in ``neutral`` as ``d/d<parameter>``.
 
     Returns
     -------
@@ -455,7 +463,11 @@ def linearize(model, state, *, independent: Sequence[str] | None = None,
             f"steady: the coordinates {', '.join(not_cyclic)} move at the state but the dynamics "
             f"depends on them (or they are dependent), so the motion is not steady")
     A = J[np.ix_(keep, keep)]
-    return linearization_result(A, tuple(chart_names[i] for i in keep), "complex-step",
+    kept_names = [chart_names[i] for i in keep]
+    if family and neutral is not False:
+        A, kept_names, extra = _divide_family(A, kept_names, family)
+        removed = tuple(removed) + tuple(extra)
+    return linearization_result(A, tuple(kept_names), "complex-step",
                    f"float64, complex-step Jacobian (step {step:g}i, exact to rounding), "
                    f"LAPACK eigenvalues", chart_names, J, removed, dependent,
                    dict(zip(names, map(float, y0))), residuals, worst)
@@ -470,6 +482,28 @@ def _check_on_manifold(model, y0) -> dict:
         listed = "; ".join(f"{nm} = {r:.3g}" for nm, r in bad)
         raise InconsistentInitialDataError(f"steady: the state is not on M_1: {listed}")
     return {nm: float(r) for nm, r in zip(names, res)}
+
+
+def _divide_family(A, names, family):
+    """Divide out the tangents of the steady family that A maps to zero."""
+    removed = []
+    for parameter, tangent in family.items():
+        if not A.size:
+            break
+        t = np.array([float(tangent.get(s, 0.0)) for s in names])
+        norm = np.abs(t).max(initial=0.0)
+        scale = max(1.0, float(np.abs(A).max(initial=0.0)))
+        if norm == 0.0 or np.abs(A @ t).max() > 1e-7 * scale * norm:
+            continue
+        j = int(np.argmax(np.abs(t)))
+        T = np.eye(len(names))
+        T[:, j] = t
+        B = np.linalg.solve(T, A @ T)
+        keep = [i for i in range(len(names)) if i != j]
+        A = B[np.ix_(keep, keep)]
+        names = [names[i] for i in keep]
+        removed.append(f"d/d{parameter}")
+    return A, names, removed
 
 
 def _neutral_directions(J, chart_names, neutral):
@@ -603,7 +637,7 @@ def _locate(linearize_at, a, b, lin_a, lin_b, xtol):
 
 def sweep_steady(model, state_of: Callable[[Mapping[str, float]], Mapping[str, float]],
                  parameter: str, values: Sequence[float], *, independent=None,
-                 xtol: float = 1e-12) -> Sweep:
+                 xtol: float = 1e-12, family_of=None) -> Sweep:
     """:func:`sweep` of a steady motion that moves with a parameter.
 
     Parameters
@@ -619,6 +653,8 @@ def sweep_steady(model, state_of: Callable[[Mapping[str, float]], Mapping[str, f
         As for :func:`linearize`; default: the chart chosen at the first value,
         kept for every value (with the neutral directions found there).
     xtol : float, optional
+    family_of : callable, optional
+        ``{parameter: value} -> family`` (see :func:`linearize`).
 
     Returns
     -------
@@ -630,6 +666,11 @@ def sweep_steady(model, state_of: Callable[[Mapping[str, float]], Mapping[str, f
     def model_and_state(value):
         m = model.with_parameters(**{parameter: value})
         return m, state_of(m.parameters)
+
+    def fam(value):
+        if family_of is None:
+            return None
+        return family_of(model.with_parameters(**{parameter: value}).parameters)
 
     # One chart and one set of neutral directions for every value: those
     # found neutral at the first, middle and last values (a direction can be
@@ -645,6 +686,7 @@ def sweep_steady(model, state_of: Callable[[Mapping[str, float]], Mapping[str, f
         neutral = [s for s in (lin.neutral if neutral is None else neutral) if s in lin.neutral]
 
     def at(value):
-        return linearize(*model_and_state(value), independent=first.chart, neutral=neutral)
+        return linearize(*model_and_state(value), independent=first.chart, neutral=neutral,
+                         family=fam(value))
 
     return sweep(at, parameter, values, xtol=xtol)

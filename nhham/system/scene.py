@@ -772,8 +772,10 @@ def dump_scene(system, initial=None, simulate=None, *, description: str = "",
         lines.append("")
         lines.append("[steady]")
         for k, v in table.items():
-            text = _toml_string(to_text(sp.sympify(v))) if isinstance(v, (str, sp.Basic)) \
-                else _toml_float(v, k)
+            if isinstance(v, (str, sp.Basic)) and not sp.sympify(v).is_number:
+                text = _toml_string(to_text(sp.sympify(v)))
+            else:
+                text = _toml_float(float(sp.sympify(v)), k)
             lines.append(f"{_toml_key(k)} = {text}")
     options = simulate.given() if isinstance(simulate, SimulateOptions) else dict(simulate or {})
     if options:

@@ -81,9 +81,22 @@ class SteadyState:
             out[name] = z.real
         return out
 
+    def family(self, parameters: Mapping[str, float]) -> dict:
+        """Tangents of the steady family: ``{p: {name: d value / d p}}`` for every
+        parameter p the entries use, at the given parameter values (exact
+        derivatives, evaluated)."""
+        used = sorted({s.name for e in self.expressions.values() for s in e.free_symbols})
+        point = {sp.Symbol(k): sp.Float(float(v), 30) for k, v in parameters.items()}
+        out = {}
+        for p in used:
+            sym = sp.Symbol(p)
+            out[p] = {name: float(sp.diff(e, sym).xreplace(point).evalf(20))
+                      for name, e in self.expressions.items()}
+        return out
+
     def to_toml_table(self) -> dict:
-        """``{name: str}`` as a scene's ``[steady]`` table would hold it."""
-        return {k: str(v) for k, v in self.expressions.items()}
+        """``{name: float or str}`` as a scene's ``[steady]`` table would hold it."""
+        return {k: float(v) if v.is_number else str(v) for k, v in self.expressions.items()}
 
 
 def state_names(coordinates) -> list:

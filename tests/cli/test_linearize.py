@@ -1,0 +1,100 @@
+"""``nhham linearize``: JSON keys, sweeps, exit statuses (in-process, small scenes)."""
+
+import json
+from pathlib import Path
+
+import pytest
+
+from nhham.cli.main import main
+
+EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
+
+SLEIGH = """
+name = "sleigh"
+coordinates = ["x", "y", "theta"]
+parameters = { m = 1.0, I = 0.25, a = 0.5, u = 2.0 }
+lagrangian = "m*(x_dot**2 + y_dot**2)/2 + I*theta_dot**2/2"
+constraints = ["-sin(theta)*x_dot + cos(theta)*y_dot - a*theta_dot"]
+[steady]
+x = 0
+y = 0
+theta = 0
+x_dot = "u"
+y_dot = 0
+theta_dot = 0
+"""
+
+
+def run(capsys, *argv):
+    status = main([str(a) for a in argv])
+    out = capsys.readouterr()
+    return status, out.out, out.err
+
+
+@pytest.fixture
+def sleigh(tmp_path):
+    path = tmp_path / "sleigh.toml"
+    path.write_text(SLEIGH)
+    return path
+
+
+def test_json_keys_and_exact_verdict(capsys, sleigh):
+    status, out, _ = run(capsys, "linearize", sleigh, "--json")
+    assert status == 0
+    d = json.loads(out)
+    assert d["coordinates"] == ["theta_dot"] and d["method"] == "exact"
+    # w' = -m a u w / (I + m a^2) = -2 w
+    assert d["eigenvalues"] == [[-2.0, 0.0]] and d["stable"] is True
+    assert d["matrix"] == [[-2.0]] and d["matrix_exact"] == [["-2"]]
+    assert "x_dot" in d["neutral"]   # the speed: a column nothing depends on
+
+
+def test_sweep_json_with_crossing(capsys, sleigh):
+    status, out, _ = run(capsys, "linearize", sleigh, "--json", "--numeric",
+                         "--sweep", "u=-1:1.5:6")
+    assert status == 0
+    sw = json.loads(out)["sweep"]
+    assert set(sw) >= {"parameter", "values", "eigenvalues", "crossings"}
+    assert sw["parameter"] == "u" and len(sw["values"]) == 6 == len(sw["eigenvalues"])
+    assert [c["kind"] for c in sw["crossings"]] == ["real"]
+    assert abs(sw["crossings"][0]["value"]) < 1e-9
+
+
+def test_differential_drive_text(capsys):
+    status, out, _ = run(capsys, "linearize", EXAMPLES / "differential_drive.toml")
+    assert status == 0
+    assert "asymptotically stable" in out and "-0.8908685969" in out
+
+
+@pytest.mark.parametrize("argv, fragment", [
+    (["--sweep", "v=0:10"], "--sweep: expected PARAMETER=START:STOP:COUNT"),
+    (["--sweep", "w=0:1:5"], "'w' is not a parameter"),
+    (["--plot", "x.png"], "--plot draws the root locus of a sweep"),
+])
+def test_bad_options_exit_2(capsys, sleigh, argv, fragment):
+    status, out, err = run(capsys, "linearize", sleigh, *argv)
+    assert status == 2 and fragment in err and len(err.strip().splitlines()) == 1
+
+
+def test_scene_without_steady_exits_2(capsys):
+    status, _, err = run(capsys, "linearize", EXAMPLES / "rolling_disk.toml")
+    assert status == 2 and "needs a [steady] table" in err
+
+
+def test_not_steady_exits_2_with_residual(capsys, tmp_path):
+    path = tmp_path / "s.toml"
+    path.write_text(SLEIGH.replace('x_dot = "u"', 'x_dot = "u"\n').replace(
+        "theta_dot = 0", "theta_dot = 1").replace("y_dot = 0", "y_dot = 0.5"))
+    status, _, err = run(capsys, "linearize", path)
+    assert status == 2 and "not steady" in err
+
+
+def test_plot_needs_the_extra_or_writes_a_file(capsys, sleigh, tmp_path):
+    target = tmp_path / "locus.png"
+    status, _, err = run(capsys, "linearize", sleigh, "--sweep", "u=0:1:3", "--plot", target)
+    try:
+        import matplotlib  # noqa: F401
+    except ImportError:
+        assert status == 2 and "matplotlib" in err
+    else:
+        assert status == 0 and target.exists()
