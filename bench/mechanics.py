@@ -73,7 +73,7 @@ def main():
             (lin, _), t_lin = clock(lambda: linearize_scene(scene, "complex-step", model=model))
             (_, sw), t_sweep = clock(lambda: linearize_scene(
                 scene, "complex-step", (p, np.linspace(lo, hi, 101)), model=model))
-            res, _ = clock(lambda: simulate(model, dict(scene.initial), (0.0, 10.0),
+            res, _ = clock(lambda: simulate(model, (0.0, 10.0), dict(scene.initial),
                                             method="DOP853", rtol=1e-10))
         cross = ", ".join(f"{c.kind} {p} = {c.value:.6f}" for c in sw.crossings) or "none"
         system = scene.system

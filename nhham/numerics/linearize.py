@@ -599,14 +599,33 @@ def _branch(lin, kind, target=None):
     return pick[np.argmin(np.abs(pick - target))]
 
 
+def _same_branch(lin_a, lin_b, kind):
+    """Eigenvalues of one branch at both ends whose real parts differ in sign, or (None, None).
+
+    The branch is followed from the end where it is nearest to the imaginary
+    axis (a structural zero excluded) to the nearest eigenvalue at the other end.
+    """
+    za0, zb0 = _branch(lin_a, kind), _branch(lin_b, kind)
+    pairs = []
+    if za0 is not None:
+        pairs.append((za0, _branch(lin_b, kind, za0)))
+    if zb0 is not None:
+        pairs.append((_branch(lin_a, kind, zb0), zb0))
+    for za, zb in pairs:
+        if (za is not None and zb is not None and za.real * zb.real < 0
+                and abs(za.real) > lin_a.tolerance and abs(zb.real) > lin_b.tolerance):
+            return za, zb
+    return None, None
+
+
 def _locate(linearize_at, a, b, lin_a, lin_b, xtol):
     from scipy.optimize import brentq
 
     found = []
     for _ in range(60):
         for kind in ("real", "complex"):
-            za, zb = _branch(lin_a, kind), _branch(lin_b, kind)
-            if za is None or zb is None or not (za.real * zb.real < 0):
+            za, zb = _same_branch(lin_a, lin_b, kind)
+            if za is None:
                 continue
 
             def f(p, kind=kind, a=a, b=b, za=za, zb=zb):
