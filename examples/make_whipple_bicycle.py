@@ -210,7 +210,8 @@ HEADER = """\
 # What `nhham classify` should report: C regular on M_1, one stage (M_f = M_1), determined,
 #   no free multipliers; not integrable (rolling); see bench/RESULTS.md for its time.
 # What `nhham linearize` finds about the [steady] upright straight-ahead motion: neutral
-#   directions x, y, psi, thetaR, thetaF (cyclic) and thetaR_dot (the speed); in the
+#   directions x, y, psi, thetaR, thetaF (cyclic) and the speed (thetaF_dot in the chart
+#   chosen: pitch, x_dot, y_dot, psi_dot, pitch_dot, thetaR_dot dependent); in the
 #   independent coordinates phi, delta, phi_dot, delta_dot the 4x4 state matrix of the
 #   benchmark (eigenvalues to 1e-8 against the paper's M, C1, K0, K2, tests/numerics/
 #   test_linearize.py). `nhham linearize examples/whipple_bicycle.toml --sweep v=0:10:101`
