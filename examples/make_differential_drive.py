@@ -86,10 +86,10 @@ HEADER = """\
 # angles; the centre of mass is d ahead of the axle. No side slip of the axle, both wheels
 # roll: n = 5, m = 3.
 #
-# What `nhham classify` should report: C regular on M_1, one stage, determined, no free
-#   multipliers; not integrable.
+# What `nhham classify` reports: C regular on M_1 (rank 3, exact), one stage, determined, no
+#   free multipliers, not integrable; on T*Q 1 first class, 2 second class (~3 s).
 # What `nhham linearize` finds about the [steady] straight drive at wheel rate w: neutral
-#   x, y, theta, phiL, phiR and the speed; one eigenvalue -mc d r w / J with
+#   x, y, theta, phiL, phiR and the speed (d/dw); one eigenvalue -mc d r w / J with
 #   J = Ic + mc d^2 + 2 (Id + mw b^2) + 2 Iw b^2 / r^2 (the Chaplygin sleigh with wheel inertia,
 #   derived in the script's docstring; tests/system/test_mechanics_models.py): stable driving
 #   forward (w > 0, mass ahead of the axle), unstable backward; `--sweep w=-5:5:11` finds

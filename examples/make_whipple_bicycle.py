@@ -207,8 +207,9 @@ HEADER = """\
 # thetaR rear wheel angle, delta steer, thetaF front wheel angle. Front contact on the ground
 # (holonomic), no slip at either wheel (4 affine constraints): n = 8, m = 5.
 #
-# What `nhham classify` should report: C regular on M_1, one stage (M_f = M_1), determined,
-#   no free multipliers; not integrable (rolling); see bench/RESULTS.md for its time.
+# What `nhham classify` should report (expected, not yet seen: it does not finish within
+#   380 s on this machine, see bench/RESULTS.md): C regular on M_1, one stage (M_f = M_1),
+#   determined, no free multipliers, not integrable (rolling).
 # What `nhham linearize` finds about the [steady] upright straight-ahead motion: neutral
 #   directions x, y, psi, thetaR, thetaF (cyclic) and the speed (thetaF_dot in the chart
 #   chosen: pitch, x_dot, y_dot, psi_dot, pitch_dot, thetaR_dot dependent); in the
