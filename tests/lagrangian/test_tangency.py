@@ -30,6 +30,11 @@ from nhham.system.scene import load_scene
 from rolling_disc_3d import rolling_disc_3d
 
 EXAMPLES = sorted((Path(__file__).resolve().parents[2] / "examples").glob("*.toml"))
+# The gallery models brought in from sympy.physics.mechanics (n >= 5, W coupled through the
+# heading) take the symbolic route -- W^-1 written out -- many minutes each; their points
+# route is checked against the numeric saddle solve in tests/system/test_mechanics_models.py.
+GALLERY = {"differential_drive", "rolling_disc_3d", "whipple_bicycle"}
+SYMBOLIC_EXAMPLES = [p for p in EXAMPLES if p.stem not in GALLERY]
 
 
 def _symbolic_stage_one(system):
@@ -50,7 +55,7 @@ def _points_stage_one(system):
     return int(v.rank.value), bool(v.consistent.value), v
 
 
-@pytest.mark.parametrize("path", EXAMPLES, ids=lambda p: p.stem)
+@pytest.mark.parametrize("path", SYMBOLIC_EXAMPLES, ids=lambda p: p.stem)
 def test_points_agree_with_the_symbolic_route_on_every_example(path):
     system = load_scene(path, drop_redundant=True).system
     try:

@@ -179,3 +179,26 @@ def test_refusals_name_the_culprit():
     msys.add_actuators(me.TorqueActuator(sp.Symbol("T"), N.z, B, N))
     with pytest.raises(ValidationError, match=r"actuators\[0\].*is an actuator"):
         from_mechanics(msys)
+
+
+@pytest.mark.parametrize("scene_file", ["rolling_disc_3d.toml", "differential_drive.toml"])
+def test_points_route_agrees_with_the_numeric_saddle_solve(scene_file):
+    """Stage 1 at exact points (rank of Z_i(phi_j), consistency) against numbers: C is
+    well conditioned at random states of M_1 (rank m) and the saddle solve's accelerations
+    keep every constraint: d(phi)/dt = 0 (so no secondary constraint appears)."""
+    from nhham.lagrangian.geometry import LagrangianGeometry
+    from nhham.lagrangian.tangency import tangency_at_points
+
+    system = load_scene(EXAMPLES / scene_file).system
+    geo = LagrangianGeometry(system)
+    v = tangency_at_points(system, geo.hessian, geo.forcing,
+                           list(system.holonomic) + list(system.phi), seed=7)
+    assert int(v.rank.value) == system.m and bool(v.consistent.value)
+    model = numeric_model(system, backend="numpy")
+    rng = np.random.default_rng(3)
+    for _ in range(5):
+        y = model.project(rng.uniform(-1, 1, 2 * system.n)).y
+        assert model.cond_C(y) < 1e8
+        dy = model.rhs(0.0, y)
+        h = 1e-7   # phi(y + h dy) - phi(y) = O(h^2) when the field keeps phi = 0
+        assert np.abs(model.residuals(y + h * dy)[:system.m]).max() < 1e-10
