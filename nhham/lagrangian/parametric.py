@@ -55,7 +55,7 @@ from sympy.external.gmpy import MPQ
 from sympy.polys.matrices import DomainMatrix
 
 from nhham.errors import InputError, NhhamError, SingularLagrangianError
-from nhham.lagrangian.algorithm import ConstraintAnalysis, analyze_constraints
+from nhham.lagrangian.analysis import ConstraintAnalysis, analyze_constraints
 from nhham.lagrangian.points import Angle, NotExact, evaluate, jacobian_row
 from nhham.lagrangian.submanifold import Submanifold
 from nhham.settings import SEED
@@ -319,7 +319,9 @@ class ValuesVerdict:
     system : System
         The system the verdict was computed on (the conditions substituted).
     warnings : tuple of str
-        Values near an exceptional set; limits hit.
+        Values near an exceptional set; the depth bound hit.
+    notes : tuple of str
+        What was not examined and why (no exact points, a datum not evaluable).
     """
 
     verdict: Verdict
@@ -327,6 +329,7 @@ class ValuesVerdict:
     conditions: tuple
     system: object = field(compare=False, repr=False)
     warnings: tuple = ()
+    notes: tuple = ()
 
     @property
     def differs(self) -> bool:
@@ -466,7 +469,8 @@ def classification_at_values(system, *, classes: Callable | None = None,
     values = {p: system.parameter_values[p] for p in valued}
     exact = {p: _exact(v) for p, v in values.items()}
     generic, _, notes, hits, close = _examine(system, (), values=values, **opts)
-    warnings = list(notes) + _close_warnings(close, values)
+    notes = list(notes)
+    warnings = _close_warnings(close, values)
     current, verdict, conditions, substitution = system, generic, [], {}
     for depth in range(max_depth + 1):
         if not hits:
@@ -502,10 +506,11 @@ def classification_at_values(system, *, classes: Callable | None = None,
         current = spec
         rest = {p: v for p, v in values.items() if p not in substitution}
         verdict, _, more, hits, close = _examine(spec, (), values=rest, **opts)
-        warnings += list(more) + _close_warnings(close, rest)
+        notes += more
+        warnings += _close_warnings(close, rest)
     return ValuesVerdict(verdict, generic, tuple(conditions),
                          current if current is not None else system,
-                         tuple(dict.fromkeys(warnings)))
+                         tuple(dict.fromkeys(warnings)), tuple(dict.fromkeys(notes)))
 
 
 def _close_warnings(close, values) -> list:
@@ -893,7 +898,15 @@ class _Data:
         K = QQ.frac_field(*params)
         env0 = self.env(gens=dict(zip(params, K.gens)))
         out = []
-        for reason, fn in self.items():
+        items = self.items()
+        try:
+            if self.analysis.stages:
+                self._pts(self.analysis.stages[0].constraints, env0, K, 1)
+        except (NotExact, ZeroDivisionError) as exc:
+            self.notes.append(f"the exceptional sets were not computed: no exact points of "
+                              f"M_1 with symbolic parameters ({exc})")
+            return out
+        for reason, fn in items:
             try:
                 vals = fn(env0, K)
             except (NotExact, ZeroDivisionError) as exc:
@@ -915,9 +928,19 @@ class _Data:
         hits, close = [], []
         values = {p: _exact_mpq(x) for p, x in values.items()}
         base = self.env(at=values)
-        for reason, fn in self.items():
+        items = self.items()
+        try:
+            if self.analysis.stages:
+                self._pts(self.analysis.stages[0].constraints, base, QQ, 1)
+        except (NotExact, ZeroDivisionError) as exc:
+            self.notes.append(f"the parameter values were not checked against the "
+                              f"exceptional sets: no exact points of M_1 ({exc})")
+            return hits, close
+        for reason, fn in items:
             try:
-                if not any(fn(self.env(generic=True), QQ)):
+                if not reason.startswith("the condition"):
+                    pass  # nonzero for generic parameters by construction
+                elif not any(fn(self.env(generic=True), QQ)):
                     continue  # zero for generic parameters: not a generic assumption
                 v0 = fn(base, QQ)
                 shifted = {}
