@@ -950,6 +950,8 @@ class _Data:
             except (NotExact, ZeroDivisionError) as exc:
                 self.notes.append(f"not examined at the values ({exc}): whether {reason}")
                 continue
+            if not v0:
+                continue  # nothing assumed nonzero (e.g. a bracket matrix of rank 0)
             if not any(v0):
                 involved = tuple(p for p, (h, vals) in shifted.items() if any(vals))
                 hits.append((reason, involved))
