@@ -167,7 +167,7 @@ class Verdict:
 
     def to_dict(self) -> dict:
         """The verdict's fields as JSON-ready data."""
-        out = {f: getattr(self, f) for f in self.FIELDS}
+        out = {("rank_c" if f == "rank_C" else f): getattr(self, f) for f in self.FIELDS}
         out["redundant"] = list(self.redundant)
         out["note"] = self.note
         return out
