@@ -217,10 +217,13 @@ class Case:
     reasons: tuple = ()
 
     def holds_at(self, values: Mapping) -> bool | None:
-        """Whether exact parameter values satisfy the conditions and inequations.
+        """Whether parameter values satisfy the conditions and inequations.
 
-        None when a condition involves a parameter without a value.
+        ``values`` maps parameters (symbols or names) to numbers, read exactly (floats as
+        their decimal text). None when a condition involves a parameter without a value.
         """
+        values = {(k if isinstance(k, sp.Symbol) else sp.Symbol(str(k))): v
+                  for k, v in values.items()}
         exprs = tuple(self.conditions) + tuple(self.excluding)
         if any(s not in values for e in exprs for s in sp.sympify(e).free_symbols):
             return None
@@ -1167,13 +1170,16 @@ def _rebuild(system, sub, values):
 
 
 def _order_cases(nodes) -> list:
-    """Cases, most specific first, each with the inequations excluding earlier ones.
+    """Cases, invalid ones and then the most specific first, each with the inequations
+    excluding earlier ones.
 
     A node whose verdict equals the verdict of the set containing it (its parent) is
     not a case of its own; its sub-cases are kept.
     """
     kept = [(full, sub, v, why) for full, sub, v, parent, why in nodes if v != parent]
-    kept.sort(key=lambda t: -len(t[1]))
+    # Where nhham does not apply (singular W) holds on the whole set, whatever else
+    # holds there: those cases first; then the most specific first.
+    kept.sort(key=lambda t: (t[2].status != "invalid", -len(t[1])))
     # A case whose points would fall, without it, into a case with the same verdict is
     # dropped: the first later case containing it, with no case in between meeting it.
     j = 0
