@@ -8,6 +8,7 @@ system whose expressions carry the numbers (no parameters left to be generic abo
 
 from __future__ import annotations
 
+import functools
 import random
 
 import pytest
@@ -306,10 +307,8 @@ def _case_points(pv, system, rng, count):
 @settings(max_examples=6, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(st.integers(min_value=0, max_value=2 ** 32), st.sampled_from(["3.2", "two"]))
 def test_random_points_of_each_case_give_its_verdict(seed, which):
-    make, positive = {"3.2": (paper_3_2, ["a", "b", "c"]),
-                      "two": (two_bodies, ["I1", "I2"])}[which]
-    system = make()
-    pv = PV[which]
+    system = {"3.2": paper_3_2, "two": two_bodies}[which]()
+    pv = _pv(which)
     rng = random.Random(seed)
     for case, point in _case_points(pv, system, rng, 1):
         first = next(i for i, c in enumerate(pv.cases) if c.holds_at(point))
@@ -320,5 +319,8 @@ def test_random_points_of_each_case_give_its_verdict(seed, which):
         assert numeric_verdict(system, generic) == key(pv.generic)
 
 
-PV = {"3.2": parametric_classification(paper_3_2(), positive=["a", "b", "c"]),
-      "two": parametric_classification(two_bodies(), positive=["I1", "I2"])}
+@functools.cache
+def _pv(which):
+    make, positive = {"3.2": (paper_3_2, ["a", "b", "c"]),
+                      "two": (two_bodies, ["I1", "I2"])}[which]
+    return parametric_classification(make(), positive=positive)
