@@ -1,6 +1,6 @@
 """Verdicts for every parameter value: where the classification changes.
 
-An exact verdict of :func:`nhham.lagrangian.algorithm.analyze_constraints` holds for
+An exact verdict of :func:`nhham.lagrangian.analysis.analyze_constraints` holds for
 *generic* parameters: every decision assumed that some function of the state and the
 parameters is not identically zero on M_k. This module records those functions, finds
 the parameter values where they vanish identically in the state, and runs the ordinary
@@ -124,7 +124,7 @@ class Verdict:
         Why the case is ``"invalid"``.
     system, analysis, classes
         The system the verdict was computed on (the case's condition substituted), its
-        :class:`~nhham.lagrangian.algorithm.ConstraintAnalysis` and, when a ``classes``
+        :class:`~nhham.lagrangian.analysis.ConstraintAnalysis` and, when a ``classes``
         function was given, its first/second-class result (not compared).
     """
 
@@ -363,7 +363,7 @@ def parametric_classification(system, *, positive: Sequence = (),
     max_depth : int, optional
         Bound on the nesting of cases (a note says when it was hit).
     precision, seed
-        As in :func:`~nhham.lagrangian.algorithm.analyze_constraints`.
+        As in :func:`~nhham.lagrangian.analysis.analyze_constraints`.
     near : float, optional
         Relative distance to an exceptional set below which the values are warned
         about.

@@ -19,7 +19,7 @@ from hypothesis import strategies as st
 import nhham
 from nhham.errors import InputError
 from nhham.hamiltonian.classification import classify_constraints
-from nhham.lagrangian.algorithm import analyze_constraints
+from nhham.lagrangian.analysis import analyze_constraints
 from nhham.lagrangian.parametric import (
     classification_at_values,
     exceptional_conditions,
