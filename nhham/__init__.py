@@ -58,6 +58,12 @@ _LAZY = {
     "ConstraintAnalysis": "lagrangian.analysis",
     "run_algorithm": "lagrangian.algorithm",
     "integrability": "lagrangian.integrability",
+    # verdicts for every parameter value
+    "parametric_classification": "lagrangian.parametric",
+    "classification_at_values": "lagrangian.parametric",
+    "exceptional_conditions": "lagrangian.parametric",
+    "ParametricVerdict": "lagrangian.parametric",
+    "ValuesVerdict": "lagrangian.parametric",
     # Hamiltonian side (Section 6)
     "legendre_map": "hamiltonian.legendre",
     "LegendreMap": "hamiltonian.legendre",

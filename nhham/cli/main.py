@@ -37,7 +37,7 @@ from nhham.cli.envelope import (
 )
 from nhham.cli.linearize import LINEARIZE_HELP, cmd_linearize
 from nhham.cli.linearize import add_arguments as add_linearize_arguments
-from nhham.cli.report import Steps
+from nhham.cli.report import Steps, expr_text, table
 from nhham.errors import InputError, NhhamError
 
 __all__ = ["main", "build_parser", "COMMANDS", "METHODS"]
@@ -72,33 +72,121 @@ def _parser_for(scene):
 
 # ---------------------------------------------------------------- classify
 def cmd_classify(args, steps) -> CommandOutput:
-    """The constraint-set verdict: algorithm, integrability, classes."""
+    """The constraint-set verdict at the scene's parameter values (algorithm,
+    integrability, classes); with ``--parametric`` the verdict for every value."""
     from nhham.cli.results import classify_data, classify_latex, classify_text, classify_warnings
     from nhham.hamiltonian.classification import classify_constraints
-    from nhham.lagrangian.analysis import analyze_constraints
+    from nhham.lagrangian.analysis import ConstraintAnalysis
+    from nhham.lagrangian.parametric import classification_at_values
 
     scene = _load(args, steps, drop_redundant=True)
-    with steps.step("constraint algorithm (stages, ranks, decisions at exact points)"):
-        analysis = analyze_constraints(scene.system, precision=args.precision)
+    if getattr(args, "parametric", False):
+        return _classify_parametric(args, steps, scene)
+    with steps.step("constraint algorithm at the parameter values (stages, ranks, decisions "
+                    "at exact points, integrability, classes, exceptional parameter sets)"):
+        at = classification_at_values(
+            scene.system, precision=args.precision,
+            classes=lambda a: classify_constraints(a, precision=args.precision))
+    for note in at.notes:
+        steps.note(f"parameter values: {note}")
+    if at.verdict.status == "invalid":
+        raise InputError(f"{args.scene}: at the parameter values {at.verdict.note}")
+    analysis, classes = at.verdict.analysis, at.verdict.classes
+    assert isinstance(analysis, ConstraintAnalysis)  # a valid verdict carries its analysis
     for stage in analysis.stages:
         for d in stage.decisions:
             steps.note(f"stage {stage.index}: {_evidence_text(d)}")
-    with steps.step("Frobenius integrability of the constraint distribution"):
-        analysis.integrable
-    classes = None
-    if analysis.status != "inconsistent":
-        with steps.step("Poisson brackets of the final constraints on M_f (T*Q)"):
-            classes = classify_constraints(analysis, precision=args.precision)
     data = classify_data(analysis, classes)
+    data["parameter_case"] = None if not at.conditions else {
+        "conditions": [expr_text(c) for c in at.conditions],
+        "generic": at.generic.to_dict(), "generic_differs": bool(at.differs)}
     title = _title(scene, args)
+    note = ""
+    if at.conditions:
+        where = ", ".join(f"{expr_text(c)} = 0" for c in at.conditions)
+        note = (f"\nnote: the parameter values satisfy {where}; the verdict above holds there"
+                + (f" and differs from the generic one ({at.generic.describe()})"
+                   if at.differs else " (the generic verdict is the same)"))
     if args.latex:
         def text():
             return classify_latex(title, data, _parser_for(scene))
     else:
         def text():
-            return classify_text(title, data)
+            return classify_text(title, data) + note
     return CommandOutput(result=data, text=text, scene=scene_info(scene),
-                         warnings=classify_warnings(analysis, classes))
+                         warnings=classify_warnings(analysis, classes) + list(at.warnings))
+
+
+def _classify_parametric(args, steps, scene) -> CommandOutput:
+    """classify --parametric: the generic verdict and every exceptional case."""
+    from nhham.cli.results import classify_data
+    from nhham.hamiltonian.classification import classify_constraints
+    from nhham.lagrangian.parametric import parametric_classification
+
+    if args.latex:
+        raise InputError("classify --parametric: --latex is not available (use --json or text)")
+    positive = [p.strip() for p in (args.positive or "").split(",") if p.strip()]
+    with steps.step("verdicts for every parameter value (generic run, exceptional sets, "
+                    "one run per case)"):
+        pv = parametric_classification(
+            scene.system, positive=positive, max_depth=args.depth, precision=args.precision,
+            classes=lambda a: classify_constraints(a, precision=args.precision))
+
+    def verdict_data(v):
+        if v.status == "invalid":
+            return {"status": "invalid", "note": v.note}
+        out = classify_data(v.analysis, v.classes)
+        out["note"] = None
+        return out
+
+    data = {
+        "parameters": [p.name for p in pv.parameters],
+        "positive": [p.name for p in pv.positive],
+        "values": {p.name: float(v) for p, v in pv.values.items()},
+        "generic": verdict_data(pv.generic),
+        "cases": [{"conditions": [expr_text(c) for c in case.conditions],
+                   "excluding": [expr_text(c) for c in case.excluding],
+                   "reasons": list(case.reasons),
+                   "verdict": verdict_data(case.verdict)} for case in pv.cases],
+        "scene_case": pv.scene_case,
+        "dropped": [{"conditions": [expr_text(c) for c in eqs], "reason": why}
+                    for eqs, why in pv.dropped],
+        "notes": list(pv.notes),
+    }
+
+    def text():
+        names = ", ".join(data["parameters"]) or "(none)"
+        pos = ", ".join(data["positive"])
+        lines = [f"{_title(scene, args)}: verdicts for every value of the parameters {names}"
+                 + (f" (declared positive: {pos})" if pos else "")]
+        lines.append("generic (where no case below holds):")
+        lines.append(table([("verdict", pv.generic.describe())]))
+        for i, case in enumerate(pv.cases):
+            lines.append(f"case {i}: " + " and ".join(
+                f"{c} = 0" for c in data["cases"][i]["conditions"]))
+            rows = []
+            if case.excluding:
+                rows.append(("excluding", ", ".join(
+                    f"{c} = 0" for c in data["cases"][i]["excluding"])))
+            rows.append(("verdict", case.verdict.describe()))
+            diff = case.verdict.differences(pv.generic)
+            if diff and case.verdict.status != "invalid":
+                rows.append(("differs in", ", ".join(diff)))
+            rows.append(("why", "; ".join(case.reasons)))
+            lines.append(table(rows))
+        if pv.dropped:
+            lines.append("dropped (no real solution with the declared signs):")
+            lines.append(table([(", ".join(f"{c} = 0" for c in d["conditions"]), d["reason"])
+                                for d in data["dropped"]]))
+        if data["values"]:
+            where = "generic" if pv.scene_case is None else f"case {pv.scene_case}"
+            lines.append("scene values " + ", ".join(
+                f"{k} = {v}" for k, v in data["values"].items()) + f": {where}")
+        lines += [f"note: {n}" for n in data["notes"]]
+        return "\n".join(lines)
+
+    return CommandOutput(result=data, text=text, scene=scene_info(scene),
+                         warnings=list(pv.warnings))
 
 
 def _evidence_text(d):
@@ -464,6 +552,16 @@ def build_parser() -> argparse.ArgumentParser:
                                 "DIGITS digits (default: float64)")
             p.add_argument("--latex", action="store_true",
                            help="print LaTeX in the paper's notation instead of text")
+        if name == "classify":
+            p.add_argument("--parametric", action="store_true",
+                           help="the verdict for generic parameters and every case (parameter "
+                                "values given by polynomial equations) where it changes, with "
+                                "the case the scene's values fall in")
+            p.add_argument("--positive", default=None, metavar="NAMES",
+                           help="with --parametric: comma-separated parameters declared "
+                                "positive; conditions without a real solution are dropped")
+            p.add_argument("--depth", type=int, default=3, metavar="N",
+                           help="with --parametric: bound on the nesting of cases (default: 3)")
         if name in ("derive", "compare", "simulate", "bench"):
             p.add_argument("--drop-redundant", action="store_true",
                            help="drop constraints whose one-form is a combination of the others "
