@@ -1,6 +1,8 @@
-"""``nhham linearize``: JSON keys, sweeps, exit statuses (in-process, small scenes)."""
+"""``nhham linearize``: JSON keys (and the schema), sweeps, exit statuses (in-process)."""
 
 import json
+
+import jsonschema
 from pathlib import Path
 
 import pytest
@@ -41,7 +43,9 @@ def sleigh(tmp_path):
 def test_json_keys_and_exact_verdict(capsys, sleigh):
     status, out, _ = run(capsys, "linearize", sleigh, "--json")
     assert status == 0
-    d = json.loads(out)
+    env = json.loads(out)
+    assert env["command"] == "linearize"
+    d = env["result"]
     assert d["coordinates"] == ["theta_dot"] and d["method"] == "exact"
     # w' = -m a u w / (I + m a^2) = -2 w
     assert d["eigenvalues"] == [[-2.0, 0.0]] and d["stable"] is True
@@ -50,10 +54,13 @@ def test_json_keys_and_exact_verdict(capsys, sleigh):
 
 
 def test_sweep_json_with_crossing(capsys, sleigh):
+    from nhham.cli.envelope import output_schema
+
     status, out, _ = run(capsys, "linearize", sleigh, "--json", "--numeric",
                          "--sweep", "u=-1:1.5:6")
     assert status == 0
-    sw = json.loads(out)["sweep"]
+    jsonschema.validate(json.loads(out), output_schema())
+    sw = json.loads(out)["result"]["sweep"]
     assert set(sw) >= {"parameter", "values", "eigenvalues", "crossings"}
     assert sw["parameter"] == "u" and len(sw["values"]) == 6 == len(sw["eigenvalues"])
     assert [c["kind"] for c in sw["crossings"]] == ["real"]
