@@ -56,7 +56,7 @@ from sympy.polys.matrices import DomainMatrix
 
 from nhham.errors import InputError, NhhamError, SingularLagrangianError
 from nhham.lagrangian.analysis import ConstraintAnalysis, analyze_constraints
-from nhham.lagrangian.points import Angle, NotExact, evaluate, jacobian_row
+from nhham.lagrangian.points import Angle, NotExact, eliminate_coordinates, evaluate, jacobian_row
 from nhham.lagrangian.submanifold import Submanifold
 from nhham.settings import SEED
 from nhham.system.description import System
@@ -612,6 +612,10 @@ class _Sampler:
             self.mu = [jacobian_row(e, self.v) for e in eqs]
             self.h = [e.xreplace({x: 0 for x in self.v}) for e in eqs]
         else:
+            # The cheap test first: the symbolic reduction of a large M_k with a holonomic
+            # constraint no coordinate can be solved from linearly takes minutes, to end
+            # in the same NotExact.
+            eliminate_coordinates(self.q, system.holonomic)
             red = Submanifold(system, eqs).reduction
             if red.residual:
                 raise NotExact("M_k is not parametrised by the exact reduction (residual "

@@ -583,7 +583,7 @@ class PointSampler:
         self.fixed = {p: _exact_number(p, values[p]) for p in parameters if p in values}
         self.drawn = tuple(p for p in parameters if p not in values)
         self.rng = random.Random(seed)
-        self.solved = _eliminate_coordinates(self.coordinates, holonomic)
+        self.solved = eliminate_coordinates(self.coordinates, holonomic)
         self.affine = tuple(sp.sympify(e) for e in affine)
         vels = self.velocities
         self.mu = mu if mu is not None else [jacobian_row(e, vels) for e in self.affine]
@@ -691,7 +691,7 @@ def _exact_number(name, value):
     return MPQ(int(r.p), int(r.q))
 
 
-def _eliminate_coordinates(coordinates, holonomic) -> dict:
+def eliminate_coordinates(coordinates, holonomic) -> dict:
     """Coordinates solved from holonomic constraints linear in them (constant coefficient)."""
     solved: dict = {}
     for g in holonomic:

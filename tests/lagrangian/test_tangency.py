@@ -33,7 +33,7 @@ EXAMPLES = sorted((Path(__file__).resolve().parents[2] / "examples").glob("*.tom
 # The gallery models brought in from sympy.physics.mechanics (n >= 5, W coupled through the
 # heading) take the symbolic route -- W^-1 written out -- many minutes each; their points
 # route is checked against the numeric saddle solve in tests/system/test_mechanics_models.py.
-GALLERY = {"differential_drive", "rolling_disc_3d", "whipple_bicycle"}
+GALLERY = {"chaplygin_sphere", "differential_drive", "rolling_disc_3d", "whipple_bicycle"}
 SYMBOLIC_EXAMPLES = [p for p in EXAMPLES if p.stem not in GALLERY]
 
 
@@ -238,3 +238,34 @@ def test_rolling_disc_3d_accelerations_agree_with_lagranges_method(disc):
         F_num = np.array(FF.subs(sub).evalf(), dtype=float).ravel()
         ref = np.linalg.solve(M_num, F_num)[n:2 * n]
         assert np.max(np.abs(a - ref)) < 1e-10 * max(1.0, np.max(np.abs(ref)))
+
+
+def test_chaplygin_sphere_classes_against_an_independent_numeric_bracket():
+    """The gallery's Chaplygin sphere: classes at exact points (a proof of full rank of the
+    bracket matrix) against {phi_a, phi_b}_L computed here in numpy from sympy's own
+    derivatives of L and of the constraints at a random state of M_1."""
+    path = Path(__file__).resolve().parents[2] / "examples" / "chaplygin_sphere.toml"
+    system = load_scene(path).system
+    analysis = analyze_constraints(system)
+    assert analysis.status == "determined" and analysis.rank_C == 2
+    assert analysis.integrable is False
+    exact = classify_constraints(analysis)
+    assert exact.method == "exact at points" and (exact.first_class, exact.second_class) == (0, 2)
+    q, v = list(system.coordinates), list(system.velocities)
+    vals = {p: float(x) for p, x in system.parameter_values.items()}
+    L = system.lagrangian.xreplace(vals)
+    phi = [c.xreplace(vals) for c in system.constraints]
+    W = sp.lambdify(q + v, sp.hessian(L, v))
+    Mx = sp.lambdify(q + v, sp.Matrix([[sp.diff(L, a, b) for b in q] for a in v]))
+    Jq = sp.lambdify(q + v, sp.Matrix([[sp.diff(f, a) for a in q] for f in phi]))
+    Jv = sp.lambdify(q + v, sp.Matrix([[sp.diff(f, a) for a in v] for f in phi]))
+    rng = np.random.default_rng(11)
+    qs = rng.uniform(-1, 1, 5)
+    mu = np.array(Jv(*qs, *np.zeros(5)), dtype=float)
+    vs = np.linalg.svd(mu)[2][2:].T @ rng.normal(size=3)
+    state = [*qs, *vs]
+    U = np.linalg.solve(np.array(W(*state), dtype=float), np.array(Jv(*state), dtype=float).T)
+    A = np.array(Mx(*state), dtype=float)
+    Q = np.array(Jq(*state), dtype=float)
+    B = Q @ U - U.T @ Q.T - U.T @ (A - A.T) @ U
+    assert np.linalg.matrix_rank(B, tol=1e-9 * np.abs(B).max()) == exact.second_class
