@@ -70,6 +70,55 @@ def _parser_for(scene):
     return lambda text: parse_expression(text, names)
 
 
+def _at_values(args, steps, scene, classes=None):
+    """The classification at the scene's parameter values (a ``ValuesVerdict``).
+
+    Every command answers for the values the user gave: where they satisfy an
+    exceptional condition, its ``system`` has the condition substituted.
+    """
+    from nhham.lagrangian.parametric import classification_at_values
+
+    with steps.step("constraint algorithm at the parameter values (stages, ranks, decisions "
+                    "at exact points, integrability, exceptional parameter sets)"):
+        at = classification_at_values(scene.system, precision=args.precision, classes=classes)
+    for note in at.notes:
+        steps.note(f"parameter values: {note}")
+    if at.verdict.status == "invalid":
+        raise InputError(f"{args.scene}: at the parameter values {at.verdict.note}")
+    return at
+
+
+def _parameter_case(at) -> tuple:
+    """(JSON ``parameter_case``, text note) of a ``ValuesVerdict``."""
+    if not at.conditions:
+        return None, ""
+    data = {"conditions": [expr_text(c) for c in at.conditions],
+            "generic": at.generic.to_dict(), "generic_differs": bool(at.differs)}
+    where = ", ".join(f"{expr_text(c)} = 0" for c in at.conditions)
+    note = (f"\nnote: the parameter values satisfy {where}; the answer above holds there"
+            + (f" and differs from the generic one ({at.generic.describe()})"
+               if at.differs else " (the generic verdict is the same)"))
+    return data, note
+
+
+def _with_case(out: CommandOutput, at) -> CommandOutput:
+    """``out`` with the parameter case of ``at`` (None: no parameter has a value)."""
+    import dataclasses
+
+    case, note = _parameter_case(at) if at is not None else (None, "")
+    out.result["parameter_case"] = case
+    if not note:
+        return out
+    old = out.text
+    text = (lambda: out.render_text() + note) if callable(old) else f"{old}{note}"
+    return dataclasses.replace(out, text=text, warnings=list(out.warnings) + list(at.warnings))
+
+
+def _at_scene_values(args, steps, scene):
+    """``_at_values`` when some parameter has a value, else None (nothing to place)."""
+    return _at_values(args, steps, scene) if scene.system.parameter_values else None
+
+
 # ---------------------------------------------------------------- classify
 def cmd_classify(args, steps) -> CommandOutput:
     """The constraint-set verdict at the scene's parameter values (algorithm,
@@ -77,36 +126,20 @@ def cmd_classify(args, steps) -> CommandOutput:
     from nhham.cli.results import classify_data, classify_latex, classify_text, classify_warnings
     from nhham.hamiltonian.classification import classify_constraints
     from nhham.lagrangian.analysis import ConstraintAnalysis
-    from nhham.lagrangian.parametric import classification_at_values
 
     scene = _load(args, steps, drop_redundant=True)
     if getattr(args, "parametric", False):
         return _classify_parametric(args, steps, scene)
-    with steps.step("constraint algorithm at the parameter values (stages, ranks, decisions "
-                    "at exact points, integrability, classes, exceptional parameter sets)"):
-        at = classification_at_values(
-            scene.system, precision=args.precision,
-            classes=lambda a: classify_constraints(a, precision=args.precision))
-    for note in at.notes:
-        steps.note(f"parameter values: {note}")
-    if at.verdict.status == "invalid":
-        raise InputError(f"{args.scene}: at the parameter values {at.verdict.note}")
+    at = _at_values(args, steps, scene, classes=lambda a: classify_constraints(
+        a, precision=args.precision))
     analysis, classes = at.verdict.analysis, at.verdict.classes
     assert isinstance(analysis, ConstraintAnalysis)  # a valid verdict carries its analysis
     for stage in analysis.stages:
         for d in stage.decisions:
             steps.note(f"stage {stage.index}: {_evidence_text(d)}")
     data = classify_data(analysis, classes)
-    data["parameter_case"] = None if not at.conditions else {
-        "conditions": [expr_text(c) for c in at.conditions],
-        "generic": at.generic.to_dict(), "generic_differs": bool(at.differs)}
+    data["parameter_case"], note = _parameter_case(at)
     title = _title(scene, args)
-    note = ""
-    if at.conditions:
-        where = ", ".join(f"{expr_text(c)} = 0" for c in at.conditions)
-        note = (f"\nnote: the parameter values satisfy {where}; the verdict above holds there"
-                + (f" and differs from the generic one ({at.generic.describe()})"
-                   if at.differs else " (the generic verdict is the same)"))
     if args.latex:
         def text():
             return classify_latex(title, data, _parser_for(scene))
@@ -200,9 +233,15 @@ def _evidence_text(d):
 def cmd_derive(args, steps) -> CommandOutput:
     """The projected field, multipliers, C and energy (Lagrangian or Hamiltonian side)."""
     scene = _load(args, steps)
-    system = scene.system
+    at = _at_scene_values(args, steps, scene)
+    system = scene.system if at is None else at.system
     if args.side == "hamiltonian":
-        return _derive_hamiltonian(args, steps, scene)
+        return _with_case(_derive_hamiltonian(args, steps, scene, system), at)
+    return _with_case(_derive_lagrangian(args, steps, scene, system, at), at)
+
+
+def _derive_lagrangian(args, steps, scene, system, at):
+    """derive on the Lagrangian side, for ``system`` (the scene's, at its values)."""
     from nhham.lagrangian.geometry import lagrangian_geometry
 
     G = lagrangian_geometry(system, precision=args.precision)
@@ -211,7 +250,8 @@ def cmd_derive(args, steps) -> CommandOutput:
     with steps.step("implicit form: W, F, mu and mu a = -(dphi/dq) v"):
         implicit = _implicit_form(G)
     if not (args.explicit or G.closed_form_affordable):
-        return _derive_implicit(args, steps, scene, G, implicit, energy)
+        return _derive_implicit(args, steps, scene, G, implicit, energy,
+                                None if at is None else at.verdict.analysis)
     with steps.step("constraint matrix C = Z_i(phi_j)"):
         C = G.constraint_matrix
     with steps.step("rank of C on M_1"):
@@ -226,8 +266,11 @@ def cmd_derive(args, steps) -> CommandOutput:
         from nhham.lagrangian.analysis import analyze_constraints
 
         # C is singular: the dynamics is whatever the constraint algorithm leaves.
-        with steps.step("C singular: constraint algorithm for the dynamics on M_f"):
-            analysis = analyze_constraints(system, precision=args.precision)
+        if at is not None:
+            analysis = at.verdict.analysis
+        else:
+            with steps.step("C singular: constraint algorithm for the dynamics on M_f"):
+                analysis = analyze_constraints(system, precision=args.precision)
         if analysis.dynamics is None:
             raise InputError(f"{args.scene}: the constraints are inconsistent "
                              f"({analysis.inconsistency}); there is no dynamics to derive "
@@ -260,15 +303,17 @@ def _implicit_form(G) -> dict:
     }
 
 
-def _derive_implicit(args, steps, scene, G, implicit, energy):
-    """derive without closed forms: the mass-matrix form and the verdict on M_f."""
+def _derive_implicit(args, steps, scene, G, implicit, energy, analysis=None):
+    """derive without closed forms: the mass-matrix form and the verdict on M_f
+    (``analysis``: the one already run at the parameter values)."""
     from nhham.cli.report import expr_text
     from nhham.cli.results import implicit_latex, implicit_text
     from nhham.lagrangian.analysis import analyze_constraints
 
-    system = scene.system
-    with steps.step("constraint algorithm at exact points (M_f, free multipliers)"):
-        analysis = analyze_constraints(system, precision=args.precision)
+    system = G.system
+    if analysis is None:
+        with steps.step("constraint algorithm at exact points (M_f, free multipliers)"):
+            analysis = analyze_constraints(system, precision=args.precision)
     if analysis.status == "inconsistent":
         raise InputError(f"{args.scene}: the constraints are inconsistent "
                          f"({analysis.inconsistency}); there is no dynamics to derive "
@@ -300,11 +345,11 @@ def _derive_implicit(args, steps, scene, G, implicit, energy):
                          warnings=list(analysis.warnings))
 
 
-def _derive_hamiltonian(args, steps, scene):
+def _derive_hamiltonian(args, steps, scene, system):
     from nhham.hamiltonian.side import hamiltonian_side
 
     with steps.step("Legendre map and Hamiltonian H = E_L o Leg^-1"):
-        side = hamiltonian_side(scene.system, precision=args.precision)
+        side = hamiltonian_side(system, precision=args.precision)
         H = side.H
     with steps.step("C^H and the projected Hamiltonian field"):
         C = side.constraint_matrix_H
@@ -339,10 +384,12 @@ def cmd_compare(args, steps) -> CommandOutput:
     from nhham.hamiltonian.side import hamiltonian_side
 
     scene = _load(args, steps)
+    at = _at_scene_values(args, steps, scene)
+    system = scene.system if at is None else at.system
     # One T*Q side for both checks: its numeric layer is built once.
-    side = hamiltonian_side(scene.system, precision=args.precision, samples=args.samples)
+    side = hamiltonian_side(system, precision=args.precision, samples=args.samples)
     with steps.step("cross-check through the Legendre map"):
-        report = cross_check(scene.system, precision=args.precision, samples=args.samples,
+        report = cross_check(system, precision=args.precision, samples=args.samples,
                              side=side)
     dirac = None
     warnings = []
@@ -350,7 +397,7 @@ def cmd_compare(args, steps) -> CommandOutput:
         try:
             from nhham.hamiltonian.classification import dirac_vs_projected
 
-            dirac = dirac_vs_projected(scene.system, precision=args.precision,
+            dirac = dirac_vs_projected(system, precision=args.precision,
                                        samples=args.samples, side=side)
         except NhhamError as exc:
             warnings.append(f"Dirac comparison not available: {one_line(exc)}")
@@ -365,8 +412,8 @@ def cmd_compare(args, steps) -> CommandOutput:
     failure = None if data["agree"] else (
         "the Lagrangian and Hamiltonian sides disagree (see the checks); please report this "
         "scene as a bug")
-    return CommandOutput(result=data, text=text, scene=scene_info(scene), warnings=warnings,
-                         failure=failure)
+    return _with_case(CommandOutput(result=data, text=text, scene=scene_info(scene),
+                                    warnings=warnings, failure=failure), at)
 
 
 # ---------------------------------------------------------------- simulate

@@ -879,7 +879,7 @@ def dirac_vs_projected(system, *, precision=None, samples=6, seed=SEED,
     if not side.regular:
         raise ComputationError(
             "dirac_vs_projected: C^H is singular on M_1; the projected field is a family "
-            "(see nhham.algorithm) and the comparison is defined for regular systems only")
+            "(see nhham.lagrangian.algorithm) and the comparison is defined for regular systems only")
     XD, X, diff = _fields_on_Mf(side, classes)
     Mf = classes.manifold
     decisions = tuple(Mf.vanishes(d, tol=tol) for d in diff)

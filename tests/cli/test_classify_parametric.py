@@ -10,6 +10,7 @@ from __future__ import annotations
 import json
 
 import jsonschema
+import sympy as sp
 import pytest
 
 from tests.cli.conftest import run_inprocess
@@ -117,3 +118,32 @@ def test_parametric_bad_input_exits_2(scenes):
     assert rc == 2 and "positive: 'zz'" in err
     rc, _, err = run("classify", scenes["on"], "--parametric", "--latex")
     assert rc == 2 and "--parametric" in err
+
+
+def test_derive_and_compare_answer_at_b_equal_one(scenes, schema):
+    """At b = 1, C = -(1 - b^2) = 0 by hand: lambda_1 is free, q2'' = -lambda_1, q3'' = lambda_1."""
+    rc, env, _ = run("derive", scenes["on"], "--json")
+    assert rc == 0
+    jsonschema.validate(env, schema)
+    r = env["result"]
+    assert r["constraint_matrix"] == [["0"]]
+    assert r["free_multiplier_symbols"] == ["lambda_1"]
+    assert r["field"][3:] == ["0", "-lambda_1", "lambda_1"]
+    assert r["parameter_case"]["conditions"] == ["b - 1"]
+    assert r["parameter_case"]["generic_differs"] is True
+    rc, env, _ = run("compare", scenes["on"], "--json")
+    assert rc == 0
+    jsonschema.validate(env, schema)
+    r = env["result"]
+    assert r["agree"] and r["lagrangian_status"] == r["hamiltonian_status"] == "underdetermined"
+    assert r["parameter_case"]["conditions"] == ["b - 1"]
+
+
+def test_derive_at_generic_values_is_the_generic_one(scenes):
+    """b = 1/2: C = -(1 - 1/4) = -3/4, lambda = 0 (xi_L(phi) = 0), no case."""
+    rc, env, _ = run("derive", scenes["off"], "--json")
+    assert rc == 0
+    r = env["result"]
+    assert r["parameter_case"] is None and r["free_multiplier_symbols"] == []
+    c = sp.sympify(r["constraint_matrix"][0][0]).subs({"a": 1, "b": sp.Rational(1, 2)})
+    assert abs(float(c) + 0.75) < 1e-12
