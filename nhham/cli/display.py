@@ -129,8 +129,8 @@ def report(obj) -> Report:
         return Report(title, R.derive_text(title, data), R.derive_latex(data, _parser(system)))
     if kind == "HamiltonianSide":
         system = obj.system
-        data = R.derive_data("hamiltonian", obj.variables, list(obj.projected_field_H),
-                             list(obj.multipliers_H), obj.constraint_matrix_H, obj.H, ())
+        data = R.derive_data("hamiltonian", obj.variables, list(obj.projected_field),
+                             list(obj.multipliers), obj.constraint_matrix, obj.H, ())
         title = _title(system)
         return Report(title, R.derive_text(title, data), R.derive_latex(data, _parser(system)))
     if kind == "CrossCheckReport":

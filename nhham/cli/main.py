@@ -236,12 +236,16 @@ def cmd_derive(args, steps) -> CommandOutput:
     at = _at_scene_values(args, steps, scene)
     system = scene.system if at is None else at.system
     if args.side == "hamiltonian":
-        return _with_case(_derive_hamiltonian(args, steps, scene, system), at)
-    return _with_case(_derive_lagrangian(args, steps, scene, system, at), at)
+        from nhham.hamiltonian.side import hamiltonian_side
 
-
-def _derive_lagrangian(args, steps, scene, system, at):
-    """derive on the Lagrangian side, for ``system`` (the scene's, at its values)."""
+        side = hamiltonian_side(system, precision=args.precision)
+        with steps.step("Legendre map and Hamiltonian H = E_L o Leg^-1"):
+            side.energy
+        out = _derive_closed_form(args, steps, scene, side, "hamiltonian", side.analysis)
+        out.result.update(form="explicit", mass_matrix=None, forcing=None,
+                          constraint_jacobian=None, constraint_rhs=None)
+        return _with_case(out, at)
+    from nhham.lagrangian.analysis import analyze_constraints
     from nhham.lagrangian.geometry import lagrangian_geometry
 
     G = lagrangian_geometry(system, precision=args.precision)
@@ -249,40 +253,47 @@ def _derive_lagrangian(args, steps, scene, system, at):
         energy = G.energy
     with steps.step("implicit form: W, F, mu and mu a = -(dphi/dq) v"):
         implicit = _implicit_form(G)
+    analysis = None if at is None else at.verdict.analysis
     if not (args.explicit or G.closed_form_affordable):
-        return _derive_implicit(args, steps, scene, G, implicit, energy,
-                                None if at is None else at.verdict.analysis)
+        return _with_case(_derive_implicit(args, steps, scene, G, implicit, energy, analysis), at)
+
+    def algorithm():
+        return analysis or analyze_constraints(system, precision=args.precision)
+
+    out = _derive_closed_form(args, steps, scene, G, "lagrangian", algorithm)
+    out.result.update(form="explicit", **implicit)
+    return _with_case(out, at)
+
+
+def _derive_closed_form(args, steps, scene, side, name, algorithm) -> CommandOutput:
+    """The closed forms of one side (``LagrangianGeometry`` or ``HamiltonianSide``: the
+    same names on both): C, its rank on M_1, and P(xi) with the multipliers when C is
+    regular, else the dynamics the constraint algorithm (``algorithm()``) leaves on M_f."""
+    system = side.system
     with steps.step("constraint matrix C = Z_i(phi_j)"):
-        C = G.constraint_matrix
+        C = side.constraint_matrix
     with steps.step("rank of C on M_1"):
-        rank = G.constraint_rank
+        rank = side.constraint_rank
     steps.note(f"rank C on M_1: {rank.describe()}")
     free: tuple = ()
-    warnings = list(getattr(rank, "warnings", ()))
+    warnings = list(rank.warnings)
     if rank.value == system.m:
-        with steps.step("multipliers lambda = -C^{-T} xi_L(phi) and P(xi_L)"):
-            field, multipliers = list(G.projected_field), list(G.multipliers)
+        with steps.step("multipliers lambda = -C^{-T} xi(phi) and the projected field"):
+            field, multipliers = list(side.projected_field), list(side.multipliers)
     else:
-        from nhham.lagrangian.analysis import analyze_constraints
-
         # C is singular: the dynamics is whatever the constraint algorithm leaves.
-        if at is not None:
-            analysis = at.verdict.analysis
-        else:
-            with steps.step("C singular: constraint algorithm for the dynamics on M_f"):
-                analysis = analyze_constraints(system, precision=args.precision)
+        with steps.step("C singular: constraint algorithm for the dynamics on M_f"):
+            analysis = algorithm()
         if analysis.dynamics is None:
             raise InputError(f"{args.scene}: the constraints are inconsistent "
                              f"({analysis.inconsistency}); there is no dynamics to derive "
                              f"(run `nhham classify {args.scene}` for the stages)")
         field = list(analysis.dynamics)
         free = analysis.free_multiplier_symbols
-        multipliers = [analysis.multipliers.get(s, s) for s in G.multiplier_symbols]
+        multipliers = [analysis.multipliers.get(s, s) for s in side.multiplier_symbols]
         warnings += list(analysis.warnings)
-    out = _derive_output(args, steps, scene, "lagrangian", system.state, field, multipliers,
-                         C, energy, free, warnings)
-    out.result.update(form="explicit", **implicit)
-    return out
+    return _derive_output(args, steps, scene, name, side.state, field, multipliers, C,
+                          side.energy, free, warnings)
 
 
 def _implicit_form(G) -> dict:
@@ -343,20 +354,6 @@ def _derive_implicit(args, steps, scene, G, implicit, energy, analysis=None):
             return implicit_text(title, data)
     return CommandOutput(result=data, text=text, scene=scene_info(scene),
                          warnings=list(analysis.warnings))
-
-
-def _derive_hamiltonian(args, steps, scene, system):
-    from nhham.hamiltonian.side import hamiltonian_side
-
-    with steps.step("Legendre map and Hamiltonian H = E_L o Leg^-1"):
-        side = hamiltonian_side(system, precision=args.precision)
-        H = side.H
-    with steps.step("C^H and the projected Hamiltonian field"):
-        C = side.constraint_matrix_H
-        field = list(side.projected_field_H)
-        multipliers = list(side.multipliers_H)
-    return _derive_output(args, steps, scene, "hamiltonian", side.variables, field, multipliers,
-                          C, H, (), [])
 
 
 def _derive_output(args, steps, scene, side, variables, field, multipliers, C, energy, free,

@@ -965,8 +965,8 @@ def _fields_on_Mf(side: HamiltonianSide, classes: ConstraintClasses):
     inverses = [(blk, block_inverse(B.extract(blk, blk))) for blk in blocks]
     s = [Mf.reduce(alg.bracket(c, side.H)) for c in chi]
     XH = [Mf.reduce(e) for e in side.X_H]
-    lam = [Mf.reduce(e) for e in side.multipliers_H]
-    Z = side.vertical_fields_H
+    lam = [Mf.reduce(e) for e in side.multipliers]
+    Z = side.vertical_fields
     XD, X, diff = [], [], []
     for i, z in enumerate(side.variables):
         t = [Mf.reduce(alg.bracket(z, c)) for c in chi]

@@ -415,7 +415,7 @@ def _exact(system, side: HamiltonianSide, precision, samples, seed, tol, max_sta
                                          "lambda^L against Leg^* lambda^H"))
     checks.append(_check_form(side, sampler))
     chis_H = tuple(run_H.final_constraints) if run_H.status != "inconsistent" else (
-        side.holonomic + side.constraints_H)
+        side.holonomic + side.constraints)
     checks.append(_check_poisson_exact(side, chis_H, sampler))
     return checks, stages_L, stages_H, statuses, (len(sampler.points), sampler.dropped)
 
@@ -449,12 +449,12 @@ def _regular_exact(system, side, sampler) -> list:
         ("Leg_* Z_j = Z_j^H o Leg",
          sp.Matrix.hstack(*[leg.tangent_map(geo.vertical_fields.row(j).T)
                             for j in range(system.m)]) if system.m else sp.zeros(0, 1),
-         side.vertical_fields_H.T if system.m else sp.zeros(0, 1)),
+         side.vertical_fields.T if system.m else sp.zeros(0, 1)),
     ]
     lam_parts = [
-        ("C = C^H o Leg", geo.constraint_matrix, side.constraint_matrix_H.applyfunc(pull)),
+        ("C = C^H o Leg", geo.constraint_matrix, side.constraint_matrix.applyfunc(pull)),
         ("xi_L(phi) = X_H(phi^H) o Leg", geo.constraint_derivatives,
-         side.constraint_derivatives_H.applyfunc(pull)),
+         side.constraint_derivatives.applyfunc(pull)),
     ]
     field_pairs, lam_pairs = _numeric_assembly(system, side, sampler)
     out = []

@@ -35,6 +35,7 @@ from nhham.system.evaluation import numeric_function
 from nhham.settings import PARAMETER_BOX, SEED, Precision
 from nhham.errors import ComputationError
 from nhham.lagrangian.algebra import cancel
+from nhham.system.description import System
 from nhham.system.naming import momentum_symbol
 
 __all__ = ["LegendreMap", "legendre_map", "NoClosedFormInverseError", "canonical_form_matrix"]
@@ -80,6 +81,11 @@ class LegendreMap:
     momentum_symbols : tuple of sympy.Symbol
         p_A, named ``p_<q>``.
     """
+
+    system: System
+    coordinates: tuple
+    velocities: tuple
+    momentum_symbols: tuple
 
     def __init__(self, system):
         object.__setattr__(self, "system", system)

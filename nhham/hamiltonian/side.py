@@ -38,6 +38,7 @@ from nhham.errors import ComputationError
 from nhham.hamiltonian.legendre import Backend, Lambdified, LegendreMap, canonical_form_matrix
 from nhham.lagrangian.algebra import cancel, solve_linear
 from nhham.lagrangian.submanifold import Decision, Submanifold
+from nhham.system.description import System
 
 __all__ = [
     "HamiltonianSide",
@@ -67,8 +68,30 @@ def hamiltonian_side(system, precision: int | None = None, samples: int = 6,
     return HamiltonianSide(system, precision=precision, samples=samples, seed=seed, exact=exact)
 
 
+#: The ``_H`` names of nhham 0.1 and the shared names that replace them.
+_OLD_NAMES = {f"{name}_H": name for name in (
+    "constraints", "vertical_fields", "constraint_gradients", "constraint_matrix",
+    "constraint_derivatives", "multipliers", "projected_field", "projector_Q", "projector_P")}
+
+
 class HamiltonianSide:
-    """Constrained Hamiltonian dynamics of a system on T*Q (frozen, lazy)."""
+    """Constrained Hamiltonian dynamics of a system on T*Q (frozen, lazy).
+
+    It answers the questions of :class:`nhham.lagrangian.geometry.LagrangianGeometry`
+    under the same names, on T*Q: ``state`` (q, p), ``energy`` (H), ``vertical_fields``
+    (Z_i^H), ``constraint_gradients``, ``constraint_matrix`` (C^H),
+    ``constraint_derivatives`` (X_H(phi_i^H)), ``multipliers``, ``multiplier_symbols``,
+    ``projected_field`` (P(X_H)), ``projector_Q``, ``projector_P``, ``M1``,
+    ``constraint_rank``, ``regular``; the constraint functions are ``constraints``
+    (phi^H = phi o Leg^-1). The names with ``_H`` of nhham 0.1 still answer, with a
+    DeprecationWarning.
+    """
+
+    system: "System"
+    precision: int | None
+    samples: int
+    seed: int
+    exact: bool
 
     def __init__(self, system, precision=None, samples=6, seed=SEED, exact=True):
         object.__setattr__(self, "system", system)
@@ -79,6 +102,7 @@ class HamiltonianSide:
 
     def __setattr__(self, key, value):
         raise AttributeError(f"HamiltonianSide is frozen; cannot set {key!r}")
+
 
     def __repr__(self):
         return f"HamiltonianSide({self.system!r})"
@@ -109,6 +133,19 @@ class HamiltonianSide:
     def variables(self) -> tuple:
         """(q^1..q^n, p_1..p_n)."""
         return self.coordinates + self.momenta
+
+    @property
+    def state(self) -> tuple:
+        """The coordinates of T*Q, (q, p): ``variables`` under the name the Lagrangian
+        side uses for (q, v)."""
+        return self.variables
+
+    @property
+    def multiplier_symbols(self) -> tuple:
+        """lambda_1..lambda_m, the same symbols as on the Lagrangian side."""
+        from nhham.system.naming import multiplier_symbol
+
+        return tuple(multiplier_symbol(i + 1) for i in range(self.m))
 
     @cached_property
     def symbolic_affordable(self) -> bool:
@@ -141,6 +178,11 @@ class HamiltonianSide:
         """H = E_L o Leg^{-1} in (q, p)."""
         return self.legendre.hamiltonian
 
+    @property
+    def energy(self) -> sp.Expr:
+        """The energy function on T*Q: H (as ``energy`` is E_L on the Lagrangian side)."""
+        return self.H
+
     @cached_property
     def X_H(self) -> sp.Matrix:
         """X_H = (dH/dp, -dH/dq), shape (2n, 1)."""
@@ -153,37 +195,37 @@ class HamiltonianSide:
         return tuple(self.system.holonomic)
 
     @cached_property
-    def constraints_H(self) -> tuple:
+    def constraints(self) -> tuple:
         """phi_i^H = phi_i o Leg^{-1}, in the order of ``system.phi``."""
         return tuple(self.legendre.transport(f) for f in self.system.phi)
 
     @cached_property
-    def vertical_fields_H(self) -> sp.Matrix:
+    def vertical_fields(self) -> sp.Matrix:
         """Z_i^H = -mu_iA d/dp_A as rows, shape (m, 2n); q-components zero."""
         return sp.Matrix.hstack(sp.zeros(self.m, self.n), -self.system.mu)
 
     @cached_property
-    def constraint_gradients_H(self) -> sp.Matrix:
+    def constraint_gradients(self) -> sp.Matrix:
         """d phi_i^H as rows in the basis (dq, dp), shape (m, 2n)."""
         if not self.m:
             return sp.zeros(0, 2 * self.n)
-        return sp.Matrix([[sp.diff(f, z) for z in self.variables] for f in self.constraints_H])
+        return sp.Matrix([[sp.diff(f, z) for z in self.variables] for f in self.constraints])
 
     @cached_property
-    def constraint_matrix_H(self) -> sp.Matrix:
+    def constraint_matrix(self) -> sp.Matrix:
         """C^H_ij = Z_i^H(phi_j^H) = -mu_iA d phi_j^H / d p_A, shape (m, m)."""
         if not self.m:
             return sp.zeros(0, 0)
-        return (self.vertical_fields_H * self.constraint_gradients_H.T).applyfunc(cancel)
+        return (self.vertical_fields * self.constraint_gradients.T).applyfunc(cancel)
 
     @cached_property
-    def constraint_derivatives_H(self) -> sp.Matrix:
+    def constraint_derivatives(self) -> sp.Matrix:
         """X_H(phi_i^H) = {phi_i^H, H}, shape (m, 1)."""
-        return sp.Matrix([self.algebra.bracket(f, self.H) for f in self.constraints_H]) \
+        return sp.Matrix([self.algebra.bracket(f, self.H) for f in self.constraints]) \
             if self.m else sp.zeros(0, 1)
 
     @cached_property
-    def multipliers_H(self) -> sp.Matrix:
+    def multipliers(self) -> sp.Matrix:
         """lambda^j = -(C^H)^{ij} X_H(phi_i^H): a solve with (C^H)^T, shape (m, 1).
 
         Defined where C^H is invertible (the regular case); singular systems
@@ -191,39 +233,39 @@ class HamiltonianSide:
         """
         if not self.m:
             return sp.zeros(0, 1)
-        return (-solve_linear(self.constraint_matrix_H.T, self.constraint_derivatives_H)).applyfunc(
+        return (-solve_linear(self.constraint_matrix.T, self.constraint_derivatives)).applyfunc(
             cancel)
 
     @cached_property
-    def projected_field_H(self) -> sp.Matrix:
+    def projected_field(self) -> sp.Matrix:
         """X = X_H + lambda^j Z_j^H, shape (2n, 1)."""
         if not self.m:
             return self.X_H
-        return (self.X_H + self.vertical_fields_H.T * self.multipliers_H).applyfunc(cancel)
+        return (self.X_H + self.vertical_fields.T * self.multipliers).applyfunc(cancel)
 
     @cached_property
-    def projector_Q_H(self) -> sp.Matrix:
+    def projector_Q(self) -> sp.Matrix:
         """Q = (C^H)^{ij} Z_j^H (x) d phi_i^H as a (2n, 2n) matrix acting on columns."""
         if not self.m:
             return sp.zeros(2 * self.n, 2 * self.n)
-        return (self.vertical_fields_H.T
-                * solve_linear(self.constraint_matrix_H.T, self.constraint_gradients_H)).applyfunc(cancel)
+        return (self.vertical_fields.T
+                * solve_linear(self.constraint_matrix.T, self.constraint_gradients)).applyfunc(cancel)
 
     @cached_property
-    def projector_P_H(self) -> sp.Matrix:
+    def projector_P(self) -> sp.Matrix:
         """P = id - Q on T*Q; P(X_H) is the projected field."""
-        return sp.eye(2 * self.n) - self.projector_Q_H
+        return sp.eye(2 * self.n) - self.projector_Q
 
     @cached_property
     def equations_of_motion(self) -> tuple:
         """(dq/dt, dp/dt) = (dH/dp, -dH/dq - lambda^i mu_i) as a 2n-tuple of expressions."""
-        return tuple(self.projected_field_H)
+        return tuple(self.projected_field)
 
     # --------------------------------------------------------------- on M_1
     @cached_property
     def M1(self) -> Submanifold:
         """M_1 on T*Q = {g = 0, phi^H = 0} (decisions with this side's precision)."""
-        return self.submanifold(self.holonomic + self.constraints_H)
+        return self.submanifold(self.holonomic + self.constraints)
 
     def submanifold(self, equations: Sequence) -> Submanifold:
         """A submanifold of T*Q given by equations in (q, p)."""
@@ -234,7 +276,7 @@ class HamiltonianSide:
     @cached_property
     def constraint_rank(self) -> Decision:
         """rank C^H on M_1, with how it was decided."""
-        return self.M1.rank(self.constraint_matrix_H)
+        return self.M1.rank(self.constraint_matrix)
 
     @property
     def regular(self) -> bool:
@@ -276,6 +318,21 @@ class HamiltonianSide:
         return self._analysis_cache[max_stages]
 
 
+def _deprecated_name(old: str, new: str) -> property:
+    def get(self):
+        import warnings
+
+        warnings.warn(f"HamiltonianSide.{old} is now .{new} (the Lagrangian side's name)",
+                      DeprecationWarning, stacklevel=2)
+        return getattr(self, new)
+
+    return property(get, doc=f"Deprecated: :attr:`{new}`.")
+
+
+for _old, _new in _OLD_NAMES.items():
+    setattr(HamiltonianSide, _old, _deprecated_name(_old, _new))
+
+
 def _hamiltonian_analysis(side: HamiltonianSide, max_stages: int):
     from nhham.lagrangian.algorithm import run_algorithm
 
@@ -294,8 +351,8 @@ def _algorithm_arguments(side: HamiltonianSide, max_stages: int) -> dict:
         f"{lab}.lift" if k < nh else lab for k, lab in enumerate(sysm.constraint_labels))
     return dict(
         base_field=side.X_H,
-        vertical_fields=side.vertical_fields_H,
-        primary=side.holonomic + side.constraints_H,
+        vertical_fields=side.vertical_fields,
+        primary=side.holonomic + side.constraints,
         labels=labels,
         manifold_factory=side.submanifold,
         max_stages=max_stages,
@@ -545,7 +602,7 @@ class NonholonomicBracket(BivectorBracket):
                 f"{side.constraint_rank.value} < m = {side.m} "
                 f"({side.constraint_rank.describe()})")
         Omega = canonical_form_matrix(side.n)
-        P = side.projector_P_H
+        P = side.projector_P
         tensor = (Omega.T * P.T * Omega * P * Omega).applyfunc(cancel)
         super().__init__(tensor, side.variables)
         self.side = side
@@ -556,14 +613,14 @@ class NonholonomicBracket(BivectorBracket):
         side = self.side
         if not side.m:
             return sp.zeros(0, 1)
-        rhs = sp.Matrix([side.system.h[j] - side.constraints_H[j] for j in range(side.m)])
-        return solve_linear(side.constraint_matrix_H, rhs).applyfunc(cancel)
+        rhs = sp.Matrix([side.system.h[j] - side.constraints[j] for j in range(side.m)])
+        return solve_linear(side.constraint_matrix, rhs).applyfunc(cancel)
 
     def extra_term(self, f) -> sp.Expr:
         """(C^H)^{ij} (h_j - phi_j^H) {f, phi_i^H} (zero on M_1 for linear constraints)."""
         side = self.side
         return cancel(sum((self.extra_coefficients[i] * side.algebra.bracket(f, phi)
-                          for i, phi in enumerate(side.constraints_H)), sp.S.Zero))
+                          for i, phi in enumerate(side.constraints)), sp.S.Zero))
 
     def time_derivative(self, f) -> sp.Expr:
         """d f/dt along the projected field: {f, H}_nh + extra term."""

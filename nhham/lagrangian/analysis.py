@@ -36,6 +36,7 @@ from nhham.lagrangian.algorithm import (
 )
 from nhham.lagrangian.submanifold import Submanifold
 from nhham.settings import SEED
+from nhham.system.description import System
 from nhham.system.naming import multiplier_symbol
 
 __all__ = ["Block", "ConstraintAnalysis", "analyze_constraints"]
@@ -118,7 +119,7 @@ class ConstraintAnalysis:
     ``projector_P`` and :meth:`project` (the almost product structure on M_f).
     """
 
-    system: object
+    system: System
     status: str
     stages: tuple
     final_constraints: tuple

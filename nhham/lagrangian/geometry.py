@@ -34,7 +34,7 @@ from nhham.settings import SEED
 from nhham.lagrangian.algebra import solve_linear
 from nhham.lagrangian.submanifold import Decision, Submanifold
 from nhham.system.naming import acceleration_symbol, multiplier_symbol
-from nhham.system.description import quadratic_parts
+from nhham.system.description import System, quadratic_parts
 
 __all__ = ["LagrangianGeometry", "lagrangian_geometry", "DynamicsIngredients"]
 
@@ -91,6 +91,12 @@ class LagrangianGeometry:
     quadratic fast path when L is quadratic in the velocities; False always
     differentiates L (the general path, for comparisons).
     """
+
+    system: "System"
+    precision: int | None
+    samples: int
+    seed: int
+    fast: bool
 
     def __init__(self, system, precision=None, samples=6, seed=SEED, fast=True):
         object.__setattr__(self, "system", system)
@@ -161,6 +167,11 @@ class LagrangianGeometry:
                     out[A] = d
         return out
 
+    @property
+    def state(self) -> tuple:
+        """The coordinates of TQ, (q, v) (``system.state``)."""
+        return tuple(self.system.state)
+
     @cached_property
     def momenta(self) -> sp.Matrix:
         """Fibre derivative p_A = dL/dv^A, shape (n, 1)."""
@@ -194,7 +205,7 @@ class LagrangianGeometry:
         if self._parts is None:
             return self.momenta.jacobian(self.system.coordinates)
         n, v = self.n, self.system.velocities
-        terms = [[[] for _ in range(n)] for _ in range(n)]
+        terms: list[list[list]] = [[[] for _ in range(n)] for _ in range(n)]
         for (A, C), dW in self._dW.items():
             for B, d in dW.items():
                 terms[A][B].append(d * v[C])
@@ -273,8 +284,8 @@ class LagrangianGeometry:
     def _quadratic_forcing(self) -> sp.Matrix:
         n, v, half = self.n, self.system.velocities, sp.Rational(1, 2)
         # quad[B][(A, C)]: summands of the coefficient of v^A v^C (A <= C) in F_B
-        quad = [dict() for _ in range(n)]
-        lin = [dict() for _ in range(n)]
+        quad: list[dict] = [dict() for _ in range(n)]
+        lin: list[dict] = [dict() for _ in range(n)]
 
         def put(table, key, value):
             table.setdefault(key, []).append(value)

@@ -34,6 +34,7 @@ This module must not import sympy (``DESIGN.md`` §4).
 from __future__ import annotations
 
 import ctypes
+from typing import Any
 import math
 from dataclasses import dataclass, field, replace
 from types import MappingProxyType
@@ -137,13 +138,18 @@ class NumericModel:
     backend_note: str = ""
     python_source: str = field(default="", repr=False)
     c_source: str = field(default="", repr=False)
+    # Set once by __post_init__, never changed (the model stays immutable).
+    _p: np.ndarray = field(init=False, repr=False)
+    _plist: list = field(init=False, repr=False)
+    _block0: "ParameterBlock" = field(init=False, repr=False)
+    _ext: Any = field(init=False, repr=False)
+    _one: "SingleStateSolver" = field(init=False, repr=False)
 
     def __post_init__(self):
         object.__setattr__(self, "layout", MappingProxyType(dict(self.layout)))
         p = np.array(self.parameter_values, dtype=float)
         object.__setattr__(self, "_p", p if p.size else np.zeros(1))
         object.__setattr__(self, "_plist", [float(x) for x in self.parameter_values])
-        # Set once here, never changed (the model stays immutable).
         object.__setattr__(self, "_block0", ParameterBlock.of(self._plist))
         ext = None
         if self.compiled is not None and self.path == "saddle":

@@ -111,6 +111,18 @@ class System:
         one-forms, a singular Hessian W.
     """
 
+    name: str
+    coordinates: tuple
+    velocities: tuple
+    parameters: tuple
+    parameter_values: Mapping
+    lagrangian: sp.Expr
+    holonomic: tuple
+    _symbol_table: Mapping
+    constraints: tuple
+    dropped: tuple
+    constraint_labels: tuple
+
     def __init__(
         self,
         coordinates: Sequence,

@@ -210,3 +210,28 @@ def test_envelope_helper_for_any_subcommand():
     assert env["result"] == {"a_b": 1.0, "c": None}  # non-finite numbers are null
     assert env["warnings"] == ["x y"]
     assert list(env) == ["command", "nhham_version", "scene", "result", "warnings"]
+
+
+@pytest.mark.parametrize("example", ["rolling_disk.toml", "paper_3_1.toml",
+                                     "pendulum_cartesian.toml"])
+def test_hamiltonian_derive_matches_the_schema(example, schema):
+    rc, out, err = run_inprocess("derive", str(EXAMPLES / example), "--side", "hamiltonian",
+                                 "--json")
+    assert rc == 0, err
+    env = json.loads(out)
+    jsonschema.validate(env, schema)
+    r = env["result"]
+    assert r["side"] == "hamiltonian" and r["form"] == "explicit" and r["mass_matrix"] is None
+
+
+def test_hamiltonian_derive_of_a_singular_c_leaves_the_multiplier_free():
+    """Example 3.1 by hand: H = (p1^2 + p2^2 - p3^2)/2, phi^H = p2 - p3, C^H = 0 and
+    X_H(phi^H) = 0, so dp/dt = -lambda_1 (0, 1, 1) with lambda_1 free."""
+    rc, out, err = run_inprocess("derive", str(EXAMPLES / "paper_3_1.toml"), "--side",
+                                 "hamiltonian", "--json")
+    assert rc == 0, err
+    r = json.loads(out)["result"]
+    assert r["free_multiplier_symbols"] == ["lambda_1"]
+    got = [sp.sympify(f) for f in r["field"]]
+    p1, p2, p3, lam = sp.symbols("p_q1 p_q2 p_q3 lambda_1")
+    assert got == [p1, p2, -p3, 0, -lam, -lam]

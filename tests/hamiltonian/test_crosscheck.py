@@ -117,8 +117,8 @@ def test_a_wrong_sign_is_detected(monkeypatch):
     def wrong(self):
         return sp.Matrix.hstack(sp.zeros(self.m, self.n), self.system.mu)
 
-    monkeypatch.setattr(HamiltonianSide, "vertical_fields_H", cached_property(wrong))
-    HamiltonianSide.vertical_fields_H.__set_name__(HamiltonianSide, "vertical_fields_H")
+    monkeypatch.setattr(HamiltonianSide, "vertical_fields", cached_property(wrong))
+    HamiltonianSide.vertical_fields.__set_name__(HamiltonianSide, "vertical_fields")
     report = cross_check(models.chaplygin_sleigh(), method="exact")
     assert not report.agree
     assert not report.detail["field"].agree

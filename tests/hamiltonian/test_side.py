@@ -62,26 +62,26 @@ def test_rolling_disk_hamiltonian_objects():
     # phi_i^H: x_dot = p_x/m, phi_dot = p_phi/I2.
     phi1 = px / m - R * c * pph / I2
     phi2 = py / m - R * sn * pph / I2
-    assert zero(side.constraints_H[0] - phi1) and zero(side.constraints_H[1] - phi2)
+    assert zero(side.constraints[0] - phi1) and zero(side.constraints[1] - phi2)
     # Z_i^H = -mu_i d/dp: mu_1 = (1, 0, 0, -R c), mu_2 = (0, 1, 0, -R s).
     Z = sp.Matrix([[0, 0, 0, 0, -1, 0, 0, R * c], [0, 0, 0, 0, 0, -1, 0, R * sn]])
-    assert side.vertical_fields_H == Z
+    assert side.vertical_fields == Z
     # C^H = -mu W^{-1} mu^T, the same matrix as on TQ.
     C = -sp.Matrix([[1 / m + R**2 * c**2 / I2, R**2 * c * sn / I2],
                     [R**2 * c * sn / I2, 1 / m + R**2 * sn**2 / I2]])
-    assert all(zero(e) for e in side.constraint_matrix_H - C)
+    assert all(zero(e) for e in side.constraint_matrix - C)
     # X_H(phi_1) = d phi_1/d theta dH/dp_theta = (R s p_phi/I2)(p_theta/I1); X_H(phi_2) similar.
     w = R * pth * pph / (I1 * I2)
-    assert zero(side.constraint_derivatives_H[0] - w * sn)
-    assert zero(side.constraint_derivatives_H[1] + w * c)
+    assert zero(side.constraint_derivatives[0] - w * sn)
+    assert zero(side.constraint_derivatives[1] + w * c)
     # X_H(phi) = w (s, -c) is orthogonal to n = (c, s), and C^{-1} = -m (I - k n n^T)
     # (Sherman-Morrison), so lambda = -C^{-T} X_H(phi) = m w (s, -c).
-    assert zero(side.multipliers_H[0] - m * w * sn)
-    assert zero(side.multipliers_H[1] + m * w * c)
+    assert zero(side.multipliers[0] - m * w * sn)
+    assert zero(side.multipliers[1] + m * w * c)
     # X = X_H + lambda^j Z_j: q' = dH/dp; p_x' = -lambda_1, p_y' = -lambda_2, p_theta' = 0,
     # p_phi' = R c lambda_1 + R s lambda_2 = 0.
     X = sp.Matrix([px / m, py / m, pth / I1, pph / I2, -m * w * sn, m * w * c, 0, 0])
-    assert all(zero(e) for e in side.projected_field_H - X)
+    assert all(zero(e) for e in side.projected_field - X)
     assert side.regular and side.constraint_rank.value == 2
 
 
@@ -94,15 +94,15 @@ def test_pendulum_multiplier_and_field():
     # phi^H = 2 (x p_x + y p_y)/m, mu = (2x, 2y), C = -4 (x^2 + y^2)/m,
     # X_H(phi^H) = 2 (p_x^2 + p_y^2)/m^2 - 2 g y, lambda = -X_H(phi)/C = (p^2 - g m^2 y)/(2 m r^2).
     r2 = x**2 + y**2
-    assert zero(side.constraints_H[0] - 2 * (x * px + y * py) / m)
-    assert zero(side.constraint_matrix_H[0, 0] + 4 * r2 / m)
+    assert zero(side.constraints[0] - 2 * (x * px + y * py) / m)
+    assert zero(side.constraint_matrix[0, 0] + 4 * r2 / m)
     lam = (px**2 + py**2 - g * m**2 * y) / (2 * m * r2)
-    assert zero(side.multipliers_H[0] - lam)
+    assert zero(side.multipliers[0] - lam)
     # p' = -dH/dq - lambda mu = (-2 x lambda, -m g - 2 y lambda).
-    X = side.projected_field_H
+    X = side.projected_field
     assert zero(X[2] + 2 * x * lam) and zero(X[3] + m * g + 2 * y * lam)
     # X is tangent to M_1 = {g = 0, phi^H = 0}.
-    for f in side.holonomic + side.constraints_H:
+    for f in side.holonomic + side.constraints:
         assert side.M1.vanishes(side.algebra.apply(X, f)).value
 
 
@@ -120,8 +120,8 @@ def test_two_particle_rod_multipliers_on_M1():
     # lambda_1 = |p2 - p1|^2/(2 l^2), lambda_2 = (p_x2 p_y1 - p_x1 p_y2 - g (x2 - x1))/l^2.
     lam1 = ((px2 - px1) ** 2 + (py2 - py1) ** 2) / (2 * l**2)
     lam2 = (px2 * py1 - px1 * py2 - g * X) / l**2
-    assert side.M1.vanishes(side.multipliers_H[0] - lam1).value
-    assert side.M1.vanishes(side.multipliers_H[1] - lam2).value
+    assert side.M1.vanishes(side.multipliers[0] - lam1).value
+    assert side.M1.vanishes(side.multipliers[1] - lam2).value
 
 
 # ---------------------------------------------------------------- numeric layer
@@ -132,9 +132,9 @@ def test_numeric_layer_matches_symbolic(make, precision):
     side = hamiltonian_side(s)
     be = Backend(precision)
     pts = side.M1.points()[0][:3]
-    Xs = side.projected_field_H
+    Xs = side.projected_field
     args = list(side.variables) + list(s.parameters)
-    f = sp.lambdify(args, list(Xs) + list(side.multipliers_H), "mpmath" if precision else "numpy")
+    f = sp.lambdify(args, list(Xs) + list(side.multipliers), "mpmath" if precision else "numpy")
     with be.context():
         for pt in pts:
             q = [pt[a] for a in side.coordinates]
@@ -240,7 +240,7 @@ def test_equations_of_motion_need_the_affine_term():
     x, y = s.coordinates
     px, py = side.momenta
     Om = S("Omega")
-    X = side.projected_field_H
+    X = side.projected_field
     for z, Xz in zip(side.variables, X):
         assert zero(nh.time_derivative(z) - Xz)
     # Without the extra term y' comes out wrong: {y, H}_nh = 0 (P kills d/dp_y) but y' = Omega x.
@@ -254,7 +254,7 @@ def test_linear_constraints_need_no_extra_term():
     s = sleigh()
     nh = nonholonomic_bracket(s)
     side = nh.side
-    for z, Xz in zip(side.variables, side.projected_field_H):
+    for z, Xz in zip(side.variables, side.projected_field):
         assert side.M1.vanishes(nh(z, side.H) - Xz).value
 
 
@@ -263,3 +263,34 @@ def test_nonholonomic_bracket_needs_regular_C():
     s = nhham.System(["q1", "q2", "q3"], (v1**2 + v2**2 - v3**2) / 2, [v2 + v3])
     with pytest.raises(ComputationError, match="C\\^H invertible"):
         nonholonomic_bracket(s)
+
+
+SHARED = ("state", "energy", "vertical_fields", "constraint_gradients", "constraint_matrix",
+          "constraint_derivatives", "multipliers", "multiplier_symbols", "projected_field",
+          "projector_Q", "projector_P", "M1", "constraint_rank", "regular")
+
+
+def test_both_sides_answer_under_the_same_names():
+    """The Lagrangian and Hamiltonian sides share their names; on the rolling disk
+    (W constant, Leg linear) C^H o Leg = C and the multipliers agree through Leg."""
+    system = disk()
+    geo, side = nhham.lagrangian_geometry(system), hamiltonian_side(system)
+    for name in SHARED:
+        getattr(geo, name), getattr(side, name)
+    assert len(side.state) == len(geo.state) == 2 * system.n
+    assert side.energy == side.H and geo.energy == geo.energy
+    pull = dict(zip(side.legendre.momentum_symbols, geo.momenta))
+    assert (side.constraint_matrix.subs(pull) - geo.constraint_matrix).applyfunc(
+        sp.simplify) == sp.zeros(system.m, system.m)
+    assert (side.multipliers.subs(pull) - geo.multipliers).applyfunc(
+        sp.simplify) == sp.zeros(system.m, 1)
+    assert side.multiplier_symbols == geo.multiplier_symbols
+
+
+def test_the_old_hamiltonian_names_still_answer_with_a_warning():
+    side = hamiltonian_side(disk())
+    with pytest.warns(DeprecationWarning, match="constraint_matrix"):
+        C = side.constraint_matrix_H
+    assert C == side.constraint_matrix
+    with pytest.raises(AttributeError):
+        side.no_such_name
