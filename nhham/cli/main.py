@@ -136,7 +136,7 @@ def cmd_classify(args, steps) -> CommandOutput:
     assert isinstance(analysis, ConstraintAnalysis)  # a valid verdict carries its analysis
     for stage in analysis.stages:
         for d in stage.decisions:
-            steps.note(f"stage {stage.index}: {_evidence_text(d)}")
+            steps.note(f"stage {stage.index}: {d.describe()}")
     data = classify_data(analysis, classes)
     data["parameter_case"], note = _parameter_case(at)
     title = _title(scene, args)
@@ -220,13 +220,6 @@ def _classify_parametric(args, steps, scene) -> CommandOutput:
 
     return CommandOutput(result=data, text=text, scene=scene_info(scene),
                          warnings=list(pv.warnings))
-
-
-def _evidence_text(d):
-    for attr in ("describe", "summary"):
-        if hasattr(d, attr) and callable(getattr(d, attr)):
-            return getattr(d, attr)()
-    return str(d)
 
 
 # ------------------------------------------------------------------ derive

@@ -14,6 +14,7 @@ import sympy as sp
 from nhham.cli import latex as tex
 from nhham.cli.envelope import json_number, jsonable
 from nhham.cli.report import display_form, expr_text, table
+from nhham.lagrangian.algorithm import Evidence
 
 __all__ = [
     "classify_data", "classify_text", "classify_latex",
@@ -25,16 +26,16 @@ __all__ = [
 
 
 # ---------------------------------------------------------------- classify
-def _decision_data(evidence) -> dict:
-    d = getattr(evidence, "decision", evidence)
+def _decision_data(evidence: Evidence) -> dict:
+    d = evidence.decision
     return {
-        "subject": str(getattr(evidence, "subject", "")),
-        "outcome": str(getattr(evidence, "outcome", "")),
-        "method": str(getattr(d, "method", "")),
-        "precision": str(getattr(d, "precision", "")),
-        "samples": int(getattr(d, "samples", 0) or 0),
-        "error_bound": json_number(getattr(d, "error_bound", None)),
-        "detail": str(getattr(d, "detail", "")),
+        "subject": evidence.subject,
+        "outcome": evidence.outcome,
+        "method": d.method,
+        "precision": str(d.precision),
+        "samples": int(d.samples or 0),
+        "error_bound": json_number(d.error_bound),
+        "detail": d.detail,
     }
 
 
@@ -53,7 +54,7 @@ def classify_data(analysis, classes=None) -> dict:
             "decisions": [_decision_data(d) for d in s.decisions],
         })
     first = analysis.stages[0].decisions if analysis.stages else ()
-    first_rank = str(first[0].method) if first else "exact"
+    first_rank = first[0].decision.method if first else "exact"
     return {
         "n": int(system.n),
         "m": int(system.m),

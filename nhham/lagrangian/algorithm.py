@@ -84,27 +84,6 @@ class Evidence:
     decision: Decision
     outcome: str = ""
 
-    # The decision's fields, for callers that treat the evidence as a Decision.
-    @property
-    def value(self):
-        return self.decision.value
-
-    @property
-    def method(self) -> str:
-        return self.decision.method
-
-    @property
-    def precision(self) -> str:
-        return self.decision.precision
-
-    @property
-    def detail(self) -> str:
-        return self.decision.detail
-
-    @property
-    def warnings(self) -> tuple:
-        return self.decision.warnings
-
     def describe(self) -> str:
         """One line: subject, outcome and how it was decided."""
         text = f"{self.subject}: {self.decision.describe()}"
