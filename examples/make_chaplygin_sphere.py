@@ -58,7 +58,12 @@ HEADER = """\
 # What `nhham classify` reports: C regular on M_1 (rank 2, proved at an exact point), one
 #   stage, determined, no free multipliers; not integrable (rolling); on T*Q the bracket
 #   matrix of the two constraints has rank 2 at an exact point: 0 first class, 2 second
-#   class (the sampled route agrees: tests/lagrangian/test_tangency.py).
+#   class (the same rank from a numpy bracket matrix: tests/lagrangian/test_tangency.py).
+# `nhham linearize`: no [steady] table. The sphere's steady motions move coordinates the
+#   dynamics depends on (spinning about a vertical principal axis turns the yaw, which turns
+#   the rolling constraints; rolling about a horizontal one turns the roll), so no constant
+#   state matrix describes them in this chart: linearize refuses such a [steady] table with
+#   that message (tests/cli/test_linearize_command.py).
 # Energy is conserved (L = T, the constraints are linear). Reference for the model:
 #   S. A. Chaplygin, "On a ball's rolling on a horizontal plane" (1903); A. V. Borisov,
 #   I. S. Mamaev, "Rolling of a rigid body on a plane and sphere", Regul. Chaotic Dyn. 7 (2002).

@@ -59,6 +59,8 @@ ON_TOLERANCE = 1e-9
 
 # A Jacobian column is zero (a neutral direction) below this, relative to max |J|.
 _NEUTRAL_TOL = 1e-10
+#: Relative change of the Jacobian along a steady motion taken as rounding.
+_INVARIANCE_TOL = 1e-7
 
 
 # ------------------------------------------------------------------ results
@@ -244,12 +246,6 @@ def linearization_result(A, coords, method, precision, chart_names, J, removed, 
         dependent=tuple(dependent), state=MappingProxyType(state),
         residuals=MappingProxyType(residuals), acceleration_residual=worst,
         exact_matrix=exact_matrix)
-
-
-def _sorted(ev):
-    ev = np.asarray(ev, dtype=complex)
-    order = np.lexsort((-ev.imag, -np.round(ev.real, 12)))
-    return ev[order]
 
 
 def _sorted(ev):
@@ -448,11 +444,7 @@ def linearize(model, state, *, independent: Sequence[str] | None = None,
             f"a steady motion has every acceleration zero)")
     chart = _choose_chart(model, y0, independent)
     cf = _ComplexField(model)
-    q0 = y0[:n]
-    x0 = np.concatenate([y0[list(chart.iq)], y0[n + np.array(chart.iv, dtype=int)]])
-    d = x0.size
-    X = np.tile(x0.astype(complex), (d, 1)) + 1j * step * np.eye(d)
-    J = _reduced_field(cf, chart, q0, X).imag.T / step
+    J = _chart_jacobian(cf, chart, y0, step)
     chart_names = tuple(names[i] for i in chart.iq) + tuple(names[n + i] for i in chart.iv)
     dependent = tuple(names[i] for i in chart.dq) + tuple(names[n + i] for i in chart.dv)
     keep, removed = _neutral_directions(J, chart_names, neutral)
@@ -462,6 +454,15 @@ def linearize(model, state, *, independent: Sequence[str] | None = None,
         raise InconsistentInitialDataError(
             f"steady: the coordinates {', '.join(not_cyclic)} move at the state but the dynamics "
             f"depends on them (or they are dependent), so the motion is not steady")
+    if moving:
+        change = _change_along_the_motion(cf, chart, y0, J, step)
+        if change > _INVARIANCE_TOL * max(1.0, float(np.abs(J).max(initial=0.0))):
+            raise InconsistentInitialDataError(
+                f"steady: the motion moves {', '.join(moving)} and the linearised dynamics "
+                f"changes along it (by {change:.3g} over the first half radian or unit), so the "
+                f"state matrix at this point does not describe its stability; linearize needs "
+                f"coordinates in which every moving one is cyclic (a rotation about the "
+                f"vertical that also turns the constraints is not)")
     A = J[np.ix_(keep, keep)]
     kept_names = [chart_names[i] for i in keep]
     if family and neutral is not False:
@@ -471,6 +472,27 @@ def linearize(model, state, *, independent: Sequence[str] | None = None,
                    f"float64, complex-step Jacobian (step {step:g}i, exact to rounding), "
                    f"LAPACK eigenvalues", chart_names, J, removed, dependent,
                    dict(zip(names, map(float, y0))), residuals, worst)
+
+
+def _chart_jacobian(cf, chart, y, step):
+    """The complex-step Jacobian of the chart's field at the state y."""
+    n = cf.n
+    x = np.concatenate([y[list(chart.iq)], y[n + np.array(chart.iv, dtype=int)]])
+    X = np.tile(x.astype(complex), (x.size, 1)) + 1j * step * np.eye(x.size)
+    return _reduced_field(cf, chart, y[:n], X).imag.T / step
+
+
+def _change_along_the_motion(cf, chart, y0, J, step) -> float:
+    """max |J(y(t)) - J(y0)| at y(t) = (q0 + t v0, v0), the steady motion itself, moved
+    until some coordinate has changed by 1/2. A steady motion whose moving coordinates
+    are cyclic has the same Jacobian all along; zero Jacobian columns at y0 alone do not
+    show that (the spinning Chaplygin sphere: the yaw column vanishes, but turning the
+    yaw turns the constraints' velocity block)."""
+    n = cf.n
+    v0 = y0[n:]
+    y1 = y0.astype(float).copy()
+    y1[:n] += 0.5 / float(np.abs(v0).max()) * v0
+    return float(np.abs(_chart_jacobian(cf, chart, y1, step) - J).max(initial=0.0))
 
 
 def _check_on_manifold(model, y0) -> dict:

@@ -105,3 +105,20 @@ def test_plot_needs_the_extra_or_writes_a_file(capsys, sleigh, tmp_path):
         assert status == 2 and "matplotlib" in err
     else:
         assert status == 0 and target.exists()
+
+
+def test_a_rotating_chart_is_refused(capsys, tmp_path):
+    """The Chaplygin sphere spinning in place about its vertical principal axis: every
+    acceleration is zero and the yaw column of the Jacobian vanishes, but turning the yaw
+    turns the rolling constraints' velocity block, so the state matrix at yaw = 0 does not
+    describe the motion (it changes by O(1) over half a radian). Refused, exit 2."""
+    text = (EXAMPLES / "chaplygin_sphere.toml").read_text()
+    steady = {s: "0.0" for s in ("yaw", "pitch", "roll", "x", "y", "pitch_dot", "roll_dot",
+                                 "x_dot", "y_dot")} | {"yaw_dot": '"w"'}
+    text = text.replace("I3 = 0.12 }", "I3 = 0.12, w = 2.0 }") + "\n[steady]\n" + "".join(
+        f"{k} = {v}\n" for k, v in steady.items())
+    path = tmp_path / "spinning_sphere.toml"
+    path.write_text(text)
+    status, _, err = run(capsys, "linearize", path)
+    assert status == 2
+    assert "moves yaw" in err and "changes along it" in err
