@@ -167,7 +167,11 @@ class Verdict:
 
     def to_dict(self) -> dict:
         """The verdict's fields as JSON-ready data."""
-        out = {("rank_c" if f == "rank_C" else f): getattr(self, f) for f in self.FIELDS}
+        # Counts get their own names: "stages" and "final_constraints" are lists in
+        # classify's JSON (one type per key across the output).
+        rename = {"rank_C": "rank_c", "stages": "stage_count",
+                  "final_constraints": "final_constraint_count"}
+        out = {rename.get(f, f): getattr(self, f) for f in self.FIELDS}
         out["redundant"] = list(self.redundant)
         out["note"] = self.note
         return out
