@@ -37,8 +37,21 @@ GALLERY = {"chaplygin_sphere", "differential_drive", "rolling_disc_3d", "whipple
 SYMBOLIC_EXAMPLES = [p for p in EXAMPLES if p.stem not in GALLERY]
 
 
+def _at_values(system):
+    """The system with its parameter values substituted as exact rationals: the points
+    route decides at the values, the symbolic route would treat them as indeterminates."""
+    vals = {p: sp.Rational(str(x)) for p, x in system.parameter_values.items()}
+    if not vals:
+        return system
+    return System(system.coordinates, system.lagrangian.xreplace(vals),
+                  constraints=[c.xreplace(vals) for c in system.constraints],
+                  holonomic=[g.xreplace(vals) for g in system.holonomic])
+
+
 def _symbolic_stage_one(system):
-    """rank of (Z_i(chi_j)) and whether stage 1 adds constraints, the old way."""
+    """rank of (Z_i(chi_j)) and whether stage 1 adds constraints, the old way, at the
+    parameter values."""
+    system = _at_values(system)
     geo = LagrangianGeometry(system)
     exprs = list(system.holonomic) + list(system.phi)
     labels = [f"c{i}" for i in range(len(exprs))]
