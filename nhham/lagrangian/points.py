@@ -31,7 +31,10 @@ a proof.
 
 from __future__ import annotations
 
+import functools
+
 import itertools
+import math
 import random
 from dataclasses import dataclass
 
@@ -52,6 +55,7 @@ __all__ = [
     "evaluate",
     "exact_rank",
     "exact_solve",
+    "maximal_minors",
     "rank_bound",
     "minor_degree",
     "solve_degrees",
@@ -473,6 +477,38 @@ def exact_solve(A, b):
     return X.to_list()
 
 
+def maximal_minors(M: DomainMatrix) -> list:
+    """Every maximal minor of an m x n DomainMatrix M (m <= n) over a field, in the order
+    of ``itertools.combinations(range(n), m)``.
+
+    One elimination instead of C(n, m) determinants: with P the pivot columns of M and
+    R = M[:, P]^{-1} M (so R[:, P] = I), det M[:, S] = det M[:, P] det R[:, S], and
+    det R[:, S] is, up to the sign of a generalised Laplace expansion along the unit
+    columns, the minor of R on the rows of P \\ S and the columns of S \\ P (at most
+    (n - m) x (n - m)).
+    """
+    m, n = M.shape
+    _, pivots = M.rref()
+    if len(pivots) < m:
+        return [M.domain.zero] * math.comb(n, m)
+    P = list(pivots)
+    B = M.extract(list(range(m)), P)
+    det_B = B.det()
+    R = B.inv() * M
+    row_of = {c: i for i, c in enumerate(P)}
+    out = []
+    for S in itertools.combinations(range(n), m):
+        unit = [j for j, c in enumerate(S) if c in row_of]
+        other = [S[j] for j, c in enumerate(S) if c not in row_of]
+        used = [row_of[S[j]] for j in unit]
+        rest = [i for i in range(m) if i not in set(used)]
+        sub = R.extract(rest, other).det() if other else M.domain.one
+        parity = sum(u + 1 for u in used) + sum(j + 1 for j in unit) + sum(
+            1 for a in range(len(used)) for b in range(a + 1, len(used)) if used[a] > used[b])
+        out.append(-det_B * sub if parity % 2 else det_B * sub)
+    return out
+
+
 def _ints_mod_p(rows):
     return [[ModP.lift(x).v for x in row] for row in rows]
 
@@ -680,7 +716,14 @@ def jacobian_row(expr, symbols) -> list:
     """[d expr / d s for s in symbols], differentiating only where s occurs."""
     expr = sp.sympify(expr)
     present = expr.free_symbols
-    return [expr.diff(s) if s in present else sp.S.Zero for s in symbols]
+    return [_derivative(expr, s) if s in present else sp.S.Zero for s in symbols]
+
+
+@functools.lru_cache(maxsize=8192)
+def _derivative(expr, s):
+    # A pure function of its (hashable, immutable) arguments: the analysis, the check
+    # at the parameter values and the classes differentiate the same rows again.
+    return expr.diff(s)
 
 
 def _exact_number(name, value):

@@ -22,6 +22,7 @@ from nhham.lagrangian.points import (
     evaluate,
     exact_rank,
     exact_solve,
+    maximal_minors,
     minor_degree,
 )
 
@@ -167,3 +168,33 @@ def test_parameter_values_are_taken_as_exact_decimals():
     m = sp.Symbol("m")
     sampler = PointSampler((q1,), (), (m,), {m: 0.1}, (), (), seed=1)
     assert sampler.point().env[m] == MPQ(1, 10)
+
+
+@pytest.mark.parametrize("seed", range(40))
+def test_maximal_minors_are_the_determinants(seed):
+    """One elimination gives every maximal minor: against C(n, m) determinants, over QQ
+    (rank-deficient matrices included) and over Q(a)."""
+    import itertools
+
+    from sympy import QQ
+    from sympy.polys.matrices import DomainMatrix
+
+    rng = random.Random(seed)
+    m = rng.randint(1, 5)
+    n = rng.randint(m, 8)
+    rank = m if seed % 4 else rng.randint(0, m)
+    basis = [[rng.randint(-3, 3) for _ in range(n)] for _ in range(max(rank, 1))]
+    rows = [[sum(rng.randint(-2, 2) * b[j] for b in basis) if rank else 0 for j in range(n)]
+            for _ in range(m)] if rank < m else [[rng.randint(-4, 4) for _ in range(n)]
+                                                for _ in range(m)]
+    M = DomainMatrix([[QQ(x) for x in r] for r in rows], (m, n), QQ)
+    direct = [M.extract(list(range(m)), list(S)).det()
+              for S in itertools.combinations(range(n), m)]
+    assert maximal_minors(M) == direct
+    a = sp.Symbol("a")
+    K = QQ.frac_field(a)
+    Ma = DomainMatrix([[K.convert(x + (a if (i + j) % 3 == 0 else 0)) for j, x in enumerate(r)]
+                       for i, r in enumerate(rows)], (m, n), K)
+    direct = [Ma.extract(list(range(m)), list(S)).det()
+              for S in itertools.combinations(range(n), m)]
+    assert maximal_minors(Ma) == direct
