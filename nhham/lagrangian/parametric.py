@@ -907,6 +907,10 @@ class _Data:
 
     def _bracket_minor(self, env0, K):
         mats = self._brackets(env0, K)
+        if "R" not in self._pivots and mats and mats[0].shape[0] and mats[0].det():
+            # Full rank at the first point (all second class, the usual case): the
+            # datum is det B itself, no elimination of a large rational matrix needed.
+            self._pivots["R"] = list(range(mats[0].shape[0]))
         if "R" not in self._pivots:
             ranks = [B.rank() for B in mats]
             r = max(ranks)
