@@ -105,13 +105,18 @@ def _with_case(out: CommandOutput, at) -> CommandOutput:
     """``out`` with the parameter case of ``at`` (None: no parameter has a value)."""
     import dataclasses
 
-    case, note = _parameter_case(at) if at is not None else (None, "")
-    out.result["parameter_case"] = case
-    if not note:
+    if at is None:
+        out.result["parameter_case"] = None
         return out
+    case, note = _parameter_case(at)
+    out.result["parameter_case"] = case
+    # Values near an exceptional set warn whether or not they fall in one.
+    warnings = list(out.warnings) + list(at.warnings)
+    if not note:
+        return dataclasses.replace(out, warnings=warnings)
     old = out.text
     text = (lambda: out.render_text() + note) if callable(old) else f"{old}{note}"
-    return dataclasses.replace(out, text=text, warnings=list(out.warnings) + list(at.warnings))
+    return dataclasses.replace(out, text=text, warnings=warnings)
 
 
 def _at_scene_values(args, steps, scene):
@@ -251,7 +256,9 @@ def cmd_derive(args, steps) -> CommandOutput:
         return _with_case(_derive_implicit(args, steps, scene, G, implicit, energy, analysis), at)
 
     def algorithm():
-        return analysis or analyze_constraints(system, precision=args.precision)
+        if analysis is not None:
+            return analysis
+        return analyze_constraints(system, precision=args.precision)
 
     out = _derive_closed_form(args, steps, scene, G, "lagrangian", algorithm)
     out.result.update(form="explicit", **implicit)

@@ -147,3 +147,11 @@ def test_derive_at_generic_values_is_the_generic_one(scenes):
     assert r["parameter_case"] is None and r["free_multiplier_symbols"] == []
     c = sp.sympify(r["constraint_matrix"][0][0]).subs({"a": 1, "b": sp.Rational(1, 2)})
     assert abs(float(c) + 0.75) < 1e-12
+
+
+@pytest.mark.parametrize("command", ["derive", "compare"])
+def test_derive_and_compare_warn_near_the_exceptional_set(scenes, command):
+    """b = 1 + 1e-10: generic (C = -(1 - b^2) != 0), but within 1e-8 of b = 1."""
+    rc, env, _ = run(command, scenes["near"], "--json")
+    assert rc == 0 and env["result"]["parameter_case"] is None
+    assert any("relative distance" in w and "C singular" in w for w in env["warnings"])
