@@ -32,7 +32,9 @@ import sympy as sp
 from sympy.physics import mechanics as me
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+sys.path.insert(0, str(Path(__file__).resolve().parent))
 
+from scene_output import write_scene  # noqa: E402
 from nhham.system.description import System  # noqa: E402
 from nhham.system.mechanics import from_mechanics  # noqa: E402
 from nhham.system.scene import dump_scene  # noqa: E402
@@ -107,10 +109,7 @@ def main(argv):
                "theta_dot": r * (1.5 * w - w) / (2 * b), "phiL_dot": w, "phiR_dot": 1.5 * w}
     text = HEADER + dump_scene(system, initial=initial, steady=STEADY,
                                simulate={"t_end": 10.0, "method": "DOP853", "rtol": 1e-10})
-    if target == "-":
-        sys.stdout.write(text)
-    else:
-        Path(target).write_text(text)
+    write_scene(text, target)
 
 
 if __name__ == "__main__":

@@ -26,7 +26,9 @@ import sympy as sp
 from sympy.physics import mechanics as me
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+sys.path.insert(0, str(Path(__file__).resolve().parent))
 
+from scene_output import write_scene  # noqa: E402
 from nhham.system.mechanics import from_mechanics  # noqa: E402
 from nhham.system.scene import dump_scene  # noqa: E402
 
@@ -103,10 +105,7 @@ def main(argv):
                "lean_dot": 0.2, "spin_dot": 6.0, "x_dot": values["r"] * 6.0, "y_dot": 0.0}
     text = HEADER + dump_scene(system, initial=initial, steady=STEADY,
                                simulate={"t_end": 10.0, "method": "DOP853", "rtol": 1e-10})
-    if target == "-":
-        sys.stdout.write(text)
-    else:
-        Path(target).write_text(text)
+    write_scene(text, target)
 
 
 if __name__ == "__main__":

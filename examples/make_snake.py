@@ -21,7 +21,9 @@ from pathlib import Path
 import sympy as sp
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+sys.path.insert(0, str(Path(__file__).resolve().parent))
 
+from scene_output import write_scene  # noqa: E402
 from nhham.system.models import snake  # noqa: E402
 
 SIMULATE = {"t_end": 10.0, "method": "DOP853", "rtol": 1e-10}
@@ -122,10 +124,8 @@ def main(argv=None):
     N = int(argv[0])
     text = scene_text(N)
     target = argv[1] if len(argv) == 2 else f"snake_{N}.toml"
-    if target == "-":
-        sys.stdout.write(text)
-    else:
-        Path(target).write_text(text, encoding="utf-8")
+    write_scene(text, target)
+    if target != "-":
         print(f"wrote {target}", file=sys.stderr)
     return 0
 

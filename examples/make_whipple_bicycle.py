@@ -52,7 +52,9 @@ import sympy as sp
 from sympy.physics import mechanics as me
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+sys.path.insert(0, str(Path(__file__).resolve().parent))
 
+from scene_output import write_scene  # noqa: E402
 from nhham.system.description import System, quadratic_parts  # noqa: E402
 from nhham.system.mechanics import from_mechanics  # noqa: E402
 from nhham.system.scene import dump_scene  # noqa: E402
@@ -239,10 +241,7 @@ def main(argv):
         system, initial=initial_state(), steady=STEADY,
         simulate={"t_end": 10.0, "method": "DOP853", "rtol": 1e-10},
         description="Whipple bicycle, Meijaard et al. (2007) benchmark; forward speed v")
-    if target == "-":
-        sys.stdout.write(text)
-    else:
-        Path(target).write_text(text)
+    write_scene(text, target)
 
 
 if __name__ == "__main__":
