@@ -32,7 +32,6 @@ a proof.
 from __future__ import annotations
 
 import functools
-
 import itertools
 import math
 import random
@@ -501,7 +500,8 @@ def maximal_minors(M: DomainMatrix) -> list:
         unit = [j for j, c in enumerate(S) if c in row_of]
         other = [S[j] for j, c in enumerate(S) if c not in row_of]
         used = [row_of[S[j]] for j in unit]
-        rest = [i for i in range(m) if i not in set(used)]
+        taken = set(used)
+        rest = [i for i in range(m) if i not in taken]
         sub = R.extract(rest, other).det() if other else M.domain.one
         parity = sum(u + 1 for u in used) + sum(j + 1 for j in unit) + sum(
             1 for a in range(len(used)) for b in range(a + 1, len(used)) if used[a] > used[b])
