@@ -32,7 +32,10 @@ rolling disc in 3-D (built from sympy.physics.mechanics bodies,
 memory of each process; beside them, in this process, sympy's
 ``LagrangesMethod.form_lagranges_equations`` on the same system
 (:func:`nhham.system.mechanics.to_lagranges_method`) and nhham's classify work
-(analysis, integrability, classes) for the ratio LM / nhham.
+(analysis, integrability, classes) for the ratio LM / nhham; and the same comparison
+as whole processes, a script that loads the scene and forms Lagrange's equations
+against the ``nhham classify`` command (both CPU s, start-up included: the
+``LM script / classify`` column).
 
 Usage::
 
@@ -258,6 +261,13 @@ def _lagranges(system, runs):
     return cpu
 
 
+LM_SCRIPT = ("import sys\n"
+             "from nhham.system.scene import load_scene\n"
+             "from nhham.system.mechanics import to_lagranges_method\n"
+             "to_lagranges_method(load_scene(sys.argv[1]).system).lm"
+             ".form_lagranges_equations()\n")
+
+
 def _nhham_classify_work(system, runs):
     from nhham.hamiltonian.classification import classify_constraints
 
@@ -276,22 +286,32 @@ def scaling(runs: int, timeout: float = 120.0):
           f"{os.cpu_count()} CPUs, load average {load:.1f}; whole commands, median of {runs} "
           f"runs: wall s / CPU s / peak MB; LM = LagrangesMethod.form_lagranges_equations "
           f"(CPU s, in process); nhham = analysis + integrability + classes (CPU s, in "
-          f"process)")
-    header = ["system"] + [f"nhham {c}" for c in COMMANDS] + ["LM", "nhham (in process)",
-                                                              "LM / nhham"]
+          f"process); LM script = a process loading the scene and forming Lagrange's "
+          f"equations (CPU s), against the classify command's CPU s")
+    header = ["system"] + [f"nhham {c}" for c in COMMANDS] + [
+        "LM", "nhham (in process)", "LM / nhham", "LM script", "LM script / classify"]
     print("| " + " | ".join(header) + " |")
     print("|" + "---|" * len(header))
     with tempfile.TemporaryDirectory() as tmp:
         for label, path, system in _scaling_systems(Path(tmp)):
-            cells = [label]
+            cells, timings = [label], {}
             for cmd, extra in COMMANDS.items():
-                res = _median_command([sys.executable, "-m", "nhham", cmd, str(path), "--json",
-                                       *extra], runs, timeout)
+                res = timings[cmd] = _median_command(
+                    [sys.executable, "-m", "nhham", cmd, str(path), "--json", *extra], runs,
+                    timeout)
                 cells.append("> %g s" % timeout if res is None else
                              f"{res[0]:.2f} / {res[1]:.2f} / {res[2]:.0f}")
+            classify = timings["classify"]
             lm = _lagranges(system, runs)
             work = _nhham_classify_work(system, runs)
-            cells += [f"{lm:.2f}", f"{work:.2f}", f"{lm / work:.1f}"]
+            # The same comparison as whole processes: a script that loads the scene and
+            # forms Lagrange's equations (imports included, as in the nhham command).
+            script = _median_command([sys.executable, "-c", LM_SCRIPT, str(path)], runs,
+                                     timeout)
+            cells += [f"{lm:.2f}", f"{work:.2f}", f"{lm / work:.1f}",
+                      "> %g s" % timeout if script is None else f"{script[1]:.2f}",
+                      "-" if script is None or classify is None else
+                      f"{script[1] / classify[1]:.1f}"]
             print("| " + " | ".join(cells) + " |", flush=True)
 
 

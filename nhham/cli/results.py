@@ -286,7 +286,8 @@ def compare_data(report, dirac=None) -> dict:
                        "exact": bool(c["exact"]),
                        "max_abs_difference": json_number(c["max_abs_difference"]),
                        "max_rel_difference": json_number(c["max_rel_difference"]),
-                       "samples": int(c["samples"]), "detail": str(c["detail"])})
+                       "samples": int(c["samples"]), "detail": str(c["detail"]),
+                       "method": str(c["method"])})
 
     def stages(rows):
         return [{"index": int(s["index"]), "constraint_count": int(s["constraints"]),

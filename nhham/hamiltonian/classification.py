@@ -29,6 +29,7 @@ taken over the second-class set, block by block
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Sequence
 
@@ -39,7 +40,7 @@ from nhham.settings import SEED
 from nhham.hamiltonian.brackets import DiracBracket, connected_blocks
 from nhham.errors import ComputationError, InputError
 from nhham.hamiltonian.side import HamiltonianSide, hamiltonian_side
-from nhham.hamiltonian.legendre import Backend, Lambdified
+from nhham.hamiltonian.legendre import Backend, Lambdified, ModularBackend
 from nhham.lagrangian.algebra import block_inverse, cancel
 from nhham.lagrangian.analysis import ConstraintAnalysis, analyze_constraints
 from nhham.lagrangian.points import (
@@ -496,10 +497,25 @@ def _bracket_at(env, W, Mx, Jq, Jv, solve=exact_solve):
 
 
 def _numerically_regular(side, precision, samples, seed, tol) -> bool:
-    """C^H has full rank m at every seeded point of M_1 (numeric layer)."""
+    """C^H has full rank m on M_1: proved at an exact point modulo p when M_1 has exact
+    points and L is quadratic in v (rank C^H can only drop under reduction mod p, so
+    full rank there is full generic rank); else at every seeded point (numeric layer)."""
     system = side.system
     if not system.m:
         return True
+    if precision is None and side.legendre.is_quadratic:
+        try:
+            sampler = PointSampler(system.coordinates, system.velocities, system.parameters,
+                                   dict(system.parameter_values), system.holonomic,
+                                   system.phi, seed, modular=True,
+                                   mu=[list(system.mu.row(i)) for i in range(system.m)])
+            be = ModularBackend()
+            for _ in range(3):
+                C = side.numeric.point_from_tq(be, sampler.point().env).C
+                if exact_rank([list(row) for row in C])[0] == system.m:
+                    return True
+        except (NotExact, ZeroDivisionError):
+            pass  # no exact points: decide at sampled points
     M1 = Submanifold(system, tuple(system.holonomic) + tuple(system.phi), precision=precision,
                      samples=samples, seed=seed, exact=False)
     be = Backend(precision)
@@ -797,7 +813,8 @@ class DiracProjectedReport:
     decisions : tuple of Decision
         Per component of the difference: does it vanish on M_f.
     max_abs_difference : float
-        Largest |X_D - X| at the seeded sample points of M_f.
+        Largest |X_D - X| at the seeded sample points of M_f (nan when compared
+        exactly modulo p at exact points: F_p has no absolute value).
     samples : int
     notes : tuple of str
         Caveats (first-class constraints make the Dirac flow a gauge family).
@@ -874,6 +891,12 @@ def dirac_vs_projected(system, *, precision=None, samples=6, seed=SEED,
     if classes is None:
         classes = classify_constraints(side, precision=precision, samples=samples, seed=seed,
                                        method=method, tol=tol)
+    if classes.method == "exact at points" and precision is None \
+            and side.legendre.is_quadratic:
+        try:
+            return _dirac_vs_projected_at_points(side, classes, samples, seed)
+        except NotExact:
+            pass  # no exact points after all: sampled
     if classes.method != "exact":
         return _dirac_vs_projected_sampled(side, classes, precision, samples, seed, tol)
     if not side.regular:
@@ -900,6 +923,64 @@ def _gauge_note(classes) -> tuple:
             f"compared is {{z, H}}_D without such terms",)
 
 
+def _dirac_minus_projected(be, num, hp, chis):
+    """X_D - X at one point of the numeric layer (``be`` arithmetic), or None where C^H
+    is singular (outside the domain of X).
+
+    X_D = X_H - X_{chi_a} (B_RR^{-1})^{ab} {chi_b, H} with X_chi = (chi_p, -chi_q),
+    X = X_H + lambda^j Z_j^H.
+    """
+    try:
+        X, _ = num.projected_field(be, hp)
+    except (np.linalg.LinAlgError, ZeroDivisionError):
+        return None
+    XD = hp.X_H.copy()
+    if chis:
+        _, Gq, Gp = num.gradients(be, hp, chis)
+        B = Gq @ Gp.T - Gp @ Gq.T
+        y = be.solve(B, Gq @ hp.Hp - Gp @ hp.Hq)
+        XD = XD - np.concatenate([Gp.T @ y, -(Gq.T @ y)])
+    return XD, X
+
+
+def _dirac_vs_projected_at_points(side, classes, samples, seed):
+    """X_D - X exactly modulo p at seeded points of M_f = M_1 (no symbolic inverse, no
+    compilation). A difference nonzero at a point proves X_D != X; zero at every
+    point is the probabilistic verdict "equal" (a nonzero rational function of the
+    drawn values vanishes at a random point of F_p with probability at most its
+    degree over p = 2^61 - 1)."""
+    system = side.system
+    be = ModularBackend()
+    R = list(classes.second_class_indices)
+    chis = [classes.constraints_TQ[a] for a in R]
+    sampler = PointSampler(system.coordinates, system.velocities, system.parameters,
+                           dict(system.parameter_values), system.holonomic, system.phi,
+                           seed, mu=[list(system.mu.row(i)) for i in range(system.m)],
+                           modular=True)
+    num = side.numeric
+    used = differ = 0
+    for _ in range(2 * samples):
+        if used == samples:
+            break
+        got = _dirac_minus_projected(be, num, num.point_from_tq(be, sampler.point().env), chis)
+        if got is None:
+            continue
+        used += 1
+        differ += any(a != b for a, b in zip(*got))
+    if not used:
+        raise ComputationError("dirac_vs_projected: C^H is singular at every exact point")
+    equal = not differ
+    detail = (f"X_D - X is 0 at each of {used} exact points of M_f (arithmetic modulo "
+              f"p = 2^61 - 1)" if equal else
+              f"X_D - X is nonzero at {differ} of {used} exact points of M_f (arithmetic "
+              f"modulo p = 2^61 - 1; a proof)")
+    decision = Decision(equal, "exact at points", detail, precision=be.label, samples=used)
+    return DiracProjectedReport(
+        equal=equal, difference=None, dirac_field=None, projected_field=None,
+        decisions=(decision,), max_abs_difference=math.nan, samples=used,
+        notes=_gauge_note(classes), classes=classes)
+
+
 def _dirac_vs_projected_sampled(side, classes, precision, samples, seed, tol):
     """X_D - X at seeded points of M_f from the numeric layer (no symbolic inverse).
 
@@ -918,18 +999,10 @@ def _dirac_vs_projected_sampled(side, classes, precision, samples, seed, tol):
     worst, worst_rel, used = 0.0, 0.0, 0
     with be.context():
         for x in points:
-            hp = num.point_from_tq(be, x)
-            try:
-                X, _ = num.projected_field(be, hp)
-            except (np.linalg.LinAlgError, ZeroDivisionError):
+            got = _dirac_minus_projected(be, num, num.point_from_tq(be, x), chis)
+            if got is None:
                 continue  # C singular at this point: outside the domain of X
-            XD = hp.X_H.copy()
-            if R:
-                _, Gq, Gp = num.gradients(be, hp, chis)
-                B = Gq @ Gp.T - Gp @ Gq.T
-                s_H = Gq @ hp.Hp - Gp @ hp.Hq
-                y = be.solve(B, s_H)
-                XD = XD - np.concatenate([Gp.T @ y, -(Gq.T @ y)])
+            XD, X = got
             d = float(be.norm(XD - X))
             scale = max(1.0, float(be.norm(X)), float(be.norm(XD)))
             worst, worst_rel, used = max(worst, d), max(worst_rel, d / scale), used + 1

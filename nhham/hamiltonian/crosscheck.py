@@ -17,10 +17,12 @@ Through the Legendre map (``DESIGN.md`` §2) the two descriptions must agree:
 Each check is decided exactly where the difference cancels (or reduces to
 zero on M_f), and is in every case also evaluated at seeded points of M_f,
 which gives the maximum absolute and relative differences. With
-``method="sampled"`` nothing symbolic beyond derivatives is formed: both sides
-are evaluated numerically at the points (the Hamiltonian side through its
-numeric layer, v = Leg^{-1}(q, p) solved numerically), which is what large
-systems such as the N-link snake need.
+``method="points"`` or ``"sampled"`` nothing symbolic beyond derivatives is
+formed: both sides are evaluated at the points (the Hamiltonian side through its
+numeric layer, v = Leg^{-1}(q, p) solved at the point), which is what large
+systems such as the N-link snake need; ``"points"`` does it in exact rational
+arithmetic at exact points of M_1 (:mod:`nhham.lagrangian.points`), so a
+difference is exactly zero or a disagreement, ``"sampled"`` in floating point.
 
 Agreement of a sampled quantity means |a - b| <= tol * max(1, |a|, |b|)
 (infinity norms over the components) at every point; the reported relative
@@ -31,6 +33,8 @@ dynamics) are skipped and counted in the check's detail.
 
 from __future__ import annotations
 
+import dataclasses
+import math
 import time
 from dataclasses import dataclass
 from functools import cached_property
@@ -41,12 +45,18 @@ import sympy as sp
 from nhham.settings import SEED
 from nhham.errors import InputError
 from nhham.hamiltonian.side import HamiltonianSide, hamiltonian_side
-from nhham.hamiltonian.legendre import Backend, Lambdified, canonical_form_matrix
+from nhham.hamiltonian.legendre import Backend, ModularBackend, Lambdified, canonical_form_matrix
 from nhham.lagrangian.algebra import cancel
 from nhham.lagrangian.geometry import LagrangianGeometry
+from nhham.lagrangian.points import NotExact, PointSampler, exact_rank
+from nhham.system.expressions import derivative
 from nhham.lagrangian.submanifold import Submanifold
 
-__all__ = ["CheckResult", "CrossCheckReport", "cross_check"]
+__all__ = ["CheckResult", "CrossCheckReport", "cross_check", "METHODS"]
+
+# "exact": symbolic differences; "points": both sides in exact arithmetic modulo p at
+# seeded exact points of M_1; "sampled": both sides in floating point at sampled points.
+METHODS = ("auto", "exact", "points", "sampled")
 
 # ------------------------------------------------------------------ results
 @dataclass(frozen=True)
@@ -66,6 +76,10 @@ class CheckResult:
     detail : str
     decisions : tuple of Decision
         Decisions on M_f behind ``exact`` (when a difference had to be reduced).
+    method : str
+        How the numbers were compared: ``"exact"`` (symbolic), ``"points"``
+        (exact arithmetic modulo p at exact points: each difference is exactly 0,
+        which is a proof at those points, not of the identity) or ``"sampled"``.
     """
 
     name: str
@@ -76,12 +90,18 @@ class CheckResult:
     samples: int = 0
     detail: str = ""
     decisions: tuple = ()
+    method: str = ""
+
+    @property
+    def how(self) -> str:
+        """``method``, defaulting to "exact" or "sampled" from ``exact``."""
+        return self.method or ("exact" if self.exact else "sampled")
 
     def to_dict(self) -> dict:
         return {"agree": self.agree, "exact": self.exact,
                 "max_abs_difference": self.max_abs_difference,
                 "max_rel_difference": self.max_rel_difference, "samples": self.samples,
-                "detail": self.detail}
+                "detail": self.detail, "method": self.how}
 
 
 @dataclass(frozen=True)
@@ -101,9 +121,9 @@ class CrossCheckReport:
     tolerance : float
         Relative tolerance of sampled agreement.
     precision : str
-        ``"float64"`` or ``"mpmath:<digits>"``.
+        ``"float64"``, ``"mpmath:<digits>"`` or ``"exact rationals"``.
     method : str
-        ``"exact"`` or ``"sampled"``.
+        ``"exact"``, ``"points"`` or ``"sampled"``.
     checks : tuple of CheckResult
     lagrangian_stages, hamiltonian_stages : tuple of dict
         Per stage: index, number of constraints, rank, augmented rank, labels.
@@ -146,7 +166,7 @@ class CrossCheckReport:
         lines = [head]
         for c in self.checks:
             lines.append(f"  {c.name}: {'agrees' if c.agree else 'DIFFERS'} "
-                         f"({'exact' if c.exact else 'sampled'}): {c.detail}")
+                         f"({c.how}): {c.detail}")
         return "\n".join(lines)
 
     def to_dict(self) -> dict:
@@ -200,7 +220,7 @@ class _Sampler:
             ranks = []
             for pt in pts:
                 try:
-                    ranks.append(_numeric_rank(_lag_C(lag, be, self.values(pt)), self.tol))
+                    ranks.append(self.rank(_lag_C(lag, be, self.values(pt))))
                 except (np.linalg.LinAlgError, ZeroDivisionError, ValueError):
                     ranks.append(-1)
         top = max(ranks)
@@ -210,6 +230,9 @@ class _Sampler:
 
     def values(self, pt) -> list:
         return [self.backend.scalar(pt[s]) for s in self.args]
+
+    def rank(self, C) -> int:
+        return _numeric_rank(C, self.tol)
 
     def compare(self, pairs) -> tuple[float, float, bool]:
         """(max abs, max rel, agree) over an iterable of (a, b) numeric arrays.
@@ -247,6 +270,43 @@ class _Sampler:
         """Text about skipped points of the last comparison."""
         k = getattr(self, "skipped", 0)
         return f" ({k} sample point(s) skipped: not finite there)" if k else ""
+
+
+class _ExactSampler(_Sampler):
+    """Seeded points of M_1 over F_p (:class:`~nhham.lagrangian.points.PointSampler`
+    with ``modular=True``): every quantity is computed exactly modulo p, so a
+    difference is zero or it is not."""
+
+    def __init__(self, system, samples, seed):
+        self.system = system
+        self.backend = ModularBackend()
+        self.tol = 0.0
+        self.dropped = 0
+        self.args = (tuple(system.coordinates) + tuple(system.velocities)
+                     + tuple(system.parameters))
+        self.count = int(samples)
+        self.sampler = PointSampler(
+            system.coordinates, system.velocities, system.parameters,
+            dict(system.parameter_values), system.holonomic, system.phi, seed,
+            mu=[list(system.mu.row(i)) for i in range(system.m)], modular=True)
+
+    @cached_property
+    def all_points(self):
+        return [self.sampler.point().env for _ in range(self.count)]
+
+    def values(self, pt) -> list:
+        return [pt[s] for s in self.args]
+
+    def rank(self, C) -> int:
+        return exact_rank([list(row) for row in C])[0] if C.size else 0
+
+    def compare(self, pairs) -> tuple[float, float, bool]:
+        """(0, 0, True) when every difference is 0 modulo p; (nan, nan, False) otherwise
+        (F_p has no absolute value: a nonzero difference has no size)."""
+        self.skipped = 0
+        ok = all(all(x == y for x, y in zip(np.asarray(a).ravel(), np.asarray(b).ravel()))
+                 for a, b in pairs)
+        return (0.0, 0.0, True) if ok else (math.nan, math.nan, False)
 
 
 class _NumericLagrangian:
@@ -291,8 +351,8 @@ class _NumericLagrangian:
             q, v = self.system.coordinates, self.system.velocities
             k, n = len(exprs), self.n
             self._grads[key] = (
-                Lambdified(self.args, [sp.diff(e, s) for e in exprs for s in q], (k, n)),
-                Lambdified(self.args, [sp.diff(e, s) for e in exprs for s in v], (k, n)))
+                Lambdified(self.args, [derivative(e, s) for e in exprs for s in q], (k, n)),
+                Lambdified(self.args, [derivative(e, s) for e in exprs for s in v], (k, n)))
         gq, gv = self._grads[key]
         return gq(be, vals), gv(be, vals)
 
@@ -323,15 +383,18 @@ def cross_check(system, precision: int | None = None, samples: int = 6, seed: in
     tol : float, optional
         Relative tolerance of sampled agreement (default 1e-9 in float64,
         10**(3 - digits) in mpmath).
-    method : {"auto", "exact", "sampled"}
+    method : {"auto", "exact", "points", "sampled"}
         ``"exact"``: symbolic differences (cancelled, or reduced on M_f) plus
-        the sampled numbers; ``"sampled"``: numbers only, from derivatives and
-        numeric solves (no symbolic inverse of W, no symbolic algorithm run);
-        when C is singular at the samples the stages need the symbolic
-        algorithm and the check falls back to ``"exact"`` (the report's
-        ``method`` says so); ``"auto"``: exact when
+        the sampled numbers; ``"points"``: both sides evaluated in exact
+        rational arithmetic at ``samples`` seeded exact points of M_1 (no
+        symbolic inverse, no compilation; every difference must be exactly 0,
+        the tolerance is 0); ``"sampled"``: the same computations in floating
+        point at sampled points. When C is singular at the points the stages
+        need the symbolic algorithm and the check falls back to ``"exact"``
+        (the report's ``method`` says so). ``"auto"``: exact when
         :attr:`HamiltonianSide.symbolic_affordable` (exact Legendre inverse and W
-        diagonal, q-independent or n <= 3), sampled otherwise.
+        diagonal, q-independent or n <= 3), else points when L is quadratic in
+        v, ``precision`` is None and M_1 has exact points, else sampled.
     max_stages : int, optional
         Bound of the constraint algorithm (default 2n).
     side : HamiltonianSide, optional
@@ -342,24 +405,35 @@ def cross_check(system, precision: int | None = None, samples: int = 6, seed: in
     -------
     CrossCheckReport
     """
-    if method not in ("auto", "exact", "sampled"):
-        raise InputError(f"cross_check: method must be 'auto', 'exact' or 'sampled', got "
-                         f"{method!r}")
+    if method not in METHODS:
+        raise InputError(f"cross_check: method must be one of {', '.join(map(repr, METHODS))}, "
+                         f"got {method!r}")
     start = time.perf_counter()
-    be = Backend(precision)
-    tol = be.default_tol() if tol is None else float(tol)
     if side is None:
         side = hamiltonian_side(system, precision=precision, samples=samples, seed=seed)
+    sampler = None
     if method == "auto":
         method = "exact" if side.symbolic_affordable else "sampled"
+        if method == "sampled" and precision is None:
+            sampler = _exact_sampler(system, side, samples, seed)
+            method = "points" if sampler is not None else "sampled"
+    elif method == "points":
+        sampler = _exact_sampler(system, side, samples, seed, required=True)
+    if method != "exact" and sampler is None:
+        sampler = _Sampler(system, tuple(system.holonomic) + tuple(system.phi), precision,
+                           samples, seed, tol if tol is not None else Backend(precision)
+                           .default_tol(), exact=False)
+    be = sampler.backend if sampler is not None else Backend(precision)
+    tol = be.default_tol() if tol is None or method == "points" else float(tol)
     if method == "exact":
         checks, stages_L, stages_H, statuses, (npts, skipped) = _exact(
             system, side, precision, samples, seed, tol, max_stages)
     else:
-        got = _sampled(system, side, precision, samples, seed, tol)
+        got = _sampled(system, side, sampler)
         if got is None:
             # C is singular at the samples: stages need the symbolic algorithm.
-            method = "exact"
+            method, be = "exact", Backend(precision)
+            tol = be.default_tol()
             got = _exact(system, side, precision, samples, seed, tol, max_stages)
         checks, stages_L, stages_H, statuses, (npts, skipped) = got
     return CrossCheckReport(
@@ -670,10 +744,31 @@ def _check_stages(system, side, analysis, run_H) -> CheckResult:
 
 
 # ---------------------------------------------------------------- sampled
-def _sampled(system, side: HamiltonianSide, precision, samples, seed, tol):
-    """Numeric checks at points of M_1 for a regular system; None when C is singular."""
+def _exact_sampler(system, side, samples, seed, required=False):
+    """An :class:`_ExactSampler` when both sides can be evaluated exactly at exact points
+    of M_1 (L quadratic in v, so Leg^-1 is one linear solve; M_1 with exact points),
+    else None (or an error naming why, when ``required``)."""
+    why = None
+    if not side.legendre.is_quadratic:
+        why = "L is not quadratic in the velocities (Leg^-1 is solved numerically)"
+    else:
+        try:
+            sampler = _ExactSampler(system, samples, seed)
+            sampler.points  # noqa: B018 - draws the points, or raises NotExact
+            return sampler
+        except (NotExact, ZeroDivisionError) as exc:
+            why = f"no exact points of M_1 ({exc})"
+    if required:
+        raise InputError(f"cross_check: method 'points' is not available: {why}")
+    return None
+
+
+def _sampled(system, side: HamiltonianSide, sampler):
+    """Checks at points of M_1 for a regular system, in floating point or (an
+    :class:`_ExactSampler`) exactly; None when C is singular there."""
     primary = tuple(system.holonomic) + tuple(system.phi)
-    sampler = _Sampler(system, primary, precision, samples, seed, tol, exact=False)
+    exactly = isinstance(sampler, _ExactSampler)
+    how = "exact solves modulo p" if exactly else "numeric solves"
     be = sampler.backend
     lag = _NumericLagrangian(system, sampler.args)
     num = side.numeric
@@ -685,8 +780,8 @@ def _sampled(system, side: HamiltonianSide, precision, samples, seed, tol):
             vals = sampler.values(pt)
             hp = num.point_from_tq(be, pt)
             inv_pairs.append((hp.v, np.array(vals[system.n:2 * system.n])))
-            ranks_L.append(_numeric_rank(_lag_C(lag, be, vals), tol))
-            ranks_H.append(_numeric_rank(hp.C, tol))
+            ranks_L.append(sampler.rank(_lag_C(lag, be, vals)))
+            ranks_H.append(sampler.rank(hp.C))
             if ranks_L[-1] < m or ranks_H[-1] < m:
                 continue
             fL, lamL, _ = lag.projected(be, vals)
@@ -714,10 +809,10 @@ def _sampled(system, side: HamiltonianSide, precision, samples, seed, tol):
                 if same else f"numeric ranks differ: TQ {ranks_L}, T*Q {ranks_H}")))
     ab, rel, ok = sampler.compare(inv_pairs)
     checks.append(CheckResult("legendre inverse", ok, False, ab, rel, len(inv_pairs),
-                              "v -> p = dL/dv -> Leg^-1(q, p) (numeric) against v"))
+                              f"v -> p = dL/dv -> Leg^-1(q, p) ({how}) against v"))
     ab, rel, ok = sampler.compare(field_pairs)
     checks.append(CheckResult("field", ok, False, ab, rel, len(field_pairs),
-                              "Leg_*(P(xi_L)) against X o Leg, both by numeric solves" + skip))
+                              f"Leg_*(P(xi_L)) against X o Leg, both by {how}" + skip))
     ab, rel, ok = sampler.compare(lam_pairs)
     checks.append(CheckResult("multipliers", ok, False, ab, rel, len(lam_pairs),
                               "lambda^L against lambda^H o Leg"))
@@ -726,7 +821,9 @@ def _sampled(system, side: HamiltonianSide, precision, samples, seed, tol):
     checks.append(CheckResult(
         "Poisson map", ok, False, ab, rel, len(br_pairs),
         f"{{f, g}} o Leg against {{Leg^* f, Leg^* g}}_L for the {len(primary)} constraint "
-        f"functions, numerically"))
+        f"functions, by {how}"))
+    if exactly:
+        checks = [dataclasses.replace(c, method="points") for c in checks]
     stages = (stage,)
     return checks, stages, stages, ("determined", "determined"), (len(sampler.points),
                                                                   sampler.dropped)

@@ -24,6 +24,7 @@ the Hamiltonian side, the classification and the cross-check.
 
 from __future__ import annotations
 
+import contextlib
 from functools import cached_property
 from typing import Sequence
 
@@ -35,6 +36,8 @@ from nhham.system.evaluation import numeric_function
 from nhham.settings import PARAMETER_BOX, SEED, Precision
 from nhham.errors import ComputationError
 from nhham.lagrangian.algebra import cancel
+from nhham.lagrangian.geometry import LagrangianGeometry
+from nhham.lagrangian.points import ModP, evaluate, exact_solve
 from nhham.system.description import System
 from nhham.system.naming import momentum_symbol
 
@@ -106,10 +109,14 @@ class LegendreMap:
 
     # ------------------------------------------------------------ the map
     @cached_property
+    def _geometry(self):
+        # The fibre derivatives have one home, with its fast path for L quadratic in v.
+        return LagrangianGeometry(self.system)
+
+    @cached_property
     def momenta(self) -> sp.Matrix:
         """p_A = dL/dv^A as functions of (q, v), shape (n, 1)."""
-        L = self.system.lagrangian
-        return sp.Matrix([sp.diff(L, v) for v in self.velocities])
+        return self._geometry.momenta
 
     @cached_property
     def hessian(self) -> sp.Matrix:
@@ -119,7 +126,7 @@ class LegendreMap:
     @cached_property
     def mixed_hessian(self) -> sp.Matrix:
         """M_AB = d p_A / d q^B, shape (n, n)."""
-        return self.momenta.jacobian(self.coordinates)
+        return self._geometry.mixed_hessian
 
     @cached_property
     def jacobian(self) -> sp.Matrix:
@@ -434,6 +441,64 @@ class Backend:
         return _object_solve(A, B)
 
 
+class ModularBackend(Backend):
+    """Exact arithmetic in F_p (p = 2^61 - 1) at the modular points of
+    :class:`~nhham.lagrangian.points.PointSampler` (``modular=True``).
+
+    Arrays are ``object`` arrays of :class:`~nhham.lagrangian.points.ModP`. A
+    coordinate's value is an :class:`~nhham.lagrangian.points.Angle` (its sine and
+    cosine exact), so coordinate values are only handed to :class:`Lambdified`, never
+    computed with. Two quantities are equal or they are not: the tolerance is 0, and
+    the "size" of a difference is 0 or 1 (F_p has no absolute value). Fixed-size
+    residues keep this fast where exact rationals at random points grow large.
+    """
+
+    def __init__(self):
+        self.precision = "modular"
+        self.module = "modular"
+
+    @property
+    def label(self) -> str:
+        return "exact mod p = 2^61 - 1"
+
+    def context(self):
+        return contextlib.nullcontext()
+
+    def default_tol(self) -> float:
+        return 0.0
+
+    def scalar(self, x):
+        return ModP.lift(x)
+
+    def vector(self, xs) -> np.ndarray:
+        return np.array(_flatten(xs), dtype=object)
+
+    def matrix(self, rows, shape=None) -> np.ndarray:
+        out = np.array([[ModP.lift(x) for x in r] for r in rows], dtype=object) \
+            if len(rows) else np.zeros((0, 0), dtype=object)
+        return out.reshape(shape) if shape is not None else out
+
+    def zeros(self, *shape) -> np.ndarray:
+        out = np.empty(shape, dtype=object)
+        out.fill(ModP(0))
+        return out
+
+    def norm(self, x):
+        return 1.0 if any(e != 0 for e in x.ravel()) else 0.0
+
+    def solve(self, A: np.ndarray, B: np.ndarray) -> np.ndarray:
+        """A^{-1} B over F_p; ZeroDivisionError when A is singular modulo p."""
+        n = A.shape[0]
+        vec = B.ndim == 1
+        rhs = B.reshape(n, 1) if vec else B
+        if rhs.shape[1] == 0:
+            return np.empty(B.shape, dtype=object)
+        X = exact_solve([[ModP.lift(x) for x in row] for row in A],
+                        [[ModP.lift(x) for x in row] for row in rhs])
+        out = np.array(X, dtype=object).reshape(n, rhs.shape[1])
+        return out[:, 0] if vec else out
+
+
 def _flatten(xs):
     if isinstance(xs, mpmath.matrix):
         return [xs[i, j] for i in range(xs.rows) for j in range(xs.cols)]
@@ -487,6 +552,10 @@ class Lambdified:
         self._compiled = {}
 
     def __call__(self, backend: Backend, values: Sequence) -> np.ndarray:
+        if backend.module == "modular":
+            # Values at an exact point: no compilation, sin/cos of Angles exact.
+            out = [ModP.lift(x) for x in evaluate(self.exprs, dict(zip(self.args, values)), {})]
+            return np.array(out, dtype=object).reshape(self.shape)
         fn = self._compiled.get(backend.module)
         if fn is None:
             fn = numeric_function(self.args, self.exprs, backend.precision,

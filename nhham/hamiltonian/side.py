@@ -39,6 +39,7 @@ from nhham.hamiltonian.legendre import Backend, Lambdified, LegendreMap, canonic
 from nhham.lagrangian.algebra import cancel, solve_linear
 from nhham.lagrangian.submanifold import Decision, Submanifold
 from nhham.system.description import System
+from nhham.system.expressions import derivative
 
 __all__ = [
     "HamiltonianSide",
@@ -530,8 +531,8 @@ class TransportedFunctions:
         self.exprs = exprs
         k = len(exprs)
         self._val = Lambdified(args, list(exprs), (k,))
-        self._dq = Lambdified(args, [sp.diff(e, s) for e in exprs for s in q], (k, n))
-        self._dv = Lambdified(args, [sp.diff(e, s) for e in exprs for s in v], (k, n))
+        self._dq = Lambdified(args, [derivative(e, s) for e in exprs for s in q], (k, n))
+        self._dv = Lambdified(args, [derivative(e, s) for e in exprs for s in v], (k, n))
 
     def gradients(self, backend: Backend, vals, W, M):
         """(values (k,), d/dq (k, n), d/dp (k, n)) at (q, v) with W, M given there."""

@@ -50,18 +50,23 @@ from types import MappingProxyType
 from typing import Callable, Mapping, Sequence
 
 import sympy as sp
+from mpmath.libmp import from_rational
 from sympy import QQ
 from sympy.external.gmpy import MPQ
+from sympy.polys.domains import GF, RealField
 from sympy.polys.matrices import DomainMatrix
 
 from nhham.errors import InputError, NhhamError, SingularLagrangianError
 from nhham.lagrangian.analysis import ConstraintAnalysis, analyze_constraints
 from nhham.lagrangian.points import (
+    PRIME,
     Angle,
     NotExact,
     eliminate_coordinates,
     evaluate,
     jacobian_row,
+    field_det,
+    field_solve,
     maximal_minors,
 )
 from nhham.lagrangian.submanifold import Submanifold
@@ -96,6 +101,11 @@ DRAW_BITS = 16
 # Plain classification names the condition its values satisfy (symbolically) up to this
 # n + m; beyond, the parameters involved are substituted by their values.
 SYMBOLIC_VALUES_SIZE = 10
+# Whether a datum vanishes at the values is decided modulo p first (nonzero there is a
+# proof); its nearness to vanishing is estimated at moved values in 200-bit floating
+# point, where a determinant's rounding error is far below its change over 1e-4.
+MODULAR = GF(PRIME)
+SHIFT_FIELD = RealField(200)
 # Beyond this many maximal minors of mu the redundancy data is not computed (noted).
 MAX_MINORS = 120
 
@@ -757,12 +767,21 @@ class _Data:
             self.points = saved
 
     def _pts(self, eqs, env0, K, tag):
-        sampler = _Sampler(self.system, eqs, env0, K, random.Random(f"{self.seed}:{tag}"))
+        # The points stay exact when the data are evaluated in another field.
+        exact = K if K.is_QQ or not (K.is_RealField or K.is_FiniteField) else QQ
+        sampler = _Sampler(self.system, eqs, env0, exact, random.Random(f"{self.seed}:{tag}"))
         return [sampler.point() for _ in range(self.points)]
 
     @staticmethod
     def _val(K, x):
-        return K.convert(x.r if isinstance(x, Angle) else x)
+        x = x.r if isinstance(x, Angle) else x
+        if K.is_FiniteField or K.is_RealField:
+            q = MPQ(x)  # ZeroDivisionError when p divides the denominator
+            if K.is_RealField:  # rounded once, directly (K.convert goes through sympy)
+                return K.dtype(from_rational(int(q.numerator), int(q.denominator),
+                                             K.precision, "n"))
+            return K(int(q.numerator)) / K(int(q.denominator))
+        return K.convert(x)
 
     def _matrix(self, K, rows, env, cache):
         vals = [[self._val(K, x) for x in evaluate(r, env, cache)] for r in rows]
@@ -779,7 +798,7 @@ class _Data:
         out = []
         m1 = stages[0].constraints
         out.append(("the Lagrangian is singular (det W = 0)", lambda env0, K: [
-            self._matrix(K, self.W, env, {}).det() for env in self._pts(m1, env0, K, 1)]))
+            field_det(self._matrix(K, self.W, env, {})) for env in self._pts(m1, env0, K, 1)]))
         if system.m and math.comb(system.n, system.m) <= MAX_MINORS:
             out.append(("the constraint one-forms become dependent (a constraint is "
                         "redundant)", lambda env0, K: self._mu_minors(m1, env0, K)))
@@ -802,7 +821,11 @@ class _Data:
         rows = [list(system.mu.row(i)) for i in range(m)]
         vals = []
         for env in self._pts(eqs, env0, K, 1):
-            vals += maximal_minors(self._matrix(K, rows, env, {}))
+            M = self._matrix(K, rows, env, {})
+            # Floating point reuses the exact choice of pivot columns.
+            vals += maximal_minors(M, self._pivots.get("mu") if K.is_RealField else None)
+            if not K.is_RealField:
+                self._pivots["mu"] = list(M.rref()[1])
         return vals
 
     def _stage_items(self, stage):
@@ -826,7 +849,7 @@ class _Data:
                     JJ = self._matrix(K, Jv, env, cache)
                     top = W.hstack(MI.transpose())
                     bottom = JJ.hstack(DomainMatrix.zeros((r, r), K))
-                    vals.append(top.vstack(bottom).det())
+                    vals.append(field_det(top.vstack(bottom)))
                 return vals
 
             out.append((f"the rank of (Z_i(chi_j)) on M_{k} drops below {r}"
@@ -851,12 +874,16 @@ class _Data:
         for env in self._pts(eqs, env0, K, 1):
             cache = {}
             M = self._matrix(K, rows, env, cache)
-            _, dep = M.rref()
+            if "dep" not in self._pivots or not K.is_RealField:
+                # Floating point reuses the exact choice of the kernel basis (the
+                # values depend on it) instead of deciding pivots on rounded numbers.
+                self._pivots["dep"] = list(M.rref()[1])
+            dep = self._pivots["dep"]
             if len(dep) < m:
                 continue
             free = [j for j in range(n) if j not in dep]
             block = M.extract(list(range(m)), list(dep))
-            sol = block.lu_solve(-M.extract(list(range(m)), free)).to_list()
+            sol = field_solve(block, -M.extract(list(range(m)), free)).to_list()
             basis = []
             for a, j in enumerate(free):
                 col = [K.zero] * n
@@ -888,7 +915,7 @@ class _Data:
             cache = {}
             W = self._matrix(K, self.W, env, cache)
             M = self._matrix(K, Mx, env, cache)
-            U = W.lu_solve(self._matrix(K, Jv, env, cache).transpose())
+            U = field_solve(W, self._matrix(K, Jv, env, cache).transpose())
             JU = self._matrix(K, Jq, env, cache) * U
             mats.append(JU - JU.transpose() - U.transpose() * (M - M.transpose()) * U)
         return mats
@@ -900,6 +927,17 @@ class _Data:
         if not self.analysis.final_constraints:
             return 0
         try:
+            if K.is_QQ:
+                # Rank modulo p at the first point is a lower bound of the rank over Q
+                # at every point of the datum: full there, it is the answer.
+                k = len(self.analysis.final_constraints)
+                try:
+                    with self._first_point_only():
+                        B, = self._brackets(env0, MODULAR, count=1)
+                    if B.rank() == k:
+                        return k
+                except ZeroDivisionError:
+                    pass
             return max(B.rank() for B in self._brackets(env0, K))
         except (NotExact, ZeroDivisionError) as exc:
             self.notes.append(f"bracket matrix on M_f not evaluated exactly ({exc})")
@@ -919,7 +957,7 @@ class _Data:
         R = self._pivots["R"]
         if not R:
             return []
-        return [B.extract(R, R).det() for B in mats]
+        return [field_det(B.extract(R, R)) for B in mats]
 
     # ------------------------------------------------------------ the modes
     def symbolic(self, params):
@@ -945,16 +983,29 @@ class _Data:
                 out.append((reason, vals))
         return out
 
-    def _with_shifts(self, fn, base, values):
-        """The datum at the values and at each value moved by a relative 1e-4."""
+    def _with_shifts(self, fn, base, values, K=QQ):
+        """The datum at the values and at each value moved by a relative 1e-4, in K."""
+        at = fn(base, K)  # first: structural choices (pivots) are made there
         shifted = {}
         for p, x in values.items():
             h = abs(x) / 10 ** 4 if x else MPQ(1, 10 ** 4)
-            shifted[p] = (h, fn(self.env(at={**values, p: x + h}), QQ))
-        return fn(base, QQ), shifted
+            shifted[p] = (h, fn(self.env(at={**values, p: x + h}), K))
+        return at, shifted
+
+    def _modular(self, fn, base):
+        """The datum at the values modulo p at the first point (None: not evaluable)."""
+        try:
+            with self._first_point_only():
+                return fn(base, MODULAR)
+        except ZeroDivisionError:  # p divides a denominator: decide over Q instead
+            return None
 
     def at_values(self, values, near):
         """Data that vanish at exact parameter ``values`` and data nearly vanishing.
+
+        A datum nonzero modulo p at the first point is nonzero at the values (a
+        proof); its nearness is then estimated in ``SHIFT_FIELD``. Only a datum
+        that vanishes modulo p is evaluated over Q, at every point.
 
         Returns
         -------
@@ -983,16 +1034,20 @@ class _Data:
                 # hit); the others only confirm a vanishing. The nearness estimate uses
                 # the first point too: every term must vanish on the exceptional set, so
                 # one point's largest |P| / |grad P| already bounds the distance.
-                with self._first_point_only():
+                mod = self._modular(fn, base)
+                if mod is not None and any(mod):
+                    with self._first_point_only():
+                        v0, shifted = self._with_shifts(fn, base, values, SHIFT_FIELD)
+                    nonzero = [bool(x) for x in mod]
+                else:
                     v0, shifted = self._with_shifts(fn, base, values)
-                if v0 and not any(v0):
-                    v0, shifted = self._with_shifts(fn, base, values)
+                    nonzero = [bool(x) for x in v0]
             except (NotExact, ZeroDivisionError) as exc:
                 self.notes.append(f"not examined at the values ({exc}): whether {reason}")
                 continue
             if not v0:
                 continue  # nothing assumed nonzero (e.g. a bracket matrix of rank 0)
-            if not any(v0):
+            if not any(nonzero):
                 involved = tuple(p for p, (h, vals) in shifted.items() if any(vals))
                 hits.append((reason, involved))
                 continue
@@ -1001,14 +1056,19 @@ class _Data:
             scale = math.sqrt(sum(float(x) ** 2 for x in values.values())) or 1.0
             worst = 0.0
             for i, val in enumerate(v0):
-                if not val:
+                if not nonzero[i]:
                     continue
-                grad = math.sqrt(sum(float((vals[i] - val) / h) ** 2
+                grad = math.sqrt(sum(_difference(vals[i], val, h) ** 2
                                      for h, vals in shifted.values()))
                 worst = max(worst, abs(float(val)) / grad if grad else math.inf)
             if worst / scale < near:
                 close.append((reason, worst / scale))
         return hits, close
+
+
+def _difference(moved, value, h) -> float:
+    """(moved - value) / h as a float, computed in the field of the values."""
+    return float((moved - value) / (h if isinstance(moved, MPQ) else SHIFT_FIELD.convert(h)))
 
 
 # ============================================================ the components

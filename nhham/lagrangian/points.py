@@ -31,7 +31,6 @@ a proof.
 
 from __future__ import annotations
 
-import functools
 import itertools
 import math
 import random
@@ -45,6 +44,7 @@ from sympy.polys.matrices import DomainMatrix
 from sympy.polys.matrices.exceptions import DMNonInvertibleMatrixError
 
 from nhham.errors import NhhamError
+from nhham.system.expressions import derivative
 
 __all__ = [
     "NotExact",
@@ -55,6 +55,8 @@ __all__ = [
     "exact_rank",
     "exact_solve",
     "maximal_minors",
+    "field_det",
+    "field_solve",
     "rank_bound",
     "minor_degree",
     "solve_degrees",
@@ -476,7 +478,7 @@ def exact_solve(A, b):
     return X.to_list()
 
 
-def maximal_minors(M: DomainMatrix) -> list:
+def maximal_minors(M: DomainMatrix, pivots=None) -> list:
     """Every maximal minor of an m x n DomainMatrix M (m <= n) over a field, in the order
     of ``itertools.combinations(range(n), m)``.
 
@@ -484,16 +486,19 @@ def maximal_minors(M: DomainMatrix) -> list:
     R = M[:, P]^{-1} M (so R[:, P] = I), det M[:, S] = det M[:, P] det R[:, S], and
     det R[:, S] is, up to the sign of a generalised Laplace expansion along the unit
     columns, the minor of R on the rows of P \\ S and the columns of S \\ P (at most
-    (n - m) x (n - m)).
+    (n - m) x (n - m)). ``pivots`` gives P (m columns with det M[:, P] != 0) instead of
+    finding it: in floating point, where a rounded zero is not zero, it should come
+    from an exact evaluation.
     """
     m, n = M.shape
-    _, pivots = M.rref()
-    if len(pivots) < m:
-        return [M.domain.zero] * math.comb(n, m)
+    if pivots is None:
+        _, pivots = M.rref()
+        if len(pivots) < m:
+            return [M.domain.zero] * math.comb(n, m)
     P = list(pivots)
     B = M.extract(list(range(m)), P)
-    det_B = B.det()
-    R = B.inv() * M
+    det_B = field_det(B)
+    R = field_solve(B, M)
     row_of = {c: i for i, c in enumerate(P)}
     out = []
     for S in itertools.combinations(range(n), m):
@@ -502,11 +507,54 @@ def maximal_minors(M: DomainMatrix) -> list:
         used = [row_of[S[j]] for j in unit]
         taken = set(used)
         rest = [i for i in range(m) if i not in taken]
-        sub = R.extract(rest, other).det() if other else M.domain.one
+        sub = field_det(R.extract(rest, other)) if other else M.domain.one
         parity = sum(u + 1 for u in used) + sum(j + 1 for j in unit) + sum(
             1 for a in range(len(used)) for b in range(a + 1, len(used)) if used[a] > used[b])
         out.append(-det_B * sub if parity % 2 else det_B * sub)
     return out
+
+
+def field_det(M: DomainMatrix):
+    """det M; in floating point by elimination with partial pivoting (sympy's
+    fraction-free elimination divides by rounded, possibly tiny, pivots)."""
+    K = M.domain
+    if not K.is_RealField:
+        return M.det()
+    rows, n = M.to_list(), M.shape[0]
+    det = K.one
+    for c in range(n):
+        p = max(range(c, n), key=lambda i: abs(rows[i][c]))
+        if not rows[p][c]:
+            return K.zero
+        if p != c:
+            rows[c], rows[p] = rows[p], rows[c]
+            det = -det
+        det *= rows[c][c]
+        for i in range(c + 1, n):
+            f = rows[i][c] / rows[c][c]
+            if f:
+                rows[i] = [a - f * b for a, b in zip(rows[i], rows[c])]
+    return det
+
+
+def field_solve(A: DomainMatrix, B: DomainMatrix) -> DomainMatrix:
+    """A^-1 B; in floating point with partial pivoting (see :func:`field_det`)."""
+    K = A.domain
+    if not K.is_RealField:
+        return A.lu_solve(B)
+    n, k = A.shape[0], B.shape[1]
+    rows = [a + b for a, b in zip(A.to_list(), B.to_list())]
+    for c in range(n):
+        p = max(range(c, n), key=lambda i: abs(rows[i][c]))
+        if not rows[p][c]:
+            raise ZeroDivisionError("singular matrix")
+        rows[c], rows[p] = rows[p], rows[c]
+        for i in range(n):
+            if i != c and rows[i][c]:
+                f = rows[i][c] / rows[c][c]
+                rows[i] = [a - f * b for a, b in zip(rows[i], rows[c])]
+    X = [[rows[i][n + j] / rows[i][i] for j in range(k)] for i in range(n)]
+    return DomainMatrix(X, (n, k), K)
 
 
 def _ints_mod_p(rows):
@@ -716,14 +764,7 @@ def jacobian_row(expr, symbols) -> list:
     """[d expr / d s for s in symbols], differentiating only where s occurs."""
     expr = sp.sympify(expr)
     present = expr.free_symbols
-    return [_derivative(expr, s) if s in present else sp.S.Zero for s in symbols]
-
-
-@functools.lru_cache(maxsize=8192)
-def _derivative(expr, s):
-    # A pure function of its (hashable, immutable) arguments: the analysis, the check
-    # at the parameter values and the classes differentiate the same rows again.
-    return expr.diff(s)
+    return [derivative(expr, s) if s in present else sp.S.Zero for s in symbols]
 
 
 def _exact_number(name, value):

@@ -6,6 +6,7 @@ linear in p, f = a(q).p and h = b(q).p: {f, h} = p . ((b.grad) a - (a.grad) b).
 """
 
 import json
+import math
 
 import numpy as np
 import pytest
@@ -14,7 +15,9 @@ import sympy as sp
 import nhham
 
 import handmade
+from nhham import models
 from nhham.hamiltonian.classification import classify_constraints, dirac_bracket, dirac_vs_projected
+from nhham.hamiltonian.side import hamiltonian_side
 
 S = sp.Symbol
 
@@ -278,3 +281,32 @@ def test_compact_repr_and_latex_of_the_classes():
     c = classify_constraints(rolling_disk(symbolic=True))
     assert len(repr(c)) < 200 and "2 first class" in repr(c)
     assert r"\operatorname{rank}" in c._repr_latex_()
+
+
+def _coupled_holonomic():
+    """Four coordinates, a q-dependent non-diagonal W (beyond the symbolic size) and two
+    linear holonomic constraints: the Dirac flow is the true dynamics (holonomic)."""
+    q = sp.symbols("q1:5")
+    v = sp.symbols("q1_dot q2_dot q3_dot q4_dot")
+    A = sp.Matrix(4, 4, lambda i, j: 2 if i == j else (1 if abs(i - j) == 1 else 0))
+    A[0, 1] = A[1, 0] = sp.cos(q[3]) / 2
+    L = (sp.Matrix([v]) * A * sp.Matrix(v))[0] / 2 - q[0] ** 2 - 3 * q[2]
+    return nhham.System([str(x) for x in q], L, [], holonomic=[q[0] - q[1], q[2] + q[3]])
+
+
+@pytest.mark.parametrize("make, equal", [(_coupled_holonomic, True),
+                                         (lambda: models.snake(3), False)])
+def test_dirac_vs_projected_at_exact_points(make, equal):
+    """Beyond the symbolic size, X_D - X is computed modulo p at exact points of M_f:
+    nonzero at a point is a proof that the Dirac flow is not the true dynamics (snake);
+    holonomic constraints give zero at every point."""
+    system = make()
+    assert not hamiltonian_side(system).symbolic_affordable
+    report = dirac_vs_projected(system, samples=3)
+    assert report.classes.method == "exact at points"
+    d = report.decisions[0]
+    assert report.equal is equal and d.method == "exact at points" and report.samples == 3
+    assert math.isnan(report.max_abs_difference)
+    assert ("a proof" in d.detail) is (not equal)
+    sampled = dirac_vs_projected(system, method="sampled")
+    assert sampled.equal is equal and sampled.decisions[0].method == "sampled"

@@ -107,9 +107,75 @@ def test_mpmath_precision():
 
 
 def test_snake_sampled_cross_check():
-    report = cross_check(models.snake(4))
+    report = cross_check(models.snake(4), method="sampled")
     assert report.method == "sampled" and report.agree and not report.exact
     assert report.max_rel_difference < 1e-12
+
+
+def test_snake_cross_check_at_exact_points():
+    """Beyond the symbolic size, "auto" compares both sides exactly modulo p at exact
+    points of M_1: every difference is exactly 0 and the tolerance is 0."""
+    report = cross_check(models.snake(4), samples=3)
+    assert report.method == "points" and report.agree and not report.exact
+    assert report.precision == "exact mod p = 2^61 - 1" and report.tolerance == 0
+    assert report.max_abs_difference == 0 and report.samples == 3
+    assert set(report.detail) == CHECKS
+    assert {c.how for c in report.checks} == {"points"}
+    assert json.loads(json.dumps(report.to_dict()))["checks"]["field"]["method"] == "points"
+
+
+def _perturbed_X_H(size):
+    """HamiltonianPoint.X_H plus ``size`` in its first component (in the point's field)."""
+    from nhham.hamiltonian.side import HamiltonianPoint
+    from nhham.lagrangian.points import ModP
+
+    original = HamiltonianPoint.X_H.fget
+
+    def X_H(self):
+        out = original(self).copy()
+        out[0] = out[0] + (ModP.lift(size) if isinstance(out[0], ModP) else float(size))
+        return out
+
+    return property(X_H)
+
+
+def test_exact_points_see_what_floating_point_cannot(monkeypatch):
+    """A planted error of relative size 1e-13 in the Hamiltonian field: within the
+    float64 tolerance of the sampled check, exactly nonzero at exact points."""
+    from nhham.hamiltonian.side import HamiltonianPoint
+
+    from sympy.external.gmpy import MPQ
+
+    monkeypatch.setattr(HamiltonianPoint, "X_H", _perturbed_X_H(MPQ(1, 10 ** 13)))
+    system = models.snake(2)
+    assert cross_check(system, method="sampled", samples=3).detail["field"].agree
+    report = cross_check(system, method="points", samples=3)
+    assert not report.agree and not report.detail["field"].agree
+    assert report.detail["legendre inverse"].agree and report.detail["Poisson map"].agree
+    assert "DIFFERS (points)" in report.describe()
+
+
+def test_a_wrong_sign_is_detected_at_exact_points(monkeypatch):
+    """Z^H = (0, +mu) instead of (0, -mu) in the numeric layer: the field disagrees at
+    the exact points (the multipliers, solved from C^H and X_H(phi), still agree)."""
+    from nhham.hamiltonian.side import HamiltonianPoint
+
+    monkeypatch.setattr(HamiltonianPoint, "vertical",
+                        lambda self: np.concatenate([self.mu * 0, self.mu], axis=1))
+    report = cross_check(models.snake(2), method="points", samples=2)
+    assert not report.detail["field"].agree and report.detail["multipliers"].agree
+
+
+def test_points_need_exact_points_and_a_quadratic_lagrangian():
+    """The Cartesian pendulum's M_1 (x^2 + y^2 = l^2) has no exact points: "points" says
+    so, "auto" compares at sampled points."""
+    from nhham.errors import InputError
+
+    system = models.pendulum_cartesian()
+    with pytest.raises(InputError, match="no exact points"):
+        cross_check(system, method="points")
+    with pytest.raises(InputError, match="method must be one of"):
+        cross_check(system, method="modular")
 
 
 def test_a_wrong_sign_is_detected(monkeypatch):

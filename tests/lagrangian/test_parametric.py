@@ -324,3 +324,47 @@ def _pv(which):
     make, positive = {"3.2": (paper_3_2, ["a", "b", "c"]),
                       "two": (two_bodies, ["I1", "I2"])}[which]
     return parametric_classification(make(), positive=positive)
+
+
+def test_floating_point_determinants_pivot():
+    """The nearness estimate evaluates data in 200-bit floating point: determinants and
+    solves there pivot (sympy's fraction-free elimination divides by the rounded zero
+    pivots of an antisymmetric bracket matrix). Checked against exact arithmetic."""
+    from sympy.polys.matrices import DomainMatrix
+
+    from nhham.lagrangian.parametric import SHIFT_FIELD
+    from nhham.lagrangian.points import field_det, field_solve
+
+    rows = [[0, 3, -1, 2], [-3, 0, 5, 1], [1, -5, 0, 7], [-2, -1, -7, 0]]
+    exact = DomainMatrix([[sp.QQ(x) for x in r] for r in rows], (4, 4), sp.QQ)
+    F = SHIFT_FIELD
+    approx = exact.convert_to(F)
+    pf = 3 * 7 - (-1) * 1 + 2 * 5  # Pfaffian b01 b23 - b02 b13 + b03 b12 = 32
+    assert exact.det() == pf ** 2
+    assert abs(float(field_det(approx)) - pf ** 2) < 1e-40
+    rhs = DomainMatrix([[sp.QQ(1)], [sp.QQ(0)], [sp.QQ(2)], [sp.QQ(-1)]], (4, 1), sp.QQ)
+    x = exact.lu_solve(rhs).to_list()
+    y = field_solve(approx, rhs.convert_to(F)).to_list()
+    assert all(abs(float(a[0]) - float(b[0])) < 1e-40 for a, b in zip(x, y))
+
+
+def test_values_far_from_every_exceptional_set_raise_no_warning(monkeypatch):
+    """The 4-link snake at m = l = 1: every datum is nonzero modulo p at the values (a
+    proof, so none is evaluated over Q) and none is near vanishing -- in particular
+    the antisymmetric bracket matrix, whose determinant is estimated in floating point
+    at moved values."""
+    from nhham import models
+    from nhham.lagrangian import parametric
+
+    fields = []
+    original = parametric._Data._with_shifts
+
+    def spy(self, fn, base, values, K=sp.QQ):
+        fields.append(K)
+        return original(self, fn, base, values, K)
+
+    monkeypatch.setattr(parametric._Data, "_with_shifts", spy)
+    at = classification_at_values(models.snake(4))
+    assert at.conditions == () and at.warnings == ()
+    assert at.verdict.second_class == 4
+    assert len(fields) == 5 and set(fields) == {parametric.SHIFT_FIELD}
