@@ -42,6 +42,7 @@ import numpy as np
 import sympy as sp
 
 from nhham.errors import ComputationError
+from nhham.lagrangian.adjugate import divide_out, scale_factors
 from nhham.lagrangian.algebra import cancel, solve_linear, tidy, tidy_light
 from nhham.lagrangian.submanifold import Decision, Submanifold
 from nhham.system.expressions import short
@@ -185,10 +186,22 @@ class AlgorithmRun:
         The N variables.
     fields : callable
         ``fields() -> (ξ, Z)``: the base field and the rows Z_i, formed only when
-        ``base_field``/``vertical_fields`` (or what needs them: multipliers,
-        dynamics, projectors) are asked for.
+        ``base_field``/``vertical_fields`` (or what needs them: ``dynamics``,
+        ``tangency_matrix``) are asked for. On TQ these are the closed forms with W⁻¹.
     manifold : Submanifold or None
         M_f (the last M_k), for further decisions on it.
+    scaled_fields : callable or None
+        ``scaled_fields() -> (δ ξ, δ Z, δ)``: the fields scaled by a function δ ≠ 0
+        with polynomial entries (on TQ δ W⁻¹ is made of adjugates, see
+        :mod:`nhham.lagrangian.adjugate`), formed on first use; None when the loop
+        ran with ``fields`` as they are. The multipliers and the projector do not
+        change under the scaling and are formed from these, so they need no W⁻¹.
+    denominator : sympy.Expr or None
+        δ when the loop ran with scaled fields (the denominator of W⁻¹ on TQ: the
+        tangency equations, hence every result, hold where it does not vanish), else
+        None.
+    scale : sympy.Expr (computed on first use)
+        δ of ``scaled_fields`` (1 when unscaled).
     """
 
     status: str
@@ -207,6 +220,19 @@ class AlgorithmRun:
     variables: tuple
     fields: Callable = field(compare=False, repr=False)
     manifold: Submanifold | None = field(default=None, compare=False, repr=False)
+    scaled_fields: Callable | None = field(default=None, compare=False, repr=False)
+    denominator: object = field(default=None, compare=False, repr=False)
+
+    @cached_property
+    def scale(self) -> sp.Expr:
+        """δ, the factor of the scaled fields (1 when unscaled)."""
+        if self.denominator is not None:
+            return self.denominator
+        return sp.S.One if self.scaled_fields is None else self._scaled[2]
+
+    @cached_property
+    def _scaled(self):
+        return self.scaled_fields() if self.scaled_fields is not None else None
 
     @cached_property
     def base_field(self) -> sp.Matrix:
@@ -226,17 +252,31 @@ class AlgorithmRun:
     @cached_property
     def tangency_rhs(self) -> sp.Matrix:
         """b_j = ξ(χ_j) over the final constraints."""
-        if not self.final_constraints:
-            return sp.zeros(0, 1)
-        return sp.Matrix([cancel((sp.Matrix([[sp.diff(c, s) for s in self.variables]])
-                                  * self.base_field)[0]) for c in self.final_constraints])
+        return _tangency_rhs(self.final_constraints, self.base_field, self.variables)
+
+    @cached_property
+    def _loop_fields(self):
+        """(ξ, Z) as the loop used them: scaled by δ when ``scaled_fields`` is set."""
+        if self.scaled_fields is None:
+            return self.base_field, self.vertical_fields
+        return self._scaled[:2]
+
+    @cached_property
+    def _loop_tangency(self):
+        """(A, b) over the final constraints from the loop's fields (δ A, δ b if scaled)."""
+        if self.scaled_fields is None:
+            return self.tangency_matrix, self.tangency_rhs
+        xi, Z = self._loop_fields
+        return (tangency_matrix(self.final_constraints, Z, self.variables, expand=True),
+                _tangency_rhs(self.final_constraints, xi, self.variables, expand=True))
 
     @cached_property
     def multipliers(self) -> Mapping:
-        """Determined ``{λ^i: expression}`` (see the class docstring)."""
+        """Determined ``{λ^i: expression}`` (see the class docstring); the same from the
+        scaled fields (δ cancels in λ_I = −B^{-1}(b_J + A[J, F] λ_F))."""
         if self.status == "inconsistent":
             return MappingProxyType({})
-        A, b = self.tangency_matrix, self.tangency_rhs
+        A, b = self._loop_tangency
         rows, cols = list(self.block[0]), list(self.block[1])
         if not cols:
             return MappingProxyType({})
@@ -272,8 +312,10 @@ class AlgorithmRun:
         rows, cols = self.block
         grads = sp.Matrix([[sp.diff(self.final_constraints[j], s) for s in self.variables]
                            for j in rows]) if rows else sp.zeros(0, len(self.variables))
-        A = tangency_matrix([self.final_constraints[j] for j in rows], self.vertical_fields,
-                             self.variables)
+        # B from the loop's fields: Z_I^T B^{-1} does not change when Z is scaled by δ.
+        Z = self._loop_fields[1]
+        A = tangency_matrix([self.final_constraints[j] for j in rows], Z, self.variables,
+                            expand=self.scaled_fields is not None)
         B = A.extract(list(range(len(rows))), list(cols)) if rows else sp.zeros(0, 0)
         return _solve_on(self.manifold, B, grads) if rows else grads
 
@@ -290,7 +332,7 @@ class AlgorithmRun:
         cols = list(self.block[1])
         if not cols:
             return sp.zeros(N, N)
-        Z_I = self.vertical_fields.extract(cols, list(range(N)))
+        Z_I = self._loop_fields[1].extract(cols, list(range(N)))
         return (Z_I.T * self._block_solve).applyfunc(cancel)
 
     @cached_property
@@ -328,7 +370,8 @@ def run_algorithm(base_field, vertical_fields, primary: Sequence, labels: Sequen
                   manifold_factory: Callable[[tuple], Submanifold], *,
                   max_stages: int | None = None, multiplier_symbols: Sequence | None = None,
                   variables: Sequence | None = None, secondary_start: int = 0,
-                  secondary_prefix: str = "secondary") -> AlgorithmRun:
+                  secondary_prefix: str = "secondary", scale=None,
+                  closed_fields: Callable | None = None) -> AlgorithmRun:
     """Run the constraint algorithm (paper §3) for any number of constraints.
 
     Parameters
@@ -364,6 +407,19 @@ def run_algorithm(base_field, vertical_fields, primary: Sequence, labels: Sequen
         that blocks analysed separately get distinct labels.
     secondary_prefix : str, optional
         Stem of the labels of secondary constraints.
+    scale : sympy.Expr, optional
+        Set when ``base_field`` and ``vertical_fields`` are δ ξ and δ Z for a
+        function δ ≠ 0 on the domain, with polynomial entries (on TQ: δ W⁻¹ from
+        :func:`nhham.lagrangian.adjugate.scaled_inverse`, δ = ``scale``). The
+        tangency rows are then polynomials and are expanded, not cancelled; ranks,
+        multipliers and projector are those of the unscaled fields; a λ-free
+        condition is δ ψ and is stored as a new constraint with the factors of δ
+        divided out (the zeros of ψ where δ ≠ 0). None (default): the fields are
+        used as they are and every row is cancelled.
+    closed_fields : callable, optional
+        With ``scale``: ``closed_fields() -> (ξ, Z)``, the unscaled fields, formed only
+        when ``base_field``, ``vertical_fields`` or ``dynamics`` of the run are asked
+        for; default (ξ̃/δ, Z̃/δ).
 
     Returns
     -------
@@ -413,29 +469,43 @@ def run_algorithm(base_field, vertical_fields, primary: Sequence, labels: Sequen
     for lab, chi in zip(labels, primary):
         graph.add_node(lab, expr=chi, stage=1, kind=constraint_kind(lab))
     loop = _Loop(xi, Z, variables, lam, manifold_factory, graph, secondary_start,
-                 secondary_prefix)
+                 secondary_prefix, scale=scale, closed_fields=closed_fields)
     return loop.run(primary, labels, bound)
 
 
 class _Loop:
     """State of one run of the algorithm (row caches, provenance, warnings)."""
 
-    def __init__(self, xi, Z, variables, lam, factory, graph, start, prefix):
+    def __init__(self, xi, Z, variables, lam, factory, graph, start, prefix, scale=None,
+                 closed_fields=None):
         self.xi, self.Z, self.variables, self.lam = xi, Z, variables, lam
         self.factory, self.graph = factory, graph
         self.next_secondary, self.prefix = start, prefix
         self.rows: dict = {}
         self.warnings: list[str] = []
+        # Scaled fields (δ ξ, δ Z) have polynomial entries: rows are expanded, and the
+        # factors of δ are divided out of conditions (they do not vanish on the domain).
+        self.scaled = scale is not None
+        self.scale = sp.S.One if scale is None else sp.sympify(scale)
+        self.scale_factors = scale_factors(self.scale)
+        self.closed_fields = closed_fields
 
     # ------------------------------------------------------------ tangency rows
     def row(self, chi):
         """(dχ, Z_i(χ) for every i, ξ(χ)) cached by expression."""
         if chi not in self.rows:
             grad = sp.Matrix([[sp.diff(chi, s) for s in self.variables]])
-            a = [cancel((grad * self.Z.row(i).T)[0]) for i in range(self.Z.rows)]
-            b = cancel((grad * self.xi)[0])
+            # Polynomial rows of scaled fields need no cancellation, only expansion.
+            normal = sp.expand if self.scaled else cancel
+            a = [normal((grad * self.Z.row(i).T)[0]) for i in range(self.Z.rows)]
+            b = normal((grad * self.xi)[0])
             self.rows[chi] = (grad, a, b)
         return self.rows[chi]
+
+    def unscaled(self, psi):
+        """A condition δ ψ computed from scaled fields with the factors of δ divided
+        out: the same zeros as ψ where δ ≠ 0 (``psi`` itself when δ = 1)."""
+        return divide_out(psi, self.scale_factors) if self.scale_factors else psi
 
     def matrices(self, chis):
         A = sp.Matrix(len(chis), self.Z.rows, lambda j, i: self.row(chis[j])[1][i])
@@ -500,7 +570,10 @@ class _Loop:
             c = coeffs[:, pos] if r else sp.zeros(0, 1)
             psi = cancel(b[j] - (c.T * b.extract(rows, [0]))[0]) if r else b[j]
             sources = [labs[j]] + [labs[rows[t]] for t in range(r) if c[t] != 0]
-            conditions.append((labs[j], psi))
+            # Recorded as ψ (its values at points are those of the unscaled route);
+            # decided on δ ψ with the factors of δ divided out (same zeros, no division).
+            conditions.append((labs[j], psi / self.scale if self.scale != 1 else psi))
+            psi = self.unscaled(psi)
             subject = f"condition from {labs[j]} on M_{k}: 0 = {short(psi)}"
             dec = M.vanishes(psi)
             self._collect(f"stage {k}: {subject}", dec)
@@ -583,6 +656,7 @@ class _Loop:
     def _rank_drop_check(self, k, M, A, rows, cols, chis):
         """Warn where the rank of A drops on M_k (the paper assumes it does not)."""
         det = cancel(A.extract(rows, cols).det(method="berkowitz"))
+        det = self.unscaled(det)  # δ^r det B: the factors of δ do not vanish on the domain
         red = M.reduce(det) if M.exact else det
         if red.is_number or _sign_definite(red):
             return
@@ -651,8 +725,19 @@ class _Loop:
             provenance=self.graph, inconsistency=inconsistency,
             warnings=tuple(dict.fromkeys(self.warnings)), converged=converged,
             dimension=dimension, variables=self.variables,
-            fields=_constant_fields(self.xi, self.Z), manifold=M,
+            fields=self._closed_fields(), manifold=M,
+            scaled_fields=_constant_fields(self.xi, self.Z, self.scale) if self.scaled else None,
+            denominator=self.scale if self.scaled else None,
         )
+
+    def _closed_fields(self):
+        """``fields`` of the run: the unscaled (ξ, Z), formed on first use."""
+        if not self.scaled:
+            return _constant_fields(self.xi, self.Z)
+        if self.closed_fields is not None:
+            return self.closed_fields
+        xi, Z, scale = self.xi, self.Z, self.scale
+        return lambda: ((xi / scale).applyfunc(cancel), (Z / scale).applyfunc(cancel))
 
     def _dimension(self, M, chis, k):
         """dim M_f and, if it is 0 or M_f looks empty, the inconsistency message.
@@ -691,18 +776,20 @@ class _Loop:
 
 
 def rank_drop_warnings(k, manifold, base_field, vertical_fields, variables, multipliers, A,
-                       rows, cols, chis) -> list:
+                       rows, cols, chis, scale=None) -> list:
     """Warnings where the rank of A = (Z_i(chi_j)) drops on M_k (the paper assumes it does
-    not): the symbolic check of the loop, for callers that decided the rank elsewhere."""
+    not): the symbolic check of the loop, for callers that decided the rank elsewhere.
+    ``scale``: δ when the fields (and A) are scaled by δ (see :func:`run_algorithm`)."""
     loop = _Loop(base_field, vertical_fields, tuple(variables), tuple(multipliers),
-                 lambda eqs: manifold.with_equations(eqs), nx.DiGraph(), 0, "secondary")
+                 lambda eqs: manifold.with_equations(eqs), nx.DiGraph(), 0, "secondary",
+                 scale=scale)
     loop._rank_drop_check(k, manifold, A, list(rows), list(cols), list(chis))
     return loop.warnings
 
 
 # ================================================================= small helpers
-def _constant_fields(xi, Z):
-    return lambda: (xi, Z)
+def _constant_fields(*fields):
+    return lambda: fields
 
 
 def constraint_kind(label: str) -> str:
@@ -715,13 +802,24 @@ def constraint_kind(label: str) -> str:
     return "primary"
 
 
-def tangency_matrix(chis, Z, variables) -> sp.Matrix:
-    """A_ji = Z_i(χ_j) for the listed constraints."""
+def tangency_matrix(chis, Z, variables, expand: bool = False) -> sp.Matrix:
+    """A_ji = Z_i(χ_j) for the listed constraints (``expand``: polynomial fields, the
+    entries are expanded instead of cancelled)."""
+    normal = sp.expand if expand else cancel
     rows = []
     for chi in chis:
         grad = sp.Matrix([[sp.diff(chi, s) for s in variables]])
-        rows.append([cancel((grad * Z.row(i).T)[0]) for i in range(Z.rows)])
+        rows.append([normal((grad * Z.row(i).T)[0]) for i in range(Z.rows)])
     return sp.Matrix(rows) if rows else sp.zeros(0, Z.rows)
+
+
+def _tangency_rhs(chis, xi, variables, expand: bool = False) -> sp.Matrix:
+    """b_j = ξ(χ_j) for the listed constraints (``expand`` as in :func:`tangency_matrix`)."""
+    if not chis:
+        return sp.zeros(0, 1)
+    normal = sp.expand if expand else cancel
+    return sp.Matrix([normal((sp.Matrix([[sp.diff(c, s) for s in variables]]) * xi)[0])
+                      for c in chis])
 
 
 def _solve_on(M, B, rhs):

@@ -5,8 +5,10 @@ M_1 = {g = 0, g^c = 0, φ = 0}. The system is split into independent blocks
 first without W⁻¹ (:mod:`nhham.lagrangian.tangency`: the bordered matrix at exact
 points, or at sampled points where there are none), which settles every system whose C
 is regular on M_1; otherwise the symbolic loop of :mod:`nhham.lagrangian.algorithm` runs
-with ξ_L and Z_i. The blocks' runs are merged into one :class:`ConstraintAnalysis`, with
-the Frobenius integrability of the constraint distribution derived on first use.
+with δ ξ_L and δ Z_i (:mod:`nhham.lagrangian.adjugate`: δ W⁻¹ has polynomial entries,
+so the tangency rows are polynomials and W⁻¹ is not formed). The blocks' runs are
+merged into one :class:`ConstraintAnalysis`, with the Frobenius integrability of the
+constraint distribution derived on first use.
 """
 
 from __future__ import annotations
@@ -232,6 +234,14 @@ class ConstraintAnalysis:
             lines.insert(1, "dropped redundant constraints: " + "; ".join(
                 f"{d.label} = " + " + ".join(f"({c})*{k}" for k, c in d.combination.items())
                 for d in self.dropped))
+        for b in self.blocks:
+            delta = b.run.denominator
+            if delta is not None and delta != 1:
+                where = f" of [{', '.join(q.name for q in b.coordinates)}]" \
+                    if len(self.blocks) > 1 else ""
+                lines.insert(1, f"tangency equations{where} multiplied by delta = {delta} "
+                             f"(det W up to factors, the denominator of W^-1): the results "
+                             f"hold where delta != 0")
         if len(self.blocks) > 1:
             lines.insert(1, f"{len(self.blocks)} independent blocks: " + "; ".join(
                 f"[{', '.join(q.name for q in b.coordinates)}] with "
@@ -255,7 +265,11 @@ def analyze_constraints(system, *, precision: int | None = None, samples: int = 
 
     M_1 = {g = 0, g^c = 0, φ = 0} (holonomic constraints, their complete lifts, the
     affine constraints); the base field is ξ_L and the vertical fields are
-    Z_i = −W^{AB} μ_iB ∂/∂v^A, one per φ_i (see :func:`run_algorithm`).
+    Z_i = −W^{AB} μ_iB ∂/∂v^A, one per φ_i (see :func:`run_algorithm`). Both enter
+    multiplied by δ (δ = det W, or a factor of it, with δ W⁻¹ free of denominators:
+    :mod:`nhham.lagrangian.adjugate`): the tangency equations, ranks, multipliers and
+    secondary constraints are the same where W is regular, and no W⁻¹ is formed unless
+    the closed forms (``dynamics``, ``tangency_matrix``) are asked for.
 
     Parameters
     ----------
@@ -409,10 +423,15 @@ def _run_block(system, spec, opts, start, geometry):
     run = _stage_one_at_points(view, geo, exprs, labels, lam, factory, opts) \
         if opts["exact"] else None
     bound = opts["max_stages"] if opts["max_stages"] is not None else 2 * len(spec["coords"])
+    # C singular or λ-free conditions: the symbolic loop, with the fields scaled by
+    # δ (δ W⁻¹ has polynomial entries, see nhham.lagrangian.adjugate), so that no
+    # tangency row is a rational function and W⁻¹ is never formed; ξ_L and Z_i in
+    # closed form only if the run's dynamics is asked for.
     run = run or run_algorithm(
-        geo.euler_lagrange_field, geo.vertical_fields, exprs, labels, factory,
+        geo.scaled_euler_lagrange_field, geo.scaled_vertical_fields, exprs, labels, factory,
         max_stages=bound, multiplier_symbols=lam, variables=view.state,
-        secondary_start=start,
+        secondary_start=start, scale=geo.field_scale,
+        closed_fields=lambda: (geo.euler_lagrange_field, geo.vertical_fields),
     )
     for i in spec["hol"]:
         lift = f"holonomic[{i}].lift"
@@ -461,7 +480,9 @@ def _stage_one_at_points(view, geo, exprs, labels, lam, factory, opts):
                                                            view.coordinates]]) * v)[0]))
                        for j in others)
     evidence = (
-        Evidence("rank of (Z_i(chi_j)) on M_1", verdict.rank, f"rank {r}"),
+        Evidence("rank of (Z_i(chi_j)) on M_1", verdict.rank, f"rank {r}" + (
+            "" if not r or geo.closed_form_affordable else
+            " (generic; where it might drop on M_1 is not examined at this size)")),
         Evidence("lambda-free conditions on M_1", verdict.consistent, "add nothing"),
     )
     stage = Stage(index=1, constraints=tuple(exprs), labels=tuple(labels), new_constraints=(),
@@ -476,10 +497,12 @@ def _stage_one_at_points(view, geo, exprs, labels, lam, factory, opts):
     M = factory(tuple(exprs))
     if r and geo.closed_form_affordable:
         # Where the rank of C drops on M_1 (the paper assumes it does not): the
-        # symbolic check needs A = (Z_i(chi_j)), affordable only for small blocks.
-        A = tangency_matrix(list(exprs), geo.vertical_fields, tuple(view.state))
-        warnings += rank_drop_warnings(1, M, geo.euler_lagrange_field, geo.vertical_fields,
-                                       view.state, lam, A, rows, cols, exprs)
+        # symbolic check needs A = (Z_i(chi_j)), affordable only for small blocks;
+        # from the scaled fields (δ A: same rank, the factors of δ divided out).
+        Z = geo.scaled_vertical_fields
+        A = tangency_matrix(list(exprs), Z, tuple(view.state), expand=True)
+        warnings += rank_drop_warnings(1, M, geo.scaled_euler_lagrange_field, Z, view.state,
+                                       lam, A, rows, cols, exprs, scale=geo.field_scale)
     dimension = 2 * view.n - int(verdict.jacobian_rank.value)
     return AlgorithmRun(
         status="determined", stages=(stage,), final_constraints=tuple(exprs),
@@ -488,6 +511,8 @@ def _stage_one_at_points(view, geo, exprs, labels, lam, factory, opts):
         inconsistency=None, warnings=tuple(warnings), converged=True, dimension=dimension,
         variables=tuple(view.state),
         fields=lambda: (geo.euler_lagrange_field, geo.vertical_fields), manifold=M,
+        scaled_fields=lambda: (geo.scaled_euler_lagrange_field, geo.scaled_vertical_fields,
+                               geo.field_scale),
     )
 
 

@@ -31,8 +31,10 @@ from functools import cached_property
 import sympy as sp
 
 from nhham.settings import SEED
+from nhham.lagrangian.adjugate import ScaledInverse, scaled_inverse
 from nhham.lagrangian.algebra import solve_linear
 from nhham.lagrangian.submanifold import Decision, Submanifold
+from nhham.system.expressions import derivative
 from nhham.system.naming import acceleration_symbol, multiplier_symbol
 from nhham.system.description import System, quadratic_parts
 
@@ -343,6 +345,40 @@ class LagrangianGeometry:
         """xi_L = v^A d/dq^A + xi^A d/dv^A (solution of i_X omega_L = dE_L)."""
         return sp.Matrix.vstack(self._v, self.accelerations)
 
+    # ------------------------------------------- inverse-free (scaled) fields
+    @cached_property
+    def scaled_inverse(self) -> ScaledInverse:
+        """δ W⁻¹ as diagonal blocks of polynomial entries (:mod:`nhham.lagrangian.adjugate`).
+
+        δ (``field_scale``) is 1 when W does not depend on the state, else the lcm of
+        the determinants of the state-dependent diagonal blocks of W.
+        """
+        return scaled_inverse(self.hessian, self.state)
+
+    @property
+    def field_scale(self) -> sp.Expr:
+        """δ, the factor of the scaled fields (nonzero wherever W is regular)."""
+        return self.scaled_inverse.scale
+
+    @cached_property
+    def scaled_euler_lagrange_field(self) -> sp.Matrix:
+        """ξ̃ = δ ξ_L = (δ v, δ W⁻¹ F) with polynomial entries (no division).
+
+        Used by the constraint algorithm instead of ξ_L: the tangency condition
+        ξ̃(χ) + λ^i Z̃_i(χ) = 0 is δ times ξ_L(χ) + λ^i Z_i(χ) = 0.
+        """
+        S = self.scaled_inverse
+        return sp.Matrix.vstack((S.scale * self._v).applyfunc(sp.expand),
+                                S.apply(self.forcing))
+
+    @cached_property
+    def scaled_vertical_fields(self) -> sp.Matrix:
+        """Z̃_i = δ Z_i = −δ W^{AB} μ_iB ∂/∂v^A as rows (m x 2n), polynomial entries."""
+        m, n = self.m, self.n
+        if m == 0:
+            return sp.zeros(0, 2 * n)
+        return sp.Matrix.hstack(sp.zeros(m, n), -self.scaled_inverse.apply(self.system.mu.T).T)
+
     def gradient(self, f) -> sp.Matrix:
         """df as a 2n-vector (d/dq, d/dv)."""
         return sp.Matrix([sp.diff(f, s) for s in self.system.state])
@@ -499,7 +535,7 @@ def _coordinate_derivatives(expr, qidx) -> dict:
     parts: dict = {}
     for term in sp.Add.make_args(expr):
         for q in term.free_symbols & qidx.keys():
-            d = _derivative(term, q)
+            d = derivative(term, q)
             if d != 0:
                 parts.setdefault(qidx[q], []).append(d)
     out = {}
@@ -508,31 +544,3 @@ def _coordinate_derivatives(expr, qidx) -> dict:
         if d != 0:
             out[B] = d
     return out
-
-
-def _derivative(expr, x):
-    """d expr / d x by the sum, product, power and chain rules.
-
-    The same derivative as ``expr.diff(x)`` (which it falls back to for any
-    other node), without what makes sympy's ``diff`` slow on these small
-    entries: a ``Derivative`` object per factor (also for factors free of x,
-    whose zero derivative then multiplies the others and queries their
-    assumptions) and an ``is_zero`` assumption query on every result. Only
-    the factors that contain x are differentiated.
-    """
-    if expr.is_Symbol:
-        return sp.S.One if expr == x else sp.S.Zero
-    if expr.is_Add:
-        return sp.Add(*[_derivative(a, x) for a in expr.args if x in a.free_symbols])
-    if expr.is_Mul:
-        args = expr.args
-        return sp.Add(*[sp.Mul(*args[:i], _derivative(a, x), *args[i + 1:])
-                        for i, a in enumerate(args) if x in a.free_symbols])
-    if expr.is_Pow and x not in expr.exp.free_symbols:
-        base, k = expr.args
-        return k * base ** (k - 1) * _derivative(base, x)
-    if isinstance(expr, sp.sin):
-        return sp.cos(expr.args[0]) * _derivative(expr.args[0], x)
-    if isinstance(expr, sp.cos):
-        return -sp.sin(expr.args[0]) * _derivative(expr.args[0], x)
-    return expr.diff(x)

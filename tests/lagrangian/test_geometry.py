@@ -217,7 +217,7 @@ def test_energy_not_conserved_for_affine_constraint():
 
 
 # ------------------------------------------- quadratic fast path vs general
-from nhham.lagrangian.geometry import LagrangianGeometry, _derivative  # noqa: E402
+from nhham.lagrangian.geometry import LagrangianGeometry  # noqa: E402
 from nhham.system.models import MODELS, snake_chain_lagrangian  # noqa: E402
 from nhham.system.description import quadratic_parts, velocity_polynomial  # noqa: E402
 
@@ -363,16 +363,6 @@ def test_velocity_polynomial_keeps_degree_before_cancellation_out():
     poly = velocity_polynomial((xd + x) * (xd - x) - xd**2 + yd * sp.cos(x), (xd, yd), 2)
     assert poly == {(): -x**2, (1,): sp.cos(x)}
     assert velocity_polynomial(xd * yd, (xd, yd), 1) is None
-
-
-@pytest.mark.parametrize("expr", [
-    "a*sin(x - y)**3*cos(2*x)/(1 + x**2)", "exp(x*y) + log(1 + x**2)*y", "x**y + sqrt(x)",
-    "atan2(y, x)*x", "Abs(x)*y", "cos(sin(x*y))"])
-def test_derivative_matches_sympy_diff(expr):
-    x, y, a = sp.symbols("x y a")
-    e = sp.sympify(expr, locals={"x": x, "y": y, "a": a})
-    for s in (x, y, a):
-        assert sp.simplify(_derivative(e, s) - e.diff(s)) == 0
 
 
 # ------------------------------------------------ System validation numerics

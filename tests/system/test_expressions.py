@@ -368,3 +368,17 @@ def test_random_token_sequences_give_only_parse_errors(tokens):
         parse(text)
     except ParseError as exc:
         assert str(exc).startswith("lagrangian: ")
+
+
+@pytest.mark.parametrize("expr", [
+    "a*sin(x - y)**3*cos(2*x)/(1 + x**2)", "exp(x*y) + log(1 + x**2)*y", "x**y + sqrt(x)",
+    "atan2(y, x)*x", "Abs(x)*y", "cos(sin(x*y))", "x*cos(x)**2 + sin(x)*y - 3"])
+def test_derivative_matches_sympy_diff(expr):
+    """The sum/product/power/chain-rule derivative against sympy's own diff."""
+    from nhham.system.expressions import derivative
+
+    x, y, a = sp.symbols("x y a")
+    e = sp.sympify(expr, locals={"x": x, "y": y, "a": a})
+    for s in (x, y, a):
+        assert sp.simplify(derivative(e, s) - e.diff(s)) == 0
+
