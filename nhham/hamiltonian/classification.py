@@ -330,14 +330,12 @@ def _classify_at_points(side, cons, labels, analysis, seed, target=TARGET_ERROR)
     q, v = system.coordinates, system.velocities
     cons = [sp.sympify(c) for c in cons]
     k = len(cons)
-    mu = [list(system.mu.row(i)) for i in range(system.m)]
-    sampler = PointSampler(q, v, system.parameters, dict(system.parameter_values),
-                           system.holonomic, system.phi, seed, mu=mu)
+    sampler = PointSampler.on_M1(system, seed)
     Jq = [jacobian_row(c, q) for c in cons]
     Jv = [jacobian_row(c, v) for c in cons]
     W = [list(geo.hessian.row(i)) for i in range(system.n)]
     Mx = [list(geo.mixed_hessian.row(i)) for i in range(system.n)]
-    proof = _full_rank_modulo_p(side, cons, labels, analysis, seed, mu, W, Mx, Jq, Jv)
+    proof = _full_rank_modulo_p(side, cons, labels, analysis, seed, W, Mx, Jq, Jv)
     if proof is not None:
         return proof
     best, count, pivots, mats, degrees, error = -1, 0, [], [], None, 0.0
@@ -401,7 +399,7 @@ def _classify_at_points(side, cons, labels, analysis, seed, target=TARGET_ERROR)
         side=side, analysis=analysis)
 
 
-def _full_rank_modulo_p(side, cons, labels, analysis, seed, mu, W, Mx, Jq, Jv, tries=3):
+def _full_rank_modulo_p(side, cons, labels, analysis, seed, W, Mx, Jq, Jv, tries=3):
     """All constraints second class, proved at a point over F_p; else None.
 
     B of full rank modulo p at a point of M_1 has full rank over Q at a rational
@@ -411,9 +409,7 @@ def _full_rank_modulo_p(side, cons, labels, analysis, seed, mu, W, Mx, Jq, Jv, t
     k = len(cons)
     if k == 0 or k % 2:
         return None  # B is antisymmetric: full rank needs k even
-    sampler = PointSampler(system.coordinates, system.velocities, system.parameters,
-                           dict(system.parameter_values), system.holonomic, system.phi,
-                           seed, mu=mu, modular=True)
+    sampler = PointSampler.on_M1(system, seed, modular=True)
     for _ in range(tries):
         try:
             Bp = _bracket_at(sampler.point().env, W, Mx, Jq, Jv)
@@ -505,10 +501,7 @@ def _numerically_regular(side, precision, samples, seed, tol) -> bool:
         return True
     if precision is None and side.legendre.is_quadratic:
         try:
-            sampler = PointSampler(system.coordinates, system.velocities, system.parameters,
-                                   dict(system.parameter_values), system.holonomic,
-                                   system.phi, seed, modular=True,
-                                   mu=[list(system.mu.row(i)) for i in range(system.m)])
+            sampler = PointSampler.on_M1(system, seed, modular=True)
             be = ModularBackend()
             for _ in range(3):
                 C = side.numeric.point_from_tq(be, sampler.point().env).C
@@ -953,10 +946,7 @@ def _dirac_vs_projected_at_points(side, classes, samples, seed):
     be = ModularBackend()
     R = list(classes.second_class_indices)
     chis = [classes.constraints_TQ[a] for a in R]
-    sampler = PointSampler(system.coordinates, system.velocities, system.parameters,
-                           dict(system.parameter_values), system.holonomic, system.phi,
-                           seed, mu=[list(system.mu.row(i)) for i in range(system.m)],
-                           modular=True)
+    sampler = PointSampler.on_M1(system, seed, modular=True)
     num = side.numeric
     used = differ = 0
     for _ in range(2 * samples):

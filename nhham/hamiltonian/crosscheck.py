@@ -20,9 +20,9 @@ which gives the maximum absolute and relative differences. With
 ``method="points"`` or ``"sampled"`` nothing symbolic beyond derivatives is
 formed: both sides are evaluated at the points (the Hamiltonian side through its
 numeric layer, v = Leg^{-1}(q, p) solved at the point), which is what large
-systems such as the N-link snake need; ``"points"`` does it in exact rational
-arithmetic at exact points of M_1 (:mod:`nhham.lagrangian.points`), so a
-difference is exactly zero or a disagreement, ``"sampled"`` in floating point.
+systems such as the N-link snake need; ``"points"`` does it in exact
+arithmetic modulo p = 2^61 - 1 at exact points of M_1 (:mod:`nhham.lagrangian.points`),
+so a difference is exactly zero or a disagreement, ``"sampled"`` in floating point.
 
 Agreement of a sampled quantity means |a - b| <= tol * max(1, |a|, |b|)
 (infinity norms over the components) at every point; the reported relative
@@ -121,7 +121,7 @@ class CrossCheckReport:
     tolerance : float
         Relative tolerance of sampled agreement.
     precision : str
-        ``"float64"``, ``"mpmath:<digits>"`` or ``"exact rationals"``.
+        ``"float64"``, ``"mpmath:<digits>"`` or ``"exact mod p = 2^61 - 1"``.
     method : str
         ``"exact"``, ``"points"`` or ``"sampled"``.
     checks : tuple of CheckResult
@@ -285,10 +285,7 @@ class _ExactSampler(_Sampler):
         self.args = (tuple(system.coordinates) + tuple(system.velocities)
                      + tuple(system.parameters))
         self.count = int(samples)
-        self.sampler = PointSampler(
-            system.coordinates, system.velocities, system.parameters,
-            dict(system.parameter_values), system.holonomic, system.phi, seed,
-            mu=[list(system.mu.row(i)) for i in range(system.m)], modular=True)
+        self.sampler = PointSampler.on_M1(system, seed, modular=True)
 
     @cached_property
     def all_points(self):

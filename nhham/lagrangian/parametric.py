@@ -768,7 +768,7 @@ class _Data:
 
     def _pts(self, eqs, env0, K, tag):
         # The points stay exact when the data are evaluated in another field.
-        exact = K if K.is_QQ or not (K.is_RealField or K.is_FiniteField) else QQ
+        exact = QQ if K.is_RealField or K.is_FiniteField else K
         sampler = _Sampler(self.system, eqs, env0, exact, random.Random(f"{self.seed}:{tag}"))
         return [sampler.point() for _ in range(self.points)]
 
@@ -822,10 +822,9 @@ class _Data:
         vals = []
         for env in self._pts(eqs, env0, K, 1):
             M = self._matrix(K, rows, env, {})
-            # Floating point reuses the exact choice of pivot columns.
-            vals += maximal_minors(M, self._pivots.get("mu") if K.is_RealField else None)
-            if not K.is_RealField:
+            if not K.is_RealField:  # floating point reuses the exact pivot columns
                 self._pivots["mu"] = list(M.rref()[1])
+            vals += maximal_minors(M, self._pivots.get("mu"))
         return vals
 
     def _stage_items(self, stage):

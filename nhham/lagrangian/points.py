@@ -486,15 +486,15 @@ def maximal_minors(M: DomainMatrix, pivots=None) -> list:
     R = M[:, P]^{-1} M (so R[:, P] = I), det M[:, S] = det M[:, P] det R[:, S], and
     det R[:, S] is, up to the sign of a generalised Laplace expansion along the unit
     columns, the minor of R on the rows of P \\ S and the columns of S \\ P (at most
-    (n - m) x (n - m)). ``pivots`` gives P (m columns with det M[:, P] != 0) instead of
-    finding it: in floating point, where a rounded zero is not zero, it should come
-    from an exact evaluation.
+    (n - m) x (n - m)). ``pivots`` gives P (the pivot columns, found by an exact
+    evaluation) instead of finding it: in floating point a rounded zero is not zero.
+    Fewer than m pivots: every minor is zero.
     """
     m, n = M.shape
     if pivots is None:
         _, pivots = M.rref()
-        if len(pivots) < m:
-            return [M.domain.zero] * math.comb(n, m)
+    if len(pivots) < m:
+        return [M.domain.zero] * math.comb(n, m)
     P = list(pivots)
     B = M.extract(list(range(m)), P)
     det_B = field_det(B)
@@ -677,6 +677,15 @@ class PointSampler:
         self.modular = modular
         if modular:
             self.fixed = {p: ModP.lift(x) for p, x in self.fixed.items()}
+
+    @classmethod
+    def on_M1(cls, system, seed: int, *, modular: bool = False) -> "PointSampler":
+        """The sampler of M_1 = {g = 0, φ = 0} of a system (its coordinates, velocities,
+        parameters with their values, holonomic constraints and φ with μ)."""
+        return cls(system.coordinates, system.velocities, system.parameters,
+                   dict(system.parameter_values), system.holonomic, system.phi, seed,
+                   mu=[list(system.mu.row(i)) for i in range(len(system.phi))],
+                   modular=modular)
 
     # Degree bookkeeping for the denominators that may vanish at a drawn point
     # (they are drawn again): the bound of their numerators.

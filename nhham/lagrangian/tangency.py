@@ -107,8 +107,7 @@ def tangency_at_points(system, hessian, forcing, primary, *, seed: int,
     n, m = len(q), len(system.phi)
     chis = [sp.sympify(c) for c in primary]
     mu = [list(system.mu.row(i)) for i in range(m)]
-    sampler = PointSampler(q, v, system.parameters, dict(system.parameter_values),
-                           system.holonomic, system.phi, seed, mu=mu)
+    sampler = PointSampler.on_M1(system, seed)
     Jq = [jacobian_row(c, q) for c in chis]
     rows_of = {f: i for i, f in enumerate(system.phi)}
     Jv = [mu[rows_of[c]] if c in rows_of else jacobian_row(c, v) for c in chis]
@@ -191,8 +190,7 @@ def _proof_modulo_p(system, chis, W, F, mu, Jq, Jv, seed, tries: int = 3):
             return None
     if len(moving) != m:
         return None
-    sampler = PointSampler(q, v, system.parameters, dict(system.parameter_values),
-                           system.holonomic, system.phi, seed, mu=mu, modular=True)
+    sampler = PointSampler.on_M1(system, seed, modular=True)
     for _ in range(tries):
         try:
             pt = sampler.point()

@@ -169,6 +169,7 @@ def test_a_wrong_sign_is_detected_at_exact_points(monkeypatch):
 def test_points_need_exact_points_and_a_quadratic_lagrangian():
     """The Cartesian pendulum's M_1 (x^2 + y^2 = l^2) has no exact points: "points" says
     so, "auto" compares at sampled points."""
+    import nhham
     from nhham.errors import InputError
 
     system = models.pendulum_cartesian()
@@ -176,6 +177,12 @@ def test_points_need_exact_points_and_a_quadratic_lagrangian():
         cross_check(system, method="points")
     with pytest.raises(InputError, match="method must be one of"):
         cross_check(system, method="modular")
+    th = sp.Symbol("theta")
+    xd, thd = sp.symbols("x_dot theta_dot")
+    quartic = nhham.System(["x", "theta"], (xd**2 + thd**2) / 2 + xd**4 / 20,
+                           [sp.sin(th) * xd - thd])
+    with pytest.raises(InputError, match="not quadratic"):
+        cross_check(quartic, method="points")
 
 
 def test_a_wrong_sign_is_detected(monkeypatch):
