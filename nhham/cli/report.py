@@ -7,7 +7,6 @@ Python reprs). JSON values are numbers, booleans, null, strings and lists.
 
 from __future__ import annotations
 
-import math
 import sys
 import time
 from contextlib import contextmanager
@@ -39,12 +38,6 @@ def display_form(expr):
     except Exception:  # pragma: no cover - sympy corner cases; show as derived
         return expr
     return simpler if sp.count_ops(simpler) <= sp.count_ops(expr) else expr
-
-
-def json_number(x):
-    """A float for JSON: finite numbers as numbers, others as null."""
-    x = float(x)
-    return x if math.isfinite(x) else None
 
 
 def table(rows, header=None, indent="  ") -> str:

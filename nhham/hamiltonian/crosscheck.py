@@ -272,7 +272,7 @@ class _Sampler:
         return f" ({k} sample point(s) skipped: not finite there)" if k else ""
 
 
-class _ExactSampler(_Sampler):
+class _ModularSampler(_Sampler):
     """Seeded points of M_1 over F_p (:class:`~nhham.lagrangian.points.PointSampler`
     with ``modular=True``): every quantity is computed exactly modulo p, so a
     difference is zero or it is not."""
@@ -412,10 +412,10 @@ def cross_check(system, precision: int | None = None, samples: int = 6, seed: in
     if method == "auto":
         method = "exact" if side.symbolic_affordable else "sampled"
         if method == "sampled" and precision is None:
-            sampler = _exact_sampler(system, side, samples, seed)
+            sampler = _modular_sampler(system, side, samples, seed)
             method = "points" if sampler is not None else "sampled"
     elif method == "points":
-        sampler = _exact_sampler(system, side, samples, seed, required=True)
+        sampler = _modular_sampler(system, side, samples, seed, required=True)
     if method != "exact" and sampler is None:
         sampler = _Sampler(system, tuple(system.holonomic) + tuple(system.phi), precision,
                            samples, seed, tol if tol is not None else Backend(precision)
@@ -741,8 +741,8 @@ def _check_stages(system, side, analysis, run_H) -> CheckResult:
 
 
 # ---------------------------------------------------------------- sampled
-def _exact_sampler(system, side, samples, seed, required=False):
-    """An :class:`_ExactSampler` when both sides can be evaluated exactly at exact points
+def _modular_sampler(system, side, samples, seed, required=False):
+    """An :class:`_ModularSampler` when both sides can be evaluated exactly at exact points
     of M_1 (L quadratic in v, so Leg^-1 is one linear solve; M_1 with exact points),
     else None (or an error naming why, when ``required``)."""
     why = None
@@ -750,7 +750,7 @@ def _exact_sampler(system, side, samples, seed, required=False):
         why = "L is not quadratic in the velocities (Leg^-1 is solved numerically)"
     else:
         try:
-            sampler = _ExactSampler(system, samples, seed)
+            sampler = _ModularSampler(system, samples, seed)
             sampler.points  # noqa: B018 - draws the points, or raises NotExact
             return sampler
         except (NotExact, ZeroDivisionError) as exc:
@@ -762,9 +762,9 @@ def _exact_sampler(system, side, samples, seed, required=False):
 
 def _sampled(system, side: HamiltonianSide, sampler):
     """Checks at points of M_1 for a regular system, in floating point or (an
-    :class:`_ExactSampler`) exactly; None when C is singular there."""
+    :class:`_ModularSampler`) exactly; None when C is singular there."""
     primary = tuple(system.holonomic) + tuple(system.phi)
-    exactly = isinstance(sampler, _ExactSampler)
+    exactly = isinstance(sampler, _ModularSampler)
     how = "exact solves modulo p" if exactly else "numeric solves"
     be = sampler.backend
     lag = _NumericLagrangian(system, sampler.args)
