@@ -251,15 +251,32 @@ def _median_command(argv, runs, timeout):
     return tuple(statistics.median(r[i] for r in rows) for i in range(3))
 
 
-def _lagranges(system, runs):
-    from nhham.system.mechanics import to_lagranges_method
-
-    def once():
-        lm = to_lagranges_method(system).lm
-        lm.form_lagranges_equations()
-    cpu, _, _ = timed(once, runs)
-    return cpu
-
+# Both sides of the comparison in a fresh process each run, timed after the imports
+# (process CPU time), caches cold: the nhham side is the whole classify command (scene
+# load, the verdict at the parameter values, classes, the JSON written), the
+# LagrangesMethod side loads the same scene, builds the model and forms the equations.
+AFTER_IMPORTS = {
+    "nhham classify": (
+        "import contextlib, io, sys, time\n"
+        "import networkx, numpy, scipy.linalg  # noqa\n"
+        "from nhham.cli import results  # noqa\n"
+        "from nhham.cli.main import main\n"
+        "from nhham.hamiltonian import classification, crosscheck  # noqa\n"
+        "from nhham.lagrangian import analysis, parametric  # noqa\n"
+        "from nhham.system import scene  # noqa\n"
+        "t = time.process_time()\n"
+        "with contextlib.redirect_stdout(io.StringIO()):\n"
+        "    rc = main(['classify', sys.argv[1], '--json'])\n"
+        "print(time.process_time() - t if rc == 0 else 'failed')\n"),
+    "LM": (
+        "import sys, time\n"
+        "import sympy.physics.mechanics  # noqa\n"
+        "from nhham.system.scene import load_scene\n"
+        "from nhham.system.mechanics import to_lagranges_method\n"
+        "t = time.process_time()\n"
+        "to_lagranges_method(load_scene(sys.argv[1]).system).lm.form_lagranges_equations()\n"
+        "print(time.process_time() - t)\n"),
+}
 
 LM_SCRIPT = ("import sys\n"
              "from nhham.system.scene import load_scene\n"
@@ -268,14 +285,17 @@ LM_SCRIPT = ("import sys\n"
              ".form_lagranges_equations()\n")
 
 
-def _nhham_classify_work(system, runs):
-    from nhham.hamiltonian.classification import classify_constraints
-
-    def once():
-        a = analyze_constraints(system)
-        return a.integrable, classify_constraints(a)
-    cpu, _, _ = timed(once, runs)
-    return cpu
+def _after_imports(which, path, runs, timeout):
+    """Median CPU s of ``AFTER_IMPORTS[which]`` on a scene, one fresh process per run."""
+    out = []
+    for _ in range(runs):
+        try:
+            proc = subprocess.run([sys.executable, "-c", AFTER_IMPORTS[which], str(path)],
+                                  capture_output=True, text=True, timeout=timeout)
+            out.append(float(proc.stdout.strip().splitlines()[-1]))
+        except (subprocess.TimeoutExpired, ValueError, IndexError):
+            return None
+    return statistics.median(out)
 
 
 def scaling(runs: int, timeout: float = 120.0):
@@ -284,12 +304,14 @@ def scaling(runs: int, timeout: float = 120.0):
     load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
     print(f"# nhham scaling: {platform.python_version()}, sympy {sp.__version__}, "
           f"{os.cpu_count()} CPUs, load average {load:.1f}; whole commands, median of {runs} "
-          f"runs: wall s / CPU s / peak MB; LM = LagrangesMethod.form_lagranges_equations "
-          f"(CPU s, in process); nhham = analysis + integrability + classes (CPU s, in "
-          f"process); LM script = a process loading the scene and forming Lagrange's "
-          f"equations (CPU s), against the classify command's CPU s")
+          f"runs: wall s / CPU s / peak MB; after imports (CPU s, a fresh process per run, "
+          f"timed after the imports): LM = load the scene, build the LagrangesMethod and "
+          f"form_lagranges_equations, nhham = the whole classify command; LM script = a "
+          f"process loading the scene and forming Lagrange's equations (CPU s, imports "
+          f"included), against the classify command's CPU s")
     header = ["system"] + [f"nhham {c}" for c in COMMANDS] + [
-        "LM", "nhham (in process)", "LM / nhham", "LM script", "LM script / classify"]
+        "LM after imports", "nhham classify after imports", "LM / nhham",
+        "LM script", "LM script / classify"]
     print("| " + " | ".join(header) + " |")
     print("|" + "---|" * len(header))
     with tempfile.TemporaryDirectory() as tmp:
@@ -302,13 +324,14 @@ def scaling(runs: int, timeout: float = 120.0):
                 cells.append("> %g s" % timeout if res is None else
                              f"{res[0]:.2f} / {res[1]:.2f} / {res[2]:.0f}")
             classify = timings["classify"]
-            lm = _lagranges(system, runs)
-            work = _nhham_classify_work(system, runs)
+            lm = _after_imports("LM", path, runs, timeout)
+            work = _after_imports("nhham classify", path, runs, timeout)
             # The same comparison as whole processes: a script that loads the scene and
             # forms Lagrange's equations (imports included, as in the nhham command).
             script = _median_command([sys.executable, "-c", LM_SCRIPT, str(path)], runs,
                                      timeout)
-            cells += [f"{lm:.2f}", f"{work:.2f}", f"{lm / work:.1f}",
+            cells += ["-" if lm is None else f"{lm:.2f}", "-" if work is None else f"{work:.2f}",
+                      "-" if lm is None or work is None else f"{lm / work:.1f}",
                       "> %g s" % timeout if script is None else f"{script[1]:.2f}",
                       "-" if script is None or classify is None else
                       f"{script[1] / classify[1]:.1f}"]

@@ -73,7 +73,7 @@ def snake_expressions(N, form):
     physics (tests/test_models.py checks the identity), different sizes.
     """
     base = snake(N)
-    q, v = base.coordinates, base.velocities
+    q = base.coordinates
     if form == "compact":
         L = base.lagrangian
     elif form == "chain":

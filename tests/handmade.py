@@ -152,3 +152,54 @@ def evaluate(expr, point):
 def evaluate_matrix(matrix, point):
     sub = {k: sp.Float(v, 30) for k, v in point.items()}
     return np.array(matrix.xreplace(sub).evalf(20), dtype=float)
+
+
+# ======================================= singular C with a non-constant W (by hand)
+# A point transformation q = f(Q) of a system solved by hand: L and the constraints are
+# pulled back, W(Q) = J^T W_0 J is neither constant nor diagonal, and status, stage
+# count, ranks and the multipliers are those of the original system.
+q1, q2, q3, q4 = sp.symbols("q1 q2 q3 q4")
+v1, v2, v3, v4 = sp.symbols("q1_dot q2_dot q3_dot q4_dot")
+LOR = (v1**2 + v2**2 - v3**2) / 2  # the paper's Lorentzian kinetic energy
+
+
+def pulled_back(coords, L, constraints, transform, name, holonomic=()):
+    """The system in coordinates Q with q = transform[q] (the other q unchanged)."""
+    Q = sp.symbols(coords)
+    V = [sp.Symbol(f"{c}_dot") for c in coords]
+    sub = {q: transform.get(q, q) for q in Q}
+    vel = {v: sum((sp.diff(sub[q], p) * w for p, w in zip(Q, V)), sp.S.Zero)
+           for q, v in zip(Q, V)}
+    back = {**sub, **vel}
+    return nhham.System(list(coords), sp.expand(L.xreplace(back)),
+                        [sp.expand(c.xreplace(back)) for c in constraints],
+                        holonomic=[h.xreplace(sub) for h in holonomic], name=name)
+
+
+def curvilinear_3_2():
+    """Example 3.2 (L = LOR + q1^2/2, phi = v1 + v3) with q3 -> q3 + sin(q2) and
+    q2 -> q2 + q2^3/3.  W(q) is not constant, not diagonal, and
+    det W = -(1 + q2^2)^2.  Known: phi -> q1 -> v1, ranks 0, 0, 1, lambda = q1."""
+    return pulled_back(["q1", "q2", "q3"], LOR + q1**2 / 2, [v1 + v3],
+                       {q3: q3 + sp.sin(q2), q2: q2 + q2**3 / 3}, "curvilinear 3.2")
+
+
+def curvilinear_five_stage():
+    """The five-stage walk-through (L = LOR + q1 q2, phi = v2 + v3) with q3 -> q3 + q1^2/2
+    and q1 -> q1 + q1^3/3: secondary q1, v1, q2, v2 (up to factors), ranks 0, 0, 0, 0, 1."""
+    return pulled_back(["q1", "q2", "q3"], LOR + q1 * q2, [v2 + v3],
+                       {q3: q3 + q1**2 / 2, q1: q1 + q1**3 / 3}, "curvilinear five stages")
+
+
+def curvilinear_free_multiplier():
+    """The free-multiplier case (L = LOR + v4^2/2 - q4, phi1 = v2 + v3, phi2 = v4) with
+    q3 -> q3 + cos(q4), q4 -> q4 + q4^3/3: underdetermined, lambda_1 free, rank C = 1."""
+    return pulled_back(["q1", "q2", "q3", "q4"], LOR + v4**2 / 2 - q4, [v2 + v3, v4],
+                       {q3: q3 + sp.cos(q4), q4: q4 + q4**3 / 3}, "curvilinear free")
+
+
+def curvilinear_inconsistent():
+    """The inconsistent case (L = LOR + q1 q2, phi1 = v1 + v3, phi2 = v2 - 1) with
+    q3 -> q3 + q2^2, q1 -> q1 + q1^3: psi = q2 at stage 1, then 0 = 1 on M_2."""
+    return pulled_back(["q1", "q2", "q3"], LOR + q1 * q2, [v1 + v3, v2 - 1],
+                       {q3: q3 + q2**2, q1: q1 + q1**3}, "curvilinear inconsistent")

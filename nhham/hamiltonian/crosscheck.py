@@ -23,6 +23,9 @@ numeric layer, v = Leg^{-1}(q, p) solved at the point), which is what large
 systems such as the N-link snake need; ``"points"`` does it in exact
 arithmetic modulo p = 2^61 - 1 at exact points of M_1 (:mod:`nhham.lagrangian.points`),
 so a difference is exactly zero or a disagreement, ``"sampled"`` in floating point.
+Where C is singular, ``"points"`` compares the two constraint algorithms through their
+data at exact points of every M_k (the T*Q algorithm is not run symbolically, which
+would need H written with Leg^{-1}).
 
 Agreement of a sampled quantity means |a - b| <= tol * max(1, |a|, |b|)
 (infinity norms over the components) at every point; the reported relative
@@ -35,6 +38,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import random
 import time
 from dataclasses import dataclass
 from functools import cached_property
@@ -48,7 +52,8 @@ from nhham.hamiltonian.side import HamiltonianSide, hamiltonian_side
 from nhham.hamiltonian.legendre import Backend, ModularBackend, Lambdified, canonical_form_matrix
 from nhham.lagrangian.algebra import cancel
 from nhham.lagrangian.geometry import LagrangianGeometry
-from nhham.lagrangian.points import NotExact, PointSampler, exact_rank
+from nhham.lagrangian.points import (PRIME, ModP, NotExact, PointSampler, eliminate_coordinates,
+                                    exact_rank, exact_solve, jacobian_row)
 from nhham.system.expressions import derivative
 from nhham.lagrangian.submanifold import Submanifold
 
@@ -277,7 +282,7 @@ class _ModularSampler(_Sampler):
     with ``modular=True``): every quantity is computed exactly modulo p, so a
     difference is zero or it is not."""
 
-    def __init__(self, system, samples, seed):
+    def __init__(self, system, samples, seed, sampler: PointSampler | None = None):
         self.system = system
         self.backend = ModularBackend()
         self.tol = 0.0
@@ -285,11 +290,41 @@ class _ModularSampler(_Sampler):
         self.args = (tuple(system.coordinates) + tuple(system.velocities)
                      + tuple(system.parameters))
         self.count = int(samples)
-        self.sampler = PointSampler.on_M1(system, seed, modular=True)
+        self.sampler = sampler or PointSampler.on_M1(system, seed, modular=True)
+
+    @classmethod
+    def on(cls, system, constraints, samples, seed) -> "_ModularSampler":
+        """Seeded points of M = {constraints = 0} over F_p: the constraints free of
+        velocities are solved for coordinates, those affine in the velocities for
+        dependent velocities (NotExact for any other constraint)."""
+        vels = set(system.velocities)
+        holonomic: list = []
+        rest = [sp.sympify(c) for c in constraints]
+        # A constraint that becomes free of velocities once the coordinates solved so far
+        # are substituted (q2 - 2 q1 v1^2 where q1 = 0) is solved for a coordinate too.
+        while True:
+            solved = eliminate_coordinates(system.coordinates, holonomic)
+            reduced = [sp.expand(c.xreplace(solved)) for c in rest]
+            more = [c for c in reduced if c != 0 and not c.free_symbols & vels]
+            if not more:
+                break
+            holonomic += more
+            rest = [c for c, r in zip(rest, reduced) if r.free_symbols & vels]
+        affine = [c for c in reduced if c != 0]
+        for c in affine:
+            if any(e.free_symbols & vels for e in jacobian_row(c, system.velocities)):
+                raise NotExact(f"{c} is not affine in the velocities")
+        return cls(system, samples, seed, PointSampler(
+            system.coordinates, system.velocities, system.parameters,
+            dict(system.parameter_values), holonomic, affine, seed, modular=True))
 
     @cached_property
     def all_points(self):
-        return [self.sampler.point().env for _ in range(self.count)]
+        # Velocities in F_p (solved ones may come out as exact 0); coordinates stay
+        # angles or exact numbers so that sin and cos of them stay exact.
+        vels = set(self.system.velocities)
+        return [{s: ModP.lift(x) if s in vels else x for s, x in self.sampler.point().env.items()}
+                for _ in range(self.count)]
 
     def values(self, pt) -> list:
         return [pt[s] for s in self.args]
@@ -386,9 +421,13 @@ def cross_check(system, precision: int | None = None, samples: int = 6, seed: in
         rational arithmetic at ``samples`` seeded exact points of M_1 (no
         symbolic inverse, no compilation; every difference must be exactly 0,
         the tolerance is 0); ``"sampled"``: the same computations in floating
-        point at sampled points. When C is singular at the points the stages
-        need the symbolic algorithm and the check falls back to ``"exact"``
-        (the report's ``method`` says so). ``"auto"``: exact when
+        point at sampled points. When C is singular, ``"points"`` runs the
+        inverse-free constraint algorithm on TQ and compares the T*Q algorithm's
+        data (Z_i^H(chi^H), X_H(chi^H)) with the TQ data at exact points of every
+        M_k, then the fields on M_f; where some M_k has no exact points (a secondary
+        constraint not solvable for a coordinate nor affine in the velocities), and
+        for ``"sampled"``, the check falls back to ``"exact"`` (the report's
+        ``method`` says so). ``"auto"``: exact when
         :attr:`HamiltonianSide.symbolic_affordable` (exact Legendre inverse and W
         diagonal, q-independent or n <= 3), else points when L is quadratic in
         v, ``precision`` is None and M_1 has exact points, else sampled.
@@ -427,6 +466,11 @@ def cross_check(system, precision: int | None = None, samples: int = 6, seed: in
             system, side, precision, samples, seed, tol, max_stages)
     else:
         got = _sampled(system, side, sampler)
+        if got is None and method == "points":
+            try:
+                got = _staged_at_points(system, side, samples, seed, max_stages)
+            except (NotExact, ZeroDivisionError):
+                got = None
         if got is None:
             # C is singular at the samples: stages need the symbolic algorithm.
             method, be = "exact", Backend(precision)
@@ -824,6 +868,199 @@ def _sampled(system, side: HamiltonianSide, sampler):
     stages = (stage,)
     return checks, stages, stages, ("determined", "determined"), (len(sampler.points),
                                                                   sampler.dropped)
+
+
+# ------------------------------------------- singular C: exact points of every M_k
+@dataclass(frozen=True)
+class _Tangency:
+    """The stage data of one side at one point: T (k, m) with T[j, i] = Z_i(chi_j) and
+    xi (k,) with xi[j] = xi(chi_j), for the constraints chi of a stage."""
+
+    T: np.ndarray
+    xi: np.ndarray
+
+
+def _tangency_L(lag: _NumericLagrangian, be, vals, chis) -> _Tangency:
+    """On TQ: Z_i = -W^{AB} mu_iB d/dv^A and xi_L = v d/dq + W^{-1} F d/dv."""
+    n = lag.n
+    W, F, mu = lag._W(be, vals), lag._F(be, vals), lag._mu(be, vals)
+    v = np.array(vals[n:2 * n], dtype=object)
+    Gq, Gv = lag.gradients(be, vals, chis)
+    return _Tangency(-(Gv @ be.solve(W, mu.T)), Gq @ v + Gv @ be.solve(W, F))
+
+
+def _tangency_H(num, be, hp, chis) -> _Tangency:
+    """On T*Q, of chi o Leg^{-1}: Z_i^H = -mu_iA d/dp_A and X_H = (dH/dp, -dH/dq)."""
+    _, dq, dp = num.gradients(be, hp, chis)
+    return _Tangency(-(dp @ hp.mu.T), dq @ hp.Hp - dp @ hp.Hq)
+
+
+def _solutions(t: _Tangency):
+    """(rank, augmented rank, particular lambda, kernel basis) of T lambda = -xi over F_p.
+
+    The particular solution is zero off the pivot columns; the kernel has one vector
+    per non-pivot column. Both are None when the system is inconsistent.
+    """
+    k, m = t.T.shape
+    rows = [list(r) for r in t.T]
+    r, prow, pcol = exact_rank(rows) if k and m else (0, [], [])
+    aug = exact_rank([row + [x] for row, x in zip(rows, t.xi)])[0] if k else 0
+    if aug > r:
+        return r, aug, None, None
+    zero = ModularBackend().zeros(m)
+    block = [[rows[i][j] for j in pcol] for i in prow]
+    lam = zero.copy()
+    if r:
+        for j, x in zip(pcol, exact_solve(block, [[-t.xi[i]] for i in prow])):
+            lam[j] = x[0]
+    kernel = []
+    for j in (j for j in range(m) if j not in pcol):
+        vec = zero.copy()
+        vec[j] = ModP(1)
+        if r:
+            for c, x in zip(pcol, exact_solve(block, [[rows[i][j]] for i in prow])):
+                vec[c] = -x[0]
+        kernel.append(vec)
+    return r, aug, lam, kernel
+
+
+def _staged_at_points(system, side: HamiltonianSide, samples, seed, max_stages):
+    """The checks of a system whose C is singular, at exact points of every M_k.
+
+    The constraint algorithm on TQ is the inverse-free one; the T*Q algorithm is
+    not run symbolically (that would need H through Leg^{-1}). Instead its data at
+    Leg of exact points of each M_k, Z_i^H(chi_j^H) and X_H(chi_j^H) with chi^H =
+    chi o Leg^{-1}, are computed modulo p and compared with Z_i(chi_j) and
+    xi_L(chi_j): equal data give the same ranks, conditions and multipliers on both
+    sides, so the T*Q algorithm's stages are the TQ ones at those points. On M_f
+    each side solves its own final tangency system for lambda and the fields are
+    compared at common multipliers (free multipliers given the same seeded values).
+
+    Raises
+    ------
+    NotExact
+        When some M_k has no exact points (a constraint neither solvable for a
+        coordinate nor affine in the velocities) or the run is inconsistent.
+    """
+    from nhham.lagrangian.analysis import analyze_constraints
+
+    analysis = analyze_constraints(system, samples=samples, seed=seed,
+                                   max_stages=max_stages, decompose=False)
+    if analysis.status == "inconsistent":
+        raise NotExact("the constraint algorithm is inconsistent (no M_f to sample)")
+    samplers = [_ModularSampler.on(system, st.constraints, samples, seed + st.index)
+                for st in analysis.stages]
+    final = _ModularSampler.on(system, analysis.final_constraints, samples, seed)
+    for smp in samplers + [final]:
+        smp.all_points  # noqa: B018 - draws the points, or raises NotExact
+    be = final.backend
+    lag = _NumericLagrangian(system, final.args)
+    num = side.numeric
+    m = system.m
+    checks, problems, data_pairs, stages_H, dropped = [], [], [], [], 0
+    for st, smp in zip(analysis.stages, samplers):
+        seen_L, seen_H = [], []
+        for pt in smp.all_points:
+            vals = smp.values(pt)
+            hp = num.point_from_tq(be, pt)
+            tL = _tangency_L(lag, be, vals, st.constraints)
+            tH = _tangency_H(num, be, hp, st.constraints)
+            data_pairs += [(tL.T, tH.T), (tL.xi, tH.xi)]
+            seen_L.append(_solutions(tL)[:2])
+            seen_H.append(_solutions(tH)[:2])
+        rank_L, rank_H = max(seen_L), max(seen_H)
+        dropped += sum(1 for x in seen_L if x[0] < rank_L[0])
+        stages_H.append({"index": st.index, "constraints": len(st.constraints),
+                         "rank": rank_H[0], "augmented_rank": rank_H[1],
+                         "labels": list(st.labels)})
+        if rank_L != (st.rank, st.augmented_rank):
+            # The points carry the parameter values, the algorithm's ranks are generic:
+            # the values are exceptional, which the symbolic route handles.
+            raise NotExact(f"stage {st.index}: ranks {rank_L[0]}/{rank_L[1]} at the points, "
+                           f"{st.rank}/{st.augmented_rank} generically")
+        if rank_H != rank_L:
+            problems.append(f"stage {st.index}: ranks {rank_L[0]}/{rank_L[1]} (TQ) vs "
+                            f"{rank_H[0]}/{rank_H[1]} (T*Q)")
+    _, _, same_data = final.compare(data_pairs)
+    if not same_data:
+        problems.append("Z_i^H(chi^H), X_H(chi^H) differ from Z_i(chi), xi_L(chi) at "
+                        "exact points of some M_k")
+    # On M_f every stage's T*Q system is consistent: Leg(M_f) lies in the T*Q M_f.
+    field_pairs, lam_pairs, inv_pairs, br_pairs, kernel_dims = [], [], [], [], set()
+    rng = random.Random(seed + 7)
+    top = analysis.stages[-1].rank
+    for pt in final.all_points:
+        vals = final.values(pt)
+        hp = num.point_from_tq(be, pt)
+        inv_pairs.append((hp.v, np.array(vals[system.n:2 * system.n], dtype=object)))
+        for st in analysis.stages:
+            if _solutions(_tangency_H(num, be, hp, st.constraints))[2] is None:
+                problems.append(f"stage {st.index}: the T*Q tangency equations are "
+                                f"inconsistent at Leg of a point of M_f")
+        tL = _tangency_L(lag, be, vals, analysis.final_constraints)
+        tH = _tangency_H(num, be, hp, analysis.final_constraints)
+        rL, _, lamL, kernel = _solutions(tL)
+        rH, _, lamH, _ = _solutions(tH)
+        if lamL is None or lamH is None or rL < top or rH < top:
+            dropped += 1  # not a generic point of M_f
+            continue
+        kernel_dims.add(len(kernel))
+        # The two sides' solutions agree when they differ by a kernel vector of T.
+        lam_pairs.append((tL.T @ lamH, -tL.xi))
+        lam = lamL + sum((k * ModP(rng.randrange(1, PRIME)) for k in kernel), be.zeros(m))
+        W, M, F = lag._W(be, vals), lag._M(be, vals), lag._F(be, vals)
+        mu = lag._mu(be, vals)
+        v = np.array(vals[system.n:2 * system.n], dtype=object)
+        acc = be.solve(W, F) - be.solve(W, mu.T) @ lam
+        field_pairs.append((np.concatenate([v, M @ v + W @ acc]),
+                            hp.X_H + hp.vertical().T @ lam))
+        br_pairs.append((num.bracket_matrix(be, hp, analysis.final_constraints),
+                         lag.bracket_matrix(be, vals, analysis.final_constraints)))
+    free = len(analysis.free_multiplier_symbols)
+    if kernel_dims and kernel_dims != {free}:
+        problems.append(f"{sorted(kernel_dims)} free multipliers at the points of M_f, "
+                        f"{free} from the algorithm")
+    if not field_pairs:
+        problems.append("no generic exact point of M_f")
+    k = len(data_pairs) // 2
+    how = "exact solves modulo p at exact points"
+    checks.append(CheckResult(
+        "stages", not problems, False, samples=k,
+        detail="; ".join(problems) if problems else (
+            f"{analysis.status} with {len(analysis.stages)} stage(s), ranks "
+            f"{[st.rank for st in analysis.stages]}: Z_i^H(chi^H) and X_H(chi^H) on T*Q equal "
+            f"Z_i(chi) and xi_L(chi) at {k} exact points of the M_k (so the T*Q algorithm "
+            f"has the same stages, ranks and conditions there), and every stage's T*Q "
+            f"tangency equations are consistent at Leg of the points of M_f")))
+    _, _, ok = final.compare(inv_pairs)
+    checks.append(CheckResult("legendre inverse", ok, False, 0.0, 0.0, len(inv_pairs),
+                              f"v -> p = dL/dv -> Leg^-1(q, p) ({how}) against v"))
+    _, _, ok = final.compare(field_pairs)
+    checks.append(CheckResult(
+        "field", ok, False, 0.0 if ok else math.nan, 0.0 if ok else math.nan,
+        len(field_pairs),
+        f"Leg_*(xi_L + lambda^i Z_i) against X_H + lambda^i Z_i^H on M_f, lambda solving "
+        f"the TQ tangency equations ({free} free multiplier(s) given the same seeded "
+        f"values), by {how}"))
+    _, _, ok = final.compare(lam_pairs)
+    checks.append(CheckResult(
+        "multipliers", ok, False, 0.0 if ok else math.nan, 0.0 if ok else math.nan,
+        len(lam_pairs),
+        "lambda^H (solving the T*Q tangency equations on M_f) solves the TQ ones: "
+        "lambda^L - lambda^H o Leg lies in the kernel (the free multipliers)"))
+    checks.append(_check_form_sampled(side, final, lag))
+    _, _, ok = final.compare(br_pairs)
+    checks.append(CheckResult(
+        "Poisson map", ok, False, 0.0 if ok else math.nan, 0.0 if ok else math.nan,
+        len(br_pairs),
+        f"{{f, g}} o Leg against {{Leg^* f, Leg^* g}}_L for the "
+        f"{len(analysis.final_constraints)} final constraints, by {how}"))
+    checks = [dataclasses.replace(c, method="points") for c in checks]
+    stages_L = _stage_summaries(analysis.stages)
+    h_status = analysis.status if not problems else (
+        "determined" if top == m else "underdetermined")
+    return (checks, stages_L, tuple(stages_H), (analysis.status, h_status),
+            (len(final.all_points), dropped))
 
 
 def _labels(system):

@@ -482,7 +482,8 @@ def _stage_one_at_points(view, geo, exprs, labels, lam, factory, opts):
     evidence = (
         Evidence("rank of (Z_i(chi_j)) on M_1", verdict.rank, f"rank {r}" + (
             "" if not r or geo.closed_form_affordable else
-            " (generic; where it might drop on M_1 is not examined at this size)")),
+            " (generic, proved at an exact point; it drops exactly where det W det C = "
+            "det [[W, mu^T], [mu, 0]] vanishes on M_1, not expanded at this size)")),
         Evidence("lambda-free conditions on M_1", verdict.consistent, "add nothing"),
     )
     stage = Stage(index=1, constraints=tuple(exprs), labels=tuple(labels), new_constraints=(),

@@ -747,6 +747,8 @@ class _Data:
         self.W = [list(geo.hessian.row(i)) for i in range(system.n)]
         self.notes: list[str] = []
         self._pivots: dict = {}
+        self._points_cache: dict = {}
+        self._memos: dict = {}
 
     def env(self, gens=None, at=None, generic=False) -> dict:
         """Parameter values: ``gens`` (symbol -> field element) first, then ``at``
@@ -767,10 +769,27 @@ class _Data:
             self.points = saved
 
     def _pts(self, eqs, env0, K, tag):
-        # The points stay exact when the data are evaluated in another field.
+        # The points stay exact when the data are evaluated in another field. The same
+        # (stage, parameter values) gives the same points for every datum: drawn once,
+        # and a shorter list is a prefix of a longer one (one seeded stream).
         exact = QQ if K.is_RealField or K.is_FiniteField else K
+        try:
+            key = (tag, tuple(eqs), exact, frozenset(env0.items()))
+            known = self._points_cache.get(key, [])
+        except TypeError:  # unhashable parameter values: no caching
+            key, known = None, []
+        if len(known) >= self.points:
+            return known[:self.points]
         sampler = _Sampler(self.system, eqs, env0, exact, random.Random(f"{self.seed}:{tag}"))
-        return [sampler.point() for _ in range(self.points)]
+        out = [sampler.point() for _ in range(self.points)]
+        if key is not None:
+            self._points_cache[key] = out
+        return out
+
+    def _memo(self, env) -> dict:
+        """The memo of subexpression values at one point, shared by every datum (the
+        point is kept alive with it, so its id stays its own)."""
+        return self._memos.setdefault(id(env), (env, {}))[1]
 
     @staticmethod
     def _val(K, x):
@@ -798,7 +817,8 @@ class _Data:
         out = []
         m1 = stages[0].constraints
         out.append(("the Lagrangian is singular (det W = 0)", lambda env0, K: [
-            field_det(self._matrix(K, self.W, env, {})) for env in self._pts(m1, env0, K, 1)]))
+            field_det(self._matrix(K, self.W, env, self._memo(env)))
+            for env in self._pts(m1, env0, K, 1)]))
         if system.m and math.comb(system.n, system.m) <= MAX_MINORS:
             out.append(("the constraint one-forms become dependent (a constraint is "
                         "redundant)", lambda env0, K: self._mu_minors(m1, env0, K)))
@@ -821,7 +841,7 @@ class _Data:
         rows = [list(system.mu.row(i)) for i in range(m)]
         vals = []
         for env in self._pts(eqs, env0, K, 1):
-            M = self._matrix(K, rows, env, {})
+            M = self._matrix(K, rows, env, self._memo(env))
             if not K.is_RealField:  # floating point reuses the exact pivot columns
                 self._pivots["mu"] = list(M.rref()[1])
             vals += maximal_minors(M, self._pivots.get("mu"))
@@ -842,7 +862,7 @@ class _Data:
             def block_det(env0, K, eqs=stage.constraints, mu_I=mu_I, Jv=Jv, r=r, k=k):
                 vals = []
                 for env in self._pts(eqs, env0, K, k):
-                    cache = {}
+                    cache = self._memo(env)
                     W = self._matrix(K, self.W, env, cache)
                     MI = self._matrix(K, mu_I, env, cache)
                     JJ = self._matrix(K, Jv, env, cache)
@@ -855,7 +875,7 @@ class _Data:
                         + (" (C singular)" if k == 1 else ""), block_det))
         for label, psi in stage.conditions:
             def condition(env0, K, eqs=stage.constraints, psi=psi, k=k):
-                return [self._val(K, evaluate([psi], env, {})[0])
+                return [self._val(K, evaluate([psi], env, self._memo(env))[0])
                         for env in self._pts(eqs, env0, K, k)]
 
             out.append((f"the condition from {label} on M_{k} vanishes", condition))
@@ -871,7 +891,7 @@ class _Data:
                for i in range(m)]
         vals = []
         for env in self._pts(eqs, env0, K, 1):
-            cache = {}
+            cache = self._memo(env)
             M = self._matrix(K, rows, env, cache)
             if "dep" not in self._pivots or not K.is_RealField:
                 # Floating point reuses the exact choice of the kernel basis (the
@@ -911,7 +931,7 @@ class _Data:
         mats = []
         pts = self._pts(cons, env0, K, "f")
         for env in pts[:count]:
-            cache = {}
+            cache = self._memo(env)
             W = self._matrix(K, self.W, env, cache)
             M = self._matrix(K, Mx, env, cache)
             U = field_solve(W, self._matrix(K, Jv, env, cache).transpose())

@@ -24,7 +24,10 @@ from nhham.lagrangian.algorithm import run_algorithm
 from nhham.lagrangian.analysis import analyze_constraints
 from nhham.lagrangian.geometry import LagrangianGeometry
 from nhham.lagrangian.submanifold import Submanifold
-from nhham.system.scene import load_scene, loads_scene
+from nhham.system.scene import load_scene
+
+from handmade import (curvilinear_3_2, curvilinear_five_stage, curvilinear_free_multiplier,
+                      curvilinear_inconsistent)
 
 EXAMPLES = pathlib.Path(__file__).resolve().parents[2] / "examples"
 
@@ -33,7 +36,6 @@ xd, yd = sp.symbols("x_dot y_dot")
 q1, q2, q3, q4 = sp.symbols("q1 q2 q3 q4")
 v1, v2, v3, v4 = sp.symbols("q1_dot q2_dot q3_dot q4_dot")
 l1, l2 = sp.symbols("lambda_1 lambda_2")
-LOR = (v1**2 + v2**2 - v3**2) / 2
 
 
 # ====================================================================== δ W⁻¹
@@ -70,48 +72,6 @@ def test_divide_out_removes_every_power_of_the_factors_of_delta():
 
 
 # =============================================== systems with a non-constant W
-def pulled_back(coords, L, constraints, transform, name, holonomic=()):
-    """The system in coordinates Q with q = transform[q] (the other q unchanged)."""
-    Q = sp.symbols(coords)
-    V = [sp.Symbol(f"{c}_dot") for c in coords]
-    sub = {q: transform.get(q, q) for q in Q}
-    vel = {v: sum((sp.diff(sub[q], p) * w for p, w in zip(Q, V)), sp.S.Zero)
-           for q, v in zip(Q, V)}
-    back = {**sub, **vel}
-    return System(list(coords), sp.expand(L.xreplace(back)),
-                  [sp.expand(c.xreplace(back)) for c in constraints],
-                  holonomic=[h.xreplace(sub) for h in holonomic], name=name)
-
-
-def curvilinear_3_2():
-    """Example 3.2 (L = LOR + q1^2/2, phi = v1 + v3) with q3 -> q3 + sin(q2) and
-    q2 -> q2 + q2^3/3.  W(q) is not constant, not diagonal, and
-    det W = -(1 + q2^2)^2.  Known: phi -> q1 -> v1, ranks 0, 0, 1, lambda = q1."""
-    return pulled_back(["q1", "q2", "q3"], LOR + q1**2 / 2, [v1 + v3],
-                       {q3: q3 + sp.sin(q2), q2: q2 + q2**3 / 3}, "curvilinear 3.2")
-
-
-def curvilinear_five_stage():
-    """The five-stage walk-through (L = LOR + q1 q2, phi = v2 + v3) with q3 -> q3 + q1^2/2
-    and q1 -> q1 + q1^3/3: secondary q1, v1, q2, v2 (up to factors), ranks 0, 0, 0, 0, 1."""
-    return pulled_back(["q1", "q2", "q3"], LOR + q1 * q2, [v2 + v3],
-                       {q3: q3 + q1**2 / 2, q1: q1 + q1**3 / 3}, "curvilinear five stages")
-
-
-def curvilinear_free_multiplier():
-    """The free-multiplier case (L = LOR + v4^2/2 - q4, phi1 = v2 + v3, phi2 = v4) with
-    q3 -> q3 + cos(q4), q4 -> q4 + q4^3/3: underdetermined, lambda_1 free, rank C = 1."""
-    return pulled_back(["q1", "q2", "q3", "q4"], LOR + v4**2 / 2 - q4, [v2 + v3, v4],
-                       {q3: q3 + sp.cos(q4), q4: q4 + q4**3 / 3}, "curvilinear free")
-
-
-def curvilinear_inconsistent():
-    """The inconsistent case (L = LOR + q1 q2, phi1 = v1 + v3, phi2 = v2 - 1) with
-    q3 -> q3 + q2^2, q1 -> q1 + q1^3: psi = q2 at stage 1, then 0 = 1 on M_2."""
-    return pulled_back(["q1", "q2", "q3"], LOR + q1 * q2, [v1 + v3, v2 - 1],
-                       {q3: q3 + q2**2, q1: q1 + q1**3}, "curvilinear inconsistent")
-
-
 def conformal_lorentzian():
     """L = (1 + x^2)(x'^2 - y'^2)/2 - x^2/2, phi = x' - y' (n = 2, W depends on x).
 
@@ -281,39 +241,11 @@ def test_singular_C_route_never_forms_the_inverse(monkeypatch, make):
 
 
 
-# The scene used to time `nhham classify` (kept here, not in examples/: `nhham compare`
-# still forms W^-1 on the Hamiltonian side and does not finish on it).
-CURVILINEAR_PAIR = """
-# Two copies of the paper's Example 3.2, (q1, q2, q3) and (q4, q5, q6), written in
-# curvilinear coordinates that couple them: the flat coordinates are
-#   Q1 = q1, Q2 = q2 + cos(q4), Q3 = q3 + sin(q5), Q4 = q4, Q5 = q5 + q5^3/3,
-#   Q6 = q6 + sin(q3),
-# L = (Q1'^2 + Q2'^2 - Q3'^2)/2 + Q1^2/2 + (Q4'^2 + Q5'^2 - Q6'^2)/2 + Q4^2/2,
-# phi_1 = Q1' + Q3', phi_2 = Q4' + Q6' pulled back. W(q) is 6 x 6, neither constant nor
-# diagonal, det W = (1 + q5^2)^2, and the coordinates form one block.
-#
-# What `nhham classify` should report (Example 3.2 twice: ranks, stages, multipliers and
-# the secondary constraints are invariant under the change of coordinates, and q1 = Q1,
-# q4 = Q4):
-#   singular: C = 0, rank C = 0 (of 2) on M_1
-#   xi_L(phi_1) = q1, xi_L(phi_2) = q4 -> M_2 adds q1, q4; then q1', q4' -> M_3;
-#     Z_1(q1') = Z_2(q4') = -1 fix both multipliers: 3 stages, ranks 0, 0, 2,
-#     dim M_f = 12 - 6 = 6
-#   status: determined; lambda_1 = q1, lambda_2 = q4 (= 0 on M_f)
-#   integrable (phi_1 = d(Q1 + Q3)/dt, phi_2 = d(Q4 + Q6)/dt)
-#   Hamiltonian side: 4 second class, 2 first class
-name = "two copies of Example 3.2 in curvilinear coordinates"
-coordinates = ["q1", "q2", "q3", "q4", "q5", "q6"]
-lagrangian = "(q1_dot**2 + (q2_dot - sin(q4)*q4_dot)**2 - (q3_dot + cos(q5)*q5_dot)**2)/2 + q1**2/2 + (q4_dot**2 + ((1 + q5**2)*q5_dot)**2 - (q6_dot + cos(q3)*q3_dot)**2)/2 + q4**2/2"
-constraints = ["q1_dot + q3_dot + cos(q5)*q5_dot", "q4_dot + q6_dot + cos(q3)*q3_dot"]
-"""
-
-
 def test_curvilinear_pair_reports_what_its_header_says():
-    """CURVILINEAR_PAIR (n = 6, W(q) with sines and cosines, det W = (1 + q5^2)^2).  The
+    """examples/curvilinear_pair.toml (n = 6, W(q) with sines and cosines, det W = (1 + q5^2)^2).  The
     W^-1 route did not finish in 20 minutes (nhham classify); the scaled one answers in
     about a second."""
-    a = analyze_constraints(loads_scene(CURVILINEAR_PAIR).system)
+    a = analyze_constraints(load_scene(EXAMPLES / "curvilinear_pair.toml").system)
     assert len(a.blocks) == 1 and a.rank_C == 0 and not a.regular
     assert a.status == "determined" and [s.rank for s in a.stages] == [0, 0, 2]
     assert [list(s.new_constraints) for s in a.stages] == [[q1, q4], [v1, v4], []]

@@ -33,7 +33,10 @@ EXAMPLES = sorted((Path(__file__).resolve().parents[2] / "examples").glob("*.tom
 # The gallery models brought in from sympy.physics.mechanics (n >= 5, W coupled through the
 # heading) take the symbolic route -- W^-1 written out -- many minutes each; their points
 # route is checked against the numeric saddle solve in tests/system/test_mechanics_models.py.
-GALLERY = {"chaplygin_sphere", "differential_drive", "rolling_disc_3d", "whipple_bicycle"}
+# The coupled curvilinear pair (n = 6, W(q) dense) did not finish on that route in 20 minutes;
+# its stages are checked against its hand-derived header in tests/lagrangian/test_adjugate.py.
+GALLERY = {"chaplygin_sphere", "differential_drive", "rolling_disc_3d", "whipple_bicycle",
+           "curvilinear_pair"}
 SYMBOLIC_EXAMPLES = [p for p in EXAMPLES if p.stem not in GALLERY]
 
 
@@ -194,6 +197,14 @@ def test_snake_verdicts_against_an_independent_numeric_computation(N):
     assert analysis.rank_C == rank_C == N and analysis.status == "determined"
     assert classes.second_class == rank_B and classes.first_class == N - rank_B
     assert classes.second_class == 2 * (N // 2)   # the scene header's claim
+    # Where rank C could drop: the report names det [[W, mu^T], [mu, 0]] = det W det C
+    # (Schur complement; checked here at the numeric point).
+    bordered = np.block([[Wq, muq.T], [muq, np.zeros((N, N))]])
+    assert np.linalg.det(bordered) == pytest.approx(np.linalg.det(Wq) * np.linalg.det(C),
+                                                    rel=1e-8)
+    outcome = analysis.stages[0].decisions[0].outcome
+    if N == 8:  # beyond the closed forms
+        assert "det W det C = det [[W, mu^T], [mu, 0]]" in outcome
 
 
 # ---------------------------------------------------- 3-D disc: LagrangesMethod
