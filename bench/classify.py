@@ -26,15 +26,16 @@ sympy, meaningful on a shared machine) with the wall-clock median beside them.
 
 Scaling (``--scaling``): the commands a user runs, ``nhham classify``, ``nhham
 derive`` (implicit form) and ``nhham compare``, as whole processes on the N-link
-snake (N = 2, 4, 8, 12, 16, scenes written by ``examples/make_snake.py``) and the
+snake (N = 2, 4, 8, 12, 16, scenes written by ``examples/make_snake.py``), the
 rolling disc in 3-D (built from sympy.physics.mechanics bodies,
-``tests/rolling_disc_3d.py``), with wall and CPU seconds (medians) and the peak
-memory of each process; beside them, in this process, sympy's
-``LagrangesMethod.form_lagranges_equations`` on the same system
-(:func:`nhham.system.mechanics.to_lagranges_method`) and nhham's classify work
-(analysis, integrability, classes) for the ratio LM / nhham; and the same comparison
-as whole processes, a script that loads the scene and forms Lagrange's equations
-against the ``nhham classify`` command (both CPU s, start-up included: the
+``tests/rolling_disc_3d.py``) and ``examples/curvilinear_pair.toml`` (n = 6, C
+singular, W(q) dense), with wall and CPU seconds (medians) and the peak memory of
+each process. Beside them, sympy's ``LagrangesMethod.form_lagranges_equations`` on the
+same scene (:func:`nhham.system.mechanics.to_lagranges_method`) against the whole
+``nhham classify`` command, each in a fresh process per run and timed after the
+imports (CPU s: scene load included on both sides, caches cold): the ``LM / nhham``
+column; and the same comparison with the imports counted, a script that loads the
+scene and forms Lagrange's equations against the ``nhham classify`` process (the
 ``LM script / classify`` column).
 
 Usage::
@@ -205,7 +206,7 @@ def _scene_text(system) -> str:
 
 
 def _scaling_systems(tmp: Path):
-    """(label, scene path, System) for the snakes and the 3-D disc."""
+    """(label, scene path, System) for the snakes, the 3-D disc and the singular-C pair."""
     sys.path.insert(0, str(ROOT / "tests"))
     from rolling_disc_3d import rolling_disc_3d
 
@@ -221,6 +222,8 @@ def _scaling_systems(tmp: Path):
     path = tmp / "rolling_disc_3d.toml"
     path.write_text(_scene_text(disc))
     out.append(("3-D rolling disc (n=5, m=2)", path, load_scene(path).system))
+    path = ROOT / "examples" / "curvilinear_pair.toml"
+    out.append(("curvilinear pair, C singular (n=6, m=2)", path, load_scene(path).system))
     return out
 
 

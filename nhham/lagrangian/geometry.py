@@ -259,7 +259,9 @@ class LagrangianGeometry:
 
     @cached_property
     def _W_is_diagonal(self):
-        return self.hessian.is_diagonal()
+        # Structural zeros (W's entries are expanded): no assumption queries.
+        W = self.hessian
+        return all(W[i, j] == 0 for i in range(W.rows) for j in range(W.cols) if i != j)
 
     def _solve_W(self, rhs: sp.Matrix) -> sp.Matrix:
         """W^{-1} rhs by a linear solve (no symbolic inverse)."""

@@ -49,6 +49,7 @@ from functools import reduce
 from types import MappingProxyType
 from typing import Callable, Mapping, Sequence
 
+import numpy as np
 import sympy as sp
 from mpmath.libmp import from_rational
 from sympy import QQ
@@ -59,6 +60,8 @@ from sympy.polys.matrices import DomainMatrix
 from nhham.errors import InputError, NhhamError, SingularLagrangianError
 from nhham.lagrangian.analysis import ConstraintAnalysis, analyze_constraints
 from nhham.lagrangian.points import (
+    FLOAT64,
+    FloatMatrix,
     PRIME,
     Angle,
     NotExact,
@@ -102,10 +105,14 @@ DRAW_BITS = 16
 # n + m; beyond, the parameters involved are substituted by their values.
 SYMBOLIC_VALUES_SIZE = 10
 # Whether a datum vanishes at the values is decided modulo p first (nonzero there is a
-# proof); its nearness to vanishing is estimated at moved values in 200-bit floating
+# proof); near vanishing, its nearness is estimated at moved values in 200-bit floating
 # point, where a determinant's rounding error is far below its change over 1e-4.
 MODULAR = GF(PRIME)
 SHIFT_FIELD = RealField(200)
+# The estimate is made in float64 first and kept when it puts the values farther than
+# NEAR * FLOAT_MARGIN from vanishing: float64 with pivoting would need a rounding error
+# of 1e-4 relative to a datum's terms to move a distance below NEAR that far.
+FLOAT_MARGIN = 1e4
 # Beyond this many maximal minors of mu the redundancy data is not computed (noted).
 MAX_MINORS = 120
 
@@ -794,17 +801,27 @@ class _Data:
     @staticmethod
     def _val(K, x):
         x = x.r if isinstance(x, Angle) else x
+        if K is FLOAT64:
+            return float(MPQ(x))
         if K.is_FiniteField or K.is_RealField:
-            q = MPQ(x)  # ZeroDivisionError when p divides the denominator
+            q = MPQ(x)
             if K.is_RealField:  # rounded once, directly (K.convert goes through sympy)
                 return K.dtype(from_rational(int(q.numerator), int(q.denominator),
                                              K.precision, "n"))
-            return K(int(q.numerator)) / K(int(q.denominator))
+            den = int(q.denominator)
+            if den == 1:
+                return K(int(q.numerator))
+            try:
+                return K(int(q.numerator) * pow(den, -1, int(K.characteristic())))
+            except ValueError as exc:  # p divides the denominator: not a value mod p
+                raise ZeroDivisionError(str(exc)) from exc
         return K.convert(x)
 
     def _matrix(self, K, rows, env, cache):
         vals = [[self._val(K, x) for x in evaluate(r, env, cache)] for r in rows]
         shape = (len(vals), len(vals[0]) if vals else 0)
+        if K is FLOAT64:
+            return FloatMatrix(np.array(vals, dtype=float).reshape(shape))
         return DomainMatrix(vals, shape, K)
 
     # ---------------------------------------------------------------- items
@@ -867,7 +884,9 @@ class _Data:
                     MI = self._matrix(K, mu_I, env, cache)
                     JJ = self._matrix(K, Jv, env, cache)
                     top = W.hstack(MI.transpose())
-                    bottom = JJ.hstack(DomainMatrix.zeros((r, r), K))
+                    zeros = (FloatMatrix.zeros((r, r)) if K is FLOAT64 else
+                             DomainMatrix.zeros((r, r), K))
+                    bottom = JJ.hstack(zeros)
                     vals.append(field_det(top.vstack(bottom)))
                 return vals
 
@@ -1023,8 +1042,9 @@ class _Data:
         """Data that vanish at exact parameter ``values`` and data nearly vanishing.
 
         A datum nonzero modulo p at the first point is nonzero at the values (a
-        proof); its nearness is then estimated in ``SHIFT_FIELD``. Only a datum
-        that vanishes modulo p is evaluated over Q, at every point.
+        proof); its nearness is then estimated in float64, and again in
+        ``SHIFT_FIELD`` when float64 finds it within ``near * FLOAT_MARGIN``. Only a
+        datum that vanishes modulo p is evaluated over Q, at every point.
 
         Returns
         -------
@@ -1055,9 +1075,9 @@ class _Data:
                 # one point's largest |P| / |grad P| already bounds the distance.
                 mod = self._modular(fn, base)
                 if mod is not None and any(mod):
-                    with self._first_point_only():
-                        v0, shifted = self._with_shifts(fn, base, values, SHIFT_FIELD)
                     nonzero = [bool(x) for x in mod]
+                    with self._first_point_only():
+                        v0, shifted = self._estimate(fn, base, values, nonzero, near)
                 else:
                     v0, shifted = self._with_shifts(fn, base, values)
                     nonzero = [bool(x) for x in v0]
@@ -1070,23 +1090,41 @@ class _Data:
                 involved = tuple(p for p, (h, vals) in shifted.items() if any(vals))
                 hits.append((reason, involved))
                 continue
-            # Relative distance to where this datum vanishes: for each point, the
-            # largest over the nonzero terms of |P| / |grad P| (every term must vanish).
-            scale = math.sqrt(sum(float(x) ** 2 for x in values.values())) or 1.0
-            worst = 0.0
-            for i, val in enumerate(v0):
-                if not nonzero[i]:
-                    continue
-                grad = math.sqrt(sum(_difference(vals[i], val, h) ** 2
-                                     for h, vals in shifted.values()))
-                worst = max(worst, abs(float(val)) / grad if grad else math.inf)
-            if worst / scale < near:
-                close.append((reason, worst / scale))
+            distance = _relative_distance(v0, nonzero, shifted, values)
+            if distance < near:
+                close.append((reason, distance))
         return hits, close
+
+    def _estimate(self, fn, base, values, nonzero, near):
+        """(value, shifted values) of a datum for its nearness: in float64 when that
+        puts it farther than ``near * FLOAT_MARGIN`` from vanishing, else (closer, not
+        finite, or a float pivot vanished) in ``SHIFT_FIELD``."""
+        try:
+            v0, shifted = self._with_shifts(fn, base, values, FLOAT64)
+            if _relative_distance(v0, nonzero, shifted, values) >= near * FLOAT_MARGIN:
+                return v0, shifted
+        except ZeroDivisionError:
+            pass
+        return self._with_shifts(fn, base, values, SHIFT_FIELD)
+
+
+def _relative_distance(v0, nonzero, shifted, values) -> float:
+    """Relative distance of the values to where a datum vanishes: over its nonzero terms,
+    the largest |P| / |grad P| (every term must vanish there), over |values|."""
+    scale = math.sqrt(sum(float(x) ** 2 for x in values.values())) or 1.0
+    worst = 0.0
+    for i, val in enumerate(v0):
+        if not nonzero[i]:
+            continue
+        grad = math.sqrt(sum(_difference(vals[i], val, h) ** 2 for h, vals in shifted.values()))
+        worst = max(worst, abs(float(val)) / grad if grad else math.inf)
+    return worst / scale
 
 
 def _difference(moved, value, h) -> float:
     """(moved - value) / h as a float, computed in the field of the values."""
+    if isinstance(moved, float):
+        return (moved - value) / float(h)
     return float((moved - value) / (h if isinstance(moved, MPQ) else SHIFT_FIELD.convert(h)))
 
 

@@ -36,6 +36,7 @@ import math
 import random
 from dataclasses import dataclass
 
+import numpy as np
 import sympy as sp
 from sympy import QQ
 from sympy.external.gmpy import MPQ
@@ -57,6 +58,8 @@ __all__ = [
     "maximal_minors",
     "field_det",
     "field_solve",
+    "FLOAT64",
+    "FloatMatrix",
     "rank_bound",
     "minor_degree",
     "solve_degrees",
@@ -514,10 +517,83 @@ def maximal_minors(M: DomainMatrix, pivots=None) -> list:
     return out
 
 
+class _Float64:
+    """float64 in place of a sympy real domain, for estimates (the elements are Python
+    floats; :class:`FloatMatrix` holds them)."""
+
+    is_RealField = True
+    is_FiniteField = False
+    is_QQ = False
+    precision = 53
+    zero = 0.0
+    one = 1.0
+
+    def __repr__(self):
+        return "FLOAT64"
+
+
+#: The float64 "domain" of :class:`FloatMatrix`.
+FLOAT64 = _Float64()
+
+
+class FloatMatrix:
+    """The part of the DomainMatrix interface that :func:`field_det`,
+    :func:`field_solve` and :func:`maximal_minors` use, on a numpy float64 array
+    (LAPACK's partially pivoted LU): for estimates where 200-bit arithmetic is not needed.
+    """
+
+    domain = FLOAT64
+
+    def __init__(self, a):
+        self.a = np.asarray(a, dtype=float)
+
+    @classmethod
+    def zeros(cls, shape) -> "FloatMatrix":
+        return cls(np.zeros(shape))
+
+    @property
+    def shape(self) -> tuple:
+        return self.a.shape
+
+    def hstack(self, other) -> "FloatMatrix":
+        return FloatMatrix(np.hstack([self.a, other.a]))
+
+    def vstack(self, other) -> "FloatMatrix":
+        return FloatMatrix(np.vstack([self.a, other.a]))
+
+    def transpose(self) -> "FloatMatrix":
+        return FloatMatrix(self.a.T)
+
+    def extract(self, rows, cols) -> "FloatMatrix":
+        return FloatMatrix(self.a[np.ix_(list(rows), list(cols))])
+
+    def __mul__(self, other) -> "FloatMatrix":
+        return FloatMatrix(self.a @ other.a)
+
+    def __sub__(self, other) -> "FloatMatrix":
+        return FloatMatrix(self.a - other.a)
+
+    def __neg__(self) -> "FloatMatrix":
+        return FloatMatrix(-self.a)
+
+    def to_list(self) -> list:
+        return self.a.tolist()
+
+    def det(self) -> float:
+        return field_det(self)
+
+
 def field_det(M: DomainMatrix):
     """det M; in floating point by elimination with partial pivoting (sympy's
     fraction-free elimination divides by rounded, possibly tiny, pivots)."""
+    if isinstance(M, FloatMatrix):
+        return float(np.linalg.det(M.a)) if M.shape[0] else 1.0
     K = M.domain
+    if K.is_FiniteField:
+        # On machine-size residues: sympy's elements invert by an extended gcd per division.
+        p = int(K.characteristic())
+        return K(_det_mod(
+            [[int(K.to_int(x)) % p for x in row] for row in M.to_list()], p))
     if not K.is_RealField:
         return M.det()
     rows, n = M.to_list(), M.shape[0]
@@ -539,6 +615,11 @@ def field_det(M: DomainMatrix):
 
 def field_solve(A: DomainMatrix, B: DomainMatrix) -> DomainMatrix:
     """A^-1 B; in floating point with partial pivoting (see :func:`field_det`)."""
+    if isinstance(A, FloatMatrix):
+        try:
+            return FloatMatrix(np.linalg.solve(A.a, B.a))
+        except np.linalg.LinAlgError as exc:
+            raise ZeroDivisionError("singular matrix") from exc
     K = A.domain
     if not K.is_RealField:
         return A.lu_solve(B)
@@ -555,6 +636,25 @@ def field_solve(A: DomainMatrix, B: DomainMatrix) -> DomainMatrix:
                 rows[i] = [a - f * b for a, b in zip(rows[i], rows[c])]
     X = [[rows[i][n + j] / rows[i][i] for j in range(k)] for i in range(n)]
     return DomainMatrix(X, (n, k), K)
+
+
+def _det_mod(rows, p: int) -> int:
+    """det of a square matrix of residues modulo the prime p (Gaussian elimination)."""
+    M, n, det = [list(r) for r in rows], len(rows), 1
+    for c in range(n):
+        k = next((i for i in range(c, n) if M[i][c]), None)
+        if k is None:
+            return 0
+        if k != c:
+            M[c], M[k] = M[k], M[c]
+            det = -det
+        det = det * M[c][c] % p
+        inv = pow(M[c][c], -1, p)
+        for i in range(c + 1, n):
+            if M[i][c]:
+                f = M[i][c] * inv % p
+                M[i] = [(a - f * b) % p for a, b in zip(M[i], M[c])]
+    return det % p
 
 
 def _ints_mod_p(rows):

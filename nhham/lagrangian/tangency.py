@@ -183,7 +183,7 @@ def _proof_modulo_p(system, chis, W, F, mu, Jq, Jv, seed, tries: int = 3):
     n, m = len(q), len(mu)
     moving = [j for j, row in enumerate(Jv) if any(x != 0 for x in row)]
     still = [j for j in range(len(chis)) if j not in moving]
-    known = {sp.expand(c) for c in chis}
+    known = {sp.expand(c) for c in chis} if still else set()
     for j in still:
         lift = sp.expand(sum((a * b for a, b in zip(Jq[j], v)), sp.S.Zero))
         if lift != 0 and lift not in known and -lift not in known:

@@ -20,6 +20,7 @@ import nhham
 from nhham.errors import InputError
 from nhham.hamiltonian.classification import classify_constraints
 from nhham.lagrangian.analysis import analyze_constraints
+from nhham.lagrangian.points import FLOAT64
 from nhham.lagrangian.parametric import (
     classification_at_values,
     exceptional_conditions,
@@ -251,12 +252,30 @@ def test_values_on_a_two_parameter_condition_keep_the_names():
     assert key(at0.verdict)[:5] == ("underdetermined", False, 0, 1, 1)
 
 
-def test_values_near_an_exceptional_set_are_warned_about():
+def test_values_near_an_exceptional_set_are_warned_about(monkeypatch):
+    """By hand: C is singular on the plane I1 = I2, at distance |I1 - I2| / sqrt(2) from
+    (I1, I2, k) = (0.5, 0.5 + 1e-10, 2), relative to |(I1, I2, k)| = sqrt(4.5): 3.3e-11.
+    float64 finds the values near and the estimate is made again in 200-bit; for far
+    values float64 is enough."""
+    from nhham.lagrangian import parametric
+
+    fields = []
+    original = parametric._Data._with_shifts
+
+    def spy(self, fn, base, values, K=sp.QQ):
+        fields.append(K)
+        return original(self, fn, base, values, K)
+
+    monkeypatch.setattr(parametric._Data, "_with_shifts", spy)
     near = classification_at_values(two_bodies({"I1": 0.5, "I2": 0.5 + 1e-10, "k": 2.0}))
     assert near.conditions == () and near.verdict.regular
-    assert any("relative distance" in w and "C singular" in w for w in near.warnings)
+    (warning,) = near.warnings
+    assert "relative distance 3.3e-11" in warning and "C singular" in warning
+    assert parametric.SHIFT_FIELD in fields and FLOAT64 in fields
+    fields.clear()
     far = classification_at_values(two_bodies({"I1": 0.5, "I2": 0.7, "k": 2.0}))
     assert far.warnings == ()
+    assert FLOAT64 in fields and parametric.SHIFT_FIELD not in fields
 
 
 def test_scene_values_are_placed_in_their_case():
@@ -352,7 +371,7 @@ def test_values_far_from_every_exceptional_set_raise_no_warning(monkeypatch):
     """The 4-link snake at m = l = 1: every datum is nonzero modulo p at the values (a
     proof, so none is evaluated over Q) and none is near vanishing -- in particular
     the antisymmetric bracket matrix, whose determinant is estimated in floating point
-    at moved values."""
+    at moved values. float64 puts each far beyond the margin, so 200-bit is not used."""
     from nhham import models
     from nhham.lagrangian import parametric
 
@@ -367,4 +386,4 @@ def test_values_far_from_every_exceptional_set_raise_no_warning(monkeypatch):
     at = classification_at_values(models.snake(4))
     assert at.conditions == () and at.warnings == ()
     assert at.verdict.second_class == 4
-    assert len(fields) == 5 and set(fields) == {parametric.SHIFT_FIELD}
+    assert len(fields) == 5 and set(fields) == {FLOAT64}
