@@ -940,17 +940,23 @@ def _staged_at_points(system, side: HamiltonianSide, samples, seed, max_stages):
     ------
     NotExact
         When some M_k has no exact points (a constraint neither solvable for a
-        coordinate nor affine in the velocities) or the run is inconsistent.
+        coordinate nor affine in the velocities), or the ranks at the points are not
+        the algorithm's generic ones (parameter values where they drop).
     """
     from nhham.lagrangian.analysis import analyze_constraints
 
     analysis = analyze_constraints(system, samples=samples, seed=seed,
                                    max_stages=max_stages, decompose=False)
-    if analysis.status == "inconsistent":
-        raise NotExact("the constraint algorithm is inconsistent (no M_f to sample)")
+    inconsistent = analysis.status == "inconsistent"
     samplers = [_ModularSampler.on(system, st.constraints, samples, seed + st.index)
                 for st in analysis.stages]
-    final = _ModularSampler.on(system, analysis.final_constraints, samples, seed)
+    # No M_f when the run is inconsistent: the round trip, the form and the brackets of
+    # the primary constraints are then checked at the points of M_1.
+    if inconsistent:
+        final, chis = samplers[0], tuple(system.holonomic) + tuple(system.phi)
+    else:
+        final = _ModularSampler.on(system, analysis.final_constraints, samples, seed)
+        chis = tuple(analysis.final_constraints)
     for smp in samplers + [final]:
         smp.all_points  # noqa: B018 - draws the points, or raises NotExact
     be = final.backend
@@ -993,6 +999,9 @@ def _staged_at_points(system, side: HamiltonianSide, samples, seed, max_stages):
         vals = final.values(pt)
         hp = num.point_from_tq(be, pt)
         inv_pairs.append((hp.v, np.array(vals[system.n:2 * system.n], dtype=object)))
+        br_pairs.append((num.bracket_matrix(be, hp, chis), lag.bracket_matrix(be, vals, chis)))
+        if inconsistent:
+            continue
         for st in analysis.stages:
             if _solutions(_tangency_H(num, be, hp, st.constraints))[2] is None:
                 problems.append(f"stage {st.index}: the T*Q tangency equations are "
@@ -1014,13 +1023,11 @@ def _staged_at_points(system, side: HamiltonianSide, samples, seed, max_stages):
         acc = be.solve(W, F) - be.solve(W, mu.T) @ lam
         field_pairs.append((np.concatenate([v, M @ v + W @ acc]),
                             hp.X_H + hp.vertical().T @ lam))
-        br_pairs.append((num.bracket_matrix(be, hp, analysis.final_constraints),
-                         lag.bracket_matrix(be, vals, analysis.final_constraints)))
     free = len(analysis.free_multiplier_symbols)
     if kernel_dims and kernel_dims != {free}:
         problems.append(f"{sorted(kernel_dims)} free multipliers at the points of M_f, "
                         f"{free} from the algorithm")
-    if not field_pairs:
+    if not field_pairs and not inconsistent:
         problems.append("no generic exact point of M_f")
     k = len(data_pairs) // 2
     how = "exact solves modulo p at exact points"
@@ -1030,35 +1037,44 @@ def _staged_at_points(system, side: HamiltonianSide, samples, seed, max_stages):
             f"{analysis.status} with {len(analysis.stages)} stage(s), ranks "
             f"{[st.rank for st in analysis.stages]}: Z_i^H(chi^H) and X_H(chi^H) on T*Q equal "
             f"Z_i(chi) and xi_L(chi) at {k} exact points of the M_k (so the T*Q algorithm "
-            f"has the same stages, ranks and conditions there), and every stage's T*Q "
-            f"tangency equations are consistent at Leg of the points of M_f")))
+            f"has the same stages, ranks and conditions there)" + (
+                ", so the same inconsistency" if inconsistent else
+                ", and every stage's T*Q tangency equations are consistent at Leg of the "
+                "points of M_f"))))
     _, _, ok = final.compare(inv_pairs)
     checks.append(CheckResult("legendre inverse", ok, False, 0.0, 0.0, len(inv_pairs),
                               f"v -> p = dL/dv -> Leg^-1(q, p) ({how}) against v"))
-    _, _, ok = final.compare(field_pairs)
-    checks.append(CheckResult(
-        "field", ok, False, 0.0 if ok else math.nan, 0.0 if ok else math.nan,
-        len(field_pairs),
-        f"Leg_*(xi_L + lambda^i Z_i) against X_H + lambda^i Z_i^H on M_f, lambda solving "
-        f"the TQ tangency equations ({free} free multiplier(s) given the same seeded "
-        f"values), by {how}"))
-    _, _, ok = final.compare(lam_pairs)
-    checks.append(CheckResult(
-        "multipliers", ok, False, 0.0 if ok else math.nan, 0.0 if ok else math.nan,
-        len(lam_pairs),
-        "lambda^H (solving the T*Q tangency equations on M_f) solves the TQ ones: "
-        "lambda^L - lambda^H o Leg lies in the kernel (the free multipliers)"))
+    if inconsistent:
+        none = ("no dynamics: the problem is inconsistent on both sides (equal stage data "
+                "at the points of every M_k)" if not problems else
+                "the TQ run is inconsistent and the T*Q data differ")
+        checks += [CheckResult("field", not problems, False, detail=none),
+                   CheckResult("multipliers", not problems, False, detail=none)]
+    else:
+        _, _, ok = final.compare(field_pairs)
+        checks.append(CheckResult(
+            "field", ok, False, 0.0 if ok else math.nan, 0.0 if ok else math.nan,
+            len(field_pairs),
+            f"Leg_*(xi_L + lambda^i Z_i) against X_H + lambda^i Z_i^H on M_f, lambda "
+            f"solving the TQ tangency equations ({free} free multiplier(s) given the same "
+            f"seeded values), by {how}"))
+        _, _, ok = final.compare(lam_pairs)
+        checks.append(CheckResult(
+            "multipliers", ok, False, 0.0 if ok else math.nan, 0.0 if ok else math.nan,
+            len(lam_pairs),
+            "lambda^H (solving the T*Q tangency equations on M_f) solves the TQ ones: "
+            "lambda^L - lambda^H o Leg lies in the kernel (the free multipliers)"))
     checks.append(_check_form_sampled(side, final, lag))
     _, _, ok = final.compare(br_pairs)
     checks.append(CheckResult(
         "Poisson map", ok, False, 0.0 if ok else math.nan, 0.0 if ok else math.nan,
         len(br_pairs),
-        f"{{f, g}} o Leg against {{Leg^* f, Leg^* g}}_L for the "
-        f"{len(analysis.final_constraints)} final constraints, by {how}"))
+        f"{{f, g}} o Leg against {{Leg^* f, Leg^* g}}_L for the {len(chis)} "
+        f"{'primary' if inconsistent else 'final'} constraints, by {how}"))
     checks = [dataclasses.replace(c, method="points") for c in checks]
     stages_L = _stage_summaries(analysis.stages)
     h_status = analysis.status if not problems else (
-        "determined" if top == m else "underdetermined")
+        "inconsistent" if inconsistent else "determined" if top == m else "underdetermined")
     return (checks, stages_L, tuple(stages_H), (analysis.status, h_status),
             (len(final.all_points), dropped))
 

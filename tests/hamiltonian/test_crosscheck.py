@@ -260,6 +260,21 @@ def test_singular_C_at_points_matches_the_symbolic_route():
     assert points.statuses == exact.statuses
 
 
+def test_an_inconsistent_singular_system_at_exact_points():
+    """curvilinear_inconsistent (by hand: psi = q2 at stage 1, then 0 = 1 on M_2): the
+    T*Q data equal the TQ data at points of M_1 and M_2, so the T*Q run is inconsistent
+    too; its stages are those of the symbolic T*Q algorithm."""
+    system = _curvilinear("curvilinear_inconsistent")
+    report = cross_check(system, method="points", samples=3)
+    assert report.method == "points" and report.agree
+    assert report.statuses == ("inconsistent", "inconsistent")
+    assert [(s["rank"], s["augmented_rank"]) for s in report.hamiltonian_stages] == \
+        [(1, 2), (1, 2)]
+    assert "inconsistent on both sides" in report.detail["field"].detail
+    exact = cross_check(system, method="exact")
+    assert exact.hamiltonian_stages == report.hamiltonian_stages
+
+
 def test_the_coupled_pair_is_compared_at_exact_points():
     """examples/curvilinear_pair.toml (n = 6, W(q) dense with sines and cosines): the
     symbolic T*Q algorithm did not finish in 300 s; at exact points of M_1, M_2, M_3 the
