@@ -252,11 +252,8 @@ def test_values_on_a_two_parameter_condition_keep_the_names():
     assert key(at0.verdict)[:5] == ("underdetermined", False, 0, 1, 1)
 
 
-def test_values_near_an_exceptional_set_are_warned_about(monkeypatch):
-    """By hand: C is singular on the plane I1 = I2, at distance |I1 - I2| / sqrt(2) from
-    (I1, I2, k) = (0.5, 0.5 + 1e-10, 2), relative to |(I1, I2, k)| = sqrt(4.5): 3.3e-11.
-    float64 finds the values near and the estimate is made again in 200-bit; for far
-    values float64 is enough."""
+def shift_fields(monkeypatch) -> list:
+    """The fields the nearness estimates are made in, appended as they are used."""
     from nhham.lagrangian import parametric
 
     fields = []
@@ -267,6 +264,17 @@ def test_values_near_an_exceptional_set_are_warned_about(monkeypatch):
         return original(self, fn, base, values, K)
 
     monkeypatch.setattr(parametric._Data, "_with_shifts", spy)
+    return fields
+
+
+def test_values_near_an_exceptional_set_are_warned_about(monkeypatch):
+    """By hand: C is singular on the plane I1 = I2, at distance |I1 - I2| / sqrt(2) from
+    (I1, I2, k) = (0.5, 0.5 + 1e-10, 2), relative to |(I1, I2, k)| = sqrt(4.5): 3.3e-11.
+    float64 finds the values near and the estimate is made again in 200-bit; for far
+    values float64 is enough."""
+    from nhham.lagrangian import parametric
+
+    fields = shift_fields(monkeypatch)
     near = classification_at_values(two_bodies({"I1": 0.5, "I2": 0.5 + 1e-10, "k": 2.0}))
     assert near.conditions == () and near.verdict.regular
     (warning,) = near.warnings
@@ -373,16 +381,8 @@ def test_values_far_from_every_exceptional_set_raise_no_warning(monkeypatch):
     the antisymmetric bracket matrix, whose determinant is estimated in floating point
     at moved values. float64 puts each far beyond the margin, so 200-bit is not used."""
     from nhham import models
-    from nhham.lagrangian import parametric
 
-    fields = []
-    original = parametric._Data._with_shifts
-
-    def spy(self, fn, base, values, K=sp.QQ):
-        fields.append(K)
-        return original(self, fn, base, values, K)
-
-    monkeypatch.setattr(parametric._Data, "_with_shifts", spy)
+    fields = shift_fields(monkeypatch)
     at = classification_at_values(models.snake(4))
     assert at.conditions == () and at.warnings == ()
     assert at.verdict.second_class == 4
