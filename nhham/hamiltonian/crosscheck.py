@@ -373,9 +373,20 @@ class _NumericLagrangian:
             acc = a - WmT @ lam
         else:
             lam, C, acc = be.zeros(0), be.zeros(0, 0), a
-        # Leg_* (v, acc) = (v, M v + W acc)
-        field = np.concatenate([v, M @ v + W @ acc])
-        return field, lam, C
+        return self._pushed(v, acc, W, M), lam, C
+
+    def field(self, be: Backend, vals, lam):
+        """Leg_*(xi_L + lambda^i Z_i) at x for given multipliers lambda, a 2n-vector."""
+        n = self.n
+        W, F, M, mu = self._W(be, vals), self._F(be, vals), self._M(be, vals), \
+            self._mu(be, vals)
+        v = np.array(vals[n:2 * n], dtype=object if be.precision else float)
+        return self._pushed(v, be.solve(W, F) - be.solve(W, mu.T) @ lam, W, M)
+
+    @staticmethod
+    def _pushed(v, acc, W, M):
+        """Leg_* (v, acc) = (v, M v + W acc)."""
+        return np.concatenate([v, M @ v + W @ acc])
 
     def gradients(self, be, vals, exprs):
         key = tuple(exprs)
@@ -1017,12 +1028,7 @@ def _staged_at_points(system, side: HamiltonianSide, samples, seed, max_stages):
         # The two sides' solutions agree when they differ by a kernel vector of T.
         lam_pairs.append((tL.T @ lamH, -tL.xi))
         lam = lamL + sum((k * ModP(rng.randrange(1, PRIME)) for k in kernel), be.zeros(m))
-        W, M, F = lag._W(be, vals), lag._M(be, vals), lag._F(be, vals)
-        mu = lag._mu(be, vals)
-        v = np.array(vals[system.n:2 * system.n], dtype=object)
-        acc = be.solve(W, F) - be.solve(W, mu.T) @ lam
-        field_pairs.append((np.concatenate([v, M @ v + W @ acc]),
-                            hp.X_H + hp.vertical().T @ lam))
+        field_pairs.append((lag.field(be, vals, lam), hp.X_H + hp.vertical().T @ lam))
     free = len(analysis.free_multiplier_symbols)
     if kernel_dims and kernel_dims != {free}:
         problems.append(f"{sorted(kernel_dims)} free multipliers at the points of M_f, "

@@ -579,9 +579,6 @@ class FloatMatrix:
     def to_list(self) -> list:
         return self.a.tolist()
 
-    def det(self) -> float:
-        return field_det(self)
-
 
 def field_det(M: DomainMatrix):
     """det M; in floating point by elimination with partial pivoting (sympy's
