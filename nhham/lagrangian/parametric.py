@@ -42,6 +42,7 @@ names, or sympy assumptions on the parameter symbols) are dropped and reported.
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import math
 import random
 from dataclasses import dataclass, field
@@ -539,6 +540,11 @@ def classification_at_values(system, *, classes: Callable | None = None,
         verdict, _, more, hits, close = _examine(spec, (), values=rest, **opts)
         notes += more
         warnings += _close_warnings(close, rest)
+    if conditions and generic.analysis is not None:
+        # The generic verdict, not the one at the values: a Frobenius term that is a
+        # nonzero function vanishing at the values left ``integrable`` undecided there.
+        generic = dataclasses.replace(generic,
+                                      integrable=generic.analysis.integrability.generic)
     return ValuesVerdict(verdict, generic, tuple(conditions),
                          current if current is not None else system,
                          tuple(dict.fromkeys(warnings)), tuple(dict.fromkeys(notes)))
@@ -844,7 +850,7 @@ class _Data:
                               f"({math.comb(system.n, system.m)} maximal minors of mu)")
         for stage in stages:
             out += self._stage_items(stage)
-        if analysis.integrable is False and system.m and system.n - system.m > 1:
+        if analysis.integrability.generic is False and system.m and system.n - system.m > 1:
             out.append(("the constraint distribution becomes integrable",
                         lambda env0, K: self._frobenius(m1, env0, K)))
         if analysis.status != "inconsistent" and analysis.final_constraints:
@@ -1110,22 +1116,32 @@ class _Data:
 
 def _relative_distance(v0, nonzero, shifted, values) -> float:
     """Relative distance of the values to where a datum vanishes: over its nonzero terms,
-    the largest |P| / |grad P| (every term must vanish there), over |values|."""
-    scale = math.sqrt(sum(float(x) ** 2 for x in values.values())) or 1.0
+    the largest |P| / |grad P| (every term must vanish there), over |values|.
+
+    Scale-free: each term enters through its logarithmic derivative
+    (P(x + h) - P(x)) / (h P(x)), formed in the field of the values before it becomes
+    a float, so a determinant of a large system (|P| beyond 1e308 or below 1e-308) neither
+    overflows nor underflows. Raises ZeroDivisionError when a float64 value is not
+    usable (zero by underflow, or not finite): the caller then works in a wider field.
+    """
+    scale = math.hypot(*(float(x) for x in values.values())) or 1.0
     worst = 0.0
     for i, val in enumerate(v0):
         if not nonzero[i]:
             continue
-        grad = math.sqrt(sum(_difference(vals[i], val, h) ** 2 for h, vals in shifted.values()))
-        worst = max(worst, abs(float(val)) / grad if grad else math.inf)
+        slope = math.hypot(*(_log_slope(vals[i], val, h) for h, vals in shifted.values()))
+        worst = max(worst, 1.0 / slope if slope else math.inf)
     return worst / scale
 
 
-def _difference(moved, value, h) -> float:
-    """(moved - value) / h as a float, computed in the field of the values."""
-    if isinstance(moved, float):
-        return (moved - value) / float(h)
-    return float((moved - value) / (h if isinstance(moved, MPQ) else SHIFT_FIELD.convert(h)))
+def _log_slope(moved, value, h) -> float:
+    """(moved - value) / (h value) as a float, computed in the field of the values."""
+    if isinstance(value, float):
+        if value == 0.0 or not (math.isfinite(value) and math.isfinite(moved)):
+            raise ZeroDivisionError("a float64 value underflowed or overflowed")
+        return (moved / value - 1.0) / float(h)
+    step = h if isinstance(value, MPQ) else SHIFT_FIELD.convert(h)
+    return float((moved - value) / (step * value))
 
 
 # ============================================================ the components
@@ -1173,6 +1189,18 @@ def _components(values, params) -> list:
         eqs = tuple(_normal(sp.numer(sp.together(p - v))) for p, v in sol.items())
         out.append(tuple(sorted(eqs, key=sp.default_sort_key)))
     return out
+
+
+def _distance_to_zero(expr, at, syms) -> float:
+    """|e| / |grad e| at the exact point ``at``, formed exactly before it becomes a
+    float (a polynomial of high degree in large values would overflow float64)."""
+    grad2 = sum(sp.diff(expr, p).xreplace(at) ** 2 for p in syms)
+    if not grad2:
+        return math.inf
+    try:
+        return math.sqrt(float(expr.xreplace(at) ** 2 / grad2))
+    except OverflowError:
+        return math.inf
 
 
 def _normal(expr):
@@ -1388,13 +1416,8 @@ def _near_warnings(conds, values, near) -> list:
         at = {p: _exact(values[p]) for p in syms}
         if all(sp.sympify(e).xreplace(at) == 0 for e in eqs):
             continue
-        scale = math.sqrt(sum(float(at[p]) ** 2 for p in syms)) or 1.0
-        dist = 0.0
-        for e in eqs:
-            e = sp.sympify(e)
-            val = abs(float(e.xreplace(at)))
-            grad = math.sqrt(sum(float(sp.diff(e, p).xreplace(at)) ** 2 for p in syms))
-            dist = max(dist, val / grad if grad else math.inf)
+        scale = math.hypot(*(float(at[p]) for p in syms)) or 1.0
+        dist = max(_distance_to_zero(sp.sympify(e), at, syms) for e in eqs)
         rel = dist / scale
         if rel < near:
             out.append("the parameter values "

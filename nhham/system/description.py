@@ -31,6 +31,7 @@ from nhham.errors import (
 )
 from nhham.settings import PARAMETER_BOX, STATE_BOX
 from nhham.system.naming import as_symbol, velocity_symbol
+from nhham.system.rank import float_rank, precise_ranks
 
 __all__ = ["System", "DroppedConstraint", "QuadraticParts", "quadratic_parts", "velocity_polynomial"]
 
@@ -662,13 +663,16 @@ def _check_dependence(system, cons, hols, drop_redundant):
     vels = system.velocities
     mu = _one_forms(rows, vels)
     rng = np.random.default_rng(_VALIDATION_SEED)
-    samples = _numeric_samples(mu, _sample_q(system, rng, _VALIDATION_SAMPLES))
+    points = _sample_q(system, rng, _VALIDATION_SAMPLES)
+    samples = _numeric_samples(mu, points)
     independent: list[int] = []
     dependent: list[tuple[int, dict]] = []
     for i in range(len(rows)):
         trial = independent + [i]
-        ranks = [np.linalg.matrix_rank(S[trial], tol=1e-9 * max(1.0, np.abs(S).max())) for S in samples]
-        if max(ranks) == len(trial):
+        full = len(trial)
+        # A float64 deficiency may come from the units: confirm it in high precision.
+        if (max(float_rank(S[trial]) for S in samples) == full
+                or precise_ranks(mu, points, [trial])[0] == full):
             independent.append(i)
             continue
         dependent.append((i, _combination(mu, rows, independent, i, vels)))
@@ -750,8 +754,11 @@ def _check_regular(system):
             raise SingularLagrangianError([_singular_message(W, rank, W.nullspace())])
         return
     rng = np.random.default_rng(_VALIDATION_SEED + 1)
-    ranks = [np.linalg.matrix_rank(S)
-             for S in _numeric_samples(W, _sample_q(system, rng, _VALIDATION_SAMPLES))]
+    points = _sample_q(system, rng, _VALIDATION_SAMPLES)
+    ranks = [float_rank(S) for S in _numeric_samples(W, points)]
+    if max(ranks) < n:
+        # A float64 deficiency may come from the units (m = 1e-16): confirm it.
+        ranks = precise_ranks(W, points, [list(range(n))])
     if max(ranks) < n:
         W = sp.hessian(system.lagrangian, system.velocities)  # as the message always showed it
         try:
