@@ -81,8 +81,6 @@ def _at_values(args, steps, scene, classes=None):
     with steps.step("constraint algorithm at the parameter values (stages, ranks, decisions "
                     "at exact points, integrability, exceptional parameter sets)"):
         at = classification_at_values(scene.system, precision=args.precision, classes=classes)
-    for note in at.notes:
-        steps.note(f"parameter values: {note}")
     if at.verdict.status == "invalid":
         raise InputError(f"{args.scene}: at the parameter values {at.verdict.note}")
     return at

@@ -72,6 +72,7 @@ from nhham.lagrangian.points import (
     field_det,
     field_solve,
     maximal_minors,
+    adjacent_column_sets,
 )
 from nhham.lagrangian.submanifold import Submanifold
 from nhham.settings import SEED
@@ -114,7 +115,7 @@ SHIFT_FIELD = RealField(200)
 # NEAR * FLOAT_MARGIN from vanishing: float64 with pivoting would need a rounding error
 # of 1e-4 relative to a datum's terms to move a distance below NEAR that far.
 FLOAT_MARGIN = 1e4
-# Beyond this many maximal minors of mu the redundancy data is not computed (noted).
+# Beyond this many maximal minors of mu, the m (n - m) + 1 next to the pivot block.
 MAX_MINORS = 120
 
 
@@ -351,9 +352,9 @@ class ValuesVerdict:
     system : System
         The system the verdict was computed on (the conditions substituted).
     warnings : tuple of str
-        Values near an exceptional set; the depth bound hit.
-    notes : tuple of str
-        What was not examined and why (no exact points, a datum not evaluable).
+        Values near an exceptional set; the depth bound hit; every check that was not
+        made and why (no exact points, a datum not evaluable): an unchecked answer is
+        not silently a checked one.
     """
 
     verdict: Verdict
@@ -361,7 +362,6 @@ class ValuesVerdict:
     conditions: tuple
     system: object = field(compare=False, repr=False)
     warnings: tuple = ()
-    notes: tuple = ()
 
     @property
     def differs(self) -> bool:
@@ -547,7 +547,7 @@ def classification_at_values(system, *, classes: Callable | None = None,
                                       integrable=generic.analysis.integrability.generic)
     return ValuesVerdict(verdict, generic, tuple(conditions),
                          current if current is not None else system,
-                         tuple(dict.fromkeys(warnings)), tuple(dict.fromkeys(notes)))
+                         tuple(dict.fromkeys(warnings + notes)))
 
 
 def _close_warnings(close, values) -> list:
@@ -599,6 +599,10 @@ def _examine(system, params, *, classes, precision, seed, points, values=None,
     if classes is not None and analysis.status != "inconsistent":
         cls = classes(analysis)
     data = _Data(system, analysis, seed, points)
+    if cls is not None and tuple(cls.labels) == tuple(analysis.final_labels):
+        # The second-class set the classification chose (for generic parameters when it
+        # decided symbolically): at values where B drops rank its minor is the datum.
+        data.use_second_class_set(cls.second_class_indices)
     comps, hits, close = (), [], []
     if params:
         comps = _conditions(data.symbolic(tuple(params)), tuple(params))
@@ -611,7 +615,8 @@ def _examine(system, params, *, classes, precision, seed, points, values=None,
             K = QQ.frac_field(*params)
             rank = data.bracket_rank(data.env(gens=dict(zip(params, K.gens))), K)
         else:
-            rank = data.bracket_rank(data.env(), QQ)
+            # the ordinary classification's answer: for generic parameters
+            rank = data.bracket_rank(data.env(generic=True), QQ)
         first = second = None
         if analysis.status != "inconsistent" and rank is not None:
             first, second = len(analysis.final_constraints) - rank, rank
@@ -842,12 +847,9 @@ class _Data:
         out.append(("the Lagrangian is singular (det W = 0)", lambda env0, K: [
             field_det(self._matrix(K, self.W, env, self._memo(env)))
             for env in self._pts(m1, env0, K, 1)]))
-        if system.m and math.comb(system.n, system.m) <= MAX_MINORS:
+        if system.m:
             out.append(("the constraint one-forms become dependent (a constraint is "
                         "redundant)", lambda env0, K: self._mu_minors(m1, env0, K)))
-        elif system.m:
-            self.notes.append(f"redundancy data not computed "
-                              f"({math.comb(system.n, system.m)} maximal minors of mu)")
         for stage in stages:
             out += self._stage_items(stage)
         if analysis.integrability.generic is False and system.m and system.n - system.m > 1:
@@ -867,7 +869,12 @@ class _Data:
             M = self._matrix(K, rows, env, self._memo(env))
             if not K.is_RealField:  # floating point reuses the exact pivot columns
                 self._pivots["mu"] = list(M.rref()[1])
-            vals += maximal_minors(M, self._pivots.get("mu"))
+            pivots = self._pivots.get("mu")
+            # Beyond MAX_MINORS, the minors next to the pivot block: they vanish together
+            # exactly where all do (rank mu < m), at a cost of m (n - m) + 1.
+            subsets = None if math.comb(system.n, m) <= MAX_MINORS or pivots is None or \
+                len(pivots) < m else adjacent_column_sets(pivots, system.n)
+            vals += maximal_minors(M, pivots, subsets)
         return vals
 
     def _stage_items(self, stage):
@@ -987,17 +994,20 @@ class _Data:
             self.notes.append(f"bracket matrix on M_f not evaluated exactly ({exc})")
             return None
 
+    def use_second_class_set(self, indices) -> None:
+        """Take the principal block of the bracket datum from a classification."""
+        self._pivots["R"] = list(indices)
+
     def _bracket_minor(self, env0, K):
-        mats = self._brackets(env0, K)
-        if "R" not in self._pivots and mats and mats[0].shape[0] and mats[0].det():
-            # Full rank at the first point (all second class, the usual case): the
-            # datum is det B itself, no elimination of a large rational matrix needed.
-            self._pivots["R"] = list(range(mats[0].shape[0]))
         if "R" not in self._pivots:
-            ranks = [B.rank() for B in mats]
-            r = max(ranks)
-            _, R = mats[ranks.index(r)].rref()
-            self._pivots["R"] = list(R)
+            # The principal block is chosen for generic parameters (modulo p, at random
+            # parameter values): at the given values its minor may vanish, which is the
+            # very event the datum detects.
+            with self._first_point_only():
+                (B,) = self._brackets(self.env(generic=True), MODULAR)
+            full = B.shape[0] and B.det()  # all second class, the usual case: no rref
+            self._pivots["R"] = list(range(B.shape[0])) if full else list(B.rref()[1])
+        mats = self._brackets(env0, K)
         R = self._pivots["R"]
         if not R:
             return []

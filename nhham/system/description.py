@@ -252,6 +252,13 @@ class System:
         """Names -> symbols for coordinates, velocities and parameters."""
         return self._symbol_table
 
+    @cached_property
+    def exact_parameter_values(self) -> Mapping[sp.Symbol, sp.Rational]:
+        """The parameter values as the exact decimals they were written as (``0.1`` is
+        1/10): the values every exact decision at the values uses."""
+        return MappingProxyType({p: sp.Rational(str(v)) for p, v in
+                                 self.parameter_values.items()})
+
     # ----------------------------------------------------- constraint pieces
     @cached_property
     def complete_lifts(self) -> tuple[sp.Expr, ...]:
