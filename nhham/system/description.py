@@ -31,6 +31,7 @@ from nhham.errors import (
 )
 from nhham.settings import PARAMETER_BOX, STATE_BOX
 from nhham.system.naming import as_symbol, velocity_symbol
+from nhham.system.screening import coordinate_symbols, expression_problems
 
 __all__ = ["System", "DroppedConstraint", "QuadraticParts", "quadratic_parts", "velocity_polynomial"]
 
@@ -106,9 +107,12 @@ class System:
     Raises
     ------
     ValidationError
-        With every problem found: unknown symbols, non-affine constraints,
-        holonomic constraints with velocities, m >= n, dependent constraint
-        one-forms, a singular Hessian W.
+        With every problem found: unknown symbols, dynamicsymbols (pointed to
+        :func:`nhham.from_mechanics`), numbers that are not real, functions
+        that are not smooth in the state (``Abs``, ``sign``), expressions too
+        large to expand (see :mod:`nhham.system.screening`), non-affine
+        constraints, holonomic constraints with velocities, m >= n, dependent
+        constraint one-forms, a singular Hessian W.
     """
 
     name: str
@@ -136,8 +140,8 @@ class System:
         # Long on purpose: every check appends to one list of problems, so that the
         # user sees them all at once, in the order the pieces were given.
         problems: list[str] = []
-        coords = tuple(as_symbol(q) for q in coordinates)
-        if not coords:
+        coords = coordinate_symbols(coordinates, problems)
+        if not coords and not problems:
             problems.append("coordinates: at least one coordinate is needed")
         dupes = sorted({q.name for q in coords if coords.count(q) > 1})
         if dupes:
@@ -163,12 +167,7 @@ class System:
 
         known = set(table.values())
         for label, expr in [("lagrangian", lag)] + _labelled(cons, hols):
-            unknown = sorted(s.name for s in expr.free_symbols - known)
-            if unknown:
-                problems.append(
-                    f"{label}: unknown symbol(s) {', '.join(unknown)} in {expr} "
-                    f"(declare parameters explicitly)"
-                )
+            problems += expression_problems(label, expr, coords + vels, known)
         for i, g in enumerate(hols):
             used = sorted(v.name for v in g.free_symbols & set(vels))
             if used:
