@@ -114,7 +114,14 @@ class NonAffineConstraintError(ValidationError):
 
 
 class RedundantConstraintError(ValidationError):
-    """The constraint one-forms mu_i are linearly dependent."""
+    """The constraint one-forms mu_i are linearly dependent.
+
+    A problem that dropping the constraint would solve ends with :attr:`ADVICE`
+    (the command says ``--drop-redundant`` instead).
+    """
+
+    #: How the Python API drops a redundant velocity constraint.
+    ADVICE = "pass drop_redundant=True to drop it"
 
 
 class MissingParameterValueError(InputError):

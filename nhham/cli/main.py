@@ -53,13 +53,19 @@ FIXED_STEP = ("rattle", "rattle4", "rk4")
 
 
 def _load(args, steps, drop_redundant=False):
+    from nhham.errors import RedundantConstraintError
     from nhham.system.scene import load_scene
 
     # With --project-initial the initial data are projected later, not refused here.
     check = not getattr(args, "project_initial", False)
     with steps.step(f"load scene {args.scene}"):
-        scene = load_scene(args.scene, check_initial=check, drop_redundant=drop_redundant
-                           or getattr(args, "drop_redundant", False))
+        try:
+            scene = load_scene(args.scene, check_initial=check, drop_redundant=drop_redundant
+                               or getattr(args, "drop_redundant", False))
+        except RedundantConstraintError as exc:  # the command's way to drop it
+            raise RedundantConstraintError(
+                [p.replace(exc.ADVICE, "run with --drop-redundant to drop it")
+                 for p in exc.problems]) from None
     args.loaded_scene = scene  # the envelope of a later failure names the scene
     return scene
 

@@ -687,10 +687,15 @@ def _check_dependence(system, cons, hols, drop_redundant):
                 f"they imply the position constraint {sp.trigsimp(position_part)} = 0; give "
                 f"that as a holonomic constraint instead"
             )
-        elif labels[i].startswith("holonomic") or not drop_redundant:
+        elif labels[i].startswith("holonomic"):  # drop_redundant drops velocity constraints
+            problems.append(
+                f"{labels[i]}: the complete lift {rows[i]} is a combination of the others: "
+                f"{labels[i]} = {combo}; the constraint is redundant: remove it from holonomic"
+            )
+        elif not drop_redundant:
             problems.append(
                 f"{labels[i]}: {rows[i]} is redundant, a combination of the others: "
-                f"{labels[i]} = {combo} (pass drop_redundant=True to drop it)"
+                f"{labels[i]} = {combo} ({RedundantConstraintError.ADVICE})"
             )
         else:
             dropped.append(DroppedConstraint(labels[i], rows[i],
