@@ -241,6 +241,8 @@ def test_bad_scene(filename, tmp_path, monkeypatch):
     message = str(info.value)
     for fragment in expected["contains"]:
         assert fragment in message, f"{fragment!r} not in {message!r}"
+    if "key" in expected:  # the key the command's JSON error names
+        assert info.value.key == expected["key"]
     assert not (tmp_path / "PWNED").exists()
     assert sorted(p.name for p in tmp_path.iterdir()) == [filename]
 
