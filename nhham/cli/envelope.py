@@ -137,7 +137,7 @@ def envelope(command: str | None, result: dict | None, *, scene: dict | None = N
 
     >>> env = envelope("classify", {"status": "determined"})
     >>> sorted(env)
-    ['command', 'nhham_version', 'error', 'result', 'scene', 'warnings']
+    ['command', 'error', 'nhham_version', 'result', 'scene', 'warnings']
     >>> envelope("simulate", None, error=error_info("usage", "--atol: must be > 0",
     ...                                             "--atol"))["error"]
     {'kind': 'usage', 'message': '--atol: must be > 0', 'key': '--atol'}

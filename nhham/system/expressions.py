@@ -239,14 +239,14 @@ def number_problems(expr) -> list[str]:
             stack.extend(node.args)
             continue
         for number in node.atoms(sp.Float):
-            value = float(number)
-            if not math.isfinite(value) or (value == 0.0 and not number.is_zero):
+            double = float(number)
+            if not math.isfinite(double) or (double == 0.0 and not number.is_zero):
                 problems.append(f"the number {sp.sstr(number)} is outside the range of double "
                                 f"precision (about 1e-308 to 1e308)")
-        value = _complex_value(node)
-        if value:
-            problems.append(f"{sp.sstr(node)} is not a real number (its value is {value}); "
-                            f"nhham takes real data only")
+        complex_value = _complex_value(node)
+        if complex_value:
+            problems.append(f"{sp.sstr(node)} is not a real number (its value is "
+                            f"{complex_value}); nhham takes real data only")
     return problems
 
 
