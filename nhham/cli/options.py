@@ -16,9 +16,10 @@ from __future__ import annotations
 import argparse
 import math
 import os
+import re
 from pathlib import Path
 
-from nhham.errors import InputError, UsageError, key_of
+from nhham.errors import InputError, UsageError
 from nhham.system.scene import simulate_option_problem
 
 __all__ = ["DEFAULT_BUDGET", "MAX_BUDGET", "MIN_DIGITS", "MAX_DIGITS", "MAX_SAMPLES",
@@ -88,8 +89,9 @@ def check_options(args: argparse.Namespace) -> None:
             parse_sweep(sweep)
         except InputError as exc:  # its message names --sweep
             problems.append(str(exc))
-    if problems:
-        raise UsageError("; ".join(problems), key=key_of(problems[0]))
+    if problems:  # each starts with its option
+        option = re.match(r"--[a-z-]+", problems[0])
+        raise UsageError("; ".join(problems), key=option.group() if option else None)
 
 
 def _option(dest: str) -> str:
@@ -124,6 +126,8 @@ def _check_combinations(args, problems) -> None:
         for key in ("positive", "depth"):
             if getattr(args, key, None) is not None:
                 problems.append(f"{_option(key)}: only with --parametric")
+    if getattr(args, "sweep", "") is None and getattr(args, "plot", None) is not None:
+        problems.append("--plot draws the root locus of a sweep: give --sweep too")
     depth = getattr(args, "depth", None)
     if depth is not None and depth < 0:
         problems.append(f"--depth: expected a non-negative integer, got {depth}")

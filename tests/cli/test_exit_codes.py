@@ -162,7 +162,7 @@ REFUSED = [
     ("classify", "--precision", "0"), ("derive", "--precision", "-5"),
     ("simulate", "--plot", "trajectory.nosuchformat"),
     ("classify", "--depth", "2"), ("classify", "--positive", "m"),
-    ("linearize", "--sweep", "v=10:0:5"),
+    ("linearize", "--sweep", "v=10:0:5"), ("linearize", "--plot", "locus.png"),
 ]
 
 
