@@ -36,6 +36,7 @@ from __future__ import annotations
 
 import json
 import math
+import sys
 import warnings as _warnings
 from contextlib import contextmanager
 from dataclasses import dataclass, field
@@ -53,6 +54,8 @@ __all__ = [
     "envelope",
     "scene_info",
     "error_info",
+    "FailureReport",
+    "print_json",
     "one_line",
     "capture_warnings",
     "output_schema",
@@ -187,6 +190,42 @@ def scene_info(scene) -> dict:
     return {"path": str(scene.source), "name": scene.name, "coordinates": coords,
             "velocities": vels, "momenta": momenta, "parameters": params,
             "names": list(dict.fromkeys(names))}
+
+
+def print_json(data) -> None:
+    """Print one JSON document on stdout (non-finite numbers are refused: see jsonable)."""
+    print(json.dumps(data, indent=2, allow_nan=False))
+
+
+@dataclass(frozen=True)
+class FailureReport:
+    """Where a command's failure is reported: one line on stderr, and with ``--json``
+    the envelope with its ``error`` on stdout.
+
+    Attributes
+    ----------
+    command : str or None
+        The subcommand, as far as the command line was understood.
+    json : bool
+        Whether ``--json`` was asked for.
+    scene : callable returning a Scene or None
+        The scene once loaded (the envelope's ``scene`` then names it).
+    """
+
+    command: str | None
+    json: bool
+    scene: Callable[[], Any] = lambda: None
+
+    def fail(self, kind: str, message, key: str | None = None, *,
+             prefix: str = "nhham: error: ", warnings=()) -> int:
+        """Report a failure of ``kind`` that left no result; returns its exit status."""
+        print(prefix + one_line(message), file=sys.stderr)
+        if self.json:
+            scene = self.scene()
+            print_json(envelope(self.command, None, warnings=warnings,
+                                scene=None if scene is None else scene_info(scene),
+                                error=error_info(kind, message, key)))
+        return ERROR_KINDS[kind]
 
 
 @contextmanager

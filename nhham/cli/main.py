@@ -20,27 +20,26 @@ to :data:`COMMANDS` and its options in :func:`build_parser`.
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import sys
 import traceback
-from dataclasses import dataclass
 
 from nhham.cli.budget import BudgetExceeded, time_budget
 from nhham.cli.envelope import (
-    ERROR_KINDS,
     EXIT_NOT_SUCCEEDED,
     EXIT_OK,
     CommandOutput,
+    FailureReport,
     capture_warnings,
     envelope,
     error_info,
     one_line,
+    print_json,
     scene_info,
 )
 from nhham.cli.linearize import LINEARIZE_HELP, cmd_linearize
 from nhham.cli.linearize import add_arguments as add_linearize_arguments
-from nhham.cli.options import DEFAULT_BUDGET, budget_value, check_options
+from nhham.cli.options import DEFAULT_BUDGET, argparse_key, budget_value, check_options
 from nhham.cli.report import Steps, expr_text, table
 from nhham.errors import InputError, NhhamError, UsageError
 
@@ -598,19 +597,7 @@ class _Parser(argparse.ArgumentParser):
 
     def error(self, message):
         raise UsageError(f"{one_line(message)} (see `{self.prog} --help`)",
-                         key=_argparse_key(message))
-
-
-def _argparse_key(message: str) -> str | None:
-    """The option (or argument) an argparse message is about."""
-    message = str(message)
-    if message.startswith("argument "):
-        name = message[len("argument "):].split(":")[0].split("/")[0]
-        return name.lower() if name.isupper() else name
-    if "arguments are required: " in message:
-        name = message.split("arguments are required: ")[1].split(",")[0].strip()
-        return name.lower() if name.isupper() else name
-    return None
+                         key=argparse_key(message))
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -745,10 +732,13 @@ def main(argv=None) -> int:
     argv = sys.argv[1:] if argv is None else list(argv)
     parser = build_parser()
     words = [a for a in argv if a in COMMANDS]
-    run = _Run(command=words[0] if words else None, json="--json" in argv)
+    # Where failures are reported, as far as the command line was understood.
+    run = FailureReport(command=words[0] if words else None, json="--json" in argv)
     try:
         args, extra = parser.parse_known_args(argv)
-        run = _Run(command=args.command, json=getattr(args, "json", False))
+        # Once the scene has loaded (_load), a failure's envelope names it.
+        run = FailureReport(command=args.command, json=args.json,
+                            scene=lambda: getattr(args, "loaded_scene", None))
         if extra:
             raise UsageError(f"{_unknown_options(parser, args.command, extra)} "
                              f"(see `nhham {args.command} --help`)",
@@ -756,7 +746,8 @@ def main(argv=None) -> int:
                                       None))
         check_options(args)
     except UsageError as exc:
-        return run.fail("usage", str(exc), exc.key, prefix=f"nhham{_space(run.command)}: error: ")
+        prefix = f"nhham {run.command}: error: " if run.command else "nhham: error: "
+        return run.fail("usage", str(exc), exc.key, prefix=prefix)
     steps = Steps(progress=sys.stderr.isatty() and not run.json)
     try:
         with capture_warnings() as caught, time_budget(args.budget, steps):
@@ -766,22 +757,21 @@ def main(argv=None) -> int:
                                     text=out if isinstance(out, str) else "")
             text = None if run.json else out.render_text()
     except BudgetExceeded as exc:
-        return run.failed_after(args, caught, "budget",
-                                f"{exc}; finished before it: {steps.decided()}; allow more "
-                                f"with a larger --budget (or --budget none)", prefix="nhham: ")
+        return run.fail("budget", f"{exc}; finished before it: {steps.decided()}; allow more "
+                                  f"with a larger --budget (or --budget none)", prefix="nhham: ",
+                        warnings=caught)
     except InputError as exc:
-        return run.failed_after(args, caught, "usage" if isinstance(exc, UsageError) else
-                                "input", str(exc), exc.key)
+        return run.fail("usage" if isinstance(exc, UsageError) else "input", str(exc), exc.key,
+                        warnings=caught)
     except KeyboardInterrupt:
-        return run.failed_after(args, caught, "interrupted", "interrupted", prefix="nhham: ")
+        return run.fail("interrupted", "interrupted", prefix="nhham: ", warnings=caught)
     except Exception as exc:  # internal failure: say so, traceback on request
         if args.debug:
             traceback.print_exc()
         kind = "internal error" if not isinstance(exc, NhhamError) else "failed"
-        return run.failed_after(args, caught, "internal",
-                                f"{type(exc).__name__}: {exc}"
-                                + ("" if args.debug else " (run with --debug for a traceback)"),
-                                prefix=f"nhham: {kind}: ")
+        return run.fail("internal", f"{type(exc).__name__}: {exc}"
+                        + ("" if args.debug else " (run with --debug for a traceback)"),
+                        prefix=f"nhham: {kind}: ", warnings=caught)
     warnings = list(out.warnings) + [w for w in caught if w not in out.warnings]
     try:
         return _print_output(args, out, text, warnings, steps)
@@ -790,44 +780,11 @@ def main(argv=None) -> int:
         return EXIT_OK
 
 
-def _space(command) -> str:
-    return f" {command}" if command else ""
-
-
-@dataclass(frozen=True)
-class _Run:
-    """Where a failure is reported: one line on stderr, and the envelope with --json."""
-
-    command: str | None
-    json: bool
-
-    def fail(self, kind, message, key=None, *, prefix="nhham: error: ", scene=None,
-             warnings=()) -> int:
-        """Report a failure of ``kind`` (see ``ERROR_KINDS``) that left no result;
-        returns its exit status."""
-        print(prefix + one_line(message), file=sys.stderr)
-        if self.json:
-            _print_json(envelope(self.command, None, scene=scene, warnings=warnings,
-                                 error=error_info(kind, message, key)))
-        return ERROR_KINDS[kind]
-
-    def failed_after(self, args, warnings, kind, message, key=None, *,
-                     prefix="nhham: error: ") -> int:
-        """A failure after the options were read: the scene, if loaded, is named."""
-        scene = getattr(args, "loaded_scene", None)
-        return self.fail(kind, message, key, prefix=prefix, warnings=warnings,
-                         scene=None if scene is None else scene_info(scene))
-
-
-def _print_json(data) -> None:
-    print(json.dumps(data, indent=2, allow_nan=False))
-
-
 def _print_output(args, out, text, warnings, steps) -> int:
     error = None if not out.failure else error_info("failed", out.failure)
     if getattr(args, "json", False):
-        _print_json(envelope(args.command, out.result, scene=out.scene, warnings=warnings,
-                             error=error))
+        print_json(envelope(args.command, out.result, scene=out.scene, warnings=warnings,
+                            error=error))
     else:
         print(text)
         for w in dict.fromkeys(one_line(w) for w in warnings):

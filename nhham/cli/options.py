@@ -23,7 +23,7 @@ from nhham.errors import InputError, UsageError
 from nhham.system.scene import simulate_option_problem
 
 __all__ = ["DEFAULT_BUDGET", "MAX_BUDGET", "MIN_DIGITS", "MAX_DIGITS", "MAX_SAMPLES",
-           "budget_value", "check_options"]
+           "budget_value", "check_options", "argparse_key"]
 
 #: Default ``--budget`` (seconds) of the symbolic commands (classify, derive, compare,
 #: linearize); simulate and bench have none (they report their progress).
@@ -52,6 +52,24 @@ def budget_value(text: str) -> float | None:
     except ValueError:
         raise argparse.ArgumentTypeError(
             f"expected a number of seconds or 'none', got {text!r}") from None
+
+
+def argparse_key(message: str) -> str | None:
+    """The option (or argument) an argparse error message is about, or None.
+
+    >>> argparse_key("argument --method: invalid choice: 'euler'")
+    '--method'
+    >>> argparse_key("the following arguments are required: scene")
+    'scene'
+    """
+    message = str(message)
+    if message.startswith("argument "):
+        name = message[len("argument "):].split(":")[0].split("/")[0]
+    elif "arguments are required: " in message:
+        name = message.split("arguments are required: ")[1].split(",")[0].strip()
+    else:
+        return None
+    return name.lower() if name.isupper() else name  # the metavar COMMAND is the command
 
 
 def check_options(args: argparse.Namespace) -> None:

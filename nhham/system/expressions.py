@@ -16,8 +16,9 @@ which Python would silently read as ``m``) is refused.
 
 Data are real: a constant that is not a real number (``sqrt(-1)``, ``log(-1)``,
 ``asin(2)``) and a literal outside double precision's range (``1e-400``, which
-Python reads as 0) are refused, never truncated; :func:`number_problems` applies
-the same rules to expressions built with sympy.
+Python reads as 0) are refused, never truncated;
+:func:`nhham.system.numbers.number_problems` applies the same rules to
+expressions built with sympy.
 
 The work done on hostile input is bounded: the text length, the nesting
 depth, the size of exact numbers and numeric powers are all capped, and every
@@ -44,6 +45,7 @@ import sympy as sp
 from sympy.printing.str import StrPrinter
 
 from nhham.errors import ParseError
+from nhham.system.numbers import complex_string, number_problems
 
 __all__ = [
     "FUNCTIONS",
@@ -51,7 +53,6 @@ __all__ = [
     "RESERVED_NAMES",
     "MAX_EXPRESSION_LENGTH",
     "parse_expression",
-    "number_problems",
     "to_text",
     "short",
     "derivative",
@@ -210,60 +211,6 @@ def _not_normalized(body: str, lead: int, text: str) -> str:
                         f"normal form NFKC (normalised, as Python reads names, it becomes {normal!r}); "
                         f"write names exactly as they are declared")
     return "the text is not in Unicode normal form NFKC; write names as they are declared"
-
-
-def number_problems(expr) -> list[str]:
-    """Why the numbers in ``expr`` are not real data nhham can compute with.
-
-    Every constant subexpression must be a real number (``sqrt(-1)``, ``log(-1)`` =
-    ``I*pi``, ``asin(2)`` are not) and every float must lie within double
-    precision's range (sympy's ``Float('1e-400')`` would become 0).
-
-    Parameters
-    ----------
-    expr : sympy.Expr
-
-    Returns
-    -------
-    list of str
-        One line per offending number (empty when every number is fine).
-
-    >>> number_problems(sp.asin(2) * sp.Symbol("x"))
-    ['asin(2) is not a real number (its value is 1.5708-1.31696i); nhham takes real data only']
-    """
-    problems = []
-    stack = [sp.sympify(expr)]
-    while stack:
-        node = stack.pop()
-        if not isinstance(node, sp.Expr) or node.free_symbols:
-            stack.extend(node.args)
-            continue
-        for number in node.atoms(sp.Float):
-            double = float(number)
-            if not math.isfinite(double) or (double == 0.0 and not number.is_zero):
-                problems.append(f"the number {sp.sstr(number)} is outside the range of double "
-                                f"precision (about 1e-308 to 1e308)")
-        complex_value = _complex_value(node)
-        if complex_value:
-            problems.append(f"{sp.sstr(node)} is not a real number (its value is "
-                            f"{complex_value}); nhham takes real data only")
-    return problems
-
-
-def _complex_value(number) -> str | None:
-    """The value of the constant ``number`` as ``a+bi`` when it is not real, else None."""
-    real = number.is_extended_real
-    if real:
-        return None
-    try:
-        re, im = (float(part) for part in number.evalf(30).as_real_imag())
-    except (TypeError, ValueError, OverflowError):
-        return None  # not a number that evaluates: the numeric checks met later say so
-    if not (math.isfinite(re) and math.isfinite(im)):
-        return None  # not finite: refused as such
-    if real is None and abs(im) <= 1e-25 * max(1.0, abs(re)):
-        return None
-    return f"{re:.6g}{im:+.6g}i"
 
 
 def _symbol_table(symbols) -> Mapping[str, sp.Symbol]:
@@ -558,7 +505,7 @@ class _Builder:
     def real(self, node, value):
         """``value``, refused when it is a constant that is not a real number."""
         if not value.free_symbols:
-            complex_value = _complex_value(value)
+            complex_value = complex_string(value)
             if complex_value:
                 raise ParseError(f"{self.where}: {self.fragment(node)} is not a real number "
                                  f"(its value is {complex_value}); nhham takes real data only")

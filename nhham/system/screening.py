@@ -7,7 +7,7 @@ problem one line starting with the key path (``lagrangian``, ``constraints[1]``)
   derivative is pointed to :func:`nhham.from_mechanics`, an unknown symbol to the
   ``parameters`` (and a time ``t`` to the fact that systems are autonomous: declaring
   it a parameter would freeze time);
-- real data (:func:`nhham.system.expressions.number_problems`): ``asin(2)`` or
+- real data (:func:`nhham.system.numbers.number_problems`): ``asin(2)`` or
   ``sympy.I`` would otherwise lose their imaginary part in the numbers;
 - smooth functions of the state: ``Abs``, ``sign`` and other kinks or jumps of the
   coordinates or velocities have no derivative nhham can use;
@@ -24,8 +24,9 @@ import unicodedata
 import sympy as sp
 from sympy.core.function import AppliedUndef
 
-from nhham.system.expressions import number_problems, short, to_text
+from nhham.system.expressions import short, to_text
 from nhham.system.naming import as_symbol
+from nhham.system.numbers import number_problems
 
 __all__ = ["MAX_EXPANDED_TERMS", "expanded_size", "coordinate_symbols", "expression_problems"]
 

@@ -109,3 +109,11 @@ def test_expressions_too_large_to_expand_are_refused_at_once():
     assert f"expands to about {float(math.comb(63, 3)):.3g} terms" in str(error)
     assert "(x + y + z + 1)**60" in str(error)
     nhham.System(["x", "y", "z"], L_free - (x + y + z + 1) ** 6, parameters={"m": 1.0})
+
+
+def test_docstring_examples():
+    import doctest
+
+    from nhham.system import screening
+
+    assert doctest.testmod(screening).failed == 0
