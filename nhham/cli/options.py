@@ -154,7 +154,9 @@ def _check_combinations(args, problems) -> None:
 def _output_problem(path_text: str, figure: bool) -> str | None:
     """Why a file could not be written at ``path_text`` (checked before the work), or None."""
     path = Path(path_text)
-    if path_text.strip() == "" or path.is_dir():
+    if not path_text.strip():
+        return "expected a file name, got an empty one"
+    if path.is_dir():
         return f"{path_text!r} is a directory, not a file name"
     folder = path.parent
     if not folder.is_dir():
