@@ -56,7 +56,7 @@ import numpy as np
 import sympy as sp
 
 from nhham.settings import PARAMETER_BOX, SEED, STATE_BOX, Precision
-from nhham.errors import ComputationError
+from nhham.errors import ComputationError, EmptySubmanifoldError
 from nhham.lagrangian.algebra import cancel, solve_linear
 from nhham.system.evaluation import numeric_function
 from nhham.system.expressions import short
@@ -530,9 +530,10 @@ class Submanifold:
             pts.append(pt)
             worst = max(worst, res)
         if not pts:
-            raise ComputationError(
+            raise EmptySubmanifoldError(
                 f"could not find points on the submanifold defined by {list(self.equations)} "
-                f"(Newton projection failed from {attempts} seeded starts; it may be empty)"
+                f"(Newton projection failed from {attempts} seeded starts; it may be empty: "
+                f"equations without a real solution?)"
             )
         return pts, worst
 

@@ -32,6 +32,7 @@ from nhham.errors import (
 from nhham.settings import PARAMETER_BOX, STATE_BOX
 from nhham.system.naming import as_symbol, velocity_symbol
 from nhham.system.rank import float_rank, precise_ranks
+from nhham.system.screening import coordinate_symbols, expression_problems
 
 __all__ = ["System", "DroppedConstraint", "QuadraticParts", "quadratic_parts", "velocity_polynomial"]
 
@@ -107,9 +108,12 @@ class System:
     Raises
     ------
     ValidationError
-        With every problem found: unknown symbols, non-affine constraints,
-        holonomic constraints with velocities, m >= n, dependent constraint
-        one-forms, a singular Hessian W.
+        With every problem found: unknown symbols, dynamicsymbols (pointed to
+        :func:`nhham.from_mechanics`), numbers that are not real, functions
+        that are not smooth in the state (``Abs``, ``sign``), expressions too
+        large to expand (see :mod:`nhham.system.screening`), non-affine
+        constraints, holonomic constraints with velocities, m >= n, dependent
+        constraint one-forms, a singular Hessian W.
     """
 
     name: str
@@ -137,8 +141,8 @@ class System:
         # Long on purpose: every check appends to one list of problems, so that the
         # user sees them all at once, in the order the pieces were given.
         problems: list[str] = []
-        coords = tuple(as_symbol(q) for q in coordinates)
-        if not coords:
+        coords = coordinate_symbols(coordinates, problems)
+        if not coords and not problems:
             problems.append("coordinates: at least one coordinate is needed")
         dupes = sorted({q.name for q in coords if coords.count(q) > 1})
         if dupes:
@@ -164,12 +168,7 @@ class System:
 
         known = set(table.values())
         for label, expr in [("lagrangian", lag)] + _labelled(cons, hols):
-            unknown = sorted(s.name for s in expr.free_symbols - known)
-            if unknown:
-                problems.append(
-                    f"{label}: unknown symbol(s) {', '.join(unknown)} in {expr} "
-                    f"(declare parameters explicitly)"
-                )
+            problems += expression_problems(label, expr, coords + vels, known)
         for i, g in enumerate(hols):
             used = sorted(v.name for v in g.free_symbols & set(vels))
             if used:
@@ -699,10 +698,15 @@ def _check_dependence(system, cons, hols, drop_redundant):
                 f"they imply the position constraint {sp.trigsimp(position_part)} = 0; give "
                 f"that as a holonomic constraint instead"
             )
-        elif labels[i].startswith("holonomic") or not drop_redundant:
+        elif labels[i].startswith("holonomic"):  # drop_redundant drops velocity constraints
+            problems.append(
+                f"{labels[i]}: the complete lift {rows[i]} is a combination of the others: "
+                f"{labels[i]} = {combo}; the constraint is redundant: remove it from holonomic"
+            )
+        elif not drop_redundant:
             problems.append(
                 f"{labels[i]}: {rows[i]} is redundant, a combination of the others: "
-                f"{labels[i]} = {combo} (pass drop_redundant=True to drop it)"
+                f"{labels[i]} = {combo} ({RedundantConstraintError.ADVICE})"
             )
         else:
             dropped.append(DroppedConstraint(labels[i], rows[i],
