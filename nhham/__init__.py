@@ -23,11 +23,13 @@ which only classifies never imports the numerical integrators.
 """
 
 from nhham.errors import (
+    BudgetExceeded,
     ComputationError,
     InconsistentInitialDataError,
     InputError,
     MissingParameterValueError,
     NhhamError,
+    NhhamWarning,
     NonAffineConstraintError,
     OptionalDependencyError,
     ParseError,
@@ -84,6 +86,8 @@ _LAZY = {
     "simulate": "numerics.integrate",
     "SimulationResult": "numerics.integrate",
     "work_precision": "numerics.workprecision",
+    # a bound on the time of a computation (the command's --budget)
+    "time_budget": "budget",
     # input and output
     "load_scene": "system.scene",
     "loads_scene": "system.scene",
@@ -115,6 +119,8 @@ __all__ = [
     "InconsistentInitialDataError",
     "OptionalDependencyError",
     "ComputationError",
+    "BudgetExceeded",
+    "NhhamWarning",
     *_LAZY,
 ]
 

@@ -29,7 +29,10 @@ __all__ = [
     "MissingParameterValueError",
     "InconsistentInitialDataError",
     "ComputationError",
+    "BudgetExceeded",
+    "ClosedFormTooLarge",
     "EmptySubmanifoldError",
+    "NhhamWarning",
     "OptionalDependencyError",
     "key_of",
 ]
@@ -138,6 +141,19 @@ class OptionalDependencyError(InputError, ImportError):
 
 class ComputationError(NhhamError):
     """A computation could not be carried out (not the user's fault)."""
+
+
+class BudgetExceeded(NhhamError):
+    """A time budget (``nhham.time_budget``, the command's ``--budget``) ran out."""
+
+
+class ClosedFormTooLarge(ComputationError):
+    """A closed form (a symbolic solve with C) refused by the size guard; the message
+    names the implicit form to use instead and how to ask for the closed form anyway."""
+
+
+class NhhamWarning(UserWarning):
+    """A result or a request that deserves the user's attention (not an error)."""
 
 
 class EmptySubmanifoldError(InputError, ComputationError):

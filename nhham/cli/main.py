@@ -246,7 +246,7 @@ def cmd_derive(args, steps) -> CommandOutput:
     if args.side == "hamiltonian":
         from nhham.hamiltonian.side import hamiltonian_side
 
-        side = hamiltonian_side(system, precision=args.precision)
+        side = hamiltonian_side(system, precision=args.precision, closed_form=True)
         with steps.step("Legendre map and Hamiltonian H = E_L o Leg^-1"):
             side.energy
         out = _derive_closed_form(args, steps, scene, side, "hamiltonian", side.analysis)
@@ -256,7 +256,9 @@ def cmd_derive(args, steps) -> CommandOutput:
     from nhham.lagrangian.analysis import analyze_constraints
     from nhham.lagrangian.geometry import lagrangian_geometry
 
-    G = lagrangian_geometry(system, precision=args.precision)
+    # derive forms closed forms only where it decided to (W cheap, or --explicit asked):
+    # its --budget bounds them, not the library's size guard.
+    G = lagrangian_geometry(system, precision=args.precision, closed_form=True)
     with steps.step("energy E_L"):
         energy = G.energy
     with steps.step("implicit form: W, F, mu and mu a = -(dphi/dq) v"):
@@ -394,7 +396,8 @@ def cmd_compare(args, steps) -> CommandOutput:
     at = _at_scene_values(args, steps, scene)
     system = scene.system if at is None else at.system
     # One T*Q side for both checks: its numeric layer is built once.
-    side = hamiltonian_side(system, precision=args.precision, samples=args.samples)
+    side = hamiltonian_side(system, precision=args.precision, samples=args.samples,
+                            closed_form=True)
     with steps.step("cross-check through the Legendre map"):
         report = cross_check(system, precision=args.precision, samples=args.samples,
                              side=side)

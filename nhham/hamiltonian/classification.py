@@ -896,7 +896,7 @@ def dirac_vs_projected(system, *, precision=None, samples=6, seed=SEED,
     """
     if side is None:
         side = classes.side if classes is not None else hamiltonian_side(
-            system, precision=precision, samples=samples, seed=seed)
+            system, precision=precision, samples=samples, seed=seed, closed_form=True)
     if classes is None:
         classes = classify_constraints(side, precision=precision, samples=samples, seed=seed,
                                        method=method, tol=tol)
