@@ -59,7 +59,7 @@ from nhham.settings import PARAMETER_BOX, SEED, STATE_BOX, Precision
 from nhham.errors import ComputationError, EmptySubmanifoldError
 from nhham.lagrangian.algebra import cancel, solve_linear
 from nhham.system.evaluation import numeric_function
-from nhham.system.expressions import short
+from nhham.system.expressions import derivative, short
 
 __all__ = ["Decision", "Submanifold"]
 
@@ -412,7 +412,7 @@ class Submanifold:
         f = self._lambdify([reduced])
         # Singular values are compared with the size of the terms of the entries (not
         # with 1): unit-free, and a matrix of rounding noise still has rank 0.
-        f_scale = self._lambdify([reduced.applyfunc(_term_size)])
+        f_scale = self._lambdify([reduced.applyfunc(lambda e: _value_scale(e, self.variables))])
         svals, relative, ranks = [], [], []
         tol = self._tol(tol)
         zero = self._zero_level(resid)
@@ -670,7 +670,7 @@ class Submanifold:
         points, resid = self.points()
         tol = self._tol(tol)
         f = self._lambdify([expr])
-        scale_f = self._lambdify([_term_size(expr)])
+        scale_f = self._lambdify([_value_scale(expr, self.variables)])
         worst, worst_rel = 0.0, 0.0
         for pt in points:
             value = self._evaluate(f, pt)[0]
@@ -704,9 +704,18 @@ class Submanifold:
 
 
 # ------------------------------------------------------------------ helpers
-def _term_size(expr):
-    """The sum of |terms| of ``expr`` expanded: the scale its value is compared with."""
-    return sum((abs(t) for t in sp.Add.make_args(sp.expand(expr))), sp.S.Zero)
+def _value_scale(expr, variables):
+    """The size a value of ``expr`` at a sample point is compared with.
+
+    The sum of |terms| of ``expr`` expanded, plus |d expr / d z| times the size of the
+    sample box for every state variable z: unit-free (it scales with the parameters as
+    ``expr`` does), and a function vanishing on M is still seen as zero at a point off M
+    by the rounding of the Newton projection (q1 = 4e-16 on {q1 = 0}).
+    """
+    expr = sp.expand(expr)
+    terms = sum((abs(t) for t in sp.Add.make_args(expr)), sp.S.Zero)
+    slope = sum((abs(derivative(expr, z)) for z in variables if expr.has(z)), sp.S.Zero)
+    return terms + slope * max(abs(b) for b in STATE_BOX)
 
 
 def _floats(values):
