@@ -34,8 +34,9 @@ This module must not import sympy (``DESIGN.md`` §4).
 from __future__ import annotations
 
 import ctypes
-from typing import Any
 import math
+import warnings
+from typing import Any
 from dataclasses import dataclass, field, replace
 from types import MappingProxyType
 
@@ -603,12 +604,18 @@ class NumericModel:
 
 
 def _until_built(f, pending):
-    """``f``, until the ``pending`` build has succeeded: then :class:`LibraryReady`. (A
-    failed build changes nothing: numpy goes on; :meth:`NumericModel.with_library`
-    reports why.) One event test per call: nothing next to a numpy evaluation."""
+    """``f``, until the ``pending`` build is over: then :class:`LibraryReady` if it
+    succeeded; if it failed numpy goes on, with a :class:`NumericsWarning` saying why.
+    One event test per call: nothing next to a numpy evaluation."""
+    told = []
+
     def g(z):
-        if pending.ready() and pending.succeeded():
-            raise LibraryReady("the compiled library is built")
+        if pending.ready() and not told:
+            if pending.succeeded():
+                raise LibraryReady("the compiled library is built")
+            told.append(True)
+            warnings.warn(f"C backend unavailable ({pending.failure()}); numpy goes on",
+                          NumericsWarning, stacklevel=2)
         return f(z)
 
     return g

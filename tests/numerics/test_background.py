@@ -142,3 +142,18 @@ def test_a_synchronous_build_waits_for_the_background_one(held_compiler):
     model = numeric_model(chaplygin_sleigh())
     assert model.backend == "c" and pending.succeeded()
     assert len(log.read_text().split()) == 1  # one compilation, not two
+
+
+def test_a_failed_build_leaves_numpy_with_a_warning(tmp_path, monkeypatch):
+    """A build that failed during the run: numpy goes on, and a warning says why."""
+    script = tmp_path / "broken-cc"
+    script.write_text('#!/bin/sh\necho "model.c:1:1: error: no compiler today" >&2\nexit 1\n')
+    script.chmod(0o755)
+    monkeypatch.setenv("CC", str(script))
+    monkeypatch.setenv("NHHAM_CACHE", str(tmp_path / "cache"))
+    model = numeric_model(chaplygin_sleigh(), background=True)
+    assert model.pending.wait(600) and not model.pending.succeeded()
+    with pytest.warns(NumericsWarning, match="C backend unavailable.*no compiler today"):
+        res = simulate(model, (0, 4), sleigh_state(), rtol=1e-10, atol=1e-12, warn=False)
+    assert res.success and res.settings["backend"] == "numpy"
+    assert sleigh_error(res) < 1e-8

@@ -62,13 +62,20 @@ class BackgroundBuild:
         """Wait until the build is over; False when ``timeout`` passed first."""
         return self._done.wait(timeout)
 
+    def failure(self) -> str:
+        """Why no library came out of a build that is over (empty while it runs or when
+        it succeeded)."""
+        if not self.ready() or self.succeeded():
+            return ""
+        return self.outcome.note if self.outcome is not None else f"the build was {self.state}"
+
     def load(self, layout) -> tuple:
         """``(CompiledRHS or None, note)``: the library, loaded, once the build is over
         (waits for it); a :class:`~nhham.numerics.model.NumericsWarning` when numpy
         stays (why) or the plain library replaces the CPython entry points. Called by
         the thread that uses the model."""
         self.wait()
-        outcome = self.outcome or LibraryBuild(None, False, f"the build was {self.state}")
+        outcome = self.outcome or LibraryBuild(None, False, self.failure())
         compiled, note = load_library(outcome, layout)
         if compiled is None:
             warnings.warn(f"C backend unavailable ({note}); using numpy", NumericsWarning,
