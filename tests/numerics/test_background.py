@@ -157,3 +157,19 @@ def test_a_failed_build_leaves_numpy_with_a_warning(tmp_path, monkeypatch):
         res = simulate(model, (0, 4), sleigh_state(), rtol=1e-10, atol=1e-12, warn=False)
     assert res.success and res.settings["backend"] == "numpy"
     assert sleigh_error(res) < 1e-8
+
+
+def test_a_forked_child_does_not_wait_for_the_parents_build(held_compiler):
+    """The worker thread is not in a forked child: builds the child inherited are over
+    there (stopped), and the child builds its own library."""
+    go, _ = held_compiler
+    model = numeric_model(chaplygin_sleigh(), background=True)
+    pid = os.fork()
+    if pid == 0:  # the child: exit status 0 only if everything holds
+        ok = model.pending.wait(5) and model.pending.state == "stopped"
+        go.touch()
+        ok = ok and numeric_model(chaplygin_sleigh()).backend == "c"
+        os._exit(0 if ok else 1)
+    _, status = os.waitpid(pid, 0)
+    assert os.waitstatus_to_exitcode(status) == 0
+    assert model.pending.wait(600) and model.pending.succeeded()  # the parent's own build

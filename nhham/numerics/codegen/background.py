@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import atexit
 import collections
+import os
 import threading
 import warnings
 
@@ -160,6 +161,14 @@ class _Worker:
         build._finish("withdrawn", None)
         return None
 
+    def after_fork(self) -> None:
+        """In a child process: no worker thread, and the builds inherited from the parent
+        are over (stopped) for the child; its own builds start a new worker."""
+        for build in self.builds.values():
+            build._done = threading.Event()  # the parent's may be locked by a lost thread
+            build._finish("stopped", None)
+        self.__init__()  # type: ignore[misc]
+
     def stop(self) -> None:
         with self.lock:
             self.closing = True
@@ -179,6 +188,7 @@ class _Worker:
 
 
 _WORKER = _Worker()
+os.register_at_fork(after_in_child=_WORKER.after_fork)
 
 
 def build_in_background(sources, cache: CompileCache) -> BackgroundBuild:

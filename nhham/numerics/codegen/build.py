@@ -193,9 +193,11 @@ def run_compiler(command: list, cwd: str, on_start=None) -> tuple:
 
 
 def kill_group(process) -> None:
-    """Kill the compiler's whole process group and reap the driver."""
-    with contextlib.suppress(ProcessLookupError, PermissionError):
-        os.killpg(process.pid, signal.SIGKILL)
+    """Kill the compiler's whole process group and reap the driver (not once the driver
+    is reaped: its pid, the group's id, may belong to another process by then)."""
+    if process.returncode is None:
+        with contextlib.suppress(ProcessLookupError, PermissionError):
+            os.killpg(process.pid, signal.SIGKILL)
     with contextlib.suppress(Exception):
         process.communicate()
 
