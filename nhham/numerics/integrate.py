@@ -161,7 +161,7 @@ class SimulationResult:
         lines = [
             f"{self.method}: {self.message} (status {self.status}) at t = {self.t[-1]:.6g}",
             f"  steps {self.nsteps}, right-hand-side evaluations {self.nfev}, "
-            f"wall time {self.wall_time_s:.3g} s",
+            f"wall time {self.wall_time_s:.3g} s, {self.settings.get('backend')} backend",
             f"  max constraint residual {d.constraint_residual_max:.2e} "
             f"(scaled {d.constraint_residual_rel_max:.2e})",
             f"  energy drift {d.energy_drift:.2e} (relative {d.energy_drift_rel:.2e}), "
