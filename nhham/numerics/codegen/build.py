@@ -35,7 +35,7 @@ from nhham.numerics.codegen.cache import CACHE_FORMAT, CompileCache
 from nhham.numerics.kernels import CompiledRHS
 
 __all__ = ["c_compiler", "compile_c", "build_library", "find_library", "load_library",
-           "pyext_flags", "Compilation", "LibraryBuild"]
+           "pyext_flags", "Compilation", "LibraryBuild", "CompilerStopped"]
 
 _FLAGS = ("-O2", "-fno-math-errno", "-shared", "-fPIC", "-std=c99")
 _TIMEOUT_S = 300
@@ -159,7 +159,7 @@ def build(cache: CompileCache, job: Compilation, problems: list | None = None,
         if returncode == 0:
             return cache.install(lib, job.key)
         if returncode < 0:
-            raise ComputationError(f"the C compiler was stopped by signal {-returncode}")
+            raise CompilerStopped(f"the C compiler was stopped by signal {-returncode}")
         message = f"C compilation failed: {_first_error(stderr)}"
         if "No space left on device" not in stderr:  # a full disk is no property of the source
             cache.remember_failure(job.key, message, stderr, tmp)
@@ -171,6 +171,11 @@ def _first_error(stderr: str) -> str:
     lines = [line.strip() for line in stderr.splitlines() if line.strip()]
     errors = [line for line in lines if "error" in line.lower()]
     return (errors or lines or ["no message"])[0][:500]
+
+
+class CompilerStopped(ComputationError):
+    """The compiler was killed by a signal (by a stop at exit, or from outside): nothing
+    is known about the source, so nothing is remembered and no other build is tried."""
 
 
 def run_compiler(command: list, cwd: str, on_start=None) -> tuple:
@@ -274,7 +279,7 @@ def build_library(sources, cache: CompileCache, on_start=None) -> LibraryBuild:
         try:
             library = build(cache, job, problems, on_start)
         except (ComputationError, OSError) as exc:
-            if job.extension:
+            if job.extension and not isinstance(exc, CompilerStopped):
                 fallback = str(exc)
                 continue
             return LibraryBuild(None, False, str(exc), fallback, tuple(problems))
