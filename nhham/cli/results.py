@@ -48,8 +48,11 @@ def classify_data(analysis, classes=None) -> dict:
 
     system = analysis.system
     momenta = [momentum_symbol(q) for q in system.coordinates]
-    combos = [] if classes is None or classes.first_class_combinations is None else \
-        [expr_text(display_form(c, momenta)) for c in classes.first_class_combinations]
+    formed = classes is not None and classes.first_class_combinations is not None
+    combos = [expr_text(display_form(c, momenta))
+              for c in classes.first_class_combinations] if formed else []
+    coefficients = [{lab: expr_text(display_form(c, momenta)) for lab, c in d.items()}
+                    for d in classes.combination_coefficients] if formed else None
     given = set(system.holonomic) | set(system.phi)
 
     def shown(c):  # the scene's own constraints as given, derived ones simplified
@@ -84,6 +87,7 @@ def classify_data(analysis, classes=None) -> dict:
         "second_class": None if classes is None else int(classes.second_class),
         "second_class_set": [] if classes is None else list(classes.second_class_set),
         "first_class_combinations": combos,
+        "first_class_coefficients": coefficients,
         "inconsistency": analysis.inconsistency,
     }
 
@@ -125,10 +129,34 @@ def classify_text(title: str, data: dict) -> str:
         lines.append(table(list(earlier.items())))
     if data["first_class_combinations"]:
         lines.append("first-class combinations (in q, p):")
-        lines.append(table([(c,) for c in data["first_class_combinations"]]))
+        rows = []
+        for c, coeffs in zip(data["first_class_combinations"],
+                             data.get("first_class_coefficients") or [None] * len(
+                                 data["first_class_combinations"])):
+            if coeffs and len(coeffs) > 1:
+                rows.append(("=", _combination_text(coeffs)))
+                rows.append(("=", c))
+            else:
+                rows.append(("", c))
+        lines.append(table(rows))
+    elif data["first_class"]:
+        lines.append("first-class combinations: not formed in closed form (see the warning)")
     if data["inconsistency"]:
         lines.append(f"inconsistent: {data['inconsistency']}")
     return "\n".join(lines)
+
+
+def _combination_text(coefficients: dict) -> str:
+    """``{label: c}`` as ``c1*label1 + c2*label2`` (unit coefficients left out)."""
+    terms = []
+    for label, c in coefficients.items():
+        if c == "1":
+            terms.append(label)
+        elif c == "-1":
+            terms.append(f"-{label}")
+        else:
+            terms.append(f"({c})*{label}")
+    return " + ".join(terms).replace("+ -", "- ")
 
 
 def _label_latex(label: str) -> str:

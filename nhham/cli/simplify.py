@@ -77,8 +77,8 @@ def _nodes(expr, limit: int) -> int:
 
 # ------------------------------------------------------------- reading
 def _presented(num, den, group):
-    """num/den as an expression: the numerator's terms grouped by their monomials in
-    ``group``, then in the sines and cosines; small coefficients and denominator factored."""
+    """num/den as an expression: terms grouped by their monomials in ``group``, then in
+    the sines and cosines; small coefficients and the denominator factored."""
     if not num:
         return sp.S.Zero
     if den.ring.domain.is_negative(den.LC):
@@ -87,15 +87,17 @@ def _presented(num, den, group):
     wanted = set(group)
     levels = [[i for i, g in enumerate(symbols) if g in wanted],
               [i for i, g in enumerate(symbols) if isinstance(g, (sp.sin, sp.cos))]]
+    levels = [lv for lv in levels if lv]
     number, monomial, num = _common_factor(num)
-    dnumber, dfactors = _factored(den)
-    return sp.Mul(number / dnumber, monomial, _grouped(num, [lv for lv in levels if lv]),
-                  sp.Pow(dfactors, -1))
+    dnumber, denominator = _factored(den, levels)
+    return sp.Mul(number / dnumber, monomial, _grouped(num, levels),
+                  sp.Pow(denominator, -1))
 
 
 def _grouped(poly, levels):
     """sum over the monomials x^k in the generators of ``levels[0]`` of x^k times its
-    coefficient (itself grouped by the next level, factored at the last)."""
+    coefficient (itself grouped by the next level, factored at the last); the sign
+    taken out when most terms are negative."""
     if not levels or len(poly) == 1:
         number, rest = _factored(poly)
         return sp.Mul(number, rest)
@@ -115,29 +117,33 @@ def _grouped(poly, levels):
             number, factors = _factored(inner)
             # one Mul of several factors: sympy does not spread -1 over a sum then
             terms.append(sp.Mul(number, monomial, factors))
-    return sp.Add(*terms)
+    total = sp.Add(*terms)
+    if total.is_Add and total.could_extract_minus_sign():
+        return sp.Mul(-1, -total, evaluate=False)
+    return total
 
 
-def _factored(poly):
-    """(number, expression) with product ``poly``: factored when small, else the common
-    monomial out (the sign chosen so that most terms are positive)."""
+def _factored(poly, levels=()):
+    """(number, expression) with product ``poly``: factored when small (factors of
+    several terms grouped by ``levels``), else the common monomial out."""
     if len(poly) <= _FACTOR_TERMS:
         try:
             coeff, factors = poly.factor_list()
-            return (poly.ring.domain.to_sympy(coeff),
-                    sp.Mul(*[f.as_expr() ** e for f, e in factors]))
         except POLYNOMIAL_ERRORS:
             pass
+        else:
+            return (poly.ring.domain.to_sympy(coeff), sp.Mul(
+                *[(_grouped(f, levels) if levels and len(f) > 2 else f.as_expr()) ** e
+                  for f, e in factors]))
     number, monomial, rest = _common_factor(poly)
-    return number, monomial * rest.as_expr()
+    return number, monomial * (_grouped(rest, levels) if levels else rest.as_expr())
 
 
 def _common_factor(poly):
-    """(content, gcd of the monomials, the rest): content * monomial * rest = poly, the
-    rest with mostly positive coefficients."""
+    """(content, gcd of the monomials, the rest): content * monomial * rest = poly."""
     content, primitive = poly.primitive()
     ring = poly.ring
-    if 2 * sum(ring.domain.is_negative(c) for c in primitive.coeffs()) > len(primitive):
+    if ring.domain.is_negative(content):  # the sign is decided by the grouped terms
         content, primitive = -content, -primitive
     gcd_mon = tuple(min(m[i] for m in primitive.monoms()) for i in range(ring.ngens))
     if any(gcd_mon):

@@ -20,10 +20,10 @@ from typing import Callable
 import math
 
 import sympy as sp
-from sympy.polys.fields import sfield
+from sympy.polys.rings import sring
 
 __all__ = ["cancel", "tidy", "tidy_light", "trig_normal", "solve_linear", "block_inverse",
-           "ring_fraction", "normal_form"]
+           "ring_fraction", "normal_form", "trig_reduce"]
 
 # Exceptions sympy's polynomial machinery raises on input it cannot treat as a
 # polynomial in its generators.
@@ -139,12 +139,13 @@ def ring_fraction(expr):
     """``expr`` as num/den of sparse polynomials, cancelled and reduced modulo
     sin(u)^2 + cos(u)^2 - 1.
 
-    The generators are the symbols, each sin(u) and cos(u), and any other
-    function as an opaque generator (sympy's ``sfield``). For every angle u
-    with both sin(u) and cos(u) among them, numerator and denominator are
-    rewritten with cos(u)^2 -> 1 - sin(u)^2 or sin(u)^2 -> 1 - cos(u)^2,
-    whichever leaves fewer terms, and the gcd is cancelled again. Every step
-    is polynomial arithmetic on the terms: no expression-tree rewriting.
+    The expression is brought over one denominator (``together``), numerator
+    and denominator become polynomials in its generators (the symbols, each
+    sin(u) and cos(u), any other function as an opaque generator); for every
+    angle u with both sin(u) and cos(u) among them both are rewritten with
+    cos(u)^2 -> 1 - sin(u)^2 or sin(u)^2 -> 1 - cos(u)^2, whichever leaves
+    fewer terms, and then the gcd is cancelled. Every step is polynomial
+    arithmetic on the terms: no expression-tree rewriting.
 
     Returns
     -------
@@ -157,14 +158,14 @@ def ring_fraction(expr):
     One of POLYNOMIAL_ERRORS
         When ``expr`` is not a rational function of its generators.
     """
-    field, frac = sfield(sp.sympify(expr))
-    num, den = frac.numer, frac.denom
-    for i_sin, i_cos in _trig_pairs(field.symbols):
+    num, den = sp.fraction(sp.together(sp.sympify(expr)))
+    ring, (num, den) = sring([num, den])
+    # Reduced before the gcd: the gcd of the unreduced polynomials can cost minutes.
+    for i_sin, i_cos in _trig_pairs(ring.symbols):
         options = [(_replace_square(num, i_cos, i_sin), _replace_square(den, i_cos, i_sin)),
                    (_replace_square(num, i_sin, i_cos), _replace_square(den, i_sin, i_cos))]
         num, den = min(options, key=lambda nd: len(nd[0]) + len(nd[1]))
-        num, den = num.cancel(den)
-    return num, den
+    return num.cancel(den)
 
 
 def normal_form(expr) -> sp.Expr:
@@ -177,6 +178,14 @@ def normal_form(expr) -> sp.Expr:
     except POLYNOMIAL_ERRORS:
         return expr
     return num.as_expr() / den.as_expr()
+
+
+def trig_reduce(poly):
+    """A sparse polynomial reduced modulo sin(u)^2 + cos(u)^2 - 1 for every angle u among
+    its ring's generators (cos(u)^2 -> 1 - sin(u)^2: a normal form, the same every time)."""
+    for i_sin, i_cos in _trig_pairs(poly.ring.symbols):
+        poly = _replace_square(poly, i_cos, i_sin)
+    return poly
 
 
 def _trig_pairs(symbols) -> list:
