@@ -51,7 +51,8 @@ def classify_data(analysis, classes=None) -> dict:
     formed = classes is not None and classes.first_class_combinations is not None
     combos = [expr_text(display_form(c, momenta))
               for c in classes.first_class_combinations] if formed else []
-    coefficients = [{lab: expr_text(display_form(c, momenta)) for lab, c in d.items()}
+    coefficients = [[{"label": lab, "coefficient": expr_text(display_form(c, momenta))}
+                     for lab, c in d.items()]
                     for d in classes.combination_coefficients] if formed else None
     given = set(system.holonomic) | set(system.phi)
 
@@ -146,10 +147,11 @@ def classify_text(title: str, data: dict) -> str:
     return "\n".join(lines)
 
 
-def _combination_text(coefficients: dict) -> str:
-    """``{label: c}`` as ``c1*label1 + c2*label2`` (unit coefficients left out)."""
+def _combination_text(coefficients: list) -> str:
+    """``[{label, coefficient}]`` as ``c1*label1 + c2*label2`` (unit coefficients left out)."""
     terms = []
-    for label, c in coefficients.items():
+    for item in coefficients:
+        label, c = item["label"], item["coefficient"]
         if c == "1":
             terms.append(label)
         elif c == "-1":
