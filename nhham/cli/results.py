@@ -402,9 +402,15 @@ def compare_data(report, dirac=None) -> dict:
 
 
 def compare_text(title: str, report, dirac) -> str:
-    lines = [f"{title}: Lagrangian vs Hamiltonian", report.describe()]
-    if dirac is not None:
-        lines.append(dirac.describe())
+    """The reports' own lines, each wrapped (and elided) to the width of the terminal."""
+    from nhham.cli.layout import width, wrap
+
+    lines = [f"{title}: Lagrangian vs Hamiltonian"]
+    for line in [report.describe()] + ([] if dirac is None else [dirac.describe()]):
+        for part in line.splitlines():
+            hang = " " * (len(part) - len(part.lstrip()) + 4)
+            pieces = wrap(part, width() - len(hang))
+            lines += pieces[:1] + [hang + p for p in pieces[1:]]
     return "\n".join(lines)
 
 
