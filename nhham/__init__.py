@@ -84,6 +84,13 @@ _LAZY = {
     "simulate": "numerics.integrate",
     "SimulationResult": "numerics.integrate",
     "work_precision": "numerics.workprecision",
+    # stability of steady motions
+    "linearize": "numerics.linearize",
+    "Linearization": "numerics.linearize",
+    "sweep_steady": "numerics.linearize",
+    "Sweep": "numerics.linearize",
+    "linearize_scene": "cli.linearize",
+    "plot_root_locus": "cli.linearize",
     # input and output
     "load_scene": "system.scene",
     "loads_scene": "system.scene",
