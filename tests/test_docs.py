@@ -34,7 +34,10 @@ def notebook_code(path):
     return "\n\n".join("".join(c["source"]) for c in nb["cells"] if c["cell_type"] == "code")
 
 
-@pytest.mark.parametrize("name", ["first_steps.ipynb", "simulation.ipynb"])
+NOTEBOOKS = ["first_steps.ipynb", "simulation.ipynb", "stability.ipynb"]
+
+
+@pytest.mark.parametrize("name", NOTEBOOKS)
 def test_tutorial_notebook_runs(name):
     """Every code cell, in order, in a fresh interpreter from the repository root
     (the cells carry their own assertions)."""
@@ -44,6 +47,30 @@ def test_tutorial_notebook_runs(name):
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                           timeout=600, cwd=ROOT, env=env)
     assert proc.returncode == 0, proc.stderr[-3000:]
+
+
+def test_every_notebook_is_listed_and_stored_with_its_outputs():
+    """Readers on GitHub or the docs see what each cell prints without running it: every
+    code cell has run in order (docs/tutorials/execute.py) and has the outputs its code
+    makes: printed text for a print, a result for a last line that is an expression."""
+    import ast
+
+    assert sorted(p.name for p in (DOCS / "tutorials").glob("*.ipynb")) == sorted(NOTEBOOKS)
+    listing = (DOCS / "tutorials.rst").read_text()
+    for name in NOTEBOOKS:
+        assert f"tutorials/{name}" in listing, name
+        nb = json.loads((DOCS / "tutorials" / name).read_text())
+        code = [c for c in nb["cells"] if c["cell_type"] == "code"]
+        assert [c["execution_count"] for c in code] == list(range(1, len(code) + 1)), name
+        for cell in code:
+            source = "".join(cell["source"])
+            kinds = {o["output_type"] for o in cell["outputs"]}
+            assert "error" not in kinds, (name, source[:60])
+            if "print(" in source:
+                assert "stream" in kinds, (name, source[:60])
+            if isinstance(ast.parse(source).body[-1], ast.Expr) and "print(" not in \
+                    source.splitlines()[-1]:
+                assert "execute_result" in kinds, (name, source[:60])
 
 
 @pytest.mark.parametrize("module", ["nhham.cli.latex", "nhham.cli.envelope", "nhham.cli.display",
