@@ -25,7 +25,25 @@ def test_docs_build_without_warnings(tmp_path):
     assert proc.returncode == 0, proc.stdout + proc.stderr
     design = (tmp_path / "html" / "design.html").read_text()
     assert "Mathematics and conventions" in design  # DESIGN.md is the docs' own page
-    assert (tmp_path / "html" / "api.html").read_text().count('class="sig-name') > 25
+    api = (tmp_path / "html" / "api.html").read_text()
+    assert api.count('class="sig-name') > 25
+    # the public linearisation, the scipy-ready right-hand side and the scene writer
+    for name in ("nhham.linearize_scene", "nhham.linearize", "nhham.Linearization",
+                 "nhham.sweep_steady", "nhham.dump_scene", "nhham.NumericModel.rhs"):
+        assert f'id="{name}"' in api, name
+
+
+def test_cli_doc_lists_every_result_key():
+    """docs/cli.rst names every key of every command's result in the JSON Schema
+    (linearize's were missing)."""
+    from nhham.cli.envelope import output_schema
+
+    doc = (DOCS / "cli.rst").read_text()
+    defs = output_schema()["$defs"]
+    for command in ("classify", "derive", "compare", "simulate", "bench", "linearize",
+                    "classify_parametric", "parameter_case"):
+        missing = [k for k in defs[command]["properties"] if f"``{k}``" not in doc]
+        assert not missing, (command, missing)
 
 
 def notebook_code(path):

@@ -131,14 +131,14 @@ def classify_text(title: str, data: dict) -> str:
     if data["first_class_combinations"]:
         lines.append("first-class combinations (in q, p):")
         rows = []
-        for c, coeffs in zip(data["first_class_combinations"],
-                             data.get("first_class_coefficients") or [None] * len(
-                                 data["first_class_combinations"])):
-            if coeffs and len(coeffs) > 1:
-                rows.append(("=", _combination_text(coeffs)))
-                rows.append(("=", c))
+        combos = data["first_class_combinations"]
+        coefficients = data.get("first_class_coefficients") or [None] * len(combos)
+        for i, (c, coeffs) in enumerate(zip(combos, coefficients)):
+            name = f"gamma_{i + 1}"
+            if coeffs and len(coeffs) > 1:  # the combination of the labels, then in (q, p)
+                rows += [(name, "=", _combination_text(coeffs)), ("", "=", c)]
             else:
-                rows.append(("", c))
+                rows.append((name, "=", c))
         lines.append(table(rows))
     elif data["first_class"]:
         lines.append("first-class combinations: not formed in closed form (see the warning)")

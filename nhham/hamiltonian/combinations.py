@@ -8,17 +8,22 @@ first-class combination
 
 whose coefficients matter only on M_f: {gamma_k, chi_b} = sum_a c_a {chi_a, chi_b}
 there (the terms {c_a, chi_b} chi_a vanish), and B c = 0 on M_f where B_RR is
-invertible and rank B = |R|. So the entries of B_RR and B_Rk are needed, not
+invertible and rank B = |R|. So the entries of B on R + {k} are needed, not
 reduced on M_f, and no W^{-1} is written. For L quadratic in v (p = W v + a(q)),
 with delta = det W and Y = adj(W) (p - a):
 
-* chi_a o Leg^{-1} = chi_a(q, Y / delta); multiplied by delta^{deg_v chi_a} it is
-  a polynomial chit_a in the generators (parameters, coordinates, sines and
-  cosines, momenta);
-* Bt_ab = {chit_a, chit_b} (canonical bracket, derivatives by the chain rule
-  through the generators) equals delta^(d_a + d_b) B_ab on M_f: the same kernel;
-* ct = adj(Bt_RR) (-Bt_Rk), ct_k = det Bt_RR (fraction-free), and
-  gamma_k = (sum_a ct_a chit_a) / (ct_k delta^{d_k}), cancelled.
+* chi_a o Leg^{-1} = chi_a(q, Y / delta) = A_a / F_a with A_a a polynomial in the
+  generators (parameters, coordinates, sines and cosines, momenta) and F_a one in q
+  alone (delta^{deg_v chi_a} times the constraint's own denominator);
+* E_ab = F_a F_b {A_a, A_b} - F_b A_a {F_a, A_b} - F_a A_b {A_a, F_b}
+  = F_a^2 F_b^2 {chi_a, chi_b} exactly (canonical bracket, derivatives by the chain
+  rule through the generators; {F_a, F_b} = 0); with one F for all it is
+  F {A_a, A_b} - A_a {F, A_b} - A_b {A_a, F} = F^3 {chi_a, chi_b}, and {A_a, A_b}
+  = F^2 {chi_a, chi_b} when F is a constant;
+* E restricted to R + {k} is antisymmetric of odd size with rank |R| on M_f: its
+  kernel is spanned by c'_a = (-1)^i Pf(E without row and column a), the signed
+  sub-Pfaffians (c'_k = Pf E_RR, nonzero); c_a = F_a^2 c'_a (c' itself for one F)
+  solves B c = 0, and gamma_k = sum_a c_a chi_a / c_k, cancelled.
 
 Every polynomial is kept reduced modulo sin(u)^2 + cos(u)^2 - 1 (cos^2 -> 1 - sin^2)
 after each product, so nothing grows beyond what the identities allow.

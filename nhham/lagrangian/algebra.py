@@ -158,7 +158,11 @@ def ring_fraction(expr):
     One of POLYNOMIAL_ERRORS
         When ``expr`` is not a rational function of its generators.
     """
-    num, den = sp.fraction(sp.together(sp.sympify(expr)))
+    expr = sp.sympify(expr)
+    # ``together`` only where there is a denominator: it costs as much as the rest
+    fractional = any(isinstance(a, sp.Pow) and a.exp.is_negative and not a.base.is_number
+                     for a in sp.preorder_traversal(expr))
+    num, den = sp.fraction(sp.together(expr)) if fractional else (expr, sp.S.One)
     ring, (num, den) = sring([num, den])
     # Reduced before the gcd: the gcd of the unreduced polynomials can cost minutes.
     for i_sin, i_cos in _trig_pairs(ring.symbols):

@@ -170,3 +170,34 @@ def test_not_formed_is_said():
         assert "terms" in str(exc)
     else:
         raise AssertionError("a 5-term bound should not be met")
+
+
+def test_curvilinear_pair_combinations_are_first_class():
+    """examples/curvilinear_pair.toml: 6 final constraints, 4 second class (a 4 x 4 block:
+    the sub-Pfaffians beyond 3 x 3). By hand on T*Q the final constraints are
+    p_q1 - p_q3 + p_q6 cos q3, p_q2 sin q4 + p_q4 - p_q6, q1, q4, p_q1, p_q2 sin q4 + p_q4,
+    so on M_f q1 = q4 = 0 and p_q1 = p_q3 = p_q4 = p_q6 = 0; each reported combination must
+    vanish there and bracket to zero with every constraint there (canonical brackets
+    written out here, not nhham's)."""
+    system = load_scene(EXAMPLES / "curvilinear_pair.toml").system
+    classes = classify_constraints(system)
+    assert (classes.first_class, classes.second_class) == (2, 4)
+    q = [S(f"q{i}") for i in range(1, 7)]
+    p = [S(f"p_q{i}") for i in range(1, 7)]
+    chi = [p[0] - p[2] + p[5] * sp.cos(q[2]), p[1] * sp.sin(q[3]) + p[3] - p[5], q[0], q[3],
+           p[0], p[1] * sp.sin(q[3]) + p[3]]
+    on_mf = {q[0]: 0, q[3]: 0, p[0]: 0, p[2]: 0, p[3]: 0, p[5]: 0}
+
+    def bracket(f, g):
+        return sum(sp.diff(f, a) * sp.diff(g, b) - sp.diff(f, b) * sp.diff(g, a)
+                   for a, b in zip(q, p))
+
+    assert len(classes.first_class_combinations) == 2
+    for gamma in classes.first_class_combinations:
+        assert sp.simplify(gamma.xreplace(on_mf)) == 0
+        for c in chi:
+            assert sp.simplify(bracket(gamma, c).xreplace(on_mf)) == 0
+    # and they are independent: not proportional on M_f
+    g1, g2 = classes.first_class_combinations
+    assert sp.simplify(sp.diff(g1, p[2]) * sp.diff(g2, p[5])
+                       - sp.diff(g1, p[5]) * sp.diff(g2, p[2])) != 0
