@@ -130,9 +130,12 @@ def test_packaging_files():
     assert '"schemas/*.json"' in pyproject and '"py.typed"' in pyproject
 
 
-def test_readme_command_transcripts_are_what_the_command_prints():
-    """Each ``$ nhham ...`` block of the README shows the command's real output."""
+def test_readme_command_transcripts_are_what_the_command_prints(monkeypatch):
+    """Each ``$ nhham ...`` block of the README shows the command's real output (laid out
+    at the width of piped output, 100 columns, whatever the terminal running the tests)."""
     import shlex
+
+    monkeypatch.setenv("COLUMNS", "100")
 
     from nhham.cli.main import main
 
