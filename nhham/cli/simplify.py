@@ -128,7 +128,11 @@ def _factored(poly, levels=()):
     several terms grouped by ``levels``), else the common monomial out."""
     if len(poly) <= _FACTOR_TERMS:
         try:
-            coeff, factors = poly.factor_list()
+            # in a ring of the generators it has: the dense recursive factorisation
+            # costs with every generator of the ring, present or not
+            unused = [g for g, e in zip(poly.ring.gens, poly.degrees()) if not e]
+            small = poly.drop(*unused) if unused and len(unused) < poly.ring.ngens else poly
+            coeff, factors = small.factor_list()
         except POLYNOMIAL_ERRORS:
             pass
         else:
