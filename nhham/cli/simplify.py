@@ -133,6 +133,7 @@ def _factored(poly, levels=()):
             unused = [g for g, e in zip(poly.ring.gens, poly.degrees()) if not e]
             small = poly.drop(*unused) if unused and len(unused) < poly.ring.ngens else poly
             coeff, factors = small.factor_list()
+            factors = [(f.set_ring(poly.ring), e) for f, e in factors]  # back, for levels
         except POLYNOMIAL_ERRORS:
             pass
         else:

@@ -75,3 +75,18 @@ def test_what_is_not_rational_is_left_alone():
     for e in (sp.exp(x) / (1 + sp.exp(x)) ** 2, x ** sp.Rational(1, 3) + 1, sp.tan(th) * x + x,
               sp.Integer(3), x):
         assert equal_at_points(display_form(e), e)
+
+
+def test_a_factor_with_fewer_generators_is_grouped_in_the_whole_ring():
+    """compare's X_D - X on the drive: a denominator factor without the parameter I is
+    factored in a ring of its own generators and grouped in the sines and cosines of the
+    whole ring. By hand the numerator is I p_x (p_y cos - p_x sin)(sin^2 + cos^2)."""
+    px, py, I, bb, d, m = sp.symbols("p_x p_y I b d m")
+    num = -I * px**2 * s**3 - I * px**2 * s * c**2 + I * px * py * s**2 * c + I * px * py * c**3
+    den = bb * d * m**2 * px * c + bb * d * m**2 * py * s - d**2 * m**2 * px * s \
+        + d**2 * m**2 * py * c
+    out = display_form(num / den)
+    hand = I * px * (py * c - px * s) / (d * m**2 * (bb * px * c + bb * py * s - d * px * s
+                                                       + d * py * c))
+    assert sp.cancel(out - hand) == 0
+    assert "**3" not in str(out)
