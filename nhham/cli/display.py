@@ -19,6 +19,7 @@ the same data, labels and notation as the ``nhham`` command (the builders of
 from __future__ import annotations
 
 import html as _html
+from typing import Any
 
 import sympy as sp
 
@@ -108,6 +109,8 @@ def report(obj) -> Report:
     from nhham.cli import results as R
 
     kind = type(obj).__name__
+    analysis: Any = None
+    classes: Any = None
     if isinstance(obj, (sp.MatrixBase, sp.Basic)):
         return Report("expression", sp.sstr(obj), tex.matrix_latex(obj)
                       if isinstance(obj, sp.MatrixBase) else tex.latex(obj))
@@ -120,9 +123,7 @@ def report(obj) -> Report:
             analyze_constraints(obj.side.system)
         classes = obj
     elif kind == "ConstraintAnalysis":
-        analysis, classes = obj, None
-    else:
-        analysis = classes = None
+        analysis = obj
     if analysis is not None:
         data = R.classify_data(analysis, classes)
         title = _title(analysis.system)

@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 
 import sympy as sp
 
-__all__ = ["table", "matrix_table", "expr_text", "Steps"]
+__all__ = ["table", "matrix_table", "labelled", "expr_text", "Steps"]
 
 
 def expr_text(expr) -> str:
@@ -68,6 +68,15 @@ def table(rows, header=None, indent="  ", total=None) -> str:
             dashes = widths[:ncols - 1] + [last]
             lines.append(indent + "  ".join("-" * w for w in dashes))
     return "\n".join(lines)
+
+
+def labelled(label: str, text: str) -> str:
+    """``label: text``, the text wrapped (and elided) under its first character."""
+    from nhham.cli.layout import width, wrap
+
+    hang = " " * (len(label) + 2)
+    pieces = wrap(text, width() - len(hang))
+    return "\n".join([f"{label}: {pieces[0]}"] + [hang + p for p in pieces[1:]])
 
 
 def matrix_table(cells, name: str, rows, cols, indent="  ") -> str:

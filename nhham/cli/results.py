@@ -13,7 +13,7 @@ import sympy as sp
 
 from nhham.cli import latex as tex
 from nhham.cli.envelope import json_number, jsonable
-from nhham.cli.report import expr_text, matrix_table, table
+from nhham.cli.report import expr_text, labelled, matrix_table, table
 from nhham.cli.layout import grid_fits as table_fits
 from nhham.cli.simplify import display_form
 from nhham.lagrangian.algorithm import Evidence
@@ -130,16 +130,16 @@ def classify_text(title: str, data: dict) -> str:
         lines.append(table(list(earlier.items())))
     if data["first_class_combinations"]:
         lines.append("first-class combinations (in q, p):")
-        rows = []
+        combo_rows: list = []
         combos = data["first_class_combinations"]
         coefficients = data.get("first_class_coefficients") or [None] * len(combos)
         for i, (c, coeffs) in enumerate(zip(combos, coefficients)):
             name = f"gamma_{i + 1}"
             if coeffs and len(coeffs) > 1:  # the combination of the labels, then in (q, p)
-                rows += [(name, "=", _combination_text(coeffs)), ("", "=", c)]
+                combo_rows += [(name, "=", _combination_text(coeffs)), ("", "=", c)]
             else:
-                rows.append((name, "=", c))
-        lines.append(table(rows))
+                combo_rows.append((name, "=", c))
+        lines.append(table(combo_rows))
     elif data["first_class"]:
         lines.append("first-class combinations: not formed in closed form (see the warning)")
     if data["inconsistency"]:
@@ -246,7 +246,7 @@ def derive_text(title: str, data: dict) -> str:
     if data["free_multiplier_symbols"]:
         lines.append("free multipliers: " + ", ".join(data["free_multiplier_symbols"]))
     label = "Hamiltonian H" if data["side"] == "hamiltonian" else "energy E_L"
-    lines.append(table([(f"{label}:", data["energy"])], indent=""))
+    lines.append(labelled(label, data["energy"]))
     return "\n".join(lines)
 
 
@@ -328,8 +328,8 @@ def implicit_text(title: str, data: dict) -> str:
     if data["free_multiplier_symbols"]:
         lines.append("free multipliers: " + ", ".join(data["free_multiplier_symbols"]))
     lines.append(f"status: {data['status']}")
-    lines.append(table([("energy E_L:", data["energy"])], indent=""))
-    lines.append(table([("note:", data["note"])], indent=""))
+    lines.append(labelled("energy E_L", data["energy"]))
+    lines.append(labelled("note", data["note"]))
     return "\n".join(lines)
 
 

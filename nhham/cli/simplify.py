@@ -59,7 +59,8 @@ def display_form(expr, group=(), limit: int = SIZE_LIMIT):
     if expr.is_number or expr.is_Symbol or _nodes(expr, limit) > limit:
         return expr
     try:
-        out = _presented(*ring_fraction(expr), group)
+        num, den = ring_fraction(expr)
+        out = _presented(num, den, group)
     except POLYNOMIAL_ERRORS:  # not a rational function of its generators: show as derived
         return expr
     return out if _nodes(out, limit) < _nodes(expr, limit) else expr
