@@ -88,6 +88,13 @@ _LAZY = {
     "work_precision": "numerics.workprecision",
     # a bound on the time of a computation (the command's --budget)
     "time_budget": "budget",
+    # stability of steady motions
+    "linearize": "numerics.linearize",
+    "Linearization": "numerics.linearize",
+    "sweep_steady": "numerics.linearize",
+    "Sweep": "numerics.linearize",
+    "linearize_scene": "cli.linearize",
+    "plot_root_locus": "cli.linearize",
     # input and output
     "load_scene": "system.scene",
     "loads_scene": "system.scene",

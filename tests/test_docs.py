@@ -25,7 +25,28 @@ def test_docs_build_without_warnings(tmp_path):
     assert proc.returncode == 0, proc.stdout + proc.stderr
     design = (tmp_path / "html" / "design.html").read_text()
     assert "Mathematics and conventions" in design  # DESIGN.md is the docs' own page
-    assert (tmp_path / "html" / "api.html").read_text().count('class="sig-name') > 25
+    api = (tmp_path / "html" / "api.html").read_text()
+    assert api.count('class="sig-name') > 25
+    # the public linearisation, the scipy-ready right-hand side and the scene writer
+    for name in ("nhham.linearize_scene", "nhham.linearize", "nhham.Linearization",
+                 "nhham.sweep_steady", "nhham.dump_scene", "nhham.NumericModel.rhs"):
+        assert f'id="{name}"' in api, name
+
+
+def test_cli_doc_lists_every_result_key():
+    """docs/cli.rst names every key of every command's result in the JSON Schema
+    (linearize's were missing)."""
+    from nhham.cli.envelope import output_schema
+
+    doc = (DOCS / "cli.rst").read_text()
+    defs = output_schema()["$defs"]
+    for command in ("classify", "derive", "compare", "simulate", "bench", "linearize",
+                    "classify_parametric", "parameter_case"):
+        spec = defs[command]
+        properties = spec.get("properties") or next(
+            o["properties"] for o in spec["oneOf"] if "properties" in o)
+        missing = [k for k in properties if f"``{k}``" not in doc]
+        assert not missing, (command, missing)
 
 
 def notebook_code(path):
@@ -34,7 +55,10 @@ def notebook_code(path):
     return "\n\n".join("".join(c["source"]) for c in nb["cells"] if c["cell_type"] == "code")
 
 
-@pytest.mark.parametrize("name", ["first_steps.ipynb", "simulation.ipynb"])
+NOTEBOOKS = ["first_steps.ipynb", "simulation.ipynb", "stability.ipynb"]
+
+
+@pytest.mark.parametrize("name", NOTEBOOKS)
 def test_tutorial_notebook_runs(name):
     """Every code cell, in order, in a fresh interpreter from the repository root
     (the cells carry their own assertions)."""
@@ -44,6 +68,30 @@ def test_tutorial_notebook_runs(name):
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                           timeout=600, cwd=ROOT, env=env)
     assert proc.returncode == 0, proc.stderr[-3000:]
+
+
+def test_every_notebook_is_listed_and_stored_with_its_outputs():
+    """Readers on GitHub or the docs see what each cell prints without running it: every
+    code cell has run in order (docs/tutorials/execute.py) and has the outputs its code
+    makes: printed text for a print, a result for a last line that is an expression."""
+    import ast
+
+    assert sorted(p.name for p in (DOCS / "tutorials").glob("*.ipynb")) == sorted(NOTEBOOKS)
+    listing = (DOCS / "tutorials.rst").read_text()
+    for name in NOTEBOOKS:
+        assert f"tutorials/{name}" in listing, name
+        nb = json.loads((DOCS / "tutorials" / name).read_text())
+        code = [c for c in nb["cells"] if c["cell_type"] == "code"]
+        assert [c["execution_count"] for c in code] == list(range(1, len(code) + 1)), name
+        for cell in code:
+            source = "".join(cell["source"])
+            kinds = {o["output_type"] for o in cell["outputs"]}
+            assert "error" not in kinds, (name, source[:60])
+            if "print(" in source:
+                assert "stream" in kinds, (name, source[:60])
+            if isinstance(ast.parse(source).body[-1], ast.Expr) and "print(" not in \
+                    source.splitlines()[-1]:
+                assert "execute_result" in kinds, (name, source[:60])
 
 
 @pytest.mark.parametrize("module", ["nhham.cli.latex", "nhham.cli.envelope", "nhham.cli.display",
@@ -82,9 +130,12 @@ def test_packaging_files():
     assert '"schemas/*.json"' in pyproject and '"py.typed"' in pyproject
 
 
-def test_readme_command_transcripts_are_what_the_command_prints():
-    """Each ``$ nhham ...`` block of the README shows the command's real output."""
+def test_readme_command_transcripts_are_what_the_command_prints(monkeypatch):
+    """Each ``$ nhham ...`` block of the README shows the command's real output (laid out
+    at the width of piped output, 100 columns, whatever the terminal running the tests)."""
     import shlex
+
+    monkeypatch.setenv("COLUMNS", "100")
 
     from nhham.cli.main import main
 

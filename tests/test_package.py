@@ -23,3 +23,13 @@ def test_classify_path_does_not_import_the_integrators():
             "print('nhham.numerics.integrate' in sys.modules, 'scipy.integrate' in sys.modules)")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True).stdout
     assert out.split() == ["False", "False"]
+
+
+def test_linearize_is_public():
+    """nhham.linearize (a model's steady state) and nhham.linearize_scene (a scene's
+    [steady] table) are the Python side of ``nhham linearize``."""
+    assert nhham.linearize.__module__ == "nhham.numerics.linearize"
+    assert nhham.linearize_scene.__module__ == "nhham.cli.linearize"
+    for name in ("linearize", "linearize_scene", "Linearization", "sweep_steady", "Sweep",
+                 "plot_root_locus", "dump_scene", "NumericModel"):
+        assert name in nhham.__all__, name

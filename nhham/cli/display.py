@@ -2,7 +2,7 @@
 
 :func:`report` wraps a result (a constraint analysis or classification, the
 Lagrangian geometry, the Hamiltonian side, a cross-check, a simulation, a
-work-precision study, or any sympy expression or matrix) in a
+work-precision study, a linearisation, or any sympy expression or matrix) in a
 :class:`Report` whose ``_repr_latex_`` / ``_repr_html_`` Jupyter shows, with
 the same data, labels and notation as the ``nhham`` command (the builders of
 :mod:`nhham.cli.results`), and whose ``repr`` is one short line.
@@ -19,6 +19,7 @@ the same data, labels and notation as the ``nhham`` command (the builders of
 from __future__ import annotations
 
 import html as _html
+from typing import Any
 
 import sympy as sp
 
@@ -95,9 +96,10 @@ def report(obj) -> Report:
     Parameters
     ----------
     obj
-        ConstraintAnalysis, ConstraintClasses, LagrangianGeometry,
+        ConstraintAnalysis, ConstraintClasses (from any method of
+        :func:`nhham.classify_constraints`), LagrangianGeometry,
         HamiltonianSide, CrossCheckReport, SimulationResult,
-        WorkPrecisionResult, or a sympy expression or matrix.
+        WorkPrecisionResult, Linearization, or a sympy expression or matrix.
 
     Raises
     ------
@@ -107,15 +109,21 @@ def report(obj) -> Report:
     from nhham.cli import results as R
 
     kind = type(obj).__name__
+    analysis: Any = None
+    classes: Any = None
     if isinstance(obj, (sp.MatrixBase, sp.Basic)):
         return Report("expression", sp.sstr(obj), tex.matrix_latex(obj)
                       if isinstance(obj, sp.MatrixBase) else tex.latex(obj))
-    if kind == "ConstraintClasses" and getattr(obj, "analysis", None) is not None:
-        analysis, classes = obj.analysis, obj
+    if kind == "ConstraintClasses":
+        # Classified without the constraint algorithm (M_f = M_1 decided numerically):
+        # its verdict is run here for the rest of the table.
+        from nhham.lagrangian.analysis import ConstraintAnalysis, analyze_constraints
+
+        analysis = obj.analysis if isinstance(obj.analysis, ConstraintAnalysis) else \
+            analyze_constraints(obj.side.system)
+        classes = obj
     elif kind == "ConstraintAnalysis":
-        analysis, classes = obj, None
-    else:
-        analysis = classes = None
+        analysis = obj
     if analysis is not None:
         data = R.classify_data(analysis, classes)
         title = _title(analysis.system)
@@ -152,4 +160,11 @@ def report(obj) -> Report:
         return Report(obj.name, obj.describe(), None, _html_table(
             wp_rows, ("method", "setting", "error", "wall time [ms]", "evaluations",
                    "constraint residual")))
-    raise TypeError(f"nhham.report: no report for {kind} objects")
+    if kind == "Linearization":
+        rows = [(name, *[f"{x:.10g}" for x in row]) for name, row in zip(obj.coordinates,
+                                                                      obj.matrix)]
+        eig = [(f"{z.real:.12g}", f"{z.imag:+.12g}i") for z in obj.eigenvalues]
+        return Report(obj.verdict, f"linearisation ({obj.method}): {obj.verdict}", None,
+                      _html_table(rows, ("", *obj.coordinates))
+                      + _html_table(eig, ("Re eigenvalue", "Im eigenvalue")))
+    raise TypeError(f"nhham.report: no report for {kind} objects (see help(nhham.report))")

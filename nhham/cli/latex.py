@@ -26,18 +26,29 @@ def name_latex(name: str) -> str:
     """The LaTeX of one generated or user name (see the module docstring).
 
     >>> name_latex("x_dot"), name_latex("q1_ddot"), name_latex("p_phi")
-    ('\\\\dot{x}', '\\\\ddot{q_{1}}', 'p_{\\\\phi}')
+    ('\\\\dot{x}', '\\\\ddot{q}_{1}', 'p_{\\\\phi}')
     """
     if name.endswith("_ddot") and len(name) > 5:
-        return rf"\ddot{{{name_latex(name[:-5])}}}"
+        return _accent(r"\ddot", name_latex(name[:-5]))
     if name.endswith("_dot") and len(name) > 4:
-        return rf"\dot{{{name_latex(name[:-4])}}}"
+        return _accent(r"\dot", name_latex(name[:-4]))
     if name.startswith("p_") and len(name) > 2:
         return rf"p_{{{name_latex(name[2:])}}}"
     match = _MULTIPLIER.match(name)
     if match:
         return rf"\lambda_{{{match.group(1)}}}"
     return sp.latex(sp.Symbol(name))
+
+
+def _accent(accent: str, base: str) -> str:
+    """The accent over the symbol, not over its subscript or superscript:
+    ``\\dot{q}_{1}`` for q1, ``\\dot{\\theta}_{2}`` for theta2."""
+    depth = 0
+    for i, ch in enumerate(base):
+        depth += {"{": 1, "}": -1}.get(ch, 0)
+        if depth == 0 and ch in "_^" and i > 0:
+            return f"{accent}{{{base[:i]}}}{base[i:]}"
+    return f"{accent}{{{base}}}"
 
 
 def latex(expr) -> str:
@@ -65,9 +76,10 @@ def text(words: str) -> str:
 def aligned(rows) -> str:
     """``(left, right)`` pairs as an ``aligned`` block (``left &= right``).
 
-    A row whose right side is None is printed as a line of its own.
+    A row whose right side is None is a line of its own, set from the alignment
+    point (``& left``): every row has its ``&``.
     """
     lines = []
     for left, right in rows:
-        lines.append(left if right is None else f"{left} &= {right}")
+        lines.append(f"& {left}" if right is None else f"{left} &= {right}")
     return "\\begin{aligned}\n" + " \\\\\n".join(lines) + "\n\\end{aligned}"

@@ -33,7 +33,7 @@ from nhham.errors import InputError, OptionalDependencyError
 from nhham.cli.report import table
 
 __all__ = ["add_arguments", "cmd_linearize", "linearize_scene", "parse_sweep", "plot_root_locus",
-           "EXACT_MAX_N", "EXACT_DIGITS", "LINEARIZE_HELP"]
+           "rounding_level", "EXACT_MAX_N", "EXACT_DIGITS", "LINEARIZE_HELP"]
 
 #: (short help, description, example) for ``nhham linearize --help``.
 LINEARIZE_HELP = (
@@ -204,6 +204,9 @@ def cmd_linearize(args, steps):
                         + (f", sweep {args.sweep}" if sweep else "")):
             lin, swept = linearize_scene(scene, args.method, sweep, model=model)
     data = lin.to_dict()
+    # -0.0 is 0.0 (x + 0.0 turns the one into the other; every other value is kept)
+    data["matrix"] = [[x + 0.0 for x in row] for row in data["matrix"]]
+    data["eigenvalues"] = [[re + 0.0, im + 0.0] for re, im in data["eigenvalues"]]
     data["sweep"] = None if swept is None else swept.to_dict()
     data["plot"] = None
     if args.plot:
@@ -225,13 +228,26 @@ def _text(scene, lin, swept, args) -> str:
         ("precision", lin.precision),
     ]
     lines.append(table(rows))
+    floor = rounding_level(lin)
+    shown_as_zero = False
+
+    def num(x, digits, sign=""):
+        nonlocal shown_as_zero
+        if abs(x) <= floor:
+            shown_as_zero |= x != 0
+            return f"{0:{sign}.{digits}g}"
+        return f"{x:{sign}.{digits}g}"
+
     if lin.matrix.size:
         lines.append("state matrix:")
-        lines.append(table([[f"{x:.10g}" for x in row] for row in lin.matrix],
+        lines.append(table([[num(x, 10) for x in row] for row in lin.matrix],
                            header=list(lin.coordinates)))
     lines.append("eigenvalues:")
-    lines.append(table([(f"{z.real:.12g}", f"{z.imag:+.12g}i") for z in lin.eigenvalues]
-                       or [("none",)]))
+    lines.append(table([(num(z.real, 12), num(z.imag, 12, "+") + "i")
+                        for z in lin.eigenvalues] or [("none",)]))
+    if shown_as_zero:
+        lines.append(f"  (values of magnitude <= {floor:.1e} are shown as 0: rounding at this "
+                     f"precision; --json has them as computed)")
     if swept is not None:
         lines.append(f"sweep over {swept.parameter}: {len(swept.values)} values from "
                      f"{swept.values[0]:g} to {swept.values[-1]:g}")
@@ -247,6 +263,20 @@ def _text(scene, lin, swept, args) -> str:
         else:
             lines.append("  no crossings")
     return "\n".join(lines)
+
+
+def rounding_level(lin) -> float:
+    """The magnitude below which a number of ``lin`` is rounding, not a value.
+
+    A complex-step Jacobian is exact up to rounding in each entry (about
+    machine epsilon times the largest entry); eigenvalues from LAPACK are
+    backward stable (errors about epsilon times the norm). 64 times that for
+    float64; the exact method's matrix is exact and its eigenvalues are computed
+    at :data:`EXACT_DIGITS` digits.
+    """
+    scale = max(1.0, float(np.abs(lin.matrix).max(initial=0.0)))
+    eps = 10.0 ** -EXACT_DIGITS if lin.method == "exact" else float(np.finfo(float).eps)
+    return 64 * eps * scale
 
 
 def _matplotlib():

@@ -310,20 +310,9 @@ def _derive_closed_form(args, steps, scene, side, name, algorithm) -> CommandOut
 
 def _implicit_form(G) -> dict:
     """The dynamics as W a + mu^T lambda = F, mu a = -(dphi/dq) v (JSON-ready)."""
-    import sympy as sp
+    from nhham.cli.results import implicit_data
 
-    from nhham.cli.report import expr_text
-
-    system = G.system
-    rhs = -G.drift if system.m else sp.zeros(0, 1)
-    return {
-        "mass_matrix": [[expr_text(G.hessian[i, j]) for j in range(system.n)]
-                        for i in range(system.n)],
-        "forcing": [expr_text(f) for f in G.forcing],
-        "constraint_jacobian": [[expr_text(system.mu[i, j]) for j in range(system.n)]
-                                for i in range(system.m)],
-        "constraint_rhs": [expr_text(r) for r in rhs],
-    }
+    return implicit_data(G)
 
 
 def _derive_implicit(args, steps, scene, G, implicit, energy, analysis=None):

@@ -14,11 +14,7 @@ from dataclasses import dataclass, field
 
 import sympy as sp
 
-__all__ = ["table", "expr_text", "display_form", "Steps"]
-
-# Expressions larger than this are shown as derived, without simplification:
-# simplifying them would cost more than the user asked for.
-_SIMPLIFY_LIMIT = 300
+__all__ = ["table", "matrix_table", "labelled", "expr_text", "Steps"]
 
 
 def expr_text(expr) -> str:
@@ -28,39 +24,84 @@ def expr_text(expr) -> str:
     return to_text(sp.sympify(expr))
 
 
-def display_form(expr):
-    """A cheaply simplified form of ``expr`` for display (small ones only)."""
-    expr = sp.sympify(expr)
-    if expr.is_number or sp.count_ops(expr) > _SIMPLIFY_LIMIT:
-        return expr
-    try:
-        simpler = sp.factor_terms(sp.trigsimp(sp.cancel(sp.together(expr))))
-    except Exception:  # pragma: no cover - sympy corner cases; show as derived
-        return expr
-    return simpler if sp.count_ops(simpler) <= sp.count_ops(expr) else expr
+def table(rows, header=None, indent="  ", total=None) -> str:
+    """Align rows of strings into columns; the last cell of a row is wrapped to fit.
 
-
-def table(rows, header=None, indent="  ") -> str:
-    """Align rows of strings into columns.
+    The last cell (an expression, a sentence) does not set the width of its
+    column: it is wrapped into the room left of ``total`` columns, continuation
+    lines aligned under it, and elided past :data:`nhham.cli.layout.MAX_LINES`
+    lines with a pointer to ``--json`` and ``--latex`` (see
+    :mod:`nhham.cli.layout`). With less than 30 columns of room it starts on a
+    line of its own.
 
     Parameters
     ----------
     rows : sequence of sequence of str
     header : sequence of str, optional
+    indent : str
+    total : int, optional
+        The width to fit (default :func:`nhham.cli.layout.width`).
     """
+    from nhham.cli.layout import width, wrap
+
     rows = [[str(c) for c in r] for r in rows]
     if header:
         rows = [list(map(str, header))] + rows
     if not rows:
         return ""
-    widths = [max(len(r[i]) for r in rows if i < len(r)) for i in range(max(map(len, rows)))]
+    total = width() if total is None else total
+    ncols = max(map(len, rows))
+    widths = [max((len(r[i]) for r in rows if i < len(r) - 1), default=0) for i in range(ncols)]
     lines = []
     for k, r in enumerate(rows):
-        cells = [c.ljust(widths[i]) if i < len(r) - 1 else c for i, c in enumerate(r)]
-        lines.append(indent + "  ".join(cells).rstrip())
+        prefix = indent + "".join(c.ljust(widths[i]) + "  " for i, c in enumerate(r[:-1]))
+        room = total - len(prefix)
+        if r[:-1] and room < 30 and len(r[-1]) > room:
+            lines.append(prefix.rstrip())
+            prefix = indent + "    "
+            room = total - len(prefix)
+        pieces = wrap(r[-1], room)
+        lines.append((prefix + pieces[0]).rstrip())
+        lines += [(" " * len(prefix) + p).rstrip() for p in pieces[1:]]
         if header and k == 0:
-            lines.append(indent + "  ".join("-" * w for w in widths))
+            last = min(max(len(r[-1]) for r in rows if len(r) == ncols), max(room, 30))
+            dashes = widths[:ncols - 1] + [last]
+            lines.append(indent + "  ".join("-" * w for w in dashes))
     return "\n".join(lines)
+
+
+def labelled(label: str, text: str) -> str:
+    """``label: text``, the text wrapped (and elided) under its first character."""
+    from nhham.cli.layout import width, wrap
+
+    hang = " " * (len(label) + 2)
+    pieces = wrap(text, width() - len(hang))
+    return "\n".join([f"{label}: {pieces[0]}"] + [hang + p for p in pieces[1:]])
+
+
+def matrix_table(cells, name: str, rows, cols, indent="  ") -> str:
+    """A matrix of expression strings: a grid when it fits the width, else its entries.
+
+    Parameters
+    ----------
+    cells : list of list of str
+    name : str
+        The matrix's name in the entry list (``W[x, theta] = ...``).
+    rows, cols : sequence of str
+        Labels of the rows and columns in the entry list.
+    """
+    from nhham.cli.layout import grid_fits
+
+    if grid_fits(cells, len(indent)):
+        return table(cells, indent=indent)
+    square = len(cells) == len(cells[0]) if cells else False
+    symmetric = square and all(cells[i][j] == cells[j][i] for i in range(len(cells))
+                               for j in range(i))
+    entries = [(f"{name}[{rows[i]}, {cols[j]}]", "=", c) for i, row in enumerate(cells)
+               for j, c in enumerate(row) if c != "0" and not (symmetric and j < i)]
+    note = ("symmetric: entries below the diagonal not listed; " if symmetric else "") + \
+        "entries not listed are 0"
+    return table(entries, indent=indent) + f"\n{indent}({note})"
 
 
 @dataclass
@@ -98,5 +139,6 @@ class Steps:
         self.records.append((what, None))
 
     def render(self) -> str:
-        rows = [(what, "" if t is None else f"{t * 1e3:.1f} ms") for what, t in self.records]
-        return "derived (in order):\n" + table(rows)
+        """The steps in order, each with its time (the notes without), descriptions last."""
+        rows = [("" if t is None else f"{t * 1e3:.1f} ms", what) for what, t in self.records]
+        return "derived (in order):\n" + table([(t.rjust(10), what) for t, what in rows])

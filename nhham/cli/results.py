@@ -13,12 +13,15 @@ import sympy as sp
 
 from nhham.cli import latex as tex
 from nhham.cli.envelope import json_number, jsonable
-from nhham.cli.report import display_form, expr_text, table
+from nhham.cli.report import expr_text, labelled, matrix_table, table
+from nhham.cli.layout import grid_fits as table_fits
+from nhham.cli.simplify import display_form
 from nhham.lagrangian.algorithm import Evidence
 
 __all__ = [
     "classify_data", "classify_text", "classify_latex",
     "derive_data", "derive_text", "derive_latex",
+    "implicit_data", "implicit_text", "implicit_latex",
     "compare_data", "compare_text", "compare_latex",
     "simulation_data", "simulation_failure", "status_name",
     "bench_data",
@@ -41,15 +44,27 @@ def _decision_data(evidence: Evidence) -> dict:
 
 def classify_data(analysis, classes=None) -> dict:
     """The ``result`` of ``nhham classify`` from a ConstraintAnalysis (and ConstraintClasses)."""
+    from nhham.system.naming import momentum_symbol
+
     system = analysis.system
-    combos = [] if classes is None or classes.first_class_combinations is None else \
-        [expr_text(c) for c in classes.first_class_combinations]
+    momenta = [momentum_symbol(q) for q in system.coordinates]
+    formed = classes is not None and classes.first_class_combinations is not None
+    combos = [expr_text(display_form(c, momenta))
+              for c in classes.first_class_combinations] if formed else []
+    coefficients = [[{"label": lab, "coefficient": expr_text(display_form(c, momenta))}
+                     for lab, c in d.items()]
+                    for d in classes.combination_coefficients] if formed else None
+    given = set(system.holonomic) | set(system.phi)
+
+    def shown(c):  # the scene's own constraints as given, derived ones simplified
+        return expr_text(c if c in given else display_form(c, system.velocities))
+
     stages = []
     for s in analysis.stages:
         stages.append({
             "index": int(s.index),
             "labels": list(s.labels),
-            "constraints": [expr_text(c) for c in s.constraints],
+            "constraints": [shown(c) for c in s.constraints],
             "rank": int(s.rank),
             "decisions": [_decision_data(d) for d in s.decisions],
         })
@@ -64,7 +79,7 @@ def classify_data(analysis, classes=None) -> dict:
         "status": str(analysis.status),
         "stages": stages,
         "final_labels": list(analysis.final_labels),
-        "final_constraints": [expr_text(c) for c in analysis.final_constraints],
+        "final_constraints": [shown(c) for c in analysis.final_constraints],
         "free_multipliers": int(analysis.free_multipliers),
         "free_multiplier_symbols": [s.name for s in analysis.free_multiplier_symbols],
         "redundant": [d.label for d in analysis.dropped],
@@ -74,6 +89,7 @@ def classify_data(analysis, classes=None) -> dict:
         "second_class": None if classes is None else int(classes.second_class),
         "second_class_set": [] if classes is None else list(classes.second_class_set),
         "first_class_combinations": combos,
+        "first_class_coefficients": coefficients,
         "inconsistency": analysis.inconsistency,
     }
 
@@ -113,21 +129,48 @@ def classify_text(title: str, data: dict) -> str:
                  ("second class", str(data["second_class"]))]
     lines.append(table(rows))
     lines.append("stages:")
-    stage_rows = []
-    for s in data["stages"]:
-        for k, c in enumerate(s["constraints"]):
-            label = s["labels"][k] if k < len(s["labels"]) else ""
-            stage_rows.append((f"M_{s['index']}" if k == 0 else "", label, c,
-                               f"rank {s['rank']}" if k == 0 else ""))
-    lines.append(table(stage_rows))
-    lines.append("final constraints:")
+    lines.append(table([(f"M_{s['index']}", f"rank {s['rank']}", ", ".join(s["labels"]))
+                        for s in data["stages"]]))
+    final = f"M_{data['stages'][-1]['index']}" if data["stages"] else "M_f"
+    lines.append(f"final constraints ({final}):")
     lines.append(table(list(zip(data["final_labels"], data["final_constraints"]))))
+    shown = dict(zip(data["final_labels"], data["final_constraints"]))
+    earlier = {lab: c for s in data["stages"] for lab, c in zip(s["labels"], s["constraints"])
+               if shown.get(lab) != c}
+    if earlier:
+        lines.append("constraints of earlier stages:")
+        lines.append(table(list(earlier.items())))
     if data["first_class_combinations"]:
         lines.append("first-class combinations (in q, p):")
-        lines.append(table([(c,) for c in data["first_class_combinations"]]))
+        combo_rows: list = []
+        combos = data["first_class_combinations"]
+        coefficients = data.get("first_class_coefficients") or [None] * len(combos)
+        for i, (c, coeffs) in enumerate(zip(combos, coefficients)):
+            name = f"gamma_{i + 1}"
+            if coeffs and len(coeffs) > 1:  # the combination of the labels, then in (q, p)
+                combo_rows += [(name, "=", _combination_text(coeffs)), ("", "=", c)]
+            else:
+                combo_rows.append((name, "=", c))
+        lines.append(table(combo_rows))
+    elif data["first_class"]:
+        lines.append("first-class combinations: not formed in closed form (see the warning)")
     if data["inconsistency"]:
         lines.append(f"inconsistent: {data['inconsistency']}")
     return "\n".join(lines)
+
+
+def _combination_text(coefficients: list) -> str:
+    """``[{label, coefficient}]`` as ``c1*label1 + c2*label2`` (unit coefficients left out)."""
+    terms = []
+    for item in coefficients:
+        label, c = item["label"], item["coefficient"]
+        if c == "1":
+            terms.append(label)
+        elif c == "-1":
+            terms.append(f"-{label}")
+        else:
+            terms.append(f"({c})*{label}")
+    return " + ".join(terms).replace("+ -", "- ")
 
 
 def _label_latex(label: str) -> str:
@@ -180,10 +223,12 @@ def classify_latex(title: str, data: dict, parse) -> str:
 
 # ------------------------------------------------------------------ derive
 def derive_data(side: str, variables, field, multipliers, C, energy, free) -> dict:
-    """The ``result`` of ``nhham derive`` (expressions simplified for display)."""
-    field = [display_form(f) for f in field]
-    multipliers = [display_form(f) for f in multipliers]
-    C = sp.Matrix(C).applyfunc(display_form)
+    """The ``result`` of ``nhham derive`` (expressions simplified for display,
+    :func:`nhham.cli.simplify.display_form`, grouped by the velocities or momenta)."""
+    group = list(variables)[len(variables) // 2:]
+    field = [display_form(f, group) for f in field]
+    multipliers = [display_form(f, group) for f in multipliers]
+    C = sp.Matrix(C).applyfunc(lambda e: display_form(e, group))
     return {
         "side": side,
         "state": [s.name for s in variables],
@@ -207,11 +252,13 @@ def derive_text(title: str, data: dict) -> str:
         lines.append(table([(f"lambda_{i + 1}", "=", t)
                             for i, t in enumerate(data["multipliers"])]))
         lines.append("constraint matrix C:")
-        lines.append(table([list(row) for row in data["constraint_matrix"]]))
+        index = [str(i + 1) for i in range(len(data["constraint_matrix"]))]
+        lines.append(matrix_table([list(row) for row in data["constraint_matrix"]], "C",
+                                  index, index))
     if data["free_multiplier_symbols"]:
         lines.append("free multipliers: " + ", ".join(data["free_multiplier_symbols"]))
     label = "Hamiltonian H" if data["side"] == "hamiltonian" else "energy E_L"
-    lines.append(f"{label}: {data['energy']}")
+    lines.append(labelled(label, data["energy"]))
     return "\n".join(lines)
 
 
@@ -242,27 +289,59 @@ def derive_latex(data: dict, parse) -> str:
     return tex.aligned(rows)
 
 
+#: Implicit-form entries up to this many nodes are simplified for display (larger
+#: ones, the bulk of a big system's forcing, would cost more than they give).
+IMPLICIT_DISPLAY_LIMIT = 400
+
+
+def implicit_data(G) -> dict:
+    """W, F, mu and mu a = -(dphi/dq) v of a LagrangianGeometry (JSON-ready strings,
+    entries of moderate size simplified for display)."""
+    system = G.system
+    group = system.velocities
+
+    def shown(e):
+        return expr_text(display_form(e, group, limit=IMPLICIT_DISPLAY_LIMIT))
+
+    rhs = -G.drift if system.m else sp.zeros(0, 1)
+    W, mu = G.hessian, system.mu
+    return {
+        "mass_matrix": [[shown(W[i, j]) for j in range(system.n)] for i in range(system.n)],
+        "forcing": [shown(f) for f in G.forcing],
+        "constraint_jacobian": [[shown(mu[i, j]) for j in range(system.n)]
+                                for i in range(system.m)],
+        "constraint_rhs": [shown(r) for r in rhs],
+    }
+
+
 def implicit_text(title: str, data: dict) -> str:
     """derive without closed forms: W a + mu^T lambda = F, mu a = rhs, and M_f."""
-    a = [f"{n[:-4]}''" for n in data["state"][len(data["state"]) // 2:]]
+    q = [n[:-4] for n in data["state"][len(data["state"]) // 2:]]
     lines = [f"{title}: dynamics in implicit form (W a + mu^T lambda = F, mu a = rhs), "
              f"a = ({', '.join(data['accelerations'])})"]
-    lines.append("mass matrix W:")
-    lines.append(table(data["mass_matrix"]))
-    lines.append("forcing F:")
-    lines.append(table([(n, "=", f) for n, f in zip(a, data["forcing"])]))
+    lines.append("mass matrix W (rows and columns: " + ", ".join(q) + "):")
+    lines.append(matrix_table(data["mass_matrix"], "W", q, q))
+    lines.append("forcing F (the row of each coordinate):")
+    lines.append(table([(f"F[{n}]", "=", f) for n, f in zip(q, data["forcing"])]))
     if data["constraint_jacobian"]:
         lines.append("constraint rows mu (mu a = rhs):")
-        lines.append(table([list(row) + ["|", r] for row, r in zip(data["constraint_jacobian"],
-                                                                  data["constraint_rhs"])]))
+        rows = [list(row) + ["|", r] for row, r in zip(data["constraint_jacobian"],
+                                                       data["constraint_rhs"])]
+        index = [str(i + 1) for i in range(len(rows))]
+        if table_fits(rows):
+            lines.append(table(rows))
+        else:
+            lines.append(matrix_table(data["constraint_jacobian"], "mu", index, q))
+            lines.append(table([(f"rhs[{i}]", "=", r) for i, r in zip(index,
+                                                                     data["constraint_rhs"])]))
     if data["secondary_constraints"]:
         lines.append("secondary constraints (M_f):")
         lines.append(table([(c,) for c in data["secondary_constraints"]]))
     if data["free_multiplier_symbols"]:
         lines.append("free multipliers: " + ", ".join(data["free_multiplier_symbols"]))
     lines.append(f"status: {data['status']}")
-    lines.append(f"energy E_L: {data['energy']}")
-    lines.append(f"note: {data['note']}")
+    lines.append(labelled("energy E_L", data["energy"]))
+    lines.append(labelled("note", data["note"]))
     return "\n".join(lines)
 
 
@@ -335,10 +414,19 @@ def compare_data(report, dirac=None) -> dict:
 
 
 def compare_text(title: str, report, dirac) -> str:
-    lines = [f"{title}: Lagrangian vs Hamiltonian", report.describe()]
+    """The reports' own lines, each wrapped (and elided) to the width of the terminal."""
+    from nhham.cli.layout import width, wrap
+
+    lines = [f"{title}: Lagrangian vs Hamiltonian"]
+    for line in [report.describe()] + ([] if dirac is None else [dirac.describe()]):
+        for part in line.splitlines():
+            hang = " " * (len(part) - len(part.lstrip()) + 4)
+            pieces = wrap(part, width() - len(hang))
+            lines += pieces[:1] + [hang + p for p in pieces[1:]]
     if dirac is not None:
-        lines.append(dirac.describe())
-        lines += [f"  note: {n}" for n in dirac.notes]
+        for note in dirac.notes:
+            pieces = wrap(f"  note: {note}", width() - 4)
+            lines += pieces[:1] + ["    " + p for p in pieces[1:]]
     return "\n".join(lines)
 
 

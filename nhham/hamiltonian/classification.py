@@ -30,7 +30,7 @@ taken over the second-class set, block by block
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Sequence
 
 import numpy as np
@@ -41,6 +41,7 @@ from nhham.hamiltonian.brackets import DiracBracket, connected_blocks
 from nhham.errors import ComputationError, InputError
 from nhham.hamiltonian.side import HamiltonianSide, hamiltonian_side
 from nhham.hamiltonian.legendre import Backend, Lambdified, ModularBackend
+from nhham.hamiltonian.combinations import NotFormed, closed_form_combinations
 from nhham.lagrangian.algebra import block_inverse, cancel
 from nhham.lagrangian.analysis import ConstraintAnalysis, analyze_constraints
 from nhham.lagrangian.points import (
@@ -307,11 +308,13 @@ def classify_constraints(source, constraints: Sequence | None = None,
     if requested == "auto" and set(cons) == set(system.holonomic) | set(system.phi):
         # M_f = M_1: the brackets can be decided at exact points of M_1.
         try:
-            return _classify_at_points(side, cons, labs, analysis, seed)
+            classes = _classify_at_points(side, cons, labs, analysis, seed)
         except NotExact:
-            return _classify_lagrangian_sampled(side, cons, labs, analysis, tol, precision,
-                                                samples, seed)
-    return _classify_sampled(side, cons, labs, analysis, tol, precision, samples, seed)
+            classes = _classify_lagrangian_sampled(side, cons, labs, analysis, tol, precision,
+                                                   samples, seed)
+    else:
+        classes = _classify_sampled(side, cons, labs, analysis, tol, precision, samples, seed)
+    return _with_combinations(classes)
 
 
 def _classify_at_points(side, cons, labels, analysis, seed, target=TARGET_ERROR):
@@ -398,6 +401,46 @@ def _classify_at_points(side, cons, labels, analysis, seed, target=TARGET_ERROR)
         combination_coefficients=tuple(coeff_dicts), individually_first_class=alone,
         blocks=blocks, decisions=decisions, method="exact at points", manifold=None,
         side=side, analysis=analysis)
+
+
+#: The first-class combinations of a classification decided at points are formed in
+#: closed form up to this many coordinates (:mod:`nhham.hamiltonian.combinations`).
+COMBINATION_MAX_N = 8
+
+
+def _with_combinations(classes: ConstraintClasses) -> ConstraintClasses:
+    """``classes`` (decided at points) with its first-class combinations in closed form.
+
+    The rank and the maximal second-class set R were decided at points of M_f;
+    the combinations gamma_k = chi_k - sum_{a in R} (B_RR^{-1} B_Rk)_a chi_a
+    follow from the entries of B_RR and B_Rk by polynomial arithmetic
+    (:func:`nhham.hamiltonian.combinations.closed_form_combinations`), with their
+    coefficients as ``combination_coefficients``. Where that is not possible
+    the combinations stay None and a ``"combinations"`` decision says why (with
+    a warning); the coefficients at the points remain.
+    """
+    if classes.first_class == 0 or classes.first_class_combinations is not None:
+        return classes
+    system = classes.side.system
+    why = f"n = {system.n} > {COMBINATION_MAX_N}" if system.n > COMBINATION_MAX_N else ""
+    if not why:
+        try:
+            gammas, coeffs = closed_form_combinations(system, classes.constraints_TQ,
+                                                      classes.second_class_indices)
+        except NotFormed as exc:
+            why = str(exc)
+    if why:
+        note = (f"first-class combinations not formed in closed form ({why}); their "
+                f"coefficients at the points are in combination_coefficients")
+        decision = Decision(False, classes.method, note, warnings=(note,))
+        return replace(classes, decisions={**classes.decisions, "combinations": decision})
+    labels = classes.labels
+    decision = Decision(True, "exact", "first-class combinations formed in closed form from "
+                        "the entries of B_RR and B_Rk (R decided at points)")
+    return replace(classes, first_class_combinations=gammas,
+                   combination_coefficients=tuple({labels[a]: c for a, c in d.items()}
+                                                  for d in coeffs),
+                   decisions={**classes.decisions, "combinations": decision})
 
 
 def _full_rank_modulo_p(side, cons, labels, analysis, seed, W, Mx, Jq, Jv, tries=3):

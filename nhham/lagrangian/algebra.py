@@ -9,16 +9,21 @@
 - :func:`block_inverse`: the inverse of a small block (closed forms for 1x1
   and antisymmetric 2x2);
 - :func:`guard_closed_form`: the size guard in front of a symbolic solve with C.
+- :func:`ring_fraction`, :func:`normal_form`: one fraction of sparse
+  polynomials, cancelled and reduced modulo sin^2 + cos^2 = 1, by polynomial
+  arithmetic on the terms (far cheaper than :func:`cancel` on large sums).
 """
 
 from __future__ import annotations
 
+import math
 from typing import Callable
 
 import sympy as sp
+from sympy.polys.rings import sring
 
 __all__ = ["cancel", "tidy", "tidy_light", "trig_normal", "solve_linear", "block_inverse",
-           "guard_closed_form", "CLOSED_FORM_OPS"]
+           "guard_closed_form", "CLOSED_FORM_OPS", "ring_fraction", "normal_form", "trig_reduce"]
 
 #: A symbolic solve with an m x m matrix (m >= 2) of more operations than this is refused
 #: unless asked for: the car with a trailer (n = 4, C of 547 operations) takes 30 s, the
@@ -28,7 +33,8 @@ CLOSED_FORM_OPS = 300
 # Exceptions sympy's polynomial machinery raises on input it cannot treat as a
 # polynomial in its generators.
 POLYNOMIAL_ERRORS = (sp.PolynomialError, sp.polys.polyerrors.PolificationFailed, TypeError,
-                     ValueError, ZeroDivisionError, sp.polys.polyerrors.CoercionFailed)
+                     ValueError, ZeroDivisionError, sp.polys.polyerrors.CoercionFailed,
+                     sp.polys.polyerrors.DomainError, NotImplementedError)
 
 
 def cancel(expr) -> sp.Expr:
@@ -161,3 +167,86 @@ def guard_closed_form(C: sp.Matrix, what: str, owner: str) -> None:
         f"(W a + mu^T lambda = F, mu a = -(dphi/dq) v: .equations_of_motion, "
         f"`nhham derive`), numbers (nhham.simulate), or ask for it with "
         f"{owner}(system, closed_form=True), bounded by `with nhham.time_budget(seconds):`")
+
+
+def ring_fraction(expr):
+    """``expr`` as num/den of sparse polynomials, cancelled and reduced modulo
+    sin(u)^2 + cos(u)^2 - 1.
+
+    The expression is brought over one denominator (``together``), numerator
+    and denominator become polynomials in its generators (the symbols, each
+    sin(u) and cos(u), any other function as an opaque generator); for every
+    angle u with both sin(u) and cos(u) among them both are rewritten with
+    cos(u)^2 -> 1 - sin(u)^2 or sin(u)^2 -> 1 - cos(u)^2, whichever leaves
+    fewer terms, and then the gcd is cancelled. Every step is polynomial
+    arithmetic on the terms: no expression-tree rewriting.
+
+    Returns
+    -------
+    (PolyElement, PolyElement)
+        Numerator and denominator in one ring (``num.ring.symbols`` are the
+        generators).
+
+    Raises
+    ------
+    One of POLYNOMIAL_ERRORS
+        When ``expr`` is not a rational function of its generators.
+    """
+    expr = sp.sympify(expr)
+    # ``together`` only where there is a denominator: it costs as much as the rest
+    fractional = any(isinstance(a, sp.Pow) and a.exp.is_negative and not a.base.is_number
+                     for a in sp.preorder_traversal(expr))
+    num, den = sp.fraction(sp.together(expr)) if fractional else (expr, sp.S.One)
+    ring, (num, den) = sring([num, den])
+    # Reduced before the gcd: the gcd of the unreduced polynomials can cost minutes.
+    for i_sin, i_cos in _trig_pairs(ring.symbols):
+        options = [(_replace_square(num, i_cos, i_sin), _replace_square(den, i_cos, i_sin)),
+                   (_replace_square(num, i_sin, i_cos), _replace_square(den, i_sin, i_cos))]
+        num, den = min(options, key=lambda nd: len(nd[0]) + len(nd[1]))
+    return num.cancel(den)
+
+
+def normal_form(expr) -> sp.Expr:
+    """:func:`ring_fraction` as one expression (``expr`` itself if it is not rational)."""
+    expr = sp.sympify(expr)
+    if expr.is_number:
+        return expr
+    try:
+        num, den = ring_fraction(expr)
+    except POLYNOMIAL_ERRORS:
+        return expr
+    return num.as_expr() / den.as_expr()
+
+
+def trig_reduce(poly):
+    """A sparse polynomial reduced modulo sin(u)^2 + cos(u)^2 - 1 for every angle u among
+    its ring's generators (cos(u)^2 -> 1 - sin(u)^2: a normal form, the same every time)."""
+    for i_sin, i_cos in _trig_pairs(poly.ring.symbols):
+        poly = _replace_square(poly, i_cos, i_sin)
+    return poly
+
+
+def _trig_pairs(symbols) -> list:
+    """Index pairs (i_sin, i_cos) of generators sin(u), cos(u) with the same u."""
+    where = {(type(g), g.args[0]): i for i, g in enumerate(symbols)
+             if isinstance(g, (sp.sin, sp.cos))}
+    return [(i, where[(sp.cos, u)]) for (kind, u), i in where.items()
+            if kind is sp.sin and (sp.cos, u) in where]
+
+
+def _replace_square(poly, hi: int, lo: int):
+    """``poly`` with gen[hi]^2 replaced by 1 - gen[lo]^2 (every power of gen[hi] below 2)."""
+    terms: dict = {}
+    for mon, coeff in poly.terms():
+        k = mon[hi]
+        if k < 2:
+            terms[mon] = terms.get(mon, 0) + coeff
+            continue
+        half = k // 2
+        for j in range(half + 1):
+            new = list(mon)
+            new[hi] = k % 2
+            new[lo] += 2 * j
+            key = tuple(new)
+            terms[key] = terms.get(key, 0) + coeff * ((-1) ** j * math.comb(half, j))
+    return poly.ring.from_dict({m: c for m, c in terms.items() if c})

@@ -122,6 +122,12 @@ class SimulationResult:
     t_events: list | None = None
     y_events: list | None = None
 
+    def __repr__(self) -> str:
+        # One line: the arrays are in .t, .y (a repr printing them ran to 14 KB).
+        return (f"<SimulationResult {self.method}: {self.message} at t = {self.t[-1]:.6g}; "
+                f"{self.y.shape[1]} states of {self.y.shape[0]} variables, {self.nsteps} "
+                f"steps, max constraint residual {self.diagnostics.constraint_residual_max:.2e}>")
+
     @property
     def success(self) -> bool:
         return self.status >= 0

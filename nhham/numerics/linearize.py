@@ -89,7 +89,7 @@ class Linearization:
     precision : str
         How the numbers were obtained and the tolerance of the verdict.
     tolerance : float
-        |Re lambda| at or below this counts as zero.
+        ``|Re lambda|`` at or below this counts as zero.
     chart : tuple of str
         All independent coordinates and velocities (before removing neutral
         directions).
@@ -104,7 +104,7 @@ class Linearization:
     residuals : mapping of str to float
         Constraint residuals at the state.
     acceleration_residual : float
-        max |a| at the state (zero for a steady motion).
+        ``max |a|`` at the state (zero for a steady motion).
     exact_matrix : sympy.Matrix or None
         The state matrix with exact entries (``method == "exact"``).
     """

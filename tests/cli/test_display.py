@@ -33,6 +33,26 @@ def test_reports_of_numeric_results():
     assert "theta_dot" in r._repr_html_() and "DOP853" in repr(r)
 
 
+def test_report_of_a_classification_decided_at_points():
+    """classify_constraints' docstring accepts a System; for the differential drive the
+    classes are decided at points with no constraint analysis attached (it raised
+    TypeError). The report runs the analysis for its table."""
+    system = load_scene(EXAMPLES / "differential_drive.toml").system
+    classes = nhham.classify_constraints(system)
+    assert classes.analysis is None
+    r = nhham.report(classes)
+    assert "n = 5 coordinates, m = 3 velocity constraints" in repr(r)
+    assert r"\text{first / second class} &= 1\ /\ 2" in r.latex
+    assert "first class             1" in r.text
+
+
+def test_report_of_a_linearization():
+    lin, _ = nhham.linearize_scene(load_scene(EXAMPLES / "differential_drive.toml"))
+    r = nhham.report(lin)
+    assert "asymptotically stable" in repr(r) and "\n" not in repr(r)
+    assert "<table>" in r._repr_html_() and "phiR_dot" in r._repr_html_()
+
+
 def test_report_refuses_other_objects():
     with pytest.raises(TypeError, match="no report for"):
         nhham.report(object())

@@ -29,7 +29,10 @@ def test_names_in_the_papers_notation():
     assert name_latex("theta_ddot") == r"\ddot{\theta}"
     assert name_latex("p_phi") == r"p_{\phi}"
     assert name_latex("lambda_2") == r"\lambda_{2}"
-    assert name_latex("q1_dot") == r"\dot{q_{1}}"
+    # the dot over the symbol, not over its subscript
+    assert name_latex("q1_dot") == r"\dot{q}_{1}"
+    assert name_latex("theta2_ddot") == r"\ddot{\theta}_{2}"
+    assert name_latex("p_q1") == r"p_{q_{1}}"
     assert name_latex("I2") == "I_{2}"
     th, thd = sp.symbols("theta theta_dot")
     assert latex(sp.sin(th) * thd) == r"\dot{\theta} \sin{\left(\theta \right)}"
@@ -58,7 +61,7 @@ def test_classify_latex_paper_3_2_stages():
     assert balanced(out)
     for k in (1, 2, 3):
         assert f"M_{{{k}}}" in out
-    assert r"\psi_{1} &= q_{1}" in out and r"\psi_{2} &= \dot{q_{1}}" in out
+    assert r"\psi_{1} &= q_{1}" in out and r"\psi_{2} &= \dot{q}_{1}" in out
     assert r"M_{3} &= \{\phi_{1} = \psi_{1} = \psi_{2} = 0\}" in out
     assert r"p_{q_{3}}" in out  # the first-class combination
 
@@ -67,3 +70,12 @@ def test_compare_latex():
     out = text_of("compare", str(EXAMPLES / "chaplygin_sleigh.toml"), "--latex")
     assert r"\begin{array}" in out and balanced(out)
     assert r"(X_D - X)" in out  # nonholonomic: the Dirac flow is not the dynamics
+
+
+def test_every_aligned_row_has_its_ampersand():
+    """The title row of classify's aligned block had none."""
+    out = text_of("classify", str(EXAMPLES / "paper_3_2.toml"), "--latex")
+    body = out.split("\\begin{aligned}\n", 1)[1].split("\n\\end{aligned}", 1)[0]
+    rows = body.split(" \\\\\n")
+    assert len(rows) > 5 and all("&" in row for row in rows), rows[:2]
+    assert rows[0].startswith(r"& \text{paper Example 3.2: }")

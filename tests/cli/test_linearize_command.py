@@ -122,3 +122,39 @@ def test_a_rotating_chart_is_refused(capsys, tmp_path):
     status, _, err = run(capsys, "linearize", path)
     assert status == 2
     assert "moves yaw" in err and "changes along it" in err
+
+
+def test_rounding_is_shown_as_zero_and_said(sleigh):
+    """-0 and 1e-17 in a complex-step state matrix are rounding: the text shows 0 and says
+    which magnitudes it treats so; the JSON keeps the values (with -0.0 written 0.0)."""
+    from types import SimpleNamespace
+
+    import numpy as np
+
+    from nhham.cli.linearize import _text, rounding_level
+    from nhham.numerics.linearize import linearization_result
+
+    A = np.array([[-0.0, 1.0e-17], [2.0, -1.5]])
+    lin = linearization_result(A, ("phi", "phi_dot"), "complex-step", "float64", ("phi", "phi_dot"),
+                               A, (), (), {}, {}, 0.0)
+    text = _text(SimpleNamespace(name="toy"), lin, None, SimpleNamespace(scene="toy.toml"))
+    matrix = text.split("state matrix:\n", 1)[1].split("eigenvalues:", 1)[0]
+    assert "-0 " not in matrix + " " and "e-17" not in matrix
+    assert matrix.splitlines()[2].split() == ["0", "0"]
+    assert f"values of magnitude <= {rounding_level(lin):.1e} are shown as 0" in text
+    # eigenvalues of [[0, 0], [2, -1.5]]: 0 and -1.5 (by hand), no "-0"
+    eig = text.split("eigenvalues:\n", 1)[1].splitlines()[:2]
+    assert [e.split()[0] for e in eig] == ["0", "-1.5"]
+
+
+def test_json_has_no_negative_zero(capsys):
+    """The 3-D disc's state matrix had -0.0 entries (JSON "-0.0")."""
+    import math
+
+    status, out, err = run(capsys, "linearize", EXAMPLES / "rolling_disc_3d.toml", "--json")
+    assert status == 0, err
+    res = json.loads(out)["result"]
+    values = [x for row in res["matrix"] for x in row] + [x for z in res["eigenvalues"]
+                                                          for x in z]
+    assert all(math.copysign(1.0, x) > 0 for x in values if x == 0)
+    assert "-0.0" not in out.split('"matrix"', 1)[1].split("]]", 1)[0]

@@ -42,6 +42,16 @@ def test_result_object_in_the_style_of_oderesult(sleigh):
         res.status = 1  # frozen
 
 
+def test_repr_is_one_short_line(sleigh):
+    """The repr printed every array (14 KB for a longer run); now one line, the arrays
+    being in .t and .y."""
+    res = simulate(sleigh, (0, 30), sleigh_state(), t_eval=np.linspace(0, 30, 2000),
+                   warn=False)
+    text = repr(res)
+    assert "\n" not in text and len(text) < 200
+    assert text.startswith("<SimulationResult DOP853:") and "2000 states of 6 variables" in text
+
+
 def test_system_is_accepted_directly():
     res = simulate(chaplygin_sleigh(), (0, 1), sleigh_state(), warn=False)
     assert res.success and res.model.backend in ("c", "numpy")

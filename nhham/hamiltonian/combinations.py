@@ -1,0 +1,293 @@
+"""First-class combinations in closed form, by polynomial arithmetic (``DESIGN.md`` §2).
+
+A classification decided at points of M_f (:mod:`nhham.hamiltonian.classification`)
+knows r = rank B and a maximal second-class set R. Each k outside R gives the
+first-class combination
+
+    gamma_k = chi_k - sum_{a in R} (B_RR^{-1} B_Rk)_a chi_a
+
+whose coefficients matter only on M_f: {gamma_k, chi_b} = sum_a c_a {chi_a, chi_b}
+there (the terms {c_a, chi_b} chi_a vanish), and B c = 0 on M_f where B_RR is
+invertible and rank B = |R|. So the entries of B on R + {k} are needed, not
+reduced on M_f, and no W^{-1} is written. For L quadratic in v (p = W v + a(q)),
+with delta = det W and Y = adj(W) (p - a):
+
+* chi_a o Leg^{-1} = chi_a(q, Y / delta) = A_a / F_a with A_a a polynomial in the
+  generators (parameters, coordinates, sines and cosines, momenta) and F_a one in q
+  alone (delta^{deg_v chi_a} times the constraint's own denominator);
+* E_ab = F_a F_b {A_a, A_b} - F_b A_a {F_a, A_b} - F_a A_b {A_a, F_b}
+  = F_a^2 F_b^2 {chi_a, chi_b} exactly (canonical bracket, derivatives by the chain
+  rule through the generators; {F_a, F_b} = 0); with one F for all it is
+  F {A_a, A_b} - A_a {F, A_b} - A_b {A_a, F} = F^3 {chi_a, chi_b}, and {A_a, A_b}
+  = F^2 {chi_a, chi_b} when F is a constant;
+* E restricted to R + {k} is antisymmetric of odd size with rank |R| on M_f: its
+  kernel is spanned by c'_a = (-1)^i Pf(E without row and column a), the signed
+  sub-Pfaffians (c'_k = Pf E_RR, nonzero); c_a = F_a^2 c'_a (c' itself for one F)
+  solves B c = 0, and gamma_k = sum_a c_a chi_a / c_k, cancelled.
+
+Every polynomial is kept reduced modulo sin(u)^2 + cos(u)^2 - 1 (cos^2 -> 1 - sin^2)
+after each product, so nothing grows beyond what the identities allow.
+"""
+
+from __future__ import annotations
+
+import sympy as sp
+from sympy.polys.rings import sring
+
+from nhham.lagrangian.algebra import POLYNOMIAL_ERRORS, trig_reduce
+from nhham.system.naming import momentum_symbol
+
+__all__ = ["closed_form_combinations", "NotFormed"]
+
+
+# num/den with more terms than this are not cancelled by a gcd.
+_CANCEL_TERMS = 2000
+
+
+class NotFormed(Exception):
+    """The combinations cannot be formed in closed form here (the reason is the message)."""
+
+
+def closed_form_combinations(system, constraints, second_class, max_terms: int = 20000):
+    """The first-class combinations gamma_k (k outside ``second_class``) in (q, p).
+
+    Parameters
+    ----------
+    system : System
+        With L quadratic in the velocities.
+    constraints : sequence of sympy.Expr
+        The final constraints chi_a on TQ (functions of q and v).
+    second_class : sequence of int
+        Indices of a maximal second-class set R (B_RR invertible on M_f).
+    max_terms : int
+        Give up (NotFormed) when a polynomial on the way has more terms.
+
+    Returns
+    -------
+    (tuple of sympy.Expr, tuple of dict)
+        gamma_k for each k not in R, in order, and the coefficients
+        ``{index: c_a}`` of each (c_k = 1), as expressions in (q, p).
+
+    Raises
+    ------
+    NotFormed
+        L not quadratic in v, a constraint or W not polynomial in the
+        generators, or a polynomial over ``max_terms`` terms.
+    """
+    ctx = _Context(system, constraints, max_terms)
+    R = list(second_class)
+    A, F = zip(*[ctx.hamiltonian(i) for i in range(len(ctx.constraints))])
+    uniform = all(f == F[0] for f in F)
+    constant = uniform and not ctx.depends_on_q(F[0])
+    entries: dict = {}
+
+    def E(a, b):
+        """F^2 {chi_a, chi_b} for one constant F, F^3 {chi_a, chi_b} for one F, else
+        F_a^2 F_b^2 {chi_a, chi_b}: a polynomial, proportional to B_ab with the same
+        factor in every entry (or one per row and column)."""
+        if (a, b) not in entries:
+            if constant:
+                entry = ctx.bracket(A[a], A[b])
+            else:
+                fa, fb = (ctx.ring.one, ctx.ring.one) if uniform else (F[a], F[b])
+                entry = (F[a] * fb * ctx.bracket(A[a], A[b])
+                         - fb * A[a] * ctx.bracket(F[a], A[b])
+                         - fa * A[b] * ctx.bracket(A[a], F[b]))
+            entries[a, b] = ctx.reduce(entry)
+            entries[b, a] = -entries[a, b]
+        return entries[a, b]
+
+    gammas, coefficients = [], []
+    zero = ctx.ring.zero
+    for k in (i for i in range(len(A)) if i not in R):
+        # E on R + [k] is antisymmetric of odd size: its kernel (on M_f, where its rank
+        # is |R|) is spanned by the signed Pfaffians of the blocks without one index
+        idx = R + [k]
+        c = {a: ctx.reduce((-1) ** (len(idx) - 1 - i) * ctx.pfaffian(
+            [[E(x, y) for y in idx if y != a] for x in idx if x != a]))
+            for i, a in enumerate(idx)}
+        if not c[k]:
+            raise NotFormed("the bracket block of the second-class set vanishes identically")
+        c = ctx.without_common_factor(c)
+        # B c = 0 for c_a = c'_a (uniform F) or F_a^2 c'_a; gamma_k = sum_a c_a chi_a / c_k
+        weight = {a: ctx.ring.one if uniform else F[a] ** 2 for a in idx}
+        num = sum(((c[a] if uniform else F[a] * c[a]) * A[a] for a in idx), zero)
+        den = (F[k] if uniform else F[k] ** 2) * c[k]
+        gammas.append(ctx.expression(ctx.reduce(num), ctx.reduce(den)))
+        coefficients.append({a: ctx.expression(ctx.reduce(weight[a] * c[a]),
+                                               ctx.reduce(weight[k] * c[k]))
+                             for a in sorted(idx) if c[a]})
+    return tuple(gammas), tuple(coefficients)
+
+
+class _Context:
+    """One polynomial ring for W, a(q), the constraints and the momenta."""
+
+    def __init__(self, system, constraints, max_terms):
+        q, v = list(system.coordinates), list(system.velocities)
+        p = [momentum_symbol(s) for s in q]
+        L = sp.expand(system.lagrangian)
+        try:
+            if sp.Poly(L, *v).total_degree() > 2:
+                raise NotFormed("L is not quadratic in the velocities")
+        except sp.PolynomialError:
+            raise NotFormed("L is not polynomial in the velocities") from None
+        n = len(q)
+        grad = [sp.diff(L, s) for s in v]
+        W = [[sp.diff(grad[i], v[j]) for j in range(n)] for i in range(n)]
+        zero = {s: 0 for s in v}
+        a = [g.xreplace(zero) for g in grad]
+        nums, dens = [], []
+        for c in constraints:
+            num, den = sp.fraction(sp.together(sp.sympify(c)))
+            if den.free_symbols & set(v):
+                raise NotFormed("a final constraint is not polynomial in the velocities")
+            nums.append(num)
+            dens.append(den)
+        flat = [e for row in W for e in row] + a + nums + dens + q + v + p
+        # every sine with its cosine (and back): the derivatives stay in the ring
+        angles = {f.args[0] for e in flat for f in sp.sympify(e).atoms(sp.sin, sp.cos)}
+        flat += [f(u) for u in sorted(angles, key=sp.default_sort_key) for f in (sp.sin, sp.cos)]
+        try:
+            self.ring, polys = sring(flat)
+        except POLYNOMIAL_ERRORS as exc:
+            raise NotFormed(f"not polynomial in its generators ({exc})") from None
+        self.max_terms = max_terms
+        self.q, self.v, self.p = q, v, p
+        self.state = set(q) | set(v) | set(p)
+        k = len(constraints)
+        it = iter(polys)
+        self.W = [[self.reduce(next(it)) for _ in range(n)] for _ in range(n)]
+        self.a = [self.reduce(next(it)) for _ in range(n)]
+        self.constraints = [self.reduce(next(it)) for _ in range(k)]
+        self.denominators = [self.reduce(next(it)) for _ in range(k)]
+        self.gq, self.gv, self.gp = ([next(it) for _ in range(n)] for _ in range(3))
+        self._dq = [self._coordinate_derivatives(s) for s in q]
+
+    # -------------------------------------------------------- arithmetic
+    def reduce(self, poly):
+        poly = trig_reduce(poly)
+        if len(poly) > self.max_terms:
+            raise NotFormed(f"a polynomial of more than {self.max_terms} terms")
+        return poly
+
+    def adj_det(self, rows):
+        """(adjugate as rows, determinant) of a square matrix of ring elements.
+
+        Faddeev-LeVerrier: M_k = A M_{k-1} + c_{n-k+1} I, c_{n-k} = -tr(A M_k) / k
+        (exact integer divisions), det A = (-1)^n c_0, adj A = (-1)^(n-1) M_n; only
+        products and sums, so every step may be reduced modulo sin^2 + cos^2 = 1.
+        """
+        n, zero = len(rows), self.ring.zero
+        M = [[zero] * n for _ in range(n)]
+        c = self.ring.one
+        for k in range(1, n + 1):
+            M = [[self.reduce(sum((rows[i][j] * M[j][l] for j in range(n)), zero)
+                              + (c if i == l else zero)) for l in range(n)] for i in range(n)]
+            trace = sum((rows[i][j] * M[j][i] for i in range(n) for j in range(n)), zero)
+            c = -self.reduce(trace).quo_ground(k)  # exact: the normal form of k c
+        sign = -1 if n % 2 else 1
+        return [[-sign * e for e in row] for row in M], sign * c
+
+    def pfaffian(self, rows):
+        """The Pfaffian of an antisymmetric matrix of ring elements (expansion along
+        the first row; 1 for the empty matrix)."""
+        n = len(rows)
+        if n == 0:
+            return self.ring.one
+        if n % 2:
+            return self.ring.zero
+        total = self.ring.zero
+        for j in range(1, n):
+            if rows[0][j]:
+                keep = [i for i in range(1, n) if i != j]
+                minor = [[rows[x][y] for y in keep] for x in keep]
+                total += (-1) ** (j - 1) * rows[0][j] * self.pfaffian(minor)
+        return self.reduce(total)
+
+    def expression(self, num, den) -> sp.Expr:
+        """num/den, their common factor in the parameters divided out, and cancelled
+        when small (a gcd of large polynomials costs more than it gives)."""
+        num, den = self.without_common_factor({0: num, 1: den}).values()
+        if len(num) + len(den) <= _CANCEL_TERMS:
+            num, den = num.cancel(den)
+        return num.as_expr() / den.as_expr()
+
+    def without_common_factor(self, polys: dict) -> dict:
+        """``polys`` divided by the gcd of all their coefficients as polynomials in the
+        state generators (q, v, p and the sines and cosines) over the parameters: a
+        polynomial in the parameters alone, found by gcds of small polynomials."""
+        state = [i for i, g in enumerate(self.ring.symbols)
+                 if g in self.state or isinstance(g, (sp.sin, sp.cos))]
+        common = None
+        for poly in polys.values():
+            parts: dict = {}
+            for mon, coeff in poly.terms():
+                key = tuple(mon[i] for i in state)
+                rest = tuple(0 if i in state else e for i, e in enumerate(mon))
+                parts.setdefault(key, {})[rest] = coeff
+            for rest in parts.values():
+                part = self.ring.from_dict(rest)
+                common = part if common is None else common.gcd(part)
+                if common.is_ground:
+                    return polys
+        if common is None or common.is_ground:
+            return polys
+        return {key: poly.exquo(common) for key, poly in polys.items()}
+
+    # ------------------------------------------------------ Legendre map
+    def hamiltonian(self, index):
+        """(chit, den): chi o Leg^{-1} = chit / den for the constraint ``index``, both
+        polynomials (den = the constraint's own denominator times delta^{deg_v chi})."""
+        if not hasattr(self, "_Y"):
+            adj, self.delta = self.adj_det(self.W)
+            rhs = [self.gp[i] - self.a[i] for i in range(len(self.p))]
+            self._Y = [self.reduce(sum((adj[i][j] * rhs[j] for j in range(len(rhs))),
+                                       self.ring.zero)) for i in range(len(rhs))]
+        chi = self.constraints[index]
+        vpos = [self.ring.gens.index(g) for g in self.gv]
+        degree = max((sum(m[i] for i in vpos) for m in chi.monoms()), default=0)
+        out = self.ring.zero
+        for mon, coeff in chi.terms():
+            term = self.ring({tuple(0 if i in vpos else e for i, e in enumerate(mon)): coeff})
+            j = 0
+            for i, pos in enumerate(vpos):
+                for _ in range(mon[pos]):
+                    term = self.reduce(term * self._Y[i])
+                    j += 1
+            out += term * self.delta ** (degree - j)
+        return self.reduce(out), self.reduce(self.denominators[index] * self.delta ** degree)
+
+    # ------------------------------------------------------------ bracket
+    def _coordinate_derivatives(self, q):
+        """[(generator index, d generator / dq as a ring element)] for generators with q."""
+        out = []
+        for i, g in enumerate(self.ring.symbols):
+            if g.has(q) and g not in self.p:
+                try:
+                    out.append((i, self.ring(sp.diff(g, q))))
+                except (*POLYNOMIAL_ERRORS, sp.polys.polyerrors.GeneratorsError):
+                    raise NotFormed(f"d({g})/d{q} is not a polynomial in the generators") \
+                        from None
+        return out
+
+    def depends_on_q(self, f) -> bool:
+        """True when the polynomial ``f`` involves a generator that depends on q."""
+        used = {i for i, e in enumerate(f.degrees()) if e}
+        return any(i in used for pairs in self._dq for i, _ in pairs)
+
+    def _dq_of(self, f, A):
+        return self.reduce(sum((f.diff(self.ring.gens[i]) * dg for i, dg in self._dq[A]),
+                               self.ring.zero))
+
+    def bracket(self, f, g):
+        """{f, g} = f_q . g_p - f_p . g_q on polynomials in the generators."""
+        total = self.ring.zero
+        for A in range(len(self.q)):
+            fp, gp = f.diff(self.gp[A]), g.diff(self.gp[A])
+            if gp:
+                total += self._dq_of(f, A) * gp
+            if fp:
+                total -= fp * self._dq_of(g, A)
+            total = self.reduce(total)
+        return total
