@@ -6,7 +6,7 @@ warnings}`` on stdout. Exit status 0 on success, 1 on an internal failure
 (traceback only with ``--debug``), 2 on bad input or usage (one line on
 stderr), 3 when the command ran but its computation did not succeed or
 ``--budget`` ran out (one line on stderr saying why and what to do; a
-simulation's JSON envelope is still printed).
+simulation's JSON envelope is still printed), 130 after Ctrl-C.
 Warnings are one line each: in the envelope with ``--json``, else on stderr.
 
 Each command derives only what its output needs; ``--verbose`` lists what
@@ -563,7 +563,8 @@ _HELP = {
 }
 
 _EXIT_TEXT = ("exit status: 0 success; 1 internal failure; 2 bad input or usage; 3 the "
-              "computation did not succeed (one line on stderr says why and what to do)")
+              "computation did not succeed (one line on stderr says why and what to do); "
+              "130 interrupted (Ctrl-C)")
 
 
 class _Parser(argparse.ArgumentParser):
@@ -696,6 +697,10 @@ def add_common_arguments(p: argparse.ArgumentParser) -> None:
                         "default: no bound)")
 
 
+#: Exit status after Ctrl-C (128 + SIGINT, as shells report it), at any point of a command.
+EXIT_INTERRUPTED = 130
+
+
 def main(argv=None) -> int:
     """Run the command; returns the exit status."""
     parser = build_parser()
@@ -722,7 +727,7 @@ def main(argv=None) -> int:
         return EXIT_INPUT
     except KeyboardInterrupt:
         print("nhham: interrupted", file=sys.stderr)
-        return EXIT_INTERNAL
+        return EXIT_INTERRUPTED
     except Exception as exc:  # internal failure: say so, traceback on request
         if getattr(args, "debug", False):
             traceback.print_exc()

@@ -1,7 +1,7 @@
 """Diagnostics of a computed trajectory: residuals, energy, conditioning.
 
-Everything is evaluated on the stored states in one batch per quantity (no
-Python loop over states). The energy balance uses the exact identity of the
+Everything is evaluated on the stored states in batches (no Python loop over states;
+blocks of a few thousand states, so that a long run's diagnostics need little memory). The energy balance uses the exact identity of the
 constrained field dE_L/dt = -lambda . (mu v) (= lambda . h on M_1, see
 :mod:`nhham.numerics.model`): the integrators carry its time integral W(t) (the work
 of the constraint forces), and the residual max |E(t) - E(0) - W(t)| measures
@@ -23,6 +23,22 @@ __all__ = ["Diagnostics", "trajectory_diagnostics"]
 # the first and last): long runs stay cheap, spikes between samples can be
 # missed, which the docstring of Diagnostics states.
 _COND_SAMPLES = 20000
+
+# States per batch call: the kernels' temporaries (W, mu, ... for every state of the
+# batch) stay at a few MB however long the run.
+_BLOCK = 8192
+
+
+def _blockwise(fn, Y):
+    """``fn`` on blocks of rows of Y, the results concatenated."""
+    if len(Y) <= _BLOCK:
+        return np.asarray(fn(Y))
+    return np.concatenate([np.atleast_1d(fn(Y[i:i + _BLOCK]))
+                           for i in range(0, len(Y), _BLOCK)])
+
+
+def _row_max(A):
+    return A.max(axis=1) if A.shape[1] else np.zeros(A.shape[0])
 
 
 @dataclass(frozen=True)
@@ -105,11 +121,9 @@ def trajectory_diagnostics(model, t, y, work=None, *, residual_tol: float = 1e-8
         return Diagnostics(np.array([]), np.array([]), np.array([]), nan, nan, nan, nan, nan,
                            nan, nan, 0, tuple(notes))
     with np.errstate(all="ignore"):
-        E = model.energy(Yf)
-        res = np.abs(model.residuals(Yf))
-        rres = model.scaled_residuals(Yf)
-    rmax = res.max(axis=1) if res.shape[1] else np.zeros(len(tf))
-    rrel = rres.max(axis=1) if rres.shape[1] else np.zeros(len(tf))
+        E = np.atleast_1d(_blockwise(model.energy, Yf))
+        rmax = _blockwise(lambda B: _row_max(np.abs(model.residuals(B))), Yf)
+        rrel = _blockwise(lambda B: _row_max(model.scaled_residuals(B)), Yf)
     if work is None:
         work = _trapezoid_work(model, tf, Yf)
     else:
@@ -119,8 +133,8 @@ def trajectory_diagnostics(model, t, y, work=None, *, residual_tol: float = 1e-8
     balance = float(np.max(np.abs(E - E[0] - work)))
     idx = _cond_indices(len(tf))
     with np.errstate(all="ignore"):
-        cC = np.atleast_1d(model.cond_C(Yf[idx]))
-        cW = np.atleast_1d(model.cond_W(Yf[idx]))
+        cC = np.atleast_1d(_blockwise(model.cond_C, Yf[idx]))
+        cW = np.atleast_1d(_blockwise(model.cond_W, Yf[idx]))
     cond_C_max = float(np.nanmax(cC)) if cC.size else 1.0
     cond_W_max = float(np.nanmax(cW)) if cW.size else 1.0
     if cond_C_max > cond_warn:
@@ -153,7 +167,8 @@ def _cond_indices(K):
 
 def _trapezoid_work(model, t, Y):
     with np.errstate(all="ignore"):
-        P = np.atleast_1d(model.evaluate(Y)[2]) if len(t) > 1 else np.zeros(1)
+        P = _blockwise(lambda B: np.atleast_1d(model.evaluate(B)[2]), Y) if len(t) > 1 \
+            else np.zeros(1)
     if len(t) == 1:
         return np.zeros(1)
     inc = 0.5 * (P[1:] + P[:-1]) * np.diff(t)

@@ -15,7 +15,12 @@ import numpy as np
 
 from nhham.numerics.status import Status
 
-__all__ = ["Run", "report_progress"]
+__all__ = ["Run", "report_progress", "PAUSE_SECONDS"]
+
+#: Wall time after which the compiled loops hand control back to Python: a signal
+#: (Ctrl-C, the command's ``--budget``) is handled within this, never after a long run
+#: of steps (one return costs microseconds).
+PAUSE_SECONDS = 0.005
 
 
 @dataclass(frozen=True)
@@ -46,6 +51,10 @@ class Run:
     t_events, y_events : list of ndarray or None
         Event times and states, one entry per event function (scipy methods with
         ``events``).
+    failed_state : ndarray (2n,) or None
+        The state at which an evaluation of the field failed (a stage of the step that
+        did not complete), when the loop knows it; the stored trajectory ends at the
+        last completed step before it.
     """
 
     t: np.ndarray
@@ -62,6 +71,7 @@ class Run:
     sol: object = None
     t_events: list | None = None
     y_events: list | None = None
+    failed_state: np.ndarray | None = None
 
 
 def report_progress(t, t0, t1, reported):

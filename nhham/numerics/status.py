@@ -59,10 +59,13 @@ class NumericalFailure(ComputationError):
     status : Status or int
     message : str, optional
         What happened and where; default: the status's own message.
+    state : ndarray, optional
+        The state at which it happened, when known (``self.state``, else None).
     """
 
-    def __init__(self, status, message: str | None = None):
+    def __init__(self, status, message: str | None = None, state=None):
         self.status = Status(status)
+        self.state = state
         super().__init__(message or self.status.message)
 
 

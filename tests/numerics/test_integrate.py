@@ -296,8 +296,29 @@ def test_compiled_loop_failures_progress_and_options(capsys):
     res = simulate(sleigh, (0, 1), sleigh_state(), max_step=0.01, first_step=1e-3,
                    loop="compiled", warn=False)
     assert np.max(np.diff(res.t)) <= 0.01 + 1e-15 and res.t[1] == pytest.approx(1e-3)
+
+
+@needs_cc
+@pytest.mark.parametrize("method, options", [("DOP853", {"rtol": 1e-12}),
+                                             ("RK23", {"projection": True}),
+                                             ("rattle", {"step": 0.01}),
+                                             ("rattle4", {"step": 0.05})])
+def test_compiled_loops_resume_after_every_pause(monkeypatch, capsys, method, options):
+    """The compiled loops hand control back every PAUSE_SECONDS (so that Ctrl-C and the
+    command's --budget are handled at once): with a pause after every step the run is
+    the same to the last bit, and progress is reported at every tenth."""
+    import nhham.numerics.compiled_loop as compiled_loop
+    import nhham.numerics.integrators as integrators
+
+    sleigh = numeric_model(chaplygin_sleigh())
+    whole = simulate(sleigh, (0, 2), sleigh_state(), method=method, warn=False, **options)
+    monkeypatch.setattr(compiled_loop, "PAUSE_SECONDS", 0.0)
+    monkeypatch.setattr(integrators, "PAUSE_SECONDS", 0.0)
     capsys.readouterr()
-    simulate(sleigh, (0, 1), sleigh_state(), loop="compiled", progress=True, warn=False)
+    paused = simulate(sleigh, (0, 2), sleigh_state(), method=method, warn=False,
+                      progress=True, **options)
+    assert np.array_equal(whole.t, paused.t) and np.array_equal(whole.y, paused.y)
+    assert whole.nsteps == paused.nsteps > 15 and whole.nfev == paused.nfev
     err = capsys.readouterr().err
     assert "(50%)" in err and "(100%)" in err
 
