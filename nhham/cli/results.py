@@ -409,23 +409,32 @@ def simulation_data(result, t_span) -> dict:
 
 
 def simulation_failure(result, scene_path: str, free_multipliers=()) -> str:
-    """One line: why the run stopped, and what to do."""
+    """One line: why the run stopped, what was singular there, and what to do."""
     t = float(result.t[-1])
     code = int(result.status)
     where = f"at t = {t:.6g}"
-    if code == -3:
+    singular = result.singularity
+    if singular is not None and singular.part in ("W", "mu"):
+        todo = ("start from other [initial] data" if t == float(result.t[0]) else
+                f"stop before it (--t-end below {t:.6g}) or start from [initial] data whose "
+                f"motion avoids it")
+        return (f"simulation stopped {where}: {singular.describe()}; the dynamics is not "
+                f"defined there: {todo}")
+    if code == -3 or singular is not None:
         why = (f"free multiplier {', '.join(free_multipliers)}: " if free_multipliers else "")
-        return (f"simulation stopped {where}: {why}the constraint matrix C is singular, so the "
-                f"multipliers are not determined; run `nhham classify {scene_path}` to see the "
-                f"free multipliers or secondary constraints")
+        what = (singular.describe() if singular is not None else
+                "the constraint matrix C is singular")
+        return (f"simulation stopped {where}: {why}{what}, so the multipliers are not "
+                f"determined; run `nhham classify {scene_path}` to see the free multipliers "
+                f"or secondary constraints, or where the rank of C drops")
     if code == -2:
         return (f"simulation stopped {where}: the state became non-finite; check the "
                 f"parameters and [initial] data, or try a smaller --max-step")
     if code == -4:
         return (f"simulation stopped {where}: the projection onto the constraints did not "
                 f"converge; try a smaller --step or --rtol")
-    return (f"simulation stopped {where}: {result.message}; try --method Radau or a looser "
-            f"--rtol")
+    stiff = "" if result.method in ("Radau", "BDF", "LSODA") else "--method Radau or "
+    return f"simulation stopped {where}: {result.message}; try {stiff}a looser --rtol"
 
 
 # ------------------------------------------------------------------- bench

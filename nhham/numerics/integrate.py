@@ -46,7 +46,8 @@ import numpy as np
 
 from nhham.errors import InconsistentInitialDataError, InputError
 from nhham.numerics.compiled_loop import COMPILED_METHODS, run_compiled
-from nhham.numerics.diagnostics import Diagnostics, trajectory_diagnostics
+from nhham.numerics.diagnostics import (Diagnostics, Singularity, singularity_at,
+                                        trajectory_diagnostics)
 from nhham.numerics.integrators import FIXED_STEP_METHODS, run_fixed_step
 from nhham.numerics.model import NumericModel, NumericsWarning, ProjectionOutcome
 from nhham.numerics.run import Run
@@ -160,6 +161,17 @@ class SimulationResult:
     work = property(lambda self: self.diagnostics.work)
 
     @cached_property
+    def singularity(self) -> Singularity | None:
+        """For a run that stopped: what is singular (W, the constraints' one-forms, or C)
+        where it stopped (at :attr:`failed_state` when known, else at the last state),
+        or None when nothing is nearly singular there (see
+        :func:`nhham.numerics.diagnostics.singularity_at`)."""
+        if self.success or self.model is None:
+            return None
+        y = self.failed_state if self.failed_state is not None else self.y[:, -1]
+        return singularity_at(self.model, y)
+
+    @cached_property
     def multipliers(self) -> np.ndarray:
         """lambda at the stored states, shape (m, K) (continuous-field values)."""
         return np.atleast_2d(self.model.multipliers(self.states)).T
@@ -184,6 +196,8 @@ class SimulationResult:
             lines.append(f"  initial data projected onto M_1: residual {p.residual_before:.2e} -> "
                          f"{p.residual_after:.2e}, |dq| = {p.displacement_q:.2e}, "
                          f"|dv| = {p.displacement_v:.2e}")
+        if self.singularity is not None:
+            lines.append(f"  where it stopped, {self.singularity.describe()}")
         lines += [f"  warning: {w}" for w in self.warnings]
         lines.append("  final state: " + ", ".join(f"{k} = {v:.10g}"
                                                   for k, v in self.final_state.items()))
