@@ -501,18 +501,29 @@ def _free_multipliers(system) -> tuple:
 
 def cmd_bench(args, steps) -> CommandOutput:
     """Work-precision study of the scene's system."""
-    from nhham.cli.results import bench_data
+    from nhham.cli.results import bench_data, bench_failure_data
+    from nhham.numerics.status import NumericalFailure
     from nhham.numerics.workprecision import work_precision
 
     scene = _load(args, steps)
     if scene.initial is None:
         raise InputError(f"{args.scene}: bench needs an [initial] table")
     t_end = args.t_end if args.t_end is not None else (scene.simulate.t_end or 10.0)
-    with capture_warnings() as caught:
-        with steps.step("work-precision study"):
-            result = work_precision(scene.system, dict(scene.initial), (0.0, t_end),
-                                    quick=args.quick, progress=steps.progress,
-                                    reference_digits=args.reference_digits)
+    study = "work-precision study" + (" (--quick)" if args.quick else "")
+    try:
+        with capture_warnings() as caught:
+            with steps.step(study):
+                result = work_precision(scene.system, dict(scene.initial), (0.0, t_end),
+                                        quick=args.quick, progress=steps.progress,
+                                        reference_digits=args.reference_digits)
+    except NumericalFailure as exc:  # no reference: nothing to measure against
+        return CommandOutput(result=bench_failure_data((0.0, t_end), args),
+                             text=f"work-precision: {_title(scene, args)}, t in [0, {t_end:g}]: "
+                                  f"nothing measured (no reference solution)",
+                             scene=scene_info(scene), warnings=[],
+                             failure=f"bench stopped: {exc}; run `nhham classify "
+                                     f"{args.scene}` and `nhham simulate {args.scene}` to "
+                                     f"see why")
     data = bench_data(result)
     data["plot"] = None
     if args.plot:

@@ -21,7 +21,7 @@ __all__ = [
     "derive_data", "derive_text", "derive_latex",
     "compare_data", "compare_text", "compare_latex",
     "simulation_data", "simulation_failure", "status_name",
-    "bench_data",
+    "bench_data", "bench_failure_data",
 ]
 
 
@@ -397,7 +397,16 @@ def simulation_data(result, t_span) -> dict:
         "cond_w_max": json_number(d.cond_W_max),
         "settings": jsonable(dict(result.settings)),
         "initial_projection": None,
+        "storage": None if result.storage is None else jsonable(result.storage.to_dict()),
+        "singularity": None,
     }
+    found = result.singularity
+    if found is not None:
+        data["singularity"] = {
+            "part": found.part, "description": found.describe(),
+            "cond_w": json_number(found.cond_W), "cond_mu": json_number(found.cond_mu),
+            "cond_c": json_number(found.cond_C), "rank_mu": int(found.rank_mu),
+            "state": jsonable(found.state)}
     p = result.initial_projection
     if p is not None:
         data["initial_projection"] = {
@@ -444,7 +453,7 @@ def bench_data(result) -> dict:
     for r in result.rows:
         rows.append({"method": str(r.method), "setting": str(r.setting),
                      "error": json_number(r.error), "wall_time_s": json_number(r.wall_time_s),
-                     "nfev": int(r.nfev),
+                     "runs": int(r.runs), "nfev": int(r.nfev),
                      "constraint_residual": json_number(r.constraint_residual),
                      "energy_drift": json_number(r.energy_drift),
                      "energy_balance_residual": json_number(r.energy_balance_residual),
@@ -455,7 +464,18 @@ def bench_data(result) -> dict:
         for method, wall in result.time_to_solution(target).items():
             tts.append({"target": target, "method": method, "wall_time_s": json_number(wall)})
     return {"t_span": [float(x) for x in result.t_span], "backend": str(result.backend),
+            "reference": str(result.reference),
             "reference_digits": int(result.reference_digits),
             "reference_error_estimate": json_number(result.reference_error_estimate),
             "reference_wall_time_s": json_number(result.reference_wall_time_s),
-            "rows": rows, "time_to_solution": tts}
+            "rows": rows, "time_to_solution": tts,
+            "skipped": [{"method": m, "setting": s, "reason": why}
+                        for m, s, why in result.skipped]}
+
+
+def bench_failure_data(t_span, args) -> dict:
+    """The ``result`` of a bench whose reference could not be computed: no rows."""
+    return {"t_span": [float(x) for x in t_span], "backend": "none", "reference": "none",
+            "reference_digits": int(args.reference_digits), "reference_error_estimate": None,
+            "reference_wall_time_s": None, "rows": [], "time_to_solution": [], "skipped": [],
+            "plot": None}

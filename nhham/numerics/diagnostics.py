@@ -203,6 +203,8 @@ class Singularity:
     m : int
     where : str
         The coordinates at the state (``x = 0, phi = 1.5708``).
+    state : tuple of float
+        The state (coordinates and velocities).
     """
 
     part: str
@@ -212,6 +214,7 @@ class Singularity:
     rank_mu: int
     m: int
     where: str
+    state: tuple = ()
 
     def describe(self) -> str:
         """One clause: what is singular there."""
@@ -253,4 +256,5 @@ def singularity_at(model, y, threshold: float = COND_C_WARN) -> Singularity | No
         part = "C"
     where = ", ".join(f"{name} = {value:.6g}" for name, value in
                       zip(model.coordinate_names, y[:model.n]))
-    return Singularity(part, cond_W, cond_mu, cond_C, rank_mu, model.m, where)
+    return Singularity(part, cond_W, cond_mu, cond_C, rank_mu, model.m, where,
+                       tuple(float(x) for x in y))
