@@ -359,7 +359,7 @@ def compare_latex(title: str, data: dict, parse) -> str:
 # ---------------------------------------------------------------- simulate
 # The names of nhham.numerics.status.Status, for results that carry a plain int.
 _STATUS_NAMES = {0: "success", 1: "event", -1: "step_failed", -2: "nonfinite", -3: "singular",
-                 -4: "not_converged"}
+                 -4: "not_converged", -5: "time_limit"}
 
 
 def status_name(status) -> str:

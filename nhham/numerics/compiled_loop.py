@@ -92,7 +92,7 @@ def _workspace(y0, t0, atol, first_step, nz):
 
 
 def run_compiled(model, y0, t0, t1, method, *, rtol, atol, max_step, first_step, t_eval,
-                 projection, baumgarte, recorder, progress=False) -> Run:
+                 projection, baumgarte, recorder, progress=False, deadline=None) -> Run:
     """RK23/RK45/DOP853 as one compiled loop (see the module docstring); the states go
     into ``recorder`` (a :class:`~nhham.numerics.storage.Recorder`: every stride-th step,
     or room for the t_eval points)."""
@@ -122,9 +122,13 @@ def run_compiled(model, y0, t0, t1, method, *, rtol, atol, max_step, first_step,
             reported = report_progress(state[0], t0, t1, reported)
         if status != Status.PAUSED:
             break
+        if deadline is not None and deadline.passed():
+            status = Status.TIME_LIMIT
+            break
     if t_eval is None:
         recorder.close(float(state[0]), state[2:2 + nz])
-    message = _message(status, method, float(state[0]), fail, n2)
+    message = (deadline.message(float(state[0])) if status == Status.TIME_LIMIT else
+               _message(status, method, float(state[0]), fail, n2))
     T, Y, work = recorder.result(n2)
     failed = None if np.isnan(fail[0]) else fail[1:1 + n2].copy()
     return Run(T, Y, work, status, message, int(iw[2]), int(iw[3]), failed_state=failed)

@@ -50,7 +50,7 @@ from nhham.numerics.diagnostics import (Diagnostics, Singularity, singularity_at
                                         trajectory_diagnostics)
 from nhham.numerics.integrators import FIXED_STEP_METHODS, run_fixed_step
 from nhham.numerics.model import NumericModel, NumericsWarning, ProjectionOutcome
-from nhham.numerics.run import Run
+from nhham.numerics.run import Deadline, Run
 from nhham.numerics.scipy_loop import SCIPY_METHODS, DenseOutput, run_scipy
 from nhham.numerics.status import Status
 from nhham.numerics.storage import Recorder, Storage, check_plan, default_max_points
@@ -74,7 +74,8 @@ class SimulationResult:
     status : Status
         An int-valued enum: 0 success; 1 a terminal event stopped the run; -1 step
         failure; -2 NaN/overflow (run stopped); -3 singular saddle-point system; -4
-        Newton/projection failure. The trajectory up to the failure is kept.
+        Newton/projection failure; -5 stopped at ``time_limit``. The trajectory up to the
+        failure is kept.
     message : str
     success : bool
         ``status >= 0``, as in scipy.
@@ -248,7 +249,8 @@ def simulate(system_or_model, t_span, y0, *, method: str = "DOP853", rtol: float
              initial_tol: float = 1e-10, residual_tol: float | None = None,
              reference_digits: int | None = None, save_every: int = 1,
              max_points: int | None = None, backend: str = "auto", warn: bool = True,
-             progress: bool = False, loop: str = "auto") -> SimulationResult:
+             progress: bool = False, loop: str = "auto",
+             time_limit: float | None = None) -> SimulationResult:
     """Integrate the constrained dynamics from ``y0`` over ``t_span``.
 
     Parameters
@@ -307,6 +309,9 @@ def simulate(system_or_model, t_span, y0, *, method: str = "DOP853", rtol: float
         else scipy's Python loop; ``"compiled"`` insists (InputError if
         impossible); ``"scipy"`` always uses scipy's loop. Both give the same
         steps up to round-off. ``result.settings["loop"]`` says which ran.
+    time_limit : float, optional
+        Seconds of wall time after which the run stops with ``Status.TIME_LIMIT`` (a
+        failure that keeps the trajectory so far; not the reference method).
     dense_output : bool
         scipy methods: keep the continuous solution, ``result.sol(t)`` (runs
         scipy's loop).
@@ -345,11 +350,11 @@ def simulate(system_or_model, t_span, y0, *, method: str = "DOP853", rtol: float
     if residual_tol is None:
         exact = projection or method in ("rattle", "rattle4", "reference")
         residual_tol = 1e-11 if exact else 1e-8
+    start = time.perf_counter()
+    deadline = Deadline.after(time_limit)
     adaptive = dict(rtol=rtol, atol=atol, max_step=max_step, first_step=first_step,
                     t_eval=t_eval, projection=projection, baumgarte=baumgarte,
-                    progress=progress, recorder=recorder)
-
-    start = time.perf_counter()
+                    progress=progress, recorder=recorder, deadline=deadline)
     if compiled_loop:
         settings["loop"] = "compiled"
         run = run_compiled(model, y_init, t0, t1, method, **adaptive)
@@ -358,7 +363,7 @@ def simulate(system_or_model, t_span, y0, *, method: str = "DOP853", rtol: float
         run = run_scipy(model, y_init, t0, t1, method, dense_output=dense_output,
                         events=events, **adaptive)
     elif method in FIXED_STEP_METHODS:
-        opts = {"recorder": recorder, "progress": progress}
+        opts = {"recorder": recorder, "progress": progress, "deadline": deadline}
         if method == "rk4":
             opts.update(projection=projection, baumgarte=baumgarte)
         run = run_fixed_step(method, model, y_init, t0, t1, float(step), **opts)

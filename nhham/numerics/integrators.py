@@ -299,7 +299,7 @@ def _recorder(recorder, width, save_every):
     return Recorder(width, default_max_points(width), int(save_every))
 
 
-def _run_fixed(step_fn, recorder, y0, t0, t1, h, progress=False):
+def _run_fixed(step_fn, recorder, y0, t0, t1, h, progress=False, deadline=None):
     """Steps of ``step_fn`` from y0; the kept states go into ``recorder``."""
     N, h = _grid(t0, t1, h)
     y = np.asarray(y0, dtype=float).copy()
@@ -319,6 +319,9 @@ def _run_fixed(step_fn, recorder, y0, t0, t1, h, progress=False):
                 recorder.add(t, y)
             if progress:
                 reported = report_progress(t, t0, t1, reported)
+            if deadline is not None and i < N and deadline.passed():
+                status, message = Status.TIME_LIMIT, deadline.message(t)
+                break
     except NumericalFailure as exc:
         status, message = exc.status, str(exc)
     except np.linalg.LinAlgError as exc:
@@ -328,7 +331,7 @@ def _run_fixed(step_fn, recorder, y0, t0, t1, h, progress=False):
 
 
 def rattle(model, y0, t0, t1, h, *, save_every: int = 1, tol=None, recorder=None,
-           progress: bool = False) -> FixedStepRun:
+           progress: bool = False, deadline=None) -> FixedStepRun:
     """Integrate with the nonholonomic RATTLE scheme (see the module docstring).
 
     Parameters
@@ -348,20 +351,22 @@ def rattle(model, y0, t0, t1, h, *, save_every: int = 1, tol=None, recorder=None
         ``save_every``-th step within the default memory bound.
     progress : bool
         Report each tenth of the interval on stderr.
+    deadline : Deadline, optional
+        Stop with ``Status.TIME_LIMIT`` when it has passed (:class:`~nhham.numerics.run.Deadline`).
     """
     st = _RattleStepper(model, tol=tol)
     recorder = _recorder(recorder, 2 * model.n, save_every)
     if _compiled_ok(model):
-        return _compiled_rattle(model, st, y0, t0, t1, h, recorder, 0, progress)
+        return _compiled_rattle(model, st, y0, t0, t1, h, recorder, 0, progress, deadline)
     _, status, msg, nsteps, hh = _run_fixed(lambda y, h: st.step(y, h)[0], recorder, y0,
-                                            t0, t1, h, progress)
+                                            t0, t1, h, progress, deadline)
     t, y, _ = recorder.result(2 * model.n)
     return Run(t, y, None, status, msg, st.nfev + nsteps + st.newton, nsteps,
                newton_iterations=st.newton, step=hh)
 
 
 def rattle4(model, y0, t0, t1, h, *, save_every: int = 1, tol=None, recorder=None,
-            progress: bool = False) -> FixedStepRun:
+            progress: bool = False, deadline=None) -> FixedStepRun:
     """Fourth order: RATTLE composed with the triple jump (g1, g2, g1) h.
 
     g1 = 1/(2 - 2^(1/3)), g2 = 1 - 2 g1 (Yoshida 1990; Suzuki 1990): the
@@ -371,14 +376,14 @@ def rattle4(model, y0, t0, t1, h, *, save_every: int = 1, tol=None, recorder=Non
     st = _RattleStepper(model, tol=tol)
     recorder = _recorder(recorder, 2 * model.n, save_every)
     if _compiled_ok(model):
-        return _compiled_rattle(model, st, y0, t0, t1, h, recorder, 1, progress)
+        return _compiled_rattle(model, st, y0, t0, t1, h, recorder, 1, progress, deadline)
 
     def step(y, h):
         y = st.step(y, _G1 * h)[0]
         y = st.step(y, _G2 * h)[0]
         return st.step(y, _G1 * h)[0]
 
-    _, status, msg, nsteps, hh = _run_fixed(step, recorder, y0, t0, t1, h, progress)
+    _, status, msg, nsteps, hh = _run_fixed(step, recorder, y0, t0, t1, h, progress, deadline)
     t, y, _ = recorder.result(2 * model.n)
     return Run(t, y, None, status, msg, st.nfev + 3 * nsteps + st.newton, nsteps,
                newton_iterations=st.newton, step=hh)
@@ -392,7 +397,7 @@ def _compiled_ok(model):
 _REDUCE_THE_STEP = {Status.NOT_CONVERGED: "; reduce the step"}
 
 
-def _compiled_rattle(model, st, y0, t0, t1, h, recorder, composition, progress):
+def _compiled_rattle(model, st, y0, t0, t1, h, recorder, composition, progress, deadline):
     """The compiled RATTLE loop, called until done (it returns every few milliseconds,
     so that signals are handled, and when the recorder's room is full)."""
     N, h = _grid(t0, t1, h)
@@ -420,10 +425,14 @@ def _compiled_rattle(model, st, y0, t0, t1, h, recorder, composition, progress):
             reported = report_progress(t0 + h * int(info[0]), t0, t1, reported)
         if status != Status.PAUSED:
             break
+        if deadline is not None and deadline.passed():
+            status = Status.TIME_LIMIT
+            break
     done, newton = int(info[0]), int(info[1])
     recorder.close(t0 + h * done, y)
     T, Y, _ = recorder.result(2 * model.n)
-    msg = status.message if status == 0 else (
+    msg = status.message if status == 0 else deadline.message(t0 + h * done) if (
+        status == Status.TIME_LIMIT) else (
         f"{status.message} in the RATTLE step at t = {t0 + (done + 1) * h:.6g} "
         f"(step {done + 1}){_REDUCE_THE_STEP.get(status, '')}; the run was stopped")
     # A step costs about one field evaluation plus one per Newton iteration.
@@ -433,7 +442,8 @@ def _compiled_rattle(model, st, y0, t0, t1, h, recorder, composition, progress):
 
 # --------------------------------------------------------------------- RK4
 def rk4(model, y0, t0, t1, h, *, projection: bool = False, baumgarte=None,
-        save_every: int = 1, recorder=None, progress: bool = False) -> FixedStepRun:
+        save_every: int = 1, recorder=None, progress: bool = False,
+        deadline=None) -> FixedStepRun:
     """Classical fourth-order Runge-Kutta on the projected field.
 
     With ``projection`` every step ends with :meth:`NumericModel.project`
@@ -465,7 +475,7 @@ def rk4(model, y0, t0, t1, h, *, projection: bool = False, baumgarte=None,
 
     z0 = np.append(np.asarray(y0, dtype=float), 0.0)
     recorder = _recorder(recorder, n2 + 1, save_every)
-    _, status, msg, nsteps, hh = _run_fixed(step, recorder, z0, t0, t1, h, progress)
+    _, status, msg, nsteps, hh = _run_fixed(step, recorder, z0, t0, t1, h, progress, deadline)
     t, y, work = recorder.result(n2)
     return Run(t, y, work, status, msg, counter["nfev"], nsteps, step=hh)
 

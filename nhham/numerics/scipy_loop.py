@@ -140,7 +140,7 @@ def _solver_options(method, n2, rtol, atol, max_step, first_step):
 
 def run_scipy(model, y0, t0, t1, method, *, rtol, atol, max_step, first_step, t_eval,
               projection, baumgarte, recorder, progress=False, dense_output=False,
-              events=None) -> Run:
+              events=None, deadline=None) -> Run:
     """Integrate with scipy's ``method`` (see the module docstring); the states go into
     ``recorder`` (a :class:`~nhham.numerics.storage.Recorder`)."""
     n2 = 2 * model.n
@@ -186,6 +186,9 @@ def run_scipy(model, y0, t0, t1, method, *, rtol, atol, max_step, first_step, t_
                 reported = report_progress(solver.t, t0, t1, reported)
             if t_stop is not None:
                 status, message = Status.EVENT, Status.EVENT.message
+                break
+            if deadline is not None and deadline.passed():
+                status, message = Status.TIME_LIMIT, deadline.message(solver.t)
                 break
     except NumericalFailure as exc:
         status, message, failed = exc.status, str(exc), exc.state

@@ -33,6 +33,7 @@ class Status(enum.IntEnum):
     NONFINITE = -2
     SINGULAR = -3
     NOT_CONVERGED = -4
+    TIME_LIMIT = -5
 
     @property
     def message(self) -> str:
@@ -48,6 +49,7 @@ _MESSAGES = {
     Status.NONFINITE: "non-finite or overflowing state or right-hand side (NaN or overflow)",
     Status.SINGULAR: "singular saddle-point system",
     Status.NOT_CONVERGED: "Newton iteration or projection did not converge",
+    Status.TIME_LIMIT: "stopped at the time limit (wall time) before the end of the interval",
 }
 
 

@@ -15,7 +15,8 @@ wall time, the evaluations, the constraint residual and the energy drift.
   autorange does): a sub-millisecond run is repeated hundreds of times and the median
   reported, so that the timings of neighbouring settings do not zig-zag with noise.
 - A method's tighter settings are skipped once one of its runs took longer than
-  ``slow`` seconds (they would take longer still); the result lists them.
+  ``slow`` seconds (they would take longer still); the result lists them. A run is
+  stopped at twice ``slow`` (``Status.TIME_LIMIT``: a failed row).
 """
 
 from __future__ import annotations
@@ -263,11 +264,11 @@ def work_precision(system_or_model, y0, t_span, *, methods=None, tolerances=DEFA
                 say(f"  {label} {text} ...", end="")
                 start = time.perf_counter()
                 row = _one_row(model, y_init, (t0, t1), method, label, s, projection, y_ref,
-                               repeats, loop, min_time)
+                               repeats, loop, min_time, slow)
                 rows.append(row)
                 say(f" {1e3 * row.wall_time_s:.3g} ms x {row.runs} ({row.status_name}; "
                     f"{time.perf_counter() - start:.2g} s)")
-                if row.wall_time_s > slow:
+                if row.wall_time_s > slow or row.status == Status.TIME_LIMIT:
                     too_slow = f"{label} {text} took {row.wall_time_s:.3g} s"
     finite = [r.error for r in rows if r.status == 0 and r.error > 0]
     if finite and ref_error * 100 > min(finite):
@@ -344,8 +345,8 @@ def _setting_text(method, setting) -> str:
 
 
 def _one_row(model, y0, t_span, method, label, setting, projection, y_ref, repeats, loop,
-             min_time):
-    kw = {"warn": False, "projection": projection}
+             min_time, slow):
+    kw = {"warn": False, "projection": projection, "time_limit": 2 * slow}
     if method in SCIPY_METHODS:
         kw["loop"] = loop
     if method in ("rattle", "rattle4", "rk4"):
