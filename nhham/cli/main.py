@@ -417,7 +417,8 @@ def cmd_compare(args, steps) -> CommandOutput:
 def _simulate_options(args, scene):
     """The scene's [simulate] table overridden by the command line, checked."""
     opts = scene.simulate.given()
-    given = {k: getattr(args, k) for k in ("method", "rtol", "atol", "step", "t_end", "max_step")
+    given = {k: getattr(args, k) for k in ("method", "rtol", "atol", "step", "t_end", "max_step",
+                                           "save_every", "max_points")
              if getattr(args, k, None) is not None}
     opts.update(given)
     method = opts.get("method", "DOP853")
@@ -438,6 +439,10 @@ def _simulate_options(args, scene):
             opts.pop(key, None)
     else:
         opts.pop("step", None)
+    for key, least in (("save_every", 1), ("max_points", 2)):
+        if key in given and given[key] < least:
+            raise InputError(f"--{key.replace('_', '-')} must be at least {least}, "
+                             f"got {given[key]}")
     if getattr(args, "projection", False):
         if method in ("rattle", "rattle4", "reference"):
             raise InputError(f"--projection: {method} keeps the constraints itself; "
@@ -459,7 +464,8 @@ def cmd_simulate(args, steps) -> CommandOutput:
     t_end, opts = _simulate_options(args, scene)
     t_span = (0.0, float(t_end))
     with capture_warnings() as caught:
-        with steps.step(f"simulate with {opts.get('method', 'DOP853')}"):
+        with steps.step(f"simulate with {opts.get('method', 'DOP853')} "
+                        f"({_storage_plan(scene, opts)})"):
             result = simulate(scene.system, t_span=t_span, y0=dict(scene.initial),
                               project_initial=args.project_initial, progress=steps.progress,
                               **opts)
@@ -487,6 +493,17 @@ def cmd_simulate(args, steps) -> CommandOutput:
                          if not line.lstrip().startswith("warning:"))
     return CommandOutput(result=data, text=text, scene=scene_info(scene),
                          warnings=warnings, failure=failure)
+
+
+def _storage_plan(scene, opts) -> str:
+    """What the run will keep, and the memory that takes at most."""
+    from nhham.numerics.storage import default_max_points, memory_text, storage_bytes
+
+    width = 2 * scene.system.n + (0 if opts.get("method") in ("rattle", "rattle4") else 1)
+    bound = opts.get("max_points") or default_max_points(width)
+    every = opts.get("save_every", 1)
+    kept = "every step" if every == 1 else f"one step in {every}"
+    return f"keeps {kept}, at most {bound} states: {memory_text(storage_bytes(bound, width))}"
 
 
 def _free_multipliers(system) -> tuple:
@@ -658,7 +675,15 @@ def build_parser() -> argparse.ArgumentParser:
                            help="project onto the constraints after every step (adaptive "
                                 "methods and rk4): residual at round-off for a small cost")
             p.add_argument("--output", metavar="FILE", default=None,
-                           help="write the trajectory: .npz (numpy) or otherwise CSV")
+                           help="write the trajectory (the kept states): .npz (numpy) or "
+                                "otherwise CSV")
+            p.add_argument("--save-every", dest="save_every", type=int, default=None,
+                           metavar="J", help="keep every J-th step and the last (default: 1)")
+            p.add_argument("--max-points", dest="max_points", type=int, default=None,
+                           metavar="K",
+                           help="most states kept in memory; beyond it every other one is "
+                                "dropped and the stride doubles (default: as many as fit in "
+                                "64 MiB, 8 (2n + 2) bytes a state)")
             p.add_argument("--project-initial", action="store_true",
                            help="project [initial] data that violate the constraints onto "
                                 "M_1 (the constraints as given, velocity and holonomic) "
