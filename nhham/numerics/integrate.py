@@ -314,7 +314,8 @@ def simulate(system_or_model, t_span, y0, *, method: str = "DOP853", rtol: float
         failure that keeps the trajectory so far; not the reference method).
     dense_output : bool
         scipy methods: keep the continuous solution, ``result.sol(t)`` (runs
-        scipy's loop).
+        scipy's loop; its memory grows with the steps, a few hundred bytes each, and is
+        not bounded by ``max_points``).
     events : callable or sequence of callables, optional
         scipy methods: ``event(t, y) -> float`` on the state y (2n,), located as
         in :func:`scipy.integrate.solve_ivp` (``terminal`` and ``direction``
@@ -435,6 +436,9 @@ def _recorder(model, method, t_eval, save_every, max_points) -> Recorder:
     constraint forces where the loop carries it)."""
     width = 2 * model.n + (0 if method in ("rattle", "rattle4") else 1)
     bound = default_max_points(width) if max_points is None else int(max_points)
+    if t_eval is not None and method in FIXED_STEP_METHODS:
+        raise InputError(f"t_eval: the fixed-step method {method!r} keeps its grid points "
+                         f"(every save_every-th step); t_eval is for the adaptive methods")
     if t_eval is not None and method != "reference":
         points = len(np.atleast_1d(t_eval))
         check_plan(points, bound, width, "t_eval")

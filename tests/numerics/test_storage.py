@@ -94,6 +94,8 @@ def test_t_eval_beyond_max_points_is_refused_with_the_memory(sleigh):
     res = simulate(sleigh, (0, 1), sleigh_state(), t_eval=t, max_points=101, warn=False)
     assert np.array_equal(res.t, t) and res.storage.stride == 0
     assert res.storage.bytes == storage_bytes(101, 7)
+    with pytest.raises(InputError, match="t_eval: the fixed-step method 'rattle'"):
+        simulate(sleigh, (0, 1), sleigh_state(), method="rattle", step=0.1, t_eval=t)
     for bad in ({"max_points": 1}, {"save_every": 0}, {"save_every": 1.5}):
         with pytest.raises(InputError, match="max_points|save_every"):
             simulate(sleigh, (0, 1), sleigh_state(), **bad)
