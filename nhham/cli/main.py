@@ -455,7 +455,7 @@ def _simulate_options(args, scene):
 def cmd_simulate(args, steps) -> CommandOutput:
     """Integrate the constrained dynamics from the scene's initial data."""
     from nhham.cli.results import simulation_data, simulation_failure
-    from nhham.numerics.integrate import simulate
+    from nhham.numerics.integrate import simulate, storage_plan
 
     scene = _load(args, steps)
     if scene.initial is None:
@@ -464,8 +464,9 @@ def cmd_simulate(args, steps) -> CommandOutput:
     t_end, opts = _simulate_options(args, scene)
     t_span = (0.0, float(t_end))
     with capture_warnings() as caught:
-        with steps.step(f"simulate with {opts.get('method', 'DOP853')} "
-                        f"({_storage_plan(scene, opts)})"):
+        plan = storage_plan(scene.system.n, opts.get("method", "DOP853"),
+                            opts.get("save_every", 1), opts.get("max_points"))
+        with steps.step(f"simulate with {opts.get('method', 'DOP853')} ({plan})"):
             result = simulate(scene.system, t_span=t_span, y0=dict(scene.initial),
                               project_initial=args.project_initial, progress=steps.progress,
                               **opts)
@@ -495,17 +496,6 @@ def cmd_simulate(args, steps) -> CommandOutput:
                          warnings=warnings, failure=failure)
 
 
-def _storage_plan(scene, opts) -> str:
-    """What the run will keep, and the memory that takes at most."""
-    from nhham.numerics.storage import default_max_points, memory_text, storage_bytes
-
-    width = 2 * scene.system.n + (0 if opts.get("method") in ("rattle", "rattle4") else 1)
-    bound = opts.get("max_points") or default_max_points(width)
-    every = opts.get("save_every", 1)
-    kept = "every step" if every == 1 else f"one step in {every}"
-    return f"keeps {kept}, at most {bound} states: {memory_text(storage_bytes(bound, width))}"
-
-
 def _free_multipliers(system) -> tuple:
     """Names of the free multipliers (for the failure message), or () if unknown."""
     try:
@@ -518,7 +508,7 @@ def _free_multipliers(system) -> tuple:
 
 def cmd_bench(args, steps) -> CommandOutput:
     """Work-precision study of the scene's system."""
-    from nhham.cli.results import bench_data, bench_failure_data
+    from nhham.cli.results import bench_data, bench_failure, bench_failure_data
     from nhham.numerics.status import NumericalFailure
     from nhham.numerics.workprecision import work_precision
 
@@ -538,9 +528,7 @@ def cmd_bench(args, steps) -> CommandOutput:
                              text=f"work-precision: {_title(scene, args)}, t in [0, {t_end:g}]: "
                                   f"nothing measured (no reference solution)",
                              scene=scene_info(scene), warnings=[],
-                             failure=f"bench stopped: {exc}; run `nhham classify "
-                                     f"{args.scene}` and `nhham simulate {args.scene}` to "
-                                     f"see why")
+                             failure=bench_failure(exc, str(args.scene)))
     data = bench_data(result)
     data["plot"] = None
     if args.plot:

@@ -21,7 +21,7 @@ __all__ = [
     "derive_data", "derive_text", "derive_latex",
     "compare_data", "compare_text", "compare_latex",
     "simulation_data", "simulation_failure", "status_name",
-    "bench_data", "bench_failure_data",
+    "bench_data", "bench_failure", "bench_failure_data",
 ]
 
 
@@ -471,6 +471,12 @@ def bench_data(result) -> dict:
             "rows": rows, "time_to_solution": tts,
             "skipped": [{"method": m, "setting": s, "reason": why}
                         for m, s, why in result.skipped]}
+
+
+def bench_failure(exc, scene_path: str) -> str:
+    """One line: why there is no reference solution, and what to run."""
+    return (f"bench stopped: {exc}; run `nhham classify {scene_path}` and `nhham simulate "
+            f"{scene_path}` to see why")
 
 
 def bench_failure_data(t_span, args) -> dict:

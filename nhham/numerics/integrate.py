@@ -53,9 +53,11 @@ from nhham.numerics.model import NumericModel, NumericsWarning, ProjectionOutcom
 from nhham.numerics.run import Deadline, Run
 from nhham.numerics.scipy_loop import SCIPY_METHODS, DenseOutput, run_scipy
 from nhham.numerics.status import Status
-from nhham.numerics.storage import Recorder, Storage, check_plan, default_max_points
+from nhham.numerics.storage import (Recorder, Storage, check_plan, default_max_points,
+                                    memory_text, storage_bytes)
 
-__all__ = ["simulate", "SimulationResult", "SCIPY_METHODS", "COMPILED_METHODS", "METHODS"]
+__all__ = ["simulate", "SimulationResult", "SCIPY_METHODS", "COMPILED_METHODS", "METHODS",
+           "storage_plan"]
 
 _LOOPS = ("auto", "compiled", "scipy")
 METHODS = tuple(SCIPY_METHODS) + tuple(FIXED_STEP_METHODS) + ("reference",)
@@ -430,11 +432,25 @@ def _check_options(method, step, projection, baumgarte, model):
             raise InputError("baumgarte: needs the saddle path (path='saddle')")
 
 
+def _width(n, method) -> int:
+    """Numbers a loop keeps per state: the state, and the work of the constraint forces
+    where the loop carries it (all but RATTLE)."""
+    return 2 * n + (0 if method in ("rattle", "rattle4") else 1)
+
+
+def storage_plan(n: int, method: str, save_every: int = 1, max_points=None) -> str:
+    """What a run of ``method`` on n coordinates will keep, and the memory that takes at
+    most (without t_eval)."""
+    width = _width(n, method)
+    bound = default_max_points(width) if max_points is None else int(max_points)
+    kept = "every step" if save_every == 1 else f"one step in {save_every}"
+    return f"keeps {kept}, at most {bound} states: {memory_text(storage_bytes(bound, width))}"
+
+
 def _recorder(model, method, t_eval, save_every, max_points) -> Recorder:
     """Where the loop puts the states: the t_eval points (refused beyond max_points),
-    or every save_every-th step within max_points (rows: the state, and the work of the
-    constraint forces where the loop carries it)."""
-    width = 2 * model.n + (0 if method in ("rattle", "rattle4") else 1)
+    or every save_every-th step within max_points."""
+    width = _width(model.n, method)
     bound = default_max_points(width) if max_points is None else int(max_points)
     if t_eval is not None and method in FIXED_STEP_METHODS:
         raise InputError(f"t_eval: the fixed-step method {method!r} keeps its grid points "

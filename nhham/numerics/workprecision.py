@@ -243,7 +243,7 @@ def work_precision(system_or_model, y0, t_span, *, methods=None, tolerances=DEFA
     say = _say if progress else (lambda *a, **k: None)
     y_init = model.state(y0)
     y_ref, ref_error, ref_time, ref_text, digits = _reference(
-        model, y_init, (t0, t1), quick, reference_digits, say)
+        model, y_init, (t0, t1), quick, reference_digits, progress)
     if methods is None:
         methods = list(SCIPY_METHODS) + (["rattle", "rattle4"] if model.quadratic else []) + ["rk4"]
     if steps is None:
@@ -266,7 +266,8 @@ def work_precision(system_or_model, y0, t_span, *, methods=None, tolerances=DEFA
                 row = _one_row(model, y_init, (t0, t1), method, label, s, projection, y_ref,
                                repeats, loop, min_time, slow)
                 rows.append(row)
-                say(f" {1e3 * row.wall_time_s:.3g} ms x {row.runs} ({row.status_name}; "
+                failed = "" if row.status == 0 else f"; failed: {row.status_name}"
+                say(f" {1e3 * row.wall_time_s:.3g} ms (median of {row.runs} run(s){failed}; "
                     f"{time.perf_counter() - start:.2g} s)")
                 if row.wall_time_s > slow or row.status == Status.TIME_LIMIT:
                     too_slow = f"{label} {text} took {row.wall_time_s:.3g} s"
@@ -290,10 +291,11 @@ def _model(system, backend):
     return numeric_model(system, backend=backend)
 
 
-def _reference(model, y0, t_span, quick, digits, say):
+def _reference(model, y0, t_span, quick, digits, progress):
     """(y_ref at t_end, its error estimate, wall time, description, digits)."""
     from nhham.numerics.reference import reference_solution
 
+    say = _say if progress else (lambda *a, **k: None)
     t0, t1 = t_span
     _check_start(model, y0, t0)
     start = time.perf_counter()
@@ -313,14 +315,16 @@ def _reference(model, y0, t_span, quick, digits, say):
                 f"error estimated by a run at 10x the tolerance)")
         digits = 16
     else:
-        say(f"  reference: mpmath {digits} digits ...", end="")
-        ref = reference_solution(model, y0, t_span, digits=digits, t_eval=[t1])
+        say(f"  reference: mpmath {digits} digits (minutes on larger systems; --quick: "
+            f"seconds) ...")
+        ref = reference_solution(model, y0, t_span, digits=digits, t_eval=[t1],
+                                 progress=progress)
         if ref.status != 0 or not len(ref.t):
             raise _reference_failure(model, ref.status, ref.message, None, None)
         y_ref, error = ref.y[:, -1], ref.error_estimate
         text = f"mpmath {digits} digits (Gragg-Bulirsch-Stoer extrapolation)"
     wall = time.perf_counter() - start
-    say(f" {wall:.3g} s")
+    say(f"{'' if quick else '  reference:'} {wall:.3g} s")
     return y_ref, error, wall, text, digits
 
 
