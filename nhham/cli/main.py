@@ -486,7 +486,8 @@ def cmd_simulate(args, steps) -> CommandOutput:
     failure = None
     if not result.success:
         free = ()
-        if int(result.status) == -3:
+        found = result.singularity
+        if found.part == "C" if found is not None else int(result.status) == -3:
             free = _free_multipliers(scene.system)
         failure = simulation_failure(result, str(args.scene), free)
     def text():  # the warnings go to stderr, one line each

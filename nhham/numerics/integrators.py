@@ -402,11 +402,15 @@ def _compiled_rattle(model, st, y0, t0, t1, h, recorder, composition, progress, 
     so that signals are handled, and when the recorder's room is full)."""
     N, h = _grid(t0, t1, h)
     y = np.array(y0, dtype=float)
-    lam = np.append(st.guess_lambda(y), 0.0)
+    recorder.add(t0, y)
+    try:
+        lam = np.append(st.guess_lambda(y), 0.0)
+    except NumericalFailure as exc:  # the field is singular at the initial state
+        T, Y, _ = recorder.result(2 * model.n)
+        return Run(T, Y, None, exc.status, str(exc), st.nfev, 0, step=h)
     wsp = np.empty(2 * model.n * model.n)
     info = np.zeros(3, dtype=np.int64)  # steps done, Newton iterations, rows stored
     pointer = model.parameter_block().pointer
-    recorder.add(t0, y)
     first, reported = True, 0
     while True:
         before = int(info[0])

@@ -155,3 +155,15 @@ def test_precision_reaches_the_hamiltonian_side():
                "--precision", "30", "--json")
     assert proc.returncode == 0, proc.stderr
     assert json.loads(proc.stdout)["result"]["side"] == "hamiltonian"
+
+
+@pytest.mark.parametrize("method", ["rattle", "Radau"])
+def test_free_multiplier_named_whatever_the_method(method):
+    """Paper Example 3.1 with RATTLE (the multiplier guess at the initial state fails) and
+    Radau (its batched Jacobian reports the failure as non-finite): exit 3, one line
+    naming lambda_1, never exit 1."""
+    args = ["--step", "0.1"] if method == "rattle" else []
+    proc = run("simulate", EXAMPLES / "paper_3_1.toml", "--method", method, *args)
+    assert proc.returncode == 3, proc.stderr
+    assert_clean_lines(proc.stderr)
+    assert "free multiplier lambda_1" in proc.stderr.splitlines()[-1]
