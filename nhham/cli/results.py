@@ -440,8 +440,10 @@ def simulation_failure(result, scene_path: str, free_multipliers=()) -> str:
         return (f"simulation stopped {where}: the state became non-finite; check the "
                 f"parameters and [initial] data, or try a smaller --max-step")
     if code == -4:
-        return (f"simulation stopped {where}: the projection onto the constraints did not "
-                f"converge; try a smaller --step or --rtol")
+        todo = ("a smaller --step" if result.settings.get("step") is not None else
+                "a smaller --rtol or --max-step")
+        return (f"simulation stopped {where}: the Newton iteration of the step (or of the "
+                f"projection onto the constraints) did not converge; try {todo}")
     stiff = "" if result.method in ("Radau", "BDF", "LSODA") else "--method Radau or "
     return f"simulation stopped {where}: {result.message}; try {stiff}a looser --rtol"
 
