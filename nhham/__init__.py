@@ -24,11 +24,13 @@ imports the numerical integrators.
 """
 
 from nhham.errors import (
+    BudgetExceeded,
     ComputationError,
     InconsistentInitialDataError,
     InputError,
     MissingParameterValueError,
     NhhamError,
+    NhhamWarning,
     NonAffineConstraintError,
     OptionalDependencyError,
     ParseError,
@@ -87,6 +89,8 @@ _LAZY = {
     "simulate": "numerics.integrate",
     "SimulationResult": "numerics.integrate",
     "work_precision": "numerics.workprecision",
+    # a bound on the time of a computation (the command's --budget)
+    "time_budget": "budget",
     # input and output
     "load_scene": "system.scene",
     "loads_scene": "system.scene",
@@ -118,6 +122,8 @@ __all__ = [
     "InconsistentInitialDataError",
     "OptionalDependencyError",
     "ComputationError",
+    "BudgetExceeded",
+    "NhhamWarning",
     *_LAZY,
 ]
 

@@ -2,7 +2,7 @@
 
 :func:`run` loads the command inside a Ctrl-C handler: the imports (sympy, numpy) take
 about a second, and an interrupt there ends as one later does, with one line and exit
-status 130 (``EXIT_INTERRUPTED`` of :mod:`nhham.cli.main`), not a traceback. After an
+status 130 (``EXIT_INTERRUPTED`` of :mod:`nhham.cli.envelope`), not a traceback. After an
 interrupt or a stop (status 130 or 3: Ctrl-C, ``--budget``, a failed computation) the
 process ends at once: tearing down a large symbolic model object by object takes seconds,
 and nothing is left to do.

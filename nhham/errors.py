@@ -3,14 +3,23 @@
 Every error the library raises on purpose derives from :class:`NhhamError`.
 :class:`InputError` and its subclasses mean "the user's input is wrong" (the
 command exits with status 2); anything else rooted at :class:`NhhamError` is a
-failure to compute (status 1).
+failure to compute (status 1). :class:`UsageError` is the command line's
+share of bad input.
+
+Every error may carry the key path or option it is about (``constraints[1]``,
+``parameters.m``, ``--atol``) as :attr:`NhhamError.key`; the command's JSON
+envelope reports it as ``error.key``. Collected problems (``problems``) are each
+``"<key>: <what is wrong>"`` and the first one's key is the error's.
 """
 
 from __future__ import annotations
 
+import re
+
 __all__ = [
     "NhhamError",
     "InputError",
+    "UsageError",
     "ParseError",
     "SceneError",
     "ValidationError",
@@ -20,16 +29,55 @@ __all__ = [
     "MissingParameterValueError",
     "InconsistentInitialDataError",
     "ComputationError",
+    "BudgetExceeded",
+    "ClosedFormTooLarge",
+    "EmptySubmanifoldError",
+    "NhhamWarning",
     "OptionalDependencyError",
+    "key_of",
 ]
+
+# The key path a problem starts with: ``constraints[1]: ...``, ``parameters.m: ...``,
+# ``holonomic[0] (time derivative): ...``, ``--atol: ...``.
+_LEADING_KEY = re.compile(r"^(--[a-z][a-z-]*|[^\W\d][\w-]*(?:\[\d+\]|\.[\w\"-]+)*)"
+                          r"(?: \([^)]*\))?: ")
+
+
+def key_of(problem: str) -> str | None:
+    """The key path a one-line problem starts with, or None.
+
+    >>> key_of("constraints[1]: unknown name 'R'")
+    'constraints[1]'
+    >>> key_of("holonomic[0] (time derivative): 0.5 at the initial state")
+    'holonomic[0]'
+    >>> key_of("the constraints are inconsistent") is None
+    True
+    """
+    match = _LEADING_KEY.match(str(problem))
+    return match.group(1) if match else None
 
 
 class NhhamError(Exception):
-    """Root of every exception nhham raises on purpose."""
+    """Root of every exception nhham raises on purpose.
+
+    Parameters
+    ----------
+    message : str
+    key : str, optional
+        The key path or option the error is about, when one is known.
+    """
+
+    def __init__(self, message: str = "", *, key: str | None = None):
+        super().__init__(message)
+        self.key = key
 
 
 class InputError(NhhamError):
     """The user's input (system description, scene, options) is invalid."""
+
+
+class UsageError(InputError):
+    """The command line is invalid: an unknown option, a value out of its range."""
 
 
 class ParseError(InputError):
@@ -50,13 +98,14 @@ class ValidationError(InputError):
         Validation collects all problems before raising once.
     """
 
-    def __init__(self, problems):
+    def __init__(self, problems, *, key: str | None = None):
         self.problems = tuple(problems)
         if len(self.problems) == 1:
             message = self.problems[0]
         else:
             message = f"{len(self.problems)} problems: " + "; ".join(self.problems)
-        super().__init__(message)
+        first = key_of(self.problems[0]) if self.problems else None
+        super().__init__(message, key=key if key is not None else first)
 
 
 class SingularLagrangianError(ValidationError):
@@ -68,7 +117,14 @@ class NonAffineConstraintError(ValidationError):
 
 
 class RedundantConstraintError(ValidationError):
-    """The constraint one-forms mu_i are linearly dependent."""
+    """The constraint one-forms mu_i are linearly dependent.
+
+    A problem that dropping the constraint would solve ends with :attr:`ADVICE`
+    (the command says ``--drop-redundant`` instead).
+    """
+
+    #: How the Python API drops a redundant velocity constraint.
+    ADVICE = "pass drop_redundant=True to drop it"
 
 
 class MissingParameterValueError(InputError):
@@ -85,3 +141,25 @@ class OptionalDependencyError(InputError, ImportError):
 
 class ComputationError(NhhamError):
     """A computation could not be carried out (not the user's fault)."""
+
+
+class BudgetExceeded(NhhamError):
+    """A time budget (``nhham.time_budget``, the command's ``--budget``) ran out."""
+
+
+class ClosedFormTooLarge(ComputationError):
+    """A closed form (a symbolic solve with C) refused by the size guard; the message
+    names the implicit form to use instead and how to ask for the closed form anyway."""
+
+
+class NhhamWarning(UserWarning):
+    """A result or a request that deserves the user's attention (not an error)."""
+
+
+class EmptySubmanifoldError(InputError, ComputationError):
+    """No point of a constraint submanifold M_k was found: it is most likely empty.
+
+    Reported as bad input (the command exits 2: the usual cause is a holonomic
+    constraint without a real solution), and still a :class:`ComputationError` for
+    the constraint algorithm, which records an empty M_k as an inconsistency.
+    """

@@ -2,11 +2,13 @@
 
 Contract (see :mod:`nhham.cli.envelope` and ``docs/cli.rst``): ``--json``
 prints exactly one JSON envelope ``{command, nhham_version, scene, result,
-warnings}`` on stdout. Exit status 0 on success, 1 on an internal failure
-(traceback only with ``--debug``), 2 on bad input or usage (one line on
-stderr), 3 when the command ran but its computation did not succeed or
-``--budget`` ran out (one line on stderr saying why and what to do; a
-simulation's JSON envelope is still printed), 130 after Ctrl-C.
+warnings, error}`` on stdout, whatever the exit status. Exit status 0 on success,
+1 on an internal failure (traceback only with ``--debug``), 2 on bad input or
+usage (one line on stderr; the options are checked by
+:func:`nhham.cli.options.check_options` before any work), 3 when the command ran
+but its computation did not succeed or ``--budget`` ran out (one line on stderr
+saying why and what to do), 130 after Ctrl-C. A failure's envelope has ``error`` = ``{kind,
+message, key}`` and, unless the command ran to its end, a null ``result``.
 Warnings are one line each: in the envelope with ``--json``, else on stderr.
 
 Each command derives only what its output needs; ``--verbose`` lists what
@@ -18,27 +20,28 @@ to :data:`COMMANDS` and its options in :func:`build_parser`.
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import sys
 import traceback
 
 from nhham.cli.budget import BudgetExceeded, time_budget
 from nhham.cli.envelope import (
-    EXIT_INPUT,
-    EXIT_INTERNAL,
     EXIT_NOT_SUCCEEDED,
     EXIT_OK,
     CommandOutput,
+    FailureReport,
     capture_warnings,
     envelope,
+    error_info,
     one_line,
+    print_json,
     scene_info,
 )
 from nhham.cli.linearize import LINEARIZE_HELP, cmd_linearize
 from nhham.cli.linearize import add_arguments as add_linearize_arguments
+from nhham.cli.options import DEFAULT_BUDGET, argparse_key, budget_value, check_options
 from nhham.cli.report import Steps, expr_text, table
-from nhham.errors import InputError, NhhamError
+from nhham.errors import InputError, NhhamError, UsageError
 
 __all__ = ["main", "build_parser", "COMMANDS", "METHODS"]
 
@@ -49,13 +52,21 @@ FIXED_STEP = ("rattle", "rattle4", "rk4")
 
 
 def _load(args, steps, drop_redundant=False):
+    from nhham.errors import RedundantConstraintError
     from nhham.system.scene import load_scene
 
     # With --project-initial the initial data are projected later, not refused here.
     check = not getattr(args, "project_initial", False)
     with steps.step(f"load scene {args.scene}"):
-        return load_scene(args.scene, check_initial=check, drop_redundant=drop_redundant
-                          or getattr(args, "drop_redundant", False))
+        try:
+            scene = load_scene(args.scene, check_initial=check, drop_redundant=drop_redundant
+                               or getattr(args, "drop_redundant", False))
+        except RedundantConstraintError as exc:  # the command's way to drop it
+            raise RedundantConstraintError(
+                [p.replace(exc.ADVICE, "run with --drop-redundant to drop it")
+                 for p in exc.problems]) from None
+    args.loaded_scene = scene  # the envelope of a later failure names the scene
+    return scene
 
 
 def _title(scene, args) -> str:
@@ -81,8 +92,6 @@ def _at_values(args, steps, scene, classes=None):
     with steps.step("constraint algorithm at the parameter values (stages, ranks, decisions "
                     "at exact points, integrability, exceptional parameter sets)"):
         at = classification_at_values(scene.system, precision=args.precision, classes=classes)
-    for note in at.notes:
-        steps.note(f"parameter values: {note}")
     if at.verdict.status == "invalid":
         raise InputError(f"{args.scene}: at the parameter values {at.verdict.note}")
     return at
@@ -167,7 +176,8 @@ def _classify_parametric(args, steps, scene) -> CommandOutput:
     with steps.step("verdicts for every parameter value (generic run, exceptional sets, "
                     "one run per case)"):
         pv = parametric_classification(
-            scene.system, positive=positive, max_depth=args.depth, precision=args.precision,
+            scene.system, positive=positive, max_depth=3 if args.depth is None else args.depth,
+            precision=args.precision,
             classes=lambda a: classify_constraints(a, precision=args.precision))
 
     def verdict_data(v):
@@ -236,7 +246,7 @@ def cmd_derive(args, steps) -> CommandOutput:
     if args.side == "hamiltonian":
         from nhham.hamiltonian.side import hamiltonian_side
 
-        side = hamiltonian_side(system, precision=args.precision)
+        side = hamiltonian_side(system, precision=args.precision, closed_form=True)
         with steps.step("Legendre map and Hamiltonian H = E_L o Leg^-1"):
             side.energy
         out = _derive_closed_form(args, steps, scene, side, "hamiltonian", side.analysis)
@@ -246,7 +256,9 @@ def cmd_derive(args, steps) -> CommandOutput:
     from nhham.lagrangian.analysis import analyze_constraints
     from nhham.lagrangian.geometry import lagrangian_geometry
 
-    G = lagrangian_geometry(system, precision=args.precision)
+    # derive forms closed forms only where it decided to (W cheap, or --explicit asked):
+    # its --budget bounds them, not the library's size guard.
+    G = lagrangian_geometry(system, precision=args.precision, closed_form=True)
     with steps.step("energy E_L"):
         energy = G.energy
     with steps.step("implicit form: W, F, mu and mu a = -(dphi/dq) v"):
@@ -384,7 +396,8 @@ def cmd_compare(args, steps) -> CommandOutput:
     at = _at_scene_values(args, steps, scene)
     system = scene.system if at is None else at.system
     # One T*Q side for both checks: its numeric layer is built once.
-    side = hamiltonian_side(system, precision=args.precision, samples=args.samples)
+    side = hamiltonian_side(system, precision=args.precision, samples=args.samples,
+                            closed_form=True)
     with steps.step("cross-check through the Legendre map"):
         report = cross_check(system, precision=args.precision, samples=args.samples,
                              side=side)
@@ -416,6 +429,8 @@ def cmd_compare(args, steps) -> CommandOutput:
 # ---------------------------------------------------------------- simulate
 def _simulate_options(args, scene):
     """The scene's [simulate] table overridden by the command line, checked."""
+    from nhham.system.scene import simulate_option_problem
+
     opts = scene.simulate.given()
     given = {k: getattr(args, k) for k in ("method", "rtol", "atol", "step", "t_end", "max_step",
                                            "save_every", "max_points")
@@ -424,29 +439,37 @@ def _simulate_options(args, scene):
     method = opts.get("method", "DOP853")
     if method not in METHODS:
         raise InputError(f"method {method!r} (from the scene's [simulate] table) is not one of "
-                         f"{', '.join(METHODS)}")
+                         f"{', '.join(METHODS)}", key="simulate.method")
     if method in FIXED_STEP and opts.get("step") is None:
-        raise InputError(f"--method {method} is a fixed-step method and needs --step DT "
-                         f"(e.g. --step 0.01)")
+        raise UsageError(f"--method {method} is a fixed-step method and needs --step DT "
+                         f"(e.g. --step 0.01)", key="--step")
     if method not in FIXED_STEP and "step" in given:
-        raise InputError(f"--step applies to the fixed-step methods ({', '.join(FIXED_STEP)}), "
-                         f"not to {method}; use --max-step to bound its steps")
-    if method in FIXED_STEP:
+        raise UsageError(f"--step applies to the fixed-step methods ({', '.join(FIXED_STEP)}), "
+                         f"not to {method}" + ("" if method == "reference" else
+                                               "; use --max-step to bound its steps"),
+                         key="--step")
+    if method in FIXED_STEP or method == "reference":
+        # The reference integrates to its own digits: tolerances would be ignored.
         for key in ("rtol", "atol", "max_step"):
             if key in given:
-                raise InputError(f"--{key.replace('_', '-')} applies to the adaptive methods, "
-                                 f"not to the fixed-step {method}; choose its --step instead")
+                option = "--" + key.replace("_", "-")
+                raise UsageError(f"{option} applies to the adaptive methods, not to "
+                                 + (f"the fixed-step {method}; choose its --step instead"
+                                    if method in FIXED_STEP else
+                                    "reference, which integrates to 30 digits"), key=option)
             opts.pop(key, None)
     else:
         opts.pop("step", None)
-    for key, least in (("save_every", 1), ("max_points", 2)):
-        if key in given and given[key] < least:
-            raise InputError(f"--{key.replace('_', '-')} must be at least {least}, "
-                             f"got {given[key]}")
+    if "step" in opts:
+        where = "--step" if "step" in given else "simulate.step"
+        problem = simulate_option_problem("step", opts["step"], opts.get("t_end", 10.0))
+        if problem:
+            raise (UsageError if "step" in given else InputError)(f"{where}: {problem}",
+                                                                   key=where)
     if getattr(args, "projection", False):
         if method in ("rattle", "rattle4", "reference"):
-            raise InputError(f"--projection: {method} keeps the constraints itself; "
-                             f"use it without --projection")
+            raise UsageError(f"--projection: {method} keeps the constraints itself; "
+                             f"use it without --projection", key="--projection")
         opts["projection"] = True
     t_end = opts.pop("t_end", 10.0)
     return t_end, opts
@@ -585,11 +608,11 @@ _EXIT_TEXT = ("exit status: 0 success; 1 internal failure; 2 bad input or usage;
 
 
 class _Parser(argparse.ArgumentParser):
-    """Usage errors as one line on stderr (exit status 2), pointing to --help."""
+    """Usage errors as a :class:`UsageError` (one line, exit status 2), pointing to --help."""
 
     def error(self, message):
-        self.exit(EXIT_INPUT, f"{self.prog}: error: {one_line(message)} "
-                              f"(see `{self.prog} --help`)\n")
+        raise UsageError(f"{one_line(message)} (see `{self.prog} --help`)",
+                         key=argparse_key(message))
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -609,7 +632,7 @@ def build_parser() -> argparse.ArgumentParser:
         p = sub.add_parser(name, help=short, description=long,
                            epilog=f"example: {example}\n{_EXIT_TEXT}",
                            formatter_class=argparse.RawDescriptionHelpFormatter)
-        add_common_arguments(p)
+        add_common_arguments(p, budget=None if name in ("simulate", "bench") else DEFAULT_BUDGET)
         if name in ("classify", "derive", "compare"):
             p.add_argument("--precision", type=int, default=None, metavar="DIGITS",
                            help="decide ranks and vanishings that need sampling with mpmath at "
@@ -624,7 +647,7 @@ def build_parser() -> argparse.ArgumentParser:
             p.add_argument("--positive", default=None, metavar="NAMES",
                            help="with --parametric: comma-separated parameters declared "
                                 "positive; conditions without a real solution are dropped")
-            p.add_argument("--depth", type=int, default=3, metavar="N",
+            p.add_argument("--depth", type=int, default=None, metavar="N",
                            help="with --parametric: bound on the nesting of cases (default: 3)")
         if name in ("derive", "compare", "simulate", "bench"):
             p.add_argument("--drop-redundant", action="store_true",
@@ -708,8 +731,12 @@ def _unknown_options(parser, command, extra) -> str:
     return "; ".join(dict.fromkeys(words))
 
 
-def add_common_arguments(p: argparse.ArgumentParser) -> None:
-    """The arguments every subcommand has (for new subcommands too)."""
+def add_common_arguments(p: argparse.ArgumentParser, budget: float | None = None) -> None:
+    """The arguments every subcommand has (for new subcommands too).
+
+    ``budget``: the default ``--budget`` in seconds (None: no bound); symbolic work
+    has one, so that no input keeps the command busy without end.
+    """
     p.add_argument("scene", help="scene file (TOML); see examples/")
     p.add_argument("--json", action="store_true",
                    help="print one JSON envelope {command, nhham_version, scene, result, "
@@ -717,50 +744,57 @@ def add_common_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--verbose", action="store_true",
                    help="list on stderr what was derived, how decisions were made, and timings")
     p.add_argument("--debug", action="store_true", help="tracebacks for internal errors")
-    p.add_argument("--budget", type=float, default=None, metavar="SECONDS",
-                   help="stop after SECONDS and say what was decided so far (exit 3; "
-                        "default: no bound)")
-
-
-#: Exit status after Ctrl-C (128 + SIGINT, as shells report it), at any point of a command.
-EXIT_INTERRUPTED = 130
+    p.add_argument("--budget", type=budget_value, default=budget, metavar="SECONDS",
+                   help="stop after SECONDS and say what was decided so far (exit 3); "
+                        "'none': no bound (default: "
+                        + ("no bound" if budget is None else f"{budget:g}") + ")")
 
 
 def main(argv=None) -> int:
     """Run the command; returns the exit status."""
+    argv = sys.argv[1:] if argv is None else list(argv)
     parser = build_parser()
-    args, extra = parser.parse_known_args(argv)
-    if extra:
-        print(f"nhham {args.command}: error: {_unknown_options(parser, args.command, extra)} "
-              f"(see `nhham {args.command} --help`)", file=sys.stderr)
-        return EXIT_INPUT
-    use_json = getattr(args, "json", False)
-    steps = Steps(progress=sys.stderr.isatty() and not use_json)
+    words = [a for a in argv if a in COMMANDS]
+    # Where failures are reported, as far as the command line was understood.
+    run = FailureReport(command=words[0] if words else None, json="--json" in argv)
     try:
-        with capture_warnings() as caught, time_budget(getattr(args, "budget", None), steps):
+        args, extra = parser.parse_known_args(argv)
+        # Once the scene has loaded (_load), a failure's envelope names it.
+        run = FailureReport(command=args.command, json=args.json,
+                            scene=lambda: getattr(args, "loaded_scene", None))
+        if extra:
+            raise UsageError(f"{_unknown_options(parser, args.command, extra)} "
+                             f"(see `nhham {args.command} --help`)",
+                             key=next((e.split("=")[0] for e in extra if e.startswith("-")),
+                                      None))
+        check_options(args)
+    except UsageError as exc:
+        prefix = f"nhham {run.command}: error: " if run.command else "nhham: error: "
+        return run.fail("usage", str(exc), exc.key, prefix=prefix)
+    steps = Steps(progress=sys.stderr.isatty() and not run.json)
+    try:
+        with capture_warnings() as caught, time_budget(args.budget, steps):
             out = COMMANDS[args.command](args, steps)
             if not isinstance(out, CommandOutput):  # a plain dict (JSON) or text
                 out = CommandOutput(result=out if isinstance(out, dict) else {},
                                     text=out if isinstance(out, str) else "")
-            text = None if use_json else out.render_text()
+            text = None if run.json else out.render_text()
     except BudgetExceeded as exc:
-        print(f"nhham: {one_line(exc)}; finished before it: {steps.decided()}; "
-              f"allow more with a larger --budget", file=sys.stderr)
-        return EXIT_NOT_SUCCEEDED
+        return run.fail("budget", f"{exc}; finished before it: {steps.decided()}; allow more "
+                                  f"with a larger --budget (or --budget none)", prefix="nhham: ",
+                        warnings=caught)
     except InputError as exc:
-        print(f"nhham: error: {one_line(exc)}", file=sys.stderr)
-        return EXIT_INPUT
+        return run.fail("usage" if isinstance(exc, UsageError) else "input", str(exc), exc.key,
+                        warnings=caught)
     except KeyboardInterrupt:
-        print("nhham: interrupted", file=sys.stderr)
-        return EXIT_INTERRUPTED
+        return run.fail("interrupted", "interrupted", prefix="nhham: ", warnings=caught)
     except Exception as exc:  # internal failure: say so, traceback on request
-        if getattr(args, "debug", False):
+        if args.debug:
             traceback.print_exc()
         kind = "internal error" if not isinstance(exc, NhhamError) else "failed"
-        print(f"nhham: {kind}: {type(exc).__name__}: {one_line(exc)}"
-              + ("" if getattr(args, "debug", False) else " (run with --debug for a traceback)"),
-              file=sys.stderr)
-        return EXIT_INTERNAL
+        return run.fail("internal", f"{type(exc).__name__}: {exc}"
+                        + ("" if args.debug else " (run with --debug for a traceback)"),
+                        prefix=f"nhham: {kind}: ", warnings=caught)
     warnings = list(out.warnings) + [w for w in caught if w not in out.warnings]
     try:
         return _print_output(args, out, text, warnings, steps)
@@ -770,9 +804,10 @@ def main(argv=None) -> int:
 
 
 def _print_output(args, out, text, warnings, steps) -> int:
+    error = None if not out.failure else error_info("failed", out.failure)
     if getattr(args, "json", False):
-        print(json.dumps(envelope(args.command, out.result, scene=out.scene, warnings=warnings),
-                         indent=2, allow_nan=False))
+        print_json(envelope(args.command, out.result, scene=out.scene, warnings=warnings,
+                            error=error))
     else:
         print(text)
         for w in dict.fromkeys(one_line(w) for w in warnings):

@@ -69,6 +69,7 @@ def classify_data(analysis, classes=None) -> dict:
         "free_multiplier_symbols": [s.name for s in analysis.free_multiplier_symbols],
         "redundant": [d.label for d in analysis.dropped],
         "integrable": analysis.integrable,
+        "affine_parts": not system.is_linear,
         "first_class": None if classes is None else int(classes.first_class),
         "second_class": None if classes is None else int(classes.second_class),
         "second_class_set": [] if classes is None else list(classes.second_class_set),
@@ -82,6 +83,18 @@ def classify_warnings(analysis, classes=None) -> list:
                                       list(getattr(classes, "warnings", ())))
 
 
+def _integrable_text(data: dict) -> str:
+    """What the Frobenius test of ker mu says about the constraints themselves."""
+    verdict = data["integrable"]
+    if verdict is None:
+        return "undecided"
+    if not verdict:
+        return "no (truly nonholonomic)"
+    if data["affine_parts"]:
+        return "yes, the linear parts (affine h(q) != 0: rheonomic, not holonomic)"
+    return "yes (holonomic in disguise)"
+
+
 def classify_text(title: str, data: dict) -> str:
     lines = [f"{title}: n = {data['n']} coordinates, m = {data['m']} velocity constraints"]
     free = data["free_multipliers"]
@@ -93,8 +106,7 @@ def classify_text(title: str, data: dict) -> str:
         ("free multipliers", f"{free}" + (f" ({', '.join(data['free_multiplier_symbols'])})"
                                           if free else "")),
         ("redundant (dropped)", ", ".join(data["redundant"]) or "none"),
-        ("integrable (holonomic)", {True: "yes", False: "no", None: "undecided"}[
-            data["integrable"]]),
+        ("integrable (Frobenius)", _integrable_text(data)),
     ]
     if data["first_class"] is not None:
         rows += [("first class", str(data["first_class"])),
@@ -326,6 +338,7 @@ def compare_text(title: str, report, dirac) -> str:
     lines = [f"{title}: Lagrangian vs Hamiltonian", report.describe()]
     if dirac is not None:
         lines.append(dirac.describe())
+        lines += [f"  note: {n}" for n in dirac.notes]
     return "\n".join(lines)
 
 

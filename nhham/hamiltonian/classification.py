@@ -56,6 +56,7 @@ from nhham.lagrangian.points import (
 )
 from nhham.lagrangian.submanifold import Decision, Submanifold
 from nhham.lagrangian.tangency import MAX_POINTS, TARGET_ERROR
+from nhham.system.expressions import short
 
 __all__ = [
     "ConstraintClasses",
@@ -559,7 +560,8 @@ def _classify_exact(side, cons, labels, analysis, tol):
     decisions["rank"] = rank_d
     r = int(rank_d.value)
     samples_B = _sample_matrix(Mf, Br) if r else ()
-    R = _principal_pivots(Br, samples_B, r, tol)
+    R = _principal_pivots(Br, samples_B, r, tol,
+                          nonzero=lambda e: not Mf.vanishes(cancel(e), tol=tol).value)
     gammas, coeff_dicts = [], []
     inv = block_inverse(Br.extract(R, R)) if R else sp.zeros(0, 0)
     for kk in (i for i in range(k) if i not in R):
@@ -604,13 +606,18 @@ def _sample_matrix(Mf: Submanifold, matrix: sp.Matrix):
     f = Lambdified(args, list(matrix), matrix.shape)
     be = Backend(None)
     out = []
-    for pt in points:
-        out.append(f(be, [float(pt[s]) for s in args]))
+    with np.errstate(all="ignore"):  # a singular point gives inf or nan, read by callers
+        for pt in points:
+            out.append(f(be, [float(pt[s]) for s in args]))
     return out
 
 
-def _principal_pivots(Br: sp.Matrix, samples, r: int, tol) -> list:
-    """A principal index set R, |R| = r, with B_RR invertible (grown two at a time)."""
+def _principal_pivots(Br: sp.Matrix, samples, r: int, tol, nonzero=None) -> list:
+    """A principal index set R, |R| = r, with B_RR invertible (grown two at a time).
+
+    Invertibility is read off the samples; where they cannot show it (the parameter
+    values put every sample on the exceptional set of a generic decision), ``nonzero``
+    decides det B_RR exactly, as the generic rank was decided."""
     if r == 0:
         return []
     k = Br.rows
@@ -652,6 +659,13 @@ def _principal_pivots(Br: sp.Matrix, samples, r: int, tol) -> list:
                     break
             if grown:
                 break
+        if not grown and nonzero is not None:
+            trial = next((sorted(R + [a, b]) for a in range(k) for b in range(a + 1, k)
+                          if a not in R and b not in R
+                          and nonzero(Br.extract(sorted(R + [a, b]), sorted(R + [a, b])).det())),
+                         None)
+            if trial is not None:
+                R, grown = trial, True
         if not grown:
             raise ComputationError(
                 f"classification: no principal {len(R) + 2}x{len(R) + 2} block of the bracket "
@@ -831,11 +845,13 @@ class DiracProjectedReport:
         if self.difference is None:
             return ("the Dirac-bracket flow of H is NOT the true dynamics on M_f: "
                     + self.decisions[0].detail)
-        comps = [f"d/d{z}: {d}" for z, d in zip(self.classes.side.variables, self.difference)
-                 if d != 0]
+        comps = [f"d/d{z}: {short(d, 160)}" for z, d in zip(self.classes.side.variables,
+                                                              self.difference) if d != 0]
+        cut = any(len(str(d)) > 160 for d in self.difference)
         return ("the Dirac-bracket flow of H is NOT the true dynamics on M_f; X_D - X = "
                 + "; ".join(comps) + f" (max |X_D - X| = {self.max_abs_difference:.3g} at "
-                f"{self.samples} sample points)")
+                f"{self.samples} sample points" + ("; whole expressions with --json or "
+                                                    "--latex)" if cut else ")"))
 
     def to_dict(self) -> dict:
         return {"equal": self.equal,
@@ -880,7 +896,7 @@ def dirac_vs_projected(system, *, precision=None, samples=6, seed=SEED,
     """
     if side is None:
         side = classes.side if classes is not None else hamiltonian_side(
-            system, precision=precision, samples=samples, seed=seed)
+            system, precision=precision, samples=samples, seed=seed, closed_form=True)
     if classes is None:
         classes = classify_constraints(side, precision=precision, samples=samples, seed=seed,
                                        method=method, tol=tol)
@@ -900,12 +916,37 @@ def dirac_vs_projected(system, *, precision=None, samples=6, seed=SEED,
     Mf = classes.manifold
     decisions = tuple(Mf.vanishes(d, tol=tol) for d in diff)
     reduced = sp.Matrix([0 if d.value else e for d, e in zip(decisions, diff)])
+    notes = _gauge_note(classes)
+    at, generic = _at_parameter_values(Mf, reduced, tol, side.variables)
+    if at is not None:
+        # The verdict is for the scene's values; the generic difference is a note.
+        decisions, reduced = at
+        notes += (f"X_D - X vanishes at the parameter values but not for generic values "
+                  f"({generic})",)
     sampled = _sample_matrix(Mf, reduced) if reduced.rows else []
+    # A sample point on a singular set of the chart (the snakeboard at phi = +-pi/2)
+    # gives no value: it is left out, not reported as an infinite difference.
+    sampled = [S for S in sampled if np.all(np.isfinite(S))]
     worst = max((float(np.max(np.abs(S))) for S in sampled), default=0.0)
     return DiracProjectedReport(
         equal=all(d.value for d in decisions), difference=reduced, dirac_field=XD,
         projected_field=X, decisions=decisions, max_abs_difference=worst,
-        samples=len(sampled), notes=_gauge_note(classes), classes=classes)
+        samples=len(sampled), notes=notes, classes=classes)
+
+
+def _at_parameter_values(Mf, reduced, tol, variables):
+    """((decisions, reduced difference) at the system's parameter values, the generic
+    difference as text) when the values make a generically nonzero X_D - X vanish;
+    else (None, None)."""
+    values = Mf.system.exact_parameter_values
+    if not values or all(e == 0 for e in reduced):
+        return None, None
+    at_values = [cancel(e.xreplace(values)) for e in reduced]
+    decisions = tuple(Mf.vanishes(e, tol=tol) for e in at_values)
+    if not all(d.value for d in decisions):
+        return None, None
+    generic = "; ".join(f"d/d{z}: {e}" for z, e in zip(variables, reduced) if e != 0)
+    return (decisions, sp.zeros(*reduced.shape)), generic
 
 
 def _gauge_note(classes) -> tuple:

@@ -457,7 +457,10 @@ def cross_check(system, precision: int | None = None, samples: int = 6, seed: in
                          f"got {method!r}")
     start = time.perf_counter()
     if side is None:
-        side = hamiltonian_side(system, precision=precision, samples=samples, seed=seed)
+        # closed forms only where symbolic_affordable chose them
+        side = hamiltonian_side(system, precision=precision, samples=samples, seed=seed,
+                                closed_form=True)
+    requested, tol_given = method, tol
     sampler = None
     if method == "auto":
         method = "exact" if side.symbolic_affordable else "sampled"
@@ -466,17 +469,31 @@ def cross_check(system, precision: int | None = None, samples: int = 6, seed: in
             method = "points" if sampler is not None else "sampled"
     elif method == "points":
         sampler = _modular_sampler(system, side, samples, seed, required=True)
+    def float_sampler():
+        return _Sampler(system, tuple(system.holonomic) + tuple(system.phi), precision,
+                        samples, seed, tol_given if tol_given is not None else
+                        Backend(precision).default_tol(), exact=False)
+
     if method != "exact" and sampler is None:
-        sampler = _Sampler(system, tuple(system.holonomic) + tuple(system.phi), precision,
-                           samples, seed, tol if tol is not None else Backend(precision)
-                           .default_tol(), exact=False)
+        sampler = float_sampler()
     be = sampler.backend if sampler is not None else Backend(precision)
     tol = be.default_tol() if tol is None or method == "points" else float(tol)
     if method == "exact":
         checks, stages_L, stages_H, statuses, (npts, skipped) = _exact(
             system, side, precision, samples, seed, tol, max_stages)
     else:
-        got = _sampled(system, side, sampler)
+        try:
+            got = _sampled(system, side, sampler)
+        except NotExact as exc:
+            # The points are exact but a datum is not (a parameter value inside a sine):
+            # floating-point samples instead, as where M_1 has no exact points.
+            if requested == "points":
+                raise InputError(f"cross_check: method 'points' is not available: {exc}") \
+                    from None
+            sampler, method = float_sampler(), "sampled"
+            be = sampler.backend
+            tol = be.default_tol() if tol_given is None else float(tol_given)
+            got = _sampled(system, side, sampler)
         if got is None and method == "points":
             try:
                 got = _staged_at_points(system, side, samples, seed, max_stages)

@@ -36,7 +36,7 @@ from nhham.settings import SEED
 from nhham.hamiltonian.brackets import BivectorBracket, BracketAlgebra, numeric_bracket_matrix
 from nhham.errors import ComputationError
 from nhham.hamiltonian.legendre import Backend, Lambdified, LegendreMap, canonical_form_matrix
-from nhham.lagrangian.algebra import cancel, solve_linear
+from nhham.lagrangian.algebra import cancel, guard_closed_form, solve_linear
 from nhham.lagrangian.submanifold import Decision, Submanifold
 from nhham.system.description import System
 from nhham.system.expressions import derivative
@@ -53,7 +53,8 @@ __all__ = [
 
 
 def hamiltonian_side(system, precision: int | None = None, samples: int = 6,
-                     seed: int = SEED, exact: bool = True) -> "HamiltonianSide":
+                     seed: int = SEED, exact: bool = True,
+                     closed_form: bool = False) -> "HamiltonianSide":
     """The Hamiltonian-side objects of ``system`` (frozen, lazy).
 
     Parameters
@@ -65,8 +66,12 @@ def hamiltonian_side(system, precision: int | None = None, samples: int = 6,
         Number and seed of the sample points of sampled decisions.
     exact : bool, optional
         False: decisions on submanifolds of T*Q are taken at sample points only.
+    closed_form : bool, optional
+        As for :func:`nhham.lagrangian.geometry.lagrangian_geometry`: True forms the
+        closed forms that need a symbolic solve with C^H whatever their size.
     """
-    return HamiltonianSide(system, precision=precision, samples=samples, seed=seed, exact=exact)
+    return HamiltonianSide(system, precision=precision, samples=samples, seed=seed, exact=exact,
+                           closed_form=closed_form)
 
 
 #: The ``_H`` names of nhham 0.1 and the shared names that replace them.
@@ -93,8 +98,11 @@ class HamiltonianSide:
     samples: int
     seed: int
     exact: bool
+    closed_form: bool
 
-    def __init__(self, system, precision=None, samples=6, seed=SEED, exact=True):
+    def __init__(self, system, precision=None, samples=6, seed=SEED, exact=True,
+                 closed_form=False):
+        object.__setattr__(self, "closed_form", bool(closed_form))
         object.__setattr__(self, "system", system)
         object.__setattr__(self, "precision", precision)
         object.__setattr__(self, "samples", samples)
@@ -234,6 +242,8 @@ class HamiltonianSide:
         """
         if not self.m:
             return sp.zeros(0, 1)
+        if not self.closed_form:
+            guard_closed_form(self.constraint_matrix, "multipliers", "hamiltonian_side")
         return (-solve_linear(self.constraint_matrix.T, self.constraint_derivatives)).applyfunc(
             cancel)
 
@@ -249,6 +259,8 @@ class HamiltonianSide:
         """Q = (C^H)^{ij} Z_j^H (x) d phi_i^H as a (2n, 2n) matrix acting on columns."""
         if not self.m:
             return sp.zeros(2 * self.n, 2 * self.n)
+        if not self.closed_form:
+            guard_closed_form(self.constraint_matrix, "projector_Q", "hamiltonian_side")
         return (self.vertical_fields.T
                 * solve_linear(self.constraint_matrix.T, self.constraint_gradients)).applyfunc(cancel)
 

@@ -8,6 +8,7 @@
   an explicit symbolic inverse of anything large;
 - :func:`block_inverse`: the inverse of a small block (closed forms for 1x1
   and antisymmetric 2x2);
+- :func:`guard_closed_form`: the size guard in front of a symbolic solve with C.
 """
 
 from __future__ import annotations
@@ -16,7 +17,13 @@ from typing import Callable
 
 import sympy as sp
 
-__all__ = ["cancel", "tidy", "tidy_light", "trig_normal", "solve_linear", "block_inverse"]
+__all__ = ["cancel", "tidy", "tidy_light", "trig_normal", "solve_linear", "block_inverse",
+           "guard_closed_form", "CLOSED_FORM_OPS"]
+
+#: A symbolic solve with an m x m matrix (m >= 2) of more operations than this is refused
+#: unless asked for: the car with a trailer (n = 4, C of 547 operations) takes 30 s, the
+#: 3-D rolling disc (13,053) more than an hour; the rolling ball (82) 0.3 s.
+CLOSED_FORM_OPS = 300
 
 # Exceptions sympy's polynomial machinery raises on input it cannot treat as a
 # polynomial in its generators.
@@ -125,3 +132,32 @@ def block_inverse(B: sp.Matrix) -> sp.Matrix:
         b = B[0, 1]
         return sp.Matrix([[0, -1 / b], [1 / b, 0]])
     return B.inv(method="LU").applyfunc(cancel)
+
+
+def guard_closed_form(C: sp.Matrix, what: str, owner: str) -> None:
+    """Raise :class:`~nhham.errors.ClosedFormTooLarge` before a symbolic solve with ``C``
+    that would not finish in reasonable time (m >= 2 and more than CLOSED_FORM_OPS
+    operations in C).
+
+    Parameters
+    ----------
+    C : sympy.Matrix, shape (m, m)
+    what : str
+        The closed form asked for (``"multipliers"``).
+    owner : str
+        How the user built the object (``"lagrangian_geometry"``), for the advice.
+    """
+    from nhham.errors import ClosedFormTooLarge
+
+    if C.rows < 2:
+        return
+    ops = sum(sp.count_ops(e) for e in C)
+    if ops <= CLOSED_FORM_OPS:
+        return
+    raise ClosedFormTooLarge(
+        f"{owner}(...).{what}: the closed form needs a symbolic solve with C ({C.rows} x "
+        f"{C.cols}, {ops} operations, more than the {CLOSED_FORM_OPS} it is formed for by "
+        f"default), which may run for hours. Use the implicit form instead "
+        f"(W a + mu^T lambda = F, mu a = -(dphi/dq) v: .equations_of_motion, "
+        f"`nhham derive`), numbers (nhham.simulate), or ask for it with "
+        f"{owner}(system, closed_form=True), bounded by `with nhham.time_budget(seconds):`")

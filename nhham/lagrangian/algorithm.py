@@ -835,9 +835,15 @@ def _exactly_empty(M):
     """A reason why M is empty, proved by the reduction (a nonzero constant residual)."""
     if not M.exact:
         return None
+    state = set(M.system.coordinates) | set(M.system.velocities)
     for r in M.reduction.residual:
         if r.is_number and r != 0:
             return f"the reduction leaves the equation 0 = {r}"
+        if r != 0 and not r.free_symbols & state:
+            # Nonzero for generic parameters; where the parameter values make it vanish,
+            # the verdict at the values substitutes them (nhham.lagrangian.parametric).
+            return (f"the reduction leaves the equation 0 = {short(r)}, a nonzero function "
+                    f"of the parameters alone (exact)")
     return None
 
 

@@ -482,7 +482,7 @@ def _stage_one_at_points(view, geo, exprs, labels, lam, factory, opts):
     evidence = (
         Evidence("rank of (Z_i(chi_j)) on M_1", verdict.rank, f"rank {r}" + (
             "" if not r or geo.closed_form_affordable else
-            " (generic, proved at an exact point; it drops exactly where det W det C = "
+            f" ({_how_generic(verdict.rank)}; it drops exactly where det W det C = "
             "det [[W, mu^T], [mu, 0]] vanishes on M_1, not expanded at this size)")),
         Evidence("lambda-free conditions on M_1", verdict.consistent, "add nothing"),
     )
@@ -592,3 +592,12 @@ def _frozen_stage(run, k):
     return Stage(index=k, constraints=last.constraints, labels=last.labels,
                  new_constraints=(), new_labels=(), rank=last.rank,
                  augmented_rank=last.rank, block=last.block, conditions=(), decisions=())
+
+
+def _how_generic(decision) -> str:
+    """How a generic rank was found, in the words of its decision (never mixed)."""
+    if decision.method == "exact":
+        return "generic, proved at an exact point"
+    if decision.method == "exact at points":
+        return "generic, at random exact points with the stated error bound"
+    return f"at {decision.samples} seeded points ({decision.precision}), not proved"

@@ -32,7 +32,7 @@ import sympy as sp
 
 from nhham.settings import SEED
 from nhham.lagrangian.adjugate import ScaledInverse, scaled_inverse
-from nhham.lagrangian.algebra import solve_linear
+from nhham.lagrangian.algebra import guard_closed_form, solve_linear
 from nhham.lagrangian.submanifold import Decision, Submanifold
 from nhham.system.expressions import derivative
 from nhham.system.naming import acceleration_symbol, multiplier_symbol
@@ -70,7 +70,7 @@ class DynamicsIngredients:
 
 
 def lagrangian_geometry(system, precision: int | None = None, samples: int = 6,
-                        seed: int = SEED) -> "LagrangianGeometry":
+                        seed: int = SEED, closed_form: bool = False) -> "LagrangianGeometry":
     """The Lagrangian-side objects of ``system``, computed lazily.
 
     Parameters
@@ -81,8 +81,14 @@ def lagrangian_geometry(system, precision: int | None = None, samples: int = 6,
         mpmath digits).
     samples, seed : int, optional
         Number and seed of the sample points of sampled decisions.
+    closed_form : bool, optional
+        True: form the closed forms that need a symbolic solve with C (``multipliers``,
+        ``projected_field``, ``projector_Q``) whatever their size. False (default): refuse
+        them beyond a size guard (:func:`nhham.lagrangian.algebra.guard_closed_form`) with
+        a :class:`~nhham.errors.ClosedFormTooLarge` naming the implicit form.
     """
-    return LagrangianGeometry(system, precision=precision, samples=samples, seed=seed)
+    return LagrangianGeometry(system, precision=precision, samples=samples, seed=seed,
+                              closed_form=closed_form)
 
 
 class LagrangianGeometry:
@@ -99,8 +105,11 @@ class LagrangianGeometry:
     samples: int
     seed: int
     fast: bool
+    closed_form: bool
 
-    def __init__(self, system, precision=None, samples=6, seed=SEED, fast=True):
+    def __init__(self, system, precision=None, samples=6, seed=SEED, fast=True,
+                 closed_form=False):
+        object.__setattr__(self, "closed_form", bool(closed_form))
         object.__setattr__(self, "system", system)
         object.__setattr__(self, "precision", precision)
         object.__setattr__(self, "samples", samples)
@@ -451,6 +460,8 @@ class LagrangianGeometry:
         if self.m == 0:
             return sp.zeros(0, 1)
         C = self.constraint_matrix
+        if not self.closed_form:
+            guard_closed_form(C, "multipliers", "lagrangian_geometry")
         return -solve_linear(C.T, self.constraint_derivatives, simplify=None)
 
     @cached_property
@@ -471,6 +482,8 @@ class LagrangianGeometry:
         if self.m == 0:
             return sp.zeros(2 * self.n, 2 * self.n)
         C = self.constraint_matrix
+        if not self.closed_form:
+            guard_closed_form(C, "projector_Q", "lagrangian_geometry")
         return self.vertical_fields.T * solve_linear(C.T, self.constraint_gradients, simplify=None)
 
     @cached_property

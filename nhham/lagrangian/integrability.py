@@ -97,6 +97,19 @@ class Integrability:
     def __bool__(self):
         return bool(self.integrable)
 
+    @property
+    def generic(self) -> bool | None:
+        """The verdict for generic parameter values.
+
+        False also where an exact decision found a term that is a nonzero function but
+        vanishes at the given parameter values (``integrable`` is then None: the answer
+        at those values is decided by substituting them, :mod:`nhham.lagrangian.parametric`).
+        """
+        if self.integrable is None and any(
+                d.method == "exact" and d.value is False for _, d in self.decisions):
+            return False
+        return self.integrable
+
     @cached_property
     def first_integrals(self) -> tuple:
         """``(label, F)`` with dF = μ_i for every closed row μ_i (F None otherwise).

@@ -42,6 +42,7 @@ names, or sympy assumptions on the parameter symbols) are dropped and reported.
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import math
 import random
 from dataclasses import dataclass, field
@@ -71,6 +72,7 @@ from nhham.lagrangian.points import (
     field_det,
     field_solve,
     maximal_minors,
+    adjacent_column_sets,
 )
 from nhham.lagrangian.submanifold import Submanifold
 from nhham.settings import SEED
@@ -113,7 +115,7 @@ SHIFT_FIELD = RealField(200)
 # NEAR * FLOAT_MARGIN from vanishing: float64 with pivoting would need a rounding error
 # of 1e-4 relative to a datum's terms to move a distance below NEAR that far.
 FLOAT_MARGIN = 1e4
-# Beyond this many maximal minors of mu the redundancy data is not computed (noted).
+# Beyond this many maximal minors of mu, the m (n - m) + 1 next to the pivot block.
 MAX_MINORS = 120
 
 
@@ -350,9 +352,9 @@ class ValuesVerdict:
     system : System
         The system the verdict was computed on (the conditions substituted).
     warnings : tuple of str
-        Values near an exceptional set; the depth bound hit.
-    notes : tuple of str
-        What was not examined and why (no exact points, a datum not evaluable).
+        Values near an exceptional set; the depth bound hit; every check that was not
+        made and why (no exact points, a datum not evaluable): an unchecked answer is
+        not silently a checked one.
     """
 
     verdict: Verdict
@@ -360,7 +362,6 @@ class ValuesVerdict:
     conditions: tuple
     system: object = field(compare=False, repr=False)
     warnings: tuple = ()
-    notes: tuple = ()
 
     @property
     def differs(self) -> bool:
@@ -539,9 +540,14 @@ def classification_at_values(system, *, classes: Callable | None = None,
         verdict, _, more, hits, close = _examine(spec, (), values=rest, **opts)
         notes += more
         warnings += _close_warnings(close, rest)
+    if conditions and generic.analysis is not None:
+        # The generic verdict, not the one at the values: a Frobenius term that is a
+        # nonzero function vanishing at the values left ``integrable`` undecided there.
+        generic = dataclasses.replace(generic,
+                                      integrable=generic.analysis.integrability.generic)
     return ValuesVerdict(verdict, generic, tuple(conditions),
                          current if current is not None else system,
-                         tuple(dict.fromkeys(warnings)), tuple(dict.fromkeys(notes)))
+                         tuple(dict.fromkeys(warnings + notes)))
 
 
 def _close_warnings(close, values) -> list:
@@ -593,6 +599,10 @@ def _examine(system, params, *, classes, precision, seed, points, values=None,
     if classes is not None and analysis.status != "inconsistent":
         cls = classes(analysis)
     data = _Data(system, analysis, seed, points)
+    if cls is not None and tuple(cls.labels) == tuple(analysis.final_labels):
+        # The second-class set the classification chose (for generic parameters when it
+        # decided symbolically): at values where B drops rank its minor is the datum.
+        data.use_second_class_set(cls.second_class_indices)
     comps, hits, close = (), [], []
     if params:
         comps = _conditions(data.symbolic(tuple(params)), tuple(params))
@@ -605,7 +615,8 @@ def _examine(system, params, *, classes, precision, seed, points, values=None,
             K = QQ.frac_field(*params)
             rank = data.bracket_rank(data.env(gens=dict(zip(params, K.gens))), K)
         else:
-            rank = data.bracket_rank(data.env(), QQ)
+            # the ordinary classification's answer: for generic parameters
+            rank = data.bracket_rank(data.env(generic=True), QQ)
         first = second = None
         if analysis.status != "inconsistent" and rank is not None:
             first, second = len(analysis.final_constraints) - rank, rank
@@ -836,15 +847,12 @@ class _Data:
         out.append(("the Lagrangian is singular (det W = 0)", lambda env0, K: [
             field_det(self._matrix(K, self.W, env, self._memo(env)))
             for env in self._pts(m1, env0, K, 1)]))
-        if system.m and math.comb(system.n, system.m) <= MAX_MINORS:
+        if system.m:
             out.append(("the constraint one-forms become dependent (a constraint is "
                         "redundant)", lambda env0, K: self._mu_minors(m1, env0, K)))
-        elif system.m:
-            self.notes.append(f"redundancy data not computed "
-                              f"({math.comb(system.n, system.m)} maximal minors of mu)")
         for stage in stages:
             out += self._stage_items(stage)
-        if analysis.integrable is False and system.m and system.n - system.m > 1:
+        if analysis.integrability.generic is False and system.m and system.n - system.m > 1:
             out.append(("the constraint distribution becomes integrable",
                         lambda env0, K: self._frobenius(m1, env0, K)))
         if analysis.status != "inconsistent" and analysis.final_constraints:
@@ -861,7 +869,12 @@ class _Data:
             M = self._matrix(K, rows, env, self._memo(env))
             if not K.is_RealField:  # floating point reuses the exact pivot columns
                 self._pivots["mu"] = list(M.rref()[1])
-            vals += maximal_minors(M, self._pivots.get("mu"))
+            pivots = self._pivots.get("mu")
+            # Beyond MAX_MINORS, the minors next to the pivot block: they vanish together
+            # exactly where all do (rank mu < m), at a cost of m (n - m) + 1.
+            subsets = None if math.comb(system.n, m) <= MAX_MINORS or pivots is None or \
+                len(pivots) < m else adjacent_column_sets(pivots, system.n)
+            vals += maximal_minors(M, pivots, subsets)
         return vals
 
     def _stage_items(self, stage):
@@ -981,17 +994,20 @@ class _Data:
             self.notes.append(f"bracket matrix on M_f not evaluated exactly ({exc})")
             return None
 
+    def use_second_class_set(self, indices) -> None:
+        """Take the principal block of the bracket datum from a classification."""
+        self._pivots["R"] = list(indices)
+
     def _bracket_minor(self, env0, K):
-        mats = self._brackets(env0, K)
-        if "R" not in self._pivots and mats and mats[0].shape[0] and mats[0].det():
-            # Full rank at the first point (all second class, the usual case): the
-            # datum is det B itself, no elimination of a large rational matrix needed.
-            self._pivots["R"] = list(range(mats[0].shape[0]))
         if "R" not in self._pivots:
-            ranks = [B.rank() for B in mats]
-            r = max(ranks)
-            _, R = mats[ranks.index(r)].rref()
-            self._pivots["R"] = list(R)
+            # The principal block is chosen for generic parameters (modulo p, at random
+            # parameter values): at the given values its minor may vanish, which is the
+            # very event the datum detects.
+            with self._first_point_only():
+                (B,) = self._brackets(self.env(generic=True), MODULAR)
+            full = B.shape[0] and B.det()  # all second class, the usual case: no rref
+            self._pivots["R"] = list(range(B.shape[0])) if full else list(B.rref()[1])
+        mats = self._brackets(env0, K)
         R = self._pivots["R"]
         if not R:
             return []
@@ -1110,22 +1126,32 @@ class _Data:
 
 def _relative_distance(v0, nonzero, shifted, values) -> float:
     """Relative distance of the values to where a datum vanishes: over its nonzero terms,
-    the largest |P| / |grad P| (every term must vanish there), over |values|."""
-    scale = math.sqrt(sum(float(x) ** 2 for x in values.values())) or 1.0
+    the largest |P| / |grad P| (every term must vanish there), over |values|.
+
+    Scale-free: each term enters through its logarithmic derivative
+    (P(x + h) - P(x)) / (h P(x)), formed in the field of the values before it becomes
+    a float, so a determinant of a large system (|P| beyond 1e308 or below 1e-308) neither
+    overflows nor underflows. Raises ZeroDivisionError when a float64 value is not
+    usable (zero by underflow, or not finite): the caller then works in a wider field.
+    """
+    scale = math.hypot(*(float(x) for x in values.values())) or 1.0
     worst = 0.0
     for i, val in enumerate(v0):
         if not nonzero[i]:
             continue
-        grad = math.sqrt(sum(_difference(vals[i], val, h) ** 2 for h, vals in shifted.values()))
-        worst = max(worst, abs(float(val)) / grad if grad else math.inf)
+        slope = math.hypot(*(_log_slope(vals[i], val, h) for h, vals in shifted.values()))
+        worst = max(worst, 1.0 / slope if slope else math.inf)
     return worst / scale
 
 
-def _difference(moved, value, h) -> float:
-    """(moved - value) / h as a float, computed in the field of the values."""
-    if isinstance(moved, float):
-        return (moved - value) / float(h)
-    return float((moved - value) / (h if isinstance(moved, MPQ) else SHIFT_FIELD.convert(h)))
+def _log_slope(moved, value, h) -> float:
+    """(moved - value) / (h value) as a float, computed in the field of the values."""
+    if isinstance(value, float):
+        if value == 0.0 or not (math.isfinite(value) and math.isfinite(moved)):
+            raise ZeroDivisionError("a float64 value underflowed or overflowed")
+        return (moved / value - 1.0) / float(h)
+    step = h if isinstance(value, MPQ) else SHIFT_FIELD.convert(h)
+    return float((moved - value) / (step * value))
 
 
 # ============================================================ the components
@@ -1173,6 +1199,18 @@ def _components(values, params) -> list:
         eqs = tuple(_normal(sp.numer(sp.together(p - v))) for p, v in sol.items())
         out.append(tuple(sorted(eqs, key=sp.default_sort_key)))
     return out
+
+
+def _distance_to_zero(expr, at, syms) -> float:
+    """|e| / |grad e| at the exact point ``at``, formed exactly before it becomes a
+    float (a polynomial of high degree in large values would overflow float64)."""
+    grad2 = sum(sp.diff(expr, p).xreplace(at) ** 2 for p in syms)
+    if not grad2:
+        return math.inf
+    try:
+        return math.sqrt(float(expr.xreplace(at) ** 2 / grad2))
+    except OverflowError:
+        return math.inf
 
 
 def _normal(expr):
@@ -1388,13 +1426,8 @@ def _near_warnings(conds, values, near) -> list:
         at = {p: _exact(values[p]) for p in syms}
         if all(sp.sympify(e).xreplace(at) == 0 for e in eqs):
             continue
-        scale = math.sqrt(sum(float(at[p]) ** 2 for p in syms)) or 1.0
-        dist = 0.0
-        for e in eqs:
-            e = sp.sympify(e)
-            val = abs(float(e.xreplace(at)))
-            grad = math.sqrt(sum(float(sp.diff(e, p).xreplace(at)) ** 2 for p in syms))
-            dist = max(dist, val / grad if grad else math.inf)
+        scale = math.hypot(*(float(at[p]) for p in syms)) or 1.0
+        dist = max(_distance_to_zero(sp.sympify(e), at, syms) for e in eqs)
         rel = dist / scale
         if rel < near:
             out.append("the parameter values "

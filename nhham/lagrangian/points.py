@@ -32,7 +32,6 @@ a proof.
 from __future__ import annotations
 
 import itertools
-import math
 import random
 from dataclasses import dataclass
 
@@ -56,6 +55,7 @@ __all__ = [
     "exact_rank",
     "exact_solve",
     "maximal_minors",
+    "adjacent_column_sets",
     "field_det",
     "field_solve",
     "FLOAT64",
@@ -481,9 +481,10 @@ def exact_solve(A, b):
     return X.to_list()
 
 
-def maximal_minors(M: DomainMatrix, pivots=None) -> list:
+def maximal_minors(M: DomainMatrix, pivots=None, subsets=None) -> list:
     """Every maximal minor of an m x n DomainMatrix M (m <= n) over a field, in the order
-    of ``itertools.combinations(range(n), m)``.
+    of ``itertools.combinations(range(n), m)`` (or of the column sets ``subsets``, each
+    sorted; ``adjacent_column_sets`` gives the m (n - m) + 1 that decide the rank).
 
     One elimination instead of C(n, m) determinants: with P the pivot columns of M and
     R = M[:, P]^{-1} M (so R[:, P] = I), det M[:, S] = det M[:, P] det R[:, S], and
@@ -496,15 +497,17 @@ def maximal_minors(M: DomainMatrix, pivots=None) -> list:
     m, n = M.shape
     if pivots is None:
         _, pivots = M.rref()
+    if subsets is None:
+        subsets = list(itertools.combinations(range(n), m))
     if len(pivots) < m:
-        return [M.domain.zero] * math.comb(n, m)
+        return [M.domain.zero] * len(subsets)
     P = list(pivots)
     B = M.extract(list(range(m)), P)
     det_B = field_det(B)
     R = field_solve(B, M)
     row_of = {c: i for i, c in enumerate(P)}
     out = []
-    for S in itertools.combinations(range(n), m):
+    for S in subsets:
         unit = [j for j, c in enumerate(S) if c in row_of]
         other = [S[j] for j, c in enumerate(S) if c not in row_of]
         used = [row_of[S[j]] for j in unit]
@@ -514,6 +517,22 @@ def maximal_minors(M: DomainMatrix, pivots=None) -> list:
         parity = sum(u + 1 for u in used) + sum(j + 1 for j in unit) + sum(
             1 for a in range(len(used)) for b in range(a + 1, len(used)) if used[a] > used[b])
         out.append(-det_B * sub if parity % 2 else det_B * sub)
+    return out
+
+
+def adjacent_column_sets(pivots, n) -> list:
+    """The pivot columns P and every set that swaps one of them for another column.
+
+    Their minors are det M[:, P] and det M[:, P] R_ij (R = M[:, P]^-1 M): all vanish
+    exactly where M has rank < m, as all maximal minors do, with m (n - m) + 1 terms
+    instead of C(n, m).
+    """
+    P = sorted(pivots)
+    out = [tuple(P)]
+    for i in range(len(P)):
+        for c in range(n):
+            if c not in P:
+                out.append(tuple(sorted(P[:i] + [c] + P[i + 1:])))
     return out
 
 

@@ -56,10 +56,10 @@ import numpy as np
 import sympy as sp
 
 from nhham.settings import PARAMETER_BOX, SEED, STATE_BOX, Precision
-from nhham.errors import ComputationError
+from nhham.errors import ComputationError, EmptySubmanifoldError
 from nhham.lagrangian.algebra import cancel, solve_linear
 from nhham.system.evaluation import numeric_function
-from nhham.system.expressions import short
+from nhham.system.expressions import derivative, short
 
 __all__ = ["Decision", "Submanifold"]
 
@@ -410,26 +410,31 @@ class Submanifold:
     def _sampled_rank(self, reduced, tol):
         points, resid = self.points()
         f = self._lambdify([reduced])
-        svals, ranks = [], []
+        # Singular values are compared with the size of the terms of the entries (not
+        # with 1): unit-free, and a matrix of rounding noise still has rank 0.
+        f_scale = self._lambdify([reduced.applyfunc(lambda e: _value_scale(e, self.variables))])
+        svals, relative, ranks = [], [], []
         tol = self._tol(tol)
         zero = self._zero_level(resid)
         for pt in points:
             S = self._matrix_at(f, pt, reduced.shape)
             s = _singular_values(S, self.precision)
+            ref = float(np.max(np.abs(np.asarray(self._matrix_at(f_scale, pt, reduced.shape),
+                                                 dtype=complex)), initial=0.0)) or 1.0
             svals.append(tuple(float(x) for x in s))
-            top = max(float(s[0]) if len(s) else 0.0, 1e-300)
-            ranks.append(int(sum(float(x) > tol * max(top, 1.0) for x in s)))
+            relative.append(tuple(float(x) / ref for x in s))
+            ranks.append(int(sum(float(x) > tol * ref for x in s)))
         r = max(ranks)
         warnings = []
         if len(set(ranks)) > 1:
             warnings.append(f"rank is not constant on M: ranks {ranks} at the samples")
-        gaps = [sv[r - 1] / max(sv[0], 1.0) for sv in svals if r >= 1]
+        gaps = [sv[r - 1] for sv in relative if r >= 1]
         if gaps and min(gaps) < 1e3 * tol:
             warnings.append(
                 f"smallest kept singular value ratio {min(gaps):.3g} is within 1e3 of the "
                 f"tolerance {tol:g}: the rank is doubtful at this precision"
             )
-        dropped = [sv[r] / max(sv[0], 1.0) for sv in svals if r < len(sv)]
+        dropped = [sv[r] for sv in relative if r < len(sv)]
         if dropped and max(dropped) > zero:
             warnings.append(
                 f"largest dropped singular value ratio {max(dropped):.3g} is above the zero "
@@ -438,7 +443,8 @@ class Submanifold:
             )
         return Decision(
             r, "sampled",
-            f"rank {r} at {len(points)} seeded points (relative tolerance {tol:g})",
+            f"rank {r} at {len(points)} seeded points (singular values relative to the size "
+            f"of the entries' terms, tolerance {tol:g})",
             precision=self.precision_label, samples=len(points), singular_values=tuple(svals),
             point_residual=resid, warnings=tuple(warnings),
             points=_record(points, self.variables),
@@ -524,9 +530,10 @@ class Submanifold:
             pts.append(pt)
             worst = max(worst, res)
         if not pts:
-            raise ComputationError(
+            raise EmptySubmanifoldError(
                 f"could not find points on the submanifold defined by {list(self.equations)} "
-                f"(Newton projection failed from {attempts} seeded starts; it may be empty)"
+                f"(Newton projection failed from {attempts} seeded starts; it may be empty: "
+                f"equations without a real solution?)"
             )
         return pts, worst
 
@@ -663,8 +670,7 @@ class Submanifold:
         points, resid = self.points()
         tol = self._tol(tol)
         f = self._lambdify([expr])
-        scale_f = self._lambdify([sum((abs(t) for t in sp.Add.make_args(sp.expand(expr))),
-                                      sp.S.Zero)])
+        scale_f = self._lambdify([_value_scale(expr, self.variables)])
         worst, worst_rel = 0.0, 0.0
         for pt in points:
             value = self._evaluate(f, pt)[0]
@@ -675,7 +681,9 @@ class Submanifold:
                                 precision=self.precision_label, samples=len(points),
                                 point_residual=resid)
             worst = max(worst, a)
-            worst_rel = max(worst_rel, a / max(float(abs(scale)), 1.0))
+            # relative to the size of the terms, not to 1: unit-free
+            scale = float(abs(scale))
+            worst_rel = max(worst_rel, a / scale if scale else (0.0 if a == 0 else math.inf))
         vanishes = worst_rel <= tol
         warnings = ()
         zero = self._zero_level(resid)
@@ -696,6 +704,20 @@ class Submanifold:
 
 
 # ------------------------------------------------------------------ helpers
+def _value_scale(expr, variables):
+    """The size a value of ``expr`` at a sample point is compared with.
+
+    The sum of |terms| of ``expr`` expanded, plus |d expr / d z| times the size of the
+    sample box for every state variable z: unit-free (it scales with the parameters as
+    ``expr`` does), and a function vanishing on M is still seen as zero at a point off M
+    by the rounding of the Newton projection (q1 = 4e-16 on {q1 = 0}).
+    """
+    expr = sp.expand(expr)
+    terms = sum((abs(t) for t in sp.Add.make_args(expr)), sp.S.Zero)
+    slope = sum((abs(derivative(expr, z)) for z in variables if expr.has(z)), sp.S.Zero)
+    return terms + slope * max(abs(b) for b in STATE_BOX)
+
+
 def _floats(values):
     return "[" + ", ".join(f"{v:.3g}" for v in values) + "]"
 
@@ -832,21 +854,22 @@ def _zero_test(expr, residual=(), parameters=(), values=None):
 
 
 def _parameter_warning(poly_expr, parameters, values):
-    """Warn when a polynomial nonzero in the parameters vanishes at their values."""
+    """Warn when a polynomial nonzero in the parameters vanishes at their values.
+
+    Decided exactly, with the values read as the decimals they were written as (every
+    coefficient, as a polynomial in the state, is zero there): no tolerance, so the
+    answer does not depend on the units.
+    """
     params = [p for p in parameters if p in poly_expr.free_symbols]
     if not params or any(p not in values for p in params):
         return None
     state = sorted(poly_expr.free_symbols - set(params), key=sp.default_sort_key)
     try:
         coeffs = sp.Poly(poly_expr, *state).coeffs() if state else [poly_expr]
-        at = {p: sp.Float(values[p]) for p in params}
-        at_abs = {p: sp.Float(abs(values[p])) for p in params}
-        nums = [abs(complex(sp.sympify(c).xreplace(at).evalf())) for c in coeffs]
-        scale = max(abs(complex(sum((abs(t) for t in sp.Add.make_args(sp.expand(c))),
-                                    sp.S.Zero).xreplace(at_abs).evalf())) for c in coeffs)
-    except (TypeError, ValueError, sp.PolynomialError):  # pragma: no cover
+    except sp.PolynomialError:  # pragma: no cover
         return None
-    if max(nums) <= 1e-12 * max(scale, 1.0):
+    at = {p: sp.Rational(repr(float(values[p]))) for p in params}
+    if all(sp.expand(sp.sympify(c).xreplace(at)) == 0 for c in coeffs):
         return (f"the nonzero function {short(poly_expr)} vanishes at the given parameter "
                 f"values (exact decisions treat parameters as generic)")
     return None

@@ -1,11 +1,12 @@
 """What the user describes: the first layer, beneath every other.
 
 Modules: ``naming`` (generated symbol names), ``expressions`` (the safe
-parser and its printer), ``polynomial`` (structure of expressions in the
-velocities), ``evaluation`` (the one route from sympy to numbers),
-``description`` (:class:`System` and its validation), ``scene`` (TOML
-scene files), ``mechanics`` (the sympy.physics.mechanics adapter),
-``models`` (ready-made systems).
+parser and its printer), ``numbers`` (which numbers are data: real, within
+double precision), ``screening`` (what a System's expressions may contain),
+``polynomial`` (structure of expressions in the velocities), ``evaluation``
+(the one route from sympy to numbers), ``description`` (:class:`System` and its
+validation), ``scene`` (TOML scene files), ``mechanics`` (the
+sympy.physics.mechanics adapter), ``models`` (ready-made systems).
 """
 
 from nhham.lazy import lazy_exports

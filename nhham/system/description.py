@@ -31,6 +31,8 @@ from nhham.errors import (
 )
 from nhham.settings import PARAMETER_BOX, STATE_BOX
 from nhham.system.naming import as_symbol, velocity_symbol
+from nhham.system.rank import float_rank, precise_ranks
+from nhham.system.screening import coordinate_symbols, expression_problems
 
 __all__ = ["System", "DroppedConstraint", "QuadraticParts", "quadratic_parts", "velocity_polynomial"]
 
@@ -106,9 +108,12 @@ class System:
     Raises
     ------
     ValidationError
-        With every problem found: unknown symbols, non-affine constraints,
-        holonomic constraints with velocities, m >= n, dependent constraint
-        one-forms, a singular Hessian W.
+        With every problem found: unknown symbols, dynamicsymbols (pointed to
+        :func:`nhham.from_mechanics`), numbers that are not real, functions
+        that are not smooth in the state (``Abs``, ``sign``), expressions too
+        large to expand (see :mod:`nhham.system.screening`), non-affine
+        constraints, holonomic constraints with velocities, m >= n, dependent
+        constraint one-forms, a singular Hessian W.
     """
 
     name: str
@@ -136,8 +141,8 @@ class System:
         # Long on purpose: every check appends to one list of problems, so that the
         # user sees them all at once, in the order the pieces were given.
         problems: list[str] = []
-        coords = tuple(as_symbol(q) for q in coordinates)
-        if not coords:
+        coords = coordinate_symbols(coordinates, problems)
+        if not coords and not problems:
             problems.append("coordinates: at least one coordinate is needed")
         dupes = sorted({q.name for q in coords if coords.count(q) > 1})
         if dupes:
@@ -163,12 +168,7 @@ class System:
 
         known = set(table.values())
         for label, expr in [("lagrangian", lag)] + _labelled(cons, hols):
-            unknown = sorted(s.name for s in expr.free_symbols - known)
-            if unknown:
-                problems.append(
-                    f"{label}: unknown symbol(s) {', '.join(unknown)} in {expr} "
-                    f"(declare parameters explicitly)"
-                )
+            problems += expression_problems(label, expr, coords + vels, known)
         for i, g in enumerate(hols):
             used = sorted(v.name for v in g.free_symbols & set(vels))
             if used:
@@ -250,6 +250,13 @@ class System:
     def symbol_table(self) -> Mapping[str, sp.Symbol]:
         """Names -> symbols for coordinates, velocities and parameters."""
         return self._symbol_table
+
+    @cached_property
+    def exact_parameter_values(self) -> Mapping[sp.Symbol, sp.Rational]:
+        """The parameter values as the exact decimals they were written as (``0.1`` is
+        1/10): the values every exact decision at the values uses."""
+        return MappingProxyType({p: sp.Rational(str(v)) for p, v in
+                                 self.parameter_values.items()})
 
     # ----------------------------------------------------- constraint pieces
     @cached_property
@@ -662,13 +669,16 @@ def _check_dependence(system, cons, hols, drop_redundant):
     vels = system.velocities
     mu = _one_forms(rows, vels)
     rng = np.random.default_rng(_VALIDATION_SEED)
-    samples = _numeric_samples(mu, _sample_q(system, rng, _VALIDATION_SAMPLES))
+    points = _sample_q(system, rng, _VALIDATION_SAMPLES)
+    samples = _numeric_samples(mu, points)
     independent: list[int] = []
     dependent: list[tuple[int, dict]] = []
     for i in range(len(rows)):
         trial = independent + [i]
-        ranks = [np.linalg.matrix_rank(S[trial], tol=1e-9 * max(1.0, np.abs(S).max())) for S in samples]
-        if max(ranks) == len(trial):
+        full = len(trial)
+        # A float64 deficiency may come from the units: confirm it in high precision.
+        if (max(float_rank(S[trial]) for S in samples) == full
+                or precise_ranks(mu, points, [trial])[0] == full):
             independent.append(i)
             continue
         dependent.append((i, _combination(mu, rows, independent, i, vels)))
@@ -688,10 +698,15 @@ def _check_dependence(system, cons, hols, drop_redundant):
                 f"they imply the position constraint {sp.trigsimp(position_part)} = 0; give "
                 f"that as a holonomic constraint instead"
             )
-        elif labels[i].startswith("holonomic") or not drop_redundant:
+        elif labels[i].startswith("holonomic"):  # drop_redundant drops velocity constraints
+            problems.append(
+                f"{labels[i]}: the complete lift {rows[i]} is a combination of the others: "
+                f"{labels[i]} = {combo}; the constraint is redundant: remove it from holonomic"
+            )
+        elif not drop_redundant:
             problems.append(
                 f"{labels[i]}: {rows[i]} is redundant, a combination of the others: "
-                f"{labels[i]} = {combo} (pass drop_redundant=True to drop it)"
+                f"{labels[i]} = {combo} ({RedundantConstraintError.ADVICE})"
             )
         else:
             dropped.append(DroppedConstraint(labels[i], rows[i],
@@ -750,8 +765,11 @@ def _check_regular(system):
             raise SingularLagrangianError([_singular_message(W, rank, W.nullspace())])
         return
     rng = np.random.default_rng(_VALIDATION_SEED + 1)
-    ranks = [np.linalg.matrix_rank(S)
-             for S in _numeric_samples(W, _sample_q(system, rng, _VALIDATION_SAMPLES))]
+    points = _sample_q(system, rng, _VALIDATION_SAMPLES)
+    ranks = [float_rank(S) for S in _numeric_samples(W, points)]
+    if max(ranks) < n:
+        # A float64 deficiency may come from the units (m = 1e-16): confirm it.
+        ranks = precise_ranks(W, points, [list(range(n))])
     if max(ranks) < n:
         W = sp.hessian(system.lagrangian, system.velocities)  # as the message always showed it
         try:

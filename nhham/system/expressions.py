@@ -10,7 +10,15 @@ with the key path it came from and quotes the offending fragment.
 
 Names are ordinary symbols: ``I``, ``E``, ``S``, ``N``, ``beta``, ``gamma``,
 ``lambda`` mean whatever the symbol table says, never sympy's imaginary unit,
-Euler's number and so on.
+Euler's number and so on. Names are read exactly as written: text that is not
+in Unicode normal form NFKC (a full-width ``ｍ``, a mathematical italic ``𝑚``,
+which Python would silently read as ``m``) is refused.
+
+Data are real: a constant that is not a real number (``sqrt(-1)``, ``log(-1)``,
+``asin(2)``) and a literal outside double precision's range (``1e-400``, which
+Python reads as 0) are refused, never truncated;
+:func:`nhham.system.numbers.number_problems` applies the same rules to
+expressions built with sympy.
 
 The work done on hostile input is bounded: the text length, the nesting
 depth, the size of exact numbers and numeric powers are all capped, and every
@@ -29,6 +37,7 @@ import io
 import keyword
 import math
 import tokenize
+import unicodedata
 import warnings
 from typing import Iterable, Mapping
 
@@ -36,6 +45,7 @@ import sympy as sp
 from sympy.printing.str import StrPrinter
 
 from nhham.errors import ParseError
+from nhham.system.numbers import complex_string, number_problems
 
 __all__ = [
     "FUNCTIONS",
@@ -141,10 +151,21 @@ def parse_expression(text: str, symbols: Mapping[str, sp.Symbol] | Iterable,
     ------
     ParseError
         On a syntax error, a construct outside the whitelist, an unknown name
-        (with the closest known name suggested), a wrong number of function
-        arguments, a division by zero, or input too large or too deeply
-        nested to handle in bounded time and memory.
+        (with the closest known name suggested; the name is the error's
+        ``unknown_name``), a wrong number of function arguments, a division by
+        zero, a number that is not real or not a double, text not in Unicode
+        normal form NFKC, or input too large or too deeply nested to handle in
+        bounded time and memory. Its ``key`` is ``where``.
     """
+    try:
+        return _parse(text, symbols, where)
+    except ParseError as exc:
+        if exc.key is None:
+            exc.key = where
+        raise
+
+
+def _parse(text, symbols, where) -> sp.Expr:
     if not isinstance(text, str):
         raise ParseError(f"{where}: expected an expression string, got {type(text).__name__}")
     symbols = _symbol_table(symbols)
@@ -164,14 +185,32 @@ def parse_expression(text: str, symbols: Mapping[str, sp.Symbol] | Iterable,
     lead = len(flat) - len(body)
     if not body.strip():
         raise ParseError(f"{where}: empty expression")
+    if not unicodedata.is_normalized("NFKC", body):
+        raise ParseError(f"{where}: {_not_normalized(body, lead, text)}")
     source, renamed = _rename_keywords(body, symbols, where)
     tree = _ast_parse(source, text, lead, where)
     builder = _Builder(body, symbols, renamed, where)
     expr = builder.build(tree.body)
     if expr.has(*_NONFINITE):
         raise ParseError(f"{where}: the expression is not finite ({_quote(body)} gives {expr})")
-    _check_float_range(expr, where)
+    problems = number_problems(expr)
+    if problems:
+        raise ParseError(f"{where}: {problems[0]}")
     return expr
+
+
+def _not_normalized(body: str, lead: int, text: str) -> str:
+    """Describe the first character (or pair) of ``body`` that NFKC would change."""
+    for width in (1, 2):
+        for i in range(len(body) - width + 1):
+            piece = body[i:i + width]
+            normal = unicodedata.normalize("NFKC", piece)
+            if normal != piece:
+                names = ", ".join(f"U+{ord(c):04X} {unicodedata.name(c, '?')}" for c in piece)
+                return (f"{piece!r} ({names}) {_position(text, lead + i)} is not in Unicode "
+                        f"normal form NFKC (normalised, as Python reads names, it becomes {normal!r}); "
+                        f"write names exactly as they are declared")
+    return "the text is not in Unicode normal form NFKC; write names as they are declared"
 
 
 def _symbol_table(symbols) -> Mapping[str, sp.Symbol]:
@@ -183,19 +222,6 @@ def _symbol_table(symbols) -> Mapping[str, sp.Symbol]:
         sym = item if isinstance(item, sp.Symbol) else sp.Symbol(str(item))
         table[sym.name] = sym
     return table
-
-
-def _check_float_range(expr: sp.Expr, where: str) -> None:
-    """Refuse floats that sympy computed beyond double precision's range.
-
-    sympy's floats have unbounded exponents (exp(1000.0) is 1.97e434); such a
-    number cannot be used numerically nor written back as a literal.
-    """
-    for number in expr.atoms(sp.Float):
-        value = float(number)
-        if not math.isfinite(value) or (value == 0.0 and number != 0):
-            raise ParseError(f"{where}: the number {sp.sstr(number)} is outside the range "
-                             f"of double precision (about 1e-308 to 1e308)")
 
 
 def _ast_parse(source: str, original: str, lead: int, where: str) -> ast.Expression:
@@ -341,7 +367,15 @@ class _Builder:
             return sp.Integer(value)
         if not math.isfinite(value):
             raise self.error(node, "number out of range")
+        if value == 0.0 and any(c in "123456789" for c in self.mantissa(node)):
+            raise ParseError(f"{self.where}: the number {self.fragment(node)} is outside the range "
+                             f"of double precision (about 1e-308 to 1e308; it would be read as 0)")
         return sp.Float(value)
+
+    def mantissa(self, node) -> str:
+        """The digits of a float literal before its exponent."""
+        segment = ast.get_source_segment(self.text, node) or ""
+        return segment.lower().split("e")[0]
 
     def name(self, node, depth):
         ident = self.renamed.get(node.id, node.id)
@@ -353,7 +387,9 @@ class _Builder:
             return CONSTANTS[ident]
         if ident in FUNCTIONS:
             raise self.error(node, f"{ident!r} is a function; call it as {ident}(...)")
-        raise ParseError(f"{self.where}: unknown name {ident!r}{self.suggest(ident)}")
+        error = ParseError(f"{self.where}: unknown name {ident!r}{self.suggest(ident)}")
+        error.unknown_name = ident  # a scene adds where to declare it
+        raise error
 
     def suggest(self, ident: str) -> str:
         known = list(self.symbols) + list(CONSTANTS) + list(FUNCTIONS)
@@ -428,7 +464,7 @@ class _Builder:
             if base == 0 and exponent.is_negative:
                 raise self.error(node, "division by zero")
             self.check_root(node, base, exponent)
-        return sp.Pow(base, exponent)
+        return self.real(node, sp.Pow(base, exponent))
 
     def check_root(self, node, base, exponent):
         """Refuse roots of huge exact numbers: sympy would try to factor them."""
@@ -464,7 +500,16 @@ class _Builder:
         args = [self.build(arg, depth + 1) for arg in node.args]
         if ident == "sqrt":
             self.check_root(node, args[0], sp.S.Half)
-        return FUNCTIONS[ident](*args)
+        return self.real(node, FUNCTIONS[ident](*args))
+
+    def real(self, node, value):
+        """``value``, refused when it is a constant that is not a real number."""
+        if not value.free_symbols:
+            complex_value = complex_string(value)
+            if complex_value:
+                raise ParseError(f"{self.where}: {self.fragment(node)} is not a real number "
+                                 f"(its value is {complex_value}); nhham takes real data only")
+        return value
 
     def check_number_size(self, node, items):
         """Refuse sums/products whose exact numbers could grow past the cap."""

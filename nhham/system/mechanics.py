@@ -21,6 +21,7 @@ corresponds to ``lambda_<i>``. Beware: sympy 1.14's ``mass_matrix`` appends
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass
 from types import MappingProxyType
 from typing import Mapping, NamedTuple, Sequence
@@ -78,7 +79,8 @@ def from_mechanics(lagrangian=None, q: Sequence | None = None, hol_coneqs: Seque
                    bodies: Sequence = (), loads: Sequence = (), frame=None, origin=None,
                    u: Sequence | None = None, kd_eqs: Sequence = (),
                    velocity_constraints: Sequence = (),
-                   configuration_constraints: Sequence = ()) -> System:
+                   configuration_constraints: Sequence = (),
+                   drop_redundant: bool = False) -> System:
     """Build a :class:`System` from a ``sympy.physics.mechanics`` description.
 
     Three ways in, which may be combined:
@@ -93,6 +95,11 @@ def from_mechanics(lagrangian=None, q: Sequence | None = None, hol_coneqs: Seque
        frame, fixed point, bodies, loads, coordinates ``q``, speeds ``u``,
        kinematic differential equations ``kdes``, ``holonomic_constraints``
        and ``nonholonomic_constraints`` are read as in 2.
+
+    A ``LagrangesMethod`` is read as :func:`from_lagranges_method` reads it. A
+    ``KanesMethod`` is refused with a pointer to the ``System`` it is formed
+    from: it holds the equations of motion, not the energies nor the point from
+    which positions are measured.
 
     Constraints written in generalized speeds u, with kinematic differential
     equations ``kd_eqs`` as ``KanesMethod`` takes them (affine in u and in
@@ -145,10 +152,16 @@ def from_mechanics(lagrangian=None, q: Sequence | None = None, hol_coneqs: Seque
         Constraints affine in u (or q'), each = 0.
     configuration_constraints : sequence of sympy.Expr, optional
         Holonomic constraints in q.
+    drop_redundant : bool, optional
+        Passed to :class:`System`: drop velocity constraints that are combinations
+        of the others instead of refusing them (default False).
 
     Returns
     -------
     System
+
+    Problems found by :class:`System` name the constraints as given here
+    (``nonholonomic_constraints[3]``, ``nonhol_coneqs[0]``, ``hol_coneqs[1]``).
 
     Raises
     ------
@@ -161,22 +174,55 @@ def from_mechanics(lagrangian=None, q: Sequence | None = None, hol_coneqs: Seque
         force, a body whose mass centre has no position from the origin;
         then whatever :class:`System` finds (non-affine constraints...).
     """
-    if isinstance(lagrangian, me.System):
+    if isinstance(lagrangian, (me.System, me.LagrangesMethod)):
         given = dict(q=q, hol_coneqs=hol_coneqs, nonhol_coneqs=nonhol_coneqs, bodies=bodies,
                      loads=loads, frame=frame, origin=origin, u=u, kd_eqs=kd_eqs,
                      velocity_constraints=velocity_constraints,
                      configuration_constraints=configuration_constraints)
         extra = [k for k, v in given.items() if v is not None and v != ()]
+        kind = type(lagrangian).__name__
         if extra:
-            raise InputError(f"from_mechanics: with a sympy.physics.mechanics.System give only "
-                             f"parameters and name (also given: {', '.join(extra)})")
-        return _from_me_system(lagrangian, parameters, name)
+            raise InputError(f"from_mechanics: with a sympy.physics.mechanics.{kind} give only "
+                             f"parameters, name and drop_redundant (also given: "
+                             f"{', '.join(extra)})")
+        if isinstance(lagrangian, me.LagrangesMethod):
+            return from_lagranges_method(lagrangian, parameters, name,
+                                         drop_redundant=drop_redundant)
+        return _from_me_system(lagrangian, parameters, name, drop_redundant)
+    if isinstance(lagrangian, me.KanesMethod):
+        raise InputError(
+            "from_mechanics: a KanesMethod holds the equations of motion, not the energies "
+            "nor the point positions are measured from; pass the "
+            "sympy.physics.mechanics.System it is formed from (system.form_eoms() makes "
+            "the KanesMethod), or its pieces: from_mechanics(q=q, u=u, kd_eqs=kdes, "
+            "bodies=bodies, loads=loads, frame=N, origin=O, velocity_constraints=...)")
     if q is None:
-        raise InputError("from_mechanics: the coordinates q are required")
+        raise InputError(f"from_mechanics: the coordinates q are required (got a "
+                         f"{type(lagrangian).__name__} and no q)" if lagrangian is not None
+                         else "from_mechanics: the coordinates q are required")
+    return _from_pieces(lagrangian, q, hol_coneqs, nonhol_coneqs, parameters, name,
+                        bodies=bodies, loads=loads, frame=frame, origin=origin, u=u,
+                        kd_eqs=kd_eqs, velocity_constraints=velocity_constraints,
+                        configuration_constraints=configuration_constraints,
+                        drop_redundant=drop_redundant, labels=_ARGUMENT_LABELS)
+
+
+# How the constraints and kinematic equations are called in messages: the keyword
+# arguments of from_mechanics, or the attributes of a sympy.physics.mechanics.System.
+_ARGUMENT_LABELS = {"velocity": "velocity_constraints",
+                    "configuration": "configuration_constraints", "kd": "kd_eqs"}
+_SYSTEM_LABELS = {"velocity": "nonholonomic_constraints",
+                  "configuration": "holonomic_constraints", "kd": "kdes"}
+
+
+def _from_pieces(lagrangian, q, hol_coneqs, nonhol_coneqs, parameters, name, *, bodies, loads,
+                 frame, origin, u, kd_eqs, velocity_constraints, configuration_constraints,
+                 drop_redundant, labels) -> System:
+    """:func:`from_mechanics` once the way in is known (``labels``: names in messages)."""
     coords = _coordinate_functions(q)
     t = me.dynamicsymbols._t
     problems: list[str] = []
-    to_q = _speed_substitution(coords, u, kd_eqs, t, problems)
+    to_q = _speed_substitution(coords, u, kd_eqs, t, problems, labels["kd"])
     if lagrangian is None:
         if not bodies and not loads:
             raise InputError("from_mechanics: give a Lagrangian, or bodies (and loads)")
@@ -188,8 +234,8 @@ def from_mechanics(lagrangian=None, q: Sequence | None = None, hol_coneqs: Seque
     speeds = tuple(to_q) if to_q else ()
     vcons = []
     for i, c in enumerate(velocity_constraints):
-        c = _as_expr(f"velocity_constraints[{i}]", c)
-        _check_affine(f"velocity_constraints[{i}]", c, speeds, problems)
+        c = _as_expr(f"{labels['velocity']}[{i}]", c)
+        _check_affine(f"{labels['velocity']}[{i}]", c, speeds, problems)
         vcons.append(c)
     if problems:
         raise ValidationError(problems)
@@ -199,14 +245,15 @@ def from_mechanics(lagrangian=None, q: Sequence | None = None, hol_coneqs: Seque
     return _from_lagrangian(lagrangian, coords, list(hol_coneqs) + list(configuration_constraints),
                             list(nonhol_coneqs) + vcons, parameters, name,
                             hol_labels=[f"hol_coneqs[{i}]" for i in range(len(hol_coneqs))]
-                            + [f"configuration_constraints[{i}]"
+                            + [f"{labels['configuration']}[{i}]"
                                for i in range(len(configuration_constraints))],
                             nonhol_labels=[f"nonhol_coneqs[{i}]" for i in range(len(nonhol_coneqs))]
-                            + [f"velocity_constraints[{i}]" for i in range(len(vcons))])
+                            + [f"{labels['velocity']}[{i}]" for i in range(len(vcons))],
+                            drop_redundant=drop_redundant)
 
 
 def _from_lagrangian(lagrangian, coords, hols, nonhols, parameters, name, hol_labels,
-                     nonhol_labels) -> System:
+                     nonhol_labels, drop_redundant=False) -> System:
     t = me.dynamicsymbols._t
     to_plain = _plain_map(coords, t)
     reserved = {s.name for s in to_plain.values()}
@@ -219,17 +266,27 @@ def _from_lagrangian(lagrangian, coords, hols, nonhols, parameters, name, hol_la
         raise ValidationError(problems)
     if parameters is None:
         parameters = _remaining_symbols(converted.values(), reserved)
-    return System(
-        [to_plain[f] for f in coords],
-        converted["lagrangian"],
-        constraints=[converted[label] for label in nonhol_labels],
-        holonomic=[converted[label] for label in hol_labels],
-        parameters=parameters,
-        name=name,
-    )
+    try:
+        return System(
+            [to_plain[f] for f in coords],
+            converted["lagrangian"],
+            constraints=[converted[label] for label in nonhol_labels],
+            holonomic=[converted[label] for label in hol_labels],
+            parameters=parameters,
+            name=name,
+            drop_redundant=drop_redundant,
+        )
+    except ValidationError as exc:  # System's constraints[i] are the user's labels
+        names = {"constraints": nonhol_labels, "holonomic": hol_labels}
+        raise type(exc)([_CONSTRAINT_LABEL.sub(
+            lambda m: names[m.group(1)][int(m.group(2))], p) for p in exc.problems]) from None
 
 
-def _from_me_system(msys, parameters, name) -> System:
+# A constraint as System names it (not inside a longer name such as nonhol_coneqs[0]).
+_CONSTRAINT_LABEL = re.compile(r"(?<![\w.\[])(constraints|holonomic)\[(\d+)\]")
+
+
+def _from_me_system(msys, parameters, name, drop_redundant=False) -> System:
     """Read a ``sympy.physics.mechanics.System`` (see :func:`from_mechanics`)."""
     problems = []
     actuators = list(getattr(msys, "actuators", ()) or ())
@@ -242,24 +299,26 @@ def _from_me_system(msys, parameters, name) -> System:
     if not q:
         raise InputError("from_mechanics: the System has no coordinates (add_coordinates)")
     u = list(msys.u)
-    return from_mechanics(
-        None, q, parameters=parameters, name=name,
+    return _from_pieces(
+        None, q, (), (), parameters, name,
         bodies=list(msys.bodies), loads=list(msys.loads), frame=msys.frame,
         origin=msys.fixed_point, u=u or None, kd_eqs=list(msys.kdes),
         velocity_constraints=list(msys.nonholonomic_constraints),
         configuration_constraints=list(msys.holonomic_constraints),
+        drop_redundant=drop_redundant, labels=_SYSTEM_LABELS,
     )
 
 
-def _speed_substitution(coords, u, kd_eqs, t, problems) -> dict:
-    """{u_k: expression in q, q'} from the kinematic differential equations."""
+def _speed_substitution(coords, u, kd_eqs, t, problems, kd="kd_eqs") -> dict:
+    """{u_k: expression in q, q'} from the kinematic differential equations (``kd``: their
+    name in messages)."""
     if not kd_eqs:
         if u:
-            problems.append("kd_eqs: speeds u were given but no kinematic differential "
-                            "equations define them")
+            problems.append(f"{kd}: speeds u were given but no kinematic differential "
+                            f"equations define them")
         return {}
     qset = set(coords) | {f.diff(t) for f in coords}
-    eqs = [_as_expr(f"kd_eqs[{i}]", e) for i, e in enumerate(kd_eqs)]
+    eqs = [_as_expr(f"{kd}[{i}]", e) for i, e in enumerate(kd_eqs)]
     if u is None:
         found = set()
         for e in eqs:
@@ -272,11 +331,11 @@ def _speed_substitution(coords, u, kd_eqs, t, problems) -> dict:
     if bad:
         return {}
     if len(eqs) != len(u):
-        problems.append(f"kd_eqs: {len(eqs)} kinematic differential equations for {len(u)} "
+        problems.append(f"{kd}: {len(eqs)} kinematic differential equations for {len(u)} "
                         f"speeds {', '.join(map(str, u))}; one per speed is needed")
         return {}
     for i, e in enumerate(eqs):
-        _check_affine(f"kd_eqs[{i}]", e, tuple(u), problems)
+        _check_affine(f"{kd}[{i}]", e, tuple(u), problems)
     if problems:
         return {}
     B = sp.Matrix([[sp.diff(e, s) for s in u] for e in eqs])
@@ -284,7 +343,7 @@ def _speed_substitution(coords, u, kd_eqs, t, problems) -> dict:
     try:
         sol = B.LUsolve(-rest)
     except (ValueError, ZeroDivisionError, sp.matrices.exceptions.NonInvertibleMatrixError):
-        problems.append(f"kd_eqs: cannot be solved for the speeds {', '.join(map(str, u))} "
+        problems.append(f"{kd}: cannot be solved for the speeds {', '.join(map(str, u))} "
                         f"(the coefficient matrix of u is singular)")
         return {}
     return {s: sp.simplify(x) if B != -sp.eye(len(u)) else sp.expand(x) for s, x in zip(u, sol)}
@@ -370,7 +429,8 @@ def _free_velocity(label, point, frame, origin, problems):
     return r.dt(frame)
 
 
-def from_lagranges_method(lm: me.LagrangesMethod, parameters=None, name: str = "") -> System:
+def from_lagranges_method(lm: me.LagrangesMethod, parameters=None, name: str = "", *,
+                          drop_redundant: bool = False) -> System:
     """Build a :class:`System` from a ``LagrangesMethod`` object.
 
     Uses the Lagrangian ``lm._L``, the coordinates ``lm.q`` and the
@@ -385,6 +445,8 @@ def from_lagranges_method(lm: me.LagrangesMethod, parameters=None, name: str = "
     parameters : mapping or sequence, optional
         As for :func:`from_mechanics`.
     name : str, optional
+    drop_redundant : bool, optional
+        As for :func:`from_mechanics`.
 
     Raises
     ------
@@ -401,7 +463,8 @@ def from_lagranges_method(lm: me.LagrangesMethod, parameters=None, name: str = "
                          "as a potential)")
     hol = list(lm._hol_coneqs)
     nonhol = list(lm.coneqs)[len(hol):]
-    return from_mechanics(lm._L[0], list(lm.q), hol, nonhol, parameters=parameters, name=name)
+    return from_mechanics(lm._L[0], list(lm.q), hol, nonhol, parameters=parameters, name=name,
+                          drop_redundant=drop_redundant)
 
 
 def _coordinate_functions(q):

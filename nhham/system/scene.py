@@ -45,6 +45,7 @@ from nhham.errors import (
     MissingParameterValueError,
     ParseError,
     SceneError,
+    key_of,
 )
 from nhham.system.expressions import RESERVED_NAMES, parse_expression, to_text
 from nhham.system.naming import acceleration_symbol, momentum_symbol, velocity_symbol
@@ -59,6 +60,9 @@ __all__ = [
     "dump_scene",
     "MAX_SCENE_BYTES",
     "INITIAL_TOLERANCE",
+    "MIN_RTOL",
+    "MAX_FIXED_STEPS",
+    "simulate_option_problem",
 ]
 
 #: Largest scene file accepted, checked before parsing.
@@ -66,6 +70,13 @@ MAX_SCENE_BYTES = 2 * 1024 * 1024
 
 #: Relative tolerance on constraint residuals at the initial state.
 INITIAL_TOLERANCE = 1e-9
+
+#: Smallest relative tolerance the adaptive methods honour in float64 (scipy raises a
+#: smaller one to this): 100 machine epsilons.
+MIN_RTOL = 100 * 2.0 ** -52
+
+#: Most steps a fixed-step run may take (t_end / step): every step is stored.
+MAX_FIXED_STEPS = 10**8
 
 _TOP_KEYS = (
     "name", "description", "coordinates", "parameters", "symbolic_parameters",
@@ -101,11 +112,14 @@ class SimulateOptions:
     method : str or None
         Integration method name (checked by the simulator, not here).
     rtol, atol : float or None
-        Relative and absolute tolerances (> 0).
+        Relative (:data:`MIN_RTOL` <= rtol < 1) and absolute (> 0) tolerances.
     step : float or None
-        Fixed step size dt for fixed-step methods (> 0).
+        Fixed step size dt for fixed-step methods (0 < step <= t_end, at most
+        :data:`MAX_FIXED_STEPS` steps).
     max_step : float or None
         Largest step an adaptive method may take (> 0).
+
+    :func:`simulate_option_problem` holds these ranges (the command's options too).
     """
 
     t_end: float | None = None
@@ -353,7 +367,7 @@ def _scene_error(source: str, problems: list[str]) -> SceneError:
         message = f"{source}: {problems[0]}"
     else:
         message = f"{source}: {len(problems)} problems:\n" + "\n".join(f"  - {p}" for p in problems)
-    error = SceneError(message)
+    error = SceneError(message, key=key_of(problems[0]))
     error.problems = tuple(problems)
     return error
 
@@ -560,11 +574,49 @@ def _simulate_table(value, problems) -> SimulateOptions:
         number = _finite_number(value[key], path, problems)
         if number is None:
             continue
-        if number <= 0:
-            problems.append(f"{path}: must be positive, got {value[key]!r}")
+        problem = simulate_option_problem(key, number, options.get("t_end"))
+        if problem:
+            problems.append(f"{path}: {problem}")
             continue
         options[key] = number
     return SimulateOptions(**options)
+
+
+def simulate_option_problem(key: str, value: float, t_end: float | None = None) -> str | None:
+    """Why ``value`` cannot be the simulation option ``key``, or None.
+
+    One home for the ranges of ``t_end``, ``rtol``, ``atol``, ``step`` and
+    ``max_step``, shared by a scene's ``[simulate]`` table and the command's options.
+
+    Parameters
+    ----------
+    key : str
+        ``t_end``, ``rtol``, ``atol``, ``step`` or ``max_step``.
+    value : float
+    t_end : float, optional
+        The final time, against which a ``step`` is checked when known.
+
+    >>> simulate_option_problem("rtol", 1e-16)
+    'must be at least 2.22e-14 (100 machine epsilons: float64 methods do not reach less), got 1e-16'
+    >>> simulate_option_problem("step", 1e300, t_end=10.0) is not None
+    True
+    """
+    if not math.isfinite(value):
+        return f"expected a finite number, got {value!r}"
+    if value <= 0:
+        return f"must be positive, got {value!r}"
+    if key == "rtol" and value < MIN_RTOL:
+        return (f"must be at least {MIN_RTOL:.3g} (100 machine epsilons: float64 methods do "
+                f"not reach less), got {value!r}")
+    if key == "rtol" and value >= 1:
+        return f"must be below 1 (a relative tolerance), got {value!r}"
+    if key == "step" and t_end is not None:
+        if value > t_end:
+            return f"must not exceed the time span t_end = {t_end:g}, got {value!r}"
+        if t_end / value > MAX_FIXED_STEPS:
+            return (f"{value!r} makes {t_end / value:.3g} steps up to t_end = {t_end:g}; at most "
+                    f"{MAX_FIXED_STEPS:.0e} (every step is stored)")
+    return None
 
 
 # ------------------------------------------------------------- expressions
@@ -590,20 +642,33 @@ def _parse_expressions(spec: _Spec) -> dict:
         try:
             parsed[path] = parse_expression(text, table, where=path)
         except ParseError as exc:
-            problems.append(str(exc))
+            problems.append(str(exc) + _declare_hint(getattr(exc, "unknown_name", None)))
     steady, steady_problems = parse_steady(spec.steady, spec.parameters)
     problems.extend(steady_problems)
     if steady is not None:
         parsed["[steady]"] = steady
     if problems:
         if len(problems) == 1:
-            error = ParseError(problems[0])
+            error = ParseError(problems[0], key=key_of(problems[0]))
         else:
             error = ParseError(f"{len(problems)} problems:\n"
-                               + "\n".join(f"  - {p}" for p in problems))
+                               + "\n".join(f"  - {p}" for p in problems), key=key_of(problems[0]))
         error.problems = tuple(problems)
         raise error
     return parsed
+
+
+def _declare_hint(name: str | None) -> str:
+    """Where an unknown name of a scene expression would be declared."""
+    if name is None:
+        return ""
+    if name == "t":
+        return (" (systems are autonomous: L and the constraints may not depend on time t; "
+                "if t is a parameter, add it to parameters)")
+    if name.endswith("_ddot"):
+        return " (accelerations may not appear in L or the constraints)"
+    return (f" (a parameter must be declared: parameters = {{ {name} = <value> }} or "
+            f"symbolic_parameters = [\"{name}\"])")
 
 
 def _build_system(spec: _Spec, parsed: dict, drop_redundant: bool):
@@ -665,8 +730,7 @@ def _check_initial(scene: Scene) -> dict:
         if missing:
             raise MissingParameterValueError(
                 f"{path}: no numeric value for parameter {', '.join(map(repr, missing))}, "
-                f"needed to check the initial data (give it in parameters)"
-            )
+                f"needed to check the initial data (give it in parameters)", key="parameters")
         residual, scale = _evaluate(expr, point)
         if residual is None:
             problems.append(f"{path}: {to_text(expr)} is not a finite real number "
@@ -679,7 +743,7 @@ def _check_initial(scene: Scene) -> dict:
                             f"(residual {abs(residual):.3g} exceeds tolerance {tolerance:.1g})")
     if problems:
         intro = f"{scene.source}: initial data violate the constraints: "
-        raise InconsistentInitialDataError(intro + "; ".join(problems))
+        raise InconsistentInitialDataError(intro + "; ".join(problems), key=key_of(problems[0]))
     return residuals
 
 

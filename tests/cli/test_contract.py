@@ -50,6 +50,10 @@ def test_every_example_output_matches_the_schema(command, example, schema):
     if rc == 3:
         assert command == "simulate" and env["result"]["success"] is False
         assert err.strip().splitlines()[-1].startswith("nhham: simulation stopped")
+        assert env["error"]["kind"] == "failed"
+        assert err.strip().splitlines()[-1] == f"nhham: {env['error']['message']}"
+    else:
+        assert env["error"] is None
 
 
 def test_bench_output_matches_the_schema(bench_envelope, schema):
@@ -74,11 +78,16 @@ def test_the_schema_is_a_valid_draft_2020_12_schema(schema):
 def test_the_schema_rejects_what_it_should(schema):
     """The schema is not vacuous: a wrong type, a missing key, a stray key fail."""
     rc, env, _ = envelope_of("classify", "rolling_disk.toml")
-    bad = [json.loads(json.dumps(env)) for _ in range(4)]
+    bad = [json.loads(json.dumps(env)) for _ in range(9)]
     bad[0]["result"]["status"] = 0
     del bad[1]["result"]["rank_c"]
     bad[2]["extra"] = 1
     bad[3]["warnings"] = ["two\nlines"]
+    del bad[4]["error"]
+    bad[5]["result"] = None  # no result needs an error
+    bad[6]["error"] = {"kind": "usage", "message": "m", "key": None}  # ... and then no result
+    bad[7]["error"] = {"kind": "oops", "message": "m", "key": None}
+    bad[8]["result"], bad[8]["error"] = None, {"kind": "input", "message": "m"}  # key missing
     for b in bad:
         with pytest.raises(jsonschema.ValidationError):
             jsonschema.validate(b, schema)
@@ -106,7 +115,9 @@ def _json_type(v):
 
 def test_keys_are_snake_case_with_one_type_across_commands(bench_envelope):
     """Every key anywhere in any output is snake_case and has one JSON type
-    (null allowed beside it) in every command; settings are free-form."""
+    (null allowed beside it) in every command; settings are free-form. The envelope's
+    own keys form their own namespace: its ``error`` (null, or the failure's
+    ``{kind, message, key}``) is not the ``error`` of a bench row (a number)."""
     seen = {}
     for command, example, rc, env, err in all_envelopes([bench_envelope]):
         for path, key, value in _walk(env):
@@ -115,7 +126,8 @@ def test_keys_are_snake_case_with_one_type_across_commands(bench_envelope):
             assert SNAKE.match(key), (command, example, path)
             t = _json_type(value)
             if t is not None:
-                seen.setdefault(key, {}).setdefault(t, (command, example, path))
+                name = f"envelope.{key}" if len(path) == 1 else key
+                seen.setdefault(name, {}).setdefault(t, (command, example, path))
     clashes = {k: v for k, v in seen.items() if len(v) > 1}
     assert not clashes, clashes
 
@@ -209,7 +221,8 @@ def test_envelope_helper_for_any_subcommand():
     env = envelope("linearize", {"a_b": 1.0, "c": float("inf")}, warnings=["x\n y", "x y"])
     assert env["result"] == {"a_b": 1.0, "c": None}  # non-finite numbers are null
     assert env["warnings"] == ["x y"]
-    assert list(env) == ["command", "nhham_version", "scene", "result", "warnings"]
+    assert list(env) == ["command", "nhham_version", "scene", "result", "warnings", "error"]
+    assert env["error"] is None
 
 
 @pytest.mark.parametrize("example", ["rolling_disk.toml", "paper_3_1.toml",

@@ -1,20 +1,32 @@
-"""Exit codes and messages as a user meets them (the command in a subprocess).
+"""Exit codes and messages as a user meets them (the command in a subprocess, or in
+process where a failure has to be planted).
 
 0 success, 1 internal failure, 2 bad input or usage, 3 the computation did not
-succeed; every message is one line in the command's own vocabulary.
+succeed; every message is one line in the command's own vocabulary, and with
+``--json`` every exit prints exactly one envelope that the shipped schema accepts,
+its ``error`` naming the kind of failure and the option or key at fault.
 """
 
+import contextlib
+import importlib
+import io
 import json
 import subprocess
 import sys
 from pathlib import Path
 
+import jsonschema
 import pytest
 
 import nhham
 
+cli_main = importlib.import_module("nhham.cli.main")  # the module (nhham.cli.main is also a function)
+
 ROOT = Path(__file__).resolve().parents[2]
 EXAMPLES = ROOT / "examples"
+HOSTILE = Path(__file__).resolve().parent / "scenes_hostile"
+BAD = ROOT / "tests" / "system" / "scenes_bad"
+DISK = EXAMPLES / "rolling_disk.toml"
 
 
 def run(*args):
@@ -167,3 +179,164 @@ def test_free_multiplier_named_whatever_the_method(method):
     assert proc.returncode == 3, proc.stderr
     assert_clean_lines(proc.stderr)
     assert "free multiplier lambda_1" in proc.stderr.splitlines()[-1]
+
+
+# ------------------------------------------------------ the envelope on failure
+def in_process(*argv):
+    """(exit status, stdout, stderr) of ``nhham ARGV`` run by ``main`` in this process."""
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        rc = cli_main.main([str(a) for a in argv])
+    return rc, out.getvalue(), err.getvalue()
+
+
+def one_envelope(stdout, schema):
+    """stdout is exactly one JSON document, an envelope the schema accepts."""
+    env = json.loads(stdout)  # two documents, or text around one, would not parse
+    jsonschema.validate(env, schema)
+    return env
+
+
+def assert_failure(rc, out, err, schema, status, kind, key):
+    assert rc == status, err
+    assert len(err.strip().splitlines()) == 1, err
+    assert_clean_lines(err)
+    env = one_envelope(out, schema)
+    assert env["error"]["kind"] == kind and env["error"]["key"] == key, env["error"]
+    assert env["error"]["message"] in err  # the same words on stderr
+    return env
+
+
+# The values of issue 21 that failed with an internal error after the work or were
+# silently used, with the option the refusal must name. The scene does not exist:
+# the option is refused before anything is loaded.
+REFUSED = [
+    ("simulate", "--atol", "-1"), ("simulate", "--atol", "nan"),
+    ("simulate", "--max-step", "0"), ("simulate", "--max-step", "-1"),
+    ("simulate", "--budget", "nan"), ("simulate", "--budget", "inf"),
+    ("simulate", "--budget", "1e20"), ("classify", "--budget", "0"),
+    ("compare", "--samples", "0"), ("compare", "--samples", "-1"),
+    ("bench", "--reference-digits", "0"), ("bench", "--reference-digits", "-3"),
+    ("simulate", "--output", "/nonexistent/dir/x.csv"),
+    ("simulate", "--rtol", "0"), ("simulate", "--rtol", "-1"), ("simulate", "--rtol", "1e-16"),
+    ("simulate", "--t-end", "-1"), ("bench", "--t-end", "inf"),
+    ("classify", "--precision", "0"), ("derive", "--precision", "-5"),
+    ("simulate", "--plot", "trajectory.nosuchformat"),
+    ("classify", "--depth", "2"), ("classify", "--positive", "m"),
+    ("linearize", "--sweep", "v=10:0:5"), ("linearize", "--plot", "locus.png"),
+]
+
+
+@pytest.mark.parametrize("command,option,value", REFUSED)
+def test_option_values_are_refused_before_any_work(command, option, value, schema):
+    rc, out, err = in_process(command, "no_such_scene.toml", option, value, "--json")
+    env = assert_failure(rc, out, err, schema, 2, "usage", option)
+    assert "no_such_scene" not in err  # refused before the scene was read
+    assert env["result"] is None and env["scene"] is None and env["command"] == command
+    rc, out, err = in_process(command, "no_such_scene.toml", option, value)
+    assert rc == 2 and out == "" and err.startswith(f"nhham {command}: error: {option}")
+
+
+def test_the_fixed_step_may_not_exceed_the_time_span(schema):
+    """rattle with --step 1e300 took one step of 10 (x = 10.86 where the motion gives
+    -1.088): refused against the command line's --t-end and the scene's t_end alike."""
+    rc, out, err = in_process("simulate", "no_such_scene.toml", "--method", "rattle",
+                              "--step", "1e300", "--t-end", "10", "--json")
+    assert_failure(rc, out, err, schema, 2, "usage", "--step")
+    rc, out, err = in_process("simulate", DISK, "--method", "rattle", "--step", "1e300",
+                              "--json")  # t_end = 10 from the scene's [simulate]
+    env = assert_failure(rc, out, err, schema, 2, "usage", "--step")
+    assert "must not exceed the time span t_end = 10" in env["error"]["message"]
+    assert env["scene"]["name"] == "vertical rolling disk"
+
+
+def test_options_that_would_be_ignored_are_refused(schema):
+    rc, out, err = in_process("classify", DISK, "--latex", "--json")
+    assert_failure(rc, out, err, schema, 2, "usage", "--latex")
+    rc, out, err = in_process("simulate", DISK, "--method", "reference", "--rtol", "1e-6",
+                              "--json")
+    env = assert_failure(rc, out, err, schema, 2, "usage", "--rtol")
+    assert "not to reference" in env["error"]["message"]
+
+
+def test_no_bound_on_request():
+    """--budget none lifts the default bound of the symbolic commands."""
+    args = cli_main.build_parser().parse_args(["classify", str(DISK), "--budget", "none"])
+    assert args.budget is None
+    assert cli_main.build_parser().parse_args(["classify", str(DISK)]).budget == 600
+    assert cli_main.build_parser().parse_args(["simulate", str(DISK)]).budget is None
+
+
+def test_usage_errors_print_the_envelope(schema):
+    rc, out, err = in_process("bogus", "x.toml", "--json")
+    env = assert_failure(rc, out, err, schema, 2, "usage", "command")
+    assert env["command"] is None
+    rc, out, err = in_process("classify", "--json")
+    assert_failure(rc, out, err, schema, 2, "usage", "scene")
+    rc, out, err = in_process("simulate", DISK, "--method", "euler", "--json")
+    assert_failure(rc, out, err, schema, 2, "usage", "--method")
+    rc, out, err = in_process("simulate", DISK, "--frobnicate", "--json")
+    assert_failure(rc, out, err, schema, 2, "usage", "--frobnicate")
+
+
+@pytest.mark.parametrize("scene,key", [
+    ("imaginary_log.toml", "lagrangian"), ("fullwidth_name.toml", "lagrangian"),
+    ("sign_in_lagrangian.toml", "lagrangian"), ("huge_expansion.toml", "lagrangian"),
+    ("simulate_rtol_below_epsilon.toml", "simulate.rtol"), ("unknown_name.toml", "lagrangian"),
+])
+def test_bad_scenes_print_the_envelope(scene, key, schema):
+    rc, out, err = in_process("derive", BAD / scene, "--json")
+    env = assert_failure(rc, out, err, schema, 2, "input", key)
+    assert env["result"] is None and env["scene"] is None
+
+
+def test_holonomic_constraint_without_real_solution_is_bad_input(schema):
+    """derive and compare find no point of M_1 (x^2 + y^2 + 1 = 0): exit 2, not an
+    internal failure; classify reports the constraint set inconsistent."""
+    scene = HOSTILE / "holonomic_no_real_solution.toml"
+    for command in ("derive", "compare"):
+        rc, out, err = in_process(command, scene, "--json")
+        env = assert_failure(rc, out, err, schema, 2, "input", None)
+        assert "x**2 + y**2 + 1" in env["error"]["message"]
+        assert env["scene"]["coordinates"] == ["x", "y", "z"]
+    rc, out, err = in_process("classify", scene, "--json")
+    assert rc == 0 and one_envelope(out, schema)["result"]["status"] == "inconsistent"
+
+
+def test_redundant_constraint_advice_is_the_commands_option(schema):
+    rc, out, err = in_process("derive", BAD / "dependent_constraints.toml", "--json")
+    env = assert_failure(rc, out, err, schema, 2, "input", "constraints[1]")
+    assert "run with --drop-redundant" in err and "drop_redundant=True" not in err
+    rc, out, err = in_process("derive", BAD / "dependent_constraints.toml", "--drop-redundant",
+                              "--json")
+    assert rc == 0, err
+    assert one_envelope(out, schema)["error"] is None
+
+
+def test_internal_failure_prints_the_envelope(monkeypatch, schema):
+    def boom(args, steps):
+        cli_main._load(args, steps)
+        raise RuntimeError("planted\nfailure")
+
+    monkeypatch.setitem(cli_main.COMMANDS, "classify", boom)
+    rc, out, err = in_process("classify", DISK, "--json")
+    env = assert_failure(rc, out, err, schema, 1, "internal", None)
+    assert env["error"]["message"].startswith("RuntimeError: planted failure")
+    assert env["scene"]["name"] == "vertical rolling disk" and env["result"] is None
+
+    def interrupted(args, steps):
+        raise KeyboardInterrupt
+
+    monkeypatch.setitem(cli_main.COMMANDS, "classify", interrupted)
+    rc, out, err = in_process("classify", DISK, "--json")
+    assert_failure(rc, out, err, schema, 130, "interrupted", None)
+
+
+def test_budget_and_failed_runs_print_the_envelope(schema):
+    rc, out, err = in_process("classify", EXAMPLES / "snakeboard.toml", "--budget", "0.05",
+                              "--json")
+    env = assert_failure(rc, out, err, schema, 3, "budget", None)
+    assert "ran out during" in env["error"]["message"] and env["result"] is None
+    rc, out, err = in_process("simulate", EXAMPLES / "paper_3_1.toml", "--json")
+    env = assert_failure(rc, out, err, schema, 3, "failed", None)
+    assert env["result"]["success"] is False  # the run's result says how it stopped

@@ -10,6 +10,7 @@ import pytest
 import sympy as sp
 
 from nhham import models
+from nhham.errors import InputError
 from nhham.hamiltonian.classification import classify_constraints
 from nhham.hamiltonian.crosscheck import CrossCheckReport, _Sampler, cross_check
 from nhham.hamiltonian.side import HamiltonianSide, hamiltonian_side
@@ -332,3 +333,28 @@ def test_singular_C_without_exact_points_falls_back_to_the_symbolic_route():
     null = nhham.load_scene(EXAMPLES / "parametric_null_constraint.toml").system
     report = cross_check(null, method="points", samples=2)
     assert report.method == "exact" and report.agree
+
+
+def _ball_on_incline(potential):
+    """A homogeneous ball rolling on an incline (n = 5, Cardan angles a, b, c; the space
+    angular velocity w = c' e_z + b' Rz(c) e_y + a' Rz(c) Ry(b) e_x), written by hand."""
+    from nhham import System
+
+    wx = "(-sin(c)*b_dot + cos(c)*cos(b)*a_dot)"
+    wy = "(cos(c)*b_dot + sin(c)*cos(b)*a_dot)"
+    wz = "(c_dot - sin(b)*a_dot)"
+    L = (f"m*(x_dot**2 + y_dot**2)/2 + I*({wx}**2 + {wy}**2 + {wz}**2)/2 - {potential}")
+    return System(["x", "y", "a", "b", "c"], L, [f"x_dot - r*{wy}", f"y_dot + r*{wx}"],
+                  parameters={"m": 1.0, "r": 0.5, "I": 0.1, "g": 9.81, "alpha": 0.3})
+
+
+def test_a_parameter_inside_a_sine_falls_back_to_sampling():
+    """The exact points of M_1 exist, but sin(alpha) at alpha = 0.3 has no exact value:
+    compare falls back to floating-point samples (it crashed with NotExact); the same
+    system with the potential's slope as a number is compared at exact points."""
+    inclined = cross_check(_ball_on_incline("m*g*sin(alpha)*x"))
+    assert inclined.method == "sampled" and inclined.agree
+    plain = cross_check(_ball_on_incline("m*g*x/3"))
+    assert plain.method == "points" and plain.agree
+    with pytest.raises(InputError, match="sin"):
+        cross_check(_ball_on_incline("m*g*sin(alpha)*x"), method="points")

@@ -128,14 +128,25 @@ def test_sampled_agrees_with_exact(case, precision):
 
 
 def test_tiny_obstruction_is_undecided_in_float64():
-    """eps = 1e-11: dmu ^ mu = -eps dq1 ^ dq2 ^ dq3 is exactly nonzero; float64 sampling
-    sees a value below its tolerance but above its zero level and must not choose."""
-    s = heisenberg(sp.Rational(1, 10**11))
+    """eps = 1e-11 hidden in a cancellation: mu = dq3 - q1 (sin^2 q3 + cos^2 q3 - 1 + eps) dq2,
+    so dmu ^ mu = -eps dq1 ^ dq2 ^ dq3 is exactly nonzero, but float64 sampling sees a
+    value about eps/2 of the size of its terms, below its tolerance but above its zero
+    level, and must not choose."""
+    eps = sp.Rational(1, 10**11)
+    c = sp.sin(q3)**2 + sp.cos(q3)**2 - 1 + eps
+    s = System(["q1", "q2", "q3"], T3, [v3 - c * q1 * v2])
     assert integrability(s).integrable is False
     f64 = integrability(s, exact=False)
     assert f64.integrable is None and f64.warnings
     assert "undecided" in f64.describe()
     assert integrability(s, exact=False, precision=30).integrable is False
+
+
+def test_small_obstruction_is_decided_whatever_the_units():
+    """eps = 1e-11 as a coefficient (a choice of units for q2): dmu ^ mu = -eps dq1 ^ dq2 ^ dq3
+    is one term, as far from zero as with eps = 1, so sampling decides it too."""
+    for eps in (sp.Rational(1, 10**11), sp.Integer(10**11)):
+        assert integrability(heisenberg(eps), exact=False).integrable is False
 
 
 def _with_circle(constraints):

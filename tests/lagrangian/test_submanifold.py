@@ -117,12 +117,23 @@ def test_sampled_rank_near_singular_warns_and_more_digits_decide():
 
 
 def test_sampled_vanishing_near_tolerance_warns():
-    """q1 * 1e-11 vanishes below float64's tolerance but above its zero level."""
+    """sin^2 + cos^2 - 1 + 1e-11 q1: its value, relative to the size of its terms (about
+    2), is below float64's tolerance but above its zero level."""
     s = System(["q1", "q2"], (v1**2 + v2**2) / 2)
-    d = Submanifold(s, [], fibre=(), exact=False).vanishes(q1 / 10**11)
+    expr = sp.sin(q1)**2 + sp.cos(q1)**2 - 1 + q1 / 10**11
+    d = Submanifold(s, [], fibre=(), exact=False).vanishes(expr)
     assert d.value is True and d.warnings
-    d = Submanifold(s, [], fibre=(), exact=False, precision=30).vanishes(q1 / 10**11)
+    d = Submanifold(s, [], fibre=(), exact=False, precision=30).vanishes(expr)
     assert d.value is False and d.warnings == ()
+
+
+def test_sampled_vanishing_does_not_depend_on_the_units():
+    """A single term is as far from zero whatever its size: q1 * 1e-11 and q1 * 1e11
+    are both nonzero without a warning (the old absolute floor called the first zero)."""
+    s = System(["q1", "q2"], (v1**2 + v2**2) / 2)
+    for scale in (sp.Rational(1, 10**11), sp.Integer(10**11)):
+        d = Submanifold(s, [], fibre=(), exact=False).vanishes(q1 * scale)
+        assert d.value is False and d.warnings == ()
 
 
 def test_regular_block_prefers_large_well_conditioned_blocks():

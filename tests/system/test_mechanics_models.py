@@ -18,6 +18,7 @@ import pytest
 import sympy as sp
 from sympy.physics import mechanics as me
 
+import nhham
 from nhham import ValidationError
 from nhham.numerics.codegen import numeric_model
 from nhham.numerics.linearize import linearize, sweep_steady
@@ -202,3 +203,58 @@ def test_points_route_agrees_with_the_numeric_saddle_solve(scene_file):
         dy = model.rhs(0.0, y)
         h = 1e-7   # phi(y + h dy) - phi(y) = O(h^2) when the field keeps phi = 0
         assert np.abs(model.residuals(y + h * dy)[:system.m]).max() < 1e-10
+
+
+def _blade_system(*constraints):
+    """A knife edge (point mass and blade inertia) as a sympy.physics.mechanics System
+    with speeds u = q' and the given nonholonomic constraints in u."""
+    x, y, th = me.dynamicsymbols("x y theta")
+    u = me.dynamicsymbols("u1:4")
+    m, I = sp.symbols("m I")
+    N, O = me.ReferenceFrame("N"), me.Point("O")
+    B = N.orientnew("B", "Axis", [th, N.z])
+    P = O.locatenew("P", x * N.x + y * N.y)
+    msys = me.System(N, O)
+    msys.add_coordinates(x, y, th)
+    msys.add_speeds(*u)
+    msys.add_kdes(*[q.diff(t) - s for q, s in zip((x, y, th), u)])
+    msys.add_bodies(me.RigidBody("blade", P, B, m, (me.inertia(B, 0, 0, I), P)))
+    msys.add_nonholonomic_constraints(*[c(th, u) for c in constraints])
+    return msys
+
+
+def _sideways(th, u):
+    return sp.sin(th) * u[0] - sp.cos(th) * u[1]
+
+
+def test_redundant_constraint_advice_can_be_followed():
+    """The second constraint is twice the first: the message names it as the user knows
+    it (nonholonomic_constraints[1]) and its advice, drop_redundant=True, is a keyword
+    from_mechanics takes; the kept constraint is sin(theta) x' - cos(theta) y'."""
+    msys = _blade_system(_sideways, lambda th, u: 2 * _sideways(th, u))
+    with pytest.raises(ValidationError) as info:
+        from_mechanics(msys)
+    message = str(info.value)
+    assert message.startswith("nonholonomic_constraints[1]: ")
+    assert "= (2)*nonholonomic_constraints[0]" in message and "drop_redundant=True" in message
+    assert info.value.key == "nonholonomic_constraints[1]"
+    system = from_mechanics(msys, drop_redundant=True)
+    x, y, th, xd, yd = sp.symbols("x y theta x_dot y_dot")
+    assert system.m == 1 and len(system.dropped) == 1
+    assert sp.expand(system.constraints[0] - (sp.sin(th) * xd - sp.cos(th) * yd)) == 0
+
+
+def test_mechanics_objects_are_read_or_pointed_to_what_reads_them():
+    """A LagrangesMethod is read as from_lagranges_method reads it; a KanesMethod (which
+    holds equations of motion, not energies) is pointed to the System it comes from."""
+    x, y = me.dynamicsymbols("x y")
+    L = (x.diff(t) ** 2 + y.diff(t) ** 2) / 2
+    lm = me.LagrangesMethod(L, [x, y], nonhol_coneqs=[x.diff(t) - y * y.diff(t)])
+    system = from_mechanics(lm)
+    X, Y, Xd, Yd = sp.symbols("x y x_dot y_dot")
+    assert system.constraints == (Xd - Y * Yd,)
+    msys = _blade_system(_sideways)
+    km = me.KanesMethod(msys.frame, list(msys.q), list(msys.u), kd_eqs=list(msys.kdes))
+    with pytest.raises(nhham.InputError, match="KanesMethod.*pass the sympy.physics.mechanics"
+                                               ".System it is formed from"):
+        from_mechanics(km)

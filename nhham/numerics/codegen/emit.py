@@ -105,7 +105,7 @@ def system_fingerprint(system, path: str = "saddle") -> str:
 
 
 def _generate(system, path: str) -> dict:
-    geom = lagrangian_geometry(system)
+    geom = lagrangian_geometry(system, closed_form=True)  # the closed path is chosen by size
     ing = geom.ingredients
     n, m, k = system.n, system.m, len(system.holonomic)
     rename = _renaming(system)

@@ -1,0 +1,90 @@
+"""A bound on the time a computation may take: ``with nhham.time_budget(60): ...``.
+
+Symbolic work (sympy's determinants, solves and simplifications) cannot be made to stop
+politely from outside, so the budget is an interval timer: when it runs out,
+:class:`~nhham.errors.BudgetExceeded` is raised in the main thread wherever the work is.
+The command's ``--budget`` is this bound, and the library takes the same one::
+
+    with nhham.time_budget(60):
+        G = nhham.lagrangian_geometry(system)
+        lam = G.multipliers          # BudgetExceeded after 60 s instead of running on
+
+Budgets nest: an inner bound never extends an outer one, and when the inner block ends
+the outer timer runs on with what is left of it. Off the main thread (where Python
+delivers no signals) the bound cannot be enforced: a warning says so.
+"""
+
+from __future__ import annotations
+
+import math
+import signal
+import threading
+import time
+import warnings
+from contextlib import contextmanager
+from typing import Callable, Iterator
+
+from nhham.errors import BudgetExceeded, InputError, NhhamWarning
+
+__all__ = ["time_budget", "remaining_time"]
+
+# The deadlines (time.monotonic()) of the budgets in force, outermost first.
+_DEADLINES: list[tuple[float, float, Callable[[], str]]] = []
+
+
+def remaining_time() -> float:
+    """Seconds left of the innermost budget in force (inf when there is none).
+
+    Long numeric loops read it to stop at the budget without waiting for a signal.
+    """
+    return min((d - time.monotonic() for d, _, _ in _DEADLINES), default=math.inf)
+
+
+@contextmanager
+def time_budget(seconds: float | None, what: Callable[[], str] | None = None) -> Iterator[None]:
+    """Raise :class:`~nhham.errors.BudgetExceeded` in this block after ``seconds``.
+
+    Parameters
+    ----------
+    seconds : float or None
+        A positive, finite number of seconds; None: no bound (the block just runs).
+    what : callable returning str, optional
+        Names the step that was running, for the message (the command passes the name
+        of its current step).
+    """
+    if seconds is None:
+        yield
+        return
+    if not (isinstance(seconds, (int, float)) and math.isfinite(seconds) and seconds > 0):
+        raise InputError(f"time_budget: seconds must be a positive finite number, got "
+                         f"{seconds!r}")
+    if not hasattr(signal, "setitimer") or threading.current_thread() is not \
+            threading.main_thread():
+        warnings.warn(f"time_budget({seconds:g}) cannot be enforced off the main thread "
+                      f"(no signals there); the block runs without a bound", NhhamWarning,
+                      stacklevel=3)
+        yield
+        return
+    now = time.monotonic()
+    deadline = min([now + seconds] + [d for d, _, _ in _DEADLINES])
+    _DEADLINES.append((deadline, seconds, what or (lambda: "")))
+
+    def expire(signum, frame):
+        # The innermost budget whose deadline has passed is the one that ran out.
+        late = [b for b in _DEADLINES if b[0] <= time.monotonic() + 1e-3] or _DEADLINES
+        _, total, name = late[0]
+        step = name()
+        raise BudgetExceeded(f"the budget of {total:g} s ran out"
+                             + (f" during '{step}'" if step else ""))
+
+    previous = signal.signal(signal.SIGALRM, expire)
+    signal.setitimer(signal.ITIMER_REAL, max(deadline - now, 1e-6))
+    try:
+        yield
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0)
+        _DEADLINES.pop()
+        signal.signal(signal.SIGALRM, previous)
+        if _DEADLINES:  # the outer budget runs on with what is left of it
+            left = _DEADLINES[-1][0] - time.monotonic()
+            signal.setitimer(signal.ITIMER_REAL, max(left, 1e-6))

@@ -1,0 +1,74 @@
+"""Which numbers are data nhham computes with: real ones, within double precision.
+
+A constant that is not a real number (``sqrt(-1)``, ``log(-1)`` = ``I*pi``,
+``asin(2)``, the principal root ``(-1)**(1/3)``) would lose its imaginary part in
+the numeric layer, and a float beyond double precision's range (``1e-400``) would
+become 0 or infinite there: both are refused where the input comes in (the
+expression parser, :class:`nhham.System`), naming the number and its value.
+"""
+
+from __future__ import annotations
+
+import math
+
+import sympy as sp
+
+__all__ = ["number_problems", "complex_string"]
+
+
+def number_problems(expr) -> list[str]:
+    """Why the numbers in ``expr`` are not real data nhham can compute with.
+
+    Every constant subexpression must be a real number (``sqrt(-1)``, ``log(-1)`` =
+    ``I*pi``, ``asin(2)`` are not) and every float must lie within double
+    precision's range (sympy's ``Float('1e-400')`` would become 0).
+
+    Parameters
+    ----------
+    expr : sympy.Expr
+
+    Returns
+    -------
+    list of str
+        One line per offending number (empty when every number is fine).
+
+    >>> number_problems(sp.asin(2) * sp.Symbol("x"))
+    ['asin(2) is not a real number (its value is 1.5708-1.31696i); nhham takes real data only']
+    """
+    problems = []
+    stack = [sp.sympify(expr)]
+    while stack:
+        node = stack.pop()
+        if not isinstance(node, sp.Expr) or node.free_symbols:
+            stack.extend(node.args)
+            continue
+        for number in node.atoms(sp.Float):
+            double = float(number)
+            if not math.isfinite(double) or (double == 0.0 and not number.is_zero):
+                problems.append(f"the number {sp.sstr(number)} is outside the range of double "
+                                f"precision (about 1e-308 to 1e308)")
+        complex_value = complex_string(node)
+        if complex_value:
+            problems.append(f"{sp.sstr(node)} is not a real number (its value is "
+                            f"{complex_value}); nhham takes real data only")
+    return problems
+
+
+def complex_string(number) -> str | None:
+    """The value of the constant ``number`` as ``a+bi`` when it is not real, else None.
+
+    >>> complex_string(sp.asin(2)), complex_string(sp.acos(sp.Rational(1, 3)))
+    ('1.5708-1.31696i', None)
+    """
+    real = number.is_extended_real
+    if real:
+        return None
+    try:
+        re, im = (float(part) for part in number.evalf(30).as_real_imag())
+    except (TypeError, ValueError, OverflowError):
+        return None  # not a number that evaluates: the numeric checks met later say so
+    if not (math.isfinite(re) and math.isfinite(im)):
+        return None  # not finite: refused as such
+    if real is None and abs(im) <= 1e-25 * max(1.0, abs(re)):
+        return None
+    return f"{re:.6g}{im:+.6g}i"
