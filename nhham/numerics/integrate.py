@@ -49,7 +49,8 @@ from nhham.numerics.compiled_loop import COMPILED_METHODS, run_compiled
 from nhham.numerics.diagnostics import (Diagnostics, Singularity, singularity_at,
                                         trajectory_diagnostics)
 from nhham.numerics.integrators import FIXED_STEP_METHODS, run_fixed_step
-from nhham.numerics.model import NumericModel, NumericsWarning, ProjectionOutcome
+from nhham.numerics.model import (LibraryReady, NumericModel, NumericsWarning,
+                                  ProjectionOutcome)
 from nhham.numerics.run import Deadline, Run
 from nhham.numerics.scipy_loop import SCIPY_METHODS, DenseOutput, run_scipy
 from nhham.numerics.status import Status
@@ -185,7 +186,7 @@ class SimulationResult:
         lines = [
             f"{self.method}: {self.message} (status {self.status}) at t = {self.t[-1]:.6g}",
             f"  steps {self.nsteps}, right-hand-side evaluations {self.nfev}, "
-            f"wall time {self.wall_time_s:.3g} s",
+            f"wall time {self.wall_time_s:.3g} s, {self.settings.get('backend')} backend",
             f"  max constraint residual {d.constraint_residual_max:.2e} "
             f"(scaled {d.constraint_residual_rel_max:.2e})",
             f"  energy drift {d.energy_drift:.2e} (relative {d.energy_drift_rel:.2e}), "
@@ -301,6 +302,10 @@ def simulate(system_or_model, t_span, y0, *, method: str = "DOP853", rtol: float
         838,860 states for n = 4).
     backend : str
         Backend when a System is given (see :func:`nhham.numerics.codegen.numeric_model`).
+        With ``"auto"`` a library not yet in the compile cache is built in the background
+        while numpy integrates; when the build finishes first the run starts again on
+        the compiled code. ``result.settings["backend"]`` (and ``"backend_note"``) say
+        which ran; both give the same steps up to round-off.
     warn : bool
         Issue the diagnostics' warnings as :class:`NumericsWarning`.
     progress : bool
@@ -337,7 +342,8 @@ def simulate(system_or_model, t_span, y0, *, method: str = "DOP853", rtol: float
         For an unknown method or inconsistent options (``dense_output`` or
         ``events`` with a method that is not a scipy one, for instance).
     """
-    model = _as_model(system_or_model, backend)
+    model = _as_model(system_or_model, backend,
+                      background=method not in ("rattle", "rattle4") and loop != "compiled")
     t0, t1 = (float(t_span[0]), float(t_span[1]))
     if not (math.isfinite(t0) and math.isfinite(t1)) or t1 == t0:
         raise InputError(f"t_span: need two different finite times, got {t_span!r}")
@@ -348,8 +354,9 @@ def simulate(system_or_model, t_span, y0, *, method: str = "DOP853", rtol: float
     recorder = _recorder(model, method, t_eval, save_every, max_points)
     settings = {"rtol": rtol, "atol": atol, "step": step, "projection": projection,
                 "baumgarte": None if baumgarte is None else tuple(map(float, baumgarte)),
-                "backend": model.backend, "path": model.path,
-                "save_every": int(save_every), "max_points": recorder.max_points}
+                "backend": model.backend, "backend_note": model.backend_note,
+                "path": model.path, "save_every": int(save_every),
+                "max_points": recorder.max_points}
     if residual_tol is None:
         exact = projection or method in ("rattle", "rattle4", "reference")
         residual_tol = 1e-11 if exact else 1e-8
@@ -357,22 +364,32 @@ def simulate(system_or_model, t_span, y0, *, method: str = "DOP853", rtol: float
     deadline = Deadline.after(time_limit)
     adaptive = dict(rtol=rtol, atol=atol, max_step=max_step, first_step=first_step,
                     t_eval=t_eval, projection=projection, baumgarte=baumgarte,
-                    progress=progress, recorder=recorder, deadline=deadline)
-    if compiled_loop:
-        settings["loop"] = "compiled"
-        run = run_compiled(model, y_init, t0, t1, method, **adaptive)
-    elif method in SCIPY_METHODS:
-        settings["loop"] = "scipy"
-        run = run_scipy(model, y_init, t0, t1, method, dense_output=dense_output,
-                        events=events, **adaptive)
-    elif method in FIXED_STEP_METHODS:
-        opts = {"recorder": recorder, "progress": progress, "deadline": deadline}
-        if method == "rk4":
-            opts.update(projection=projection, baumgarte=baumgarte)
-        run = run_fixed_step(method, model, y_init, t0, t1, float(step), **opts)
-        settings.update(step=run.step, newton_iterations=run.newton_iterations)
-    else:
-        run = _run_reference(model, y_init, t0, t1, reference_digits, t_eval, settings)
+                    progress=progress, deadline=deadline)
+    while True:
+        try:
+            if compiled_loop:
+                settings["loop"] = "compiled"
+                run = run_compiled(model, y_init, t0, t1, method, recorder=recorder, **adaptive)
+            elif method in SCIPY_METHODS:
+                settings["loop"] = "scipy"
+                run = run_scipy(model, y_init, t0, t1, method, dense_output=dense_output,
+                                events=events, recorder=recorder, **adaptive)
+            elif method in FIXED_STEP_METHODS:
+                opts = {"recorder": recorder, "progress": progress, "deadline": deadline}
+                if method == "rk4":
+                    opts.update(projection=projection, baumgarte=baumgarte)
+                run = run_fixed_step(method, model, y_init, t0, t1, float(step), **opts)
+                settings.update(step=run.step, newton_iterations=run.newton_iterations)
+            else:
+                run = _run_reference(model, y_init, t0, t1, reference_digits, t_eval,
+                                     settings)
+            break
+        except LibraryReady:  # the background build won: the whole run on compiled code
+            model = model.with_library()
+            compiled_loop = _use_compiled_loop(model, method, loop, dense_output or
+                                               events is not None)
+            settings.update(backend=model.backend, backend_note=model.backend_note)
+            recorder = _recorder(model, method, t_eval, save_every, max_points)
     wall = time.perf_counter() - start
     storage = None if method == "reference" else recorder.storage(t_eval is not None)
     return _result(model, run, method, settings, wall, residual_tol, initial, warn, storage)
@@ -407,12 +424,12 @@ def _result(model, run, method, settings, wall, residual_tol, initial, warn, sto
 
 
 # ------------------------------------------------------------------ helpers
-def _as_model(obj, backend) -> NumericModel:
+def _as_model(obj, backend, background=False) -> NumericModel:
     if isinstance(obj, NumericModel):
         return obj
     from nhham.numerics.codegen import numeric_model  # the one bridge from sympy
 
-    return numeric_model(obj, backend=backend)
+    return numeric_model(obj, backend=backend, background=background)
 
 
 def _check_options(method, step, projection, baumgarte, model):

@@ -34,8 +34,9 @@ This module must not import sympy (``DESIGN.md`` §4).
 from __future__ import annotations
 
 import ctypes
-from typing import Any
 import math
+import warnings
+from typing import Any
 from dataclasses import dataclass, field, replace
 from types import MappingProxyType
 
@@ -46,8 +47,8 @@ from nhham.numerics.kernels import CompiledRHS, GeneratedKernels
 from nhham.numerics.saddle import SingleStateSolver, cond_each, solve_saddle
 from nhham.numerics.status import NumericalFailure, Status
 
-__all__ = ["NumericModel", "NumericsWarning", "ProjectionOutcome", "ParameterBlock",
-           "COND_C_WARN"]
+__all__ = ["NumericModel", "NumericsWarning", "LibraryReady", "ProjectionOutcome",
+           "ParameterBlock", "COND_C_WARN"]
 
 #: cond(C) above which results are flagged (errors grow like cond(C) * eps).
 COND_C_WARN = 1e10
@@ -55,6 +56,16 @@ COND_C_WARN = 1e10
 
 class NumericsWarning(UserWarning):
     """A numeric result may be unreliable (conditioning, residuals, fallbacks)."""
+
+
+class LibraryReady(Exception):
+    """The compiled library of a model that evaluates with numpy meanwhile is built.
+
+    Raised by the field of :meth:`NumericModel.field_function` on a model with a
+    ``pending`` build, at the first evaluation after the build succeeded, so that the
+    caller can run again on :meth:`NumericModel.with_library` (not an error: deliberately
+    not a :class:`~nhham.errors.NhhamError`, so no loop mistakes it for a failed step).
+    """
 
 
 @dataclass(frozen=True)
@@ -121,6 +132,10 @@ class NumericModel:
     parameter_values : tuple of float
     backend : {"c", "numpy"}
         What evaluates :meth:`rhs`; ``backend_note`` says why.
+    pending : object or None
+        The build of the compiled library under way while numpy evaluates the model
+        (``numeric_model(..., background=True)``; a
+        :class:`nhham.numerics.codegen.background.BackgroundBuild`), else None.
     path : {"saddle", "closed_form"}
     constant_W : bool
         W does not depend on q.
@@ -138,6 +153,7 @@ class NumericModel:
     backend_note: str = ""
     python_source: str = field(default="", repr=False)
     c_source: str = field(default="", repr=False)
+    pending: Any = field(default=None, repr=False)
     # Set once by __post_init__, never changed (the model stays immutable).
     _p: np.ndarray = field(init=False, repr=False)
     _plist: list = field(init=False, repr=False)
@@ -295,6 +311,12 @@ class NumericModel:
         return (OUT[:, :n2], OUT[:, n2:n2 + self.m], OUT[:, -1],
                 Status.NONFINITE if bad else Status.SUCCESS)
 
+    def with_library(self) -> "NumericModel":
+        """The same model on the compiled library of its ``pending`` build, once that
+        build is over (numpy still, with a warning saying why, when it failed)."""
+        compiled, note = self.pending.load(self.layout)
+        return replace(self, compiled=compiled, backend_note=note, pending=None)
+
     def parameter_block(self, baumgarte=None) -> ParameterBlock:
         """The parameters (and Baumgarte terms) as the compiled code reads them."""
         if baumgarte is None:
@@ -319,7 +341,7 @@ class NumericModel:
             return out
 
         if self._ext is None:
-            return f_slow
+            return f_slow if self.pending is None else _until_built(f_slow, self.pending)
         field, block = self._ext.field, self.parameter_block(baumgarte)
         addr = block.address  # the closure keeps ``block`` (and so its array) alive
 
@@ -579,6 +601,24 @@ class NumericModel:
         raise NumericalFailure(
             Status.NOT_CONVERGED, f"projection onto the holonomic constraints did not "
             f"converge: |g| = {err:.3g} after {maxiter} Newton iterations")
+
+
+def _until_built(f, pending):
+    """``f``, until the ``pending`` build is over: then :class:`LibraryReady` if it
+    succeeded; if it failed numpy goes on, with a :class:`NumericsWarning` saying why.
+    One event test per call: nothing next to a numpy evaluation."""
+    told = []
+
+    def g(z):
+        if pending.ready() and not told:
+            if pending.succeeded():
+                raise LibraryReady("the compiled library is built")
+            told.append(True)
+            warnings.warn(f"C backend unavailable ({pending.failure()}); numpy goes on",
+                          NumericsWarning, stacklevel=2)
+        return f(z)
+
+    return g
 
 
 def _failure_message(status, y) -> str:

@@ -2,10 +2,11 @@
 
 :func:`numeric_model` generates the model's kernels (:mod:`.emit`: sympy to Python, numpy,
 mpmath and C text, the only place in the numerics layer that imports sympy), compiles and
-loads the C (:mod:`.build`: the cache of shared libraries) and returns a
-:class:`~nhham.numerics.model.NumericModel` whose methods take arrays of states and never
-touch sympy. The C runtime the generated kernels are compiled with lives in
-``nhham/numerics/c/`` (package data):
+loads the C (:mod:`.build`; the compile cache and how a cached library is verified before
+it is loaded: :mod:`.cache`; builds in the background while numpy answers:
+:mod:`.background`) and returns a :class:`~nhham.numerics.model.NumericModel` whose
+methods take arrays of states and never touch sympy. The C runtime the generated kernels
+are compiled with lives in ``nhham/numerics/c/`` (package data):
 
 - the saddle solve ``ksolve``: Cholesky of W and of the Schur complement mu W^-1 mu^T
   (W is positive definite for mechanical Lagrangians), LU with partial pivoting of the
@@ -17,27 +18,34 @@ touch sympy. The C runtime the generated kernels are compiled with lives in
 - when the Python and numpy headers are installed, CPython entry points for the
   single-state calls (``pyext.c``; no ctypes on the hot path).
 
-When no compiler works the model falls back to numpy and says why (``model.backend_note``).
+Every fallback (numpy instead of C, the plain library instead of the CPython entry
+points, a private cache instead of the configured one, a refused cached library) is
+reported with a :class:`~nhham.numerics.model.NumericsWarning`; ``model.backend_note``
+says what runs. Only ``NHHAM_NO_CC=1`` (or ``backend="numpy"``) asks for numpy silently.
 """
 
 from __future__ import annotations
 
+import os
 import warnings
 
-from nhham.errors import MissingParameterValueError
-from nhham.numerics.codegen.build import c_compiler, compile_c, build_compiled
+from nhham.errors import ComputationError, MissingParameterValueError
+from nhham.numerics.codegen.background import build_in_background, take_over
+from nhham.numerics.codegen.build import (build_library, c_compiler, compile_c,
+                                          find_library, load_library)
+from nhham.numerics.codegen.cache import CompileCache, cache_location
 from nhham.numerics.codegen.emit import generate_sources
 from nhham.numerics.kernels import GeneratedKernels
 from nhham.numerics.model import NumericModel, NumericsWarning
 
-__all__ = ["numeric_model", "generate_sources", "compile_c", "c_compiler"]
+__all__ = ["numeric_model", "generate_sources", "compile_c", "c_compiler", "cache_location"]
 
 _BACKENDS = ("numpy", "c", "auto")
 _PATHS = ("saddle", "closed_form")
 
 
 def numeric_model(system, *, backend: str = "auto", path: str = "saddle",
-                  parameters=None, cache_dir=None) -> NumericModel:
+                  parameters=None, cache_dir=None, background: bool = False) -> NumericModel:
     """Generate the numeric model of ``system``.
 
     Parameters
@@ -47,8 +55,8 @@ def numeric_model(system, *, backend: str = "auto", path: str = "saddle",
         ``"numpy"``: generated Python/numpy only. ``"c"``: also compile the
         right-hand side with the system C compiler; if that is impossible a
         :class:`~nhham.numerics.model.NumericsWarning` is issued and numpy is used.
-        ``"auto"`` (default): C when a compiler works, numpy otherwise
-        (silently; ``model.backend_note`` says why).
+        ``"auto"`` (default): C when a compiler works, else numpy with that warning
+        (none when ``NHHAM_NO_CC=1`` asks for numpy).
     path : {"saddle", "closed_form"}, optional
         ``"saddle"`` (default) solves the saddle-point system numerically at
         every evaluation. ``"closed_form"`` evaluates the symbolic closed form
@@ -56,8 +64,13 @@ def numeric_model(system, *, backend: str = "auto", path: str = "saddle",
     parameters : mapping of str to float, optional
         Values overriding ``system.parameter_values``.
     cache_dir : str, optional
-        Where compiled libraries are kept (default ``$NHHAM_CACHE`` or
-        ``~/.cache/nhham``).
+        The compile cache (default ``$NHHAM_CACHE``, else ``$XDG_CACHE_HOME/nhham``,
+        else ``~/.cache/nhham``; see :mod:`nhham.numerics.codegen.cache`).
+    background : bool, optional
+        With ``backend="auto"``: when the library is not in the cache yet, do not wait
+        for the compiler; the model evaluates with numpy, ``model.pending`` is the build
+        under way, and :meth:`NumericModel.with_library` gives the compiled model once it
+        is done (what :func:`nhham.numerics.integrate.simulate` does for a System).
 
     Returns
     -------
@@ -77,10 +90,12 @@ def numeric_model(system, *, backend: str = "auto", path: str = "saddle",
     values = _parameter_values(system, parameters)
     sources = generate_sources(system, path=path)
     kernels = GeneratedKernels.from_source(sources["python"], sources["layout"])
-    compiled, note = None, "numpy backend requested"
+    compiled, note, pending = None, "numpy backend requested", None
     if backend in ("c", "auto"):
-        compiled, note = build_compiled(sources, cache_dir)
-        if compiled is None and backend == "c":
+        compiled, note, pending = _compiled(sources, cache_dir,
+                                            background and backend == "auto")
+        if compiled is None and pending is None and (
+                backend == "c" or not os.environ.get("NHHAM_NO_CC")):
             warnings.warn(f"C backend unavailable ({note}); using numpy", NumericsWarning,
                           stacklevel=2)
     return NumericModel(
@@ -92,8 +107,31 @@ def numeric_model(system, *, backend: str = "auto", path: str = "saddle",
         backend_note=note,
         python_source=sources["python"],
         c_source=sources["c"],
+        pending=pending,
     )
 
+
+def _compiled(sources, cache_dir, background: bool) -> tuple:
+    """``(CompiledRHS or None, note, BackgroundBuild or None)`` for a model's sources."""
+    problems: list = []
+    try:
+        cache = CompileCache.open(cache_dir)
+        if background:
+            built = find_library(sources, cache, problems)
+            if built is None:
+                return (None, "numpy while the C library is compiled in the background",
+                        build_in_background(sources, cache))
+        else:
+            take_over(sources)
+            built = build_library(sources, cache)
+            problems += built.problems
+    except (ComputationError, OSError) as exc:
+        return None, str(exc), None
+    finally:
+        for problem in problems:
+            warnings.warn(problem, NumericsWarning, stacklevel=3)
+    compiled, note = load_library(built, sources["layout"])
+    return compiled, note, None
 
 
 def _parameter_values(system, overrides) -> dict:

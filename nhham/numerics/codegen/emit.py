@@ -14,7 +14,7 @@ sin/cos are computed anyway are expanded first, see :func:`expand_angle_sums`):
 ``geometry(q)``
     W, mu, h, g: what projection onto M_1 and the structure-preserving integrator need.
 ``energy(q, v)``
-    E_L.
+    E_L (v^T W v / 2 + V for L = v^T W v / 2 + b . v - V, read from the terms of L).
 ``lq(q, v)``, ``jphi(q, v)``
     dL/dq (n) and d(phi)/dq (m x n), for the Newton iterations of the nonholonomic RATTLE
     scheme.
@@ -51,6 +51,7 @@ from sympy.printing.pycode import MpmathPrinter, PythonCodePrinter
 
 from nhham.lagrangian.geometry import lagrangian_geometry
 from nhham.numerics.status import c_defines
+from nhham.system.expressions import derivative
 
 __all__ = ["generate_sources", "system_fingerprint", "expand_angle_sums", "runtime_source",
            "RUNTIME_FILES"]
@@ -122,14 +123,15 @@ def _generate(system, path: str) -> dict:
     qs = [rename[q] for q in system.coordinates]
     vs = [rename[v] for v in system.velocities]
     L = R(system.lagrangian)
-    lq = [sp.diff(L, q) for q in qs]
+    # nhham's own derivative: sympy's diff spends most of its time on factors free of x
+    lq = [derivative(L, q) for q in qs]
     phi = [R(e) for e in system.phi]
-    jphi = [sp.diff(f, q) for f in phi for q in qs]
+    jphi = [derivative(f, q) for f in phi for q in qs]
 
     kernels = {
         "saddle": ("qv", W + F + mu + drift + h + g),
         "geometry": ("q", W + mu + h + g),
-        "energy": ("qv", [R(geom.energy)]),
+        "energy": ("qv", [_energy(system, L, vs, W)]),
         "lq": ("qv", lq),
         "jphi": ("qv", jphi),
     }
@@ -152,7 +154,7 @@ def _generate(system, path: str) -> dict:
         "holonomic_labels": tuple(f"holonomic[{i}]" for i in range(k)),
         "constant_W": not any(e.free_symbols & set(qs) for e in W),
         "quadratic": _is_quadratic(system),
-        "linear_constraints": all(sp.simplify(e) == 0 for e in h),
+        "linear_constraints": system.is_linear,
         "name": system.name,
         "kernels": tuple(kernels),
     }
@@ -171,8 +173,24 @@ def _renaming(system) -> dict:
     return rename
 
 
+def _energy(system, L, vs, W):
+    """E_L = v^A dL/dv^A - L in the generated names (``L``, ``vs``, the entries ``W``):
+    v^T W v / 2 + V when L = v^T W v / 2 + b . v - V (the b terms cancel), else by
+    differentiation."""
+    parts = system.quadratic_parts
+    n = len(vs)
+    if parts is None:
+        return sp.Add(*[v * derivative(L, v) for v in vs]) - L
+    rename = _renaming(system)
+    half = sp.Add(*[W[i * n + j] * vs[i] * vs[j] for i in range(n) for j in range(n)]) / 2
+    return half + sp.sympify(parts.V).xreplace(rename)
+
+
 def _is_quadratic(system) -> bool:
     """True when L = 1/2 v^T W(q) v - V(q) (no linear-in-v terms, W free of v)."""
+    parts = system.quadratic_parts
+    if parts is not None:  # read from the terms of L: only b is left to look at
+        return all(sp.simplify(b) == 0 for b in parts.b)
     W = system.hessian
     vs = set(system.velocities)
     if any(e.free_symbols & vs for e in W):
