@@ -45,6 +45,7 @@ the tolerance; in between the decision is doubtful and says so in
 
 from __future__ import annotations
 
+import contextlib
 import itertools
 import math
 from dataclasses import dataclass, field
@@ -59,7 +60,7 @@ from nhham.settings import PARAMETER_BOX, SEED, STATE_BOX, Precision
 from nhham.errors import ComputationError, EmptySubmanifoldError
 from nhham.lagrangian.algebra import cancel, solve_linear
 from nhham.system.evaluation import numeric_function
-from nhham.system.expressions import derivative, short
+from nhham.system.expressions import short
 
 __all__ = ["Decision", "Submanifold"]
 
@@ -408,22 +409,45 @@ class Submanifold:
                           self.system.parameter_values)
 
     def _sampled_rank(self, reduced, tol):
+        """The rank at the sample points, whatever the units.
+
+        Singular values are compared with the largest one after the matrix is
+        equilibrated by rows and columns (a change of units leaves the rank unchanged).
+        Where that answer differs from the plain one (singular values over max(s_1, 1)),
+        an entry could be rounding noise that equilibration blew up (a function
+        vanishing on M, seen off M by the Newton projection): entries below the zero
+        level of their size (:func:`_value_scale`) are then set to 0 first.
+        """
         points, resid = self.points()
         f = self._lambdify([reduced])
-        # Singular values are compared with the size of the terms of the entries (not
-        # with 1): unit-free, and a matrix of rounding noise still has rank 0.
-        f_scale = self._lambdify([reduced.applyfunc(lambda e: _value_scale(e, self.variables))])
-        svals, relative, ranks = [], [], []
         tol = self._tol(tol)
         zero = self._zero_level(resid)
-        for pt in points:
-            S = self._matrix_at(f, pt, reduced.shape)
-            s = _singular_values(S, self.precision)
-            ref = float(np.max(np.abs(np.asarray(self._matrix_at(f_scale, pt, reduced.shape),
-                                                 dtype=complex)), initial=0.0)) or 1.0
-            svals.append(tuple(float(x) for x in s))
-            relative.append(tuple(float(x) / ref for x in s))
-            ranks.append(int(sum(float(x) > tol * ref for x in s)))
+        with self._arithmetic():
+            return self._decide_rank(reduced, f, points, resid, tol, zero)
+
+    def _arithmetic(self):
+        """The working precision of the sampled arithmetic (mpmath's dps, or float64)."""
+        return mpmath.workdps(self.precision) if self.precision else contextlib.nullcontext()
+
+    def _decide_rank(self, reduced, f, points, resid, tol, zero):
+        values = [self._matrix_at(f, pt, reduced.shape) for pt in points]
+        plain = [_singular_values(S, self.precision) for S in values]
+        ranks = [_count_above(s, tol * max(float(s[0]) if len(s) else 0.0, 1.0))
+                 for s in plain]
+        relative = [_relative(_singular_values(_equilibrated(S), self.precision))
+                    for S in values]
+        how = "plain"
+        if [_count_above(s, tol) for s in relative] != ranks:
+            f_size = self._lambdify([reduced.applyfunc(
+                lambda e: _value_scale(e, self.variables))])
+            cleaned = [_without_noise(S, self._matrix_at(f_size, pt, reduced.shape), zero)
+                       for S, pt in zip(values, points)]
+            relative = [_relative(_singular_values(_equilibrated(S), self.precision))
+                        for S in cleaned]
+            ranks = [_count_above(s, tol) for s in relative]
+            how = "equilibrated"
+        else:
+            relative = [_relative(s, floor=1.0) for s in plain]
         r = max(ranks)
         warnings = []
         if len(set(ranks)) > 1:
@@ -441,11 +465,13 @@ class Submanifold:
                 f"level {zero:.3g} but below the tolerance {tol:g}: near-singular at this "
                 f"precision, the rank may be higher (try more digits)"
             )
+        basis = ("relative tolerance" if how == "plain" else
+                 "singular values of the matrix equilibrated by rows and columns, rounding "
+                 "noise removed; relative tolerance")
         return Decision(
-            r, "sampled",
-            f"rank {r} at {len(points)} seeded points (singular values relative to the size "
-            f"of the entries' terms, tolerance {tol:g})",
-            precision=self.precision_label, samples=len(points), singular_values=tuple(svals),
+            r, "sampled", f"rank {r} at {len(points)} seeded points ({basis} {tol:g})",
+            precision=self.precision_label, samples=len(points),
+            singular_values=tuple(tuple(float(x) for x in s) for s in plain),
             point_residual=resid, warnings=tuple(warnings),
             points=_record(points, self.variables),
         )
@@ -707,15 +733,82 @@ class Submanifold:
 def _value_scale(expr, variables):
     """The size a value of ``expr`` at a sample point is compared with.
 
-    The sum of |terms| of ``expr`` expanded, plus |d expr / d z| times the size of the
-    sample box for every state variable z: unit-free (it scales with the parameters as
-    ``expr`` does), and a function vanishing on M is still seen as zero at a point off M
-    by the rounding of the Newton projection (q1 = 4e-16 on {q1 = 0}).
+    The expression with every sum replaced by the sum of the sizes of its terms (so no
+    cancellation can make it small), every state variable z by |z| + the half-width of
+    the sample box, and every function of the state by 1 + its modulus: a bound on the
+    terms of ``expr`` over a neighbourhood of the point, formed on the tree as it is
+    (no expansion). Unit-free, since it scales with the parameters as ``expr`` does, and
+    a function vanishing on M stays zero at a point off M by the rounding of the Newton
+    projection (q1 = 4e-16 on {q1 = 0} is 4e-16 of its size 1.3).
     """
-    expr = sp.expand(expr)
-    terms = sum((abs(t) for t in sp.Add.make_args(expr)), sp.S.Zero)
-    slope = sum((abs(derivative(expr, z)) for z in variables if expr.has(z)), sp.S.Zero)
-    return terms + slope * max(abs(b) for b in STATE_BOX)
+    state = set(variables)
+    box = max(abs(b) for b in STATE_BOX)
+    memo: dict = {}
+
+    def modulus(e):  # unevaluated: sympy's Abs would query assumptions on large trees
+        return sp.Abs(e, evaluate=False)
+
+    def size(e):
+        if e in memo:
+            return memo[e]
+        if e.is_number:
+            out = abs(e)
+        elif e.is_Symbol:
+            out = sp.Add(modulus(e), box, evaluate=False) if e in state else modulus(e)
+        elif e.is_Add:
+            out = sp.Add(*[size(a) for a in e.args], evaluate=False)
+        elif e.is_Mul:
+            out = sp.Mul(*[size(a) for a in e.args], evaluate=False)
+        elif e.is_Pow and e.exp.is_number and e.exp > 0:
+            out = sp.Pow(size(e.base), e.exp, evaluate=False)
+        elif e.free_symbols & state:
+            # a function of the state (or a denominator): its modulus, at least 1
+            out = sp.Add(1, modulus(e), evaluate=False)
+        else:
+            out = modulus(e)
+        memo[e] = out
+        return out
+
+    return size(sp.sympify(expr))
+
+
+def _count_above(singular_values, threshold) -> int:
+    return int(sum(float(x) > threshold for x in singular_values))
+
+
+def _relative(singular_values, floor=0.0) -> tuple:
+    """Singular values over the largest (at least ``floor``)."""
+    top = max(float(singular_values[0]) if len(singular_values) else 0.0, floor)
+    return tuple(float(x) / top for x in singular_values) if top else \
+        tuple(0.0 for _ in singular_values)
+
+
+def _equilibrated(S):
+    """S with rows and columns scaled to unit largest modulus (Ruiz's iteration); zero
+    rows and columns stay zero. Works on float and on object (mpf) arrays."""
+    A = np.array(S, dtype=object if np.asarray(S).dtype == object else complex)
+    for _ in range(8):
+        for axis in (1, 0):
+            big = [max((abs(x) for x in (A[i, :] if axis else A[:, i])), default=0)
+                   for i in range(A.shape[0] if axis else A.shape[1])]
+            for i, b in enumerate(big):
+                if b:
+                    root = b ** 0.5
+                    if axis:
+                        A[i, :] = A[i, :] / root
+                    else:
+                        A[:, i] = A[:, i] / root
+    return A
+
+
+def _without_noise(S, size, zero):
+    """S with the entries below ``zero`` times their size set to 0."""
+    A = np.array(S, dtype=object if np.asarray(S).dtype == object else complex)
+    B = np.asarray(size)
+    for idx in np.ndindex(A.shape):
+        if abs(A[idx]) <= zero * abs(B[idx]):
+            A[idx] = 0
+    return A
 
 
 def _floats(values):

@@ -97,6 +97,27 @@ def test_rank_exact_paths():
     assert Q.rank(sp.zeros(0, 3)).value == 0
 
 
+@pytest.mark.parametrize("precision", [None, 30])
+def test_sampled_rank_does_not_depend_on_the_units(precision):
+    """diag(m (1 + q1^2), 1) has rank 2 for every m != 0; m = 1e-16 (a mass in other units)
+    was rank 1 against the old absolute floor, and m = 1e-16 on both rows rank 0."""
+    s = System(["q1", "q2"], (v1**2 + v2**2) / 2)
+    M = Submanifold(s, [], fibre=(), exact=False, precision=precision)
+    e = sp.Rational(1, 10**16)
+    assert M.rank(sp.diag(e * (1 + q1**2), 1)).value == 2
+    assert M.rank(sp.diag(e * (1 + q1**2), e * (2 + q2**2))).value == 2
+    assert M.rank(sp.Matrix([[e * q1, e * q1 * q2], [e, e * q2]])).value == 1
+
+
+def test_sampled_rank_ignores_rounding_noise_of_functions_vanishing_on_M():
+    """On M = {q1 - q2^2 = 0}, [[q1 - q2^2, 0], [0, 1]] has rank 1: the (1, 1) entry is the
+    Newton projection's rounding there, which equilibration alone would scale up to 1."""
+    s = System(["q1", "q2"], (v1**2 + v2**2) / 2, holonomic=[q1 - q2**2])
+    M = Submanifold(s, [q1 - q2**2], fibre=(), exact=False)
+    d = M.rank(sp.Matrix([[q1 - q2**2, 0], [0, 1 + q1**2]]))
+    assert d.value == 1
+
+
 def test_sampled_rank_near_singular_warns_and_more_digits_decide():
     """[[1, 1], [1, 1 + e]] with e = 10^-11: singular value ratio ~ e/4 = 2.5e-12,
     between float64's zero level (1e-12) and its tolerance (1e-9): rank 1 with a warning;
