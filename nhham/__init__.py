@@ -17,9 +17,10 @@ The package is layered; each layer imports only from those beneath it:
 ``nhham.cli``
     the ``nhham`` command, its text and JSON reports, and the plots.
 
-Public names are re-exported here explicitly. All but the system description
-and the exceptions are imported on first use (PEP 562), so that a command
-which only classifies never imports the numerical integrators.
+Public names are re-exported here explicitly. All but the exceptions are
+imported on first use (PEP 562), so that ``import nhham`` is quick (the command
+loads sympy inside its Ctrl-C handler) and a command which only classifies never
+imports the numerical integrators.
 """
 
 from nhham.errors import (
@@ -39,12 +40,14 @@ from nhham.errors import (
     ValidationError,
 )
 from nhham.lazy import lazy_exports
-from nhham.system.description import DroppedConstraint, System
 
 from nhham.settings import __version__ as __version__
 
 # name -> module that defines it
 _LAZY = {
+    # the system description
+    "System": "system.description",
+    "DroppedConstraint": "system.description",
     # Lagrangian side (paper Sections 2, 4, 5)
     "lagrangian_geometry": "lagrangian.geometry",
     "LagrangianGeometry": "lagrangian.geometry",

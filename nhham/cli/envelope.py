@@ -21,7 +21,8 @@ JSON Schema is :func:`output_schema` (the file ``nhham/cli/schemas/output.schema
 Exit status: :data:`EXIT_OK` (0) success, :data:`EXIT_INTERNAL` (1) an
 internal failure, :data:`EXIT_INPUT` (2) bad input or usage,
 :data:`EXIT_NOT_SUCCEEDED` (3) the command ran but its computation did not
-succeed (a simulation that stopped early) or its ``--budget`` ran out. Whatever
+succeed (a simulation that stopped early) or its ``--budget`` ran out,
+:data:`EXIT_INTERRUPTED` (130) Ctrl-C. Whatever
 the status, ``--json`` prints exactly one envelope; when the command failed its
 ``error`` is ``{kind, message, key}`` (:func:`error_info`, kinds in
 :data:`ERROR_KINDS`), ``result`` is null unless the command ran to its end
@@ -49,6 +50,7 @@ __all__ = [
     "EXIT_INTERNAL",
     "EXIT_INPUT",
     "EXIT_NOT_SUCCEEDED",
+    "EXIT_INTERRUPTED",
     "ERROR_KINDS",
     "CommandOutput",
     "envelope",
@@ -67,13 +69,15 @@ EXIT_OK = 0
 EXIT_INTERNAL = 1
 EXIT_INPUT = 2
 EXIT_NOT_SUCCEEDED = 3
+#: Ctrl-C, at any point of a command (128 + SIGINT, as shells report it).
+EXIT_INTERRUPTED = 130
 
 #: ``error.kind`` of a failed command -> its exit status: ``usage`` (the command line)
-#: and ``input`` (the scene, its data) exit 2; ``internal`` and ``interrupted`` exit 1;
-#: ``budget`` (``--budget`` ran out) and ``failed`` (the computation ran but did not
-#: succeed; ``result`` says how) exit 3.
+#: and ``input`` (the scene, its data) exit 2; ``internal`` exits 1; ``budget``
+#: (``--budget`` ran out) and ``failed`` (the computation ran but did not succeed;
+#: ``result`` says how) exit 3; ``interrupted`` (Ctrl-C) exits 130.
 ERROR_KINDS = {"usage": EXIT_INPUT, "input": EXIT_INPUT, "internal": EXIT_INTERNAL,
-               "interrupted": EXIT_INTERNAL, "budget": EXIT_NOT_SUCCEEDED,
+               "interrupted": EXIT_INTERRUPTED, "budget": EXIT_NOT_SUCCEEDED,
                "failed": EXIT_NOT_SUCCEEDED}
 
 

@@ -7,7 +7,7 @@ warnings, error}`` on stdout, whatever the exit status. Exit status 0 on success
 usage (one line on stderr; the options are checked by
 :func:`nhham.cli.options.check_options` before any work), 3 when the command ran
 but its computation did not succeed or ``--budget`` ran out (one line on stderr
-saying why and what to do). A failure's envelope has ``error`` = ``{kind,
+saying why and what to do), 130 after Ctrl-C. A failure's envelope has ``error`` = ``{kind,
 message, key}`` and, unless the command ran to its end, a null ``result``.
 Warnings are one line each: in the envelope with ``--json``, else on stderr.
 
@@ -421,7 +421,8 @@ def _simulate_options(args, scene):
     from nhham.system.scene import simulate_option_problem
 
     opts = scene.simulate.given()
-    given = {k: getattr(args, k) for k in ("method", "rtol", "atol", "step", "t_end", "max_step")
+    given = {k: getattr(args, k) for k in ("method", "rtol", "atol", "step", "t_end", "max_step",
+                                           "save_every", "max_points")
              if getattr(args, k, None) is not None}
     opts.update(given)
     method = opts.get("method", "DOP853")
@@ -466,7 +467,7 @@ def _simulate_options(args, scene):
 def cmd_simulate(args, steps) -> CommandOutput:
     """Integrate the constrained dynamics from the scene's initial data."""
     from nhham.cli.results import simulation_data, simulation_failure
-    from nhham.numerics.integrate import simulate
+    from nhham.numerics.integrate import simulate, storage_plan
 
     scene = _load(args, steps)
     if scene.initial is None:
@@ -475,7 +476,9 @@ def cmd_simulate(args, steps) -> CommandOutput:
     t_end, opts = _simulate_options(args, scene)
     t_span = (0.0, float(t_end))
     with capture_warnings() as caught:
-        with steps.step(f"simulate with {opts.get('method', 'DOP853')}"):
+        plan = storage_plan(scene.system.n, opts.get("method", "DOP853"),
+                            opts.get("save_every", 1), opts.get("max_points"))
+        with steps.step(f"simulate with {opts.get('method', 'DOP853')} ({plan})"):
             result = simulate(scene.system, t_span=t_span, y0=dict(scene.initial),
                               project_initial=args.project_initial, progress=steps.progress,
                               **opts)
@@ -495,7 +498,8 @@ def cmd_simulate(args, steps) -> CommandOutput:
     failure = None
     if not result.success:
         free = ()
-        if int(result.status) == -3:
+        found = result.singularity
+        if found.part == "C" if found is not None else int(result.status) == -3:
             free = _free_multipliers(scene.system)
         failure = simulation_failure(result, str(args.scene), free)
     def text():  # the warnings go to stderr, one line each
@@ -517,18 +521,27 @@ def _free_multipliers(system) -> tuple:
 
 def cmd_bench(args, steps) -> CommandOutput:
     """Work-precision study of the scene's system."""
-    from nhham.cli.results import bench_data
+    from nhham.cli.results import bench_data, bench_failure, bench_failure_data
+    from nhham.numerics.status import NumericalFailure
     from nhham.numerics.workprecision import work_precision
 
     scene = _load(args, steps)
     if scene.initial is None:
         raise InputError(f"{args.scene}: bench needs an [initial] table")
     t_end = args.t_end if args.t_end is not None else (scene.simulate.t_end or 10.0)
-    with capture_warnings() as caught:
-        with steps.step("work-precision study"):
-            result = work_precision(scene.system, dict(scene.initial), (0.0, t_end),
-                                    quick=args.quick, progress=steps.progress,
-                                    reference_digits=args.reference_digits)
+    study = "work-precision study" + (" (--quick)" if args.quick else "")
+    try:
+        with capture_warnings() as caught:
+            with steps.step(study):
+                result = work_precision(scene.system, dict(scene.initial), (0.0, t_end),
+                                        quick=args.quick, progress=steps.progress,
+                                        reference_digits=args.reference_digits)
+    except NumericalFailure as exc:  # no reference: nothing to measure against
+        return CommandOutput(result=bench_failure_data((0.0, t_end), args),
+                             text=f"work-precision: {_title(scene, args)}, t in [0, {t_end:g}]: "
+                                  f"nothing measured (no reference solution)",
+                             scene=scene_info(scene), warnings=[],
+                             failure=bench_failure(exc, str(args.scene)))
     data = bench_data(result)
     data["plot"] = None
     if args.plot:
@@ -579,7 +592,8 @@ _HELP = {
 }
 
 _EXIT_TEXT = ("exit status: 0 success; 1 internal failure; 2 bad input or usage; 3 the "
-              "computation did not succeed (one line on stderr says why and what to do)")
+              "computation did not succeed (one line on stderr says why and what to do); "
+              "130 interrupted (Ctrl-C)")
 
 
 class _Parser(argparse.ArgumentParser):
@@ -662,7 +676,15 @@ def build_parser() -> argparse.ArgumentParser:
                            help="project onto the constraints after every step (adaptive "
                                 "methods and rk4): residual at round-off for a small cost")
             p.add_argument("--output", metavar="FILE", default=None,
-                           help="write the trajectory: .npz (numpy) or otherwise CSV")
+                           help="write the trajectory (the kept states): .npz (numpy) or "
+                                "otherwise CSV")
+            p.add_argument("--save-every", dest="save_every", type=int, default=None,
+                           metavar="J", help="keep every J-th step and the last (default: 1)")
+            p.add_argument("--max-points", dest="max_points", type=int, default=None,
+                           metavar="K",
+                           help="most states kept in memory; beyond it every other one is "
+                                "dropped and the stride doubles (default: as many as fit in "
+                                "64 MiB, 8 (2n + 2) bytes a state)")
             p.add_argument("--project-initial", action="store_true",
                            help="project [initial] data that violate the constraints onto "
                                 "M_1 (the constraints as given, velocity and holonomic) "

@@ -84,6 +84,10 @@ def check_options(args: argparse.Namespace) -> None:
     _check_budget(args, problems)
     _check_digits(args, problems)
     _check_combinations(args, problems)
+    for key, least in (("save_every", 1), ("max_points", 2)):
+        value = getattr(args, key, None)
+        if value is not None and value < least:
+            problems.append(f"{_option(key)}: expected at least {least}, got {value}")
     samples = getattr(args, "samples", None)
     if samples is not None and not 1 <= samples <= MAX_SAMPLES:
         problems.append(f"--samples: expected 1 to {MAX_SAMPLES} points, got {samples}")

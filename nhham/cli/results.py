@@ -24,7 +24,7 @@ __all__ = [
     "implicit_data", "implicit_text", "implicit_latex",
     "compare_data", "compare_text", "compare_latex",
     "simulation_data", "simulation_failure", "status_name",
-    "bench_data",
+    "bench_data", "bench_failure", "bench_failure_data",
 ]
 
 
@@ -460,7 +460,7 @@ def compare_latex(title: str, data: dict, parse) -> str:
 # ---------------------------------------------------------------- simulate
 # The names of nhham.numerics.status.Status, for results that carry a plain int.
 _STATUS_NAMES = {0: "success", 1: "event", -1: "step_failed", -2: "nonfinite", -3: "singular",
-                 -4: "not_converged"}
+                 -4: "not_converged", -5: "time_limit"}
 
 
 def status_name(status) -> str:
@@ -498,7 +498,16 @@ def simulation_data(result, t_span) -> dict:
         "cond_w_max": json_number(d.cond_W_max),
         "settings": jsonable(dict(result.settings)),
         "initial_projection": None,
+        "storage": None if result.storage is None else jsonable(result.storage.to_dict()),
+        "singularity": None,
     }
+    found = result.singularity
+    if found is not None:
+        data["singularity"] = {
+            "part": found.part, "description": found.describe(),
+            "cond_w": json_number(found.cond_W), "cond_mu": json_number(found.cond_mu),
+            "cond_c": json_number(found.cond_C), "rank_mu": int(found.rank_mu),
+            "state": jsonable(found.state)}
     p = result.initial_projection
     if p is not None:
         data["initial_projection"] = {
@@ -510,23 +519,34 @@ def simulation_data(result, t_span) -> dict:
 
 
 def simulation_failure(result, scene_path: str, free_multipliers=()) -> str:
-    """One line: why the run stopped, and what to do."""
+    """One line: why the run stopped, what was singular there, and what to do."""
     t = float(result.t[-1])
     code = int(result.status)
     where = f"at t = {t:.6g}"
-    if code == -3:
+    singular = result.singularity
+    if singular is not None and singular.part in ("W", "mu"):
+        todo = ("start from other [initial] data" if t == float(result.t[0]) else
+                f"stop before it (--t-end below {t:.6g}) or start from [initial] data whose "
+                f"motion avoids it")
+        return (f"simulation stopped {where}: {singular.describe()}; the dynamics is not "
+                f"defined there: {todo}")
+    if code == -3 or singular is not None:
         why = (f"free multiplier {', '.join(free_multipliers)}: " if free_multipliers else "")
-        return (f"simulation stopped {where}: {why}the constraint matrix C is singular, so the "
-                f"multipliers are not determined; run `nhham classify {scene_path}` to see the "
-                f"free multipliers or secondary constraints")
+        what = (singular.describe() if singular is not None else
+                "the constraint matrix C is singular")
+        return (f"simulation stopped {where}: {why}{what}, so the multipliers are not "
+                f"determined; run `nhham classify {scene_path}` to see the free multipliers "
+                f"or secondary constraints, or where the rank of C drops")
     if code == -2:
         return (f"simulation stopped {where}: the state became non-finite; check the "
                 f"parameters and [initial] data, or try a smaller --max-step")
     if code == -4:
-        return (f"simulation stopped {where}: the projection onto the constraints did not "
-                f"converge; try a smaller --step or --rtol")
-    return (f"simulation stopped {where}: {result.message}; try --method Radau or a looser "
-            f"--rtol")
+        todo = ("a smaller --step" if result.settings.get("step") is not None else
+                "a smaller --rtol or --max-step")
+        return (f"simulation stopped {where}: the Newton iteration of the step (or of the "
+                f"projection onto the constraints) did not converge; try {todo}")
+    stiff = "" if result.method in ("Radau", "BDF", "LSODA") else "--method Radau or "
+    return f"simulation stopped {where}: {result.message}; try {stiff}a looser --rtol"
 
 
 # ------------------------------------------------------------------- bench
@@ -536,7 +556,7 @@ def bench_data(result) -> dict:
     for r in result.rows:
         rows.append({"method": str(r.method), "setting": str(r.setting),
                      "error": json_number(r.error), "wall_time_s": json_number(r.wall_time_s),
-                     "nfev": int(r.nfev),
+                     "runs": int(r.runs), "nfev": int(r.nfev),
                      "constraint_residual": json_number(r.constraint_residual),
                      "energy_drift": json_number(r.energy_drift),
                      "energy_balance_residual": json_number(r.energy_balance_residual),
@@ -547,7 +567,24 @@ def bench_data(result) -> dict:
         for method, wall in result.time_to_solution(target).items():
             tts.append({"target": target, "method": method, "wall_time_s": json_number(wall)})
     return {"t_span": [float(x) for x in result.t_span], "backend": str(result.backend),
+            "reference": str(result.reference),
             "reference_digits": int(result.reference_digits),
             "reference_error_estimate": json_number(result.reference_error_estimate),
             "reference_wall_time_s": json_number(result.reference_wall_time_s),
-            "rows": rows, "time_to_solution": tts}
+            "rows": rows, "time_to_solution": tts,
+            "skipped": [{"method": m, "setting": s, "reason": why}
+                        for m, s, why in result.skipped]}
+
+
+def bench_failure(exc, scene_path: str) -> str:
+    """One line: why there is no reference solution, and what to run."""
+    return (f"bench stopped: {exc}; run `nhham classify {scene_path}` and `nhham simulate "
+            f"{scene_path}` to see why")
+
+
+def bench_failure_data(t_span, args) -> dict:
+    """The ``result`` of a bench whose reference could not be computed: no rows."""
+    return {"t_span": [float(x) for x in t_span], "backend": "none", "reference": "none",
+            "reference_digits": int(args.reference_digits), "reference_error_estimate": None,
+            "reference_wall_time_s": None, "rows": [], "time_to_solution": [], "skipped": [],
+            "plot": None}

@@ -2,10 +2,11 @@
 
 :func:`run_compiled` calls ``nhham_erk`` (``nhham/numerics/c/erk.c``): scipy's algorithm
 (its coefficients, initial step, error norm, step-size control and dense output) with the
-projection onto M_1 and the storage done in C too, so no Python runs per step; Python
-runs only between chunks of stored steps (and at each tenth of the interval with
-``progress``). The statuses are those of :class:`~nhham.numerics.status.Status`. No sympy
-here.
+projection onto M_1 and the storage done in C too, so no Python runs per step. The C
+loop hands control back every :data:`~nhham.numerics.run.PAUSE_SECONDS` of wall time and
+when the recorder's room is full, so that a signal (Ctrl-C, the command's ``--budget``)
+is handled within milliseconds and the recorder can thin what it keeps. The statuses
+are those of :class:`~nhham.numerics.status.Status`. No sympy here.
 """
 
 from __future__ import annotations
@@ -15,7 +16,7 @@ from functools import cache
 
 import numpy as np
 
-from nhham.numerics.run import Run, report_progress
+from nhham.numerics.run import PAUSE_SECONDS, Run, report_progress
 from nhham.numerics.scipy_loop import SCIPY_METHODS, WORK_ATOL, eval_failure
 from nhham.numerics.status import Status
 
@@ -91,8 +92,10 @@ def _workspace(y0, t0, atol, first_step, nz):
 
 
 def run_compiled(model, y0, t0, t1, method, *, rtol, atol, max_step, first_step, t_eval,
-                 projection, baumgarte, progress=False) -> Run:
-    """RK23/RK45/DOP853 as one compiled loop (see the module docstring)."""
+                 projection, baumgarte, recorder, progress=False, deadline=None) -> Run:
+    """RK23/RK45/DOP853 as one compiled loop (see the module docstring); the states go
+    into ``recorder`` (a :class:`~nhham.numerics.storage.Recorder`: every stride-th step,
+    or room for the t_eval points)."""
     n2 = 2 * model.n
     nz = n2 + 1
     rtol = _scipy_validation(t0, t1, rtol, max_step, first_step)
@@ -100,43 +103,35 @@ def run_compiled(model, y0, t0, t1, method, *, rtol, atol, max_step, first_step,
     block = model.parameter_block(baumgarte)
     ws = _workspace(y0, t0, atol, first_step, nz)
     state, fail = ws[:2 + 2 * nz], ws[2 + 2 * nz:2 + 2 * nz + 1 + nz]
-    ts, zs = [np.array([t0])], [state[2:2 + nz].copy()[None, :]]
     if t_eval is not None:
         t_eval = np.ascontiguousarray(t_eval, dtype=float)
-        if not np.isclose(t_eval[0], t0):
-            ts, zs = [], []
-        cap = max(1, len(t_eval))
-    else:
-        cap = 256
-    # iw = [t_eval index, rows stored, nfev, nsteps]
-    iw = np.array([len(ts), 0, 0, 0], dtype=np.int64)
-    out_t, out_z = np.empty(cap), np.empty((cap, nz))
+    if t_eval is None or np.isclose(t_eval[0], t0):
+        recorder.add(t0, state[2:2 + nz])
+    # iw = [t_eval index, rows stored by the call, nfev, nsteps]
+    iw = np.array([recorder.count, 0, 0, 0], dtype=np.int64)
     reported = 0
     while True:
-        t_pause = t1 if not progress else t0 + (t1 - t0) * min(1.0, (reported + 1) / 10)
+        out_t, out_z = recorder.room()
         status = Status(model.compiled.erk(info, tab, ws, iw, t1, rtol, float(max_step),
                                            projection, 1e-14, 50, t_eval, out_t, out_z,
-                                           t_pause, block.pointer))
+                                           recorder.stride, PAUSE_SECONDS, block.pointer))
         info[4] = 0
-        if t_eval is None:
-            k = int(iw[1])
-            ts.append(out_t[:k].copy())
-            zs.append(out_z[:k].copy())
-            iw[1] = 0
-            if k == cap and cap < 65536:
-                cap *= 4
-                out_t, out_z = np.empty(cap), np.empty((cap, nz))
+        recorder.advance(int(iw[1]))
+        iw[1] = 0
         if progress:
             reported = report_progress(state[0], t0, t1, reported)
         if status != Status.PAUSED:
             break
-    if t_eval is not None:
-        ts.append(out_t[:int(iw[1])])
-        zs.append(out_z[:int(iw[1])])
-    message = _message(status, method, float(state[0]), fail, n2)
-    T = np.concatenate(ts) if ts else np.zeros(0)
-    Z = np.concatenate(zs).T if zs else np.zeros((nz, 0))
-    return Run(T, Z[:n2], Z[n2], status, message, int(iw[2]), int(iw[3]))
+        if deadline is not None and deadline.passed():
+            status = Status.TIME_LIMIT
+            break
+    if t_eval is None:
+        recorder.close(float(state[0]), state[2:2 + nz])
+    message = (deadline.message(float(state[0])) if status == Status.TIME_LIMIT else
+               _message(status, method, float(state[0]), fail, n2))
+    T, Y, work = recorder.result(n2)
+    failed = None if np.isnan(fail[0]) else fail[1:1 + n2].copy()
+    return Run(T, Y, work, status, message, int(iw[2]), int(iw[3]), failed_state=failed)
 
 
 def _message(status, method, t_now, fail, n2) -> str:

@@ -1,8 +1,10 @@
 """Diagnostics of a computed trajectory: residuals, energy, conditioning.
 
-Everything is evaluated on the stored states in one batch per quantity (no
-Python loop over states). The energy balance uses the exact identity of the
-constrained field dE_L/dt = -lambda . (mu v) (= lambda . h on M_1, see
+:func:`singularity_at` says what is singular at a state where a run stopped.
+
+Everything is evaluated on the stored states in batches (no Python loop over
+states; blocks of a few thousand, so that a long run's diagnostics need little
+memory). The energy balance uses the exact identity of the constrained field dE_L/dt = -lambda . (mu v) (= lambda . h on M_1, see
 :mod:`nhham.numerics.model`): the integrators carry its time integral W(t) (the work
 of the constraint forces), and the residual max |E(t) - E(0) - W(t)| measures
 integration error alone, also for affine constraints where E is not
@@ -17,12 +19,28 @@ import numpy as np
 
 from nhham.numerics.model import COND_C_WARN
 
-__all__ = ["Diagnostics", "trajectory_diagnostics"]
+__all__ = ["Diagnostics", "trajectory_diagnostics", "Singularity", "singularity_at"]
 
 # cond is an SVD per state; beyond this many states every j-th is used (and
 # the first and last): long runs stay cheap, spikes between samples can be
 # missed, which the docstring of Diagnostics states.
 _COND_SAMPLES = 20000
+
+# States per batch call: the kernels' temporaries (W, mu, ... for every state of the
+# batch) stay at a few MB however long the run.
+_BLOCK = 8192
+
+
+def _blockwise(fn, Y):
+    """``fn`` on blocks of rows of Y, the results concatenated."""
+    if len(Y) <= _BLOCK:
+        return np.asarray(fn(Y))
+    return np.concatenate([np.atleast_1d(fn(Y[i:i + _BLOCK]))
+                           for i in range(0, len(Y), _BLOCK)])
+
+
+def _row_max(A):
+    return A.max(axis=1) if A.shape[1] else np.zeros(A.shape[0])
 
 
 @dataclass(frozen=True)
@@ -105,11 +123,9 @@ def trajectory_diagnostics(model, t, y, work=None, *, residual_tol: float = 1e-8
         return Diagnostics(np.array([]), np.array([]), np.array([]), nan, nan, nan, nan, nan,
                            nan, nan, 0, tuple(notes))
     with np.errstate(all="ignore"):
-        E = model.energy(Yf)
-        res = np.abs(model.residuals(Yf))
-        rres = model.scaled_residuals(Yf)
-    rmax = res.max(axis=1) if res.shape[1] else np.zeros(len(tf))
-    rrel = rres.max(axis=1) if rres.shape[1] else np.zeros(len(tf))
+        E = np.atleast_1d(_blockwise(model.energy, Yf))
+        rmax = _blockwise(lambda B: _row_max(np.abs(model.residuals(B))), Yf)
+        rrel = _blockwise(lambda B: _row_max(model.scaled_residuals(B)), Yf)
     if work is None:
         work = _trapezoid_work(model, tf, Yf)
     else:
@@ -119,11 +135,16 @@ def trajectory_diagnostics(model, t, y, work=None, *, residual_tol: float = 1e-8
     balance = float(np.max(np.abs(E - E[0] - work)))
     idx = _cond_indices(len(tf))
     with np.errstate(all="ignore"):
-        cC = np.atleast_1d(model.cond_C(Yf[idx]))
-        cW = np.atleast_1d(model.cond_W(Yf[idx]))
+        cC = np.atleast_1d(_blockwise(model.cond_C, Yf[idx]))
+        cW = np.atleast_1d(_blockwise(model.cond_W, Yf[idx]))
     cond_C_max = float(np.nanmax(cC)) if cC.size else 1.0
     cond_W_max = float(np.nanmax(cW)) if cW.size else 1.0
-    if cond_C_max > cond_warn:
+    if cond_W_max > cond_warn:  # then C = -mu W^-1 mu^T is not what to look at
+        first = tf[idx][np.argmax(cW > cond_warn)]
+        notes.append(f"cond(W) = {cond_W_max:.3g} exceeds {cond_warn:.0e} (first at t = "
+                     f"{first:.6g}): W = d2L/dv2 is close to singular, the Lagrangian nearly "
+                     f"degenerate there")
+    elif cond_C_max > cond_warn:
         first = tf[idx][np.argmax(cC > cond_warn)]
         notes.append(f"cond(C) = {cond_C_max:.3g} exceeds {cond_warn:.0e} (first at t = {first:.6g}): "
                      f"errors grow like cond(C)*eps ~ {cond_C_max * 2.2e-16:.1g}; the constraint "
@@ -153,8 +174,87 @@ def _cond_indices(K):
 
 def _trapezoid_work(model, t, Y):
     with np.errstate(all="ignore"):
-        P = np.atleast_1d(model.evaluate(Y)[2]) if len(t) > 1 else np.zeros(1)
+        P = _blockwise(lambda B: np.atleast_1d(model.evaluate(B)[2]), Y) if len(t) > 1 \
+            else np.zeros(1)
     if len(t) == 1:
         return np.zeros(1)
     inc = 0.5 * (P[1:] + P[:-1]) * np.diff(t)
     return np.concatenate([[0.0], np.cumsum(inc)])
+
+
+@dataclass(frozen=True)
+class Singularity:
+    """What makes the saddle-point system singular, or nearly so, at one state.
+
+    C = -mu W^-1 mu^T, so cond(C) <= cond(W) cond(mu)^2: the larger of the two factors
+    is named (``part``): ``"W"`` (the Lagrangian is not regular there), ``"mu"`` (the
+    constraints' one-forms are dependent there: a singular configuration of the
+    constraints) or ``"C"`` (W and mu are regular and C is still singular: an indefinite
+    W, or constraints whose C vanishes, as with free multipliers).
+
+    Attributes
+    ----------
+    part : {"W", "mu", "C"}
+    cond_W, cond_mu, cond_C : float
+        2-norm condition numbers at the state (inf when exactly singular); cond_mu is
+        sigma_max / sigma_min of the m x n matrix mu.
+    rank_mu : int
+        Numerical rank of mu (singular values above 1e-10 sigma_max).
+    m : int
+    where : str
+        The coordinates at the state (``x = 0, phi = 1.5708``).
+    state : tuple of float
+        The state (coordinates and velocities).
+    """
+
+    part: str
+    cond_W: float
+    cond_mu: float
+    cond_C: float
+    rank_mu: int
+    m: int
+    where: str
+    state: tuple = ()
+
+    def describe(self) -> str:
+        """One clause: what is singular there."""
+        if self.part == "W":
+            nearly = "" if np.isinf(self.cond_W) else "nearly "
+            return (f"W = d2L/dv2 is {nearly}singular (cond(W) = {self.cond_W:.3g}): the "
+                    f"Lagrangian is not regular at {self.where}")
+        if self.part == "mu":
+            how = (f"dependent (rank of mu {self.rank_mu} of {self.m})" if self.rank_mu < self.m
+                   else f"nearly dependent (cond(mu) = {self.cond_mu:.3g})")
+            return (f"the constraints' one-forms are {how}, so C is singular (cond(C) = "
+                    f"{self.cond_C:.3g}): a singular configuration of the constraints at "
+                    f"{self.where}")
+        return (f"C = -mu W^-1 mu^T is singular (cond(C) = {self.cond_C:.3g}) while W "
+                f"(cond {self.cond_W:.3g}) and the one-forms mu (cond {self.cond_mu:.3g}) are "
+                f"regular, at {self.where}")
+
+
+def singularity_at(model, y, threshold: float = COND_C_WARN) -> Singularity | None:
+    """What is singular at state ``y`` (2n,), or None when cond(C) and cond(W) are both
+    below ``threshold`` (see :class:`Singularity`)."""
+    y = np.asarray(y, dtype=float)
+    W, mu, _, _ = model.geometry(y)
+    with np.errstate(all="ignore"):
+        sW = np.linalg.svd(W, compute_uv=False) if np.all(np.isfinite(W)) else np.zeros(1)
+        s_mu = (np.linalg.svd(mu, compute_uv=False) if model.m and np.all(np.isfinite(mu))
+                else np.ones(1))
+        cond_W = float(sW[0] / sW[-1]) if sW[-1] > 0 else np.inf
+        cond_mu = float(s_mu[0] / s_mu[-1]) if s_mu[-1] > 0 else np.inf
+        cond_C = float(model.cond_C(y))
+    if max(cond_C, cond_W) <= threshold:
+        return None
+    rank_mu = int(np.sum(s_mu > 1e-10 * s_mu[0])) if model.m else 0
+    if cond_W >= max(cond_mu ** 2, np.sqrt(threshold)):
+        part = "W"
+    elif cond_mu ** 2 >= np.sqrt(threshold):
+        part = "mu"
+    else:
+        part = "C"
+    where = ", ".join(f"{name} = {value:.6g}" for name, value in
+                      zip(model.coordinate_names, y[:model.n]))
+    return Singularity(part, cond_W, cond_mu, cond_C, rank_mu, model.m, where,
+                       tuple(float(x) for x in y))

@@ -46,15 +46,19 @@ import numpy as np
 
 from nhham.errors import InconsistentInitialDataError, InputError
 from nhham.numerics.compiled_loop import COMPILED_METHODS, run_compiled
-from nhham.numerics.diagnostics import Diagnostics, trajectory_diagnostics
+from nhham.numerics.diagnostics import (Diagnostics, Singularity, singularity_at,
+                                        trajectory_diagnostics)
 from nhham.numerics.integrators import FIXED_STEP_METHODS, run_fixed_step
 from nhham.numerics.model import (LibraryReady, NumericModel, NumericsWarning,
                                   ProjectionOutcome)
-from nhham.numerics.run import Run
+from nhham.numerics.run import Deadline, Run
 from nhham.numerics.scipy_loop import SCIPY_METHODS, DenseOutput, run_scipy
 from nhham.numerics.status import Status
+from nhham.numerics.storage import (Recorder, Storage, check_plan, default_max_points,
+                                    memory_text, storage_bytes)
 
-__all__ = ["simulate", "SimulationResult", "SCIPY_METHODS", "COMPILED_METHODS", "METHODS"]
+__all__ = ["simulate", "SimulationResult", "SCIPY_METHODS", "COMPILED_METHODS", "METHODS",
+           "storage_plan"]
 
 _LOOPS = ("auto", "compiled", "scipy")
 METHODS = tuple(SCIPY_METHODS) + tuple(FIXED_STEP_METHODS) + ("reference",)
@@ -73,7 +77,8 @@ class SimulationResult:
     status : Status
         An int-valued enum: 0 success; 1 a terminal event stopped the run; -1 step
         failure; -2 NaN/overflow (run stopped); -3 singular saddle-point system; -4
-        Newton/projection failure. The trajectory up to the failure is kept.
+        Newton/projection failure; -5 stopped at ``time_limit``. The trajectory up to the
+        failure is kept.
     message : str
     success : bool
         ``status >= 0``, as in scipy.
@@ -100,6 +105,13 @@ class SimulationResult:
     t_events, y_events : list of ndarray or None
         With ``events`` (scipy methods): per event function, its times (k,) and
         states (k, 2n), as in scipy.
+    storage : Storage or None
+        What was kept of the steps (every how many, how many states, their memory;
+        :mod:`nhham.numerics.storage`).
+    failed_state : ndarray (2n,) or None
+        When the run stopped because the field could not be evaluated: the state where
+        that happened (a stage of the step that did not complete; ``t`` and ``y`` end at
+        the last completed step), if the loop knows it.
     """
 
     t: np.ndarray
@@ -121,6 +133,8 @@ class SimulationResult:
     sol: DenseOutput | None = field(default=None, repr=False)
     t_events: list | None = None
     y_events: list | None = None
+    storage: Storage | None = None
+    failed_state: np.ndarray | None = field(default=None, repr=False)
 
     def __repr__(self) -> str:
         # One line: the arrays are in .t, .y (a repr printing them ran to 14 KB).
@@ -157,6 +171,17 @@ class SimulationResult:
     work = property(lambda self: self.diagnostics.work)
 
     @cached_property
+    def singularity(self) -> Singularity | None:
+        """For a run that stopped: what is singular (W, the constraints' one-forms, or C)
+        where it stopped (at :attr:`failed_state` when known, else at the last state),
+        or None when nothing is nearly singular there (see
+        :func:`nhham.numerics.diagnostics.singularity_at`)."""
+        if self.success or self.model is None:
+            return None
+        y = self.failed_state if self.failed_state is not None else self.y[:, -1]
+        return singularity_at(self.model, y)
+
+    @cached_property
     def multipliers(self) -> np.ndarray:
         """lambda at the stored states, shape (m, K) (continuous-field values)."""
         return np.atleast_2d(self.model.multipliers(self.states)).T
@@ -174,11 +199,15 @@ class SimulationResult:
             f"energy balance residual {d.energy_balance_residual:.2e}",
             f"  max cond(C) {d.cond_C_max:.3g}, max cond(W) {d.cond_W_max:.3g}",
         ]
+        if self.storage is not None:
+            lines.append(f"  {self.storage.describe(self.nsteps)}")
         if self.initial_projection is not None:
             p = self.initial_projection
             lines.append(f"  initial data projected onto M_1: residual {p.residual_before:.2e} -> "
                          f"{p.residual_after:.2e}, |dq| = {p.displacement_q:.2e}, "
                          f"|dv| = {p.displacement_v:.2e}")
+        if self.singularity is not None:
+            lines.append(f"  where it stopped, {self.singularity.describe()}")
         lines += [f"  warning: {w}" for w in self.warnings]
         lines.append("  final state: " + ", ".join(f"{k} = {v:.10g}"
                                                   for k, v in self.final_state.items()))
@@ -211,6 +240,7 @@ class SimulationResult:
             "cond_C_max": d.cond_C_max, "cond_W_max": d.cond_W_max,
             "warnings": list(self.warnings), "final_state": self.final_state,
             "settings": dict(self.settings),
+            "storage": None if self.storage is None else self.storage.to_dict(),
         }
         if self.initial_projection is not None:
             p = self.initial_projection
@@ -227,8 +257,9 @@ def simulate(system_or_model, t_span, y0, *, method: str = "DOP853", rtol: float
              projection: bool = False, baumgarte=None, project_initial: bool = False,
              initial_tol: float = 1e-10, residual_tol: float | None = None,
              reference_digits: int | None = None, save_every: int = 1,
-             backend: str = "auto", warn: bool = True, progress: bool = False,
-             loop: str = "auto") -> SimulationResult:
+             max_points: int | None = None, backend: str = "auto", warn: bool = True,
+             progress: bool = False, loop: str = "auto",
+             time_limit: float | None = None) -> SimulationResult:
     """Integrate the constrained dynamics from ``y0`` over ``t_span``.
 
     Parameters
@@ -246,7 +277,8 @@ def simulate(system_or_model, t_span, y0, *, method: str = "DOP853", rtol: float
     step : float
         Step of the fixed-step methods (required for them).
     t_eval : array_like, optional
-        Output times (adaptive and reference methods); default every step.
+        Output times (adaptive and reference methods); default every step (see
+        ``save_every`` and ``max_points``).
     max_step, first_step : float, optional
         Passed to the scipy solvers.
     projection : bool
@@ -266,7 +298,14 @@ def simulate(system_or_model, t_span, y0, *, method: str = "DOP853", rtol: float
     reference_digits : int, optional
         Digits of the ``"reference"`` method (default 30).
     save_every : int
-        Fixed-step methods: store every j-th step.
+        Keep every j-th step (and the last state); every method but the reference.
+    max_points : int, optional
+        Most states kept in memory. When every ``save_every``-th step would be more,
+        every other kept state is dropped and the stride doubles, as often as needed
+        (``result.storage`` says what was kept); a ``t_eval`` longer than it is refused
+        with the memory it would need. Default: as many states as fit in
+        :data:`~nhham.numerics.storage.STORE_BYTES` (64 MiB; 8 (2n + 2) bytes a state:
+        838,860 states for n = 4).
     backend : str
         Backend when a System is given (see :func:`nhham.numerics.codegen.numeric_model`).
         With ``"auto"`` a library not yet in the compile cache is built in the background
@@ -276,16 +315,20 @@ def simulate(system_or_model, t_span, y0, *, method: str = "DOP853", rtol: float
     warn : bool
         Issue the diagnostics' warnings as :class:`NumericsWarning`.
     progress : bool
-        Report progress of the adaptive methods on stderr (every 10% of t_span).
+        Report progress on stderr (each tenth of t_span; not the reference method).
     loop : {"auto", "compiled", "scipy"}
         RK23, RK45, DOP853: ``"auto"`` runs the whole integration as one
         compiled loop when the model has the compiled backend (saddle path),
         else scipy's Python loop; ``"compiled"`` insists (InputError if
         impossible); ``"scipy"`` always uses scipy's loop. Both give the same
         steps up to round-off. ``result.settings["loop"]`` says which ran.
+    time_limit : float, optional
+        Seconds of wall time after which the run stops with ``Status.TIME_LIMIT`` (a
+        failure that keeps the trajectory so far; not the reference method).
     dense_output : bool
         scipy methods: keep the continuous solution, ``result.sol(t)`` (runs
-        scipy's loop).
+        scipy's loop; its memory grows with the steps, a few hundred bytes each, and is
+        not bounded by ``max_points``).
     events : callable or sequence of callables, optional
         scipy methods: ``event(t, y) -> float`` on the state y (2n,), located as
         in :func:`scipy.integrate.solve_ivp` (``terminal`` and ``direction``
@@ -314,29 +357,31 @@ def simulate(system_or_model, t_span, y0, *, method: str = "DOP853", rtol: float
     _check_scipy_only(method, dense_output, events)
     compiled_loop = _use_compiled_loop(model, method, loop, dense_output or events is not None)
     y_init, initial = _initial_state(model, y0, project_initial, initial_tol)
+    recorder = _recorder(model, method, t_eval, save_every, max_points)
     settings = {"rtol": rtol, "atol": atol, "step": step, "projection": projection,
                 "baumgarte": None if baumgarte is None else tuple(map(float, baumgarte)),
                 "backend": model.backend, "backend_note": model.backend_note,
-                "path": model.path}
+                "path": model.path, "save_every": int(save_every),
+                "max_points": recorder.max_points}
     if residual_tol is None:
         exact = projection or method in ("rattle", "rattle4", "reference")
         residual_tol = 1e-11 if exact else 1e-8
+    start = time.perf_counter()
+    deadline = Deadline.after(time_limit)
     adaptive = dict(rtol=rtol, atol=atol, max_step=max_step, first_step=first_step,
                     t_eval=t_eval, projection=projection, baumgarte=baumgarte,
-                    progress=progress)
-
-    start = time.perf_counter()
+                    progress=progress, deadline=deadline)
     while True:
         try:
             if compiled_loop:
                 settings["loop"] = "compiled"
-                run = run_compiled(model, y_init, t0, t1, method, **adaptive)
+                run = run_compiled(model, y_init, t0, t1, method, recorder=recorder, **adaptive)
             elif method in SCIPY_METHODS:
                 settings["loop"] = "scipy"
                 run = run_scipy(model, y_init, t0, t1, method, dense_output=dense_output,
-                                events=events, **adaptive)
+                                events=events, recorder=recorder, **adaptive)
             elif method in FIXED_STEP_METHODS:
-                opts = {"save_every": int(save_every)}
+                opts = {"recorder": recorder, "progress": progress, "deadline": deadline}
                 if method == "rk4":
                     opts.update(projection=projection, baumgarte=baumgarte)
                 run = run_fixed_step(method, model, y_init, t0, t1, float(step), **opts)
@@ -350,8 +395,10 @@ def simulate(system_or_model, t_span, y0, *, method: str = "DOP853", rtol: float
             compiled_loop = _use_compiled_loop(model, method, loop, dense_output or
                                                events is not None)
             settings.update(backend=model.backend, backend_note=model.backend_note)
+            recorder = _recorder(model, method, t_eval, save_every, max_points)
     wall = time.perf_counter() - start
-    return _result(model, run, method, settings, wall, residual_tol, initial, warn)
+    storage = None if method == "reference" else recorder.storage(t_eval is not None)
+    return _result(model, run, method, settings, wall, residual_tol, initial, warn, storage)
 
 
 def _run_reference(model, y0, t0, t1, digits, t_eval, settings) -> Run:
@@ -363,7 +410,7 @@ def _run_reference(model, y0, t0, t1, digits, t_eval, settings) -> Run:
     return Run(ref.t, ref.y, ref.work, ref.status, ref.message, ref.nfev, ref.nsteps)
 
 
-def _result(model, run, method, settings, wall, residual_tol, initial, warn):
+def _result(model, run, method, settings, wall, residual_tol, initial, warn, storage):
     """The diagnostics of ``run`` and the result (warnings issued here: stacklevel 3
     points at the caller of :func:`simulate`)."""
     diag = trajectory_diagnostics(model, run.t, run.y, run.work, residual_tol=residual_tol)
@@ -374,12 +421,12 @@ def _result(model, run, method, settings, wall, residual_tol, initial, warn):
         for note in notes:
             warnings.warn(note, NumericsWarning, stacklevel=3)
     return SimulationResult(
-        t=run.t, y=np.array(run.y, dtype=float), status=Status(run.status),
+        t=run.t, y=np.asarray(run.y, dtype=float), status=Status(run.status),
         message=run.message, method=method, settings=MappingProxyType(settings),
         names=model.names, nfev=run.nfev, njev=run.njev, nlu=run.nlu, nsteps=run.nsteps,
         wall_time_s=wall, diagnostics=diag, warnings=tuple(notes),
         initial_projection=initial, model=model, sol=run.sol, t_events=run.t_events,
-        y_events=run.y_events)
+        y_events=run.y_events, storage=storage, failed_state=run.failed_state)
 
 
 # ------------------------------------------------------------------ helpers
@@ -406,6 +453,38 @@ def _check_options(method, step, projection, baumgarte, model):
                              f"{baumgarte!r}")
         if model.path != "saddle":
             raise InputError("baumgarte: needs the saddle path (path='saddle')")
+
+
+def _width(n, method) -> int:
+    """Numbers a loop keeps per state: the state, and the work of the constraint forces
+    where the loop carries it (all but RATTLE)."""
+    return 2 * n + (0 if method in ("rattle", "rattle4") else 1)
+
+
+def storage_plan(n: int, method: str, save_every: int = 1, max_points=None) -> str:
+    """What a run of ``method`` on n coordinates will keep, and the memory that takes at
+    most (without t_eval)."""
+    width = _width(n, method)
+    bound = default_max_points(width) if max_points is None else int(max_points)
+    kept = "every step" if save_every == 1 else f"one step in {save_every}"
+    return f"keeps {kept}, at most {bound} states: {memory_text(storage_bytes(bound, width))}"
+
+
+def _recorder(model, method, t_eval, save_every, max_points) -> Recorder:
+    """Where the loop puts the states: the t_eval points (refused beyond max_points),
+    or every save_every-th step within max_points."""
+    width = _width(model.n, method)
+    bound = default_max_points(width) if max_points is None else int(max_points)
+    if t_eval is not None and method in FIXED_STEP_METHODS:
+        raise InputError(f"t_eval: the fixed-step method {method!r} keeps its grid points "
+                         f"(every save_every-th step); t_eval is for the adaptive methods")
+    if t_eval is not None and method != "reference":
+        points = len(np.atleast_1d(t_eval))
+        check_plan(points, bound, width, "t_eval")
+        return Recorder(width, max(2, points), thin=False)
+    if int(save_every) != save_every:
+        raise InputError(f"save_every: a positive whole number of steps, got {save_every!r}")
+    return Recorder(width, bound, int(save_every))
 
 
 def _check_scipy_only(method, dense_output, events):

@@ -52,9 +52,10 @@ import math
 import numpy as np
 
 from nhham.errors import InputError
-from nhham.numerics.run import Run
+from nhham.numerics.run import PAUSE_SECONDS, Run, report_progress
 from nhham.numerics.saddle import solve_saddle
 from nhham.numerics.status import NumericalFailure, Status
+from nhham.numerics.storage import Recorder, default_max_points
 
 __all__ = ["FixedStepRun", "rattle", "rattle4", "rk4", "rattle_step", "FIXED_STEP_METHODS"]
 
@@ -112,14 +113,21 @@ class _RattleStepper:
 
     # ---------------------------------------------------- residual pieces
     def _r3(self, q0, q1, h):
-        """Discrete constraints: midpoint rows (nonholonomic), g(q1) (holonomic)."""
-        n, k = self.n, self.k
+        """Discrete constraints: midpoint rows (nonholonomic), g(q1) (holonomic); and the
+        size of each row's terms, which its round-off is relative to: u = (q1 - q0)/h
+        carries the round-off of q1, eps |q1| / |h|, which grows with the coordinates
+        (an angle that has turned 1e4 times), so the Newton test is relative to it."""
+        k = self.k
         qm = 0.5 * (q0 + q1)
+        u = (q1 - q0) / h
         _, mu_m, h_m, _ = self.model.geometry(qm)
-        r = mu_m @ ((q1 - q0) / h) + h_m
+        r = mu_m @ u + h_m
+        size = 1.0 + np.abs(h_m) + np.abs(mu_m) @ (np.abs(u) + np.abs(q1) / abs(h))
         if k:
-            r[:k] = self.model.geometry(q1)[3]
-        return r
+            _, G, _, g1 = self.model.geometry(q1)
+            r[:k] = g1
+            size[:k] = 1.0 + np.abs(G[:k]) @ np.abs(q1)
+        return r, size
 
     def _r3_jac_q1(self, q0, q1, h):
         """d r3 / d q1 (m x n)."""
@@ -181,13 +189,12 @@ class _RattleStepper:
         best = np.inf
         for it in range(self.maxiter):
             q1 = q_free + dq_dlam @ lam
-            r = self._r3(q0, q1, h)
-            err = float(np.max(np.abs(r)))
-            scale = 1.0 + float(np.max(np.abs((q1 - q0) / h)))
-            if err <= self.tol * scale:
+            r, size = self._r3(q0, q1, h)
+            err = float(np.max(np.abs(r) / size))
+            if err <= self.tol:
                 break
             if it > 2 and err >= best:
-                _floor_or_fail(err, scale)
+                _floor_or_fail(err)
                 break
             best = min(best, err)
             J = self._r3_jac_q1(q0, q1, h) @ dq_dlam
@@ -238,12 +245,13 @@ class _RattleStepper:
         for it in range(self.maxiter):
             r = self._residual(z[None], q0, p0, W0, mu0, h)[0]
             err = float(np.max(np.abs(r[:2 * n]) / scale[:2 * n]))
-            err = max(err, float(np.max(np.abs(r[2 * n:]), initial=0.0))
-                      / (1.0 + float(np.max(np.abs(p0)))))
+            if m:
+                size = np.maximum(self._r3(q0, z[n:2 * n], h)[1], 1.0 + np.max(np.abs(p0)))
+                err = max(err, float(np.max(np.abs(r[2 * n:]) / size)))
             if err <= self.tol:
                 break
             if it > 3 and err >= best:
-                _floor_or_fail(err, 1.0)
+                _floor_or_fail(err)
                 break
             if J is None or err > 0.1 * best:
                 J = self._fd_jacobian(z, r, q0, p0, W0, mu0, h, scale)
@@ -266,9 +274,10 @@ class _RattleStepper:
         return ((R - r[None, :]) / eps[:, None]).T
 
 
-def _floor_or_fail(err, scale):
-    """Newton stalled: accept at the round-off floor, fail if far from it."""
-    if err > 1e-9 * scale:
+def _floor_or_fail(err):
+    """Newton stalled: accept at the round-off floor, fail if far from it (``err`` is
+    relative)."""
+    if err > 1e-9:
         raise NumericalFailure(Status.NOT_CONVERGED, f"Newton iteration of the RATTLE step "
                                f"stalled at residual {err:.3g}; reduce the step")
 
@@ -282,31 +291,47 @@ def rattle_step(model, y0, h):
     return y1
 
 
-def _run_fixed(step_fn, stepper, y0, t0, t1, h, save_every):
+def _recorder(recorder, width, save_every):
+    """The given recorder, or one keeping every ``save_every``-th step within the default
+    bound."""
+    if recorder is not None:
+        return recorder
+    return Recorder(width, default_max_points(width), int(save_every))
+
+
+def _run_fixed(step_fn, recorder, y0, t0, t1, h, progress=False, deadline=None):
+    """Steps of ``step_fn`` from y0; the kept states go into ``recorder``."""
     N, h = _grid(t0, t1, h)
     y = np.asarray(y0, dtype=float).copy()
-    ts, ys = [t0], [y.copy()]
+    recorder.add(t0, y)
     status, message = Status.SUCCESS, Status.SUCCESS.message
     t = t0
-    i = 0
+    i = done = reported = 0
     try:
         for i in range(1, N + 1):
-            y = step_fn(y, h)
-            t = t0 + i * h
-            if not np.all(np.isfinite(y)) or np.max(np.abs(y)) > 1e150:
+            y_new = step_fn(y, h)
+            t_new = t0 + i * h
+            if not np.all(np.isfinite(y_new)) or np.max(np.abs(y_new)) > 1e150:
                 raise NumericalFailure(Status.NONFINITE, f"non-finite or overflowing state at "
-                                       f"t = {t:.6g} (step {i}); the run was stopped")
-            if i % save_every == 0 or i == N:
-                ts.append(t)
-                ys.append(y.copy())
+                                       f"t = {t_new:.6g} (step {i}); the run was stopped")
+            y, t, done = y_new, t_new, i
+            if recorder.keep(i):
+                recorder.add(t, y)
+            if progress:
+                reported = report_progress(t, t0, t1, reported)
+            if deadline is not None and i < N and deadline.passed():
+                status, message = Status.TIME_LIMIT, deadline.message(t)
+                break
     except NumericalFailure as exc:
         status, message = exc.status, str(exc)
     except np.linalg.LinAlgError as exc:
         status, message = Status.SINGULAR, f"singular linear system at t = {t:.6g}: {exc}"
-    return np.array(ts), np.array(ys).T, status, message, i if status == 0 else i - 1, h
+    recorder.close(t, y)
+    return recorder, status, message, done, h
 
 
-def rattle(model, y0, t0, t1, h, *, save_every: int = 1, tol=None) -> FixedStepRun:
+def rattle(model, y0, t0, t1, h, *, save_every: int = 1, tol=None, recorder=None,
+           progress: bool = False, deadline=None) -> FixedStepRun:
     """Integrate with the nonholonomic RATTLE scheme (see the module docstring).
 
     Parameters
@@ -320,34 +345,46 @@ def rattle(model, y0, t0, t1, h, *, save_every: int = 1, tol=None) -> FixedStepR
     save_every : int
         Store every j-th step (and the last).
     tol : float, optional
-        Newton tolerance (default 4 eps, relative).
+        Newton tolerance (default 4 eps, relative to the size of each constraint's terms).
+    recorder : Recorder, optional
+        Where the states go (:mod:`nhham.numerics.storage`); default: every
+        ``save_every``-th step within the default memory bound.
+    progress : bool
+        Report each tenth of the interval on stderr.
+    deadline : Deadline, optional
+        Stop with ``Status.TIME_LIMIT`` when it has passed (:class:`~nhham.numerics.run.Deadline`).
     """
     st = _RattleStepper(model, tol=tol)
+    recorder = _recorder(recorder, 2 * model.n, save_every)
     if _compiled_ok(model):
-        return _compiled_rattle(model, st, y0, t0, t1, h, save_every, 0)
-    t, y, status, msg, nsteps, hh = _run_fixed(lambda y, h: st.step(y, h)[0], st, y0, t0, t1, h,
-                                               save_every)
+        return _compiled_rattle(model, st, y0, t0, t1, h, recorder, 0, progress, deadline)
+    _, status, msg, nsteps, hh = _run_fixed(lambda y, h: st.step(y, h)[0], recorder, y0,
+                                            t0, t1, h, progress, deadline)
+    t, y, _ = recorder.result(2 * model.n)
     return Run(t, y, None, status, msg, st.nfev + nsteps + st.newton, nsteps,
                newton_iterations=st.newton, step=hh)
 
 
-def rattle4(model, y0, t0, t1, h, *, save_every: int = 1, tol=None) -> FixedStepRun:
+def rattle4(model, y0, t0, t1, h, *, save_every: int = 1, tol=None, recorder=None,
+            progress: bool = False, deadline=None) -> FixedStepRun:
     """Fourth order: RATTLE composed with the triple jump (g1, g2, g1) h.
 
     g1 = 1/(2 - 2^(1/3)), g2 = 1 - 2 g1 (Yoshida 1990; Suzuki 1990): the
     composition of a symmetric method is symmetric of order 4. Constraints
-    hold at every substep, hence at every grid point.
+    hold at every substep, hence at every grid point. Options as :func:`rattle`.
     """
     st = _RattleStepper(model, tol=tol)
+    recorder = _recorder(recorder, 2 * model.n, save_every)
     if _compiled_ok(model):
-        return _compiled_rattle(model, st, y0, t0, t1, h, save_every, 1)
+        return _compiled_rattle(model, st, y0, t0, t1, h, recorder, 1, progress, deadline)
 
     def step(y, h):
         y = st.step(y, _G1 * h)[0]
         y = st.step(y, _G2 * h)[0]
         return st.step(y, _G1 * h)[0]
 
-    t, y, status, msg, nsteps, hh = _run_fixed(step, st, y0, t0, t1, h, save_every)
+    _, status, msg, nsteps, hh = _run_fixed(step, recorder, y0, t0, t1, h, progress, deadline)
+    t, y, _ = recorder.result(2 * model.n)
     return Run(t, y, None, status, msg, st.nfev + 3 * nsteps + st.newton, nsteps,
                newton_iterations=st.newton, step=hh)
 
@@ -360,36 +397,64 @@ def _compiled_ok(model):
 _REDUCE_THE_STEP = {Status.NOT_CONVERGED: "; reduce the step"}
 
 
-def _compiled_rattle(model, st, y0, t0, t1, h, save_every, composition):
+def _compiled_rattle(model, st, y0, t0, t1, h, recorder, composition, progress, deadline):
+    """The compiled RATTLE loop, called until done (it returns every few milliseconds,
+    so that signals are handled, and when the recorder's room is full)."""
     N, h = _grid(t0, t1, h)
-    y0 = np.asarray(y0, dtype=float)
-    lam0 = st.guess_lambda(y0)
-    Y, done, newton, status = model.compiled.rattle(
-        y0, h, N, int(save_every), composition, model.parameter_block().pointer, lam0, st.tol,
-        st.maxiter)
-    status = Status(status)
-    steps = [0] + [min(i * save_every, N) for i in range(1, len(Y))]
-    if status == 0:
-        steps[-1] = N
-    else:
-        steps = [0] + [i * save_every for i in range(1, len(Y))]
-    t = t0 + h * np.array(steps, dtype=float)
-    msg = status.message if status == 0 else (
+    y = np.array(y0, dtype=float)
+    recorder.add(t0, y)
+    try:
+        lam = np.append(st.guess_lambda(y), 0.0)
+    except NumericalFailure as exc:  # the field is singular at the initial state
+        T, Y, _ = recorder.result(2 * model.n)
+        return Run(T, Y, None, exc.status, str(exc), st.nfev, 0, step=h)
+    wsp = np.empty(2 * model.n * model.n)
+    info = np.zeros(3, dtype=np.int64)  # steps done, Newton iterations, rows stored
+    pointer = model.parameter_block().pointer
+    first, reported = True, 0
+    while True:
+        before = int(info[0])
+        t_room, z_room = recorder.room()
+        status = Status(model.compiled.rattle(y, h, N, recorder.stride, composition, z_room,
+                                              pointer, lam, wsp, first, st.tol, st.maxiter,
+                                              PAUSE_SECONDS, info))
+        first = False
+        k = int(info[2])
+        if k:  # the rows are the steps after `before` that are multiples of the stride
+            s = recorder.stride
+            steps = (before // s + 1) * s + s * np.arange(k)
+            t_room[:k] = t0 + h * steps
+            recorder.advance(k)
+        if progress:
+            reported = report_progress(t0 + h * int(info[0]), t0, t1, reported)
+        if status != Status.PAUSED:
+            break
+        if deadline is not None and deadline.passed():
+            status = Status.TIME_LIMIT
+            break
+    done, newton = int(info[0]), int(info[1])
+    recorder.close(t0 + h * done, y)
+    T, Y, _ = recorder.result(2 * model.n)
+    msg = status.message if status == 0 else deadline.message(t0 + h * done) if (
+        status == Status.TIME_LIMIT) else (
         f"{status.message} in the RATTLE step at t = {t0 + (done + 1) * h:.6g} "
         f"(step {done + 1}){_REDUCE_THE_STEP.get(status, '')}; the run was stopped")
     # A step costs about one field evaluation plus one per Newton iteration.
-    return Run(t, Y.T, None, status, msg, st.nfev + done * (1 + composition * 2) + newton,
+    return Run(T, Y, None, status, msg, st.nfev + done * (1 + composition * 2) + newton,
                done, newton_iterations=newton, step=h)
 
 
 # --------------------------------------------------------------------- RK4
 def rk4(model, y0, t0, t1, h, *, projection: bool = False, baumgarte=None,
-        save_every: int = 1) -> FixedStepRun:
+        save_every: int = 1, recorder=None, progress: bool = False,
+        deadline=None) -> FixedStepRun:
     """Classical fourth-order Runge-Kutta on the projected field.
 
     With ``projection`` every step ends with :meth:`NumericModel.project`
     (Newton for g, kinetic-metric projection of v). The work of the
     constraint forces is integrated with the same weights as the state.
+    ``save_every`` and ``recorder`` as in :func:`rattle` (the recorder's width is
+    2n + 1: the state and the work).
     """
     n2 = 2 * model.n
     counter = {"nfev": 0}
@@ -413,8 +478,10 @@ def rk4(model, y0, t0, t1, h, *, projection: bool = False, baumgarte=None,
         return z
 
     z0 = np.append(np.asarray(y0, dtype=float), 0.0)
-    t, z, status, msg, nsteps, hh = _run_fixed(step, None, z0, t0, t1, h, save_every)
-    return Run(t, z[:n2], z[n2], status, msg, counter["nfev"], nsteps, step=hh)
+    recorder = _recorder(recorder, n2 + 1, save_every)
+    _, status, msg, nsteps, hh = _run_fixed(step, recorder, z0, t0, t1, h, progress, deadline)
+    t, y, work = recorder.result(n2)
+    return Run(t, y, work, status, msg, counter["nfev"], nsteps, step=hh)
 
 
 def run_fixed_step(method, model, y0, t0, t1, h, **options) -> FixedStepRun:

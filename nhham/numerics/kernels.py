@@ -134,29 +134,32 @@ class CompiledRHS:
         status = (self._closed if closed else self._rhs)(yp, op, pext)
         return obuf, status
 
-    def rattle(self, y0, h, nsteps, save_every, composition, pext, lam0, tol, maxiter):
-        """The compiled RATTLE loop (constant W): (Y stored, steps done, Newton its, status)."""
+    def rattle(self, y, h, nsteps, stride, composition, out, pext, lam, wsp, first, tol,
+               maxiter, pause_s, info):
+        """One call of the compiled RATTLE loop (constant W, ``nhham_rattle``): steps from
+        ``y`` (updated in place) until ``info[0] = nsteps``, a failure or ``pause_s``
+        seconds; every stride-th step goes to the rows of ``out`` (its first dimension
+        is the room). ``lam`` (m + 1), ``wsp`` (2 n*n: W, W^-1, filled when ``first``)
+        and ``info`` (int64: steps done, Newton iterations, rows stored by the call) are
+        carried from call to call. Returns the status (see the C source)."""
         c = ctypes
-        nsave = nsteps // save_every + 2
-        out = np.empty((nsave, 2 * self.n))
-        y0 = np.ascontiguousarray(y0, dtype=float)
-        lam = np.ascontiguousarray(np.append(lam0, 0.0), dtype=float)
-        info = np.zeros(3, dtype=np.int64)
-        status = self._lib.nhham_rattle(
-            c.c_void_p(y0.ctypes.data), c.c_double(h), c.c_long(nsteps), c.c_long(save_every),
-            c.c_int(composition), c.c_void_p(out.ctypes.data), pext,
-            c.c_void_p(lam.ctypes.data), c.c_double(tol), c.c_int(maxiter),
+        return self._lib.nhham_rattle(
+            c.c_void_p(y.ctypes.data), c.c_double(h), c.c_long(nsteps), c.c_long(stride),
+            c.c_int(composition), c.c_void_p(out.ctypes.data), c.c_long(out.shape[0]), pext,
+            c.c_void_p(lam.ctypes.data), c.c_void_p(wsp.ctypes.data), c.c_int(int(first)),
+            c.c_double(tol), c.c_int(maxiter), c.c_double(pause_s),
             c.c_void_p(info.ctypes.data))
-        return out[:int(info[2])], int(info[0]), int(info[1]), int(status)
 
     def erk(self, info, tab, ws, iw, t_bound, rtol, max_step, projection, proj_tol,
-            proj_maxiter, t_eval, out_t, out_z, t_pause, pext):
+            proj_maxiter, t_eval, out_t, out_z, stride, pause_s, pext):
         """One call of the compiled explicit Runge-Kutta loop (``nhham_erk``).
 
         ``ws`` (float64) = [state = (t, h_abs, z (2n+1), f (2n+1)), fail = (t, z),
         atol (2n+1)] and ``iw`` (int64) = [next t_eval index, rows stored, nfev,
-        nsteps] are updated in place; ``out_t``/``out_z`` receive the stored rows.
-        Returns the status (see the C source).
+        nsteps] are updated in place; ``out_t``/``out_z`` (contiguous, their length the
+        room) receive the stored rows: the t_eval points, or every ``stride``-th step.
+        The call returns after ``pause_s`` seconds of wall time at the latest (status
+        PAUSED: call again). Returns the status (see the C source).
         """
         c = ctypes
         nz = 2 * self.n + 1
@@ -169,7 +172,8 @@ class CompiledRHS:
             c.c_int(proj_maxiter), None if t_eval is None else c.c_void_p(t_eval.ctypes.data),
             c.c_long(n_eval), c.c_void_p(i), c.c_void_p(out_t.ctypes.data),
             c.c_void_p(out_z.ctypes.data), c.c_long(out_t.shape[0]), c.c_void_p(i + 8),
-            c.c_double(t_pause), pext, c.c_void_p(i + 16), c.c_void_p(w + 8 * (2 + 2 * nz)))
+            c.c_long(stride), c.c_double(pause_s), pext, c.c_void_p(i + 16),
+            c.c_void_p(w + 8 * (2 + 2 * nz)))
 
     def batch(self, Y, pext, closed=False):
         """OUT (k, 2n+m+1) at k states and the number of failed states."""

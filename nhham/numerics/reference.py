@@ -23,6 +23,7 @@ from dataclasses import dataclass
 import mpmath
 import numpy as np
 
+from nhham.numerics.run import report_progress
 from nhham.numerics.status import Status
 
 
@@ -103,7 +104,8 @@ class _MpField:
 
 
 def reference_solution(model, y0, t_span, *, digits: int = 30, t_eval=None, tol=None,
-                       kmax: int = 12, max_steps: int = 200000) -> ReferenceSolution:
+                       kmax: int = 12, max_steps: int = 200000,
+                       progress: bool = False) -> ReferenceSolution:
     """Integrate with GBS extrapolation in mpmath.
 
     Parameters
@@ -120,16 +122,19 @@ def reference_solution(model, y0, t_span, *, digits: int = 30, t_eval=None, tol=
         Local relative tolerance (default 10^-(digits - 6)).
     kmax : int
         Largest extrapolation column.
+    progress : bool
+        Report each tenth of the interval on stderr.
     """
     if digits < 16:
         raise ValueError("reference_digits must be at least 16 (more than float64)")
     tol = 10.0 ** (-(digits - 6)) if tol is None else float(tol)
     t0, t1 = float(t_span[0]), float(t_span[1])
     with mpmath.workdps(digits + _GUARD):
-        return _integrate(model, y0, t0, t1, digits, t_eval, mpmath.mpf(tol), kmax, max_steps)
+        return _integrate(model, y0, t0, t1, digits, t_eval, mpmath.mpf(tol), kmax, max_steps,
+                          progress)
 
 
-def _integrate(model, y0, t0, t1, digits, t_eval, tol, kmax, max_steps):
+def _integrate(model, y0, t0, t1, digits, t_eval, tol, kmax, max_steps, progress):
     f = _MpField(model)
     z = [mpmath.mpf(float(x)) if not isinstance(x, mpmath.mpf) else x for x in y0]
     z.append(mpmath.mpf(0))
@@ -143,6 +148,7 @@ def _integrate(model, y0, t0, t1, digits, t_eval, tol, kmax, max_steps):
         ts.append(t)
         zs.append(list(z))
     oi = len(ts) if outputs is not None else 0
+    reported = 0
     err_sum = mpmath.mpf(0)
     nsteps = rejected = 0
     status, message = Status.SUCCESS, Status.SUCCESS.message
@@ -166,6 +172,8 @@ def _integrate(model, y0, t0, t1, digits, t_eval, tol, kmax, max_steps):
             z, err, col = result
             t = target if clipped else t + Hs
             nsteps += 1
+            if progress:
+                reported = report_progress(float(t), t0, t1, reported)
             err_sum += err
             if outputs is None or (clipped and oi < len(outputs)):
                 ts.append(t)

@@ -9,13 +9,19 @@ are columns, as in scipy: ``y`` has shape (2n, K). No sympy here.
 from __future__ import annotations
 
 import sys
+import time
 from dataclasses import dataclass
 
 import numpy as np
 
 from nhham.numerics.status import Status
 
-__all__ = ["Run", "report_progress"]
+__all__ = ["Run", "report_progress", "PAUSE_SECONDS", "Deadline"]
+
+#: Wall time after which the compiled loops hand control back to Python: a signal
+#: (Ctrl-C, the command's ``--budget``) is handled within this, never after a long run
+#: of steps (one return costs microseconds).
+PAUSE_SECONDS = 0.005
 
 
 @dataclass(frozen=True)
@@ -46,6 +52,10 @@ class Run:
     t_events, y_events : list of ndarray or None
         Event times and states, one entry per event function (scipy methods with
         ``events``).
+    failed_state : ndarray (2n,) or None
+        The state at which an evaluation of the field failed (a stage of the step that
+        did not complete), when the loop knows it; the stored trajectory ends at the
+        last completed step before it.
     """
 
     t: np.ndarray
@@ -62,6 +72,27 @@ class Run:
     sol: object = None
     t_events: list | None = None
     y_events: list | None = None
+    failed_state: np.ndarray | None = None
+
+
+@dataclass(frozen=True)
+class Deadline:
+    """The wall-time limit of a run (``simulate(time_limit=...)``): the loops look at it
+    after every step (Python) or every return of the compiled loop (every few ms)."""
+
+    seconds: float
+    end: float
+
+    @classmethod
+    def after(cls, seconds) -> "Deadline | None":
+        return None if seconds is None else cls(float(seconds), time.perf_counter() + seconds)
+
+    def passed(self) -> bool:
+        return time.perf_counter() > self.end
+
+    def message(self, t) -> str:
+        return (f"stopped at the time limit of {self.seconds:g} s (wall time) at t = {t:.6g}, "
+                f"before the end of the interval")
 
 
 def report_progress(t, t0, t1, reported):

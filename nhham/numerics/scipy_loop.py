@@ -58,12 +58,13 @@ class DenseOutput:
 def eval_failure(status, t, y) -> NumericalFailure:
     """The failure of a field evaluation at time ``t`` and state ``y``."""
     status = Status(status)
+    y = np.array(y, dtype=float)
     if status == Status.SINGULAR:
         return NumericalFailure(status, f"singular saddle-point system at t = {t:.6g} "
-                                        f"(cond(C) is infinite)")
+                                        f"(cond(C) is infinite)", state=y)
     return NumericalFailure(status, f"non-finite right-hand side (NaN or overflow) at "
                                     f"t = {t:.6g}; the run was stopped (state max |y| = "
-                                    f"{float(np.max(np.abs(y))):.3g})")
+                                    f"{float(np.max(np.abs(y))):.3g})", state=y)
 
 
 def _make_fun(model, baumgarte, counter):
@@ -138,8 +139,10 @@ def _solver_options(method, n2, rtol, atol, max_step, first_step):
 
 
 def run_scipy(model, y0, t0, t1, method, *, rtol, atol, max_step, first_step, t_eval,
-              projection, baumgarte, progress=False, dense_output=False, events=None) -> Run:
-    """Integrate with scipy's ``method`` (see the module docstring)."""
+              projection, baumgarte, recorder, progress=False, dense_output=False,
+              events=None, deadline=None) -> Run:
+    """Integrate with scipy's ``method`` (see the module docstring); the states go into
+    ``recorder`` (a :class:`~nhham.numerics.storage.Recorder`)."""
     n2 = 2 * model.n
     counter = [0]
     fun = _make_fun(model, baumgarte, counter)
@@ -147,10 +150,10 @@ def run_scipy(model, y0, t0, t1, method, *, rtol, atol, max_step, first_step, t_
     opts = _solver_options(method, n2, rtol, atol, max_step, first_step)
     z0 = np.append(y0, 0.0)
     t_eval = None if t_eval is None else np.asarray(t_eval, dtype=float)
-    store = _Store(t0, z0, t_eval, model, projection, forward=t1 > t0)
+    store = _Store(t0, z0, t_eval, model, projection, forward=t1 > t0, recorder=recorder)
     watch = _Events(events, n2, t0, z0) if events is not None else None
     knots, pieces = [t0], []
-    status, message = Status.SUCCESS, Status.SUCCESS.message
+    status, message, failed = Status.SUCCESS, Status.SUCCESS.message, None
     nsteps = njev = nlu = reported = 0
     try:
         solver = cls(fun, t0, z0, t1, **opts)
@@ -184,35 +187,45 @@ def run_scipy(model, y0, t0, t1, method, *, rtol, atol, max_step, first_step, t_
             if t_stop is not None:
                 status, message = Status.EVENT, Status.EVENT.message
                 break
+            if deadline is not None and deadline.passed():
+                status, message = Status.TIME_LIMIT, deadline.message(solver.t)
+                break
     except NumericalFailure as exc:
-        status, message = exc.status, str(exc)
+        status, message, failed = exc.status, str(exc), exc.state
     except np.linalg.LinAlgError as exc:
         status, message = Status.SINGULAR, f"singular linear system: {exc}"
     except ComputationError as exc:  # a projection that did not converge and the like
         status, message = Status.NOT_CONVERGED, str(exc)
-    Z = np.array(store.zs).T if store.zs else np.zeros((n2 + 1, 0))
+    store.close()
+    T, Y, work = recorder.result(n2)
     sol = DenseOutput(OdeSolution(knots, pieces), n2) if dense_output and pieces else None
     t_events, y_events = watch.results() if watch else (None, None)
-    return Run(np.array(store.ts), Z[:n2], Z[n2], status, message, counter[0], nsteps,
-               njev=njev, nlu=nlu, sol=sol, t_events=t_events, y_events=y_events)
+    return Run(T, Y, work, status, message, counter[0], nsteps,
+               njev=njev, nlu=nlu, sol=sol, t_events=t_events, y_events=y_events,
+               failed_state=None if failed is None else failed[:n2])
 
 
 class _Store:
-    """The stored times and states: every step, or the ``t_eval`` points."""
+    """The kept times and states (into a Recorder): every stride-th step and the last,
+    or the ``t_eval`` points."""
 
-    def __init__(self, t0, z0, t_eval, model, projection, forward):
+    def __init__(self, t0, z0, t_eval, model, projection, forward, recorder):
         self.t_eval, self.model, self.projection = t_eval, model, projection
-        self.forward = forward
-        store_first = t_eval is None or (len(t_eval) and np.isclose(t_eval[0], t0))
-        self.ts, self.zs = ([t0], [z0.copy()]) if store_first else ([], [])
-        self.i = len(self.ts)
+        self.forward, self.recorder = forward, recorder
+        if t_eval is None or (len(t_eval) and np.isclose(t_eval[0], t0)):
+            recorder.add(t0, z0)
+        self.i = recorder.count
+        self.steps = 0
+        self.last = (t0, z0)
 
     def add(self, t, z, make_dense):
         """The step ending at ``t`` (state ``z``); the t_eval points inside it from the
         step's dense output (``make_dense()``, called only when a point is inside)."""
         if self.t_eval is None:
-            self.ts.append(t)
-            self.zs.append(np.array(z, dtype=float))
+            self.steps += 1
+            self.last = (t, z)
+            if self.recorder.keep(self.steps):
+                self.recorder.add(t, z)
             return
         t_eval, dense = self.t_eval, None
         while self.i < len(t_eval) and ((t_eval[self.i] <= t) if self.forward
@@ -221,9 +234,13 @@ class _Store:
             point = np.asarray(dense(t_eval[self.i]), dtype=float)
             if self.projection:
                 point[:-1] = self.model.project(point[:-1]).y
-            self.ts.append(float(t_eval[self.i]))
-            self.zs.append(point)
+            self.recorder.add(float(t_eval[self.i]), point)
             self.i += 1
+
+    def close(self):
+        """Keep the last state (steps only: with t_eval only those times are kept)."""
+        if self.t_eval is None:
+            self.recorder.close(*self.last)
 
 
 def _project_solver(solver, model, fun, cls, t1, opts):

@@ -33,6 +33,7 @@ class Status(enum.IntEnum):
     NONFINITE = -2
     SINGULAR = -3
     NOT_CONVERGED = -4
+    TIME_LIMIT = -5
 
     @property
     def message(self) -> str:
@@ -48,6 +49,7 @@ _MESSAGES = {
     Status.NONFINITE: "non-finite or overflowing state or right-hand side (NaN or overflow)",
     Status.SINGULAR: "singular saddle-point system",
     Status.NOT_CONVERGED: "Newton iteration or projection did not converge",
+    Status.TIME_LIMIT: "stopped at the time limit (wall time) before the end of the interval",
 }
 
 
@@ -59,10 +61,13 @@ class NumericalFailure(ComputationError):
     status : Status or int
     message : str, optional
         What happened and where; default: the status's own message.
+    state : ndarray, optional
+        The state at which it happened, when known (``self.state``, else None).
     """
 
-    def __init__(self, status, message: str | None = None):
+    def __init__(self, status, message: str | None = None, state=None):
         self.status = Status(status)
+        self.state = state
         super().__init__(message or self.status.message)
 
 

@@ -17,13 +17,10 @@ EXAMPLES = ROOT / "examples"
 EXAMPLE_NAMES = sorted(p.name for p in EXAMPLES.glob("*.toml"))
 
 # (command, example) pairs left out of the every-example runs, with why: the
-# snakeboard's cross-check takes about a minute, and its simulation runs into
-# the configuration where the wheels are parallel (a true singularity; see
-# test_exit_codes for a failed run's contract on a cheap scene). The bicycle's cross-check
+# snakeboard's cross-check takes about a minute. The bicycle's cross-check
 # takes about half a minute (its linearisation and simulation are checked against the
 # benchmark in tests/numerics/test_linearize.py).
-HEAVY = {("compare", "snakeboard.toml"), ("simulate", "snakeboard.toml"),
-         ("compare", "whipple_bicycle.toml")}
+HEAVY = {("compare", "snakeboard.toml"), ("compare", "whipple_bicycle.toml")}
 
 
 @functools.cache

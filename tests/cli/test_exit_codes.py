@@ -65,6 +65,55 @@ def test_failed_simulation_json_still_has_the_envelope():
     assert len(proc.stderr.strip().splitlines()) == 1  # the reason; warnings are in the JSON
 
 
+DEGENERATE = """name = "degenerate at x = 0"
+coordinates = ["x", "y"]
+lagrangian = "x**2*x_dot**2/2 + y_dot**2/2"
+constraints = ["y_dot - 1"]
+[initial]
+x = 0.0
+y = 0.5
+x_dot = 1.0
+y_dot = 1.0
+"""
+
+
+def _snakeboard_at_the_singular_steering(tmp_path):
+    """The bundled snakeboard started at phi = pi/2 (both axles parallel: the two rows of
+    mu are opposite), with (x', y') = (0, 0.5) on both constraints there."""
+    text = (EXAMPLES / "snakeboard.toml").read_text()
+    for old, new in (("phi = 0.0", "phi = 1.5707963267948966"), ("x_dot = 1.0", "x_dot = 0.0"),
+                     ("y_dot = 0.0", "y_dot = 0.5")):
+        assert old in text
+        text = text.replace(old, new)
+    path = tmp_path / "snakeboard_pi_2.toml"
+    path.write_text(text)
+    return path
+
+
+@pytest.mark.parametrize("scene, words", [
+    ("degenerate", ["at t = 0: W = d2L/dv2 is singular", "not regular at x = 0, y = 0.5",
+                    "start from other [initial] data"]),
+    ("snakeboard", ["one-forms are dependent (rank of mu 1 of 2)", "phi = 1.5708",
+                    "start from other [initial] data"]),
+])
+def test_a_run_stopped_by_a_singularity_says_what_is_singular_and_where(tmp_path, scene,
+                                                                         words):
+    """W singular at the initial state (not C, not free multipliers), or the constraints
+    dependent at a configuration: the one line names it, with the coordinates."""
+    if scene == "degenerate":
+        path = tmp_path / "degenerate.toml"
+        path.write_text(DEGENERATE)
+    else:
+        path = _snakeboard_at_the_singular_steering(tmp_path)
+    proc = run("simulate", path)
+    assert proc.returncode == 3, proc.stderr
+    assert_clean_lines(proc.stderr)
+    last = proc.stderr.splitlines()[-1]
+    for w in words:
+        assert w in last, (w, last)
+    assert "free multiplier" not in last and "Radau" not in last
+
+
 @pytest.mark.parametrize("args,words", [
     (["simulate", "rolling_disk.toml", "--precision", "30"],
      ["simulate has no option --precision", "classify, derive, compare"]),
@@ -118,6 +167,18 @@ def test_precision_reaches_the_hamiltonian_side():
                "--precision", "30", "--json")
     assert proc.returncode == 0, proc.stderr
     assert json.loads(proc.stdout)["result"]["side"] == "hamiltonian"
+
+
+@pytest.mark.parametrize("method", ["rattle", "Radau"])
+def test_free_multiplier_named_whatever_the_method(method):
+    """Paper Example 3.1 with RATTLE (the multiplier guess at the initial state fails) and
+    Radau (its batched Jacobian reports the failure as non-finite): exit 3, one line
+    naming lambda_1, never exit 1."""
+    args = ["--step", "0.1"] if method == "rattle" else []
+    proc = run("simulate", EXAMPLES / "paper_3_1.toml", "--method", method, *args)
+    assert proc.returncode == 3, proc.stderr
+    assert_clean_lines(proc.stderr)
+    assert "free multiplier lambda_1" in proc.stderr.splitlines()[-1]
 
 
 # ------------------------------------------------------ the envelope on failure
@@ -268,7 +329,7 @@ def test_internal_failure_prints_the_envelope(monkeypatch, schema):
 
     monkeypatch.setitem(cli_main.COMMANDS, "classify", interrupted)
     rc, out, err = in_process("classify", DISK, "--json")
-    assert_failure(rc, out, err, schema, 1, "interrupted", None)
+    assert_failure(rc, out, err, schema, 130, "interrupted", None)
 
 
 def test_budget_and_failed_runs_print_the_envelope(schema):

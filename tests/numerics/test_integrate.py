@@ -13,6 +13,7 @@ from nhham.numerics.codegen import numeric_model
 from nhham.errors import InconsistentInitialDataError, InputError
 from nhham.numerics.integrate import METHODS, simulate
 from nhham.numerics.model import NumericsWarning
+from nhham.numerics.status import NumericalFailure
 from nhham.numerics.workprecision import work_precision
 
 from test_codegen import pendulum, pendulum_state
@@ -195,6 +196,58 @@ def test_work_precision_rows_and_time_to_solution(sleigh):
     assert wp.reference_error_estimate < 1e-18
 
 
+def test_work_precision_quick_timing_and_skipped_settings(sleigh):
+    """--quick: the float64 reference agrees with the sleigh's closed form; each setting
+    runs `repeats` times at least (min_time 0: exactly); slow = 0 keeps only the loosest
+    setting of every method and lists the others as skipped."""
+    with pytest.warns(NumericsWarning, match="not 100 times below"):  # rk4 at h = 0.0025
+        wp = work_precision(sleigh, sleigh_state(), (0, 2.0), quick=True,
+                            methods=["DOP853", "rk4"], repeats=3, min_time=0.0)
+    assert "float64 DOP853" in wp.reference and wp.reference_digits == 16
+    assert wp.reference_error_estimate < 1e-11 and not wp.skipped
+    assert all(r.runs == 3 for r in wp.rows)
+    best = min(r.error for r in wp.rows if r.method == "DOP853")
+    assert best < 1e-9  # rtol 1e-8 against the reference
+    u, w, th = sleigh_exact(np.array(2.0))
+    ref = simulate(sleigh, (0, 2.0), sleigh_state(), rtol=1e-13, atol=1e-16, projection=True,
+                   warn=False)  # the quick reference's run
+    assert abs(ref["theta"][-1] - th) < 1e-11 and abs(ref["theta_dot"][-1] - w) < 1e-11
+    lean = work_precision(sleigh, sleigh_state(), (0, 2.0), quick=True,
+                          methods=["DOP853", "rk4"], min_time=0.0, slow=0.0)
+    assert [(r.method, r.setting) for r in lean.rows] == [
+        ("DOP853", "rtol=1e-05"), ("DOP853+projection", "rtol=1e-05"), ("rk4", "h=0.04"),
+        ("rk4+projection", "h=0.04")]
+    assert [(m, s) for m, s, _ in lean.skipped] == [
+        ("DOP853", "rtol=1e-08"), ("DOP853+projection", "rtol=1e-08"), ("rk4", "h=0.01"),
+        ("rk4", "h=0.0025"), ("rk4+projection", "h=0.01"), ("rk4+projection", "h=0.0025")]
+    assert "skipped: DOP853 rtol=1e-08 (DOP853 rtol=1e-05 took" in lean.describe()
+
+
+def test_reference_failure_is_a_numerical_failure_saying_what():
+    """C = 0 identically (a free multiplier): nothing to measure against."""
+    model = numeric_model(nhham.System(["x", "y", "z"], "(x_dot**2 + y_dot**2 - z_dot**2)/2",
+                                       ["y_dot + z_dot"]))
+    with pytest.raises(NumericalFailure, match=r"reference solution stopped at t = 0 .*C = "
+                                               r"-mu W\^-1 mu\^T is singular"):
+        work_precision(model, [0.0, 0.0, 0.0, 1.0, 1.0, -1.0], (0, 1.0), quick=True)
+
+
+@pytest.mark.parametrize("method, options", [("DOP853", {}), ("Radau", {}),
+                                             ("rattle", {"step": 0.01}), ("rk4", {"step": 0.01})])
+def test_time_limit_stops_a_run_and_keeps_it(method, options):
+    """time_limit=0: the run stops at the first look at the clock (after a step, or the
+    first return of a compiled loop) with Status.TIME_LIMIT, a failure that keeps the
+    trajectory so far."""
+    from test_exact_solutions import rolling_disk, rolling_disk_exact
+
+    model = numeric_model(rolling_disk())
+    y0, _ = rolling_disk_exact(np.array(0.0))
+    res = simulate(model, (0, 1e5), y0, method=method, time_limit=0.0, warn=False, **options)
+    assert res.status == -5 and not res.success and res.status.name == "TIME_LIMIT"
+    assert "time limit of 0 s" in res.message and 0 < res.t[-1] < 1e5
+    assert len(res.t) == res.y.shape[1] >= 2
+
+
 def test_plots_need_matplotlib_or_say_so(tmp_path, sleigh):
     from nhham.cli.plotting import OptionalDependencyError, plot_trajectory, save_figure
 
@@ -306,8 +359,29 @@ def test_compiled_loop_failures_progress_and_options(capsys):
     res = simulate(sleigh, (0, 1), sleigh_state(), max_step=0.01, first_step=1e-3,
                    loop="compiled", warn=False)
     assert np.max(np.diff(res.t)) <= 0.01 + 1e-15 and res.t[1] == pytest.approx(1e-3)
+
+
+@needs_cc
+@pytest.mark.parametrize("method, options", [("DOP853", {"rtol": 1e-12}),
+                                             ("RK23", {"projection": True}),
+                                             ("rattle", {"step": 0.01}),
+                                             ("rattle4", {"step": 0.05})])
+def test_compiled_loops_resume_after_every_pause(monkeypatch, capsys, method, options):
+    """The compiled loops hand control back every PAUSE_SECONDS (so that Ctrl-C and the
+    command's --budget are handled at once): with a pause after every step the run is
+    the same to the last bit, and progress is reported at every tenth."""
+    import nhham.numerics.compiled_loop as compiled_loop
+    import nhham.numerics.integrators as integrators
+
+    sleigh = numeric_model(chaplygin_sleigh())
+    whole = simulate(sleigh, (0, 2), sleigh_state(), method=method, warn=False, **options)
+    monkeypatch.setattr(compiled_loop, "PAUSE_SECONDS", 0.0)
+    monkeypatch.setattr(integrators, "PAUSE_SECONDS", 0.0)
     capsys.readouterr()
-    simulate(sleigh, (0, 1), sleigh_state(), loop="compiled", progress=True, warn=False)
+    paused = simulate(sleigh, (0, 2), sleigh_state(), method=method, warn=False,
+                      progress=True, **options)
+    assert np.array_equal(whole.t, paused.t) and np.array_equal(whole.y, paused.y)
+    assert whole.nsteps == paused.nsteps > 15 and whole.nfev == paused.nfev
     err = capsys.readouterr().err
     assert "(50%)" in err and "(100%)" in err
 

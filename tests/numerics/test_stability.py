@@ -25,8 +25,9 @@ from nhham.numerics.integrate import simulate
 from nhham.numerics.model import NumericsWarning
 from nhham.numerics.reference import _MpField
 
-from test_exact_solutions import (chaplygin_sleigh, nonholonomic_particle, rolling_disk,
-                                  rolling_disk_exact, sleigh_exact, sleigh_state)
+from test_exact_solutions import (ball_on_turntable, ball_state, chaplygin_sleigh,
+                                  nonholonomic_particle, rolling_disk, rolling_disk_exact,
+                                  sleigh_exact, sleigh_state)
 
 EPS = np.finfo(float).eps
 
@@ -259,10 +260,12 @@ def test_step_sizes_near_the_stability_limit():
       energy error that is large (amplified by 1/(1 - h^2/4)) but bounded (the
       second half of the run exceeds the first by at most 20%); h = 2.01 and
       2.1 grow geometrically and stop with status -2 (overflow) and a warning;
-    - x' = 0.3 (coupled through the constraint): h = 1.0 runs; at h = 1.9,
-      inside the linear limit, the nonlinear midpoint-constraint equations of
-      the step stop converging and the run stops with status -4 and the
-      advice to reduce the step -- never a silent wrong trajectory;
+    - x' = 0.3 (coupled through the constraint): h = 1.0 runs; at h = 1.9
+      the coordinates grow to about 1e4 and the run still completes, its
+      energy error large but bounded (the Newton test of the step is relative
+      to the round-off of (q1 - q)/h, which grows with the coordinates; an
+      absolute test stopped this run at t = 1712 with a residual of 4e-15);
+      at h = 2.1 the coupled motion grows and stops with status -2;
     - RK4: h = 2.7 runs with decaying energy, h = 2.95 stops with status -2."""
     model = numeric_model(nonholonomic_particle("y-harmonic"))
     still = np.array([1.0, 0.5, 0.0, 0.0, 0.8, 0.0])
@@ -276,7 +279,16 @@ def test_step_sizes_near_the_stability_limit():
         assert bad.status == -2 and "non-finite or overflow" in bad.message
         assert np.all(np.isfinite(bad.y))
     assert simulate(model, (0, 2000.0), moving, method="rattle", step=1.0, warn=False).success
-    stuck = simulate(model, (0, 2000 * 1.9), moving, method="rattle", step=1.9, warn=False)
+    far = simulate(model, (0, 2000 * 1.9), moving, method="rattle", step=1.9, warn=False)
+    dE = np.abs(far.energy - far.energy[0])
+    assert far.success and np.max(np.abs(far.y)) > 5e3 and far.constraint_residual_max < 1e-13
+    assert dE[1000:].max() <= 1.2 * dE[:1000].max()
+    grows = simulate(model, (0, 2000 * 2.1), moving, method="rattle", step=2.1, warn=False)
+    assert grows.status == -2 and np.all(np.isfinite(grows.y))
+    # A step the Newton iteration cannot solve at all: the ball on the turntable turns
+    # by 1 rad per unit of time; with h = 1 the step stops with -4 and the advice.
+    ball = numeric_model(ball_on_turntable())
+    stuck = simulate(ball, (0, 50), ball_state(ball), method="rattle", step=1.0, warn=False)
     assert stuck.status == -4 and "reduce the step" in stuck.message
     ok4 = simulate(model, (0, 2000 * 2.7), moving, method="rk4", step=2.7, warn=False)
     assert ok4.success and ok4.energy[-1] < ok4.energy[0]

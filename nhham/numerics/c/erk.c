@@ -101,8 +101,10 @@ static void erk_dense(int dop, int s, int np_, const double *K, const double *P,
          A_EXTRA (3 x 16), C_EXTRA (3), D (4 x 16)
    st = [t, h_abs, z (NZ), f (NZ)]: the state carried from call to call
         (h_abs <= 0 on the first call: select the initial step).
-   Returns NHHAM_SUCCESS (t_bound reached), NHHAM_PAUSED (t_pause passed or the
-   step buffer full), NHHAM_STEP_FAILED (step size too small), NHHAM_NONFINITE
+   Without t_eval every stride-th step (counted from the start of the run) is stored,
+   until the buffer (cap rows) is full.
+   Returns NHHAM_SUCCESS (t_bound reached), NHHAM_PAUSED (pause_s seconds of wall time
+   passed, or the step buffer is full: call again to go on), NHHAM_STEP_FAILED (step size too small), NHHAM_NONFINITE
    (non-finite or overflowing state or field), NHHAM_SINGULAR (singular saddle
    matrix, or singular matrix in the projection), NHHAM_NOT_CONVERGED (projection
    failed). A failure of the field (not of the projection or the state) also
@@ -113,8 +115,8 @@ static void erk_dense(int dop, int s, int np_, const double *K, const double *P,
 int nhham_erk(const int *info, const double *tab, double *st, double t_bound, double rtol,
               const double *atol, double max_step, int projection, double proj_tol,
               int proj_maxiter, const double *t_eval, long n_eval, long *i_eval,
-              double *out_t, double *out_z, long cap, long *nout, double t_pause,
-              const double *pext, long *counts, double *fail) {
+              double *out_t, double *out_z, long cap, long *nout, long stride,
+              double pause_s, const double *pext, long *counts, double *fail) {
     const int s = info[0], dop = info[1], np_ = info[2];
     const double err_exp = -1.0 / (info[3] + 1);
     const double *A = tab, *B = A + s * s, *C = B + s, *E = C + s, *E3 = E + s + 1;
@@ -124,7 +126,8 @@ int nhham_erk(const int *info, const double *tab, double *st, double t_bound, do
     double *t = st, *habs = st + 1, *z = st + 2, *f = st + 2 + NZ;
     long *nfev = counts, *nsteps = counts + 1;
     const double dir = t_bound >= *t ? 1.0 : -1.0;
-    int status;
+    const double wall_pause = wall_seconds() + pause_s;
+    int status, stepped = 0;
     if (info[4]) {
         if ((status = erk_field(z, *t, pext, f, nfev, fail))) return status;
         if (!(*habs > 0.0)) {  /* select_initial_step */
@@ -159,8 +162,9 @@ int nhham_erk(const int *info, const double *tab, double *st, double t_bound, do
     }
     for (;;) {
         if (*t == t_bound) return NHHAM_SUCCESS;
-        if (dir * (*t - t_pause) >= 0.0) return NHHAM_PAUSED;
         if (n_eval == 0 && *nout >= cap) return NHHAM_PAUSED;
+        if (stepped && wall_seconds() >= wall_pause) return NHHAM_PAUSED;
+        stepped = 1;
         const double t0 = *t;
         const double min_step = 10.0 * fabs(nextafter(t0, dir * INFINITY) - t0);
         double h_abs = *habs > max_step ? max_step : (*habs < min_step ? min_step : *habs);
@@ -229,6 +233,7 @@ int nhham_erk(const int *info, const double *tab, double *st, double t_bound, do
             if ((status = erk_field(z, *t, pext, f, nfev, fail))) return status;
         }
         if (n_eval == 0) {
+            if (*nsteps % stride != 0) continue;
             out_t[*nout] = *t;
             for (int i = 0; i < NZ; ++i) out_z[*nout * NZ + i] = z[i];
             ++*nout;

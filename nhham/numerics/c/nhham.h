@@ -24,11 +24,23 @@
 #define NPY_NO_DEPRECATED_API NPY_1_7_API_VERSION
 #include <numpy/arrayobject.h>
 #endif
+#ifndef _POSIX_C_SOURCE
+#define _POSIX_C_SOURCE 200809L        /* clock_gettime under -std=c99 */
+#endif
 #include <math.h>
+#include <time.h>
 
 #define NCX (NC > 0 ? NC : 1)          /* array sizes that must not be zero */
 #define NNX (NQ + NCX)
 #define NRES (2 * NQ + NC + 1)         /* out of nhham_rhs: dy (2n), lambda (m), power */
+
+/* Seconds on a monotonic clock: the integration loops return to Python every few ms
+   (NHHAM_PAUSED) so that a signal (Ctrl-C, a time budget) is handled at once. */
+static double wall_seconds(void) {
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
 
 /* The generated kernels (y = [q, v] or q; p = parameters; out as in emit.py):
    saddle:   W (n*n, row-major), F (n), mu (m*n), drift (m), h (m), g (k) at (q, v);

@@ -42,14 +42,20 @@ static int rattle_step(double *q, double *v, double h, double *lam, const double
         if (NC == 0) break;
         geometry(qm, p, geo);
         const double *mum = geo + NQ * NQ, *hm = mum + NC * NQ;
-        double err = 0.0, scale = 1.0;
+        /* Each row's residual relative to the size of its terms: u = (q1 - q)/h carries
+           the round-off of q1, eps |q1| / |h|, which grows with the coordinates (an angle
+           that has turned 1e4 times), so an absolute test would fail on long runs. */
+        double err = 0.0, size[NCX];
         for (int c = 0; c < NC; ++c) {
-            double s = hm[c];
-            for (int j = 0; j < NQ; ++j) s += mum[c * NQ + j] * u[j];
+            double s = hm[c], a = 1.0 + fabs(hm[c]);
+            for (int j = 0; j < NQ; ++j) {
+                s += mum[c * NQ + j] * u[j];
+                a += fabs(mum[c * NQ + j]) * (fabs(u[j]) + fabs(q1[j]) / fabs(h));
+            }
             r[c] = s;
+            size[c] = a;
         }
         for (int c = 0; c < NC; ++c) for (int j = 0; j < NQ; ++j) Jq[c * NQ + j] = mum[c * NQ + j] / h;
-        for (int j = 0; j < NQ; ++j) if (fabs(u[j]) + 1.0 > scale) scale = fabs(u[j]) + 1.0;
         double yy[2 * NQ];
         for (int j = 0; j < NQ; ++j) { yy[j] = qm[j]; yy[NQ + j] = u[j]; }
         jphi(yy, p, Jp);
@@ -60,13 +66,17 @@ static int rattle_step(double *q, double *v, double h, double *lam, const double
             const double *g1 = geo1 + NQ * NQ + NC * NQ + NC;
             for (int c = 0; c < NH; ++c) {
                 r[c] = g1[c];
-                for (int j = 0; j < NQ; ++j) Jq[c * NQ + j] = geo1[NQ * NQ + c * NQ + j];
+                size[c] = 1.0;
+                for (int j = 0; j < NQ; ++j) {
+                    Jq[c * NQ + j] = geo1[NQ * NQ + c * NQ + j];
+                    size[c] += fabs(Jq[c * NQ + j] * q1[j]);
+                }
             }
         }
-        for (int c = 0; c < NC; ++c) if (fabs(r[c]) > err) err = fabs(r[c]);
+        for (int c = 0; c < NC; ++c) if (fabs(r[c]) / size[c] > err) err = fabs(r[c]) / size[c];
         if (!(err == err)) return NHHAM_NONFINITE;
-        if (err <= tol * scale) break;
-        if (it > 2 && err >= best) { if (err > 1e-9 * scale) return NHHAM_NOT_CONVERGED; break; }
+        if (err <= tol) break;
+        if (it > 2 && err >= best) { if (err > 1e-9) return NHHAM_NOT_CONVERGED; break; }
         if (it >= maxiter) return NHHAM_NOT_CONVERGED;
         if (err < best) best = err;
         for (int c = 0; c < NC; ++c)
@@ -124,30 +134,40 @@ static int rattle_step(double *q, double *v, double h, double *lam, const double
     return NHHAM_SUCCESS;
 }
 
-/* nsteps steps of size h from y0; composition 0: RATTLE, 1: triple jump (order 4).
-   out: states every save_every steps (and the last), row-major (.., 2n).
-   info: [steps done, Newton iterations, states stored]. Returns the status. */
-int nhham_rattle(const double *y0, double h, long nsteps, long save_every, int composition,
-                 double *out, const double *pext, double *lam0, double tol, int maxiter,
-                 long *info) {
-    double W[NQ * NQ], Winv[NQ * NQ], geo[NGEO], q[NQ], v[NQ], lam[NCX];
-    geometry(y0, pext, geo);
-    for (int i = 0; i < NQ * NQ; ++i) W[i] = geo[i];
-    for (int c = 0; c < NQ; ++c) {
-        double A[NQ * NQ], e[NQ];
-        for (int i = 0; i < NQ * NQ; ++i) A[i] = W[i];
-        for (int i = 0; i < NQ; ++i) e[i] = (i == c);
-        if (gsolve(NQ, A, e)) return NHHAM_SINGULAR;
-        for (int i = 0; i < NQ; ++i) Winv[i * NQ + c] = e[i];
+/* Steps of size h from y (2n: q, v; updated in place) until info[0] = nsteps, a
+   failure, or pause_s seconds of wall time; composition 0: RATTLE, 1: triple jump
+   (order 4). Every stride-th step (counted from the start of the run) is stored in out
+   (row-major, .. x 2n) until cap rows are there. lam: the multiplier guess carried from
+   step to step; wsp: W and its inverse (2 n*n), computed when first is set (W is
+   constant). info = [steps done, Newton iterations (both carried from call to call),
+   rows stored by this call]. Returns NHHAM_SUCCESS (nsteps done), NHHAM_PAUSED (call
+   again to go on) or the failure's status, with y the state after the last good step. */
+int nhham_rattle(double *y, double h, long nsteps, long stride, int composition,
+                 double *out, long cap, const double *pext, double *lam, double *wsp,
+                 int first, double tol, int maxiter, double pause_s, long *info) {
+    double *W = wsp, *Winv = wsp + NQ * NQ, geo[NGEO], q[NQ], v[NQ];
+    const double wall_pause = wall_seconds() + pause_s;
+    if (first) {
+        geometry(y, pext, geo);
+        for (int i = 0; i < NQ * NQ; ++i) W[i] = geo[i];
+        for (int c = 0; c < NQ; ++c) {
+            double A[NQ * NQ], e[NQ];
+            for (int i = 0; i < NQ * NQ; ++i) A[i] = W[i];
+            for (int i = 0; i < NQ; ++i) e[i] = (i == c);
+            if (gsolve(NQ, A, e)) return NHHAM_SINGULAR;
+            for (int i = 0; i < NQ; ++i) Winv[i * NQ + c] = e[i];
+        }
     }
-    for (int i = 0; i < NQ; ++i) { q[i] = y0[i]; v[i] = y0[NQ + i]; }
-    for (int c = 0; c < NC; ++c) lam[c] = lam0[c];
     const double g1 = 1.0 / (2.0 - cbrt(2.0)), g2 = 1.0 - 2.0 * g1;
-    long stored = 0, newton = 0, s;
-    int status = 0;
-    for (int i = 0; i < NQ; ++i) { out[i] = q[i]; out[NQ + i] = v[i]; }
-    stored = 1;
-    for (s = 1; s <= nsteps; ++s) {
+    long newton = info[1];
+    int status = NHHAM_SUCCESS, stepped = 0;
+    info[2] = 0;
+    while (info[0] < nsteps) {
+        if (info[2] >= cap || (stepped && wall_seconds() >= wall_pause)) {
+            status = NHHAM_PAUSED;
+            break;
+        }
+        for (int i = 0; i < NQ; ++i) { q[i] = y[i]; v[i] = y[NQ + i]; }
         if (composition == 0) {
             status = rattle_step(q, v, h, lam, pext, W, Winv, tol, maxiter, &newton);
         } else {
@@ -156,14 +176,15 @@ int nhham_rattle(const double *y0, double h, long nsteps, long save_every, int c
             if (!status) status = rattle_step(q, v, g1 * h, lam, pext, W, Winv, tol, maxiter, &newton);
         }
         if (status) break;
-        if (s % save_every == 0 || s == nsteps) {
-            double *o = out + stored * 2 * NQ;
-            for (int i = 0; i < NQ; ++i) { o[i] = q[i]; o[NQ + i] = v[i]; }
-            ++stored;
+        for (int i = 0; i < NQ; ++i) { y[i] = q[i]; y[NQ + i] = v[i]; }
+        ++info[0];
+        stepped = 1;
+        if (info[0] % stride == 0) {
+            double *o = out + info[2] * 2 * NQ;
+            for (int i = 0; i < 2 * NQ; ++i) o[i] = y[i];
+            ++info[2];
         }
     }
-    info[0] = status ? s - 1 : nsteps;
     info[1] = newton;
-    info[2] = stored;
     return status;
 }
