@@ -339,7 +339,7 @@ def _classify_at_points(side, cons, labels, analysis, seed, target=TARGET_ERROR)
     Jv = [jacobian_row(c, v) for c in cons]
     W = [list(geo.hessian.row(i)) for i in range(system.n)]
     Mx = [list(geo.mixed_hessian.row(i)) for i in range(system.n)]
-    proof = _full_rank_modulo_p(side, cons, labels, analysis, seed, W, Mx, Jq, Jv)
+    proof = _rank_modulo_p(side, cons, labels, analysis, seed, W, Mx, Jq, Jv)
     if proof is not None:
         return proof
     best, count, pivots, mats, degrees, error = -1, 0, [], [], None, 0.0
@@ -443,36 +443,74 @@ def _with_combinations(classes: ConstraintClasses) -> ConstraintClasses:
                    decisions={**classes.decisions, "combinations": decision})
 
 
-def _full_rank_modulo_p(side, cons, labels, analysis, seed, W, Mx, Jq, Jv, tries=3):
-    """All constraints second class, proved at a point over F_p; else None.
+def _rank_modulo_p(side, cons, labels, analysis, seed, W, Mx, Jq, Jv, tries=3):
+    """The rank of B proved at a point over F_p where it is the largest B can have; else None.
 
-    B of full rank modulo p at a point of M_1 has full rank over Q at a rational
-    point (no inverse taken was of a multiple of p), hence on M_1 generically.
+    B is antisymmetric, so its rank is at most k for k even and k - 1 for k odd. A rank
+    r modulo p at a point of M_1 is a lower bound of its rank over Q at a rational point
+    (no inverse taken was of a multiple of p), hence of its generic rank on M_1: where r
+    is that largest rank, the rank is proved. The r pivot rows R are independent, so
+    B_RR is invertible (a principal submatrix of an antisymmetric matrix on a maximal
+    independent set of rows); for k odd the one first-class combination is
+    chi_k - sum_R (B_RR^-1 B_Rk)_a chi_a, its coefficients given at seeded float points
+    of M_1 (rational arithmetic at n = 19 took 5 s a point).
     """
     system = side.system
     k = len(cons)
-    if k == 0 or k % 2:
-        return None  # B is antisymmetric: full rank needs k even
+    if k == 0:
+        return None
+    largest = k - k % 2
     sampler = PointSampler.on_M1(system, seed, modular=True)
     for _ in range(tries):
         try:
             Bp = _bracket_at(sampler.point().env, W, Mx, Jq, Jv)
         except (ZeroDivisionError, NotExact):
             continue
-        if exact_rank(Bp)[0] < k:
+        r, rows, _ = exact_rank(Bp)
+        if r < largest:
             continue
-        rank_d = Decision(k, "exact", f"bracket matrix of full rank {k} at a random point of "
-                          f"M_f modulo the prime 2^61 - 1 (proof)", samples=1, error_bound=0.0)
+        rank_d = Decision(r, "exact", f"bracket matrix of rank {r} at a random point of "
+                          f"M_f modulo the prime 2^61 - 1, the largest an antisymmetric "
+                          f"{k} x {k} matrix has (proof)", samples=1, error_bound=0.0)
         nonzero = np.array([[bool(x) for x in row] for row in Bp], dtype=bool).reshape(k, k)
         blocks = tuple(tuple(labels[a] for a in blk) for blk in connected_blocks(nonzero))
+        R = list(rows) if r < k else list(range(k))
+        decisions = {"rank": rank_d}
+        coeff_dicts: tuple = ()
+        if r < k:
+            (kk,) = [a for a in range(k) if a not in R]
+            coeff_dicts = (_coefficients_at_floats(side, cons, labels, analysis, seed, R, kk),)
+            decisions[f"gamma[{labels[kk]}]"] = Decision(
+                True, "exact", "B_RR of rank r modulo p at the point: the combination with "
+                "coefficient 1 on this constraint and -B_RR^-1 B_Rk on R is first class (its "
+                "coefficients depend on the point)", samples=1)
         return ConstraintClasses(
             labels=tuple(labels), constraints_TQ=tuple(cons), constraints=None,
-            bracket_matrix=None, bracket_samples=(), rank=k, first_class=0, second_class=k,
-            second_class_set=tuple(labels), first_class_combinations=(),
-            combination_coefficients=(), individually_first_class=(), blocks=blocks,
-            decisions={"rank": rank_d}, method="exact at points", manifold=None, side=side,
-            analysis=analysis)
+            bracket_matrix=None, bracket_samples=(), rank=r, first_class=k - r,
+            second_class=r, second_class_set=tuple(labels[a] for a in R),
+            first_class_combinations=() if r == k else None,
+            combination_coefficients=coeff_dicts,
+            individually_first_class=tuple(labels[a] for a in range(k)
+                                           if not nonzero[a].any()),
+            blocks=blocks, decisions=decisions, method="exact at points", manifold=None,
+            side=side, analysis=analysis)
     return None
+
+
+def _coefficients_at_floats(side, cons, labels, analysis, seed, R, kk, samples=3) -> dict:
+    """The coefficients of chi_kk - sum_R (B_RR^-1 B_Rk)_a chi_a at seeded float points of
+    M_1: label -> values, one per point."""
+    if not R:
+        return {labels[kk]: (1.0,)}
+    mats, _ = _float_brackets(side, cons, analysis, None, samples, seed)
+    per_point = []
+    for S in mats:
+        c = np.zeros(len(cons))
+        c[kk] = 1.0
+        c[R] = -np.linalg.solve(S[np.ix_(R, R)], S[R, kk])
+        per_point.append(c)
+    return {labels[a]: tuple(float(c[a]) for c in per_point)
+            for a in range(len(cons)) if any(c[a] != 0 for c in per_point)}
 
 
 def _classify_lagrangian_sampled(side, cons, labels, analysis, tol, precision, samples,
@@ -482,6 +520,15 @@ def _classify_lagrangian_sampled(side, cons, labels, analysis, tol, precision, s
     The Lagrangian bracket needs only W, the mixed Hessian and the gradients of
     the constraints at each point (numbers), never H or Leg^-1 symbolically.
     """
+    mats, resid = _float_brackets(side, cons, analysis, precision, samples, seed)
+    return _classes_from_samples(side, tuple(sp.sympify(c) for c in cons), labels, analysis,
+                                 mats, Backend(None), tol, resid,
+                                 "the bracket matrix {chi_a, chi_b}_L")
+
+
+def _float_brackets(side, cons, analysis, precision, samples, seed) -> tuple:
+    """B = {chi_a, chi_b}_L (float64 arrays, k x k) at seeded float points of M_f = M_1,
+    with the points' residual."""
     from nhham.lagrangian.geometry import LagrangianGeometry
 
     system = side.system
@@ -504,8 +551,7 @@ def _classify_lagrangian_sampled(side, cons, labels, analysis, tol, precision, s
         Jq, Jv = Jp[:, :n], Jp[:, n:]
         U = np.linalg.solve(W, Jv.T)
         mats.append(Jq @ U - U.T @ Jq.T - U.T @ (Mx - Mx.T) @ U)
-    return _classes_from_samples(side, tuple(cons), labels, analysis, mats, Backend(None), tol,
-                                 resid, "the bracket matrix {chi_a, chi_b}_L")
+    return mats, resid
 
 
 def _degree_solve(A, B):

@@ -31,6 +31,8 @@ after each product, so nothing grows beyond what the identities allow.
 
 from __future__ import annotations
 
+import time
+
 import sympy as sp
 from sympy.polys.rings import sring
 
@@ -43,12 +45,21 @@ __all__ = ["closed_form_combinations", "NotFormed"]
 # num/den with more terms than this are not cancelled by a gcd.
 _CANCEL_TERMS = 2000
 
+# A product of polynomials with more pairs of terms than this is not formed (about a
+# second of sympy's sparse multiplication): the 3-link snake's bracket entries would
+# have taken 100 s to reach the term bound.
+MAX_PRODUCT_TERMS = 1_000_000
+
+# The closed forms are for display: they are given up after this many CPU seconds.
+TIME_LIMIT = 2.0
+
 
 class NotFormed(Exception):
     """The combinations cannot be formed in closed form here (the reason is the message)."""
 
 
-def closed_form_combinations(system, constraints, second_class, max_terms: int = 20000):
+def closed_form_combinations(system, constraints, second_class, max_terms: int = 20000,
+                             time_limit: float = TIME_LIMIT):
     """The first-class combinations gamma_k (k outside ``second_class``) in (q, p).
 
     Parameters
@@ -60,7 +71,10 @@ def closed_form_combinations(system, constraints, second_class, max_terms: int =
     second_class : sequence of int
         Indices of a maximal second-class set R (B_RR invertible on M_f).
     max_terms : int
-        Give up (NotFormed) when a polynomial on the way has more terms.
+        Give up (NotFormed) when a polynomial on the way has more terms (or a product
+        more than MAX_PRODUCT_TERMS pairs of terms).
+    time_limit : float
+        Give up (NotFormed) after this many seconds.
 
     Returns
     -------
@@ -72,9 +86,9 @@ def closed_form_combinations(system, constraints, second_class, max_terms: int =
     ------
     NotFormed
         L not quadratic in v, a constraint or W not polynomial in the
-        generators, or a polynomial over ``max_terms`` terms.
+        generators, a polynomial over ``max_terms`` terms, or out of time.
     """
-    ctx = _Context(system, constraints, max_terms)
+    ctx = _Context(system, constraints, max_terms, time_limit)
     R = list(second_class)
     A, F = zip(*[ctx.hamiltonian(i) for i in range(len(ctx.constraints))])
     uniform = all(f == F[0] for f in F)
@@ -90,9 +104,10 @@ def closed_form_combinations(system, constraints, second_class, max_terms: int =
                 entry = ctx.bracket(A[a], A[b])
             else:
                 fa, fb = (ctx.ring.one, ctx.ring.one) if uniform else (F[a], F[b])
-                entry = (F[a] * fb * ctx.bracket(A[a], A[b])
-                         - fb * A[a] * ctx.bracket(F[a], A[b])
-                         - fa * A[b] * ctx.bracket(A[a], F[b]))
+                mul = ctx.mul
+                entry = (mul(mul(F[a], fb), ctx.bracket(A[a], A[b]))
+                         - mul(mul(fb, A[a]), ctx.bracket(F[a], A[b]))
+                         - mul(mul(fa, A[b]), ctx.bracket(A[a], F[b])))
             entries[a, b] = ctx.reduce(entry)
             entries[b, a] = -entries[a, b]
         return entries[a, b]
@@ -123,7 +138,9 @@ def closed_form_combinations(system, constraints, second_class, max_terms: int =
 class _Context:
     """One polynomial ring for W, a(q), the constraints and the momenta."""
 
-    def __init__(self, system, constraints, max_terms):
+    def __init__(self, system, constraints, max_terms, time_limit=TIME_LIMIT):
+        self.deadline = time.process_time() + time_limit
+        self.time_limit = time_limit
         q, v = list(system.coordinates), list(system.velocities)
         p = [momentum_symbol(s) for s in q]
         L = sp.expand(system.lagrangian)
@@ -169,7 +186,16 @@ class _Context:
         poly = trig_reduce(poly)
         if len(poly) > self.max_terms:
             raise NotFormed(f"a polynomial of more than {self.max_terms} terms")
+        if time.process_time() > self.deadline:
+            raise NotFormed(f"not formed within {self.time_limit:g} s of CPU time")
         return poly
+
+    def mul(self, f, g):
+        """f g, refused (NotFormed) when it would take more than MAX_PRODUCT_TERMS
+        products of terms."""
+        if len(f) * len(g) > MAX_PRODUCT_TERMS:
+            raise NotFormed(f"a product of polynomials of {len(f)} and {len(g)} terms")
+        return f * g
 
     def adj_det(self, rows):
         """(adjugate as rows, determinant) of a square matrix of ring elements.
@@ -182,9 +208,10 @@ class _Context:
         M = [[zero] * n for _ in range(n)]
         c = self.ring.one
         for k in range(1, n + 1):
-            M = [[self.reduce(sum((rows[i][j] * M[j][l] for j in range(n)), zero)
+            M = [[self.reduce(sum((self.mul(rows[i][j], M[j][l]) for j in range(n)), zero)
                               + (c if i == l else zero)) for l in range(n)] for i in range(n)]
-            trace = sum((rows[i][j] * M[j][i] for i in range(n) for j in range(n)), zero)
+            trace = sum((self.mul(rows[i][j], M[j][i]) for i in range(n) for j in range(n)),
+                        zero)
             c = -self.reduce(trace).quo_ground(k)  # exact: the normal form of k c
         sign = -1 if n % 2 else 1
         return [[-sign * e for e in row] for row in M], sign * c
@@ -202,7 +229,7 @@ class _Context:
             if rows[0][j]:
                 keep = [i for i in range(1, n) if i != j]
                 minor = [[rows[x][y] for y in keep] for x in keep]
-                total += (-1) ** (j - 1) * rows[0][j] * self.pfaffian(minor)
+                total += (-1) ** (j - 1) * self.mul(rows[0][j], self.pfaffian(minor))
         return self.reduce(total)
 
     def expression(self, num, den) -> sp.Expr:
@@ -242,7 +269,7 @@ class _Context:
         if not hasattr(self, "_Y"):
             adj, self.delta = self.adj_det(self.W)
             rhs = [self.gp[i] - self.a[i] for i in range(len(self.p))]
-            self._Y = [self.reduce(sum((adj[i][j] * rhs[j] for j in range(len(rhs))),
+            self._Y = [self.reduce(sum((self.mul(adj[i][j], rhs[j]) for j in range(len(rhs))),
                                        self.ring.zero)) for i in range(len(rhs))]
         chi = self.constraints[index]
         vpos = [self.ring.gens.index(g) for g in self.gv]
@@ -253,7 +280,7 @@ class _Context:
             j = 0
             for i, pos in enumerate(vpos):
                 for _ in range(mon[pos]):
-                    term = self.reduce(term * self._Y[i])
+                    term = self.reduce(self.mul(term, self._Y[i]))
                     j += 1
             out += term * self.delta ** (degree - j)
         return self.reduce(out), self.reduce(self.denominators[index] * self.delta ** degree)
@@ -286,8 +313,8 @@ class _Context:
         for A in range(len(self.q)):
             fp, gp = f.diff(self.gp[A]), g.diff(self.gp[A])
             if gp:
-                total += self._dq_of(f, A) * gp
+                total += self.mul(self._dq_of(f, A), gp)
             if fp:
-                total -= fp * self._dq_of(g, A)
+                total -= self.mul(fp, self._dq_of(g, A))
             total = self.reduce(total)
         return total

@@ -17,6 +17,7 @@ and p_theta(G) = p_theta - d (-p_x sin theta + p_y cos theta).
 import random
 from pathlib import Path
 
+import pytest
 import sympy as sp
 
 import nhham
@@ -201,3 +202,13 @@ def test_curvilinear_pair_combinations_are_first_class():
     g1, g2 = classes.first_class_combinations
     assert sp.simplify(sp.diff(g1, p[2]) * sp.diff(g2, p[5])
                        - sp.diff(g1, p[5]) * sp.diff(g2, p[2])) != 0
+
+
+def test_a_closed_form_beyond_reach_is_given_up_quickly():
+    """The 3-link snake's bracket entries are products of polynomials of thousands of terms
+    (100 s to reach the term bound): refused before they are formed, with the reason."""
+    from nhham.system import models
+
+    system = models.snake(3)
+    with pytest.raises(NotFormed, match="product of polynomials|within"):
+        closed_form_combinations(system, list(system.phi), [0, 1])
