@@ -38,7 +38,7 @@ import sympy as sp
 
 from nhham.settings import SEED
 from nhham.hamiltonian.brackets import DiracBracket, connected_blocks
-from nhham.errors import ComputationError, InputError
+from nhham.errors import ComputationError, InputError, NhhamError
 from nhham.hamiltonian.side import HamiltonianSide, hamiltonian_side
 from nhham.hamiltonian.legendre import Backend, Lambdified, ModularBackend
 from nhham.hamiltonian.combinations import NotFormed, closed_form_combinations
@@ -479,7 +479,8 @@ def _rank_modulo_p(side, cons, labels, analysis, seed, W, Mx, Jq, Jv, tries=3):
         coeff_dicts: tuple = ()
         if r < k:
             (kk,) = [a for a in range(k) if a not in R]
-            coeff_dicts = (_coefficients_at_floats(side, cons, labels, analysis, seed, R, kk),)
+            coeff_dicts = (_coefficients_at_a_point(side, cons, labels, analysis, seed, R, kk,
+                                                     (W, Mx, Jq, Jv)),)
             decisions[f"gamma[{labels[kk]}]"] = Decision(
                 True, "exact", "B_RR of rank r modulo p at the point: the combination with "
                 "coefficient 1 on this constraint and -B_RR^-1 B_Rk on R is first class (its "
@@ -497,12 +498,38 @@ def _rank_modulo_p(side, cons, labels, analysis, seed, W, Mx, Jq, Jv, tries=3):
     return None
 
 
-def _coefficients_at_floats(side, cons, labels, analysis, seed, R, kk, samples=3) -> dict:
-    """The coefficients of chi_kk - sum_R (B_RR^-1 B_Rk)_a chi_a at seeded float points of
-    M_1: label -> values, one per point."""
+def _coefficients_at_a_point(side, cons, labels, analysis, seed, R, kk, data) -> dict:
+    """The coefficients of chi_kk - sum_R (B_RR^-1 B_Rk)_a chi_a: label -> values.
+
+    At one random rational point of M_1 (exact, then rounded) up to
+    COMBINATION_MAX_N coordinates or when float points cannot be found (parameters
+    of very different sizes); beyond, at seeded float points (rational arithmetic at
+    n = 19 takes seconds a point).
+    """
     if not R:
         return {labels[kk]: (1.0,)}
-    mats, _ = _float_brackets(side, cons, analysis, None, samples, seed)
+    if side.system.n > COMBINATION_MAX_N:
+        try:
+            mats, _ = _float_brackets(side, cons, analysis, None, 3, seed)
+        except NhhamError:
+            mats = []
+    else:
+        mats = []
+    if not mats:
+        sampler = PointSampler.on_M1(side.system, seed)
+        for _ in range(MAX_POINTS):
+            try:
+                Bp = _bracket_at(sampler.point().env, *data)
+                cR = exact_solve([[Bp[a][b] for b in R] for a in R], [[-Bp[a][kk]] for a in R])
+            except ZeroDivisionError:
+                continue
+            c = [0.0] * len(cons)
+            c[kk] = 1.0
+            for i, a in enumerate(R):
+                c[a] = float(cR[i][0])
+            return {labels[a]: (c[a],) for a in range(len(cons)) if c[a] != 0}
+        raise ComputationError(f"B_RR singular at {MAX_POINTS} random points of M_1 though "
+                               f"it is regular modulo p at one")
     per_point = []
     for S in mats:
         c = np.zeros(len(cons))
