@@ -36,4 +36,13 @@ def numeric_function(args: Sequence, exprs, precision: int | None = None,
     cse : bool
         Common subexpressions extracted once (worth it for long lists).
     """
-    return sp.lambdify(list(args), exprs, modules=numeric_module(precision), cse=cse)
+    from sympy.printing.numpy import NumPyPrinter
+    from sympy.printing.pycode import MpmathPrinter
+
+    # The terms of a sum are printed as they are stored: sorting them (sympy's default)
+    # is most of the cost of printing the bicycle's matrices.
+    printer = (NumPyPrinter if precision is None else MpmathPrinter)(
+        {"fully_qualified_modules": False, "inline": True, "allow_unknown_functions": True,
+         "user_functions": {}, "order": "none"})
+    return sp.lambdify(list(args), exprs, modules=numeric_module(precision), cse=cse,
+                       printer=printer)
