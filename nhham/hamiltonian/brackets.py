@@ -182,9 +182,6 @@ class BracketMatrix:
                 M[b, a] = -M[a, b]
         return M
 
-    def as_matrix(self) -> sp.Matrix:
-        return self.matrix
-
 
 def numeric_bracket_matrix(Gq: np.ndarray, Gp: np.ndarray, Hq: np.ndarray | None = None,
                            Hp: np.ndarray | None = None) -> np.ndarray:

@@ -19,12 +19,12 @@ canonical bracket. On M_f:
   may be second class on its own while such a combination of several is first
   class.
 
-Decisions on M_f follow the rule of :mod:`nhham.onmanifold` (exact reduction
+Decisions on M_f follow the rule of :mod:`nhham.lagrangian.submanifold` (exact reduction
 first, seeded sampling second), each recorded as a Decision.
 
 The Dirac bracket {f, g}_D = {f, g} - {f, chi_a} (B^{-1})^{ab} {chi_b, g} is
 taken over the second-class set, block by block
-(:class:`nhham.brackets.DiracBracket`).
+(:class:`nhham.hamiltonian.brackets.DiracBracket`).
 """
 
 from __future__ import annotations

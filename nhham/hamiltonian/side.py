@@ -75,11 +75,6 @@ def hamiltonian_side(system, precision: int | None = None, samples: int = 6,
 
 
 #: The ``_H`` names of nhham 0.1 and the shared names that replace them.
-_OLD_NAMES = {f"{name}_H": name for name in (
-    "constraints", "vertical_fields", "constraint_gradients", "constraint_matrix",
-    "constraint_derivatives", "multipliers", "projected_field", "projector_Q", "projector_P")}
-
-
 class HamiltonianSide:
     """Constrained Hamiltonian dynamics of a system on T*Q (frozen, lazy).
 
@@ -89,8 +84,7 @@ class HamiltonianSide:
     ``constraint_derivatives`` (X_H(phi_i^H)), ``multipliers``, ``multiplier_symbols``,
     ``projected_field`` (P(X_H)), ``projector_Q``, ``projector_P``, ``M1``,
     ``constraint_rank``, ``regular``; the constraint functions are ``constraints``
-    (phi^H = phi o Leg^-1). The names with ``_H`` of nhham 0.1 still answer, with a
-    DeprecationWarning.
+    (phi^H = phi o Leg^-1).
     """
 
     system: "System"
@@ -329,21 +323,6 @@ class HamiltonianSide:
         if max_stages not in self._analysis_cache:
             self._analysis_cache[max_stages] = _hamiltonian_analysis(self, max_stages)
         return self._analysis_cache[max_stages]
-
-
-def _deprecated_name(old: str, new: str) -> property:
-    def get(self):
-        import warnings
-
-        warnings.warn(f"HamiltonianSide.{old} is now .{new} (the Lagrangian side's name)",
-                      DeprecationWarning, stacklevel=2)
-        return getattr(self, new)
-
-    return property(get, doc=f"Deprecated: :attr:`{new}`.")
-
-
-for _old, _new in _OLD_NAMES.items():
-    setattr(HamiltonianSide, _old, _deprecated_name(_old, _new))
 
 
 def _hamiltonian_analysis(side: HamiltonianSide, max_stages: int):

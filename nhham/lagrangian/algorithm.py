@@ -23,7 +23,7 @@ Q = (C')^{i'j'} Z_{j'} ⊗ dχ_{i'} built on the block), P = id − Q.
 Conventions: vectors are sympy column matrices of length N = 2n in the order of the
 manifold's variables (coordinates, then velocities or momenta); vertical fields are
 the rows of an m x N matrix; the i-th multiplier is ``lambda_<i>`` (1-based, the
-index of the constraint φ_i in ``System.phi``, see :mod:`nhham.symbols`).
+index of the constraint φ_i in ``System.phi``, see :mod:`nhham.system.naming`).
 
 :func:`run_algorithm` is the generic loop (used by both the Lagrangian and the
 Hamiltonian side) with its records and its report;
@@ -432,7 +432,7 @@ def run_algorithm(base_field, vertical_fields, primary: Sequence, labels: Sequen
     What is exact: the conditions ψ_j and the multipliers are symbolic (Schur
     complements with the chosen block, from unreduced functions); whether a rank
     or a vanishing holds on M_k is decided by the manifold (exact reduction, else
-    seeded samples; see :mod:`nhham.onmanifold`), and the block is chosen by
+    seeded samples; see :mod:`nhham.lagrangian.submanifold`), and the block is chosen by
     conditioning at sample points when A is not constant. So a condition is as
     reliable as the rank decision it rests on, and every decision is recorded.
 

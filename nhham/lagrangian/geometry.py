@@ -134,10 +134,6 @@ class LagrangianGeometry:
         return self.system.m
 
     @cached_property
-    def _q(self):
-        return sp.Matrix(self.system.coordinates)
-
-    @cached_property
     def _v(self):
         return sp.Matrix(self.system.velocities)
 

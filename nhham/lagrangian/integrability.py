@@ -21,7 +21,7 @@ space {v : μ(q) v = −h(q)}, a translate of the linear space D_q = ker μ(q). 
   constraint set is the tangent bundle of a submanifold.
 
 ``integrable`` is True / False when every decision was clear, and None when a
-sampled decision was doubtful at the chosen precision (see :mod:`nhham.onmanifold`).
+sampled decision was doubtful at the chosen precision (see :mod:`nhham.lagrangian.submanifold`).
 """
 
 from __future__ import annotations

@@ -123,7 +123,6 @@ class System:
     parameter_values: Mapping
     lagrangian: sp.Expr
     holonomic: tuple
-    _symbol_table: Mapping
     constraints: tuple
     dropped: tuple
     constraint_labels: tuple
@@ -198,7 +197,6 @@ class System:
         object.__setattr__(self, "parameter_values", MappingProxyType(dict(values)))
         object.__setattr__(self, "lagrangian", lag)
         object.__setattr__(self, "holonomic", hols)
-        object.__setattr__(self, "_symbol_table", MappingProxyType(table))
 
         kept, dropped, mu = _check_dependence(self, cons, hols, drop_redundant)
         if mu is not None and not dropped:
@@ -245,11 +243,6 @@ class System:
     def state(self) -> tuple[sp.Symbol, ...]:
         """Coordinates on TQ in order (q^1..q^n, v^1..v^n)."""
         return self.coordinates + self.velocities
-
-    @property
-    def symbol_table(self) -> Mapping[str, sp.Symbol]:
-        """Names -> symbols for coordinates, velocities and parameters."""
-        return self._symbol_table
 
     @cached_property
     def exact_parameter_values(self) -> Mapping[sp.Symbol, sp.Rational]:

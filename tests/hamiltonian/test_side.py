@@ -288,10 +288,8 @@ def test_both_sides_answer_under_the_same_names():
     assert side.multiplier_symbols == geo.multiplier_symbols
 
 
-def test_the_old_hamiltonian_names_still_answer_with_a_warning():
+def test_the_hamiltonian_side_answers_only_under_the_lagrangian_names():
     side = hamiltonian_side(disk())
-    with pytest.warns(DeprecationWarning, match="constraint_matrix"):
-        C = side.constraint_matrix_H
-    assert C == side.constraint_matrix
-    with pytest.raises(AttributeError):
-        side.no_such_name
+    for old in ("constraint_matrix_H", "multipliers_H", "projected_field_H"):
+        with pytest.raises(AttributeError):
+            getattr(side, old)
