@@ -191,7 +191,7 @@ class CrossCheckReport:
 
 
 # --------------------------------------------------------------- numerics
-class _Sampler:
+class _ComparisonPoints:
     """Seeded points of M_f in TQ and comparisons of numeric vectors there."""
 
     def __init__(self, system, equations, precision, samples, seed, tol, exact=True):
@@ -277,7 +277,7 @@ class _Sampler:
         return f" ({k} sample point(s) skipped: not finite there)" if k else ""
 
 
-class _ModularSampler(_Sampler):
+class _ModularComparisonPoints(_ComparisonPoints):
     """Seeded points of M_1 over F_p (:class:`~nhham.lagrangian.points.PointSampler`
     with ``modular=True``): every quantity is computed exactly modulo p, so a
     difference is zero or it is not."""
@@ -293,7 +293,7 @@ class _ModularSampler(_Sampler):
         self.sampler = sampler or PointSampler.on_M1(system, seed, modular=True)
 
     @classmethod
-    def on(cls, system, constraints, samples, seed) -> "_ModularSampler":
+    def on(cls, system, constraints, samples, seed) -> "_ModularComparisonPoints":
         """Seeded points of M = {constraints = 0} over F_p: the constraints free of
         velocities are solved for coordinates, those affine in the velocities for
         dependent velocities (NotExact for any other constraint)."""
@@ -470,7 +470,7 @@ def cross_check(system, precision: int | None = None, samples: int = 6, seed: in
     elif method == "points":
         sampler = _modular_sampler(system, side, samples, seed, required=True)
     def float_sampler():
-        return _Sampler(system, tuple(system.holonomic) + tuple(system.phi), precision,
+        return _ComparisonPoints(system, tuple(system.holonomic) + tuple(system.phi), precision,
                         samples, seed, tol_given if tol_given is not None else
                         Backend(precision).default_tol(), exact=False)
 
@@ -533,7 +533,7 @@ def _exact(system, side: HamiltonianSide, precision, samples, seed, tol, max_sta
     checks = [_check_stages(system, side, analysis, run_H)]
     final = analysis.final_constraints if analysis.status != "inconsistent" else (
         tuple(system.holonomic) + tuple(system.phi))
-    sampler = _Sampler(system, final, precision, samples, seed, tol)
+    sampler = _ComparisonPoints(system, final, precision, samples, seed, tol)
     checks.append(_check_inverse_exact(side, sampler))
     free = tuple(analysis.free_multiplier_symbols)
     if analysis.status == "inconsistent" or run_H.status == "inconsistent":
@@ -649,7 +649,7 @@ def _split_free(expr, free):
     return parts
 
 
-def _compare_exact(name, lhs, rhs, sampler: _Sampler, free, what) -> CheckResult:
+def _compare_exact(name, lhs, rhs, sampler: _ComparisonPoints, free, what) -> CheckResult:
     lhs, rhs = sp.Matrix(lhs), sp.Matrix(rhs)
     if lhs.shape != rhs.shape or any(e.has(sp.nan) for e in rhs):
         return CheckResult(name, False, True, detail=f"{what}: the two sides have different "
@@ -814,7 +814,7 @@ def _check_stages(system, side, analysis, run_H) -> CheckResult:
 
 # ---------------------------------------------------------------- sampled
 def _modular_sampler(system, side, samples, seed, required=False):
-    """An :class:`_ModularSampler` when both sides can be evaluated exactly at exact points
+    """An :class:`_ModularComparisonPoints` when both sides can be evaluated exactly at exact points
     of M_1 (L quadratic in v, so Leg^-1 is one linear solve; M_1 with exact points),
     else None (or an error naming why, when ``required``)."""
     why = None
@@ -822,7 +822,7 @@ def _modular_sampler(system, side, samples, seed, required=False):
         why = "L is not quadratic in the velocities (Leg^-1 is solved numerically)"
     else:
         try:
-            sampler = _ModularSampler(system, samples, seed)
+            sampler = _ModularComparisonPoints(system, samples, seed)
             sampler.points  # noqa: B018 - draws the points, or raises NotExact
             return sampler
         except (NotExact, ZeroDivisionError) as exc:
@@ -834,9 +834,9 @@ def _modular_sampler(system, side, samples, seed, required=False):
 
 def _sampled(system, side: HamiltonianSide, sampler):
     """Checks at points of M_1 for a regular system, in floating point or (an
-    :class:`_ModularSampler`) exactly; None when C is singular there."""
+    :class:`_ModularComparisonPoints`) exactly; None when C is singular there."""
     primary = tuple(system.holonomic) + tuple(system.phi)
-    exactly = isinstance(sampler, _ModularSampler)
+    exactly = isinstance(sampler, _ModularComparisonPoints)
     how = "exact solves modulo p" if exactly else "numeric solves"
     be = sampler.backend
     lag = _NumericLagrangian(system, sampler.args)
@@ -976,14 +976,14 @@ def _staged_at_points(system, side: HamiltonianSide, samples, seed, max_stages):
     analysis = analyze_constraints(system, samples=samples, seed=seed,
                                    max_stages=max_stages, decompose=False)
     inconsistent = analysis.status == "inconsistent"
-    samplers = [_ModularSampler.on(system, st.constraints, samples, seed + st.index)
+    samplers = [_ModularComparisonPoints.on(system, st.constraints, samples, seed + st.index)
                 for st in analysis.stages]
     # No M_f when the run is inconsistent: the round trip, the form and the brackets of
     # the primary constraints are then checked at the points of M_1.
     if inconsistent:
         final, chis = samplers[0], tuple(system.holonomic) + tuple(system.phi)
     else:
-        final = _ModularSampler.on(system, analysis.final_constraints, samples, seed)
+        final = _ModularComparisonPoints.on(system, analysis.final_constraints, samples, seed)
         chis = tuple(analysis.final_constraints)
     for smp in samplers + [final]:
         smp.all_points  # noqa: B018 - draws the points, or raises NotExact

@@ -631,7 +631,7 @@ def _examine(system, params, *, classes, precision, seed, points, values=None,
 
 
 # ============================================================ exact evaluation
-class _Sampler:
+class _ParameterFieldSampler:
     """Random exact points of M = {equations = 0} with parameters as field generators.
 
     M_1 without holonomic constraints: coordinates drawn, dependent velocities solved
@@ -798,7 +798,7 @@ class _Data:
             key, known = None, []
         if len(known) >= self.points:
             return known[:self.points]
-        sampler = _Sampler(self.system, eqs, env0, exact, random.Random(f"{self.seed}:{tag}"))
+        sampler = _ParameterFieldSampler(self.system, eqs, env0, exact, random.Random(f"{self.seed}:{tag}"))
         out = [sampler.point() for _ in range(self.points)]
         if key is not None:
             self._points_cache[key] = out
