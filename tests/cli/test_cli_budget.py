@@ -61,8 +61,11 @@ def test_budget_stops_a_compiled_loop_before_its_end(monkeypatch, method, option
 
 
 def _command(*args):
+    # SIGINT as at a terminal: a test run started in the background (a shell's `&`) would
+    # pass SIGINT on ignored, and Python keeps an ignored SIGINT ignored.
     return subprocess.Popen([sys.executable, "-m", "nhham", *map(str, args)], cwd=ROOT,
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
 
 
 @pytest.mark.parametrize("delay", [0.2, 4.0])
