@@ -377,13 +377,7 @@ def _classify_at_points(side, cons, labels, analysis, seed, target=TARGET_ERROR)
     for kk in (i for i in range(k) if i not in R):
         per_point = []
         for Bp in mats:
-            c = [0] * k
-            c[kk] = 1
-            if R:
-                cR = exact_solve([[Bp[a][b] for b in R] for a in R], [[-Bp[a][kk]] for a in R])
-                for i, a in enumerate(R):
-                    c[a] = cR[i][0]
-            per_point.append(c)
+            per_point.append(_exact_combination(Bp, R, kk))
         coeff_dicts.append({labels[a]: tuple(float(c[a]) for c in per_point)
                             for a in range(k) if any(c[a] != 0 for c in per_point)})
         decisions[f"gamma[{labels[kk]}]"] = Decision(
@@ -498,6 +492,18 @@ def _rank_modulo_p(side, cons, labels, analysis, seed, W, Mx, Jq, Jv, tries=3):
     return None
 
 
+def _exact_combination(Bp, R, kk) -> list:
+    """c with c_kk = 1, c_R = -B_RR^-1 B_Rk and 0 elsewhere (B c = 0 where rank B = |R|),
+    B exact at one point (ZeroDivisionError where B_RR is singular there)."""
+    c = [0] * len(Bp)
+    c[kk] = 1
+    if R:
+        cR = exact_solve([[Bp[a][b] for b in R] for a in R], [[-Bp[a][kk]] for a in R])
+        for i, a in enumerate(R):
+            c[a] = cR[i][0]
+    return c
+
+
 def _coefficients_at_a_point(side, cons, labels, analysis, seed, R, kk, data) -> dict:
     """The coefficients of chi_kk - sum_R (B_RR^-1 B_Rk)_a chi_a: label -> values.
 
@@ -519,15 +525,10 @@ def _coefficients_at_a_point(side, cons, labels, analysis, seed, R, kk, data) ->
         sampler = PointSampler.on_M1(side.system, seed)
         for _ in range(MAX_POINTS):
             try:
-                Bp = _bracket_at(sampler.point().env, *data)
-                cR = exact_solve([[Bp[a][b] for b in R] for a in R], [[-Bp[a][kk]] for a in R])
+                c = _exact_combination(_bracket_at(sampler.point().env, *data), R, kk)
             except ZeroDivisionError:
                 continue
-            c = [0.0] * len(cons)
-            c[kk] = 1.0
-            for i, a in enumerate(R):
-                c[a] = float(cR[i][0])
-            return {labels[a]: (c[a],) for a in range(len(cons)) if c[a] != 0}
+            return {labels[a]: (float(c[a]),) for a in range(len(cons)) if c[a] != 0}
         raise ComputationError(f"B_RR singular at {MAX_POINTS} random points of M_1 though "
                                f"it is regular modulo p at one")
     per_point = []
