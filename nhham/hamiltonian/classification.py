@@ -514,13 +514,12 @@ def _coefficients_at_a_point(side, cons, labels, analysis, seed, R, kk, data) ->
     """
     if not R:
         return {labels[kk]: (1.0,)}
+    mats: list = []
     if side.system.n > COMBINATION_MAX_N:
         try:
             mats, _ = _float_brackets(side, cons, analysis, None, 3, seed)
         except NhhamError:
-            mats = []
-    else:
-        mats = []
+            pass  # no float points (parameters of very different sizes): a rational one
     if not mats:
         sampler = PointSampler.on_M1(side.system, seed)
         for _ in range(MAX_POINTS):
