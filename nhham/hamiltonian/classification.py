@@ -326,11 +326,11 @@ def _classify_at_points(side, cons, labels, analysis, seed, target=TARGET_ERROR)
     with M the mixed Hessian d2L/dq dv. rank B at an exact point is proved; a
     deficiency seen at k points carries the Schwartz–Zippel bound.
     """
-    from nhham.lagrangian.geometry import LagrangianGeometry
+    from nhham.lagrangian.geometry import lagrangian_geometry
 
     system = side.system
     geo = analysis.geometry if isinstance(analysis, ConstraintAnalysis) else \
-        LagrangianGeometry(system)
+        lagrangian_geometry(system)
     q, v = system.coordinates, system.velocities
     cons = [sp.sympify(c) for c in cons]
     k = len(cons)
@@ -556,11 +556,11 @@ def _classify_lagrangian_sampled(side, cons, labels, analysis, tol, precision, s
 def _float_brackets(side, cons, analysis, precision, samples, seed) -> tuple:
     """B = {chi_a, chi_b}_L (float64 arrays, k x k) at seeded float points of M_f = M_1,
     with the points' residual."""
-    from nhham.lagrangian.geometry import LagrangianGeometry
+    from nhham.lagrangian.geometry import lagrangian_geometry
 
     system = side.system
     geo = analysis.geometry if isinstance(analysis, ConstraintAnalysis) else \
-        LagrangianGeometry(system)
+        lagrangian_geometry(system)
     q, v = system.coordinates, system.velocities
     cons = [sp.sympify(c) for c in cons]
     k, n = len(cons), system.n

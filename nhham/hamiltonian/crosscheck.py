@@ -51,7 +51,7 @@ from nhham.errors import InputError
 from nhham.hamiltonian.side import HamiltonianSide, hamiltonian_side
 from nhham.hamiltonian.legendre import Backend, ModularBackend, Lambdified, canonical_form_matrix
 from nhham.lagrangian.algebra import cancel
-from nhham.lagrangian.geometry import LagrangianGeometry
+from nhham.lagrangian.geometry import lagrangian_geometry
 from nhham.lagrangian.points import (PRIME, ModP, NotExact, PointSampler, eliminate_coordinates,
                                     exact_rank, exact_solve, jacobian_row)
 from nhham.system.expressions import derivative
@@ -345,7 +345,7 @@ class _NumericLagrangian:
     """P(xi_L), lambda, Leg_* and {f, g}_L at points of TQ by numeric solves with W."""
 
     def __init__(self, system, args):
-        geo = LagrangianGeometry(system)
+        geo = lagrangian_geometry(system)
         ing = geo.ingredients
         n, m = system.n, system.m
         self.n, self.m = n, m
@@ -582,7 +582,7 @@ def _regular_exact(system, side, sampler) -> list:
     (numeric solves on both sides).
     """
     leg = side.legendre
-    geo = LagrangianGeometry(system)
+    geo = lagrangian_geometry(system)
     pull = leg.pullback
     everywhere = Submanifold(system, (), precision=side.precision, samples=side.samples,
                              seed=side.seed)
@@ -716,7 +716,7 @@ def _check_inverse_exact(side, sampler) -> CheckResult:
 def _check_form(side, sampler) -> CheckResult:
     """Leg^* omega_Q against omega_L (exact: J^T Omega_Q J - Omega_L expands to 0)."""
     leg = side.legendre
-    geo = LagrangianGeometry(side.system)
+    geo = lagrangian_geometry(side.system)
     pulled = leg.pullback_form(canonical_form_matrix(side.n))
     omega_L = geo.poincare_cartan_2form
     diff = (pulled - omega_L).applyfunc(sp.expand)
@@ -737,7 +737,7 @@ def _check_form(side, sampler) -> CheckResult:
 def _check_poisson_exact(side, chis_H, sampler) -> CheckResult:
     """Leg^*{f, g} against {Leg^* f, Leg^* g}_L for the final constraints f, g in (q, p)."""
     leg = side.legendre
-    geo = LagrangianGeometry(side.system)
+    geo = lagrangian_geometry(side.system)
     k = len(chis_H)
     pairs_idx = [(a, b) for a in range(k) for b in range(a + 1, k)]
     lhs = sp.Matrix([leg.pullback(side.algebra.bracket(chis_H[a], chis_H[b]))
@@ -1134,7 +1134,7 @@ def _check_form_sampled(side, sampler, lag) -> CheckResult:
     Z = be.zeros(n, n)
     O = np.block([[Z, I], [-I, Z]])
     pairs = []
-    geo = LagrangianGeometry(side.system)
+    geo = lagrangian_geometry(side.system)
     fo = Lambdified(sampler.args, list(geo.poincare_cartan_2form), (2 * n, 2 * n))
     with be.context():
         for pt in sampler.points:

@@ -36,7 +36,7 @@ from nhham.system.evaluation import numeric_function
 from nhham.settings import PARAMETER_BOX, SEED, Precision
 from nhham.errors import ComputationError
 from nhham.lagrangian.algebra import cancel
-from nhham.lagrangian.geometry import LagrangianGeometry
+from nhham.lagrangian.geometry import lagrangian_geometry
 from nhham.lagrangian.points import ModP, evaluate, exact_solve
 from nhham.system.description import System
 from nhham.system.naming import momentum_symbol
@@ -110,8 +110,9 @@ class LegendreMap:
     # ------------------------------------------------------------ the map
     @cached_property
     def _geometry(self):
-        # The fibre derivatives have one home, with its fast path for L quadratic in v.
-        return LagrangianGeometry(self.system)
+        # The fibre derivatives have one home, with its fast path for L quadratic in v;
+        # the system's shared geometry, so that a command forms them once.
+        return lagrangian_geometry(self.system)
 
     @cached_property
     def momenta(self) -> sp.Matrix:

@@ -299,9 +299,9 @@ def analyze_constraints(system, *, precision: int | None = None, samples: int = 
                                  max_stages=max_stages, exact=exact))
     specs = _decompose(system) if decompose else [_whole(system)]
     blocks, start = [], 0
-    from nhham.lagrangian.geometry import LagrangianGeometry
+    from nhham.lagrangian.geometry import lagrangian_geometry
 
-    geometry = LagrangianGeometry(system, precision=precision, samples=samples, seed=seed)
+    geometry = lagrangian_geometry(system, precision=precision, samples=samples, seed=seed)
     for spec in specs:
         run = _run_block(system, spec, opts, start, geometry)
         start += sum(1 for _, d in run.provenance.nodes(data=True) if d["kind"] == "secondary")

@@ -86,9 +86,35 @@ def lagrangian_geometry(system, precision: int | None = None, samples: int = 6,
         ``projected_field``, ``projector_Q``) whatever their size. False (default): refuse
         them beyond a size guard (:func:`nhham.lagrangian.algebra.guard_closed_form`) with
         a :class:`~nhham.errors.ClosedFormTooLarge` naming the implicit form.
+
+    Returns
+    -------
+    LagrangianGeometry
+        One object per system and settings: a second call with the same arguments
+        returns the first call's geometry, so that what it has formed (W, the
+        forcing, the fibre derivatives) is formed once per command. A System is
+        frozen, so its geometry cannot go stale.
     """
-    return LagrangianGeometry(system, precision=precision, samples=samples, seed=seed,
-                              closed_form=closed_form)
+    key = (precision, samples, seed, bool(closed_form))
+    # Kept on the system itself (a cycle the collector frees with it); a weak-keyed
+    # table would keep every system alive through its geometry's reference to it.
+    shared = system.__dict__.setdefault("_lagrangian_geometries", {})
+    if key not in shared:
+        geometry = LagrangianGeometry(system, precision=precision, samples=samples,
+                                      seed=seed, closed_form=closed_form)
+        # closed_form only decides whether a closed form is refused, never its value:
+        # a geometry differing in it alone starts from what the other has formed.
+        sibling = shared.get(key[:3] + (not key[3],))
+        if sibling is not None:
+            formed = {k: v for k, v in vars(sibling).items() if k not in _SETTINGS}
+            vars(geometry).update(formed)
+        shared[key] = geometry
+    return shared[key]
+
+
+# The constructor's arguments, kept as attributes; everything else in a geometry's
+# __dict__ is a formed (cached) quantity.
+_SETTINGS = frozenset({"system", "precision", "samples", "seed", "fast", "closed_form"})
 
 
 class LagrangianGeometry:
