@@ -38,7 +38,7 @@ WHERE = (
     "nhham.lagrangian.geometry",
     "nhham.lagrangian.points",
     "nhham.lagrangian.submanifold",
-    "nhham.lagrangian.parametric",
+    "nhham.lagrangian.exceptional",
     "nhham.hamiltonian.side",
     "nhham.hamiltonian.crosscheck",
     "nhham.hamiltonian.classification",
@@ -52,7 +52,7 @@ SAMPLER_SUFFIXES = ("Sampler", "ComparisonPoints")
 # (class, method) -> counter; the method returns one point a call, or a list of points.
 DRAWS = {
     ("PointSampler", "point"): "exact points",
-    ("_ParameterFieldSampler", "point"): "exact points",
+    ("ParameterFieldSampler", "point"): "exact points",
     ("Submanifold", "_raw_points"): "float points",
 }
 COLUMNS = ("geometries", "H sides", "submanifolds", "samplers", "exact points", "float points")

@@ -64,11 +64,12 @@ _LAZY = {
     "run_algorithm": "lagrangian.algorithm",
     "integrability": "lagrangian.integrability",
     # verdicts for every parameter value
-    "parametric_classification": "lagrangian.parametric",
-    "classification_at_values": "lagrangian.parametric",
-    "exceptional_conditions": "lagrangian.parametric",
-    "ParametricVerdict": "lagrangian.parametric",
-    "ValuesVerdict": "lagrangian.parametric",
+    "parametric_classification": "verdict.parametric",
+    "classification_at_values": "verdict.values",
+    "exceptional_conditions": "lagrangian.exceptional",
+    "Verdict": "verdict.results",
+    "ParametricVerdict": "verdict.results",
+    "ValuesVerdict": "verdict.results",
     # Hamiltonian side (Section 6)
     "legendre_map": "hamiltonian.legendre",
     "LegendreMap": "hamiltonian.legendre",

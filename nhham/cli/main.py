@@ -20,6 +20,7 @@ to :data:`COMMANDS` and its options in :func:`build_parser`.
 from __future__ import annotations
 
 import argparse
+import functools
 import os
 import sys
 import traceback
@@ -87,7 +88,7 @@ def _at_values(args, steps, scene, classes=None):
     Every command answers for the values the user gave: where they satisfy an
     exceptional condition, its ``system`` has the condition substituted.
     """
-    from nhham.lagrangian.parametric import classification_at_values
+    from nhham.verdict.values import classification_at_values
 
     with steps.step("constraint algorithm at the parameter values (stages, ranks, decisions "
                     "at exact points, integrability, exceptional parameter sets)"):
@@ -144,8 +145,10 @@ def cmd_classify(args, steps) -> CommandOutput:
     scene = _load(args, steps, drop_redundant=True)
     if getattr(args, "parametric", False):
         return _classify_parametric(args, steps, scene)
-    at = _at_values(args, steps, scene, classes=lambda a: classify_constraints(
-        a, precision=args.precision))
+    # The verdict layer calls the Hamiltonian classification directly (no callback
+    # into this module): the walk goes down the layers.
+    at = _at_values(args, steps, scene,
+                    classes=functools.partial(classify_constraints, precision=args.precision))
     analysis, classes = at.verdict.analysis, at.verdict.classes
     assert isinstance(analysis, ConstraintAnalysis)  # a valid verdict carries its analysis
     for stage in analysis.stages:
@@ -168,7 +171,7 @@ def _classify_parametric(args, steps, scene) -> CommandOutput:
     """classify --parametric: the generic verdict and every exceptional case."""
     from nhham.cli.results import classify_data
     from nhham.hamiltonian.classification import classify_constraints
-    from nhham.lagrangian.parametric import parametric_classification
+    from nhham.verdict.parametric import parametric_classification
 
     if args.latex:
         raise InputError("classify --parametric: --latex is not available (use --json or text)")
@@ -178,7 +181,7 @@ def _classify_parametric(args, steps, scene) -> CommandOutput:
         pv = parametric_classification(
             scene.system, positive=positive, max_depth=3 if args.depth is None else args.depth,
             precision=args.precision,
-            classes=lambda a: classify_constraints(a, precision=args.precision))
+            classes=functools.partial(classify_constraints, precision=args.precision))
 
     def verdict_data(v):
         if v.status == "invalid":

@@ -5,8 +5,8 @@ Modules: ``submanifold`` (deciding ranks and vanishing on M_k, with a
 P(xi_L)), ``algorithm`` (the loop of the constraint algorithm of Section 3), ``analysis``
 (:func:`analyze_constraints`, the Lagrangian entry point),
 ``integrability`` (Frobenius test of the constraint distribution),
-``symmetries`` (Section 5), ``parametric`` (verdicts for every parameter value:
-the exceptional sets where the classification changes).
+``symmetries`` (Section 5), ``exceptional`` (the parameter values where a generic
+decision's datum vanishes; the verdicts built on them are in :mod:`nhham.verdict`).
 """
 
 from nhham.lazy import lazy_exports
@@ -21,11 +21,7 @@ _LAZY = {
     "ConstraintAnalysis": "analysis",
     "run_algorithm": "algorithm",
     "integrability": "integrability",
-    "parametric_classification": "parametric",
-    "classification_at_values": "parametric",
-    "exceptional_conditions": "parametric",
-    "ParametricVerdict": "parametric",
-    "ValuesVerdict": "parametric",
+    "exceptional_conditions": "exceptional",
     "constant_of_motion": "symmetries",
     "cyclic_constants": "symmetries",
     "lie_symmetry": "symmetries",

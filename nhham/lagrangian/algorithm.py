@@ -841,7 +841,7 @@ def _exactly_empty(M):
             return f"the reduction leaves the equation 0 = {r}"
         if r != 0 and not r.free_symbols & state:
             # Nonzero for generic parameters; where the parameter values make it vanish,
-            # the verdict at the values substitutes them (nhham.lagrangian.parametric).
+            # the verdict at the values substitutes them (nhham.verdict.values).
             return (f"the reduction leaves the equation 0 = {short(r)}, a nonzero function "
                     f"of the parameters alone (exact)")
     return None

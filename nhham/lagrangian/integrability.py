@@ -103,7 +103,7 @@ class Integrability:
 
         False also where an exact decision found a term that is a nonzero function but
         vanishes at the given parameter values (``integrable`` is then None: the answer
-        at those values is decided by substituting them, :mod:`nhham.lagrangian.parametric`).
+        at those values is decided by substituting them, :mod:`nhham.verdict.values`).
         """
         if self.integrable is None and any(
                 d.method == "exact" and d.value is False for _, d in self.decisions):

@@ -21,11 +21,9 @@ from nhham.errors import InputError
 from nhham.hamiltonian.classification import classify_constraints
 from nhham.lagrangian.analysis import analyze_constraints
 from nhham.lagrangian.points import FLOAT64
-from nhham.lagrangian.parametric import (
-    classification_at_values,
-    exceptional_conditions,
-    parametric_classification,
-)
+from nhham.lagrangian.exceptional import exceptional_conditions
+from nhham.verdict.parametric import parametric_classification
+from nhham.verdict.values import classification_at_values
 
 
 # ------------------------------------------------------------------ systems
@@ -254,16 +252,16 @@ def test_values_on_a_two_parameter_condition_keep_the_names():
 
 def shift_fields(monkeypatch) -> list:
     """The fields the nearness estimates are made in, appended as they are used."""
-    from nhham.lagrangian import parametric
+    from nhham.lagrangian import exceptional
 
     fields = []
-    original = parametric._Data._with_shifts
+    original = exceptional.ExceptionalData._with_shifts
 
     def spy(self, fn, base, values, K=sp.QQ):
         fields.append(K)
         return original(self, fn, base, values, K)
 
-    monkeypatch.setattr(parametric._Data, "_with_shifts", spy)
+    monkeypatch.setattr(exceptional.ExceptionalData, "_with_shifts", spy)
     return fields
 
 
@@ -272,18 +270,18 @@ def test_values_near_an_exceptional_set_are_warned_about(monkeypatch):
     (I1, I2, k) = (0.5, 0.5 + 1e-10, 2), relative to |(I1, I2, k)| = sqrt(4.5): 3.3e-11.
     float64 finds the values near and the estimate is made again in 200-bit; for far
     values float64 is enough."""
-    from nhham.lagrangian import parametric
+    from nhham.lagrangian import exceptional
 
     fields = shift_fields(monkeypatch)
     near = classification_at_values(two_bodies({"I1": 0.5, "I2": 0.5 + 1e-10, "k": 2.0}))
     assert near.conditions == () and near.verdict.regular
     (warning,) = near.warnings
     assert "relative distance 3.3e-11" in warning and "C singular" in warning
-    assert parametric.SHIFT_FIELD in fields and FLOAT64 in fields
+    assert exceptional.SHIFT_FIELD in fields and FLOAT64 in fields
     fields.clear()
     far = classification_at_values(two_bodies({"I1": 0.5, "I2": 0.7, "k": 2.0}))
     assert far.warnings == ()
-    assert FLOAT64 in fields and parametric.SHIFT_FIELD not in fields
+    assert FLOAT64 in fields and exceptional.SHIFT_FIELD not in fields
 
 
 def test_scene_values_are_placed_in_their_case():
@@ -359,7 +357,7 @@ def test_floating_point_determinants_pivot():
     pivots of an antisymmetric bracket matrix). Checked against exact arithmetic."""
     from sympy.polys.matrices import DomainMatrix
 
-    from nhham.lagrangian.parametric import SHIFT_FIELD
+    from nhham.lagrangian.exceptional import SHIFT_FIELD
     from nhham.lagrangian.points import field_det, field_solve
 
     rows = [[0, 3, -1, 2], [-3, 0, 5, 1], [1, -5, 0, 7], [-2, -1, -7, 0]]

@@ -1,0 +1,740 @@
+"""The exceptional parameter sets of a classification's generic decisions.
+
+An exact verdict of :func:`nhham.lagrangian.analysis.analyze_constraints` holds for
+*generic* parameters: every decision assumed that some function of the state and the
+parameters is not identically zero on M_k. This module evaluates those functions
+exactly, with the parameters symbolic or at their values, and finds the parameter
+values where they vanish identically in the state. The verdicts built on it (every
+case, or the case of the scene's values) are in :mod:`nhham.verdict`.
+
+The polynomial data each generic decision rests on (all with parameters kept symbolic):
+
+* ``det W`` — the Lagrangian is regular (where it vanishes nhham does not apply);
+* the maximal minors of μ — the constraint one-forms are independent (where they all
+  vanish a constraint is redundant);
+* for every stage k with rank r > 0, the determinant of the bordered block
+  [[W, μ_Iᵀ], [∂χ_J/∂v, 0]] = det W · det (Z_i(χ_j))_{J, I} on M_k — the rank of
+  (Z_i(χ_j)) on M_k (rank C at stage 1);
+* every λ-free condition ψ_j found nonzero on M_k — a new constraint, or the reason of
+  an inconsistency;
+* when the constraint distribution is not integrable, every Frobenius term
+  dμ_i(X_a, X_b) on Q_1 (where they all vanish it becomes integrable);
+* the principal minor det B_RR of the bracket matrix B_ab = {χ_a, χ_b} on M_f over a
+  maximal second-class set R (where it vanishes the first/second-class split changes).
+
+A function f(q, v, p) is *exceptional* at parameter values p* where f(·, p*) vanishes
+identically on M_k. It is evaluated exactly at random points of M_k (rational
+coordinates and velocities, sines and cosines through rational points of the circle,
+dependent velocities solved exactly) with the parameters as generators of the field
+Q(p): each value is a rational function of the parameters, and the exceptional set is
+the common zero set of the numerators of the values, which is that of the coefficients
+of f (as a polynomial in the state) with probability ≥ 1 − D/2^62 per point. It is
+split into the irreducible factors of their gcd (components of codimension 1) and the
+solutions of what remains (lower-dimensional components). Every component is verified
+by the case analysis (:mod:`nhham.verdict.parametric`), which runs the classification
+there.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import math
+import random
+from dataclasses import dataclass
+from functools import reduce
+from typing import Sequence
+
+import numpy as np
+import sympy as sp
+from mpmath.libmp import from_rational
+from sympy import QQ
+from sympy.external.gmpy import MPQ
+from sympy.polys.domains import GF, RealField
+from sympy.polys.matrices import DomainMatrix
+
+from nhham.lagrangian.analysis import ConstraintAnalysis
+from nhham.lagrangian.points import (
+    FLOAT64,
+    FloatMatrix,
+    PRIME,
+    Angle,
+    NotExact,
+    eliminate_coordinates,
+    evaluate,
+    jacobian_row,
+    field_det,
+    field_solve,
+    maximal_minors,
+    adjacent_column_sets,
+)
+from nhham.lagrangian.submanifold import Submanifold
+from nhham.settings import SEED
+from nhham.system.expressions import short
+
+__all__ = [
+    "Condition",
+    "ExceptionalData",
+    "exceptional_conditions",
+    "exceptional_components",
+    "POINTS",
+]
+
+# Exact points per decision (each a proof of non-vanishing; the gcd of the values at
+# several points gives the content of the function in the parameters).
+POINTS = 3
+# Size of the random state values: small numbers keep the arithmetic in Q(p) cheap. A
+# value can only add a spurious factor to the gcd of the values (never hide a true
+# component), and every component is verified by running the classification on it.
+DRAW_BITS = 16
+# Plain classification names the condition its values satisfy (symbolically) up to this
+# n + m; beyond, the parameters involved are substituted by their values.
+# Whether a datum vanishes at the values is decided modulo p first (nonzero there is a
+# proof); near vanishing, its nearness is estimated at moved values in 200-bit floating
+# point, where a determinant's rounding error is far below its change over 1e-4.
+MODULAR = GF(PRIME)
+SHIFT_FIELD = RealField(200)
+# The estimate is made in float64 first and kept when it puts the values farther than
+# NEAR * FLOAT_MARGIN from vanishing: float64 with pivoting would need a rounding error
+# of 1e-4 relative to a datum's terms to move a distance below NEAR that far.
+FLOAT_MARGIN = 1e4
+# Beyond this many maximal minors of mu, the m (n - m) + 1 next to the pivot block.
+MAX_MINORS = 120
+
+
+
+@dataclass(frozen=True)
+class Condition:
+    """One component of an exceptional set: polynomial equations in the parameters.
+
+    Attributes
+    ----------
+    equations : tuple of sympy.Expr
+        Each = 0, factored, in the scene's parameter names.
+    reasons : tuple of str
+        Which generic decisions fail there.
+    """
+
+    equations: tuple
+    reasons: tuple
+
+    def describe(self) -> str:
+        return ", ".join(f"{short(e)} = 0" for e in self.equations)
+
+
+
+def exceptional_conditions(analysis: ConstraintAnalysis, parameters: Sequence | None = None,
+                           *, seed: int = SEED, points: int = POINTS) -> tuple:
+    """The components of the exceptional set of one classification.
+
+    Parameters
+    ----------
+    analysis : ConstraintAnalysis
+        The run whose generic decisions are examined.
+    parameters : sequence of sympy.Symbol, optional
+        The parameters kept symbolic (default: all of the system's); the others take
+        their values, or random rational values when they have none.
+    seed : int, optional
+    points : int, optional
+        Exact points per datum.
+
+    Returns
+    -------
+    tuple of Condition
+    """
+    system = analysis.system
+    params = tuple(system.parameters if parameters is None else parameters)
+    if not params:
+        return ()
+    return exceptional_components(ExceptionalData(system, analysis, seed, points).symbolic(params), params)
+
+
+# ============================================================ exact evaluation
+class ParameterFieldSampler:
+    """Random exact points of M = {equations = 0} with parameters as field generators.
+
+    M_1 without holonomic constraints: coordinates drawn, dependent velocities solved
+    at the point over Q(p). Otherwise the exact reduction of
+    :class:`~nhham.lagrangian.submanifold.Submanifold` is evaluated at the point
+    (NotExact when it leaves residual equations).
+    """
+
+    def __init__(self, system, equations, env0, K, rng):
+        self.q, self.v = tuple(system.coordinates), tuple(system.velocities)
+        self.env0, self.K, self.rng = env0, K, rng
+        eqs = tuple(sp.sympify(e) for e in equations)
+        phis = set(system.phi)
+        self.affine = not system.holonomic and all(e in phis for e in eqs)
+        self.dep = None
+        if self.affine:
+            self.mu = [jacobian_row(e, self.v) for e in eqs]
+            self.h = [e.xreplace({x: 0 for x in self.v}) for e in eqs]
+        else:
+            # The cheap test first: the symbolic reduction of a large M_k with a holonomic
+            # constraint no coordinate can be solved from linearly takes minutes, to end
+            # in the same NotExact.
+            eliminate_coordinates(self.q, system.holonomic)
+            red = Submanifold(system, eqs).reduction
+            if red.residual:
+                raise NotExact("M_k is not parametrised by the exact reduction (residual "
+                               "equations " + ", ".join(short(r) for r in red.residual) + ")")
+            self.sub = red.substitution
+
+    def _draw(self):
+        return MPQ(self.rng.randint(1, 2 ** DRAW_BITS))
+
+    def _angle(self):
+        t = self._draw()
+        one = 1 + t * t
+        return Angle(self._draw(), (1 - t * t) / one, 2 * t / one)
+
+    def point(self) -> dict:
+        for _ in range(20):
+            try:
+                return self._point()
+            except ZeroDivisionError:
+                continue
+        raise NotExact("no exact point found (denominators vanish at every point tried)")
+
+    def _point(self):
+        env, K = dict(self.env0), self.K
+        if self.affine:
+            for q in self.q:
+                env[q] = self._angle()
+            if not self.mu:
+                for x in self.v:
+                    env[x] = self._draw()
+                return env
+            cache = {}
+            mu = [[K.convert(x) for x in evaluate(r, env, cache)] for r in self.mu]
+            h = [K.convert(x) for x in evaluate(self.h, env, cache)]
+            m, n = len(mu), len(self.v)
+            if self.dep is None:
+                _, piv = DomainMatrix(mu, (m, n), K).rref()
+                if len(piv) < m:
+                    raise NotExact("the affine constraints are dependent at a random point")
+                self.dep = tuple(piv)
+            free = [i for i in range(n) if i not in self.dep]
+            for i in free:
+                env[self.v[i]] = self._draw()
+            block = DomainMatrix([[row[j] for j in self.dep] for row in mu], (m, m), K)
+            rhs = DomainMatrix([[-(h[k] + sum((mu[k][i] * K.convert(env[self.v[i]])
+                                               for i in free), K.zero))] for k in range(m)],
+                               (m, 1), K)
+            try:
+                sol = block.lu_solve(rhs).to_list()
+            except Exception as exc:  # singular at this point: draw again
+                raise ZeroDivisionError(str(exc)) from exc
+            for pos, j in enumerate(self.dep):
+                env[self.v[j]] = sol[pos][0]
+            return env
+        for q in self.q:
+            if q not in self.sub:
+                env[q] = self._angle()
+        for x in self.v:
+            if x not in self.sub:
+                env[x] = self._draw()
+        cache = {}
+        for q in self.q:
+            if q in self.sub:
+                env[q] = _coordinate_value(self.sub[q], env, cache)
+        for x in self.v:
+            if x in self.sub:
+                env[x], = evaluate([self.sub[x]], env, cache)
+        return env
+
+
+def _coordinate_value(expr, env, cache):
+    """A solved coordinate's value: an Angle when it is an integer combination of
+    drawn coordinates (so sin/cos of it stay exact), else its value."""
+    expr = sp.expand(expr)
+    if expr == 0:
+        return Angle(0, 1, 0)
+    terms = expr.as_coefficients_dict()
+    if all(isinstance(s, sp.Symbol) and isinstance(env.get(s), Angle) and c.is_Integer
+           for s, c in terms.items()):
+        out = Angle(0, 1, 0)
+        for s, c in terms.items():
+            out = out + env[s] * int(c)
+        return out
+    value, = evaluate([expr], env, cache)
+    return value
+
+
+class ExceptionalData:
+    """The data the generic decisions of one analysis rest on, as evaluators.
+
+    :meth:`items` gives ``(reason, evaluate)`` pairs; ``evaluate(env0, K)`` returns the
+    values of the datum's functions at seeded exact points of its M_k, the parameters
+    taking the values of ``env0`` (generators of K = Q(p) to keep them symbolic, or
+    exact rationals). The same seed gives the same free coordinates and velocities
+    for every ``env0``, so values at nearby parameter points can be compared.
+    """
+
+    def __init__(self, system, analysis, seed, points):
+        self.system, self.analysis = system, analysis
+        self.seed, self.points = seed, int(points)
+        rng = random.Random(seed + 104729)
+        values = dict(system.parameter_values)
+        # Parameters without values (and without generators) take these fixed values.
+        self.fixed = {p: (_exact_mpq(values[p]) if p in values else
+                          MPQ(rng.randint(1, 2 ** DRAW_BITS))) for p in system.parameters}
+        self.random = {p: MPQ(rng.randint(1, 2 ** DRAW_BITS)) for p in system.parameters}
+        geo = analysis.geometry
+        self.W = [list(geo.hessian.row(i)) for i in range(system.n)]
+        self.notes: list[str] = []
+        self._pivots: dict = {}
+        self._points_cache: dict = {}
+        self._memos: dict = {}
+
+    def env(self, gens=None, at=None, generic=False) -> dict:
+        """Parameter values: ``gens`` (symbol -> field element) first, then ``at``
+        (symbol -> exact value), then random values (``generic``) or the system's."""
+        out = dict(self.random if generic else self.fixed)
+        out.update(at or {})
+        out.update(gens or {})
+        return out
+
+    # --------------------------------------------------------------- points
+    @contextlib.contextmanager
+    def _first_point_only(self):
+        """Evaluate data at the first seeded point only (the same point as always)."""
+        saved, self.points = self.points, 1
+        try:
+            yield
+        finally:
+            self.points = saved
+
+    def _pts(self, eqs, env0, K, tag):
+        # The points stay exact when the data are evaluated in another field. The same
+        # (stage, parameter values) gives the same points for every datum: drawn once,
+        # and a shorter list is a prefix of a longer one (one seeded stream).
+        exact = QQ if K.is_RealField or K.is_FiniteField else K
+        try:
+            key = (tag, tuple(eqs), exact, frozenset(env0.items()))
+            known = self._points_cache.get(key, [])
+        except TypeError:  # unhashable parameter values: no caching
+            key, known = None, []
+        if len(known) >= self.points:
+            return known[:self.points]
+        sampler = ParameterFieldSampler(self.system, eqs, env0, exact, random.Random(f"{self.seed}:{tag}"))
+        out = [sampler.point() for _ in range(self.points)]
+        if key is not None:
+            self._points_cache[key] = out
+        return out
+
+    def _memo(self, env) -> dict:
+        """The memo of subexpression values at one point, shared by every datum (the
+        point is kept alive with it, so its id stays its own)."""
+        return self._memos.setdefault(id(env), (env, {}))[1]
+
+    @staticmethod
+    def _val(K, x):
+        x = x.r if isinstance(x, Angle) else x
+        if K is FLOAT64:
+            return float(MPQ(x))
+        if K.is_FiniteField or K.is_RealField:
+            q = MPQ(x)
+            if K.is_RealField:  # rounded once, directly (K.convert goes through sympy)
+                return K.dtype(from_rational(int(q.numerator), int(q.denominator),
+                                             K.precision, "n"))
+            den = int(q.denominator)
+            if den == 1:
+                return K(int(q.numerator))
+            try:
+                return K(int(q.numerator) * pow(den, -1, int(K.characteristic())))
+            except ValueError as exc:  # p divides the denominator: not a value mod p
+                raise ZeroDivisionError(str(exc)) from exc
+        return K.convert(x)
+
+    def _matrix(self, K, rows, env, cache):
+        vals = [[self._val(K, x) for x in evaluate(r, env, cache)] for r in rows]
+        shape = (len(vals), len(vals[0]) if vals else 0)
+        if K is FLOAT64:
+            return FloatMatrix(np.array(vals, dtype=float).reshape(shape))
+        return DomainMatrix(vals, shape, K)
+
+    # ---------------------------------------------------------------- items
+    def items(self) -> list:
+        """[(reason, evaluate)] for every datum of the analysis."""
+        analysis, system = self.analysis, self.system
+        stages = analysis.stages
+        if not stages:
+            return []
+        out = []
+        m1 = stages[0].constraints
+        out.append(("the Lagrangian is singular (det W = 0)", lambda env0, K: [
+            field_det(self._matrix(K, self.W, env, self._memo(env)))
+            for env in self._pts(m1, env0, K, 1)]))
+        if system.m:
+            out.append(("the constraint one-forms become dependent (a constraint is "
+                        "redundant)", lambda env0, K: self._mu_minors(m1, env0, K)))
+        for stage in stages:
+            out += self._stage_items(stage)
+        if analysis.integrability.generic is False and system.m and system.n - system.m > 1:
+            out.append(("the constraint distribution becomes integrable",
+                        lambda env0, K: self._frobenius(m1, env0, K)))
+        if analysis.status != "inconsistent" and analysis.final_constraints:
+            out.append(("the rank of the bracket matrix on M_f drops (the first/second-class "
+                        "split changes)", lambda env0, K: self._bracket_minor(env0, K)))
+        return out
+
+    def _mu_minors(self, eqs, env0, K):
+        system = self.system
+        m = system.m
+        rows = [list(system.mu.row(i)) for i in range(m)]
+        vals = []
+        for env in self._pts(eqs, env0, K, 1):
+            M = self._matrix(K, rows, env, self._memo(env))
+            if not K.is_RealField:  # floating point reuses the exact pivot columns
+                self._pivots["mu"] = list(M.rref()[1])
+            pivots = self._pivots.get("mu")
+            # Beyond MAX_MINORS, the minors next to the pivot block: they vanish together
+            # exactly where all do (rank mu < m), at a cost of m (n - m) + 1.
+            subsets = None if math.comb(system.n, m) <= MAX_MINORS or pivots is None or \
+                len(pivots) < m else adjacent_column_sets(pivots, system.n)
+            vals += maximal_minors(M, pivots, subsets)
+        return vals
+
+    def _stage_items(self, stage):
+        k = stage.index
+        system = self.system
+        index = {lab: c for lab, c in zip(stage.labels, stage.constraints)}
+        rows, cols = stage.block
+        r = len(rows)
+        out = []
+        if r:
+            phi_idx = [int(s.name.rsplit("_", 1)[1]) - 1 for s in cols]
+            mu_I = [list(system.mu.row(i)) for i in phi_idx]
+            Jv = [jacobian_row(index[lab], system.velocities) for lab in rows]
+
+            def block_det(env0, K, eqs=stage.constraints, mu_I=mu_I, Jv=Jv, r=r, k=k):
+                vals = []
+                for env in self._pts(eqs, env0, K, k):
+                    cache = self._memo(env)
+                    W = self._matrix(K, self.W, env, cache)
+                    MI = self._matrix(K, mu_I, env, cache)
+                    JJ = self._matrix(K, Jv, env, cache)
+                    top = W.hstack(MI.transpose())
+                    zeros = (FloatMatrix.zeros((r, r)) if K is FLOAT64 else
+                             DomainMatrix.zeros((r, r), K))
+                    bottom = JJ.hstack(zeros)
+                    vals.append(field_det(top.vstack(bottom)))
+                return vals
+
+            out.append((f"the rank of (Z_i(chi_j)) on M_{k} drops below {r}"
+                        + (" (C singular)" if k == 1 else ""), block_det))
+        for label, psi in stage.conditions:
+            def condition(env0, K, eqs=stage.constraints, psi=psi, k=k):
+                return [self._val(K, evaluate([psi], env, self._memo(env))[0])
+                        for env in self._pts(eqs, env0, K, k)]
+
+            out.append((f"the condition from {label} on M_{k} vanishes", condition))
+        return out
+
+    def _frobenius(self, eqs, env0, K):
+        system = self.system
+        m, n = system.m, system.n
+        q = system.coordinates
+        rows = [list(system.mu.row(i)) for i in range(m)]
+        grads = [[jacobian_row(system.mu[i, A], q) for A in range(n)] for i in range(m)]
+        dmu = [[[grads[i][B][A] - grads[i][A][B] for B in range(n)] for A in range(n)]
+               for i in range(m)]
+        vals = []
+        for env in self._pts(eqs, env0, K, 1):
+            cache = self._memo(env)
+            M = self._matrix(K, rows, env, cache)
+            if "dep" not in self._pivots or not K.is_RealField:
+                # Floating point reuses the exact choice of the kernel basis (the
+                # values depend on it) instead of deciding pivots on rounded numbers.
+                self._pivots["dep"] = list(M.rref()[1])
+            dep = self._pivots["dep"]
+            if len(dep) < m:
+                continue
+            free = [j for j in range(n) if j not in dep]
+            block = M.extract(list(range(m)), list(dep))
+            sol = field_solve(block, -M.extract(list(range(m)), free)).to_list()
+            basis = []
+            for a, j in enumerate(free):
+                col = [K.zero] * n
+                col[j] = K.one
+                for t, d in enumerate(dep):
+                    col[d] = sol[t][a]
+                basis.append(col)
+            for i in range(m):
+                D = [[self._val(K, x) for x in evaluate(r, env, cache)] for r in dmu[i]]
+                for a in range(len(free)):
+                    for b in range(a + 1, len(free)):
+                        X, Y = basis[a], basis[b]
+                        vals.append(sum((X[A] * D[A][B] * Y[B] for A in range(n)
+                                         for B in range(n) if D[A][B]), K.zero))
+        return vals
+
+    def _brackets(self, env0, K, count=None):
+        """B = ({chi_a, chi_b}_L) over the final constraints at points of M_f."""
+        analysis, system = self.analysis, self.system
+        cons = list(analysis.final_constraints)
+        geo = analysis.geometry
+        n = system.n
+        Mx = [list(geo.mixed_hessian.row(i)) for i in range(n)]
+        Jq = [jacobian_row(c, system.coordinates) for c in cons]
+        Jv = [jacobian_row(c, system.velocities) for c in cons]
+        mats = []
+        pts = self._pts(cons, env0, K, "f")
+        for env in pts[:count]:
+            cache = self._memo(env)
+            W = self._matrix(K, self.W, env, cache)
+            M = self._matrix(K, Mx, env, cache)
+            U = field_solve(W, self._matrix(K, Jv, env, cache).transpose())
+            JU = self._matrix(K, Jq, env, cache) * U
+            mats.append(JU - JU.transpose() - U.transpose() * (M - M.transpose()) * U)
+        return mats
+
+    def bracket_rank(self, env0, K):
+        """Rank of the bracket matrix on M_f (None when not evaluated exactly)."""
+        if self.analysis.status == "inconsistent":
+            return None
+        if not self.analysis.final_constraints:
+            return 0
+        try:
+            if K.is_QQ:
+                # Rank modulo p at the first point is a lower bound of the rank over Q
+                # at every point of the datum: full there, it is the answer.
+                k = len(self.analysis.final_constraints)
+                try:
+                    with self._first_point_only():
+                        B, = self._brackets(env0, MODULAR, count=1)
+                    if B.rank() == k:
+                        return k
+                except ZeroDivisionError:
+                    pass
+            return max(B.rank() for B in self._brackets(env0, K))
+        except (NotExact, ZeroDivisionError) as exc:
+            self.notes.append(f"bracket matrix on M_f not evaluated exactly ({exc})")
+            return None
+
+    def use_second_class_set(self, indices) -> None:
+        """Take the principal block of the bracket datum from a classification."""
+        self._pivots["R"] = list(indices)
+
+    def _bracket_minor(self, env0, K):
+        if "R" not in self._pivots:
+            # The principal block is chosen for generic parameters (modulo p, at random
+            # parameter values): at the given values its minor may vanish, which is the
+            # very event the datum detects.
+            with self._first_point_only():
+                (B,) = self._brackets(self.env(generic=True), MODULAR)
+            full = B.shape[0] and B.det()  # all second class, the usual case: no rref
+            self._pivots["R"] = list(range(B.shape[0])) if full else list(B.rref()[1])
+        mats = self._brackets(env0, K)
+        R = self._pivots["R"]
+        if not R:
+            return []
+        return [field_det(B.extract(R, R)) for B in mats]
+
+    # ------------------------------------------------------------ the modes
+    def symbolic(self, params):
+        """[(reason, values)] with ``params`` as generators of Q(params)."""
+        K = QQ.frac_field(*params)
+        env0 = self.env(gens=dict(zip(params, K.gens)))
+        out = []
+        items = self.items()
+        try:
+            if self.analysis.stages:
+                self._pts(self.analysis.stages[0].constraints, env0, K, 1)
+        except (NotExact, ZeroDivisionError) as exc:
+            self.notes.append(f"the exceptional sets were not computed: no exact points of "
+                              f"M_1 with symbolic parameters ({exc})")
+            return out
+        for reason, fn in items:
+            try:
+                vals = fn(env0, K)
+            except (NotExact, ZeroDivisionError) as exc:
+                self.notes.append(f"not examined ({exc}): whether {reason}")
+                continue
+            if any(vals):
+                out.append((reason, vals))
+        return out
+
+    def _with_shifts(self, fn, base, values, K=QQ):
+        """The datum at the values and at each value moved by a relative 1e-4, in K."""
+        at = fn(base, K)  # first: structural choices (pivots) are made there
+        shifted = {}
+        for p, x in values.items():
+            h = abs(x) / 10 ** 4 if x else MPQ(1, 10 ** 4)
+            shifted[p] = (h, fn(self.env(at={**values, p: x + h}), K))
+        return at, shifted
+
+    def _modular(self, fn, base):
+        """The datum at the values modulo p at the first point (None: not evaluable)."""
+        try:
+            with self._first_point_only():
+                return fn(base, MODULAR)
+        except ZeroDivisionError:  # p divides a denominator: decide over Q instead
+            return None
+
+    def at_values(self, values, near):
+        """Data that vanish at exact parameter ``values`` and data nearly vanishing.
+
+        A datum nonzero modulo p at the first point is nonzero at the values (a
+        proof); its nearness is then estimated in float64, and again in
+        ``SHIFT_FIELD`` when float64 finds it within ``near * FLOAT_MARGIN``. Only a
+        datum that vanishes modulo p is evaluated over Q, at every point.
+
+        Returns
+        -------
+        hits : list of (reason, involved parameters)
+            Data nonzero for generic parameters that vanish identically at the values.
+        close : list of (reason, relative distance)
+        """
+        hits, close = [], []
+        values = {p: _exact_mpq(x) for p, x in values.items()}
+        base = self.env(at=values)
+        items = self.items()
+        try:
+            if self.analysis.stages:
+                self._pts(self.analysis.stages[0].constraints, base, QQ, 1)
+        except (NotExact, ZeroDivisionError) as exc:
+            self.notes.append(f"the parameter values were not checked against the "
+                              f"exceptional sets: no exact points of M_1 ({exc})")
+            return hits, close
+        for reason, fn in items:
+            try:
+                if not reason.startswith("the condition"):
+                    pass  # nonzero for generic parameters by construction
+                elif not any(fn(self.env(generic=True), QQ)):
+                    continue  # zero for generic parameters: not a generic assumption
+                # The first point decides almost always (a datum nonzero there is not
+                # hit); the others only confirm a vanishing. The nearness estimate uses
+                # the first point too: every term must vanish on the exceptional set, so
+                # one point's largest |P| / |grad P| already bounds the distance.
+                mod = self._modular(fn, base)
+                if mod is not None and any(mod):
+                    nonzero = [bool(x) for x in mod]
+                    with self._first_point_only():
+                        v0, shifted = self._estimate(fn, base, values, nonzero, near)
+                else:
+                    v0, shifted = self._with_shifts(fn, base, values)
+                    nonzero = [bool(x) for x in v0]
+            except (NotExact, ZeroDivisionError) as exc:
+                self.notes.append(f"not examined at the values ({exc}): whether {reason}")
+                continue
+            if not v0:
+                continue  # nothing assumed nonzero (e.g. a bracket matrix of rank 0)
+            if not any(nonzero):
+                involved = tuple(p for p, (h, vals) in shifted.items() if any(vals))
+                hits.append((reason, involved))
+                continue
+            distance = _relative_distance(v0, nonzero, shifted, values)
+            if distance < near:
+                close.append((reason, distance))
+        return hits, close
+
+    def _estimate(self, fn, base, values, nonzero, near):
+        """(value, shifted values) of a datum for its nearness: in float64 when that
+        puts it farther than ``near * FLOAT_MARGIN`` from vanishing, else (closer, not
+        finite, or a float pivot vanished) in ``SHIFT_FIELD``."""
+        try:
+            v0, shifted = self._with_shifts(fn, base, values, FLOAT64)
+            if _relative_distance(v0, nonzero, shifted, values) >= near * FLOAT_MARGIN:
+                return v0, shifted
+        except ZeroDivisionError:
+            pass
+        return self._with_shifts(fn, base, values, SHIFT_FIELD)
+
+
+def _relative_distance(v0, nonzero, shifted, values) -> float:
+    """Relative distance of the values to where a datum vanishes: over its nonzero terms,
+    the largest |P| / |grad P| (every term must vanish there), over |values|.
+
+    Scale-free: each term enters through its logarithmic derivative
+    (P(x + h) - P(x)) / (h P(x)), formed in the field of the values before it becomes
+    a float, so a determinant of a large system (|P| beyond 1e308 or below 1e-308) neither
+    overflows nor underflows. Raises ZeroDivisionError when a float64 value is not
+    usable (zero by underflow, or not finite): the caller then works in a wider field.
+    """
+    scale = math.hypot(*(float(x) for x in values.values())) or 1.0
+    worst = 0.0
+    for i, val in enumerate(v0):
+        if not nonzero[i]:
+            continue
+        slope = math.hypot(*(_log_slope(vals[i], val, h) for h, vals in shifted.values()))
+        worst = max(worst, 1.0 / slope if slope else math.inf)
+    return worst / scale
+
+
+def _log_slope(moved, value, h) -> float:
+    """(moved - value) / (h value) as a float, computed in the field of the values."""
+    if isinstance(value, float):
+        if value == 0.0 or not (math.isfinite(value) and math.isfinite(moved)):
+            raise ZeroDivisionError("a float64 value underflowed or overflowed")
+        return (moved / value - 1.0) / float(h)
+    step = h if isinstance(value, MPQ) else SHIFT_FIELD.convert(h)
+    return float((moved - value) / (step * value))
+
+
+# ============================================================ the components
+def exceptional_components(data, params) -> tuple:
+    """Components of the union of the exceptional sets of every datum, deduplicated."""
+    found: dict = {}
+    for reason, values in data:
+        for eqs in _components(values, params):
+            key = tuple(sp.srepr(e) for e in eqs)
+            found.setdefault(key, (eqs, []))[1].append(reason)
+    return tuple(Condition(eqs, tuple(dict.fromkeys(reasons)))
+                 for eqs, reasons in found.values())
+
+
+def _components(values, params) -> list:
+    """Components of the common zero set of the numerators of ``values``."""
+    nums = [v.numer for v in values if v]
+    if not nums or not params:
+        return []
+    g = reduce(lambda a, b: a.gcd(b), nums)
+    out = []
+    if not g.is_ground:
+        _, factors = sp.factor_list(g.as_expr(), *params)
+        for f, _ in factors:
+            if f.free_symbols:
+                out.append((_normal(f),))
+    rest = [a.exquo(g) for a in nums]
+    if all(r.is_ground for r in rest):
+        return out
+    exprs = list(dict.fromkeys(r.as_expr() for r in rest))
+    try:
+        basis = sp.groebner(exprs, *params, order="lex")
+    except Exception:  # pragma: no cover - sympy failure
+        return out
+    if list(basis.exprs) == [1]:
+        return out
+    try:
+        sols = sp.solve(list(basis.exprs), list(params), dict=True)
+    except Exception:  # pragma: no cover - sympy cannot solve: carry the relations
+        sols = None
+    if not sols:
+        out.append(tuple(_normal(e) for e in basis.exprs))
+        return out
+    for sol in sols:
+        eqs = tuple(_normal(sp.numer(sp.together(p - v))) for p, v in sol.items())
+        out.append(tuple(sorted(eqs, key=sp.default_sort_key)))
+    return out
+
+
+def _normal(expr):
+    """A factored polynomial with a positive leading coefficient, content removed."""
+    expr = sp.factor(sp.expand(expr))
+    c, rest = expr.as_coeff_Mul()
+    out = rest if c.is_number and c != 0 else expr
+    syms = sorted(out.free_symbols, key=sp.default_sort_key)
+    if syms:
+        try:
+            if sp.Poly(out, *syms).LC() < 0:
+                out = sp.factor(-out)
+        except sp.PolynomialError:  # pragma: no cover
+            pass
+    return out
+
+
+# ======================================================== signs and solving
+def _exact_mpq(value):
+    r = sp.Rational(str(value))
+    return MPQ(int(r.p), int(r.q))

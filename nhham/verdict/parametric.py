@@ -1,0 +1,304 @@
+"""Verdicts for every parameter value: where the classification changes.
+
+The exceptional sets of the generic decisions (:mod:`nhham.lagrangian.exceptional`)
+are explored in the manner of comprehensive Gröbner systems: every component is
+*verified*: its condition is substituted into the system (solved for a parameter when
+linear, else by ``sympy.solve``, real branches only) and the ordinary classification is
+run there, recursively, so a spurious component can only produce a case that repeats
+its parent's verdict, and such cases are dropped.
+
+Conditions with no real solution under the parameters' declared signs (``positive=``
+names, or sympy assumptions on the parameter symbols) are dropped and reported.
+"""
+
+from __future__ import annotations
+
+import math
+from types import MappingProxyType
+from typing import Callable, Sequence
+
+import sympy as sp
+
+from nhham.errors import InputError
+from nhham.lagrangian.exceptional import POINTS
+from nhham.settings import SEED
+from nhham.system.expressions import short
+from nhham.verdict.results import (
+    MAX_DEPTH,
+    NEAR,
+    Case,
+    ParametricVerdict,
+    Verdict,
+    exact_value,
+)
+from nhham.verdict.substitution import branches, canonical, compose, rebuild
+from nhham.verdict.values import examine
+
+__all__ = ["parametric_classification"]
+
+
+def parametric_classification(system, *, positive: Sequence = (),
+                              classes: Callable | None = None, max_depth: int = MAX_DEPTH,
+                              precision: int | None = None, seed: int = SEED,
+                              near: float = NEAR, points: int = POINTS) -> ParametricVerdict:
+    """The verdict for generic parameters and every case where it changes.
+
+    Parameters
+    ----------
+    system : nhham.System
+        Parameter values, if any, are ignored for the cases (every parameter is
+        treated as an indeterminate) and used only to place the system in a case.
+    positive : sequence of str or sympy.Symbol, optional
+        Parameters declared positive (masses, lengths); parameter symbols carrying
+        sympy sign assumptions count as declared too.
+    classes : callable, optional
+        ``classes(analysis) -> result with first_class, second_class`` (e.g.
+        :func:`nhham.hamiltonian.classification.classify_constraints`), called on
+        every case's analysis; by default the counts come from the rank of the
+        bracket matrix at exact points of M_f with the parameters symbolic.
+    max_depth : int, optional
+        Bound on the nesting of cases (a note says when it was hit).
+    precision, seed
+        As in :func:`~nhham.lagrangian.analysis.analyze_constraints`.
+    near : float, optional
+        Relative distance to an exceptional set below which the values are warned
+        about.
+    points : int, optional
+        Exact points per decision datum.
+
+    Returns
+    -------
+    ParametricVerdict
+
+    Raises
+    ------
+    InputError
+        On a ``positive`` name that is not a parameter of the system, or a bad
+        ``max_depth``/``near``.
+    """
+    params = tuple(system.parameters)
+    declared = _declared_positive(system, positive)
+    if int(max_depth) != max_depth or max_depth < 0:
+        raise InputError(f"max_depth: expected a non-negative integer, got {max_depth!r}")
+    if not (near >= 0):
+        raise InputError(f"near: expected a non-negative number, got {near!r}")
+    opts = dict(classes=classes, precision=precision, seed=seed, points=points)
+    base = rebuild(system, {}, None)
+    signs = _sign_dummies(params, declared)
+    generic, comps, notes, _, _ = examine(base, params, **opts)
+    notes = list(notes)
+    nodes, dropped, seen = [], [], set()
+
+    def visit(sysm, sub, conditions, reasons_here, verdict_here, comps, depth):
+        for comp in comps:
+            full = tuple(conditions) + tuple(comp.equations)
+            why = _no_real_solution(comp.equations, signs)
+            if why:
+                dropped.append((full, why))
+                continue
+            for branch in branches(comp.equations, tuple(sysm.parameters), signs):
+                total = compose(sub, branch)
+                why = _bad_substitution(total, signs)
+                if why:
+                    dropped.append((full, why))
+                    continue
+                key = canonical(total)
+                if key in seen:
+                    continue
+                seen.add(key)
+                spec = rebuild(system, total, None)
+                if isinstance(spec, Verdict):
+                    nodes.append((full, total, spec, verdict_here, comp.reasons))
+                    continue
+                remaining = tuple(p for p in params if p not in total)
+                verdict, sub_comps, sub_notes, _, _ = examine(spec, remaining, **opts)
+                notes.extend(sub_notes)
+                nodes.append((full, total, verdict, verdict_here, comp.reasons))
+                if depth + 1 < max_depth:
+                    visit(spec, total, full, comp.reasons, verdict, sub_comps, depth + 1)
+                elif sub_comps:
+                    notes.append(
+                        f"depth bound {max_depth} hit: below "
+                        + ", ".join(f"{short(e)} = 0" for e in full)
+                        + " further exceptional sets were not explored ("
+                        + "; ".join(c.describe() for c in sub_comps) + ")")
+
+    visit(base, {}, (), (), generic, comps, 0)
+    cases = _order_cases(nodes)
+    values = dict(system.parameter_values)
+    scene_case, warnings = None, []
+    if values:
+        for i, case in enumerate(cases):
+            if case.holds_at(values):
+                scene_case = i
+                break
+        warnings = _near_warnings([(c.conditions, c.verdict) for c in cases], values, near)
+    return ParametricVerdict(
+        generic=generic, cases=tuple(cases), scene_case=scene_case,
+        dropped=tuple(_dedupe(dropped)), notes=tuple(dict.fromkeys(notes)),
+        warnings=tuple(warnings), parameters=params, positive=tuple(declared),
+        values=MappingProxyType(values))
+
+
+
+def _distance_to_zero(expr, at, syms) -> float:
+    """|e| / |grad e| at the exact point ``at``, formed exactly before it becomes a
+    float (a polynomial of high degree in large values would overflow float64)."""
+    grad2 = sum(sp.diff(expr, p).xreplace(at) ** 2 for p in syms)
+    if not grad2:
+        return math.inf
+    try:
+        return math.sqrt(float(expr.xreplace(at) ** 2 / grad2))
+    except OverflowError:
+        return math.inf
+
+def _declared_positive(system, positive) -> list:
+    by_name = {p.name: p for p in system.parameters}
+    out, bad = [], []
+    for item in positive:
+        name = item.name if isinstance(item, sp.Symbol) else str(item)
+        if name not in by_name:
+            bad.append(name)
+        elif by_name[name] not in out:
+            out.append(by_name[name])
+    if bad:
+        raise InputError(f"positive: {', '.join(repr(b) for b in bad)} "
+                         f"{'is not a parameter' if len(bad) == 1 else 'are not parameters'} "
+                         f"of the system (parameters: "
+                         f"{', '.join(sorted(by_name)) or 'none'})")
+    for p in system.parameters:
+        if p.is_positive and p not in out:
+            out.append(p)
+    return out
+
+
+def _sign_dummies(params, positive) -> dict:
+    """Parameter -> a real Dummy carrying its declared sign."""
+    out = {}
+    for p in params:
+        kw = {"real": True}
+        if p in positive:
+            kw["positive"] = True
+        for name in ("negative", "nonnegative", "nonpositive"):
+            if getattr(p, f"is_{name}"):
+                kw[name] = True
+        out[p] = sp.Dummy(p.name, **kw)
+    return out
+
+
+def _no_real_solution(eqs, signs) -> str | None:
+    """Why equations in the parameters have no real solution under the signs, else None."""
+    for e in eqs:
+        d = sp.sympify(e).xreplace(signs)
+        try:
+            definite = bool(d.is_positive) or bool(d.is_negative)
+        except Exception:  # pragma: no cover
+            definite = False
+        if definite:
+            decl = sorted((s.name for s in sp.sympify(e).free_symbols
+                           if signs.get(s) is not None and signs[s].is_positive),
+                          key=str)
+            return (f"{short(e)} never vanishes for real parameters"
+                    + (f" with {', '.join(n + ' > 0' for n in decl)}" if decl else ""))
+    return None
+
+
+def _bad_substitution(sub, signs) -> str | None:
+    for p, v in sub.items():
+        d = sp.sympify(v).xreplace(signs)
+        if d.is_real is False:
+            return f"{p.name} = {short(v)} is not real"
+        s = signs.get(p)
+        if s is not None and s.is_positive and d.is_nonpositive:
+            return f"{p.name} = {short(v)} contradicts {p.name} > 0"
+    return None
+
+
+
+def _order_cases(nodes) -> list:
+    """Cases, invalid ones and then the most specific first, each with the inequations
+    excluding earlier ones.
+
+    A node whose verdict equals the verdict of the set containing it (its parent) is
+    not a case of its own; its sub-cases are kept.
+    """
+    kept = [(full, sub, v, why) for full, sub, v, parent, why in nodes if v != parent]
+    # Where nhham does not apply (singular W) holds on the whole set, whatever else
+    # holds there: those cases first; then the most specific first.
+    kept.sort(key=lambda t: (t[2].status != "invalid", -len(t[1])))
+    # A case whose points would fall, without it, into a case with the same verdict is
+    # dropped: the first later case containing it, with no case in between meeting it.
+    j = 0
+    while j < len(kept):
+        full, sub, verdict, _ = kept[j]
+        fallback = None
+        for k in range(j + 1, len(kept)):
+            extra = _restricted(kept[k][0], sub)
+            if any(e.is_number and e != 0 for e in extra):
+                continue  # disjoint
+            if all(e == 0 for e in extra):
+                fallback = kept[k][2]
+                break
+            fallback = False  # meets part of it: keep the case
+            break
+        if fallback is not None and fallback is not False and fallback == verdict:
+            del kept[j]
+        else:
+            j += 1
+    cases: list = []
+    for full, sub, verdict, why in kept:
+        excluding = []
+        for earlier in cases:
+            extra = _restricted(earlier.conditions, sub)
+            if any(e.is_number and e != 0 for e in extra):
+                continue  # disjoint
+            extra = [e for e in extra if e != 0]
+            if not extra:
+                continue
+            excluding.append(extra[0] if len(extra) == 1
+                             else sp.Add(*[e ** 2 for e in extra]))
+        cases.append(Case(conditions=tuple(full), excluding=tuple(dict.fromkeys(excluding)),
+                          verdict=verdict, substitution=MappingProxyType(dict(sub)),
+                          reasons=tuple(why)))
+    return cases
+
+
+def _restricted(conditions, sub) -> list:
+    """Conditions restricted to a case's set (its substitution applied), factored."""
+    return [sp.factor(sp.expand(sp.sympify(e).xreplace(sub))) for e in conditions]
+
+
+def _near_warnings(conds, values, near) -> list:
+    """Warnings for values within relative distance ``near`` of a condition's set."""
+    out: list = []
+    if not near:
+        return out
+    for eqs, _ in conds:
+        syms = set().union(*[sp.sympify(e).free_symbols for e in eqs]) if eqs else set()
+        if not syms or not syms <= set(values):
+            continue
+        at = {p: exact_value(values[p]) for p in syms}
+        if all(sp.sympify(e).xreplace(at) == 0 for e in eqs):
+            continue
+        scale = math.hypot(*(float(at[p]) for p in syms)) or 1.0
+        dist = max(_distance_to_zero(sp.sympify(e), at, syms) for e in eqs)
+        rel = dist / scale
+        if rel < near:
+            out.append("the parameter values "
+                       + ", ".join(f"{p.name} = {values[p]}" for p in sorted(syms, key=str))
+                       + f" lie within relative distance {rel:.1e} of the exceptional set "
+                       + ", ".join(f"{short(e)} = 0" for e in eqs)
+                       + ": the system is nearly singular there and numbers will be "
+                         "ill-conditioned")
+    return out
+
+
+def _dedupe(items) -> list:
+    """One entry per reason (the shortest conditions that gave it)."""
+    best: dict = {}
+    for eqs, why in items:
+        if why not in best or len(eqs) < len(best[why]):
+            best[why] = tuple(eqs)
+    return [(eqs, why) for why, eqs in best.items()]
+
+

@@ -1,0 +1,169 @@
+"""The verdict that holds at the system's parameter values.
+
+Plain ``nhham classify`` answers here: the ordinary classification (parameters as
+indeterminates where it decides symbolically), the data its decisions rest on checked
+at the given values, and the classification run again where the values satisfy an
+exceptional condition.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Callable
+
+import sympy as sp
+from sympy import QQ
+
+from nhham.lagrangian.analysis import analyze_constraints
+from nhham.lagrangian.exceptional import (
+    POINTS,
+    ExceptionalData,
+    exceptional_components,
+    exceptional_conditions,
+)
+from nhham.settings import SEED
+from nhham.verdict.results import MAX_DEPTH, NEAR, ValuesVerdict, Verdict, exact_value
+from nhham.verdict.substitution import branches, compose, rebuild
+
+__all__ = ["classification_at_values", "examine", "SYMBOLIC_VALUES_SIZE"]
+
+# Plain classification names the condition its values satisfy (symbolically) up to this
+# n + m; beyond, the parameters involved are substituted by their values.
+SYMBOLIC_VALUES_SIZE = 10
+
+
+def classification_at_values(system, *, classes: Callable | None = None,
+                             max_depth: int = MAX_DEPTH, precision: int | None = None,
+                             seed: int = SEED, near: float = NEAR,
+                             points: int = POINTS) -> ValuesVerdict:
+    """The verdict that holds at the system's parameter values.
+
+    The ordinary classification treats parameters as indeterminates wherever it
+    decides symbolically. Here the data those decisions rest on are checked at the
+    given values (exactly, the values read as decimals): when the values satisfy an
+    exceptional condition, the condition is substituted (solved for a parameter with
+    a value) and the classification is run again, up to ``max_depth`` times.
+    Parameters without values stay generic.
+
+    Parameters
+    ----------
+    system : nhham.System
+    classes, max_depth, precision, seed, near, points
+        As in :func:`nhham.verdict.parametric.parametric_classification`.
+
+    Returns
+    -------
+    ValuesVerdict
+    """
+    valued = tuple(p for p in system.parameters if p in system.parameter_values)
+    opts = dict(classes=classes, precision=precision, seed=seed, points=points, near=near)
+    values = {p: system.parameter_values[p] for p in valued}
+    exact = {p: exact_value(v) for p, v in values.items()}
+    generic, _, notes, hits, close = examine(system, (), values=values, **opts)
+    notes = list(notes)
+    warnings = _close_warnings(close, values)
+    current, verdict = system, generic
+    conditions: list = []
+    substitution: dict = {}
+    for depth in range(max_depth + 1):
+        if not hits:
+            break
+        if depth == max_depth:
+            warnings.append(f"depth bound {max_depth} hit: the values are also where "
+                            + "; ".join(r for r, _ in hits) + " (not examined further)")
+            break
+        left = [p for p in current.parameters if p in values]
+        involved = tuple(dict.fromkeys(p for _, inv in hits for p in inv if p in left))
+        branch: dict | None = None
+        eqs: tuple = ()
+        if involved and current.n + current.m <= SYMBOLIC_VALUES_SIZE:
+            comps = exceptional_conditions(verdict.analysis, involved, seed=seed,
+                                           points=points)
+            hit = next((c for c in comps if all(
+                e.free_symbols <= set(exact) and e.xreplace(exact) == 0
+                for e in c.equations)), None)
+            if hit is not None:
+                branch = next((b for b in branches(hit.equations, involved, {})
+                               if all(sp.simplify(v.xreplace(exact) - exact[p]) == 0
+                                      for p, v in b.items())), None)
+                eqs = hit.equations
+        if branch is None:
+            fix = involved or tuple(left)
+            branch = {p: exact[p] for p in fix}
+            eqs = tuple(p - exact[p] for p in fix)
+        substitution = compose(substitution, branch)
+        conditions += [eq for eq in eqs if eq not in conditions]
+        spec = rebuild(system, substitution, values)
+        if isinstance(spec, Verdict):
+            verdict, current = spec, None
+            break
+        current = spec
+        rest = {p: v for p, v in values.items() if p not in substitution}
+        verdict, _, more, hits, close = examine(spec, (), values=rest, **opts)
+        notes += more
+        warnings += _close_warnings(close, rest)
+    if conditions and generic.analysis is not None:
+        # The generic verdict, not the one at the values: a Frobenius term that is a
+        # nonzero function vanishing at the values left ``integrable`` undecided there.
+        generic = dataclasses.replace(generic,
+                                      integrable=generic.analysis.integrability.generic)
+    return ValuesVerdict(verdict, generic, tuple(conditions),
+                         current if current is not None else system,
+                         tuple(dict.fromkeys(warnings + notes)))
+
+
+def _close_warnings(close, values) -> list:
+    names = ", ".join(f"{p.name} = {v}" for p, v in values.items())
+    return [f"the parameter values {names} lie within relative distance {d:.1e} of values "
+            f"where {reason}: the system is nearly singular there and numbers will be "
+            f"ill-conditioned" for reason, d in close]
+
+
+
+# ================================================================= one run
+def examine(system, params, *, classes, precision, seed, points, values=None,
+             near=NEAR):
+    """The ordinary classification of ``system`` and the data of its decisions.
+
+    Returns (Verdict, conditions, notes, hits, close): with ``params`` the exceptional
+    conditions in those parameters (kept symbolic); with ``values`` the data that
+    vanish at those exact values (``hits``) and those within relative distance
+    ``near`` of vanishing (``close``).
+    """
+    analysis = analyze_constraints(system, precision=precision, seed=seed)
+    integrable = analysis.integrable
+    cls = None
+    if classes is not None and analysis.status != "inconsistent":
+        cls = classes(analysis)
+    data = ExceptionalData(system, analysis, seed, points)
+    if cls is not None and tuple(cls.labels) == tuple(analysis.final_labels):
+        # The second-class set the classification chose (for generic parameters when it
+        # decided symbolically): at values where B drops rank its minor is the datum.
+        data.use_second_class_set(cls.second_class_indices)
+    comps, hits, close = (), [], []
+    if params:
+        comps = exceptional_components(data.symbolic(tuple(params)), tuple(params))
+    if values:
+        hits, close = data.at_values(values, near)
+    if cls is not None:
+        first, second = int(cls.first_class), int(cls.second_class)
+    else:
+        if params:
+            K = QQ.frac_field(*params)
+            rank = data.bracket_rank(data.env(gens=dict(zip(params, K.gens))), K)
+        else:
+            # the ordinary classification's answer: for generic parameters
+            rank = data.bracket_rank(data.env(generic=True), QQ)
+        first = second = None
+        if analysis.status != "inconsistent" and rank is not None:
+            first, second = len(analysis.final_constraints) - rank, rank
+    verdict = Verdict(
+        status=analysis.status, regular=bool(analysis.regular), rank_C=int(analysis.rank_C),
+        stages=len(analysis.stages), free_multipliers=int(analysis.free_multipliers),
+        integrable=integrable, first_class=first, second_class=second,
+        redundant=tuple(d.label for d in analysis.dropped),
+        final_constraints=len(analysis.final_constraints), dimension=analysis.dimension,
+        system=system, analysis=analysis, classes=cls)
+    return verdict, comps, data.notes, hits, close
+
+
