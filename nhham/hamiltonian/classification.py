@@ -44,17 +44,10 @@ from nhham.hamiltonian.legendre import Backend, Lambdified, ModularBackend
 from nhham.hamiltonian.combinations import NotFormed, closed_form_combinations
 from nhham.lagrangian.algebra import block_inverse, cancel
 from nhham.lagrangian.analysis import ConstraintAnalysis, analyze_constraints
-from nhham.lagrangian.points import (
-    SAMPLE_BITS,
-    NotExact,
-    PointSampler,
-    evaluate,
-    exact_rank,
-    exact_solve,
-    jacobian_row,
-    minor_degree,
-    solve_degrees,
-)
+from nhham.lagrangian.domains import NotExact, evaluate, minor_degree, schwartz_zippel_bound
+from nhham.lagrangian.formulas import lagrangian_bracket
+from nhham.lagrangian.linalg import FloatMatrix, ListMatrix, exact_rank, exact_solve
+from nhham.lagrangian.points import PointSampler, jacobian_row
 from nhham.lagrangian.submanifold import Decision, Submanifold
 from nhham.lagrangian.tangency import MAX_POINTS, TARGET_ERROR
 from nhham.system.expressions import short
@@ -355,10 +348,11 @@ def _classify_at_points(side, cons, labels, analysis, seed, target=TARGET_ERROR)
         if r > best:
             best, pivots = r, rows
         if degrees is None:
-            degrees = _bracket_at(pt.degrees, W, Mx, Jq, Jv, solve=_degree_solve)
+            degrees = _bracket_at(pt.degrees, W, Mx, Jq, Jv)
         if best >= k:
             break
-        error = (minor_degree(degrees, best + 1) / 2 ** SAMPLE_BITS) ** count
+        error = schwartz_zippel_bound(minor_degree(degrees, best + 1), count,
+                                      denominator_degree=sampler.denominator_degree)
         if error < target:
             break
     r = best
@@ -572,41 +566,22 @@ def _float_brackets(side, cons, analysis, precision, samples, seed) -> tuple:
                   Mtq.evaluator(J))
     mats = []
     for pt in points:
-        W = np.array(fW(pt), dtype=float)
-        Mx = np.array(fM(pt), dtype=float)
         Jp = np.array(fJ(pt), dtype=float).reshape(k, 2 * n)
-        Jq, Jv = Jp[:, :n], Jp[:, n:]
-        U = np.linalg.solve(W, Jv.T)
-        mats.append(Jq @ U - U.T @ Jq.T - U.T @ (Mx - Mx.T) @ U)
+        B = lagrangian_bracket(FloatMatrix(Jp[:, :n]), FloatMatrix(Jp[:, n:]),
+                               FloatMatrix(fW(pt)), FloatMatrix(fM(pt)))
+        mats.append(B.a)
     return mats, resid
 
 
-def _degree_solve(A, B):
-    return solve_degrees(A, B)
-
-
-def _bracket_at(env, W, Mx, Jq, Jv, solve=exact_solve):
-    """The bracket matrix {chi_a, chi_b}_L at one point (values or Degree bounds)."""
-    cache = {}
-    Wp = [evaluate(r, env, cache) for r in W]
-    Mp = [evaluate(r, env, cache) for r in Mx]
-    Jqp = [evaluate(r, env, cache) for r in Jq]
-    Jvp = [evaluate(r, env, cache) for r in Jv]
-    n, k = len(Wp), len(Jqp)
-    if not k:
+def _bracket_at(env, W, Mx, Jq, Jv):
+    """The bracket matrix {chi_a, chi_b}_L at one point (exact values, residues or
+    Degree bounds: the arithmetic of ``env``)."""
+    if not Jq:
         return []
-    U = solve(Wp, [[Jvp[a][i] for a in range(k)] for i in range(n)])  # n x k: W^-1 Jv^T
-    A = [[Mp[i][j] - Mp[j][i] for j in range(n)] for i in range(n)]
-    AU = [[sum((A[i][j] * U[j][b] for j in range(n)), 0) for b in range(k)] for i in range(n)]
-    out = []
-    for a in range(k):
-        row = []
-        for b in range(k):
-            val = sum((Jqp[a][i] * U[i][b] - U[i][a] * Jqp[b][i] - U[i][a] * AU[i][b]
-                       for i in range(n)), 0)
-            row.append(val)
-        out.append(row)
-    return out
+    cache: dict = {}
+    Wp, Mp, Jqp, Jvp = (ListMatrix([evaluate(r, env, cache) for r in rows])
+                        for rows in (W, Mx, Jq, Jv))
+    return lagrangian_bracket(Jqp, Jvp, Wp, Mp).to_list()
 
 
 def _numerically_regular(side, precision, samples, seed, tol) -> bool:

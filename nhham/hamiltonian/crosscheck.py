@@ -52,8 +52,10 @@ from nhham.hamiltonian.side import HamiltonianSide, hamiltonian_side
 from nhham.hamiltonian.legendre import Backend, ModularBackend, Lambdified, canonical_form_matrix
 from nhham.lagrangian.algebra import cancel
 from nhham.lagrangian.geometry import lagrangian_geometry
-from nhham.lagrangian.points import (PRIME, ModP, NotExact, PointSampler, eliminate_coordinates,
-                                    exact_rank, exact_solve, jacobian_row)
+from nhham.lagrangian.domains import PRIME, ModP, NotExact
+from nhham.lagrangian.formulas import lagrangian_bracket
+from nhham.lagrangian.linalg import FloatMatrix, exact_rank, exact_solve
+from nhham.lagrangian.points import PointSampler, eliminate_coordinates, jacobian_row
 from nhham.system.expressions import derivative
 from nhham.lagrangian.submanifold import Submanifold
 
@@ -401,11 +403,11 @@ class _NumericLagrangian:
 
     def bracket_matrix(self, be, vals, exprs):
         """{f_a, f_b}_L = f_q W^{-1} g_v - (W^{-1} f_v) g_q - (W^{-1} f_v)^T A (W^{-1} g_v)."""
-        W, M = self._W(be, vals), self._M(be, vals)
-        A = M - M.T
         Gq, Gv = self.gradients(be, vals, exprs)
-        Y = be.solve(W, Gv.T).T  # rows W^{-1} f_v
-        return Gq @ Y.T - Y @ Gq.T - Y @ A @ Y.T
+        B = lagrangian_bracket(FloatMatrix(Gq), FloatMatrix(Gv), FloatMatrix(self._W(be, vals)),
+                               FloatMatrix(self._M(be, vals)),
+                               solve=lambda A, X: FloatMatrix(be.solve(A.a, X.a)))
+        return B.a
 
 
 # ------------------------------------------------------------- the driver

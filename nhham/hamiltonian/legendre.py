@@ -37,7 +37,8 @@ from nhham.settings import PARAMETER_BOX, SEED, Precision
 from nhham.errors import ComputationError
 from nhham.lagrangian.algebra import cancel
 from nhham.lagrangian.geometry import lagrangian_geometry
-from nhham.lagrangian.points import ModP, evaluate, exact_solve
+from nhham.lagrangian.domains import ModP, evaluate
+from nhham.lagrangian.linalg import exact_solve
 from nhham.system.description import System
 from nhham.system.naming import momentum_symbol
 
@@ -446,8 +447,8 @@ class ModularBackend(Backend):
     """Exact arithmetic in F_p (p = 2^61 - 1) at the modular points of
     :class:`~nhham.lagrangian.points.PointSampler` (``modular=True``).
 
-    Arrays are ``object`` arrays of :class:`~nhham.lagrangian.points.ModP`. A
-    coordinate's value is an :class:`~nhham.lagrangian.points.Angle` (its sine and
+    Arrays are ``object`` arrays of :class:`~nhham.lagrangian.domains.ModP`. A
+    coordinate's value is an :class:`~nhham.lagrangian.domains.Angle` (its sine and
     cosine exact), so coordinate values are only handed to :class:`Lambdified`, never
     computed with. Two quantities are equal or they are not: the tolerance is 0, and
     the "size" of a difference is 0 or 1 (F_p has no absolute value). Fixed-size

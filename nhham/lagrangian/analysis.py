@@ -455,7 +455,7 @@ def _stage_one_at_points(view, geo, exprs, labels, lam, factory, opts):
     secondary constraints) the caller runs the symbolic algorithm, which produces
     the secondary constraints as expressions.
     """
-    from nhham.lagrangian.points import NotExact
+    from nhham.lagrangian.domains import NotExact
     from nhham.lagrangian.tangency import tangency_at_points, tangency_sampled
 
     m = len(view.phi)

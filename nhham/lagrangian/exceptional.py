@@ -53,20 +53,17 @@ from sympy.polys.domains import GF, RealField
 from sympy.polys.matrices import DomainMatrix
 
 from nhham.lagrangian.analysis import ConstraintAnalysis
-from nhham.lagrangian.points import (
+from nhham.lagrangian.domains import PRIME, Angle, NotExact, evaluate
+from nhham.lagrangian.formulas import lagrangian_bracket
+from nhham.lagrangian.linalg import (
     FLOAT64,
     FloatMatrix,
-    PRIME,
-    Angle,
-    NotExact,
-    eliminate_coordinates,
-    evaluate,
-    jacobian_row,
+    adjacent_column_sets,
     field_det,
     field_solve,
     maximal_minors,
-    adjacent_column_sets,
 )
+from nhham.lagrangian.points import eliminate_coordinates, jacobian_row
 from nhham.lagrangian.submanifold import Submanifold
 from nhham.settings import SEED
 from nhham.system.expressions import short
@@ -482,11 +479,8 @@ class ExceptionalData:
         pts = self._pts(cons, env0, K, "f")
         for env in pts[:count]:
             cache = self._memo(env)
-            W = self._matrix(K, self.W, env, cache)
-            M = self._matrix(K, Mx, env, cache)
-            U = field_solve(W, self._matrix(K, Jv, env, cache).transpose())
-            JU = self._matrix(K, Jq, env, cache) * U
-            mats.append(JU - JU.transpose() - U.transpose() * (M - M.transpose()) * U)
+            mats.append(lagrangian_bracket(*(self._matrix(K, rows, env, cache)
+                                             for rows in (Jq, Jv, self.W, Mx))))
         return mats
 
     def bracket_rank(self, env0, K):

@@ -35,17 +35,9 @@ import sympy as sp
 from nhham.settings import SEED, Precision
 from nhham.errors import ComputationError
 from nhham.lagrangian.algebra import cancel
-from nhham.lagrangian.points import (
-    SAMPLE_BITS,
-    Degree,
-    NotExact,
-    PointSampler,
-    evaluate,
-    exact_rank,
-    exact_solve,
-    jacobian_row,
-    minor_degree,
-)
+from nhham.lagrangian.domains import Degree, NotExact, evaluate, minor_degree, schwartz_zippel_bound
+from nhham.lagrangian.linalg import exact_rank, exact_solve
+from nhham.lagrangian.points import PointSampler, jacobian_row
 from nhham.lagrangian.submanifold import Decision, Submanifold
 from nhham.lagrangian.tangency import MAX_POINTS, TARGET_ERROR
 from nhham.system.expressions import short
@@ -224,7 +216,8 @@ def frobenius_at_points(system, labels, *, seed: int = SEED,
             degrees, _ = _frobenius_terms(pt.degrees, rows, dmu, dep, exact=False)
             terms = len(degrees)
             worst = max((Degree.of(d).num for d in degrees.values()), default=0)
-        error = terms * (worst / 2 ** SAMPLE_BITS) ** count
+        error = schwartz_zippel_bound(worst, count, terms=terms,
+                                      denominator_degree=sampler.denominator_degree)
         if error < target:
             break
     dec = Decision(True, "exact at points",

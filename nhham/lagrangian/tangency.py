@@ -26,16 +26,9 @@ from dataclasses import dataclass
 
 import sympy as sp
 
-from nhham.lagrangian.points import (
-    SAMPLE_BITS,
-    NotExact,
-    PointSampler,
-    evaluate,
-    exact_rank,
-    exact_solve,
-    jacobian_row,
-    minor_degree,
-)
+from nhham.lagrangian.domains import NotExact, evaluate, minor_degree, schwartz_zippel_bound
+from nhham.lagrangian.linalg import exact_rank, exact_solve
+from nhham.lagrangian.points import PointSampler, jacobian_row
 from nhham.lagrangian.submanifold import Decision
 
 __all__ = ["TangencyVerdict", "tangency_at_points", "tangency_sampled", "TARGET_ERROR"]
@@ -70,12 +63,6 @@ class TangencyVerdict:
     rows: tuple
     cols: tuple
     points: int
-
-
-def _bound(degree: int, den: int, points: int) -> float:
-    size = 2 ** SAMPLE_BITS
-    per = min(1.0, degree / max(1, size - den))
-    return per ** points
 
 
 def tangency_at_points(system, hessian, forcing, primary, *, seed: int,
@@ -255,14 +242,17 @@ def _degrees(deg_env, W, F, mu, Jq, Jv, v, sampler):
 def _errors(degrees, rK, extra, rJ, count, n, m):
     """Error bounds of: rank deficiency of K, vanishing conditions, Jacobian deficiency."""
     den = degrees["den"]
+
+    def bound(rows, rank):
+        return schwartz_zippel_bound(minor_degree(rows, rank + 1), count,
+                                     denominator_degree=den)
+
     out = []
     size_K = min(len(degrees["K"]), n + m)
-    out.append(None if rK >= size_K else
-               _bound(minor_degree(degrees["K"], rK + 1), den, count))
-    out.append(None if extra > 0 or rK >= len(degrees["K"]) else
-               _bound(minor_degree(degrees["aug"], rK + 1), den, count))
+    out.append(None if rK >= size_K else bound(degrees["K"], rK))
+    out.append(None if extra > 0 or rK >= len(degrees["K"]) else bound(degrees["aug"], rK))
     size_J = min(len(degrees["J"]), 2 * n)
-    out.append(None if rJ >= size_J else _bound(minor_degree(degrees["J"], rJ + 1), den, count))
+    out.append(None if rJ >= size_J else bound(degrees["J"], rJ))
     return out
 
 

@@ -130,7 +130,7 @@ def test_snake_cross_check_at_exact_points():
 def _perturbed_X_H(size):
     """HamiltonianPoint.X_H plus ``size`` in its first component (in the point's field)."""
     from nhham.hamiltonian.side import HamiltonianPoint
-    from nhham.lagrangian.points import ModP
+    from nhham.lagrangian.domains import ModP
 
     original = HamiltonianPoint.X_H.fget
 

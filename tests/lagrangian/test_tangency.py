@@ -21,7 +21,7 @@ from nhham.hamiltonian.classification import classify_constraints
 from nhham.lagrangian.algorithm import run_algorithm
 from nhham.lagrangian.analysis import analyze_constraints
 from nhham.lagrangian.geometry import LagrangianGeometry
-from nhham.lagrangian.points import SAMPLE_BITS, NotExact
+from nhham.lagrangian.domains import SAMPLE_BITS, NotExact
 from nhham.lagrangian.submanifold import Submanifold
 from nhham.lagrangian.tangency import tangency_at_points
 from nhham.system.models import snake

@@ -20,7 +20,7 @@ import nhham
 from nhham.errors import InputError
 from nhham.hamiltonian.classification import classify_constraints
 from nhham.lagrangian.analysis import analyze_constraints
-from nhham.lagrangian.points import FLOAT64
+from nhham.lagrangian.linalg import FLOAT64
 from nhham.lagrangian.exceptional import exceptional_conditions
 from nhham.verdict.parametric import parametric_classification
 from nhham.verdict.values import classification_at_values
@@ -358,7 +358,7 @@ def test_floating_point_determinants_pivot():
     from sympy.polys.matrices import DomainMatrix
 
     from nhham.lagrangian.exceptional import SHIFT_FIELD
-    from nhham.lagrangian.points import field_det, field_solve
+    from nhham.lagrangian.linalg import field_det, field_solve
 
     rows = [[0, 3, -1, 2], [-3, 0, 5, 1], [1, -5, 0, 7], [-2, -1, -7, 0]]
     exact = DomainMatrix([[sp.QQ(x) for x in r] for r in rows], (4, 4), sp.QQ)

@@ -1,0 +1,444 @@
+"""The arithmetics of exact decisions: the values a formula is evaluated in.
+
+One interface, the Python operators (+, -, *, /, ** and ``sin``/``cos`` through
+:func:`evaluate`), over several kinds of number:
+
+* exact rationals (``MPQ``) and exact angles (:class:`Angle`: a rational value with a
+  rational point of the unit circle);
+* integers modulo the prime 2^61 - 1 (:class:`ModP`);
+* the parameter field Q(p) and 200-bit floats, as sympy domain elements;
+* float64 and mpmath (the numeric backends);
+* :class:`Degree`: an upper bound on the degree of the numerator (and the factors of
+  the denominator) of the same computation, for the Schwartz–Zippel bound.
+
+A formula written once against these operators (:mod:`nhham.lagrangian.formulas`)
+is evaluated in each by giving it values of that kind; matrices and their solves are
+in :mod:`nhham.lagrangian.linalg`. A datum with no exact value (``sqrt``, ``exp``, a
+parameter with a value inside sin) raises :class:`NotExact`.
+
+Every evaluation can be repeated with :class:`Degree` objects in place of the
+numbers: the same arithmetic then yields an upper bound on the degree of the
+numerator of each quantity as a rational function of the drawn variables
+(r, t, free velocities, free parameters). That is the "degree" of the
+Schwartz–Zippel lemma: a nonzero rational function whose numerator has degree
+at most D vanishes at a uniformly random point of S^N with probability at most
+D/|S|. So "vanishes at k random exact points" is reported with the computed
+error bound (D/(|S| − D_den))^k (points where a denominator vanishes are drawn
+again, which the D_den term accounts for), and "nonzero at one exact point" is
+a proof.
+"""
+
+from __future__ import annotations
+
+import itertools
+
+import sympy as sp
+from sympy.external.gmpy import MPQ
+
+from nhham.errors import NhhamError
+
+__all__ = [
+    "NotExact",
+    "Angle",
+    "ModP",
+    "Degree",
+    "PRIME",
+    "SAMPLE_BITS",
+    "evaluate",
+    "rank_bound",
+    "minor_degree",
+    "schwartz_zippel_bound",
+]
+
+
+# Sample set S = {1, ..., 2**SAMPLE_BITS}: large enough that a handful of points
+# gives Schwartz–Zippel bounds far below 1e-30, small enough for quick rationals.
+SAMPLE_BITS = 62
+
+
+class NotExact(NhhamError):
+    """The expression cannot be evaluated exactly at rational points."""
+
+
+# ------------------------------------------------------------------ values
+class Angle:
+    """A coordinate's value at an exact point: polynomial value ``r`` and the point
+    ``(c, s)`` of the unit circle standing for (cos q, sin q).
+
+    Sums and integer multiples of angles stay angles (the circle points multiply
+    as unit complex numbers); any other arithmetic uses ``r``. ``r``, ``c``, ``s``
+    are exact rationals or :class:`Degree` bounds (the same code serves both).
+    """
+
+    __slots__ = ("r", "c", "s")
+
+    def __init__(self, r, c, s):
+        self.r, self.c, self.s = r, c, s
+
+    def _rotate(self, other):
+        return Angle(self.r + other.r, self.c * other.c - self.s * other.s,
+                     self.s * other.c + self.c * other.s)
+
+    def _times(self, k: int):
+        out = Angle(0, 1, 0)
+        base = self if k >= 0 else Angle(-self.r, self.c, -self.s)
+        for _ in range(abs(k)):
+            out = out._rotate(base)
+        return out
+
+    def __add__(self, other):
+        if isinstance(other, Angle):
+            return self._rotate(other)
+        if isinstance(other, int) and other == 0:
+            return self
+        return self.r + other
+
+    __radd__ = __add__
+
+    def __neg__(self):
+        return Angle(-self.r, self.c, -self.s)
+
+    def __sub__(self, other):
+        return self + (-other)
+
+    def __rsub__(self, other):
+        return (-self) + other
+
+    def __mul__(self, other):
+        if isinstance(other, int):
+            return self._times(other)
+        if isinstance(other, Angle):
+            return self.r * other.r
+        return self.r * other
+
+    __rmul__ = __mul__
+
+    def __truediv__(self, other):
+        return self.r / (other.r if isinstance(other, Angle) else other)
+
+    def __rtruediv__(self, other):
+        return other / self.r
+
+    def __pow__(self, k):
+        return self.r ** k
+
+
+# A Mersenne prime: reduction is cheap and 1/|F_p| is about 4e-19.
+PRIME = 2 ** 61 - 1
+
+
+class ModP:
+    """An element of the field F_p (p = :data:`PRIME`).
+
+    Used for proofs of full rank and of non-vanishing: a value computed from the
+    expression tree modulo p (every inverse taken exists) that is nonzero shows
+    that the rational value — hence the function — is nonzero. Mixed arithmetic
+    with ints and exact rationals reduces them modulo p.
+    """
+
+    __slots__ = ("v",)
+
+    def __init__(self, v: int):
+        self.v = v % PRIME
+
+    @staticmethod
+    def lift(x) -> "ModP":
+        if isinstance(x, ModP):
+            return x
+        if isinstance(x, int):
+            return ModP(x)
+        q = MPQ(x)
+        den = int(q.denominator) % PRIME
+        if den == 0:
+            raise ZeroDivisionError("denominator divisible by p")
+        return ModP(int(q.numerator) * pow(den, -1, PRIME))
+
+    def __add__(self, other):
+        if isinstance(other, (Angle, Degree)):
+            return NotImplemented
+        return ModP(self.v + ModP.lift(other).v)
+
+    __radd__ = __add__
+
+    def __sub__(self, other):
+        if isinstance(other, (Angle, Degree)):
+            return NotImplemented
+        return ModP(self.v - ModP.lift(other).v)
+
+    def __rsub__(self, other):
+        return ModP(ModP.lift(other).v - self.v)
+
+    def __neg__(self):
+        return ModP(-self.v)
+
+    def __mul__(self, other):
+        if isinstance(other, (Angle, Degree)):
+            return NotImplemented
+        return ModP(self.v * ModP.lift(other).v)
+
+    __rmul__ = __mul__
+
+    def inverse(self) -> "ModP":
+        if self.v == 0:
+            raise ZeroDivisionError("division by zero modulo p")
+        return ModP(pow(self.v, -1, PRIME))
+
+    def __truediv__(self, other):
+        if isinstance(other, (Angle, Degree)):
+            return NotImplemented
+        return self * ModP.lift(other).inverse()
+
+    def __rtruediv__(self, other):
+        return ModP.lift(other) * self.inverse()
+
+    def __pow__(self, k: int):
+        return ModP(pow(self.v, k, PRIME)) if k >= 0 else self.inverse() ** (-k)
+
+    def __eq__(self, other):
+        if isinstance(other, (ModP, int)):
+            return self.v == ModP.lift(other).v
+        return NotImplemented
+
+    def __hash__(self):
+        return hash(self.v)
+
+    def __bool__(self):
+        return self.v != 0
+
+    def __repr__(self):
+        return f"ModP({self.v})"
+
+
+def _sin(x):
+    if isinstance(x, Angle):
+        return x.s
+    if _is_zero_constant(x):
+        return 0
+    raise NotExact("sin of a number that is not an angle variable")
+
+
+def _cos(x):
+    if isinstance(x, Angle):
+        return x.c
+    if _is_zero_constant(x):
+        return 1
+    raise NotExact("cos of a number that is not an angle variable")
+
+
+def _inverse(x):
+    if isinstance(x, (Degree, ModP)):
+        return x.inverse()
+    return MPQ(1) / x  # ZeroDivisionError at a bad point: the caller draws again
+
+
+def _is_zero_constant(x) -> bool:
+    return isinstance(x, (int, MPQ)) and x == 0
+
+
+_FUNCTIONS = {
+    sp.sin: _sin,
+    sp.cos: _cos,
+    sp.tan: lambda x: _sin(x) / _cos(x),
+    sp.cot: lambda x: _cos(x) / _sin(x),
+}
+
+
+def evaluate(exprs, env: dict, cache: dict | None = None) -> list:
+    """Values of sympy expressions with symbols replaced by ``env`` values.
+
+    Parameters
+    ----------
+    exprs : sequence of sympy.Expr
+    env : dict
+        Symbol -> value (exact rational, :class:`Angle`, or :class:`Degree`).
+    cache : dict, optional
+        Shared memo of subexpression values (for several calls at one point).
+
+    Returns
+    -------
+    list
+        One value per expression (``int``, ``MPQ``, ``Degree`` ...).
+
+    Raises
+    ------
+    NotExact
+        On a symbol missing from ``env``, a transcendental constant, a function
+        other than sin/cos/tan/cot, or a non-integer power.
+    """
+    memo = {} if cache is None else cache
+    values = [_value(sp.sympify(e), env, memo) for e in exprs]
+    return [x.r if isinstance(x, Angle) else x for x in values]
+
+
+def _value(e, env, memo):
+    if e in memo:
+        return memo[e]
+    if e.is_Symbol:
+        if e not in env:
+            raise NotExact(f"no exact value for {e}")
+        out = env[e]
+    elif e.is_Integer:
+        out = int(e)
+    elif e.is_Rational:
+        out = MPQ(int(e.p), int(e.q))
+    elif e.is_Float:
+        r = sp.Rational(str(e))
+        out = MPQ(int(r.p), int(r.q))
+    elif e.is_Add:
+        out = 0
+        for a in e.args:
+            out = out + _value(a, env, memo)
+    elif e.is_Mul:
+        out = 1
+        for a in e.args:
+            out = out * _value(a, env, memo)
+    elif e.is_Pow:
+        if not e.exp.is_Integer:
+            raise NotExact(f"non-integer power in {e}")
+        base = _value(e.base, env, memo)
+        k = int(e.exp)
+        if isinstance(base, Angle):
+            base = base.r
+        out = base ** k if k >= 0 else _inverse(base ** (-k))
+    elif e.func in _FUNCTIONS:
+        out = _FUNCTIONS[e.func](_value(e.args[0], env, memo))
+    else:
+        raise NotExact(f"{e.func} cannot be evaluated exactly")
+    memo[e] = out
+    return out
+
+
+# ----------------------------------------------------------------- degrees
+class Degree:
+    """Upper bound on a rational function N/D of the drawn variables.
+
+    ``num`` bounds deg N; ``den`` maps each denominator factor (a key) to
+    ``(degree, exponent)``. Circle factors (1 + t²) are shared keys, so sums of
+    trigonometric terms keep one common denominator; every other denominator
+    gets a fresh key. Arithmetic mirrors the exact evaluation.
+    """
+
+    __slots__ = ("num", "den")
+    _fresh = itertools.count()
+
+    def __init__(self, num: int = 0, den: dict | None = None):
+        self.num, self.den = num, dict(den or {})
+
+    @staticmethod
+    def of(x) -> "Degree":
+        if isinstance(x, Angle):
+            x = x.r
+        return x if isinstance(x, Degree) else Degree(0)
+
+    @property
+    def den_degree(self) -> int:
+        return sum(d * k for d, k in self.den.values())
+
+    def __add__(self, other):
+        if _is_zero_constant(other):
+            return self
+        a, b = self, Degree.of(other)
+        common = dict(a.den)
+        for key, (d, k) in b.den.items():
+            if key not in common or common[key][1] < k:
+                common[key] = (d, k)
+        total = sum(d * k for d, k in common.values())
+        num = max(a.num + total - a.den_degree, b.num + total - b.den_degree)
+        return Degree(num, common)
+
+    __radd__ = __add__
+
+    def __neg__(self):
+        return self
+
+    def __sub__(self, other):
+        return self + other
+
+    def __rsub__(self, other):
+        return self + other
+
+    def __mul__(self, other):
+        if _is_zero_constant(other):
+            return 0
+        b = Degree.of(other)
+        den = dict(self.den)
+        for key, (d, k) in b.den.items():
+            den[key] = (d, den[key][1] + k) if key in den else (d, k)
+        return Degree(self.num + b.num, den)
+
+    __rmul__ = __mul__
+
+    def inverse(self) -> "Degree":
+        if self.num == 0 and not self.den:
+            return Degree(0)
+        return Degree(self.den_degree, {("denominator", next(Degree._fresh)): (self.num, 1)})
+
+    def __truediv__(self, other):
+        return self * Degree.of(other).inverse()
+
+    def __rtruediv__(self, other):
+        return self.inverse() * other
+
+    def __pow__(self, k: int):
+        out = Degree(0)
+        for _ in range(k):
+            out = out * self
+        return out
+
+    def __repr__(self):
+        return f"Degree(num={self.num}, den={self.den_degree})"
+
+
+def rank_bound(rows) -> list[int]:
+    """Per-row numerator degree contributions of a matrix of :class:`Degree` bounds.
+
+    The numerator of any minor using rows I (over the product of those rows'
+    common denominators) has degree at most the sum of the contributions of I.
+    """
+    out = []
+    for row in rows:
+        entries = [Degree.of(x) for x in row if not _is_zero_constant(x)]
+        if not entries:
+            out.append(0)
+            continue
+        lcm = Degree(0)
+        for x in entries:
+            lcm = lcm + Degree(0, x.den)  # LCM of the denominators
+        total = lcm.den_degree
+        out.append(max(x.num + total - x.den_degree for x in entries))
+    return out
+
+
+def minor_degree(rows, size: int) -> int:
+    """Bound on the numerator degree of every ``size`` x ``size`` minor."""
+    contributions = sorted(rank_bound(rows), reverse=True)
+    return sum(contributions[:size])
+
+
+def schwartz_zippel_bound(degree: int, points: int, *, denominator_degree: int = 0,
+                          terms: int = 1) -> float:
+    """The probability bound of "vanishes at ``points`` random exact points".
+
+    A nonzero rational function whose numerator has degree at most D vanishes at a
+    uniformly random point of S^N with probability at most D / |S|; points where a
+    denominator of degree D_den vanishes are drawn again, so the bound per point is
+    D / (|S| - D_den). ``terms`` functions tested together (a union bound) multiply it.
+
+    Parameters
+    ----------
+    degree : int
+        D, the numerator's degree bound (:class:`Degree`).
+    points : int
+        k, independent points at which every function vanished.
+    denominator_degree : int, optional
+        D_den, the degree bound of the denominators that make a point be drawn again.
+    terms : int, optional
+        How many functions the bound covers.
+
+    Returns
+    -------
+    float
+        terms * min(1, D / (|S| - D_den))^k, |S| = 2^SAMPLE_BITS.
+    """
+    per = min(1.0, degree / max(1, 2 ** SAMPLE_BITS - denominator_degree))
+    return min(1.0, terms * per ** points)

@@ -1,0 +1,46 @@
+"""The paper's formulas at one point, each written once for every arithmetic.
+
+A formula here takes matrices of one kind (sympy ``DomainMatrix`` over QQ, GF(p) or
+Q(params); :class:`~nhham.lagrangian.linalg.ListMatrix` of exact rationals, residues
+or :class:`~nhham.lagrangian.domains.Degree` bounds;
+:class:`~nhham.lagrangian.linalg.FloatMatrix` of float64 or mpmath numbers) and uses
+only their ``*`` (matrix product), ``-``, ``transpose`` and a ``solve``: so the exact
+decision, the proof modulo p, the degree bound of the Schwartz–Zippel lemma, the
+parameter-field datum and the floating-point estimate are one computation, and a
+defect in it shows in every arithmetic alike.
+"""
+
+from __future__ import annotations
+
+from typing import Callable
+
+from nhham.lagrangian.linalg import field_solve
+
+__all__ = ["lagrangian_bracket"]
+
+
+def lagrangian_bracket(Jq, Jv, W, M, solve: Callable = field_solve):
+    """B_ab = {chi_a, chi_b}_L at one point, the Poisson bracket pulled back by Leg.
+
+    {f, g}_L = f_q · W⁻¹ g_v − W⁻¹ f_v · g_q − (W⁻¹ f_v)ᵀ (M − Mᵀ) W⁻¹ g_v, with W the
+    Hessian d²L/dv² and M the mixed Hessian d²L/dq dv (M_AB = ∂p_A/∂q^B); in matrices,
+    with U = W⁻¹ J_vᵀ, B = J_q U − (J_q U)ᵀ − Uᵀ (M − Mᵀ) U.
+
+    Parameters
+    ----------
+    Jq, Jv : matrix, shape (k, n)
+        ∂chi_a/∂q and ∂chi_a/∂v at the point.
+    W, M : matrix, shape (n, n)
+        W and M at the point.
+    solve : callable, optional
+        ``solve(A, B) -> A⁻¹ B`` in the matrices' arithmetic (default
+        :func:`~nhham.lagrangian.linalg.field_solve`).
+
+    Returns
+    -------
+    matrix, shape (k, k)
+        Antisymmetric, of the matrices' kind.
+    """
+    U = solve(W, Jv.transpose())
+    JU = Jq * U
+    return JU - JU.transpose() - U.transpose() * (M - M.transpose()) * U

@@ -1,0 +1,377 @@
+"""Linear algebra in every arithmetic: ranks, solves, determinants, minors.
+
+Exact matrices are sympy ``DomainMatrix`` over QQ, GF(p) or Q(params) (their
+``*``, ``-`` and ``transpose``), or lists of rows of :mod:`nhham.lagrangian.domains`
+values; :class:`FloatMatrix` gives a numpy array the same interface, so a formula
+written against it (:mod:`nhham.lagrangian.formulas`) runs in floating point too.
+:func:`field_solve` and :func:`field_det` dispatch on the kind of matrix.
+"""
+
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+from sympy import QQ
+from sympy.external.gmpy import MPQ
+from sympy.matrices.exceptions import NonInvertibleMatrixError
+from sympy.polys.matrices import DomainMatrix
+from sympy.polys.matrices.exceptions import DMNonInvertibleMatrixError
+
+from nhham.lagrangian.domains import PRIME, Degree, ModP, minor_degree
+
+__all__ = [
+    "exact_rank",
+    "exact_solve",
+    "maximal_minors",
+    "adjacent_column_sets",
+    "field_det",
+    "field_solve",
+    "FLOAT64",
+    "FloatMatrix",
+    "ListMatrix",
+    "solve_degrees",
+]
+
+# ------------------------------------------------------------ exact linear algebra
+def _domain_matrix(rows):
+    M = [[x if isinstance(x, MPQ) else QQ(x) for x in row] for row in rows]
+    shape = (len(M), len(M[0]) if M else 0)
+    return DomainMatrix(M, shape, QQ)
+
+
+def exact_rank(rows) -> tuple[int, list[int], list[int]]:
+    """Rank of a matrix of exact rationals with its pivot rows and columns.
+
+    sympy's DomainMatrix over QQ (reduced row echelon form); the pivot columns
+    are the first independent columns in order, the pivot rows those of the
+    transpose.
+    """
+    if not rows or not rows[0]:
+        return 0, [], []
+    if any(isinstance(x, ModP) for row in rows for x in row):
+        return _rank_mod_p(rows)
+    dm = _domain_matrix(rows)
+    _, cols = dm.rref(method="GJ")
+    if not cols:
+        return 0, [], []
+    _, prow = dm.extract(list(range(dm.shape[0])), list(cols)).transpose().rref(method="GJ")
+    return len(cols), list(prow), list(cols)
+
+
+def exact_solve(A, b):
+    """X with A X = B for a square nonsingular exact matrix A (lists of rationals).
+
+    Raises
+    ------
+    ZeroDivisionError
+        When A is singular.
+    """
+    n = len(A)
+    if n == 0:
+        return []
+    if any(isinstance(x, ModP) for row in list(A) + list(b) for x in row):
+        return _solve_mod_p(A, b)
+    dA, dB = _domain_matrix(A), _domain_matrix(b)
+    try:
+        X = dA.lu_solve(dB)
+    except (ZeroDivisionError, NonInvertibleMatrixError, DMNonInvertibleMatrixError) as exc:
+        raise ZeroDivisionError("singular block") from exc
+    return X.to_list()
+
+
+def maximal_minors(M: DomainMatrix, pivots=None, subsets=None) -> list:
+    """Every maximal minor of an m x n DomainMatrix M (m <= n) over a field, in the order
+    of ``itertools.combinations(range(n), m)`` (or of the column sets ``subsets``, each
+    sorted; ``adjacent_column_sets`` gives the m (n - m) + 1 that decide the rank).
+
+    One elimination instead of C(n, m) determinants: with P the pivot columns of M and
+    R = M[:, P]^{-1} M (so R[:, P] = I), det M[:, S] = det M[:, P] det R[:, S], and
+    det R[:, S] is, up to the sign of a generalised Laplace expansion along the unit
+    columns, the minor of R on the rows of P \\ S and the columns of S \\ P (at most
+    (n - m) x (n - m)). ``pivots`` gives P (the pivot columns, found by an exact
+    evaluation) instead of finding it: in floating point a rounded zero is not zero.
+    Fewer than m pivots: every minor is zero.
+    """
+    m, n = M.shape
+    if pivots is None:
+        _, pivots = M.rref()
+    if subsets is None:
+        subsets = list(itertools.combinations(range(n), m))
+    if len(pivots) < m:
+        return [M.domain.zero] * len(subsets)
+    P = list(pivots)
+    B = M.extract(list(range(m)), P)
+    det_B = field_det(B)
+    R = field_solve(B, M)
+    row_of = {c: i for i, c in enumerate(P)}
+    out = []
+    for S in subsets:
+        unit = [j for j, c in enumerate(S) if c in row_of]
+        other = [S[j] for j, c in enumerate(S) if c not in row_of]
+        used = [row_of[S[j]] for j in unit]
+        taken = set(used)
+        rest = [i for i in range(m) if i not in taken]
+        sub = field_det(R.extract(rest, other)) if other else M.domain.one
+        parity = sum(u + 1 for u in used) + sum(j + 1 for j in unit) + sum(
+            1 for a in range(len(used)) for b in range(a + 1, len(used)) if used[a] > used[b])
+        out.append(-det_B * sub if parity % 2 else det_B * sub)
+    return out
+
+
+def adjacent_column_sets(pivots, n) -> list:
+    """The pivot columns P and every set that swaps one of them for another column.
+
+    Their minors are det M[:, P] and det M[:, P] R_ij (R = M[:, P]^-1 M): all vanish
+    exactly where M has rank < m, as all maximal minors do, with m (n - m) + 1 terms
+    instead of C(n, m).
+    """
+    P = sorted(pivots)
+    out = [tuple(P)]
+    for i in range(len(P)):
+        for c in range(n):
+            if c not in P:
+                out.append(tuple(sorted(P[:i] + [c] + P[i + 1:])))
+    return out
+
+
+class _Float64:
+    """float64 in place of a sympy real domain, for estimates (the elements are Python
+    floats; :class:`FloatMatrix` holds them)."""
+
+    is_RealField = True
+    is_FiniteField = False
+    is_QQ = False
+    precision = 53
+    zero = 0.0
+    one = 1.0
+
+    def __repr__(self):
+        return "FLOAT64"
+
+
+#: The float64 "domain" of :class:`FloatMatrix`.
+FLOAT64 = _Float64()
+
+
+class FloatMatrix:
+    """The part of the DomainMatrix interface that :func:`field_det`,
+    :func:`field_solve`, :func:`maximal_minors` and the formulas use, on a numpy float64
+    array (LAPACK's partially pivoted LU): for estimates where 200-bit arithmetic is not
+    needed. An ``object`` array of mpmath numbers is kept as it is (the mpmath backend;
+    its solve is then the caller's).
+    """
+
+    domain = FLOAT64
+
+    def __init__(self, a):
+        a = np.asarray(a)
+        self.a = a if a.dtype == object else a.astype(float)
+
+    @classmethod
+    def zeros(cls, shape) -> "FloatMatrix":
+        return cls(np.zeros(shape))
+
+    @property
+    def shape(self) -> tuple:
+        return self.a.shape
+
+    def hstack(self, other) -> "FloatMatrix":
+        return FloatMatrix(np.hstack([self.a, other.a]))
+
+    def vstack(self, other) -> "FloatMatrix":
+        return FloatMatrix(np.vstack([self.a, other.a]))
+
+    def transpose(self) -> "FloatMatrix":
+        return FloatMatrix(self.a.T)
+
+    def extract(self, rows, cols) -> "FloatMatrix":
+        return FloatMatrix(self.a[np.ix_(list(rows), list(cols))])
+
+    def __mul__(self, other) -> "FloatMatrix":
+        return FloatMatrix(self.a @ other.a)
+
+    def __sub__(self, other) -> "FloatMatrix":
+        return FloatMatrix(self.a - other.a)
+
+    def __neg__(self) -> "FloatMatrix":
+        return FloatMatrix(-self.a)
+
+    def to_list(self) -> list:
+        return self.a.tolist()
+
+
+class ListMatrix:
+    """Rows of Python scalars (``MPQ``, :class:`~nhham.lagrangian.domains.ModP`,
+    :class:`~nhham.lagrangian.domains.Degree`) with the part of the DomainMatrix
+    interface the formulas use: ``*`` (the matrix product), ``-``, ``transpose``.
+
+    Values of mixed kinds (an exact angle's rational next to a residue) combine by the
+    scalars' own operators; :func:`field_solve` picks the solve by the kind of entry.
+    """
+
+    def __init__(self, rows):
+        self.rows = [list(r) for r in rows]
+
+    @property
+    def shape(self) -> tuple:
+        return (len(self.rows), len(self.rows[0]) if self.rows else 0)
+
+    def transpose(self) -> "ListMatrix":
+        return ListMatrix(map(list, zip(*self.rows)))
+
+    def __mul__(self, other) -> "ListMatrix":
+        cols = list(zip(*other.rows))
+        return ListMatrix([[sum((x * y for x, y in zip(row, col)), 0) for col in cols]
+                           for row in self.rows])
+
+    def __sub__(self, other) -> "ListMatrix":
+        return ListMatrix([[x - y for x, y in zip(r, s)] for r, s in zip(self.rows, other.rows)])
+
+    def to_list(self) -> list:
+        return [list(r) for r in self.rows]
+
+
+def field_det(M: DomainMatrix):
+    """det M; in floating point by elimination with partial pivoting (sympy's
+    fraction-free elimination divides by rounded, possibly tiny, pivots)."""
+    if isinstance(M, FloatMatrix):
+        return float(np.linalg.det(M.a)) if M.shape[0] else 1.0
+    K = M.domain
+    if K.is_FiniteField:
+        # On machine-size residues: sympy's elements invert by an extended gcd per division.
+        p = int(K.characteristic())
+        return K(_det_mod(
+            [[int(K.to_int(x)) % p for x in row] for row in M.to_list()], p))
+    if not K.is_RealField:
+        return M.det()
+    rows, n = M.to_list(), M.shape[0]
+    det = K.one
+    for c in range(n):
+        p = max(range(c, n), key=lambda i: abs(rows[i][c]))
+        if not rows[p][c]:
+            return K.zero
+        if p != c:
+            rows[c], rows[p] = rows[p], rows[c]
+            det = -det
+        det *= rows[c][c]
+        for i in range(c + 1, n):
+            f = rows[i][c] / rows[c][c]
+            if f:
+                rows[i] = [a - f * b for a, b in zip(rows[i], rows[c])]
+    return det
+
+
+def field_solve(A: DomainMatrix, B: DomainMatrix) -> DomainMatrix:
+    """A^-1 B; in floating point with partial pivoting (see :func:`field_det`).
+
+    ``A`` and ``B`` of one kind: DomainMatrix (over a field), :class:`FloatMatrix`
+    (float64) or :class:`ListMatrix` (exact scalars by :func:`exact_solve`, degree
+    bounds by :func:`solve_degrees`). ZeroDivisionError where ``A`` is singular.
+    """
+    if isinstance(A, ListMatrix):
+        if any(isinstance(x, Degree) for row in A.rows for x in row):
+            return ListMatrix(solve_degrees(A.rows, B.rows))
+        return ListMatrix(exact_solve(A.rows, B.rows))
+    if isinstance(A, FloatMatrix):
+        try:
+            return FloatMatrix(np.linalg.solve(A.a, B.a))
+        except np.linalg.LinAlgError as exc:
+            raise ZeroDivisionError("singular matrix") from exc
+    K = A.domain
+    if not K.is_RealField:
+        return A.lu_solve(B)
+    n, k = A.shape[0], B.shape[1]
+    rows = [a + b for a, b in zip(A.to_list(), B.to_list())]
+    for c in range(n):
+        p = max(range(c, n), key=lambda i: abs(rows[i][c]))
+        if not rows[p][c]:
+            raise ZeroDivisionError("singular matrix")
+        rows[c], rows[p] = rows[p], rows[c]
+        for i in range(n):
+            if i != c and rows[i][c]:
+                f = rows[i][c] / rows[c][c]
+                rows[i] = [a - f * b for a, b in zip(rows[i], rows[c])]
+    X = [[rows[i][n + j] / rows[i][i] for j in range(k)] for i in range(n)]
+    return DomainMatrix(X, (n, k), K)
+
+
+def _det_mod(rows, p: int) -> int:
+    """det of a square matrix of residues modulo the prime p (Gaussian elimination)."""
+    M, n, det = [list(r) for r in rows], len(rows), 1
+    for c in range(n):
+        k = next((i for i in range(c, n) if M[i][c]), None)
+        if k is None:
+            return 0
+        if k != c:
+            M[c], M[k] = M[k], M[c]
+            det = -det
+        det = det * M[c][c] % p
+        inv = pow(M[c][c], -1, p)
+        for i in range(c + 1, n):
+            if M[i][c]:
+                f = M[i][c] * inv % p
+                M[i] = [(a - f * b) % p for a, b in zip(M[i], M[c])]
+    return det % p
+
+
+def _ints_mod_p(rows):
+    return [[ModP.lift(x).v for x in row] for row in rows]
+
+
+def _rank_mod_p(rows):
+    """Rank, pivot rows and pivot columns over F_p (Gaussian elimination on ints)."""
+    M = _ints_mod_p(rows)
+    nrows, ncols = len(M), len(M[0])
+    order = list(range(nrows))
+    prow, pcol, r = [], [], 0
+    for c in range(ncols):
+        p = next((i for i in range(r, nrows) if M[i][c]), None)
+        if p is None:
+            continue
+        M[r], M[p] = M[p], M[r]
+        order[r], order[p] = order[p], order[r]
+        inv = pow(M[r][c], -1, PRIME)
+        pivot = M[r]
+        for i in range(r + 1, nrows):
+            if M[i][c]:
+                f = M[i][c] * inv % PRIME
+                M[i] = [(a - f * b) % PRIME for a, b in zip(M[i], pivot)]
+        prow.append(order[r])
+        pcol.append(c)
+        r += 1
+        if r == nrows:
+            break
+    return r, sorted(prow), pcol
+
+
+def _solve_mod_p(A, b):
+    n = len(A)
+    M = _ints_mod_p([list(A[i]) + list(b[i]) for i in range(n)])
+    for c in range(n):
+        p = next((i for i in range(c, n) if M[i][c]), None)
+        if p is None:
+            raise ZeroDivisionError("singular block modulo p")
+        M[c], M[p] = M[p], M[c]
+        inv = pow(M[c][c], -1, PRIME)
+        M[c] = [x * inv % PRIME for x in M[c]]
+        for i in range(n):
+            if i != c and M[i][c]:
+                f = M[i][c]
+                M[i] = [(a - f * bb) % PRIME for a, bb in zip(M[i], M[c])]
+    return [[ModP(x) for x in row[n:]] for row in M]
+
+
+def solve_degrees(A, B) -> list:
+    """Degree bounds of X = A⁻¹ B (Cramer's rule) for Degree matrices A (square), B.
+
+    Every entry is a ratio of minors of [A | B]: numerator bounded by the minors
+    of [A | B], one shared fresh denominator factor for det A.
+    """
+    size = len(A)
+    widths = len(B[0]) if B else 0
+    aug = [list(a) + [sum((Degree.of(x) for x in b), Degree(0))] for a, b in zip(A, B)]
+    top = minor_degree(aug, size)
+    den = minor_degree([list(a) for a in A], size)
+    x = Degree(top, {("denominator", next(Degree._fresh)): (den, 1)})
+    return [[x] * widths for _ in range(size)]

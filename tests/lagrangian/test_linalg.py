@@ -1,0 +1,62 @@
+"""Linear algebra in every arithmetic (nhham.lagrangian.linalg), against sympy's own
+rank, linear solve and determinants."""
+
+import itertools
+import random
+
+import pytest
+import sympy as sp
+from sympy.external.gmpy import MPQ
+
+from nhham.lagrangian.domains import ModP
+from nhham.lagrangian.linalg import exact_rank, exact_solve, maximal_minors
+
+
+
+@pytest.mark.parametrize("seed", range(20))
+def test_exact_linear_algebra_agrees_with_sympy(seed):
+    rng = random.Random(seed)
+    n, m = rng.randint(1, 5), rng.randint(1, 5)
+    A = [[MPQ(rng.randint(-4, 4), rng.randint(1, 3)) for _ in range(m)] for _ in range(n)]
+    if n > 2:
+        A[-1] = [u + 2 * w for u, w in zip(A[0], A[1])]
+    S = sp.Matrix([[sp.Rational(int(v.numerator), int(v.denominator)) for v in r] for r in A])
+    r, rows, cols = exact_rank(A)
+    assert r == S.rank() and S.extract(rows, cols).rank() == r
+    # modulo p: the same rank for these small integers
+    assert exact_rank([[ModP.lift(v) for v in row] for row in A])[0] == r
+    if n == m and r == n:
+        b = [[MPQ(rng.randint(-5, 5))] for _ in range(n)]
+        X = exact_solve(A, b)
+        assert S * sp.Matrix([[sp.Rational(int(v[0].numerator), int(v[0].denominator))]
+                              for v in X]) == sp.Matrix([[int(v[0])] for v in b])
+
+
+
+@pytest.mark.parametrize("seed", range(40))
+def test_maximal_minors_are_the_determinants(seed):
+    """One elimination gives every maximal minor: against C(n, m) determinants, over QQ
+    (rank-deficient matrices included) and over Q(a)."""
+
+    from sympy import QQ
+    from sympy.polys.matrices import DomainMatrix
+
+    rng = random.Random(seed)
+    m = rng.randint(1, 5)
+    n = rng.randint(m, 8)
+    rank = m if seed % 4 else rng.randint(0, m)
+    basis = [[rng.randint(-3, 3) for _ in range(n)] for _ in range(max(rank, 1))]
+    rows = [[sum(rng.randint(-2, 2) * b[j] for b in basis) if rank else 0 for j in range(n)]
+            for _ in range(m)] if rank < m else [[rng.randint(-4, 4) for _ in range(n)]
+                                                for _ in range(m)]
+    M = DomainMatrix([[QQ(x) for x in r] for r in rows], (m, n), QQ)
+    direct = [M.extract(list(range(m)), list(S)).det()
+              for S in itertools.combinations(range(n), m)]
+    assert maximal_minors(M) == direct
+    a = sp.Symbol("a")
+    K = QQ.frac_field(a)
+    Ma = DomainMatrix([[K.convert(x + (a if (i + j) % 3 == 0 else 0)) for j, x in enumerate(r)]
+                       for i, r in enumerate(rows)], (m, n), K)
+    direct = [Ma.extract(list(range(m)), list(S)).det()
+              for S in itertools.combinations(range(n), m)]
+    assert maximal_minors(Ma) == direct
