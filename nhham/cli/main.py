@@ -397,7 +397,7 @@ def cmd_compare(args, steps) -> CommandOutput:
     warnings = []
     with steps.step("Dirac-bracket flow of H against the projected field on M_f"):
         try:
-            from nhham.hamiltonian.classification import dirac_vs_projected
+            from nhham.hamiltonian.dirac import dirac_vs_projected
 
             dirac = dirac_vs_projected(system, precision=args.precision,
                                        samples=args.samples, side=side)
@@ -608,8 +608,7 @@ class _Parser(argparse.ArgumentParser):
 
 
 def build_parser() -> argparse.ArgumentParser:
-    # Over 80 lines on purpose: one flat list of the command line's options reads better
-    # than the same declarations split across helpers.
+    """The command line: one subparser a command, its options added by command."""
     from nhham.settings import __version__
 
     parser = _Parser(
@@ -625,82 +624,112 @@ def build_parser() -> argparse.ArgumentParser:
                            epilog=f"example: {example}\n{_EXIT_TEXT}",
                            formatter_class=argparse.RawDescriptionHelpFormatter)
         add_common_arguments(p, budget=None if name in ("simulate", "bench") else DEFAULT_BUDGET)
-        if name in ("classify", "derive", "compare"):
-            p.add_argument("--precision", type=int, default=None, metavar="DIGITS",
-                           help="decide ranks and vanishings that need sampling with mpmath at "
-                                "DIGITS digits (default: float64)")
-            p.add_argument("--latex", action="store_true",
-                           help="print LaTeX in the paper's notation instead of text")
-        if name == "classify":
-            p.add_argument("--parametric", action="store_true",
-                           help="the verdict for generic parameters and every case (parameter "
-                                "values given by polynomial equations) where it changes, with "
-                                "the case the scene's values fall in")
-            p.add_argument("--positive", default=None, metavar="NAMES",
-                           help="with --parametric: comma-separated parameters declared "
-                                "positive; conditions without a real solution are dropped")
-            p.add_argument("--depth", type=int, default=None, metavar="N",
-                           help="with --parametric: bound on the nesting of cases (default: 3)")
-        if name in ("derive", "compare", "simulate", "bench"):
-            p.add_argument("--drop-redundant", action="store_true",
-                           help="drop constraints whose one-form is a combination of the others "
-                                "(default: refuse them; classify always drops and reports them)")
-        if name == "derive":
-            p.add_argument("--side", choices=("lagrangian", "hamiltonian"), default="lagrangian",
-                           help="TQ with (q, v) or T*Q with (q, p) (default: lagrangian)")
-            p.add_argument("--explicit", action="store_true",
-                           help="form the closed forms P(xi_L), lambda and C (default: only "
-                                "when W is diagonal, constant or n <= 3; the implicit "
-                                "mass-matrix form otherwise)")
-        if name == "compare":
-            p.add_argument("--samples", type=int, default=6, metavar="K",
-                           help="seeded points of M_f for sampled checks (default: 6)")
-        if name in ("simulate", "bench"):
-            p.add_argument("--t-end", dest="t_end", type=float, default=None, metavar="T",
-                           help="final time (default: the scene's [simulate] t_end, else 10)")
-            p.add_argument("--plot", metavar="FILE", default=None,
-                           help="save a figure (.png, .pdf, .svg); needs the plot extra: "
-                                "pip install 'nhham[plot]'")
-        if name == "simulate":
-            p.add_argument("--method", default=None, choices=METHODS, metavar="METHOD",
-                           help="one of " + ", ".join(METHODS) + " (default: the scene's, else "
-                                "DOP853); rattle, rattle4 and rk4 need --step")
-            p.add_argument("--rtol", type=float, default=None,
-                           help="relative tolerance of adaptive methods (default: scene's, else "
-                                "1e-9)")
-            p.add_argument("--atol", type=float, default=None,
-                           help="absolute tolerance of adaptive methods (default: scene's, else "
-                                "1e-12)")
-            p.add_argument("--step", type=float, default=None, metavar="DT",
-                           help="step size of the fixed-step methods rattle, rattle4, rk4")
-            p.add_argument("--max-step", dest="max_step", type=float, default=None, metavar="DT",
-                           help="largest step of adaptive methods (default: unbounded)")
-            p.add_argument("--projection", action="store_true",
-                           help="project onto the constraints after every step (adaptive "
-                                "methods and rk4): residual at round-off for a small cost")
-            p.add_argument("--output", metavar="FILE", default=None,
-                           help="write the trajectory (the kept states): .npz (numpy) or "
-                                "otherwise CSV")
-            p.add_argument("--save-every", dest="save_every", type=int, default=None,
-                           metavar="J", help="keep every J-th step and the last (default: 1)")
-            p.add_argument("--max-points", dest="max_points", type=int, default=None,
-                           metavar="K",
-                           help="most states kept in memory; beyond it every other one is "
-                                "dropped and the stride doubles (default: as many as fit in "
-                                "64 MiB, 8 (2n + 2) bytes a state)")
-            p.add_argument("--project-initial", action="store_true",
-                           help="project [initial] data that violate the constraints onto "
-                                "M_1 (the constraints as given, velocity and holonomic) "
-                                "instead of refusing them; the result says by how much")
-        if name == "bench":
-            p.add_argument("--quick", action="store_true",
-                           help="fewer methods and settings (seconds instead of minutes)")
-            p.add_argument("--reference-digits", dest="reference_digits", type=int, default=30,
-                           metavar="DIGITS",
-                           help="digits of the mpmath reference solution (default: 30)")
-        if name == "linearize":
-            add_linearize_arguments(p)
+        _add_shared_options(p, name)
+        if name in _OPTIONS:
+            _OPTIONS[name](p)
     return parser
+
+
+def _add_shared_options(p, name) -> None:
+    """Options that several commands take."""
+    if name in ("classify", "derive", "compare"):
+        p.add_argument("--precision", type=int, default=None, metavar="DIGITS",
+                       help="decide ranks and vanishings that need sampling with mpmath at "
+                            "DIGITS digits (default: float64)")
+        p.add_argument("--latex", action="store_true",
+                       help="print LaTeX in the paper's notation instead of text")
+    if name in ("derive", "compare", "simulate", "bench"):
+        p.add_argument("--drop-redundant", action="store_true",
+                       help="drop constraints whose one-form is a combination of the others "
+                            "(default: refuse them; classify always drops and reports them)")
+    if name in ("simulate", "bench"):
+        p.add_argument("--t-end", dest="t_end", type=float, default=None, metavar="T",
+                       help="final time (default: the scene's [simulate] t_end, else 10)")
+        p.add_argument("--plot", metavar="FILE", default=None,
+                       help="save a figure (.png, .pdf, .svg); needs the plot extra: "
+                            "pip install 'nhham[plot]'")
+
+
+def _add_classify_options(p) -> None:
+    """classify: --parametric and its options."""
+    p.add_argument("--parametric", action="store_true",
+                   help="the verdict for generic parameters and every case (parameter "
+                        "values given by polynomial equations) where it changes, with "
+                        "the case the scene's values fall in")
+    p.add_argument("--positive", default=None, metavar="NAMES",
+                   help="with --parametric: comma-separated parameters declared "
+                        "positive; conditions without a real solution are dropped")
+    p.add_argument("--depth", type=int, default=None, metavar="N",
+                   help="with --parametric: bound on the nesting of cases (default: 3)")
+
+
+def _add_derive_options(p) -> None:
+    """derive: the side and the explicit form."""
+    p.add_argument("--side", choices=("lagrangian", "hamiltonian"), default="lagrangian",
+                   help="TQ with (q, v) or T*Q with (q, p) (default: lagrangian)")
+    p.add_argument("--explicit", action="store_true",
+                   help="form the closed forms P(xi_L), lambda and C (default: only "
+                        "when W is diagonal, constant or n <= 3; the implicit "
+                        "mass-matrix form otherwise)")
+
+
+def _add_compare_options(p) -> None:
+    """compare: the sample points."""
+    p.add_argument("--samples", type=int, default=6, metavar="K",
+                   help="seeded points of M_f for sampled checks (default: 6)")
+
+
+def _add_simulate_options(p) -> None:
+    """simulate: method, tolerances, steps, output and memory."""
+    p.add_argument("--method", default=None, choices=METHODS, metavar="METHOD",
+                   help="one of " + ", ".join(METHODS) + " (default: the scene's, else "
+                        "DOP853); rattle, rattle4 and rk4 need --step")
+    p.add_argument("--rtol", type=float, default=None,
+                   help="relative tolerance of adaptive methods (default: scene's, else "
+                        "1e-9)")
+    p.add_argument("--atol", type=float, default=None,
+                   help="absolute tolerance of adaptive methods (default: scene's, else "
+                        "1e-12)")
+    p.add_argument("--step", type=float, default=None, metavar="DT",
+                   help="step size of the fixed-step methods rattle, rattle4, rk4")
+    p.add_argument("--max-step", dest="max_step", type=float, default=None, metavar="DT",
+                   help="largest step of adaptive methods (default: unbounded)")
+    p.add_argument("--projection", action="store_true",
+                   help="project onto the constraints after every step (adaptive "
+                        "methods and rk4): residual at round-off for a small cost")
+    p.add_argument("--output", metavar="FILE", default=None,
+                   help="write the trajectory (the kept states): .npz (numpy) or "
+                        "otherwise CSV")
+    p.add_argument("--save-every", dest="save_every", type=int, default=None,
+                   metavar="J", help="keep every J-th step and the last (default: 1)")
+    p.add_argument("--max-points", dest="max_points", type=int, default=None,
+                   metavar="K",
+                   help="most states kept in memory; beyond it every other one is "
+                        "dropped and the stride doubles (default: as many as fit in "
+                        "64 MiB, 8 (2n + 2) bytes a state)")
+    p.add_argument("--project-initial", action="store_true",
+                   help="project [initial] data that violate the constraints onto "
+                        "M_1 (the constraints as given, velocity and holonomic) "
+                        "instead of refusing them; the result says by how much")
+
+
+def _add_bench_options(p) -> None:
+    """bench: the quick set and the reference."""
+    p.add_argument("--quick", action="store_true",
+                   help="fewer methods and settings (seconds instead of minutes)")
+    p.add_argument("--reference-digits", dest="reference_digits", type=int, default=30,
+                   metavar="DIGITS",
+                   help="digits of the mpmath reference solution (default: 30)")
+
+
+_OPTIONS = {
+    "classify": _add_classify_options,
+    "derive": _add_derive_options,
+    "compare": _add_compare_options,
+    "simulate": _add_simulate_options,
+    "bench": _add_bench_options,
+    "linearize": add_linearize_arguments,
+}
 
 
 def _unknown_options(parser, command, extra) -> str:

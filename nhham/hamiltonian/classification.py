@@ -29,35 +29,33 @@ taken over the second-class set, block by block
 
 from __future__ import annotations
 
-import math
-from dataclasses import dataclass, replace
+from dataclasses import replace
 from typing import Sequence
 
 import numpy as np
 import sympy as sp
 
 from nhham.settings import SEED
-from nhham.hamiltonian.brackets import DiracBracket, connected_blocks
-from nhham.errors import ComputationError, InputError, NhhamError
+from nhham.hamiltonian.brackets import connected_blocks
+from nhham.errors import ComputationError, InputError
 from nhham.hamiltonian.side import HamiltonianSide, hamiltonian_side
 from nhham.hamiltonian.legendre import Backend, Lambdified, ModularBackend
 from nhham.hamiltonian.combinations import NotFormed, closed_form_combinations
 from nhham.lagrangian.algebra import block_inverse, cancel
 from nhham.lagrangian.analysis import ConstraintAnalysis, analyze_constraints
-from nhham.lagrangian.domains import NotExact, evaluate, minor_degree, schwartz_zippel_bound
-from nhham.lagrangian.formulas import lagrangian_bracket
-from nhham.lagrangian.linalg import FloatMatrix, ListMatrix, exact_rank, exact_solve
-from nhham.lagrangian.points import PointSampler, jacobian_row
+from nhham.lagrangian.domains import NotExact
+from nhham.lagrangian.linalg import exact_rank
+from nhham.lagrangian.points import PointSampler
 from nhham.lagrangian.submanifold import Decision, Submanifold
-from nhham.lagrangian.tangency import MAX_POINTS, TARGET_ERROR
-from nhham.system.expressions import short
+from nhham.hamiltonian.classes import ConstraintClasses
+from nhham.hamiltonian.classes_at_points import (
+    COMBINATION_MAX_N,
+    classify_at_points,
+    float_brackets,
+)
 
 __all__ = [
-    "ConstraintClasses",
     "classify_constraints",
-    "dirac_bracket",
-    "DiracProjectedReport",
-    "dirac_vs_projected",
     "final_constraints_of",
 ]
 
@@ -91,151 +89,8 @@ def final_constraints_of(source, precision: int | None = None, samples: int = 6,
     return analysis.system, cons, tuple(analysis.final_labels), analysis
 
 
-def _default_labels(system):
-    k = len(system.holonomic)
-    return tuple(f"holonomic[{i}]" for i in range(k)) + tuple(
-        f"{lab}.lift" if lab.startswith("holonomic") else lab
-        for lab in system.constraint_labels)
-
-
 def _is_on_tq(expr, system):
     return bool(sp.sympify(expr).free_symbols & set(system.velocities))
-
-
-# --------------------------------------------------------------- results
-@dataclass(frozen=True)
-class ConstraintClasses:
-    """Classification of the final constraints chi_a on M_f (in T*Q).
-
-    Attributes
-    ----------
-    labels : tuple of str
-        Names of the chi_a.
-    constraints_TQ : tuple of sympy.Expr
-        chi_a on TQ, functions of (q, v).
-    constraints : tuple of sympy.Expr or None
-        chi_a o Leg^{-1} in (q, p) (None in sampled mode without a symbolic inverse).
-    bracket_matrix : sympy.Matrix or None
-        B_ab = {chi_a, chi_b} reduced on M_f (exact mode), shape (k, k).
-    bracket_samples : tuple of numpy.ndarray
-        B at the sample points of M_f (sampled mode, or the pivot evidence).
-    rank : int
-        rank B on M_f = number of second-class constraints.
-    first_class, second_class : int
-    second_class_set : tuple of str
-        Labels of a maximal second-class set R (B_RR invertible on M_f).
-    first_class_combinations : tuple of sympy.Expr or None
-        A basis gamma_k = chi_k - sum_{a in R} (B_RR^{-1} B_Rk)_a chi_a (in
-        (q, p)), one per constraint outside R.
-    combination_coefficients : tuple of dict
-        ``{label: coefficient}`` of each gamma_k (expressions on M_f in
-        exact mode; in sampled mode a tuple of values, one per sample point).
-    individually_first_class : tuple of str
-        Labels whose whole row of B vanishes on M_f.
-    blocks : tuple of tuple of str
-        Connected components of the nonzero pattern of B on M_f.
-    decisions : dict
-        Named :class:`Decision` objects: ``"rank"``, ``"B[a,b]"`` per entry,
-        ``"gamma[k]"`` for the check that each combination is first class.
-    method : str
-        ``"exact"`` (symbolic B reduced on M_f), ``"exact at points"`` (B at
-        exact points of M_f: each decision says whether it is a proof or carries
-        a Schwartz–Zippel error bound; no symbolic B) or ``"sampled"``.
-    manifold : Submanifold or None
-        M_f in T*Q (exact mode).
-    side : HamiltonianSide
-    analysis : object or None
-        The ConstraintAnalysis the constraints came from.
-    """
-
-    labels: tuple
-    constraints_TQ: tuple
-    constraints: tuple | None
-    bracket_matrix: sp.Matrix | None
-    bracket_samples: tuple
-    rank: int
-    first_class: int
-    second_class: int
-    second_class_set: tuple
-    first_class_combinations: tuple | None
-    combination_coefficients: tuple
-    individually_first_class: tuple
-    blocks: tuple
-    decisions: dict
-    method: str
-    manifold: Submanifold | None
-    side: HamiltonianSide
-    analysis: object = None
-
-    @property
-    def second_class_indices(self) -> tuple:
-        return tuple(self.labels.index(lab) for lab in self.second_class_set)
-
-    @property
-    def second_class_constraints(self) -> tuple | None:
-        """The chi_a of the maximal second-class set, in (q, p)."""
-        if self.constraints is None:
-            return None
-        return tuple(self.constraints[a] for a in self.second_class_indices)
-
-    @property
-    def rank_decision(self) -> Decision:
-        return self.decisions["rank"]
-
-    @property
-    def warnings(self) -> tuple:
-        """Warnings of every decision, prefixed by what was decided."""
-        return tuple(f"{name}: {w}" for name, d in self.decisions.items() for w in d.warnings)
-
-    def __repr__(self) -> str:
-        return (f"<ConstraintClasses: {len(self.labels)} final constraint(s), "
-                f"{self.second_class} second class, {self.first_class} first class "
-                f"({self.method})>")
-
-    def _repr_latex_(self) -> str:
-        """The classification table (for notebooks)."""
-        kinds = {lab: "in the maximal second-class set" for lab in self.second_class_set}
-        rows = [rf"\text{{{lab}}} & \text{{{kinds.get(lab, 'gives a first-class combination')}}}"
-                for lab in self.labels]
-        head = (rf"\operatorname{{rank}} \{{\chi_a, \chi_b\}} = {self.rank}:\ "
-                rf"{self.second_class}\ \text{{second class}},\ {self.first_class}\ "
-                rf"\text{{first class}}")
-        return "$$" + head + r"\\ \begin{array}{ll}" + r" \\ ".join(rows) + r"\end{array}$$"
-
-    def describe(self) -> str:
-        lines = [f"{len(self.labels)} final constraints: {self.second_class} second class, "
-                 f"{self.first_class} first class (rank of the bracket matrix on M_f: "
-                 f"{self.rank_decision.describe()})"]
-        if self.second_class_set:
-            lines.append("maximal second-class set: " + ", ".join(self.second_class_set))
-        if self.first_class_combinations is not None:
-            for g in self.first_class_combinations:
-                lines.append(f"first class: {g}")
-        return "\n".join(lines)
-
-    def to_dict(self) -> dict:
-        """JSON-ready summary (expressions as sympy-parsable strings)."""
-        def coeffs(c):
-            return {k: (str(v) if isinstance(v, sp.Basic) else [float(x) for x in v])
-                    for k, v in c.items()}
-        return {
-            "constraints": [str(c) for c in self.constraints] if self.constraints else None,
-            "labels": list(self.labels),
-            "rank": self.rank,
-            "first_class": self.first_class,
-            "second_class": self.second_class,
-            "second_class_set": list(self.second_class_set),
-            "first_class_combinations": (None if self.first_class_combinations is None
-                                         else [str(g) for g in self.first_class_combinations]),
-            "combination_coefficients": [coeffs(c) for c in self.combination_coefficients],
-            "individually_first_class": list(self.individually_first_class),
-            "blocks": [list(b) for b in self.blocks],
-            "method": self.method,
-            "decisions": {k: {"value": d.value if isinstance(d.value, (bool, int)) else str(d.value),
-                              "method": d.method, "detail": d.detail, "precision": d.precision,
-                              "warnings": list(d.warnings)}
-                          for k, d in self.decisions.items()},
-        }
 
 
 # ------------------------------------------------------------ classify
@@ -287,7 +142,7 @@ def classify_constraints(source, constraints: Sequence | None = None,
                 and _numerically_regular(side, precision, samples, seed, tol):
             # C has full rank at the samples of M_1: M_f = M_1, no symbolic algorithm run.
             cons, labs, analysis = (tuple(system.holonomic) + tuple(system.phi),
-                                    _default_labels(system), None)
+                                    system.m1_labels, None)
         else:
             system, cons, labs, analysis = final_constraints_of(source, precision, samples, seed)
     else:
@@ -301,99 +156,13 @@ def classify_constraints(source, constraints: Sequence | None = None,
     if requested == "auto" and set(cons) == set(system.holonomic) | set(system.phi):
         # M_f = M_1: the brackets can be decided at exact points of M_1.
         try:
-            classes = _classify_at_points(side, cons, labs, analysis, seed)
+            classes = classify_at_points(side, cons, labs, analysis, seed)
         except NotExact:
             classes = _classify_lagrangian_sampled(side, cons, labs, analysis, tol, precision,
                                                    samples, seed)
     else:
         classes = _classify_sampled(side, cons, labs, analysis, tol, precision, samples, seed)
     return _with_combinations(classes)
-
-
-def _classify_at_points(side, cons, labels, analysis, seed, target=TARGET_ERROR):
-    """B_ab = {chi_a, chi_b} at random exact points of M_f = M_1, through the
-    Lagrangian bracket (the pull-back of the canonical one by Leg):
-
-        {f, g}_L = f_q . W^{-1} g_v - W^{-1} f_v . g_q - (W^{-1} f_v)^T (M - M^T) W^{-1} g_v
-
-    with M the mixed Hessian d2L/dq dv. rank B at an exact point is proved; a
-    deficiency seen at k points carries the Schwartz–Zippel bound.
-    """
-    from nhham.lagrangian.geometry import lagrangian_geometry
-
-    system = side.system
-    geo = analysis.geometry if isinstance(analysis, ConstraintAnalysis) else \
-        lagrangian_geometry(system)
-    q, v = system.coordinates, system.velocities
-    cons = [sp.sympify(c) for c in cons]
-    k = len(cons)
-    sampler = PointSampler.on_M1(system, seed)
-    Jq = [jacobian_row(c, q) for c in cons]
-    Jv = [jacobian_row(c, v) for c in cons]
-    W = [list(geo.hessian.row(i)) for i in range(system.n)]
-    Mx = [list(geo.mixed_hessian.row(i)) for i in range(system.n)]
-    proof = _rank_modulo_p(side, cons, labels, analysis, seed, W, Mx, Jq, Jv)
-    if proof is not None:
-        return proof
-    best, count, pivots, mats, degrees, error = -1, 0, [], [], None, 0.0
-    while count < MAX_POINTS:
-        pt = sampler.point()
-        try:
-            Bp = _bracket_at(pt.env, W, Mx, Jq, Jv)
-        except ZeroDivisionError:
-            continue
-        count += 1
-        mats.append(Bp)
-        r, rows, _ = exact_rank(Bp) if k else (0, [], [])
-        if r > best:
-            best, pivots = r, rows
-        if degrees is None:
-            degrees = _bracket_at(pt.degrees, W, Mx, Jq, Jv)
-        if best >= k:
-            break
-        error = schwartz_zippel_bound(minor_degree(degrees, best + 1), count,
-                                      denominator_degree=sampler.denominator_degree)
-        if error < target:
-            break
-    r = best
-    if r >= k:
-        rank_d = Decision(r, "exact", f"bracket matrix of full rank {r} at an exact point of "
-                          f"M_f (proof)", samples=count, error_bound=0.0)
-    else:
-        rank_d = Decision(r, "exact at points", f"rank {r} of the bracket matrix at {count} "
-                          f"random exact points of M_f", samples=count, error_bound=error)
-    decisions = {"rank": rank_d}
-    R = list(pivots) if r else []
-    nonzero = np.zeros((k, k), dtype=bool)
-    for Bp in mats:
-        nonzero |= np.array([[x != 0 for x in row] for row in Bp], dtype=bool).reshape(k, k)
-    coeff_dicts = []
-    for kk in (i for i in range(k) if i not in R):
-        per_point = []
-        for Bp in mats:
-            per_point.append(_exact_combination(Bp, R, kk))
-        coeff_dicts.append({labels[a]: tuple(float(c[a]) for c in per_point)
-                            for a in range(k) if any(c[a] != 0 for c in per_point)})
-        decisions[f"gamma[{labels[kk]}]"] = Decision(
-            True, "exact", "B c = 0 exactly at each point (c solved from the regular block "
-            "of B at that point); the coefficients depend on the point", samples=count)
-    alone = tuple(labels[a] for a in range(k) if not nonzero[a].any())
-    blocks = tuple(tuple(labels[a] for a in blk) for blk in connected_blocks(nonzero)) if k else ()
-    cons_tq = tuple(cons)
-    return ConstraintClasses(
-        labels=tuple(labels), constraints_TQ=cons_tq, constraints=None, bracket_matrix=None,
-        bracket_samples=tuple(np.array([[float(x) for x in row] for row in Bp], dtype=float)
-                              .reshape(k, k) for Bp in mats),
-        rank=r, first_class=k - r, second_class=r,
-        second_class_set=tuple(labels[a] for a in R), first_class_combinations=None,
-        combination_coefficients=tuple(coeff_dicts), individually_first_class=alone,
-        blocks=blocks, decisions=decisions, method="exact at points", manifold=None,
-        side=side, analysis=analysis)
-
-
-#: The first-class combinations of a classification decided at points are formed in
-#: closed form up to this many coordinates (:mod:`nhham.hamiltonian.combinations`).
-COMBINATION_MAX_N = 8
 
 
 def _with_combinations(classes: ConstraintClasses) -> ConstraintClasses:
@@ -431,109 +200,6 @@ def _with_combinations(classes: ConstraintClasses) -> ConstraintClasses:
                    decisions={**classes.decisions, "combinations": decision})
 
 
-def _rank_modulo_p(side, cons, labels, analysis, seed, W, Mx, Jq, Jv, tries=3):
-    """The rank of B proved at a point over F_p where it is the largest B can have; else None.
-
-    B is antisymmetric, so its rank is at most k for k even and k - 1 for k odd. A rank
-    r modulo p at a point of M_1 is a lower bound of its rank over Q at a rational point
-    (no inverse taken was of a multiple of p), hence of its generic rank on M_1: where r
-    is that largest rank, the rank is proved. The r pivot rows R are independent, so
-    B_RR is invertible (a principal submatrix of an antisymmetric matrix on a maximal
-    independent set of rows); for k odd the one first-class combination is
-    chi_k - sum_R (B_RR^-1 B_Rk)_a chi_a, its coefficients given at seeded float points
-    of M_1 (rational arithmetic at n = 19 took 5 s a point).
-    """
-    system = side.system
-    k = len(cons)
-    if k == 0:
-        return None
-    largest = k - k % 2
-    sampler = PointSampler.on_M1(system, seed, modular=True)
-    for _ in range(tries):
-        try:
-            Bp = _bracket_at(sampler.point().env, W, Mx, Jq, Jv)
-        except (ZeroDivisionError, NotExact):
-            continue
-        r, rows, _ = exact_rank(Bp)
-        if r < largest:
-            continue
-        rank_d = Decision(r, "exact", f"bracket matrix of rank {r} at a random point of "
-                          f"M_f modulo the prime 2^61 - 1, the largest an antisymmetric "
-                          f"{k} x {k} matrix has (proof)", samples=1, error_bound=0.0)
-        nonzero = np.array([[bool(x) for x in row] for row in Bp], dtype=bool).reshape(k, k)
-        blocks = tuple(tuple(labels[a] for a in blk) for blk in connected_blocks(nonzero))
-        R = list(rows) if r < k else list(range(k))
-        decisions = {"rank": rank_d}
-        coeff_dicts: tuple = ()
-        if r < k:
-            (kk,) = [a for a in range(k) if a not in R]
-            coeff_dicts = (_coefficients_at_a_point(side, cons, labels, analysis, seed, R, kk,
-                                                     (W, Mx, Jq, Jv)),)
-            decisions[f"gamma[{labels[kk]}]"] = Decision(
-                True, "exact", "B_RR of rank r modulo p at the point: the combination with "
-                "coefficient 1 on this constraint and -B_RR^-1 B_Rk on R is first class (its "
-                "coefficients depend on the point)", samples=1)
-        return ConstraintClasses(
-            labels=tuple(labels), constraints_TQ=tuple(cons), constraints=None,
-            bracket_matrix=None, bracket_samples=(), rank=r, first_class=k - r,
-            second_class=r, second_class_set=tuple(labels[a] for a in R),
-            first_class_combinations=() if r == k else None,
-            combination_coefficients=coeff_dicts,
-            individually_first_class=tuple(labels[a] for a in range(k)
-                                           if not nonzero[a].any()),
-            blocks=blocks, decisions=decisions, method="exact at points", manifold=None,
-            side=side, analysis=analysis)
-    return None
-
-
-def _exact_combination(Bp, R, kk) -> list:
-    """c with c_kk = 1, c_R = -B_RR^-1 B_Rk and 0 elsewhere (B c = 0 where rank B = |R|),
-    B exact at one point (ZeroDivisionError where B_RR is singular there)."""
-    c = [0] * len(Bp)
-    c[kk] = 1
-    if R:
-        cR = exact_solve([[Bp[a][b] for b in R] for a in R], [[-Bp[a][kk]] for a in R])
-        for i, a in enumerate(R):
-            c[a] = cR[i][0]
-    return c
-
-
-def _coefficients_at_a_point(side, cons, labels, analysis, seed, R, kk, data) -> dict:
-    """The coefficients of chi_kk - sum_R (B_RR^-1 B_Rk)_a chi_a: label -> values.
-
-    At one random rational point of M_1 (exact, then rounded) up to
-    COMBINATION_MAX_N coordinates or when float points cannot be found (parameters
-    of very different sizes); beyond, at seeded float points (rational arithmetic at
-    n = 19 takes seconds a point).
-    """
-    if not R:
-        return {labels[kk]: (1.0,)}
-    mats: list = []
-    if side.system.n > COMBINATION_MAX_N:
-        try:
-            mats, _ = _float_brackets(side, cons, analysis, None, 3, seed)
-        except NhhamError:
-            pass  # no float points (parameters of very different sizes): a rational one
-    if not mats:
-        sampler = PointSampler.on_M1(side.system, seed)
-        for _ in range(MAX_POINTS):
-            try:
-                c = _exact_combination(_bracket_at(sampler.point().env, *data), R, kk)
-            except ZeroDivisionError:
-                continue
-            return {labels[a]: (float(c[a]),) for a in range(len(cons)) if c[a] != 0}
-        raise ComputationError(f"B_RR singular at {MAX_POINTS} random points of M_1 though "
-                               f"it is regular modulo p at one")
-    per_point = []
-    for S in mats:
-        c = np.zeros(len(cons))
-        c[kk] = 1.0
-        c[R] = -np.linalg.solve(S[np.ix_(R, R)], S[R, kk])
-        per_point.append(c)
-    return {labels[a]: tuple(float(c[a]) for c in per_point)
-            for a in range(len(cons)) if any(c[a] != 0 for c in per_point)}
-
-
 def _classify_lagrangian_sampled(side, cons, labels, analysis, tol, precision, samples,
                                  seed):
     """B = {chi_a, chi_b}_L at seeded float points of M_f = M_1 (no exact points).
@@ -541,47 +207,10 @@ def _classify_lagrangian_sampled(side, cons, labels, analysis, tol, precision, s
     The Lagrangian bracket needs only W, the mixed Hessian and the gradients of
     the constraints at each point (numbers), never H or Leg^-1 symbolically.
     """
-    mats, resid = _float_brackets(side, cons, analysis, precision, samples, seed)
+    mats, resid = float_brackets(side, cons, analysis, precision, samples, seed)
     return _classes_from_samples(side, tuple(sp.sympify(c) for c in cons), labels, analysis,
                                  mats, Backend(None), tol, resid,
                                  "the bracket matrix {chi_a, chi_b}_L")
-
-
-def _float_brackets(side, cons, analysis, precision, samples, seed) -> tuple:
-    """B = {chi_a, chi_b}_L (float64 arrays, k x k) at seeded float points of M_f = M_1,
-    with the points' residual."""
-    from nhham.lagrangian.geometry import lagrangian_geometry
-
-    system = side.system
-    geo = analysis.geometry if isinstance(analysis, ConstraintAnalysis) else \
-        lagrangian_geometry(system)
-    q, v = system.coordinates, system.velocities
-    cons = [sp.sympify(c) for c in cons]
-    k, n = len(cons), system.n
-    Mtq = Submanifold(system, tuple(cons), precision=precision, samples=samples, seed=seed,
-                      exact=False)
-    points, resid = Mtq.points()
-    J = sp.Matrix([jacobian_row(c, list(q) + list(v)) for c in cons])
-    fW, fM, fJ = (Mtq.evaluator(geo.hessian), Mtq.evaluator(geo.mixed_hessian),
-                  Mtq.evaluator(J))
-    mats = []
-    for pt in points:
-        Jp = np.array(fJ(pt), dtype=float).reshape(k, 2 * n)
-        B = lagrangian_bracket(FloatMatrix(Jp[:, :n]), FloatMatrix(Jp[:, n:]),
-                               FloatMatrix(fW(pt)), FloatMatrix(fM(pt)))
-        mats.append(B.a)
-    return mats, resid
-
-
-def _bracket_at(env, W, Mx, Jq, Jv):
-    """The bracket matrix {chi_a, chi_b}_L at one point (exact values, residues or
-    Degree bounds: the arithmetic of ``env``)."""
-    if not Jq:
-        return []
-    cache: dict = {}
-    Wp, Mp, Jqp, Jvp = (ListMatrix([evaluate(r, env, cache) for r in rows])
-                        for rows in (W, Mx, Jq, Jv))
-    return lagrangian_bracket(Jqp, Jvp, Wp, Mp).to_list()
 
 
 def _numerically_regular(side, precision, samples, seed, tol) -> bool:
@@ -650,7 +279,7 @@ def _classify_exact(side, cons, labels, analysis, tol):
     rank_d = Mf.rank(Br, tol=tol) if k else Decision(0, "exact", "no constraints")
     decisions["rank"] = rank_d
     r = int(rank_d.value)
-    samples_B = _sample_matrix(Mf, Br) if r else ()
+    samples_B = sample_matrix(Mf, Br) if r else ()
     R = _principal_pivots(Br, samples_B, r, tol,
                           nonzero=lambda e: not Mf.vanishes(cancel(e), tol=tol).value)
     gammas, coeff_dicts = [], []
@@ -690,7 +319,7 @@ def _all_vanish(Mf, column, tol):
     return worst or Decision(True, "exact", "no entries")
 
 
-def _sample_matrix(Mf: Submanifold, matrix: sp.Matrix):
+def sample_matrix(Mf: Submanifold, matrix: sp.Matrix):
     """numpy float matrices of ``matrix`` at M_f's sample points."""
     points, _ = Mf.points()
     args = list(Mf.variables) + list(Mf.system.parameters)
@@ -852,329 +481,3 @@ def _svals(S, be):
         return sorted((abs(x) for x in mpmath.svd_r(A, compute_uv=False)), reverse=True)
 
 
-# ---------------------------------------------------------------- Dirac
-def dirac_bracket(source, classes: ConstraintClasses | None = None, *,
-                  on_manifold: bool = False, **classify_options) -> DiracBracket:
-    """The Dirac bracket over the maximal second-class set of the final constraints.
-
-    Parameters
-    ----------
-    source : System, HamiltonianSide, ConstraintAnalysis or ConstraintClasses
-    classes : ConstraintClasses, optional
-        A classification to use (default: computed, exact mode).
-    on_manifold : bool
-        False (default): B = {chi_a, chi_b} as functions on T*Q, blocks from
-        its identically nonzero entries, so the Dirac bracket is a Poisson
-        bracket wherever B is invertible. True: B reduced on M_f and blocks
-        from the decisions on M_f (cheaper; valid on M_f only).
-    **classify_options
-        Passed to :func:`classify_constraints`.
-
-    Returns
-    -------
-    DiracBracket
-    """
-    if isinstance(source, ConstraintClasses):
-        classes = source
-    if classes is None:
-        classify_options.setdefault("method", "exact")
-        classes = classify_constraints(source, **classify_options)
-    if classes.constraints is None:
-        raise ComputationError("the Dirac bracket needs the constraints in (q, p): classify "
-                               "with method='exact'")
-    side = classes.side
-    R = list(classes.second_class_indices)
-    chi = [classes.constraints[a] for a in R]
-    if on_manifold:
-        B = classes.bracket_matrix.extract(R, R)
-        label_index = {lab: i for i, lab in enumerate(classes.second_class_set)}
-        blocks = [[label_index[lab] for lab in blk if lab in label_index]
-                  for blk in classes.blocks]
-        blocks = [b for b in blocks if b]
-        return DiracBracket(side.algebra, chi, blocks=blocks, matrix=B)
-    return DiracBracket(side.algebra, chi)
-
-
-@dataclass(frozen=True)
-class DiracProjectedReport:
-    """The Dirac-bracket flow of H against the projected field X on M_f.
-
-    Attributes
-    ----------
-    equal : bool
-        True when X_D - X vanishes on M_f (every component).
-    difference : sympy.Matrix, shape (2n, 1), or None
-        X_D - X reduced on M_f, in (q, p) (None in sampled mode).
-    dirac_field, projected_field : sympy.Matrix, shape (2n, 1), or None
-        X_D = (z -> {z, H}_D) and X = X_H + lambda^j Z_j^H on M_f (None in
-        sampled mode).
-    decisions : tuple of Decision
-        Per component of the difference: does it vanish on M_f.
-    max_abs_difference : float
-        Largest |X_D - X| at the seeded sample points of M_f (nan when compared
-        exactly modulo p at exact points: F_p has no absolute value).
-    samples : int
-    notes : tuple of str
-        Caveats (first-class constraints make the Dirac flow a gauge family).
-    classes : ConstraintClasses
-    """
-
-    equal: bool
-    difference: sp.Matrix | None
-    dirac_field: sp.Matrix | None
-    projected_field: sp.Matrix | None
-    decisions: tuple
-    max_abs_difference: float
-    samples: int
-    notes: tuple
-    classes: ConstraintClasses
-
-    def describe(self) -> str:
-        if self.equal:
-            return ("the Dirac-bracket flow of H equals the projected (nonholonomic) field on "
-                    "M_f")
-        if self.difference is None:
-            return ("the Dirac-bracket flow of H is NOT the true dynamics on M_f: "
-                    + self.decisions[0].detail)
-        comps = [f"d/d{z}: {short(d, 160)}" for z, d in zip(self.classes.side.variables,
-                                                              self.difference) if d != 0]
-        cut = any(len(str(d)) > 160 for d in self.difference)
-        return ("the Dirac-bracket flow of H is NOT the true dynamics on M_f; X_D - X = "
-                + "; ".join(comps) + f" (max |X_D - X| = {self.max_abs_difference:.3g} at "
-                f"{self.samples} sample points" + ("; whole expressions with --json or "
-                                                    "--latex)" if cut else ")"))
-
-    def to_dict(self) -> dict:
-        return {"equal": self.equal,
-                "difference": (None if self.difference is None
-                               else [str(d) for d in self.difference]),
-                "max_abs_difference": self.max_abs_difference,
-                "samples": self.samples, "notes": list(self.notes)}
-
-
-def dirac_vs_projected(system, *, precision=None, samples=6, seed=SEED,
-                       classes: ConstraintClasses | None = None, method: str = "auto",
-                       tol: float | None = None,
-                       side: HamiltonianSide | None = None) -> DiracProjectedReport:
-    """Compare the Dirac-bracket flow of H with the true (projected) dynamics on M_f.
-
-    For holonomic constraints the two agree on M_f; for truly nonholonomic
-    constraints they do not (nonholonomic dynamics is not variational). The
-    Dirac flow is taken over the maximal second-class set of the final
-    constraints. Exact mode: the difference X_D - X is reduced on M_f and
-    decided per component, and evaluated at seeded points. Sampled mode (large
-    systems): both fields are evaluated numerically at seeded points of M_f
-    and the difference is decided there (``difference`` is then None).
-
-    Parameters
-    ----------
-    system : nhham.System
-        A regular system (C^H invertible on M_1).
-    precision, samples, seed
-        Settings of the sampled decisions.
-    classes : ConstraintClasses, optional
-        A classification to use; its method decides the mode.
-    method : {"auto", "exact", "sampled"}
-        As for :func:`classify_constraints`.
-    tol : float, optional
-        Relative tolerance of sampled decisions.
-    side : HamiltonianSide, optional
-        The T*Q side of ``system`` when the caller has it.
-
-    Returns
-    -------
-    DiracProjectedReport
-    """
-    if side is None:
-        side = classes.side if classes is not None else hamiltonian_side(
-            system, precision=precision, samples=samples, seed=seed, closed_form=True)
-    if classes is None:
-        classes = classify_constraints(side, precision=precision, samples=samples, seed=seed,
-                                       method=method, tol=tol)
-    if classes.method == "exact at points" and precision is None \
-            and side.legendre.is_quadratic:
-        try:
-            return _dirac_vs_projected_at_points(side, classes, samples, seed)
-        except NotExact:
-            pass  # no exact points after all: sampled
-    if classes.method != "exact":
-        return _dirac_vs_projected_sampled(side, classes, precision, samples, seed, tol)
-    if not side.regular:
-        raise ComputationError(
-            "dirac_vs_projected: C^H is singular on M_1; the projected field is a family "
-            "(see nhham.lagrangian.algorithm) and the comparison is defined for regular systems only")
-    XD, X, diff = _fields_on_Mf(side, classes)
-    Mf = classes.manifold
-    decisions = tuple(Mf.vanishes(d, tol=tol) for d in diff)
-    reduced = sp.Matrix([0 if d.value else e for d, e in zip(decisions, diff)])
-    notes = _gauge_note(classes)
-    at, generic = _at_parameter_values(Mf, reduced, tol, side.variables)
-    if at is not None:
-        # The verdict is for the scene's values; the generic difference is a note.
-        decisions, reduced = at
-        notes += (f"X_D - X vanishes at the parameter values but not for generic values "
-                  f"({generic})",)
-    sampled = _sample_matrix(Mf, reduced) if reduced.rows else []
-    # A sample point on a singular set of the chart (the snakeboard at phi = +-pi/2)
-    # gives no value: it is left out, not reported as an infinite difference.
-    sampled = [S for S in sampled if np.all(np.isfinite(S))]
-    worst = max((float(np.max(np.abs(S))) for S in sampled), default=0.0)
-    return DiracProjectedReport(
-        equal=all(d.value for d in decisions), difference=reduced, dirac_field=XD,
-        projected_field=X, decisions=decisions, max_abs_difference=worst,
-        samples=len(sampled), notes=notes, classes=classes)
-
-
-def _at_parameter_values(Mf, reduced, tol, variables):
-    """((decisions, reduced difference) at the system's parameter values, the generic
-    difference as text) when the values make a generically nonzero X_D - X vanish;
-    else (None, None)."""
-    values = Mf.system.exact_parameter_values
-    if not values or all(e == 0 for e in reduced):
-        return None, None
-    at_values = [cancel(e.xreplace(values)) for e in reduced]
-    decisions = tuple(Mf.vanishes(e, tol=tol) for e in at_values)
-    if not all(d.value for d in decisions):
-        return None, None
-    generic = "; ".join(f"d/d{z}: {e}" for z, e in zip(variables, reduced) if e != 0)
-    return (decisions, sp.zeros(*reduced.shape)), generic
-
-
-def _gauge_note(classes) -> tuple:
-    if not classes.first_class:
-        return ()
-    return (f"{classes.first_class} first-class constraint(s): the Dirac flow is then only "
-            f"defined up to adding multiples of their Hamiltonian fields (gauge); the field "
-            f"compared is {{z, H}}_D without such terms",)
-
-
-def _dirac_minus_projected(be, num, hp, chis):
-    """X_D - X at one point of the numeric layer (``be`` arithmetic), or None where C^H
-    is singular (outside the domain of X).
-
-    X_D = X_H - X_{chi_a} (B_RR^{-1})^{ab} {chi_b, H} with X_chi = (chi_p, -chi_q),
-    X = X_H + lambda^j Z_j^H.
-    """
-    try:
-        X, _ = num.projected_field(be, hp)
-    except (np.linalg.LinAlgError, ZeroDivisionError):
-        return None
-    XD = hp.X_H.copy()
-    if chis:
-        _, Gq, Gp = num.gradients(be, hp, chis)
-        B = Gq @ Gp.T - Gp @ Gq.T
-        y = be.solve(B, Gq @ hp.Hp - Gp @ hp.Hq)
-        XD = XD - np.concatenate([Gp.T @ y, -(Gq.T @ y)])
-    return XD, X
-
-
-def _dirac_vs_projected_at_points(side, classes, samples, seed):
-    """X_D - X exactly modulo p at seeded points of M_f = M_1 (no symbolic inverse, no
-    compilation). A difference nonzero at a point proves X_D != X; zero at every
-    point is the probabilistic verdict "equal" (a nonzero rational function of the
-    drawn values vanishes at a random point of F_p with probability at most its
-    degree over p = 2^61 - 1)."""
-    system = side.system
-    be = ModularBackend()
-    R = list(classes.second_class_indices)
-    chis = [classes.constraints_TQ[a] for a in R]
-    sampler = PointSampler.on_M1(system, seed, modular=True)
-    num = side.numeric
-    used = differ = 0
-    for _ in range(2 * samples):
-        if used == samples:
-            break
-        got = _dirac_minus_projected(be, num, num.point_from_tq(be, sampler.point().env), chis)
-        if got is None:
-            continue
-        used += 1
-        differ += any(a != b for a, b in zip(*got))
-    if not used:
-        raise ComputationError("dirac_vs_projected: C^H is singular at every exact point")
-    equal = not differ
-    detail = (f"X_D - X is 0 at each of {used} exact points of M_f (arithmetic modulo "
-              f"p = 2^61 - 1)" if equal else
-              f"X_D - X is nonzero at {differ} of {used} exact points of M_f (arithmetic "
-              f"modulo p = 2^61 - 1; a proof)")
-    decision = Decision(equal, "exact at points", detail, precision=be.label, samples=used)
-    return DiracProjectedReport(
-        equal=equal, difference=None, dirac_field=None, projected_field=None,
-        decisions=(decision,), max_abs_difference=math.nan, samples=used,
-        notes=_gauge_note(classes), classes=classes)
-
-
-def _dirac_vs_projected_sampled(side, classes, precision, samples, seed, tol):
-    """X_D - X at seeded points of M_f from the numeric layer (no symbolic inverse).
-
-    X_D = X_H - X_{chi_a} (B_RR^{-1})^{ab} {chi_b, H} with X_chi = (chi_p, -chi_q),
-    X = X_H + lambda^j Z_j^H; R the maximal second-class set of ``classes``.
-    """
-    system = side.system
-    be = Backend(precision)
-    tol_ = be.default_tol() if tol is None else tol
-    R = list(classes.second_class_indices)
-    chis = [classes.constraints_TQ[a] for a in R]
-    Mtq = Submanifold(system, classes.constraints_TQ, precision=precision, samples=samples,
-                      seed=seed, exact=False)
-    points, resid = Mtq.points()
-    num = side.numeric
-    worst, worst_rel, used = 0.0, 0.0, 0
-    with be.context():
-        for x in points:
-            got = _dirac_minus_projected(be, num, num.point_from_tq(be, x), chis)
-            if got is None:
-                continue  # C singular at this point: outside the domain of X
-            XD, X = got
-            d = float(be.norm(XD - X))
-            scale = max(1.0, float(be.norm(X)), float(be.norm(XD)))
-            worst, worst_rel, used = max(worst, d), max(worst_rel, d / scale), used + 1
-    if not used:
-        raise ComputationError("dirac_vs_projected: C^H is singular at every sample point")
-    equal = worst_rel <= tol_
-    decision = Decision(
-        equal, "sampled",
-        f"largest |X_D - X| {worst:.3g} (relative {worst_rel:.3g}) at {used} seeded points "
-        f"of M_f, tolerance {tol_:g}", precision=be.label, samples=used, max_abs=worst,
-        point_residual=resid)
-    return DiracProjectedReport(
-        equal=equal, difference=None, dirac_field=None, projected_field=None,
-        decisions=(decision,), max_abs_difference=worst, samples=used,
-        notes=_gauge_note(classes), classes=classes)
-
-
-def _fields_on_Mf(side: HamiltonianSide, classes: ConstraintClasses):
-    """X_D, X and X_D - X on M_f, assembled from factors reduced on M_f first.
-
-    {z, H}_D = {z, H} - {z, chi_a} (B^{-1})^{ab} {chi_b, H} and
-    X = X_H + Z_j^H lambda^j; reducing the small factors before multiplying
-    keeps the expressions small (reducing the assembled fields is far slower).
-    """
-    Mf = classes.manifold
-    alg = side.algebra
-    R = list(classes.second_class_indices)
-    chi = [classes.constraints[a] for a in R]
-    B = classes.bracket_matrix.extract(R, R)
-    label_index = {lab: i for i, lab in enumerate(classes.second_class_set)}
-    blocks = [[label_index[lab] for lab in blk if lab in label_index] for blk in classes.blocks]
-    blocks = [b for b in blocks if b]
-    inverses = [(blk, block_inverse(B.extract(blk, blk))) for blk in blocks]
-    s = [Mf.reduce(alg.bracket(c, side.H)) for c in chi]
-    XH = [Mf.reduce(e) for e in side.X_H]
-    lam = [Mf.reduce(e) for e in side.multipliers]
-    Z = side.vertical_fields
-    XD, X, diff = [], [], []
-    for i, z in enumerate(side.variables):
-        t = [Mf.reduce(alg.bracket(z, c)) for c in chi]
-        corr = sp.S.Zero
-        for blk, inv in inverses:
-            for ia, a in enumerate(blk):
-                if t[a] == 0:
-                    continue
-                for ib, b in enumerate(blk):
-                    if inv[ia, ib] != 0 and s[b] != 0:
-                        corr += t[a] * inv[ia, ib] * s[b]
-        force = sum((Z[j, i] * lam[j] for j in range(side.m)), sp.S.Zero)
-        XD.append(cancel(XH[i] - corr))
-        X.append(cancel(XH[i] + force))
-        diff.append(cancel(-corr - force))
-    return sp.Matrix(XD), sp.Matrix(X), sp.Matrix(diff)

@@ -336,11 +336,7 @@ def _algorithm_arguments(side: HamiltonianSide, max_stages: int) -> dict:
     from nhham.system.naming import multiplier_symbol
 
     sysm = side.system
-    nh = len(sysm.holonomic)
-    # The labels of analyze_constraints: g's, then lifts ("holonomic[i].lift"),
-    # then the affine constraints.
-    labels = tuple(f"holonomic[{i}]" for i in range(nh)) + tuple(
-        f"{lab}.lift" if k < nh else lab for k, lab in enumerate(sysm.constraint_labels))
+    labels = sysm.m1_labels  # as analyze_constraints labels them
     return dict(
         base_field=side.X_H,
         vertical_fields=side.vertical_fields,

@@ -313,15 +313,9 @@ def analyze_constraints(system, *, precision: int | None = None, samples: int = 
 # ------------------------------------------------------------- blocks and merging
 def _m1_parts(system, hol_idx, phi_idx):
     """Primary constraints of M_1 with labels: g's, then the φ rows (lifts first)."""
-    labels_phi = system.constraint_labels
-    nh = len(system.holonomic)
-    exprs, labels = [], []
-    for i in hol_idx:
-        exprs.append(system.holonomic[i])
-        labels.append(f"holonomic[{i}]")
-    for p in phi_idx:
-        exprs.append(system.phi[p])
-        labels.append(f"{labels_phi[p]}.lift" if p < nh else labels_phi[p])
+    nh, names = len(system.holonomic), system.m1_labels
+    exprs = [system.holonomic[i] for i in hol_idx] + [system.phi[p] for p in phi_idx]
+    labels = [names[i] for i in hol_idx] + [names[nh + p] for p in phi_idx]
     return exprs, labels
 
 

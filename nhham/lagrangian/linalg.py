@@ -30,6 +30,7 @@ __all__ = [
     "FLOAT64",
     "FloatMatrix",
     "ListMatrix",
+    "degree_solve",
     "solve_degrees",
 ]
 
@@ -266,12 +267,10 @@ def field_solve(A: DomainMatrix, B: DomainMatrix) -> DomainMatrix:
     """A^-1 B; in floating point with partial pivoting (see :func:`field_det`).
 
     ``A`` and ``B`` of one kind: DomainMatrix (over a field), :class:`FloatMatrix`
-    (float64) or :class:`ListMatrix` (exact scalars by :func:`exact_solve`, degree
-    bounds by :func:`solve_degrees`). ZeroDivisionError where ``A`` is singular.
+    (float64) or :class:`ListMatrix` of exact scalars (:func:`exact_solve`; degree
+    bounds solve by :func:`degree_solve`). ZeroDivisionError where ``A`` is singular.
     """
     if isinstance(A, ListMatrix):
-        if any(isinstance(x, Degree) for row in A.rows for x in row):
-            return ListMatrix(solve_degrees(A.rows, B.rows))
         return ListMatrix(exact_solve(A.rows, B.rows))
     if isinstance(A, FloatMatrix):
         try:
@@ -360,6 +359,11 @@ def _solve_mod_p(A, b):
                 f = M[i][c]
                 M[i] = [(a - f * bb) % PRIME for a, bb in zip(M[i], M[c])]
     return [[ModP(x) for x in row[n:]] for row in M]
+
+
+def degree_solve(A: ListMatrix, B: ListMatrix) -> ListMatrix:
+    """The solve of the Degree arithmetic: bounds of A⁻¹ B (:func:`solve_degrees`)."""
+    return ListMatrix(solve_degrees(A.rows, B.rows))
 
 
 def solve_degrees(A, B) -> list:

@@ -265,6 +265,14 @@ class System:
         """All affine constraints phi_i: complete lifts first, then the user's."""
         return self.complete_lifts + self.constraints
 
+    @property
+    def m1_labels(self) -> tuple[str, ...]:
+        """Labels of the constraints defining M_1 = {g = 0, phi = 0}, in that order:
+        ``holonomic[i]``, then the rows of phi (lifts ``holonomic[i].lift`` first)."""
+        nh = len(self.holonomic)
+        return tuple(f"holonomic[{i}]" for i in range(nh)) + tuple(
+            f"{lab}.lift" if k < nh else lab for k, lab in enumerate(self.constraint_labels))
+
     @cached_property
     def mu(self) -> sp.Matrix:
         """The m x n matrix of one-form coefficients mu_iA(q) = d phi_i / d v^A."""

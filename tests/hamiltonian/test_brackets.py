@@ -17,7 +17,8 @@ from nhham.hamiltonian.brackets import (
     jacobiator,
     numeric_bracket_matrix,
 )
-from nhham.hamiltonian.classification import classify_constraints, dirac_bracket
+from nhham.hamiltonian.classification import classify_constraints
+from nhham.hamiltonian.dirac import dirac_bracket
 from nhham.hamiltonian.legendre import canonical_form_matrix
 
 q1, q2, p1, p2 = sp.symbols("q1 q2 p_q1 p_q2")

@@ -16,7 +16,8 @@ import nhham
 
 import handmade
 from nhham import models
-from nhham.hamiltonian.classification import classify_constraints, dirac_bracket, dirac_vs_projected
+from nhham.hamiltonian.classification import classify_constraints
+from nhham.hamiltonian.dirac import dirac_bracket, dirac_vs_projected
 from nhham.hamiltonian.side import hamiltonian_side
 
 S = sp.Symbol

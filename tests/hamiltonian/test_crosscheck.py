@@ -12,7 +12,9 @@ import sympy as sp
 from nhham import models
 from nhham.errors import InputError
 from nhham.hamiltonian.classification import classify_constraints
-from nhham.hamiltonian.crosscheck import CrossCheckReport, _ComparisonPoints, cross_check
+from nhham.hamiltonian.checks import CrossCheckReport
+from nhham.hamiltonian.comparison import ComparisonPoints
+from nhham.hamiltonian.crosscheck import cross_check
 from nhham.hamiltonian.side import HamiltonianSide, hamiltonian_side
 from nhham.hamiltonian.legendre import Backend
 
@@ -201,7 +203,7 @@ def test_a_wrong_sign_is_detected(monkeypatch):
 
 
 def test_sampler_comparison_tolerance():
-    s = _ComparisonPoints(models.rolling_disk(), (), None, 3, 1, 1e-9)
+    s = ComparisonPoints(models.rolling_disk(), (), None, 3, 1, 1e-9)
     assert s.compare([(np.array([1.0, 2.0]), np.array([1.0, 2.0 + 1e-12]))])[2]
     ab, rel, ok = s.compare([(np.array([100.0]), np.array([100.0 + 1e-6]))])
     assert not ok and ab == pytest.approx(1e-6) and rel == pytest.approx(1e-8)

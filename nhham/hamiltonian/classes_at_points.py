@@ -1,0 +1,264 @@
+"""The first/second-class split decided at exact points of M_f = M_1.
+
+The bracket matrix B_ab = {chi_a, chi_b} is evaluated through the Lagrangian bracket
+(:func:`nhham.lagrangian.formulas.lagrangian_bracket`) at random exact points: a rank
+modulo p as large as an antisymmetric matrix can have is a proof; otherwise ranks at
+rational points with the Schwartz–Zippel bound. The coefficients of the first-class
+combinations are given at points.
+"""
+
+from __future__ import annotations
+
+from typing import cast
+
+import numpy as np
+import sympy as sp
+
+from nhham.errors import ComputationError, NhhamError
+from nhham.hamiltonian.brackets import connected_blocks
+from nhham.hamiltonian.classes import ConstraintClasses
+from nhham.lagrangian.analysis import ConstraintAnalysis
+from nhham.lagrangian.domains import NotExact, evaluate, minor_degree, schwartz_zippel_bound
+from nhham.lagrangian.formulas import lagrangian_bracket
+from nhham.lagrangian.geometry import LagrangianGeometry, lagrangian_geometry
+from nhham.lagrangian.linalg import (
+    FloatMatrix,
+    ListMatrix,
+    degree_solve,
+    exact_rank,
+    exact_solve,
+    field_solve,
+)
+from nhham.lagrangian.points import PointSampler, jacobian_row
+from nhham.lagrangian.submanifold import Decision, Submanifold
+from nhham.lagrangian.tangency import MAX_POINTS, TARGET_ERROR
+
+__all__ = ["classify_at_points", "float_brackets", "COMBINATION_MAX_N"]
+
+
+def classify_at_points(side, cons, labels, analysis, seed, target=TARGET_ERROR):
+    """B_ab = {chi_a, chi_b} at random exact points of M_f = M_1, through the
+    Lagrangian bracket (the pull-back of the canonical one by Leg):
+
+        {f, g}_L = f_q . W^{-1} g_v - W^{-1} f_v . g_q - (W^{-1} f_v)^T (M - M^T) W^{-1} g_v
+
+    with M the mixed Hessian d2L/dq dv. rank B at an exact point is proved; a
+    deficiency seen at k points carries the Schwartz–Zippel bound.
+    """
+    system = side.system
+    geo = _geometry(system, analysis)
+    q, v = system.coordinates, system.velocities
+    cons = [sp.sympify(c) for c in cons]
+    k = len(cons)
+    sampler = PointSampler.on_M1(system, seed)
+    Jq = [jacobian_row(c, q) for c in cons]
+    Jv = [jacobian_row(c, v) for c in cons]
+    W = [list(geo.hessian.row(i)) for i in range(system.n)]
+    Mx = [list(geo.mixed_hessian.row(i)) for i in range(system.n)]
+    proof = _rank_modulo_p(side, cons, labels, analysis, seed, W, Mx, Jq, Jv)
+    if proof is not None:
+        return proof
+    best, count, pivots, mats, degrees, error = -1, 0, [], [], None, 0.0
+    while count < MAX_POINTS:
+        pt = sampler.point()
+        try:
+            Bp = _bracket_at(pt.env, W, Mx, Jq, Jv)
+        except ZeroDivisionError:
+            continue
+        count += 1
+        mats.append(Bp)
+        r, rows, _ = exact_rank(Bp) if k else (0, [], [])
+        if r > best:
+            best, pivots = r, rows
+        if degrees is None:
+            degrees = _bracket_at(pt.degrees, W, Mx, Jq, Jv, degrees=True)
+        if best >= k:
+            break
+        error = schwartz_zippel_bound(minor_degree(degrees, best + 1), count,
+                                      denominator_degree=sampler.denominator_degree)
+        if error < target:
+            break
+    r = best
+    if r >= k:
+        rank_d = Decision(r, "exact", f"bracket matrix of full rank {r} at an exact point of "
+                          f"M_f (proof)", samples=count, error_bound=0.0)
+    else:
+        rank_d = Decision(r, "exact at points", f"rank {r} of the bracket matrix at {count} "
+                          f"random exact points of M_f", samples=count, error_bound=error)
+    decisions = {"rank": rank_d}
+    R = list(pivots) if r else []
+    nonzero = np.zeros((k, k), dtype=bool)
+    for Bp in mats:
+        nonzero |= np.array([[x != 0 for x in row] for row in Bp], dtype=bool).reshape(k, k)
+    coeff_dicts = []
+    for kk in (i for i in range(k) if i not in R):
+        per_point = []
+        for Bp in mats:
+            per_point.append(_exact_combination(Bp, R, kk))
+        coeff_dicts.append({labels[a]: tuple(float(c[a]) for c in per_point)
+                            for a in range(k) if any(c[a] != 0 for c in per_point)})
+        decisions[f"gamma[{labels[kk]}]"] = Decision(
+            True, "exact", "B c = 0 exactly at each point (c solved from the regular block "
+            "of B at that point); the coefficients depend on the point", samples=count)
+    alone = tuple(labels[a] for a in range(k) if not nonzero[a].any())
+    blocks = tuple(tuple(labels[a] for a in blk) for blk in connected_blocks(nonzero)) if k else ()
+    cons_tq = tuple(cons)
+    return ConstraintClasses(
+        labels=tuple(labels), constraints_TQ=cons_tq, constraints=None, bracket_matrix=None,
+        bracket_samples=tuple(np.array([[float(x) for x in row] for row in Bp], dtype=float)
+                              .reshape(k, k) for Bp in mats),
+        rank=r, first_class=k - r, second_class=r,
+        second_class_set=tuple(labels[a] for a in R), first_class_combinations=None,
+        combination_coefficients=tuple(coeff_dicts), individually_first_class=alone,
+        blocks=blocks, decisions=decisions, method="exact at points", manifold=None,
+        side=side, analysis=analysis)
+
+
+#: The first-class combinations of a classification decided at points are formed in
+#: closed form up to this many coordinates (:mod:`nhham.hamiltonian.combinations`).
+COMBINATION_MAX_N = 8
+
+
+def _rank_modulo_p(side, cons, labels, analysis, seed, W, Mx, Jq, Jv, tries=3):
+    """The rank of B proved at a point over F_p where it is the largest B can have; else None.
+
+    B is antisymmetric, so its rank is at most k for k even and k - 1 for k odd. A rank
+    r modulo p at a point of M_1 is a lower bound of its rank over Q at a rational point
+    (no inverse taken was of a multiple of p), hence of its generic rank on M_1: where r
+    is that largest rank, the rank is proved. The r pivot rows R are independent, so
+    B_RR is invertible (a principal submatrix of an antisymmetric matrix on a maximal
+    independent set of rows); for k odd the one first-class combination is
+    chi_k - sum_R (B_RR^-1 B_Rk)_a chi_a, its coefficients given at seeded float points
+    of M_1 (rational arithmetic at n = 19 took 5 s a point).
+    """
+    system = side.system
+    k = len(cons)
+    if k == 0:
+        return None
+    largest = k - k % 2
+    sampler = PointSampler.on_M1(system, seed, modular=True)
+    for _ in range(tries):
+        try:
+            Bp = _bracket_at(sampler.point().env, W, Mx, Jq, Jv)
+        except (ZeroDivisionError, NotExact):
+            continue
+        r, rows, _ = exact_rank(Bp)
+        if r < largest:
+            continue
+        rank_d = Decision(r, "exact", f"bracket matrix of rank {r} at a random point of "
+                          f"M_f modulo the prime 2^61 - 1, the largest an antisymmetric "
+                          f"{k} x {k} matrix has (proof)", samples=1, error_bound=0.0)
+        nonzero = np.array([[bool(x) for x in row] for row in Bp], dtype=bool).reshape(k, k)
+        blocks = tuple(tuple(labels[a] for a in blk) for blk in connected_blocks(nonzero))
+        R = list(rows) if r < k else list(range(k))
+        decisions = {"rank": rank_d}
+        coeff_dicts: tuple = ()
+        if r < k:
+            (kk,) = [a for a in range(k) if a not in R]
+            coeff_dicts = (_coefficients_at_a_point(side, cons, labels, analysis, seed, R, kk,
+                                                     (W, Mx, Jq, Jv)),)
+            decisions[f"gamma[{labels[kk]}]"] = Decision(
+                True, "exact", "B_RR of rank r modulo p at the point: the combination with "
+                "coefficient 1 on this constraint and -B_RR^-1 B_Rk on R is first class (its "
+                "coefficients depend on the point)", samples=1)
+        return ConstraintClasses(
+            labels=tuple(labels), constraints_TQ=tuple(cons), constraints=None,
+            bracket_matrix=None, bracket_samples=(), rank=r, first_class=k - r,
+            second_class=r, second_class_set=tuple(labels[a] for a in R),
+            first_class_combinations=() if r == k else None,
+            combination_coefficients=coeff_dicts,
+            individually_first_class=tuple(labels[a] for a in range(k)
+                                           if not nonzero[a].any()),
+            blocks=blocks, decisions=decisions, method="exact at points", manifold=None,
+            side=side, analysis=analysis)
+    return None
+
+
+def _exact_combination(Bp, R, kk) -> list:
+    """c with c_kk = 1, c_R = -B_RR^-1 B_Rk and 0 elsewhere (B c = 0 where rank B = |R|),
+    B exact at one point (ZeroDivisionError where B_RR is singular there)."""
+    c = [0] * len(Bp)
+    c[kk] = 1
+    if R:
+        cR = exact_solve([[Bp[a][b] for b in R] for a in R], [[-Bp[a][kk]] for a in R])
+        for i, a in enumerate(R):
+            c[a] = cR[i][0]
+    return c
+
+
+def _coefficients_at_a_point(side, cons, labels, analysis, seed, R, kk, data) -> dict:
+    """The coefficients of chi_kk - sum_R (B_RR^-1 B_Rk)_a chi_a: label -> values.
+
+    At one random rational point of M_1 (exact, then rounded) up to
+    COMBINATION_MAX_N coordinates or when float points cannot be found (parameters
+    of very different sizes); beyond, at seeded float points (rational arithmetic at
+    n = 19 takes seconds a point).
+    """
+    if not R:
+        return {labels[kk]: (1.0,)}
+    mats: list = []
+    if side.system.n > COMBINATION_MAX_N:
+        try:
+            mats, _ = float_brackets(side, cons, analysis, None, 3, seed)
+        except NhhamError:
+            pass  # no float points (parameters of very different sizes): a rational one
+    if not mats:
+        sampler = PointSampler.on_M1(side.system, seed)
+        for _ in range(MAX_POINTS):
+            try:
+                c = _exact_combination(_bracket_at(sampler.point().env, *data), R, kk)
+            except ZeroDivisionError:
+                continue
+            return {labels[a]: (float(c[a]),) for a in range(len(cons)) if c[a] != 0}
+        raise ComputationError(f"B_RR singular at {MAX_POINTS} random points of M_1 though "
+                               f"it is regular modulo p at one")
+    per_point = []
+    for S in mats:
+        x = np.zeros(len(cons))
+        x[kk] = 1.0
+        x[R] = -np.linalg.solve(S[np.ix_(R, R)], S[R, kk])
+        per_point.append(x)
+    return {labels[a]: tuple(float(c[a]) for c in per_point)
+            for a in range(len(cons)) if any(c[a] != 0 for c in per_point)}
+
+
+def _geometry(system, analysis) -> LagrangianGeometry:
+    """The analysis' geometry (its sampling settings), else the system's shared one."""
+    if isinstance(analysis, ConstraintAnalysis):
+        return cast(LagrangianGeometry, analysis.geometry)
+    return lagrangian_geometry(system)
+
+
+def float_brackets(side, cons, analysis, precision, samples, seed) -> tuple:
+    """B = {chi_a, chi_b}_L (float64 arrays, k x k) at seeded float points of M_f = M_1,
+    with the points' residual."""
+    system = side.system
+    geo = _geometry(system, analysis)
+    q, v = system.coordinates, system.velocities
+    cons = [sp.sympify(c) for c in cons]
+    k, n = len(cons), system.n
+    Mtq = Submanifold(system, tuple(cons), precision=precision, samples=samples, seed=seed,
+                      exact=False)
+    points, resid = Mtq.points()
+    J = sp.Matrix([jacobian_row(c, list(q) + list(v)) for c in cons])
+    fW, fM, fJ = (Mtq.evaluator(geo.hessian), Mtq.evaluator(geo.mixed_hessian),
+                  Mtq.evaluator(J))
+    mats = []
+    for pt in points:
+        Jp = np.array(fJ(pt), dtype=float).reshape(k, 2 * n)
+        B = lagrangian_bracket(FloatMatrix(Jp[:, :n]), FloatMatrix(Jp[:, n:]),
+                               FloatMatrix(fW(pt)), FloatMatrix(fM(pt)))
+        mats.append(B.a)
+    return mats, resid
+
+
+def _bracket_at(env, W, Mx, Jq, Jv, degrees: bool = False):
+    """The bracket matrix {chi_a, chi_b}_L at one point (exact values or residues: the
+    arithmetic of ``env``; Degree bounds with ``degrees``)."""
+    if not Jq:
+        return []
+    cache: dict = {}
+    Wp, Mp, Jqp, Jvp = (ListMatrix([evaluate(r, env, cache) for r in rows])
+                        for rows in (W, Mx, Jq, Jv))
+    solve = degree_solve if degrees else field_solve
+    return lagrangian_bracket(Jqp, Jvp, Wp, Mp, solve=solve).to_list()
