@@ -53,7 +53,7 @@ _LAZY = {
     "LagrangianGeometry": "lagrangian.geometry",
     "DynamicsIngredients": "lagrangian.geometry",
     "Submanifold": "lagrangian.submanifold",
-    "Decision": "lagrangian.submanifold",
+    "Decision": "lagrangian.decision",
     "constant_of_motion": "lagrangian.symmetries",
     "cyclic_constants": "lagrangian.symmetries",
     "lie_symmetry": "lagrangian.symmetries",

@@ -24,6 +24,7 @@ from typing import Any
 import sympy as sp
 
 from nhham.cli import latex as tex
+from nhham.cli import trace
 
 __all__ = ["Report", "report"]
 
@@ -96,7 +97,8 @@ def report(obj) -> Report:
     Parameters
     ----------
     obj
-        ConstraintAnalysis, ConstraintClasses (from any method of
+        ConstraintAnalysis (the classification table and the algorithm's trace),
+        AlgorithmRun (the trace), ConstraintClasses (from any method of
         :func:`nhham.classify_constraints`), LagrangianGeometry,
         HamiltonianSide, CrossCheckReport, SimulationResult,
         WorkPrecisionResult, Linearization, or a sympy expression or matrix.
@@ -127,8 +129,13 @@ def report(obj) -> Report:
     if analysis is not None:
         data = R.classify_data(analysis, classes)
         title = _title(analysis.system)
-        return Report(title, R.classify_text(title, data),
+        # The table, then the trace of the algorithm (stages, decisions, evidence).
+        text = R.classify_text(title, data) + "\n\n" + trace.analysis_text(analysis)
+        return Report(title, text,
                       R.classify_latex(title, data, _parser(analysis.system)))
+    if kind == "AlgorithmRun":
+        return Report("constraint algorithm", trace.run_text(obj),
+                      trace.run_latex(obj).strip("$"))
     if kind == "LagrangianGeometry":
         system = obj.system
         data = R.derive_data("lagrangian", system.state, list(obj.projected_field),

@@ -16,7 +16,7 @@ from nhham.cli.envelope import json_number, jsonable
 from nhham.cli.report import expr_text, labelled, matrix_table, table
 from nhham.cli.layout import grid_fits as table_fits
 from nhham.cli.simplify import display_form
-from nhham.lagrangian.algorithm import Evidence
+from nhham.lagrangian.records import Evidence
 
 __all__ = [
     "classify_data", "classify_text", "classify_latex",

@@ -7,7 +7,8 @@ from dataclasses import dataclass
 import sympy as sp
 
 from nhham.hamiltonian.side import HamiltonianSide
-from nhham.lagrangian.submanifold import Decision, Submanifold
+from nhham.lagrangian.decision import Decision
+from nhham.lagrangian.submanifold import Submanifold
 
 __all__ = ["ConstraintClasses"]
 

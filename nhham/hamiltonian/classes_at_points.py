@@ -30,7 +30,8 @@ from nhham.lagrangian.linalg import (
     field_solve,
 )
 from nhham.lagrangian.points import PointSampler, jacobian_row
-from nhham.lagrangian.submanifold import Decision, Submanifold
+from nhham.lagrangian.decision import Decision
+from nhham.lagrangian.submanifold import Submanifold
 from nhham.lagrangian.tangency import MAX_POINTS, TARGET_ERROR
 
 __all__ = ["classify_at_points", "float_brackets", "COMBINATION_MAX_N"]

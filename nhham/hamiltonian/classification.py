@@ -46,7 +46,8 @@ from nhham.lagrangian.analysis import ConstraintAnalysis, analyze_constraints
 from nhham.lagrangian.domains import NotExact
 from nhham.lagrangian.linalg import exact_rank
 from nhham.lagrangian.points import PointSampler
-from nhham.lagrangian.submanifold import Decision, Submanifold
+from nhham.lagrangian.decision import Decision
+from nhham.lagrangian.submanifold import Submanifold
 from nhham.hamiltonian.classes import ConstraintClasses
 from nhham.hamiltonian.classes_at_points import (
     COMBINATION_MAX_N,

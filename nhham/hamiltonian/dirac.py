@@ -19,7 +19,8 @@ from nhham.hamiltonian.side import HamiltonianSide, hamiltonian_side
 from nhham.lagrangian.algebra import block_inverse, cancel
 from nhham.lagrangian.domains import NotExact
 from nhham.lagrangian.points import PointSampler
-from nhham.lagrangian.submanifold import Decision, Submanifold
+from nhham.lagrangian.decision import Decision
+from nhham.lagrangian.submanifold import Submanifold
 from nhham.settings import SEED
 from nhham.system.expressions import short
 

@@ -37,7 +37,8 @@ from nhham.hamiltonian.brackets import BivectorBracket, BracketAlgebra, numeric_
 from nhham.errors import ComputationError
 from nhham.hamiltonian.legendre import Backend, Lambdified, LegendreMap, canonical_form_matrix
 from nhham.lagrangian.algebra import cancel, guard_closed_form, solve_linear
-from nhham.lagrangian.submanifold import Decision, Submanifold
+from nhham.lagrangian.decision import Decision
+from nhham.lagrangian.submanifold import Submanifold
 from nhham.system.description import System
 from nhham.system.expressions import derivative
 

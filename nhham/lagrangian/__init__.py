@@ -1,8 +1,11 @@
 """The paper on TQ (Sections 2-5): the exact geometry layer.
 
-Modules: ``submanifold`` (deciding ranks and vanishing on M_k, with a
-:class:`Decision` recording how), ``geometry`` (E_L, omega_L, xi_L, Z_i, C,
-P(xi_L)), ``algorithm`` (the loop of the constraint algorithm of Section 3), ``analysis``
+Modules: ``domains``, ``linalg`` and ``formulas`` (the arithmetics, their linear
+algebra, and the paper's formulas at a point written once for all of them),
+``points`` (exact points of M_1), ``submanifold`` (deciding ranks and vanishing on M_k,
+with a :class:`Decision` (``decision``) recording how; ``sampled`` at float points),
+``geometry`` (E_L, omega_L, xi_L, Z_i, C, P(xi_L)), ``algorithm`` (the loop of the
+constraint algorithm of Section 3) with ``records`` (its stages and result), ``analysis``
 (:func:`analyze_constraints`, the Lagrangian entry point),
 ``integrability`` (Frobenius test of the constraint distribution),
 ``symmetries`` (Section 5), ``exceptional`` (the parameter values where a generic
@@ -16,7 +19,7 @@ _LAZY = {
     "LagrangianGeometry": "geometry",
     "DynamicsIngredients": "geometry",
     "Submanifold": "submanifold",
-    "Decision": "submanifold",
+    "Decision": "decision",
     "analyze_constraints": "analysis",
     "ConstraintAnalysis": "analysis",
     "run_algorithm": "algorithm",

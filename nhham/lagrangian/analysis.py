@@ -25,17 +25,11 @@ from nhham.errors import ComputationError
 from nhham.lagrangian.algebra import cancel
 from nhham.lagrangian.algorithm import (
     CLOSED_FORM_SIZE,
-    AlgorithmRun,
-    Evidence,
-    Stage,
     constraint_kind,
-    dot_names,
-    latex_summary,
     rank_drop_warnings,
-    report_lines,
     run_algorithm,
-    tangency_matrix,
 )
+from nhham.lagrangian.records import AlgorithmRun, Evidence, Stage, tangency_matrix
 from nhham.lagrangian.submanifold import Submanifold
 from nhham.settings import SEED
 from nhham.system.description import System
@@ -215,47 +209,6 @@ class ConstraintAnalysis:
         return (f"<ConstraintAnalysis of {name}: {self.status}, rank C = {self.rank_C}, "
                 f"{len(self.stages)} stage(s), {len(self.final_constraints)} final "
                 f"constraint(s), {self.free_multipliers} free multiplier(s)>")
-
-    def _repr_latex_(self) -> str:
-        """M_f and the verdict in the paper's notation (for notebooks)."""
-        return latex_summary(self.status, self.rank_C, self.final_labels,
-                             self.final_constraints, self.free_multiplier_symbols,
-                             len(self.stages), dot_names(self.system))
-
-    def report(self) -> str:
-        """Stages, ranks, decisions with their evidence, outcome, warnings."""
-        sysm = self.system
-        lines = report_lines(self, header=f"Constraint analysis of {sysm!r}", preamble=[
-            f"n = {sysm.n}, m = {sysm.m}; rank C on M_1 = {self.rank_C} "
-            f"({'regular' if self.regular else 'singular'}); options: "
-            + ", ".join(f"{k}={v}" for k, v in self.options.items())],
-            variables=2 * sysm.n)
-        if self.dropped:
-            lines.insert(1, "dropped redundant constraints: " + "; ".join(
-                f"{d.label} = " + " + ".join(f"({c})*{k}" for k, c in d.combination.items())
-                for d in self.dropped))
-        for b in self.blocks:
-            delta = b.run.denominator
-            if delta is not None and delta != 1:
-                where = f" of [{', '.join(q.name for q in b.coordinates)}]" \
-                    if len(self.blocks) > 1 else ""
-                lines.insert(1, f"tangency equations{where} multiplied by delta = {delta} "
-                             f"(det W up to factors, the denominator of W^-1): the results "
-                             f"hold where delta != 0")
-        if len(self.blocks) > 1:
-            lines.insert(1, f"{len(self.blocks)} independent blocks: " + "; ".join(
-                f"[{', '.join(q.name for q in b.coordinates)}] with "
-                f"{', '.join(b.constraint_labels) or 'no constraints'}: {b.run.status}"
-                for b in self.blocks))
-        try:
-            integ = self.integrability.describe()
-        except Exception as exc:  # pragma: no cover - report must not fail
-            integ = f"not decided ({exc})"
-        lines.append(f"integrability of the constraint distribution: {integ}")
-        return "\n".join(lines)
-
-    def __str__(self):
-        return self.report()
 
 
 def analyze_constraints(system, *, precision: int | None = None, samples: int = 6,

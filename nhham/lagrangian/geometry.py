@@ -33,7 +33,8 @@ import sympy as sp
 from nhham.settings import SEED
 from nhham.lagrangian.adjugate import ScaledInverse, scaled_inverse
 from nhham.lagrangian.algebra import guard_closed_form, solve_linear
-from nhham.lagrangian.submanifold import Decision, Submanifold
+from nhham.lagrangian.decision import Decision
+from nhham.lagrangian.submanifold import Submanifold
 from nhham.system.expressions import derivative
 from nhham.system.naming import acceleration_symbol, multiplier_symbol
 from nhham.system.description import System, quadratic_parts

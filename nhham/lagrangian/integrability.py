@@ -38,7 +38,8 @@ from nhham.lagrangian.algebra import cancel
 from nhham.lagrangian.domains import Degree, NotExact, evaluate, minor_degree, schwartz_zippel_bound
 from nhham.lagrangian.linalg import exact_rank, exact_solve
 from nhham.lagrangian.points import PointSampler, jacobian_row
-from nhham.lagrangian.submanifold import Decision, Submanifold
+from nhham.lagrangian.decision import Decision
+from nhham.lagrangian.submanifold import Submanifold
 from nhham.lagrangian.tangency import MAX_POINTS, TARGET_ERROR
 from nhham.system.expressions import short
 

@@ -46,9 +46,8 @@ the tolerance; in between the decision is doubtful and says so in
 from __future__ import annotations
 
 import contextlib
-import itertools
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from functools import cached_property
 from typing import Sequence
 
@@ -56,78 +55,28 @@ import mpmath
 import numpy as np
 import sympy as sp
 
-from nhham.settings import PARAMETER_BOX, SEED, STATE_BOX, Precision
 from nhham.errors import ComputationError, EmptySubmanifoldError
 from nhham.lagrangian.algebra import cancel, solve_linear
+from nhham.lagrangian.decision import Decision
+from nhham.lagrangian.sampled import (
+    best_block,
+    best_columns,
+    count_above,
+    equilibrated,
+    independent_rows,
+    is_affine,
+    record,
+    relative_singular_values,
+    singular_values,
+    value_scale,
+    without_noise,
+    zero_test,
+)
+from nhham.settings import PARAMETER_BOX, SEED, STATE_BOX, Precision
 from nhham.system.evaluation import numeric_function
 from nhham.system.expressions import short
 
-__all__ = ["Decision", "Submanifold"]
-
-
-@dataclass(frozen=True)
-class Decision:
-    """How a vanishing or rank question on a submanifold was answered.
-
-    Attributes
-    ----------
-    value : bool or int
-        ``True``/``False`` for "vanishes on M", or the rank for rank questions.
-    method : {"exact", "exact at points", "sampled"}
-        Exact reduction (or a rank proved at an exact point), exact evaluation at
-        random exact points (a probabilistic verdict with ``error_bound``), or
-        evaluation at floating-point sample points (``precision``).
-    detail : str
-        Human-readable evidence.
-    precision : str
-        ``"exact"``, ``"float64"`` or ``"mpmath:<digits>"``.
-    samples : int
-        Number of sample points used (0 for exact decisions).
-    max_abs : float or None
-        Largest absolute value found at the samples (vanishing questions).
-    singular_values : tuple of tuple of float
-        Singular values at each sample (rank questions).
-    point_residual : float or None
-        Largest constraint residual of the sample points.
-    warnings : tuple of str
-        Reasons to distrust the answer (rank not constant, values near the
-        tolerance).
-    points : tuple of tuple
-        The sample points of a sampled decision, each a tuple of
-        ``(variable name, float)`` pairs (rounded for the record).
-    error_bound : float or None
-        For "exact at points": the Schwartz–Zippel bound on the probability that
-        the verdict is wrong (0.0 for a proof); None for other methods.
-    """
-
-    value: object
-    method: str
-    detail: str
-    precision: str = "exact"
-    samples: int = 0
-    max_abs: float | None = None
-    singular_values: tuple = ()
-    point_residual: float | None = None
-    warnings: tuple = ()
-    points: tuple = field(default=(), compare=False)
-    error_bound: float | None = None
-
-    def __bool__(self):
-        return bool(self.value)
-
-    def describe(self) -> str:
-        """One line saying what was decided and how (with the numeric evidence)."""
-        how = self.method if self.method != "exact at points" else (
-            f"exact at {self.samples} points, error <= {self.error_bound:.1e}")
-        text = f"{self.value} ({how}, {self.precision}): {self.detail}"
-        if self.singular_values:
-            smallest = [min(sv) if sv else 0.0 for sv in self.singular_values]
-            text += f"; smallest singular value per point {_floats(smallest)}"
-        if self.point_residual is not None and self.method == "sampled":
-            text += f"; point residual <= {self.point_residual:.2g}"
-        if self.warnings:
-            text += " WARNING: " + "; ".join(self.warnings)
-        return text
+__all__ = ["Submanifold"]
 
 
 @dataclass(frozen=True)
@@ -239,7 +188,7 @@ class Submanifold:
                     break
         pending = [sp.expand(e.xreplace(sub)) for e in pending]
         pending = [e for e in pending if e != 0]
-        affine = [e for e in pending if _is_affine(e, self.fibre) and e.free_symbols & vels]
+        affine = [e for e in pending if is_affine(e, self.fibre) and e.free_symbols & vels]
         rest = [e for e in pending if e not in affine]
         vsub, leftover = self._solve_velocities(affine, sub)
         sub.update(vsub)
@@ -256,8 +205,8 @@ class Submanifold:
         mu = sp.Matrix([[sp.diff(e, v) for v in vels] for e in affine])
         rest = sp.Matrix([e.xreplace({v: 0 for v in vels}) for e in affine])
         samples = [self._numeric_matrix(mu, pt) for pt in self._raw_points(4)]
-        rows = _independent_rows(samples)
-        cols = _best_columns([S[rows] for S in samples])
+        rows = independent_rows(samples)
+        cols = best_columns([S[rows] for S in samples])
         if cols is None:
             return {}, affine
         dep = [vels[c] for c in cols]
@@ -391,7 +340,7 @@ class Submanifold:
             f = self._lambdify([reduced])
             samples = [np.array(self._matrix_at(f, pt, reduced.shape).astype(complex).real,
                                 dtype=float) for pt in points]
-        rows, cols, score = _best_block(samples, rank)
+        rows, cols, score = best_block(samples, rank)
         if rows is None:
             raise ComputationError(
                 f"no regular {rank}x{rank} block found in a matrix of rank {rank} on M")
@@ -400,12 +349,12 @@ class Submanifold:
         if points:
             return rows, cols, Decision((rows, cols), "sampled", detail,
                                         precision=self.precision_label, samples=len(points),
-                                        points=_record(points, self.variables))
+                                        points=record(points, self.variables))
         return rows, cols, Decision((rows, cols), "exact", detail + " (constant entries)")
 
     def _zero_test(self, expr):
         """Exact zero test of a reduced expression on M: (True | False | None, warning)."""
-        return _zero_test(expr, self.reduction.residual, self.system.parameters,
+        return zero_test(expr, self.reduction.residual, self.system.parameters,
                           self.system.parameter_values)
 
     def _sampled_rank(self, reduced, tol):
@@ -416,7 +365,7 @@ class Submanifold:
         Where that answer differs from the plain one (singular values over max(s_1, 1)),
         an entry could be rounding noise that equilibration blew up (a function
         vanishing on M, seen off M by the Newton projection): entries below the zero
-        level of their size (:func:`_value_scale`) are then set to 0 first.
+        level of their size (:func:`value_scale`) are then set to 0 first.
         """
         points, resid = self.points()
         f = self._lambdify([reduced])
@@ -431,23 +380,23 @@ class Submanifold:
 
     def _decide_rank(self, reduced, f, points, resid, tol, zero):
         values = [self._matrix_at(f, pt, reduced.shape) for pt in points]
-        plain = [_singular_values(S, self.precision) for S in values]
-        ranks = [_count_above(s, tol * max(float(s[0]) if len(s) else 0.0, 1.0))
+        plain = [singular_values(S, self.precision) for S in values]
+        ranks = [count_above(s, tol * max(float(s[0]) if len(s) else 0.0, 1.0))
                  for s in plain]
-        relative = [_relative(_singular_values(_equilibrated(S), self.precision))
+        relative = [relative_singular_values(singular_values(equilibrated(S), self.precision))
                     for S in values]
         how = "plain"
-        if [_count_above(s, tol) for s in relative] != ranks:
+        if [count_above(s, tol) for s in relative] != ranks:
             f_size = self._lambdify([reduced.applyfunc(
-                lambda e: _value_scale(e, self.variables))])
-            cleaned = [_without_noise(S, self._matrix_at(f_size, pt, reduced.shape), zero)
+                lambda e: value_scale(e, self.variables))])
+            cleaned = [without_noise(S, self._matrix_at(f_size, pt, reduced.shape), zero)
                        for S, pt in zip(values, points)]
-            relative = [_relative(_singular_values(_equilibrated(S), self.precision))
+            relative = [relative_singular_values(singular_values(equilibrated(S), self.precision))
                         for S in cleaned]
-            ranks = [_count_above(s, tol) for s in relative]
+            ranks = [count_above(s, tol) for s in relative]
             how = "equilibrated"
         else:
-            relative = [_relative(s, floor=1.0) for s in plain]
+            relative = [relative_singular_values(s, floor=1.0) for s in plain]
         r = max(ranks)
         warnings = []
         if len(set(ranks)) > 1:
@@ -473,7 +422,7 @@ class Submanifold:
             precision=self.precision_label, samples=len(points),
             singular_values=tuple(tuple(float(x) for x in s) for s in plain),
             point_residual=resid, warnings=tuple(warnings),
-            points=_record(points, self.variables),
+            points=record(points, self.variables),
         )
 
     def _exact_full_rank(self, reduced):
@@ -696,7 +645,7 @@ class Submanifold:
         points, resid = self.points()
         tol = self._tol(tol)
         f = self._lambdify([expr])
-        scale_f = self._lambdify([_value_scale(expr, self.variables)])
+        scale_f = self._lambdify([value_scale(expr, self.variables)])
         worst, worst_rel = 0.0, 0.0
         for pt in points:
             value = self._evaluate(f, pt)[0]
@@ -725,295 +674,7 @@ class Submanifold:
             f"largest |value| {worst:.3g} (relative {worst_rel:.3g}) at {len(points)} seeded "
             f"points, tolerance {tol:g}",
             precision=self.precision_label, samples=len(points), max_abs=worst,
-            point_residual=resid, warnings=warnings, points=_record(points, self.variables),
+            point_residual=resid, warnings=warnings, points=record(points, self.variables),
         )
 
 
-# ------------------------------------------------------------------ helpers
-def _value_scale(expr, variables):
-    """The size a value of ``expr`` at a sample point is compared with.
-
-    The expression with every sum replaced by the sum of the sizes of its terms (so no
-    cancellation can make it small), every state variable z by |z| + the half-width of
-    the sample box, and every function of the state by 1 + its modulus: a bound on the
-    terms of ``expr`` over a neighbourhood of the point, formed on the tree as it is
-    (no expansion). Unit-free, since it scales with the parameters as ``expr`` does, and
-    a function vanishing on M stays zero at a point off M by the rounding of the Newton
-    projection (q1 = 4e-16 on {q1 = 0} is 4e-16 of its size 1.3).
-    """
-    state = set(variables)
-    box = max(abs(b) for b in STATE_BOX)
-    memo: dict = {}
-
-    def modulus(e):  # unevaluated: sympy's Abs would query assumptions on large trees
-        return sp.Abs(e, evaluate=False)
-
-    def size(e):
-        if e in memo:
-            return memo[e]
-        if e.is_number:
-            out = abs(e)
-        elif e.is_Symbol:
-            out = sp.Add(modulus(e), box, evaluate=False) if e in state else modulus(e)
-        elif e.is_Add:
-            out = sp.Add(*[size(a) for a in e.args], evaluate=False)
-        elif e.is_Mul:
-            out = sp.Mul(*[size(a) for a in e.args], evaluate=False)
-        elif e.is_Pow and e.exp.is_number and e.exp > 0:
-            out = sp.Pow(size(e.base), e.exp, evaluate=False)
-        elif e.free_symbols & state:
-            # a function of the state (or a denominator): its modulus, at least 1
-            out = sp.Add(1, modulus(e), evaluate=False)
-        else:
-            out = modulus(e)
-        memo[e] = out
-        return out
-
-    return size(sp.sympify(expr))
-
-
-def _count_above(singular_values, threshold) -> int:
-    return int(sum(float(x) > threshold for x in singular_values))
-
-
-def _relative(singular_values, floor=0.0) -> tuple:
-    """Singular values over the largest (at least ``floor``)."""
-    top = max(float(singular_values[0]) if len(singular_values) else 0.0, floor)
-    return tuple(float(x) / top for x in singular_values) if top else \
-        tuple(0.0 for _ in singular_values)
-
-
-def _equilibrated(S):
-    """S with rows and columns scaled to unit largest modulus (Ruiz's iteration); zero
-    rows and columns stay zero. Works on float and on object (mpf) arrays."""
-    A = np.array(S, dtype=object if np.asarray(S).dtype == object else complex)
-    for _ in range(8):
-        for axis in (1, 0):
-            big = [max((abs(x) for x in (A[i, :] if axis else A[:, i])), default=0)
-                   for i in range(A.shape[0] if axis else A.shape[1])]
-            for i, b in enumerate(big):
-                if b:
-                    root = b ** 0.5
-                    if axis:
-                        A[i, :] = A[i, :] / root
-                    else:
-                        A[:, i] = A[:, i] / root
-    return A
-
-
-def _without_noise(S, size, zero):
-    """S with the entries below ``zero`` times their size set to 0."""
-    A = np.array(S, dtype=object if np.asarray(S).dtype == object else complex)
-    B = np.asarray(size)
-    for idx in np.ndindex(A.shape):
-        if abs(A[idx]) <= zero * abs(B[idx]):
-            A[idx] = 0
-    return A
-
-
-def _floats(values):
-    return "[" + ", ".join(f"{v:.3g}" for v in values) + "]"
-
-
-def _record(points, variables, limit=6):
-    """Sample points as tuples of (name, float) for a Decision's record."""
-    out = []
-    for pt in points[:limit]:
-        out.append(tuple((s.name, round(float(pt[s]), 12)) for s in variables))
-    return tuple(out)
-
-
-def _is_affine(expr, vels):
-    vset = set(vels)
-    return all(not sp.diff(expr, v).free_symbols & vset for v in vels)
-
-
-def _independent_rows(samples):
-    """Indices of rows independent at the sample points (greedy)."""
-    rows = []
-    for i in range(samples[0].shape[0]):
-        trial = rows + [i]
-        if max(np.linalg.matrix_rank(S[trial], tol=1e-9 * max(1.0, np.abs(S).max()))
-               for S in samples) == len(trial):
-            rows.append(i)
-    return rows
-
-
-def _best_columns(samples):
-    """Column set of a k x n matrix whose k x k block is best conditioned.
-
-    Scores every column subset (when there are few) by the worst ratio of
-    smallest to largest singular value over the samples; ties go to blocks
-    that are the same at every sample (often constant, so no division by a
-    function of q appears).
-    """
-    k, n = samples[0].shape
-    if k == 0:
-        return None
-    if math.comb(n, k) <= 400:
-        candidates = itertools.combinations(range(n), k)
-    else:
-        import scipy.linalg
-
-        candidates = {tuple(sorted(scipy.linalg.qr(S, pivoting=True)[2][:k])) for S in samples}
-    best, best_score = None, -1.0
-    for cols in candidates:
-        blocks = [S[:, cols] for S in samples]
-        ratios = []
-        for B in blocks:
-            s = np.linalg.svd(B, compute_uv=False)
-            ratios.append(s[-1] / s[0] if s[0] > 0 else 0.0)
-        constant = all(np.allclose(B, blocks[0], atol=1e-12) for B in blocks)
-        score = min(ratios) + (1.0 if constant and min(ratios) > 1e-8 else 0.0)
-        if score > best_score + 1e-12:
-            best, best_score = cols, score
-    if best_score <= 1e-10:
-        return None
-    return list(best)
-
-
-def _zero_test(expr, residual=(), parameters=(), values=None):
-    """Exact zero test of a function on M given by its reduced expression.
-
-    Sines and cosines of symbols (after ``expand_trig``) become new variables
-    s, c with s^2 + c^2 = 1. The numerator must then be a polynomial in its
-    symbols; anything else (exp, sqrt, trig of non-symbols) is undecided.
-
-    Returns
-    -------
-    verdict : True, False or None
-        True: the numerator lies in the ideal of the trig relations and the
-        ``residual`` equations (it vanishes on M). False: only when there is
-        no residual (the reduction parametrises M) and the numerator is not
-        in the ideal of the trig relations, which is prime with a Zariski
-        dense set of real points, so the function is nonzero on an open set.
-        None: undecided.
-    warning : str or None
-        Set when the verdict is False but every coefficient of the numerator
-        (as a polynomial in the state) vanishes at the given parameter values.
-    """
-    expr = sp.sympify(expr)
-    if expr == 0:
-        return True, None
-    if expr.is_number:
-        return (None, None) if expr.has(sp.nan, sp.zoo, sp.oo) else (False, None)
-    try:
-        num = sp.numer(sp.together(sp.expand_trig(expr)))
-    except Exception:  # pragma: no cover - sympy failure on exotic input
-        return None, None
-    rep, rel = {}, []
-    for atom in num.atoms(sp.Function):
-        if not atom.free_symbols:
-            continue
-        if not isinstance(atom, (sp.sin, sp.cos)) or not atom.args[0].is_Symbol:
-            return None, None
-        a = atom.args[0]
-        if sp.sin(a) not in rep:
-            s, c = sp.Dummy(f"s_{a}"), sp.Dummy(f"c_{a}")
-            rep[sp.sin(a)], rep[sp.cos(a)] = s, c
-            rel.append(s ** 2 + c ** 2 - 1)
-    num = sp.expand(num.xreplace(rep))
-    extra = []
-    for r in residual:
-        try:
-            rn = sp.numer(sp.together(sp.expand_trig(r)))
-        except Exception:  # pragma: no cover
-            return None, None
-        for atom in rn.atoms(sp.Function):
-            if atom.free_symbols and atom not in rep:
-                return None, None
-        extra.append(sp.expand(rn.xreplace(rep)))
-    polys = rel + extra
-    variables = sorted(num.free_symbols | set().union(*[p.free_symbols for p in polys]),
-                       key=sp.default_sort_key)
-    if not variables:
-        return (num == 0), None
-    try:
-        for p in polys + [num]:
-            if not p.is_polynomial(*variables):
-                return None, None
-        basis = sp.groebner(polys, *variables, order="grevlex") if extra else rel
-        remainder = sp.reduced(num, list(basis), *variables, order="grevlex")[1] \
-            if basis else num
-    except (sp.PolynomialError, sp.polys.polyerrors.PolificationFailed, TypeError, ValueError,
-            sp.polys.polyerrors.CoercionFailed):
-        return None, None
-    remainder = sp.expand(remainder)
-    if remainder == 0:
-        return True, None
-    if extra:
-        return None, None
-    return False, _parameter_warning(remainder, parameters, values or {})
-
-
-def _parameter_warning(poly_expr, parameters, values):
-    """Warn when a polynomial nonzero in the parameters vanishes at their values.
-
-    Decided exactly, with the values read as the decimals they were written as (every
-    coefficient, as a polynomial in the state, is zero there): no tolerance, so the
-    answer does not depend on the units.
-    """
-    params = [p for p in parameters if p in poly_expr.free_symbols]
-    if not params or any(p not in values for p in params):
-        return None
-    state = sorted(poly_expr.free_symbols - set(params), key=sp.default_sort_key)
-    try:
-        coeffs = sp.Poly(poly_expr, *state).coeffs() if state else [poly_expr]
-    except sp.PolynomialError:  # pragma: no cover
-        return None
-    at = {p: sp.Rational(repr(float(values[p]))) for p in params}
-    if all(sp.expand(sp.sympify(c).xreplace(at)) == 0 for c in coeffs):
-        return (f"the nonzero function {short(poly_expr)} vanishes at the given parameter "
-                f"values (exact decisions treat parameters as generic)")
-    return None
-
-
-def _best_block(samples, r):
-    """(rows, cols, score) of the best r x r block over numeric samples.
-
-    The score of a block B of A is the worst over the samples of
-    sigma_min(B) / ||A||_2, doubled for a block that is the same at every sample.
-    """
-    R, K = samples[0].shape
-    row_sets = list(itertools.combinations(range(R), r))
-    col_sets = list(itertools.combinations(range(K), r))
-    if len(row_sets) * len(col_sets) > 400:
-        import scipy.linalg
-
-        col_sets = {tuple(sorted(scipy.linalg.qr(S, pivoting=True)[2][:r])) for S in samples}
-        pairs = set()
-        for cols in col_sets:
-            for S in samples:
-                rows = tuple(sorted(scipy.linalg.qr(S[:, cols].T, pivoting=True)[2][:r]))
-                pairs.add((rows, cols))
-        candidates = sorted(pairs)
-    else:
-        candidates = [(rows, cols) for rows in row_sets for cols in col_sets]
-    norms = [max(np.linalg.norm(S, 2), 1e-300) for S in samples]
-    best, best_score, best_raw = None, -1.0, 0.0
-    for rows, cols in candidates:
-        blocks = [S[np.ix_(rows, cols)] for S in samples]
-        # sigma_min(B) / ||A||: small when B is ill-conditioned *or* small compared
-        # with the matrix (for 1 x 1 blocks this prefers the largest entry).
-        ratios = [np.linalg.svd(B, compute_uv=False)[-1] / nrm for B, nrm in zip(blocks, norms)]
-        raw = min(ratios)
-        constant = all(np.allclose(B, blocks[0], rtol=1e-12, atol=1e-14) for B in blocks)
-        score = raw * (2.0 if constant and len(blocks) > 1 else 1.0)
-        if score > best_score * (1 + 1e-9) + 1e-15:
-            best, best_score, best_raw = (list(rows), list(cols)), score, raw
-    if best is None or best_raw <= 1e-14:
-        return None, None, 0.0
-    return best[0], best[1], best_raw
-
-
-def _singular_values(S, precision):
-    if precision is None:
-        A = np.array(S, dtype=complex)
-        if np.allclose(A.imag, 0):
-            A = A.real.astype(float)
-        return np.linalg.svd(A, compute_uv=False)
-    with mpmath.workdps(precision):
-        A = mpmath.matrix([[mpmath.mpmathify(x) for x in row] for row in S])
-        s = mpmath.svd_r(A, compute_uv=False) if A.rows and A.cols else []
-        vals = sorted((abs(x) for x in s), reverse=True)
-        return vals

@@ -18,7 +18,7 @@ from dataclasses import dataclass
 
 import sympy as sp
 
-from nhham.lagrangian.submanifold import Decision
+from nhham.lagrangian.decision import Decision
 
 __all__ = [
     "ConservationTest",

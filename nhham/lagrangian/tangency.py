@@ -29,7 +29,7 @@ import sympy as sp
 from nhham.lagrangian.domains import NotExact, evaluate, minor_degree, schwartz_zippel_bound
 from nhham.lagrangian.linalg import exact_rank, exact_solve
 from nhham.lagrangian.points import PointSampler, jacobian_row
-from nhham.lagrangian.submanifold import Decision
+from nhham.lagrangian.decision import Decision
 
 __all__ = ["TangencyVerdict", "tangency_at_points", "tangency_sampled", "TARGET_ERROR"]
 

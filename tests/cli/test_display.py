@@ -67,3 +67,15 @@ def test_scene_simulate_options():
     assert opts["rtol"] == 1e-10 and opts["y0"]["theta_dot"] == 1.0
     assert scene.simulate_options(t_end=2.0, rtol=1e-6)["t_span"] == (0.0, 2.0)
     assert scene.simulate_options(rtol=1e-6)["rtol"] == 1e-6
+
+
+def test_the_trace_of_the_algorithm_is_in_the_report(disk):
+    """The stages and decisions are rendered here (nhham.cli.trace), not by the results:
+    the analysis' report carries its trace, and a bare run of the algorithm has one."""
+    analysis = nhham.analyze_constraints(disk)
+    text = str(nhham.report(analysis))
+    assert "Stage 1: M_1 defined by 2 constraint(s); rank (Z_i(chi_j)) = 2" in text
+    run = analysis.blocks[0].run
+    r = nhham.report(run)
+    assert str(r).startswith("Constraint algorithm: determined")
+    assert r._repr_latex_().startswith("$$") and r"\text{determined}" in r._repr_latex_()

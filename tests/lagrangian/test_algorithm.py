@@ -14,6 +14,7 @@ import pytest
 import sympy as sp
 
 from nhham import System
+from nhham.cli.trace import analysis_latex, analysis_text
 from nhham.lagrangian.algorithm import run_algorithm
 from nhham.lagrangian.analysis import ConstraintAnalysis, analyze_constraints
 from nhham.errors import RedundantConstraintError
@@ -296,7 +297,7 @@ def test_singular_case_secondary_leads_to_inconsistency():
     assert a.inconsistency.startswith("stage 2")
     assert "nonzero constant 1" in a.inconsistency
     assert a.dynamics is None and a.projector_P is None
-    assert "INCONSISTENT" in a.report()
+    assert "INCONSISTENT" in analysis_text(a)
 
 
 def test_condition_without_zeros_is_inconsistent():
@@ -350,7 +351,7 @@ def test_redundant_rolling_disk_reported_and_dropped():
     a = analyze_constraints(rolling_disk(third, drop=True))
     assert [d.label for d in a.dropped] == ["constraints[2]"]
     assert a.dropped[0].combination == {"constraints[0]": c, "constraints[1]": s}
-    assert "dropped redundant constraints: constraints[2]" in a.report()
+    assert "dropped redundant constraints: constraints[2]" in analysis_text(a)
     m = sp.Symbol("m")
     assert a.status == "determined" and a.regular
     assert same_vector([a.multipliers[l1], a.multipliers[l2]],
@@ -447,7 +448,7 @@ def test_stage_bound_is_reported():
     a = analyze_constraints(five_stage(), max_stages=2)
     assert not a.converged and len(a.stages) == 2
     assert any("stage bound 2 hit" in w for w in a.warnings)
-    assert "NOT CONVERGED" in a.report()
+    assert "NOT CONVERGED" in analysis_text(a)
 
 
 # ============================================= sampled versus exact decisions
@@ -492,7 +493,7 @@ def test_near_singular_case_warns_in_float64():
     f64 = analyze_constraints(s, exact=False)
     assert f64.rank_C == 1  # the float64 answer differs from the exact one ...
     assert any("near-singular" in w for w in f64.warnings)  # ... and says it is doubtful
-    assert "WARNING" in f64.report()
+    assert "WARNING" in analysis_text(f64)
     mp = analyze_constraints(s, exact=False, precision=30)
     assert mp.regular and mp.status == "determined" and mp.warnings == ()
 
@@ -510,11 +511,11 @@ def test_rank_drop_on_M1_is_warned_with_location():
 
 
 def test_report_prints_stages_ranks_and_evidence():
-    text = str(analyze_constraints(ex32()))
+    text = analysis_text(analyze_constraints(ex32()))
     for piece in ["Stage 1", "Stage 2", "Stage 3", "rank (Z_i(chi_j)) = 1", "secondary[1]",
                   "(exact, exact)", "lambda_1 = q1", "integrab"]:
         assert piece in text
-    sampled = analyze_constraints(ex32(), exact=False, precision=30).report()
+    sampled = analysis_text(analyze_constraints(ex32(), exact=False, precision=30))
     assert "sampled, mpmath:30" in sampled and "seeded points" in sampled
 
 
@@ -523,5 +524,5 @@ def test_compact_repr_and_latex_of_the_analysis():
 
     a = analyze_constraints(rolling_disk(symbolic=True))
     assert len(repr(a)) < 200 and "determined" in repr(a)
-    tex = a._repr_latex_()
+    tex = analysis_latex(a)
     assert tex.startswith("$$") and r"\dot{x}" in tex and r"\dot{\phi}" in tex

@@ -8,7 +8,8 @@ import pytest
 import sympy as sp
 
 from nhham import System
-from nhham.lagrangian.submanifold import Decision, Submanifold
+from nhham.lagrangian.decision import Decision
+from nhham.lagrangian.submanifold import Submanifold
 
 q1, q2, q3 = sp.symbols("q1 q2 q3")
 v1, v2, v3 = sp.symbols("q1_dot q2_dot q3_dot")

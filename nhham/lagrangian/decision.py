@@ -1,0 +1,83 @@
+"""How a rank or a vanishing on M_k was decided: the Decision record.
+
+Every decision of the exact layers names its method (``exact``, ``exact at points``,
+``sampled``), its precision, the points it used and its error bound, so a verdict can say
+how far it can be trusted.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+
+
+__all__ = ["Decision"]
+
+
+@dataclass(frozen=True)
+class Decision:
+    """How a vanishing or rank question on a submanifold was answered.
+
+    Attributes
+    ----------
+    value : bool or int
+        ``True``/``False`` for "vanishes on M", or the rank for rank questions.
+    method : {"exact", "exact at points", "sampled"}
+        Exact reduction (or a rank proved at an exact point), exact evaluation at
+        random exact points (a probabilistic verdict with ``error_bound``), or
+        evaluation at floating-point sample points (``precision``).
+    detail : str
+        Human-readable evidence.
+    precision : str
+        ``"exact"``, ``"float64"`` or ``"mpmath:<digits>"``.
+    samples : int
+        Number of sample points used (0 for exact decisions).
+    max_abs : float or None
+        Largest absolute value found at the samples (vanishing questions).
+    singular_values : tuple of tuple of float
+        Singular values at each sample (rank questions).
+    point_residual : float or None
+        Largest constraint residual of the sample points.
+    warnings : tuple of str
+        Reasons to distrust the answer (rank not constant, values near the
+        tolerance).
+    points : tuple of tuple
+        The sample points of a sampled decision, each a tuple of
+        ``(variable name, float)`` pairs (rounded for the record).
+    error_bound : float or None
+        For "exact at points": the Schwartz–Zippel bound on the probability that
+        the verdict is wrong (0.0 for a proof); None for other methods.
+    """
+
+    value: object
+    method: str
+    detail: str
+    precision: str = "exact"
+    samples: int = 0
+    max_abs: float | None = None
+    singular_values: tuple = ()
+    point_residual: float | None = None
+    warnings: tuple = ()
+    points: tuple = field(default=(), compare=False)
+    error_bound: float | None = None
+
+    def __bool__(self):
+        return bool(self.value)
+
+    def describe(self) -> str:
+        """One line saying what was decided and how (with the numeric evidence)."""
+        how = self.method if self.method != "exact at points" else (
+            f"exact at {self.samples} points, error <= {self.error_bound:.1e}")
+        text = f"{self.value} ({how}, {self.precision}): {self.detail}"
+        if self.singular_values:
+            smallest = [min(sv) if sv else 0.0 for sv in self.singular_values]
+            text += f"; smallest singular value per point {_floats(smallest)}"
+        if self.point_residual is not None and self.method == "sampled":
+            text += f"; point residual <= {self.point_residual:.2g}"
+        if self.warnings:
+            text += " WARNING: " + "; ".join(self.warnings)
+        return text
+
+
+def _floats(values):
+    return "[" + ", ".join(f"{v:.3g}" for v in values) + "]"
