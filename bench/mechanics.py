@@ -28,7 +28,7 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "examples"))
 
-from nhham.cli.linearize import linearize_scene  # noqa: E402
+from nhham.cli.linearize_command import linearize_scene  # noqa: E402
 from nhham.numerics.codegen import numeric_model  # noqa: E402
 from nhham.numerics.integrate import simulate  # noqa: E402
 from nhham.system.scene import load_scene  # noqa: E402

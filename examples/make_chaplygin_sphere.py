@@ -28,7 +28,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from scene_output import write_scene  # noqa: E402
 from nhham.system.mechanics import from_mechanics  # noqa: E402
-from nhham.system.scene import dump_scene  # noqa: E402
+from nhham.system.scene_dump import dump_scene  # noqa: E402
 
 VALUES = {"m": 1.0, "r": 0.5, "I1": 0.08, "I2": 0.1, "I3": 0.12}
 

@@ -37,7 +37,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from scene_output import write_scene  # noqa: E402
 from nhham.system.description import System  # noqa: E402
 from nhham.system.mechanics import from_mechanics  # noqa: E402
-from nhham.system.scene import dump_scene  # noqa: E402
+from nhham.system.scene_dump import dump_scene  # noqa: E402
 
 VALUES = {"mc": 4.0, "Ic": 0.08, "mw": 0.3, "Iw": 0.0015, "Id": 0.001, "r": 0.1, "b": 0.15,
           "d": 0.05, "w": 5.0}

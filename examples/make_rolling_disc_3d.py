@@ -30,7 +30,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from scene_output import write_scene  # noqa: E402
 from nhham.system.mechanics import from_mechanics  # noqa: E402
-from nhham.system.scene import dump_scene  # noqa: E402
+from nhham.system.scene_dump import dump_scene  # noqa: E402
 
 VALUES = {"g": 9.81, "r": 0.26, "m": 3.43}   # test_kane5.py's numbers
 

@@ -80,7 +80,7 @@ def scene_text(N):
     state = initial_state(N)
     check_initial(system, state)
     try:
-        from nhham.system.scene import dump_scene
+        from nhham.system.scene_dump import dump_scene
     except ImportError:  # scene.py not there yet: write the TOML here
         body = _dump(system, state)
     else:

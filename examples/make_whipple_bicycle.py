@@ -57,7 +57,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from scene_output import write_scene  # noqa: E402
 from nhham.system.description import System, quadratic_parts  # noqa: E402
 from nhham.system.mechanics import from_mechanics  # noqa: E402
-from nhham.system.scene import dump_scene  # noqa: E402
+from nhham.system.scene_dump import dump_scene  # noqa: E402
 
 #: Benchmark values (Meijaard et al. 2007, Table 1), converted to the
 #: parameterisation of sympy's test_kane3.py exactly as that test does.

@@ -93,16 +93,16 @@ _LAZY = {
     # a bound on the time of a computation (the command's --budget)
     "time_budget": "budget",
     # stability of steady motions
-    "linearize": "numerics.linearize",
-    "Linearization": "numerics.linearize",
-    "sweep_steady": "numerics.linearize",
-    "Sweep": "numerics.linearize",
-    "linearize_scene": "cli.linearize",
-    "plot_root_locus": "cli.linearize",
+    "linearize": "numerics.linearization",
+    "Linearization": "numerics.linearization",
+    "sweep_steady": "numerics.steady_sweep",
+    "Sweep": "numerics.steady_sweep",
+    "linearize_scene": "cli.linearize_command",
+    "plot_root_locus": "cli.linearize_command",
     # input and output
     "load_scene": "system.scene",
     "loads_scene": "system.scene",
-    "dump_scene": "system.scene",
+    "dump_scene": "system.scene_dump",
     "Scene": "system.scene",
     "parse_expression": "system.expressions",
     "from_mechanics": "system.mechanics",

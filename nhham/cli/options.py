@@ -105,7 +105,7 @@ def check_options(args: argparse.Namespace) -> None:
                 problems.append(f"--{key}: {problem}")
     sweep = getattr(args, "sweep", None)
     if sweep is not None:
-        from nhham.cli.linearize import parse_sweep
+        from nhham.cli.linearize_command import parse_sweep
 
         try:
             parse_sweep(sweep)

@@ -63,8 +63,7 @@ from nhham.lagrangian.linalg import (
     field_solve,
     maximal_minors,
 )
-from nhham.lagrangian.points import eliminate_coordinates, jacobian_row
-from nhham.lagrangian.submanifold import Submanifold
+from nhham.lagrangian.points import DRAW_BITS, ParameterFieldSampler, jacobian_row
 from nhham.settings import SEED
 from nhham.system.expressions import short
 
@@ -79,10 +78,6 @@ __all__ = [
 # Exact points per decision (each a proof of non-vanishing; the gcd of the values at
 # several points gives the content of the function in the parameters).
 POINTS = 3
-# Size of the random state values: small numbers keep the arithmetic in Q(p) cheap. A
-# value can only add a spurious factor to the gcd of the values (never hide a true
-# component), and every component is verified by running the classification on it.
-DRAW_BITS = 16
 # Plain classification names the condition its values satisfy (symbolically) up to this
 # n + m; beyond, the parameters involved are substituted by their values.
 # Whether a datum vanishes at the values is decided modulo p first (nonzero there is a
@@ -96,7 +91,6 @@ SHIFT_FIELD = RealField(200)
 FLOAT_MARGIN = 1e4
 # Beyond this many maximal minors of mu, the m (n - m) + 1 next to the pivot block.
 MAX_MINORS = 120
-
 
 
 @dataclass(frozen=True)
@@ -116,7 +110,6 @@ class Condition:
 
     def describe(self) -> str:
         return ", ".join(f"{short(e)} = 0" for e in self.equations)
-
 
 
 def exceptional_conditions(analysis: ConstraintAnalysis, parameters: Sequence | None = None,
@@ -143,118 +136,6 @@ def exceptional_conditions(analysis: ConstraintAnalysis, parameters: Sequence | 
     if not params:
         return ()
     return exceptional_components(ExceptionalData(system, analysis, seed, points).symbolic(params), params)
-
-
-# ============================================================ exact evaluation
-class ParameterFieldSampler:
-    """Random exact points of M = {equations = 0} with parameters as field generators.
-
-    M_1 without holonomic constraints: coordinates drawn, dependent velocities solved
-    at the point over Q(p). Otherwise the exact reduction of
-    :class:`~nhham.lagrangian.submanifold.Submanifold` is evaluated at the point
-    (NotExact when it leaves residual equations).
-    """
-
-    def __init__(self, system, equations, env0, K, rng):
-        self.q, self.v = tuple(system.coordinates), tuple(system.velocities)
-        self.env0, self.K, self.rng = env0, K, rng
-        eqs = tuple(sp.sympify(e) for e in equations)
-        phis = set(system.phi)
-        self.affine = not system.holonomic and all(e in phis for e in eqs)
-        self.dep = None
-        if self.affine:
-            self.mu = [jacobian_row(e, self.v) for e in eqs]
-            self.h = [e.xreplace({x: 0 for x in self.v}) for e in eqs]
-        else:
-            # The cheap test first: the symbolic reduction of a large M_k with a holonomic
-            # constraint no coordinate can be solved from linearly takes minutes, to end
-            # in the same NotExact.
-            eliminate_coordinates(self.q, system.holonomic)
-            red = Submanifold(system, eqs).reduction
-            if red.residual:
-                raise NotExact("M_k is not parametrised by the exact reduction (residual "
-                               "equations " + ", ".join(short(r) for r in red.residual) + ")")
-            self.sub = red.substitution
-
-    def _draw(self):
-        return MPQ(self.rng.randint(1, 2 ** DRAW_BITS))
-
-    def _angle(self):
-        t = self._draw()
-        one = 1 + t * t
-        return Angle(self._draw(), (1 - t * t) / one, 2 * t / one)
-
-    def point(self) -> dict:
-        for _ in range(20):
-            try:
-                return self._point()
-            except ZeroDivisionError:
-                continue
-        raise NotExact("no exact point found (denominators vanish at every point tried)")
-
-    def _point(self):
-        env, K = dict(self.env0), self.K
-        if self.affine:
-            for q in self.q:
-                env[q] = self._angle()
-            if not self.mu:
-                for x in self.v:
-                    env[x] = self._draw()
-                return env
-            cache = {}
-            mu = [[K.convert(x) for x in evaluate(r, env, cache)] for r in self.mu]
-            h = [K.convert(x) for x in evaluate(self.h, env, cache)]
-            m, n = len(mu), len(self.v)
-            if self.dep is None:
-                _, piv = DomainMatrix(mu, (m, n), K).rref()
-                if len(piv) < m:
-                    raise NotExact("the affine constraints are dependent at a random point")
-                self.dep = tuple(piv)
-            free = [i for i in range(n) if i not in self.dep]
-            for i in free:
-                env[self.v[i]] = self._draw()
-            block = DomainMatrix([[row[j] for j in self.dep] for row in mu], (m, m), K)
-            rhs = DomainMatrix([[-(h[k] + sum((mu[k][i] * K.convert(env[self.v[i]])
-                                               for i in free), K.zero))] for k in range(m)],
-                               (m, 1), K)
-            try:
-                sol = block.lu_solve(rhs).to_list()
-            except Exception as exc:  # singular at this point: draw again
-                raise ZeroDivisionError(str(exc)) from exc
-            for pos, j in enumerate(self.dep):
-                env[self.v[j]] = sol[pos][0]
-            return env
-        for q in self.q:
-            if q not in self.sub:
-                env[q] = self._angle()
-        for x in self.v:
-            if x not in self.sub:
-                env[x] = self._draw()
-        cache = {}
-        for q in self.q:
-            if q in self.sub:
-                env[q] = _coordinate_value(self.sub[q], env, cache)
-        for x in self.v:
-            if x in self.sub:
-                env[x], = evaluate([self.sub[x]], env, cache)
-        return env
-
-
-def _coordinate_value(expr, env, cache):
-    """A solved coordinate's value: an Angle when it is an integer combination of
-    drawn coordinates (so sin/cos of it stay exact), else its value."""
-    expr = sp.expand(expr)
-    if expr == 0:
-        return Angle(0, 1, 0)
-    terms = expr.as_coefficients_dict()
-    if all(isinstance(s, sp.Symbol) and isinstance(env.get(s), Angle) and c.is_Integer
-           for s, c in terms.items()):
-        out = Angle(0, 1, 0)
-        for s, c in terms.items():
-            out = out + env[s] * int(c)
-        return out
-    value, = evaluate([expr], env, cache)
-    return value
 
 
 class ExceptionalData:

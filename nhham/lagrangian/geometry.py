@@ -37,7 +37,8 @@ from nhham.lagrangian.decision import Decision
 from nhham.lagrangian.submanifold import Submanifold
 from nhham.system.expressions import derivative
 from nhham.system.naming import acceleration_symbol, multiplier_symbol
-from nhham.system.description import System, quadratic_parts
+from nhham.system.description import System
+from nhham.system.velocities import quadratic_parts
 
 __all__ = ["LagrangianGeometry", "lagrangian_geometry", "DynamicsIngredients"]
 

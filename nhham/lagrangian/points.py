@@ -25,6 +25,7 @@ from dataclasses import dataclass
 
 import sympy as sp
 from sympy.external.gmpy import MPQ
+from sympy.polys.matrices import DomainMatrix
 
 from nhham.lagrangian.domains import (
     PRIME,
@@ -37,9 +38,17 @@ from nhham.lagrangian.domains import (
     minor_degree,
 )
 from nhham.lagrangian.linalg import exact_rank, exact_solve
-from nhham.system.expressions import derivative
+from nhham.lagrangian.submanifold import Submanifold
+from nhham.system.expressions import derivative, short
 
-__all__ = ["ExactPoint", "PointSampler", "jacobian_row", "eliminate_coordinates"]
+__all__ = [
+    "ExactPoint",
+    "PointSampler",
+    "ParameterFieldSampler",
+    "jacobian_row",
+    "eliminate_coordinates",
+    "DRAW_BITS",
+]
 
 
 # ------------------------------------------------------------------ points
@@ -229,3 +238,122 @@ def eliminate_coordinates(coordinates, holonomic) -> dict:
             raise NotExact(f"the holonomic constraint {g} = 0 is not linear in a coordinate "
                            f"with a constant coefficient")
     return solved
+
+
+# ----------------------------------------------- points over the parameter field
+# Size of the random state values: small numbers keep the arithmetic in Q(p) cheap. A
+# value can only add a spurious factor to the gcd of the values (never hide a true
+# component), and every component is verified by running the classification on it.
+DRAW_BITS = 16
+
+
+# ============================================================ exact evaluation
+class ParameterFieldSampler:
+    """Random exact points of M = {equations = 0} with parameters as field generators.
+
+    M_1 without holonomic constraints: coordinates drawn, dependent velocities solved
+    at the point over Q(p). Otherwise the exact reduction of
+    :class:`~nhham.lagrangian.submanifold.Submanifold` is evaluated at the point
+    (NotExact when it leaves residual equations).
+    """
+
+    def __init__(self, system, equations, env0, K, rng):
+        self.q, self.v = tuple(system.coordinates), tuple(system.velocities)
+        self.env0, self.K, self.rng = env0, K, rng
+        eqs = tuple(sp.sympify(e) for e in equations)
+        phis = set(system.phi)
+        self.affine = not system.holonomic and all(e in phis for e in eqs)
+        self.dep = None
+        if self.affine:
+            self.mu = [jacobian_row(e, self.v) for e in eqs]
+            self.h = [e.xreplace({x: 0 for x in self.v}) for e in eqs]
+        else:
+            # The cheap test first: the symbolic reduction of a large M_k with a holonomic
+            # constraint no coordinate can be solved from linearly takes minutes, to end
+            # in the same NotExact.
+            eliminate_coordinates(self.q, system.holonomic)
+            red = Submanifold(system, eqs).reduction
+            if red.residual:
+                raise NotExact("M_k is not parametrised by the exact reduction (residual "
+                               "equations " + ", ".join(short(r) for r in red.residual) + ")")
+            self.sub = red.substitution
+
+    def _draw(self):
+        return MPQ(self.rng.randint(1, 2 ** DRAW_BITS))
+
+    def _angle(self):
+        t = self._draw()
+        one = 1 + t * t
+        return Angle(self._draw(), (1 - t * t) / one, 2 * t / one)
+
+    def point(self) -> dict:
+        for _ in range(20):
+            try:
+                return self._point()
+            except ZeroDivisionError:
+                continue
+        raise NotExact("no exact point found (denominators vanish at every point tried)")
+
+    def _point(self):
+        env, K = dict(self.env0), self.K
+        if self.affine:
+            for q in self.q:
+                env[q] = self._angle()
+            if not self.mu:
+                for x in self.v:
+                    env[x] = self._draw()
+                return env
+            cache = {}
+            mu = [[K.convert(x) for x in evaluate(r, env, cache)] for r in self.mu]
+            h = [K.convert(x) for x in evaluate(self.h, env, cache)]
+            m, n = len(mu), len(self.v)
+            if self.dep is None:
+                _, piv = DomainMatrix(mu, (m, n), K).rref()
+                if len(piv) < m:
+                    raise NotExact("the affine constraints are dependent at a random point")
+                self.dep = tuple(piv)
+            free = [i for i in range(n) if i not in self.dep]
+            for i in free:
+                env[self.v[i]] = self._draw()
+            block = DomainMatrix([[row[j] for j in self.dep] for row in mu], (m, m), K)
+            rhs = DomainMatrix([[-(h[k] + sum((mu[k][i] * K.convert(env[self.v[i]])
+                                               for i in free), K.zero))] for k in range(m)],
+                               (m, 1), K)
+            try:
+                sol = block.lu_solve(rhs).to_list()
+            except Exception as exc:  # singular at this point: draw again
+                raise ZeroDivisionError(str(exc)) from exc
+            for pos, j in enumerate(self.dep):
+                env[self.v[j]] = sol[pos][0]
+            return env
+        for q in self.q:
+            if q not in self.sub:
+                env[q] = self._angle()
+        for x in self.v:
+            if x not in self.sub:
+                env[x] = self._draw()
+        cache = {}
+        for q in self.q:
+            if q in self.sub:
+                env[q] = _coordinate_value(self.sub[q], env, cache)
+        for x in self.v:
+            if x in self.sub:
+                env[x], = evaluate([self.sub[x]], env, cache)
+        return env
+
+
+def _coordinate_value(expr, env, cache):
+    """A solved coordinate's value: an Angle when it is an integer combination of
+    drawn coordinates (so sin/cos of it stay exact), else its value."""
+    expr = sp.expand(expr)
+    if expr == 0:
+        return Angle(0, 1, 0)
+    terms = expr.as_coefficients_dict()
+    if all(isinstance(s, sp.Symbol) and isinstance(env.get(s), Angle) and c.is_Integer
+           for s, c in terms.items()):
+        out = Angle(0, 1, 0)
+        for s, c in terms.items():
+            out = out + env[s] * int(c)
+        return out
+    value, = evaluate([expr], env, cache)
+    return value

@@ -18,7 +18,7 @@ _LAZY = {
     "to_text": "expressions",
     "load_scene": "scene",
     "loads_scene": "scene",
-    "dump_scene": "scene",
+    "dump_scene": "scene_dump",
     "Scene": "scene",
     "from_mechanics": "mechanics",
     "from_lagranges_method": "mechanics",

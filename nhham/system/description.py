@@ -33,8 +33,9 @@ from nhham.settings import PARAMETER_BOX, STATE_BOX
 from nhham.system.naming import as_symbol, velocity_symbol
 from nhham.system.rank import float_rank, precise_ranks
 from nhham.system.screening import coordinate_symbols, expression_problems
+from nhham.system.velocities import QuadraticParts, non_affine_terms, one_forms, quadratic_parts
 
-__all__ = ["System", "DroppedConstraint", "QuadraticParts", "quadratic_parts", "velocity_polynomial"]
+__all__ = ["System", "DroppedConstraint"]
 
 # Random points used for generic-rank decisions are drawn from this seed so
 # that validation is reproducible run to run.
@@ -60,25 +61,6 @@ class DroppedConstraint:
     label: str
     expression: sp.Expr
     combination: Mapping[str, sp.Expr]
-
-
-@dataclass(frozen=True)
-class QuadraticParts:
-    """L = v^T W(q) v / 2 + b(q) . v - V(q), read from the terms of L.
-
-    Attributes
-    ----------
-    W : sympy.ImmutableMatrix, shape (n, n)
-        d2L/dv^A dv^B (free of velocities).
-    b : tuple of sympy.Expr, length n
-        The coefficients of the terms linear in the velocities.
-    V : sympy.Expr
-        Minus the velocity-free part of L.
-    """
-
-    W: sp.ImmutableMatrix
-    b: tuple
-    V: sp.Expr
 
 
 class System:
@@ -180,7 +162,7 @@ class System:
 
         nonaffine = []
         for i, c in enumerate(cons):
-            bad = _non_affine_terms(c, vels)
+            bad = non_affine_terms(c, vels)
             if bad:
                 nonaffine.append(
                     f"constraints[{i}]: {c} is not affine in the velocities "
@@ -276,7 +258,7 @@ class System:
     @cached_property
     def mu(self) -> sp.Matrix:
         """The m x n matrix of one-form coefficients mu_iA(q) = d phi_i / d v^A."""
-        return _one_forms(self.phi, self.velocities) if self.phi else sp.zeros(0, self.n)
+        return one_forms(self.phi, self.velocities) if self.phi else sp.zeros(0, self.n)
 
     @cached_property
     def h(self) -> sp.Matrix:
@@ -332,126 +314,6 @@ class System:
                 f"parameters: no numeric value for {', '.join(missing)} (needed for numbers)"
             )
         return dict(self.parameter_values)
-
-
-# ------------------------------------------------- polynomial structure in v
-class _NotPolynomial(Exception):
-    """Raised inside :func:`velocity_polynomial` when the structure does not fit."""
-
-
-def velocity_polynomial(expr, velocities, max_degree: int = 2):
-    """The coefficients of ``expr`` as a polynomial in the velocities, or None.
-
-    One pass over the expression tree: sums and products are distributed only
-    where a velocity is involved, so velocity-free factors (sin, cos, sums in
-    q) stay as they are and nothing is differentiated or fully expanded.
-
-    Parameters
-    ----------
-    expr : sympy.Expr
-    velocities : sequence of sympy.Symbol
-    max_degree : int
-        Largest total degree accepted.
-
-    Returns
-    -------
-    dict or None
-        ``{key: coefficient}`` where ``key`` is the sorted tuple of velocity
-        indices of the monomial (``()``, ``(A,)``, ``(A, C)``, ...), with
-        coefficients free of the velocities and structurally nonzero; None
-        when ``expr`` is not structurally such a polynomial (a velocity inside
-        a function, a negative or fractional power of a velocity, or a product
-        of degree > ``max_degree`` before cancellation), so the caller falls
-        back to differentiation.
-    """
-    vidx = {v: i for i, v in enumerate(velocities)}
-    try:
-        terms = _poly(sp.sympify(expr), vidx, max_degree)
-    except _NotPolynomial:
-        return None
-    out = {}
-    for key, summands in terms.items():
-        c = sp.Add(*summands)
-        if c != 0:
-            out[key] = c
-    return out
-
-
-def _poly(expr, vidx, max_degree):
-    """{monomial key: list of summands of its coefficient}."""
-    if not (expr.free_symbols & vidx.keys()):
-        return {(): [expr]}
-    if expr.is_Symbol:
-        return {(vidx[expr],): [sp.S.One]}
-    if expr.is_Add:
-        out: dict = {}
-        for a in expr.args:
-            for key, summands in _poly(a, vidx, max_degree).items():
-                out.setdefault(key, []).extend(summands)
-        return out
-    if expr.is_Mul:
-        cur = {(): [sp.S.One]}
-        for a in expr.args:
-            cur = _poly_mul(cur, _poly(a, vidx, max_degree), max_degree)
-        return cur
-    if expr.is_Pow and expr.exp.is_Integer and expr.exp > 0 and expr.exp <= max_degree:
-        base = _poly(expr.base, vidx, max_degree)
-        cur = base
-        for _ in range(int(expr.exp) - 1):
-            cur = _poly_mul(cur, base, max_degree)
-        return cur
-    raise _NotPolynomial
-
-
-def _poly_mul(p1, p2, max_degree):
-    out: dict = {}
-    for k1, c1 in p1.items():
-        for k2, c2 in p2.items():
-            if len(k1) + len(k2) > max_degree:
-                raise _NotPolynomial
-            lst = out.setdefault(tuple(sorted(k1 + k2)), [])
-            lst.extend(a * b for a in c1 for b in c2)
-    return out
-
-
-def quadratic_parts(lagrangian, velocities) -> QuadraticParts | None:
-    """W, b, V of L = v^T W v / 2 + b . v - V(q), read from the terms of L.
-
-    Returns None when L is not structurally of degree <= 2 in the velocities
-    (see :func:`velocity_polynomial`); W, b and V are then undefined and the
-    callers differentiate L instead.
-    """
-    poly = velocity_polynomial(lagrangian, velocities, 2)
-    if poly is None:
-        return None
-    n = len(velocities)
-    W = [[sp.S.Zero] * n for _ in range(n)]
-    b = [sp.S.Zero] * n
-    V = sp.S.Zero
-    for key, c in poly.items():
-        if len(key) == 2:
-            A, C = key
-            if A == C:
-                W[A][A] = 2 * c
-            else:
-                W[A][C] = W[C][A] = c
-        elif len(key) == 1:
-            b[key[0]] = c
-        else:
-            V = -c
-    return QuadraticParts(sp.ImmutableMatrix(W), tuple(b), V)
-
-
-def _one_forms(rows, vels) -> sp.Matrix:
-    """mu_iA = d phi_i / d v^A, read from the terms of affine phi_i when possible."""
-    out = []
-    for f in rows:
-        poly = velocity_polynomial(f, vels, 1)
-        if poly is None:
-            out.append([sp.diff(f, v) for v in vels])
-        else:
-            out.append([poly.get((A,), sp.S.Zero) for A in range(len(vels))])
-    return sp.Matrix(out)
 
 
 # ----------------------------------------------------- numeric sample values
@@ -586,8 +448,8 @@ def _normalise_parameters(parameters, problems):
 def _to_expr(value, table, label, problems):
     """Turn user input into a sympy expression; strings go through the safe parser."""
     if isinstance(value, str):
-        from nhham.system.expressions import parse_expression
         from nhham.errors import ParseError
+        from nhham.system.expressions import parse_expression
 
         try:
             return parse_expression(value, table, where=label)
@@ -603,24 +465,6 @@ def _to_expr(value, table, label, problems):
         return value.xreplace(subs) if subs else value
     problems.append(f"{label}: expected an expression, got {type(value).__name__} {value!r}")
     return sp.S.Zero
-
-
-def _non_affine_terms(expr, vels):
-    """Terms of ``expr`` whose velocity derivatives still involve velocities."""
-    poly = velocity_polynomial(expr, vels, 1)
-    if poly is not None and not expr.has(sp.Derivative):
-        return []  # a polynomial of degree <= 1 in v: no term can be offending
-    vset = set(vels)
-    bad = []
-    for term in sp.Add.make_args(sp.expand(expr)):
-        if not term.free_symbols & vset:
-            continue
-        for v in vels:
-            d = sp.diff(term, v)
-            if d.free_symbols & vset or d.has(sp.Derivative):
-                bad.append(term)
-                break
-    return bad
 
 
 def _sample_q(system, rng, count):
@@ -668,7 +512,7 @@ def _check_dependence(system, cons, hols, drop_redundant):
     if not rows:
         return tuple(cons), (), None
     vels = system.velocities
-    mu = _one_forms(rows, vels)
+    mu = one_forms(rows, vels)
     rng = np.random.default_rng(_VALIDATION_SEED)
     points = _sample_q(system, rng, _VALIDATION_SAMPLES)
     samples = _numeric_samples(mu, points)

@@ -36,30 +36,25 @@ import tomllib
 import unicodedata
 from dataclasses import dataclass, fields
 from types import MappingProxyType
-from typing import Mapping
+from typing import TYPE_CHECKING, Mapping
 
 import sympy as sp
 
-from nhham.errors import (
-    InconsistentInitialDataError,
-    MissingParameterValueError,
-    ParseError,
-    SceneError,
-    key_of,
-)
-from nhham.system.expressions import RESERVED_NAMES, parse_expression, to_text
+from nhham.errors import ParseError, SceneError, key_of
+from nhham.system.expressions import RESERVED_NAMES, parse_expression
+from nhham.system.initial import initial_residuals
 from nhham.system.naming import acceleration_symbol, momentum_symbol, velocity_symbol
 from nhham.system.steady import parse_steady, steady_structure
+
+if TYPE_CHECKING:
+    from nhham.system.description import System
 
 __all__ = [
     "Scene",
     "SimulateOptions",
     "load_scene",
     "loads_scene",
-    "check_initial",
-    "dump_scene",
     "MAX_SCENE_BYTES",
-    "INITIAL_TOLERANCE",
     "MIN_RTOL",
     "MAX_FIXED_STEPS",
     "simulate_option_problem",
@@ -67,9 +62,6 @@ __all__ = [
 
 #: Largest scene file accepted, checked before parsing.
 MAX_SCENE_BYTES = 2 * 1024 * 1024
-
-#: Relative tolerance on constraint residuals at the initial state.
-INITIAL_TOLERANCE = 1e-9
 
 #: Smallest relative tolerance the adaptive methods honour in float64 (scipy raises a
 #: smaller one to this): 100 machine epsilons.
@@ -95,7 +87,7 @@ _SIMULATE_ALIASES = {"dt": "step", "h": "step", "t_final": "t_end", "tmax": "t_e
 
 # Names generated elsewhere in nhham for the i-th Lagrange multiplier.
 _MULTIPLIER_NAME = re.compile(r"lambda_\d+")
-_BARE_KEY = re.compile(r"[A-Za-z0-9_-]+")
+BARE_KEY = re.compile(r"[A-Za-z0-9_-]+")
 
 
 # ------------------------------------------------------------------ results
@@ -162,7 +154,7 @@ class Scene:
 
     name: str
     description: str
-    system: object
+    system: "System"
     initial: Mapping[str, float] | None
     simulate: SimulateOptions
     source: str
@@ -283,7 +275,7 @@ def loads_scene(text: str, source: str = "<string>", *, check_initial: bool = Tr
         steady=expressions.get("[steady]"),
     )
     if check_initial and scene.initial is not None:
-        _check_initial(scene)
+        initial_residuals(scene)
     return scene
 
 
@@ -374,7 +366,7 @@ def _scene_error(source: str, problems: list[str]) -> SceneError:
 
 def _key_path(prefix: str, key) -> str:
     """``prefix.key`` with the key quoted when it is not a bare TOML key."""
-    text = key if isinstance(key, str) and _BARE_KEY.fullmatch(key) else _toml_string(str(key))
+    text = key if isinstance(key, str) and BARE_KEY.fullmatch(key) else toml_string(str(key))
     return f"{prefix}.{text}" if prefix else text
 
 
@@ -687,171 +679,7 @@ def _build_system(spec: _Spec, parsed: dict, drop_redundant: bool):
     )
 
 
-# ------------------------------------------------------------ initial data
-def check_initial(scene: Scene) -> dict:
-    """Residuals of every constraint at the scene's initial state.
-
-    Each affine constraint, each holonomic constraint g and its time
-    derivative (dg/dq) v (the state must lie on T Q_1) is evaluated at the
-    initial coordinates and velocities with the parameter values.
-
-    Parameters
-    ----------
-    scene : Scene
-
-    Returns
-    -------
-    dict
-        ``{key path: residual}``, e.g. ``{"constraints[0]": 0.0,
-        "holonomic[0]": 0.0, "holonomic[0] (time derivative)": 0.0}``;
-        empty when the scene has no initial data.
-
-    Raises
-    ------
-    InconsistentInitialDataError
-        A residual exceeds ``INITIAL_TOLERANCE * max(1, |largest term|)``,
-        or is not a finite real number; the message names the constraint
-        and shows the residual.
-    MissingParameterValueError
-        A constraint uses a parameter that has no numeric value.
-    """
-    if scene.initial is None:
-        return {}
-    return _check_initial(scene)
-
-
-def _check_initial(scene: Scene) -> dict:
-    system = scene.system
-    point = {sp.Symbol(name): sp.Float(value) for name, value in scene.initial.items()}
-    point.update({p: sp.Float(v) for p, v in system.parameter_values.items()})
-    residuals, problems = {}, []
-    for path, expr in _labelled_constraints(system):
-        missing = sorted(s.name for s in expr.free_symbols if s not in point)
-        if missing:
-            raise MissingParameterValueError(
-                f"{path}: no numeric value for parameter {', '.join(map(repr, missing))}, "
-                f"needed to check the initial data (give it in parameters)", key="parameters")
-        residual, scale = _evaluate(expr, point)
-        if residual is None:
-            problems.append(f"{path}: {to_text(expr)} is not a finite real number "
-                            f"at the initial state")
-            continue
-        residuals[path] = residual
-        tolerance = INITIAL_TOLERANCE * scale
-        if abs(residual) > tolerance:
-            problems.append(f"{path}: {to_text(expr)} = {residual:.6g} at the initial state "
-                            f"(residual {abs(residual):.3g} exceeds tolerance {tolerance:.1g})")
-    if problems:
-        intro = f"{scene.source}: initial data violate the constraints: "
-        raise InconsistentInitialDataError(intro + "; ".join(problems), key=key_of(problems[0]))
-    return residuals
-
-
-def _labelled_constraints(system):
-    """(key path, expression) for every constraint the initial state must meet."""
-    items = []
-    for i, g in enumerate(system.holonomic):
-        lift = sum((sp.diff(g, q) * v for q, v in zip(system.coordinates, system.velocities)),
-                   sp.S.Zero)
-        items.append((f"holonomic[{i}]", g))
-        items.append((f"holonomic[{i}] (time derivative)", lift))
-    labels = getattr(system, "constraint_labels", ())
-    affine = [label for label in labels if label.startswith("constraints[")]
-    if len(affine) != len(system.constraints):
-        affine = [f"constraints[{i}]" for i in range(len(system.constraints))]
-    items.extend(zip(affine, system.constraints))
-    return items
-
-
-def _evaluate(expr, point):
-    """(residual, scale) of ``expr`` at ``point``; residual None if not finite real."""
-    def value(e):
-        try:
-            z = complex(sp.sympify(e.xreplace(point)).evalf())
-        except (TypeError, ValueError, OverflowError, ZeroDivisionError):
-            return None
-        if not (math.isfinite(z.real) and math.isfinite(z.imag)):
-            return None
-        return z
-
-    total = value(expr)
-    if total is None or abs(total.imag) > INITIAL_TOLERANCE * max(1.0, abs(total.real)):
-        return None, 1.0
-    # Scale: the largest term of the constraint as written, so that a
-    # residual of 1e-12 on terms of size 1e6 counts as zero.
-    terms = [value(t) for t in sp.Add.make_args(expr)]
-    scale = max([1.0] + [abs(t) for t in terms if t is not None])
-    return total.real, scale
-
-
-# -------------------------------------------------------------------- dump
-def dump_scene(system, initial=None, simulate=None, *, description: str = "",
-               steady=None) -> str:
-    """Write a system (and optional initial data and options) as scene TOML.
-
-    Parameters
-    ----------
-    system : nhham.system.System
-    initial : mapping of str to float, optional
-        Initial value of every coordinate and velocity.
-    simulate : SimulateOptions or mapping, optional
-        Simulation defaults.
-    description : str, optional
-    steady : SteadyState or mapping of str to (float or str), optional
-        The ``[steady]`` table (numbers, or expressions in the parameters).
-
-    Returns
-    -------
-    str
-        TOML text that :func:`loads_scene` reads back to an equal system.
-
-    Raises
-    ------
-    SceneError
-        A value cannot be written (non-finite number).
-    """
-    lines = []
-    if system.name:
-        lines.append(f"name = {_toml_string(system.name)}")
-    if description:
-        lines.append(f"description = {_toml_string(description)}")
-    lines.append(f"coordinates = {_toml_array([q.name for q in system.coordinates])}")
-    values = {p.name: v for p, v in system.parameter_values.items()}
-    numeric = [p.name for p in system.parameters if p.name in values]
-    symbolic = [p.name for p in system.parameters if p.name not in values]
-    if numeric:
-        items = ", ".join(f"{_toml_key(p)} = {_toml_float(values[p], p)}" for p in numeric)
-        lines.append(f"parameters = {{ {items} }}")
-    if symbolic:
-        lines.append(f"symbolic_parameters = {_toml_array(symbolic)}")
-    lines.append(f"lagrangian = {_toml_string(to_text(system.lagrangian))}")
-    lines.append(f"constraints = {_toml_array([to_text(c) for c in system.constraints])}")
-    lines.append(f"holonomic = {_toml_array([to_text(g) for g in system.holonomic])}")
-    if initial is not None:
-        lines.append("")
-        lines.append("[initial]")
-        lines.extend(f"{_toml_key(k)} = {_toml_float(v, k)}" for k, v in initial.items())
-    if steady is not None:
-        table = steady.to_toml_table() if hasattr(steady, "to_toml_table") else dict(steady)
-        lines.append("")
-        lines.append("[steady]")
-        for k, v in table.items():
-            if isinstance(v, (str, sp.Basic)) and not sp.sympify(v).is_number:
-                text = _toml_string(to_text(sp.sympify(v)))
-            else:
-                text = _toml_float(float(sp.sympify(v)), k)
-            lines.append(f"{_toml_key(k)} = {text}")
-    options = simulate.given() if isinstance(simulate, SimulateOptions) else dict(simulate or {})
-    if options:
-        lines.append("")
-        lines.append("[simulate]")
-        for key, value in options.items():
-            text = _toml_string(value) if isinstance(value, str) else _toml_float(value, key)
-            lines.append(f"{_toml_key(key)} = {text}")
-    return "\n".join(lines) + "\n"
-
-
-def _toml_string(text: str) -> str:
+def toml_string(text: str) -> str:
     """A TOML basic string."""
     out = []
     for ch in text:
@@ -868,20 +696,3 @@ def _toml_string(text: str) -> str:
     return '"' + "".join(out) + '"'
 
 
-def _toml_key(key: str) -> str:
-    return key if _BARE_KEY.fullmatch(key) else _toml_string(key)
-
-
-def _toml_float(value, key) -> str:
-    number = float(value)
-    if not math.isfinite(number):
-        raise SceneError(f"{key}: cannot write the non-finite value {value!r}")
-    return repr(number)  # shortest text that reads back to the same double
-
-
-def _toml_array(items) -> str:
-    if not items:
-        return "[]"
-    if sum(len(i) for i in items) < 60:
-        return "[" + ", ".join(_toml_string(i) for i in items) + "]"
-    return "[\n" + "".join(f"    {_toml_string(i)},\n" for i in items) + "]"

@@ -16,7 +16,7 @@ parsed (never evaluated as Python) against a symbol table holding only the
 parameters, ``pi`` and the usual functions. Because the entries are
 expressions in the parameters, a parameter sweep moves the steady motion with
 the parameter. Whether the state lies on M_1 and is steady is checked where it
-is used (:func:`nhham.numerics.linearize.linearize`), with the residuals in
+is used (:func:`nhham.numerics.linearization.linearize`), with the residuals in
 the message.
 """
 

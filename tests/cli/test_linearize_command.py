@@ -131,8 +131,8 @@ def test_rounding_is_shown_as_zero_and_said(sleigh):
 
     import numpy as np
 
-    from nhham.cli.linearize import _text, rounding_level
-    from nhham.numerics.linearize import linearization_result
+    from nhham.cli.linearize_command import _text, rounding_level
+    from nhham.numerics.linearization import linearization_result
 
     A = np.array([[-0.0, 1.0e-17], [2.0, -1.5]])
     lin = linearization_result(A, ("phi", "phi_dot"), "complex-step", "float64", ("phi", "phi_dot"),

@@ -219,7 +219,7 @@ def test_energy_not_conserved_for_affine_constraint():
 # ------------------------------------------- quadratic fast path vs general
 from nhham.lagrangian.geometry import LagrangianGeometry  # noqa: E402
 from nhham.system.models import MODELS, snake_chain_lagrangian  # noqa: E402
-from nhham.system.description import quadratic_parts, velocity_polynomial  # noqa: E402
+from nhham.system.velocities import quadratic_parts, velocity_polynomial  # noqa: E402
 
 
 def _magnetic_knife_edge():

@@ -21,7 +21,8 @@ from sympy.physics import mechanics as me
 import nhham
 from nhham import ValidationError
 from nhham.numerics.codegen import numeric_model
-from nhham.numerics.linearize import linearize, sweep_steady
+from nhham.numerics.linearization import linearize
+from nhham.numerics.steady_sweep import sweep_steady
 from nhham.system.mechanics import from_mechanics
 from nhham.system.scene import load_scene
 

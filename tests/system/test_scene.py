@@ -17,15 +17,15 @@ from nhham.errors import (
     ParseError,
     SceneError,
 )
+from nhham.system.initial import check_initial
 from nhham.system.scene import (
     MAX_SCENE_BYTES,
     Scene,
     SimulateOptions,
-    check_initial,
-    dump_scene,
     load_scene,
     loads_scene,
 )
+from nhham.system.scene_dump import dump_scene
 
 BAD = pathlib.Path(__file__).parent / "scenes_bad"
 MANIFEST = tomllib.loads((BAD / "expected.toml").read_text(encoding="utf-8"))

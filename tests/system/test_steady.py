@@ -4,7 +4,8 @@ import pytest
 import sympy as sp
 
 from nhham import ParseError, SceneError
-from nhham.system.scene import dump_scene, loads_scene
+from nhham.system.scene import loads_scene
+from nhham.system.scene_dump import dump_scene
 
 SLEIGH = """
 name = "sleigh"

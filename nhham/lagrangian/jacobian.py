@@ -1,6 +1,6 @@
 """Exact linearisation of the constrained dynamics about a state on M_1.
 
-The numeric linearisation (:mod:`nhham.numerics.linearize`) differentiates
+The numeric linearisation (:mod:`nhham.numerics.linearization`) differentiates
 the reduced field by the complex step. For small systems the same Jacobian
 can be had exactly, without ever writing W^{-1} or the closed-form field:
 

@@ -6,9 +6,9 @@ Usage::
                           [--plot FILE]
 
 The steady motion is linearised in independent coordinates on M_1
-(:mod:`nhham.numerics.linearize`): state matrix, eigenvalues, verdict. Small
+(:mod:`nhham.numerics.linearization`): state matrix, eigenvalues, verdict. Small
 systems (n <= :data:`EXACT_MAX_N`) get the exact Jacobian
-(:mod:`nhham.lagrangian.linearize`) in the same chart, eigenvalues from it at
+(:mod:`nhham.lagrangian.jacobian`) in the same chart, eigenvalues from it at
 :data:`EXACT_DIGITS` digits; larger ones the complex-step Jacobian. With
 ``--sweep`` the parameter P takes COUNT values from START to STOP (the steady
 state moves with it when its ``[steady]`` entries use P), and the crossings of
@@ -112,7 +112,8 @@ def linearize_scene(scene, method: str = "auto", sweep=None, model=None):
     (Linearization, Sweep or None)
     """
     from nhham.numerics.codegen import numeric_model
-    from nhham.numerics.linearize import linearize, sweep_steady
+    from nhham.numerics.linearization import linearize
+    from nhham.numerics.steady_sweep import sweep_steady
 
     if scene.steady is None:
         raise InputError(f"{scene.source}: linearize needs a [steady] table with a value (or an "
@@ -138,8 +139,8 @@ def _exact(scene, model, lin):
     import mpmath
     import sympy as sp
 
-    from nhham.lagrangian.linearize import exact_jacobian, exact_number
-    from nhham.numerics.linearize import linearization_result
+    from nhham.lagrangian.jacobian import exact_jacobian, exact_number
+    from nhham.numerics.linearization import linearization_result
 
     params = {p.name: exact_number(v) for p, v in scene.system.parameter_values.items()}
     point = {sp.Symbol(k): v for k, v in params.items()}

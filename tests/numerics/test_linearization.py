@@ -22,7 +22,8 @@ from scipy.optimize import brentq
 
 from nhham import InconsistentInitialDataError, InputError
 from nhham.numerics.codegen import numeric_model
-from nhham.numerics.linearize import linearize, sweep, sweep_steady
+from nhham.numerics.linearization import linearize
+from nhham.numerics.steady_sweep import sweep, sweep_steady
 from nhham.system.models import chaplygin_sleigh, pendulum_cartesian
 from nhham.system.scene import load_scene
 
@@ -105,7 +106,7 @@ def test_sleigh_steady_motion_closed_form():
 
 
 def test_pendulum_equilibria_and_exact_path():
-    from nhham.lagrangian.linearize import exact_jacobian
+    from nhham.lagrangian.jacobian import exact_jacobian
 
     system = pendulum_cartesian(g=9.81, l=2.0)
     model = numeric_model(system, backend="numpy")

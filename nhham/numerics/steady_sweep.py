@@ -1,0 +1,245 @@
+"""A parameter swept through steady motions: the eigenvalues along the way and where
+they cross the imaginary axis (the weave and capsize speeds of a bicycle).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Callable, Mapping, Sequence
+
+import numpy as np
+
+from nhham.errors import InputError
+from nhham.numerics.linearization import Linearization, linearize
+
+__all__ = ["Crossing", "Sweep", "sweep", "sweep_steady"]
+
+
+@dataclass(frozen=True)
+class Crossing:
+    """A parameter value where an eigenvalue's real part changes sign.
+
+    Attributes
+    ----------
+    value : float
+        Located by Brent's method on the real part of the crossing branch.
+    kind : {"real", "complex"}
+        A real eigenvalue through 0, or a complex pair through the imaginary axis.
+    eigenvalue : complex
+        The crossing eigenvalue at ``value`` (real part ~ 0).
+    direction : int
+        +1 when the real part becomes positive with increasing parameter.
+    """
+
+    value: float
+    kind: str
+    eigenvalue: complex
+    direction: int
+
+
+@dataclass(frozen=True)
+class Sweep:
+    """Eigenvalues of the linearisation along a parameter.
+
+    Attributes
+    ----------
+    parameter : str
+    values : ndarray, shape (N,)
+    eigenvalues : tuple of ndarray
+        One array of complex eigenvalues per value (sorted as in
+        :class:`Linearization`).
+    stable : tuple of bool or None
+    crossings : tuple of Crossing
+    coordinates : tuple of str
+        The variables of the state matrices.
+    """
+
+    parameter: str
+    values: np.ndarray
+    eigenvalues: tuple
+    stable: tuple
+    crossings: tuple
+    coordinates: tuple
+
+    def to_dict(self) -> dict:
+        """``parameter``, ``values``, ``eigenvalues`` (lists of [re, im]), ``crossings``."""
+        return {
+            "parameter": self.parameter,
+            "values": [float(v) for v in self.values],
+            "eigenvalues": [[[float(z.real), float(z.imag)] for z in ev] for ev in self.eigenvalues],
+            "stable_at": list(self.stable),
+            "crossings": [{"value": c.value, "kind": c.kind,
+                           "eigenvalue": [c.eigenvalue.real, c.eigenvalue.imag],
+                           "direction": c.direction} for c in self.crossings],
+            "coordinates": list(self.coordinates),
+        }
+
+
+def sweep(linearize_at: Callable[[float], Linearization], parameter: str,
+          values: Sequence[float], *, xtol: float = 1e-12) -> Sweep:
+    """Eigenvalues along a parameter, with the crossings of the imaginary axis.
+
+    Parameters
+    ----------
+    linearize_at : callable
+        ``value -> Linearization`` (the caller moves the steady state and the
+        parameter together; the same chart at every value).
+    parameter : str
+    values : sequence of float
+        Increasing values.
+    xtol : float, optional
+        Absolute tolerance of the located crossings.
+
+    Returns
+    -------
+    Sweep
+        Crossings are where the number of eigenvalues with positive real
+        part changes between consecutive values; each is located by Brent's
+        method on the real part of the crossing branch: the real eigenvalue
+        nearest to 0 ("real") or the complex eigenvalue of smallest |Re|
+        ("complex"), after bisecting on the count until one of them brackets.
+    """
+    values = np.asarray(values, dtype=float)
+    lins = [linearize_at(float(v)) for v in values]
+    coords = lins[0].coordinates if lins else ()
+    counts = [_n_positive(lin) for lin in lins]
+    crossings = []
+    for i in range(len(values) - 1):
+        if counts[i] != counts[i + 1]:
+            crossings.extend(_locate(linearize_at, values[i], values[i + 1], lins[i],
+                                     lins[i + 1], xtol))
+    return Sweep(parameter, values, tuple(lin.eigenvalues for lin in lins),
+                 tuple(lin.stable for lin in lins), tuple(crossings), tuple(coords))
+
+
+def _n_positive(lin):
+    return int(np.sum(lin.eigenvalues.real > lin.tolerance))
+
+
+def _branch(lin, kind, target=None):
+    """The eigenvalue of ``kind`` nearest to ``target``; without a target, the one
+    of smallest |Re| among those with |Re| above the tolerance (a structural zero
+    eigenvalue is no branch)."""
+    ev = lin.eigenvalues
+    pick = ev[ev.imag == 0] if kind == "real" else ev[ev.imag > 0]
+    if target is None:
+        pick = pick[np.abs(pick.real) > lin.tolerance]
+        if not pick.size:
+            return None
+        return pick[np.argmin(np.abs(pick.real))]
+    if not pick.size:
+        return None
+    return pick[np.argmin(np.abs(pick - target))]
+
+
+def _same_branch(lin_a, lin_b, kind):
+    """Eigenvalues of one branch at both ends whose real parts differ in sign, or (None, None).
+
+    The branch is followed from the end where it is nearest to the imaginary
+    axis (a structural zero excluded) to the nearest eigenvalue at the other end.
+    """
+    za0, zb0 = _branch(lin_a, kind), _branch(lin_b, kind)
+    pairs = []
+    if za0 is not None:
+        pairs.append((za0, _branch(lin_b, kind, za0)))
+    if zb0 is not None:
+        pairs.append((_branch(lin_a, kind, zb0), zb0))
+    for za, zb in pairs:
+        if (za is not None and zb is not None and za.real * zb.real < 0
+                and abs(za.real) > lin_a.tolerance and abs(zb.real) > lin_b.tolerance):
+            return za, zb
+    return None, None
+
+
+def _locate(linearize_at, a, b, lin_a, lin_b, xtol):
+    from scipy.optimize import brentq
+
+    found = []
+    for _ in range(60):
+        for kind in ("real", "complex"):
+            za, zb = _same_branch(lin_a, lin_b, kind)
+            if za is None:
+                continue
+
+            def f(p, kind=kind, a=a, b=b, za=za, zb=zb):
+                z = _branch(linearize_at(p), kind, za + (zb - za) * (p - a) / (b - a))
+                return math.nan if z is None else z.real
+
+            try:
+                root = brentq(f, a, b, xtol=xtol, rtol=4 * np.finfo(float).eps)
+            except ValueError:
+                continue
+            z = _branch(linearize_at(root), kind, za + (zb - za) * (root - a) / (b - a))
+            found.append(Crossing(float(root), kind, complex(z), 1 if zb.real > za.real else -1))
+        if found:
+            return found
+        if b - a <= xtol:
+            break
+        mid = 0.5 * (a + b)
+        lin_m = linearize_at(mid)
+        if _n_positive(lin_m) != _n_positive(lin_a):
+            b, lin_b = mid, lin_m
+        else:
+            a, lin_a = mid, lin_m
+    kind = "real" if abs(_n_positive(lin_a) - _n_positive(lin_b)) % 2 else "complex"
+    z = _branch(lin_b, kind)
+    return [Crossing(float(0.5 * (a + b)), kind, complex(z if z is not None else 0),
+                     1 if _n_positive(lin_b) > _n_positive(lin_a) else -1)]
+
+
+def sweep_steady(model, state_of: Callable[[Mapping[str, float]], Mapping[str, float]],
+                 parameter: str, values: Sequence[float], *, independent=None,
+                 xtol: float = 1e-12, family_of=None) -> Sweep:
+    """:func:`sweep` of a steady motion that moves with a parameter.
+
+    Parameters
+    ----------
+    model : NumericModel
+    state_of : callable
+        ``{parameter name: value} -> {state name: value}``, e.g. the
+        ``values`` method of a scene's :class:`~nhham.system.steady.SteadyState`.
+    parameter : str
+        A parameter of the model.
+    values : sequence of float
+    independent : sequence of str, optional
+        As for :func:`linearize`; default: the chart chosen at the first value,
+        kept for every value (with the neutral directions found there).
+    xtol : float, optional
+    family_of : callable, optional
+        ``{parameter: value} -> family`` (see :func:`linearize`).
+
+    Returns
+    -------
+    Sweep
+    """
+    if parameter not in model.parameter_names:
+        raise InputError(f"--sweep: {parameter!r} is not a parameter of the scene "
+                         f"(parameters: {', '.join(model.parameter_names) or 'none'})")
+    def model_and_state(value):
+        m = model.with_parameters(**{parameter: value})
+        return m, state_of(m.parameters)
+
+    def fam(value):
+        if family_of is None:
+            return None
+        return family_of(model.with_parameters(**{parameter: value}).parameters)
+
+    # One chart and one set of neutral directions for every value: those
+    # found neutral at the first, middle and last values (a direction can be
+    # neutral at an isolated value only, e.g. the yaw rate of a disc at rest).
+    values = np.asarray(values, dtype=float)
+    probes = [values[0], values[len(values) // 2], values[-1]] if len(values) else []
+    first = None
+    neutral = None
+    for value in probes:
+        lin = linearize(*model_and_state(value),
+                        independent=independent if first is None else first.chart)
+        first = first or lin
+        neutral = [s for s in (lin.neutral if neutral is None else neutral) if s in lin.neutral]
+
+    def at(value):
+        return linearize(*model_and_state(value), independent=first.chart, neutral=neutral,
+                         family=fam(value))
+
+    return sweep(at, parameter, values, xtol=xtol)

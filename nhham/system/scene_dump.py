@@ -1,0 +1,102 @@
+"""Scenes written back as TOML: what :func:`dump_scene` writes, :func:`nhham.load_scene` reads.
+"""
+
+from __future__ import annotations
+
+import math
+
+import sympy as sp
+
+from nhham.errors import (
+    SceneError,
+)
+from nhham.system.expressions import to_text
+from nhham.system.scene import BARE_KEY, SimulateOptions, toml_string
+
+__all__ = ["dump_scene"]
+
+
+# -------------------------------------------------------------------- dump
+def dump_scene(system, initial=None, simulate=None, *, description: str = "",
+               steady=None) -> str:
+    """Write a system (and optional initial data and options) as scene TOML.
+
+    Parameters
+    ----------
+    system : nhham.system.System
+    initial : mapping of str to float, optional
+        Initial value of every coordinate and velocity.
+    simulate : SimulateOptions or mapping, optional
+        Simulation defaults.
+    description : str, optional
+    steady : SteadyState or mapping of str to (float or str), optional
+        The ``[steady]`` table (numbers, or expressions in the parameters).
+
+    Returns
+    -------
+    str
+        TOML text that :func:`loads_scene` reads back to an equal system.
+
+    Raises
+    ------
+    SceneError
+        A value cannot be written (non-finite number).
+    """
+    lines = []
+    if system.name:
+        lines.append(f"name = {toml_string(system.name)}")
+    if description:
+        lines.append(f"description = {toml_string(description)}")
+    lines.append(f"coordinates = {_toml_array([q.name for q in system.coordinates])}")
+    values = {p.name: v for p, v in system.parameter_values.items()}
+    numeric = [p.name for p in system.parameters if p.name in values]
+    symbolic = [p.name for p in system.parameters if p.name not in values]
+    if numeric:
+        items = ", ".join(f"{_toml_key(p)} = {_toml_float(values[p], p)}" for p in numeric)
+        lines.append(f"parameters = {{ {items} }}")
+    if symbolic:
+        lines.append(f"symbolic_parameters = {_toml_array(symbolic)}")
+    lines.append(f"lagrangian = {toml_string(to_text(system.lagrangian))}")
+    lines.append(f"constraints = {_toml_array([to_text(c) for c in system.constraints])}")
+    lines.append(f"holonomic = {_toml_array([to_text(g) for g in system.holonomic])}")
+    if initial is not None:
+        lines.append("")
+        lines.append("[initial]")
+        lines.extend(f"{_toml_key(k)} = {_toml_float(v, k)}" for k, v in initial.items())
+    if steady is not None:
+        table = steady.to_toml_table() if hasattr(steady, "to_toml_table") else dict(steady)
+        lines.append("")
+        lines.append("[steady]")
+        for k, v in table.items():
+            if isinstance(v, (str, sp.Basic)) and not sp.sympify(v).is_number:
+                text = toml_string(to_text(sp.sympify(v)))
+            else:
+                text = _toml_float(float(sp.sympify(v)), k)
+            lines.append(f"{_toml_key(k)} = {text}")
+    options = simulate.given() if isinstance(simulate, SimulateOptions) else dict(simulate or {})
+    if options:
+        lines.append("")
+        lines.append("[simulate]")
+        for key, value in options.items():
+            text = toml_string(value) if isinstance(value, str) else _toml_float(value, key)
+            lines.append(f"{_toml_key(key)} = {text}")
+    return "\n".join(lines) + "\n"
+
+
+def _toml_key(key: str) -> str:
+    return key if BARE_KEY.fullmatch(key) else toml_string(key)
+
+
+def _toml_float(value, key) -> str:
+    number = float(value)
+    if not math.isfinite(number):
+        raise SceneError(f"{key}: cannot write the non-finite value {value!r}")
+    return repr(number)  # shortest text that reads back to the same double
+
+
+def _toml_array(items) -> str:
+    if not items:
+        return "[]"
+    if sum(len(i) for i in items) < 60:
+        return "[" + ", ".join(toml_string(i) for i in items) + "]"
+    return "[\n" + "".join(f"    {toml_string(i)},\n" for i in items) + "]"
