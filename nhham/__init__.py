@@ -11,40 +11,32 @@ The package is layered; each layer imports only from those beneath it:
 ``nhham.hamiltonian``
     Section 6 on T*Q: Legendre map, brackets, first/second class, Dirac and
     nonholonomic brackets, the Lagrangian/Hamiltonian cross-check;
+``nhham.verdict``
+    the whole-system verdict: at the scene's parameter values, and for every value;
 ``nhham.numerics``
     numbers without sympy (generated kernels, integrators, reference,
     diagnostics, work-precision); its ``codegen`` is the one bridge in;
 ``nhham.cli``
     the ``nhham`` command, its text and JSON reports, and the plots.
 
-Public names are re-exported here explicitly. All but the exceptions are
-imported on first use (PEP 562), so that ``import nhham`` is quick (the command
+Public names are re-exported here explicitly, each imported on first use
+(PEP 562), so that ``import nhham`` is quick (the command
 loads sympy inside its Ctrl-C handler) and a command which only classifies never
 imports the numerical integrators.
 """
 
-from nhham.errors import (
-    BudgetExceeded,
-    ComputationError,
-    InconsistentInitialDataError,
-    InputError,
-    MissingParameterValueError,
-    NhhamError,
-    NhhamWarning,
-    NonAffineConstraintError,
-    OptionalDependencyError,
-    ParseError,
-    RedundantConstraintError,
-    SceneError,
-    SingularLagrangianError,
-    ValidationError,
-)
 from nhham.lazy import lazy_exports
 
 from nhham.settings import __version__ as __version__
 
 # name -> module that defines it
 _LAZY = {
+    # the exceptions, rooted at NhhamError
+    **{name: "errors" for name in (
+        "NhhamError", "InputError", "ParseError", "SceneError", "ValidationError",
+        "SingularLagrangianError", "NonAffineConstraintError", "RedundantConstraintError",
+        "MissingParameterValueError", "InconsistentInitialDataError",
+        "OptionalDependencyError", "ComputationError", "BudgetExceeded", "NhhamWarning")},
     # the system description
     "System": "system.description",
     "DroppedConstraint": "system.description",
@@ -115,24 +107,6 @@ _LAZY = {
     "output_schema": "cli.envelope",
 }
 
-__all__ = [
-    "System",
-    "DroppedConstraint",
-    "NhhamError",
-    "InputError",
-    "ParseError",
-    "SceneError",
-    "ValidationError",
-    "SingularLagrangianError",
-    "NonAffineConstraintError",
-    "RedundantConstraintError",
-    "MissingParameterValueError",
-    "InconsistentInitialDataError",
-    "OptionalDependencyError",
-    "ComputationError",
-    "BudgetExceeded",
-    "NhhamWarning",
-    *_LAZY,
-]
+__all__ = list(_LAZY)
 
 __getattr__, __dir__ = lazy_exports(__name__, _LAZY, globals())

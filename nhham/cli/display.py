@@ -136,16 +136,13 @@ def report(obj) -> Report:
     if kind == "AlgorithmRun":
         return Report("constraint algorithm", trace.run_text(obj),
                       trace.run_latex(obj).strip("$"))
-    if kind == "LagrangianGeometry":
+    if kind in ("LagrangianGeometry", "HamiltonianSide"):
         system = obj.system
-        data = R.derive_data("lagrangian", system.state, list(obj.projected_field),
-                             list(obj.multipliers), obj.constraint_matrix, obj.energy, ())
-        title = _title(system)
-        return Report(title, R.derive_text(title, data), R.derive_latex(data, _parser(system)))
-    if kind == "HamiltonianSide":
-        system = obj.system
-        data = R.derive_data("hamiltonian", obj.variables, list(obj.projected_field),
-                             list(obj.multipliers), obj.constraint_matrix, obj.H, ())
+        side, state, energy = (("lagrangian", system.state, obj.energy)
+                               if kind == "LagrangianGeometry" else
+                               ("hamiltonian", obj.variables, obj.H))
+        data = R.derive_data(side, state, list(obj.projected_field), list(obj.multipliers),
+                             obj.constraint_matrix, energy, ())
         title = _title(system)
         return Report(title, R.derive_text(title, data), R.derive_latex(data, _parser(system)))
     if kind == "CrossCheckReport":

@@ -25,6 +25,7 @@ the Hamiltonian side, the classification and the cross-check.
 from __future__ import annotations
 
 import contextlib
+from dataclasses import dataclass
 from functools import cached_property
 from typing import Sequence
 
@@ -71,6 +72,7 @@ def canonical_form_matrix(n: int) -> sp.Matrix:
     return sp.Matrix(sp.BlockMatrix([[sp.zeros(n, n), sp.eye(n)], [-sp.eye(n), sp.zeros(n, n)]]))
 
 
+@dataclass(frozen=True, eq=False, repr=False)
 class LegendreMap:
     """Leg(q, v) = (q, dL/dv) for a regular Lagrangian (frozen; everything lazy).
 
@@ -87,19 +89,18 @@ class LegendreMap:
     """
 
     system: System
-    coordinates: tuple
-    velocities: tuple
-    momentum_symbols: tuple
 
-    def __init__(self, system):
-        object.__setattr__(self, "system", system)
-        object.__setattr__(self, "coordinates", tuple(system.coordinates))
-        object.__setattr__(self, "velocities", tuple(system.velocities))
-        object.__setattr__(self, "momentum_symbols",
-                           tuple(momentum_symbol(q) for q in system.coordinates))
+    @property
+    def coordinates(self) -> tuple:
+        return tuple(self.system.coordinates)
 
-    def __setattr__(self, key, value):
-        raise AttributeError(f"LegendreMap is frozen; cannot set {key!r}")
+    @property
+    def velocities(self) -> tuple:
+        return tuple(self.system.velocities)
+
+    @cached_property
+    def momentum_symbols(self) -> tuple:
+        return tuple(momentum_symbol(q) for q in self.system.coordinates)
 
     def __repr__(self):
         return f"LegendreMap({self.system!r}, inverse={self.inverse_kind!r})"

@@ -37,9 +37,8 @@ from nhham.hamiltonian.brackets import BivectorBracket, BracketAlgebra, numeric_
 from nhham.errors import ComputationError
 from nhham.hamiltonian.legendre import Backend, Lambdified, LegendreMap, canonical_form_matrix
 from nhham.lagrangian.algebra import cancel, guard_closed_form, solve_linear
-from nhham.lagrangian.decision import Decision
+from nhham.lagrangian.decision import Decision, DecisionSettings
 from nhham.lagrangian.submanifold import Submanifold
-from nhham.system.description import System
 from nhham.system.expressions import derivative
 
 __all__ = [
@@ -76,7 +75,8 @@ def hamiltonian_side(system, precision: int | None = None, samples: int = 6,
 
 
 #: The ``_H`` names of nhham 0.1 and the shared names that replace them.
-class HamiltonianSide:
+@dataclass(frozen=True, eq=False, repr=False)
+class HamiltonianSide(DecisionSettings):
     """Constrained Hamiltonian dynamics of a system on T*Q (frozen, lazy).
 
     It answers the questions of :class:`nhham.lagrangian.geometry.LagrangianGeometry`
@@ -88,37 +88,10 @@ class HamiltonianSide:
     (phi^H = phi o Leg^-1).
     """
 
-    system: "System"
-    precision: int | None
-    samples: int
-    seed: int
-    exact: bool
-    closed_form: bool
-
-    def __init__(self, system, precision=None, samples=6, seed=SEED, exact=True,
-                 closed_form=False):
-        object.__setattr__(self, "closed_form", bool(closed_form))
-        object.__setattr__(self, "system", system)
-        object.__setattr__(self, "precision", precision)
-        object.__setattr__(self, "samples", samples)
-        object.__setattr__(self, "seed", seed)
-        object.__setattr__(self, "exact", bool(exact))
-
-    def __setattr__(self, key, value):
-        raise AttributeError(f"HamiltonianSide is frozen; cannot set {key!r}")
-
-
-    def __repr__(self):
-        return f"HamiltonianSide({self.system!r})"
+    exact: bool = True
+    closed_form: bool = False
 
     # --------------------------------------------------------------- basics
-    @property
-    def n(self) -> int:
-        return self.system.n
-
-    @property
-    def m(self) -> int:
-        return self.system.m
 
     @cached_property
     def legendre(self) -> LegendreMap:

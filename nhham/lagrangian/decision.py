@@ -8,10 +8,48 @@ how far it can be trusted.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
+
+from nhham.settings import SEED
+
+if TYPE_CHECKING:
+    from nhham.system.description import System
+
+__all__ = ["Decision", "DecisionSettings"]
 
 
+@dataclass(frozen=True, eq=False, repr=False)
+class DecisionSettings:
+    """A system with the settings of the decisions taken on it (frozen; the base of
+    :class:`~nhham.lagrangian.geometry.LagrangianGeometry` and
+    :class:`~nhham.hamiltonian.side.HamiltonianSide`).
 
-__all__ = ["Decision"]
+    Attributes
+    ----------
+    system : nhham.System
+    precision : int or None
+        Sampled decisions in float64 (None) or mpmath with this many digits.
+    samples, seed : int
+        Number and seed of the sample points of sampled decisions.
+    """
+
+    system: "System"
+    precision: int | None = None
+    samples: int = 6
+    seed: int = SEED
+
+    def __repr__(self):
+        return f"{type(self).__name__}({self.system!r})"
+
+    @property
+    def n(self) -> int:
+        """Number of coordinates."""
+        return self.system.n
+
+    @property
+    def m(self) -> int:
+        """Number of affine constraints (lifts of the holonomic ones included)."""
+        return self.system.m
 
 
 @dataclass(frozen=True)

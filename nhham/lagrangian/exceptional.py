@@ -407,18 +407,24 @@ class ExceptionalData:
         return [field_det(B.extract(R, R)) for B in mats]
 
     # ------------------------------------------------------------ the modes
+    def _has_points(self, env0, K, note) -> bool:
+        """Whether M_1 has exact points over K; else a note ``note (why)``."""
+        try:
+            if self.analysis.stages:
+                self._pts(self.analysis.stages[0].constraints, env0, K, 1)
+        except (NotExact, ZeroDivisionError) as exc:
+            self.notes.append(f"{note} ({exc})")
+            return False
+        return True
+
     def symbolic(self, params):
         """[(reason, values)] with ``params`` as generators of Q(params)."""
         K = QQ.frac_field(*params)
         env0 = self.env(gens=dict(zip(params, K.gens)))
         out = []
         items = self.items()
-        try:
-            if self.analysis.stages:
-                self._pts(self.analysis.stages[0].constraints, env0, K, 1)
-        except (NotExact, ZeroDivisionError) as exc:
-            self.notes.append(f"the exceptional sets were not computed: no exact points of "
-                              f"M_1 with symbolic parameters ({exc})")
+        if not self._has_points(env0, K, "the exceptional sets were not computed: no exact "
+                                "points of M_1 with symbolic parameters"):
             return out
         for reason, fn in items:
             try:
@@ -465,12 +471,8 @@ class ExceptionalData:
         values = {p: _exact_mpq(x) for p, x in values.items()}
         base = self.env(at=values)
         items = self.items()
-        try:
-            if self.analysis.stages:
-                self._pts(self.analysis.stages[0].constraints, base, QQ, 1)
-        except (NotExact, ZeroDivisionError) as exc:
-            self.notes.append(f"the parameter values were not checked against the "
-                              f"exceptional sets: no exact points of M_1 ({exc})")
+        if not self._has_points(base, QQ, "the parameter values were not checked against "
+                                "the exceptional sets: no exact points of M_1"):
             return hits, close
         for reason, fn in items:
             try:

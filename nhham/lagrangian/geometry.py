@@ -33,11 +33,10 @@ import sympy as sp
 from nhham.settings import SEED
 from nhham.lagrangian.adjugate import ScaledInverse, scaled_inverse
 from nhham.lagrangian.algebra import guard_closed_form, solve_linear
-from nhham.lagrangian.decision import Decision
+from nhham.lagrangian.decision import Decision, DecisionSettings
 from nhham.lagrangian.submanifold import Submanifold
 from nhham.system.expressions import derivative
 from nhham.system.naming import acceleration_symbol, multiplier_symbol
-from nhham.system.description import System
 from nhham.system.velocities import quadratic_parts
 
 __all__ = ["LagrangianGeometry", "lagrangian_geometry", "DynamicsIngredients"]
@@ -119,7 +118,8 @@ def lagrangian_geometry(system, precision: int | None = None, samples: int = 6,
 _SETTINGS = frozenset({"system", "precision", "samples", "seed", "fast", "closed_form"})
 
 
-class LagrangianGeometry:
+@dataclass(frozen=True, eq=False, repr=False)
+class LagrangianGeometry(DecisionSettings):
     """Lagrangian-side geometry of a constrained system (frozen, lazy).
 
     Every attribute is computed on first access and then kept. Arguments as
@@ -128,38 +128,12 @@ class LagrangianGeometry:
     differentiates L (the general path, for comparisons).
     """
 
-    system: "System"
-    precision: int | None
-    samples: int
-    seed: int
-    fast: bool
-    closed_form: bool
-
-    def __init__(self, system, precision=None, samples=6, seed=SEED, fast=True,
-                 closed_form=False):
-        object.__setattr__(self, "closed_form", bool(closed_form))
-        object.__setattr__(self, "system", system)
-        object.__setattr__(self, "precision", precision)
-        object.__setattr__(self, "samples", samples)
-        object.__setattr__(self, "seed", seed)
-        # fast=False forces the general path (differentiate L) even for a
-        # Lagrangian quadratic in the velocities: for tests and comparisons.
-        object.__setattr__(self, "fast", bool(fast))
-
-    def __setattr__(self, key, value):
-        raise AttributeError(f"LagrangianGeometry is frozen; cannot set {key!r}")
-
-    def __repr__(self):
-        return f"LagrangianGeometry({self.system!r})"
+    # fast=False forces the general path (differentiate L) even for a
+    # Lagrangian quadratic in the velocities: for tests and comparisons.
+    fast: bool = True
+    closed_form: bool = False
 
     # ------------------------------------------------------------ basics
-    @property
-    def n(self):
-        return self.system.n
-
-    @property
-    def m(self):
-        return self.system.m
 
     @cached_property
     def _v(self):

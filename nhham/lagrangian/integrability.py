@@ -184,12 +184,10 @@ def frobenius_at_points(system, labels, *, seed: int = SEED,
     NotExact
         When Q_1 has no exact points or μ cannot be evaluated exactly.
     """
-    mu = sp.Matrix(system.mu)
-    q = tuple(system.coordinates)
+    mu, q, common, trivial = _distribution(system, labels)
+    if trivial is not None:
+        return trivial
     m, n = mu.rows, len(q)
-    common = dict(mu=mu, coordinates=q, labels=tuple(labels))
-    if m == 0 or n - m <= 1:
-        return frobenius(mu, q, Submanifold(system, (), fibre=()), labels)
     sampler = PointSampler(q, (), system.parameters, dict(system.parameter_values),
                            system.holonomic, (), seed)
     rows = [list(mu.row(i)) for i in range(m)]
@@ -239,12 +237,10 @@ def frobenius_sampled(system, labels, *, precision: int | None = None, samples: 
     verdict is None (undecided) in between. Used where Q_1 has no exact points
     and the system is too large for a symbolic kernel basis.
     """
-    mu = sp.Matrix(system.mu)
-    q = tuple(system.coordinates)
+    mu, q, common, trivial = _distribution(system, labels)
+    if trivial is not None:
+        return trivial
     m, n = mu.rows, len(q)
-    common = dict(mu=mu, coordinates=q, labels=tuple(labels))
-    if m == 0 or n - m <= 1:
-        return frobenius(mu, q, Submanifold(system, (), fibre=()), labels)
     Q1 = Submanifold(system, system.holonomic, precision=precision, samples=samples,
                      seed=seed, fibre=(), exact=False)
     points, residual = Q1.points()
@@ -285,6 +281,17 @@ def frobenius_sampled(system, labels, *, precision: int | None = None, samples: 
                    point_residual=residual, warnings=warn)
     return Integrability(None if doubtful else True, n - m, None, (),
                          (("dmu_i(X_a, X_b) on Q_1", dec),), "sampled", warn, **common)
+
+
+def _distribution(system, labels):
+    """(mu, q, the fields every result shares, the result where the test is trivial):
+    no constraint, or a distribution of rank at most 1 (always integrable)."""
+    mu, q = sp.Matrix(system.mu), tuple(system.coordinates)
+    common = dict(mu=mu, coordinates=q, labels=tuple(labels))
+    trivial = None
+    if mu.rows == 0 or len(q) - mu.rows <= 1:
+        trivial = frobenius(mu, q, Submanifold(system, (), fibre=()), labels)
+    return mu, q, common, trivial
 
 
 def _frobenius_terms(env, rows, dmu, dep, exact=True):
