@@ -54,13 +54,12 @@ from sympy.polys.matrices import DomainMatrix
 
 from nhham.lagrangian.analysis import ConstraintAnalysis
 from nhham.lagrangian.domains import PRIME, Angle, NotExact, evaluate
-from nhham.lagrangian.formulas import lagrangian_bracket
+from nhham.lagrangian.formulas import frobenius_terms, lagrangian_bracket
 from nhham.lagrangian.linalg import (
     FLOAT64,
     FloatMatrix,
     adjacent_column_sets,
     field_det,
-    field_solve,
     maximal_minors,
 )
 from nhham.lagrangian.points import DRAW_BITS, ParameterFieldSampler, jacobian_row
@@ -328,23 +327,9 @@ class ExceptionalData:
             dep = self._pivots["dep"]
             if len(dep) < m:
                 continue
-            free = [j for j in range(n) if j not in dep]
-            block = M.extract(list(range(m)), list(dep))
-            sol = field_solve(block, -M.extract(list(range(m)), free)).to_list()
-            basis = []
-            for a, j in enumerate(free):
-                col = [K.zero] * n
-                col[j] = K.one
-                for t, d in enumerate(dep):
-                    col[d] = sol[t][a]
-                basis.append(col)
-            for i in range(m):
-                D = [[self._val(K, x) for x in evaluate(r, env, cache)] for r in dmu[i]]
-                for a in range(len(free)):
-                    for b in range(a + 1, len(free)):
-                        X, Y = basis[a], basis[b]
-                        vals.append(sum((X[A] * D[A][B] * Y[B] for A in range(n)
-                                         for B in range(n) if D[A][B]), K.zero))
+            D = [[[self._val(K, x) for x in evaluate(r, env, cache)] for r in dmu[i]]
+                 for i in range(m)]
+            vals.extend(frobenius_terms(M, D, dep).values())
         return vals
 
     def _brackets(self, env0, K, count=None):

@@ -16,7 +16,7 @@ from typing import Callable
 
 from nhham.lagrangian.linalg import field_solve
 
-__all__ = ["lagrangian_bracket"]
+__all__ = ["lagrangian_bracket", "frobenius_terms"]
 
 
 def lagrangian_bracket(Jq, Jv, W, M, solve: Callable = field_solve):
@@ -44,3 +44,43 @@ def lagrangian_bracket(Jq, Jv, W, M, solve: Callable = field_solve):
     U = solve(W, Jv.transpose())
     JU = Jq * U
     return JU - JU.transpose() - U.transpose() * (M - M.transpose()) * U
+
+
+def frobenius_terms(M, D, dep, solve: Callable = field_solve) -> dict:
+    """dμ_i(X_a, X_b) for a basis X_a of ker μ at one point, in any arithmetic.
+
+    The distribution ker μ is integrable exactly where every term vanishes (Frobenius:
+    for X, Y in ker μ, dμ_i(X, Y) = −μ_i([X, Y])). The sign convention has this one
+    home: dμ_i(X, Y) = X^A Y^B (∂_A μ_iB − ∂_B μ_iA).
+
+    Parameters
+    ----------
+    M : matrix, shape (m, n)
+        μ at the point (rows independent).
+    D : sequence of m rows-of-rows, each (n, n)
+        ``D[i][A][B]`` = ∂_A μ_iB − ∂_B μ_iA at the point.
+    dep : sequence of int
+        m columns of M that form an invertible block; the basis is X_a = e_(free a)
+        − (M_dep)⁻¹ M_free e_a, one per other column.
+    solve : callable, optional
+        ``solve(A, B) -> A⁻¹ B`` in the matrices' arithmetic.
+
+    Returns
+    -------
+    dict
+        ``{(i, a, b): dμ_i(X_a, X_b)}`` for a < b, in the order of i, a, b.
+    """
+    m, n = M.shape
+    free = [j for j in range(n) if j not in dep]
+    rows = list(range(m))
+    sol = solve(M.extract(rows, list(dep)), -M.extract(rows, free)).to_list()
+    basis = [dict(sorted({j: 1, **{d: sol[t][a] for t, d in enumerate(dep)}}.items()))
+             for a, j in enumerate(free)]
+    out = {}
+    for i, Di in enumerate(D):
+        for a in range(len(free)):
+            for b in range(a + 1, len(free)):
+                X, Y = basis[a], basis[b]
+                out[(i, a, b)] = sum((x * Di[A][B] * y for A, x in X.items()
+                                      for B, y in Y.items() if Di[A][B] != 0), 0)
+    return out

@@ -32,15 +32,16 @@ from functools import cached_property
 import numpy as np
 import sympy as sp
 
-from nhham.settings import SEED, Precision
 from nhham.errors import ComputationError
 from nhham.lagrangian.algebra import cancel
-from nhham.lagrangian.domains import Degree, NotExact, evaluate, minor_degree, schwartz_zippel_bound
-from nhham.lagrangian.linalg import exact_rank, exact_solve
-from nhham.lagrangian.points import PointSampler, jacobian_row
 from nhham.lagrangian.decision import Decision
+from nhham.lagrangian.domains import Degree, NotExact, evaluate, schwartz_zippel_bound
+from nhham.lagrangian.formulas import frobenius_terms
+from nhham.lagrangian.linalg import ListMatrix, degree_solve, exact_rank, field_solve
+from nhham.lagrangian.points import PointSampler, jacobian_row
 from nhham.lagrangian.submanifold import Submanifold
 from nhham.lagrangian.tangency import MAX_POINTS, TARGET_ERROR
+from nhham.settings import SEED, Precision
 from nhham.system.expressions import short
 
 __all__ = ["Integrability", "integrability", "frobenius", "frobenius_at_points",
@@ -192,7 +193,8 @@ def frobenius_at_points(system, labels, *, seed: int = SEED,
                            system.holonomic, (), seed)
     rows = [list(mu.row(i)) for i in range(m)]
     grads = [[jacobian_row(mu[i, A], q) for A in range(n)] for i in range(m)]
-    dmu = [[[grads[i][A][B] - grads[i][B][A] for A in range(n)] for B in range(n)]
+    # dmu[i][A][B] = d_A mu_iB - d_B mu_iA (grads[i][B][A] = d mu_iB / d q^A)
+    dmu = [[[grads[i][B][A] - grads[i][A][B] for B in range(n)] for A in range(n)]
            for i in range(m)]
     dep = None
     count, terms, worst = 0, 0, 0
@@ -295,40 +297,16 @@ def _distribution(system, labels):
 
 
 def _frobenius_terms(env, rows, dmu, dep, exact=True):
-    """{(i, a, b): dμ_i(X_a, X_b)} at one point (exact values or Degree bounds)."""
-    cache = {}
-    M = [evaluate(r, env, cache) for r in rows]
+    """{(i, a, b): dμ_i(X_a, X_b)} at one point (exact values, or Degree bounds with
+    ``exact=False``), and the pivot columns of μ used for the kernel basis."""
+    cache: dict = {}
+    M = ListMatrix([evaluate(r, env, cache) for r in rows])
     D = [[evaluate(r, env, cache) for r in dmu_i] for dmu_i in dmu]
-    m, n = len(M), len(M[0])
     if dep is None:
-        rank, _, dep = exact_rank(M)
-        if rank < m:
+        rank, _, dep = exact_rank(M.rows)
+        if rank < M.shape[0]:
             raise NotExact("mu is rank deficient at a random point")
-    free = [j for j in range(n) if j not in dep]
-    if exact:
-        sol = exact_solve([[r[j] for j in dep] for r in M],
-                          [[-r[j] for j in free] for r in M])
-    else:
-        block = [[r[j] for j in dep] + [sum((r[j] for j in free), 0)] for r in M]
-        top = minor_degree(block, m)
-        den = minor_degree([b[:m] for b in block], m)
-        x = Degree(top, {("denominator", id(block)): (den, 1)})
-        sol = [[x] * len(free) for _ in dep]
-    basis = []
-    for a, j in enumerate(free):
-        col = [0] * n
-        col[j] = 1
-        for t, d in enumerate(dep):
-            col[d] = sol[t][a]
-        basis.append(col)
-    out = {}
-    for i in range(m):
-        for a in range(len(free)):
-            for b in range(a + 1, len(free)):
-                X, Y = basis[a], basis[b]
-                out[(i, a, b)] = sum((X[A] * D[i][B][A] * Y[B] for A in range(n)
-                                      for B in range(n) if D[i][B][A] != 0), 0)
-    return out, dep
+    return frobenius_terms(M, D, dep, solve=field_solve if exact else degree_solve), dep
 
 
 def frobenius(mu, coordinates, manifold: Submanifold, labels=None) -> Integrability:

@@ -229,6 +229,12 @@ class ListMatrix:
     def __sub__(self, other) -> "ListMatrix":
         return ListMatrix([[x - y for x, y in zip(r, s)] for r, s in zip(self.rows, other.rows)])
 
+    def __neg__(self) -> "ListMatrix":
+        return ListMatrix([[-x for x in r] for r in self.rows])
+
+    def extract(self, rows, cols) -> "ListMatrix":
+        return ListMatrix([[self.rows[i][j] for j in cols] for i in rows])
+
     def to_list(self) -> list:
         return [list(r) for r in self.rows]
 

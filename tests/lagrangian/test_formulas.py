@@ -174,3 +174,28 @@ def test_a_defect_planted_in_one_arithmetic_is_caught(monkeypatch):
 
     monkeypatch.setattr(linalg, "exact_solve", planted)
     assert mismatches(data) == ["GF(p) lists"]
+
+
+def test_frobenius_terms_are_minus_mu_of_the_lie_bracket():
+    """mu = dz - y dx (the contact form): on ker mu, dmu(X, Y) = -mu([X, Y]) computed by
+    sympy's Lie bracket of the basis fields, at a point, in every arithmetic."""
+    from nhham.lagrangian.formulas import frobenius_terms
+
+    x, y, z = sp.symbols("x y z")
+    q = (x, y, z)
+    mu = sp.Matrix([[-y, 0, 1]])
+    X, Y = sp.Matrix([1, 0, y]), sp.Matrix([0, 1, 0])  # the basis of the formula, dep = z
+    lie = Y.jacobian(q) * X - X.jacobian(q) * Y
+    expected = -(mu * lie)[0]
+    at = {y: sp.Rational(3, 7)}
+    D = [[[sp.diff(mu[0, B], q[A]) - sp.diff(mu[0, A], q[B]) for B in range(3)]
+          for A in range(3)]]
+    exact = frobenius_terms(ListMatrix([[_mpq(v.subs(at)) for v in mu]]),
+                            [[[_mpq(v) for v in row] for row in D[0]]], [2])
+    assert exact == {(0, 0, 1): expected.subs(at)} == {(0, 0, 1): 1}
+    modular = frobenius_terms(ListMatrix([[ModP.lift(_mpq(v.subs(at))) for v in mu]]),
+                              [[[ModP.lift(_mpq(v)) for v in row] for row in D[0]]], [2])
+    assert modular == {(0, 0, 1): ModP(1)}
+    floats = frobenius_terms(FloatMatrix([[float(v.subs(at)) for v in mu]]),
+                             [[[float(v) for v in row] for row in D[0]]], [2])
+    assert floats[(0, 0, 1)] == pytest.approx(1.0, abs=1e-15)
