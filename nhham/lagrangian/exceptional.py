@@ -54,7 +54,7 @@ from sympy.polys.matrices import DomainMatrix
 
 from nhham.lagrangian.analysis import ConstraintAnalysis
 from nhham.lagrangian.domains import PRIME, Angle, NotExact, evaluate
-from nhham.lagrangian.formulas import frobenius_terms, lagrangian_bracket
+from nhham.lagrangian.formulas import bordered_matrix, frobenius_terms, lagrangian_bracket
 from nhham.lagrangian.linalg import (
     FLOAT64,
     FloatMatrix,
@@ -284,18 +284,12 @@ class ExceptionalData:
             mu_I = [list(system.mu.row(i)) for i in phi_idx]
             Jv = [jacobian_row(index[lab], system.velocities) for lab in rows]
 
-            def block_det(env0, K, eqs=stage.constraints, mu_I=mu_I, Jv=Jv, r=r, k=k):
+            def block_det(env0, K, eqs=stage.constraints, mu_I=mu_I, Jv=Jv, k=k):
                 vals = []
                 for env in self._pts(eqs, env0, K, k):
                     cache = self._memo(env)
-                    W = self._matrix(K, self.W, env, cache)
-                    MI = self._matrix(K, mu_I, env, cache)
-                    JJ = self._matrix(K, Jv, env, cache)
-                    top = W.hstack(MI.transpose())
-                    zeros = (FloatMatrix.zeros((r, r)) if K is FLOAT64 else
-                             DomainMatrix.zeros((r, r), K))
-                    bottom = JJ.hstack(zeros)
-                    vals.append(field_det(top.vstack(bottom)))
+                    vals.append(field_det(bordered_matrix(
+                        *(self._matrix(K, rows, env, cache) for rows in (self.W, mu_I, Jv)))))
                 return vals
 
             out.append((f"the rank of (Z_i(chi_j)) on M_{k} drops below {r}"

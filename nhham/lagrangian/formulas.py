@@ -14,9 +14,32 @@ from __future__ import annotations
 
 from typing import Callable
 
-from nhham.lagrangian.linalg import field_solve
+from nhham.lagrangian.linalg import field_solve, zeros_like
 
-__all__ = ["lagrangian_bracket", "frobenius_terms"]
+__all__ = ["bordered_matrix", "lagrangian_bracket", "frobenius_terms"]
+
+
+def bordered_matrix(W, mu, Jv):
+    """K = [[W, μᵀ], [∂χ/∂v, 0]]: the matrix of the tangency equations of χ on M_k.
+
+    With a = v̇, W a + μᵀ λ = F and (∂χ_j/∂v) a = −(∂χ_j/∂q) v (DESIGN.md, inverse-free
+    form): rank K − n is the rank of (Z_i(χ_j)) where W is regular, and
+    det K = det W · det (Z_i(χ_j)) for as many χ as multipliers.
+
+    Parameters
+    ----------
+    W : matrix, shape (n, n)
+    mu : matrix, shape (m, n)
+        The rows of the multipliers taken (all of μ, or a block of them).
+    Jv : matrix, shape (r, n)
+        ∂χ_j/∂v.
+
+    Returns
+    -------
+    matrix, shape (n + r, n + m)
+    """
+    zero = zeros_like(Jv, (Jv.shape[0], mu.shape[0]))
+    return W.hstack(mu.transpose()).vstack(Jv.hstack(zero))
 
 
 def lagrangian_bracket(Jq, Jv, W, M, solve: Callable = field_solve):

@@ -30,6 +30,7 @@ __all__ = [
     "FLOAT64",
     "FloatMatrix",
     "ListMatrix",
+    "zeros_like",
     "degree_solve",
     "solve_degrees",
 ]
@@ -235,8 +236,23 @@ class ListMatrix:
     def extract(self, rows, cols) -> "ListMatrix":
         return ListMatrix([[self.rows[i][j] for j in cols] for i in rows])
 
+    def hstack(self, other) -> "ListMatrix":
+        return ListMatrix([r + s for r, s in zip(self.rows, other.rows)])
+
+    def vstack(self, other) -> "ListMatrix":
+        return ListMatrix(self.rows + other.rows)
+
     def to_list(self) -> list:
         return [list(r) for r in self.rows]
+
+
+def zeros_like(M, shape):
+    """A zero matrix of ``shape`` of the same kind (and domain) as ``M``."""
+    if isinstance(M, ListMatrix):
+        return ListMatrix([[0] * shape[1] for _ in range(shape[0])])
+    if isinstance(M, FloatMatrix):
+        return FloatMatrix.zeros(shape)
+    return DomainMatrix.zeros(shape, M.domain)
 
 
 def field_det(M: DomainMatrix):

@@ -26,10 +26,11 @@ from dataclasses import dataclass
 
 import sympy as sp
 
-from nhham.lagrangian.domains import NotExact, evaluate, minor_degree, schwartz_zippel_bound
-from nhham.lagrangian.linalg import exact_rank, exact_solve
-from nhham.lagrangian.points import PointSampler, jacobian_row
 from nhham.lagrangian.decision import Decision
+from nhham.lagrangian.domains import NotExact, evaluate, minor_degree, schwartz_zippel_bound
+from nhham.lagrangian.formulas import bordered_matrix
+from nhham.lagrangian.linalg import ListMatrix, exact_rank, exact_solve
+from nhham.lagrangian.points import PointSampler, jacobian_row
 
 __all__ = ["TangencyVerdict", "tangency_at_points", "tangency_sampled", "TARGET_ERROR"]
 
@@ -224,9 +225,7 @@ def _bordered(env, W, F, mu, Jq, Jv, v):
     Jqv = [evaluate(row, env, cache) for row in Jq]
     Jvv = [evaluate(row, env, cache) for row in Jv]
     vel = [env[s] for s in v]
-    n, m = len(Wv), len(muv)
-    K = [Wv[i] + [muv[k][i] for k in range(m)] for i in range(n)]
-    K += [Jvv[j] + [0] * m for j in range(len(Jvv))]
+    K = bordered_matrix(ListMatrix(Wv), ListMatrix(muv), ListMatrix(Jvv)).rows
     c = Fv + [-sum((a * b for a, b in zip(row, vel)), 0) for row in Jqv]
     J = [a + b for a, b in zip(Jqv, Jvv)]
     return K, c, J

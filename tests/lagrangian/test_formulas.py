@@ -199,3 +199,29 @@ def test_frobenius_terms_are_minus_mu_of_the_lie_bracket():
     floats = frobenius_terms(FloatMatrix([[float(v.subs(at)) for v in mu]]),
                              [[[float(v) for v in row] for row in D[0]]], [2])
     assert floats[(0, 0, 1)] == pytest.approx(1.0, abs=1e-15)
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_bordered_matrix_determinant_is_det_W_det_C(seed):
+    """det [[W, mu^T], [mu, 0]] = det W det C with C = -mu W^-1 mu^T (Schur complement),
+    C from sympy; in rationals (lists and DomainMatrix) and float64."""
+    from nhham.lagrangian.formulas import bordered_matrix
+    from nhham.lagrangian.linalg import field_det
+
+    L, chis = _system()
+    _, Jv, W, _ = _data(L, chis, _point(seed))
+    if W.det() == 0:
+        pytest.skip("W singular at this point")
+    C = -Jv * W.inv() * Jv.T
+    expected = W.det() * C.det()
+    rows = [[[_mpq(x) for x in X.row(i)] for i in range(X.rows)] for X in (W, Jv)]
+    K = bordered_matrix(ListMatrix(rows[0]), ListMatrix(rows[1]), ListMatrix(rows[1]))
+    assert K.shape == (6, 6)
+    dm = DomainMatrix(K.rows, (6, 6), QQ)
+    assert sp.Rational(int(dm.det().numerator), int(dm.det().denominator)) == expected
+    Kd = bordered_matrix(*(DomainMatrix([[QQ(x) for x in row] for row in r],
+                                        (len(r), 3), QQ) for r in (rows[0], rows[1], rows[1])))
+    assert Kd.det() == dm.det()
+    Kf = bordered_matrix(*(FloatMatrix([[float(x) for x in row] for row in r])
+                           for r in (rows[0], rows[1], rows[1])))
+    assert field_det(Kf) == pytest.approx(float(expected), rel=1e-9)
