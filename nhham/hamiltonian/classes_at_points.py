@@ -18,6 +18,7 @@ from nhham.errors import ComputationError, NhhamError
 from nhham.hamiltonian.brackets import connected_blocks
 from nhham.hamiltonian.classes import ConstraintClasses
 from nhham.lagrangian.analysis import ConstraintAnalysis
+from nhham.lagrangian.decision import Decision
 from nhham.lagrangian.domains import NotExact, evaluate, minor_degree, schwartz_zippel_bound
 from nhham.lagrangian.formulas import lagrangian_bracket
 from nhham.lagrangian.geometry import LagrangianGeometry, lagrangian_geometry
@@ -30,7 +31,6 @@ from nhham.lagrangian.linalg import (
     field_solve,
 )
 from nhham.lagrangian.points import PointSampler, jacobian_row
-from nhham.lagrangian.decision import Decision
 from nhham.lagrangian.submanifold import Submanifold
 from nhham.lagrangian.tangency import MAX_POINTS, TARGET_ERROR
 

@@ -35,25 +35,25 @@ from typing import Sequence
 import numpy as np
 import sympy as sp
 
-from nhham.settings import SEED
-from nhham.hamiltonian.brackets import connected_blocks
 from nhham.errors import ComputationError, InputError
-from nhham.hamiltonian.side import HamiltonianSide, hamiltonian_side
-from nhham.hamiltonian.legendre import Backend, Lambdified, ModularBackend
-from nhham.hamiltonian.combinations import NotFormed, closed_form_combinations
-from nhham.lagrangian.algebra import block_inverse, cancel
-from nhham.lagrangian.analysis import ConstraintAnalysis, analyze_constraints
-from nhham.lagrangian.domains import NotExact
-from nhham.lagrangian.linalg import exact_rank
-from nhham.lagrangian.points import PointSampler
-from nhham.lagrangian.decision import Decision
-from nhham.lagrangian.submanifold import Submanifold
+from nhham.hamiltonian.brackets import connected_blocks
 from nhham.hamiltonian.classes import ConstraintClasses
 from nhham.hamiltonian.classes_at_points import (
     COMBINATION_MAX_N,
     classify_at_points,
     float_brackets,
 )
+from nhham.hamiltonian.combinations import NotFormed, closed_form_combinations
+from nhham.hamiltonian.side import HamiltonianSide, hamiltonian_side
+from nhham.lagrangian.algebra import block_inverse, cancel
+from nhham.lagrangian.analysis import ConstraintAnalysis, analyze_constraints
+from nhham.lagrangian.decision import Decision
+from nhham.lagrangian.domains import NotExact
+from nhham.lagrangian.linalg import ModularBackend, exact_rank
+from nhham.lagrangian.points import PointSampler
+from nhham.lagrangian.submanifold import Submanifold
+from nhham.settings import SEED
+from nhham.system.evaluation import Backend, Lambdified
 
 __all__ = [
     "classify_constraints",

@@ -16,13 +16,13 @@ import sympy as sp
 
 from nhham.errors import InputError
 from nhham.hamiltonian.checks import CheckResult
-from nhham.hamiltonian.legendre import Backend, Lambdified, ModularBackend
 from nhham.lagrangian.domains import ModP, NotExact
 from nhham.lagrangian.formulas import lagrangian_bracket
 from nhham.lagrangian.geometry import lagrangian_geometry
-from nhham.lagrangian.linalg import FloatMatrix, exact_rank
+from nhham.lagrangian.linalg import FloatMatrix, ModularBackend, exact_rank
 from nhham.lagrangian.points import PointSampler, eliminate_coordinates, jacobian_row
 from nhham.lagrangian.submanifold import Submanifold
+from nhham.system.evaluation import Backend, Lambdified
 from nhham.system.expressions import derivative
 
 __all__ = [

@@ -52,7 +52,7 @@ from nhham.hamiltonian.comparison import (
     lag_C,
     modular_sampler,
 )
-from nhham.hamiltonian.legendre import Backend, Lambdified, canonical_form_matrix
+from nhham.hamiltonian.legendre import canonical_form_matrix
 from nhham.hamiltonian.side import HamiltonianSide, hamiltonian_side
 from nhham.hamiltonian.staged import staged_at_points
 from nhham.lagrangian.algebra import cancel
@@ -60,6 +60,7 @@ from nhham.lagrangian.domains import NotExact
 from nhham.lagrangian.geometry import lagrangian_geometry
 from nhham.lagrangian.submanifold import Submanifold
 from nhham.settings import SEED
+from nhham.system.evaluation import Backend, Lambdified
 
 __all__ = ["CheckResult", "CrossCheckReport", "cross_check", "METHODS"]
 

@@ -14,14 +14,15 @@ from nhham.errors import ComputationError
 from nhham.hamiltonian.brackets import DiracBracket
 from nhham.hamiltonian.classes import ConstraintClasses
 from nhham.hamiltonian.classification import classify_constraints, sample_matrix
-from nhham.hamiltonian.legendre import Backend, ModularBackend
 from nhham.hamiltonian.side import HamiltonianSide, hamiltonian_side
 from nhham.lagrangian.algebra import block_inverse, cancel
-from nhham.lagrangian.domains import NotExact
-from nhham.lagrangian.points import PointSampler
 from nhham.lagrangian.decision import Decision
+from nhham.lagrangian.domains import NotExact
+from nhham.lagrangian.linalg import ModularBackend
+from nhham.lagrangian.points import PointSampler
 from nhham.lagrangian.submanifold import Submanifold
 from nhham.settings import SEED
+from nhham.system.evaluation import Backend
 from nhham.system.expressions import short
 
 __all__ = ["dirac_bracket", "DiracProjectedReport", "dirac_vs_projected"]

@@ -24,23 +24,18 @@ the Hamiltonian side, the classification and the cross-check.
 
 from __future__ import annotations
 
-import contextlib
 from dataclasses import dataclass
 from functools import cached_property
-from typing import Sequence
 
-import mpmath
 import numpy as np
 import sympy as sp
 
-from nhham.system.evaluation import numeric_function
-from nhham.settings import PARAMETER_BOX, SEED, Precision
 from nhham.errors import ComputationError
 from nhham.lagrangian.algebra import cancel
 from nhham.lagrangian.geometry import lagrangian_geometry
-from nhham.lagrangian.domains import ModP, evaluate
-from nhham.lagrangian.linalg import exact_solve
+from nhham.settings import PARAMETER_BOX, SEED
 from nhham.system.description import System
+from nhham.system.evaluation import Backend, numeric_function
 from nhham.system.naming import momentum_symbol
 
 __all__ = ["LegendreMap", "legendre_map", "NoClosedFormInverseError", "canonical_form_matrix"]
@@ -374,202 +369,3 @@ def _close(cand, v, p, pA, pt):
     except (TypeError, ValueError, ZeroDivisionError):
         return False
     return abs(back.imag) < 1e-9 and abs(back.real - pt[v]) < 1e-9 * (1 + abs(pt[v]))
-
-
-# ======================================================================
-# Numeric backend shared by the Hamiltonian side, classification and
-# cross-check: float64 numpy arrays, or numpy object arrays of mpmath.mpf.
-# ======================================================================
-class Backend:
-    """Dense linear algebra in float64 (``precision=None``) or mpmath digits.
-
-    Arrays are numpy arrays: ``float`` dtype, or ``object`` dtype holding
-    ``mpmath.mpf`` (object arrays support ``@`` through Python arithmetic).
-    """
-
-    def __init__(self, precision: int | None):
-        self.precision = precision
-        self.module = "numpy" if precision is None else "mpmath"
-
-    @property
-    def label(self) -> str:
-        return Precision(self.precision).label
-
-    def context(self):
-        if self.precision is None:
-            return np.errstate(all="ignore")
-        return mpmath.workdps(self.precision + 5)
-
-    def default_tol(self) -> float:
-        return Precision(self.precision).tolerance
-
-    def scalar(self, x):
-        return float(x) if self.precision is None else mpmath.mpf(x)
-
-    def vector(self, xs) -> np.ndarray:
-        if self.precision is None:
-            return np.asarray(_flatten(xs), dtype=float)
-        return np.array([mpmath.mpf(x) for x in _flatten(xs)], dtype=object)
-
-    def matrix(self, rows, shape=None) -> np.ndarray:
-        if isinstance(rows, mpmath.matrix):
-            rows = rows.tolist()
-        if self.precision is None:
-            out = np.asarray(rows, dtype=float)
-        else:
-            out = np.array([[mpmath.mpf(x) for x in row] for row in rows], dtype=object) \
-                if len(rows) else np.zeros((0, 0), dtype=object)
-        if shape is not None:
-            out = out.reshape(shape)
-        return out
-
-    def zeros(self, *shape) -> np.ndarray:
-        if self.precision is None:
-            return np.zeros(shape)
-        out = np.empty(shape, dtype=object)
-        out.fill(mpmath.mpf(0))
-        return out
-
-    def norm(self, x):
-        if x.size == 0:
-            return self.scalar(0)
-        if self.precision is None:
-            return float(np.max(np.abs(x)))
-        return max(abs(e) for e in x.ravel())
-
-    def solve(self, A: np.ndarray, B: np.ndarray) -> np.ndarray:
-        """A^{-1} B for a square A (vector or matrix B)."""
-        if self.precision is None:
-            return np.linalg.solve(A, B)
-        return _object_solve(A, B)
-
-
-class ModularBackend(Backend):
-    """Exact arithmetic in F_p (p = 2^61 - 1) at the modular points of
-    :class:`~nhham.lagrangian.points.PointSampler` (``modular=True``).
-
-    Arrays are ``object`` arrays of :class:`~nhham.lagrangian.domains.ModP`. A
-    coordinate's value is an :class:`~nhham.lagrangian.domains.Angle` (its sine and
-    cosine exact), so coordinate values are only handed to :class:`Lambdified`, never
-    computed with. Two quantities are equal or they are not: the tolerance is 0, and
-    the "size" of a difference is 0 or 1 (F_p has no absolute value). Fixed-size
-    residues keep this fast where exact rationals at random points grow large.
-    """
-
-    def __init__(self):
-        self.precision = "modular"
-        self.module = "modular"
-
-    @property
-    def label(self) -> str:
-        return "exact mod p = 2^61 - 1"
-
-    def context(self):
-        return contextlib.nullcontext()
-
-    def default_tol(self) -> float:
-        return 0.0
-
-    def scalar(self, x):
-        return ModP.lift(x)
-
-    def vector(self, xs) -> np.ndarray:
-        return np.array(_flatten(xs), dtype=object)
-
-    def matrix(self, rows, shape=None) -> np.ndarray:
-        out = np.array([[ModP.lift(x) for x in r] for r in rows], dtype=object) \
-            if len(rows) else np.zeros((0, 0), dtype=object)
-        return out.reshape(shape) if shape is not None else out
-
-    def zeros(self, *shape) -> np.ndarray:
-        out = np.empty(shape, dtype=object)
-        out.fill(ModP(0))
-        return out
-
-    def norm(self, x):
-        return 1.0 if any(e != 0 for e in x.ravel()) else 0.0
-
-    def solve(self, A: np.ndarray, B: np.ndarray) -> np.ndarray:
-        """A^{-1} B over F_p; ZeroDivisionError when A is singular modulo p."""
-        n = A.shape[0]
-        vec = B.ndim == 1
-        rhs = B.reshape(n, 1) if vec else B
-        if rhs.shape[1] == 0:
-            return np.empty(B.shape, dtype=object)
-        X = exact_solve([[ModP.lift(x) for x in row] for row in A],
-                        [[ModP.lift(x) for x in row] for row in rhs])
-        out = np.array(X, dtype=object).reshape(n, rhs.shape[1])
-        return out[:, 0] if vec else out
-
-
-def _flatten(xs):
-    if isinstance(xs, mpmath.matrix):
-        return [xs[i, j] for i in range(xs.rows) for j in range(xs.cols)]
-    if isinstance(xs, np.ndarray):
-        return list(xs.ravel())
-    out = []
-    for x in xs:
-        if isinstance(x, (list, tuple, np.ndarray, mpmath.matrix)):
-            out.extend(_flatten(x))
-        else:
-            out.append(x)
-    return out
-
-
-def _object_solve(A, B):
-    """Gaussian elimination with partial pivoting on object (mpmath) arrays."""
-    n = A.shape[0]
-    vec = B.ndim == 1
-    M = np.concatenate([A.astype(object), (B.reshape(n, 1) if vec else B).astype(object)], axis=1)
-    for k in range(n):
-        piv = max(range(k, n), key=lambda i: abs(M[i, k]))
-        if M[piv, k] == 0:
-            raise ZeroDivisionError("singular matrix")
-        if piv != k:
-            M[[k, piv]] = M[[piv, k]]
-        for i in range(k + 1, n):
-            f = M[i, k] / M[k, k]
-            if f != 0:
-                M[i, k:] = M[i, k:] - f * M[k, k:]
-    X = np.empty((n, M.shape[1] - n), dtype=object)
-    for i in range(n - 1, -1, -1):
-        X[i] = (M[i, n:] - M[i, i + 1:n] @ X[i + 1:]) / M[i, i] if i + 1 < n else M[i, n:] / M[i, i]
-    return X[:, 0] if vec else X
-
-
-class Lambdified:
-    """A list of expressions compiled once per backend, evaluated to an array.
-
-    Parameters
-    ----------
-    args : sequence of sympy.Symbol
-    exprs : sequence of sympy.Expr
-    shape : tuple
-        Shape of the result array.
-    """
-
-    def __init__(self, args: Sequence, exprs: Sequence, shape: tuple):
-        self.args = tuple(args)
-        self.exprs = [sp.sympify(e) for e in exprs]
-        self.shape = shape
-        self._compiled = {}
-
-    def __call__(self, backend: Backend, values: Sequence) -> np.ndarray:
-        if backend.module == "modular":
-            # Values at an exact point: no compilation, sin/cos of Angles exact.
-            out = [ModP.lift(x) for x in evaluate(self.exprs, dict(zip(self.args, values)), {})]
-            return np.array(out, dtype=object).reshape(self.shape)
-        fn = self._compiled.get(backend.module)
-        if fn is None:
-            fn = numeric_function(self.args, self.exprs, backend.precision,
-                                  cse=len(self.exprs) > 4)
-            self._compiled[backend.module] = fn
-        if not self.exprs:
-            return backend.zeros(*self.shape)
-        out = fn(*values)
-        # Real parts: sqrt of a negative number on a bad sample is complex;
-        # such samples are rejected by finiteness checks of the callers.
-        if backend.precision is None:
-            return np.array([complex(o).real for o in out], dtype=float).reshape(self.shape)
-        return np.array([mpmath.mpf(mpmath.re(mpmath.mpmathify(o))) for o in out],
-                        dtype=object).reshape(self.shape)

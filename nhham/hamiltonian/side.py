@@ -32,13 +32,14 @@ from typing import Sequence
 import numpy as np
 import sympy as sp
 
-from nhham.settings import SEED
-from nhham.hamiltonian.brackets import BivectorBracket, BracketAlgebra, numeric_bracket_matrix
 from nhham.errors import ComputationError
-from nhham.hamiltonian.legendre import Backend, Lambdified, LegendreMap, canonical_form_matrix
+from nhham.hamiltonian.brackets import BivectorBracket, BracketAlgebra, numeric_bracket_matrix
+from nhham.hamiltonian.legendre import LegendreMap, canonical_form_matrix
 from nhham.lagrangian.algebra import cancel, guard_closed_form, solve_linear
 from nhham.lagrangian.decision import Decision, DecisionSettings
 from nhham.lagrangian.submanifold import Submanifold
+from nhham.settings import SEED
+from nhham.system.evaluation import Backend, Lambdified
 from nhham.system.expressions import derivative
 
 __all__ = [

@@ -19,10 +19,9 @@ from nhham.hamiltonian.comparison import (
     NumericLagrangian,
     check_form_sampled,
 )
-from nhham.hamiltonian.legendre import ModularBackend
 from nhham.hamiltonian.side import HamiltonianSide
 from nhham.lagrangian.domains import PRIME, ModP, NotExact
-from nhham.lagrangian.linalg import exact_rank, exact_solve
+from nhham.lagrangian.linalg import ModularBackend, exact_rank, exact_solve
 
 __all__ = ["staged_at_points"]
 

@@ -9,6 +9,7 @@ written against it (:mod:`nhham.lagrangian.formulas`) runs in floating point too
 
 from __future__ import annotations
 
+import contextlib
 import itertools
 
 import numpy as np
@@ -18,7 +19,8 @@ from sympy.matrices.exceptions import NonInvertibleMatrixError
 from sympy.polys.matrices import DomainMatrix
 from sympy.polys.matrices.exceptions import DMNonInvertibleMatrixError
 
-from nhham.lagrangian.domains import PRIME, Degree, ModP, minor_degree
+from nhham.lagrangian.domains import PRIME, Degree, ModP, evaluate, minor_degree
+from nhham.system.evaluation import Backend, flatten
 
 __all__ = [
     "exact_rank",
@@ -33,6 +35,7 @@ __all__ = [
     "zeros_like",
     "degree_solve",
     "solve_degrees",
+    "ModularBackend",
 ]
 
 # ------------------------------------------------------------ exact linear algebra
@@ -206,41 +209,52 @@ class FloatMatrix:
 class ListMatrix:
     """Rows of Python scalars (``MPQ``, :class:`~nhham.lagrangian.domains.ModP`,
     :class:`~nhham.lagrangian.domains.Degree`) with the part of the DomainMatrix
-    interface the formulas use: ``*`` (the matrix product), ``-``, ``transpose``.
+    interface the formulas use: ``*`` (the matrix product), ``-``, ``transpose``,
+    ``extract``, ``hstack``, ``vstack``.
 
     Values of mixed kinds (an exact angle's rational next to a residue) combine by the
     scalars' own operators; :func:`field_solve` picks the solve by the kind of entry.
+    The number of columns is kept apart from the rows, so that a matrix with no rows
+    (no constraints) still has its width: its transpose has that many rows.
     """
 
-    def __init__(self, rows):
+    def __init__(self, rows, ncols: int | None = None):
         self.rows = [list(r) for r in rows]
+        self.ncols = len(self.rows[0]) if self.rows else (ncols or 0)
 
     @property
     def shape(self) -> tuple:
-        return (len(self.rows), len(self.rows[0]) if self.rows else 0)
+        return (len(self.rows), self.ncols)
 
     def transpose(self) -> "ListMatrix":
-        return ListMatrix(map(list, zip(*self.rows)))
+        return ListMatrix([[r[j] for r in self.rows] for j in range(self.ncols)],
+                          len(self.rows))
 
     def __mul__(self, other) -> "ListMatrix":
-        cols = list(zip(*other.rows))
+        cols = [[r[j] for r in other.rows] for j in range(other.ncols)]
         return ListMatrix([[sum((x * y for x, y in zip(row, col)), 0) for col in cols]
-                           for row in self.rows])
+                           for row in self.rows], other.ncols)
 
     def __sub__(self, other) -> "ListMatrix":
-        return ListMatrix([[x - y for x, y in zip(r, s)] for r, s in zip(self.rows, other.rows)])
+        return ListMatrix([[x - y for x, y in zip(r, s)] for r, s in zip(self.rows, other.rows)],
+                          self.ncols)
 
     def __neg__(self) -> "ListMatrix":
-        return ListMatrix([[-x for x in r] for r in self.rows])
+        return ListMatrix([[-x for x in r] for r in self.rows], self.ncols)
 
     def extract(self, rows, cols) -> "ListMatrix":
-        return ListMatrix([[self.rows[i][j] for j in cols] for i in rows])
+        return ListMatrix([[self.rows[i][j] for j in cols] for i in rows], len(cols))
 
     def hstack(self, other) -> "ListMatrix":
-        return ListMatrix([r + s for r, s in zip(self.rows, other.rows)])
+        if len(self.rows) != len(other.rows):
+            raise ValueError(f"hstack: {self.shape} beside {other.shape}")
+        return ListMatrix([r + s for r, s in zip(self.rows, other.rows)],
+                          self.ncols + other.ncols)
 
     def vstack(self, other) -> "ListMatrix":
-        return ListMatrix(self.rows + other.rows)
+        if self.ncols != other.ncols:
+            raise ValueError(f"vstack: {self.shape} above {other.shape}")
+        return ListMatrix(self.rows + other.rows, self.ncols)
 
     def to_list(self) -> list:
         return [list(r) for r in self.rows]
@@ -249,7 +263,7 @@ class ListMatrix:
 def zeros_like(M, shape):
     """A zero matrix of ``shape`` of the same kind (and domain) as ``M``."""
     if isinstance(M, ListMatrix):
-        return ListMatrix([[0] * shape[1] for _ in range(shape[0])])
+        return ListMatrix([[0] * shape[1] for _ in range(shape[0])], shape[1])
     if isinstance(M, FloatMatrix):
         return FloatMatrix.zeros(shape)
     return DomainMatrix.zeros(shape, M.domain)
@@ -293,7 +307,7 @@ def field_solve(A: DomainMatrix, B: DomainMatrix) -> DomainMatrix:
     bounds solve by :func:`degree_solve`). ZeroDivisionError where ``A`` is singular.
     """
     if isinstance(A, ListMatrix):
-        return ListMatrix(exact_solve(A.rows, B.rows))
+        return ListMatrix(exact_solve(A.rows, B.rows), B.ncols)
     if isinstance(A, FloatMatrix):
         try:
             return FloatMatrix(np.linalg.solve(A.a, B.a))
@@ -385,7 +399,7 @@ def _solve_mod_p(A, b):
 
 def degree_solve(A: ListMatrix, B: ListMatrix) -> ListMatrix:
     """The solve of the Degree arithmetic: bounds of A⁻¹ B (:func:`solve_degrees`)."""
-    return ListMatrix(solve_degrees(A.rows, B.rows))
+    return ListMatrix(solve_degrees(A.rows, B.rows), B.ncols)
 
 
 def solve_degrees(A, B) -> list:
@@ -401,3 +415,67 @@ def solve_degrees(A, B) -> list:
     den = minor_degree([list(a) for a in A], size)
     x = Degree(top, {("denominator", next(Degree._fresh)): (den, 1)})
     return [[x] * widths for _ in range(size)]
+
+
+class ModularBackend(Backend):
+    """Exact arithmetic in F_p (p = 2^61 - 1) at the modular points of
+    :class:`~nhham.lagrangian.points.PointSampler` (``modular=True``).
+
+    Arrays are ``object`` arrays of :class:`~nhham.lagrangian.domains.ModP`. A
+    coordinate's value is an :class:`~nhham.lagrangian.domains.Angle` (its sine and
+    cosine exact), so coordinate values are only handed to :class:`Lambdified`, never
+    computed with. Two quantities are equal or they are not: the tolerance is 0, and
+    the "size" of a difference is 0 or 1 (F_p has no absolute value). Fixed-size
+    residues keep this fast where exact rationals at random points grow large.
+    """
+
+    def __init__(self):
+        self.precision = "modular"
+        self.module = "modular"
+
+    def evaluate(self, f, values) -> np.ndarray:
+        """``f``'s expressions at the exact point ``values``: no compilation, the sines
+        and cosines of Angles exact."""
+        out = [ModP.lift(x) for x in evaluate(f.exprs, dict(zip(f.args, values)), {})]
+        return np.array(out, dtype=object)
+
+    @property
+    def label(self) -> str:
+        return "exact mod p = 2^61 - 1"
+
+    def context(self):
+        return contextlib.nullcontext()
+
+    def default_tol(self) -> float:
+        return 0.0
+
+    def scalar(self, x):
+        return ModP.lift(x)
+
+    def vector(self, xs) -> np.ndarray:
+        return np.array(flatten(xs), dtype=object)
+
+    def matrix(self, rows, shape=None) -> np.ndarray:
+        out = np.array([[ModP.lift(x) for x in r] for r in rows], dtype=object) \
+            if len(rows) else np.zeros((0, 0), dtype=object)
+        return out.reshape(shape) if shape is not None else out
+
+    def zeros(self, *shape) -> np.ndarray:
+        out = np.empty(shape, dtype=object)
+        out.fill(ModP(0))
+        return out
+
+    def norm(self, x):
+        return 1.0 if any(e != 0 for e in x.ravel()) else 0.0
+
+    def solve(self, A: np.ndarray, B: np.ndarray) -> np.ndarray:
+        """A^{-1} B over F_p; ZeroDivisionError when A is singular modulo p."""
+        n = A.shape[0]
+        vec = B.ndim == 1
+        rhs = B.reshape(n, 1) if vec else B
+        if rhs.shape[1] == 0:
+            return np.empty(B.shape, dtype=object)
+        X = exact_solve([[ModP.lift(x) for x in row] for row in A],
+                        [[ModP.lift(x) for x in row] for row in rhs])
+        out = np.array(X, dtype=object).reshape(n, rhs.shape[1])
+        return out[:, 0] if vec else out

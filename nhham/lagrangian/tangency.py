@@ -225,7 +225,8 @@ def _bordered(env, W, F, mu, Jq, Jv, v):
     Jqv = [evaluate(row, env, cache) for row in Jq]
     Jvv = [evaluate(row, env, cache) for row in Jv]
     vel = [env[s] for s in v]
-    K = bordered_matrix(ListMatrix(Wv), ListMatrix(muv), ListMatrix(Jvv)).rows
+    n = len(Wv)
+    K = bordered_matrix(ListMatrix(Wv), ListMatrix(muv, n), ListMatrix(Jvv, n)).rows
     c = Fv + [-sum((a * b for a, b in zip(row, vel)), 0) for row in Jqv]
     J = [a + b for a, b in zip(Jqv, Jvv)]
     return K, c, J

@@ -60,3 +60,18 @@ def test_maximal_minors_are_the_determinants(seed):
     direct = [Ma.extract(list(range(m)), list(S)).det()
               for S in itertools.combinations(range(n), m)]
     assert maximal_minors(Ma) == direct
+
+
+def test_a_list_matrix_without_rows_keeps_its_width():
+    """No constraints (m = 0): mu is 0 x n, its transpose n x 0, and K = [[W, mu^T]] is W
+    (a width lost there once made K empty and the rank at exact points 0)."""
+    from nhham.lagrangian.formulas import bordered_matrix
+    from nhham.lagrangian.linalg import ListMatrix
+
+    W = ListMatrix([[MPQ(2), MPQ(1)], [MPQ(1), MPQ(3)]])
+    mu = ListMatrix([], 2)
+    assert mu.shape == (0, 2) and mu.transpose().shape == (2, 0)
+    K = bordered_matrix(W, mu, ListMatrix([], 2))
+    assert K.shape == (2, 2) and K.rows == W.rows
+    with pytest.raises(ValueError):
+        W.hstack(ListMatrix([[MPQ(1)]]))
