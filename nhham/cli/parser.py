@@ -1,7 +1,7 @@
 """The command line: every command's options, their help, and usage errors.
 
 Built once by :func:`build_parser`; a usage error is a one-line
-:class:`~nhham.cli.envelope.UsageError` (exit status 2) naming the option.
+:class:`~nhham.errors.UsageError` (exit status 2) naming the option.
 """
 
 from __future__ import annotations

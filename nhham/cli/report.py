@@ -1,7 +1,7 @@
 """Plain-text and JSON rendering shared by the command and the result objects.
 
 Text output is aligned tables of short strings; expressions are printed in
-the scene's own names with :func:`nhham.expressions.to_text` (never raw
+the scene's own names with :func:`nhham.system.expressions.to_text` (never raw
 Python reprs). JSON values are numbers, booleans, null, strings and lists.
 """
 

@@ -285,7 +285,7 @@ class HamiltonianSide(DecisionSettings):
         Returns
         -------
         nhham.algorithm.AlgorithmRun
-            :func:`nhham.crosscheck.cross_check` compares its stages, ranks
+            :func:`nhham.hamiltonian.crosscheck.cross_check` compares its stages, ranks
             and multipliers with the Lagrangian run (checked, not assumed).
         """
         return self._analysis(2 * self.n if max_stages is None else int(max_stages))

@@ -159,7 +159,7 @@ class ConstraintAnalysis:
 
     @cached_property
     def integrability(self):
-        """:class:`nhham.integrability.Integrability` of the constraint distribution."""
+        """:class:`nhham.lagrangian.integrability.Integrability` of the constraint distribution."""
         from nhham.lagrangian.integrability import integrability
 
         opts = self.options

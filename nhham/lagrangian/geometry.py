@@ -11,7 +11,7 @@ multipliers come from a solve with the m x m matrix C.
 
 Fast path: when L is quadratic in the velocities, L = v^T W(q) v / 2 +
 b(q) . v - V(q) (every natural Lagrangian), W, b and V are read from the
-terms of L (:func:`nhham.system.quadratic_parts`) and the momenta, the mixed
+terms of L (:func:`nhham.system.velocities.quadratic_parts`) and the momenta, the mixed
 Hessian and the forcing are assembled from derivatives of the small entries
 of W, b and V instead of differentiating L twice::
 

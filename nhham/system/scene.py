@@ -19,7 +19,7 @@ A scene (``DESIGN.md`` §3) looks like::
 Loading happens in layers, each of which reports every problem it finds at
 once: the file itself (size, encoding, TOML syntax), the structure (keys,
 types, names), the expressions (parsed with
-:func:`nhham.expressions.parse_expression`, never evaluated as Python), the
+:func:`nhham.system.expressions.parse_expression`, never evaluated as Python), the
 system (:class:`nhham.system.System` checks the mechanics) and finally the
 initial data against the constraints. Every message names the key path
 (``parameters.m``, ``constraints[1]``, ``initial.x_dot``). Nothing the user
