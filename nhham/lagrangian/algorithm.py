@@ -26,7 +26,8 @@ the rows of an m x N matrix; the i-th multiplier is ``lambda_<i>`` (1-based, the
 index of the constraint φ_i in ``System.phi``, see :mod:`nhham.system.naming`).
 
 :func:`run_algorithm` is the generic loop (used by both the Lagrangian and the
-Hamiltonian side) with its records and its report;
+Hamiltonian side); its records are :mod:`nhham.lagrangian.records`, its trace as text
+:mod:`nhham.cli.trace`;
 :func:`nhham.lagrangian.analysis.analyze_constraints` is the Lagrangian entry point.
 """
 
