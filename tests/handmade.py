@@ -203,3 +203,23 @@ def curvilinear_inconsistent():
     q3 -> q3 + q2^2, q1 -> q1 + q1^3: psi = q2 at stage 1, then 0 = 1 on M_2."""
     return pulled_back(["q1", "q2", "q3"], LOR + q1 * q2, [v1 + v3, v2 - 1],
                        {q3: q3 + q2**2, q1: q1 + q1**3}, "curvilinear inconsistent")
+
+
+def sphere_with_knife():
+    """Particle on the sphere r = l with the nonholonomic constraint z_dot = y x_dot."""
+    x, y, z = sp.symbols("x y z")
+    xd, yd, zd = sp.symbols("x_dot y_dot z_dot")
+    m, l = sp.symbols("m l")
+    return nhham.System(["x", "y", "z"], m * (xd**2 + yd**2 + zd**2) / 2, [zd - y * xd],
+                        holonomic=[(x**2 + y**2 + z**2 - l**2) / 2],
+                        parameters={"m": 1.3, "l": 1.1})
+
+
+def sleigh_with_values():
+    """The Chaplygin sleigh (blade behind: -a theta_dot) with parameter values."""
+    th = sp.Symbol("theta")
+    xd, yd, thd = sp.symbols("x_dot y_dot theta_dot")
+    m, I, a = sp.symbols("m I a")
+    return nhham.System(["x", "y", "theta"], m * (xd**2 + yd**2) / 2 + I * thd**2 / 2,
+                        [-sp.sin(th) * xd + sp.cos(th) * yd - a * thd],
+                        parameters={"m": 1.5, "I": 0.4, "a": 0.6})
