@@ -23,7 +23,8 @@ import sympy as sp
 from sympy.polys.rings import sring
 
 __all__ = ["cancel", "tidy", "tidy_light", "trig_normal", "solve_linear", "block_inverse",
-           "guard_closed_form", "CLOSED_FORM_OPS", "ring_fraction", "normal_form", "trig_reduce"]
+           "guard_closed_form", "CLOSED_FORM_OPS", "ring_fraction", "normal_form", "trig_reduce",
+           "solve_for_coordinates"]
 
 #: A symbolic solve with an m x m matrix (m >= 2) of more operations than this is refused
 #: unless asked for: the car with a trailer (n = 4, C of 547 operations) takes 30 s, the
@@ -250,3 +251,57 @@ def _replace_square(poly, hi: int, lo: int):
             key = tuple(new)
             terms[key] = terms.get(key, 0) + coeff * ((-1) ** j * math.comb(half, j))
     return poly.ring.from_dict({m: c for m, c in terms.items() if c})
+
+
+def solve_for_coordinates(coordinates, equations, skip=frozenset()) -> tuple[dict, list]:
+    """Coordinates solved exactly from the equations linear in them with a constant
+    coefficient: the one coordinate elimination of the exact layers.
+
+    Repeatedly, the first equation (in order) that is linear with a constant nonzero
+    coefficient in a coordinate not yet solved (the first such coordinate) is solved for
+    it, and the value substituted into those solved before; an equation that reduces to 0
+    is dropped. Equations that involve a symbol of ``skip`` (velocities) are left alone.
+
+    Parameters
+    ----------
+    coordinates : sequence of sympy.Symbol
+    equations : sequence of sympy.Expr
+        Each meaning ``= 0``.
+    skip : set of sympy.Symbol, optional
+
+    Returns
+    -------
+    substitution : dict
+        Coordinate -> expanded expression in the others.
+    unsolved : list of sympy.Expr
+        The equations not used, as given (not substituted), in order.
+    """
+    sub: dict = {}
+    pending = [sp.sympify(e) for e in equations]
+    progress = True
+    while progress:
+        progress = False
+        for eq in list(pending):
+            e = sp.expand(eq.xreplace(sub)) if sub else sp.expand(eq)
+            if e == 0:
+                pending.remove(eq)
+                progress = True
+                continue
+            if e.free_symbols & skip:
+                continue
+            for q in coordinates:
+                if q in sub or q not in e.free_symbols:
+                    continue
+                coeff = e.coeff(q, 1)
+                rest = sp.expand(e - coeff * q)
+                if coeff.free_symbols or coeff == 0 or rest.has(q):
+                    continue
+                value = sp.expand(-rest / coeff)
+                sub = {k: sp.expand(v.xreplace({q: value})) for k, v in sub.items()}
+                sub[q] = value
+                pending.remove(eq)
+                progress = True
+                break
+            if progress:
+                break
+    return sub, pending

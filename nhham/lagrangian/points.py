@@ -27,6 +27,7 @@ import sympy as sp
 from sympy.external.gmpy import MPQ
 from sympy.polys.matrices import DomainMatrix
 
+from nhham.lagrangian.algebra import solve_for_coordinates
 from nhham.lagrangian.domains import (
     PRIME,
     SAMPLE_BITS,
@@ -217,26 +218,13 @@ def _exact_number(name, value):
 
 
 def eliminate_coordinates(coordinates, holonomic) -> dict:
-    """Coordinates solved from holonomic constraints linear in them (constant coefficient)."""
-    solved: dict = {}
-    for g in holonomic:
-        e = sp.expand(sp.sympify(g).xreplace(solved))
-        if e == 0:
-            continue
-        for q in coordinates:
-            if q in solved or q not in e.free_symbols:
-                continue
-            coeff = e.coeff(q, 1)
-            rest = sp.expand(e - coeff * q)
-            if coeff.free_symbols or coeff == 0 or rest.has(q):
-                continue
-            value = sp.expand(-rest / coeff)
-            solved = {k: sp.expand(v.xreplace({q: value})) for k, v in solved.items()}
-            solved[q] = value
-            break
-        else:
-            raise NotExact(f"the holonomic constraint {g} = 0 is not linear in a coordinate "
-                           f"with a constant coefficient")
+    """Coordinates solved from holonomic constraints linear in them (constant coefficient,
+    :func:`~nhham.lagrangian.algebra.solve_for_coordinates`); NotExact naming the first
+    constraint that is not."""
+    solved, unsolved = solve_for_coordinates(coordinates, holonomic)
+    if unsolved:
+        raise NotExact(f"the holonomic constraint {unsolved[0]} = 0 is not linear in a "
+                       f"coordinate with a constant coefficient")
     return solved
 
 

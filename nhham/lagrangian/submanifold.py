@@ -56,7 +56,7 @@ import numpy as np
 import sympy as sp
 
 from nhham.errors import ComputationError, EmptySubmanifoldError
-from nhham.lagrangian.algebra import cancel, solve_linear
+from nhham.lagrangian.algebra import cancel, solve_for_coordinates, solve_linear
 from nhham.lagrangian.decision import Decision
 from nhham.lagrangian.sampled import (
     best_block,
@@ -156,36 +156,9 @@ class Submanifold:
     @cached_property
     def reduction(self) -> Reduction:
         """Exact elimination of coordinates and dependent velocities."""
-        sub: dict = {}
-        pending = [e for e in self.equations]
-        coords = list(self.system.coordinates)
         vels = set(self.fibre)
         # Coordinates given linearly with a constant coefficient, repeatedly.
-        progress = True
-        while progress:
-            progress = False
-            for eq in list(pending):
-                e = sp.expand(eq.xreplace(sub)) if sub else sp.expand(eq)
-                if e == 0:
-                    pending.remove(eq)
-                    progress = True
-                    continue
-                if e.free_symbols & vels:
-                    continue
-                for q in coords:
-                    if q in sub or q not in e.free_symbols:
-                        continue
-                    coeff = e.coeff(q, 1)
-                    if coeff.free_symbols or coeff == 0 or sp.expand(e - coeff * q).has(q):
-                        continue
-                    value = sp.expand(-(e - coeff * q) / coeff)
-                    sub = {k: sp.expand(v.xreplace({q: value})) for k, v in sub.items()}
-                    sub[q] = value
-                    pending.remove(eq)
-                    progress = True
-                    break
-                if progress:
-                    break
+        sub, pending = solve_for_coordinates(self.system.coordinates, self.equations, vels)
         pending = [sp.expand(e.xreplace(sub)) for e in pending]
         pending = [e for e in pending if e != 0]
         affine = [e for e in pending if is_affine(e, self.fibre) and e.free_symbols & vels]

@@ -29,3 +29,17 @@ def test_ring_fraction_cancels_what_only_the_identity_shows():
     assert num.as_expr() / den.as_expr() == 1
     assert normal_form(sp.exp(t) + 1) == sp.exp(t) + 1          # opaque generators pass
     assert normal_form(sp.Integer(5)) == 5
+
+
+def test_solve_for_coordinates_by_hand():
+    """The one coordinate elimination: linear with a constant coefficient, repeatedly
+    (x y - 1 becomes linear once y = 2 is known), velocities left alone, the rest kept."""
+    from nhham.lagrangian.algebra import solve_for_coordinates
+
+    x, y, z, xd = sp.symbols("x y z x_dot")
+    sub, unsolved = solve_for_coordinates((x, y, z), [x * y - 1, y - 2, xd - z, z**2 - 1],
+                                          skip={xd})
+    assert sub == {y: 2, x: sp.Rational(1, 2)}
+    assert unsolved == [xd - z, z**2 - 1]
+    sub, unsolved = solve_for_coordinates((x, y), [x - 2 * y, y - 3, x - 6])
+    assert sub == {x: 6, y: 3} and unsolved == []
