@@ -20,10 +20,10 @@ import re
 from pathlib import Path
 
 from nhham.errors import InputError, UsageError
+from nhham.settings import MAX_DIGITS, MIN_DIGITS, option_problem
 from nhham.system.scene import simulate_option_problem
 
-__all__ = ["DEFAULT_BUDGET", "MAX_BUDGET", "MIN_DIGITS", "MAX_DIGITS", "MAX_SAMPLES",
-           "budget_value", "check_options", "argparse_key"]
+__all__ = ["DEFAULT_BUDGET", "MAX_BUDGET", "budget_value", "check_options", "argparse_key"]
 
 #: Default ``--budget`` (seconds) of the symbolic commands (classify, derive, compare,
 #: linearize); simulate and bench have none (they report their progress).
@@ -31,13 +31,6 @@ DEFAULT_BUDGET = 600.0
 
 #: Largest ``--budget`` (seconds, about 11.6 days): beyond it ``--budget none``.
 MAX_BUDGET = 1e6
-
-#: Range of mpmath digits (``--precision``, ``--reference-digits``): more than float64.
-MIN_DIGITS = 16
-MAX_DIGITS = 1000
-
-#: Most seeded points ``compare --samples`` takes.
-MAX_SAMPLES = 1000
 
 # Options of `simulate` and `bench` with the range of a [simulate] table entry.
 _SIMULATE_RANGES = ("t_end", "rtol", "atol", "step", "max_step")
@@ -89,8 +82,8 @@ def check_options(args: argparse.Namespace) -> None:
         if value is not None and value < least:
             problems.append(f"{_option(key)}: expected at least {least}, got {value}")
     samples = getattr(args, "samples", None)
-    if samples is not None and not 1 <= samples <= MAX_SAMPLES:
-        problems.append(f"--samples: expected 1 to {MAX_SAMPLES} points, got {samples}")
+    if samples is not None and option_problem("samples", samples):
+        problems.append(f"--samples: {option_problem('samples', samples)}")
     t_end = getattr(args, "t_end", None)
     for key in _SIMULATE_RANGES:
         value = getattr(args, key, None)

@@ -52,7 +52,7 @@ from nhham.lagrangian.domains import NotExact
 from nhham.lagrangian.linalg import ModularBackend, exact_rank
 from nhham.lagrangian.points import PointSampler
 from nhham.lagrangian.submanifold import Submanifold
-from nhham.settings import SEED
+from nhham.settings import SEED, check_options
 from nhham.system.evaluation import Backend, Lambdified
 
 __all__ = [
@@ -130,6 +130,8 @@ def classify_constraints(source, constraints: Sequence | None = None,
     """
     if method not in ("auto", "exact", "sampled"):
         raise InputError(f"classify: method must be 'auto', 'exact' or 'sampled', got {method!r}")
+    check_options("classify_constraints", precision=precision, samples=samples, seed=seed,
+                  tol=tol)
     side_in = source if isinstance(source, HamiltonianSide) else None
     system = source.system if isinstance(source, HamiltonianSide) else getattr(
         source, "system", source)

@@ -59,7 +59,7 @@ from nhham.lagrangian.algebra import cancel
 from nhham.lagrangian.domains import NotExact
 from nhham.lagrangian.geometry import lagrangian_geometry
 from nhham.lagrangian.submanifold import Submanifold
-from nhham.settings import SEED
+from nhham.settings import SEED, check_options
 from nhham.system.evaluation import Backend, Lambdified
 
 __all__ = ["CheckResult", "CrossCheckReport", "cross_check", "METHODS"]
@@ -116,6 +116,8 @@ def cross_check(system, precision: int | None = None, samples: int = 6, seed: in
     if method not in METHODS:
         raise InputError(f"cross_check: method must be one of {', '.join(map(repr, METHODS))}, "
                          f"got {method!r}")
+    check_options("cross_check", precision=precision, samples=samples, seed=seed, tol=tol,
+                  max_stages=max_stages)
     start = time.perf_counter()
     if side is None:
         # closed forms only where symbolic_affordable chose them

@@ -21,7 +21,7 @@ from nhham.lagrangian.domains import NotExact
 from nhham.lagrangian.linalg import ModularBackend
 from nhham.lagrangian.points import PointSampler
 from nhham.lagrangian.submanifold import Submanifold
-from nhham.settings import SEED
+from nhham.settings import SEED, check_options
 from nhham.system.evaluation import Backend
 from nhham.system.expressions import short
 
@@ -161,6 +161,7 @@ def dirac_vs_projected(system, *, precision=None, samples=6, seed=SEED,
     -------
     DiracProjectedReport
     """
+    check_options("dirac_vs_projected", precision=precision, samples=samples, seed=seed, tol=tol)
     if side is None:
         side = classes.side if classes is not None else hamiltonian_side(
             system, precision=precision, samples=samples, seed=seed, closed_form=True)

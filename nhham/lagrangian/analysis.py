@@ -31,7 +31,7 @@ from nhham.lagrangian.algorithm import (
 )
 from nhham.lagrangian.records import AlgorithmRun, Evidence, Stage, tangency_matrix
 from nhham.lagrangian.submanifold import Submanifold
-from nhham.settings import SEED
+from nhham.settings import SEED, check_options
 from nhham.system.description import System
 from nhham.system.naming import multiplier_symbol
 
@@ -248,6 +248,8 @@ def analyze_constraints(system, *, precision: int | None = None, samples: int = 
     -------
     ConstraintAnalysis
     """
+    check_options("analyze_constraints", precision=precision, samples=samples, seed=seed,
+                  max_stages=max_stages)
     opts = MappingProxyType(dict(precision=precision, samples=samples, seed=seed,
                                  max_stages=max_stages, exact=exact))
     specs = _decompose(system) if decompose else [_whole(system)]

@@ -10,7 +10,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
-from nhham.settings import SEED
+from nhham.settings import SEED, check_options
 
 if TYPE_CHECKING:
     from nhham.system.description import System
@@ -37,6 +37,10 @@ class DecisionSettings:
     precision: int | None = None
     samples: int = 6
     seed: int = SEED
+
+    def __post_init__(self):
+        check_options(type(self).__name__, precision=self.precision, samples=self.samples,
+                      seed=self.seed)
 
     def __repr__(self):
         return f"{type(self).__name__}({self.system!r})"

@@ -21,7 +21,7 @@ import sympy as sp
 
 from nhham.errors import InputError
 from nhham.lagrangian.exceptional import POINTS
-from nhham.settings import SEED
+from nhham.settings import SEED, check_options
 from nhham.system.expressions import short
 from nhham.verdict.results import (
     MAX_DEPTH,
@@ -78,10 +78,8 @@ def parametric_classification(system, *, positive: Sequence = (),
     """
     params = tuple(system.parameters)
     declared = _declared_positive(system, positive)
-    if int(max_depth) != max_depth or max_depth < 0:
-        raise InputError(f"max_depth: expected a non-negative integer, got {max_depth!r}")
-    if not (near >= 0):
-        raise InputError(f"near: expected a non-negative number, got {near!r}")
+    check_options("parametric_classification", precision=precision, seed=seed, near=near,
+                  max_depth=max_depth, points=points)
     opts = dict(classes=classes, precision=precision, seed=seed, points=points)
     base = rebuild(system, {}, None)
     signs = _sign_dummies(params, declared)

@@ -21,7 +21,7 @@ from nhham.lagrangian.exceptional import (
     exceptional_components,
     exceptional_conditions,
 )
-from nhham.settings import SEED
+from nhham.settings import SEED, check_options
 from nhham.verdict.results import MAX_DEPTH, NEAR, ValuesVerdict, Verdict, exact_value
 from nhham.verdict.substitution import branches, compose, rebuild
 
@@ -55,6 +55,8 @@ def classification_at_values(system, *, classes: Callable | None = None,
     -------
     ValuesVerdict
     """
+    check_options("classification_at_values", precision=precision, seed=seed, near=near,
+                  max_depth=max_depth, points=points)
     valued = tuple(p for p in system.parameters if p in system.parameter_values)
     opts = dict(classes=classes, precision=precision, seed=seed, points=points, near=near)
     values = {p: system.parameter_values[p] for p in valued}
