@@ -1,0 +1,41 @@
+"""The data of the generic decisions and their exceptional sets
+(nhham.lagrangian.exceptional): the components found against those derived by hand, and the
+200-bit floating-point determinants and solves against exact arithmetic."""
+
+from __future__ import annotations
+
+import sympy as sp
+
+from nhham.lagrangian.analysis import analyze_constraints
+from nhham.lagrangian.exceptional import exceptional_conditions
+from parametric_systems import two_bodies
+
+
+def test_exceptional_conditions_of_one_analysis():
+    conds = exceptional_conditions(analyze_constraints(two_bodies()))
+    eqs = {tuple(str(e) for e in c.equations) for c in conds}
+    assert ("I1 - I2",) in eqs
+    rank = next(c for c in conds if c.equations == (sp.Symbol("I1") - sp.Symbol("I2"),))
+    assert any("C singular" in r for r in rank.reasons)
+
+
+def test_floating_point_determinants_pivot():
+    """The nearness estimate evaluates data in 200-bit floating point: determinants and
+    solves there pivot (sympy's fraction-free elimination divides by the rounded zero
+    pivots of an antisymmetric bracket matrix). Checked against exact arithmetic."""
+    from sympy.polys.matrices import DomainMatrix
+
+    from nhham.lagrangian.exceptional import SHIFT_FIELD
+    from nhham.lagrangian.linalg import field_det, field_solve
+
+    rows = [[0, 3, -1, 2], [-3, 0, 5, 1], [1, -5, 0, 7], [-2, -1, -7, 0]]
+    exact = DomainMatrix([[sp.QQ(x) for x in r] for r in rows], (4, 4), sp.QQ)
+    F = SHIFT_FIELD
+    approx = exact.convert_to(F)
+    pf = 3 * 7 - (-1) * 1 + 2 * 5  # Pfaffian b01 b23 - b02 b13 + b03 b12 = 32
+    assert exact.det() == pf ** 2
+    assert abs(float(field_det(approx)) - pf ** 2) < 1e-40
+    rhs = DomainMatrix([[sp.QQ(1)], [sp.QQ(0)], [sp.QQ(2)], [sp.QQ(-1)]], (4, 1), sp.QQ)
+    x = exact.lu_solve(rhs).to_list()
+    y = field_solve(approx, rhs.convert_to(F)).to_list()
+    assert all(abs(float(a[0]) - float(b[0])) < 1e-40 for a, b in zip(x, y))
