@@ -32,8 +32,6 @@ def latex_summary(status, rank, labels, constraints, free, stages, names=None) -
     return "$$\\begin{aligned}" + r" \\ ".join(rows) + "\\end{aligned}$$"
 
 
-
-
 def report_lines(res, header: str, preamble=(), variables: int | None = None) -> list:
     """The report of a run or an analysis as lines: stages, decisions, outcome, warnings.
 

@@ -273,7 +273,6 @@ def modular_sampler(system, side, samples, seed, required=False):
     return None
 
 
-
 def lag_C(lag: NumericLagrangian, be, vals):
     """C = -mu W^{-1} mu^T numerically at a point of TQ."""
     if not lag.m:

@@ -38,6 +38,7 @@ __all__ = [
     "ModularBackend",
 ]
 
+
 # ------------------------------------------------------------ exact linear algebra
 def _domain_matrix(rows):
     M = [[x if isinstance(x, MPQ) else QQ(x) for x in row] for row in rows]

@@ -16,6 +16,10 @@ constraints are eliminated when a coordinate enters one linearly with a constant
 coefficient. Anything else raises :class:`~nhham.lagrangian.domains.NotExact`, and
 the caller decides at sampled points instead, saying so. The arithmetic of the
 values and of their degree bounds is :mod:`nhham.lagrangian.domains`.
+
+Two samplers, one per kind of point: :class:`PointSampler` (rational points, or points
+over F_p with ``modular=True``) and :class:`ParameterFieldSampler` (points whose values
+lie in the field Q(params) of the parameters kept symbolic, for the exceptional sets).
 """
 
 from __future__ import annotations

@@ -138,7 +138,6 @@ def parametric_classification(system, *, positive: Sequence = (),
         values=MappingProxyType(values))
 
 
-
 def _distance_to_zero(expr, at, syms) -> float:
     """|e| / |grad e| at the exact point ``at``, formed exactly before it becomes a
     float (a polynomial of high degree in large values would overflow float64)."""
@@ -149,6 +148,7 @@ def _distance_to_zero(expr, at, syms) -> float:
         return math.sqrt(float(expr.xreplace(at) ** 2 / grad2))
     except OverflowError:
         return math.inf
+
 
 def _declared_positive(system, positive) -> list:
     by_name = {p.name: p for p in system.parameters}
@@ -210,7 +210,6 @@ def _bad_substitution(sub, signs) -> str | None:
         if s is not None and s.is_positive and d.is_nonpositive:
             return f"{p.name} = {short(v)} contradicts {p.name} > 0"
     return None
-
 
 
 def _order_cases(nodes) -> list:

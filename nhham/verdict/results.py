@@ -24,6 +24,7 @@ NEAR = 1e-8
 # Default bound on the depth of the recursion over cases.
 MAX_DEPTH = 3
 
+
 @dataclass(frozen=True)
 class Verdict:
     """The classification at one parameter case (the keys of ``nhham classify``).
@@ -105,7 +106,6 @@ class Verdict:
         out["redundant"] = list(self.redundant)
         out["note"] = self.note
         return out
-
 
 
 @dataclass(frozen=True)

@@ -121,7 +121,6 @@ def _close_warnings(close, values) -> list:
             f"ill-conditioned" for reason, d in close]
 
 
-
 # ================================================================= one run
 def examine(system, params, *, classes, precision, seed, points, values=None,
              near=NEAR):
