@@ -82,8 +82,9 @@ def check_options(args: argparse.Namespace) -> None:
         if value is not None and value < least:
             problems.append(f"{_option(key)}: expected at least {least}, got {value}")
     samples = getattr(args, "samples", None)
-    if samples is not None and option_problem("samples", samples):
-        problems.append(f"--samples: {option_problem('samples', samples)}")
+    why = None if samples is None else option_problem("samples", samples)
+    if why:
+        problems.append(f"--samples: {why}")
     t_end = getattr(args, "t_end", None)
     for key in _SIMULATE_RANGES:
         value = getattr(args, key, None)

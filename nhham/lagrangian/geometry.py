@@ -25,7 +25,7 @@ both give the same expressions up to algebraic rearrangement.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 from functools import cached_property
 
 import sympy as sp
@@ -107,15 +107,12 @@ def lagrangian_geometry(system, precision: int | None = None, samples: int = 6,
         # a geometry differing in it alone starts from what the other has formed.
         sibling = shared.get(key[:3] + (not key[3],))
         if sibling is not None:
-            formed = {k: v for k, v in vars(sibling).items() if k not in _SETTINGS}
+            settings = {f.name for f in fields(LagrangianGeometry)}  # the arguments
+            formed = {k: v for k, v in vars(sibling).items() if k not in settings}
             vars(geometry).update(formed)
         shared[key] = geometry
     return shared[key]
 
-
-# The constructor's arguments, kept as attributes; everything else in a geometry's
-# __dict__ is a formed (cached) quantity.
-_SETTINGS = frozenset({"system", "precision", "samples", "seed", "fast", "closed_form"})
 
 
 @dataclass(frozen=True, eq=False, repr=False)
