@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import sympy as sp
 
-from nhham.lagrangian.algorithm import CLOSED_FORM_SIZE
+from nhham.lagrangian.engine import Policy
 
 __all__ = ["dot_names", "latex_summary", "report_lines", "run_text", "run_latex",
            "analysis_text", "analysis_latex"]
@@ -43,10 +43,12 @@ def report_lines(res, header: str, preamble=(), variables: int | None = None) ->
     preamble : sequence of str
         Lines printed after the header.
     variables : int, optional
-        Number of variables N (closed forms are printed only for N <= 2 CLOSED_FORM_SIZE).
+        Number of variables N (closed forms are printed only for N <= 2 n, n the
+        policy's ``closed_form_size``: the run's, or the default).
     """
     lines = [f"{header}: {res.status}", *preamble]
-    small = variables is not None and variables <= 2 * CLOSED_FORM_SIZE
+    size = getattr(res, "policy", Policy()).closed_form_size
+    small = variables is not None and variables <= 2 * size
     for st in res.stages:
         lines.append(f"Stage {st.index}: M_{st.index} defined by {len(st.constraints)} "
                      f"constraint(s); rank (Z_i(chi_j)) = {st.rank}, augmented rank "

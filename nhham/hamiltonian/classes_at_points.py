@@ -17,9 +17,10 @@ import sympy as sp
 from nhham.errors import ComputationError, NhhamError
 from nhham.hamiltonian.brackets import connected_blocks
 from nhham.hamiltonian.classes import ConstraintClasses
+from nhham.hamiltonian.classes_sampled import classes_from_samples
 from nhham.lagrangian.analysis import ConstraintAnalysis
 from nhham.lagrangian.decision import Decision
-from nhham.lagrangian.domains import NotExact, evaluate, minor_degree, schwartz_zippel_bound
+from nhham.lagrangian.domains import evaluate, minor_degree, schwartz_zippel_bound
 from nhham.lagrangian.formulas import lagrangian_bracket
 from nhham.lagrangian.geometry import LagrangianGeometry, lagrangian_geometry
 from nhham.lagrangian.linalg import (
@@ -32,120 +33,65 @@ from nhham.lagrangian.linalg import (
 )
 from nhham.lagrangian.points import PointSampler, jacobian_row
 from nhham.lagrangian.submanifold import Submanifold
-from nhham.lagrangian.tangency import MAX_POINTS, TARGET_ERROR
+from nhham.system.evaluation import Backend
 
-__all__ = ["classify_at_points", "float_brackets", "COMBINATION_MAX_N"]
+__all__ = ["BracketRank", "float_brackets"]
 
 
-def classify_at_points(side, cons, labels, analysis, seed, target=TARGET_ERROR):
-    """B_ab = {chi_a, chi_b} at random exact points of M_f = M_1, through the
-    Lagrangian bracket (the pull-back of the canonical one by Leg):
+class BracketRank:
+    """The first/second-class split on M_f = M_1 as a question for
+    :func:`~nhham.lagrangian.engine.decide`: the rank of B_ab = {chi_a, chi_b}_L
+    (:func:`nhham.lagrangian.formulas.lagrangian_bracket`), its maximal second-class set
+    and the first-class combinations at the points (the answer:
+    :class:`~nhham.hamiltonian.classes.ConstraintClasses`).
 
-        {f, g}_L = f_q . W^{-1} g_v - W^{-1} f_v . g_q - (W^{-1} f_v)^T (M - M^T) W^{-1} g_v
-
-    with M the mixed Hessian d2L/dq dv. rank B at an exact point is proved; a
-    deficiency seen at k points carries the Schwartz–Zippel bound.
+    No exact reduction here (the symbolic classification is
+    ``classify_constraints(method="exact")``); sampled:
+    the Lagrangian bracket at floating-point points.
     """
-    system = side.system
-    geo = _geometry(system, analysis)
-    q, v = system.coordinates, system.velocities
-    cons = [sp.sympify(c) for c in cons]
-    k = len(cons)
-    sampler = PointSampler.on_M1(system, seed)
-    Jq = [jacobian_row(c, q) for c in cons]
-    Jv = [jacobian_row(c, v) for c in cons]
-    W = [list(geo.hessian.row(i)) for i in range(system.n)]
-    Mx = [list(geo.mixed_hessian.row(i)) for i in range(system.n)]
-    proof = _rank_modulo_p(side, cons, labels, analysis, seed, W, Mx, Jq, Jv)
-    if proof is not None:
-        return proof
-    best, count, pivots, mats, degrees, error = -1, 0, [], [], None, 0.0
-    while count < MAX_POINTS:
-        pt = sampler.point()
-        try:
-            Bp = _bracket_at(pt.env, W, Mx, Jq, Jv)
-        except ZeroDivisionError:
-            continue
-        count += 1
-        mats.append(Bp)
-        r, rows, _ = exact_rank(Bp) if k else (0, [], [])
-        if r > best:
-            best, pivots = r, rows
-        if degrees is None:
-            degrees = _bracket_at(pt.degrees, W, Mx, Jq, Jv, degrees=True)
-        if best >= k:
-            break
-        error = schwartz_zippel_bound(minor_degree(degrees, best + 1), count,
-                                      denominator_degree=sampler.denominator_degree)
-        if error < target:
-            break
-    r = best
-    if r >= k:
-        rank_d = Decision(r, "exact", f"bracket matrix of full rank {r} at an exact point of "
-                          f"M_f (proof)", samples=count, error_bound=0.0)
-    else:
-        rank_d = Decision(r, "exact at points", f"rank {r} of the bracket matrix at {count} "
-                          f"random exact points of M_f", samples=count, error_bound=error)
-    decisions = {"rank": rank_d}
-    R = list(pivots) if r else []
-    nonzero = np.zeros((k, k), dtype=bool)
-    for Bp in mats:
-        nonzero |= np.array([[x != 0 for x in row] for row in Bp], dtype=bool).reshape(k, k)
-    coeff_dicts = []
-    for kk in (i for i in range(k) if i not in R):
-        per_point = []
-        for Bp in mats:
-            per_point.append(_exact_combination(Bp, R, kk))
-        coeff_dicts.append({labels[a]: tuple(float(c[a]) for c in per_point)
-                            for a in range(k) if any(c[a] != 0 for c in per_point)})
-        decisions[f"gamma[{labels[kk]}]"] = Decision(
-            True, "exact", "B c = 0 exactly at each point (c solved from the regular block "
-            "of B at that point); the coefficients depend on the point", samples=count)
-    alone = tuple(labels[a] for a in range(k) if not nonzero[a].any())
-    blocks = tuple(tuple(labels[a] for a in blk) for blk in connected_blocks(nonzero)) if k else ()
-    cons_tq = tuple(cons)
-    return ConstraintClasses(
-        labels=tuple(labels), constraints_TQ=cons_tq, constraints=None, bracket_matrix=None,
-        bracket_samples=tuple(np.array([[float(x) for x in row] for row in Bp], dtype=float)
-                              .reshape(k, k) for Bp in mats),
-        rank=r, first_class=k - r, second_class=r,
-        second_class_set=tuple(labels[a] for a in R), first_class_combinations=None,
-        combination_coefficients=tuple(coeff_dicts), individually_first_class=alone,
-        blocks=blocks, decisions=decisions, method="exact at points", manifold=None,
-        side=side, analysis=analysis)
 
+    what = "rank of the bracket matrix on M_f"
 
-#: The first-class combinations of a classification decided at points are formed in
-#: closed form up to this many coordinates (:mod:`nhham.hamiltonian.combinations`).
-COMBINATION_MAX_N = 8
+    def __init__(self, side, cons, labels, analysis, policy):
+        system = side.system
+        geo = _geometry(system, analysis)
+        q, v = system.coordinates, system.velocities
+        self.side, self.analysis, self.labels = side, analysis, tuple(labels)
+        self.policy = policy
+        self.cons = [sp.sympify(c) for c in cons]
+        self.Jq = [jacobian_row(c, q) for c in self.cons]
+        self.Jv = [jacobian_row(c, v) for c in self.cons]
+        self.W = [list(geo.hessian.row(i)) for i in range(system.n)]
+        self.Mx = [list(geo.mixed_hessian.row(i)) for i in range(system.n)]
+        self.best, self.pivots, self.mats = -1, [], []
 
+    def value(self, env, degrees: bool = False):
+        return _bracket_at(env, self.W, self.Mx, self.Jq, self.Jv, degrees=degrees)
 
-def _rank_modulo_p(side, cons, labels, analysis, seed, W, Mx, Jq, Jv, tries=3):
-    """The rank of B proved at a point over F_p where it is the largest B can have; else None.
+    @property
+    def data(self):
+        return self.W, self.Mx, self.Jq, self.Jv
 
-    B is antisymmetric, so its rank is at most k for k even and k - 1 for k odd. A rank
-    r modulo p at a point of M_1 is a lower bound of its rank over Q at a rational point
-    (no inverse taken was of a multiple of p), hence of its generic rank on M_1: where r
-    is that largest rank, the rank is proved. The r pivot rows R are independent, so
-    B_RR is invertible (a principal submatrix of an antisymmetric matrix on a maximal
-    independent set of rows); for k odd the one first-class combination is
-    chi_k - sum_R (B_RR^-1 B_Rk)_a chi_a, its coefficients given at seeded float points
-    of M_1 (rational arithmetic at n = 19 took 5 s a point).
-    """
-    system = side.system
-    k = len(cons)
-    if k == 0:
-        return None
-    largest = k - k % 2
-    sampler = PointSampler.on_M1(system, seed, modular=True)
-    for _ in range(tries):
-        try:
-            Bp = _bracket_at(sampler.point().env, W, Mx, Jq, Jv)
-        except (ZeroDivisionError, NotExact):
-            continue
+    def proved_modulo_p(self, Bp):
+        """The rank of B proved at a point over F_p where it is the largest B can have;
+        else None.
+
+        B is antisymmetric, so its rank is at most k for k even and k - 1 for k odd. A
+        rank r modulo p at a point of M_1 is a lower bound of its rank over Q at a
+        rational point (no inverse taken was of a multiple of p), hence of its generic
+        rank on M_1: where r is that largest rank, the rank is proved. The r pivot rows
+        R are independent, so B_RR is invertible (a principal submatrix of an
+        antisymmetric matrix on a maximal independent set of rows); for k odd the one
+        first-class combination is chi_k - sum_R (B_RR^-1 B_Rk)_a chi_a, its
+        coefficients given at seeded float points of M_1 (rational arithmetic at
+        n = 19 took 5 s a point).
+        """
+        k, labels, side, cons = len(self.cons), self.labels, self.side, self.cons
+        if k == 0:
+            return None
         r, rows, _ = exact_rank(Bp)
-        if r < largest:
-            continue
+        if r < k - k % 2:
+            return None
         rank_d = Decision(r, "exact", f"bracket matrix of rank {r} at a random point of "
                           f"M_f modulo the prime 2^61 - 1, the largest an antisymmetric "
                           f"{k} x {k} matrix has (proof)", samples=1, error_bound=0.0)
@@ -156,14 +102,14 @@ def _rank_modulo_p(side, cons, labels, analysis, seed, W, Mx, Jq, Jv, tries=3):
         coeff_dicts: tuple = ()
         if r < k:
             (kk,) = [a for a in range(k) if a not in R]
-            coeff_dicts = (_coefficients_at_a_point(side, cons, labels, analysis, seed, R, kk,
-                                                     (W, Mx, Jq, Jv)),)
+            coeff_dicts = (_coefficients_at_a_point(side, cons, labels, self.analysis,
+                                                     self.policy, R, kk, self.data),)
             decisions[f"gamma[{labels[kk]}]"] = Decision(
                 True, "exact", "B_RR of rank r modulo p at the point: the combination with "
                 "coefficient 1 on this constraint and -B_RR^-1 B_Rk on R is first class (its "
                 "coefficients depend on the point)", samples=1)
         return ConstraintClasses(
-            labels=tuple(labels), constraints_TQ=tuple(cons), constraints=None,
+            labels=labels, constraints_TQ=tuple(cons), constraints=None,
             bracket_matrix=None, bracket_samples=(), rank=r, first_class=k - r,
             second_class=r, second_class_set=tuple(labels[a] for a in R),
             first_class_combinations=() if r == k else None,
@@ -171,8 +117,72 @@ def _rank_modulo_p(side, cons, labels, analysis, seed, W, Mx, Jq, Jv, tries=3):
             individually_first_class=tuple(labels[a] for a in range(k)
                                            if not nonzero[a].any()),
             blocks=blocks, decisions=decisions, method="exact at points", manifold=None,
-            side=side, analysis=analysis)
-    return None
+            side=side, analysis=self.analysis)
+
+    def observe(self, Bp) -> bool:
+        k = len(self.cons)
+        self.mats.append(Bp)
+        r, rows, _ = exact_rank(Bp) if k else (0, [], [])
+        if r > self.best:
+            self.best, self.pivots = r, rows
+        return self.best >= k  # full rank at a rational point: proved
+
+    def pending_error(self, degrees, count, denominator_degree):
+        if self.best >= len(self.cons):
+            return None
+        return schwartz_zippel_bound(minor_degree(degrees, self.best + 1), count,
+                                     denominator_degree=denominator_degree)
+
+    def conclude(self, count, degrees, denominator_degree) -> ConstraintClasses:
+        k, labels, mats, r = len(self.cons), self.labels, self.mats, self.best
+        if r >= k:
+            rank_d = Decision(r, "exact", f"bracket matrix of full rank {r} at an exact "
+                              f"point of M_f (proof)", samples=count, error_bound=0.0)
+        else:
+            error = self.pending_error(degrees, count, denominator_degree)
+            rank_d = Decision(r, "exact at points", f"rank {r} of the bracket matrix at "
+                              f"{count} random exact points of M_f", samples=count,
+                              error_bound=error)
+        decisions = {"rank": rank_d}
+        R = list(self.pivots) if r else []
+        nonzero = np.zeros((k, k), dtype=bool)
+        for Bp in mats:
+            nonzero |= np.array([[x != 0 for x in row] for row in Bp],
+                                dtype=bool).reshape(k, k)
+        coeff_dicts = []
+        for kk in (i for i in range(k) if i not in R):
+            per_point = [_exact_combination(Bp, R, kk) for Bp in mats]
+            coeff_dicts.append({labels[a]: tuple(float(c[a]) for c in per_point)
+                                for a in range(k) if any(c[a] != 0 for c in per_point)})
+            decisions[f"gamma[{labels[kk]}]"] = Decision(
+                True, "exact", "B c = 0 exactly at each point (c solved from the regular "
+                "block of B at that point); the coefficients depend on the point",
+                samples=count)
+        alone = tuple(labels[a] for a in range(k) if not nonzero[a].any())
+        blocks = tuple(tuple(labels[a] for a in blk)
+                       for blk in connected_blocks(nonzero)) if k else ()
+        return ConstraintClasses(
+            labels=labels, constraints_TQ=tuple(self.cons), constraints=None,
+            bracket_matrix=None,
+            bracket_samples=tuple(np.array([[float(x) for x in row] for row in Bp],
+                                           dtype=float).reshape(k, k) for Bp in mats),
+            rank=r, first_class=k - r, second_class=r,
+            second_class_set=tuple(labels[a] for a in R), first_class_combinations=None,
+            combination_coefficients=tuple(coeff_dicts), individually_first_class=alone,
+            blocks=blocks, decisions=decisions, method="exact at points", manifold=None,
+            side=self.side, analysis=self.analysis)
+
+    def sampled(self, manifold, policy) -> ConstraintClasses:
+        """B = {chi_a, chi_b}_L at seeded float points of M_f = M_1 (no exact points).
+
+        The Lagrangian bracket needs only W, the mixed Hessian and the gradients of
+        the constraints at each point (numbers), never H or Leg^-1 symbolically.
+        """
+        mats, resid = float_brackets(self.side, self.cons, self.analysis, policy.precision,
+                                     policy.samples, policy.seed)
+        return classes_from_samples(self.side, tuple(self.cons), self.labels, self.analysis,
+                                    mats, Backend(None), policy.tol, resid,
+                                    "the bracket matrix {chi_a, chi_b}_L")
 
 
 def _exact_combination(Bp, R, kk) -> list:
@@ -187,31 +197,32 @@ def _exact_combination(Bp, R, kk) -> list:
     return c
 
 
-def _coefficients_at_a_point(side, cons, labels, analysis, seed, R, kk, data) -> dict:
+def _coefficients_at_a_point(side, cons, labels, analysis, policy, R, kk, data) -> dict:
     """The coefficients of chi_kk - sum_R (B_RR^-1 B_Rk)_a chi_a: label -> values.
 
     At one random rational point of M_1 (exact, then rounded) up to
-    COMBINATION_MAX_N coordinates or when float points cannot be found (parameters
+    ``policy.combination_size`` coordinates or when float points cannot be found (parameters
     of very different sizes); beyond, at seeded float points (rational arithmetic at
     n = 19 takes seconds a point).
     """
     if not R:
         return {labels[kk]: (1.0,)}
     mats: list = []
-    if side.system.n > COMBINATION_MAX_N:
+    seed = policy.seed
+    if side.system.n > policy.combination_size:
         try:
             mats, _ = float_brackets(side, cons, analysis, None, 3, seed)
         except NhhamError:
             pass  # no float points (parameters of very different sizes): a rational one
     if not mats:
         sampler = PointSampler.on_M1(side.system, seed)
-        for _ in range(MAX_POINTS):
+        for _ in range(policy.max_points):
             try:
                 c = _exact_combination(_bracket_at(sampler.point().env, *data), R, kk)
             except ZeroDivisionError:
                 continue
             return {labels[a]: (float(c[a]),) for a in range(len(cons)) if c[a] != 0}
-        raise ComputationError(f"B_RR singular at {MAX_POINTS} random points of M_1 though "
+        raise ComputationError(f"B_RR singular at {policy.max_points} random points of M_1 though "
                                f"it is regular modulo p at one")
     per_point = []
     for S in mats:

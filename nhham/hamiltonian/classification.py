@@ -38,16 +38,16 @@ import sympy as sp
 from nhham.errors import ComputationError, InputError
 from nhham.hamiltonian.brackets import connected_blocks
 from nhham.hamiltonian.classes import ConstraintClasses
+from nhham.hamiltonian.classes_sampled import classes_from_samples, principal_pivots
 from nhham.hamiltonian.classes_at_points import (
-    COMBINATION_MAX_N,
-    classify_at_points,
-    float_brackets,
+    BracketRank,
 )
 from nhham.hamiltonian.combinations import NotFormed, closed_form_combinations
 from nhham.hamiltonian.side import HamiltonianSide, hamiltonian_side
 from nhham.lagrangian.algebra import block_inverse, cancel
 from nhham.lagrangian.analysis import ConstraintAnalysis, analyze_constraints
 from nhham.lagrangian.decision import Decision
+from nhham.lagrangian.engine import Policy, decide, policy_of
 from nhham.lagrangian.domains import NotExact
 from nhham.lagrangian.linalg import ModularBackend, exact_rank
 from nhham.lagrangian.points import PointSampler
@@ -98,7 +98,8 @@ def _is_on_tq(expr, system):
 def classify_constraints(source, constraints: Sequence | None = None,
                          labels: Sequence[str] | None = None, *, precision: int | None = None,
                          samples: int = 6, seed: int = SEED, method: str = "auto",
-                         tol: float | None = None) -> ConstraintClasses:
+                         tol: float | None = None,
+                         policy: Policy | None = None) -> ConstraintClasses:
     """Classify the final constraints of a system into first and second class.
 
     Parameters
@@ -123,6 +124,9 @@ def classify_constraints(source, constraints: Sequence | None = None,
         bounds), sampled as the last resort.
     tol : float, optional
         Relative tolerance of sampled decisions (default 1e-9 / 10**(3-digits)).
+    policy : Policy, optional
+        All the settings of the decisions in one object, instead of ``precision``,
+        ``samples``, ``seed`` and ``tol``.
 
     Returns
     -------
@@ -132,6 +136,9 @@ def classify_constraints(source, constraints: Sequence | None = None,
         raise InputError(f"classify: method must be 'auto', 'exact' or 'sampled', got {method!r}")
     check_options("classify_constraints", precision=precision, samples=samples, seed=seed,
                   tol=tol)
+    policy = policy_of(policy, "classify_constraints", precision=precision, samples=samples,
+                       seed=seed, tol=tol)
+    precision, samples, seed, tol = policy.precision, policy.samples, policy.seed, policy.tol
     side_in = source if isinstance(source, HamiltonianSide) else None
     system = source.system if isinstance(source, HamiltonianSide) else getattr(
         source, "system", source)
@@ -158,17 +165,15 @@ def classify_constraints(source, constraints: Sequence | None = None,
         return _classify_exact(side, cons, labs, analysis, tol)
     if requested == "auto" and set(cons) == set(system.holonomic) | set(system.phi):
         # M_f = M_1: the brackets can be decided at exact points of M_1.
-        try:
-            classes = classify_at_points(side, cons, labs, analysis, seed)
-        except NotExact:
-            classes = _classify_lagrangian_sampled(side, cons, labs, analysis, tol, precision,
-                                                   samples, seed)
+        classes = decide(BracketRank(side, cons, labs, analysis, policy),
+                         Submanifold(system, cons, precision=precision, samples=samples,
+                                     seed=seed), policy)
     else:
         classes = _classify_sampled(side, cons, labs, analysis, tol, precision, samples, seed)
-    return _with_combinations(classes)
+    return _with_combinations(classes, policy)
 
 
-def _with_combinations(classes: ConstraintClasses) -> ConstraintClasses:
+def _with_combinations(classes: ConstraintClasses, policy: Policy) -> ConstraintClasses:
     """``classes`` (decided at points) with its first-class combinations in closed form.
 
     The rank and the maximal second-class set R were decided at points of M_f;
@@ -182,7 +187,8 @@ def _with_combinations(classes: ConstraintClasses) -> ConstraintClasses:
     if classes.first_class == 0 or classes.first_class_combinations is not None:
         return classes
     system = classes.side.system
-    why = f"n = {system.n} > {COMBINATION_MAX_N}" if system.n > COMBINATION_MAX_N else ""
+    size = policy.combination_size
+    why = f"n = {system.n} > {size}" if system.n > size else ""
     if not why:
         try:
             gammas, coeffs = closed_form_combinations(system, classes.constraints_TQ,
@@ -201,19 +207,6 @@ def _with_combinations(classes: ConstraintClasses) -> ConstraintClasses:
                    combination_coefficients=tuple({labels[a]: c for a, c in d.items()}
                                                   for d in coeffs),
                    decisions={**classes.decisions, "combinations": decision})
-
-
-def _classify_lagrangian_sampled(side, cons, labels, analysis, tol, precision, samples,
-                                 seed):
-    """B = {chi_a, chi_b}_L at seeded float points of M_f = M_1 (no exact points).
-
-    The Lagrangian bracket needs only W, the mixed Hessian and the gradients of
-    the constraints at each point (numbers), never H or Leg^-1 symbolically.
-    """
-    mats, resid = float_brackets(side, cons, analysis, precision, samples, seed)
-    return _classes_from_samples(side, tuple(sp.sympify(c) for c in cons), labels, analysis,
-                                 mats, Backend(None), tol, resid,
-                                 "the bracket matrix {chi_a, chi_b}_L")
 
 
 def _numerically_regular(side, precision, samples, seed, tol) -> bool:
@@ -283,7 +276,7 @@ def _classify_exact(side, cons, labels, analysis, tol):
     decisions["rank"] = rank_d
     r = int(rank_d.value)
     samples_B = sample_matrix(Mf, Br) if r else ()
-    R = _principal_pivots(Br, samples_B, r, tol,
+    R = principal_pivots(Br, samples_B, r, tol,
                           nonzero=lambda e: not Mf.vanishes(cancel(e), tol=tol).value)
     gammas, coeff_dicts = [], []
     inv = block_inverse(Br.extract(R, R)) if R else sp.zeros(0, 0)
@@ -335,67 +328,6 @@ def sample_matrix(Mf: Submanifold, matrix: sp.Matrix):
     return out
 
 
-def _principal_pivots(Br: sp.Matrix, samples, r: int, tol, nonzero=None) -> list:
-    """A principal index set R, |R| = r, with B_RR invertible (grown two at a time).
-
-    Invertibility is read off the samples; where they cannot show it (the parameter
-    values put every sample on the exceptional set of a generic decision), ``nonzero``
-    decides det B_RR exactly, as the generic rank was decided."""
-    if r == 0:
-        return []
-    k = Br.rows
-    exact = not Br.free_symbols
-    tol = 1e-9 if tol is None else tol
-
-    # Only samples where B has its generic rank r decide (Newton projection can
-    # land on a singular set, e.g. the snakeboard at phi = +-pi/2).
-    def generic_rank(S):
-        s = np.linalg.svd(S, compute_uv=False)
-        return int(sum(x > tol * max(np.abs(S).max(), 1.0) for x in s))
-
-    samples = [S for S in samples if generic_rank(S) == r] or list(samples)
-
-    def invertible(idx):
-        if exact:
-            return Br.extract(idx, idx).rank() == len(idx)
-        for S in samples:
-            sub = S[np.ix_(idx, idx)]
-            s = np.linalg.svd(sub, compute_uv=False)
-            scale = max(np.abs(S).max(), 1.0)
-            if s[-1] <= tol * scale:
-                return False
-        return True
-
-    R: list = []
-    while len(R) < r:
-        grown = False
-        for a in range(k):
-            if a in R:
-                continue
-            for b in range(a + 1, k):
-                if b in R:
-                    continue
-                trial = sorted(R + [a, b])
-                if invertible(trial):
-                    R = trial
-                    grown = True
-                    break
-            if grown:
-                break
-        if not grown and nonzero is not None:
-            trial = next((sorted(R + [a, b]) for a in range(k) for b in range(a + 1, k)
-                          if a not in R and b not in R
-                          and nonzero(Br.extract(sorted(R + [a, b]), sorted(R + [a, b])).det())),
-                         None)
-            if trial is not None:
-                R, grown = trial, True
-        if not grown:
-            raise ComputationError(
-                f"classification: no principal {len(R) + 2}x{len(R) + 2} block of the bracket "
-                f"matrix is invertible at the samples although its rank on M_f is {r}")
-    return R
-
-
 def _classify_sampled(side, cons, labels, analysis, tol, precision, samples, seed):
     """Numeric classification: B at seeded points of M_f from the numeric layer."""
     system = side.system
@@ -412,75 +344,5 @@ def _classify_sampled(side, cons, labels, analysis, tol, precision, samples, see
         for x in points:
             pt = num.point_from_tq(be, x)
             mats.append(num.bracket_matrix(be, pt, cons_tq))
-    return _classes_from_samples(side, cons_tq, labels, analysis, mats, be, tol, resid,
+    return classes_from_samples(side, cons_tq, labels, analysis, mats, be, tol, resid,
                                  "the numeric bracket matrix")
-
-
-def _classes_from_samples(side, cons_tq, labels, analysis, mats, be, tol, resid, what):
-    """ConstraintClasses from the bracket matrix B at seeded points of M_f."""
-    k = len(cons_tq)
-    points = mats
-    tol_ = be.default_tol() if tol is None else tol
-    fmats = [np.array(S, dtype=float) for S in mats]
-    ranks, svals = [], []
-    for S in mats:
-        s = _svals(S, be)
-        svals.append(tuple(float(x) for x in s))
-        top = max(float(s[0]) if len(s) else 0.0, 1.0)
-        ranks.append(int(sum(float(x) > tol_ * top for x in s)))
-    r = max(ranks) if ranks else 0
-    warnings = []
-    if len(set(ranks)) > 1:
-        warnings.append(f"rank is not constant on M_f: ranks {ranks} at the samples")
-    decisions = {"rank": Decision(
-        r, "sampled", f"rank {r} of {what} at {len(points)} seeded points "
-                      f"of M_f (relative tolerance {tol_:g})",
-        precision=be.label, samples=len(points), singular_values=tuple(svals),
-        point_residual=resid, warnings=tuple(warnings))}
-    scale = max([np.abs(S).max() for S in fmats] + [1.0])
-    nonzero = np.zeros((k, k), dtype=bool)
-    for S in fmats:
-        nonzero |= np.abs(S) > tol_ * scale
-    R = _principal_pivots(sp.Matrix(k, k, lambda a, b: sp.Symbol("b")), fmats, r, tol_) \
-        if r else []
-    coeff_dicts = []
-    for kk in (i for i in range(k) if i not in R):
-        per_point = []
-        worst = 0.0
-        for S in mats:
-            c = be.zeros(k)
-            c[kk] = be.scalar(1)
-            if R:
-                cR = -be.solve(S[np.ix_(R, R)], S[np.ix_(R, [kk])].reshape(len(R)))
-                for i, a in enumerate(R):
-                    c[a] = cR[i]
-            worst = max(worst, float(be.norm(S @ c)))
-            per_point.append(c)
-        coeff_dicts.append({labels[a]: tuple(float(c[a]) for c in per_point)
-                            for a in range(k) if any(c[a] != 0 for c in per_point)})
-        decisions[f"gamma[{labels[kk]}]"] = Decision(
-            worst <= tol_ * scale, "sampled",
-            f"largest |B c| {worst:.3g} at {len(points)} seeded points of M_f",
-            precision=be.label, samples=len(points), max_abs=worst, point_residual=resid)
-    alone = tuple(labels[a] for a in range(k) if not nonzero[a].any())
-    blocks = tuple(tuple(labels[a] for a in blk) for blk in connected_blocks(nonzero)) if k else ()
-    return ConstraintClasses(
-        labels=tuple(labels), constraints_TQ=cons_tq, constraints=None, bracket_matrix=None,
-        bracket_samples=tuple(fmats), rank=r, first_class=k - r, second_class=r,
-        second_class_set=tuple(labels[a] for a in R), first_class_combinations=None,
-        combination_coefficients=tuple(coeff_dicts), individually_first_class=alone,
-        blocks=blocks, decisions=decisions, method="sampled", manifold=None, side=side,
-        analysis=analysis)
-
-
-def _svals(S, be):
-    if be.precision is None:
-        return np.linalg.svd(np.asarray(S, dtype=float), compute_uv=False) if S.size else []
-    import mpmath
-    with mpmath.workdps(be.precision):
-        A = mpmath.matrix(S.tolist())
-        if not S.size:
-            return []
-        return sorted((abs(x) for x in mpmath.svd_r(A, compute_uv=False)), reverse=True)
-
-

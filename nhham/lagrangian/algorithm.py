@@ -51,7 +51,6 @@ __all__ = [
     "run_algorithm",
     "constraint_kind",
     "rank_drop_warnings",
-    "CLOSED_FORM_SIZE",
 ]
 
 
@@ -568,9 +567,3 @@ def _essential(expr, state):
     if coeff.is_number and coeff.is_negative:
         out = -out  # keep the sign the condition was computed with
     return sp.expand(out) if sp.count_ops(out) < 60 else out
-
-
-# Systems up to this many coordinates get their closed forms (lambda, P(xi_L)) formed
-# and printed in the trace (nhham.cli.trace); beyond, W^-1 written out is too large to
-# be worth forming unasked.
-CLOSED_FORM_SIZE = 4

@@ -23,8 +23,8 @@ import sympy as sp
 
 from nhham.errors import ComputationError
 from nhham.lagrangian.algebra import cancel
+from nhham.lagrangian.engine import Policy, decide, policy_of
 from nhham.lagrangian.algorithm import (
-    CLOSED_FORM_SIZE,
     constraint_kind,
     rank_drop_warnings,
     run_algorithm,
@@ -105,6 +105,8 @@ class ConstraintAnalysis:
         empty or was not reached).
     options : Mapping
         precision, samples, seed, exact, max_stages as used.
+    policy : Policy
+        The settings of every decision of the run.
     geometry : LagrangianGeometry
         The Lagrangian geometry of the whole system (W, F, ... formed on first use),
         shared with later questions about the same system.
@@ -131,6 +133,7 @@ class ConstraintAnalysis:
     converged: bool
     dimension: int | None
     options: Mapping
+    policy: Policy = field(default_factory=Policy, compare=False, repr=False)
     geometry: object = field(default=None, compare=False, repr=False)
 
     @property
@@ -162,10 +165,7 @@ class ConstraintAnalysis:
         """:class:`nhham.lagrangian.integrability.Integrability` of the constraint distribution."""
         from nhham.lagrangian.integrability import integrability
 
-        opts = self.options
-        return integrability(self.system, precision=opts["precision"],
-                             samples=opts["samples"], seed=opts["seed"],
-                             exact=opts["exact"])
+        return integrability(self.system, policy=self.policy)
 
     @cached_property
     def integrable(self) -> bool | None:
@@ -213,7 +213,8 @@ class ConstraintAnalysis:
 
 def analyze_constraints(system, *, precision: int | None = None, samples: int = 6,
                         seed: int = SEED, max_stages: int | None = None, exact: bool = True,
-                        decompose: bool = True) -> ConstraintAnalysis:
+                        decompose: bool = True, policy: Policy | None = None
+                        ) -> ConstraintAnalysis:
     """Run the paper's constraint algorithm on a Lagrangian system.
 
     M_1 = {g = 0, g^c = 0, φ = 0} (holonomic constraints, their complete lifts, the
@@ -243,26 +244,31 @@ def analyze_constraints(system, *, precision: int | None = None, samples: int = 
         Split into independent blocks (constraints and coordinates that do not
         interact, the Lagrangian being a sum over the blocks) and analyse each on
         its own; False analyses the system as one block.
+    policy : Policy, optional
+        Every setting of the decisions in one object (thresholds included), instead
+        of ``precision``, ``samples``, ``seed`` and ``exact``.
 
     Returns
     -------
     ConstraintAnalysis
     """
-    check_options("analyze_constraints", precision=precision, samples=samples, seed=seed,
-                  max_stages=max_stages)
-    opts = MappingProxyType(dict(precision=precision, samples=samples, seed=seed,
-                                 max_stages=max_stages, exact=exact))
+    check_options("analyze_constraints", max_stages=max_stages)
+    policy = policy_of(policy, "analyze_constraints", precision=precision, samples=samples,
+                       seed=seed, exact=exact)
+    opts = MappingProxyType(dict(precision=policy.precision, samples=policy.samples,
+                                 seed=policy.seed, max_stages=max_stages, exact=policy.exact))
     specs = _decompose(system) if decompose else [_whole(system)]
     blocks, start = [], 0
     from nhham.lagrangian.geometry import lagrangian_geometry
 
-    geometry = lagrangian_geometry(system, precision=precision, samples=samples, seed=seed)
+    geometry = lagrangian_geometry(system, precision=policy.precision, samples=policy.samples,
+                                   seed=policy.seed)
     for spec in specs:
-        run = _run_block(system, spec, opts, start, geometry)
+        run = _run_block(system, spec, policy, max_stages, start, geometry)
         start += sum(1 for _, d in run.provenance.nodes(data=True) if d["kind"] == "secondary")
         blocks.append(Block(tuple(system.coordinates[i] for i in spec["coords"]),
                             tuple(spec["labels"]), run))
-    return _merge(system, blocks, opts, geometry)
+    return _merge(system, blocks, opts, policy, geometry)
 
 
 # ------------------------------------------------------------- blocks and merging
@@ -355,23 +361,23 @@ class _BlockSystem:
         return f"_BlockSystem({[q.name for q in self.coordinates]})"
 
 
-def _run_block(system, spec, opts, start, geometry):
+def _run_block(system, spec, policy, max_stages, start, geometry):
     from nhham.lagrangian.geometry import LagrangianGeometry
 
     whole = len(spec["coords"]) == system.n
     view = system if whole else _BlockSystem(system, spec)
     geo = geometry if whole else LagrangianGeometry(
-        view, precision=opts["precision"], samples=opts["samples"], seed=opts["seed"])
+        view, precision=policy.precision, samples=policy.samples, seed=policy.seed)
     exprs, labels = _m1_parts(system, spec["hol"], spec["phi"])
 
     def factory(eqs):
-        return Submanifold(view, eqs, precision=opts["precision"], samples=opts["samples"],
-                           seed=opts["seed"], exact=opts["exact"])
+        return Submanifold(view, eqs, precision=policy.precision, samples=policy.samples,
+                           seed=policy.seed, exact=policy.exact)
 
     lam = [multiplier_symbol(p + 1) for p in spec["phi"]]
-    run = _stage_one_at_points(view, geo, exprs, labels, lam, factory, opts) \
-        if opts["exact"] else None
-    bound = opts["max_stages"] if opts["max_stages"] is not None else 2 * len(spec["coords"])
+    run = _stage_one_at_points(view, geo, exprs, labels, lam, factory, policy) \
+        if policy.exact else None
+    bound = max_stages if max_stages is not None else 2 * len(spec["coords"])
     # C singular or λ-free conditions: the symbolic loop, with the fields scaled by
     # δ (δ W⁻¹ has polynomial entries, see nhham.lagrangian.adjugate), so that no
     # tangency row is a rational function and W⁻¹ is never formed; ξ_L and Z_i in
@@ -395,7 +401,7 @@ def _run_block(system, spec, opts, start, geometry):
 
 
 
-def _stage_one_at_points(view, geo, exprs, labels, lam, factory, opts):
+def _stage_one_at_points(view, geo, exprs, labels, lam, factory, policy):
     """The run when stage 1 decides everything at exact points, else None.
 
     When C is regular on M_1 and every λ-free condition vanishes there (decided by
@@ -404,20 +410,15 @@ def _stage_one_at_points(view, geo, exprs, labels, lam, factory, opts):
     secondary constraints) the caller runs the symbolic algorithm, which produces
     the secondary constraints as expressions.
     """
-    from nhham.lagrangian.domains import NotExact
-    from nhham.lagrangian.tangency import tangency_at_points, tangency_sampled
+    from nhham.lagrangian.tangency import Tangency
 
     m = len(view.phi)
-    try:
-        verdict = tangency_at_points(view, geo.hessian, geo.forcing, exprs, seed=opts["seed"])
-    except NotExact:
-        if view.n <= CLOSED_FORM_SIZE:
-            return None  # small: the symbolic route decides exactly
-        sampled = Submanifold(view, tuple(exprs), precision=opts["precision"],
-                              samples=opts["samples"], seed=opts["seed"], exact=False)
-        verdict = tangency_sampled(view, geo.hessian, geo.forcing, exprs, sampled)
-        if any(d.warnings for d in (verdict.rank, verdict.consistent)):
-            return None  # doubtful at this precision: leave it to the full algorithm
+    verdict = decide(Tangency(view, geo.hessian, geo.forcing, exprs), factory(tuple(exprs)),
+                     policy)
+    if verdict is None:
+        return None  # no exact points and small: the symbolic route decides exactly
+    if any(d.warnings for d in (verdict.rank, verdict.consistent)):
+        return None  # doubtful at this precision: leave it to the full algorithm
     r = int(verdict.rank.value)
     if r != m or not verdict.consistent.value:
         return None
@@ -472,7 +473,7 @@ def _state_positions(system, coords):
     return idx + [system.n + i for i in idx]
 
 
-def _merge(system, blocks, opts, geometry) -> ConstraintAnalysis:
+def _merge(system, blocks, opts, policy, geometry) -> ConstraintAnalysis:
     runs = [b.run for b in blocks]
     K = max((len(r.stages) for r in runs), default=0)
     stages = []
@@ -521,7 +522,7 @@ def _merge(system, blocks, opts, geometry) -> ConstraintAnalysis:
         dropped=tuple(getattr(system, "dropped", ())), provenance=provenance,
         blocks=tuple(blocks), inconsistency=inconsistency, warnings=tuple(warnings),
         converged=all(r.converged for r in runs),
-        dimension=None if None in dims else sum(dims), options=opts, geometry=geometry,
+        dimension=None if None in dims else sum(dims), options=opts, policy=policy, geometry=geometry,
     )
 
 

@@ -38,14 +38,13 @@ from nhham.lagrangian.decision import Decision
 from nhham.lagrangian.domains import Degree, NotExact, evaluate, schwartz_zippel_bound
 from nhham.lagrangian.formulas import frobenius_terms
 from nhham.lagrangian.linalg import ListMatrix, degree_solve, exact_rank, field_solve
-from nhham.lagrangian.points import PointSampler, jacobian_row
+from nhham.lagrangian.engine import Policy, decide, policy_of
+from nhham.lagrangian.points import jacobian_row
 from nhham.lagrangian.submanifold import Submanifold
-from nhham.lagrangian.tangency import MAX_POINTS, TARGET_ERROR
 from nhham.settings import SEED, Precision
 from nhham.system.expressions import short
 
-__all__ = ["Integrability", "integrability", "frobenius", "frobenius_at_points",
-           "frobenius_sampled"]
+__all__ = ["Integrability", "Frobenius", "integrability", "frobenius", "frobenius_sampled"]
 
 
 @dataclass(frozen=True)
@@ -133,99 +132,108 @@ class Integrability:
         return text
 
 
-# Up to this many coordinates the kernel basis and the obstructions are written out
-# symbolically (cheap, and they are worth reading); above, decisions at exact points.
-SYMBOLIC_SIZE = 4
-
-
 def integrability(system, *, precision: int | None = None, samples: int = 6,
-                  seed: int = SEED, exact: bool = True) -> Integrability:
+                  seed: int = SEED, exact: bool = True,
+                  policy: Policy | None = None) -> Integrability:
     """Frobenius test of the distribution annihilated by all the μ rows of ``system``.
+
+    Decided by :func:`~nhham.lagrangian.engine.decide` on Q_1 = {g = 0}: symbolically
+    up to ``policy.closed_form_size`` coordinates, else at exact points of Q_1, else at
+    sampled points (:class:`Frobenius`).
 
     Parameters
     ----------
     system : nhham.System
     precision, samples, seed, exact
-        As in :func:`nhham.lagrangian.analysis.analyze_constraints` (the decisions are made on
-        Q_1 = {g = 0}).
+        As in :func:`nhham.lagrangian.analysis.analyze_constraints`.
+    policy : Policy, optional
+        All the settings in one object, instead of the four above.
 
     Returns
     -------
     Integrability
     """
+    policy = policy_of(policy, "integrability", precision=precision, samples=samples,
+                       seed=seed, exact=exact)
     labels = tuple(f"{lab}.lift" if i < len(system.holonomic) else lab
                    for i, lab in enumerate(system.constraint_labels))
-    if system.n > SYMBOLIC_SIZE:
-        if exact:
-            try:
-                return frobenius_at_points(system, labels, seed=seed)
-            except NotExact:
-                pass  # no exact points of Q_1
-        # Large: a symbolic kernel basis is out of reach; decide at sample points.
-        return frobenius_sampled(system, labels, precision=precision, samples=samples,
-                                 seed=seed)
-    Q1 = Submanifold(system, system.holonomic, precision=precision, samples=samples,
-                     seed=seed, fibre=(), exact=exact)
-    return frobenius(system.mu, system.coordinates, Q1, labels)
+    Q1 = Submanifold(system, system.holonomic, precision=policy.precision,
+                     samples=policy.samples, seed=policy.seed, fibre=(), exact=policy.exact)
+    return decide(Frobenius(system, labels), Q1, policy)
 
 
-def frobenius_at_points(system, labels, *, seed: int = SEED,
-                        target: float = TARGET_ERROR) -> Integrability:
-    """Frobenius test of ker μ decided at random exact points of Q_1.
+class Frobenius:
+    """The Frobenius test of ker μ on Q_1 as a question for
+    :func:`~nhham.lagrangian.engine.decide` (the answer: :class:`Integrability`).
 
-    At each point the kernel basis X_a (dependent components by Cramer's rule,
-    the same dependent set at every point) and dμ_i(X_a, X_b) are computed in
-    exact arithmetic. One nonzero value proves non-integrability; values that
-    vanish at k points give "integrable" with the Schwartz–Zippel bound (union
-    over the terms) computed from the degrees of the terms, and the basis is not
-    written out symbolically.
-
-    Raises
-    ------
-    NotExact
-        When Q_1 has no exact points or μ cannot be evaluated exactly.
+    Exact reduction: the kernel basis and the obstructions written out symbolically
+    (:func:`frobenius`), up to ``policy.closed_form_size`` coordinates. At exact points:
+    the kernel basis X_a (dependent components by Cramer's rule, the same dependent set
+    at every point) and dμ_i(X_a, X_b) (:func:`nhham.lagrangian.formulas.frobenius_terms`)
+    in exact arithmetic; one nonzero value proves non-integrability, values that vanish
+    at k points give "integrable" with the Schwartz–Zippel bound (union over the terms).
+    Sampled: :func:`frobenius_sampled`.
     """
-    mu, q, common, trivial = _distribution(system, labels)
-    if trivial is not None:
-        return trivial
-    m, n = mu.rows, len(q)
-    sampler = PointSampler(q, (), system.parameters, dict(system.parameter_values),
-                           system.holonomic, (), seed)
-    rows = [list(mu.row(i)) for i in range(m)]
-    grads = [[jacobian_row(mu[i, A], q) for A in range(n)] for i in range(m)]
-    # dmu[i][A][B] = d_A mu_iB - d_B mu_iA (grads[i][B][A] = d mu_iB / d q^A)
-    dmu = [[[grads[i][B][A] - grads[i][A][B] for B in range(n)] for A in range(n)]
-           for i in range(m)]
-    dep = None
-    count, terms, worst = 0, 0, 0
-    while count < MAX_POINTS:
-        pt = sampler.point()
-        try:
-            values, dep = _frobenius_terms(pt.env, rows, dmu, dep)
-        except ZeroDivisionError:
-            continue
-        count += 1
+
+    what = "dmu_i(X_a, X_b) on Q_1"
+
+    def __init__(self, system, labels):
+        self.system, self.labels = system, tuple(labels)
+        self.mu, self.q, self.common, self.trivial = _distribution(system, labels)
+        m, n = self.mu.rows, len(self.q)
+        self.rows = [list(self.mu.row(i)) for i in range(m)]
+        grads = [[jacobian_row(self.mu[i, A], self.q) for A in range(n)] for i in range(m)]
+        # dmu[i][A][B] = d_A mu_iB - d_B mu_iA (grads[i][B][A] = d mu_iB / d q^A)
+        self.dmu = [[[grads[i][B][A] - grads[i][A][B] for B in range(n)] for A in range(n)]
+                    for i in range(m)]
+        self.dep = None
+        self.found: tuple | None = None
+
+    def reduced(self, manifold, policy):
+        if len(self.q) <= policy.closed_form_size:
+            return frobenius(self.system.mu, self.q, manifold, self.labels)
+        return self.trivial
+
+    def value(self, env, degrees: bool = False):
+        values, self.dep = _frobenius_terms(env, self.rows, self.dmu, self.dep,
+                                            exact=not degrees)
+        return values
+
+    def observe(self, values) -> bool:
         for (i, a, b), w in values.items():
             if w != 0:
-                dec = Decision(False, "exact", f"d{labels[i]}(X_{a + 1}, X_{b + 1}) = {w} "
-                               f"at an exact point of Q_1 (proof)", samples=count,
-                               error_bound=0.0)
-                return Integrability(False, n - m, None, ((labels[i], a, b, sp.Rational(
-                    int(w.numerator), int(w.denominator))),),
-                    ((f"d{labels[i]}(X_{a + 1}, X_{b + 1})", dec),), "exact", (), **common)
-        if count == 1:
-            degrees, _ = _frobenius_terms(pt.degrees, rows, dmu, dep, exact=False)
-            terms = len(degrees)
-            worst = max((Degree.of(d).num for d in degrees.values()), default=0)
-        error = schwartz_zippel_bound(worst, count, terms=terms,
-                                      denominator_degree=sampler.denominator_degree)
-        if error < target:
-            break
-    dec = Decision(True, "exact at points",
-                   f"all {terms} terms dmu_i(X_a, X_b) vanish at {count} random exact points "
-                   f"of Q_1 (degree <= {worst})", samples=count, error_bound=error)
-    return Integrability(True, n - m, None, (), (("dmu_i(X_a, X_b) on Q_1", dec),),
-                         "exact at points", (), **common)
+                self.found = (i, a, b, w)
+                return True
+        return False
+
+    def pending_error(self, degrees, count, denominator_degree):
+        worst = max((Degree.of(d).num for d in degrees.values()), default=0)
+        return schwartz_zippel_bound(worst, count, terms=len(degrees),
+                                     denominator_degree=denominator_degree)
+
+    def conclude(self, count, degrees, denominator_degree) -> Integrability:
+        n, m, labels = len(self.q), self.mu.rows, self.labels
+        if self.found is not None:
+            i, a, b, w = self.found
+            dec = Decision(False, "exact", f"d{labels[i]}(X_{a + 1}, X_{b + 1}) = {w} "
+                           f"at an exact point of Q_1 (proof)", samples=count,
+                           error_bound=0.0)
+            return Integrability(False, n - m, None, ((labels[i], a, b, sp.Rational(
+                int(w.numerator), int(w.denominator))),),
+                ((f"d{labels[i]}(X_{a + 1}, X_{b + 1})", dec),), "exact", (), **self.common)
+        worst = max((Degree.of(d).num for d in degrees.values()), default=0)
+        error = self.pending_error(degrees, count, denominator_degree)
+        dec = Decision(True, "exact at points",
+                       f"all {len(degrees)} terms dmu_i(X_a, X_b) vanish at {count} random "
+                       f"exact points of Q_1 (degree <= {worst})", samples=count,
+                       error_bound=error)
+        return Integrability(True, n - m, None, (), (("dmu_i(X_a, X_b) on Q_1", dec),),
+                             "exact at points", (), **self.common)
+
+    def sampled(self, manifold, policy):
+        return self.trivial or frobenius_sampled(
+            self.system, self.labels, precision=policy.precision, samples=policy.samples,
+            seed=policy.seed)
 
 
 def frobenius_sampled(system, labels, *, precision: int | None = None, samples: int = 6,

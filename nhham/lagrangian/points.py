@@ -50,6 +50,7 @@ __all__ = [
     "ExactPoint",
     "PointSampler",
     "ParameterFieldSampler",
+    "exact_sampler",
     "jacobian_row",
     "eliminate_coordinates",
     "DRAW_BITS",
@@ -204,6 +205,37 @@ class PointSampler:
             env[vels[j]] = sol[pos][0]
             deg[vels[j]] = Degree(top, {fresh: (self._den_degree, 1)})
         return ExactPoint(env, deg)
+
+
+def exact_sampler(manifold, seed: int, *, modular: bool = False) -> PointSampler:
+    """The exact points of a submanifold: M_1 = {g = 0, φ = 0} of its system in TQ, or
+    Q_1 = {g = 0} in Q (``manifold.fibre == ()``).
+
+    Parameters
+    ----------
+    manifold : Submanifold
+    seed : int
+    modular : bool, optional
+        Points over F_p instead of rational points.
+
+    Raises
+    ------
+    NotExact
+        For other submanifolds (M_k, k > 1: their points are drawn over the parameter
+        field by :class:`ParameterFieldSampler`), or where M has no exact points.
+    """
+    system = manifold.system
+    equations = set(manifold.equations)
+    holonomic = tuple(system.holonomic)
+    if not manifold.fibre and equations == set(holonomic):
+        return PointSampler(system.coordinates, (), system.parameters,
+                            dict(system.parameter_values), holonomic, (), seed,
+                            modular=modular)
+    if tuple(manifold.fibre) == tuple(system.velocities) and \
+            equations == set(holonomic) | set(system.phi):
+        return PointSampler.on_M1(system, seed, modular=modular)
+    raise NotExact("exact points are drawn on M_1 and Q_1 here; this submanifold is "
+                   "another")
 
 
 def jacobian_row(expr, symbols) -> list:

@@ -58,6 +58,7 @@ import sympy as sp
 from nhham.errors import ComputationError, EmptySubmanifoldError
 from nhham.lagrangian.algebra import cancel, solve_for_coordinates, solve_linear
 from nhham.lagrangian.decision import Decision
+from nhham.lagrangian.engine import Policy, decide
 from nhham.lagrangian.sampled import (
     best_block,
     best_columns,
@@ -76,7 +77,7 @@ from nhham.settings import PARAMETER_BOX, SEED, STATE_BOX, Precision
 from nhham.system.evaluation import numeric_function
 from nhham.system.expressions import short
 
-__all__ = ["Submanifold"]
+__all__ = ["Submanifold", "Vanishing", "Rank"]
 
 
 @dataclass(frozen=True)
@@ -148,6 +149,13 @@ class Submanifold:
                            samples=self.samples if samples is None else samples,
                            seed=self.seed, fibre=self.fibre, exact=self.exact)
 
+    def sampled_only(self) -> "Submanifold":
+        """The same M deciding at sample points only (``exact=False``)."""
+        if not self.exact:
+            return self
+        return Submanifold(self.system, self.equations, precision=self.precision,
+                           samples=self.samples, seed=self.seed, fibre=self.fibre, exact=False)
+
     @property
     def precision_label(self) -> str:
         return Precision(self.precision).label
@@ -208,6 +216,12 @@ class Submanifold:
         return cancel(sp.sympify(expr).xreplace(red.substitution))
 
     # ------------------------------------------------------------ decisions
+    @cached_property
+    def policy(self) -> Policy:
+        """The settings of this manifold's decisions as a :class:`Policy`."""
+        return Policy(precision=self.precision, samples=self.samples, seed=self.seed,
+                      exact=self.exact)
+
     def vanishes(self, expr, tol: float | None = None) -> Decision:
         """Decide whether ``expr`` vanishes identically on M.
 
@@ -223,23 +237,10 @@ class Submanifold:
         -------
         Decision
             ``value`` True when it vanishes. Exact when the reduction decides
-            (either way, see the module docstring); otherwise sampled.
+            (either way, see the module docstring); otherwise sampled
+            (:func:`~nhham.lagrangian.engine.decide` with :class:`Vanishing`).
         """
-        if not self.exact:
-            return self._sampled_vanishes(cancel(expr), tol)
-        reduced = self.reduce(expr)
-        if reduced == 0:
-            return Decision(True, "exact", "vanishes after exact reduction")
-        verdict, warning = self._zero_test(reduced)
-        if verdict is True:
-            return Decision(True, "exact",
-                            "Groebner remainder 0 modulo sin^2+cos^2=1 and the equations the "
-                            "reduction could not eliminate")
-        if verdict is False:
-            return Decision(False, "exact",
-                            f"reduces to the nonzero function {short(reduced)} on M",
-                            warnings=(warning,) if warning else ())
-        return self._sampled_vanishes(reduced, tol)
+        return decide(Vanishing(expr, tol), self, self.policy)
 
     def rank(self, matrix: sp.Matrix, tol: float | None = None) -> Decision:
         """Decide the rank of a matrix of functions on M (generic rank).
@@ -250,30 +251,10 @@ class Submanifold:
         whose Schur complement vanishes on M); otherwise the rank at seeded
         sample points from singular values, with warnings where it is not the
         same at every point or a singular value is neither clearly zero nor
-        clearly nonzero at this precision.
+        clearly nonzero at this precision (:func:`~nhham.lagrangian.engine.decide`
+        with :class:`Rank`).
         """
-        matrix = sp.Matrix(matrix)
-        if 0 in matrix.shape:
-            return Decision(0, "exact", "empty matrix")
-        if not self.exact:
-            # No cancellation: a quotient is 0/0 only on a thin set the seeded
-            # points miss, and bringing large entries over one denominator costs.
-            return self._sampled_rank(matrix, tol)
-        reduced = matrix.applyfunc(self.reduce)
-        if not reduced.free_symbols:
-            r = reduced.rank()
-            return Decision(r, "exact", f"entries reduce to numbers; rank {r}")
-        if all(self._zero_test(e)[0] is True for e in reduced):
-            return Decision(0, "exact", "every entry vanishes on M")
-        exact_full = self._exact_full_rank(reduced)
-        if exact_full is not None:
-            return exact_full
-        sampled = self._sampled_rank(reduced, tol)
-        if 0 < sampled.value < min(reduced.shape):
-            certificate = self._rank_certificate(reduced, sampled)
-            if certificate is not None:
-                return certificate
-        return sampled
+        return decide(Rank(matrix, tol), self, self.policy)
 
     def regular_block(self, matrix: sp.Matrix, rank: int):
         """Rows and columns of a best-conditioned regular rank x rank block.
@@ -398,7 +379,7 @@ class Submanifold:
             points=record(points, self.variables),
         )
 
-    def _exact_full_rank(self, reduced):
+    def _exact_full_rank(self, reduced, size):
         """Full rank proved exactly: a maximal minor is a nonzero function on M.
 
         Only for small matrices and when the reduction parametrises M
@@ -406,7 +387,7 @@ class Submanifold:
         expression is a nonzero function on M.
         """
         k = min(reduced.shape)
-        if k > 6 or self.reduction.residual:
+        if k > size or self.reduction.residual:
             return None
         square = reduced if reduced.rows == reduced.cols else (
             reduced * reduced.T if reduced.rows < reduced.cols else reduced.T * reduced)
@@ -418,10 +399,10 @@ class Submanifold:
                                     f"function {short(det)} on M",
                         warnings=(warning,) if warning else ())
 
-    def _rank_certificate(self, reduced, sampled):
+    def _rank_certificate(self, reduced, sampled, size):
         """Prove the sampled rank r exactly: a nonzero r x r minor, vanishing Schur complement."""
         r = sampled.value
-        if r > 6 or self.reduction.residual:
+        if r > size or self.reduction.residual:
             return None
         try:
             rows, cols, _ = self.regular_block(reduced, r)
@@ -651,3 +632,74 @@ class Submanifold:
         )
 
 
+
+
+class Vanishing:
+    """"Does ``expr`` vanish identically on M?" for :func:`~nhham.lagrangian.engine.decide`:
+    exact reduction (substitution, cancellation, a Groebner remainder), else sampled."""
+
+    what = "vanishing on M"
+
+    def __init__(self, expr, tol: float | None = None):
+        self.expr, self.tol = expr, tol
+        self.residue = None
+
+    def reduced(self, manifold: Submanifold, policy) -> Decision | None:
+        if not manifold.exact:
+            return None
+        reduced = self.residue = manifold.reduce(self.expr)
+        if reduced == 0:
+            return Decision(True, "exact", "vanishes after exact reduction")
+        verdict, warning = manifold._zero_test(reduced)
+        if verdict is True:
+            return Decision(True, "exact",
+                            "Groebner remainder 0 modulo sin^2+cos^2=1 and the equations the "
+                            "reduction could not eliminate")
+        if verdict is False:
+            return Decision(False, "exact",
+                            f"reduces to the nonzero function {short(reduced)} on M",
+                            warnings=(warning,) if warning else ())
+        return None
+
+    def sampled(self, manifold: Submanifold, policy) -> Decision:
+        expr = cancel(self.expr) if self.residue is None else self.residue
+        return manifold._sampled_vanishes(expr, self.tol)
+
+
+class Rank:
+    """"The generic rank of ``matrix`` on M" for :func:`~nhham.lagrangian.engine.decide`:
+    exact when the entries reduce to numbers or all vanish, or a maximal minor (up to
+    ``policy.exact_minor_size``) is a nonzero function on M; else sampled, proved by a
+    certificate where one is found."""
+
+    what = "rank on M"
+
+    def __init__(self, matrix, tol: float | None = None):
+        self.matrix, self.tol = sp.Matrix(matrix), tol
+        self.residue = None
+
+    def reduced(self, manifold: Submanifold, policy) -> Decision | None:
+        if 0 in self.matrix.shape:
+            return Decision(0, "exact", "empty matrix")
+        if not manifold.exact:
+            return None
+        reduced = self.residue = self.matrix.applyfunc(manifold.reduce)
+        if not reduced.free_symbols:
+            r = reduced.rank()
+            return Decision(r, "exact", f"entries reduce to numbers; rank {r}")
+        if all(manifold._zero_test(e)[0] is True for e in reduced):
+            return Decision(0, "exact", "every entry vanishes on M")
+        return manifold._exact_full_rank(reduced, policy.exact_minor_size)
+
+    def sampled(self, manifold: Submanifold, policy) -> Decision:
+        if self.residue is None:
+            # No cancellation: a quotient is 0/0 only on a thin set the seeded
+            # points miss, and bringing large entries over one denominator costs.
+            return manifold._sampled_rank(self.matrix, self.tol)
+        reduced = self.residue
+        sampled = manifold._sampled_rank(reduced, self.tol)
+        if 0 < sampled.value < min(reduced.shape):
+            certificate = manifold._rank_certificate(reduced, sampled, policy.exact_minor_size)
+            if certificate is not None:
+                return certificate
+        return sampled

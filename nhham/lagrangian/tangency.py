@@ -22,21 +22,20 @@ Euler–Lagrange field or a multiplier in closed form.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import sympy as sp
 
 from nhham.lagrangian.decision import Decision
 from nhham.lagrangian.domains import NotExact, evaluate, minor_degree, schwartz_zippel_bound
+from nhham.lagrangian.engine import Policy, decide
 from nhham.lagrangian.formulas import bordered_matrix
 from nhham.lagrangian.linalg import ListMatrix, exact_rank, exact_solve
-from nhham.lagrangian.points import PointSampler, jacobian_row
+from nhham.lagrangian.points import jacobian_row
+from nhham.lagrangian.submanifold import Submanifold
 
-__all__ = ["TangencyVerdict", "tangency_at_points", "tangency_sampled", "TARGET_ERROR"]
+__all__ = ["Tangency", "TangencyVerdict", "tangency_at_points", "tangency_sampled"]
 
-# Default bound on the probability that a "vanishes"/"rank deficient" verdict is wrong.
-TARGET_ERROR = 1e-30
-MAX_POINTS = 12
 
 
 @dataclass(frozen=True)
@@ -67,8 +66,11 @@ class TangencyVerdict:
 
 
 def tangency_at_points(system, hessian, forcing, primary, *, seed: int,
-                       target: float = TARGET_ERROR) -> TangencyVerdict:
+                       target: float | None = None) -> TangencyVerdict:
     """Decide stage 1 of the constraint algorithm at exact points of M_1.
+
+    The exact steps of :func:`~nhham.lagrangian.engine.decide` for :class:`Tangency`
+    (a proof modulo p, else rational points with the Schwartz–Zippel bound).
 
     Parameters
     ----------
@@ -84,124 +86,189 @@ def tangency_at_points(system, hessian, forcing, primary, *, seed: int,
     seed : int
         Seed of the random points.
     target : float, optional
-        Stop drawing points once every probabilistic verdict's error bound is below.
+        Stop drawing points once every probabilistic verdict's error bound is below
+        (default: :attr:`Policy.target_error <nhham.lagrangian.engine.Policy>`).
 
     Raises
     ------
     NotExact
         When M_1 has no exact points or an entry cannot be evaluated exactly.
     """
-    q, v = tuple(system.coordinates), tuple(system.velocities)
-    n, m = len(q), len(system.phi)
-    chis = [sp.sympify(c) for c in primary]
-    mu = [list(system.mu.row(i)) for i in range(m)]
-    sampler = PointSampler.on_M1(system, seed)
-    Jq = [jacobian_row(c, q) for c in chis]
-    rows_of = {f: i for i, f in enumerate(system.phi)}
-    Jv = [mu[rows_of[c]] if c in rows_of else jacobian_row(c, v) for c in chis]
-    W = [list(hessian.row(i)) for i in range(n)]
-    F = list(forcing)
-    proof = _proof_modulo_p(system, chis, W, F, mu, Jq, Jv, seed)
-    if proof is not None:
-        return proof
+    M1 = Submanifold(system, tuple(primary), seed=seed)
+    policy = Policy(seed=seed, closed_form_size=system.n)  # exact points only
+    if target is not None:
+        policy = replace(policy, target_error=target)
+    verdict = decide(Tangency(system, hessian, forcing, primary), M1, policy)
+    if verdict is None:
+        raise NotExact("no exact point of M_1 where the entries are defined")
+    return verdict
 
-    best_K = best_aug = best_J = -1
-    first_K = None
-    count = 0
-    state = dict(rows=(), cols=())
-    degrees = None
-    while count < MAX_POINTS:
-        pt = sampler.point()
-        try:
-            K, c, J = _bordered(pt.env, W, F, mu, Jq, Jv, v)
-        except ZeroDivisionError:
-            continue
-        count += 1
+
+class Tangency:
+    """Stage 1 of the constraint algorithm as a question for
+    :func:`~nhham.lagrangian.engine.decide`: the ranks of K, [K | c] and the Jacobian
+    of the constraints on M_1 (the data: :func:`nhham.lagrangian.formulas.bordered_matrix`).
+
+    The answer is a :class:`TangencyVerdict`. No exact reduction: where M_1 has no
+    exact points, systems up to ``policy.closed_form_size`` coordinates are left to
+    the symbolic constraint algorithm (``sampled`` gives None), larger ones are
+    decided at floating-point points.
+    """
+
+    what = "rank (Z_i(chi_j)) on M_1"
+
+    def __init__(self, system, hessian, forcing, primary):
+        q, v = tuple(system.coordinates), tuple(system.velocities)
+        self.system, self.v, self.n = system, v, len(q)
+        self.m = len(system.phi)
+        self.hessian, self.forcing = hessian, forcing
+        self.chis = [sp.sympify(c) for c in primary]
+        self.mu = [list(system.mu.row(i)) for i in range(self.m)]
+        self.Jq = [jacobian_row(c, q) for c in self.chis]
+        rows_of = {f: i for i, f in enumerate(system.phi)}
+        self.Jv = [self.mu[rows_of[c]] if c in rows_of else jacobian_row(c, v)
+                   for c in self.chis]
+        self.W = [list(hessian.row(i)) for i in range(self.n)]
+        self.F = list(forcing)
+        self.best_K = self.best_aug = self.best_J = -1
+        self.block: tuple = ((), ())
+        self.moving = self._moving_rows()
+
+    def value(self, env, degrees: bool = False):
+        """(K, c, J) at a point: the bordered matrix, the right-hand side and the
+        Jacobian [∂χ/∂q, ∂χ/∂v] of the constraints."""
+        cache: dict = {}
+        W, F, mu, Jq, Jv = (evaluate(x, env, cache) if x is self.F else
+                            [evaluate(row, env, cache) for row in x]
+                            for x in (self.W, self.F, self.mu, self.Jq, self.Jv))
+        vel = [env[s] for s in self.v]
+        n = self.n
+        K = bordered_matrix(ListMatrix(W), ListMatrix(mu, n), ListMatrix(Jv, n)).rows
+        c = F + [-sum((a * b for a, b in zip(row, vel)), 0) for row in Jq]
+        J = [a + b for a, b in zip(Jq, Jv)]
+        return K, c, J
+
+    # ------------------------------------------------------------ modulo p
+    @property
+    def proved_modulo_p(self):
+        """What a point over F_p proves; None when it could prove nothing (a holonomic
+        row whose lift is not among the constraints, or fewer moving rows than
+        multipliers)."""
+        return None if self.moving is None else self._proved_modulo_p
+
+    def _proved_modulo_p(self, value):
+        """The verdict proved at one point over F_p, else None.
+
+        Rows of K with dχ/dv = 0 (holonomic g) are set aside: their condition is
+        dg/dq · v, which vanishes on M_1 by construction when it is one of the
+        constraints (the complete lift). If the remaining rows of K have full row
+        rank at a point modulo p, they have it over Q at the same rational point, so
+        C is regular on M_1 (proof), there is no λ-free combination among them
+        (proof), and a Jacobian of full rank proves dim M_1 = 2n − (number of
+        constraints).
+        """
+        moving = self.moving
+        K, _, J = value
+        n, m = self.n, self.m
+        rK, _, _ = exact_rank(K[:n] + [K[n + j] for j in moving])
+        rJ, _, _ = exact_rank(J)
+        if rK != n + m or rJ != len(self.chis):
+            return None
+        how = "at a random point modulo the prime 2^61 - 1 (proof)"
+        still = len(moving) < len(self.chis)
+        rank = Decision(m, "exact", f"rank (Z_i(chi_j)) = rank [[W, mu^T], [mu, 0]] - n = "
+                        f"{m}, full, {how}", precision="exact", samples=1, error_bound=0.0)
+        cons = Decision(True, "exact", "no lambda-free condition: the rows of the "
+                        "velocity constraints are independent in K " + how
+                        + ("; the holonomic rows give their complete lifts, which are "
+                           "constraints of M_1" if still else ""),
+                        precision="exact", samples=1, error_bound=0.0)
+        jac = Decision(rJ, "exact", f"Jacobian of the constraints of full rank {rJ} {how}",
+                       precision="exact", samples=1, error_bound=0.0)
+        return TangencyVerdict(rank, cons, jac, tuple(moving), tuple(range(m)), 1)
+
+    def _moving_rows(self):
+        """The rows with dχ/dv ≠ 0 when the others are complete lifts already among the
+        constraints and the moving rows are as many as the multipliers; else None."""
+        moving = [j for j, row in enumerate(self.Jv) if any(x != 0 for x in row)]
+        still = [j for j in range(len(self.chis)) if j not in moving]
+        known = {sp.expand(c) for c in self.chis} if still else set()
+        for j in still:
+            lift = sp.expand(sum((a * b for a, b in zip(self.Jq[j], self.v)), sp.S.Zero))
+            if lift != 0 and lift not in known and -lift not in known:
+                return None
+        return moving if len(moving) == self.m else None
+
+    # ----------------------------------------------------- rational points
+    def observe(self, value) -> bool:
+        K, c, J = value
+        n = self.n
         if exact_rank([row[:n] for row in K[:n]])[0] < n:
             raise NotExact("W is singular at an exact point of M_1")
         rK, _, _ = exact_rank(K)
         rAug, _, _ = exact_rank([row + [x] for row, x in zip(K, c)])
         rJ, _, _ = exact_rank(J)
-        if rK > best_K:
-            best_K, first_K = rK, pt
-            state.update(zip(("rows", "cols"), _block(K, n)))
-        best_aug, best_J = max(best_aug, rAug - rK), max(best_J, rJ)
-        if degrees is None:
-            degrees = _degrees(pt.degrees, W, F, mu, Jq, Jv, v, sampler)
-        pending = [e for e in _errors(degrees, best_K, best_aug, best_J, count, n, m)
+        if rK > self.best_K:
+            self.best_K = rK
+            self.block = _block(K, n)
+        self.best_aug, self.best_J = max(self.best_aug, rAug - rK), max(self.best_J, rJ)
+        return False
+
+    def pending_error(self, degrees, count, denominator_degree):
+        pending = [e for e in self._errors(degrees, count, denominator_degree)
                    if e is not None]
-        if not pending or max(pending) < target:
-            break
-    if first_K is None:
-        raise NotExact("no exact point of M_1 where the entries are defined")
-    errors = _errors(degrees, best_K, best_aug, best_J, count, n, m)
-    rank = best_K - n
-    full = min(len([r for r in Jv if any(x != 0 for x in r)]), m)
-    rank_dec = _rank_decision(rank, full, errors[0], count,
-                              "rank (Z_i(chi_j)) = rank [[W, mu^T], [dchi/dv, 0]] - n")
-    consistent = best_aug == 0
-    if best_K == n + len(chis):
-        # K has full row rank: there is no lambda-free combination at all.
-        cons_dec = Decision(True, "exact", "every constraint row is in the regular block: "
-                            "no lambda-free condition (K has full row rank at an exact point)",
-                            precision="exact", samples=count, error_bound=0.0)
-    else:
-        cons_dec = Decision(
-            consistent, "exact at points" if consistent else "exact",
-            ("rank [K | c] = rank K at every point: every lambda-free condition vanishes"
-             if consistent else "rank [K | c] > rank K at an exact point: a lambda-free "
-             "condition is nonzero"),
-            precision="exact", samples=count, error_bound=errors[1] if consistent else 0.0)
-    jac_dec = _rank_decision(best_J, min(len(chis), 2 * n), errors[2], count,
-                             "rank of the Jacobian of the constraints of M_1")
-    return TangencyVerdict(rank_dec, cons_dec, jac_dec, state["rows"], state["cols"], count)
+        return max(pending) if pending else None
 
+    def _errors(self, degrees, count, den):
+        """Error bounds of: rank deficiency of K, vanishing conditions, Jacobian
+        deficiency (None where the verdict is a proof)."""
+        K, c, J = degrees
+        aug = [row + [x] for row, x in zip(K, c)]
+        n, m = self.n, self.m
 
-def _proof_modulo_p(system, chis, W, F, mu, Jq, Jv, seed, tries: int = 3):
-    """The verdict when it can be proved at one point over F_p, else None.
+        def bound(rows, rank):
+            return schwartz_zippel_bound(minor_degree(rows, rank + 1), count,
+                                         denominator_degree=den)
 
-    Rows of K with dχ/dv = 0 (holonomic g) are set aside: their condition is
-    dg/dq · v, which vanishes on M_1 by construction when it is one of the
-    constraints (the complete lift). If the remaining rows of K have full row rank
-    at a point modulo p, they have it over Q at the same rational point, so C is
-    regular on M_1 (proof), there is no λ-free combination among them (proof),
-    and a Jacobian of full rank proves dim M_1 = 2n − (number of constraints).
-    """
-    q, v = tuple(system.coordinates), tuple(system.velocities)
-    n, m = len(q), len(mu)
-    moving = [j for j, row in enumerate(Jv) if any(x != 0 for x in row)]
-    still = [j for j in range(len(chis)) if j not in moving]
-    known = {sp.expand(c) for c in chis} if still else set()
-    for j in still:
-        lift = sp.expand(sum((a * b for a, b in zip(Jq[j], v)), sp.S.Zero))
-        if lift != 0 and lift not in known and -lift not in known:
+        rK, extra, rJ = self.best_K, self.best_aug, self.best_J
+        return [None if rK >= min(len(K), n + m) else bound(K, rK),
+                None if extra > 0 or rK >= len(K) else bound(aug, rK),
+                None if rJ >= min(len(J), 2 * n) else bound(J, rJ)]
+
+    def conclude(self, count, degrees, denominator_degree) -> TangencyVerdict:
+        n, m, chis = self.n, self.m, self.chis
+        errors = self._errors(degrees, count, denominator_degree)
+        rank = self.best_K - n
+        full = min(len([r for r in self.Jv if any(x != 0 for x in r)]), m)
+        rank_dec = _rank_decision(rank, full, errors[0], count,
+                                  "rank (Z_i(chi_j)) = rank [[W, mu^T], [dchi/dv, 0]] - n")
+        consistent = self.best_aug == 0
+        if self.best_K == n + len(chis):
+            # K has full row rank: there is no lambda-free combination at all.
+            cons_dec = Decision(True, "exact", "every constraint row is in the regular "
+                                "block: no lambda-free condition (K has full row rank at an "
+                                "exact point)", precision="exact", samples=count,
+                                error_bound=0.0)
+        else:
+            cons_dec = Decision(
+                consistent, "exact at points" if consistent else "exact",
+                ("rank [K | c] = rank K at every point: every lambda-free condition vanishes"
+                 if consistent else "rank [K | c] > rank K at an exact point: a lambda-free "
+                 "condition is nonzero"),
+                precision="exact", samples=count, error_bound=errors[1] if consistent else 0.0)
+        jac_dec = _rank_decision(self.best_J, min(len(chis), 2 * n), errors[2], count,
+                                 "rank of the Jacobian of the constraints of M_1")
+        rows, cols = self.block
+        return TangencyVerdict(rank_dec, cons_dec, jac_dec, rows, cols, count)
+
+    # ------------------------------------------------------ sampled points
+    def sampled(self, manifold, policy):
+        """Stage 1 at floating-point points of M_1 (None up to ``closed_form_size``
+        coordinates: the symbolic algorithm decides those exactly)."""
+        if self.n <= policy.closed_form_size:
             return None
-    if len(moving) != m:
-        return None
-    sampler = PointSampler.on_M1(system, seed, modular=True)
-    for _ in range(tries):
-        try:
-            pt = sampler.point()
-            K, c, J = _bordered(pt.env, W, F, mu, [Jq[j] for j in range(len(chis))],
-                                Jv, v)
-        except (ZeroDivisionError, NotExact):
-            continue
-        Kmov = K[:n] + [K[n + j] for j in moving]
-        rK, _, _ = exact_rank(Kmov)
-        rJ, _, _ = exact_rank(J)
-        if rK == n + m and rJ == len(chis):
-            how = "at a random point modulo the prime 2^61 - 1 (proof)"
-            rank = Decision(m, "exact", f"rank (Z_i(chi_j)) = rank [[W, mu^T], [mu, 0]] - n = "
-                            f"{m}, full, {how}", precision="exact", samples=1, error_bound=0.0)
-            cons = Decision(True, "exact", "no lambda-free condition: the rows of the "
-                            "velocity constraints are independent in K " + how
-                            + ("; the holonomic rows give their complete lifts, which are "
-                               "constraints of M_1" if still else ""),
-                            precision="exact", samples=1, error_bound=0.0)
-            jac = Decision(rJ, "exact", f"Jacobian of the constraints of full rank {rJ} {how}",
-                           precision="exact", samples=1, error_bound=0.0)
-            return TangencyVerdict(rank, cons, jac, tuple(moving), tuple(range(m)), 1)
-    return None
+        return tangency_sampled(self.system, self.hessian, self.forcing, self.chis,
+                                manifold.sampled_only())
 
 
 def _rank_decision(rank, full, error, count, what) -> Decision:
@@ -215,45 +282,6 @@ def _rank_decision(rank, full, error, count, what) -> Decision:
     return Decision(rank, "exact at points",
                     f"{what}: rank {rank} at {count} random exact points",
                     precision="exact", samples=count, error_bound=error)
-
-
-def _bordered(env, W, F, mu, Jq, Jv, v):
-    cache = {}
-    Wv = [evaluate(row, env, cache) for row in W]
-    Fv = evaluate(F, env, cache)
-    muv = [evaluate(row, env, cache) for row in mu]
-    Jqv = [evaluate(row, env, cache) for row in Jq]
-    Jvv = [evaluate(row, env, cache) for row in Jv]
-    vel = [env[s] for s in v]
-    n = len(Wv)
-    K = bordered_matrix(ListMatrix(Wv), ListMatrix(muv, n), ListMatrix(Jvv, n)).rows
-    c = Fv + [-sum((a * b for a, b in zip(row, vel)), 0) for row in Jqv]
-    J = [a + b for a, b in zip(Jqv, Jvv)]
-    return K, c, J
-
-
-def _degrees(deg_env, W, F, mu, Jq, Jv, v, sampler):
-    """Minor-degree data of K, [K | c] and the Jacobian from Degree arithmetic."""
-    K, c, J = _bordered(deg_env, W, F, mu, Jq, Jv, v)
-    aug = [row + [x] for row, x in zip(K, c)]
-    return {"K": K, "aug": aug, "J": J, "den": sampler.denominator_degree}
-
-
-def _errors(degrees, rK, extra, rJ, count, n, m):
-    """Error bounds of: rank deficiency of K, vanishing conditions, Jacobian deficiency."""
-    den = degrees["den"]
-
-    def bound(rows, rank):
-        return schwartz_zippel_bound(minor_degree(rows, rank + 1), count,
-                                     denominator_degree=den)
-
-    out = []
-    size_K = min(len(degrees["K"]), n + m)
-    out.append(None if rK >= size_K else bound(degrees["K"], rK))
-    out.append(None if extra > 0 or rK >= len(degrees["K"]) else bound(degrees["aug"], rK))
-    size_J = min(len(degrees["J"]), 2 * n)
-    out.append(None if rJ >= size_J else bound(degrees["J"], rJ))
-    return out
 
 
 def _block(K, n):
