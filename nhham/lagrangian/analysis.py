@@ -16,14 +16,16 @@ from __future__ import annotations
 from dataclasses import dataclass, field, replace
 from functools import cached_property
 from types import MappingProxyType
-from typing import Mapping
+from typing import TYPE_CHECKING, Mapping, cast
 
 import networkx as nx
 import sympy as sp
 
 from nhham.errors import ComputationError
 from nhham.lagrangian.algebra import cancel
+from nhham.lagrangian.decision import Assumption
 from nhham.lagrangian.engine import Policy, decide, policy_of
+from nhham.lagrangian.points import jacobian_row
 from nhham.lagrangian.algorithm import (
     constraint_kind,
     rank_drop_warnings,
@@ -34,6 +36,9 @@ from nhham.lagrangian.submanifold import Submanifold
 from nhham.settings import SEED, check_options
 from nhham.system.description import System
 from nhham.system.naming import multiplier_symbol
+
+if TYPE_CHECKING:
+    from nhham.lagrangian.geometry import LagrangianGeometry
 
 __all__ = ["Block", "ConstraintAnalysis", "analyze_constraints"]
 
@@ -159,6 +164,30 @@ class ConstraintAnalysis:
             for a, i in enumerate(_state_positions(self.system, blk.coordinates)):
                 out[i] = blk.run.dynamics[a]
         return out
+
+    @cached_property
+    def assumptions(self) -> tuple:
+        """Every function the generic decisions of the run assumed not identically zero
+        (:class:`~nhham.lagrangian.decision.Assumption`), in order: det W and the
+        maximal minors of μ on M_1 (the premises), each stage's records, and the
+        Frobenius terms when the distribution is not integrable."""
+        system, stages = self.system, self.stages
+        if not stages:
+            return ()
+        m1 = stages[0].constraints
+        hessian = cast("LagrangianGeometry", self.geometry).hessian
+        W = tuple(tuple(hessian.row(i)) for i in range(system.n))
+        out = [Assumption("the Lagrangian is singular (det W = 0)", "det", W, m1, 1)]
+        if system.m:
+            mu = tuple(tuple(system.mu.row(i)) for i in range(system.m))
+            out.append(Assumption("the constraint one-forms become dependent (a constraint "
+                                  "is redundant)", "maximal minors", mu, m1, 1))
+        for stage in stages:
+            out += stage.assumptions
+        if self.integrability.generic is False and system.m and system.n - system.m > 1:
+            out.append(Assumption("the constraint distribution becomes integrable",
+                                  "Frobenius terms", (), m1, 1))
+        return tuple(out)
 
     @cached_property
     def integrability(self):
@@ -495,6 +524,8 @@ def _merge(system, blocks, opts, policy, geometry) -> ConstraintAnalysis:
             conditions=sum((p.conditions for p in parts), ()),
             decisions=sum((p.decisions for p in parts), ()),
         ))
+        stages[-1] = replace(stages[-1], assumptions=_assumptions(system, geometry,
+                                                                   stages[-1]))
     bad = [(b, r) for b, r in zip(blocks, runs) if r.status == "inconsistent"]
     prefix = len(blocks) > 1
     inconsistency = None
@@ -524,6 +555,29 @@ def _merge(system, blocks, opts, policy, geometry) -> ConstraintAnalysis:
         converged=all(r.converged for r in runs),
         dimension=None if None in dims else sum(dims), options=opts, policy=policy, geometry=geometry,
     )
+
+
+def _assumptions(system, geometry, stage) -> tuple:
+    """What the generic decisions of stage k assumed not identically zero on M_k.
+
+    The rank r of (Z_i(χ_j)) rests on the regular block (rows J, multipliers I):
+    det [[W, μ_Iᵀ], [∂χ_J/∂v, 0]] = det W det (Z_i(χ_j))_{J, I}; every λ-free
+    condition ψ_j found nonzero is a new constraint or the reason of an inconsistency.
+    """
+    k = stage.index
+    index = dict(zip(stage.labels, stage.constraints))
+    rows, cols = stage.block
+    out = []
+    if rows:
+        W = tuple(tuple(geometry.hessian.row(i)) for i in range(system.n))
+        mu_I = tuple(tuple(system.mu.row(int(s.name.rsplit("_", 1)[1]) - 1)) for s in cols)
+        Jv = tuple(tuple(jacobian_row(index[lab], system.velocities)) for lab in rows)
+        out.append(Assumption(f"the rank of (Z_i(chi_j)) on M_{k} drops below {len(rows)}"
+                              + (" (C singular)" if k == 1 else ""), "bordered det",
+                              (W, mu_I, Jv), stage.constraints, k))
+    out += [Assumption(f"the condition from {label} on M_{k} vanishes", "value", (psi,),
+                       stage.constraints, k) for label, psi in stage.conditions]
+    return tuple(out)
 
 
 def _tagged(stage, tag):

@@ -15,7 +15,7 @@ from nhham.settings import SEED, check_options
 if TYPE_CHECKING:
     from nhham.system.description import System
 
-__all__ = ["Decision", "DecisionSettings"]
+__all__ = ["Assumption", "Decision", "DecisionSettings"]
 
 
 @dataclass(frozen=True, eq=False, repr=False)
@@ -123,3 +123,35 @@ class Decision:
 
 def _floats(values):
     return "[" + ", ".join(f"{v:.3g}" for v in values) + "]"
+
+
+@dataclass(frozen=True)
+class Assumption:
+    """A function a generic decision assumed not identically zero on M_k.
+
+    The verdict at parameter values (:mod:`nhham.lagrangian.exceptional`) evaluates
+    these records, with the parameters symbolic or at their values, instead of
+    deriving them again.
+
+    Attributes
+    ----------
+    reason : str
+        What changes where the function vanishes identically (``"the Lagrangian is
+        singular (det W = 0)"``).
+    formula : {"det", "maximal minors", "bordered det", "value", "Frobenius terms"}
+        How the function is formed from ``data`` (:mod:`nhham.lagrangian.formulas`):
+        det of the matrix; the maximal minors of μ; det [[W, μ_Iᵀ], [∂χ_J/∂v, 0]]
+        from ``(W, μ_I, ∂χ_J/∂v)``; the expression itself; dμ_i(X_a, X_b) on ker μ.
+    data : tuple
+        The rows (tuples of sympy expressions) or the expression the formula takes.
+    on : tuple of sympy.Expr
+        The constraints of M_k, where the function is evaluated.
+    stage : int
+        k.
+    """
+
+    reason: str
+    formula: str
+    data: tuple
+    on: tuple
+    stage: int

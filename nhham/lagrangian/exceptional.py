@@ -232,28 +232,41 @@ class ExceptionalData:
 
     # ---------------------------------------------------------------- items
     def items(self) -> list:
-        """[(reason, evaluate)] for every datum of the analysis."""
-        analysis, system = self.analysis, self.system
-        stages = analysis.stages
-        if not stages:
+        """[(reason, evaluate)] for every function the analysis' decisions assumed
+        nonzero (:attr:`ConstraintAnalysis.assumptions`), then the bracket datum."""
+        analysis = self.analysis
+        if not analysis.stages:
             return []
-        out = []
-        m1 = stages[0].constraints
-        out.append(("the Lagrangian is singular (det W = 0)", lambda env0, K: [
-            field_det(self._matrix(K, self.W, env, self._memo(env)))
-            for env in self._pts(m1, env0, K, 1)]))
-        if system.m:
-            out.append(("the constraint one-forms become dependent (a constraint is "
-                        "redundant)", lambda env0, K: self._mu_minors(m1, env0, K)))
-        for stage in stages:
-            out += self._stage_items(stage)
-        if analysis.integrability.generic is False and system.m and system.n - system.m > 1:
-            out.append(("the constraint distribution becomes integrable",
-                        lambda env0, K: self._frobenius(m1, env0, K)))
+        out = [(a.reason, self._evaluator(a)) for a in analysis.assumptions]
         if analysis.status != "inconsistent" and analysis.final_constraints:
             out.append(("the rank of the bracket matrix on M_f drops (the first/second-class "
                         "split changes)", lambda env0, K: self._bracket_minor(env0, K)))
         return out
+
+    def _evaluator(self, a):
+        """The values of the recorded function at the datum's points: (env0, K) -> list."""
+        def points(env0, K):
+            return self._pts(a.on, env0, K, a.stage)
+
+        def matrices(env0, K):
+            for env in points(env0, K):
+                cache = self._memo(env)
+                yield [self._matrix(K, rows, env, cache) for rows in a.data]
+
+        if a.formula == "det":
+            return lambda env0, K: [field_det(self._matrix(K, a.data, env, self._memo(env)))
+                                    for env in points(env0, K)]
+        if a.formula == "bordered det":
+            return lambda env0, K: [field_det(bordered_matrix(*mats))
+                                    for mats in matrices(env0, K)]
+        if a.formula == "value":
+            return lambda env0, K: [self._val(K, evaluate(a.data, env, self._memo(env))[0])
+                                    for env in points(env0, K)]
+        if a.formula == "maximal minors":
+            return lambda env0, K: self._mu_minors(a.on, env0, K)
+        if a.formula == "Frobenius terms":
+            return lambda env0, K: self._frobenius(a.on, env0, K)
+        raise ValueError(f"unknown formula {a.formula!r} of an assumption")
 
     def _mu_minors(self, eqs, env0, K):
         system = self.system
@@ -271,36 +284,6 @@ class ExceptionalData:
                 len(pivots) < m else adjacent_column_sets(pivots, system.n)
             vals += maximal_minors(M, pivots, subsets)
         return vals
-
-    def _stage_items(self, stage):
-        k = stage.index
-        system = self.system
-        index = {lab: c for lab, c in zip(stage.labels, stage.constraints)}
-        rows, cols = stage.block
-        r = len(rows)
-        out = []
-        if r:
-            phi_idx = [int(s.name.rsplit("_", 1)[1]) - 1 for s in cols]
-            mu_I = [list(system.mu.row(i)) for i in phi_idx]
-            Jv = [jacobian_row(index[lab], system.velocities) for lab in rows]
-
-            def block_det(env0, K, eqs=stage.constraints, mu_I=mu_I, Jv=Jv, k=k):
-                vals = []
-                for env in self._pts(eqs, env0, K, k):
-                    cache = self._memo(env)
-                    vals.append(field_det(bordered_matrix(
-                        *(self._matrix(K, rows, env, cache) for rows in (self.W, mu_I, Jv)))))
-                return vals
-
-            out.append((f"the rank of (Z_i(chi_j)) on M_{k} drops below {r}"
-                        + (" (C singular)" if k == 1 else ""), block_det))
-        for label, psi in stage.conditions:
-            def condition(env0, K, eqs=stage.constraints, psi=psi, k=k):
-                return [self._val(K, evaluate([psi], env, self._memo(env))[0])
-                        for env in self._pts(eqs, env0, K, k)]
-
-            out.append((f"the condition from {label} on M_{k} vanishes", condition))
-        return out
 
     def _frobenius(self, eqs, env0, K):
         system = self.system

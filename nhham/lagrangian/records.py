@@ -82,6 +82,10 @@ class Stage:
         Each λ-free combination ψ_j with the label of the row j it comes from.
     decisions : tuple of Evidence
         Every decision taken at this stage with its evidence.
+    assumptions : tuple of Assumption
+        The functions the stage's generic decisions assumed not identically zero on
+        M_k: the determinant of the regular block (its rank) and every λ-free
+        condition (Lagrangian analyses; empty on T*Q).
     """
 
     index: int
@@ -94,6 +98,7 @@ class Stage:
     block: tuple
     conditions: tuple
     decisions: tuple
+    assumptions: tuple = ()
 
     @property
     def consistent(self) -> bool:
