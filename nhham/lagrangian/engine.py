@@ -49,7 +49,7 @@ from dataclasses import dataclass
 from nhham.lagrangian.domains import NotExact
 from nhham.settings import SEED, check_options
 
-__all__ = ["Policy", "decide", "policy_of"]
+__all__ = ["Policy", "decide", "policy_of", "answers_by_step"]
 
 
 @dataclass(frozen=True)
@@ -241,3 +241,22 @@ def policy_of(policy: Policy | None, where: str, **options) -> Policy:
         raise InputError(f"{where}: {clash[0]} is given both as a keyword and in the policy; "
                          f"give it in the policy only", key=clash[0])
     return policy
+
+
+def answers_by_step(quantity_factory, manifold, policy: Policy) -> dict:
+    """Every step's answer to the same question, each from a fresh quantity:
+    ``{"reduced" | "proof modulo p" | "exact points" | "sampled": answer}`` for the
+    steps that answer.
+
+    The steps evaluate the same formulas in different arithmetics (sympy, GF(p), QQ
+    with degree bounds, float64/mpmath), so answers that disagree expose a defect in
+    one of them; the tests of the engine compare them.
+    """
+    steps = {"reduced": _reduced, "proof modulo p": _proof_modulo_p,
+             "exact points": _at_exact_points, "sampled": _sampled}
+    out = {}
+    for name, step in steps.items():
+        answer = step(quantity_factory(), manifold, policy)
+        if answer is not None:
+            out[name] = answer
+    return out

@@ -1,0 +1,133 @@
+"""The decision engine: the cascade's order, the policy, and the arithmetics checked
+against each other (a wrong formula planted in one of them is caught)."""
+
+from pathlib import Path
+
+import pytest
+
+from nhham import load_scene
+from nhham.errors import InputError
+from nhham.lagrangian.domains import ModP, NotExact
+from nhham.lagrangian.engine import Policy, answers_by_step, decide, policy_of
+from nhham.lagrangian.geometry import LagrangianGeometry
+from nhham.lagrangian.submanifold import Submanifold
+from nhham.lagrangian.tangency import Tangency
+
+EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
+
+
+class Recorder:
+    """A quantity whose steps answer as told and record that they ran."""
+
+    def __init__(self, answers, log):
+        self.answers, self.log = answers, log
+
+    def reduced(self, manifold, policy):
+        self.log.append("reduced")
+        return self.answers.get("reduced")
+
+    def sampled(self, manifold, policy):
+        self.log.append("sampled")
+        return self.answers.get("sampled")
+
+
+def test_the_cascade_stops_at_the_first_step_that_answers():
+    log = []
+    assert decide(Recorder({"reduced": "R", "sampled": "S"}, log), None, Policy()) == "R"
+    assert log == ["reduced"]
+    log.clear()
+    assert decide(Recorder({"sampled": "S"}, log), None, Policy()) == "S"
+    assert log == ["reduced", "sampled"]
+    log.clear()
+    assert decide(Recorder({}, log), None, Policy()) is None
+
+
+def _tangency(name):
+    system = load_scene(EXAMPLES / f"{name}.toml", drop_redundant=True).system
+    geo = LagrangianGeometry(system)
+    exprs = tuple(system.holonomic) + tuple(system.phi)
+    return system, geo, exprs, Submanifold(system, exprs)
+
+
+def test_exact_false_skips_the_steps_at_exact_points():
+    system, geo, exprs, M = _tangency("rolling_disk")
+    exact = decide(Tangency(system, geo.hessian, geo.forcing, exprs), M,
+                   Policy(closed_form_size=0))
+    assert exact.rank.method == "exact" and exact.rank.samples == 1  # proof modulo p
+    sampled = decide(Tangency(system, geo.hessian, geo.forcing, exprs), M,
+                     Policy(closed_form_size=0, exact=False))
+    assert sampled.rank.method == "sampled" and sampled.rank.value == 2
+
+
+def test_no_exact_points_gives_way_to_the_next_step():
+    class NoPoints(Recorder):
+        def observe(self, value):
+            raise AssertionError("never reached: the value raises")
+
+        def value(self, env, degrees=False):
+            raise NotExact("a parameter value inside a sine")
+
+    system, geo, exprs, M = _tangency("rolling_disk")
+    log = []
+    assert decide(NoPoints({"sampled": "S"}, log), M, Policy()) == "S"
+    assert log == ["reduced", "sampled"]
+
+
+# rank C on M_1 derived by hand: the rolling disk's C is 2 x 2 regular (two rolling
+# constraints, W diagonal); the Chaplygin sleigh's 1 x 1 C = mu W^-1 mu^T > 0; the
+# snakeboard's two wheel constraints give a regular 2 x 2 C; in the paper's Example
+# 3.2 the constraint's velocity coefficients are annihilated by W^-1: C = 0.
+RANK_C = {"rolling_disk": 2, "chaplygin_sleigh": 1, "snakeboard": 2, "paper_3_2": 0}
+
+
+@pytest.mark.parametrize("name", sorted(RANK_C))
+def test_every_arithmetic_gives_the_hand_derived_rank(name):
+    system, geo, exprs, M = _tangency(name)
+    answers = answers_by_step(lambda: Tangency(system, geo.hessian, geo.forcing, exprs), M,
+                              Policy(closed_form_size=0))
+    assert {"exact points", "sampled"} <= set(answers)
+    assert {step: a.rank.value for step, a in answers.items()} == \
+        {step: RANK_C[name] for step in answers}
+
+
+class ModularDefect(Tangency):
+    """Tangency with a wrong formula in one arithmetic: over GF(p) the bordered
+    matrix K gets a 1 in its lower-right zero block (a sign or index slip)."""
+
+    def value(self, env, degrees=False):
+        K, c, J = super().value(env, degrees)
+        if any(isinstance(x, ModP) for x in env.values()):  # a point over GF(p)
+            K = [list(row) for row in K]
+            K[-1][-1] = K[-1][-1] + 1
+        return K, c, J
+
+
+def test_a_wrong_formula_planted_in_one_arithmetic_is_caught():
+    system, geo, exprs, M = _tangency("paper_3_2")
+    policy = Policy(closed_form_size=0)
+    # Alone, the engine would trust the planted proof: rank 1, C "regular".
+    planted = decide(ModularDefect(system, geo.hessian, geo.forcing, exprs), M, policy)
+    assert planted.rank.value == 1
+    # The steps compared with each other expose it, and name the arithmetic.
+    answers = answers_by_step(lambda: ModularDefect(system, geo.hessian, geo.forcing, exprs),
+                              M, policy)
+    ranks = {step: a.rank.value for step, a in answers.items()}
+    assert ranks["proof modulo p"] == 1
+    assert ranks["exact points"] == ranks["sampled"] == RANK_C["paper_3_2"]
+
+
+@pytest.mark.parametrize("key, value", [("samples", 0), ("precision", 3), ("tol", -1.0),
+                                        ("max_points", -1), ("target_error", 2.0),
+                                        ("budget", 0.0), ("closed_form_size", 1.5)])
+def test_a_bad_policy_is_refused_naming_the_key(key, value):
+    with pytest.raises(InputError) as info:
+        Policy(**{key: value})
+    assert key in str(info.value)
+
+
+def test_a_policy_and_a_differing_keyword_together_are_refused():
+    assert policy_of(None, "f", samples=9).samples == 9
+    given = Policy(samples=9)
+    assert policy_of(given, "f", samples=6) is given  # 6 is the default: not given
+    with pytest.raises(InputError, match="seed"):
+        policy_of(given, "f", seed=3)
