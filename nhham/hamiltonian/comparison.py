@@ -12,15 +12,14 @@ import math
 from functools import cached_property
 
 import numpy as np
-import sympy as sp
 
 from nhham.errors import InputError
 from nhham.hamiltonian.checks import CheckResult
 from nhham.lagrangian.domains import ModP, NotExact
-from nhham.lagrangian.formulas import lagrangian_bracket
+from nhham.lagrangian.formulas import constrained_motion, lagrangian_bracket
 from nhham.lagrangian.geometry import lagrangian_geometry
-from nhham.lagrangian.linalg import FloatMatrix, ModularBackend, exact_rank
-from nhham.lagrangian.points import PointSampler, eliminate_coordinates, jacobian_row
+from nhham.lagrangian.linalg import FloatMatrix, ModularBackend, backend_solve, exact_rank
+from nhham.lagrangian.points import PointSampler, exact_sampler
 from nhham.lagrangian.submanifold import Submanifold
 from nhham.system.evaluation import Backend, Lambdified
 from nhham.system.expressions import derivative
@@ -139,29 +138,10 @@ class ModularComparisonPoints(ComparisonPoints):
 
     @classmethod
     def on(cls, system, constraints, samples, seed) -> "ModularComparisonPoints":
-        """Seeded points of M = {constraints = 0} over F_p: the constraints free of
-        velocities are solved for coordinates, those affine in the velocities for
-        dependent velocities (NotExact for any other constraint)."""
-        vels = set(system.velocities)
-        holonomic: list = []
-        rest = [sp.sympify(c) for c in constraints]
-        # A constraint that becomes free of velocities once the coordinates solved so far
-        # are substituted (q2 - 2 q1 v1^2 where q1 = 0) is solved for a coordinate too.
-        while True:
-            solved = eliminate_coordinates(system.coordinates, holonomic)
-            reduced = [sp.expand(c.xreplace(solved)) for c in rest]
-            more = [c for c in reduced if c != 0 and not c.free_symbols & vels]
-            if not more:
-                break
-            holonomic += more
-            rest = [c for c, r in zip(rest, reduced) if r.free_symbols & vels]
-        affine = [c for c in reduced if c != 0]
-        for c in affine:
-            if any(e.free_symbols & vels for e in jacobian_row(c, system.velocities)):
-                raise NotExact(f"{c} is not affine in the velocities")
-        return cls(system, samples, seed, PointSampler(
-            system.coordinates, system.velocities, system.parameters,
-            dict(system.parameter_values), holonomic, affine, seed, modular=True))
+        """Seeded points of M = {constraints = 0} over F_p
+        (:func:`~nhham.lagrangian.points.exact_sampler`; NotExact where M has none)."""
+        manifold = Submanifold(system, tuple(constraints), seed=seed)
+        return cls(system, samples, seed, exact_sampler(manifold, seed, modular=True))
 
     @cached_property
     def all_points(self):
@@ -208,16 +188,12 @@ class NumericLagrangian:
         n = self.n
         W, F, M = self._W(be, vals), self._F(be, vals), self._M(be, vals)
         v = np.array(vals[n:2 * n], dtype=object if be.precision else float)
-        a = be.solve(W, F)
         if self.m:
-            mu, drift = self._mu(be, vals), self._drift(be, vals)
-            WmT = be.solve(W, mu.T)
-            C = -(mu @ WmT)
-            xi_phi = drift + mu @ a
-            lam = -be.solve(C.T, xi_phi)
-            acc = a - WmT @ lam
+            mu, drift = FloatMatrix(self._mu(be, vals)), FloatMatrix(self._drift(be, vals))
+            acc, lam, C = (x.a for x in constrained_motion(
+                FloatMatrix(W), mu, FloatMatrix(F), drift, solve=backend_solve(be)))
         else:
-            lam, C, acc = be.zeros(0), be.zeros(0, 0), a
+            lam, C, acc = be.zeros(0), be.zeros(0, 0), be.solve(W, F)
         return self._pushed(v, acc, W, M), lam, C
 
     def field(self, be: Backend, vals, lam):
@@ -248,8 +224,7 @@ class NumericLagrangian:
         """{f_a, f_b}_L = f_q W^{-1} g_v - (W^{-1} f_v) g_q - (W^{-1} f_v)^T A (W^{-1} g_v)."""
         Gq, Gv = self.gradients(be, vals, exprs)
         B = lagrangian_bracket(FloatMatrix(Gq), FloatMatrix(Gv), FloatMatrix(self._W(be, vals)),
-                               FloatMatrix(self._M(be, vals)),
-                               solve=lambda A, X: FloatMatrix(be.solve(A.a, X.a)))
+                               FloatMatrix(self._M(be, vals)), solve=backend_solve(be))
         return B.a
 
 

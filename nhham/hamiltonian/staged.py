@@ -21,7 +21,14 @@ from nhham.hamiltonian.comparison import (
 )
 from nhham.hamiltonian.side import HamiltonianSide
 from nhham.lagrangian.domains import PRIME, ModP, NotExact
-from nhham.lagrangian.linalg import ModularBackend, exact_rank, exact_solve
+from nhham.lagrangian.formulas import tangency_rows
+from nhham.lagrangian.linalg import (
+    FloatMatrix,
+    ModularBackend,
+    backend_solve,
+    exact_rank,
+    exact_solve,
+)
 
 __all__ = ["staged_at_points"]
 
@@ -42,7 +49,9 @@ def _tangency_L(lag: NumericLagrangian, be, vals, chis) -> _Tangency:
     W, F, mu = lag._W(be, vals), lag._F(be, vals), lag._mu(be, vals)
     v = np.array(vals[n:2 * n], dtype=object)
     Gq, Gv = lag.gradients(be, vals, chis)
-    return _Tangency(-(Gv @ be.solve(W, mu.T)), Gq @ v + Gv @ be.solve(W, F))
+    A, b = tangency_rows(FloatMatrix(W), FloatMatrix(mu), FloatMatrix(F), FloatMatrix(Gq @ v),
+                         FloatMatrix(Gv), solve=backend_solve(be))
+    return _Tangency(A.a, b.a)
 
 
 def _tangency_H(num, be, hp, chis) -> _Tangency:

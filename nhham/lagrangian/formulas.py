@@ -16,7 +16,8 @@ from typing import Callable
 
 from nhham.lagrangian.linalg import field_solve, zeros_like
 
-__all__ = ["bordered_matrix", "lagrangian_bracket", "frobenius_terms"]
+__all__ = ["bordered_matrix", "tangency_rows", "constrained_motion", "lagrangian_bracket",
+           "frobenius_terms"]
 
 
 def bordered_matrix(W, mu, Jv):
@@ -40,6 +41,63 @@ def bordered_matrix(W, mu, Jv):
     """
     zero = zeros_like(Jv, (Jv.shape[0], mu.shape[0]))
     return W.hstack(mu.transpose()).vstack(Jv.hstack(zero))
+
+
+def tangency_rows(W, mu, F, Jq_v, Jv, solve: Callable = field_solve):
+    """(A, b) of the tangency equations A λ + b = 0 of constraints χ at one point.
+
+    A_ji = Z_i(χ_j) = −(∂χ_j/∂v W⁻¹ μᵀ)_ji and b_j = ξ_L(χ_j) = (∂χ_j/∂q v)_j +
+    (∂χ_j/∂v W⁻¹ F)_j (Z_i = −W^{AB} μ_iB ∂/∂v^A, ξ_L with W a = F: DESIGN.md). With
+    χ = φ, A is C. The Schur complement of the bordered matrix
+    :func:`bordered_matrix` (which avoids W⁻¹).
+
+    Parameters
+    ----------
+    W : matrix, shape (n, n)
+    mu : matrix, shape (m, n)
+    F : matrix, shape (n,) or (n, 1)
+    Jq_v : matrix, shape (k,) or (k, 1)
+        ∂χ/∂q · v at the point.
+    Jv : matrix, shape (k, n)
+        ∂χ/∂v.
+    solve : callable, optional
+        ``solve(A, B) -> A⁻¹ B`` in the matrices' arithmetic.
+
+    Returns
+    -------
+    A : matrix, shape (k, m)
+    b : matrix, shape (k,) or (k, 1)
+    """
+    return -(Jv * solve(W, mu.transpose())), Jq_v + Jv * solve(W, F)
+
+
+def constrained_motion(W, mu, F, drift, solve: Callable = field_solve):
+    """The saddle solve [[W, μᵀ], [μ, 0]] [a; λ] = [F; −drift] by its Schur complement.
+
+    C = −μ W⁻¹ μᵀ (= (Z_i(φ_j))), λ = −C⁻ᵀ (drift + μ W⁻¹ F) and
+    a = W⁻¹ F − W⁻¹ μᵀ λ: the accelerations of P(ξ_L) and the multipliers, for
+    φ = μ v + h with drift = ∂φ/∂q · v. The numeric kernels solve the same system
+    scaled and in one LU (:mod:`nhham.numerics.saddle`, the C runtime).
+
+    Parameters
+    ----------
+    W : matrix, shape (n, n)
+    mu : matrix, shape (m, n)
+    F : matrix, shape (n,) or (n, 1)
+    drift : matrix, shape (m,) or (m, 1)
+    solve : callable, optional
+
+    Returns
+    -------
+    a : matrix, shape of F
+    lam : matrix, shape of drift
+    C : matrix, shape (m, m)
+    """
+    a = solve(W, F)
+    Y = solve(W, mu.transpose())
+    C = -(mu * Y)
+    lam = -solve(C.transpose(), drift + mu * a)
+    return a - Y * lam, lam, C
 
 
 def lagrangian_bracket(Jq, Jv, W, M, solve: Callable = field_solve):

@@ -197,6 +197,9 @@ class FloatMatrix:
     def __mul__(self, other) -> "FloatMatrix":
         return FloatMatrix(self.a @ other.a)
 
+    def __add__(self, other) -> "FloatMatrix":
+        return FloatMatrix(self.a + other.a)
+
     def __sub__(self, other) -> "FloatMatrix":
         return FloatMatrix(self.a - other.a)
 
@@ -205,6 +208,13 @@ class FloatMatrix:
 
     def to_list(self) -> list:
         return self.a.tolist()
+
+
+def backend_solve(backend):
+    """The ``solve`` of the formulas (:mod:`nhham.lagrangian.formulas`) for
+    :class:`FloatMatrix` of a :class:`~nhham.system.evaluation.Backend`'s arrays
+    (float64, mpmath, or residues with :class:`ModularBackend`)."""
+    return lambda A, X: FloatMatrix(backend.solve(A.a, X.a))
 
 
 class ListMatrix:
@@ -235,6 +245,10 @@ class ListMatrix:
         cols = [[r[j] for r in other.rows] for j in range(other.ncols)]
         return ListMatrix([[sum((x * y for x, y in zip(row, col)), 0) for col in cols]
                            for row in self.rows], other.ncols)
+
+    def __add__(self, other) -> "ListMatrix":
+        return ListMatrix([[x + y for x, y in zip(r, s)] for r, s in zip(self.rows, other.rows)],
+                          self.ncols)
 
     def __sub__(self, other) -> "ListMatrix":
         return ListMatrix([[x - y for x, y in zip(r, s)] for r, s in zip(self.rows, other.rows)],

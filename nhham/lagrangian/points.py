@@ -208,8 +208,14 @@ class PointSampler:
 
 
 def exact_sampler(manifold, seed: int, *, modular: bool = False) -> PointSampler:
-    """The exact points of a submanifold: M_1 = {g = 0, φ = 0} of its system in TQ, or
-    Q_1 = {g = 0} in Q (``manifold.fibre == ()``).
+    """The exact points of a submanifold M = {constraints = 0} over Q (or F_p).
+
+    M_1 = {g = 0, φ = 0} of the manifold's system keeps the system's own order (so its
+    points are those of :meth:`PointSampler.on_M1`); M in Q (``manifold.fibre == ()``)
+    is {g = 0}; for any other M the constraints free of velocities are solved for
+    coordinates (also those that become free of velocities once the coordinates solved
+    so far are substituted: q2 - 2 q1 v1^2 where q1 = 0), the rest, affine in the
+    velocities, for dependent velocities.
 
     Parameters
     ----------
@@ -221,21 +227,46 @@ def exact_sampler(manifold, seed: int, *, modular: bool = False) -> PointSampler
     Raises
     ------
     NotExact
-        For other submanifolds (M_k, k > 1: their points are drawn over the parameter
-        field by :class:`ParameterFieldSampler`), or where M has no exact points.
+        Where a constraint is neither solvable for a coordinate nor affine in the
+        velocities, or M has no exact points.
     """
     system = manifold.system
     equations = set(manifold.equations)
     holonomic = tuple(system.holonomic)
-    if not manifold.fibre and equations == set(holonomic):
-        return PointSampler(system.coordinates, (), system.parameters,
-                            dict(system.parameter_values), holonomic, (), seed,
+    values = dict(system.parameter_values)
+    if not manifold.fibre:
+        if not equations <= set(holonomic):
+            raise NotExact("a submanifold of Q is defined by holonomic constraints")
+        return PointSampler(system.coordinates, (), system.parameters, values,
+                            [g for g in holonomic if g in equations], (), seed,
                             modular=modular)
-    if tuple(manifold.fibre) == tuple(system.velocities) and \
-            equations == set(holonomic) | set(system.phi):
+    if tuple(manifold.fibre) != tuple(system.velocities):
+        raise NotExact("exact points are drawn in TQ and Q")
+    if equations == set(holonomic) | set(system.phi):
         return PointSampler.on_M1(system, seed, modular=modular)
-    raise NotExact("exact points are drawn on M_1 and Q_1 here; this submanifold is "
-                   "another")
+    solved, affine = _split(system, manifold.equations)
+    return PointSampler(system.coordinates, system.velocities, system.parameters, values,
+                        solved, affine, seed, modular=modular)
+
+
+def _split(system, constraints):
+    """(constraints solved for coordinates, constraints affine in the velocities)."""
+    vels = set(system.velocities)
+    holonomic: list = []
+    rest = [sp.sympify(c) for c in constraints]
+    while True:
+        solved = eliminate_coordinates(system.coordinates, holonomic)
+        reduced = [sp.expand(c.xreplace(solved)) for c in rest]
+        more = [c for c in reduced if c != 0 and not c.free_symbols & vels]
+        if not more:
+            break
+        holonomic += more
+        rest = [c for c, r in zip(rest, reduced) if r.free_symbols & vels]
+    affine = [c for c in reduced if c != 0]
+    for c in affine:
+        if any(e.free_symbols & vels for e in jacobian_row(c, system.velocities)):
+            raise NotExact(f"{c} is not affine in the velocities")
+    return holonomic, affine
 
 
 def jacobian_row(expr, symbols) -> list:
