@@ -16,7 +16,7 @@ from typing import Callable
 
 from nhham.lagrangian.linalg import field_solve, zeros_like
 
-__all__ = ["bordered_matrix", "tangency_rows", "constrained_motion", "lagrangian_bracket",
+__all__ = ["bordered_matrix", "tangency_rows", "vertical_rows", "constrained_motion", "lagrangian_bracket",
            "frobenius_terms"]
 
 
@@ -68,7 +68,13 @@ def tangency_rows(W, mu, F, Jq_v, Jv, solve: Callable = field_solve):
     A : matrix, shape (k, m)
     b : matrix, shape (k,) or (k, 1)
     """
-    return -(Jv * solve(W, mu.transpose())), Jq_v + Jv * solve(W, F)
+    return vertical_rows(W, mu, Jv, solve), Jq_v + Jv * solve(W, F)
+
+
+def vertical_rows(W, mu, Jv, solve: Callable = field_solve):
+    """A_ji = Z_i(χ_j) = −(∂χ_j/∂v W⁻¹ μᵀ)_ji at one point: the λ-part of
+    :func:`tangency_rows` (C for χ = φ), shape (k, m)."""
+    return -(Jv * solve(W, mu.transpose()))
 
 
 def constrained_motion(W, mu, F, drift, solve: Callable = field_solve):

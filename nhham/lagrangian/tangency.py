@@ -29,8 +29,8 @@ import sympy as sp
 from nhham.lagrangian.decision import Decision
 from nhham.lagrangian.domains import NotExact, evaluate, minor_degree, schwartz_zippel_bound
 from nhham.lagrangian.engine import Policy, decide
-from nhham.lagrangian.formulas import bordered_matrix
-from nhham.lagrangian.linalg import ListMatrix, exact_rank, exact_solve
+from nhham.lagrangian.formulas import bordered_matrix, vertical_rows
+from nhham.lagrangian.linalg import ListMatrix, exact_rank
 from nhham.lagrangian.points import jacobian_row
 from nhham.lagrangian.submanifold import Submanifold
 
@@ -290,14 +290,12 @@ def _block(K, n):
     A = −J_v W⁻¹ μᵀ at the point, computed exactly; the block is the first
     independent rows and columns.
     """
-    Wp = [row[:n] for row in K[:n]]
-    muT = [row[n:] for row in K[:n]]
-    Jv = [row[:n] for row in K[n:]]
-    if not muT or not muT[0] or not Jv:
+    Km = ListMatrix(K)
+    m, k = Km.shape[1] - n, Km.shape[0] - n
+    if not m or not k:
         return (), ()
-    X = exact_solve(Wp, muT)  # W^{-1} mu^T, n x m
-    A = [[-sum((Jv[j][k] * X[k][i] for k in range(n)), 0) for i in range(len(X[0]))]
-         for j in range(len(Jv))]
+    A = vertical_rows(Km.extract(range(n), range(n)), Km.extract(range(n), range(n, n + m))
+                      .transpose(), Km.extract(range(n, n + k), range(n))).rows
     _, _, cols = exact_rank(A)
     # the independent rows restricted to those columns: pivot columns of the transpose
     _, _, rows = exact_rank([[A[j][i] for j in range(len(A))] for i in cols])

@@ -225,3 +225,52 @@ def test_bordered_matrix_determinant_is_det_W_det_C(seed):
     Kf = bordered_matrix(*(FloatMatrix([[float(x) for x in row] for row in r])
                            for r in (rows[0], rows[1], rows[1])))
     assert field_det(Kf) == pytest.approx(float(expected), rel=1e-9)
+
+
+def _saddle_data(seed):
+    """W, mu (2 x 3), F, drift at a random rational point of the test system."""
+    L, chis = _system()
+    point = _point(seed)
+    W = sp.hessian(L, V).subs(point)
+    mu = sp.Matrix([[sp.diff(c, v) for v in V] for c in chis[:2]]).subs(point)
+    F = sp.Matrix([sp.Rational(seed + 1, 3), -2, sp.Rational(5, 7)])
+    drift = sp.Matrix([sp.Rational(1, 2), sp.Rational(-seed, 5)])
+    return W, mu, F, drift
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_the_saddle_solve_is_the_bordered_system_solved_whole(seed):
+    """constrained_motion (Schur complement) against sympy's LU solve of the whole
+    saddle system [[W, mu^T], [mu, 0]] [a; lam] = [F; -drift], in QQ, GF(p) and float64;
+    tangency_rows with chi = phi gives A = C and b = drift + mu W^-1 F."""
+    from nhham.lagrangian.formulas import constrained_motion, tangency_rows
+
+    W, mu, F, drift = _saddle_data(seed)
+    if W.det() == 0 or (mu * W.inv() * mu.T).det() == 0:
+        pytest.skip("singular at this point")
+    whole = sp.Matrix(sp.BlockMatrix([[W, mu.T], [mu, sp.zeros(2, 2)]])).LUsolve(
+        sp.Matrix.vstack(F, -drift))
+    a_ref, lam_ref = list(whole[:3]), list(whole[3:])
+
+    def lists(X):
+        return ListMatrix([[_mpq(x) for x in X.row(i)] for i in range(X.rows)])
+
+    a, lam, C = constrained_motion(lists(W), lists(mu), lists(F), lists(drift))
+    assert [r[0] for r in a.rows] == a_ref and [r[0] for r in lam.rows] == lam_ref
+    assert C.rows == [[_mpq(x) for x in (-(mu * W.inv() * mu.T)).row(i)] for i in range(2)]
+    A, b = tangency_rows(lists(W), lists(mu), lists(F), lists(drift), lists(mu))
+    assert A.rows == C.rows
+    assert [r[0] for r in b.rows] == [_mpq(x) for x in drift + mu * W.inv() * F]
+
+    def residues(X):
+        return ListMatrix([[ModP.lift(_mpq(x)) for x in X.row(i)] for i in range(X.rows)])
+
+    a_p, lam_p, _ = constrained_motion(*(residues(X) for X in (W, mu, F, drift)))
+    assert [r[0] for r in a_p.rows] == [ModP.lift(_mpq(x)) for x in a_ref]
+    assert [r[0] for r in lam_p.rows] == [ModP.lift(_mpq(x)) for x in lam_ref]
+    a_f, lam_f, _ = constrained_motion(
+        *(FloatMatrix(np.array(X.tolist(), dtype=float).ravel() if X.cols == 1
+                      else np.array(X.tolist(), dtype=float)) for X in (W, mu, F, drift)),
+        solve=lambda A, X: FloatMatrix(np.linalg.solve(A.a, X.a)))
+    assert np.allclose(a_f.a, [float(x) for x in a_ref], rtol=1e-12)
+    assert np.allclose(lam_f.a, [float(x) for x in lam_ref], rtol=1e-12)
