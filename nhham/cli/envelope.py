@@ -36,7 +36,6 @@ and :func:`scene_info`, and gathers warnings with :func:`capture_warnings`.
 from __future__ import annotations
 
 import json
-import math
 import sys
 import warnings as _warnings
 from contextlib import contextmanager
@@ -44,6 +43,8 @@ from dataclasses import dataclass, field
 from functools import lru_cache
 from importlib import resources
 from typing import Any, Callable, Iterator
+
+from nhham.system.numbers import json_number
 
 __all__ = [
     "EXIT_OK",
@@ -62,7 +63,6 @@ __all__ = [
     "capture_warnings",
     "output_schema",
     "jsonable",
-    "json_number",
 ]
 
 EXIT_OK = 0
@@ -246,14 +246,6 @@ def capture_warnings() -> Iterator[list]:
             yield caught
         finally:
             caught.extend(one_line(r.message) for r in records)
-
-
-def json_number(x) -> float | None:
-    """A float for JSON: finite numbers as numbers, others (nan, inf) as null."""
-    if x is None:
-        return None
-    x = float(x)
-    return x if math.isfinite(x) else None
 
 
 def jsonable(value: Any) -> Any:

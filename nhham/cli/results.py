@@ -12,11 +12,11 @@ from __future__ import annotations
 import sympy as sp
 
 from nhham.cli import latex as tex
-from nhham.cli.envelope import json_number, jsonable
+from nhham.cli.envelope import jsonable
+from nhham.system.numbers import json_number
 from nhham.cli.report import expr_text, labelled, matrix_table, table
 from nhham.cli.layout import grid_fits as table_fits
 from nhham.cli.simplify import display_form
-from nhham.lagrangian.records import Evidence
 
 __all__ = [
     "classify_data", "classify_text", "classify_latex",
@@ -29,19 +29,6 @@ __all__ = [
 
 
 # ---------------------------------------------------------------- classify
-def _decision_data(evidence: Evidence) -> dict:
-    d = evidence.decision
-    return {
-        "subject": evidence.subject,
-        "outcome": evidence.outcome,
-        "method": d.method,
-        "precision": str(d.precision),
-        "samples": int(d.samples or 0),
-        "error_bound": json_number(d.error_bound),
-        "detail": d.detail,
-    }
-
-
 def classify_data(analysis, classes=None) -> dict:
     """The ``result`` of ``nhham classify`` from a ConstraintAnalysis (and ConstraintClasses)."""
     from nhham.system.naming import momentum_symbol
@@ -59,39 +46,17 @@ def classify_data(analysis, classes=None) -> dict:
     def shown(c):  # the scene's own constraints as given, derived ones simplified
         return expr_text(c if c in given else display_form(c, system.velocities))
 
-    stages = []
-    for s in analysis.stages:
-        stages.append({
-            "index": int(s.index),
-            "labels": list(s.labels),
-            "constraints": [shown(c) for c in s.constraints],
-            "rank": int(s.rank),
-            "decisions": [_decision_data(d) for d in s.decisions],
-        })
-    first = analysis.stages[0].decisions if analysis.stages else ()
-    first_rank = first[0].decision.method if first else "exact"
-    return {
-        "n": int(system.n),
-        "m": int(system.m),
-        "regular": bool(analysis.regular),
-        "rank_c": int(analysis.rank_C),
-        "rank_c_method": first_rank,
-        "status": str(analysis.status),
-        "stages": stages,
-        "final_labels": list(analysis.final_labels),
-        "final_constraints": [shown(c) for c in analysis.final_constraints],
-        "free_multipliers": int(analysis.free_multipliers),
-        "free_multiplier_symbols": [s.name for s in analysis.free_multiplier_symbols],
-        "redundant": [d.label for d in analysis.dropped],
-        "integrable": analysis.integrable,
-        "affine_parts": not system.is_linear,
+    out = analysis.to_dict(expression=shown)
+    inconsistency = out.pop("inconsistency")
+    out.update({
         "first_class": None if classes is None else int(classes.first_class),
         "second_class": None if classes is None else int(classes.second_class),
         "second_class_set": [] if classes is None else list(classes.second_class_set),
         "first_class_combinations": combos,
         "first_class_coefficients": coefficients,
-        "inconsistency": analysis.inconsistency,
-    }
+        "inconsistency": inconsistency,
+    })
+    return out
 
 
 def classify_warnings(analysis, classes=None) -> list:

@@ -233,6 +233,30 @@ class ConstraintAnalysis:
                     out[ia, ic] = part[a, c]
         return out
 
+    def to_dict(self, expression=str) -> dict:
+        """The verdict of the run, JSON-ready: sizes, rank of C and how it was decided,
+        status, stages with their decisions, M_f, free multipliers, redundancy,
+        integrability, inconsistency; constraints written by ``expression``."""
+        system = self.system
+        first = self.stages[0].decisions if self.stages else ()
+        return {
+            "n": int(system.n),
+            "m": int(system.m),
+            "regular": bool(self.regular),
+            "rank_c": int(self.rank_C),
+            "rank_c_method": first[0].decision.method if first else "exact",
+            "status": str(self.status),
+            "stages": [s.to_dict(expression) for s in self.stages],
+            "final_labels": list(self.final_labels),
+            "final_constraints": [expression(c) for c in self.final_constraints],
+            "free_multipliers": int(self.free_multipliers),
+            "free_multiplier_symbols": [s.name for s in self.free_multiplier_symbols],
+            "redundant": [d.label for d in self.dropped],
+            "integrable": self.integrable,
+            "affine_parts": not system.is_linear,
+            "inconsistency": self.inconsistency,
+        }
+
     def __repr__(self) -> str:
         name = getattr(self.system, "name", "") or "system"
         return (f"<ConstraintAnalysis of {name}: {self.status}, rank C = {self.rank_C}, "

@@ -106,6 +106,17 @@ class Decision:
     def __bool__(self):
         return bool(self.value)
 
+    def to_dict(self, value: bool = True) -> dict:
+        """Method, precision, samples, error bound and detail (and the value), JSON-ready
+        (non-finite numbers as strings)."""
+        from nhham.system.numbers import json_number
+
+        out = {"value": self.value} if value else {}
+        out.update(method=self.method, precision=str(self.precision),
+                   samples=int(self.samples or 0), error_bound=json_number(self.error_bound),
+                   detail=self.detail)
+        return out
+
     def describe(self) -> str:
         """One line saying what was decided and how (with the numeric evidence)."""
         how = self.method if self.method != "exact at points" else (

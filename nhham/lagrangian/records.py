@@ -49,6 +49,11 @@ class Evidence:
         text = f"{self.subject}: {self.decision.describe()}"
         return text + (f" -> {self.outcome}" if self.outcome else "")
 
+    def to_dict(self) -> dict:
+        """Subject, outcome and how it was decided, JSON-ready."""
+        return {"subject": self.subject, "outcome": self.outcome,
+                **self.decision.to_dict(value=False)}
+
 
 @dataclass(frozen=True)
 class Stage:
@@ -104,6 +109,13 @@ class Stage:
     def consistent(self) -> bool:
         """True when the tangency equations on M_k are solvable as they stand."""
         return self.augmented_rank == self.rank
+
+    def to_dict(self, expression=str) -> dict:
+        """Index, labels, constraints (as ``expression`` writes them), rank and the
+        decisions, JSON-ready."""
+        return {"index": int(self.index), "labels": list(self.labels),
+                "constraints": [expression(c) for c in self.constraints],
+                "rank": int(self.rank), "decisions": [e.to_dict() for e in self.decisions]}
 
 
 # ======================================================================= generic

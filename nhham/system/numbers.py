@@ -13,7 +13,7 @@ import math
 
 import sympy as sp
 
-__all__ = ["number_problems", "complex_string"]
+__all__ = ["number_problems", "complex_string", "json_number"]
 
 
 def number_problems(expr) -> list[str]:
@@ -72,3 +72,11 @@ def complex_string(number) -> str | None:
     if real is None and abs(im) <= 1e-25 * max(1.0, abs(re)):
         return None
     return f"{re:.6g}{im:+.6g}i"
+
+
+def json_number(x) -> float | None:
+    """A float for JSON: finite numbers as numbers, others (nan, inf) as null."""
+    if x is None:
+        return None
+    x = float(x)
+    return x if math.isfinite(x) else None
