@@ -200,7 +200,7 @@ class System:
                 [f"constraints: m = {m} independent velocity constraints (holonomic ones "
                  f"counted by their complete lifts) but n = {n} coordinates; nhham needs m < n"]
             )
-        _check_regular(self)
+        _check_regular_lagrangian(self)
 
     def __repr__(self):
         label = f"{self.name!r}, " if self.name else ""
@@ -602,8 +602,10 @@ def _vanishes_at(expr, points, tol=1e-9):
     return True
 
 
-def _check_regular(system):
-    """Raise if W is singular at every sampled point (generic rank < n)."""
+def _check_regular_lagrangian(system):
+    """Raise unless the Lagrangian is regular: W = d2L/dv dv invertible (generic rank n;
+    singular at every sampled point raises). Not C's regularity on M_1, which is a
+    verdict (``LagrangianGeometry.regular``), never an input error."""
     W = system.hessian
     n = system.n
     if not W.free_symbols:
