@@ -504,11 +504,7 @@ def _check_dependence(system, cons, hols, drop_redundant):
     Returns (kept constraints, dropped, mu of lifts + constraints or None
     when a row was dropped or there are none).
     """
-    lifts = tuple(
-        sum((sp.diff(g, q) * v for q, v in zip(system.coordinates, system.velocities)), sp.S.Zero)
-        for g in hols
-    )
-    rows = list(lifts) + list(cons)
+    rows = list(system.complete_lifts) + list(cons)  # holonomic is set before this runs
     labels = [f"holonomic[{i}]" for i in range(len(hols))] + [
         f"constraints[{i}]" for i in range(len(cons))
     ]
