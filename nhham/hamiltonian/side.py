@@ -36,7 +36,7 @@ from nhham.errors import ComputationError
 from nhham.hamiltonian.brackets import BivectorBracket, BracketAlgebra, numeric_bracket_matrix
 from nhham.hamiltonian.legendre import LegendreMap, canonical_form_matrix
 from nhham.lagrangian.algebra import cancel, guard_closed_form, solve_linear
-from nhham.lagrangian.decision import Decision, DecisionSettings
+from nhham.lagrangian.geometry import ConstraintMatrixRank
 from nhham.lagrangian.submanifold import Submanifold
 from nhham.settings import SEED
 from nhham.system.evaluation import Backend, Lambdified
@@ -75,9 +75,8 @@ def hamiltonian_side(system, precision: int | None = None, samples: int = 6,
                            closed_form=closed_form)
 
 
-#: The ``_H`` names of nhham 0.1 and the shared names that replace them.
 @dataclass(frozen=True, eq=False, repr=False)
-class HamiltonianSide(DecisionSettings):
+class HamiltonianSide(ConstraintMatrixRank):
     """Constrained Hamiltonian dynamics of a system on T*Q (frozen, lazy).
 
     It answers the questions of :class:`nhham.lagrangian.geometry.LagrangianGeometry`
@@ -85,8 +84,9 @@ class HamiltonianSide(DecisionSettings):
     (Z_i^H), ``constraint_gradients``, ``constraint_matrix`` (C^H),
     ``constraint_derivatives`` (X_H(phi_i^H)), ``multipliers``, ``multiplier_symbols``,
     ``projected_field`` (P(X_H)), ``projector_Q``, ``projector_P``, ``M1``,
-    ``constraint_rank``, ``regular``; the constraint functions are ``constraints``
-    (phi^H = phi o Leg^-1).
+    ``constraint_rank`` and ``regular`` (C^H regular on M_1, as
+    :class:`~nhham.lagrangian.geometry.ConstraintMatrixRank` says for both sides); the
+    constraint functions are ``constraints`` (phi^H = phi o Leg^-1).
     """
 
     exact: bool = True
@@ -254,15 +254,6 @@ class HamiltonianSide(DecisionSettings):
         return Submanifold(self.system, tuple(equations), precision=self.precision,
                            samples=self.samples, seed=self.seed, fibre=self.momenta,
                            exact=self.exact)
-
-    @cached_property
-    def constraint_rank(self) -> Decision:
-        """rank C^H on M_1, with how it was decided."""
-        return self.M1.rank(self.constraint_matrix)
-
-    @property
-    def regular(self) -> bool:
-        return self.constraint_rank.value == self.m
 
     # ------------------------------------------------------ almost-Poisson
     @cached_property

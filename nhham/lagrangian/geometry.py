@@ -39,7 +39,8 @@ from nhham.system.expressions import derivative
 from nhham.system.naming import acceleration_symbol, multiplier_symbol
 from nhham.system.velocities import quadratic_parts
 
-__all__ = ["LagrangianGeometry", "lagrangian_geometry", "DynamicsIngredients"]
+__all__ = ["LagrangianGeometry", "lagrangian_geometry", "ConstraintMatrixRank",
+           "DynamicsIngredients"]
 
 
 @dataclass(frozen=True)
@@ -114,9 +115,44 @@ def lagrangian_geometry(system, precision: int | None = None, samples: int = 6,
     return shared[key]
 
 
+@dataclass(frozen=True, eq=False, repr=False)
+class ConstraintMatrixRank(DecisionSettings):
+    """The rank of the constraint matrix on M_1 and whether C is regular there: one home
+    for both sides, :class:`LagrangianGeometry` (C on TQ) and
+    :class:`~nhham.hamiltonian.side.HamiltonianSide` (C^H on T*Q), each of which gives
+    ``M1`` and ``constraint_matrix``.
+
+    "Regular" alone, here and in every classification result
+    (``ConstraintAnalysis.regular``, ``Verdict.regular``, the ``regular`` key of the
+    command's JSON, its "C regular on M_1"), means C regular on M_1: rank C = m, the
+    multipliers determined there. The other regularity, of the Lagrangian (W = d2L/dv dv
+    invertible), is always named with its noun: every :class:`~nhham.System` has a
+    regular Lagrangian (checked on construction), so no property asks for it.
+    """
+
+    @property
+    def M1(self) -> Submanifold:
+        """M_1 = {g = 0, phi = 0} on this side (given by each side)."""
+        raise NotImplementedError
+
+    @property
+    def constraint_matrix(self) -> sp.Matrix:
+        """C on this side, shape (m, m) (given by each side)."""
+        raise NotImplementedError
+
+    @cached_property
+    def constraint_rank(self) -> Decision:
+        """rank of C on M_1, with how it was decided."""
+        return self.M1.rank(self.constraint_matrix)
+
+    @property
+    def regular(self) -> bool:
+        """True when C is regular on M_1: rank C = m (not the Lagrangian's regularity)."""
+        return self.constraint_rank.value == self.m
+
 
 @dataclass(frozen=True, eq=False, repr=False)
-class LagrangianGeometry(DecisionSettings):
+class LagrangianGeometry(ConstraintMatrixRank):
     """Lagrangian-side geometry of a constrained system (frozen, lazy).
 
     Every attribute is computed on first access and then kept. Arguments as
@@ -524,16 +560,6 @@ class LagrangianGeometry(DecisionSettings):
         """M_1 = {phi_i = 0, g = 0} with this geometry's precision settings."""
         return Submanifold(self.system, self.system.holonomic + self.system.phi,
                            precision=self.precision, samples=self.samples, seed=self.seed)
-
-    @cached_property
-    def constraint_rank(self) -> Decision:
-        """rank of C on M_1 with how it was decided."""
-        return self.M1.rank(self.constraint_matrix)
-
-    @property
-    def regular(self) -> bool:
-        """True when C has full rank m on M_1."""
-        return self.constraint_rank.value == self.m
 
 
 def _coordinate_derivatives(expr, qidx) -> dict:

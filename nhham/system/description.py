@@ -15,7 +15,7 @@ affine constraints in the order given.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import cached_property
 from types import MappingProxyType
 from typing import Mapping, Sequence
@@ -63,6 +63,7 @@ class DroppedConstraint:
     combination: Mapping[str, sp.Expr]
 
 
+@dataclass(frozen=True, eq=False, init=False, repr=False)
 class System:
     """A Lagrangian system with affine and holonomic constraints.
 
@@ -96,18 +97,28 @@ class System:
         large to expand (see :mod:`nhham.system.screening`), non-affine
         constraints, holonomic constraints with velocities, m >= n, dependent
         constraint one-forms, a singular Hessian W.
+
+    Notes
+    -----
+    A frozen dataclass: its fields (``dataclasses.fields(System)``, ``name`` to
+    ``constraint_labels``) are what ``__init__`` makes of the raw inputs once they are
+    validated and normalised; derived quantities are computed on first use and kept.
+    Compared and hashed by identity (``eq=False``): systems are keys of caches. No
+    field is an argument of a generated ``__init__``, so ``dataclasses.replace`` does
+    not apply (it raises): build a new ``System(...)`` from changed inputs instead.
     """
 
-    name: str
-    coordinates: tuple
-    velocities: tuple
-    parameters: tuple
-    parameter_values: Mapping
-    lagrangian: sp.Expr
-    holonomic: tuple
-    constraints: tuple
-    dropped: tuple
-    constraint_labels: tuple
+    # Set once by __init__ from the validated inputs (see Notes).
+    name: str = field(init=False)
+    coordinates: tuple[sp.Symbol, ...] = field(init=False)
+    velocities: tuple[sp.Symbol, ...] = field(init=False)
+    parameters: tuple[sp.Symbol, ...] = field(init=False)
+    parameter_values: Mapping[sp.Symbol, float] = field(init=False)
+    lagrangian: sp.Expr = field(init=False)
+    holonomic: tuple[sp.Expr, ...] = field(init=False)
+    constraints: tuple[sp.Expr, ...] = field(init=False)
+    dropped: tuple[DroppedConstraint, ...] = field(init=False)
+    constraint_labels: tuple[str, ...] = field(init=False)
 
     def __init__(
         self,
@@ -172,39 +183,24 @@ class System:
         if nonaffine:
             raise NonAffineConstraintError(nonaffine)
 
-        object.__setattr__(self, "name", str(name))
-        object.__setattr__(self, "coordinates", coords)
-        object.__setattr__(self, "velocities", vels)
-        object.__setattr__(self, "parameters", params)
-        object.__setattr__(self, "parameter_values", MappingProxyType(dict(values)))
-        object.__setattr__(self, "lagrangian", lag)
-        object.__setattr__(self, "holonomic", hols)
+        _set_fields(self, name=str(name), coordinates=coords, velocities=vels,
+                    parameters=params, parameter_values=MappingProxyType(dict(values)),
+                    lagrangian=lag, holonomic=hols)
 
         kept, dropped, mu = _check_dependence(self, cons, hols, drop_redundant)
         if mu is not None and not dropped:
             # the one-forms of phi = lifts + constraints, already read; keep them
             self.__dict__["mu"] = mu
-        object.__setattr__(self, "constraints", kept)
-        object.__setattr__(self, "dropped", dropped)
-        object.__setattr__(
-            self, "constraint_labels",
-            tuple(f"holonomic[{i}]" for i in range(len(hols)))
-            + tuple(_kept_labels(cons, dropped)),
-        )
+        _set_fields(self, constraints=kept, dropped=dropped,
+                    constraint_labels=tuple(f"holonomic[{i}]" for i in range(len(hols)))
+                    + tuple(_kept_labels(cons, dropped)))
         m, n = len(self.phi), len(coords)
         if m >= n:
             raise ValidationError(
                 [f"constraints: m = {m} independent velocity constraints (holonomic ones "
                  f"counted by their complete lifts) but n = {n} coordinates; nhham needs m < n"]
             )
-        _check_regular(self)
-
-    # Frozen: attributes are set once in __init__.
-    def __setattr__(self, key, value):
-        raise AttributeError(f"System is frozen; cannot set {key!r}")
-
-    def __delattr__(self, key):
-        raise AttributeError(f"System is frozen; cannot delete {key!r}")
+        _check_regular_lagrangian(self)
 
     def __repr__(self):
         label = f"{self.name!r}, " if self.name else ""
@@ -408,6 +404,13 @@ def _numeric_samples(matrix, points, label="lagrangian"):
 
 
 # ---------------------------------------------------------------- helpers
+def _set_fields(system, **values):
+    """Set fields of a :class:`System` under construction: a frozen dataclass refuses
+    assignment, so its own ``__init__`` goes through ``object.__setattr__``."""
+    for key, value in values.items():
+        object.__setattr__(system, key, value)
+
+
 def _labelled(cons, hols):
     return [(f"constraints[{i}]", c) for i, c in enumerate(cons)] + [
         (f"holonomic[{i}]", g) for i, g in enumerate(hols)
@@ -501,11 +504,7 @@ def _check_dependence(system, cons, hols, drop_redundant):
     Returns (kept constraints, dropped, mu of lifts + constraints or None
     when a row was dropped or there are none).
     """
-    lifts = tuple(
-        sum((sp.diff(g, q) * v for q, v in zip(system.coordinates, system.velocities)), sp.S.Zero)
-        for g in hols
-    )
-    rows = list(lifts) + list(cons)
+    rows = list(system.complete_lifts) + list(cons)  # holonomic is set before this runs
     labels = [f"holonomic[{i}]" for i in range(len(hols))] + [
         f"constraints[{i}]" for i in range(len(cons))
     ]
@@ -599,8 +598,10 @@ def _vanishes_at(expr, points, tol=1e-9):
     return True
 
 
-def _check_regular(system):
-    """Raise if W is singular at every sampled point (generic rank < n)."""
+def _check_regular_lagrangian(system):
+    """Raise unless the Lagrangian is regular: W = d2L/dv dv invertible (generic rank n;
+    singular at every sampled point raises). Not C's regularity on M_1, which is a
+    verdict (``LagrangianGeometry.regular``), never an input error."""
     W = system.hessian
     n = system.n
     if not W.free_symbols:

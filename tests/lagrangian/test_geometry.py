@@ -70,6 +70,19 @@ def test_constraint_matrix_regular_on_M1_decided_exactly():
     assert G.regular and G.constraint_rank.method == "exact"
 
 
+def test_regular_is_C_regular_on_M1_not_the_lagrangian():
+    """Paper Example 3.1: L = (v1^2 + v2^2 - v3^2)/2 is a regular Lagrangian (W =
+    diag(1, 1, -1), else no System), but phi = v2 + v3 gives C = -(1 - 1) = 0: "regular"
+    is False on both sides (C on TQ, C^H on T*Q), rank 0 < m = 1."""
+    from nhham.hamiltonian.side import hamiltonian_side
+    from nhham.system.models import paper_example_3_1
+
+    system = paper_example_3_1()
+    for side in (lagrangian_geometry(system), hamiltonian_side(system)):
+        assert side.constraint_matrix == sp.zeros(1, 1)
+        assert side.constraint_rank.value == 0 and not side.regular
+
+
 # --------------------------------------------------------------- Remark 2.1
 def test_remark_2_1_projector_independent_of_combination_on_M1():
     """phi_bar = D phi with D regular: P_bar = P on M_1 but not off it."""

@@ -1,5 +1,7 @@
 """System description: construction, affine extraction, validation messages."""
 
+import dataclasses
+
 import pytest
 import sympy as sp
 
@@ -48,8 +50,26 @@ def test_holonomic_constraint_complete_lift_comes_first():
 
 def test_system_is_frozen():
     s = make()
-    with pytest.raises(AttributeError):
+    with pytest.raises(dataclasses.FrozenInstanceError):
         s.lagrangian = 0
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        s.anything = 0
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        del s.name
+
+
+def test_system_is_a_dataclass_of_its_normalised_fields():
+    s = make(constraints=[zd, "2*z_dot"], drop_redundant=True, name="n")
+    names = [f.name for f in dataclasses.fields(nhham.System)]
+    assert names == ["name", "coordinates", "velocities", "parameters", "parameter_values",
+                     "lagrangian", "holonomic", "constraints", "dropped", "constraint_labels"]
+    assert s.constraints == (zd,) and s.constraint_labels == ("constraints[0]",)
+    assert [d.label for d in s.dropped] == ["constraints[1]"]
+    # identity equality and hash: a system is a key of caches
+    assert s == s and s != make(constraints=[zd], name="n") and hash(s) == object.__hash__(s)
+    # the constructor takes raw inputs, not fields: replace is refused, never silently wrong
+    with pytest.raises(ValueError, match="init=False"):
+        dataclasses.replace(s, name="other")
 
 
 def test_nonaffine_constraint_names_constraint_and_term():
