@@ -149,6 +149,17 @@ def evaluate(expr, point):
     return float(sp.sympify(expr).xreplace({k: sp.Float(v, 30) for k, v in point.items()}).evalf(20))
 
 
+def zero(expr):
+    """The expression simplifies to 0."""
+    return sp.simplify(sp.sympify(expr)) == 0
+
+
+def same_vector(a, b):
+    """Two vectors of expressions are equal entry by entry (after simplification)."""
+    a, b = sp.Matrix(a), sp.Matrix(b)
+    return a.shape == b.shape and all(zero(x - y) for x, y in zip(a, b))
+
+
 def evaluate_matrix(matrix, point):
     sub = {k: sp.Float(v, 30) for k, v in point.items()}
     return np.array(matrix.xreplace(sub).evalf(20), dtype=float)
@@ -223,3 +234,17 @@ def sleigh_with_values():
     return nhham.System(["x", "y", "theta"], m * (xd**2 + yd**2) / 2 + I * thd**2 / 2,
                         [-sp.sin(th) * xd + sp.cos(th) * yd - a * thd],
                         parameters={"m": 1.5, "I": 0.4, "a": 0.6})
+
+
+def example_3_2():
+    """The paper's Example 3.2: L = LOR + q1^2/2, phi = v1 + v3 (phi -> q1 -> v1,
+    lambda = q1)."""
+    return nhham.System(["q1", "q2", "q3"], LOR + q1**2 / 2, [v1 + v3], name="Example 3.2")
+
+
+def two_blocks():
+    """Rolling disk (x, y, theta, phi) + Example 3.2 (q1, q2, q3), L the sum."""
+    disk, _ = rolling_disk()
+    return nhham.System(list(disk.coordinates) + [q1, q2, q3],
+                        disk.lagrangian + LOR + q1**2 / 2, list(disk.constraints) + [v1 + v3],
+                        parameters=dict(disk.parameter_values))
