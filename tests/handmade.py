@@ -248,3 +248,39 @@ def two_blocks():
     return nhham.System(list(disk.coordinates) + [q1, q2, q3],
                         disk.lagrangian + LOR + q1**2 / 2, list(disk.constraints) + [v1 + v3],
                         parameters=dict(disk.parameter_values))
+
+
+# ========================================================= the rolling disk as scene text
+# A scene file's text in three pieces: the system, its [initial] table (on M_1:
+# x_dot = R cos(theta) phi_dot = 2, y_dot = R sin(theta) phi_dot = 0) and [simulate].
+DISK_SCENE = """\
+name = "vertical rolling disk"
+description = "a disk rolling upright without slipping"
+coordinates = ["x", "y", "theta", "phi"]
+parameters = { m = 1.0, I1 = 0.5, I2 = 0.25, R = 1.0 }
+lagrangian = "m*(x_dot**2 + y_dot**2)/2 + I1*theta_dot**2/2 + I2*phi_dot**2/2"
+constraints = ["x_dot - R*cos(theta)*phi_dot", "y_dot - R*sin(theta)*phi_dot"]
+holonomic = []
+"""
+DISK_INITIAL = """
+[initial]
+x = 0.0
+y = 0.0
+theta = 0.0
+phi = 0.0
+x_dot = 2.0
+y_dot = 0.0
+theta_dot = 1.0
+phi_dot = 2.0
+"""
+DISK_SIMULATE = """
+[simulate]
+t_end = 10.0
+method = "DOP853"
+rtol = 1e-10
+"""
+
+
+def same(a, b) -> bool:
+    """Equal expressions: structurally, or their difference simplifies to 0."""
+    return a == b or sp.simplify(a - b) == 0
