@@ -69,3 +69,8 @@ def schema():
     from nhham.cli.envelope import output_schema
 
     return output_schema()
+
+
+def long_expression(terms=300):
+    """An expression's text of about 40 characters a term (the bicycle's are thousands)."""
+    return " + ".join(f"k{i}*sin(q{i % 7})*(a + b*cos(q{i % 5}))" for i in range(terms))
