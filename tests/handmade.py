@@ -136,6 +136,12 @@ def pendulum():
                         parameters={"m": 1.2, "g": 9.81, "l": 0.8})
 
 
+def blowup_system():
+    """x'' = x^2 (V = -x^3/3) blows up in finite time; one trivial constraint."""
+    return nhham.System(["x", "y"], "(x_dot**2 + y_dot**2)/2 + x**3/3", ["y_dot"],
+                        name="blow-up")
+
+
 IDENTITY_SYSTEMS = {
     "rolling disk": rolling_disk,
     "knife edge": knife_edge_inclined,
