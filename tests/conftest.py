@@ -1,8 +1,12 @@
 """Shared test helpers (``handmade``, ``paper_reference``) live in this folder.
 
-The tests follow the package tree (``tests/<subpackage>/test_<module>.py``);
-this puts the folder on ``sys.path`` so every test can import the helpers,
-which are written by hand without nhham.
+The tests follow the package tree (``tests/<subpackage>/test_<module>.py``;
+``numerics/codegen``'s modules in ``tests/numerics``). Test modules are imported by
+their file name, so where two modules share one the test file of the second has its
+package in front: ``tests/cli/test_cli_budget.py`` (``cli/budget.py``),
+``tests/verdict/test_verdict_results.py`` (``verdict/results.py``). This conftest puts
+the folder on ``sys.path`` so every test can import the helpers, which are written by
+hand without nhham.
 """
 
 import sys
