@@ -1,12 +1,18 @@
 """Shared test helpers (``handmade``, ``paper_reference``) live in this folder.
 
-The tests follow the package tree (``tests/<subpackage>/test_<module>.py``);
-this puts the folder on ``sys.path`` so every test can import the helpers,
-which are written by hand without nhham.
+The tests follow the package tree (``tests/<subpackage>/test_<module>.py``;
+``numerics/codegen``'s modules in ``tests/numerics``). Test modules are imported by
+their file name, so where two modules share one the test file of the second has its
+package in front: ``tests/cli/test_cli_budget.py`` (``cli/budget.py``),
+``tests/verdict/test_verdict_results.py`` (``verdict/results.py``). This conftest puts
+the folder on ``sys.path`` so every test can import the helpers, which are written by
+hand without nhham.
 """
 
 import sys
 from pathlib import Path
+
+import pytest
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
@@ -25,3 +31,24 @@ def pytest_configure(config):
         prefix="nhham-test-cache-")
     os.chmod(path, 0o700)  # the compile cache refuses a directory others may write
     os.environ["NHHAM_CACHE"] = str(path)
+
+
+@pytest.fixture(scope="session")
+def bicycle():
+    """(scene, numeric model) of examples/whipple_bicycle.toml, built once (its load and
+    compilation take seconds; its linearisation and its sweeps are tested apart)."""
+    from nhham.numerics.codegen import numeric_model
+    from nhham.system.scene import load_scene
+
+    scene = load_scene(Path(__file__).resolve().parents[1] / "examples" / "whipple_bicycle.toml")
+    return scene, numeric_model(scene.system)
+
+
+@pytest.fixture(scope="session")
+def sleigh():
+    """The numeric model of the Chaplygin sleigh of tests/numerics/test_exact_solutions.py
+    (its closed form there), for the tests of simulate, its loops and drivers."""
+    from nhham.numerics.codegen import numeric_model
+    from test_exact_solutions import chaplygin_sleigh
+
+    return numeric_model(chaplygin_sleigh())

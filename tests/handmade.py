@@ -136,6 +136,12 @@ def pendulum():
                         parameters={"m": 1.2, "g": 9.81, "l": 0.8})
 
 
+def blowup_system():
+    """x'' = x^2 (V = -x^3/3) blows up in finite time; one trivial constraint."""
+    return nhham.System(["x", "y"], "(x_dot**2 + y_dot**2)/2 + x**3/3", ["y_dot"],
+                        name="blow-up")
+
+
 IDENTITY_SYSTEMS = {
     "rolling disk": rolling_disk,
     "knife edge": knife_edge_inclined,
@@ -147,6 +153,17 @@ IDENTITY_SYSTEMS = {
 def evaluate(expr, point):
     """Float value of a sympy expression at a point (dict symbol -> float)."""
     return float(sp.sympify(expr).xreplace({k: sp.Float(v, 30) for k, v in point.items()}).evalf(20))
+
+
+def zero(expr):
+    """The expression simplifies to 0."""
+    return sp.simplify(sp.sympify(expr)) == 0
+
+
+def same_vector(a, b):
+    """Two vectors of expressions are equal entry by entry (after simplification)."""
+    a, b = sp.Matrix(a), sp.Matrix(b)
+    return a.shape == b.shape and all(zero(x - y) for x, y in zip(a, b))
 
 
 def evaluate_matrix(matrix, point):
@@ -223,3 +240,53 @@ def sleigh_with_values():
     return nhham.System(["x", "y", "theta"], m * (xd**2 + yd**2) / 2 + I * thd**2 / 2,
                         [-sp.sin(th) * xd + sp.cos(th) * yd - a * thd],
                         parameters={"m": 1.5, "I": 0.4, "a": 0.6})
+
+
+def example_3_2():
+    """The paper's Example 3.2: L = LOR + q1^2/2, phi = v1 + v3 (phi -> q1 -> v1,
+    lambda = q1)."""
+    return nhham.System(["q1", "q2", "q3"], LOR + q1**2 / 2, [v1 + v3], name="Example 3.2")
+
+
+def two_blocks():
+    """Rolling disk (x, y, theta, phi) + Example 3.2 (q1, q2, q3), L the sum."""
+    disk, _ = rolling_disk()
+    return nhham.System(list(disk.coordinates) + [q1, q2, q3],
+                        disk.lagrangian + LOR + q1**2 / 2, list(disk.constraints) + [v1 + v3],
+                        parameters=dict(disk.parameter_values))
+
+
+# ========================================================= the rolling disk as scene text
+# A scene file's text in three pieces: the system, its [initial] table (on M_1:
+# x_dot = R cos(theta) phi_dot = 2, y_dot = R sin(theta) phi_dot = 0) and [simulate].
+DISK_SCENE = """\
+name = "vertical rolling disk"
+description = "a disk rolling upright without slipping"
+coordinates = ["x", "y", "theta", "phi"]
+parameters = { m = 1.0, I1 = 0.5, I2 = 0.25, R = 1.0 }
+lagrangian = "m*(x_dot**2 + y_dot**2)/2 + I1*theta_dot**2/2 + I2*phi_dot**2/2"
+constraints = ["x_dot - R*cos(theta)*phi_dot", "y_dot - R*sin(theta)*phi_dot"]
+holonomic = []
+"""
+DISK_INITIAL = """
+[initial]
+x = 0.0
+y = 0.0
+theta = 0.0
+phi = 0.0
+x_dot = 2.0
+y_dot = 0.0
+theta_dot = 1.0
+phi_dot = 2.0
+"""
+DISK_SIMULATE = """
+[simulate]
+t_end = 10.0
+method = "DOP853"
+rtol = 1e-10
+"""
+
+
+def same(a, b) -> bool:
+    """Equal expressions: structurally, or their difference simplifies to 0."""
+    return a == b or sp.simplify(a - b) == 0

@@ -19,7 +19,7 @@ EXAMPLE_NAMES = sorted(p.name for p in EXAMPLES.glob("*.toml"))
 # (command, example) pairs left out of the every-example runs, with why: the
 # snakeboard's cross-check takes about a minute. The bicycle's cross-check
 # takes about half a minute (its linearisation and simulation are checked against the
-# benchmark in tests/numerics/test_linearize.py).
+# benchmark in tests/numerics/test_linearization.py).
 HEAVY = {("compare", "snakeboard.toml"), ("compare", "whipple_bicycle.toml")}
 
 
@@ -69,3 +69,8 @@ def schema():
     from nhham.cli.envelope import output_schema
 
     return output_schema()
+
+
+def long_expression(terms=300):
+    """An expression's text of about 40 characters a term (the bicycle's are thousands)."""
+    return " + ".join(f"k{i}*sin(q{i % 7})*(a + b*cos(q{i % 5}))" for i in range(terms))

@@ -215,16 +215,6 @@ def test_scene_expressions_round_trip(example):
         assert nhham.parse_expression(to_text(expr), names) == expr
 
 
-def test_envelope_helper_for_any_subcommand():
-    from nhham.cli.envelope import envelope
-
-    env = envelope("linearize", {"a_b": 1.0, "c": float("inf")}, warnings=["x\n y", "x y"])
-    assert env["result"] == {"a_b": 1.0, "c": None}  # non-finite numbers are null
-    assert env["warnings"] == ["x y"]
-    assert list(env) == ["command", "nhham_version", "scene", "result", "warnings", "error"]
-    assert env["error"] is None
-
-
 @pytest.mark.parametrize("example", ["rolling_disk.toml", "paper_3_1.toml",
                                      "pendulum_cartesian.toml"])
 def test_hamiltonian_derive_matches_the_schema(example, schema):

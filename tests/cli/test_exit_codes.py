@@ -259,14 +259,6 @@ def test_options_that_would_be_ignored_are_refused(schema):
     assert "not to reference" in env["error"]["message"]
 
 
-def test_no_bound_on_request():
-    """--budget none lifts the default bound of the symbolic commands."""
-    args = cli_main.build_parser().parse_args(["classify", str(DISK), "--budget", "none"])
-    assert args.budget is None
-    assert cli_main.build_parser().parse_args(["classify", str(DISK)]).budget == 600
-    assert cli_main.build_parser().parse_args(["simulate", str(DISK)]).budget is None
-
-
 def test_usage_errors_print_the_envelope(schema):
     rc, out, err = in_process("bogus", "x.toml", "--json")
     env = assert_failure(rc, out, err, schema, 2, "usage", "command")

@@ -6,7 +6,9 @@ import sympy as sp
 
 import nhham
 
-from conftest import EXAMPLES, run_inprocess
+from conftest import EXAMPLES, long_expression, run_inprocess
+from nhham.cli import layout
+from nhham.cli.results import classify_text
 
 
 def envelope(*args):
@@ -58,3 +60,19 @@ def test_classify_reports_the_first_class_combination_it_counts():
     assert coefficients[-1]["coefficient"] == "1"
     rc, text, err = run_inprocess("classify", str(EXAMPLES / "differential_drive.toml"))
     assert "first-class combinations (in q, p):" in text and "*constraints[0]" in text
+
+
+def test_classify_text_lists_each_constraint_once():
+    data = {"n": 8, "m": 5, "regular": True, "rank_c": 5, "rank_c_method": "sampled",
+            "status": "determined", "free_multipliers": 0, "free_multiplier_symbols": [],
+            "redundant": [], "integrable": False, "first_class": 0, "second_class": 6,
+            "stages": [{"index": 1, "labels": ["holonomic[0]", "constraints[0]"],
+                        "constraints": [long_expression(), "x_dot"], "rank": 5}],
+            "final_labels": ["holonomic[0]", "constraints[0]"],
+            "final_constraints": [long_expression(), "x_dot"],
+            "first_class_combinations": [], "first_class_coefficients": None,
+            "inconsistency": None}
+    out = classify_text("bicycle", data)
+    assert out.count("k0*sin(q0)") == 1
+    assert "  M_1  rank 5  holonomic[0], constraints[0]" in out
+    assert max(len(line) for line in out.splitlines()) <= layout.width()

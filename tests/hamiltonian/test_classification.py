@@ -1,11 +1,10 @@
-"""First/second-class classification on M_f, the Dirac bracket over the second-class
-set, and the Dirac-flow-versus-projected-field comparison.
+"""First/second-class classification on M_f (the result object: test_classes.py; the
+Dirac bracket: test_dirac.py).
 
 Hand derivations in the comments use {f, g} = f_q g_p - f_p g_q and, for functions
 linear in p, f = a(q).p and h = b(q).p: {f, h} = p . ((b.grad) a - (a.grad) b).
 """
 
-import json
 
 import numpy as np
 import pytest
@@ -164,14 +163,6 @@ def test_sampled_mode_agrees_with_exact():
         assert np.allclose(B, -B.T)
 
 
-@pytest.mark.parametrize("precision", [None, 30])
-def test_to_dict_is_json(precision):
-    c = classify_constraints(handmade.sphere_with_knife(), precision=precision)
-    d = json.loads(json.dumps(c.to_dict()))
-    assert d["first_class"] == 1 and d["second_class"] == 2
-    assert sp.sympify(d["first_class_combinations"][0]).free_symbols
-
-
 def test_classify_accepts_an_analysis():
     from nhham.lagrangian.analysis import analyze_constraints
 
@@ -201,11 +192,3 @@ def test_every_model_classifies_consistently(name):
         assert len(c.first_class_combinations) == c.first_class
         B = c.bracket_matrix
         assert (B + B.T) == sp.zeros(k, k)
-
-
-def test_compact_repr_and_latex_of_the_classes():
-    from nhham.system.models import rolling_disk
-
-    c = classify_constraints(rolling_disk(symbolic=True))
-    assert len(repr(c)) < 200 and "2 first class" in repr(c)
-    assert r"\operatorname{rank}" in c._repr_latex_()

@@ -14,13 +14,15 @@ import pytest
 import sympy as sp
 
 from nhham import System
-from nhham.cli.trace import analysis_latex, analysis_text
+from nhham.cli.trace import analysis_text
 from nhham.lagrangian.algorithm import run_algorithm
 from nhham.lagrangian.analysis import ConstraintAnalysis, analyze_constraints
 from nhham.errors import RedundantConstraintError
 from nhham.lagrangian.submanifold import Submanifold
 
+import handmade
 import paper_reference as ref
+from handmade import same_vector, two_blocks, zero
 
 q1, q2, q3, q4 = sp.symbols("q1 q2 q3 q4")
 v1, v2, v3, v4 = sp.symbols("q1_dot q2_dot q3_dot q4_dot")
@@ -28,18 +30,9 @@ l1, l2, l3 = sp.symbols("lambda_1 lambda_2 lambda_3")
 LOR = (v1**2 + v2**2 - v3**2) / 2  # the paper's Lorentzian kinetic energy
 
 
-def zero(expr):
-    return sp.simplify(sp.sympify(expr)) == 0
-
-
 def vanish_at(exprs, sub):
     """Every expression vanishes under the hand-written substitution."""
     return all(zero(sp.sympify(e).subs(sub)) for e in exprs)
-
-
-def same_vector(a, b):
-    a, b = sp.Matrix(a), sp.Matrix(b)
-    return a.shape == b.shape and all(zero(x - y) for x, y in zip(a, b))
 
 
 # ------------------------------------------------------------------ systems
@@ -48,7 +41,7 @@ def ex31():
 
 
 def ex32():
-    return System(["q1", "q2", "q3"], LOR + q1**2 / 2, [v1 + v3], name="Example 3.2")
+    return handmade.example_3_2()
 
 
 def five_stage():
@@ -118,13 +111,6 @@ def rank_drop():
     so the rank of C is 1 generically and 0 on {q1^2 = 1}.  xi(phi) = v1^2, so
     lambda = -v1^2/(1 - q1^2)."""
     return System(["q1", "q2", "q3"], (v1**2 - v2**2 + v3**2) / 2, [q1 * v1 + v2])
-
-
-def two_blocks():
-    """Rolling disk (x, y, theta, phi) + Example 3.2 (q1, q2, q3), L the sum."""
-    disk = rolling_disk()
-    return System(list(disk.coordinates) + [q1, q2, q3], disk.lagrangian + LOR + q1**2 / 2,
-                  list(disk.constraints) + [v1 + v3], parameters=dict(disk.parameter_values))
 
 
 def rolling_disk(third=None, drop=False, values=True):
@@ -361,43 +347,6 @@ def test_redundant_rolling_disk_reported_and_dropped():
     assert a.final_constraints == plain.final_constraints
 
 
-def test_integrable_nonholonomic_constraint_is_recognised():
-    """phi = q2 v1 + q1 v2 = d(q1 q2)/dt: the distribution is integrable (holonomic)."""
-    s = System(["q1", "q2", "q3"], (v1**2 + v2**2 + v3**2) / 2, [q2 * v1 + q1 * v2])
-    a = analyze_constraints(s)
-    assert a.integrable is True
-    assert a.integrability.first_integrals == (("constraints[0]", q1 * q2),)
-    assert a.status == "determined"
-    assert analyze_constraints(rolling_disk()).integrable is False
-
-
-def test_two_decoupled_subsystems_are_separate_blocks():
-    """Rolling disk (x, y, theta, phi) + Example 3.2 (q1, q2, q3), L the sum.
-    Blocks: disk [x, y, theta, phi] with phi_1, phi_2 (lambda_1, lambda_2 as in 2.1);
-    [q1, q3] with v1 + v3 (lambda_3 = q1, three stages); q2 is free and joins a free
-    block."""
-    s = two_blocks()
-    m, R = sp.symbols("m R")
-    a = analyze_constraints(s)
-    names = [[q.name for q in b.coordinates] for b in a.blocks]
-    assert names == [["x", "y", "theta", "phi"], ["q1", "q3"], ["q2"]]
-    assert [b.run.status for b in a.blocks] == ["determined"] * 3
-    assert len(a.blocks[0].run.stages) == 1 and len(a.blocks[1].run.stages) == 3
-    assert a.status == "determined" and len(a.stages) == 3
-    assert [st.rank for st in a.stages] == [2, 2, 3]
-    th, thd, phd = sp.symbols("theta theta_dot phi_dot")
-    assert a.multipliers[l3] == q1
-    assert zero(a.multipliers[l1] - m * R * thd * phd * sp.sin(th))
-    xd, yd = sp.symbols("x_dot y_dot")
-    expected = [xd, yd, thd, phd, v1, v2, v3,
-                -R * thd * phd * sp.sin(th), R * thd * phd * sp.cos(th), 0, 0, 0, 0, q1]
-    assert same_vector(a.dynamics, expected)
-    whole = analyze_constraints(s, decompose=False)
-    assert len(whole.blocks) == 1 and whole.status == "determined"
-    assert same_vector(whole.dynamics, expected)
-    assert [st.rank for st in whole.stages] == [2, 2, 3]
-
-
 # =============================================================== idempotence
 def test_idempotent_on_final_constraints_generic_loop():
     """Feeding M_f's constraints back as primary ones gives one stage, nothing new, the
@@ -508,21 +457,3 @@ def test_rank_drop_on_M1_is_warned_with_location():
     assert drops and "drops from 1 to 0" in drops[0] and "q1=" in drops[0]
     hit = float(drops[0].split("q1=")[1].split(",")[0])
     assert abs(abs(hit) - 1) < 1e-8
-
-
-def test_report_prints_stages_ranks_and_evidence():
-    text = analysis_text(analyze_constraints(ex32()))
-    for piece in ["Stage 1", "Stage 2", "Stage 3", "rank (Z_i(chi_j)) = 1", "secondary[1]",
-                  "(exact, exact)", "lambda_1 = q1", "integrab"]:
-        assert piece in text
-    sampled = analysis_text(analyze_constraints(ex32(), exact=False, precision=30))
-    assert "sampled, mpmath:30" in sampled and "seeded points" in sampled
-
-
-def test_compact_repr_and_latex_of_the_analysis():
-    from nhham.system.models import rolling_disk
-
-    a = analyze_constraints(rolling_disk(symbolic=True))
-    assert len(repr(a)) < 200 and "determined" in repr(a)
-    tex = analysis_latex(a)
-    assert tex.startswith("$$") and r"\dot{x}" in tex and r"\dot{\phi}" in tex

@@ -232,7 +232,6 @@ def test_energy_not_conserved_for_affine_constraint():
 # ------------------------------------------- quadratic fast path vs general
 from nhham.lagrangian.geometry import LagrangianGeometry  # noqa: E402
 from nhham.system.models import MODELS, snake_chain_lagrangian  # noqa: E402
-from nhham.system.velocities import quadratic_parts, velocity_polynomial  # noqa: E402
 
 
 def _magnetic_knife_edge():
@@ -348,34 +347,6 @@ def test_magnetic_forcing_by_hand():
                           -B * xd - k * y,
                           -e * sp.sin(th) * xd + sp.sin(th)])
     assert sp.expand(LagrangianGeometry(system).forcing - expected) == sp.zeros(3, 1)
-
-
-def test_quadratic_parts_read_W_b_V():
-    x, y = sp.symbols("x y")
-    xd, yd = sp.symbols("x_dot y_dot")
-    a = sp.Symbol("a")
-    L = (1 + x**2) * (xd + a * yd) ** 2 / 2 + sp.sin(y) * xd - sp.cos(x) * y
-    parts = quadratic_parts(L, (xd, yd))
-    W = sp.Matrix([[1 + x**2, a * (1 + x**2)], [a * (1 + x**2), a**2 * (1 + x**2)]])
-    assert sp.expand(sp.Matrix(parts.W) - W) == sp.zeros(2, 2)
-    assert parts.b == (sp.sin(y), 0)
-    assert sp.expand(parts.V - sp.cos(x) * y) == 0
-
-
-@pytest.mark.parametrize("L", ["sin(x_dot)", "x_dot**3", "x_dot**2 * y_dot", "1/x_dot",
-                               "sqrt(x_dot**2 + 1)", "exp(x*x_dot)", "Abs(x_dot)**2"])
-def test_non_quadratic_lagrangians_take_the_general_path(L):
-    x, y, xd, yd = sp.symbols("x y x_dot y_dot")
-    expr = sp.sympify(L, locals={"x_dot": xd, "y_dot": yd, "x": x})
-    assert velocity_polynomial(expr, (xd, yd), 2) is None
-    assert quadratic_parts(expr, (xd, yd)) is None
-
-
-def test_velocity_polynomial_keeps_degree_before_cancellation_out():
-    xd, yd, x = sp.symbols("x_dot y_dot x")
-    poly = velocity_polynomial((xd + x) * (xd - x) - xd**2 + yd * sp.cos(x), (xd, yd), 2)
-    assert poly == {(): -x**2, (1,): sp.cos(x)}
-    assert velocity_polynomial(xd * yd, (xd, yd), 1) is None
 
 
 # ------------------------------------------------ System validation numerics

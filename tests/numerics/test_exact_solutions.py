@@ -271,36 +271,6 @@ def test_chaplygin_sleigh_closed_form(method, kw, tol):
     assert res.energy_drift < max(10 * tol, 1e-9)
 
 
-def test_chaplygin_sleigh_reference_integrator():
-    """The mpmath reference reproduces the closed form far beyond float64
-    (initial state built on M_1 in 40-digit arithmetic)."""
-    import mpmath
-
-    from nhham.numerics.reference import reference_solution
-
-    model = numeric_model(chaplygin_sleigh())
-    with mpmath.workdps(40):
-        # The model's parameters are float64 numbers: use exactly those values.
-        m, I, a = mpmath.mpf(1.0), mpmath.mpf(0.3), mpmath.mpf(0.5)
-        th0, u0, w0 = mpmath.mpf(3) / 10, mpmath.mpf(4) / 10, mpmath.mpf(3) / 2
-        y0 = [mpmath.mpf(0), mpmath.mpf(0), th0,
-              u0 * mpmath.cos(th0) - a * w0 * mpmath.sin(th0),
-              u0 * mpmath.sin(th0) + a * w0 * mpmath.cos(th0), w0]
-        ref = reference_solution(model, y0, (0, 2.0), digits=30, t_eval=[2.0])
-        assert ref.status == 0
-        J = I + m * a * a
-        U = mpmath.sqrt(u0**2 + J * w0**2 / m)
-        k = a * m * U / J
-        c = mpmath.atanh(u0 / U)
-        s = k * 2 + c
-        u = U * mpmath.tanh(s)
-        w = mpmath.sqrt(m / J) * U / mpmath.cosh(s)
-        yf = ref.y_mp[-1]
-        u_num = mpmath.cos(yf[2]) * yf[3] + mpmath.sin(yf[2]) * yf[4]
-        assert abs(u_num - u) < mpmath.mpf(10) ** -22
-        assert abs(yf[5] - w) < mpmath.mpf(10) ** -22
-
-
 @pytest.mark.parametrize("method,kw,tol", [
     ("DOP853", {"rtol": 1e-11, "atol": 1e-13}, 1e-8),
     ("LSODA", {"rtol": 1e-10, "atol": 1e-12, "projection": True}, 1e-6),

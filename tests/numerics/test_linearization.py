@@ -20,12 +20,11 @@ import numpy as np
 import pytest
 from scipy.optimize import brentq
 
-from nhham import InconsistentInitialDataError, InputError
+from nhham import InconsistentInitialDataError
 from nhham.numerics.codegen import numeric_model
 from nhham.numerics.linearization import linearize
-from nhham.numerics.steady_sweep import sweep, sweep_steady
+from nhham.numerics.steady_sweep import sweep_steady
 from nhham.system.models import chaplygin_sleigh, pendulum_cartesian
-from nhham.system.scene import load_scene
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 
@@ -53,12 +52,6 @@ def matched(a, b):
         j = int(np.argmin([abs(z - w) for w in b]))
         worst = max(worst, abs(z - b.pop(j)))
     return worst
-
-
-@pytest.fixture(scope="module")
-def bicycle():
-    scene = load_scene(EXAMPLES / "whipple_bicycle.toml")
-    return scene, numeric_model(scene.system)
 
 
 def test_bicycle_eigenvalues_match_the_benchmark(bicycle):
@@ -134,23 +127,3 @@ def test_state_off_the_manifold_or_not_steady_is_refused():
         # turning on the spot at constant rate: theta moves but the field depends on it
         linearize(sleigh, dict(x=0.0, y=0.0, theta=0.0, x_dot=0.0, y_dot=0.0, theta_dot=0.0)
                   | {"x_dot": 1.0, "theta_dot": 1.0, "y_dot": 0.5})
-
-
-def test_sweep_locates_a_real_crossing_by_root_finding():
-    # a toy branch: lambda(p) = p - 1/3 crossing at exactly 1/3
-    class Lin:
-        def __init__(self, p):
-            self.eigenvalues = np.array([p - 1 / 3, -1.0 + 0j])
-            self.tolerance = 1e-12
-            self.stable = p < 1 / 3
-            self.coordinates = ("a",)
-
-    s = sweep(Lin, "p", np.linspace(0, 1, 4))
-    assert len(s.crossings) == 1 and s.crossings[0].kind == "real"
-    assert abs(s.crossings[0].value - 1 / 3) < 1e-12
-
-
-def test_unknown_sweep_parameter(bicycle):
-    scene, model = bicycle
-    with pytest.raises(InputError, match="'w' is not a parameter"):
-        sweep_steady(model, scene.steady.values, "w", [0.0, 1.0])

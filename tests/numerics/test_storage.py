@@ -7,11 +7,10 @@ import numpy as np
 import pytest
 
 from nhham.errors import InputError
-from nhham.numerics.codegen import numeric_model
 from nhham.numerics.integrate import simulate
 from nhham.numerics.storage import STORE_BYTES, Recorder, default_max_points, storage_bytes
 
-from test_exact_solutions import chaplygin_sleigh, sleigh_state
+from test_exact_solutions import sleigh_state
 
 
 def _feed(recorder, nsteps):
@@ -50,11 +49,6 @@ def test_default_bound_is_the_store_bytes():
     assert default_max_points(9) == STORE_BYTES // 80 == 838860  # the rolling disk's rows
     assert storage_bytes(default_max_points(201), 201) <= STORE_BYTES
     assert default_max_points(10**9) == 1024  # never fewer
-
-
-@pytest.fixture(scope="module")
-def sleigh():
-    return numeric_model(chaplygin_sleigh())
 
 
 @pytest.mark.parametrize("method, options", [

@@ -1,4 +1,5 @@
-"""Tests of nhham.scene: loading, validating, checking and writing scene files."""
+"""Tests of nhham.system.scene: loading and validating scene files (their [initial] data
+is checked in test_initial.py, writing them in test_scene_dump.py)."""
 
 from __future__ import annotations
 
@@ -12,8 +13,6 @@ import sympy as sp
 
 import nhham.errors as errors
 from nhham.errors import (
-    InconsistentInitialDataError,
-    MissingParameterValueError,
     ParseError,
     SceneError,
 )
@@ -25,45 +24,18 @@ from nhham.system.scene import (
     load_scene,
     loads_scene,
 )
-from nhham.system.scene_dump import dump_scene
+
+from handmade import DISK_INITIAL as INITIAL
+from handmade import DISK_SCENE as DISK
+from handmade import DISK_SIMULATE as SIMULATE
+from handmade import same
 
 BAD = pathlib.Path(__file__).parent / "scenes_bad"
 MANIFEST = tomllib.loads((BAD / "expected.toml").read_text(encoding="utf-8"))
 
-DISK = """\
-name = "vertical rolling disk"
-description = "a disk rolling upright without slipping"
-coordinates = ["x", "y", "theta", "phi"]
-parameters = { m = 1.0, I1 = 0.5, I2 = 0.25, R = 1.0 }
-lagrangian = "m*(x_dot**2 + y_dot**2)/2 + I1*theta_dot**2/2 + I2*phi_dot**2/2"
-constraints = ["x_dot - R*cos(theta)*phi_dot", "y_dot - R*sin(theta)*phi_dot"]
-holonomic = []
-"""
-INITIAL = """
-[initial]
-x = 0.0
-y = 0.0
-theta = 0.0
-phi = 0.0
-x_dot = 2.0
-y_dot = 0.0
-theta_dot = 1.0
-phi_dot = 2.0
-"""
-SIMULATE = """
-[simulate]
-t_end = 10.0
-method = "DOP853"
-rtol = 1e-10
-"""
-
 x, y, theta, phi = sp.symbols("x y theta phi")
 x_dot, y_dot, theta_dot, phi_dot = sp.symbols("x_dot y_dot theta_dot phi_dot")
 m, I1, I2, R = sp.symbols("m I1 I2 R")
-
-
-def same(a, b) -> bool:
-    return a == b or sp.simplify(a - b) == 0
 
 
 # ------------------------------------------------------------- good scenes
@@ -163,62 +135,6 @@ def test_multiline_lagrangian():
 def test_user_text_is_not_changed():
     scene = loads_scene(DISK.replace('"vertical rolling disk"', '"  spaced  name "'))
     assert scene.name == "  spaced  name "
-
-
-# ------------------------------------------------------------- initial data
-def test_check_initial_residuals():
-    scene = loads_scene(DISK + INITIAL)
-    assert check_initial(scene) == {"constraints[0]": 0.0, "constraints[1]": 0.0}
-
-
-def test_check_initial_can_be_skipped():
-    text = DISK + INITIAL.replace("x_dot = 2.0", "x_dot = 2.5")
-    scene = loads_scene(text, check_initial=False)
-    with pytest.raises(InconsistentInitialDataError) as info:
-        check_initial(scene)
-    message = str(info.value)
-    assert "constraints[0]" in message and "0.5" in message
-    assert "constraints[1]" not in message
-
-
-def test_check_initial_tolerance_is_relative():
-    # Terms of size 1e6 with a rounding-size residual pass; 1e-3 does not.
-    big = DISK.replace("R = 1.0", "R = 1000.0") + INITIAL.replace("phi_dot = 2.0", "phi_dot = 1000.0")
-    ok = big.replace("x_dot = 2.0", "x_dot = 1000000.0000001")
-    assert abs(check_initial(loads_scene(ok))["constraints[0]"]) < 1e-3
-    with pytest.raises(InconsistentInitialDataError, match="constraints\\[0\\]"):
-        loads_scene(big.replace("x_dot = 2.0", "x_dot = 1000000.001"))
-
-
-def test_holonomic_initial_data_checks_position_and_velocity():
-    text = """
-coordinates = ["x", "y", "z"]
-lagrangian = "(x_dot**2 + y_dot**2 + z_dot**2)/2 - z"
-holonomic = ["x**2 + y**2 - 1"]
-
-[initial]
-x = 1.0
-y = 0.0
-z = 0.0
-x_dot = 0.0
-y_dot = 1.0
-z_dot = 3.0
-"""
-    residuals = check_initial(loads_scene(text))
-    assert residuals == {"holonomic[0]": 0.0, "holonomic[0] (time derivative)": 0.0}
-    with pytest.raises(InconsistentInitialDataError) as info:
-        loads_scene(text.replace("x_dot = 0.0", "x_dot = 0.25"))
-    assert "holonomic[0] (time derivative)" in str(info.value)
-    assert "0.5" in str(info.value)  # 2*x*x_dot
-
-
-def test_missing_parameter_value_for_initial_check():
-    text = DISK.replace(", R = 1.0 }", ' }\nsymbolic_parameters = ["R"]') + INITIAL
-    with pytest.raises(MissingParameterValueError, match="'R'"):
-        loads_scene(text)
-    scene = loads_scene(text, check_initial=False)
-    with pytest.raises(MissingParameterValueError):
-        check_initial(scene)
 
 
 # -------------------------------------------------------------- bad scenes
@@ -359,54 +275,3 @@ def test_injection_attempts_do_nothing(expression, tmp_path, monkeypatch):
     with pytest.raises(ParseError, match="^constraints\\[1\\]: "):
         loads_scene(text)
     assert list(tmp_path.iterdir()) == []
-
-
-# ------------------------------------------------------------- dump_scene
-def assert_same_system(a, b):
-    assert a.name == b.name
-    assert a.coordinates == b.coordinates
-    assert a.parameters == b.parameters
-    assert dict(a.parameter_values) == dict(b.parameter_values)
-    assert same(a.lagrangian, b.lagrangian)
-    assert len(a.constraints) == len(b.constraints)
-    assert all(same(p, q) for p, q in zip(a.constraints, b.constraints))
-    assert len(a.holonomic) == len(b.holonomic)
-    assert all(same(p, q) for p, q in zip(a.holonomic, b.holonomic))
-
-
-def test_dump_round_trip_rolling_disk():
-    scene = loads_scene(DISK + INITIAL + SIMULATE)
-    text = dump_scene(scene.system, scene.initial, scene.simulate)
-    again = loads_scene(text)
-    assert_same_system(scene.system, again.system)
-    assert again.system.lagrangian == scene.system.lagrangian  # structurally equal
-    assert again.initial == scene.initial
-    assert again.simulate == scene.simulate
-
-
-def test_dump_round_trip_awkward_names_and_values():
-    text = """
-name = "odd \\"quoted\\" name\\twith tab"
-coordinates = ["θ", "r", "z"]
-parameters = { lambda = 0.30000000000000004, I = 1e-3, E = 12345.678901234567 }
-symbolic_parameters = ["g", "N"]
-lagrangian = "I*θ_dot**2/2 + E*r_dot**2/2 + z_dot**2/2 - g*z + exp(1)*N*r"
-constraints = ["θ_dot - Abs(lambda)*r*r_dot"]
-holonomic = ["z - atan2(r, 1/3)"]
-"""
-    scene = loads_scene(text)
-    dumped = dump_scene(scene.system, simulate={"method": "RK45", "step": 0.01},
-                        description='two\nlines "quoted" \\ backslash')
-    again = loads_scene(dumped)
-    assert_same_system(scene.system, again.system)
-    assert again.name == 'odd "quoted" name\twith tab'
-    assert again.description == 'two\nlines "quoted" \\ backslash'
-    assert again.simulate == SimulateOptions(method="RK45", step=0.01)
-    lam = sp.Symbol("lambda")
-    assert again.system.parameter_values[lam] == 0.1 + 0.2
-
-
-def test_dump_refuses_non_finite_values():
-    scene = loads_scene(DISK)
-    with pytest.raises(SceneError, match="non-finite"):
-        dump_scene(scene.system, initial={"x": float("nan")})

@@ -1,0 +1,54 @@
+"""The generated sources (nhham.numerics.codegen.emit): sums of angles expanded only when
+that saves calls, and sources kept by the content of the system, not by the object."""
+
+from __future__ import annotations
+
+import sympy as sp
+
+import nhham
+from nhham.numerics.codegen import c_compiler, numeric_model
+
+from test_exact_solutions import chaplygin_sleigh, rolling_disk
+
+HAVE_CC = c_compiler() is not None
+
+
+def test_angle_sums_expanded_only_when_no_new_calls():
+    """sin/cos(theta_i - theta_j) become products of the sin/cos of the angles
+    when those are computed anyway (the snake: one sincos per angle instead of
+    one per pair); otherwise (the snakeboard's theta +- phi) they are kept."""
+    from nhham.numerics.codegen.emit import expand_angle_sums
+
+    a, b, c = sp.symbols("a b c", real=True)
+    out = expand_angle_sums([sp.sin(a - b) + sp.cos(a) * sp.sin(b)], [a, b])
+    assert out[0].atoms(sp.sin, sp.cos) <= {sp.sin(a), sp.cos(a), sp.sin(b), sp.cos(b)}
+    assert sp.simplify(out[0] - sp.sin(a - b) - sp.cos(a) * sp.sin(b)) == 0
+    kept = [sp.sin(a + b) * sp.cos(b)]  # sin(a) / cos(a) not computed: no gain
+    assert expand_angle_sums(kept, [a, b]) == kept
+    three = expand_angle_sums([sp.cos(a + b - c), sp.sin(a), sp.cos(b), sp.sin(c)], [a, b, c])
+    assert sp.simplify(three[0] - sp.cos(a + b - c)) == 0
+    if HAVE_CC:
+        snake = numeric_model(nhham.models.snake(5), backend="c")
+        saddle = snake.c_source.split("static void saddle(")[-1].split("\n}\n")[0]
+        calls = saddle.count("sin(") + saddle.count("cos(")
+        assert calls == 2 * 5  # one sin and one cos per link angle
+
+
+def test_generated_sources_are_kept_by_content_not_by_identity():
+    """Equal systems share their generated sources; a system is not kept alive by them;
+    a different system, or another path, gets its own."""
+    import gc
+    import weakref
+
+    from nhham.numerics.codegen.emit import generate_sources, system_fingerprint
+
+    a, b = chaplygin_sleigh(), chaplygin_sleigh()
+    assert a is not b and system_fingerprint(a) == system_fingerprint(b)
+    assert generate_sources(a) is generate_sources(b)
+    assert system_fingerprint(a) != system_fingerprint(a, "closed_form")
+    assert system_fingerprint(rolling_disk()) != system_fingerprint(a)
+    ref = weakref.ref(a)
+    numeric_model(a, backend="numpy")
+    del a
+    gc.collect()
+    assert ref() is None
