@@ -227,6 +227,8 @@ def policy_of(policy: Policy | None, where: str, **options) -> Policy:
         silently ignored otherwise).
     """
     if policy is None:
+        # Named after the caller, not the policy, when an option is out of range.
+        check_options(where, **{k: v for k, v in options.items() if k != "exact"})
         return Policy(**options)
     if not isinstance(policy, Policy):
         from nhham.errors import InputError

@@ -63,6 +63,7 @@ from nhham.lagrangian.linalg import (
     maximal_minors,
 )
 from nhham.lagrangian.points import DRAW_BITS, ParameterFieldSampler, jacobian_row
+from nhham.lagrangian.submanifold import Submanifold
 from nhham.settings import SEED
 from nhham.system.expressions import short
 
@@ -193,7 +194,9 @@ class ExceptionalData:
             key, known = None, []
         if len(known) >= self.points:
             return known[:self.points]
-        sampler = ParameterFieldSampler(self.system, eqs, env0, exact, random.Random(f"{self.seed}:{tag}"))
+        sampler = ParameterFieldSampler(self.system, eqs, env0, exact,
+                                        random.Random(f"{self.seed}:{tag}"),
+                                        lambda: Submanifold(self.system, eqs).reduction)
         out = [sampler.point() for _ in range(self.points)]
         if key is not None:
             self._points_cache[key] = out

@@ -43,7 +43,6 @@ from nhham.lagrangian.domains import (
     minor_degree,
 )
 from nhham.lagrangian.linalg import exact_rank, exact_solve
-from nhham.lagrangian.submanifold import Submanifold
 from nhham.system.expressions import derivative, short
 
 __all__ = [
@@ -307,12 +306,12 @@ class ParameterFieldSampler:
     """Random exact points of M = {equations = 0} with parameters as field generators.
 
     M_1 without holonomic constraints: coordinates drawn, dependent velocities solved
-    at the point over Q(p). Otherwise the exact reduction of
-    :class:`~nhham.lagrangian.submanifold.Submanifold` is evaluated at the point
-    (NotExact when it leaves residual equations).
+    at the point over Q(p). Otherwise ``reduction()``, the exact reduction of M
+    (:attr:`Submanifold.reduction <nhham.lagrangian.submanifold.Submanifold.reduction>`),
+    is evaluated at the point (NotExact when it leaves residual equations).
     """
 
-    def __init__(self, system, equations, env0, K, rng):
+    def __init__(self, system, equations, env0, K, rng, reduction=None):
         self.q, self.v = tuple(system.coordinates), tuple(system.velocities)
         self.env0, self.K, self.rng = env0, K, rng
         eqs = tuple(sp.sympify(e) for e in equations)
@@ -327,7 +326,7 @@ class ParameterFieldSampler:
             # constraint no coordinate can be solved from linearly takes minutes, to end
             # in the same NotExact.
             eliminate_coordinates(self.q, system.holonomic)
-            red = Submanifold(system, eqs).reduction
+            red = reduction()
             if red.residual:
                 raise NotExact("M_k is not parametrised by the exact reduction (residual "
                                "equations " + ", ".join(short(r) for r in red.residual) + ")")
