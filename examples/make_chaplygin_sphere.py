@@ -26,9 +26,8 @@ from sympy.physics import mechanics as me
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from scene_output import write_scene  # noqa: E402
+from scene_output import write_example  # noqa: E402
 from nhham.system.mechanics import from_mechanics  # noqa: E402
-from nhham.system.scene_dump import dump_scene  # noqa: E402
 
 VALUES = {"m": 1.0, "r": 0.5, "I1": 0.08, "I2": 0.1, "I3": 0.12}
 
@@ -73,17 +72,12 @@ HEADER = """\
 
 
 def main(argv):
-    target = argv[1] if len(argv) > 1 else str(Path(__file__).resolve().parent
-                                               / "chaplygin_sphere.toml")
-    system = build()
     r = VALUES["r"]
     # Rolling along x with the ball spinning about N.y at rate 2 (and a little yaw rate).
     initial = {"yaw": 0.0, "pitch": 0.0, "roll": 0.0, "x": 0.0, "y": 0.0,
                "yaw_dot": 0.3, "pitch_dot": 0.0, "roll_dot": 2.0, "x_dot": 2.0 * r,
                "y_dot": 0.0}
-    text = HEADER + dump_scene(system, initial=initial,
-                               simulate={"t_end": 10.0, "method": "DOP853", "rtol": 1e-10})
-    write_scene(text, target)
+    write_example(argv, "chaplygin_sphere.toml", HEADER, build(), initial=initial)
 
 
 if __name__ == "__main__":

@@ -34,10 +34,9 @@ from sympy.physics import mechanics as me
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from scene_output import write_scene  # noqa: E402
+from scene_output import write_example  # noqa: E402
 from nhham.system.description import System  # noqa: E402
 from nhham.system.mechanics import from_mechanics  # noqa: E402
-from nhham.system.scene_dump import dump_scene  # noqa: E402
 
 VALUES = {"mc": 4.0, "Ic": 0.08, "mw": 0.3, "Iw": 0.0015, "Id": 0.001, "r": 0.1, "b": 0.15,
           "d": 0.05, "w": 5.0}
@@ -100,16 +99,12 @@ HEADER = """\
 
 
 def main(argv):
-    target = argv[1] if len(argv) > 1 else str(Path(__file__).resolve().parent
-                                               / "differential_drive.toml")
-    system = build()
     w, r, b = VALUES["w"], VALUES["r"], VALUES["b"]
     initial = {"x": 0.0, "y": 0.0, "theta": 0.0, "phiL": 0.0, "phiR": 0.0,
                "x_dot": r * (w + 1.5 * w) / 2, "y_dot": 0.0,
                "theta_dot": r * (1.5 * w - w) / (2 * b), "phiL_dot": w, "phiR_dot": 1.5 * w}
-    text = HEADER + dump_scene(system, initial=initial, steady=STEADY,
-                               simulate={"t_end": 10.0, "method": "DOP853", "rtol": 1e-10})
-    write_scene(text, target)
+    write_example(argv, "differential_drive.toml", HEADER, build(), initial=initial,
+                  steady=STEADY)
 
 
 if __name__ == "__main__":

@@ -28,9 +28,8 @@ from sympy.physics import mechanics as me
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from scene_output import write_scene  # noqa: E402
+from scene_output import write_example  # noqa: E402
 from nhham.system.mechanics import from_mechanics  # noqa: E402
-from nhham.system.scene_dump import dump_scene  # noqa: E402
 
 VALUES = {"g": 9.81, "r": 0.26, "m": 3.43}   # test_kane5.py's numbers
 
@@ -97,15 +96,11 @@ HEADER = """\
 
 
 def main(argv):
-    target = argv[1] if len(argv) > 1 else str(Path(__file__).resolve().parent
-                                               / "rolling_disc_3d.toml")
     values = dict(VALUES, w=6.0)
-    system = build(values)
     initial = {"yaw": 0.0, "lean": 0.0, "spin": 0.0, "x": 0.0, "y": 0.0, "yaw_dot": 0.0,
                "lean_dot": 0.2, "spin_dot": 6.0, "x_dot": values["r"] * 6.0, "y_dot": 0.0}
-    text = HEADER + dump_scene(system, initial=initial, steady=STEADY,
-                               simulate={"t_end": 10.0, "method": "DOP853", "rtol": 1e-10})
-    write_scene(text, target)
+    write_example(argv, "rolling_disc_3d.toml", HEADER, build(values), initial=initial,
+                  steady=STEADY)
 
 
 if __name__ == "__main__":

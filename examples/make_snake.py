@@ -23,10 +23,8 @@ import sympy as sp
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from scene_output import write_scene  # noqa: E402
+from scene_output import SIMULATE, write_scene  # noqa: E402
 from nhham.system.models import snake  # noqa: E402
-
-SIMULATE = {"t_end": 10.0, "method": "DOP853", "rtol": 1e-10}
 
 
 def initial_state(N):

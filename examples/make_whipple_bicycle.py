@@ -54,10 +54,9 @@ from sympy.physics import mechanics as me
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from scene_output import write_scene  # noqa: E402
+from scene_output import write_example  # noqa: E402
 from nhham.system.description import System, quadratic_parts  # noqa: E402
 from nhham.system.mechanics import from_mechanics  # noqa: E402
-from nhham.system.scene_dump import dump_scene  # noqa: E402
 
 #: Benchmark values (Meijaard et al. 2007, Table 1), converted to the
 #: parameterisation of sympy's test_kane3.py exactly as that test does.
@@ -234,14 +233,9 @@ def initial_state():
 
 
 def main(argv):
-    target = argv[1] if len(argv) > 1 else str(Path(__file__).resolve().parent
-                                               / "whipple_bicycle.toml")
-    system = build()
-    text = HEADER + dump_scene(
-        system, initial=initial_state(), steady=STEADY,
-        simulate={"t_end": 10.0, "method": "DOP853", "rtol": 1e-10},
-        description="Whipple bicycle, Meijaard et al. (2007) benchmark; forward speed v")
-    write_scene(text, target)
+    write_example(argv, "whipple_bicycle.toml", HEADER, build(), initial=initial_state(),
+                  steady=STEADY,
+                  description="Whipple bicycle, Meijaard et al. (2007) benchmark; forward speed v")
 
 
 if __name__ == "__main__":

@@ -25,87 +25,66 @@ loads sympy inside its Ctrl-C handler) and a command which only classifies never
 imports the numerical integrators.
 """
 
-from nhham.lazy import lazy_exports
+from nhham.lazy import by_module, lazy_exports
 
 from nhham.settings import __version__ as __version__
 
-# name -> module that defines it
-_LAZY = {
+# module that defines them -> public names
+_LAZY = by_module({
     # the exceptions, rooted at NhhamError
-    **{name: "errors" for name in (
+    "errors": (
         "NhhamError", "InputError", "ParseError", "SceneError", "ValidationError",
         "SingularLagrangianError", "NonAffineConstraintError", "RedundantConstraintError",
         "MissingParameterValueError", "InconsistentInitialDataError",
-        "OptionalDependencyError", "ComputationError", "BudgetExceeded", "NhhamWarning")},
+        "OptionalDependencyError", "ComputationError", "BudgetExceeded", "NhhamWarning"),
     # the system description
-    "System": "system.description",
-    "DroppedConstraint": "system.description",
+    "system.description": ("System", "DroppedConstraint"),
     # Lagrangian side (paper Sections 2, 4, 5)
-    "lagrangian_geometry": "lagrangian.geometry",
-    "LagrangianGeometry": "lagrangian.geometry",
-    "DynamicsIngredients": "lagrangian.geometry",
-    "Submanifold": "lagrangian.submanifold",
-    "Decision": "lagrangian.decision",
-    "constant_of_motion": "lagrangian.symmetries",
-    "cyclic_constants": "lagrangian.symmetries",
-    "lie_symmetry": "lagrangian.symmetries",
-    "complete_lift": "lagrangian.symmetries",
+    "lagrangian.geometry": ("lagrangian_geometry", "LagrangianGeometry", "DynamicsIngredients"),
+    "lagrangian.submanifold": ("Submanifold",),
+    "lagrangian.decision": ("Decision",),
+    "lagrangian.symmetries": ("constant_of_motion", "cyclic_constants", "lie_symmetry",
+                              "complete_lift"),
     # constraint algorithm (Section 3)
-    "analyze_constraints": "lagrangian.analysis",
-    "ConstraintAnalysis": "lagrangian.analysis",
-    "run_algorithm": "lagrangian.algorithm",
-    "integrability": "lagrangian.integrability",
+    "lagrangian.analysis": ("analyze_constraints", "ConstraintAnalysis"),
+    "lagrangian.algorithm": ("run_algorithm",),
+    "lagrangian.integrability": ("integrability",),
     # verdicts for every parameter value
-    "parametric_classification": "verdict.parametric",
-    "classification_at_values": "verdict.values",
-    "exceptional_conditions": "lagrangian.exceptional",
-    "Verdict": "verdict.results",
-    "ParametricVerdict": "verdict.results",
-    "ValuesVerdict": "verdict.results",
+    "verdict.parametric": ("parametric_classification",),
+    "verdict.values": ("classification_at_values",),
+    "lagrangian.exceptional": ("exceptional_conditions",),
+    "verdict.results": ("Verdict", "ParametricVerdict", "ValuesVerdict"),
     # Hamiltonian side (Section 6)
-    "legendre_map": "hamiltonian.legendre",
-    "LegendreMap": "hamiltonian.legendre",
-    "canonical_bracket": "hamiltonian.brackets",
-    "BracketAlgebra": "hamiltonian.brackets",
-    "hamiltonian_side": "hamiltonian.side",
-    "HamiltonianSide": "hamiltonian.side",
-    "nonholonomic_bracket": "hamiltonian.side",
-    "classify_constraints": "hamiltonian.classification",
-    "ConstraintClasses": "hamiltonian.classes",
-    "dirac_bracket": "hamiltonian.dirac",
-    "dirac_vs_projected": "hamiltonian.dirac",
-    "cross_check": "hamiltonian.crosscheck",
-    "CrossCheckReport": "hamiltonian.checks",
+    "hamiltonian.legendre": ("legendre_map", "LegendreMap"),
+    "hamiltonian.brackets": ("canonical_bracket", "BracketAlgebra"),
+    "hamiltonian.side": ("hamiltonian_side", "HamiltonianSide", "nonholonomic_bracket"),
+    "hamiltonian.classification": ("classify_constraints",),
+    "hamiltonian.classes": ("ConstraintClasses",),
+    "hamiltonian.dirac": ("dirac_bracket", "dirac_vs_projected"),
+    "hamiltonian.crosscheck": ("cross_check",),
+    "hamiltonian.checks": ("CrossCheckReport",),
     # numbers
-    "numeric_model": "numerics.codegen",
-    "NumericModel": "numerics.model",
-    "simulate": "numerics.integrate",
-    "SimulationResult": "numerics.integrate",
-    "work_precision": "numerics.workprecision",
+    "numerics.codegen": ("numeric_model",),
+    "numerics.model": ("NumericModel",),
+    "numerics.integrate": ("simulate", "SimulationResult"),
+    "numerics.workprecision": ("work_precision",),
     # a bound on the time of a computation (the command's --budget)
-    "time_budget": "budget",
+    "budget": ("time_budget",),
     # stability of steady motions
-    "linearize": "numerics.linearization",
-    "Linearization": "numerics.linearization",
-    "sweep_steady": "numerics.steady_sweep",
-    "Sweep": "numerics.steady_sweep",
-    "linearize_scene": "cli.linearize_command",
-    "plot_root_locus": "cli.linearize_command",
+    "numerics.linearization": ("linearize", "Linearization"),
+    "numerics.steady_sweep": ("sweep_steady", "Sweep"),
+    "cli.linearize_command": ("linearize_scene", "plot_root_locus"),
     # input and output
-    "load_scene": "system.scene",
-    "loads_scene": "system.scene",
-    "dump_scene": "system.scene_dump",
-    "Scene": "system.scene",
-    "parse_expression": "system.expressions",
-    "from_mechanics": "system.mechanics",
-    "from_lagranges_method": "system.mechanics",
-    "models": "system.models",
+    "system.scene": ("load_scene", "loads_scene", "Scene"),
+    "system.scene_dump": ("dump_scene",),
+    "system.expressions": ("parse_expression",),
+    "system.mechanics": ("from_mechanics", "from_lagranges_method"),
+    "system.models": ("models",),
     # reports, figures and the command's JSON contract
-    "report": "cli.display",
-    "plot_trajectory": "cli.plotting",
-    "plot_work_precision": "cli.plotting",
-    "output_schema": "cli.envelope",
-}
+    "cli.display": ("report",),
+    "cli.plotting": ("plot_trajectory", "plot_work_precision"),
+    "cli.envelope": ("output_schema",),
+})
 
 __all__ = list(_LAZY)
 

@@ -1,6 +1,7 @@
 """Public names of a package, imported on first use (PEP 562).
 
-A package lists ``{name: module}`` and gets the module-level ``__getattr__``
+A package lists its public names by defining module (:func:`by_module` turns
+that into the ``{name: module}`` table) and gets the module-level ``__getattr__``
 and ``__dir__`` that import the defining module the first time a name is
 read. So ``import nhham`` stays cheap, and a command that only classifies
 never imports the integrators (or scipy.integrate, which alone takes a
@@ -10,9 +11,26 @@ second to import).
 from __future__ import annotations
 
 from importlib import import_module
-from typing import Callable, Mapping
+from typing import Callable, Iterable, Mapping
 
-__all__ = ["lazy_exports"]
+__all__ = ["by_module", "lazy_exports"]
+
+
+def by_module(groups: Mapping[str, Iterable[str]]) -> dict[str, str]:
+    """The ``{name: module}`` table of names listed by defining module.
+
+    Parameters
+    ----------
+    groups : mapping of str to iterable of str
+        Module (relative to the package) -> the public names it defines, in the
+        order ``__all__`` lists them.
+
+    Examples
+    --------
+    >>> by_module({"system.scene": ("load_scene", "Scene"), "budget": ("time_budget",)})
+    {'load_scene': 'system.scene', 'Scene': 'system.scene', 'time_budget': 'budget'}
+    """
+    return {name: module for module, names in groups.items() for name in names}
 
 
 def lazy_exports(package: str, table: Mapping[str, str], namespace: dict

@@ -232,6 +232,17 @@ def sphere_with_knife():
                         parameters={"m": 1.3, "l": 1.1})
 
 
+#: A Chaplygin sleigh (blade behind) as scene text, with a parameter u: a forward speed
+#: for the [steady] tables the tests add.
+SLEIGH_SCENE = """
+name = "sleigh"
+coordinates = ["x", "y", "theta"]
+parameters = { m = 1.0, I = 0.25, a = 0.5, u = 2.0 }
+lagrangian = "m*(x_dot**2 + y_dot**2)/2 + I*theta_dot**2/2"
+constraints = ["-sin(theta)*x_dot + cos(theta)*y_dot - a*theta_dot"]
+"""
+
+
 def sleigh_with_values():
     """The Chaplygin sleigh (blade behind: -a theta_dot) with parameter values."""
     th = sp.Symbol("theta")

@@ -76,6 +76,17 @@ def _parser_for(scene):
     return lambda text: parse_expression(text, names)
 
 
+def _report_text(args, scene, latex, plain):
+    """A command's text report, formed only when it is shown (not under ``--json``).
+
+    ``latex(parse)`` under ``--latex``, ``parse`` reading the output's expressions
+    back with the scene's names (:func:`_parser_for`); else ``plain()``.
+    """
+    if args.latex:
+        return lambda: latex(_parser_for(scene))
+    return plain
+
+
 def _at_values(args, steps, scene, classes=None):
     """The classification at the scene's parameter values (a ``ValuesVerdict``).
 
@@ -151,12 +162,8 @@ def cmd_classify(args, steps) -> CommandOutput:
     data = classify_data(analysis, classes)
     data["parameter_case"], note = _parameter_case(at)
     title = _title(scene, args)
-    if args.latex:
-        def text():
-            return classify_latex(title, data, _parser_for(scene))
-    else:
-        def text():
-            return classify_text(title, data) + note
+    text = _report_text(args, scene, functools.partial(classify_latex, title, data),
+                        lambda: classify_text(title, data) + note)
     return CommandOutput(result=data, text=text, scene=scene_info(scene),
                          warnings=classify_warnings(analysis, classes) + list(at.warnings))
 
@@ -343,13 +350,8 @@ def _derive_implicit(args, steps, scene, G, implicit, energy, analysis=None):
         "note": (f"closed forms of P(xi_L), lambda and C need W^-1 of a {system.n} x "
                  f"{system.n} matrix of functions: not formed; --explicit forms them"),
     }
-    title = _title(scene, args)
-    if args.latex:
-        def text():
-            return implicit_latex(data, _parser_for(scene))
-    else:
-        def text():
-            return implicit_text(title, data)
+    text = _report_text(args, scene, functools.partial(implicit_latex, data),
+                        functools.partial(implicit_text, _title(scene, args), data))
     return CommandOutput(result=data, text=text, scene=scene_info(scene),
                          warnings=list(analysis.warnings))
 
@@ -360,13 +362,8 @@ def _derive_output(args, steps, scene, side, variables, field, multipliers, C, e
 
     with steps.step("display simplification"):
         data = derive_data(side, variables, field, multipliers, C, energy, free)
-    title = _title(scene, args)
-    if args.latex:
-        def text():
-            return derive_latex(data, _parser_for(scene))
-    else:
-        def text():
-            return derive_text(title, data)
+    text = _report_text(args, scene, functools.partial(derive_latex, data),
+                        functools.partial(derive_text, _title(scene, args), data))
     return CommandOutput(result=data, text=text, scene=scene_info(scene), warnings=warnings)
 
 
@@ -399,12 +396,8 @@ def cmd_compare(args, steps) -> CommandOutput:
             warnings.append(f"Dirac comparison not available: {one_line(exc)}")
     data = compare_data(report, dirac)
     title = _title(scene, args)
-    if args.latex:
-        def text():
-            return compare_latex(title, data, _parser_for(scene))
-    else:
-        def text():
-            return compare_text(title, report, dirac)
+    text = _report_text(args, scene, functools.partial(compare_latex, title, data),
+                        functools.partial(compare_text, title, report, dirac))
     failure = None if data["agree"] else (
         "the Lagrangian and Hamiltonian sides disagree (see the checks); please report this "
         "scene as a bug")

@@ -10,22 +10,17 @@ through Leg), with ``checks`` (its results), ``comparison`` (its points and the 
 Lagrangian side) and ``staged`` (the check staged at exact points when C is singular).
 """
 
-from nhham.lazy import lazy_exports
+from nhham.lazy import by_module, lazy_exports
 
-_LAZY = {
-    "legendre_map": "legendre",
-    "LegendreMap": "legendre",
-    "canonical_bracket": "brackets",
-    "BracketAlgebra": "brackets",
-    "hamiltonian_side": "side",
-    "HamiltonianSide": "side",
-    "nonholonomic_bracket": "side",
-    "classify_constraints": "classification",
-    "ConstraintClasses": "classes",
-    "dirac_bracket": "dirac",
-    "dirac_vs_projected": "dirac",
-    "cross_check": "crosscheck",
-    "CrossCheckReport": "checks",
-}
+_LAZY = by_module({
+    "legendre": ("legendre_map", "LegendreMap"),
+    "brackets": ("canonical_bracket", "BracketAlgebra"),
+    "side": ("hamiltonian_side", "HamiltonianSide", "nonholonomic_bracket"),
+    "classification": ("classify_constraints",),
+    "classes": ("ConstraintClasses",),
+    "dirac": ("dirac_bracket", "dirac_vs_projected"),
+    "crosscheck": ("cross_check",),
+    "checks": ("CrossCheckReport",),
+})
 __all__ = list(_LAZY)
 __getattr__, __dir__ = lazy_exports(__name__, _LAZY, globals())

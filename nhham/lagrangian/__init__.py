@@ -12,23 +12,17 @@ constraint algorithm of Section 3) with ``records`` (its stages and result), ``a
 decision's datum vanishes; the verdicts built on them are in :mod:`nhham.verdict`).
 """
 
-from nhham.lazy import lazy_exports
+from nhham.lazy import by_module, lazy_exports
 
-_LAZY = {
-    "lagrangian_geometry": "geometry",
-    "LagrangianGeometry": "geometry",
-    "DynamicsIngredients": "geometry",
-    "Submanifold": "submanifold",
-    "Decision": "decision",
-    "analyze_constraints": "analysis",
-    "ConstraintAnalysis": "analysis",
-    "run_algorithm": "algorithm",
-    "integrability": "integrability",
-    "exceptional_conditions": "exceptional",
-    "constant_of_motion": "symmetries",
-    "cyclic_constants": "symmetries",
-    "lie_symmetry": "symmetries",
-    "complete_lift": "symmetries",
-}
+_LAZY = by_module({
+    "geometry": ("lagrangian_geometry", "LagrangianGeometry", "DynamicsIngredients"),
+    "submanifold": ("Submanifold",),
+    "decision": ("Decision",),
+    "analysis": ("analyze_constraints", "ConstraintAnalysis"),
+    "algorithm": ("run_algorithm",),
+    "integrability": ("integrability",),
+    "exceptional": ("exceptional_conditions",),
+    "symmetries": ("constant_of_motion", "cyclic_constants", "lie_symmetry", "complete_lift"),
+})
 __all__ = list(_LAZY)
 __getattr__, __dir__ = lazy_exports(__name__, _LAZY, globals())

@@ -15,17 +15,15 @@ A new integrator goes beside ``integrators`` (fixed step) or ``scipy_loop`` (ada
 returns a :class:`~nhham.numerics.run.Run` and is dispatched by ``integrate.simulate``.
 """
 
-from nhham.lazy import lazy_exports
+from nhham.lazy import by_module, lazy_exports
 
-_LAZY = {
-    "numeric_model": "codegen",
-    "NumericModel": "model",
-    "simulate": "integrate",
-    "SimulationResult": "integrate",
-    "work_precision": "workprecision",
-    "reference_solution": "reference",
-    "Status": "status",
-    "NumericalFailure": "status",
-}
+_LAZY = by_module({
+    "codegen": ("numeric_model",),
+    "model": ("NumericModel",),
+    "integrate": ("simulate", "SimulationResult"),
+    "workprecision": ("work_precision",),
+    "reference": ("reference_solution",),
+    "status": ("Status", "NumericalFailure"),
+})
 __all__ = list(_LAZY)
 __getattr__, __dir__ = lazy_exports(__name__, _LAZY, globals())

@@ -9,21 +9,15 @@ validation), ``scene`` (TOML scene files), ``mechanics`` (the
 sympy.physics.mechanics adapter), ``models`` (ready-made systems).
 """
 
-from nhham.lazy import lazy_exports
+from nhham.lazy import by_module, lazy_exports
 
-_LAZY = {
-    "System": "description",
-    "DroppedConstraint": "description",
-    "parse_expression": "expressions",
-    "to_text": "expressions",
-    "load_scene": "scene",
-    "loads_scene": "scene",
-    "dump_scene": "scene_dump",
-    "Scene": "scene",
-    "from_mechanics": "mechanics",
-    "from_lagranges_method": "mechanics",
-    "to_lagranges_method": "mechanics",
-    "models": "models",
-}
+_LAZY = by_module({
+    "description": ("System", "DroppedConstraint"),
+    "expressions": ("parse_expression", "to_text"),
+    "scene": ("load_scene", "loads_scene", "Scene"),
+    "scene_dump": ("dump_scene",),
+    "mechanics": ("from_mechanics", "from_lagranges_method", "to_lagranges_method"),
+    "models": ("models",),
+})
 __all__ = list(_LAZY)
 __getattr__, __dir__ = lazy_exports(__name__, _LAZY, globals())

@@ -35,7 +35,7 @@ import re
 import tomllib
 import unicodedata
 from dataclasses import dataclass, fields
-from types import MappingProxyType
+from functools import partial
 from typing import TYPE_CHECKING, Mapping
 
 import sympy as sp
@@ -44,7 +44,7 @@ from nhham.errors import ParseError, SceneError, key_of
 from nhham.system.expressions import RESERVED_NAMES, parse_expression
 from nhham.system.initial import initial_residuals
 from nhham.system.naming import acceleration_symbol, momentum_symbol, velocity_symbol
-from nhham.system.steady import parse_steady, steady_structure
+from nhham.system.steady import parse_steady, state_table, steady_structure
 
 if TYPE_CHECKING:
     from nhham.system.description import System
@@ -379,21 +379,14 @@ def _check_keys(table: dict, prefix: str, known, aliases, problems) -> None:
         problems.append(f"{_key_path(prefix, key)}: unknown key{suggestion}")
 
 
+# How a TOML value's type is called in messages; bool before int, which it subclasses.
+_TYPE_NAMES = ((bool, "a boolean"), (int, "an integer"), (float, "a float"),
+               (str, "a string"), (list, "an array"), (dict, "a table"))
+
+
 def _type_name(value) -> str:
-    """How a TOML value's type is called in messages."""
-    if isinstance(value, bool):
-        return "a boolean"
-    if isinstance(value, int):
-        return "an integer"
-    if isinstance(value, float):
-        return "a float"
-    if isinstance(value, str):
-        return "a string"
-    if isinstance(value, list):
-        return "an array"
-    if isinstance(value, dict):
-        return "a table"
-    return "a date/time"
+    """How a TOML value's type is called in messages (the only other TOML type: date/time)."""
+    return next((name for kind, name in _TYPE_NAMES if isinstance(value, kind)), "a date/time")
 
 
 def _optional_string(data, key, problems) -> str:
@@ -525,23 +518,8 @@ def _initial_table(value, coordinates, problems):
     if not isinstance(value, dict):
         problems.append(f"initial: expected a table, got {_type_name(value)}")
         return None
-    wanted = list(coordinates) + [velocity_symbol(sp.Symbol(q)).name for q in coordinates]
-    result = {}
-    for key, item in value.items():
-        path = _key_path("initial", key)
-        if key not in wanted:
-            close = difflib.get_close_matches(key, wanted, n=1)
-            hint = f"; did you mean {close[0]!r}?" if close else ""
-            problems.append(f"{path}: unknown name (not a coordinate or velocity){hint}")
-            continue
-        number = _finite_number(item, path, problems)
-        if number is not None:
-            result[key] = number
-    missing = [name for name in wanted if name not in value]
-    if missing:
-        problems.append(f"initial: missing value for {', '.join(map(repr, missing))} "
-                        f"(every coordinate and velocity needs one)")
-    return MappingProxyType({name: result[name] for name in wanted if name in result})
+    return state_table(value, coordinates, _finite_number, problems,
+                       section="initial", path=partial(_key_path, "initial"))
 
 
 def _simulate_table(value, problems) -> SimulateOptions:

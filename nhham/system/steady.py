@@ -26,7 +26,7 @@ import difflib
 import math
 from dataclasses import dataclass
 from types import MappingProxyType
-from typing import Mapping
+from typing import Callable, Mapping
 
 import sympy as sp
 
@@ -34,7 +34,7 @@ from nhham.errors import MissingParameterValueError, ParseError
 from nhham.system.expressions import parse_expression
 from nhham.system.naming import velocity_symbol
 
-__all__ = ["SteadyState", "steady_structure", "parse_steady"]
+__all__ = ["SteadyState", "state_table", "steady_structure", "parse_steady"]
 
 
 @dataclass(frozen=True)
@@ -104,6 +104,53 @@ def state_names(coordinates) -> list:
     return list(coordinates) + [velocity_symbol(sp.Symbol(q)).name for q in coordinates]
 
 
+def state_table(table: Mapping, coordinates, entry: Callable, problems: list, *,
+                section: str, path: Callable[[object], str]) -> Mapping:
+    """The entries of a scene table that gives a value for exactly every state name.
+
+    The one check behind ``[initial]`` and ``[steady]``: an unknown key (with the
+    closest state name as a hint) and the state names without a value are problems.
+
+    Parameters
+    ----------
+    table : mapping
+        The raw table.
+    coordinates : sequence of str
+        The scene's coordinates; the state names are these and their velocities.
+    entry : callable
+        ``entry(item, path, problems)``: the value kept for one entry, or None once it
+        has appended the entry's problem.
+    problems : list of str
+        Where the problems are appended.
+    section : str
+        The table's name, which the missing values' problem starts with.
+    path : callable
+        ``path(key)``: how a problem names an entry.
+
+    Returns
+    -------
+    mapping of str
+        The values kept, in state order (read-only).
+    """
+    wanted = state_names(coordinates)
+    kept = {}
+    for key, item in table.items():
+        where = path(key)
+        if key not in wanted:
+            close = difflib.get_close_matches(str(key), wanted, n=1)
+            hint = f"; did you mean {close[0]!r}?" if close else ""
+            problems.append(f"{where}: unknown name (not a coordinate or velocity){hint}")
+            continue
+        value = entry(item, where, problems)
+        if value is not None:
+            kept[key] = value
+    missing = [name for name in wanted if name not in table]
+    if missing:
+        problems.append(f"{section}: missing value for {', '.join(map(repr, missing))} "
+                        f"(every coordinate and velocity needs one)")
+    return MappingProxyType({name: kept[name] for name in wanted if name in kept})
+
+
 def steady_structure(value, coordinates, problems) -> Mapping | None:
     """Check a raw ``[steady]`` table: a number or string for exactly every state name.
 
@@ -115,27 +162,19 @@ def steady_structure(value, coordinates, problems) -> Mapping | None:
     if not isinstance(value, dict):
         problems.append("steady: expected a table of name = number or expression")
         return None
-    wanted = state_names(coordinates)
-    raw = {}
-    for key, item in value.items():
-        path = f"steady.{key}"
-        if key not in wanted:
-            close = difflib.get_close_matches(str(key), wanted, n=1)
-            hint = f"; did you mean {close[0]!r}?" if close else ""
-            problems.append(f"{path}: unknown name (not a coordinate or velocity){hint}")
-            continue
-        if isinstance(item, bool) or not isinstance(item, (int, float, str)):
-            problems.append(f"{path}: expected a number or an expression string")
-            continue
-        if isinstance(item, float) and not math.isfinite(item):
-            problems.append(f"{path}: expected a finite number, got {item!r}")
-            continue
-        raw[key] = item
-    missing = [name for name in wanted if name not in value]
-    if missing:
-        problems.append(f"steady: missing value for {', '.join(map(repr, missing))} "
-                        f"(every coordinate and velocity needs one)")
-    return MappingProxyType({name: raw[name] for name in wanted if name in raw})
+    return state_table(value, coordinates, _steady_entry, problems,
+                       section="steady", path="steady.{}".format)
+
+
+def _steady_entry(item, path, problems):
+    """A ``[steady]`` value as given: a finite number or an expression string."""
+    if isinstance(item, bool) or not isinstance(item, (int, float, str)):
+        problems.append(f"{path}: expected a number or an expression string")
+        return None
+    if isinstance(item, float) and not math.isfinite(item):
+        problems.append(f"{path}: expected a finite number, got {item!r}")
+        return None
+    return item
 
 
 def parse_steady(raw: Mapping, parameters) -> tuple[SteadyState | None, list]:

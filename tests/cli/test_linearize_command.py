@@ -9,15 +9,11 @@ import pytest
 
 from nhham.cli.main import main
 
+from handmade import SLEIGH_SCENE
+
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 
-SLEIGH = """
-name = "sleigh"
-coordinates = ["x", "y", "theta"]
-parameters = { m = 1.0, I = 0.25, a = 0.5, u = 2.0 }
-lagrangian = "m*(x_dot**2 + y_dot**2)/2 + I*theta_dot**2/2"
-constraints = ["-sin(theta)*x_dot + cos(theta)*y_dot - a*theta_dot"]
-[steady]
+SLEIGH = SLEIGH_SCENE + """[steady]
 x = 0
 y = 0
 theta = 0

@@ -151,8 +151,10 @@ def sphere():
 
 @pytest.fixture(scope="module")
 def sphere_dirac():
+    """The Dirac bracket of the particle on a sphere, and its variables x, y, z, p_x, p_y, p_z."""
     s = sphere()
-    return s, dirac_bracket(s)
+    D = dirac_bracket(s)
+    return D, (*s.coordinates, *D.algebra.momenta)
 
 
 def test_sphere_dirac_bracket_hand_values(sphere_dirac):
@@ -161,9 +163,7 @@ def test_sphere_dirac_bracket_hand_values(sphere_dirac):
     # {q_i, p_j}_D = delta_ij - {q_i, chi_1}B^{12}{chi_2, p_j} - {q_i, chi_2}B^{21}{chi_1, p_j}
     #             = delta_ij - (x_i/m)(m/r^2) x_j = delta_ij - x_i x_j / r^2,
     # {q_i, q_j}_D = 0 and {p_i, p_j}_D = (x_i p_j - x_j p_i)/r^2 ... checked below.
-    s, D = sphere_dirac
-    x, y, z = s.coordinates
-    px, py, pz = D.algebra.momenta
+    D, (x, y, z, px, py, pz) = sphere_dirac
     r2 = x**2 + y**2 + z**2
     X, Pm = (x, y, z), (px, py, pz)
     assert D.blocks == [[0, 1]]
@@ -181,9 +181,7 @@ def test_sphere_dirac_bracket_hand_values(sphere_dirac):
 @settings(max_examples=8, deadline=None)
 @given(st.data())
 def test_sphere_dirac_second_class_constraints_are_casimirs(sphere_dirac, data):
-    s, D = sphere_dirac
-    x, y, z = s.coordinates
-    px, py, pz = D.algebra.momenta
+    D, (x, y, z, px, py, pz) = sphere_dirac
     pool = [x, y, z, px, py, pz, sp.sin(x), x * pz - z * px, px**2 + py * z]
     f = data.draw(st.sampled_from(pool)) * data.draw(st.sampled_from(pool)) + \
         data.draw(st.sampled_from(pool))
@@ -192,9 +190,7 @@ def test_sphere_dirac_second_class_constraints_are_casimirs(sphere_dirac, data):
 
 
 def test_sphere_dirac_jacobi_identity(sphere_dirac):
-    s, D = sphere_dirac
-    x, y, z = s.coordinates
-    px, py, pz = D.algebra.momenta
+    D, (x, y, z, px, py, pz) = sphere_dirac
     triples = [(x, y, px), (x, px, py), (px, py, pz), (x * py, z, px), (x * px + y, py, pz**2),
                (sp.sin(x), py, z * pz)]
     for f, g, h in triples:
@@ -227,9 +223,7 @@ def test_dirac_bracket_antisymmetric_and_block_decomposed():
 @settings(max_examples=6, deadline=None)
 @given(st.data())
 def test_sphere_dirac_jacobi_random_triples(sphere_dirac, data):
-    s, D = sphere_dirac
-    x, y, z = s.coordinates
-    px, py, pz = D.algebra.momenta
+    D, (x, y, z, px, py, pz) = sphere_dirac
     pool = [x, y, z, px, py, pz, x * py - y * px, pz**2, sp.cos(y)]
     f, g, h = (data.draw(st.sampled_from(pool)) * data.draw(st.sampled_from(pool))
                for _ in range(3))

@@ -7,13 +7,7 @@ from nhham import ParseError, SceneError
 from nhham.system.scene import loads_scene
 from nhham.system.scene_dump import dump_scene
 
-SLEIGH = """
-name = "sleigh"
-coordinates = ["x", "y", "theta"]
-parameters = { m = 1.0, I = 0.25, a = 0.5, u = 2.0 }
-lagrangian = "m*(x_dot**2 + y_dot**2)/2 + I*theta_dot**2/2"
-constraints = ["-sin(theta)*x_dot + cos(theta)*y_dot - a*theta_dot"]
-"""
+from handmade import SLEIGH_SCENE
 
 STEADY = """
 [steady]
@@ -27,7 +21,7 @@ theta_dot = 0
 
 
 def test_steady_entries_are_expressions_in_the_parameters():
-    scene = loads_scene(SLEIGH + STEADY)
+    scene = loads_scene(SLEIGH_SCENE + STEADY)
     values = scene.steady.values({"m": 1.0, "I": 0.25, "a": 0.5, "u": 4.0})
     assert values["x_dot"] == pytest.approx(4.0 * 3 ** 0.5 / 2, abs=1e-15)
     assert values["y_dot"] == 2.0 and values["y"] == 0.5
@@ -37,23 +31,23 @@ def test_steady_entries_are_expressions_in_the_parameters():
 
 def test_steady_errors_name_the_key():
     with pytest.raises(SceneError, match=r"steady.x_dt: unknown name .*did you mean 'x_dot'"):
-        loads_scene(SLEIGH + STEADY.replace("x_dot =", "x_dt ="))
+        loads_scene(SLEIGH_SCENE + STEADY.replace("x_dot =", "x_dt ="))
     with pytest.raises(SceneError, match=r"steady: missing value for 'theta_dot'"):
-        loads_scene(SLEIGH + STEADY.replace("theta_dot = 0\n", ""))
+        loads_scene(SLEIGH_SCENE + STEADY.replace("theta_dot = 0\n", ""))
     # coordinates and velocities are not parameters: a steady entry cannot use them
     with pytest.raises(ParseError, match=r"steady.y_dot.*theta"):
-        loads_scene(SLEIGH + STEADY.replace('"u/2"', '"u*theta"'))
+        loads_scene(SLEIGH_SCENE + STEADY.replace('"u/2"', '"u*theta"'))
     with pytest.raises(SceneError, match=r"steady.theta: expected a number or an expression"):
-        loads_scene(SLEIGH + STEADY.replace("theta = 0.0", "theta = true"))
+        loads_scene(SLEIGH_SCENE + STEADY.replace("theta = 0.0", "theta = true"))
 
 
 def test_steady_is_never_evaluated_as_python():
     with pytest.raises(ParseError):
-        loads_scene(SLEIGH + STEADY.replace('"u/2"', '"__import__(\'os\')"'))
+        loads_scene(SLEIGH_SCENE + STEADY.replace('"u/2"', '"__import__(\'os\')"'))
 
 
 def test_dump_round_trip_keeps_the_steady_table():
-    scene = loads_scene(SLEIGH + STEADY)
+    scene = loads_scene(SLEIGH_SCENE + STEADY)
     text = dump_scene(scene.system, steady=scene.steady)
     again = loads_scene(text)
     for k, e in scene.steady.expressions.items():

@@ -68,6 +68,28 @@ static int lu_solve(int mm, const double *W, const double *mu, const double *d,
 #define HOT static inline
 #endif
 
+/* Cholesky A = L L^T of the leading n x n block of the symmetric A (row stride lda)
+   into the lower part of L (row stride ldl; L may be A, factored in place). The
+   diagonal of L holds 1 / L_jj. A pivot is accepted when it is finite and above
+   ratio times its diagonal entry of A (ratio 0: positive). Returns 0, or 1 at the
+   first pivot refused. Forced inline, like ksolve which factors W and S with it. */
+HOT int cholesky(int n, const double *A, int lda, double *L, int ldl, double ratio) {
+    for (int j = 0; j < n; ++j) {
+        const double ajj = A[j * lda + j];
+        double s = ajj;
+        for (int k = 0; k < j; ++k) s -= L[j * ldl + k] * L[j * ldl + k];
+        if (!(s > ratio * ajj) || !isfinite(s)) return 1;
+        const double inv = 1.0 / sqrt(s);
+        L[j * ldl + j] = inv;
+        for (int i = j + 1; i < n; ++i) {
+            double t = A[i * lda + j];
+            for (int k = 0; k < j; ++k) t -= L[i * ldl + k] * L[j * ldl + k];
+            L[i * ldl + j] = t * inv;
+        }
+    }
+    return 0;
+}
+
 /* [[W, mu^T], [mu, 0]] [x; y] = [top; bottom] with the first mm rows of mu
    (row stride NQ); W symmetric.
 
@@ -83,26 +105,14 @@ static int lu_solve(int mm, const double *W, const double *mu, const double *d,
    pivoting on the symmetrically scaled saddle matrix (unit diagonal of W,
    unit rows of mu), which makes extreme mass ratios harmless.
    Returns 0, or 1 when the matrix is singular.
-   One function (and forced inline) on purpose: it is the innermost call of every field
-   evaluation, and the Cholesky factors live on its stack for the LU fallback's decision. */
+   Forced inline (with the Cholesky it calls) on purpose: it is the innermost call of every
+   field evaluation, and the Cholesky factors live on its stack for the LU fallback's decision. */
 HOT int ksolve(int mm, const double *W, const double *mu, const double *top,
                const double *bottom, double *x, double *y) {
     enum { M1 = NCX + 1 };
     double L[NQ * NQ], Z[M1 * NQ], G[M1 * M1], r[NCX];
-    /* Cholesky W = L L^T; the diagonal of L holds 1 / L_jj. */
-    for (int j = 0; j < NQ; ++j) {
-        const double wjj = W[j * NQ + j];
-        double s = wjj;
-        for (int k = 0; k < j; ++k) s -= L[j * NQ + k] * L[j * NQ + k];
-        if (!(s > CHOL_MIN * wjj)) goto lu;
-        const double inv = 1.0 / sqrt(s);
-        L[j * NQ + j] = inv;
-        for (int i = j + 1; i < NQ; ++i) {
-            double t = W[i * NQ + j];
-            for (int k = 0; k < j; ++k) t -= L[i * NQ + k] * L[j * NQ + k];
-            L[i * NQ + j] = t * inv;
-        }
-    }
+    /* Cholesky W = L L^T. */
+    if (cholesky(NQ, W, NQ, L, NQ, CHOL_MIN)) goto lu;
     /* [Z | u] = L^-1 [mu^T | top]: row c of Z holds column c (c = mm: u). */
     for (int c = 0; c <= mm; ++c) {
         double *zc = Z + c * NQ;
@@ -121,19 +131,8 @@ HOT int ksolve(int mm, const double *W, const double *mu, const double *top,
             for (int i = 0; i < NQ; ++i) s += zc[i] * ze[i];
             G[c * M1 + e] = s;
         }
-    /* Cholesky of S in place (diagonal holds 1 / R_jj); S y = Z^T u - bottom. */
-    for (int j = 0; j < mm; ++j) {
-        double s = G[j * M1 + j];
-        for (int k = 0; k < j; ++k) s -= G[j * M1 + k] * G[j * M1 + k];
-        if (!(s > 0.0) || !isfinite(s)) goto lu;
-        const double inv = 1.0 / sqrt(s);
-        G[j * M1 + j] = inv;
-        for (int i = j + 1; i < mm; ++i) {
-            double t = G[i * M1 + j];
-            for (int k = 0; k < j; ++k) t -= G[i * M1 + k] * G[j * M1 + k];
-            G[i * M1 + j] = t * inv;
-        }
-    }
+    /* Cholesky of S in place; S y = Z^T u - bottom. */
+    if (cholesky(mm, G, M1, G, M1, 0.0)) goto lu;
     for (int i = 0; i < mm; ++i) {
         double s = G[mm * M1 + i] - bottom[i];
         for (int k = 0; k < i; ++k) s -= G[i * M1 + k] * r[k];
