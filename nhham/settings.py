@@ -20,7 +20,7 @@ import numbers
 from dataclasses import dataclass
 
 __all__ = ["__version__", "SEED", "STATE_BOX", "PARAMETER_BOX", "Precision", "MIN_DIGITS",
-           "MAX_DIGITS", "MAX_SAMPLES", "option_problem", "check_options"]
+           "MAX_DIGITS", "MAX_SAMPLES", "option_problem", "check_options", "json_number"]
 
 #: The version of nhham (the package, the command's --version and its JSON read it here).
 __version__ = "0.1.0"
@@ -130,3 +130,11 @@ def check_options(where: str, **options) -> None:
         why = option_problem(key, value)
         if why is not None:
             raise InputError(f"{where}: {key}: {why}", key=key)
+
+
+def json_number(x) -> float | None:
+    """A float for JSON: finite numbers as numbers, others (nan, inf) as null."""
+    if x is None:
+        return None
+    x = float(x)
+    return x if math.isfinite(x) else None

@@ -44,7 +44,7 @@ from functools import lru_cache
 from importlib import resources
 from typing import Any, Callable, Iterator
 
-from nhham.system.numbers import json_number
+from nhham.settings import json_number
 
 __all__ = [
     "EXIT_OK",

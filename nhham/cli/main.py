@@ -41,6 +41,7 @@ from nhham.cli.linearize_command import cmd_linearize
 from nhham.cli.options import check_options
 from nhham.cli.report import Steps, expr_text, table
 from nhham.errors import InputError, NhhamError, UsageError
+from nhham.lagrangian.engine import Policy
 from nhham.cli.parser import FIXED_STEP, METHODS, build_parser, unknown_options
 
 __all__ = ["main", "build_parser", "COMMANDS", "METHODS"]
@@ -87,6 +88,14 @@ def _report_text(args, scene, latex, plain):
     return plain
 
 
+def _policy(args) -> Policy:
+    """The settings of every decision the command takes, built once from its options and
+    passed down (``--precision``, ``--samples``, ``--budget``; the rest at their
+    defaults)."""
+    return Policy(precision=getattr(args, "precision", None),
+                  samples=getattr(args, "samples", 6), budget=args.budget)
+
+
 def _at_values(args, steps, scene, classes=None):
     """The classification at the scene's parameter values (a ``ValuesVerdict``).
 
@@ -97,7 +106,7 @@ def _at_values(args, steps, scene, classes=None):
 
     with steps.step("constraint algorithm at the parameter values (stages, ranks, decisions "
                     "at exact points, integrability, exceptional parameter sets)"):
-        at = classification_at_values(scene.system, precision=args.precision, classes=classes)
+        at = classification_at_values(scene.system, policy=args.policy, classes=classes)
     if at.verdict.status == "invalid":
         raise InputError(f"{args.scene}: at the parameter values {at.verdict.note}")
     return at
@@ -153,7 +162,7 @@ def cmd_classify(args, steps) -> CommandOutput:
     # The verdict layer calls the Hamiltonian classification directly (no callback
     # into this module): the walk goes down the layers.
     at = _at_values(args, steps, scene,
-                    classes=functools.partial(classify_constraints, precision=args.precision))
+                    classes=functools.partial(classify_constraints, policy=args.policy))
     analysis, classes = at.verdict.analysis, at.verdict.classes
     assert isinstance(analysis, ConstraintAnalysis)  # a valid verdict carries its analysis
     for stage in analysis.stages:
@@ -181,8 +190,8 @@ def _classify_parametric(args, steps, scene) -> CommandOutput:
                     "one run per case)"):
         pv = parametric_classification(
             scene.system, positive=positive, max_depth=3 if args.depth is None else args.depth,
-            precision=args.precision,
-            classes=functools.partial(classify_constraints, precision=args.precision))
+            policy=args.policy,
+            classes=functools.partial(classify_constraints, policy=args.policy))
 
     def verdict_data(v):
         if v.status == "invalid":
@@ -250,7 +259,7 @@ def cmd_derive(args, steps) -> CommandOutput:
     if args.side == "hamiltonian":
         from nhham.hamiltonian.side import hamiltonian_side
 
-        side = hamiltonian_side(system, precision=args.precision, closed_form=True)
+        side = hamiltonian_side(system, precision=args.policy.precision, closed_form=True)
         with steps.step("Legendre map and Hamiltonian H = E_L o Leg^-1"):
             side.energy
         out = _derive_closed_form(args, steps, scene, side, "hamiltonian", side.analysis)
@@ -262,7 +271,7 @@ def cmd_derive(args, steps) -> CommandOutput:
 
     # derive forms closed forms only where it decided to (W cheap, or --explicit asked):
     # its --budget bounds them, not the library's size guard.
-    G = lagrangian_geometry(system, precision=args.precision, closed_form=True)
+    G = lagrangian_geometry(system, precision=args.policy.precision, closed_form=True)
     with steps.step("energy E_L"):
         energy = G.energy
     with steps.step("implicit form: W, F, mu and mu a = -(dphi/dq) v"):
@@ -274,7 +283,7 @@ def cmd_derive(args, steps) -> CommandOutput:
     def algorithm():
         if analysis is not None:
             return analysis
-        return analyze_constraints(system, precision=args.precision)
+        return analyze_constraints(system, policy=args.policy)
 
     out = _derive_closed_form(args, steps, scene, G, "lagrangian", algorithm)
     out.result.update(form="explicit", **implicit)
@@ -329,7 +338,7 @@ def _derive_implicit(args, steps, scene, G, implicit, energy, analysis=None):
     system = G.system
     if analysis is None:
         with steps.step("constraint algorithm at exact points (M_f, free multipliers)"):
-            analysis = analyze_constraints(system, precision=args.precision)
+            analysis = analyze_constraints(system, policy=args.policy)
     if analysis.status == "inconsistent":
         raise InputError(f"{args.scene}: the constraints are inconsistent "
                          f"({analysis.inconsistency}); there is no dynamics to derive "
@@ -379,19 +388,17 @@ def cmd_compare(args, steps) -> CommandOutput:
     at = _at_scene_values(args, steps, scene)
     system = scene.system if at is None else at.system
     # One T*Q side for both checks: its numeric layer is built once.
-    side = hamiltonian_side(system, precision=args.precision, samples=args.samples,
+    side = hamiltonian_side(system, precision=args.policy.precision, samples=args.policy.samples,
                             closed_form=True)
     with steps.step("cross-check through the Legendre map"):
-        report = cross_check(system, precision=args.precision, samples=args.samples,
-                             side=side)
+        report = cross_check(system, side=side, policy=args.policy)
     dirac = None
     warnings = []
     with steps.step("Dirac-bracket flow of H against the projected field on M_f"):
         try:
             from nhham.hamiltonian.dirac import dirac_vs_projected
 
-            dirac = dirac_vs_projected(system, precision=args.precision,
-                                       samples=args.samples, side=side)
+            dirac = dirac_vs_projected(system, side=side, policy=args.policy)
         except NhhamError as exc:
             warnings.append(f"Dirac comparison not available: {one_line(exc)}")
     data = compare_data(report, dirac)
@@ -577,7 +584,8 @@ def main(argv=None) -> int:
         return run.fail("usage", str(exc), exc.key, prefix=prefix)
     steps = Steps(progress=sys.stderr.isatty() and not run.json)
     try:
-        with capture_warnings() as caught, time_budget(args.budget, steps):
+        args.policy = _policy(args)
+        with capture_warnings() as caught, time_budget(args.policy.budget, steps):
             out = COMMANDS[args.command](args, steps)
             if not isinstance(out, CommandOutput):  # a plain dict (JSON) or text
                 out = CommandOutput(result=out if isinstance(out, dict) else {},

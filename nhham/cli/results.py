@@ -13,7 +13,7 @@ import sympy as sp
 
 from nhham.cli import latex as tex
 from nhham.cli.envelope import jsonable
-from nhham.system.numbers import json_number
+from nhham.settings import json_number
 from nhham.cli.report import expr_text, labelled, matrix_table, table
 from nhham.cli.layout import grid_fits as table_fits
 from nhham.cli.simplify import display_form

@@ -62,16 +62,16 @@ __all__ = [
 
 
 # ---------------------------------------------------------------- inputs
-def final_constraints_of(source, precision: int | None = None, samples: int = 6,
-                         seed: int = SEED):
+def final_constraints_of(source, policy: Policy | None = None):
     """(system, final constraints on TQ, labels, analysis) for a source.
 
     Parameters
     ----------
     source : System, HamiltonianSide or ConstraintAnalysis
         A system (or a side, for its system) runs the constraint algorithm
-        (:func:`nhham.lagrangian.analysis.analyze_constraints` with these
-        precision, samples and seed); an analysis is used as it is.
+        (:func:`nhham.lagrangian.analysis.analyze_constraints` with this policy); an
+        analysis is used as it is.
+    policy : Policy, optional
 
     Raises
     ------
@@ -81,7 +81,7 @@ def final_constraints_of(source, precision: int | None = None, samples: int = 6,
     if isinstance(source, HamiltonianSide):
         source = source.system
     analysis = source if isinstance(source, ConstraintAnalysis) else analyze_constraints(
-        source, precision=precision, samples=samples, seed=seed)
+        source, policy=policy or Policy())
     if analysis.status == "inconsistent":
         raise ComputationError(
             f"classify: the constraint algorithm found no dynamics (inconsistent: "
@@ -154,7 +154,7 @@ def classify_constraints(source, constraints: Sequence | None = None,
             cons, labs, analysis = (tuple(system.holonomic) + tuple(system.phi),
                                     system.m1_labels, None)
         else:
-            system, cons, labs, analysis = final_constraints_of(source, precision, samples, seed)
+            system, cons, labs, analysis = final_constraints_of(source, policy)
     else:
         cons = tuple(sp.sympify(c) for c in constraints)
         labs = tuple(labels) if labels is not None else tuple(f"chi[{a}]" for a in range(len(cons)))

@@ -55,6 +55,7 @@ from nhham.hamiltonian.comparison import (
 from nhham.hamiltonian.legendre import canonical_form_matrix
 from nhham.hamiltonian.side import HamiltonianSide, hamiltonian_side
 from nhham.hamiltonian.staged import staged_at_points
+from nhham.lagrangian.engine import Policy, policy_of
 from nhham.lagrangian.algebra import cancel
 from nhham.lagrangian.domains import NotExact
 from nhham.lagrangian.geometry import lagrangian_geometry
@@ -73,7 +74,8 @@ METHODS = ("auto", "exact", "points", "sampled")
 def cross_check(system, precision: int | None = None, samples: int = 6, seed: int = SEED,
                 tol: float | None = None, method: str = "auto",
                 max_stages: int | None = None,
-                side: HamiltonianSide | None = None) -> CrossCheckReport:
+                side: HamiltonianSide | None = None,
+                policy: Policy | None = None) -> CrossCheckReport:
     """Check that the Lagrangian and Hamiltonian sides agree through the Legendre map.
 
     Parameters
@@ -108,6 +110,9 @@ def cross_check(system, precision: int | None = None, samples: int = 6, seed: in
     side : HamiltonianSide, optional
         The T*Q side of ``system`` when the caller has it (its numeric layer is
         built once for several checks).
+    policy : Policy, optional
+        The settings of the decisions, instead of ``precision``, ``samples``, ``seed``
+        and ``tol``.
 
     Returns
     -------
@@ -116,8 +121,10 @@ def cross_check(system, precision: int | None = None, samples: int = 6, seed: in
     if method not in METHODS:
         raise InputError(f"cross_check: method must be one of {', '.join(map(repr, METHODS))}, "
                          f"got {method!r}")
-    check_options("cross_check", precision=precision, samples=samples, seed=seed, tol=tol,
-                  max_stages=max_stages)
+    check_options("cross_check", max_stages=max_stages)
+    policy = policy_of(policy, "cross_check", precision=precision, samples=samples, seed=seed,
+                       tol=tol)
+    precision, samples, seed, tol = policy.precision, policy.samples, policy.seed, policy.tol
     start = time.perf_counter()
     if side is None:
         # closed forms only where symbolic_affordable chose them
@@ -182,8 +189,9 @@ def _exact(system, side: HamiltonianSide, precision, samples, seed, tol, max_sta
     from nhham.lagrangian.analysis import analyze_constraints
 
     leg = side.legendre
-    analysis = analyze_constraints(system, precision=precision, samples=samples, seed=seed,
-                                   max_stages=max_stages, decompose=False)
+    analysis = analyze_constraints(system, max_stages=max_stages, decompose=False,
+                                   policy=Policy(precision=precision, samples=samples,
+                                                 seed=seed))
     run_H = side.analysis(max_stages)
     stages_L, stages_H = stage_summaries(analysis.stages), stage_summaries(run_H.stages)
     statuses = (analysis.status, run_H.status)

@@ -15,13 +15,14 @@ from nhham.hamiltonian.brackets import DiracBracket
 from nhham.hamiltonian.classes import ConstraintClasses
 from nhham.hamiltonian.classification import classify_constraints, sample_matrix
 from nhham.hamiltonian.side import HamiltonianSide, hamiltonian_side
+from nhham.lagrangian.engine import Policy, policy_of
 from nhham.lagrangian.algebra import block_inverse, cancel
 from nhham.lagrangian.decision import Decision
 from nhham.lagrangian.domains import NotExact
 from nhham.lagrangian.linalg import ModularBackend
 from nhham.lagrangian.points import PointSampler
 from nhham.lagrangian.submanifold import Submanifold
-from nhham.settings import SEED, check_options
+from nhham.settings import SEED
 from nhham.system.evaluation import Backend
 from nhham.system.expressions import short
 
@@ -131,7 +132,8 @@ class DiracProjectedReport:
 def dirac_vs_projected(system, *, precision=None, samples=6, seed=SEED,
                        classes: ConstraintClasses | None = None, method: str = "auto",
                        tol: float | None = None,
-                       side: HamiltonianSide | None = None) -> DiracProjectedReport:
+                       side: HamiltonianSide | None = None,
+                       policy: Policy | None = None) -> DiracProjectedReport:
     """Compare the Dirac-bracket flow of H with the true (projected) dynamics on M_f.
 
     For holonomic constraints the two agree on M_f; for truly nonholonomic
@@ -156,18 +158,22 @@ def dirac_vs_projected(system, *, precision=None, samples=6, seed=SEED,
         Relative tolerance of sampled decisions.
     side : HamiltonianSide, optional
         The T*Q side of ``system`` when the caller has it.
+    policy : Policy, optional
+        The settings of the decisions, instead of ``precision``, ``samples``, ``seed``
+        and ``tol``.
 
     Returns
     -------
     DiracProjectedReport
     """
-    check_options("dirac_vs_projected", precision=precision, samples=samples, seed=seed, tol=tol)
+    policy = policy_of(policy, "dirac_vs_projected", precision=precision, samples=samples,
+                       seed=seed, tol=tol)
+    precision, samples, seed, tol = policy.precision, policy.samples, policy.seed, policy.tol
     if side is None:
         side = classes.side if classes is not None else hamiltonian_side(
             system, precision=precision, samples=samples, seed=seed, closed_form=True)
     if classes is None:
-        classes = classify_constraints(side, precision=precision, samples=samples, seed=seed,
-                                       method=method, tol=tol)
+        classes = classify_constraints(side, method=method, policy=policy)
     if classes.method == "exact at points" and precision is None \
             and side.legendre.is_quadratic:
         try:

@@ -109,7 +109,7 @@ class Decision:
     def to_dict(self, value: bool = True) -> dict:
         """Method, precision, samples, error bound and detail (and the value), JSON-ready
         (non-finite numbers as strings)."""
-        from nhham.system.numbers import json_number
+        from nhham.settings import json_number
 
         out = {"value": self.value} if value else {}
         out.update(method=self.method, precision=str(self.precision),

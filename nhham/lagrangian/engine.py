@@ -46,7 +46,6 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from nhham.lagrangian.domains import NotExact
 from nhham.settings import SEED, check_options
 
 __all__ = ["Policy", "decide", "policy_of", "answers_by_step"]
@@ -168,6 +167,7 @@ def _proof_modulo_p(quantity, manifold, policy):
     proved = getattr(quantity, "proved_modulo_p", None)
     if proved is None:
         return None
+    from nhham.lagrangian.domains import NotExact
     from nhham.lagrangian.points import exact_sampler
 
     try:
@@ -189,6 +189,7 @@ def _at_exact_points(quantity, manifold, policy):
     None (M has no exact points, or the datum is not exact there)."""
     if getattr(quantity, "observe", None) is None:
         return None
+    from nhham.lagrangian.domains import NotExact
     from nhham.lagrangian.points import exact_sampler
 
     try:

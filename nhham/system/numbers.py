@@ -13,7 +13,7 @@ import math
 
 import sympy as sp
 
-__all__ = ["number_problems", "complex_string", "json_number"]
+__all__ = ["number_problems", "complex_string"]
 
 
 def number_problems(expr) -> list[str]:
@@ -73,10 +73,3 @@ def complex_string(number) -> str | None:
         return None
     return f"{re:.6g}{im:+.6g}i"
 
-
-def json_number(x) -> float | None:
-    """A float for JSON: finite numbers as numbers, others (nan, inf) as null."""
-    if x is None:
-        return None
-    x = float(x)
-    return x if math.isfinite(x) else None

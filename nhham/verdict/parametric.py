@@ -21,6 +21,7 @@ import sympy as sp
 
 from nhham.errors import InputError
 from nhham.lagrangian.exceptional import POINTS
+from nhham.lagrangian.engine import Policy, policy_of
 from nhham.settings import SEED, check_options
 from nhham.system.expressions import short
 from nhham.verdict.results import (
@@ -40,7 +41,8 @@ __all__ = ["parametric_classification"]
 def parametric_classification(system, *, positive: Sequence = (),
                               classes: Callable | None = None, max_depth: int = MAX_DEPTH,
                               precision: int | None = None, seed: int = SEED,
-                              near: float = NEAR, points: int = POINTS) -> ParametricVerdict:
+                              near: float = NEAR, points: int = POINTS,
+                              policy: Policy | None = None) -> ParametricVerdict:
     """The verdict for generic parameters and every case where it changes.
 
     Parameters
@@ -65,6 +67,8 @@ def parametric_classification(system, *, positive: Sequence = (),
         about.
     points : int, optional
         Exact points per decision datum.
+    policy : Policy, optional
+        The settings of the decisions, instead of ``precision`` and ``seed``.
 
     Returns
     -------
@@ -78,9 +82,9 @@ def parametric_classification(system, *, positive: Sequence = (),
     """
     params = tuple(system.parameters)
     declared = _declared_positive(system, positive)
-    check_options("parametric_classification", precision=precision, seed=seed, near=near,
-                  max_depth=max_depth, points=points)
-    opts = dict(classes=classes, precision=precision, seed=seed, points=points)
+    check_options("parametric_classification", near=near, max_depth=max_depth, points=points)
+    policy = policy_of(policy, "parametric_classification", precision=precision, seed=seed)
+    opts = dict(classes=classes, policy=policy, points=points)
     base = rebuild(system, {}, None)
     signs = _sign_dummies(params, declared)
     generic, comps, notes, _, _ = examine(base, params, **opts)

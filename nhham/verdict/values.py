@@ -21,21 +21,18 @@ from nhham.lagrangian.exceptional import (
     exceptional_components,
     exceptional_conditions,
 )
+from nhham.lagrangian.engine import Policy, policy_of
 from nhham.settings import SEED, check_options
 from nhham.verdict.results import MAX_DEPTH, NEAR, ValuesVerdict, Verdict, exact_value
 from nhham.verdict.substitution import branches, compose, rebuild
 
-__all__ = ["classification_at_values", "examine", "SYMBOLIC_VALUES_SIZE"]
-
-# Plain classification names the condition its values satisfy (symbolically) up to this
-# n + m; beyond, the parameters involved are substituted by their values.
-SYMBOLIC_VALUES_SIZE = 10
-
+__all__ = ["classification_at_values", "examine"]
 
 def classification_at_values(system, *, classes: Callable | None = None,
                              max_depth: int = MAX_DEPTH, precision: int | None = None,
                              seed: int = SEED, near: float = NEAR,
-                             points: int = POINTS) -> ValuesVerdict:
+                             points: int = POINTS,
+                             policy: Policy | None = None) -> ValuesVerdict:
     """The verdict that holds at the system's parameter values.
 
     The ordinary classification treats parameters as indeterminates wherever it
@@ -50,15 +47,20 @@ def classification_at_values(system, *, classes: Callable | None = None,
     system : nhham.System
     classes, max_depth, precision, seed, near, points
         As in :func:`nhham.verdict.parametric.parametric_classification`.
+    policy : Policy, optional
+        The settings of the decisions (instead of ``precision`` and ``seed``); its
+        ``symbolic_values_size`` bounds n + m up to which the condition the values
+        satisfy is named with the parameters kept symbolic.
 
     Returns
     -------
     ValuesVerdict
     """
-    check_options("classification_at_values", precision=precision, seed=seed, near=near,
-                  max_depth=max_depth, points=points)
+    check_options("classification_at_values", near=near, max_depth=max_depth, points=points)
+    policy = policy_of(policy, "classification_at_values", precision=precision, seed=seed)
+    seed = policy.seed
     valued = tuple(p for p in system.parameters if p in system.parameter_values)
-    opts = dict(classes=classes, precision=precision, seed=seed, points=points, near=near)
+    opts = dict(classes=classes, policy=policy, points=points, near=near)
     values = {p: system.parameter_values[p] for p in valued}
     exact = {p: exact_value(v) for p, v in values.items()}
     generic, _, notes, hits, close = examine(system, (), values=values, **opts)
@@ -78,7 +80,7 @@ def classification_at_values(system, *, classes: Callable | None = None,
         involved = tuple(dict.fromkeys(p for _, inv in hits for p in inv if p in left))
         branch: dict | None = None
         eqs: tuple = ()
-        if involved and current.n + current.m <= SYMBOLIC_VALUES_SIZE:
+        if involved and current.n + current.m <= policy.symbolic_values_size:
             comps = exceptional_conditions(verdict.analysis, involved, seed=seed,
                                            points=points)
             hit = next((c for c in comps if all(
@@ -122,8 +124,7 @@ def _close_warnings(close, values) -> list:
 
 
 # ================================================================= one run
-def examine(system, params, *, classes, precision, seed, points, values=None,
-             near=NEAR):
+def examine(system, params, *, classes, policy, points, values=None, near=NEAR):
     """The ordinary classification of ``system`` and the data of its decisions.
 
     Returns (Verdict, conditions, notes, hits, close): with ``params`` the exceptional
@@ -131,12 +132,12 @@ def examine(system, params, *, classes, precision, seed, points, values=None,
     vanish at those exact values (``hits``) and those within relative distance
     ``near`` of vanishing (``close``).
     """
-    analysis = analyze_constraints(system, precision=precision, seed=seed)
+    analysis = analyze_constraints(system, policy=policy)
     integrable = analysis.integrable
     cls = None
     if classes is not None and analysis.status != "inconsistent":
         cls = classes(analysis)
-    data = ExceptionalData(system, analysis, seed, points)
+    data = ExceptionalData(system, analysis, policy.seed, points)
     if cls is not None and tuple(cls.labels) == tuple(analysis.final_labels):
         # The second-class set the classification chose (for generic parameters when it
         # decided symbolically): at values where B drops rank its minor is the datum.
