@@ -254,6 +254,11 @@ def _classify_parametric(args, steps, scene) -> CommandOutput:
 def cmd_derive(args, steps) -> CommandOutput:
     """The projected field, multipliers, C and energy (Lagrangian or Hamiltonian side)."""
     scene = _load(args, steps)
+    if args.side == "lagrangian":
+        from nhham.lagrangian.geometry import lagrangian_geometry
+
+        # One geometry for the command: the analysis at the values takes this one.
+        lagrangian_geometry(scene.system, precision=args.policy.precision, closed_form=True)
     at = _at_scene_values(args, steps, scene)
     system = scene.system if at is None else at.system
     if args.side == "hamiltonian":

@@ -315,7 +315,7 @@ def analyze_constraints(system, *, precision: int | None = None, samples: int = 
     from nhham.lagrangian.geometry import lagrangian_geometry
 
     geometry = lagrangian_geometry(system, precision=policy.precision, samples=policy.samples,
-                                   seed=policy.seed)
+                                   seed=policy.seed, closed_form=None)
     for spec in specs:
         run = _run_block(system, spec, policy, max_stages, start, geometry)
         start += sum(1 for _, d in run.provenance.nodes(data=True) if d["kind"] == "secondary")

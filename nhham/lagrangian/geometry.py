@@ -72,7 +72,8 @@ class DynamicsIngredients:
 
 
 def lagrangian_geometry(system, precision: int | None = None, samples: int = 6,
-                        seed: int = SEED, closed_form: bool = False) -> "LagrangianGeometry":
+                        seed: int = SEED, closed_form: bool | None = False
+                        ) -> "LagrangianGeometry":
     """The Lagrangian-side objects of ``system``, computed lazily.
 
     Parameters
@@ -87,7 +88,9 @@ def lagrangian_geometry(system, precision: int | None = None, samples: int = 6,
         True: form the closed forms that need a symbolic solve with C (``multipliers``,
         ``projected_field``, ``projector_Q``) whatever their size. False (default): refuse
         them beyond a size guard (:func:`nhham.lagrangian.algebra.guard_closed_form`) with
-        a :class:`~nhham.errors.ClosedFormTooLarge` naming the implicit form.
+        a :class:`~nhham.errors.ClosedFormTooLarge` naming the implicit form. None:
+        either, for a caller that forms no closed form (the constraint analysis): the
+        geometry already built with these settings, else a new one with False.
 
     Returns
     -------
@@ -97,10 +100,13 @@ def lagrangian_geometry(system, precision: int | None = None, samples: int = 6,
         forcing, the fibre derivatives) is formed once per command. A System is
         frozen, so its geometry cannot go stale.
     """
-    key = (precision, samples, seed, bool(closed_form))
     # Kept on the system itself (a cycle the collector frees with it); a weak-keyed
     # table would keep every system alive through its geometry's reference to it.
     shared = system.__dict__.setdefault("_lagrangian_geometries", {})
+    if closed_form is None:  # either will do: the one built already, else a plain one
+        closed_form = (precision, samples, seed, True) in shared and \
+            (precision, samples, seed, False) not in shared
+    key = (precision, samples, seed, bool(closed_form))
     if key not in shared:
         geometry = LagrangianGeometry(system, precision=precision, samples=samples,
                                       seed=seed, closed_form=closed_form)
