@@ -9,6 +9,7 @@ combinations are given at points.
 
 from __future__ import annotations
 
+from functools import cached_property
 from typing import cast
 
 import numpy as np
@@ -53,24 +54,25 @@ class BracketRank:
     what = "rank of the bracket matrix on M_f"
 
     def __init__(self, side, cons, labels, analysis, policy):
-        system = side.system
-        geo = _geometry(system, analysis)
-        q, v = system.coordinates, system.velocities
         self.side, self.analysis, self.labels = side, analysis, tuple(labels)
         self.policy = policy
         self.cons = [sp.sympify(c) for c in cons]
-        self.Jq = [jacobian_row(c, q) for c in self.cons]
-        self.Jv = [jacobian_row(c, v) for c in self.cons]
-        self.W = [list(geo.hessian.row(i)) for i in range(system.n)]
-        self.Mx = [list(geo.mixed_hessian.row(i)) for i in range(system.n)]
         self.best, self.pivots, self.mats = -1, [], []
 
-    def value(self, env, degrees: bool = False):
-        return _bracket_at(env, self.W, self.Mx, self.Jq, self.Jv, degrees=degrees)
+    @cached_property
+    def data(self) -> tuple:
+        """(W, mixed Hessian, dchi/dq, dchi/dv) as rows, formed once M has exact points."""
+        system = self.side.system
+        geo = _geometry(system, self.analysis)
+        n = system.n
+        return ([list(geo.hessian.row(i)) for i in range(n)],
+                [list(geo.mixed_hessian.row(i)) for i in range(n)],
+                [jacobian_row(c, system.coordinates) for c in self.cons],
+                [jacobian_row(c, system.velocities) for c in self.cons])
 
-    @property
-    def data(self):
-        return self.W, self.Mx, self.Jq, self.Jv
+    def value(self, env, degrees: bool = False):
+        W, Mx, Jq, Jv = self.data
+        return _bracket_at(env, W, Mx, Jq, Jv, degrees=degrees)
 
     def proved_modulo_p(self, Bp):
         """The rank of B proved at a point over F_p where it is the largest B can have;

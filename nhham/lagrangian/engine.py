@@ -164,8 +164,8 @@ def _sampled(quantity, manifold, policy):
 
 def _proof_modulo_p(quantity, manifold, policy):
     """The answer a random point of M over F_p proves, else None."""
-    proved = getattr(quantity, "proved_modulo_p", None)
-    if proved is None:
+    # Looked up on the class: a property is evaluated only once M has exact points.
+    if getattr(type(quantity), "proved_modulo_p", None) is None:
         return None
     from nhham.lagrangian.domains import NotExact
     from nhham.lagrangian.points import exact_sampler
@@ -173,6 +173,9 @@ def _proof_modulo_p(quantity, manifold, policy):
     try:
         sampler = exact_sampler(manifold, policy.seed, modular=True)
     except NotExact:
+        return None
+    proved = quantity.proved_modulo_p
+    if proved is None:
         return None
     for _ in range(policy.proof_tries):
         try:

@@ -180,14 +180,18 @@ class Frobenius:
     def __init__(self, system, labels):
         self.system, self.labels = system, tuple(labels)
         self.mu, self.q, self.common, self.trivial = _distribution(system, labels)
-        m, n = self.mu.rows, len(self.q)
-        self.rows = [list(self.mu.row(i)) for i in range(m)]
-        grads = [[jacobian_row(self.mu[i, A], self.q) for A in range(n)] for i in range(m)]
-        # dmu[i][A][B] = d_A mu_iB - d_B mu_iA (grads[i][B][A] = d mu_iB / d q^A)
-        self.dmu = [[[grads[i][B][A] - grads[i][A][B] for B in range(n)] for A in range(n)]
-                    for i in range(m)]
+        self.rows = [list(self.mu.row(i)) for i in range(self.mu.rows)]
         self.dep = None
         self.found: tuple | None = None
+
+    @cached_property
+    def dmu(self) -> list:
+        """dmu[i][A][B] = d_A mu_iB - d_B mu_iA, formed once Q_1 has exact points."""
+        m, n = self.mu.rows, len(self.q)
+        grads = [[jacobian_row(self.mu[i, A], self.q) for A in range(n)] for i in range(m)]
+        # grads[i][B][A] = d mu_iB / d q^A
+        return [[[grads[i][B][A] - grads[i][A][B] for B in range(n)] for A in range(n)]
+                for i in range(m)]
 
     def reduced(self, manifold, policy):
         if len(self.q) <= policy.closed_form_size:

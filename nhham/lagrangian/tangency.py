@@ -23,6 +23,7 @@ Euler–Lagrange field or a multiplier in closed form.
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
+from functools import cached_property
 
 import sympy as sp
 
@@ -118,21 +119,36 @@ class Tangency:
     what = "rank (Z_i(chi_j)) on M_1"
 
     def __init__(self, system, hessian, forcing, primary):
-        q, v = tuple(system.coordinates), tuple(system.velocities)
-        self.system, self.v, self.n = system, v, len(q)
-        self.m = len(system.phi)
+        self.system, self.v = system, tuple(system.velocities)
+        self.n, self.m = len(system.coordinates), len(system.phi)
         self.hessian, self.forcing = hessian, forcing
         self.chis = [sp.sympify(c) for c in primary]
-        self.mu = [list(system.mu.row(i)) for i in range(self.m)]
-        self.Jq = [jacobian_row(c, q) for c in self.chis]
-        rows_of = {f: i for i, f in enumerate(system.phi)}
-        self.Jv = [self.mu[rows_of[c]] if c in rows_of else jacobian_row(c, v)
-                   for c in self.chis]
-        self.W = [list(hessian.row(i)) for i in range(self.n)]
-        self.F = list(forcing)
         self.best_K = self.best_aug = self.best_J = -1
         self.block: tuple = ((), ())
-        self.moving = self._moving_rows()
+
+    # The data at points, formed once the manifold has exact points (the sampled step
+    # forms its own sympy matrices).
+    @cached_property
+    def mu(self) -> list:
+        return [list(self.system.mu.row(i)) for i in range(self.m)]
+
+    @cached_property
+    def Jq(self) -> list:
+        return [jacobian_row(c, self.system.coordinates) for c in self.chis]
+
+    @cached_property
+    def Jv(self) -> list:
+        rows_of = {f: i for i, f in enumerate(self.system.phi)}
+        return [self.mu[rows_of[c]] if c in rows_of else jacobian_row(c, self.v)
+                for c in self.chis]
+
+    @cached_property
+    def W(self) -> list:
+        return [list(self.hessian.row(i)) for i in range(self.n)]
+
+    @cached_property
+    def F(self) -> list:
+        return list(self.forcing)
 
     def value(self, env, degrees: bool = False):
         """(K, c, J) at a point: the bordered matrix, the right-hand side and the
@@ -155,6 +171,12 @@ class Tangency:
         row whose lift is not among the constraints, or fewer moving rows than
         multipliers)."""
         return None if self.moving is None else self._proved_modulo_p
+
+    @cached_property
+    def moving(self):
+        """The rows with dχ/dv ≠ 0 when the others are complete lifts already among the
+        constraints and the moving rows are as many as the multipliers; else None."""
+        return self._moving_rows()
 
     def _proved_modulo_p(self, value):
         """The verdict proved at one point over F_p, else None.
