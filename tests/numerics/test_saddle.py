@@ -118,3 +118,19 @@ def test_gauss_and_the_condition_of_C():
     W = np.stack([np.eye(2), np.zeros((2, 2))])
     mu = np.stack([np.diag([1.0, 2.0])] * 2)
     assert np.allclose(cond_each(W, mu), [4.0, np.inf])
+
+
+def test_a_mass_ratio_of_1e16_keeps_the_constraint_to_rounding():
+    """W = diag(a, b), mu = (1, 1), [[W, mu^T], [mu, 0]] [x; y] = [(1, 0); 1] by hand:
+    x1 = (1 + b)/(a + b), x2 = 1 - x1, y = 1 - a x1. With a = 1e-8, b = 1e8 the
+    multiplier is 1e8 times the second acceleration: without refinement the
+    constraint row was met only to 1.7e-8."""
+    from nhham.numerics.saddle import solve_saddle
+
+    a, b = 1e-8, 1e8
+    x, y = solve_saddle(np.diag([a, b]), np.array([[1.0, 1.0]]), np.array([1.0, 0.0]),
+                        np.array([1.0]))
+    x1 = (1 + b) / (a + b)
+    assert abs(x[0] - x1) <= 4e-16 * x1
+    assert abs(x[0] + x[1] - 1.0) <= 4e-16
+    assert abs(y[0] - (1 - a * x1)) <= 4e-16
