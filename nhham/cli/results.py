@@ -46,7 +46,10 @@ def classify_data(analysis, classes=None) -> dict:
     def shown(c):  # the scene's own constraints as given, derived ones simplified
         return expr_text(c if c in given else display_form(c, system.velocities))
 
-    out = analysis.to_dict(expression=shown)
+    out = analysis.to_dict(expressions=False)
+    for stage in out["stages"]:
+        stage["constraints"] = [shown(c) for c in stage["constraints"]]
+    out["final_constraints"] = [shown(c) for c in out["final_constraints"]]
     inconsistency = out.pop("inconsistency")
     out.update({
         "first_class": None if classes is None else int(classes.first_class),

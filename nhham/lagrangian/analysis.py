@@ -233,10 +233,12 @@ class ConstraintAnalysis:
                     out[ia, ic] = part[a, c]
         return out
 
-    def to_dict(self, expression=str) -> dict:
-        """The verdict of the run, JSON-ready: sizes, rank of C and how it was decided,
-        status, stages with their decisions, M_f, free multipliers, redundancy,
-        integrability, inconsistency; constraints written by ``expression``."""
+    def to_dict(self, expressions: bool = True) -> dict:
+        """The verdict of the run: sizes, rank of C and how it was decided, status,
+        stages with their decisions, M_f, free multipliers, redundancy, integrability,
+        inconsistency. JSON-ready; with ``expressions=False`` the constraints stay
+        sympy expressions, for a renderer that writes them its own way."""
+        expression = str if expressions else (lambda e: e)
         system = self.system
         first = self.stages[0].decisions if self.stages else ()
         return {
@@ -246,7 +248,7 @@ class ConstraintAnalysis:
             "rank_c": int(self.rank_C),
             "rank_c_method": first[0].decision.method if first else "exact",
             "status": str(self.status),
-            "stages": [s.to_dict(expression) for s in self.stages],
+            "stages": [s.to_dict(expressions) for s in self.stages],
             "final_labels": list(self.final_labels),
             "final_constraints": [expression(c) for c in self.final_constraints],
             "free_multipliers": int(self.free_multipliers),

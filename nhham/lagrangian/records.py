@@ -110,11 +110,11 @@ class Stage:
         """True when the tangency equations on M_k are solvable as they stand."""
         return self.augmented_rank == self.rank
 
-    def to_dict(self, expression=str) -> dict:
-        """Index, labels, constraints (as ``expression`` writes them), rank and the
-        decisions, JSON-ready."""
+    def to_dict(self, expressions: bool = True) -> dict:
+        """Index, labels, constraints, rank and the decisions, JSON-ready (with
+        ``expressions=False`` the constraints stay sympy expressions)."""
         return {"index": int(self.index), "labels": list(self.labels),
-                "constraints": [expression(c) for c in self.constraints],
+                "constraints": [str(c) if expressions else c for c in self.constraints],
                 "rank": int(self.rank), "decisions": [e.to_dict() for e in self.decisions]}
 
 
