@@ -40,8 +40,11 @@ def solve_saddle(W, mu, top, bottom):
     scaled matrix S K S has unit diagonal in its W block and unit rows in its
     mu block; LU with partial pivoting on it, and one step of iterative
     refinement where the residual is above rounding (the multipliers can be
-    1e8 times the accelerations), keep mass ratios of 1e-8..1e8 to rounding.
-    Raises numpy.linalg.LinAlgError if exactly singular.
+    1e8 times the accelerations), meet every row to rounding. Accuracy is
+    backward, not relative per component: at mass ratios of 1e16 an
+    acceleration that is the difference of nearly equal terms
+    (x'' = (1 - lambda)/a with lambda = 1 - 1e-16) keeps only its absolute
+    accuracy. Raises numpy.linalg.LinAlgError if exactly singular.
     """
     n, m = W.shape[-1], mu.shape[-2]
     diag = np.abs(np.diagonal(W, axis1=-2, axis2=-1))

@@ -103,7 +103,8 @@ HOT int cholesky(int n, const double *A, int lda, double *L, int ldl, double rat
    Otherwise (W indefinite, e.g. a Lorentzian metric, or nearly singular; S
    not numerically positive definite, e.g. mu rank deficient): LU with partial
    pivoting on the symmetrically scaled saddle matrix (unit diagonal of W,
-   unit rows of mu), which makes extreme mass ratios harmless.
+   unit rows of mu), backward stable at extreme mass ratios (an acceleration that is
+   a difference of nearly equal terms keeps only its absolute accuracy).
    Returns 0, or 1 when the matrix is singular.
    Forced inline (with the Cholesky it calls) on purpose: it is the innermost call of every
    field evaluation, and the Cholesky factors live on its stack for the LU fallback's decision. */
