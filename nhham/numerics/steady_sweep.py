@@ -11,7 +11,7 @@ from typing import Callable, Mapping, Sequence
 import numpy as np
 
 from nhham.errors import InputError
-from nhham.numerics.linearization import Linearization, linearize
+from nhham.numerics.linearization import Linearization, linearize, linearize_many
 
 __all__ = ["Crossing", "Sweep", "sweep", "sweep_steady"]
 
@@ -77,7 +77,8 @@ class Sweep:
 
 
 def sweep(linearize_at: Callable[[float], Linearization], parameter: str,
-          values: Sequence[float], *, xtol: float = 1e-12) -> Sweep:
+          values: Sequence[float], *, xtol: float = 1e-12,
+          linearize_all: Callable[[Sequence[float]], list] | None = None) -> Sweep:
     """Eigenvalues along a parameter, with the crossings of the imaginary axis.
 
     Parameters
@@ -90,6 +91,9 @@ def sweep(linearize_at: Callable[[float], Linearization], parameter: str,
         Increasing values.
     xtol : float, optional
         Absolute tolerance of the located crossings.
+    linearize_all : callable, optional
+        ``values -> [Linearization]`` at once (one batch), the same as
+        ``linearize_at`` at each; ``linearize_at`` then only locates the crossings.
 
     Returns
     -------
@@ -101,7 +105,8 @@ def sweep(linearize_at: Callable[[float], Linearization], parameter: str,
         ("complex"), after bisecting on the count until one of them brackets.
     """
     values = np.asarray(values, dtype=float)
-    lins = [linearize_at(float(v)) for v in values]
+    lins = (list(linearize_all([float(v) for v in values])) if linearize_all is not None
+            else [linearize_at(float(v)) for v in values])
     coords = lins[0].coordinates if lins else ()
     counts = [_n_positive(lin) for lin in lins]
     crossings = []
@@ -242,4 +247,9 @@ def sweep_steady(model, state_of: Callable[[Mapping[str, float]], Mapping[str, f
         return linearize(*model_and_state(value), independent=first.chart, neutral=neutral,
                          family=fam(value))
 
-    return sweep(at, parameter, values, xtol=xtol)
+    def at_all(values):
+        pairs = [model_and_state(v) for v in values]
+        return linearize_many([m for m, _ in pairs], [s for _, s in pairs], first.chart,
+                              neutral=neutral, families=[fam(v) for v in values])
+
+    return sweep(at, parameter, values, xtol=xtol, linearize_all=at_all)

@@ -25,6 +25,7 @@ from __future__ import annotations
 import difflib
 import math
 from dataclasses import dataclass
+from functools import cached_property
 from types import MappingProxyType
 from typing import Callable, Mapping
 
@@ -64,39 +65,85 @@ class SteadyState:
         ParseError
             An entry is not a finite real number at these values.
         """
-        point = {sp.Symbol(k): sp.Float(float(v), 30) for k, v in parameters.items()}
         out = {}
         for name, expr in self.expressions.items():
-            missing = sorted(s.name for s in expr.free_symbols if s not in point)
+            if name in self._numbers:  # a number: the same at every parameter value
+                out[name] = self._numbers[name]
+                continue
+            missing = sorted(s.name for s in expr.free_symbols if s.name not in parameters)
             if missing:
                 raise MissingParameterValueError(
                     f"steady.{name}: no numeric value for parameter {', '.join(missing)}")
-            try:
-                z = complex(expr.xreplace(point).evalf(20))
-            except (TypeError, ValueError, ZeroDivisionError, OverflowError):
-                z = complex(math.nan)
-            if not (math.isfinite(z.real) and abs(z.imag) <= 1e-12 * max(1.0, abs(z.real))):
-                raise ParseError(f"steady.{name}: {expr} is not a finite real number at the "
-                                 f"parameter values")
-            out[name] = z.real
+            out[name] = _at(name, expr, self._compiled[name], parameters)
         return out
 
     def family(self, parameters: Mapping[str, float]) -> dict:
         """Tangents of the steady family: ``{p: {name: d value / d p}}`` for every
         parameter p the entries use, at the given parameter values (exact
         derivatives, evaluated)."""
+        return {p: {name: 0.0 if d == 0 else _at(name, d, f, parameters)
+                    for name, (d, f) in tangent.items()}
+                for p, tangent in self._derivatives.items()}
+
+    # Formed once per steady state: a parameter sweep evaluates the state and its
+    # family at every value.
+    @cached_property
+    def _numbers(self) -> dict:
+        point: dict = {}
+        return {name: _real(name, e, point) for name, e in self.expressions.items()
+                if not e.free_symbols}
+
+    @cached_property
+    def _compiled(self) -> dict:
+        return {name: _compile(e) for name, e in self.expressions.items() if e.free_symbols}
+
+    @cached_property
+    def _derivatives(self) -> dict:
         used = sorted({s.name for e in self.expressions.values() for s in e.free_symbols})
-        point = {sp.Symbol(k): sp.Float(float(v), 30) for k, v in parameters.items()}
-        out = {}
+        out: dict = {}
         for p in used:
-            sym = sp.Symbol(p)
-            out[p] = {name: float(sp.diff(e, sym).xreplace(point).evalf(20))
-                      for name, e in self.expressions.items()}
+            out[p] = {}
+            for name, e in self.expressions.items():
+                d = sp.diff(e, sp.Symbol(p))
+                out[p][name] = (d, _compile(d) if d.free_symbols else None)
         return out
 
     def to_toml_table(self) -> dict:
         """``{name: float or str}`` as a scene's ``[steady]`` table would hold it."""
         return {k: float(v) if v.is_number else str(v) for k, v in self.expressions.items()}
+
+
+def _compile(expr):
+    """(parameter names, a float64 function of them) for an expression in the parameters."""
+    names = sorted(s.name for s in expr.free_symbols)
+    return names, sp.lambdify([sp.Symbol(s) for s in names], expr, modules="math")
+
+
+def _at(name, expr, compiled, parameters) -> float:
+    """An entry at the parameter values, in float64 (a constant: ``compiled`` None)."""
+    if compiled is None:
+        return _real(name, expr, {})
+    names, f = compiled
+    try:
+        value = float(f(*(float(parameters[s]) for s in names)))
+    except (TypeError, ValueError, ZeroDivisionError, OverflowError):
+        value = math.nan
+    if not math.isfinite(value):
+        raise ParseError(f"steady.{name}: {expr} is not a finite real number at the "
+                         f"parameter values")
+    return value
+
+
+def _real(name, expr, point) -> float:
+    """``expr`` at ``point`` (20 digits, then rounded), checked finite and real."""
+    try:
+        z = complex(expr.xreplace(point).evalf(20))
+    except (TypeError, ValueError, ZeroDivisionError, OverflowError):
+        z = complex(math.nan)
+    if not (math.isfinite(z.real) and abs(z.imag) <= 1e-12 * max(1.0, abs(z.real))):
+        raise ParseError(f"steady.{name}: {expr} is not a finite real number at the "
+                         f"parameter values")
+    return z.real
 
 
 def state_names(coordinates) -> list:

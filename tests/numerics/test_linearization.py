@@ -22,7 +22,7 @@ from scipy.optimize import brentq
 
 from nhham import InconsistentInitialDataError
 from nhham.numerics.codegen import numeric_model
-from nhham.numerics.linearization import linearize
+from nhham.numerics.linearization import BATCH_STATES, linearize, linearize_many
 from nhham.numerics.steady_sweep import sweep_steady
 from nhham.system.models import chaplygin_sleigh, pendulum_cartesian
 
@@ -66,6 +66,25 @@ def test_bicycle_eigenvalues_match_the_benchmark(bicycle):
         assert lin.method == "complex-step"
     assert linearize(model.with_parameters(v=5.0),
                      scene.steady.values({**model.parameters, "v": 5.0})).stable is True
+
+
+def test_many_speeds_in_one_batch_are_the_single_linearisations(bicycle):
+    """linearize_many over more speeds than one batch holds: the benchmark's eigenvalues
+    at each (Meijaard et al. 2007), and the single linearize's to rounding."""
+    scene, model = bicycle
+    speeds = np.linspace(0.0, 10.0, BATCH_STATES + 3)
+    models = [model.with_parameters(v=float(v)) for v in speeds]
+    states = [scene.steady.values(m.parameters) for m in models]
+    first = linearize(models[0], states[0])
+    many = linearize_many(models, states, first.chart,
+                          families=[scene.steady.family(m.parameters) for m in models])
+    for v, lin in zip(speeds, many):
+        assert matched(lin.eigenvalues, benchmark_eigenvalues(v)) < 1e-8, v
+    for i in (0, BATCH_STATES - 1, BATCH_STATES, len(speeds) - 1):
+        one = linearize(models[i], states[i], independent=first.chart,
+                        family=scene.steady.family(models[i].parameters))
+        assert many[i].coordinates == one.coordinates and many[i].neutral == one.neutral
+        assert np.allclose(many[i].matrix, one.matrix, rtol=1e-13, atol=1e-13)
 
 
 def test_bicycle_weave_and_capsize_speeds(bicycle):
