@@ -208,6 +208,7 @@ class _ComplexField:
         self.n, self.m, self.k = model.n, model.m, model.k
         try:
             self._batch = model.kernels.functions["saddle"][1]
+            self._geometry_batch = model.kernels.functions["geometry"][1]
         except (AttributeError, KeyError, IndexError, TypeError):  # pragma: no cover
             raise ComputationError("linearize: the numeric model has no numpy saddle kernel "
                                    "for complex-step differentiation") from None
@@ -233,6 +234,20 @@ class _ComplexField:
         h = out[:, i:i + m]; i += m
         g = out[:, i:i + k]
         return W, F, mu, drift, h, g
+
+    def geometry(self, Q, p=None):
+        """mu, h, g at complex coordinates (rows of Q: shape (K, n)): the kernel of the
+        coordinates only (no F, no drift), for lifting points onto M_1."""
+        n, m, k = self.n, self.m, self.k
+        Y = np.ascontiguousarray(Q.T.astype(complex))
+        out = np.zeros((n * n + m * n + m + k, Y.shape[1]), dtype=complex)
+        with np.errstate(all="ignore"):
+            self._geometry_batch(Y, self._p if p is None else p, out)
+        out = out.T
+        i = n * n
+        mu = out[:, i:i + m * n].reshape(-1, m, n); i += m * n
+        h = out[:, i:i + m]; i += m
+        return mu, h, out[:, i:i + k]
 
     def accelerations(self, Q, V, p=None):
         W, F, mu, drift, _, _ = self.pieces(Q, V, p)
@@ -318,7 +333,7 @@ def _reduced_field(cf, chart, q0, X, p=None):
     V[:, iv] = X[:, len(iq):]
     if dq:
         for _ in range(30):
-            _, _, mu, _, _, g = cf.pieces(Q, V, p)
+            mu, _, g = cf.geometry(Q, p)
             G = mu[:, :cf.k, :][:, :, dq]
             step = np.linalg.solve(G, g[..., None])[..., 0]
             Q[:, dq] -= step
@@ -328,7 +343,7 @@ def _reduced_field(cf, chart, q0, X, p=None):
             raise ComputationError("linearize: Newton iteration for the dependent coordinates "
                                    "did not converge")
     if dv:
-        _, _, mu, _, h, _ = cf.pieces(Q, V, p)
+        mu, h, _ = cf.geometry(Q, p)
         rhs = -(np.einsum("kij,kj->ki", mu[:, :, iv], V[:, iv]) + h)
         V[:, dv] = np.linalg.solve(mu[:, :, dv], rhs[..., None])[..., 0]
     a = cf.accelerations(Q, V, p)
