@@ -322,19 +322,65 @@ class Submanifold:
         vanishing on M, seen off M by the Newton projection): entries below the zero
         level of their size (:func:`value_scale`) are then set to 0 first.
         """
+        return self.sampled_ranks([reduced], tol)[0]
+
+    def sampled_ranks(self, matrices, tol: float | None = None) -> list:
+        """The ranks of several matrices at the same sample points (as :meth:`rank` with
+        ``exact=False``), their distinct entries lambdified once: matrices that share
+        entries (a matrix and the matrix bordered by a column) print each entry once.
+
+        Parameters
+        ----------
+        matrices : sequence of sympy.Matrix
+        tol : float, optional
+
+        Returns
+        -------
+        list of Decision
+        """
+        matrices = [sp.Matrix(M) for M in matrices]
+        if all(0 in M.shape for M in matrices):
+            return [Decision(0, "exact", "empty matrix") for _ in matrices]
         points, resid = self.points()
-        f = self._lambdify([reduced])
+        entries = list(dict.fromkeys(e for M in matrices for e in M))
+        where = {e: i for i, e in enumerate(entries)}
         tol = self._tol(tol)
         zero = self._zero_level(resid)
+        out = []
         with self._arithmetic():
-            return self._decide_rank(reduced, f, points, resid, tol, zero)
+            flat = self._entries_at(entries, points)
+            sizes: list = []  # the entries' sizes, formed once if any matrix needs them
+
+            def sizes_at():
+                if not sizes:
+                    sizes.append(self._entries_at(
+                        [value_scale(e, self.variables) for e in entries], points))
+                return sizes[0]
+
+            for M in matrices:
+                if 0 in M.shape:
+                    out.append(Decision(0, "exact", "empty matrix"))
+                    continue
+                index = np.array([where[e] for e in M], dtype=np.intp).reshape(M.shape)
+                out.append(self._decide_rank(
+                    [v[index] for v in flat], points, resid, tol, zero,
+                    lambda index=index: [s[index] for s in sizes_at()]))
+        return out
+
+    def _entries_at(self, entries, points) -> list:
+        """The values of expressions at each point, one object array each (one lambdified
+        function for all)."""
+        f = self._lambdify([sp.Matrix(len(entries), 1, entries)])
+        return [self._matrix_at(f, pt, (len(entries),)) for pt in points]
 
     def _arithmetic(self):
         """The working precision of the sampled arithmetic (mpmath's dps, or float64)."""
         return mpmath.workdps(self.precision) if self.precision else contextlib.nullcontext()
 
-    def _decide_rank(self, reduced, f, points, resid, tol, zero):
-        values = [self._matrix_at(f, pt, reduced.shape) for pt in points]
+    def _decide_rank(self, values, points, resid, tol, zero, sizes):
+        """The rank from the values at the points; ``sizes()``: the entries' sizes at
+        the points (:func:`value_scale`), asked only when rounding noise may need to be
+        set to 0."""
         plain = [singular_values(S, self.precision) for S in values]
         ranks = [count_above(s, tol * max(float(s[0]) if len(s) else 0.0, 1.0))
                  for s in plain]
@@ -342,10 +388,7 @@ class Submanifold:
                     for S in values]
         how = "plain"
         if [count_above(s, tol) for s in relative] != ranks:
-            f_size = self._lambdify([reduced.applyfunc(
-                lambda e: value_scale(e, self.variables))])
-            cleaned = [without_noise(S, self._matrix_at(f_size, pt, reduced.shape), zero)
-                       for S, pt in zip(values, points)]
+            cleaned = [without_noise(S, size, zero) for S, size in zip(values, sizes())]
             relative = [relative_singular_values(singular_values(equilibrated(S), self.precision))
                         for S in cleaned]
             ranks = [count_above(s, tol) for s in relative]

@@ -347,8 +347,9 @@ def tangency_sampled(system, hessian, forcing, primary, manifold) -> TangencyVer
     K = sp.Matrix.vstack(sp.Matrix.hstack(hessian, mu.T),
                          sp.Matrix.hstack(Jv, sp.zeros(len(chis), m)))
     c = sp.Matrix.vstack(forcing, -Jq * sp.Matrix(v))
-    rK = manifold.rank(K)
-    rAug = manifold.rank(sp.Matrix.hstack(K, c))
+    # One lambdified function for the three matrices (K is inside [K | c]).
+    rK, rAug, jac = manifold.sampled_ranks([K, sp.Matrix.hstack(K, c),
+                                            sp.Matrix.hstack(Jq, Jv) if chis else sp.zeros(0, 0)])
     rank = _shifted(rK, -n, "rank (Z_i(chi_j)) = rank [[W, mu^T], [dchi/dv, 0]] - n")
     consistent = Decision(rAug.value == rK.value, rAug.method,
                           f"rank [K | c] = {rAug.value}, rank K = {rK.value} at the sample points",
@@ -356,7 +357,8 @@ def tangency_sampled(system, hessian, forcing, primary, manifold) -> TangencyVer
                           singular_values=rAug.singular_values,
                           point_residual=rAug.point_residual,
                           warnings=tuple(rK.warnings) + tuple(rAug.warnings))
-    jac = manifold.rank(sp.Matrix.hstack(Jq, Jv)) if chis else Decision(0, "exact", "none")
+    if not chis:
+        jac = Decision(0, "exact", "none")
     moving = [j for j in range(len(chis)) if any(x != 0 for x in Jv.row(j))]
     return TangencyVerdict(rank, consistent, jac, tuple(moving), tuple(range(m)),
                            rK.samples)
