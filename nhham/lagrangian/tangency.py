@@ -152,11 +152,15 @@ class Tangency:
 
     def value(self, env, degrees: bool = False):
         """(K, c, J) at a point: the bordered matrix, the right-hand side and the
-        Jacobian [∂χ/∂q, ∂χ/∂v] of the constraints."""
+        Jacobian [∂χ/∂q, ∂χ/∂v] of the constraints (Degree bounds with a Degree ``env``:
+        the arithmetic is the values')."""
         cache: dict = {}
-        W, F, mu, Jq, Jv = (evaluate(x, env, cache) if x is self.F else
-                            [evaluate(row, env, cache) for row in x]
-                            for x in (self.W, self.F, self.mu, self.Jq, self.Jv))
+
+        def rows(matrix):
+            return [evaluate(row, env, cache) for row in matrix]
+
+        W, mu, Jq, Jv = rows(self.W), rows(self.mu), rows(self.Jq), rows(self.Jv)
+        F = evaluate(self.F, env, cache)
         vel = [env[s] for s in self.v]
         n = self.n
         K = bordered_matrix(ListMatrix(W), ListMatrix(mu, n), ListMatrix(Jv, n)).rows
