@@ -43,6 +43,7 @@ _LAZY = by_module({
     "lagrangian.geometry": ("lagrangian_geometry", "LagrangianGeometry", "DynamicsIngredients"),
     "lagrangian.submanifold": ("Submanifold",),
     "lagrangian.decision": ("Decision",),
+    "lagrangian.engine": ("Policy",),
     "lagrangian.symmetries": ("constant_of_motion", "cyclic_constants", "lie_symmetry",
                               "complete_lift"),
     # constraint algorithm (Section 3)
@@ -71,7 +72,7 @@ _LAZY = by_module({
     # a bound on the time of a computation (the command's --budget)
     "budget": ("time_budget",),
     # stability of steady motions
-    "numerics.linearization": ("linearize", "Linearization"),
+    "numerics.linearization": ("linearize", "linearize_many", "Linearization"),
     "numerics.steady_sweep": ("sweep_steady", "Sweep"),
     "cli.linearize_command": ("linearize_scene", "plot_root_locus"),
     # input and output
