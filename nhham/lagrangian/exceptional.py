@@ -112,6 +112,14 @@ class Condition:
         return ", ".join(f"{short(e)} = 0" for e in self.equations)
 
 
+def _nonzero_claim(value) -> bool:
+    """Whether a decision's value says something is not zero (a rank > 0, "does not
+    vanish"): the claims that can fail at special parameter values."""
+    if isinstance(value, bool):
+        return value is False
+    return isinstance(value, int) and value > 0
+
+
 def exceptional_conditions(analysis: ConstraintAnalysis, parameters: Sequence | None = None,
                            *, seed: int = SEED, points: int = POINTS) -> tuple:
     """The components of the exceptional set of one classification.
@@ -371,6 +379,33 @@ class ExceptionalData:
             return []
         return [field_det(B.extract(R, R)) for B in mats]
 
+    def _unchecked_note(self) -> str:
+        """What the verdict at the values rests on when M_1 has no exact points.
+
+        A decision taken at float points is taken with the parameters at their values
+        (:class:`~nhham.lagrangian.submanifold.Submanifold` samples them so): when every
+        decision was, the verdict is already the one at the values, and there is no
+        generic verdict whose exceptional sets the values could fall in. An exact
+        "vanishes" holds at every value; an exact rank or "does not vanish" (and "not
+        integrable") holds for generic parameters: those decisions are named.
+        """
+        analysis = self.analysis
+        generic = [ev.subject for st in analysis.stages for ev in st.decisions
+                   if ev.decision.method != "sampled" and _nonzero_claim(ev.decision.value)]
+        if analysis.integrability.method != "sampled" and analysis.integrable is False:
+            generic.append("integrability")
+        if not generic:
+            drawn = [p.name for p in self.system.parameters
+                     if p not in self.system.parameter_values]
+            return ("no exact points of M_1: every decision that could change with the "
+                    "parameters was taken at float points with the parameters at their "
+                    "values" + (f" ({', '.join(drawn)} at random values)" if drawn else "")
+                    + " (sampled, not proved), so the verdict is the one at these values; "
+                    "there is no generic verdict whose exceptional sets they could fall in")
+        return ("the parameter values were not checked against the exceptional sets of the "
+                "decisions taken for generic parameters (" + "; ".join(generic[:3])
+                + ("; ..." if len(generic) > 3 else "") + "): no exact points of M_1")
+
     # ------------------------------------------------------------ the modes
     def _has_points(self, env0, K, note) -> bool:
         """Whether M_1 has exact points over K; else a note ``note (why)``."""
@@ -436,8 +471,7 @@ class ExceptionalData:
         values = {p: _exact_mpq(x) for p, x in values.items()}
         base = self.env(at=values)
         items = self.items()
-        if not self._has_points(base, QQ, "the parameter values were not checked against "
-                                "the exceptional sets: no exact points of M_1"):
+        if not self._has_points(base, QQ, self._unchecked_note()):
             return hits, close
         for reason, fn in items:
             try:

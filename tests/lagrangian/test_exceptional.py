@@ -39,3 +39,37 @@ def test_floating_point_determinants_pivot():
     x = exact.lu_solve(rhs).to_list()
     y = field_solve(approx, rhs.convert_to(F)).to_list()
     assert all(abs(float(a[0]) - float(b[0])) < 1e-40 for a, b in zip(x, y))
+
+
+def test_without_exact_points_the_note_says_what_the_verdict_at_the_values_rests_on():
+    """No exact points of M_1 (a circle x^2 + y^2 = l^2): the decisions taken at float
+    points are taken with the parameters at their values, so nothing is left unchecked;
+    a decision taken for generic parameters (an exact rank) is named instead."""
+    from types import SimpleNamespace
+
+    from nhham.lagrangian.decision import Decision
+    from nhham.lagrangian.exceptional import ExceptionalData
+    from nhham.lagrangian.records import Evidence
+    from nhham.system.models import pendulum_cartesian
+    from nhham.verdict.values import classification_at_values
+
+    at = classification_at_values(pendulum_cartesian())
+    assert at.warnings[0].startswith("no exact points of M_1: every decision that could "
+                                     "change with the parameters was taken at float points")
+    assert not any("not checked" in w for w in at.warnings)
+
+    def note(*evidence, integrable=True, method="sampled"):
+        stage = SimpleNamespace(decisions=evidence)
+        analysis = SimpleNamespace(stages=(stage,), integrable=integrable,
+                                   integrability=SimpleNamespace(method=method))
+        return ExceptionalData._unchecked_note(SimpleNamespace(
+            analysis=analysis, system=pendulum_cartesian()))
+
+    sampled = Evidence("rank of (Z_i(chi_j)) on M_1", Decision(1, "sampled", "at points"))
+    exact_zero = Evidence("condition from g", Decision(True, "exact", "vanishes"))
+    exact_rank = Evidence("rank of (Z_i(chi_j)) on M_2", Decision(2, "exact", "minor"))
+    assert note(sampled, exact_zero).startswith("no exact points of M_1: every decision")
+    text = note(sampled, exact_rank, integrable=False, method="exact")
+    assert text.startswith("the parameter values were not checked")
+    assert "rank of (Z_i(chi_j)) on M_2" in text and "integrability" in text
+    assert "(Z_i(chi_j)) on M_1" not in text  # the sampled decision is not named
