@@ -80,9 +80,9 @@ class Rank:
         if self.residue is None:
             # No cancellation: a quotient is 0/0 only on a thin set the seeded
             # points miss, and bringing large entries over one denominator costs.
-            return manifold._sampled_rank(self.matrix, self.tol)
+            return manifold.sampled_ranks([self.matrix], self.tol)[0]
         reduced = self.residue
-        sampled = manifold._sampled_rank(reduced, self.tol)
+        sampled = manifold.sampled_ranks([reduced], self.tol)[0]
         if 0 < sampled.value < min(reduced.shape):
             certificate = manifold._rank_certificate(reduced, sampled, policy.exact_minor_size)
             if certificate is not None:

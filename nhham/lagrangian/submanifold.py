@@ -312,22 +312,17 @@ class Submanifold:
         return zero_test(expr, self.reduction.residual, self.system.parameters,
                           self.system.parameter_values)
 
-    def _sampled_rank(self, reduced, tol):
-        """The rank at the sample points, whatever the units.
-
-        Singular values are compared with the largest one after the matrix is
-        equilibrated by rows and columns (a change of units leaves the rank unchanged).
-        Where that answer differs from the plain one (singular values over max(s_1, 1)),
-        an entry could be rounding noise that equilibration blew up (a function
-        vanishing on M, seen off M by the Newton projection): entries below the zero
-        level of their size (:func:`value_scale`) are then set to 0 first.
-        """
-        return self.sampled_ranks([reduced], tol)[0]
-
     def sampled_ranks(self, matrices, tol: float | None = None) -> list:
         """The ranks of several matrices at the same sample points (as :meth:`rank` with
         ``exact=False``), their distinct entries lambdified once: matrices that share
         entries (a matrix and the matrix bordered by a column) print each entry once.
+
+        Whatever the units: singular values are compared with the largest one after the
+        matrix is equilibrated by rows and columns (a change of units leaves the rank
+        unchanged). Where that answer differs from the plain one (singular values over
+        max(s_1, 1)), an entry could be rounding noise that equilibration blew up (a
+        function vanishing on M, seen off M by the Newton projection): entries below the
+        zero level of their size (:func:`value_scale`) are then set to 0 first.
 
         Parameters
         ----------
