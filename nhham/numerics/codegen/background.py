@@ -25,7 +25,8 @@ import os
 import threading
 import warnings
 
-from nhham.numerics.codegen.build import LibraryBuild, build_library, kill_group, load_library
+from nhham.numerics.codegen.build import (LibraryBuild, build_library, kill_group, load_library,
+                                          signal_group)
 from nhham.numerics.codegen.cache import CompileCache
 from nhham.numerics.model import NumericsWarning
 
@@ -178,7 +179,7 @@ class _Worker:
         for build in queued:
             build._finish("stopped", None)
         if process is not None:
-            kill_group(process)
+            signal_group(process)  # the worker reaps it and sees the signal: no fallback
         if thread is not None:
             thread.join(_JOIN_AT_EXIT_S)
             if thread.is_alive():

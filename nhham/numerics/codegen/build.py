@@ -197,12 +197,20 @@ def run_compiler(command: list, cwd: str, on_start=None) -> tuple:
     return process.returncode, stderr
 
 
-def kill_group(process) -> None:
-    """Kill the compiler's whole process group and reap the driver (not once the driver
-    is reaped: its pid, the group's id, may belong to another process by then)."""
+def signal_group(process) -> None:
+    """Kill the compiler's whole process group, not once the driver is reaped (its pid,
+    the group's id, may belong to another process by then). Safe from a thread that does
+    not own ``process``: the owner reaps it (see :func:`kill_group`)."""
     if process.returncode is None:
         with contextlib.suppress(ProcessLookupError, PermissionError):
             os.killpg(process.pid, signal.SIGKILL)
+
+
+def kill_group(process) -> None:
+    """Kill the compiler's whole process group and reap the driver. Only the thread that
+    runs the compiler may call it: a second ``communicate`` would close the pipe under
+    the first, whose read then fails with EBADF instead of reporting the signal."""
+    signal_group(process)
     with contextlib.suppress(Exception):
         process.communicate()
 
