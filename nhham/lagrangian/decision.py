@@ -7,7 +7,7 @@ how far it can be trusted.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields, is_dataclass, replace
 from typing import TYPE_CHECKING
 
 from nhham.settings import SEED, check_options
@@ -15,7 +15,7 @@ from nhham.settings import SEED, check_options
 if TYPE_CHECKING:
     from nhham.system.description import System
 
-__all__ = ["Assumption", "Decision", "DecisionSettings"]
+__all__ = ["Assumption", "Decision", "DecisionSettings", "scoped"]
 
 
 @dataclass(frozen=True, eq=False, repr=False)
@@ -89,6 +89,10 @@ class Decision:
     error_bound : float or None
         For "exact at points": the Schwartz–Zippel bound on the probability that
         the verdict is wrong (0.0 for a proof); None for other methods.
+    scope : str
+        Where an exact answer holds when that is less than all of M for all parameter
+        values: a proof at a point of a curved M holds on the component of M through
+        the point, at the parameter values ("" otherwise). Also ends ``detail``.
     """
 
     value: object
@@ -102,6 +106,7 @@ class Decision:
     warnings: tuple = ()
     points: tuple = field(default=(), compare=False)
     error_bound: float | None = None
+    scope: str = ""
 
     def __bool__(self):
         return bool(self.value)
@@ -115,6 +120,8 @@ class Decision:
         out.update(method=self.method, precision=str(self.precision),
                    samples=int(self.samples or 0), error_bound=json_number(self.error_bound),
                    detail=self.detail)
+        if self.scope:
+            out["scope"] = self.scope
         return out
 
     def describe(self) -> str:
@@ -130,6 +137,36 @@ class Decision:
         if self.warnings:
             text += " WARNING: " + "; ".join(self.warnings)
         return text
+
+
+def scoped(answer, scope: str):
+    """``answer`` with ``scope`` on every exact :class:`Decision` in it (through frozen
+    dataclasses, tuples and lists); the answer itself when ``scope`` is empty.
+
+    The decision engine calls it for proofs at points of a curved M, whose quantities
+    build their Decisions without knowing where the point came from.
+    """
+    if not scope:
+        return answer
+    if isinstance(answer, Decision):
+        if answer.method == "sampled" or answer.scope:
+            return answer
+        return replace(answer, scope=scope, detail=f"{answer.detail}; {scope}")
+    if isinstance(answer, (tuple, list)):
+        items = [scoped(x, scope) for x in answer]
+        if all(a is b for a, b in zip(items, answer)):
+            return answer
+        return type(answer)(*items) if hasattr(answer, "_fields") else type(answer)(items)
+    if is_dataclass(answer) and not isinstance(answer, type):
+        changes = {}
+        for f in fields(answer):
+            value = getattr(answer, f.name)
+            if f.init and isinstance(value, (Decision, tuple, list)):
+                new = scoped(value, scope)
+                if new is not value:
+                    changes[f.name] = new
+        return replace(answer, **changes) if changes else answer
+    return answer
 
 
 def _floats(values):

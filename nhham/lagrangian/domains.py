@@ -13,8 +13,8 @@ One interface, the Python operators (+, -, *, /, ** and ``sin``/``cos`` through
 
 A formula written once against these operators (:mod:`nhham.lagrangian.formulas`)
 is evaluated in each by giving it values of that kind; matrices and their solves are
-in :mod:`nhham.lagrangian.linalg`. A datum with no exact value (``sqrt``, ``exp``, a
-parameter with a value inside sin) raises :class:`NotExact`.
+in :mod:`nhham.lagrangian.linalg`. A datum with no exact value (``exp``, ``sqrt`` except
+modulo p, where :func:`square_root` fixes one branch) raises :class:`NotExact`.
 
 Every evaluation can be repeated with :class:`Degree` objects in place of the
 numbers: the same arithmetic then yields an upper bound on the degree of the
@@ -45,6 +45,7 @@ __all__ = [
     "PRIME",
     "SAMPLE_BITS",
     "evaluate",
+    "square_root",
     "rank_bound",
     "minor_degree",
     "schwartz_zippel_bound",
@@ -68,6 +69,8 @@ class Angle:
     Sums and integer multiples of angles stay angles (the circle points multiply
     as unit complex numbers); any other arithmetic uses ``r``. ``r``, ``c``, ``s``
     are exact rationals or :class:`Degree` bounds (the same code serves both).
+    ``r = None``: the angle is known only by its circle point (a coordinate solved on
+    a curved M, :mod:`nhham.lagrangian.curved`); using its value raises NotExact.
     """
 
     __slots__ = ("r", "c", "s")
@@ -75,13 +78,21 @@ class Angle:
     def __init__(self, r, c, s):
         self.r, self.c, self.s = r, c, s
 
+    @property
+    def value(self):
+        """``r``; NotExact when the angle has only its circle point."""
+        if self.r is None:
+            raise NotExact("an angle solved on a curved M enters only through sin and cos")
+        return self.r
+
     def _rotate(self, other):
-        return Angle(self.r + other.r, self.c * other.c - self.s * other.s,
+        r = None if self.r is None or other.r is None else self.r + other.r
+        return Angle(r, self.c * other.c - self.s * other.s,
                      self.s * other.c + self.c * other.s)
 
     def _times(self, k: int):
         out = Angle(0, 1, 0)
-        base = self if k >= 0 else Angle(-self.r, self.c, -self.s)
+        base = self if k >= 0 else -self
         for _ in range(abs(k)):
             out = out._rotate(base)
         return out
@@ -91,12 +102,12 @@ class Angle:
             return self._rotate(other)
         if isinstance(other, int) and other == 0:
             return self
-        return self.r + other
+        return self.value + other
 
     __radd__ = __add__
 
     def __neg__(self):
-        return Angle(-self.r, self.c, -self.s)
+        return Angle(None if self.r is None else -self.r, self.c, -self.s)
 
     def __sub__(self, other):
         return self + (-other)
@@ -108,19 +119,19 @@ class Angle:
         if isinstance(other, int):
             return self._times(other)
         if isinstance(other, Angle):
-            return self.r * other.r
-        return self.r * other
+            return self.value * other.value
+        return self.value * other
 
     __rmul__ = __mul__
 
     def __truediv__(self, other):
-        return self.r / (other.r if isinstance(other, Angle) else other)
+        return self.value / (other.value if isinstance(other, Angle) else other)
 
     def __rtruediv__(self, other):
-        return other / self.r
+        return other / self.value
 
     def __pow__(self, k):
-        return self.r ** k
+        return self.value ** k
 
 
 # A Mersenne prime: reduction is cheap and 1/|F_p| is about 4e-19.
@@ -209,6 +220,28 @@ class ModP:
         return f"ModP({self.v})"
 
 
+def square_root(x) -> "ModP":
+    """The square root of ``x`` in F_p that is itself a square (p = 3 mod 4, so exactly
+    one of the two roots is): one fixed branch of sqrt, the same at every occurrence,
+    so that a point of a variety with w^2 = b keeps w = sqrt(b) throughout.
+
+    Raises
+    ------
+    ZeroDivisionError
+        ``x`` is not a square modulo p: the point is outside the domain of sqrt over
+        F_p (the caller draws another).
+    NotExact
+        ``x`` is not a residue: sqrt leaves Q (a rational), and a degree bound of it is
+        not kept.
+    """
+    if not isinstance(x, ModP):
+        raise NotExact("sqrt has no exact value at a rational point")
+    root = ModP(pow(x.v, (PRIME + 1) // 4, PRIME))
+    if root * root != x:
+        raise ZeroDivisionError("not a square modulo p")
+    return root
+
+
 def _sin(x):
     if isinstance(x, Angle):
         return x.s
@@ -267,7 +300,7 @@ def evaluate(exprs, env: dict, cache: dict | None = None) -> list:
     """
     memo = {} if cache is None else cache
     values = [_value(sp.sympify(e), env, memo) for e in exprs]
-    return [x.r if isinstance(x, Angle) else x for x in values]
+    return [x.value if isinstance(x, Angle) else x for x in values]
 
 
 def _value(e, env, memo):
@@ -293,12 +326,15 @@ def _value(e, env, memo):
         for a in e.args:
             out = out * _value(a, env, memo)
     elif e.is_Pow:
-        if not e.exp.is_Integer:
-            raise NotExact(f"non-integer power in {e}")
         base = _value(e.base, env, memo)
-        k = int(e.exp)
         if isinstance(base, Angle):
-            base = base.r
+            base = base.value
+        if e.exp.is_Rational and e.exp.q == 2:  # (sqrt b)^k, the root of F_p's choice
+            base, k = square_root(base), int(e.exp.p)
+        elif e.exp.is_Integer:
+            k = int(e.exp)
+        else:
+            raise NotExact(f"non-integer power in {e}")
         out = base ** k if k >= 0 else _inverse(base ** (-k))
     elif e.func in _FUNCTIONS:
         out = _FUNCTIONS[e.func](_value(e.args[0], env, memo))

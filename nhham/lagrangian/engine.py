@@ -7,7 +7,10 @@ and returns the first answer:
    thresholds say it is affordable;
 2. **proof at an exact point** (``quantity.proved_modulo_p``): the datum at a random
    point of M over F_p, p = 2^61 − 1; a rank there is a lower bound of the generic
-   rank over Q, so a full rank (or a nonzero value) is a proof;
+   rank over Q, so a full rank (or a nonzero value) is a proof; on a curved M
+   (:mod:`nhham.lagrangian.curved`) the point is a smooth point and the proof holds on
+   the component of M through it, which every Decision of the answer says
+   (``Decision.scope``);
 3. **exact points** (``quantity.observe`` / ``pending_error`` / ``conclude``): the
    datum at random rational points until the one Schwartz–Zippel bound
    (:func:`~nhham.lagrangian.domains.schwartz_zippel_bound`, degrees of numerator and
@@ -167,6 +170,7 @@ def _proof_modulo_p(quantity, manifold, policy):
     # Looked up on the class: a property is evaluated only once M has exact points.
     if getattr(type(quantity), "proved_modulo_p", None) is None:
         return None
+    from nhham.lagrangian.decision import scoped
     from nhham.lagrangian.domains import NotExact
     from nhham.lagrangian.points import exact_sampler
 
@@ -183,7 +187,7 @@ def _proof_modulo_p(quantity, manifold, policy):
         except (ZeroDivisionError, NotExact):
             continue
         if answer is not None:
-            return answer
+            return scoped(answer, sampler.scope)
     return None
 
 

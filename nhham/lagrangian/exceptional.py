@@ -58,8 +58,11 @@ from nhham.lagrangian.formulas import bordered_matrix, frobenius_terms, lagrangi
 from nhham.lagrangian.linalg import (
     FLOAT64,
     FloatMatrix,
+    ListMatrix,
     adjacent_column_sets,
+    exact_rank,
     field_det,
+    field_solve,
     maximal_minors,
 )
 from nhham.lagrangian.points import DRAW_BITS, ParameterFieldSampler, jacobian_row
@@ -357,8 +360,36 @@ class ExceptionalData:
                     pass
             return max(B.rank() for B in self._brackets(env0, K))
         except (NotExact, ZeroDivisionError) as exc:
-            self.notes.append(f"bracket matrix on M_f not evaluated exactly ({exc})")
+            rank = self._rank_on_curved_M()
+            if rank is None:
+                self.notes.append(f"bracket matrix on M_f not evaluated exactly ({exc})")
+            return rank
+
+    def _rank_on_curved_M(self):
+        """The rank of B proved at a smooth point of a curved M_f over F_p (parameters
+        at their values), when it is the largest an antisymmetric matrix has: a rank at
+        the values bounds the generic rank from below. None otherwise."""
+        from nhham.lagrangian.points import exact_sampler
+
+        analysis, system = self.analysis, self.system
+        cons = list(analysis.final_constraints)
+        k = len(cons)
+        try:
+            sampler = exact_sampler(Submanifold(system, tuple(cons), seed=self.seed),
+                                    self.seed, modular=True)
+            if sampler.chart is None:
+                return None
+            env, cache = sampler.point().env, {}
+            geo = analysis.geometry
+            mats = [[list(geo.mixed_hessian.row(i)) for i in range(system.n)], self.W,
+                    [jacobian_row(c, system.coordinates) for c in cons],
+                    [jacobian_row(c, system.velocities) for c in cons]]
+            Mx, W, Jq, Jv = (ListMatrix([evaluate(r, env, cache) for r in rows], len(rows[0]))
+                             for rows in mats)
+            rank = exact_rank(lagrangian_bracket(Jq, Jv, W, Mx, solve=field_solve).rows)[0]
+        except (NotExact, ZeroDivisionError):
             return None
+        return rank if rank == k - k % 2 else None
 
     def use_second_class_set(self, indices) -> None:
         """Take the principal block of the bracket datum from a classification."""
@@ -385,15 +416,25 @@ class ExceptionalData:
         A decision taken at float points is taken with the parameters at their values
         (:class:`~nhham.lagrangian.submanifold.Submanifold` samples them so): when every
         decision was, the verdict is already the one at the values, and there is no
-        generic verdict whose exceptional sets the values could fall in. An exact
-        "vanishes" holds at every value; an exact rank or "does not vanish" (and "not
-        integrable") holds for generic parameters: those decisions are named.
+        generic verdict whose exceptional sets the values could fall in. So does a proof
+        at a point of a curved M_1 over F_p (its ``Decision.scope``), drawn with the
+        parameters at their values: when every decision is one, there is nothing left
+        to check and the note is empty. An exact "vanishes" holds at every value; an
+        exact rank or "does not vanish" (and "not integrable") by reduction holds for
+        generic parameters: those decisions are named.
         """
         analysis = self.analysis
-        generic = [ev.subject for st in analysis.stages for ev in st.decisions
-                   if ev.decision.method != "sampled" and _nonzero_claim(ev.decision.value)]
-        if analysis.integrability.method != "sampled" and analysis.integrable is False:
-            generic.append("integrability")
+        decisions = [(ev.subject, ev.decision) for st in analysis.stages
+                     for ev in st.decisions]
+        if analysis.integrable is False:
+            decisions += [("integrability", d) for _, d in analysis.integrability.decisions]
+        # A proof at a point of a curved M_1 (a scope) was made at the values.
+        generic = list(dict.fromkeys(
+            subject for subject, d in decisions
+            if d.method != "sampled" and not d.scope and _nonzero_claim(d.value)))
+        sampled = any(d.method == "sampled" for _, d in decisions)
+        if not generic and not sampled:
+            return ""  # every decision proved at the values: nothing left to check
         if not generic:
             drawn = [p.name for p in self.system.parameters
                      if p not in self.system.parameter_values]
@@ -408,12 +449,14 @@ class ExceptionalData:
 
     # ------------------------------------------------------------ the modes
     def _has_points(self, env0, K, note) -> bool:
-        """Whether M_1 has exact points over K; else a note ``note (why)``."""
+        """Whether M_1 has exact points over K; else a note ``note (why)`` (none when
+        ``note`` is empty)."""
         try:
             if self.analysis.stages:
                 self._pts(self.analysis.stages[0].constraints, env0, K, 1)
         except (NotExact, ZeroDivisionError) as exc:
-            self.notes.append(f"{note} ({exc})")
+            if note:
+                self.notes.append(f"{note} ({exc})")
             return False
         return True
 

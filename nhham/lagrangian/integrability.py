@@ -62,8 +62,9 @@ class Integrability:
         Columns X_a spanning D (solved for the m best-conditioned dependent
         components; denominators may vanish on a thin set). None when the test
         ran at exact points (the basis is then never written out, and an
-        obstruction is its value at the point that proved it).
-    obstructions : tuple of (str, int, int, sympy.Expr)
+        obstruction is its value at the rational point that proved it, None for a
+        point over F_p).
+    obstructions : tuple of (str, int, int, sympy.Expr or None)
         ``(constraint label, a, b, dμ_i(X_a, X_b))`` for every term found not to
         vanish on Q_1.
     decisions : tuple of (str, Decision)
@@ -126,7 +127,8 @@ class Integrability:
         if self.obstructions:
             lab, a, b, expr = self.obstructions[0]
             where = "" if self.basis is not None else " at an exact point of Q_1"
-            text += f"; e.g. d{lab}(X_{a + 1}, X_{b + 1}) = {short(expr)}{where}"
+            value = "!= 0 modulo p" if expr is None else f"= {short(expr)}"
+            text += f"; e.g. d{lab}(X_{a + 1}, X_{b + 1}) {value}{where}"
         if self.warnings:
             text += " WARNING: " + "; ".join(self.warnings)
         return text
@@ -202,6 +204,21 @@ class Frobenius:
         values, self.dep = _frobenius_terms(env, self.rows, self.dmu, self.dep,
                                             exact=not degrees)
         return values
+
+    def proved_modulo_p(self, values):
+        """Non-integrability proved by a term nonzero at a point over F_p (its value
+        over Q at the same rational point, or on a curved Q_1 at a point of the
+        component, is nonzero); None when every term vanishes there."""
+        n, m, labels = len(self.q), self.mu.rows, self.labels
+        for (i, a, b), w in values.items():
+            if w != 0:
+                dec = Decision(False, "exact", f"d{labels[i]}(X_{a + 1}, X_{b + 1}) != 0 at "
+                               f"a random point of Q_1 modulo the prime 2^61 - 1 (proof)",
+                               samples=1, error_bound=0.0)
+                return Integrability(False, n - m, None, ((labels[i], a, b, None),),
+                                     ((f"d{labels[i]}(X_{a + 1}, X_{b + 1})", dec),), "exact",
+                                     (), **self.common)
+        return None
 
     def observe(self, values) -> bool:
         for (i, a, b), w in values.items():

@@ -32,6 +32,7 @@ from sympy.external.gmpy import MPQ
 from sympy.polys.matrices import DomainMatrix
 
 from nhham.lagrangian.algebra import solve_for_coordinates
+from nhham.lagrangian.curved import curved_chart
 from nhham.lagrangian.domains import (
     PRIME,
     SAMPLE_BITS,
@@ -50,6 +51,7 @@ __all__ = [
     "PointSampler",
     "ParameterFieldSampler",
     "exact_sampler",
+    "circle_parameters",
     "jacobian_row",
     "eliminate_coordinates",
     "DRAW_BITS",
@@ -94,17 +96,26 @@ class PointSampler:
         The velocity coefficients of ``affine`` when the caller has them.
     modular : bool, optional
         Points over F_p (:class:`ModP` values, for proofs of full rank and of
-        non-vanishing) instead of rational points.
+        non-vanishing) instead of rational points. Only these exist where a holonomic
+        constraint is curved (:mod:`nhham.lagrangian.curved`).
+    circle : sequence of sympy.Symbol, optional
+        Parameters with values whose (cos, sin) is drawn on the unit circle (see
+        :func:`circle_parameters`).
+    context : sequence of sympy.Expr, optional
+        The other expressions evaluated at the points (the Lagrangian), for the choice
+        of the coordinates solved on a curved M.
     """
 
     def __init__(self, coordinates, velocities, parameters, values, holonomic, affine, seed,
-                 mu=None, modular=False):
+                 mu=None, modular=False, circle=(), context=()):
         self.coordinates = tuple(coordinates)
         self.velocities = tuple(velocities)
         self.fixed = {p: _exact_number(p, values[p]) for p in parameters if p in values}
+        self.circle = tuple(p for p in circle if self.fixed.get(p))
         self.drawn = tuple(p for p in parameters if p not in values)
         self.rng = random.Random(seed)
-        self.solved = eliminate_coordinates(self.coordinates, holonomic)
+        self.solved, self.chart = _charts(self.coordinates, holonomic, modular,
+                                          (*context, *affine))
         self.affine = tuple(sp.sympify(e) for e in affine)
         vels = self.velocities
         self.mu = mu if mu is not None else [jacobian_row(e, vels) for e in self.affine]
@@ -122,7 +133,18 @@ class PointSampler:
         return cls(system.coordinates, system.velocities, system.parameters,
                    dict(system.parameter_values), system.holonomic, system.phi, seed,
                    mu=[list(system.mu.row(i)) for i in range(len(system.phi))],
-                   modular=modular)
+                   modular=modular, circle=circle_parameters(system),
+                   context=(system.lagrangian,))
+
+    @property
+    def scope(self) -> str:
+        """What an answer proved at one of these points holds on ("" where M is
+        parametrised rationally: all of M)."""
+        if self.chart is None:
+            return ""
+        return (f"M is curved ({self.chart.describe()}): proved at a smooth point of M "
+                f"over F_p with the parameters at their values, so on the component of M "
+                f"through it")
 
     # Degree bookkeeping for the denominators that may vanish at a drawn point
     # (they are drawn again): the bound of their numerators.
@@ -147,7 +169,17 @@ class PointSampler:
 
     def _try_point(self):
         env, deg = dict(self.fixed), {p: 0 for p in self.fixed}
-        for s in self.drawn + tuple(q for q in self.coordinates if q not in self.solved):
+        dependent = () if self.chart is None else self.chart.dependent
+        for p in self.circle:  # the value's (cos, sin) is transcendental: drawn
+            t = self._draw()
+            one = 1 + t * t
+            if not one:
+                return None
+            env[p] = Angle(self.fixed[p], (1 - t * t) / one, 2 * t / one)
+            circ = Degree(2, {("circle", p): (2, 1)})
+            deg[p] = Angle(0, circ, circ)
+        for s in self.drawn + tuple(q for q in self.coordinates
+                                    if q not in self.solved and q not in dependent):
             t = self._draw()
             one = 1 + t * t
             if not one:
@@ -156,18 +188,32 @@ class PointSampler:
             key = ("circle", s)
             circ = Degree(2, {key: (2, 1)})
             deg[s] = Angle(Degree(1), circ, circ)
+        if self.chart is not None:
+            found = self.chart.solve(env, self.rng)
+            if found is None:
+                return None
+            env.update(found)
         for q, expr in self.solved.items():
             try:
                 env[q], = evaluate([expr], env)
             except ZeroDivisionError:
                 return None
-            deg[q], = evaluate([expr], deg)
+            if self.chart is None:
+                deg[q], = evaluate([expr], deg)
         vels = self.velocities
         if not self.affine:
             for v in vels:
                 env[v], deg[v] = self._draw(), Degree(1)
             self._den_degree = 0
             return ExactPoint(env, deg)
+        if self.chart is not None:  # over F_p, for proofs: no degree bounds
+            return self._velocities(env, {}, keep_degrees=False)
+        return self._velocities(env, deg)
+
+    def _velocities(self, env, deg, keep_degrees=True):
+        """The point with free velocities drawn and the dependent ones solved from the
+        affine constraints (None where they are singular at the point)."""
+        vels = self.velocities
         cache, dcache = {}, {}
         try:
             mu = [evaluate(row, env, cache) for row in self.mu]
@@ -186,6 +232,14 @@ class PointSampler:
         block = [[row[j] for j in dep] for row in mu]
         rhs = [[-(h[k] + sum((mu[k][i] * env[vels[i]] for i in free), 0))]
                for k in range(len(mu))]
+        if not keep_degrees:
+            self._den_degree = 0
+            try:
+                sol = exact_solve(block, rhs)
+            except ZeroDivisionError:
+                return None
+            env.update((vels[j], sol[pos][0]) for pos, j in enumerate(dep))
+            return ExactPoint(env, {})
         # Degrees of the dependent velocities (Cramer): numerator and denominator
         # are minors of [block | rhs].
         dmu = [evaluate(row, deg, dcache) for row in self.mu]
@@ -238,14 +292,16 @@ def exact_sampler(manifold, seed: int, *, modular: bool = False) -> PointSampler
             raise NotExact("a submanifold of Q is defined by holonomic constraints")
         return PointSampler(system.coordinates, (), system.parameters, values,
                             [g for g in holonomic if g in equations], (), seed,
-                            modular=modular)
+                            modular=modular, circle=circle_parameters(system),
+                            context=(system.lagrangian,))
     if tuple(manifold.fibre) != tuple(system.velocities):
         raise NotExact("exact points are drawn in TQ and Q")
     if equations == set(holonomic) | set(system.phi):
         return PointSampler.on_M1(system, seed, modular=modular)
     solved, affine = _split(system, manifold.equations)
     return PointSampler(system.coordinates, system.velocities, system.parameters, values,
-                        solved, affine, seed, modular=modular)
+                        solved, affine, seed, modular=modular,
+                        circle=circle_parameters(system), context=(system.lagrangian,))
 
 
 def _split(system, constraints):
@@ -266,6 +322,40 @@ def _split(system, constraints):
         if any(e.free_symbols & vels for e in jacobian_row(c, system.velocities)):
             raise NotExact(f"{c} is not affine in the velocities")
     return holonomic, affine
+
+
+def _charts(coordinates, holonomic, modular, context):
+    """(coordinates solved linearly, the curved chart of the rest or None)."""
+    solved, unsolved = solve_for_coordinates(coordinates, holonomic)
+    if not unsolved:
+        return solved, None
+    if not modular:
+        raise NotExact(f"the holonomic constraint {short(unsolved[0])} = 0 is not linear "
+                       f"in a coordinate with a constant coefficient: M is curved, with "
+                       f"points over F_p only")
+    rest = [sp.sympify(g).xreplace(solved) for g in unsolved]
+    free = [q for q in coordinates if q not in solved]
+    return solved, curved_chart(rest, free, context)
+
+
+def circle_parameters(system) -> tuple:
+    """The parameter with a nonzero value that appears inside sin/cos, when it is the
+    only parameter with a value there; else ().
+
+    Its (cos a, sin a) is then drawn at random on the unit circle like a coordinate's:
+    for a nonzero rational a, e^{ia} is transcendental (Lindemann–Weierstrass), so a
+    polynomial identity over Q in (cos a, sin a) holds at the value exactly when it
+    holds on the whole circle, and a random circle point decides it as at the value.
+    Two such parameters are not independent (e^{ia} and e^{ib} are powers of one
+    number for rational a, b): neither is drawn, and sin/cos of them has no exact
+    value.
+    """
+    values = system.parameter_values
+    found = set()
+    for e in (system.lagrangian, *system.phi, *system.holonomic):
+        for f in sp.sympify(e).atoms(sp.sin, sp.cos, sp.tan, sp.cot):
+            found |= {p for p in f.args[0].free_symbols if p in values and values[p]}
+    return tuple(found) if len(found) == 1 else ()
 
 
 def jacobian_row(expr, symbols) -> list:

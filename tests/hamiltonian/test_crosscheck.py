@@ -158,12 +158,18 @@ def test_a_wrong_sign_is_detected_at_exact_points(monkeypatch):
 
 
 def test_points_need_exact_points_and_a_quadratic_lagrangian():
-    """The Cartesian pendulum's M_1 (x^2 + y^2 = l^2) has no exact points: "points" says
-    so, "auto" compares at sampled points."""
+    """The Cartesian pendulum's M_1 (x^2 + y^2 = l^2) is curved: compared at its points
+    over F_p. A holonomic constraint through exp has no exact points: "points" says so,
+    "auto" compares another way."""
     import nhham
     from nhham.errors import InputError
 
-    system = models.pendulum_cartesian()
+    assert cross_check(models.pendulum_cartesian(), method="points").agree
+    x, y = sp.symbols("x y")
+    xd, yd = sp.symbols("x_dot y_dot")
+    system = nhham.System(["x", "y"], (xd**2 + yd**2) / 2 - y, [],
+                          holonomic=[x**2 + sp.exp(y) - 2])
+    assert cross_check(system).method != "points"
     with pytest.raises(InputError, match="no exact points"):
         cross_check(system, method="points")
     with pytest.raises(InputError, match="method must be one of"):
@@ -211,16 +217,21 @@ def _ball_on_incline(potential):
     wz = "(c_dot - sin(b)*a_dot)"
     L = (f"m*(x_dot**2 + y_dot**2)/2 + I*({wx}**2 + {wy}**2 + {wz}**2)/2 - {potential}")
     return System(["x", "y", "a", "b", "c"], L, [f"x_dot - r*{wy}", f"y_dot + r*{wx}"],
-                  parameters={"m": 1.0, "r": 0.5, "I": 0.1, "g": 9.81, "alpha": 0.3})
+                  parameters={"m": 1.0, "r": 0.5, "I": 0.1, "g": 9.81, "alpha": 0.3,
+                              "beta": 0.6})
 
 
-def test_a_parameter_inside_a_sine_falls_back_to_sampling():
-    """The exact points of M_1 exist, but sin(alpha) at alpha = 0.3 has no exact value:
-    compare falls back to floating-point samples (it crashed with NotExact); the same
-    system with the potential's slope as a number is compared at exact points."""
+def test_a_parameter_inside_a_sine():
+    """sin(alpha) at alpha = 0.3: e^{0.3 i} is transcendental, so (cos, sin) of alpha are
+    drawn on the circle and compare runs at exact points, agreeing; a second angle with
+    a value (beta = 0.6 = 2 alpha, so cos beta = 2 cos^2 alpha - 1 at the values) makes
+    neither drawable, and compare falls back to floating-point samples (once a crash
+    with NotExact)."""
     inclined = cross_check(_ball_on_incline("m*g*sin(alpha)*x"))
-    assert inclined.method == "sampled" and inclined.agree
+    assert inclined.method == "points" and inclined.agree
     plain = cross_check(_ball_on_incline("m*g*x/3"))
     assert plain.method == "points" and plain.agree
+    two = cross_check(_ball_on_incline("m*g*sin(alpha)*x + m*g*sin(beta)*y"))
+    assert two.method == "sampled" and two.agree
     with pytest.raises(InputError, match="sin"):
-        cross_check(_ball_on_incline("m*g*sin(alpha)*x"), method="points")
+        cross_check(_ball_on_incline("m*g*sin(alpha)*x + m*g*sin(beta)*y"), method="points")

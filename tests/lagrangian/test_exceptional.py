@@ -41,10 +41,12 @@ def test_floating_point_determinants_pivot():
     assert all(abs(float(a[0]) - float(b[0])) < 1e-40 for a, b in zip(x, y))
 
 
-def test_without_exact_points_the_note_says_what_the_verdict_at_the_values_rests_on():
-    """No exact points of M_1 (a circle x^2 + y^2 = l^2): the decisions taken at float
-    points are taken with the parameters at their values, so nothing is left unchecked;
-    a decision taken for generic parameters (an exact rank) is named instead."""
+def test_without_points_over_the_parameter_field_the_note_says_what_the_verdict_rests_on():
+    """M_1 curved (a circle x^2 + y^2 = l^2): no points over Q(params), but every
+    decision is proved at points of M_1 over F_p with the parameters at their values, so
+    nothing is left unchecked and nothing is said. Decisions taken at float points are
+    also at the values; one taken for generic parameters (an exact rank by reduction)
+    is named."""
     from types import SimpleNamespace
 
     from nhham.lagrangian.decision import Decision
@@ -54,22 +56,27 @@ def test_without_exact_points_the_note_says_what_the_verdict_at_the_values_rests
     from nhham.verdict.values import classification_at_values
 
     at = classification_at_values(pendulum_cartesian())
-    assert at.warnings[0].startswith("no exact points of M_1: every decision that could "
-                                     "change with the parameters was taken at float points")
-    assert not any("not checked" in w for w in at.warnings)
+    assert at.warnings == ()
+    assert all(ev.decision.scope.startswith("M is curved")
+               for st in at.verdict.analysis.stages for ev in st.decisions
+               if ev.decision.method == "exact")
 
-    def note(*evidence, integrable=True, method="sampled"):
+    def note(*evidence, integrable=True, terms=()):
         stage = SimpleNamespace(decisions=evidence)
         analysis = SimpleNamespace(stages=(stage,), integrable=integrable,
-                                   integrability=SimpleNamespace(method=method))
+                                   integrability=SimpleNamespace(decisions=terms))
         return ExceptionalData._unchecked_note(SimpleNamespace(
             analysis=analysis, system=pendulum_cartesian()))
 
     sampled = Evidence("rank of (Z_i(chi_j)) on M_1", Decision(1, "sampled", "at points"))
     exact_zero = Evidence("condition from g", Decision(True, "exact", "vanishes"))
     exact_rank = Evidence("rank of (Z_i(chi_j)) on M_2", Decision(2, "exact", "minor"))
+    at_values = Evidence("rank of (Z_i(chi_j)) on M_1",
+                         Decision(2, "exact", "proof", scope="M is curved (...)"))
+    frobenius = (("dmu(X_1, X_2)", Decision(False, "exact", "reduced")),)
     assert note(sampled, exact_zero).startswith("no exact points of M_1: every decision")
-    text = note(sampled, exact_rank, integrable=False, method="exact")
+    assert note(at_values, exact_zero) == ""
+    text = note(sampled, exact_rank, integrable=False, terms=frobenius)
     assert text.startswith("the parameter values were not checked")
     assert "rank of (Z_i(chi_j)) on M_2" in text and "integrability" in text
     assert "(Z_i(chi_j)) on M_1" not in text  # the sampled decision is not named

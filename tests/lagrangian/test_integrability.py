@@ -156,15 +156,22 @@ def _with_circle(constraints):
     return System(names, L, constraints, holonomic=["a**2 + b**2 - 1"], parameters={"R": 1.0})
 
 
-def test_sampled_frobenius_where_there_are_no_exact_points():
+def test_frobenius_on_a_curved_Q1():
     """The rolling disk's distribution beside a circle: not integrable (dmu_1 = R sin(theta)
-    dtheta ^ dphi on D, as in the symbolic test above); x_dot - y_dot beside it: closed,
-    integrable. Both decided at sampled points of Q_1 (the circle has no exact points)."""
+    dtheta ^ dphi on D, as in the symbolic test above), proved at a point of the curved
+    Q_1 over F_p and said so; at sampled points too. x_dot - y_dot beside it: closed,
+    integrable, at sampled points (the circle has no rational points for the bound)."""
     from nhham.lagrangian.integrability import frobenius_sampled
 
     rolling = _with_circle(["x_dot - R*cos(theta)*phi_dot", "y_dot - R*sin(theta)*phi_dot"])
     res = integrability(rolling)
-    assert res.integrable is False and res.method == "sampled"
+    assert res.integrable is False and res.method == "exact"
+    (_, proof), = res.decisions
+    assert proof.error_bound == 0.0 and proof.scope.startswith("M is curved")
+    assert "on the component of M through it" in proof.detail
+    sampled = frobenius_sampled(rolling, ("holonomic[0].lift", "constraints[0]",
+                                          "constraints[1]"))
+    assert sampled.integrable is False and sampled.method == "sampled"
     closed = _with_circle(["x_dot - y_dot"])
     res = frobenius_sampled(closed, ("holonomic[0].lift", "constraints[0]"))
     assert res.integrable is True and res.method == "sampled"

@@ -1,0 +1,358 @@
+"""Points over F_p of a curved configuration space: holonomic constraints solved mod p.
+
+A holonomic constraint that no coordinate enters linearly with a constant coefficient
+(the bicycle's front contact, a closed linkage, a particle on a sphere) leaves M_1 with
+no rational parametrisation, so :mod:`nhham.lagrangian.points` cannot draw it. Over the
+finite field F_p (p = 2^61 − 1) it has points all the same: the remaining k constraints
+g(q) = 0 become k polynomial equations in k *dependent* coordinates once the others
+are drawn at random, and a polynomial system over F_p is solved exactly.
+
+How the equations are made polynomial (done once, symbolically):
+
+* a dependent coordinate q that appears only inside sin/cos (an *angle*) becomes the
+  rational parameter t of its circle point, cos q = (1 − t²)/(1 + t²),
+  sin q = 2t/(1 + t²); sin/cos of k q + rest are expanded, ``rest`` staying an
+  expression of the drawn symbols; a dependent coordinate that never appears inside
+  sin/cos is its own unknown; one that appears both ways cannot be dependent;
+* every sqrt(b) whose radicand involves a dependent coordinate is a new unknown w with
+  w² = b (half-integer powers are its powers);
+* numerators are taken; the coefficients, expressions of the drawn coordinates and the
+  parameters, are evaluated at each draw by :func:`~nhham.lagrangian.domains.evaluate`.
+
+Per draw, a lex Gröbner basis over F_p gives a triangular system, solved by univariate
+roots (:meth:`sympy.Poly.ground_roots` over GF(p)) from the last unknown up. A solution
+is a point only when the original constraints vanish there *exactly* (evaluated with
+the branch :func:`~nhham.lagrangian.domains.square_root` fixes for every sqrt, which
+rejects the other branch and the zeros of denominators) and the Jacobian dg/dq_dep has
+full rank there (a *smooth* point, on exactly one component of M).
+
+What a point proves. A function of q (a minor, a bracket, a Frobenius term) that is
+nonzero at a smooth point of M over F_p does not vanish identically on the irreducible
+component of M through that point (over the algebraic closure of Q): if it vanished
+there it would lie in that component's ideal, and a polynomial of that ideal with
+p-integral coefficients vanishes at its points mod p. So a full rank there proves the
+rank on that component, for the parameter values the point was drawn with. When M is
+irreducible (a single hypersurface g = 0 with g irreducible, as the bicycle's contact),
+that is M. Where no solution is found the caller falls back to sampled points.
+"""
+
+from __future__ import annotations
+
+import itertools
+from dataclasses import dataclass
+
+import sympy as sp
+
+from nhham.lagrangian.domains import PRIME, Angle, ModP, NotExact, evaluate
+from nhham.lagrangian.linalg import exact_rank
+from nhham.system.expressions import derivative, short
+
+__all__ = ["CurvedChart", "curved_chart"]
+
+# Dependent coordinate sets tried (each built symbolically) before giving up.
+MAX_CHOICES = 12
+
+
+@dataclass(frozen=True)
+class CurvedChart:
+    """The constraints g(q) = 0 of a curved M as polynomials in its dependent unknowns.
+
+    Attributes
+    ----------
+    constraints : tuple of sympy.Expr
+        The constraints solved here (each = 0), in the coordinates.
+    dependent : tuple of sympy.Symbol
+        The coordinates solved mod p, one per constraint.
+    angles : tuple of bool
+        Per dependent coordinate: an angle (solved for its circle point) or a plain
+        value.
+    unknowns : tuple of sympy.Symbol
+        The polynomial unknowns: one per dependent coordinate (t or the value), then
+        one per sqrt of a radicand with a dependent coordinate.
+    polynomials : tuple of dict
+        Each equation as {exponent tuple: coefficient expression in the drawn symbols}.
+    degrees : tuple of int
+        Total degree of each equation in the unknowns (its Bézout number is their
+        product).
+    """
+
+    constraints: tuple
+    dependent: tuple
+    angles: tuple
+    unknowns: tuple
+    polynomials: tuple
+    degrees: tuple
+
+    def describe(self) -> str:
+        """What the chart solves, for the decisions' scope."""
+        names = ", ".join(q.name for q in self.dependent)
+        return (f"the holonomic constraint{'s' if len(self.constraints) > 1 else ''} solved "
+                f"for {names} over F_p")
+
+    def solve(self, env: dict, rng) -> dict | None:
+        """The dependent coordinates at one smooth point of M above the drawn values.
+
+        Parameters
+        ----------
+        env : dict
+            Values (:class:`ModP`, :class:`Angle` of them) of every other coordinate
+            and of the parameters.
+        rng : random.Random
+            Picks one of the solutions.
+
+        Returns
+        -------
+        dict or None
+            Dependent coordinate -> value (an :class:`Angle` with no polynomial value
+            for an angle, a :class:`ModP` otherwise); None when no smooth point lies
+            above these values (the caller draws again).
+        """
+        try:
+            system = self._instance(env)
+        except ZeroDivisionError:
+            return None
+        solutions = _triangular_solutions(system, self.unknowns)
+        rng.shuffle(solutions)
+        for sol in solutions:
+            point = self._point(sol)
+            if point is not None and self._on_M(env, point):
+                return point
+        return None
+
+    def _instance(self, env):
+        """The equations over F_p at the drawn values (sympy Polys with modulus p)."""
+        cache: dict = {}
+        out = []
+        for poly in self.polynomials:
+            keys = list(poly)
+            values = evaluate([poly[k] for k in keys], env, cache)
+            out.append(sp.Poly.from_dict({k: ModP.lift(v).v for k, v in zip(keys, values)},
+                                         *self.unknowns, modulus=PRIME))
+        return out
+
+    def _point(self, sol):
+        point = {}
+        for q, angle, u in zip(self.dependent, self.angles, self.unknowns):
+            t = ModP(sol[u])
+            if not angle:
+                point[q] = t
+                continue
+            one = 1 + t * t
+            if not one:
+                return None
+            point[q] = Angle(None, (1 - t * t) / one, 2 * t / one)
+        return point
+
+    def _on_M(self, env, point) -> bool:
+        """The constraints vanish exactly at the point (the branch of every sqrt as F_p
+        fixes it, no denominator zero) and their Jacobian in the dependent coordinates
+        has full rank (a smooth point)."""
+        at = {**env, **point}
+        try:
+            if any(evaluate(self.constraints, at)):
+                return False
+            jac = [evaluate([derivative(g, q) for q in self.dependent], at)
+                   for g in self.constraints]
+        except (ZeroDivisionError, NotExact):
+            return False
+        return exact_rank(jac)[0] == len(self.dependent)
+
+
+def curved_chart(constraints, coordinates, expressions=()) -> CurvedChart:
+    """The chart of ``constraints`` with the dependent coordinates of least degree.
+
+    Parameters
+    ----------
+    constraints : sequence of sympy.Expr
+        The holonomic constraints not solved linearly (each = 0), in the remaining
+        coordinates.
+    coordinates : sequence of sympy.Symbol
+        The coordinates that may be dependent (those not solved linearly).
+    expressions : sequence of sympy.Expr, optional
+        Everything else evaluated at the points (Lagrangian, constraints): a
+        coordinate that appears there outside sin/cos cannot be an angle solved by its
+        circle point alone.
+
+    Raises
+    ------
+    NotExact
+        No choice of dependent coordinates makes the constraints polynomial.
+    """
+    constraints = tuple(sp.sympify(g) for g in constraints)
+    k = len(constraints)
+    involved = set().union(*(g.free_symbols for g in constraints))
+    candidates = [q for q in coordinates if q in involved]
+    kinds = {q: _kind(q, constraints, expressions) for q in candidates}
+    usable = [q for q in candidates if kinds[q] is not None]
+    charts, why = [], "no coordinate enters them only through sin/cos or only polynomially"
+    for choice in itertools.islice(itertools.combinations(usable, k), MAX_CHOICES):
+        try:
+            charts.append(_chart(constraints, choice, [kinds[q] for q in choice]))
+        except NotExact as exc:
+            why = str(exc)
+    if not charts:
+        raise NotExact(f"the holonomic constraint {short(constraints[0])} = 0 cannot be "
+                       f"solved over F_p ({why})")
+    return min(charts, key=lambda c: (_bezout(c.degrees), len(c.unknowns)))
+
+
+def _bezout(degrees) -> int:
+    out = 1
+    for d in degrees:
+        out *= d
+    return out
+
+
+def _kind(q, constraints, expressions) -> str | None:
+    """"angle" (q only inside sin/cos everywhere), "value" (never inside sin/cos in
+    the constraints nor anywhere else), or None."""
+    inside = outside = False
+    for e in (*constraints, *expressions):
+        i, o = _occurrences(sp.sympify(e), q)
+        inside, outside = inside or i, outside or o
+    if inside and outside:
+        return None
+    return "angle" if inside else "value"
+
+
+def _occurrences(e, q) -> tuple[bool, bool]:
+    """(q inside a sin/cos argument, q elsewhere) in ``e``."""
+    if q not in e.free_symbols:
+        return False, False
+    if e == q:
+        return False, True
+    if e.func in (sp.sin, sp.cos, sp.tan, sp.cot):
+        return True, False
+    inside = outside = False
+    for a in e.args:
+        i, o = _occurrences(a, q)
+        inside, outside = inside or i, outside or o
+    return inside, outside
+
+
+def _chart(constraints, dependent, kinds) -> CurvedChart:
+    """The polynomial equations for one choice of dependent coordinates."""
+    unknowns, circle = [], {}
+    for q, kind in zip(dependent, kinds):
+        if kind == "angle":
+            t = sp.Dummy(f"t_{q.name}")
+            circle[q] = ((1 - t ** 2) / (1 + t ** 2), 2 * t / (1 + t ** 2))
+            unknowns.append(t)
+        else:
+            unknowns.append(q)
+    roots: dict = {}
+    rewrite = _Rewrite(set(dependent), circle, roots)
+    equations = [rewrite(g) for g in constraints]
+    for base, w in list(roots.items()):
+        equations.append(w ** 2 - base)
+    gens = [*unknowns, *roots.values()]
+    polys, degrees = [], []
+    for eq in equations:
+        num = sp.fraction(sp.together(eq))[0]
+        try:
+            poly = sp.Poly(sp.expand(num), *gens)
+        except sp.PolynomialError as exc:
+            raise NotExact(f"not polynomial in {', '.join(q.name for q in dependent)}: "
+                           f"{exc}") from exc
+        if any(s in gens for c in poly.coeffs() for s in c.free_symbols):
+            raise NotExact("a coefficient still depends on an unknown")
+        polys.append(dict(zip(poly.monoms(), poly.coeffs())))
+        degrees.append(poly.total_degree())
+    return CurvedChart(tuple(constraints), tuple(dependent),
+                       tuple(k == "angle" for k in kinds), tuple(gens), tuple(polys),
+                       tuple(degrees))
+
+
+class _Rewrite:
+    """sin/cos of the dependent angles as rational functions of t, sqrt of radicands
+    with a dependent coordinate as new unknowns w (w² = radicand)."""
+
+    def __init__(self, dependent, circle, roots):
+        self.dependent, self.circle, self.roots = dependent, circle, roots
+
+    def __call__(self, e):
+        e = sp.sympify(e)
+        if e.is_Atom or not e.free_symbols & self.dependent:
+            return e
+        if e.func in (sp.sin, sp.cos):
+            return self._trig(e.func, e.args[0])
+        if e.func in (sp.tan, sp.cot):
+            s, c = self._trig(sp.sin, e.args[0]), self._trig(sp.cos, e.args[0])
+            return s / c if e.func is sp.tan else c / s
+        if e.is_Pow and e.exp.is_Rational and e.exp.q == 2:
+            base = self(e.base)
+            w = self.roots.setdefault(base, sp.Dummy(f"w{len(self.roots)}"))
+            return w ** int(e.exp.p)
+        if e.is_Pow and not e.exp.is_Integer:
+            raise NotExact(f"the power {short(e)} of a dependent coordinate")
+        if e.is_Function and not e.is_Add and not e.is_Mul and not e.is_Pow:
+            raise NotExact(f"{e.func} of a dependent coordinate")
+        return e.func(*[self(a) for a in e.args])
+
+    def _trig(self, func, arg):
+        arg = sp.expand(arg)
+        c, s = sp.S.One, sp.S.Zero
+        rest = arg
+        for q in self.dependent & arg.free_symbols:
+            k = arg.coeff(q)
+            if not k.is_Integer or q not in self.circle:
+                raise NotExact(f"{func}({short(arg)}) is not of an integer multiple of "
+                               f"the angle {q.name}")
+            ck, sk = _multiple(*self.circle[q], int(k))
+            c, s = c * ck - s * sk, s * ck + c * sk
+            rest = rest - k * q
+        rest = sp.expand(rest)
+        if rest.free_symbols & self.dependent:
+            raise NotExact(f"{func}({short(arg)}) is not linear in the dependent angles")
+        cr, sr = sp.cos(rest), sp.sin(rest)
+        if func is sp.cos:
+            return c * cr - s * sr
+        return s * cr + c * sr
+
+
+def _multiple(c, s, k: int):
+    """(cos k q, sin k q) from (cos q, sin q)."""
+    ck, sk = sp.S.One, sp.S.Zero
+    for _ in range(abs(k)):
+        ck, sk = ck * c - sk * s, sk * c + ck * s
+    return (ck, sk) if k >= 0 else (ck, -sk)
+
+
+def _triangular_solutions(polys, unknowns) -> list:
+    """Every solution over F_p of the polynomial system (a list of {unknown: int}); []
+    when the system is not zero-dimensional or has no solution there."""
+    gens = list(unknowns)
+    try:
+        basis = sp.groebner([p.as_expr() for p in polys], *gens, order="lex",
+                            modulus=PRIME)
+    except (sp.PolynomialError, ZeroDivisionError):
+        return []
+    if list(basis.exprs) == [1]:
+        return []
+    basis = [sp.Poly(b, *gens, modulus=PRIME) for b in basis.exprs]
+    return _solve_from(len(gens) - 1, basis, gens, {})
+
+
+def _solve_from(i, basis, gens, known) -> list:
+    """Solutions extending ``known`` (values of gens[i+1:]) by the values of gens[i]."""
+    if i < 0:
+        return [dict(known)]
+    later = set(gens[i + 1:])
+    own = []
+    for b in basis:
+        used = {g for g, d in zip(gens, b.degree_list()) if d}
+        if used <= later | {gens[i]} and gens[i] in used:
+            own.append(b)
+    if not own:
+        return []  # gens[i] free above this point: not zero-dimensional
+    univariate = None
+    for b in own:
+        e = b.as_expr().xreplace({g: known[g] for g in later})
+        u = sp.Poly(e, gens[i], modulus=PRIME)
+        univariate = u if univariate is None else univariate.gcd(u)
+    if univariate is None or univariate.is_zero or univariate.degree() < 1:
+        return []
+    out = []
+    for root in univariate.ground_roots():
+        out += _solve_from(i - 1, basis, gens, {**known, gens[i]: int(root) % PRIME})
+    return out
