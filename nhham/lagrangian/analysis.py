@@ -477,6 +477,8 @@ def _stage_one_at_points(view, geo, exprs, labels, lam, factory, policy):
     r = int(verdict.rank.value)
     if r != m or not verdict.consistent.value:
         return None
+    if verdict.rank.scope and not _has_real_point(view, exprs, policy):
+        return None  # points over F_p only (x^2 + y^2 + 1 = 0): the loop says M_1 is empty
     rows, cols = verdict.rows, verdict.cols
     others = [j for j in range(len(exprs)) if j not in rows]
     v = sp.Matrix(view.velocities)
@@ -520,6 +522,17 @@ def _stage_one_at_points(view, geo, exprs, labels, lam, factory, policy):
         scaled_fields=lambda: (geo.scaled_euler_lagrange_field, geo.scaled_vertical_fields,
                                geo.field_scale),
     )
+
+
+def _has_real_point(view, exprs, policy) -> bool:
+    """Whether a curved M_1 has a real point (one found by Newton projection): its
+    points over F_p are points over the algebraic closure, and say nothing of that."""
+    try:
+        Submanifold(view, tuple(exprs), precision=policy.precision, samples=1,
+                    seed=policy.seed).points()
+    except ComputationError:
+        return False
+    return True
 
 
 def _state_positions(system, coords):

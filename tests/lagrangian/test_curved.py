@@ -1,0 +1,152 @@
+"""Points over F_p of curved configuration spaces (nhham.lagrangian.curved).
+
+Every point is checked against the constraints written out by hand in plain modular
+integers (not through the evaluator that found it); the verdicts on curved M_1 against
+what holds at the parameter values.
+"""
+
+from __future__ import annotations
+
+import pytest
+import sympy as sp
+
+import nhham
+from nhham import Policy
+from nhham.lagrangian.curved import curved_chart
+from nhham.lagrangian.domains import PRIME, Angle, ModP, NotExact, square_root
+from nhham.lagrangian.points import PointSampler, circle_parameters, exact_sampler
+from nhham.lagrangian.submanifold import Submanifold
+from nhham.system.models import particle_on_sphere
+from nhham.system.scene import load_scene
+
+P = PRIME
+
+
+def _value(x) -> int:
+    x = x.r if isinstance(x, Angle) else x
+    return x.v if isinstance(x, ModP) else ModP.lift(x).v
+
+
+def test_points_of_the_sphere_satisfy_the_constraints_exactly():
+    """x^2 + y^2 + z^2 = R^2 and x x' + y y' + z z' = 0 in integers mod p, at points
+    whose dependent coordinate comes from a root of a polynomial over F_p."""
+    system = particle_on_sphere()
+    sampler = PointSampler.on_M1(system, seed=3, modular=True)
+    assert sampler.chart is not None and sampler.chart.degrees == (2,)
+    x, y, z = system.coordinates
+    xd, yd, zd = system.velocities
+    R = sp.Symbol("R")
+    for _ in range(5):
+        env = sampler.point().env
+        X, Y, Z = (_value(env[s]) for s in (x, y, z))
+        assert (X * X + Y * Y + Z * Z - _value(env[R]) ** 2) % P == 0
+        assert (X * _value(env[xd]) + Y * _value(env[yd]) + Z * _value(env[zd])) % P == 0
+
+
+def test_a_rational_sampler_refuses_a_curved_M():
+    """Rational points of a curved M are not drawn (no rational parametrisation)."""
+    with pytest.raises(NotExact, match="curved"):
+        PointSampler.on_M1(particle_on_sphere(), seed=1)
+
+
+@pytest.fixture(scope="module")
+def bicycle():
+    return load_scene("examples/whipple_bicycle.toml").system
+
+
+def test_the_bicycle_contact_holds_exactly_at_points_over_Fp(bicycle):
+    """The front contact of the Whipple bicycle (a sqrt of 1 - S^2) at points over F_p:
+    with S = sin(delta) cos(phi) cos(h + theta) + sin(phi) cos(delta) and w the square
+    root of 1 - S^2 that is a square mod p, the contact condition written by hand
+    -lf sin(h + theta) cos(phi) + fo (-sin(delta) sin(phi) + cos(delta) cos(phi)
+    cos(h + theta)) + lr cos(phi) cos(h + theta) - rF w + rR cos(phi) = 0 holds in
+    integers mod p; the head angle h is drawn on the circle (one angle with a value)."""
+    sampler = PointSampler.on_M1(bicycle, seed=5, modular=True)
+    names = {s.name: s for s in (*bicycle.coordinates, *bicycle.parameters)}
+    assert circle_parameters(bicycle) == (names["htangle"],)
+    for _ in range(3):
+        env = sampler.point().env
+
+        def cs(name):
+            a = env[names[name]]
+            assert isinstance(a, Angle)
+            return a.c.v, a.s.v
+
+        def par(name):
+            return _value(env[names[name]])
+
+        (cp, sp_), (cd, sd), (ch, sh), (ct, st) = (cs(n) for n in ("phi", "delta",
+                                                                   "htangle", "pitch"))
+        c_ht, s_ht = (ch * ct - sh * st) % P, (sh * ct + ch * st) % P
+        S = (sd * cp * c_ht + sp_ * cd) % P
+        w = square_root(ModP(1 - S * S)).v
+        g = (-par("forklength") * s_ht * cp
+             + par("forkoffset") * (-sd * sp_ + cd * cp * c_ht)
+             + par("framelength") * cp * c_ht - par("rF") * w + par("rR") * cp)
+        assert g % P == 0
+        assert (cp * cp + sp_ * sp_ - 1) % P == 0 and (ct * ct + st * st - 1) % P == 0
+    assert "over F_p" in sampler.scope and "component" in sampler.scope
+
+
+def test_the_bicycle_is_classified_by_proofs_at_its_parameter_values(bicycle):
+    """Every decision of the bicycle's classification is a proof at a smooth point of
+    M_1 over F_p (none sampled), each saying so; the verdict at the values has nothing
+    left to check."""
+    from nhham.verdict.values import classification_at_values
+
+    at = classification_at_values(bicycle)
+    analysis = at.verdict.analysis
+    decisions = [ev.decision for st in analysis.stages for ev in st.decisions]
+    decisions += [d for _, d in analysis.integrability.decisions]
+    assert decisions and all(d.method == "exact" and d.error_bound == 0.0 for d in decisions)
+    assert all(d.scope.startswith("M is curved") and d.scope in d.detail for d in decisions)
+    assert analysis.rank_C == 5 and analysis.integrable is False
+    assert (at.verdict.first_class, at.verdict.second_class) == (0, 6)
+    assert at.warnings == ()
+
+
+def test_exact_points_answer_where_sampling_would_be_wrong():
+    """Two velocity constraints z' + x' and z' + (1 + eps) x' on a cylinder over a
+    circle, eps = 1e-13: independent at the value, but within float64's tolerance of
+    dependent. The exact route (points of the curved M_1 over F_p) says rank C = 3,
+    determined; the sampled route alone finds rank 2 and no warning."""
+    system = nhham.System(["x", "y", "z", "w"], "(x_dot**2 + y_dot**2 + z_dot**2 + w_dot**2)/2",
+                          ["z_dot + x_dot", "z_dot + (1 + eps)*x_dot"],
+                          holonomic=["x**2 + y**2 - 1"], parameters={"eps": 1e-13})
+    exact = nhham.analyze_constraints(system)
+    assert exact.rank_C == 3 and exact.status == "determined"
+    assert all(ev.decision.method == "exact" for st in exact.stages for ev in st.decisions)
+    sampled = nhham.analyze_constraints(system, policy=Policy(exact=False))
+    assert sampled.rank_C == 2 and sampled.status == "underdetermined"
+
+
+def test_a_rank_drop_on_the_curved_M1_is_not_proved_away():
+    """Constraints dependent only on the circle x^2 + y^2 = 1 (z' + w' and
+    (x^2 + y^2) z' + w', equal there): no point over F_p proves a full rank, and the
+    decision says rank 2 of 3 (C singular on M_1)."""
+    system = nhham.System(["x", "y", "z", "w"], "(x_dot**2 + y_dot**2 + z_dot**2 + w_dot**2)/2",
+                          ["z_dot + w_dot", "(x**2 + y**2)*z_dot + w_dot"],
+                          holonomic=["x**2 + y**2 - 1"])
+    analysis = nhham.analyze_constraints(system)
+    assert analysis.rank_C == 2 and not analysis.regular
+
+
+def test_a_chart_refuses_what_it_cannot_make_polynomial():
+    """A dependent coordinate both inside and outside sin (q + sin q = 1), or under exp,
+    gives NotExact naming the constraint."""
+    q, r = sp.symbols("q r")
+    with pytest.raises(NotExact, match="cannot be solved over F_p"):
+        curved_chart([q + sp.sin(q) - 1], [q])
+    with pytest.raises(NotExact, match="cannot be solved over F_p"):
+        curved_chart([sp.exp(q) + r ** 2 - 3], [q])
+
+
+def test_the_submanifold_of_Q_of_a_curved_constraint_has_points():
+    """exact_sampler of Q_1 = {g = 0} (fibre ()) is curved too; its points satisfy g."""
+    system = particle_on_sphere()
+    Q1 = Submanifold(system, system.holonomic, fibre=())
+    sampler = exact_sampler(Q1, 7, modular=True)
+    env = sampler.point().env
+    x, y, z = system.coordinates
+    total = sum(_value(env[s]) ** 2 for s in (x, y, z)) - _value(env[sp.Symbol("R")]) ** 2
+    assert total % P == 0
