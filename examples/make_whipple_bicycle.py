@@ -208,9 +208,10 @@ HEADER = """\
 # thetaR rear wheel angle, delta steer, thetaF front wheel angle. Front contact on the ground
 # (holonomic), no slip at either wheel (4 affine constraints): n = 8, m = 5.
 #
-# What `nhham classify` reports: C regular on M_1 (rank 5, sampled), one stage (M_f = M_1),
+# What `nhham classify` reports: C regular on M_1 (rank 5), one stage (M_f = M_1),
 #   determined, no free multipliers, not integrable (rolling); on T*Q 0 first class, 6 second
-#   class (about 13 s CPU, bench/RESULTS.md).
+#   class: every decision proved at a smooth point of the curved M_1 over F_p with the
+#   parameters at their values (about 2.7 s CPU, bench/RESULTS.md).
 # What `nhham linearize` finds about the [steady] upright straight-ahead motion: neutral
 #   directions x, y, psi, thetaR, thetaF (cyclic) and the speed (thetaF_dot in the chart
 #   chosen: pitch, x_dot, y_dot, psi_dot, pitch_dot, thetaR_dot dependent); in the

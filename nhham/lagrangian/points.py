@@ -10,12 +10,15 @@ independent of (cos q, sin q): a polynomial in (q, cos q, sin q) vanishes as a
 function exactly when it vanishes at every (r, c, s) with c² + s² = 1. Integer
 combinations of coordinates inside sin/cos (θ1 − θ2, 2φ) are exact through
 (c + i s) products. Parameters with values take their exact decimal value
-(``Rational(str(value))``); parameters without values are drawn like coordinates.
-Dependent velocities are solved exactly from the affine constraints; holonomic
-constraints are eliminated when a coordinate enters one linearly with a constant
-coefficient. Anything else raises :class:`~nhham.lagrangian.domains.NotExact`, and
-the caller decides at sampled points instead, saying so. The arithmetic of the
-values and of their degree bounds is :mod:`nhham.lagrangian.domains`.
+(``Rational(str(value))``), except the one parameter with a value inside sin/cos, whose
+circle point is drawn (:func:`circle_parameters`); parameters without values are drawn
+like coordinates. Dependent velocities are solved exactly from the affine constraints;
+holonomic constraints are eliminated when a coordinate enters one linearly with a
+constant coefficient; the others make M curved, with points over F_p only, found by
+:mod:`nhham.lagrangian.curved` (``modular=True``). Anything else raises
+:class:`~nhham.lagrangian.domains.NotExact`, and the caller decides at sampled points
+instead, saying so. The arithmetic of the values and of their degree bounds is
+:mod:`nhham.lagrangian.domains`.
 
 Two samplers, one per kind of point: :class:`PointSampler` (rational points, or points
 over F_p with ``modular=True``) and :class:`ParameterFieldSampler` (points whose values
