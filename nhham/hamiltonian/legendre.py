@@ -141,6 +141,8 @@ class LegendreMap:
     @cached_property
     def is_quadratic(self) -> bool:
         """True when L is a polynomial of degree <= 2 in the velocities."""
+        if self.system.quadratic_parts is not None:  # read from L's terms: no expansion
+            return True
         try:
             poly = sp.Poly(sp.expand(self.system.lagrangian), *self.velocities)
         except sp.PolynomialError:

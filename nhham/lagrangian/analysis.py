@@ -525,11 +525,13 @@ def _stage_one_at_points(view, geo, exprs, labels, lam, factory, policy):
 
 
 def _has_real_point(view, exprs, policy) -> bool:
-    """Whether a curved M_1 has a real point (one found by Newton projection): its
-    points over F_p are points over the algebraic closure, and say nothing of that."""
+    """Whether a curved M_1 has a real point: its points over F_p are points over the
+    algebraic closure, and say nothing of that. A point of Q_1 = {g = 0} found by Newton
+    projection is enough: the rank of C proved on M_1 makes mu of full rank at almost
+    every point of Q_1, where the velocities solve mu v = -h."""
     try:
-        Submanifold(view, tuple(exprs), precision=policy.precision, samples=1,
-                    seed=policy.seed).points()
+        Submanifold(view, tuple(view.holonomic), precision=policy.precision, samples=1,
+                    seed=policy.seed, fibre=()).points()
     except ComputationError:
         return False
     return True

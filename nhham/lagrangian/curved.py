@@ -38,6 +38,7 @@ that is M. Where no solution is found the caller falls back to sampled points.
 
 from __future__ import annotations
 
+import functools
 import itertools
 from dataclasses import dataclass
 
@@ -178,7 +179,13 @@ def curved_chart(constraints, coordinates, expressions=()) -> CurvedChart:
     NotExact
         No choice of dependent coordinates makes the constraints polynomial.
     """
-    constraints = tuple(sp.sympify(g) for g in constraints)
+    # Memoised: a command asks for the chart of M_1, Q_1 and M_f, often the same one.
+    return _best_chart(tuple(sp.sympify(g) for g in constraints), tuple(coordinates),
+                       tuple(sp.sympify(e) for e in expressions))
+
+
+@functools.lru_cache(maxsize=64)
+def _best_chart(constraints, coordinates, expressions) -> CurvedChart:
     k = len(constraints)
     involved = set().union(*(g.free_symbols for g in constraints))
     candidates = [q for q in coordinates if q in involved]

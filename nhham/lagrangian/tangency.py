@@ -218,14 +218,13 @@ class Tangency:
         constraints and the moving rows are as many as the multipliers; else None."""
         moving = [j for j, row in enumerate(self.Jv) if any(x != 0 for x in row)]
         still = [j for j in range(len(self.chis)) if j not in moving]
-        known = {sp.expand(c) for c in self.chis} if still else set()
         # The system's own lifts are recognised as written (expand does not bring a
         # lift with sqrt to one normal form: the bicycle's differs by 10^4 characters).
         lifts = dict(zip(self.system.holonomic, getattr(self.system, "complete_lifts", ())))
         chis = set(self.chis)
+        still = [j for j in still if lifts.get(self.chis[j]) not in chis]
+        known = {sp.expand(c) for c in self.chis} if still else set()
         for j in still:
-            if lifts.get(self.chis[j]) in chis:
-                continue
             lift = sp.expand(sum((a * b for a, b in zip(self.Jq[j], self.v)), sp.S.Zero))
             if lift != 0 and lift not in known and -lift not in known:
                 return None

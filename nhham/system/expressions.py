@@ -616,6 +616,10 @@ class _ScenePrinter(StrPrinter):
 
 
 _PRINTER = _ScenePrinter({"full_prec": True})
+# Sorting the terms of a sum costs three times the printing itself: entries longer than
+# this keep sympy's stored (deterministic) order; the shorter ones, read by eye, are sorted.
+_UNSORTED = _ScenePrinter({"full_prec": True, "order": "none"})
+SORTED_TEXT_LIMIT = 2000
 
 
 def to_text(expr) -> str:
@@ -633,9 +637,12 @@ def to_text(expr) -> str:
         Text in the scene's own names (``Abs``, ``atan2``, ``sqrt``...);
         ``parse_expression(to_text(e), table, ...) == e`` and, for names that
         are not Python keywords or sympy constants, ``sympy.sympify`` reads it
-        back too.
+        back too. Terms are in sympy's printing order up to
+        :data:`SORTED_TEXT_LIMIT` characters, in its stored order beyond.
     """
-    return _PRINTER.doprint(sp.sympify(expr))
+    expr = sp.sympify(expr)
+    text = _UNSORTED.doprint(expr)
+    return _PRINTER.doprint(expr) if len(text) <= SORTED_TEXT_LIMIT else text
 
 
 def short(expr, limit: int = 80) -> str:
