@@ -56,6 +56,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from scene_output import write_example  # noqa: E402
 from nhham.system.description import System, quadratic_parts  # noqa: E402
+from nhham.system.contacts import ContactPoint  # noqa: E402
 from nhham.system.mechanics import from_mechanics  # noqa: E402
 
 #: Benchmark values (Meijaard et al. 2007, Table 1), converted to the
@@ -96,6 +97,12 @@ def benchmark_parameters() -> dict:
 
 def mechanics_system() -> me.System:
     """The bicycle as a ``sympy.physics.mechanics.System`` (bodies, gravity, u-form constraints)."""
+    return mechanics_model()[0]
+
+
+def mechanics_model():
+    """(the mechanics System, its contact points): the contact points as
+    ``(name, material velocity in N as three expressions in q(t), q'(t), labels)``."""
     x, y, psi, phi, pitch, thetaR, delta, thetaF = me.dynamicsymbols(
         "x y psi phi pitch thetaR delta thetaF")
     q = [x, y, psi, phi, pitch, thetaR, delta, thetaF]
@@ -168,7 +175,14 @@ def mechanics_system() -> me.System:
     system.add_holonomic_constraints(*holonomic)
     system.add_nonholonomic_constraints(*nonholonomic)
     system.add_loads(*[me.Force(b.masscenter, -b.mass * g * N.z) for b in bodies])
-    return system
+    # Each wheel's material point at its contact: the rear carries the two rolling
+    # constraints (its height is built into the coordinates, so its normal force is no
+    # constraint force), the front also the lift of the contact height.
+    contacts = [("rear", [v_rear.dot(N.x), v_rear.dot(N.y), v_rear.dot(N.z)],
+                 ("constraints[0]", "constraints[1]")),
+                ("front", [v_front.dot(N.x), v_front.dot(N.y), v_front.dot(N.z)],
+                 ("holonomic[0]", "constraints[2]", "constraints[3]"))]
+    return system, contacts
 
 
 def build():
@@ -180,7 +194,8 @@ def build():
     """
     values = benchmark_parameters()
     values["v"] = 5.0
-    system = from_mechanics(mechanics_system(), parameters=values, name="Whipple bicycle")
+    model, _ = mechanics_model()
+    system = from_mechanics(model, parameters=values, name="Whipple bicycle")
     parts = quadratic_parts(system.lagrangian, system.velocities)
     vs, W = system.velocities, parts.W
     L = -parts.V
@@ -233,9 +248,29 @@ def initial_state():
     return state
 
 
+def contact_points(system) -> tuple:
+    """The wheels' contact points in the scene's symbols (q, q_dot)."""
+    _, contacts = mechanics_model()
+    t = me.dynamicsymbols._t
+    names = {s.name: s for s in (*system.coordinates, *system.velocities)}
+    out = []
+    for name, velocity, labels in contacts:
+        exprs = []
+        for e in velocity:
+            funcs = sorted(e.atoms(sp.Function), key=str)
+            rates = {f.diff(t): names[f"{f.func.__name__}_dot"] for f in funcs
+                     if f.func.__name__ in names}
+            e = e.subs(rates).subs({f: names[f.func.__name__] for f in funcs
+                                    if f.func.__name__ in names})
+            exprs.append(sp.expand(e))
+        out.append(ContactPoint(name, tuple(exprs), labels))
+    return tuple(out)
+
+
 def main(argv):
-    write_example(argv, "whipple_bicycle.toml", HEADER, build(), initial=initial_state(),
-                  steady=STEADY,
+    system = build()
+    write_example(argv, "whipple_bicycle.toml", HEADER, system, initial=initial_state(),
+                  steady=STEADY, contacts=contact_points(system),
                   description="Whipple bicycle, Meijaard et al. (2007) benchmark; forward speed v")
 
 

@@ -69,6 +69,9 @@ _LAZY = by_module({
     "numerics.model": ("NumericModel",),
     "numerics.integrate": ("simulate", "SimulationResult"),
     "numerics.workprecision": ("work_precision",),
+    # forces of the constraints at the points they act on
+    "system.contacts": ("ContactPoint",),
+    "numerics.contact_forces": ("contact_forces", "ContactForces"),
     # a bound on the time of a computation (the command's --budget)
     "budget": ("time_budget",),
     # stability of steady motions

@@ -485,6 +485,7 @@ def cmd_simulate(args, steps) -> CommandOutput:
                               project_initial=args.project_initial, progress=steps.progress,
                               **opts)
     data = simulation_data(result, t_span)
+    data["contact_forces"] = _contact_forces(scene, result, steps, caught)
     data["output"] = None
     data["plot"] = None
     if args.output:
@@ -509,6 +510,21 @@ def cmd_simulate(args, steps) -> CommandOutput:
                          if not line.lstrip().startswith("warning:"))
     return CommandOutput(result=data, text=text, scene=scene_info(scene),
                          warnings=warnings, failure=failure)
+
+
+def _contact_forces(scene, result, steps, warnings):
+    """The scene's contact forces along the run (None without ``[contacts]``)."""
+    if not scene.contacts or result.model is None:
+        return None
+    from nhham.numerics.contact_forces import contact_forces
+
+    with steps.step("contact forces at the stored states"):
+        forces = contact_forces(scene.system, scene.contacts, result.states,
+                                result.multipliers.T)
+    warnings.extend(forces.warnings)
+    out = forces.to_dict()
+    out.pop("warnings", None)
+    return {"t": [float(t) for t in result.t], **out}
 
 
 def _free_multipliers(system) -> tuple:

@@ -41,6 +41,7 @@ from typing import TYPE_CHECKING, Mapping
 import sympy as sp
 
 from nhham.errors import ParseError, SceneError, key_of
+from nhham.system.contacts import contacts_structure, parse_contacts
 from nhham.system.expressions import RESERVED_NAMES, parse_expression
 from nhham.system.initial import initial_residuals
 from nhham.system.naming import acceleration_symbol, momentum_symbol, velocity_symbol
@@ -72,7 +73,7 @@ MAX_FIXED_STEPS = 10**8
 
 _TOP_KEYS = (
     "name", "description", "coordinates", "parameters", "symbolic_parameters",
-    "lagrangian", "constraints", "holonomic", "initial", "simulate", "steady",
+    "lagrangian", "constraints", "holonomic", "initial", "simulate", "steady", "contacts",
 )
 _REQUIRED_KEYS = ("coordinates", "lagrangian")
 
@@ -150,6 +151,8 @@ class Scene:
         Where the scene came from (a path or ``"<string>"``).
     steady : nhham.system.steady.SteadyState or None
         The ``[steady]`` motion (expressions in the parameters), or None.
+    contacts : tuple of nhham.system.contacts.ContactPoint
+        The ``[contacts]`` points, where the constraints' forces act.
     """
 
     name: str
@@ -159,6 +162,7 @@ class Scene:
     simulate: SimulateOptions
     source: str
     steady: object = None
+    contacts: tuple = ()
 
     def simulate_options(self, **overrides) -> dict:
         """Keyword arguments for :func:`nhham.simulate` from the scene.
@@ -273,6 +277,7 @@ def loads_scene(text: str, source: str = "<string>", *, check_initial: bool = Tr
         simulate=spec.simulate,
         source=source,
         steady=expressions.get("[steady]"),
+        contacts=expressions.get("[contacts]", ()),
     )
     if check_initial and scene.initial is not None:
         initial_residuals(scene)
@@ -319,6 +324,7 @@ class _Spec:
     initial: Mapping[str, float] | None
     simulate: SimulateOptions
     steady: Mapping | None = None
+    contacts: Mapping | None = None
 
 
 def _validate_structure(data: dict, source: str) -> _Spec:
@@ -348,10 +354,11 @@ def _validate_structure(data: dict, source: str) -> _Spec:
     initial = _initial_table(data.get("initial"), coordinates, problems)
     simulate = _simulate_table(data.get("simulate"), problems)
     steady = steady_structure(data.get("steady"), coordinates, problems)
+    contacts = contacts_structure(data.get("contacts"), problems)
     if problems:
         raise _scene_error(source, problems)
     return _Spec(source, name, description, tuple(coordinates), parameters, lagrangian,
-                 tuple(constraints), tuple(holonomic), initial, simulate, steady)
+                 tuple(constraints), tuple(holonomic), initial, simulate, steady, contacts)
 
 
 def _scene_error(source: str, problems: list[str]) -> SceneError:
@@ -617,6 +624,10 @@ def _parse_expressions(spec: _Spec) -> dict:
     problems.extend(steady_problems)
     if steady is not None:
         parsed["[steady]"] = steady
+    parsed["[contacts]"], contact_problems = parse_contacts(
+        spec.contacts, lambda text, where: parse_expression(text, table, where=where),
+        len(spec.constraints), len(spec.holonomic))
+    problems.extend(contact_problems)
     if problems:
         if len(problems) == 1:
             error = ParseError(problems[0], key=key_of(problems[0]))

@@ -18,7 +18,7 @@ __all__ = ["dump_scene"]
 
 # -------------------------------------------------------------------- dump
 def dump_scene(system, initial=None, simulate=None, *, description: str = "",
-               steady=None) -> str:
+               steady=None, contacts=()) -> str:
     """Write a system (and optional initial data and options) as scene TOML.
 
     Parameters
@@ -31,6 +31,8 @@ def dump_scene(system, initial=None, simulate=None, *, description: str = "",
     description : str, optional
     steady : SteadyState or mapping of str to (float or str), optional
         The ``[steady]`` table (numbers, or expressions in the parameters).
+    contacts : sequence of ContactPoint, optional
+        The ``[contacts.<name>]`` tables (:mod:`nhham.system.contacts`).
 
     Returns
     -------
@@ -73,6 +75,10 @@ def dump_scene(system, initial=None, simulate=None, *, description: str = "",
             else:
                 text = _toml_float(float(sp.sympify(v)), k)
             lines.append(f"{_toml_key(k)} = {text}")
+    for contact in contacts:
+        lines += ["", f"[contacts.{_toml_key(contact.name)}]",
+                  f"velocity = {_toml_array([to_text(e) for e in contact.velocity])}",
+                  f"constraints = {_toml_array(list(contact.constraints))}"]
     options = simulate.given() if isinstance(simulate, SimulateOptions) else dict(simulate or {})
     if options:
         lines.append("")

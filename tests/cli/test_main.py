@@ -260,3 +260,19 @@ def test_simulate_refuses_inconsistent_initial_data(tmp_path):
     assert d["success"] and d["constraint_residual_max"] < 1e-9
 
 
+
+
+def test_simulate_reports_the_contact_forces_of_a_scene():
+    """examples/disc_on_ground.toml names its contact point: the JSON has the ground's
+    force at every stored time, its residual at rounding level (the force itself is
+    checked against m g and Newton's law in tests/numerics/test_contact_forces.py); a
+    scene without [contacts] has none."""
+    d = run_json("simulate", EXAMPLES / "disc_on_ground.toml", "--t-end", "0.5")
+    forces = d["contact_forces"]
+    assert d["contact_forces"]["t"][-1] == 0.5 and set(forces) == {"t", "ground"}
+    ground = forces["ground"]
+    assert len(ground["force"]) == len(forces["t"]) and ground["rank"] == 3
+    assert ground["max_residual"] < 1e-10
+    assert all(abs(f[2]) > 0 for f in ground["force"])
+    d = run_json("simulate", EXAMPLES / "rolling_disk.toml")
+    assert d["contact_forces"] is None
