@@ -25,9 +25,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-import sympy as sp
-
-from nhham.system.contacts import contact_rows, velocity_jacobian
 
 __all__ = ["ContactForces", "contact_forces"]
 
@@ -94,6 +91,8 @@ def contact_forces(system, contacts, states, multipliers, parameters=None) -> Co
     if Y.shape[1] != 2 * n or lam.shape != (Y.shape[0], m):
         raise ValueError(f"contact_forces: states of shape (K, {2 * n}) and multipliers "
                          f"of shape (K, {m}) expected, got {Y.shape} and {lam.shape}")
+    from nhham.numerics.codegen.contacts import contact_arrays
+
     params = dict(system.numeric_parameters(required=()))
     by_name = {p.name: p for p in system.parameters}
     for key, value in (parameters or {}).items():
@@ -103,14 +102,9 @@ def contact_forces(system, contacts, states, multipliers, parameters=None) -> Co
         from nhham.errors import MissingParameterValueError
 
         raise MissingParameterValueError(f"contact_forces: no value for {', '.join(missing)}")
-    params = {p: params[p] for p in system.parameters}
-    args = (*system.coordinates, *system.velocities, *params)
-    columns = [*Y.T, *(np.full(len(Y), v) for v in params.values())]
-    mu = _batch(args, system.mu, columns, len(Y))  # (K, m, n)
+    mu, maps = contact_arrays(system, contacts, Y, params)
     names, forces, residuals, ranks, warnings = [], {}, {}, {}, []
-    for contact in contacts:
-        rows = contact_rows(system, contact)
-        J = _batch(args, velocity_jacobian(system, contact), columns, len(Y))  # (K, 3, n)
+    for contact, (rows, J) in zip(contacts, maps):
         # Generalized force of the contact's constraints: -mu_c^T lambda_c, shape (K, n).
         Q = -np.einsum("kin,ki->kn", mu[:, rows, :], lam[:, rows])
         f = np.empty((len(Y), 3))
@@ -125,19 +119,11 @@ def contact_forces(system, contacts, states, multipliers, parameters=None) -> Co
         names.append(contact.name)
         forces[contact.name], residuals[contact.name], ranks[contact.name] = f, res, rank
         if res.max(initial=0.0) > RESIDUAL_WARNING:
-            warnings.append(f"contacts.{contact.name}: the constraints {', '.join(contact.constraints)} "
-                            f"are not velocity conditions of the point (relative residual "
+            carried = ", ".join(contact.constraints)
+            warnings.append(f"contacts.{contact.name}: the constraints {carried} are not "
+                            f"velocity conditions of the point (relative residual "
                             f"{res.max():.1e}): the force shown is the least-squares one")
         if rank < 3:
             warnings.append(f"contacts.{contact.name}: the point's velocity map has rank "
                             f"{rank} < 3: the force is determined only in its range")
     return ContactForces(tuple(names), forces, residuals, ranks, tuple(warnings))
-
-
-def _batch(args, matrix, columns, count) -> np.ndarray:
-    """A sympy matrix evaluated at K states: shape (K, rows, cols)."""
-    matrix = sp.Matrix(matrix)
-    fn = sp.lambdify(args, list(matrix), modules="numpy")
-    values = [np.broadcast_to(np.asarray(x, dtype=float), (count,))
-              for x in fn(*columns)]
-    return np.stack(values, axis=1).reshape(count, matrix.rows, matrix.cols)

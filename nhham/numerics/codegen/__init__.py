@@ -1,7 +1,8 @@
 """The one bridge from sympy to numbers: a System in, a :class:`NumericModel` out.
 
 :func:`numeric_model` generates the model's kernels (:mod:`.emit`: sympy to Python, numpy,
-mpmath and C text, the only place in the numerics layer that imports sympy), compiles and
+mpmath and C text; with :mod:`.contacts`, the arrays of a contact force, the only places in
+the numerics layer that import sympy), compiles and
 loads the C (:mod:`.build`; the compile cache and how a cached library is verified before
 it is loaded: :mod:`.cache`; builds in the background while numpy answers:
 :mod:`.background`) and returns a :class:`~nhham.numerics.model.NumericModel` whose
