@@ -102,7 +102,8 @@ def mechanics_system() -> me.System:
 
 def mechanics_model():
     """(the mechanics System, its contact points): the contact points as
-    ``(name, material velocity in N as three expressions in q(t), q'(t), labels)``."""
+    ``(name, material velocity in N as three expressions in q(t), q'(t), labels, the
+    contact Point)``."""
     x, y, psi, phi, pitch, thetaR, delta, thetaF = me.dynamicsymbols(
         "x y psi phi pitch thetaR delta thetaF")
     q = [x, y, psi, phi, pitch, thetaR, delta, thetaF]
@@ -179,9 +180,9 @@ def mechanics_model():
     # constraints (its height is built into the coordinates, so its normal force is no
     # constraint force), the front also the lift of the contact height.
     contacts = [("rear", [v_rear.dot(N.x), v_rear.dot(N.y), v_rear.dot(N.z)],
-                 ("constraints[0]", "constraints[1]")),
+                 ("constraints[0]", "constraints[1]"), WR_cont),
                 ("front", [v_front.dot(N.x), v_front.dot(N.y), v_front.dot(N.z)],
-                 ("holonomic[0]", "constraints[2]", "constraints[3]"))]
+                 ("holonomic[0]", "constraints[2]", "constraints[3]"), WF_cont)]
     return system, contacts
 
 
@@ -254,7 +255,7 @@ def contact_points(system) -> tuple:
     t = me.dynamicsymbols._t
     names = {s.name: s for s in (*system.coordinates, *system.velocities)}
     out = []
-    for name, velocity, labels in contacts:
+    for name, velocity, labels, _ in contacts:
         exprs = []
         for e in velocity:
             funcs = sorted(e.atoms(sp.Function), key=str)
