@@ -7,6 +7,8 @@ what holds at the parameter values.
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import pytest
 import sympy as sp
 
@@ -20,6 +22,7 @@ from nhham.system.models import particle_on_sphere
 from nhham.system.scene import load_scene
 
 P = PRIME
+EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 
 
 def _value(x) -> int:
@@ -51,7 +54,7 @@ def test_a_rational_sampler_refuses_a_curved_M():
 
 @pytest.fixture(scope="module")
 def bicycle():
-    return load_scene("examples/whipple_bicycle.toml").system
+    return load_scene(EXAMPLES / "whipple_bicycle.toml").system
 
 
 def test_the_bicycle_contact_holds_exactly_at_points_over_Fp(bicycle):
@@ -150,3 +153,29 @@ def test_the_submanifold_of_Q_of_a_curved_constraint_has_points():
     x, y, z = system.coordinates
     total = sum(_value(env[s]) ** 2 for s in (x, y, z)) - _value(env[sp.Symbol("R")]) ** 2
     assert total % P == 0
+
+
+def test_a_closed_loop_has_points_over_Fp_and_its_verdict_is_proved():
+    """The four-bar linkage on a rolling cart: two loop-closure constraints in three
+    angles, two of them dependent (a Groebner basis over F_p). At each point the loop
+    closes in integers mod p, a cos t1 + b cos t2 - c cos t3 - d = 0 and
+    a sin t1 + b sin t2 - c sin t3 = 0, and the classification is proved there: C of rank
+    3, 1 first-class and 4 second-class constraints (an antisymmetric 5 x 5 matrix has
+    rank 4 at most)."""
+    from nhham.verdict.values import classification_at_values
+
+    system = load_scene(EXAMPLES / "four_bar_cart.toml").system
+    sampler = PointSampler.on_M1(system, seed=11, modular=True)
+    assert len(sampler.chart.dependent) == 2
+    names = {s.name: s for s in (*system.coordinates, *system.parameters)}
+    for _ in range(3):
+        env = sampler.point().env
+        (c1, s1), (c2, s2), (c3, s3) = ((env[names[f"theta{i}"]].c.v, env[names[f"theta{i}"]].s.v)
+                                        for i in (1, 2, 3))
+        a, b, c, d = (_value(env[names[k]]) for k in "abcd")
+        assert (a * c1 + b * c2 - c * c3 - d) % P == 0
+        assert (a * s1 + b * s2 - c * s3) % P == 0
+    verdict = classification_at_values(system).verdict
+    assert (verdict.rank_C, verdict.first_class, verdict.second_class) == (3, 1, 4)
+    assert all(ev.decision.method == "exact" and ev.decision.scope
+               for st in verdict.analysis.stages for ev in st.decisions)
