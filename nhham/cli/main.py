@@ -269,7 +269,7 @@ def cmd_derive(args, steps) -> CommandOutput:
             side.energy
         out = _derive_closed_form(args, steps, scene, side, "hamiltonian", side.analysis)
         out.result.update(form="explicit", mass_matrix=None, forcing=None,
-                          constraint_jacobian=None, constraint_rhs=None)
+                          constraint_jacobian=None, constraint_rhs=None, contact_forces=None)
         return _with_case(out, at)
     from nhham.lagrangian.analysis import analyze_constraints
     from nhham.lagrangian.geometry import lagrangian_geometry
@@ -283,7 +283,8 @@ def cmd_derive(args, steps) -> CommandOutput:
         implicit = _implicit_form(G)
     analysis = None if at is None else at.verdict.analysis
     if not (args.explicit or G.closed_form_affordable):
-        return _with_case(_derive_implicit(args, steps, scene, G, implicit, energy, analysis), at)
+        return _with_case(_with_contacts(
+            _derive_implicit(args, steps, scene, G, implicit, energy, analysis), scene), at)
 
     def algorithm():
         if analysis is not None:
@@ -292,7 +293,21 @@ def cmd_derive(args, steps) -> CommandOutput:
 
     out = _derive_closed_form(args, steps, scene, G, "lagrangian", algorithm)
     out.result.update(form="explicit", **implicit)
-    return _with_case(out, at)
+    return _with_case(_with_contacts(out, scene), at)
+
+
+def _with_contacts(out: CommandOutput, scene) -> CommandOutput:
+    """``out`` with the scene's contact forces in implicit form (JSON and a text section)."""
+    import dataclasses
+
+    from nhham.cli.results import contact_data, contact_text
+
+    data = contact_data(scene.system, scene.contacts)
+    out.result["contact_forces"] = data
+    if not data or not callable(out.text):
+        return out
+    base = out.text
+    return dataclasses.replace(out, text=lambda: base() + "\n" + contact_text(data))
 
 
 def _derive_closed_form(args, steps, scene, side, name, algorithm) -> CommandOutput:

@@ -282,6 +282,41 @@ def implicit_data(G) -> dict:
     }
 
 
+def contact_data(system, contacts) -> dict | None:
+    """derive's contact forces in implicit form (JSON-ready), None without contacts: per
+    contact point the constraints it carries, their multipliers and J_P = dv_P/dv (text),
+    with f_P defined by J_P^T f_P = -mu_c^T lambda_c
+    (:mod:`nhham.numerics.contact_forces`)."""
+    if not contacts:
+        return None
+    from nhham.system.contacts import contact_rows, velocity_jacobian
+    from nhham.system.naming import multiplier_symbol
+
+    out = {}
+    for contact in contacts:
+        J = velocity_jacobian(system, contact)
+        out[contact.name] = {
+            "constraints": list(contact.constraints),
+            "multipliers": [multiplier_symbol(i + 1).name for i in contact_rows(system, contact)],
+            "velocity_jacobian": [[expr_text(J[i, j]) for j in range(J.cols)]
+                                  for i in range(J.rows)],
+            "relation": "J_P^T f_P = -mu_c^T lambda_c",
+        }
+    return out
+
+
+def contact_text(data: dict | None) -> str:
+    """One line per contact point of :func:`contact_data` ("" without contacts)."""
+    if not data:
+        return ""
+    lines = ["contact forces (J_P = dv_P/dv, in --json):"]
+    for name, item in data.items():
+        terms = " + ".join(f"{lam} mu[{label}]" for lam, label in
+                           zip(item["multipliers"], item["constraints"]))
+        lines.append(f"  {name}: J_P^T f_{name} = -({terms})^T")
+    return "\n".join(lines)
+
+
 def implicit_text(title: str, data: dict) -> str:
     """derive without closed forms: W a + mu^T lambda = F, mu a = rhs, and M_f."""
     q = [n[:-4] for n in data["state"][len(data["state"]) // 2:]]

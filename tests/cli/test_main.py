@@ -276,3 +276,19 @@ def test_simulate_reports_the_contact_forces_of_a_scene():
     assert all(abs(f[2]) > 0 for f in ground["force"])
     d = run_json("simulate", EXAMPLES / "rolling_disk.toml")
     assert d["contact_forces"] is None
+
+
+def test_derive_gives_the_contact_forces_in_implicit_form():
+    """derive on a scene with [contacts]: per point the constraints, their multipliers and
+    J_P = dv_P/dv, here d(v_P)/d(x_dot, ..., psi_dot) of the disc whose first row starts
+    (1, 0, 0) (v_P = v_C + omega x (P - C)); the Hamiltonian side has none."""
+    d = run_json("derive", EXAMPLES / "disc_on_ground.toml")
+    ground = d["contact_forces"]["ground"]
+    assert ground["constraints"] == ["holonomic[0]", "constraints[0]", "constraints[1]"]
+    assert ground["multipliers"] == ["lambda_1", "lambda_2", "lambda_3"]
+    J = ground["velocity_jacobian"]
+    assert len(J) == 3 and all(len(row) == 6 for row in J)
+    assert J[0][:3] == ["1", "0", "0"] and J[2][:3] == ["0", "0", "1"]
+    assert run_json("derive", EXAMPLES / "disc_on_ground.toml", "--side",
+                    "hamiltonian")["contact_forces"] is None
+    assert run_json("derive", EXAMPLES / "rolling_disk.toml")["contact_forces"] is None
