@@ -13,6 +13,7 @@ eom = ... - lam_coeffs^T lam), nhham's convention; but sympy 1.14's
 order (holonomic lifts first) is the same on both sides.
 """
 
+import math
 import zlib
 
 import numpy as np
@@ -273,3 +274,34 @@ def test_from_lagranges_method_rejects_forces():
     lm = me.LagrangesMethod(x.diff(t)**2 / 2, [x], forcelist=[(P, -x.diff(t) * N.x)], frame=N)
     with pytest.raises(InputError, match="forcelist"):
         from_lagranges_method(lm)
+
+
+def test_multipliers_are_minus_those_of_lagranges_method():
+    """The multipliers sympy's LagrangesMethod solves in ``rhs()`` (from
+    ``mass_matrix_full``, which appends lam_coeffs.T = -mu^T while ``eom`` has
+    -lam_coeffs^T lam: sympy issue 30215) are minus nhham's, whose W a + mu^T lambda = F
+    (DESIGN.md) makes -mu^T lambda the generalized constraint force. On the vertical
+    rolling disk through from_lagranges_method: the accelerations agree,
+    lambda_nhham = -lambda_rhs, and m x'' = -lambda_1 (the force along x) by hand."""
+    from nhham.numerics.codegen import numeric_model
+
+    x, y, th, ph = me.dynamicsymbols("x y theta phi")
+    t = me.dynamicsymbols._t
+    m, I, J, R = sp.symbols("m I J R")
+    L = (m * (x.diff(t) ** 2 + y.diff(t) ** 2) + I * th.diff(t) ** 2 + J * ph.diff(t) ** 2) / 2
+    lm = me.LagrangesMethod(L, [x, y, th, ph], nonhol_coneqs=[
+        x.diff(t) - R * sp.cos(th) * ph.diff(t), y.diff(t) - R * sp.sin(th) * ph.diff(t)])
+    lm.form_lagranges_equations()
+    values = {m: 2.0, I: 0.3, J: 0.5, R: 0.4}
+    system = from_lagranges_method(lm, parameters={k.name: v for k, v in values.items()})
+    q0, thd, phd = [0.1, -0.2, 0.7, 0.3], 1.3, 2.1
+    v0 = [0.4 * math.cos(0.7) * phd, 0.4 * math.sin(0.7) * phd, thd, phd]
+    subs = {**dict(zip([c.diff(t) for c in (x, y, th, ph)], v0)),
+            **dict(zip((x, y, th, ph), q0))}
+    reference = np.array(lm.rhs().xreplace(subs).xreplace(values), dtype=float).ravel()
+    model = numeric_model(system, backend="numpy")
+    state = np.array(q0 + v0)
+    lam = model.multipliers(state)
+    assert np.allclose(model.rhs(0.0, state)[4:], reference[4:8], atol=1e-12)
+    assert np.allclose(lam, -reference[8:], atol=1e-12)
+    assert np.isclose(values[m] * reference[4], -lam[0], atol=1e-12)
