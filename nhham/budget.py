@@ -28,6 +28,11 @@ from nhham.errors import BudgetExceeded, InputError, NhhamWarning
 
 __all__ = ["time_budget", "remaining_time"]
 
+#: After a budget runs out its alarm repeats at this interval until the block is left: an
+#: expiry raised where Python drops exceptions (a garbage-collector callback, a
+#: ``__del__``, an ``except Exception`` that draws again) is raised again.
+REPEAT_S = 0.05
+
 # The deadlines (time.monotonic()) of the budgets in force, outermost first.
 _DEADLINES: list[tuple[float, float, Callable[[], str]]] = []
 
@@ -78,7 +83,7 @@ def time_budget(seconds: float | None, what: Callable[[], str] | None = None) ->
                              + (f" during '{step}'" if step else ""))
 
     previous = signal.signal(signal.SIGALRM, expire)
-    signal.setitimer(signal.ITIMER_REAL, max(deadline - now, 1e-6))
+    signal.setitimer(signal.ITIMER_REAL, max(deadline - now, 1e-6), REPEAT_S)
     try:
         yield
     finally:
@@ -87,4 +92,4 @@ def time_budget(seconds: float | None, what: Callable[[], str] | None = None) ->
         signal.signal(signal.SIGALRM, previous)
         if _DEADLINES:  # the outer budget runs on with what is left of it
             left = _DEADLINES[-1][0] - time.monotonic()
-            signal.setitimer(signal.ITIMER_REAL, max(left, 1e-6))
+            signal.setitimer(signal.ITIMER_REAL, max(left, 1e-6), REPEAT_S)
