@@ -215,26 +215,28 @@ def _kind(q, constraints, expressions) -> str | None:
     the constraints nor anywhere else), or None."""
     inside = outside = False
     for e in (*constraints, *expressions):
-        i, o = _occurrences(sp.sympify(e), q)
-        inside, outside = inside or i, outside or o
+        i, o = _contexts(sp.sympify(e))
+        inside, outside = inside or q in i, outside or q in o
     if inside and outside:
         return None
     return "angle" if inside else "value"
 
 
-def _occurrences(e, q) -> tuple[bool, bool]:
-    """(q inside a sin/cos argument, q elsewhere) in ``e``."""
-    if q not in e.free_symbols:
-        return False, False
-    if e == q:
-        return False, True
-    if e.func in (sp.sin, sp.cos, sp.tan, sp.cot):
-        return True, False
-    inside = outside = False
-    for a in e.args:
-        i, o = _occurrences(a, q)
-        inside, outside = inside or i, outside or o
-    return inside, outside
+@functools.lru_cache(maxsize=256)
+def _contexts(e) -> tuple[frozenset, frozenset]:
+    """(symbols inside a sin/cos argument, symbols elsewhere) of ``e``, in one walk of
+    its tree (a walk per symbol asking free_symbols at every node was quadratic: 0.25 s
+    on the bicycle's Lagrangian)."""
+    inside, outside = set(), set()
+    stack = [(e, False)]
+    while stack:
+        node, trig = stack.pop()
+        if node.is_Symbol:
+            (inside if trig else outside).add(node)
+            continue
+        trig = trig or node.func in (sp.sin, sp.cos, sp.tan, sp.cot)
+        stack.extend((a, trig) for a in node.args)
+    return frozenset(inside), frozenset(outside)
 
 
 def _chart(constraints, dependent, kinds) -> CurvedChart:
