@@ -106,7 +106,11 @@ def main(argv: list[str] | None = None) -> int:
             (args.directory / name).write_text(json.dumps(envelope, indent=1, sort_keys=True))
             print(f"saved {name} (exit {envelope['exit_status']})")
             continue
-        before = json.loads((args.directory / name).read_text())
+        saved = args.directory / name
+        if not saved.exists():  # a scene added since the outputs were saved
+            print(f"new     {name} (exit {envelope['exit_status']})")
+            continue
+        before = json.loads(saved.read_text())
         found = list(differences(before, envelope))
         changed += bool(found)
         print(f"{'DIFFERS' if found else 'same   '} {name}")
