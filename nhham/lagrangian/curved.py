@@ -227,7 +227,8 @@ def _contexts(e) -> tuple[frozenset, frozenset]:
     """(symbols inside a sin/cos argument, symbols elsewhere) of ``e``, in one walk of
     its tree (a walk per symbol asking free_symbols at every node was quadratic: 0.25 s
     on the bicycle's Lagrangian)."""
-    inside, outside = set(), set()
+    inside: set = set()
+    outside: set = set()
     stack = [(e, False)]
     while stack:
         node, trig = stack.pop()
