@@ -498,9 +498,9 @@ def cmd_simulate(args, steps) -> CommandOutput:
         with steps.step(f"simulate with {opts.get('method', 'DOP853')} ({plan})"):
             result = simulate(scene.system, t_span=t_span, y0=dict(scene.initial),
                               project_initial=args.project_initial, progress=steps.progress,
-                              **opts)
+                              contacts=scene.contacts, **opts)
     data = simulation_data(result, t_span)
-    data["contact_forces"] = _contact_forces(scene, result, steps, caught)
+    data["contact_forces"] = _contact_forces(result, caught)
     data["output"] = None
     data["plot"] = None
     if args.output:
@@ -527,15 +527,11 @@ def cmd_simulate(args, steps) -> CommandOutput:
                          warnings=warnings, failure=failure)
 
 
-def _contact_forces(scene, result, steps, warnings):
+def _contact_forces(result, warnings):
     """The scene's contact forces along the run (None without ``[contacts]``)."""
-    if not scene.contacts or result.model is None:
+    forces = result.contact_forces
+    if forces is None:
         return None
-    from nhham.numerics.contact_forces import contact_forces
-
-    with steps.step("contact forces at the stored states"):
-        forces = contact_forces(scene.system, scene.contacts, result.states,
-                                result.multipliers.T)
     warnings.extend(forces.warnings)
     out = forces.to_dict()
     out.pop("warnings", None)

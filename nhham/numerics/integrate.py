@@ -38,9 +38,10 @@ from __future__ import annotations
 import math
 import time
 import warnings
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import cached_property
 from types import MappingProxyType
+from typing import Any
 
 import numpy as np
 
@@ -112,6 +113,10 @@ class SimulationResult:
         When the run stopped because the field could not be evaluated: the state where
         that happened (a stage of the step that did not complete; ``t`` and ``y`` end at
         the last completed step), if the loop knows it.
+    contact_forces : ContactForces or None
+        The forces of the constraints at the contact points given to ``simulate``
+        (``contacts=``), at the stored states: ``contact_forces.forces[name]`` of shape
+        (K, 3); None without contacts.
     """
 
     t: np.ndarray
@@ -135,6 +140,7 @@ class SimulationResult:
     y_events: list | None = None
     storage: Storage | None = None
     failed_state: np.ndarray | None = field(default=None, repr=False)
+    contact_forces: Any = None
 
     def __repr__(self) -> str:
         # One line: the arrays are in .t, .y (a repr printing them ran to 14 KB).
@@ -259,7 +265,7 @@ def simulate(system_or_model, t_span, y0, *, method: str = "DOP853", rtol: float
              reference_digits: int | None = None, save_every: int = 1,
              max_points: int | None = None, backend: str = "auto", warn: bool = True,
              progress: bool = False, loop: str = "auto",
-             time_limit: float | None = None) -> SimulationResult:
+             time_limit: float | None = None, contacts=()) -> SimulationResult:
     """Integrate the constrained dynamics from ``y0`` over ``t_span``.
 
     Parameters
@@ -325,6 +331,10 @@ def simulate(system_or_model, t_span, y0, *, method: str = "DOP853", rtol: float
     time_limit : float, optional
         Seconds of wall time after which the run stops with ``Status.TIME_LIMIT`` (a
         failure that keeps the trajectory so far; not the reference method).
+    contacts : sequence of ContactPoint, optional
+        Contact points (a scene's ``contacts``; a System must be given): the forces of
+        their constraints at the stored states are in ``result.contact_forces``
+        (:func:`nhham.numerics.contact_forces.contact_forces`).
     dense_output : bool
         scipy methods: keep the continuous solution, ``result.sol(t)`` (runs
         scipy's loop; its memory grows with the steps, a few hundred bytes each, and is
@@ -348,6 +358,9 @@ def simulate(system_or_model, t_span, y0, *, method: str = "DOP853", rtol: float
         For an unknown method or inconsistent options (``dense_output`` or
         ``events`` with a method that is not a scipy one, for instance).
     """
+    if contacts and isinstance(system_or_model, NumericModel):
+        raise InputError("simulate: contacts need the System (its constraints' velocity "
+                         "maps), not a NumericModel", key="contacts")
     model = _as_model(system_or_model, backend,
                       background=method not in ("rattle", "rattle4") and loop != "compiled")
     t0, t1 = (float(t_span[0]), float(t_span[1]))
@@ -398,7 +411,14 @@ def simulate(system_or_model, t_span, y0, *, method: str = "DOP853", rtol: float
             recorder = _recorder(model, method, t_eval, save_every, max_points)
     wall = time.perf_counter() - start
     storage = None if method == "reference" else recorder.storage(t_eval is not None)
-    return _result(model, run, method, settings, wall, residual_tol, initial, warn, storage)
+    result = _result(model, run, method, settings, wall, residual_tol, initial, warn, storage)
+    if not contacts:
+        return result
+    from nhham.numerics.contact_forces import contact_forces
+
+    return replace(result, contact_forces=contact_forces(
+        system_or_model, contacts, result.states, result.multipliers.T,
+        parameters=dict(zip(model.parameter_names, model.parameter_values))))
 
 
 def _run_reference(model, y0, t0, t1, digits, t_eval, settings) -> Run:

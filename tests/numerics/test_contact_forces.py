@@ -17,6 +17,7 @@ import numpy as np
 import pytest
 import sympy as sp
 
+import nhham
 from nhham.numerics.codegen import numeric_model
 from nhham.numerics.contact_forces import contact_forces
 from nhham.system.contacts import ContactPoint
@@ -108,3 +109,19 @@ def test_the_bicycle_at_rest_carries_its_front_load_by_hand():
     assert np.allclose(out.forces["rear"][0], 0.0, atol=1e-9)
     assert out.rank == {"rear": 2, "front": 3}
     assert any("rear" in w and "rank 2" in w for w in out.warnings)
+
+
+def test_simulate_keeps_the_contact_forces_with_the_trajectory(rolling_disc):
+    """simulate(..., contacts=) puts the forces at the stored states on the result, the
+    same as contact_forces on its states and multipliers; a NumericModel is refused (the
+    velocity maps are the System's)."""
+    system, contact, model = rolling_disc
+    y0 = _state(system, [0.0, 0.0, R * np.cos(0.2), 0.0, 0.2, 0.0], [1.0, 0.0, -8.0])
+    res = nhham.simulate(system, (0.0, 0.3), y0, rtol=1e-10, contacts=(contact,), warn=False)
+    got = res.contact_forces.forces["ground"]
+    assert got.shape == (len(res.t), 3)
+    direct = contact_forces(system, [contact], res.states, res.multipliers.T)
+    assert np.array_equal(got, direct.forces["ground"])
+    assert nhham.simulate(system, (0.0, 0.1), y0, warn=False).contact_forces is None
+    with pytest.raises(nhham.InputError, match="contacts need the System"):
+        nhham.simulate(model, (0.0, 0.1), y0, contacts=(contact,))
