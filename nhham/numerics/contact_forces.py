@@ -38,19 +38,20 @@ class ContactForces:
 
     Attributes
     ----------
-    names : tuple of str
-        The contact points.
+    points : tuple of str
+        The contact points' names.
     forces : dict
         name -> array of shape (K, 3): f_P in the inertial frame at each state.
     residuals : dict
-        name -> array of shape (K,): |J_Pᵀ f_P + μ_cᵀ λ_c| / |μ_cᵀ λ_c| (0 where the
-        constraint force vanishes).
+        name -> array of shape (K,): the relative residual ``norm(J_P^T f_P +
+        mu_c^T lambda_c) / norm(mu_c^T lambda_c)`` (0 where the constraint force
+        vanishes).
     rank : dict
         name -> the smallest rank of J_P over the states (3: f_P is unique).
     warnings : tuple of str
     """
 
-    names: tuple
+    points: tuple
     forces: dict
     residuals: dict
     rank: dict
@@ -60,7 +61,7 @@ class ContactForces:
         """JSON-ready: per contact the force rows and the largest residual."""
         return {name: {"force": self.forces[name].tolist(),
                        "max_residual": float(np.max(self.residuals[name], initial=0.0)),
-                       "rank": int(self.rank[name])} for name in self.names} | (
+                       "rank": int(self.rank[name])} for name in self.points} | (
             {"warnings": list(self.warnings)} if self.warnings else {})
 
 

@@ -159,7 +159,7 @@ def test_the_contact_forces_balance_the_bicycle(bicycle):
     dP, dH = number(momentum), number(spin)
     W, MW = number(weight), number(weight_moment)
     where = {name: number(point.pos_from(O)) for name, _, _, point in points}
-    f = {name: forces.forces[name][0].copy() for name in forces.names}
+    f = {name: forces.forces[name][0].copy() for name in forces.points}
     f["rear"][2] = dP[2] - W[2] - f["front"][2]  # the rear normal force, by balance
     total = f["rear"] + f["front"] + W
     moment = sum(np.cross(where[k], f[k]) for k in f) + MW
