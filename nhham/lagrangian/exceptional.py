@@ -360,15 +360,16 @@ class ExceptionalData:
                     pass
             return max(B.rank() for B in self._brackets(env0, K))
         except (NotExact, ZeroDivisionError) as exc:
-            rank = self._rank_on_curved_M()
+            rank = self._rank_at_a_point_over_Fp()
             if rank is None:
                 self.notes.append(f"bracket matrix on M_f not evaluated exactly ({exc})")
             return rank
 
-    def _rank_on_curved_M(self):
-        """The rank of B proved at a smooth point of a curved M_f over F_p (parameters
-        at their values), when it is the largest an antisymmetric matrix has: a rank at
-        the values bounds the generic rank from below. None otherwise."""
+    def _rank_at_a_point_over_Fp(self):
+        """The rank of B proved at a point of M_f over F_p with the parameters at their
+        values (where the points over Q(p) do not exist: a curved M_f, an angle
+        parameter drawn on the circle), when it is the largest an antisymmetric matrix
+        has: a rank at the values bounds the generic rank from below. None otherwise."""
         from nhham.lagrangian.points import exact_sampler
 
         analysis, system = self.analysis, self.system
@@ -377,8 +378,6 @@ class ExceptionalData:
         try:
             sampler = exact_sampler(Submanifold(system, tuple(cons), seed=self.seed),
                                     self.seed, modular=True)
-            if sampler.chart is None:
-                return None
             env, cache = sampler.point().env, {}
             geo = analysis.geometry
             mats = [[list(geo.mixed_hessian.row(i)) for i in range(system.n)], self.W,
@@ -428,10 +427,13 @@ class ExceptionalData:
                      for ev in st.decisions]
         if analysis.integrable is False:
             decisions += [("integrability", d) for _, d in analysis.integrability.decisions]
-        # A proof at a point of a curved M_1 (a scope) was made at the values.
+        # A decision taken at points (exact ones, or a proof at a point of a curved M_1:
+        # a scope) was taken with the parameters at their values; a reduction
+        # (samples = 0) for generic ones.
         generic = list(dict.fromkeys(
             subject for subject, d in decisions
-            if d.method != "sampled" and not d.scope and _nonzero_claim(d.value)))
+            if d.method != "sampled" and not d.scope and not d.samples
+            and _nonzero_claim(d.value)))
         sampled = any(d.method == "sampled" for _, d in decisions)
         if not generic and not sampled:
             return ""  # every decision proved at the values: nothing left to check

@@ -9,6 +9,7 @@ exceptional condition.
 from __future__ import annotations
 
 import dataclasses
+import math
 from typing import Callable
 
 import sympy as sp
@@ -65,7 +66,7 @@ def classification_at_values(system, *, classes: Callable | None = None,
     exact = {p: exact_value(v) for p, v in values.items()}
     generic, _, notes, hits, close = examine(system, (), values=values, **opts)
     notes = list(notes)
-    warnings = _close_warnings(close, values)
+    warnings = _close_warnings(close, values) + _special_angle_warnings(system, values)
     current, verdict = system, generic
     conditions: list = []
     substitution: dict = {}
@@ -114,6 +115,28 @@ def classification_at_values(system, *, classes: Callable | None = None,
     return ValuesVerdict(verdict, generic, tuple(conditions),
                          current if current is not None else system,
                          tuple(dict.fromkeys(warnings + notes)))
+
+
+def _special_angle_warnings(system, values) -> list:
+    """The angle parameter answered on the circle (:func:`~nhham.lagrangian.points.
+    circle_parameters`) when its value is within rounding of a multiple of pi/2, where
+    its sine or cosine vanishes: the decimal is answered as given, which may not be the
+    angle meant (a scene cannot write pi/2 exactly)."""
+    from nhham.lagrangian.points import circle_parameters
+
+    out = []
+    for p in circle_parameters(system):
+        value = float(values[p])
+        k = round(value / (math.pi / 2))
+        # The decimal as written against k pi/2, in 30 digits (in doubles the gap is 0).
+        gap = float(abs(sp.Rational(str(value)) - k * sp.pi / 2).evalf(30))
+        if gap <= 1e-12 * max(1.0, abs(value)):
+            which = "cos" if k % 2 else "sin"
+            out.append(f"the parameter {p.name} = {value!r} is within {gap:.1e} of "
+                       f"{k}*pi/2, where {which}({p.name}) vanishes: the verdict is the one at "
+                       f"the decimal as given, where it does not; at {k}*pi/2 it may differ "
+                       f"(`nhham classify --parametric` lists the special cases)")
+    return out
 
 
 def _close_warnings(close, values) -> list:

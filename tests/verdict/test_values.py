@@ -83,3 +83,22 @@ def test_values_far_from_every_exceptional_set_raise_no_warning(monkeypatch):
     assert at.conditions == () and at.warnings == ()
     assert at.verdict.second_class == 4
     assert len(fields) == 5 and set(fields) == {FLOAT64}
+
+
+def test_an_angle_within_rounding_of_pi_over_2_is_named():
+    """alpha = 1.5707963267948966 (the shortest decimal of the double nearest pi/2)
+    inside sin and cos: answered at that decimal (1.9e-17 from pi/2: cos(alpha) is not 0
+    there), and a warning says how close to pi/2 it is; at alpha = 0.3 nothing is said."""
+    import nhham
+    from nhham.verdict.values import classification_at_values
+
+    def incline(alpha):
+        return nhham.System(["x", "y"], "(x_dot**2 + y_dot**2)/2 - g*cos(alpha)*x",
+                            ["x_dot - sin(alpha)*y_dot"],
+                            parameters={"g": 9.81, "alpha": alpha})
+
+    near = classification_at_values(incline(1.5707963267948966)).warnings
+    assert any("alpha = 1.5707963267948966 is within 1.9e-17 of 1*pi/2, where cos(alpha)"
+               in w for w in near)
+    assert len(near) == 1  # every decision taken at points with the values: nothing else
+    assert not any("pi/2" in w for w in classification_at_values(incline(0.3)).warnings)
