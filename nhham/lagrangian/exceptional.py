@@ -323,21 +323,22 @@ class ExceptionalData:
             vals.extend(frobenius_terms(M, D, dep).values())
         return vals
 
+    def _bracket_rows(self) -> tuple:
+        """(dchi/dq, dchi/dv, W, mixed Hessian) as rows, over the final constraints: the
+        arguments of :func:`~nhham.lagrangian.formulas.lagrangian_bracket`."""
+        system, cons = self.system, list(self.analysis.final_constraints)
+        Mx = [list(self.analysis.geometry.mixed_hessian.row(i)) for i in range(system.n)]
+        return ([jacobian_row(c, system.coordinates) for c in cons],
+                [jacobian_row(c, system.velocities) for c in cons], self.W, Mx)
+
     def _brackets(self, env0, K, count=None):
         """B = ({chi_a, chi_b}_L) over the final constraints at points of M_f."""
-        analysis, system = self.analysis, self.system
-        cons = list(analysis.final_constraints)
-        geo = analysis.geometry
-        n = system.n
-        Mx = [list(geo.mixed_hessian.row(i)) for i in range(n)]
-        Jq = [jacobian_row(c, system.coordinates) for c in cons]
-        Jv = [jacobian_row(c, system.velocities) for c in cons]
+        rows = self._bracket_rows()
         mats = []
-        pts = self._pts(cons, env0, K, "f")
+        pts = self._pts(list(self.analysis.final_constraints), env0, K, "f")
         for env in pts[:count]:
             cache = self._memo(env)
-            mats.append(lagrangian_bracket(*(self._matrix(K, rows, env, cache)
-                                             for rows in (Jq, Jv, self.W, Mx))))
+            mats.append(lagrangian_bracket(*(self._matrix(K, r, env, cache) for r in rows)))
         return mats
 
     def bracket_rank(self, env0, K):
@@ -372,20 +373,16 @@ class ExceptionalData:
         has: a rank at the values bounds the generic rank from below. None otherwise."""
         from nhham.lagrangian.points import exact_sampler
 
-        analysis, system = self.analysis, self.system
-        cons = list(analysis.final_constraints)
+        cons = tuple(self.analysis.final_constraints)
         k = len(cons)
         try:
-            sampler = exact_sampler(Submanifold(system, tuple(cons), seed=self.seed),
+            sampler = exact_sampler(Submanifold(self.system, cons, seed=self.seed),
                                     self.seed, modular=True)
             env, cache = sampler.point().env, {}
-            geo = analysis.geometry
-            mats = [[list(geo.mixed_hessian.row(i)) for i in range(system.n)], self.W,
-                    [jacobian_row(c, system.coordinates) for c in cons],
-                    [jacobian_row(c, system.velocities) for c in cons]]
-            Mx, W, Jq, Jv = (ListMatrix([evaluate(r, env, cache) for r in rows], len(rows[0]))
-                             for rows in mats)
-            rank = exact_rank(lagrangian_bracket(Jq, Jv, W, Mx, solve=field_solve).rows)[0]
+            B = lagrangian_bracket(*(ListMatrix([evaluate(r, env, cache) for r in rows],
+                                                len(rows[0])) for rows in self._bracket_rows()),
+                                   solve=field_solve)
+            rank = exact_rank(B.rows)[0]
         except (NotExact, ZeroDivisionError):
             return None
         return rank if rank == k - k % 2 else None

@@ -94,16 +94,14 @@ def contact_forces(system, contacts, states, multipliers, parameters=None) -> Co
                          f"of shape (K, {m}) expected, got {Y.shape} and {lam.shape}")
     from nhham.numerics.codegen.contacts import contact_arrays
 
-    params = dict(system.numeric_parameters(required=()))
-    by_name = {p.name: p for p in system.parameters}
-    for key, value in (parameters or {}).items():
-        params[by_name.get(str(key), key)] = float(value)
-    missing = [p.name for p in system.parameters if p not in params]
+    values = {p.name: v for p, v in system.parameter_values.items()}
+    values.update({str(k): float(v) for k, v in (parameters or {}).items()})  # str(symbol) is its name
+    missing = [p.name for p in system.parameters if p.name not in values]
     if missing:
         from nhham.errors import MissingParameterValueError
 
         raise MissingParameterValueError(f"contact_forces: no value for {', '.join(missing)}")
-    mu, maps = contact_arrays(system, contacts, Y, params)
+    mu, maps = contact_arrays(system, contacts, Y, {p: values[p.name] for p in system.parameters})
     names, forces, residuals, ranks, warnings = [], {}, {}, {}, []
     for contact, (rows, J) in zip(contacts, maps):
         # Generalized force of the contact's constraints: -mu_c^T lambda_c, shape (K, n).

@@ -29,6 +29,9 @@ from typing import Mapping
 
 import sympy as sp
 
+from nhham.errors import ParseError
+from nhham.system.expressions import derivative
+
 __all__ = ["ContactPoint", "contacts_structure", "parse_contacts", "contact_rows",
            "velocity_jacobian"]
 
@@ -96,7 +99,7 @@ def parse_contacts(raw: Mapping | None, parse, n_constraints: int, n_holonomic: 
         for k, text in enumerate(velocity):
             try:
                 exprs.append(parse(text, f"contacts.{name}.velocity[{k}]"))
-            except Exception as exc:  # ParseError: listed with the others
+            except ParseError as exc:  # listed with the others
                 problems.append(str(exc))
         for label in labels:
             problem = _label_problem(label, n_constraints, n_holonomic)
@@ -140,4 +143,4 @@ def contact_rows(system, contact: ContactPoint) -> list[int]:
 
 def velocity_jacobian(system, contact: ContactPoint) -> sp.Matrix:
     """J_P = dv_P/dv, shape (3, n): the point's velocity map (v_P = J_P v + j_P)."""
-    return sp.Matrix([[sp.diff(e, v) for v in system.velocities] for e in contact.velocity])
+    return sp.Matrix([[derivative(e, v) for v in system.velocities] for e in contact.velocity])
