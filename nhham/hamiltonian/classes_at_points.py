@@ -21,7 +21,7 @@ from nhham.hamiltonian.classes import ConstraintClasses
 from nhham.hamiltonian.classes_sampled import classes_from_samples
 from nhham.lagrangian.analysis import ConstraintAnalysis
 from nhham.lagrangian.decision import Decision
-from nhham.lagrangian.domains import evaluate, minor_degree, schwartz_zippel_bound
+from nhham.lagrangian.domains import evaluate, minor_degree
 from nhham.lagrangian.formulas import lagrangian_bracket
 from nhham.lagrangian.geometry import LagrangianGeometry, lagrangian_geometry
 from nhham.lagrangian.linalg import (
@@ -129,19 +129,18 @@ class BracketRank:
             self.best, self.pivots = r, rows
         return self.best >= k  # full rank at a rational point: proved
 
-    def pending_error(self, degrees, count, denominator_degree):
+    def pending_error(self, degrees, count, bound):
         if self.best >= len(self.cons):
             return None
-        return schwartz_zippel_bound(minor_degree(degrees, self.best + 1), count,
-                                     denominator_degree=denominator_degree)
+        return bound(minor_degree(degrees, self.best + 1), count)
 
-    def conclude(self, count, degrees, denominator_degree) -> ConstraintClasses:
+    def conclude(self, count, degrees, bound) -> ConstraintClasses:
         k, labels, mats, r = len(self.cons), self.labels, self.mats, self.best
         if r >= k:
             rank_d = Decision(r, "exact", f"bracket matrix of full rank {r} at an exact "
                               f"point of M_f (proof)", samples=count, error_bound=0.0)
         else:
-            error = self.pending_error(degrees, count, denominator_degree)
+            error = self.pending_error(degrees, count, bound)
             rank_d = Decision(r, "exact at points", f"rank {r} of the bracket matrix at "
                               f"{count} random exact points of M_f", samples=count,
                               error_bound=error)

@@ -34,6 +34,14 @@ p-integral coefficients vanishes at its points mod p. So a full rank there prove
 rank on that component, for the parameter values the point was drawn with. When M is
 irreducible (a single hypersurface g = 0 with g irreducible, as the bicycle's contact),
 that is M. Where no solution is found the caller falls back to sampled points.
+
+What points prove when the function vanishes there (a rank drop, a vanishing): nothing
+for certain, but with a stated bound (:class:`~nhham.lagrangian.domains.ErrorBound`):
+by Bézout, a numerator of degree D not zero on a component of the lifted variety X
+(deg X ≤ the product of the degrees of the chart's equations and of every w² = b) vanishes
+at a drawn point of it with probability ≤ tries · deg X · D / (p − 1); the claim is then
+"on every component of M through the points". :meth:`CurvedChart.degree_env` and
+:meth:`CurvedChart.variety_degree` give the degrees.
 """
 
 from __future__ import annotations
@@ -44,7 +52,7 @@ from dataclasses import dataclass
 
 import sympy as sp
 
-from nhham.lagrangian.domains import PRIME, Angle, ModP, NotExact, evaluate
+from nhham.lagrangian.domains import PRIME, Angle, Degree, ModP, NotExact, evaluate
 from nhham.lagrangian.linalg import exact_rank
 from nhham.system.expressions import derivative, short
 
@@ -89,6 +97,43 @@ class CurvedChart:
         names = ", ".join(q.name for q in self.dependent)
         return (f"the holonomic constraint{'s' if len(self.constraints) > 1 else ''} solved "
                 f"for {names} over F_p")
+
+    def degree_env(self) -> dict:
+        """Degree bounds of the dependent coordinates in the lifted variables: an angle
+        is its circle point in its own t, a value its own unknown."""
+        out: dict = {}
+        for q, angle in zip(self.dependent, self.angles):
+            if angle:
+                circ = Degree(2, {("circle", q): (2, 1)})
+                out[q] = Angle(None, circ, circ)
+            else:
+                out[q] = Degree(1)
+        return out
+
+    def variety_degree(self, degrees: dict) -> int:
+        """The Bézout number of the lifted variety X: the product of the total degrees
+        of the chart's equations in the drawn variables (their bounds in ``degrees``)
+        and the unknowns.
+
+        Parameters
+        ----------
+        degrees : dict
+            Symbol -> :class:`Degree` of every drawn symbol the coefficients use.
+        """
+        total = 1
+        for poly in self.polynomials:
+            keys = list(poly)
+            coefficients = evaluate([poly[k] for k in keys], degrees)
+            equation = Degree(0)
+            for c, k in zip(coefficients, keys):
+                equation = equation + Degree.of(c) * Degree(sum(k))
+            total *= max(1, equation.num)
+        return total
+
+    def radicands(self) -> frozenset:
+        """The radicands of the sqrt in the constraints (their w are unknowns here)."""
+        return frozenset(a.base for g in self.constraints for a in g.atoms(sp.Pow)
+                         if a.exp.is_Rational and a.exp.q == 2)
 
     def solve(self, env: dict, rng) -> dict | None:
         """The dependent coordinates at one smooth point of M above the drawn values.

@@ -31,6 +31,7 @@ a proof.
 from __future__ import annotations
 
 import itertools
+from dataclasses import dataclass
 
 import sympy as sp
 from sympy.external.gmpy import MPQ
@@ -44,17 +45,24 @@ __all__ = [
     "Degree",
     "PRIME",
     "SAMPLE_BITS",
+    "RADICANDS",
     "evaluate",
     "square_root",
     "rank_bound",
     "minor_degree",
     "schwartz_zippel_bound",
+    "ErrorBound",
 ]
 
 
 # Sample set S = {1, ..., 2**SAMPLE_BITS}: large enough that a handful of points
 # gives Schwartz–Zippel bounds far below 1e-30, small enough for quick rationals.
 SAMPLE_BITS = 62
+
+# The key of a degree environment under which :func:`evaluate` records the radicand of
+# every sqrt it meets (radicand expression -> its Degree): each is a variable w of the
+# lifted space with the equation w^2 = b.
+RADICANDS = "radicands"
 
 
 class NotExact(NhhamError):
@@ -220,7 +228,7 @@ class ModP:
         return f"ModP({self.v})"
 
 
-def square_root(x) -> "ModP":
+def square_root(x) -> "ModP | Degree":
     """The square root of ``x`` in F_p that is itself a square (p = 3 mod 4, so exactly
     one of the two roots is): one fixed branch of sqrt, the same at every occurrence,
     so that a point of a variety with w^2 = b keeps w = sqrt(b) throughout.
@@ -234,6 +242,10 @@ def square_root(x) -> "ModP":
         ``x`` is not a residue: sqrt leaves Q (a rational), and a degree bound of it is
         not kept.
     """
+    if isinstance(x, Degree):
+        # sqrt(b) is a variable w of the lifted space (w^2 = b among its equations,
+        # counted in the variety's degree): degree 1, no denominator.
+        return Degree(1)
     if not isinstance(x, ModP):
         raise NotExact("sqrt has no exact value at a rational point")
     root = ModP(pow(x.v, (PRIME + 1) // 4, PRIME))
@@ -330,6 +342,8 @@ def _value(e, env, memo):
         if isinstance(base, Angle):
             base = base.value
         if e.exp.is_Rational and e.exp.q == 2:  # (sqrt b)^k, the root of F_p's choice
+            if isinstance(base, Degree) and RADICANDS in env:
+                env[RADICANDS][e.base] = base  # its w^2 = b counts in deg X
             base, k = square_root(base), int(e.exp.p)
         elif e.exp.is_Integer:
             k = int(e.exp)
@@ -478,3 +492,69 @@ def schwartz_zippel_bound(degree: int, points: int, *, denominator_degree: int =
     """
     per = min(1.0, degree / max(1, 2 ** SAMPLE_BITS - denominator_degree))
     return min(1.0, terms * per ** points)
+
+
+@dataclass(frozen=True)
+class ErrorBound:
+    """The error bound of verdicts taken at the points of one sampler.
+
+    Called as ``bound(degree, points, terms=1)``: the probability that ``terms``
+    functions whose numerators have degree at most ``degree`` and do not vanish
+    where the claim says they do all vanish at ``points`` drawn points.
+
+    Two kinds of points:
+
+    * **rational points of a rationally parametrised M** (``variety_degree`` 0): the
+      Schwartz–Zippel bound :func:`schwartz_zippel_bound`, ``terms`` * (D / (|S| −
+      D_den))^k: the points are independent and uniform in the parameter space, so the
+      bounds multiply;
+    * **smooth points over F_p of a curved M** (``variety_degree`` = deg X ≥ 1): X is
+      the variety of the lifted point (drawn variables, the chart's unknowns and one w
+      per sqrt, with w² = radicand), of dimension N (the drawn variables) and degree
+      at most the product of its equations' degrees (Bézout). On an irreducible
+      component V of X where a function's numerator H (degree ≤ D) is not identically
+      zero, V ∩ {H = 0} has dimension N − 1 and degree ≤ deg V · D (Bézout), hence at
+      most deg V · D · p^(N−1) points over F_p; a point is bad only when its drawn
+      coordinates lie in the projection of those, so a draw is bad with probability
+      ≤ deg X · D / (p − 1) (uniform draws in F_p*, up to a factor (p/(p−1))^N < 1 +
+      10^-15), and an accepted point, one of at most ``tries`` draws, with probability
+      ≤ tries · deg X · D / (p − 1) =: ε. The points may lie on different components,
+      so the claim is "on every component of M through the points" and its bound is
+      the union ``terms`` · k · ε, not a product.
+
+    Attributes
+    ----------
+    size : int
+        |S|: 2^SAMPLE_BITS for rational points, p − 1 over F_p.
+    denominator_degree : int
+        D_den of the rational points' redrawn denominators.
+    variety_degree : int
+        0 for a rational parametrisation; deg X (Bézout number) on a curved M.
+    tries : int
+        Draws per accepted point on a curved M.
+    """
+
+    size: int = 2 ** SAMPLE_BITS
+    denominator_degree: int = 0
+    variety_degree: int = 0
+    tries: int = 1
+
+    def per_point(self, degree: int) -> float:
+        """ε: the bound of one point (curved M) or one factor (rational points)."""
+        if not self.variety_degree:
+            return min(1.0, degree / max(1, self.size - self.denominator_degree))
+        return min(1.0, self.tries * self.variety_degree * degree / self.size)
+
+    def __call__(self, degree: int, points: int, terms: int = 1) -> float:
+        if not self.variety_degree:
+            return schwartz_zippel_bound(degree, points, terms=terms,
+                                         denominator_degree=self.denominator_degree)
+        return min(1.0, terms * points * self.per_point(degree))
+
+    def describe(self, degree: int) -> str:
+        """The bound's formula in words, for a Decision's detail."""
+        if not self.variety_degree:
+            return f"Schwartz-Zippel, numerator degree <= {degree}"
+        return (f"Bezout: per point {self.tries} draws x deg X {self.variety_degree} x "
+                f"numerator degree {degree} / (p - 1), summed over the points; on every "
+                f"component of M through them")

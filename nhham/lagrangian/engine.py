@@ -14,7 +14,10 @@ and returns the first answer:
 3. **exact points** (``quantity.observe`` / ``pending_error`` / ``conclude``): the
    datum at random rational points until the one Schwartz–Zippel bound
    (:func:`~nhham.lagrangian.domains.schwartz_zippel_bound`, degrees of numerator and
-   denominator) of every verdict still open is below ``policy.target_error``;
+   denominator) of every verdict still open is below ``policy.target_error``; on a
+   curved M, at ``policy.samples`` smooth points over F_p with the Bézout bound
+   (:class:`~nhham.lagrangian.domains.ErrorBound`: the claim is then "on every
+   component of M through the points");
 4. **sampled points** (``quantity.sampled``): floating-point points of M found by
    Newton projection, with the evidence (singular values, residuals, warnings).
 
@@ -36,10 +39,15 @@ A quantity is any object with a ``what`` (str) and some of the methods
     the answer a point over F_p proves, or None;
 ``observe(value)``
     records a rational point's value; True when the answer is decided (a proof);
-``pending_error(degrees, count, denominator_degree)``
-    the error bound of the verdicts still open after ``count`` points, None when none is;
-``conclude(count, degrees, denominator_degree)``
+``pending_error(degrees, count, bound)``
+    the error bound of the verdicts still open after ``count`` points, None when none
+    is (``bound``: the sampler's :class:`~nhham.lagrangian.domains.ErrorBound`, called
+    with a numerator degree and the number of points);
+``conclude(count, degrees, bound)``
     the answer from the points observed;
+``residues``
+    True when ``value``, ``observe`` and ``conclude`` also take residues modulo p:
+    the quantity is then decided at smooth points over F_p of a curved M (step 3).
 ``sampled(manifold, policy)``
     the answer at floating-point points, or None.
 """
@@ -49,6 +57,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from nhham.lagrangian.points import REDRAWS
 from nhham.settings import SEED, check_options
 
 __all__ = ["Policy", "decide", "policy_of", "answers_by_step"]
@@ -192,36 +201,70 @@ def _proof_modulo_p(quantity, manifold, policy):
 
 
 def _at_exact_points(quantity, manifold, policy):
-    """The answer at random rational points of M with the Schwartz–Zippel bound, else
-    None (M has no exact points, or the datum is not exact there)."""
+    """The answer at random exact points of M with its error bound, else None (M has
+    no exact points, or the datum is not exact there).
+
+    Rational points where M has a rational parametrisation (the Schwartz–Zippel bound,
+    points drawn until it is below ``policy.target_error``); on a curved M, for a
+    quantity whose data may be residues (``residues = True``), ``policy.samples``
+    smooth points over F_p (the Bézout bound of
+    :class:`~nhham.lagrangian.domains.ErrorBound`, which more points do not lower).
+    """
     if getattr(quantity, "observe", None) is None:
         return None
+    from nhham.lagrangian.decision import scoped
     from nhham.lagrangian.domains import NotExact
-    from nhham.lagrangian.points import exact_sampler
 
     try:
-        sampler = exact_sampler(manifold, policy.seed)
-        count, degrees, draws = 0, None, 0
-        while count < policy.max_points and draws < 50 * policy.max_points:
-            point = sampler.point()
-            draws += 1
-            try:
-                value = quantity.value(point.env)
-            except ZeroDivisionError:
-                continue  # a denominator vanishes at this point: draw another
+        sampler = _exact_points(quantity, manifold, policy)
+        if sampler is None:
+            return None
+        count, degrees, bound, point = 0, None, None, None
+        while count < policy.max_points:
+            value = None
+            for _ in range(1 + REDRAWS):
+                point = sampler.point()
+                try:
+                    value = quantity.value(point.env)
+                    break
+                except ZeroDivisionError:
+                    continue  # a denominator vanishes at this point: draw another
+            if value is None:
+                break
             count += 1
             if quantity.observe(value):
                 break
             if degrees is None:
                 degrees = quantity.value(point.degrees, degrees=True)
-            error = quantity.pending_error(degrees, count, sampler.denominator_degree)
+                bound = sampler.error_bound(point.degrees)
+            error = quantity.pending_error(degrees, count, bound)
             if error is None or error < policy.target_error:
+                break
+            if bound.variety_degree and count >= policy.samples:
                 break
         if count == 0:
             return None
-        return quantity.conclude(count, degrees, sampler.denominator_degree)
+        if bound is None:
+            bound = sampler.error_bound(point.degrees)
+        answer = quantity.conclude(count, degrees, bound)
+        return scoped(answer, sampler.points_scope(count))
     except NotExact:
         return None
+
+
+def _exact_points(quantity, manifold, policy):
+    """The sampler of the exact points of M: rational, or over F_p on a curved M for a
+    quantity that takes residues; None when neither applies."""
+    from nhham.lagrangian.domains import NotExact
+    from nhham.lagrangian.points import exact_sampler
+
+    try:
+        return exact_sampler(manifold, policy.seed)
+    except NotExact:
+        if not getattr(quantity, "residues", False):
+            return None
+    sampler = exact_sampler(manifold, policy.seed, modular=True)
+    return sampler if sampler.chart is not None else None
 
 
 def policy_of(policy: Policy | None, where: str, **options) -> Policy:

@@ -35,7 +35,7 @@ import sympy as sp
 from nhham.errors import ComputationError
 from nhham.lagrangian.algebra import cancel
 from nhham.lagrangian.decision import Decision
-from nhham.lagrangian.domains import Degree, NotExact, evaluate, schwartz_zippel_bound
+from nhham.lagrangian.domains import Degree, NotExact, evaluate
 from nhham.lagrangian.formulas import frobenius_terms
 from nhham.lagrangian.linalg import ListMatrix, degree_solve, exact_rank, field_solve
 from nhham.lagrangian.engine import Policy, decide, policy_of
@@ -227,12 +227,11 @@ class Frobenius:
                 return True
         return False
 
-    def pending_error(self, degrees, count, denominator_degree):
+    def pending_error(self, degrees, count, bound):
         worst = max((Degree.of(d).num for d in degrees.values()), default=0)
-        return schwartz_zippel_bound(worst, count, terms=len(degrees),
-                                     denominator_degree=denominator_degree)
+        return bound(worst, count, terms=len(degrees))
 
-    def conclude(self, count, degrees, denominator_degree) -> Integrability:
+    def conclude(self, count, degrees, bound) -> Integrability:
         n, m, labels = len(self.q), self.mu.rows, self.labels
         if self.found is not None:
             i, a, b, w = self.found
@@ -243,7 +242,7 @@ class Frobenius:
                 int(w.numerator), int(w.denominator))),),
                 ((f"d{labels[i]}(X_{a + 1}, X_{b + 1})", dec),), "exact", (), **self.common)
         worst = max((Degree.of(d).num for d in degrees.values()), default=0)
-        error = self.pending_error(degrees, count, denominator_degree)
+        error = self.pending_error(degrees, count, bound)
         dec = Decision(True, "exact at points",
                        f"all {len(degrees)} terms dmu_i(X_a, X_b) vanish at {count} random "
                        f"exact points of Q_1 (degree <= {worst})", samples=count,

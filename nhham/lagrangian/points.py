@@ -38,9 +38,11 @@ from nhham.lagrangian.algebra import solve_for_coordinates
 from nhham.lagrangian.curved import curved_chart
 from nhham.lagrangian.domains import (
     PRIME,
+    RADICANDS,
     SAMPLE_BITS,
     Angle,
     Degree,
+    ErrorBound,
     ModP,
     NotExact,
     evaluate,
@@ -59,6 +61,13 @@ __all__ = [
     "eliminate_coordinates",
     "DRAW_BITS",
 ]
+
+
+# Draws of a sampler per point it returns, and redraws of a point whose datum has a
+# zero denominator (the engine's): on a curved M their product is the ``tries`` of the
+# error bound.
+TRIES = 50
+REDRAWS = 3
 
 
 # ------------------------------------------------------------------ points
@@ -149,11 +158,39 @@ class PointSampler:
                 f"over F_p with the parameters at their values, so on the component of M "
                 f"through it")
 
+    def points_scope(self, count: int) -> str:
+        """Where an answer decided at ``count`` of these points holds ("" where M is
+        parametrised rationally)."""
+        if self.chart is None:
+            return ""
+        return (f"M is curved ({self.chart.describe()}): decided at {count} smooth "
+                f"point{'s' if count > 1 else ''} of M over F_p with the parameters at "
+                f"their values, so on every component of M through them")
+
     # Degree bookkeeping for the denominators that may vanish at a drawn point
     # (they are drawn again): the bound of their numerators.
     @property
     def denominator_degree(self) -> int:
         return self._den_degree
+
+    def error_bound(self, degrees: dict) -> ErrorBound:
+        """The bound of verdicts taken at these points (:class:`ErrorBound`).
+
+        Parameters
+        ----------
+        degrees : dict
+            The degree environment of a point (``ExactPoint.degrees``) after the data
+            were evaluated in it: on a curved M the sqrt it met count in deg X.
+        """
+        if self.chart is None:
+            size = PRIME - 1 if self.modular else 2 ** SAMPLE_BITS
+            return ErrorBound(size, self._den_degree)
+        deg_x = self.chart.variety_degree(degrees)
+        own = self.chart.radicands()
+        for base, d in degrees.get(RADICANDS, {}).items():
+            if base not in own:  # w^2 * den(b) - num(b) = 0
+                deg_x *= max(2 + d.den_degree, d.num)
+        return ErrorBound(PRIME - 1, variety_degree=deg_x, tries=TRIES * (1 + REDRAWS))
 
     def _draw(self):
         if self.modular:
@@ -162,7 +199,7 @@ class PointSampler:
 
     def point(self) -> ExactPoint:
         """A random exact point of M_1 (raises NotExact when there is no exact route)."""
-        for _ in range(50):
+        for _ in range(TRIES):
             pt = self._try_point()
             if pt is not None:
                 return pt
@@ -171,7 +208,7 @@ class PointSampler:
                        "every point tried")
 
     def _try_point(self):
-        env, deg = dict(self.fixed), {p: 0 for p in self.fixed}
+        env, deg = dict(self.fixed), {p: Degree(0) for p in self.fixed}
         dependent = () if self.chart is None else self.chart.dependent
         for p in self.circle:  # the value's (cos, sin) is transcendental: drawn
             t = self._draw()
@@ -180,7 +217,7 @@ class PointSampler:
                 return None
             env[p] = Angle(self.fixed[p], (1 - t * t) / one, 2 * t / one)
             circ = Degree(2, {("circle", p): (2, 1)})
-            deg[p] = Angle(0, circ, circ)
+            deg[p] = Angle(Degree(0), circ, circ)
         for s in self.drawn + tuple(q for q in self.coordinates
                                     if q not in self.solved and q not in dependent):
             t = self._draw()
@@ -196,24 +233,23 @@ class PointSampler:
             if found is None:
                 return None
             env.update(found)
+            deg.update(self.chart.degree_env())
+            deg[RADICANDS] = {}
         for q, expr in self.solved.items():
             try:
                 env[q], = evaluate([expr], env)
             except ZeroDivisionError:
                 return None
-            if self.chart is None:
-                deg[q], = evaluate([expr], deg)
+            deg[q], = evaluate([expr], deg)
         vels = self.velocities
         if not self.affine:
             for v in vels:
                 env[v], deg[v] = self._draw(), Degree(1)
             self._den_degree = 0
             return ExactPoint(env, deg)
-        if self.chart is not None:  # over F_p, for proofs: no degree bounds
-            return self._velocities(env, {}, keep_degrees=False)
         return self._velocities(env, deg)
 
-    def _velocities(self, env, deg, keep_degrees=True):
+    def _velocities(self, env, deg):
         """The point with free velocities drawn and the dependent ones solved from the
         affine constraints (None where they are singular at the point)."""
         vels = self.velocities
@@ -235,14 +271,6 @@ class PointSampler:
         block = [[row[j] for j in dep] for row in mu]
         rhs = [[-(h[k] + sum((mu[k][i] * env[vels[i]] for i in free), 0))]
                for k in range(len(mu))]
-        if not keep_degrees:
-            self._den_degree = 0
-            try:
-                sol = exact_solve(block, rhs)
-            except ZeroDivisionError:
-                return None
-            env.update((vels[j], sol[pos][0]) for pos, j in enumerate(dep))
-            return ExactPoint(env, {})
         # Degrees of the dependent velocities (Cramer): numerator and denominator
         # are minors of [block | rhs].
         dmu = [evaluate(row, deg, dcache) for row in self.mu]

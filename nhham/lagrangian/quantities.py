@@ -1,19 +1,26 @@
 """The two questions every submanifold answers, for :func:`~nhham.lagrangian.engine.decide`.
 
 :class:`Vanishing` ("does f vanish identically on M?") and :class:`Rank` ("the generic
-rank of a matrix of functions on M"): exact reduction first (substitution,
-cancellation, a Groebner remainder, a nonzero maximal minor), sampled points last
-(:meth:`Submanifold.vanishes <nhham.lagrangian.submanifold.Submanifold.vanishes>` and
-:meth:`Submanifold.rank <nhham.lagrangian.submanifold.Submanifold.rank>` ask them).
-The manifold supplies the reduction and the sampled tests.
+rank of a matrix of functions on M"), by every step of the cascade: exact reduction
+(substitution, cancellation, a Groebner remainder, a nonzero maximal minor), a proof at
+a random point over F_p (a nonzero value, a full rank), the values at random exact
+points with their error bound (rational points; smooth points over F_p on a curved M),
+sampled points last (:meth:`Submanifold.vanishes
+<nhham.lagrangian.submanifold.Submanifold.vanishes>` and :meth:`Submanifold.rank
+<nhham.lagrangian.submanifold.Submanifold.rank>` ask them). The manifold supplies the
+reduction and the sampled tests.
 """
 
 from __future__ import annotations
+
+from collections.abc import Callable
 
 import sympy as sp
 
 from nhham.lagrangian.algebra import cancel
 from nhham.lagrangian.decision import Decision
+from nhham.lagrangian.domains import Degree, evaluate, minor_degree
+from nhham.lagrangian.linalg import exact_rank
 from nhham.system.expressions import short
 
 __all__ = ["Vanishing", "Rank"]
@@ -24,10 +31,38 @@ class Vanishing:
     exact reduction (substitution, cancellation, a Groebner remainder), else sampled."""
 
     what = "vanishing on M"
+    residues = True
 
     def __init__(self, expr, tol: float | None = None):
         self.expr, self.tol = expr, tol
         self.residue = None
+        self.nonzero = None
+
+    def value(self, env, degrees: bool = False):
+        return evaluate([self.expr if self.residue is None else self.residue], env)[0]
+
+    def proved_modulo_p(self, value) -> Decision | None:
+        if not value:
+            return None
+        return Decision(False, "exact", "nonzero at a random point of M modulo the prime "
+                        "2^61 - 1 (proof)", samples=1, error_bound=0.0)
+
+    def observe(self, value) -> bool:
+        if value:
+            self.nonzero = value
+        return bool(value)
+
+    def pending_error(self, degree, count, bound):
+        return None if self.nonzero is not None else bound(Degree.of(degree).num, count)
+
+    def conclude(self, count, degree, bound) -> Decision:
+        if self.nonzero is not None:
+            return Decision(False, "exact", "nonzero at an exact point of M (proof)",
+                            samples=count, error_bound=0.0)
+        d = Degree.of(degree).num
+        return Decision(True, "exact at points", f"vanishes at {count} random exact "
+                        f"point{'s' if count > 1 else ''} of M ({bound.describe(d)})",
+                        samples=count, error_bound=bound(d, count))
 
     def reduced(self, manifold, policy) -> Decision | None:
         if not manifold.exact:
@@ -58,10 +93,52 @@ class Rank:
     certificate where one is found."""
 
     what = "rank on M"
+    residues = True
 
     def __init__(self, matrix, tol: float | None = None):
         self.matrix, self.tol = sp.Matrix(matrix), tol
         self.residue = None
+        self.best = 0
+        self.certify: Callable[[Decision], Decision | None] | None = None
+
+    @property
+    def full(self) -> int:
+        return min(self.matrix.shape)
+
+    def value(self, env, degrees: bool = False):
+        matrix = self.matrix if self.residue is None else self.residue
+        cache: dict = {}
+        return [evaluate(matrix.row(i), env, cache) for i in range(matrix.rows)]
+
+    def proved_modulo_p(self, values) -> Decision | None:
+        r = exact_rank(values)[0]
+        if r < self.full:
+            return None
+        return Decision(r, "exact", f"rank {r}, full, at a random point of M modulo the "
+                        f"prime 2^61 - 1 (proof)", samples=1, error_bound=0.0)
+
+    def observe(self, values) -> bool:
+        self.best = max(self.best, exact_rank(values)[0])
+        return self.best >= self.full
+
+    def pending_error(self, degrees, count, bound):
+        if self.best >= self.full:
+            return None
+        return bound(minor_degree(degrees, self.best + 1), count)
+
+    def conclude(self, count, degrees, bound) -> Decision:
+        r = self.best
+        if r >= self.full:
+            return Decision(r, "exact", f"rank {r}, full, at an exact point of M (proof)",
+                            samples=count, error_bound=0.0)
+        d = minor_degree(degrees, r + 1)
+        at_points = Decision(r, "exact at points", f"rank {r} at {count} random exact "
+                             f"point{'s' if count > 1 else ''} of M: every {r + 1} x {r + 1} "
+                             f"minor vanishes there ({bound.describe(d)})", samples=count,
+                             error_bound=bound(d, count))
+        # A deficient rank is proved by a certificate where one is found.
+        certificate = None if self.certify is None or not r else self.certify(at_points)
+        return certificate or at_points
 
     def reduced(self, manifold, policy) -> Decision | None:
         if 0 in self.matrix.shape:
@@ -69,6 +146,8 @@ class Rank:
         if not manifold.exact:
             return None
         reduced = self.residue = self.matrix.applyfunc(manifold.reduce)
+        self.certify = lambda d: manifold._rank_certificate(reduced, d,
+                                                            policy.exact_minor_size)
         if not reduced.free_symbols:
             r = reduced.rank()
             return Decision(r, "exact", f"entries reduce to numbers; rank {r}")

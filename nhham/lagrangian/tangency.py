@@ -28,7 +28,7 @@ from functools import cached_property
 import sympy as sp
 
 from nhham.lagrangian.decision import Decision
-from nhham.lagrangian.domains import NotExact, evaluate, minor_degree, schwartz_zippel_bound
+from nhham.lagrangian.domains import NotExact, evaluate, minor_degree
 from nhham.lagrangian.engine import Policy, decide
 from nhham.lagrangian.formulas import bordered_matrix, vertical_rows
 from nhham.lagrangian.linalg import ListMatrix, exact_rank
@@ -245,12 +245,12 @@ class Tangency:
         self.best_aug, self.best_J = max(self.best_aug, rAug - rK), max(self.best_J, rJ)
         return False
 
-    def pending_error(self, degrees, count, denominator_degree):
-        pending = [e for e in self._errors(degrees, count, denominator_degree)
+    def pending_error(self, degrees, count, bound):
+        pending = [e for e in self._errors(degrees, count, bound)
                    if e is not None]
         return max(pending) if pending else None
 
-    def _errors(self, degrees, count, den):
+    def _errors(self, degrees, count, error_bound):
         """Error bounds of: rank deficiency of K, vanishing conditions, Jacobian
         deficiency (None where the verdict is a proof)."""
         K, c, J = degrees
@@ -258,17 +258,16 @@ class Tangency:
         n, m = self.n, self.m
 
         def bound(rows, rank):
-            return schwartz_zippel_bound(minor_degree(rows, rank + 1), count,
-                                         denominator_degree=den)
+            return error_bound(minor_degree(rows, rank + 1), count)
 
         rK, extra, rJ = self.best_K, self.best_aug, self.best_J
         return [None if rK >= min(len(K), n + m) else bound(K, rK),
                 None if extra > 0 or rK >= len(K) else bound(aug, rK),
                 None if rJ >= min(len(J), 2 * n) else bound(J, rJ)]
 
-    def conclude(self, count, degrees, denominator_degree) -> TangencyVerdict:
+    def conclude(self, count, degrees, bound) -> TangencyVerdict:
         n, m, chis = self.n, self.m, self.chis
-        errors = self._errors(degrees, count, denominator_degree)
+        errors = self._errors(degrees, count, bound)
         rank = self.best_K - n
         full = min(len([r for r in self.Jv if any(x != 0 for x in r)]), m)
         rank_dec = _rank_decision(rank, full, errors[0], count,
