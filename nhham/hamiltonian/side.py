@@ -394,9 +394,10 @@ class NumericHamiltonian:
         self._M = Lambdified(self.args, list(leg.mixed_hessian), (n, n))
         self._p = Lambdified(self.args, list(leg.momenta), (n,))
         self._mu = Lambdified(self.args, list(sysm.mu), (m, n))
-        v = sp.Matrix(sysm.velocities)
-        # Evaluated and differentiated only: no expansion (0.4 s on the bicycle).
-        self._energy = self.functions([(v.T * leg.momenta)[0] - sysm.lagrangian])
+        # H = E_L o Leg^-1 has dH/dp = v and dH/dq = -dL/dq (at Leg^-1(q, p)): only
+        # dL/dq is compiled (differentiating E_L = v . p - L cost twice as much).
+        self._Lq = Lambdified(self.args, [derivative(sysm.lagrangian, s)
+                                          for s in sysm.coordinates], (n,))
         self._phi = self.functions(list(sysm.phi))
         self._functions: dict = {}
 
@@ -430,10 +431,10 @@ class NumericHamiltonian:
         vals = list(q) + list(v) + list(params)
         W, M = self._W(backend, vals), self._M(backend, vals)
         round_trip = float(backend.norm(self._p(backend, vals) - p))
-        _, Hq, Hp = self._energy.gradients(backend, vals, W, M)
+        Hq, Hp = -self._Lq(backend, vals), v
         phi, Phiq, Phip = self._phi.gradients(backend, vals, W, M)
         mu = self._mu(backend, vals)
-        return HamiltonianPoint(q, p, v, params, W, M, Hq[0], Hp[0], phi, Phiq, Phip, mu,
+        return HamiltonianPoint(q, p, v, params, W, M, Hq, Hp, phi, Phiq, Phip, mu,
                                 round_trip)
 
     def point_from_tq(self, backend: Backend, x: dict) -> HamiltonianPoint:

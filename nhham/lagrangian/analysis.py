@@ -24,7 +24,7 @@ import sympy as sp
 from nhham.errors import ComputationError
 from nhham.lagrangian.algebra import cancel
 from nhham.lagrangian.decision import Assumption
-from nhham.lagrangian.engine import Policy, decide, policy_of
+from nhham.lagrangian.engine import Policy, decide, has_real_point, policy_of
 from nhham.lagrangian.points import jacobian_row
 from nhham.lagrangian.algorithm import (
     constraint_kind,
@@ -358,7 +358,13 @@ def _decompose(system):
         index[q] = index[v] = i
     G = nx.Graph()
     G.add_nodes_from(("q", i) for i in range(n))
-    terms = sp.Add.make_args(sp.expand(system.lagrangian))
+    parts = getattr(system, "quadratic_parts", None)
+    if parts is None:
+        terms = sp.Add.make_args(sp.expand(system.lagrangian))
+    else:  # the same terms, piece by piece (expanding the bicycle's L whole: 0.3 s)
+        quadratic, linear, potential = parts.expanded(system.velocities)
+        terms = tuple(t for piece in (*quadratic, *linear, potential)
+                      for t in sp.Add.make_args(piece) if t != 0)
     term_sets = []
     for t in terms:
         idx = sorted({index[s] for s in t.free_symbols if s in index})
@@ -477,7 +483,7 @@ def _stage_one_at_points(view, geo, exprs, labels, lam, factory, policy):
     r = int(verdict.rank.value)
     if r != m or not verdict.consistent.value:
         return None
-    if verdict.rank.scope and not _has_real_point(view, exprs, policy):
+    if verdict.rank.scope and not has_real_point(view, view.holonomic, policy):
         return None  # points over F_p only (x^2 + y^2 + 1 = 0): the loop says M_1 is empty
     rows, cols = verdict.rows, verdict.cols
     others = [j for j in range(len(exprs)) if j not in rows]
@@ -522,19 +528,6 @@ def _stage_one_at_points(view, geo, exprs, labels, lam, factory, policy):
         scaled_fields=lambda: (geo.scaled_euler_lagrange_field, geo.scaled_vertical_fields,
                                geo.field_scale),
     )
-
-
-def _has_real_point(view, exprs, policy) -> bool:
-    """Whether a curved M_1 has a real point: its points over F_p are points over the
-    algebraic closure, and say nothing of that. A point of Q_1 = {g = 0} found by Newton
-    projection is enough: the rank of C proved on M_1 makes mu of full rank at almost
-    every point of Q_1, where the velocities solve mu v = -h."""
-    try:
-        Submanifold(view, tuple(view.holonomic), precision=policy.precision, samples=1,
-                    seed=policy.seed, fibre=()).points()
-    except ComputationError:
-        return False
-    return True
 
 
 def _state_positions(system, coords):
