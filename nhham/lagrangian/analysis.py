@@ -24,7 +24,7 @@ import sympy as sp
 from nhham.errors import ComputationError
 from nhham.lagrangian.algebra import cancel
 from nhham.lagrangian.decision import Assumption
-from nhham.lagrangian.engine import Policy, decide, has_real_point, policy_of
+from nhham.lagrangian.engine import Policy, decide, policy_of
 from nhham.lagrangian.points import jacobian_row
 from nhham.lagrangian.algorithm import (
     constraint_kind,
@@ -32,7 +32,7 @@ from nhham.lagrangian.algorithm import (
     run_algorithm,
 )
 from nhham.lagrangian.records import AlgorithmRun, Evidence, Stage, tangency_matrix
-from nhham.lagrangian.submanifold import Submanifold
+from nhham.lagrangian.submanifold import Submanifold, has_real_point
 from nhham.settings import SEED, check_options
 from nhham.system.description import System
 from nhham.system.naming import multiplier_symbol

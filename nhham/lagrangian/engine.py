@@ -54,14 +54,12 @@ A quantity is any object with a ``what`` (str) and some of the methods
 
 from __future__ import annotations
 
-import functools
 import math
 from dataclasses import dataclass
 
-from nhham.lagrangian.points import REDRAWS
 from nhham.settings import SEED, check_options
 
-__all__ = ["Policy", "decide", "policy_of", "answers_by_step", "has_real_point"]
+__all__ = ["Policy", "decide", "policy_of", "answers_by_step"]
 
 
 @dataclass(frozen=True)
@@ -215,6 +213,7 @@ def _at_exact_points(quantity, manifold, policy):
         return None
     from nhham.lagrangian.decision import scoped
     from nhham.lagrangian.domains import NotExact
+    from nhham.lagrangian.points import REDRAWS
 
     try:
         sampler = _exact_points(quantity, manifold, policy)
@@ -272,33 +271,8 @@ def _exact_points(quantity, manifold, policy):
 
 def _real(sampler, manifold, policy) -> bool:
     """Points over F_p of a curved M speak of M only where M has real points."""
-    return sampler.chart is None or has_real_point(manifold.system,
-                                                   sampler.chart.constraints, policy)
-
-
-def has_real_point(system, constraints, policy: Policy) -> bool:
-    """Whether {g = 0} in Q (``constraints``: holonomic g, the curved ones of a chart)
-    has a real point, found by Newton projection.
-
-    Points over F_p lie over the algebraic closure of Q and say nothing of that
-    (x^2 + y^2 + 1 = 0 has them). The constraints a chart leaves out are linear in a
-    coordinate with a constant coefficient: they have a real solution at every real
-    point of these. Memoised per system and constraints.
-    """
-    return _has_real_point(system, tuple(constraints), policy.precision, policy.seed)
-
-
-@functools.lru_cache(maxsize=32)
-def _has_real_point(system, constraints, precision, seed) -> bool:
-    from nhham.errors import ComputationError
-    from nhham.lagrangian.submanifold import Submanifold
-
-    try:
-        Submanifold(system, constraints, precision=precision, samples=1, seed=seed,
-                    fibre=()).points()
-    except ComputationError:
-        return False
-    return True
+    return sampler.chart is None or manifold.has_real_point(sampler.chart.constraints,
+                                                            policy)
 
 
 def policy_of(policy: Policy | None, where: str, **options) -> Policy:

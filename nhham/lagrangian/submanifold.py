@@ -46,6 +46,7 @@ the tolerance; in between the decision is doubtful and says so in
 from __future__ import annotations
 
 import contextlib
+import functools
 import math
 from dataclasses import dataclass
 from functools import cached_property
@@ -78,7 +79,7 @@ from nhham.settings import PARAMETER_BOX, SEED, STATE_BOX, Precision
 from nhham.system.evaluation import numeric_function
 from nhham.system.expressions import short
 
-__all__ = ["Submanifold"]
+__all__ = ["Submanifold", "has_real_point"]
 
 
 @dataclass(frozen=True)
@@ -242,6 +243,11 @@ class Submanifold:
             (:func:`~nhham.lagrangian.engine.decide` with :class:`Vanishing`).
         """
         return decide(Vanishing(expr, tol), self, self.policy)
+
+    def has_real_point(self, constraints, policy: Policy) -> bool:
+        """Whether {g = 0} in Q has a real point (:func:`has_real_point`), for the
+        points over F_p of a chart of this M (the engine asks)."""
+        return has_real_point(self.system, constraints, policy)
 
     def rank(self, matrix: sp.Matrix, tol: float | None = None) -> Decision:
         """Decide the rank of a matrix of functions on M (generic rank).
@@ -672,3 +678,25 @@ class Submanifold:
 
 
 
+
+
+def has_real_point(system, constraints, policy: Policy) -> bool:
+    """Whether {g = 0} in Q (``constraints``: holonomic g, the curved ones of a chart)
+    has a real point, found by Newton projection from seeded starts.
+
+    Points over F_p lie over the algebraic closure of Q and say nothing of that
+    (x^2 + y^2 + 1 = 0 has them). The constraints a chart leaves out are linear in a
+    coordinate with a constant coefficient: they have a real solution at every real
+    point of these. Memoised per system and constraints.
+    """
+    return _has_real_point(system, tuple(constraints), policy.precision, policy.seed)
+
+
+@functools.lru_cache(maxsize=32)
+def _has_real_point(system, constraints, precision, seed) -> bool:
+    try:
+        Submanifold(system, constraints, precision=precision, samples=1, seed=seed,
+                    fibre=()).points()
+    except ComputationError:
+        return False
+    return True

@@ -117,6 +117,7 @@ class Tangency:
     """
 
     what = "rank (Z_i(chi_j)) on M_1"
+    residues = True  # decided at smooth points over F_p of a curved M_1 too
 
     def __init__(self, system, hessian, forcing, primary):
         self.system, self.v = system, tuple(system.velocities)
