@@ -196,7 +196,20 @@ def _parse(text, symbols, where) -> sp.Expr:
     problems = number_problems(expr)
     if problems:
         raise ParseError(f"{where}: {problems[0]}")
-    return expr
+    return _real_parts(expr)
+
+
+def _real_parts(expr):
+    """``expr`` with re(s) -> s and im(s) -> 0 for its symbols, which are all real.
+
+    sympy's symbols carry no assumption, so it evaluates Abs(exp(x)) to exp(re(x)),
+    which no scene can write back; every symbol of a scene is real (coordinates,
+    velocities, parameters, inputs, t), so the two are the same function.
+    """
+    if not expr.has(sp.re, sp.im):
+        return expr
+    return expr.replace(lambda e: isinstance(e, (sp.re, sp.im)) and e.args[0].is_Symbol,
+                        lambda e: e.args[0] if isinstance(e, sp.re) else sp.S.Zero)
 
 
 def _not_normalized(body: str, lead: int, text: str) -> str:

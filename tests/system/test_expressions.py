@@ -412,3 +412,13 @@ def test_derivative_matches_sympy_diff(expr):
     for s in (x, y, a):
         assert sp.simplify(derivative(e, s) - e.diff(s)) == 0
 
+
+
+def test_sympys_real_parts_of_a_scene_symbol_are_the_symbol():
+    """sympy evaluates Abs(exp(x)) to exp(re(x)) (its symbols may be complex); a scene's
+    symbols are real, so the parse gives exp(x), which prints and parses back (found by
+    the round-trip property above)."""
+    expr = parse("Abs(exp(x))")
+    assert expr == sp.exp(x)
+    assert parse(to_text(expr)) == expr
+    assert parse("Abs(x)") == sp.Abs(x)  # nothing else is touched
