@@ -19,7 +19,7 @@ from sympy.matrices.exceptions import NonInvertibleMatrixError
 from sympy.polys.matrices import DomainMatrix
 from sympy.polys.matrices.exceptions import DMNonInvertibleMatrixError
 
-from nhham.lagrangian.domains import PRIME, Degree, ModP, evaluate, minor_degree
+from nhham.lagrangian.domains import PRIME, Degree, ModP, Program, minor_degree
 from nhham.system.evaluation import Backend, flatten
 
 __all__ = [
@@ -451,7 +451,10 @@ class ModularBackend(Backend):
     def evaluate(self, f, values) -> np.ndarray:
         """``f``'s expressions at the exact point ``values``: no compilation, the sines
         and cosines of Angles exact."""
-        out = [ModP.lift(x) for x in evaluate(f.exprs, dict(zip(f.args, values)), {})]
+        program = f.__dict__.get("_program")
+        if program is None:  # compiled once per function: it is run at every point
+            program = f.__dict__["_program"] = Program(f.exprs)
+        out = [ModP.lift(x) for x in program.run(dict(zip(f.args, values)))]
         return np.array(out, dtype=object)
 
     @property

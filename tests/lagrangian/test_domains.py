@@ -18,6 +18,7 @@ from nhham.lagrangian.domains import (
     Degree,
     ModP,
     NotExact,
+    Program,
     evaluate,
     minor_degree,
     schwartz_zippel_bound,
@@ -125,3 +126,28 @@ def test_schwartz_zippel_bound_by_hand():
         (4 / (S - 2 ** 61)) ** 3, rel=1e-12)
     assert schwartz_zippel_bound(4, 2, terms=10) == pytest.approx(10 * (4 / S) ** 2, rel=1e-12)
     assert schwartz_zippel_bound(S, 5) == 1.0  # no information: a degree as large as S
+
+
+def test_a_compiled_program_gives_the_values_of_the_walk():
+    """Program (the expressions compiled once) against the same values by hand at a
+    rational point, over F_p (with a sqrt), and its degree bounds against evaluate's."""
+    t1, t2 = MPQ(3, 7), MPQ(-5, 2)
+    env = {q1: circle(t1, 2), q2: circle(t2, 0), x: MPQ(5, 3), a: MPQ(2)}
+    exprs = [sp.sin(q1 - 2 * q2) * x + a * sp.cos(3 * q1) ** 2 - sp.tan(q2),
+             sp.cos(q1 + q2) / (a + sp.sin(q1)), q1 ** 2 * x - 1, sp.Integer(4)]
+    program = Program(exprs)
+    assert program.run(env) == evaluate(exprs, env)
+    # q1's polynomial value is 2, x = 5/3: q1^2 x - 1 = 17/3 by hand.
+    assert program.run(env)[2] == MPQ(17, 3)
+    # Over F_p: sqrt(x^2) is x or -x (the branch that is a square), (x + 1)^-2 by hand.
+    mod = {x: ModP(12345), a: ModP(7)}
+    root, inv = Program([sp.sqrt(x ** 2), (x + a) ** -2]).run(mod)
+    assert root in (ModP(12345), ModP(-12345))
+    assert inv == ModP(pow(12352 ** 2, -1, PRIME))
+    deg = {q1: Angle(Degree(1), Degree(2, {"c1": (2, 1)}), Degree(2, {"c1": (2, 1)})),
+           q2: Angle(Degree(1), Degree(2, {"c2": (2, 1)}), Degree(2, {"c2": (2, 1)})),
+           x: Degree(1), a: Degree(0)}
+    assert ([d.num for d in Program(exprs[:3]).run(deg)]
+            == [d.num for d in evaluate(exprs[:3], deg)])
+    with pytest.raises(NotExact):
+        Program([sp.exp(x)])
