@@ -53,10 +53,14 @@ from dataclasses import dataclass
 import sympy as sp
 from sympy.polys.domains import GF, ZZ
 from sympy.polys.galoistools import (
+    gf_add,
     gf_edf_zassenhaus,
+    gf_eval,
     gf_gcd,
     gf_monic,
-    gf_pow_mod,
+    gf_mul,
+    gf_neg,
+    gf_sqr,
     gf_strip,
     gf_sub,
 )
@@ -394,9 +398,12 @@ def _triangular_solutions(polys, unknowns) -> list:
     trips cost 50 ms a point on the bicycle; ring elements 7 ms)."""
     gens = tuple(unknowns)
     R = _ring(len(gens))
+    elements = [R.from_dict({k: int(v) for k, v in p.as_dict().items()}) for p in polys]
+    direct = _one_unknown(elements, R)
+    if direct is not None:
+        return [{gens[i]: v for i, v in sol.items()} for sol in direct]
     try:
-        basis = groebner([R.from_dict({k: int(v) for k, v in p.as_dict().items()})
-                          for p in polys], R)
+        basis = groebner(elements, R)
     except (sp.PolynomialError, ZeroDivisionError):
         return []
     if any(b.is_ground and b for b in basis):
@@ -435,14 +442,117 @@ def _solve_from(i, basis, R, known) -> list:
     return out
 
 
+def _one_unknown(elements, R) -> list | None:
+    """The solutions without a Gröbner basis in the two commonest shapes: one unknown
+    (its roots), or one unknown t and one sqrt w with f(t, w) = 0 of degree <= 2 in w and
+    c(t) w² = b(t) (the bicycle's contact): reduce f to F0(t) + w F1(t) (times c), take
+    the roots of c F0² − b F1², then w = −F0/F1 (both square roots where F1 = F0 = 0).
+    None for any other shape."""
+    if len(R.gens) == 1:
+        dense = [_dense(e, 0) for e in elements if e]
+        if not dense:
+            return None
+        f = dense[0]
+        for g in dense[1:]:
+            f = gf_gcd(f, g, PRIME, ZZ)
+        return [{0: r} for r in _roots(f)]
+    if len(R.gens) != 2 or len(elements) != 2:
+        return None
+    f, root = elements
+    if root.degree(R.gens[1]) != 2 or any(m[1] == 1 for m in root.monoms()) \
+            or f.degree(R.gens[1]) > 2:
+        return None
+    c = _dense(_part(root, 2), 0)  # c(t) w^2 - b(t) = 0
+    b = gf_neg(_dense(_part(root, 0), 0), PRIME, ZZ)
+    a = [_dense(_part(f, k), 0) for k in range(3)]  # f = a0 + a1 w + a2 w^2
+    F0 = gf_add(gf_mul(a[0], c, PRIME, ZZ), gf_mul(a[2], b, PRIME, ZZ), PRIME, ZZ)
+    F1 = gf_mul(a[1], c, PRIME, ZZ)
+    g = gf_sub(gf_mul(gf_sqr(F0, PRIME, ZZ), c, PRIME, ZZ),
+               gf_mul(b, gf_sqr(F1, PRIME, ZZ), PRIME, ZZ), PRIME, ZZ)
+    if not g:
+        return None  # t free: not zero-dimensional (left to the general route)
+    out = []
+    for t in _roots(g):
+        ct = gf_eval(c, t, PRIME, ZZ)
+        if not ct:
+            continue  # the sqrt's equation degenerates here: no point
+        f0, f1 = gf_eval(F0, t, PRIME, ZZ), gf_eval(F1, t, PRIME, ZZ)
+        if f1:
+            out.append({0: t, 1: (-f0 * pow(f1, -1, PRIME)) % PRIME})
+            continue
+        w2 = gf_eval(b, t, PRIME, ZZ) * pow(ct, -1, PRIME) % PRIME
+        w = pow(w2, (PRIME + 1) // 4, PRIME)
+        if w * w % PRIME == w2:
+            out += [{0: t, 1: w}, {0: t, 1: (-w) % PRIME}] if w else [{0: t, 1: 0}]
+    return out
+
+
+def _part(f, k: int):
+    """The coefficient of w^k in f(t, w), as an element of the same ring."""
+    R = f.ring
+    return R.from_dict({(m[0], 0): c for m, c in f.terms() if m[1] == k}) if f else R(0)
+
+
+def _dense(e, i: int) -> list:
+    """A polynomial in unknown i alone as a dense list of ints (highest degree first)."""
+    if not e:
+        return []
+    dense = [0] * (e.degree(e.ring.gens[i]) + 1)
+    for monom, c in e.terms():
+        dense[len(dense) - 1 - monom[i]] = int(c)
+    return dense
+
+
 def _roots(f) -> list:
-    """The roots in F_p of a dense polynomial over F_p (gcd with x^p - x, then split)."""
+    """The roots in F_p of a dense polynomial over F_p: gcd with x^p − x (x^p mod f by
+    squarings in plain integers), then the linear factors (by the formula up to degree 2,
+    Cantor–Zassenhaus beyond)."""
     f = gf_strip([c % PRIME for c in f])
     if len(f) < 2:
         return []
     f = gf_monic(f, PRIME, ZZ)[1]
-    xp = gf_pow_mod([1, 0], PRIME, f, PRIME, ZZ)
-    g = gf_gcd(f, gf_sub(xp, [1, 0], PRIME, ZZ), PRIME, ZZ)
+    xp = _x_power_mod(PRIME, f)
+    g = gf_monic(gf_gcd(f, gf_sub(xp, [1, 0], PRIME, ZZ), PRIME, ZZ), PRIME, ZZ)[1]
+    if len(g) == 2:
+        return [(-g[1]) % PRIME]
+    if len(g) == 3:  # x^2 + b x + c with two roots in F_p (p = 3 mod 4)
+        b, c = g[1], g[2]
+        disc = (b * b - 4 * c) % PRIME
+        r = pow(disc, (PRIME + 1) // 4, PRIME)
+        half = pow(2, -1, PRIME)
+        return [((-b + r) * half) % PRIME, ((-b - r) * half) % PRIME]
     if len(g) < 2:
         return []
     return [(-h[-1]) % PRIME for h in gf_edf_zassenhaus(g, 1, PRIME, ZZ)]
+
+
+def _x_power_mod(e: int, f: list) -> list:
+    """x^e mod f for monic f (dense, highest degree first), in plain integers."""
+    d = len(f) - 1
+    r = [1]
+    for bit in bin(e)[2:]:
+        r = _reduce(_square(r), f, d)
+        if bit == "1":
+            r = _reduce(r + [0], f, d)
+    return gf_strip(r)
+
+
+def _square(a: list) -> list:
+    n = len(a)
+    out = [0] * (2 * n - 1)
+    for i, x in enumerate(a):
+        if x:
+            for j in range(n):
+                out[i + j] += x * a[j]
+    return out
+
+
+def _reduce(a: list, f: list, d: int) -> list:
+    """a mod f (f monic of degree d), coefficients mod p."""
+    a = [x % PRIME for x in a]
+    for i in range(len(a) - d):
+        c = a[i]
+        if c:
+            for j in range(1, d + 1):
+                a[i + j] = (a[i + j] - c * f[j]) % PRIME
+    return a[max(0, len(a) - d):] if len(a) > d else a

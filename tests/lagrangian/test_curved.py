@@ -179,3 +179,56 @@ def test_a_closed_loop_has_points_over_Fp_and_its_verdict_is_proved():
     assert (verdict.rank_C, verdict.first_class, verdict.second_class) == (3, 1, 4)
     assert all(ev.decision.method == "exact" and ev.decision.scope
                for st in verdict.analysis.stages for ev in st.decisions)
+
+
+def test_the_direct_solution_agrees_with_a_groebner_basis(bicycle, monkeypatch):
+    """The bicycle's chart (one angle t, one sqrt w) is solved without a Groebner basis
+    (the roots of c F0^2 - b F1^2, w = -F0/F1); at 20 draws the solutions are the same
+    sets as the lex Groebner route gives."""
+    import nhham.lagrangian.curved as curved
+
+    sampler = PointSampler.on_M1(bicycle, seed=5, modular=True)
+    chart = sampler.chart
+    assert len(chart.unknowns) == 2  # t and w
+
+    def key(solutions):
+        return sorted(tuple(sorted((str(k), v) for k, v in s.items())) for s in solutions)
+
+    found = 0
+    for _ in range(20):
+        env = {k: v for k, v in sampler.point().env.items() if k not in chart.dependent}
+        system = chart._instance(env)
+        direct = curved._triangular_solutions(system, chart.unknowns)
+        with monkeypatch.context() as m:
+            m.setattr(curved, "_one_unknown", lambda elements, R: None)
+            general = curved._triangular_solutions(system, chart.unknowns)
+        assert key(direct) == key(general)
+        found += bool(direct)
+    assert found == 20
+
+
+def test_roots_over_Fp_of_a_product_of_known_factors():
+    """(x - r1)...(x - rk)(x^2 + b x + c): every r_i is found, and each root returned is
+    a root (Horner's rule in plain integers)."""
+    import random
+
+    from nhham.lagrangian.curved import _roots
+
+    rng = random.Random(3)
+    for _ in range(30):
+        rs = [rng.randrange(P) for _ in range(rng.randrange(0, 5))]
+        f = [1]
+        for r in rs:
+            f = [(a - r * b) % P for a, b in zip(f + [0], [0] + f)]
+        q = [1, rng.randrange(P), rng.randrange(P)]
+        g = [0] * (len(f) + 2)
+        for i, a in enumerate(f):
+            for j, b in enumerate(q):
+                g[i + j] = (g[i + j] + a * b) % P
+        got = _roots(g)
+        assert set(rs) <= set(got)
+        for r in got:
+            value = 0
+            for c in g:
+                value = (value * r + c) % P
+            assert value == 0
