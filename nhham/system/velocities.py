@@ -34,21 +34,6 @@ class QuadraticParts:
     b: tuple
     V: sp.Expr
 
-    def expanded(self, velocities) -> tuple[tuple, tuple, sp.Expr]:
-        """The expanded homogeneous parts of L: (terms of degree 2, one expanded
-        expression per nonzero W_AC v^A v^C with A <= C; the same of degree 1, per
-        b_A v^A; and -V expanded).
-
-        Their terms are the terms of expand(L) (terms of different velocity monomials
-        never combine), at a fraction of its cost: each piece is small, and sympy's
-        cache serves a second caller (the energy, the block decomposition).
-        """
-        W, v, n = self.W, velocities, len(velocities)
-        quadratic = tuple(sp.expand(W[A, A] / 2 * v[A] ** 2 if A == C else W[A, C] * v[A] * v[C])
-                          for A in range(n) for C in range(A, n) if W[A, C] != 0)
-        linear = tuple(sp.expand(b * v[A]) for A, b in enumerate(self.b) if b != 0)
-        return quadratic, linear, sp.expand(-self.V)
-
 
 # ------------------------------------------------- polynomial structure in v
 class _NotPolynomial(Exception):
