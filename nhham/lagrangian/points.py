@@ -167,12 +167,6 @@ class PointSampler:
                 f"point{'s' if count > 1 else ''} of M over F_p with the parameters at "
                 f"their values, so on every component of M through them")
 
-    # Degree bookkeeping for the denominators that may vanish at a drawn point
-    # (they are drawn again): the bound of their numerators.
-    @property
-    def denominator_degree(self) -> int:
-        return self._den_degree
-
     def error_bound(self, degrees: dict) -> ErrorBound:
         """The bound of verdicts taken at these points (:class:`ErrorBound`).
 
@@ -183,6 +177,8 @@ class PointSampler:
             were evaluated in it: on a curved M the sqrt it met count in deg X.
         """
         if self.chart is None:
+            # The denominators that may vanish at a drawn point (drawn again) count
+            # by the degree of their numerators.
             size = PRIME - 1 if self.modular else 2 ** SAMPLE_BITS
             return ErrorBound(size, self._den_degree)
         deg_x = self.chart.variety_degree(degrees)
