@@ -59,7 +59,7 @@ from dataclasses import dataclass
 
 from nhham.settings import SEED, check_options
 
-__all__ = ["Policy", "decide", "policy_of", "answers_by_step"]
+__all__ = ["Policy", "decide", "policy_of", "answers_by_step", "proof_at_a_point"]
 
 
 @dataclass(frozen=True)
@@ -171,6 +171,14 @@ def _reduced(quantity, manifold, policy):
 def _sampled(quantity, manifold, policy):
     sampled = getattr(quantity, "sampled", None)
     return None if sampled is None else sampled(manifold, policy)
+
+
+def proof_at_a_point(quantity, manifold, policy: Policy):
+    """Step 2 alone: the answer a random point of M over F_p (the parameters at their
+    values) proves, scoped to the component through it on a curved M; None when no
+    point proves it. For the verdict at the parameter values, whose generic decisions
+    a reduction took."""
+    return _proof_modulo_p(quantity, manifold, policy)
 
 
 def _proof_modulo_p(quantity, manifold, policy):

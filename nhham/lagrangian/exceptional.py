@@ -417,7 +417,8 @@ class ExceptionalData:
         parameters at their values: when every decision is one, there is nothing left
         to check and the note is empty. An exact "vanishes" holds at every value; an
         exact rank or "does not vanish" (and "not integrable") by reduction holds for
-        generic parameters: those decisions are named.
+        generic parameters: those decisions are named, but for "not integrable" proved
+        again at a point over F_p with the parameters at their values.
         """
         analysis = self.analysis
         decisions = [(ev.subject, ev.decision) for st in analysis.stages
@@ -431,6 +432,8 @@ class ExceptionalData:
             subject for subject, d in decisions
             if d.method != "sampled" and not d.scope and not d.samples
             and _nonzero_claim(d.value)))
+        if "integrability" in generic and _not_integrable_at_values(self.system, self.seed):
+            generic.remove("integrability")
         sampled = any(d.method == "sampled" for _, d in decisions)
         if not generic and not sampled:
             return ""  # every decision proved at the values: nothing left to check
@@ -656,3 +659,13 @@ def _normal(expr):
 def _exact_mpq(value):
     r = sp.Rational(str(value))
     return MPQ(int(r.p), int(r.q))
+
+
+def _not_integrable_at_values(system, seed: int) -> bool:
+    """Non-integrability proved at a point of Q_1 over F_p with the parameters at their
+    values (a reduction proved it for generic ones)."""
+    from nhham.lagrangian.engine import Policy
+    from nhham.lagrangian.integrability import integrability_proved_at_values
+
+    at = integrability_proved_at_values(system, Policy(seed=seed))
+    return at is not None and at.integrable is False

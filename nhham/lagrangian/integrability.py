@@ -35,10 +35,10 @@ import sympy as sp
 from nhham.errors import ComputationError
 from nhham.lagrangian.algebra import cancel
 from nhham.lagrangian.decision import Decision
-from nhham.lagrangian.domains import Degree, NotExact, evaluate
+from nhham.lagrangian.domains import Degree, ModP, NotExact, evaluate
 from nhham.lagrangian.formulas import frobenius_terms
 from nhham.lagrangian.linalg import ListMatrix, degree_solve, exact_rank, field_solve
-from nhham.lagrangian.engine import Policy, decide, policy_of
+from nhham.lagrangian.engine import Policy, decide, policy_of, proof_at_a_point
 from nhham.lagrangian.points import jacobian_row
 from nhham.lagrangian.submanifold import Submanifold
 from nhham.settings import SEED, Precision
@@ -157,11 +157,26 @@ def integrability(system, *, precision: int | None = None, samples: int = 6,
     """
     policy = policy_of(policy, "integrability", precision=precision, samples=samples,
                        seed=seed, exact=exact)
+    return decide(*_question(system, policy), policy)
+
+
+def integrability_proved_at_values(system, policy: Policy) -> Integrability | None:
+    """Non-integrability proved at one point of Q_1 over F_p drawn with the parameters
+    at their values (a nonzero term dmu_i(X_a, X_b)), else None.
+
+    A reduction decides for generic parameters; this says whether the scene's own
+    values are among the exceptions (:mod:`nhham.lagrangian.exceptional` asks it where
+    Q_1 has no rational points)."""
+    return proof_at_a_point(*_question(system, policy), policy)
+
+
+def _question(system, policy):
+    """The Frobenius question and Q_1 = {g = 0} it is asked on."""
     labels = tuple(f"{lab}.lift" if i < len(system.holonomic) else lab
                    for i, lab in enumerate(system.constraint_labels))
     Q1 = Submanifold(system, system.holonomic, precision=policy.precision,
                      samples=policy.samples, seed=policy.seed, fibre=(), exact=policy.exact)
-    return decide(Frobenius(system, labels), Q1, policy)
+    return Frobenius(system, labels), Q1
 
 
 class Frobenius:
@@ -178,6 +193,7 @@ class Frobenius:
     """
 
     what = "dmu_i(X_a, X_b) on Q_1"
+    residues = True  # decided at smooth points over F_p of a curved Q_1 too
 
     def __init__(self, system, labels):
         self.system, self.labels = system, tuple(labels)
@@ -235,11 +251,13 @@ class Frobenius:
         n, m, labels = len(self.q), self.mu.rows, self.labels
         if self.found is not None:
             i, a, b, w = self.found
-            dec = Decision(False, "exact", f"d{labels[i]}(X_{a + 1}, X_{b + 1}) = {w} "
-                           f"at an exact point of Q_1 (proof)", samples=count,
-                           error_bound=0.0)
-            return Integrability(False, n - m, None, ((labels[i], a, b, sp.Rational(
-                int(w.numerator), int(w.denominator))),),
+            modular = isinstance(w, ModP)  # a residue has no size: its value is not kept
+            dec = Decision(False, "exact", f"d{labels[i]}(X_{a + 1}, X_{b + 1}) = "
+                           f"{'a nonzero residue mod p' if modular else w} at an exact "
+                           f"point of Q_1 (proof)", samples=count, error_bound=0.0)
+            return Integrability(False, n - m, None, ((labels[i], a, b, None if modular else
+                                                       sp.Rational(int(w.numerator),
+                                                                   int(w.denominator))),),
                 ((f"d{labels[i]}(X_{a + 1}, X_{b + 1})", dec),), "exact", (), **self.common)
         worst = max((Degree.of(d).num for d in degrees.values()), default=0)
         error = self.pending_error(degrees, count, bound)

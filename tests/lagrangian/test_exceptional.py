@@ -66,7 +66,7 @@ def test_without_points_over_the_parameter_field_the_note_says_what_the_verdict_
         analysis = SimpleNamespace(stages=(stage,), integrable=integrable,
                                    integrability=SimpleNamespace(decisions=terms))
         return ExceptionalData._unchecked_note(SimpleNamespace(
-            analysis=analysis, system=pendulum_cartesian()))
+            analysis=analysis, system=pendulum_cartesian(), seed=1))
 
     sampled = Evidence("rank of (Z_i(chi_j)) on M_1", Decision(1, "sampled", "at points"))
     exact_zero = Evidence("condition from g", Decision(True, "exact", "vanishes"))
@@ -80,3 +80,22 @@ def test_without_points_over_the_parameter_field_the_note_says_what_the_verdict_
     assert text.startswith("the parameter values were not checked")
     assert "rank of (Z_i(chi_j)) on M_2" in text and "integrability" in text
     assert "(Z_i(chi_j)) on M_1" not in text  # the sampled decision is not named
+
+
+def test_non_integrability_by_reduction_is_proved_again_at_the_values():
+    """The two-particle rod: Q_1 = {|r2 - r1| = l} is curved; non-integrability is
+    decided by reduction for generic l, and proved again at a point of Q_1 over F_p with
+    l at its value, so the verdict at the values names nothing unchecked. A system that
+    is integrable (the Cartesian pendulum: no nonzero term) gets no such proof."""
+    from nhham.lagrangian.engine import Policy
+    from nhham.lagrangian.integrability import integrability_proved_at_values
+    from nhham.system.models import pendulum_cartesian, two_particle_rod
+    from nhham.verdict.values import classification_at_values
+
+    at = classification_at_values(two_particle_rod())
+    assert at.verdict.analysis.integrable is False
+    assert at.warnings == ()
+    proved = integrability_proved_at_values(two_particle_rod(), Policy())
+    assert proved.integrable is False and proved.method == "exact"
+    assert integrability_proved_at_values(pendulum_cartesian(), Policy()) is None
+
