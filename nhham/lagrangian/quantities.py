@@ -65,7 +65,7 @@ class Vanishing:
                         samples=count, error_bound=bound(d, count))
 
     def reduced(self, manifold, policy) -> Decision | None:
-        if not manifold.exact:
+        if not manifold.exact or not _reducible(manifold, policy):
             return None
         reduced = self.residue = manifold.reduce(self.expr)
         if reduced == 0:
@@ -143,7 +143,7 @@ class Rank:
     def reduced(self, manifold, policy) -> Decision | None:
         if 0 in self.matrix.shape:
             return Decision(0, "exact", "empty matrix")
-        if not manifold.exact:
+        if not manifold.exact or not _reducible(manifold, policy):
             return None
         reduced = self.residue = self.matrix.applyfunc(manifold.reduce)
         self.certify = lambda d: manifold._rank_certificate(reduced, d,
@@ -167,3 +167,23 @@ class Rank:
             if certificate is not None:
                 return certificate
         return sampled
+
+
+def _reducible(manifold, policy) -> bool:
+    """Whether the exact reduction is tried: not on a curved M with more than
+    ``policy.closed_form_size`` coordinates, where solving the velocities symbolically
+    costs minutes (the bicycle's M_1) and the points over F_p answer in milliseconds."""
+    if len(manifold.system.coordinates) <= policy.closed_form_size:
+        return True
+    from nhham.lagrangian.domains import NotExact
+    from nhham.lagrangian.points import exact_sampler
+
+    try:
+        exact_sampler(manifold, policy.seed)
+    except NotExact:
+        try:
+            return exact_sampler(manifold, policy.seed, modular=True).chart is None
+        except NotExact:
+            return True
+    return True
+

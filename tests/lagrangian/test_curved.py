@@ -232,3 +232,15 @@ def test_roots_over_Fp_of_a_product_of_known_factors():
             for c in g:
                 value = (value * r + c) % P
             assert value == 0
+
+
+def test_the_rank_of_C_on_the_bicycles_M1_is_proved_without_a_symbolic_reduction(bicycle):
+    """``LagrangianGeometry.constraint_rank`` asks M_1.rank(C): on the bicycle's curved
+    M_1 (n = 8 > closed_form_size) the symbolic solve of the velocities (minutes) is
+    skipped and a point over F_p proves rank 5 = m."""
+    from nhham.lagrangian.geometry import lagrangian_geometry
+
+    G = lagrangian_geometry(bicycle)
+    decision = G.constraint_rank
+    assert (decision.value, decision.method, decision.error_bound) == (5, "exact", 0.0)
+    assert decision.scope.startswith("M is curved") and G.regular
