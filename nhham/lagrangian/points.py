@@ -152,20 +152,19 @@ class PointSampler:
     def scope(self) -> str:
         """What an answer proved at one of these points holds on ("" where M is
         parametrised rationally: all of M)."""
-        if self.chart is None:
-            return ""
-        return (f"M is curved ({self.chart.describe()}): proved at a smooth point of M "
-                f"over F_p with the parameters at their values, so on the component of M "
-                f"through it")
+        return self._curved("proved at a smooth point", "the component of M through it")
 
     def points_scope(self, count: int) -> str:
         """Where an answer decided at ``count`` of these points holds ("" where M is
         parametrised rationally)."""
+        return self._curved(f"decided at {count} smooth point{'s' if count > 1 else ''}",
+                            "every component of M through them")
+
+    def _curved(self, how: str, where: str) -> str:
         if self.chart is None:
             return ""
-        return (f"M is curved ({self.chart.describe()}): decided at {count} smooth "
-                f"point{'s' if count > 1 else ''} of M over F_p with the parameters at "
-                f"their values, so on every component of M through them")
+        return (f"M is curved ({self.chart.describe()}): {how} of M over F_p with the "
+                f"parameters at their values, so on {where}")
 
     def error_bound(self, degrees: dict) -> ErrorBound:
         """The bound of verdicts taken at these points (:class:`ErrorBound`).
