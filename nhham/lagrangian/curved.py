@@ -430,9 +430,7 @@ def _solve_from(i, basis, R, known) -> list:
         u = b.subs([(R.gens[j], known[j]) for j in used if j > i]) if len(used) > 1 else b
         if not u:
             continue  # vanishes above this point: no condition on unknown i
-        dense = [0] * (u.degree(R.gens[i]) + 1)
-        for monom, c in u.terms():
-            dense[len(dense) - 1 - monom[i]] = int(c)
+        dense = _dense(u, i)
         univariate = dense if univariate is None else gf_gcd(univariate, dense, PRIME, ZZ)
     if univariate is None:
         return []  # unknown i free above this point: not zero-dimensional
