@@ -36,7 +36,7 @@ class Vanishing:
     def __init__(self, expr, tol: float | None = None):
         self.expr, self.tol = expr, tol
         self.residue = None
-        self.nonzero = None
+        self.nonzero = False
 
     def value(self, env, degrees: bool = False):
         return evaluate([self.expr if self.residue is None else self.residue], env)[0]
@@ -48,15 +48,14 @@ class Vanishing:
                         "2^61 - 1 (proof)", samples=1, error_bound=0.0)
 
     def observe(self, value) -> bool:
-        if value:
-            self.nonzero = value
-        return bool(value)
+        self.nonzero = self.nonzero or bool(value)
+        return self.nonzero
 
     def pending_error(self, degree, count, bound):
-        return None if self.nonzero is not None else bound(Degree.of(degree).num, count)
+        return None if self.nonzero else bound(Degree.of(degree).num, count)
 
     def conclude(self, count, degree, bound) -> Decision:
-        if self.nonzero is not None:
+        if self.nonzero:
             return Decision(False, "exact", "nonzero at an exact point of M (proof)",
                             samples=count, error_bound=0.0)
         d = Degree.of(degree).num
@@ -173,17 +172,4 @@ def _reducible(manifold, policy) -> bool:
     """Whether the exact reduction is tried: not on a curved M with more than
     ``policy.closed_form_size`` coordinates, where solving the velocities symbolically
     costs minutes (the bicycle's M_1) and the points over F_p answer in milliseconds."""
-    if len(manifold.system.coordinates) <= policy.closed_form_size:
-        return True
-    from nhham.lagrangian.domains import NotExact
-    from nhham.lagrangian.points import exact_sampler
-
-    try:
-        exact_sampler(manifold, policy.seed)
-    except NotExact:
-        try:
-            return exact_sampler(manifold, policy.seed, modular=True).chart is None
-        except NotExact:
-            return True
-    return True
-
+    return len(manifold.system.coordinates) <= policy.closed_form_size or not manifold.curved

@@ -244,6 +244,24 @@ class Submanifold:
         """
         return decide(Vanishing(expr, tol), self, self.policy)
 
+    @cached_property
+    def curved(self) -> bool:
+        """True when M has no rational parametrisation but points over F_p from a chart
+        (:mod:`nhham.lagrangian.curved`): a holonomic constraint no coordinate enters
+        linearly."""
+        from nhham.lagrangian.domains import NotExact
+        from nhham.lagrangian.points import exact_sampler
+
+        try:
+            exact_sampler(self, self.seed)
+            return False
+        except NotExact:
+            pass
+        try:
+            return exact_sampler(self, self.seed, modular=True).chart is not None
+        except NotExact:
+            return False
+
     def has_real_point(self, constraints, policy: Policy) -> bool:
         """Whether {g = 0} in Q has a real point (:func:`has_real_point`), for the
         points over F_p of a chart of this M (the engine asks)."""
