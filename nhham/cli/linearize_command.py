@@ -113,7 +113,7 @@ def linearize_scene(scene, method: str = "auto", sweep=None, model=None):
     """
     from nhham.numerics.codegen import numeric_model
     from nhham.numerics.linearization import linearize
-    from nhham.numerics.steady_sweep import sweep_steady
+    from nhham.numerics.steady_sweep import sweep_steady, with_steady_inputs
 
     if scene.steady is None:
         raise InputError(f"{scene.source}: linearize needs a [steady] table with a value (or an "
@@ -121,7 +121,7 @@ def linearize_scene(scene, method: str = "auto", sweep=None, model=None):
     if method not in ("auto", "exact", "complex-step"):
         raise InputError(f"linearize: unknown method {method!r}")
     model = numeric_model(scene.system) if model is None else model
-    state = scene.steady.values(model.parameters)
+    model, state = with_steady_inputs(model, scene.steady.values(model.parameters))
     family = scene.steady.family(model.parameters)
     lin = linearize(model, state, family=family)
     if method == "exact" or (method == "auto" and scene.system.n <= EXACT_MAX_N):
@@ -143,9 +143,12 @@ def _exact(scene, model, lin):
     from nhham.numerics.linearization import linearization_result
 
     params = {p.name: exact_number(v) for p, v in scene.system.parameter_values.items()}
+    params.update({u: exact_number(model.parameters[u]) for u in model.input_names})
     point = {sp.Symbol(k): v for k, v in params.items()}
     state = {}
     for name, expr in scene.steady.expressions.items():
+        if name in model.input_names:
+            continue
         value = sp.sympify(expr).xreplace(point)
         state[name] = value if value.is_number else exact_number(float(value.evalf()))
     ej = exact_jacobian(scene.system, state, params, lin.chart)
@@ -182,7 +185,7 @@ def _exact(scene, model, lin):
         np.array([[float(sp.N(e, 20)) for e in ej.matrix.row(i)] for i in range(ej.matrix.rows)]),
         lin.neutral, lin.dependent, dict(lin.state), dict(lin.residuals),
         lin.acceleration_residual, tol=10.0 ** (-EXACT_DIGITS + 5) * scale, eigenvalues=ev,
-        exact_matrix=A)
+        exact_matrix=A, inputs=lin.inputs, B=lin.input_matrix)
 
 
 def cmd_linearize(args, steps):
@@ -243,6 +246,11 @@ def _text(scene, lin, swept, args) -> str:
         lines.append("state matrix:")
         lines.append(table([[num(x, 10) for x in row] for row in lin.matrix],
                            header=list(lin.coordinates)))
+    if lin.inputs and lin.matrix.size:
+        lines.append("input matrix B (x' = A x + B u, inputs at their [steady] values):")
+        lines.append(table([[name] + [num(x, 10) for x in row]
+                            for name, row in zip(lin.coordinates, lin.input_matrix)],
+                           header=["", *lin.inputs]))
     lines.append("eigenvalues:")
     lines.append(table([(num(z.real, 12), num(z.imag, 12, "+") + "i")
                         for z in lin.eigenvalues] or [("none",)]))

@@ -491,12 +491,13 @@ def cmd_simulate(args, steps) -> CommandOutput:
         raise InputError(f"{args.scene}: simulate needs an [initial] table with a value for "
                          f"every coordinate and velocity")
     t_end, opts = _simulate_options(args, scene)
+    system = _closed_loop(scene, args)
     t_span = (0.0, float(t_end))
     with capture_warnings() as caught:
         plan = storage_plan(scene.system.n, opts.get("method", "DOP853"),
                             opts.get("save_every", 1), opts.get("max_points"))
         with steps.step(f"simulate with {opts.get('method', 'DOP853')} ({plan})"):
-            result = simulate(scene.system, t_span=t_span, y0=dict(scene.initial),
+            result = simulate(system, t_span=t_span, y0=dict(scene.initial),
                               project_initial=args.project_initial, progress=steps.progress,
                               contacts=scene.contacts, **opts)
     data = simulation_data(result, t_span)
@@ -518,13 +519,33 @@ def cmd_simulate(args, steps) -> CommandOutput:
         free = ()
         found = result.singularity
         if found.part == "C" if found is not None else int(result.status) == -3:
-            free = _free_multipliers(scene.system)
+            free = _free_multipliers(system)
         failure = simulation_failure(result, str(args.scene), free)
     def text():  # the warnings go to stderr, one line each
         return "\n".join(line for line in result.describe().splitlines()
                          if not line.lstrip().startswith("warning:"))
     return CommandOutput(result=data, text=text, scene=scene_info(scene),
                          warnings=warnings, failure=failure)
+
+
+def _closed_loop(scene, args):
+    """The scene's system with its inputs given by the [control] laws and ``--control``
+    (the command line's replace the scene's)."""
+    laws = dict(scene.control)
+    for item in getattr(args, "control", None) or []:
+        name, sep, expr = item.partition("=")
+        if not sep or not name.strip() or not expr.strip():
+            raise UsageError(f"--control {item!r}: expected U=EXPR (an input and its law)",
+                             key="--control")
+        laws[name.strip()] = expr.strip()
+    if not laws:
+        return scene.system
+    try:
+        return scene.system.closed_loop(laws)
+    except InputError as exc:
+        message = str(exc)
+        where = "--control" if getattr(args, "control", None) else "control"
+        raise InputError(message, key=where) from None
 
 
 def _contact_forces(result, warnings):
@@ -562,7 +583,8 @@ def cmd_bench(args, steps) -> CommandOutput:
     try:
         with capture_warnings() as caught:
             with steps.step(study):
-                result = work_precision(scene.system, dict(scene.initial), (0.0, t_end),
+                result = work_precision(_closed_loop(scene, args), dict(scene.initial),
+                                        (0.0, t_end),
                                         quick=args.quick, progress=steps.progress,
                                         reference_digits=args.reference_digits)
     except NumericalFailure as exc:  # no reference: nothing to measure against

@@ -110,6 +110,10 @@ def _add_shared_options(p, name) -> None:
         p.add_argument("--plot", metavar="FILE", default=None,
                        help="save a figure (.png, .pdf, .svg); needs the plot extra: "
                             "pip install 'nhham[plot]'")
+        p.add_argument("--control", action="append", default=[], metavar="U=EXPR",
+                       help="a control law for the input U: an expression in t, the "
+                            "coordinates, velocities and parameters (replaces the scene's "
+                            "[control] entry; repeatable)")
 
 
 def _add_classify_options(p) -> None:

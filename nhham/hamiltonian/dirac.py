@@ -341,7 +341,11 @@ def _fields_on_Mf(side: HamiltonianSide, classes: ConstraintClasses):
     blocks = [[label_index[lab] for lab in blk if lab in label_index] for blk in classes.blocks]
     blocks = [b for b in blocks if b]
     inverses = [(blk, block_inverse(B.extract(blk, blk))) for blk in blocks]
-    s = [Mf.reduce(alg.bracket(c, side.H)) for c in chi]
+    if side.system.has_forces:  # dchi(X_H + F^V): the Dirac projection of the forced field
+        s = [Mf.reduce(cancel(sum((sp.diff(c, z) * X for z, X in zip(side.variables, side.X_H)),
+                                  sp.S.Zero))) for c in chi]
+    else:
+        s = [Mf.reduce(alg.bracket(c, side.H)) for c in chi]
     XH = [Mf.reduce(e) for e in side.X_H]
     lam = [Mf.reduce(e) for e in side.multipliers]
     Z = side.vertical_fields

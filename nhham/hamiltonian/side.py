@@ -163,8 +163,20 @@ class HamiltonianSide(ConstraintMatrixRank):
 
     @cached_property
     def X_H(self) -> sp.Matrix:
-        """X_H = (dH/dp, -dH/dq), shape (2n, 1)."""
-        return self.algebra.hamiltonian_field(self.H).applyfunc(cancel)
+        """X_H = (dH/dp, -dH/dq) (+ F^V with forces), shape (2n, 1).
+
+        With forces (``System.generalized_forces``) this is the forced field
+        X_H + F^V, F^V = Q_A(q, Leg^-1(q, p)) d/dp_A (i_{F^V} omega_Q = -Q_A dq^A), the
+        image of the Lagrangian side's ξ_L + F^v under Leg: every object built from
+        it (the multipliers, the projected field, the constraint algorithm on T*Q)
+        is the forced one.
+        """
+        field = self.algebra.hamiltonian_field(self.H)
+        if self.system.has_forces:
+            n = self.system.n
+            Q = [self.legendre.transport(f) for f in self.system.generalized_forces]
+            field = field + sp.Matrix.vstack(sp.zeros(n, 1), sp.Matrix(Q))
+        return field.applyfunc(cancel)
 
     # ------------------------------------------------------------ constraints
     @property
@@ -198,9 +210,12 @@ class HamiltonianSide(ConstraintMatrixRank):
 
     @cached_property
     def constraint_derivatives(self) -> sp.Matrix:
-        """X_H(phi_i^H) = {phi_i^H, H}, shape (m, 1)."""
-        return sp.Matrix([self.algebra.bracket(f, self.H) for f in self.constraints]) \
-            if self.m else sp.zeros(0, 1)
+        """X_H(phi_i^H) = {phi_i^H, H} (+ F^V(phi_i^H) with forces), shape (m, 1)."""
+        if not self.m:
+            return sp.zeros(0, 1)
+        if self.system.has_forces:
+            return (self.constraint_gradients * self.X_H).applyfunc(cancel)
+        return sp.Matrix([self.algebra.bracket(f, self.H) for f in self.constraints])
 
     @cached_property
     def multipliers(self) -> sp.Matrix:
@@ -331,7 +346,8 @@ class HamiltonianPoint:
     W, M : array, shape (n, n)
         d p / d v and d p / d q at (q, v).
     Hq, Hp : array, shape (n,)
-        Gradient of H.
+        Gradient of H; with forces Hq is dH/dq - Q (so that X_H = (Hp, -Hq) is the
+        forced field X_H + F^V).
     phi : array, shape (m,)
         phi_i^H.
     Phiq, Phip : array, shape (m, n)
@@ -396,8 +412,11 @@ class NumericHamiltonian:
         self._mu = Lambdified(self.args, list(sysm.mu), (m, n))
         # H = E_L o Leg^-1 has dH/dp = v and dH/dq = -dL/dq (at Leg^-1(q, p)): only
         # dL/dq is compiled (differentiating E_L = v . p - L cost twice as much).
-        self._Lq = Lambdified(self.args, [derivative(sysm.lagrangian, s)
-                                          for s in sysm.coordinates], (n,))
+        # With forces -Hq carries Q too (dp/dt = -dH/dq + Q before the constraints).
+        lq = [derivative(sysm.lagrangian, s) for s in sysm.coordinates]
+        if sysm.has_forces:
+            lq = [a + b for a, b in zip(lq, sysm.generalized_forces)]
+        self._Lq = Lambdified(self.args, lq, (n,))
         self._phi = self.functions(list(sysm.phi))
         self._functions: dict = {}
 
@@ -578,8 +597,15 @@ class NonholonomicBracket(BivectorBracket):
                           for i, phi in enumerate(side.constraints)), sp.S.Zero))
 
     def time_derivative(self, f) -> sp.Expr:
-        """d f/dt along the projected field: {f, H}_nh + extra term."""
-        return cancel(self(f, self.side.H) + self.extra_term(f))
+        """d f/dt along the projected field: {f, H}_nh + extra term (+ df(P F^V), the
+        projected force, when the system has forces)."""
+        out = self(f, self.side.H) + self.extra_term(f)
+        side = self.side
+        if side.system.has_forces:
+            FV = side.X_H - side.algebra.hamiltonian_field(side.H)
+            grad = sp.Matrix([[sp.diff(f, z) for z in side.variables]])
+            out += (grad * side.projector_P * FV)[0]
+        return cancel(out)
 
     def equations_of_motion(self) -> tuple:
         """(dq/dt, dp/dt) from the bracket: z -> {z, H}_nh + extra term, as a 2n-tuple."""

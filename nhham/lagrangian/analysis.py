@@ -21,7 +21,7 @@ from typing import TYPE_CHECKING, Mapping, cast
 import networkx as nx
 import sympy as sp
 
-from nhham.errors import ComputationError
+from nhham.errors import ComputationError, InputError
 from nhham.lagrangian.algebra import cancel
 from nhham.lagrangian.decision import Assumption
 from nhham.lagrangian.engine import Policy, decide, policy_of
@@ -35,6 +35,7 @@ from nhham.lagrangian.records import AlgorithmRun, Evidence, Stage, tangency_mat
 from nhham.lagrangian.submanifold import Submanifold, has_real_point
 from nhham.settings import SEED, check_options
 from nhham.system.description import System
+from nhham.system.expressions import short
 from nhham.system.naming import multiplier_symbol
 
 if TYPE_CHECKING:
@@ -323,7 +324,27 @@ def analyze_constraints(system, *, precision: int | None = None, samples: int = 
         start += sum(1 for _, d in run.provenance.nodes(data=True) if d["kind"] == "secondary")
         blocks.append(Block(tuple(system.coordinates[i] for i in spec["coords"]),
                             tuple(spec["labels"]), run))
+    _check_autonomous(system, blocks)
     return _merge(system, blocks, opts, policy, geometry)
+
+
+def _check_autonomous(system, blocks) -> None:
+    """Refuse secondary constraints that depend on the time or on an input: their tangency
+    would need d/dt of the forces, which the algorithm (for autonomous fields) does not
+    form."""
+    moving = set(system.inputs) | ({system.time} if system.time is not None else set())
+    if not moving:
+        return
+    for block in blocks:
+        for stage in block.run.stages:
+            for label, chi in zip(stage.new_labels, stage.new_constraints):
+                used = sorted(s.name for s in sp.sympify(chi).free_symbols & moving)
+                if used:
+                    raise InputError(
+                        f"forces: the secondary constraint {label} = {short(chi)} depends on "
+                        f"{', '.join(used)}; the constraint algorithm needs forces that do "
+                        f"not depend on time or inputs where C is singular (give the inputs "
+                        f"as parameters with values)", key="forces")
 
 
 # ------------------------------------------------------------- blocks and merging
@@ -347,7 +368,7 @@ def _decompose(system):
 
     A coordinate is joined to the coordinates it shares a term of the Lagrangian with
     (a piece W_AC v^A v^C, b_A v^A or a term of V when L is quadratic in the
-    velocities, a term of the expanded L otherwise), and every
+    velocities, a term of the expanded L otherwise) and to those its force depends on, and every
     constraint to the coordinates whose q or v it involves. Components without
     constraints are merged into one free block. Each block's Lagrangian is the sum
     of the terms of L in its coordinates, so L is a sum over the blocks by
@@ -379,6 +400,11 @@ def _decompose(system):
         term_sets.append((t, idx))
         for a, b in zip(idx, idx[1:]):
             G.add_edge(("q", a), ("q", b))
+    if system.has_forces:  # a force on q^A couples A to the coordinates it depends on
+        for A, f in enumerate(system.generalized_forces):
+            for s in f.free_symbols:
+                if s in index:
+                    G.add_edge(("q", A), ("q", index[s]))
     for k, g in enumerate(system.holonomic):
         for s in g.free_symbols:
             if s in index:
@@ -425,6 +451,9 @@ class _BlockSystem:
         self.mu = (sp.Matrix([[sp.diff(f, v) for v in self.velocities] for f in self.phi])
                    if self.phi else sp.zeros(0, self.n))
         self.hessian = sp.hessian(self.lagrangian, self.velocities)
+        self.has_forces, self.inputs = system.has_forces, system.inputs
+        self.generalized_forces = sp.Matrix([system.generalized_forces[i]
+                                             for i in spec["coords"]])
 
     def __repr__(self):
         return f"_BlockSystem({[q.name for q in self.coordinates]})"

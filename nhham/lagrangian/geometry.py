@@ -331,18 +331,27 @@ class LagrangianGeometry(ConstraintMatrixRank):
 
     @cached_property
     def forcing(self) -> sp.Matrix:
-        """F_B = dL/dq^B - (d2L/dq^C dv^B) v^C, shape (n, 1).
+        """F_B = dL/dq^B - (d2L/dq^C dv^B) v^C + Q_B, shape (n, 1).
+
+        Q_B are the system's generalized forces (``System.generalized_forces``:
+        applied forces and -dR/dv of a dissipation function), so every field built
+        from F (ξ_L, P(ξ_L), the multipliers, the tangency equations, the generated
+        code) is the forced one: ξ_L + F^v with F^v = W^{AB} Q_B ∂/∂v^A.
 
         Fast path (L quadratic in v), collected by velocity monomial::
 
             F_B = 1/2 d_B W_AC v^A v^C - d_C W_BA v^A v^C
-                  + (d_B b_A - d_A b_B) v^A - d_B V
+                  + (d_B b_A - d_A b_B) v^A - d_B V (+ Q_B)
         """
         if self._parts is None:
             L = self.system.lagrangian
             dLdq = sp.Matrix([sp.diff(L, q) for q in self.system.coordinates])
-            return dLdq - self.mixed_hessian * self._v
-        return self._quadratic_forcing()
+            free = dLdq - self.mixed_hessian * self._v
+        else:
+            free = self._quadratic_forcing()
+        if self.system.has_forces:
+            return free + self.system.generalized_forces
+        return free
 
     def _quadratic_forcing(self) -> sp.Matrix:
         n, v, half = self.n, self.system.velocities, sp.Rational(1, 2)
@@ -403,7 +412,10 @@ class LagrangianGeometry(ConstraintMatrixRank):
 
     @cached_property
     def euler_lagrange_field(self) -> sp.Matrix:
-        """xi_L = v^A d/dq^A + xi^A d/dv^A (solution of i_X omega_L = dE_L)."""
+        """xi_L = v^A d/dq^A + xi^A d/dv^A (solution of i_X omega_L = dE_L - Q_A dq^A).
+
+        With forces this is the forced field ξ_L + F^v (``System.generalized_forces``).
+        """
         return sp.Matrix.vstack(self._v, self.accelerations)
 
     # ------------------------------------------- inverse-free (scaled) fields
@@ -500,7 +512,7 @@ class LagrangianGeometry(ConstraintMatrixRank):
 
     @cached_property
     def constraint_derivatives(self) -> sp.Matrix:
-        """xi_L(phi_i) = {phi_i, E_L}_L, shape (m, 1)."""
+        """xi_L(phi_i) (= {phi_i, E_L}_L without forces), shape (m, 1)."""
         ing = self.ingredients
         return ing.drift + ing.mu * self.accelerations
 

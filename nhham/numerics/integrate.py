@@ -463,6 +463,18 @@ def _check_options(method, step, projection, baumgarte, model):
         raise InputError(f"method: unknown method {method!r}; choose one of {', '.join(METHODS)}")
     if method in FIXED_STEP_METHODS and step is None:
         raise InputError(f"step: method {method!r} is fixed-step and needs step=...")
+    if model.forced and method in ("rattle", "rattle4"):
+        raise InputError(f"method: {method!r} is a structure-preserving scheme for "
+                         f"conservative systems; this system has forces (choose an adaptive "
+                         f"method such as DOP853)")
+    if model.time_slot is not None and (method in FIXED_STEP_METHODS or method == "reference"):
+        raise InputError(f"method: {method!r} does not take time-dependent forces (t in the "
+                         f"forces); choose an adaptive method such as DOP853")
+    unset = model.unset_inputs()
+    if unset:
+        raise InputError(f"inputs: no value for {', '.join(unset)} (give a control law, "
+                         f"[control] in a scene or System.closed_loop, or a value with "
+                         f"parameters=...)", key="inputs")
     if (projection or baumgarte is not None) and method in ("rattle", "rattle4", "reference"):
         raise InputError(f"projection/baumgarte: not applicable to method {method!r} "
                          f"(it keeps the constraints itself)")

@@ -113,6 +113,11 @@ class Linearization:
         ``max |a|`` at the state (zero for a steady motion).
     exact_matrix : sympy.Matrix or None
         The state matrix with exact entries (``method == "exact"``).
+    inputs : tuple of str
+        The system's inputs u (empty without any).
+    input_matrix : ndarray, shape (d, len(inputs))
+        B of x' = A x + B u in the variables of :attr:`matrix`, the inputs at their
+        steady values (complex-step derivative in each input, exact to rounding).
     """
 
     coordinates: tuple
@@ -132,6 +137,17 @@ class Linearization:
     residuals: Mapping[str, float] = field(default_factory=dict)
     acceleration_residual: float = 0.0
     exact_matrix: object = None
+    inputs: tuple = ()
+    input_matrix: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
+
+    def state_space(self):
+        """``scipy.signal.StateSpace(A, B, I, 0)``: the linearisation as a system with the
+        inputs u and the full state of :attr:`coordinates` as outputs."""
+        from scipy import signal
+
+        d, r = self.matrix.shape[0], len(self.inputs)
+        B = self.input_matrix if r else np.zeros((d, 1))
+        return signal.StateSpace(self.matrix, B, np.eye(d), np.zeros((d, B.shape[1])))
 
     def to_dict(self) -> dict:
         """JSON-ready: ``coordinates``, ``matrix``, ``eigenvalues`` ([re, im]), ``stable``..."""
@@ -151,6 +167,9 @@ class Linearization:
             "steady_state": dict(self.state),
             "residuals": dict(self.residuals),
             "acceleration_residual": self.acceleration_residual,
+            **({} if not self.inputs else
+               {"inputs": list(self.inputs),
+                "input_matrix": [[float(x) for x in row] for row in self.input_matrix]}),
             **({} if self.exact_matrix is None else
                {"matrix_exact": [[str(x) for x in self.exact_matrix.row(i)]
                                  for i in range(self.exact_matrix.rows)]}),
@@ -159,7 +178,7 @@ class Linearization:
 
 def linearization_result(A, coords, method, precision, chart_names, J, removed, dependent,
                          state, residuals, worst, tol=None, eigenvalues=None,
-                         exact_matrix=None) -> "Linearization":
+                         exact_matrix=None, inputs=(), B=None) -> "Linearization":
     """Eigenvalues and the stability verdict of a state matrix, as a :class:`Linearization`.
 
     ``A`` is the state matrix in the variables ``coords``; ``eigenvalues``
@@ -191,7 +210,8 @@ def linearization_result(A, coords, method, precision, chart_names, J, removed, 
         chart=tuple(chart_names), full_matrix=J, neutral=tuple(removed),
         dependent=tuple(dependent), state=MappingProxyType(state),
         residuals=MappingProxyType(residuals), acceleration_residual=worst,
-        exact_matrix=exact_matrix)
+        exact_matrix=exact_matrix, inputs=tuple(inputs),
+        input_matrix=np.zeros((A.shape[0], 0)) if B is None else B)
 
 
 def _sorted(ev):
@@ -394,13 +414,15 @@ def linearize(model, state, *, independent: Sequence[str] | None = None,
         A constraint or the saddle-point matrix is singular at the state.
     """
     y0 = model.state(state)
+    _check_inputs(model)
     residuals, worst = _check_steady(model, y0)
     chart = _choose_chart(model, y0, independent)
     cf = _ComplexField(model)
     J = _chart_jacobian(cf, chart, y0, step)
+    B = _input_jacobians(cf, chart, y0[None, :], step, model)[0]
     moved = _moved_along(y0, model.n)
     return _from_jacobian(model, y0, chart, J, lambda: _chart_jacobian(cf, chart, moved, step),
-                          neutral, family, step, residuals, worst)
+                          neutral, family, step, residuals, worst, B)
 
 
 def linearize_many(models: Sequence, states: Sequence, independent: Sequence[str], *,
@@ -431,6 +453,7 @@ def linearize_many(models: Sequence, states: Sequence, independent: Sequence[str
     """
     if not models:
         return []
+    _check_inputs(models[0])
     Y = np.array([m.state(s) for m, s in zip(models, states)])
     checks = [_check_steady(m, y) for m, y in zip(models, Y)]
     charts = {_choose_chart(m, y, independent) for m, y in zip(models, Y)}
@@ -449,8 +472,43 @@ def linearize_many(models: Sequence, states: Sequence, independent: Sequence[str
                                                step, P[:, at])):
             J1[i] = Ji
     families = families or [None] * len(models)
-    return [_from_jacobian(m, y, chart, Ji, lambda J1i=J1i: J1i, neutral, fam, step, res, worst)
-            for m, y, Ji, J1i, fam, (res, worst) in zip(models, Y, J, J1, families, checks)]
+    B = _input_jacobians(cf, chart, Y, step, models[0], P)
+    return [_from_jacobian(m, y, chart, Ji, lambda J1i=J1i: J1i, neutral, fam, step, res, worst,
+                           Bi)
+            for m, y, Ji, J1i, fam, (res, worst), Bi
+            in zip(models, Y, J, J1, families, checks, B)]
+
+
+def _check_inputs(model):
+    unset = model.unset_inputs()
+    if unset:
+        raise InputError(f"linearize: no steady value for the input(s) {', '.join(unset)} "
+                         f"(a scene's [steady] gives one for every input; in Python: "
+                         f"model.with_parameters({unset[0]}=...))", key="steady")
+    if model.time_slot is not None:
+        raise InputError("linearize: the forces depend on time t; a steady motion needs "
+                         "autonomous forces (give the inputs constant values instead)",
+                         key="forces")
+
+
+def _input_jacobians(cf, chart, Y, step, model, P=None):
+    """B at each state of Y (N, 2n): the complex-step derivative of the chart's field in
+    each input's parameter slot, shape (N, d, r)."""
+    names = model.parameter_names
+    slots = [names.index(u) for u in model.input_names]
+    n, N, r = cf.n, Y.shape[0], len(slots)
+    d = len(chart.iq) + len(chart.iv)
+    if not r:
+        return np.zeros((N, d, 0))
+    P = np.array([model.parameter_values] * N, dtype=float).T if P is None else np.asarray(P)
+    cols = list(chart.iq) + [n + i for i in chart.iv]
+    X = np.repeat(Y[:, cols].astype(complex), r, axis=0)
+    p = [np.repeat(v.astype(complex), r) for v in P]
+    for j, slot in enumerate(slots):
+        p[slot] = p[slot].copy()
+        p[slot][j::r] += 1j * step
+    F = _reduced_field(cf, chart, np.repeat(Y[:, :n], r, axis=0), X, p)
+    return np.swapaxes(F.imag.reshape(N, r, d), 1, 2) / step
 
 
 def _check_steady(model, y0):
@@ -470,7 +528,7 @@ def _check_steady(model, y0):
 
 
 def _from_jacobian(model, y0, chart, J, moved_jacobian, neutral, family, step, residuals,
-                   worst):
+                   worst, B=None):
     """The Linearization from the chart's Jacobian J at y0; ``moved_jacobian()`` gives it
     at the state moved along the motion (asked only when the state moves)."""
     n, names = model.n, model.names
@@ -494,14 +552,17 @@ def _from_jacobian(model, y0, chart, J, moved_jacobian, neutral, family, step, r
                 f"coordinates in which every moving one is cyclic (a rotation about the "
                 f"vertical that also turns the constraints is not)")
     A = J[np.ix_(keep, keep)]
+    # the neutral directions are a quotient: B keeps the rows that A keeps
+    Bk = None if B is None else B[keep, :]
     kept_names = [chart_names[i] for i in keep]
     if family and neutral is not False:
-        A, kept_names, extra = _divide_family(A, kept_names, family)
+        A, kept_names, extra, Bk = _divide_family(A, kept_names, family, Bk)
         removed = tuple(removed) + tuple(extra)
     return linearization_result(A, tuple(kept_names), "complex-step",
                    f"float64, complex-step Jacobian (step {step:g}i, exact to rounding), "
                    f"LAPACK eigenvalues", chart_names, J, removed, dependent,
-                   dict(zip(names, map(float, y0))), residuals, worst)
+                   dict(zip(names, map(float, y0))), residuals, worst,
+                   inputs=model.input_names, B=Bk)
 
 
 def _chart_jacobian(cf, chart, y, step):
@@ -553,8 +614,9 @@ def _check_on_manifold(model, y0) -> dict:
     return {nm: float(r) for nm, r in zip(names, res)}
 
 
-def _divide_family(A, names, family):
-    """Divide out the tangents of the steady family that A maps to zero."""
+def _divide_family(A, names, family, B=None):
+    """Divide out the tangents of the steady family that A maps to zero (and change B's
+    basis with A's)."""
     removed = []
     for parameter, tangent in family.items():
         if not A.size:
@@ -567,12 +629,14 @@ def _divide_family(A, names, family):
         j = int(np.argmax(np.abs(t)))
         T = np.eye(len(names))
         T[:, j] = t
-        B = np.linalg.solve(T, A @ T)
+        AT = np.linalg.solve(T, A @ T)
         keep = [i for i in range(len(names)) if i != j]
-        A = B[np.ix_(keep, keep)]
+        A = AT[np.ix_(keep, keep)]
+        if B is not None:
+            B = np.linalg.solve(T, B)[keep, :]
         names = [names[i] for i in keep]
         removed.append(f"d/d{parameter}")
-    return A, names, removed
+    return A, names, removed, B
 
 
 def _neutral_directions(J, chart_names, neutral):

@@ -14,10 +14,15 @@ evaluates, on one state ``y`` of shape (2n,) or on a batch of shape (k, 2n)
   i.e. d/dt(dL/dv) - dL/dq = -lambda^i mu_i;
 - the multipliers lambda, the constraint residuals (phi_i = mu_i v + h_i, then
   the holonomic g_a), the energy E_L, cond(C) with C = -mu W^{-1} mu^T, cond(W);
-- the power of the constraint forces P = -lambda . (mu v). Along any solution
-  dE_L/dt = P exactly; on M_1 (mu v = -h) this is P = lambda . h, the energy
-  balance for affine constraints (zero for linear ones). With the opposite
+- the power P = -lambda . (mu v) of the constraint forces, plus Q . v of the applied
+  forces and the dissipation when the system has any (``forced``). Along any solution
+  dE_L/dt = P exactly; on M_1 (mu v = -h) the constraints' part is lambda . h, the
+  energy balance for affine constraints (zero for linear ones). With the opposite
   sign convention for lambda it reads dE/dt = -lambda . h.
+
+Inputs u and the time t of the forces are parameter slots (``input_names``,
+``time_slot``): an input is NaN until set (``with_parameters``), the time is set by
+:meth:`rhs` and the integration loops.
 
 The small linear systems are solved at run time; nothing is inverted
 symbolically. The numpy path solves the saddle matrix by LU after a symmetric
@@ -191,6 +196,9 @@ class NumericModel:
     coordinate_names = property(lambda self: self.layout["coordinate_names"])
     velocity_names = property(lambda self: self.layout["velocity_names"])
     parameter_names = property(lambda self: self.layout["parameter_names"])
+    forced = property(lambda self: self.layout.get("forced", False))
+    input_names = property(lambda self: self.layout.get("input_names", ()))
+    time_slot = property(lambda self: self.layout.get("time_slot"))
 
     @property
     def names(self) -> tuple:
@@ -351,8 +359,22 @@ class NumericModel:
 
         return f
 
+    def at_time(self, t: float) -> "NumericModel":
+        """The model with its time slot at t (itself when the forces do not depend on t)."""
+        slot = self.time_slot
+        if slot is None:
+            return self
+        values = list(self.parameter_values)
+        values[slot] = float(t)
+        return replace(self, parameter_values=tuple(values))
+
+    def unset_inputs(self) -> tuple:
+        """Names of the inputs without a value (NaN)."""
+        return tuple(u for u in self.input_names if math.isnan(self.parameters[u]))
+
     def rhs(self, t, y, baumgarte=None) -> np.ndarray:
-        """y' = f(t, y) for y of shape (2n,) or (k, 2n). The system is autonomous.
+        """y' = f(t, y) for y of shape (2n,) or (k, 2n); t matters only where the forces
+        depend on time (``time_slot``).
 
         Raises
         ------
@@ -360,6 +382,8 @@ class NumericModel:
             If the saddle-point system is singular or the value is not finite (its
             ``status`` says which).
         """
+        if self.time_slot is not None and self._p[self.time_slot] != t:
+            return self.at_time(t).rhs(t, y, baumgarte)
         ext = self._ext
         if ext is not None and baumgarte is None:
             # The hot path (what an integrator calls): one C call, a new array.
@@ -423,6 +447,8 @@ class NumericModel:
             return nan, np.full(y.shape[:-1] + (self.m,), np.nan), np.nan, Status.SINGULAR
         dy = np.concatenate([v, a], axis=-1)
         power = -np.sum(lam * muv, axis=-1)
+        if self.forced:
+            power = power + out[..., -1]  # the applied power Q . v
         status = Status.SUCCESS if np.all(np.isfinite(dy)) else Status.NONFINITE
         if y.ndim == 1:
             power = float(power)
@@ -446,6 +472,8 @@ class NumericModel:
         _, mu, _, _ = self.geometry(Y)
         muv = np.einsum("kij,kj->ki", mu, Y[:, self.n:])
         power = -np.sum(LAM * muv, axis=-1)
+        if self.forced:  # the applied power Q . v, the last output of the saddle kernel
+            power = power + self.kernels.batch("saddle", Y, self._plist)[:, -1]
         status = Status.SUCCESS if np.all(np.isfinite(dY)) else Status.NONFINITE
         if y.ndim == 1:
             return dY[0].copy(), LAM[0].copy(), float(power[0]), status

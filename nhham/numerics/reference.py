@@ -100,6 +100,8 @@ class _MpField:
         # mpmath's LU raises ZeroDivisionError on a singular matrix.
         x = list(mpmath.lu_solve(K, rhs))
         power = -mpmath.fsum(x[n + c] * muv[c] for c in range(m)) if m else mpmath.mpf(0)
+        if self.model.layout.get("forced"):
+            power += out[-1]  # the applied power Q . v
         return list(v) + x[:n] + [power]
 
 

@@ -113,6 +113,8 @@ class SingleStateSolver:
         self.drift = slice(base + m * n, base + m * n + m)
         self.h = slice(base + m * n + m, base + m * n + 2 * m)
         self.g = slice(base + m * n + 2 * m, base + m * n + 2 * m + k)
+        # with forces the kernel ends with the applied power Q . v
+        self.forced = bool(layout.get("forced", False))
 
     def __call__(self, flat, y, a2, b2):
         if self.N <= 10:
@@ -159,6 +161,8 @@ class SingleStateSolver:
         a = [z[i] * d[i] for i in range(n)]
         lam = [z[n + c] * d[n + c] for c in range(m)]
         power = -sum(lam[c] * muv[c] for c in range(m))
+        if self.forced:
+            power += out[-1]
         dy = np.array(v + a)
         ok = math.isfinite(power) and all(math.isfinite(x) for x in a)
         return dy, np.array(lam), power, (Status.SUCCESS if ok else Status.NONFINITE)
@@ -194,7 +198,7 @@ class SingleStateSolver:
         z = z * d
         dy = np.concatenate((v, z[:n]))
         lam = z[n:]
-        power = -float(lam @ muv)
+        power = -float(lam @ muv) + (float(out[-1]) if self.forced else 0.0)
         return dy, lam, power, (Status.SUCCESS if np.isfinite(dy).all() else Status.NONFINITE)
 
 

@@ -71,7 +71,12 @@ def _make_fun(model, baumgarte, counter):
     n2 = 2 * model.n
     field = model.field_function(baumgarte)
 
+    timed = model.time_slot is not None
+
     def fun(t, z):
+        if timed:  # a time-dependent force: the field at this t
+            nonlocal field
+            field = model.at_time(t).field_function(baumgarte)
         if z.ndim == 1:
             out = field(z)
             counter[0] += 1
@@ -79,7 +84,7 @@ def _make_fun(model, baumgarte, counter):
                 raise eval_failure(out, t, z[:n2])
             return out
         # Vectorised call (scipy's finite-difference Jacobian): z is (2n+1, k).
-        dY, _, P, status = model.evaluate(np.ascontiguousarray(z[:n2].T), baumgarte)
+        dY, _, P, status = model.at_time(t).evaluate(np.ascontiguousarray(z[:n2].T), baumgarte)
         counter[0] += z.shape[1]
         if status:
             raise eval_failure(status, t, z[:n2, 0])

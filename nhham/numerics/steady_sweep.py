@@ -13,7 +13,7 @@ import numpy as np
 from nhham.errors import InputError
 from nhham.numerics.linearization import Linearization, linearize, linearize_many
 
-__all__ = ["Crossing", "Sweep", "sweep", "sweep_steady"]
+__all__ = ["Crossing", "Sweep", "sweep", "sweep_steady", "with_steady_inputs"]
 
 
 @dataclass(frozen=True)
@@ -193,6 +193,14 @@ def _locate(linearize_at, a, b, lin_a, lin_b, xtol):
                      1 if _n_positive(lin_b) > _n_positive(lin_a) else -1)]
 
 
+def with_steady_inputs(model, values: Mapping[str, float]) -> tuple:
+    """(model, state): the inputs' steady values of ``values`` (a scene's ``[steady]``
+    gives one for every input) set in the model, the rest the state."""
+    state = dict(values)
+    inputs = {u: state.pop(u) for u in model.input_names if u in state}
+    return (model.with_parameters(**inputs) if inputs else model), state
+
+
 def sweep_steady(model, state_of: Callable[[Mapping[str, float]], Mapping[str, float]],
                  parameter: str, values: Sequence[float], *, independent=None,
                  xtol: float = 1e-12, family_of=None) -> Sweep:
@@ -223,7 +231,7 @@ def sweep_steady(model, state_of: Callable[[Mapping[str, float]], Mapping[str, f
                          f"(parameters: {', '.join(model.parameter_names) or 'none'})")
     def model_and_state(value):
         m = model.with_parameters(**{parameter: value})
-        return m, state_of(m.parameters)
+        return with_steady_inputs(m, state_of(m.parameters))
 
     def fam(value):
         if family_of is None:

@@ -1,4 +1,4 @@
-"""The system description: coordinates, Lagrangian, constraints, parameters.
+"""The system description: coordinates, Lagrangian, constraints, forces, parameters.
 
 A :class:`System` is frozen and validated on construction. Every problem found
 is collected and raised once as a :class:`~nhham.errors.ValidationError`
@@ -11,6 +11,13 @@ constraint g(q) = 0 contributes its complete lift g^c = (dg/dq^A) v^A as an
 affine constraint (paper §4) and g = 0 is imposed on Q. In :attr:`System.phi`
 the complete lifts come first (the paper's Example 4.1 order), then the user's
 affine constraints in the order given.
+
+Forces (``DESIGN.md`` §2): generalized forces Q_A(q, v, t, u) (the components of a
+semibasic 1-form Q_A dq^A) and a Rayleigh dissipation function R(q, v), which adds
+-dR/dv^A; the equations become d/dt(dL/dv) - dL/dq = Q - mu^T lambda. Named inputs u and
+the time ``t`` may appear in forces only; for the geometry they are parameters without
+values (a verdict holds for generic constant inputs, at any instant), listed last in
+:attr:`System.parameters`; the numeric layer sets them at run time.
 """
 
 from __future__ import annotations
@@ -30,7 +37,7 @@ from nhham.errors import (
     ValidationError,
 )
 from nhham.settings import PARAMETER_BOX, STATE_BOX
-from nhham.system.naming import as_symbol, velocity_symbol
+from nhham.system.naming import TIME, as_symbol, velocity_symbol
 from nhham.system.rank import float_rank, precise_ranks
 from nhham.system.screening import coordinate_symbols, expression_problems
 from nhham.system.velocities import QuadraticParts, non_affine_terms, one_forms, quadratic_parts
@@ -87,6 +94,16 @@ class System:
         If True, affine constraints whose one-form is a combination of the
         previous ones (and whose h is the same combination) are dropped and
         recorded in :attr:`dropped`; if False (default) they are an error.
+    forces : mapping or sequence, optional
+        Generalized forces Q_A: ``{coordinate: expression}`` (the components of the
+        1-form Q_A dq^A; coordinates not named get 0) or one expression per
+        coordinate. Functions of the coordinates, velocities, parameters, the
+        ``inputs`` and the time ``t``.
+    dissipation : sympy.Expr or str, optional
+        A Rayleigh dissipation function R; it adds the force -dR/dv^A.
+    inputs : sequence of str or sympy.Symbol, optional
+        Names of inputs u (controls): symbols the forces may use, set at run time
+        (``simulate``'s control laws, ``linearize``'s B).
 
     Raises
     ------
@@ -119,6 +136,9 @@ class System:
     constraints: tuple[sp.Expr, ...] = field(init=False)
     dropped: tuple[DroppedConstraint, ...] = field(init=False)
     constraint_labels: tuple[str, ...] = field(init=False)
+    forces: tuple[sp.Expr, ...] = field(init=False)
+    dissipation: sp.Expr = field(init=False)
+    inputs: tuple[sp.Symbol, ...] = field(init=False)
 
     def __init__(
         self,
@@ -129,6 +149,9 @@ class System:
         parameters: Mapping | Sequence = (),
         name: str = "",
         drop_redundant: bool = False,
+        forces: Mapping | Sequence | None = None,
+        dissipation=None,
+        inputs: Sequence = (),
     ):
         # Long on purpose: every check appends to one list of problems, so that the
         # user sees them all at once, in the order the pieces were given.
@@ -147,6 +170,11 @@ class System:
                 "parameters: names also used as coordinates or velocities: " + ", ".join(clash)
             )
         table = {s.name: s for s in coords + vels + params}
+        ins = _input_symbols(inputs, table, problems)
+        applied, diss, uses_time = _forces(forces, dissipation, coords, vels, table, ins,
+                                           problems)
+        if uses_time or ins:
+            params = params + ins + ((TIME,) if uses_time else ())
 
         lag = _to_expr(lagrangian, table, "lagrangian", problems)
         cons = tuple(
@@ -161,6 +189,9 @@ class System:
         known = set(table.values())
         for label, expr in [("lagrangian", lag)] + _labelled(cons, hols):
             problems += expression_problems(label, expr, coords + vels, known)
+        forced = known | set(ins) | {TIME}
+        for label, expr in _force_labels(applied, coords, diss):
+            problems += expression_problems(label, expr, coords + vels + ins + (TIME,), forced)
         for i, g in enumerate(hols):
             used = sorted(v.name for v in g.free_symbols & set(vels))
             if used:
@@ -185,7 +216,8 @@ class System:
 
         _set_fields(self, name=str(name), coordinates=coords, velocities=vels,
                     parameters=params, parameter_values=MappingProxyType(dict(values)),
-                    lagrangian=lag, holonomic=hols)
+                    lagrangian=lag, holonomic=hols, forces=applied, dissipation=diss,
+                    inputs=ins)
 
         kept, dropped, mu = _check_dependence(self, cons, hols, drop_redundant)
         if mu is not None and not dropped:
@@ -204,7 +236,10 @@ class System:
 
     def __repr__(self):
         label = f"{self.name!r}, " if self.name else ""
-        return f"System({label}n={self.n}, m={self.m}, holonomic={len(self.holonomic)})"
+        forced = f", inputs={len(self.inputs)}" if self.inputs else ""
+        forced = (", forced" if self.has_forces else "") + forced
+        return (f"System({label}n={self.n}, m={self.m}, holonomic={len(self.holonomic)}"
+                f"{forced})")
 
     # ----------------------------------------------------------------- sizes
     @property
@@ -216,6 +251,83 @@ class System:
     def m(self) -> int:
         """Number of affine constraints phi_i (complete lifts included)."""
         return len(self.phi)
+
+    @property
+    def time(self) -> sp.Symbol | None:
+        """The time ``t`` when the forces depend on it (a parameter then), else None."""
+        return TIME if TIME in self.parameters[len(self.parameters) - 1:] else None
+
+    @property
+    def has_forces(self) -> bool:
+        """True when a force or a dissipation function is given."""
+        return any(f != 0 for f in self.forces) or self.dissipation != 0
+
+    @cached_property
+    def generalized_forces(self) -> sp.Matrix:
+        """Q_A - dR/dv^A, shape (n, 1): the applied forces and the dissipation's.
+
+        The force F = Q_A dq^A is semibasic; its vertical lift F^v = W^{AB} Q_B d/dv^B
+        (i_{F^v} omega_L = -F, ``DESIGN.md`` §2) is added to xi_L.
+        """
+        R = self.dissipation
+        return sp.Matrix([f - (sp.diff(R, v) if R != 0 else 0)
+                          for f, v in zip(self.forces, self.velocities)])
+
+    @property
+    def declared_parameters(self) -> tuple[sp.Symbol, ...]:
+        """The parameters as declared: :attr:`parameters` without the inputs and ``t``."""
+        extra = set(self.inputs) | {TIME}
+        return tuple(p for p in self.parameters if p not in extra)
+
+    def closed_loop(self, laws: Mapping) -> "System":
+        """The system with inputs replaced by control laws (feedback or open loop).
+
+        Parameters
+        ----------
+        laws : mapping
+            ``{input: expression}`` in ``t``, the coordinates, velocities and
+            parameters (strings go through the safe parser). Inputs not named stay
+            inputs.
+
+        Returns
+        -------
+        System
+            The same Lagrangian and constraints, the forces with the laws substituted
+            (compiled with the field by the numeric layer).
+
+        Raises
+        ------
+        ValidationError
+            A key that is not an input, or a law using an unknown name or an input.
+        """
+        problems: list[str] = []
+        by_name = {u.name: u for u in self.inputs}
+        table = {s.name: s for s in self.state + self.declared_parameters}
+        table["t"] = TIME
+        subs = {}
+        for key, law in laws.items():
+            name = key.name if isinstance(key, sp.Symbol) else str(key)
+            if name not in by_name:
+                problems.append(f"control.{name}: not an input of the system (inputs: "
+                                f"{', '.join(by_name) or 'none'})")
+                continue
+            subs[by_name[name]] = _to_expr(law, table, f"control.{name}", problems)
+        if problems:
+            raise ValidationError(problems)
+        known = set(table.values())
+        for u, law in subs.items():
+            problems += expression_problems(f"control.{u.name}", law, self.state + (TIME,),
+                                            known)
+        if problems:
+            raise ValidationError(problems)
+        return System(self.coordinates, self.lagrangian,
+                      constraints=self.constraints, holonomic=self.holonomic,
+                      parameters={p: self.parameter_values.get(p)
+                                  for p in self.declared_parameters},
+                      name=self.name,
+                      forces=[f.xreplace(subs) for f in self.forces],
+                      dissipation=self.dissipation.xreplace(subs),
+                      inputs=[u for u in self.inputs if u not in subs])
 
     @property
     def state(self) -> tuple[sp.Symbol, ...]:
@@ -409,6 +521,67 @@ def _set_fields(system, **values):
     assignment, so its own ``__init__`` goes through ``object.__setattr__``."""
     for key, value in values.items():
         object.__setattr__(system, key, value)
+
+
+def _input_symbols(inputs, table, problems) -> tuple:
+    """The inputs as plain symbols; names must be new (not state, parameter or ``t``)."""
+    if isinstance(inputs, (str, sp.Basic)):
+        inputs = [inputs]
+    out: list = []
+    for i, u in enumerate(inputs):
+        try:
+            sym = as_symbol(u)
+        except TypeError as exc:
+            problems.append(f"inputs[{i}]: {exc}")
+            continue
+        if sym.name in table or sym == TIME or sym in out:
+            what = ("the time" if sym == TIME else "a coordinate, velocity or parameter"
+                    if sym.name in table else "another input")
+            problems.append(f"inputs[{i}]: {sym.name!r} is already {what}")
+            continue
+        out.append(sym)
+    return tuple(out)
+
+
+def _forces(forces, dissipation, coords, vels, table, inputs, problems):
+    """(Q_A per coordinate, R, whether t appears), parsed against the state, the
+    parameters, the inputs and the time."""
+    n = len(coords)
+    given = forces is not None and (len(forces) if hasattr(forces, "__len__") else True)
+    if not given and dissipation is None:
+        return (sp.S.Zero,) * n, sp.S.Zero, False
+    if "t" in table:
+        problems.append(f"forces: the name t is the time in forces; rename the "
+                        f"{'coordinate' if sp.Symbol('t') in coords else 'parameter'} t")
+        return (sp.S.Zero,) * n, sp.S.Zero, False
+    full = dict(table, t=TIME, **{u.name: u for u in inputs})
+    out = [sp.S.Zero] * n
+    if isinstance(forces, Mapping):
+        index = {q.name: i for i, q in enumerate(coords)}
+        for key, value in forces.items():
+            name = key.name if isinstance(key, sp.Symbol) else str(key)
+            if name not in index:
+                problems.append(f"forces.{name}: not a coordinate (forces are given by "
+                                f"coordinate: {', '.join(index)})")
+                continue
+            out[index[name]] = _to_expr(value, full, f"forces.{name}", problems)
+    elif forces is not None:
+        items = list(forces)
+        if len(items) != n:
+            problems.append(f"forces: {len(items)} expressions for {n} coordinates (give one "
+                            f"per coordinate, or a table by coordinate)")
+        else:
+            out = [_to_expr(f, full, f"forces.{q.name}", problems)
+                   for f, q in zip(items, coords)]
+    R = sp.S.Zero if dissipation is None else _to_expr(dissipation, full, "dissipation",
+                                                       problems)
+    uses_time = any(TIME in e.free_symbols for e in out + [R])
+    return tuple(out), R, uses_time
+
+
+def _force_labels(forces, coords, dissipation):
+    out = [(f"forces.{q.name}", f) for q, f in zip(coords, forces) if f != 0]
+    return out + ([("dissipation", dissipation)] if dissipation != 0 else [])
 
 
 def _labelled(cons, hols):

@@ -1,7 +1,7 @@
 """Naming conventions for generated symbols (one home for each).
 
 A coordinate ``x`` has velocity ``x_dot``, acceleration ``x_ddot`` and
-momentum ``p_x``; the i-th Lagrange multiplier is ``lambda_i`` (1-based).
+momentum ``p_x``; the i-th Lagrange multiplier is ``lambda_i`` (1-based); time is ``t``.
 """
 
 from __future__ import annotations
@@ -14,7 +14,12 @@ __all__ = [
     "momentum_symbol",
     "multiplier_symbol",
     "as_symbol",
+    "TIME",
 ]
+
+#: The time t, the only name a force, a dissipation function or a control law may use for
+#: time (``System.forces``); L and the constraints are autonomous.
+TIME = sp.Symbol("t")
 
 
 def as_symbol(name_or_symbol) -> sp.Symbol:

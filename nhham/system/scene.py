@@ -34,8 +34,9 @@ import os
 import re
 import tomllib
 import unicodedata
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, field, fields
 from functools import partial
+from types import MappingProxyType
 from typing import TYPE_CHECKING, Mapping
 
 import sympy as sp
@@ -44,7 +45,7 @@ from nhham.errors import ParseError, SceneError, key_of
 from nhham.system.contacts import contacts_structure, parse_contacts
 from nhham.system.expressions import RESERVED_NAMES, parse_expression
 from nhham.system.initial import initial_residuals
-from nhham.system.naming import acceleration_symbol, momentum_symbol, velocity_symbol
+from nhham.system.naming import TIME, acceleration_symbol, momentum_symbol, velocity_symbol
 from nhham.system.steady import parse_steady, state_table, steady_structure
 
 if TYPE_CHECKING:
@@ -74,6 +75,7 @@ MAX_FIXED_STEPS = 10**8
 _TOP_KEYS = (
     "name", "description", "coordinates", "parameters", "symbolic_parameters",
     "lagrangian", "constraints", "holonomic", "initial", "simulate", "steady", "contacts",
+    "forces", "dissipation", "inputs", "control",
 )
 _REQUIRED_KEYS = ("coordinates", "lagrangian")
 
@@ -82,6 +84,8 @@ _TOP_ALIASES = {
     "L": "lagrangian", "coords": "coordinates", "q": "coordinates",
     "params": "parameters", "initial_conditions": "initial", "ic": "initial",
     "nonholonomic": "constraints", "sim": "simulate", "simulation": "simulate",
+    "force": "forces", "loads": "forces", "controls": "inputs", "feedback": "control",
+    "rayleigh": "dissipation",
 }
 _SIMULATE_ALIASES = {"dt": "step", "h": "step", "t_final": "t_end", "tmax": "t_end",
                      "t_max": "t_end", "integrator": "method"}
@@ -153,6 +157,10 @@ class Scene:
         The ``[steady]`` motion (expressions in the parameters), or None.
     contacts : tuple of nhham.system.contacts.ContactPoint
         The ``[contacts]`` points, where the constraints' forces act.
+    control : mapping of str to sympy.Expr
+        The ``[control]`` laws: each input as an expression in ``t``, the coordinates,
+        velocities and parameters (empty when the scene gives none). ``simulate`` closes
+        the loop with them (:meth:`System.closed_loop`).
     """
 
     name: str
@@ -163,6 +171,7 @@ class Scene:
     source: str
     steady: object = None
     contacts: tuple = ()
+    control: Mapping = field(default_factory=lambda: MappingProxyType({}))
 
     def simulate_options(self, **overrides) -> dict:
         """Keyword arguments for :func:`nhham.simulate` from the scene.
@@ -278,6 +287,7 @@ def loads_scene(text: str, source: str = "<string>", *, check_initial: bool = Tr
         source=source,
         steady=expressions.get("[steady]"),
         contacts=expressions.get("[contacts]", ()),
+        control=MappingProxyType(expressions.get("[control]", {})),
     )
     if check_initial and scene.initial is not None:
         initial_residuals(scene)
@@ -325,6 +335,10 @@ class _Spec:
     simulate: SimulateOptions
     steady: Mapping | None = None
     contacts: Mapping | None = None
+    forces: Mapping | None = None
+    dissipation: str | None = None
+    inputs: tuple = ()
+    control: Mapping | None = None
 
 
 def _validate_structure(data: dict, source: str) -> _Spec:
@@ -351,14 +365,24 @@ def _validate_structure(data: dict, source: str) -> _Spec:
         parameters.setdefault(p, None)
     _check_name_clashes(coordinates, values, symbolic, problems)
 
+    inputs = _name_list(data, "inputs", problems)
+    forces = _string_table(data, "forces", problems)
+    dissipation = _optional_string(data, "dissipation", problems) or None
+    control = _string_table(data, "control", problems)
+    for key in control or {}:
+        if key not in inputs:
+            problems.append(f"control.{key}: not an input (a control law gives an input, "
+                            f"declared in inputs = [...], as an expression)")
+
     initial = _initial_table(data.get("initial"), coordinates, problems)
     simulate = _simulate_table(data.get("simulate"), problems)
-    steady = steady_structure(data.get("steady"), coordinates, problems)
+    steady = steady_structure(data.get("steady"), coordinates, problems, inputs)
     contacts = contacts_structure(data.get("contacts"), problems)
     if problems:
         raise _scene_error(source, problems)
     return _Spec(source, name, description, tuple(coordinates), parameters, lagrangian,
-                 tuple(constraints), tuple(holonomic), initial, simulate, steady, contacts)
+                 tuple(constraints), tuple(holonomic), initial, simulate, steady, contacts,
+                 forces, dissipation, tuple(inputs), control)
 
 
 def _scene_error(source: str, problems: list[str]) -> SceneError:
@@ -416,6 +440,27 @@ def _string_list(data, key, problems) -> list[str]:
             good.append(item)
         else:
             problems.append(f"{key}[{i}]: expected a string, got {_type_name(item)}")
+    return good
+
+
+def _string_table(data, key, problems) -> dict | None:
+    """An optional table of ``name = "expression"`` (None when absent)."""
+    value = data.get(key)
+    if value is None:
+        return None
+    if not isinstance(value, dict):
+        problems.append(f"{key}: expected a table of name = \"expression\", got "
+                        f"{_type_name(value)}")
+        return None
+    good = {}
+    for name, item in value.items():
+        if isinstance(item, str):
+            good[name] = item
+        elif isinstance(item, (int, float)) and not isinstance(item, bool):
+            good[name] = repr(item)
+        else:
+            problems.append(f"{key}.{name}: expected an expression string or a number, got "
+                            f"{_type_name(item)}")
     return good
 
 
@@ -620,6 +665,25 @@ def _parse_expressions(spec: _Spec) -> dict:
             parsed[path] = parse_expression(text, table, where=path)
         except ParseError as exc:
             problems.append(str(exc) + _declare_hint(getattr(exc, "unknown_name", None)))
+    timed = dict(table, t=TIME, **{u: sp.Symbol(u) for u in spec.inputs})
+    for name, text in (spec.control or {}).items():
+        try:
+            law = parse_expression(text, dict(table, t=TIME), where=f"control.{name}")
+        except ParseError as exc:
+            problems.append(str(exc))
+        else:
+            parsed.setdefault("[control]", {})[name] = law
+    for name, text in (spec.forces or {}).items():
+        try:
+            parsed[f"forces.{name}"] = parse_expression(text, timed, where=f"forces.{name}")
+        except ParseError as exc:
+            problems.append(str(exc))
+    if spec.dissipation is not None:
+        try:
+            parsed["dissipation"] = parse_expression(spec.dissipation, timed,
+                                                     where="dissipation")
+        except ParseError as exc:
+            problems.append(str(exc))
     steady, steady_problems = parse_steady(spec.steady, spec.parameters)
     problems.extend(steady_problems)
     if steady is not None:
@@ -665,6 +729,9 @@ def _build_system(spec: _Spec, parsed: dict, drop_redundant: bool):
         parameters=dict(spec.parameters),
         name=spec.name,
         drop_redundant=drop_redundant,
+        forces={q: parsed[f"forces.{q}"] for q in spec.forces or {}},
+        dissipation=parsed.get("dissipation"),
+        inputs=list(spec.inputs),
     )
 
 

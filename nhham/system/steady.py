@@ -152,7 +152,7 @@ def state_names(coordinates) -> list:
 
 
 def state_table(table: Mapping, coordinates, entry: Callable, problems: list, *,
-                section: str, path: Callable[[object], str]) -> Mapping:
+                section: str, path: Callable[[object], str], inputs=()) -> Mapping:
     """The entries of a scene table that gives a value for exactly every state name.
 
     The one check behind ``[initial]`` and ``[steady]``: an unknown key (with the
@@ -173,33 +173,38 @@ def state_table(table: Mapping, coordinates, entry: Callable, problems: list, *,
         The table's name, which the missing values' problem starts with.
     path : callable
         ``path(key)``: how a problem names an entry.
+    inputs : sequence of str, optional
+        Input names that need a value too (after the state names).
 
     Returns
     -------
     mapping of str
         The values kept, in state order (read-only).
     """
-    wanted = state_names(coordinates)
+    wanted = state_names(coordinates) + list(inputs)
     kept = {}
     for key, item in table.items():
         where = path(key)
         if key not in wanted:
             close = difflib.get_close_matches(str(key), wanted, n=1)
             hint = f"; did you mean {close[0]!r}?" if close else ""
-            problems.append(f"{where}: unknown name (not a coordinate or velocity){hint}")
+            what = "a coordinate, velocity or input" if inputs else "a coordinate or velocity"
+            problems.append(f"{where}: unknown name (not {what}){hint}")
             continue
         value = entry(item, where, problems)
         if value is not None:
             kept[key] = value
     missing = [name for name in wanted if name not in table]
     if missing:
+        every = "coordinate, velocity and input" if inputs else "coordinate and velocity"
         problems.append(f"{section}: missing value for {', '.join(map(repr, missing))} "
-                        f"(every coordinate and velocity needs one)")
+                        f"(every {every} needs one)")
     return MappingProxyType({name: kept[name] for name in wanted if name in kept})
 
 
-def steady_structure(value, coordinates, problems) -> Mapping | None:
-    """Check a raw ``[steady]`` table: a number or string for exactly every state name.
+def steady_structure(value, coordinates, problems, inputs=()) -> Mapping | None:
+    """Check a raw ``[steady]`` table: a number or string for exactly every state name
+    and every input (the inputs' steady values, about which ``linearize`` forms B).
 
     Problems are appended to ``problems`` (each naming ``steady.<key>``); the
     raw values are returned (or None when there is no table).
@@ -210,7 +215,7 @@ def steady_structure(value, coordinates, problems) -> Mapping | None:
         problems.append("steady: expected a table of name = number or expression")
         return None
     return state_table(value, coordinates, _steady_entry, problems,
-                       section="steady", path="steady.{}".format)
+                       section="steady", path="steady.{}".format, inputs=inputs)
 
 
 def _steady_entry(item, path, problems):

@@ -58,7 +58,15 @@ static int erk_field(const double *z, double t, const double *pext, double *f, l
                      double *fail) {
     double lam[NCX];
     ++*nfev;
+#ifdef NHHAM_TIME_SLOT
+    /* a time-dependent force reads t from its parameter slot */
+    double pt[NPAR + 2];
+    for (int i = 0; i < NPAR + 2; ++i) pt[i] = pext[i];
+    pt[NHHAM_TIME_SLOT] = t;
+    int st = rhs_one(z, pt, pt[NPAR], pt[NPAR + 1], f, lam, f + 2 * NQ);
+#else
     int st = rhs_one(z, pext, pext[NPAR], pext[NPAR + 1], f, lam, f + 2 * NQ);
+#endif
     if (!st) return NHHAM_SUCCESS;
     fail[0] = t;
     for (int i = 0; i < NZ; ++i) fail[1 + i] = z[i];

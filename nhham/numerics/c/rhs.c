@@ -24,6 +24,9 @@ static int rhs_one(const double *y, const double *p, double alpha2, double beta2
     double pw = 0.0;
     for (int i = 0; i < NQ; ++i) dy[i] = v[i];
     for (int c = 0; c < NC; ++c) pw -= lam[c] * muv[c];
+#ifdef NHHAM_FORCED
+    pw += out[NOUT - 1];               /* the applied power Q . v */
+#endif
     *power = pw;
     for (int i = 0; i < 2 * NQ; ++i) if (!isfinite(dy[i])) return NHHAM_NONFINITE;
     return NHHAM_SUCCESS;

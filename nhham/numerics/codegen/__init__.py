@@ -27,6 +27,7 @@ says what runs. Only ``NHHAM_NO_CC=1`` (or ``backend="numpy"``) asks for numpy s
 
 from __future__ import annotations
 
+import math
 import os
 import warnings
 
@@ -63,7 +64,8 @@ def numeric_model(system, *, backend: str = "auto", path: str = "saddle",
         every evaluation. ``"closed_form"`` evaluates the symbolic closed form
         of P(xi_L) (costly to derive for large systems; meant for comparison).
     parameters : mapping of str to float, optional
-        Values overriding ``system.parameter_values``.
+        Values overriding ``system.parameter_values``; the values of inputs (NaN
+        until given here or by ``NumericModel.with_parameters``).
     cache_dir : str, optional
         The compile cache (default ``$NHHAM_CACHE``, else ``$XDG_CACHE_HOME/nhham``,
         else ``~/.cache/nhham``; see :mod:`nhham.numerics.codegen.cache`).
@@ -145,6 +147,11 @@ def _parameter_values(system, overrides) -> dict:
             f"parameters: {', '.join(unknown)} are not parameters of the system "
             f"(known: {', '.join(sorted(names)) or 'none'})")
     values = {p.name: v for p, v in system.parameter_values.items()}
+    # Inputs are NaN until set (a field evaluated with one unset fails, never uses a
+    # made-up value); the time slot is set by the loops.
+    values.update({u.name: math.nan for u in system.inputs})
+    if system.time is not None:
+        values[system.time.name] = 0.0
     values.update({k: float(v) for k, v in overrides.items()})
     missing = [p.name for p in system.parameters if p.name not in values]
     if missing:
