@@ -4,11 +4,12 @@
 
 Everything is evaluated on the stored states in batches (no Python loop over
 states; blocks of a few thousand, so that a long run's diagnostics need little
-memory). The energy balance uses the exact identity of the constrained field dE_L/dt = -lambda . (mu v) (= lambda . h on M_1, see
-:mod:`nhham.numerics.model`): the integrators carry its time integral W(t) (the work
-of the constraint forces), and the residual max |E(t) - E(0) - W(t)| measures
-integration error alone, also for affine constraints where E is not
-conserved.
+memory). The energy balance uses the exact identity of the constrained field
+dE_L/dt = -lambda . (mu v) + Q . v (= lambda . h + Q . v on M_1, see
+:mod:`nhham.numerics.model`): the integrators carry its time integral W(t) (the work of
+the constraint forces, and of the applied forces and the dissipation, Q, when the system
+has any), and the residual max |E(t) - E(0) - W(t)| measures integration error alone,
+also for affine constraints or forces where E is not conserved.
 """
 
 from __future__ import annotations
@@ -63,7 +64,7 @@ class Diagnostics:
     energy_drift : float
         max |E(t) - E(0)|.
     energy_drift_rel : float
-        energy_drift / max(|E(0)|, tiny).
+        energy_drift / |E(0)| (/ max |E(t)| when E(0) = 0, e.g. from rest).
     energy_balance_residual : float
         max |E(t) - E(0) - W(t)| (equals energy_drift for linear constraints
         up to the off-manifold part of W).
@@ -158,7 +159,8 @@ def trajectory_diagnostics(model, t, y, work=None, *, residual_tol: float = 1e-8
         constraint_residual_max=float(rmax.max()),
         constraint_residual_rel_max=float(rrel.max()),
         energy_drift=e_drift,
-        energy_drift_rel=e_drift / max(abs(float(E[0])), np.finfo(float).tiny),
+        energy_drift_rel=e_drift / max(abs(float(E[0])) or float(np.abs(E).max()),
+                                       np.finfo(float).tiny),
         energy_balance_residual=balance,
         cond_C_max=cond_C_max, cond_W_max=cond_W_max, cond_C_sampled=int(len(idx)),
         warnings=tuple(notes),

@@ -1,16 +1,26 @@
 """Bridges to :mod:`sympy.physics.mechanics`.
 
-:func:`from_mechanics` and :func:`from_lagranges_method` turn a Lagrangian
-and constraints written in dynamicsymbols q(t), q(t).diff(t) into an
-:class:`nhham.System`; :func:`to_lagranges_method` goes the other way, so
-that tests and benchmarks can run ``LagrangesMethod`` on exactly the system
-nhham sees.
+:func:`from_mechanics` and :func:`from_lagranges_method` turn a Lagrangian,
+bodies, loads, actuators and constraints written in dynamicsymbols q(t),
+q(t).diff(t) into an :class:`nhham.System`; :func:`to_lagranges_method` goes
+the other way, so that tests and benchmarks can run ``LagrangesMethod`` on
+exactly the system nhham sees (forces included).
 
 Names: the dynamicsymbol ``q1(t)`` becomes the coordinate ``q1`` and its
-derivative the velocity ``q1_dot``.
+derivative the velocity ``q1_dot``; an input ``T(t)`` (a "specified" symbol,
+listed in ``inputs``) becomes the plain input symbol ``T``; sympy's time
+``dynamicsymbols._t`` is nhham's time ``t``.
 
-Multipliers: ``LagrangesMethod.eom`` is d/dt(dL/dq') - dL/dq - lam_coeffs^T lam
-with lam_coeffs = -d(coneqs)/dq', i.e. d/dt(dL/dv) - dL/dq + mu^T lam = 0,
+Forces (``DESIGN.md`` §2): the equations are d/dt(dL/dv) - dL/dq = Q - mu^T
+lambda, with the generalized force Q on the right-hand side. A force F on a
+point P adds Q_A = F . dv_P/dq'_A and a torque T on a frame B adds
+Q_A = T . dw_B/dq'_A (partial velocities; v_P, w_B in the inertial frame), as
+``KanesMethod`` and ``LagrangesMethod`` count them. A force constant in the
+inertial frame (gravity type) goes into the Lagrangian as the potential
+-F . r(P) instead (the same equations).
+
+Multipliers: ``LagrangesMethod.eom`` is d/dt(dL/dq') - dL/dq - Q - lam_coeffs^T lam
+with lam_coeffs = -d(coneqs)/dq', i.e. d/dt(dL/dv) - dL/dq - Q + mu^T lam = 0,
 nhham's convention (``DESIGN.md`` §2); its constraint order (time
 derivatives of the holonomic constraints first, then the nonholonomic ones)
 is nhham's order of :attr:`System.phi`. So ``lam<i>(t)`` in ``lm.eom``
@@ -32,7 +42,13 @@ from sympy.physics import mechanics as me
 
 from nhham.errors import InputError, ValidationError
 from nhham.system.expressions import short
-from nhham.system.naming import acceleration_symbol, multiplier_symbol, velocity_symbol
+from nhham.system.naming import (
+    TIME,
+    acceleration_symbol,
+    as_symbol,
+    multiplier_symbol,
+    velocity_symbol,
+)
 from nhham.system.description import System
 
 __all__ = [
@@ -54,11 +70,13 @@ class Substitutions:
     Attributes
     ----------
     to_mechanics : mapping
-        ``q -> q(t)``, ``q_dot -> q(t).diff(t)`` for every coordinate.
+        ``q -> q(t)``, ``q_dot -> q(t).diff(t)`` for every coordinate and
+        ``u -> u(t)`` for every input (the time ``t`` is sympy's
+        ``dynamicsymbols._t`` already).
     from_mechanics : mapping
-        ``q(t) -> q``, ``q'(t) -> q_dot``, ``q''(t) -> q_ddot`` and the
-        multipliers ``lam<i>(t) -> lambda_<i>``. Use with ``xreplace`` (not
-        ``subs``: a derivative must be replaced as a whole).
+        ``q(t) -> q``, ``q'(t) -> q_dot``, ``q''(t) -> q_ddot``, the inputs
+        ``u(t) -> u`` and the multipliers ``lam<i>(t) -> lambda_<i>``. Use with
+        ``xreplace`` (not ``subs``: a derivative must be replaced as a whole).
     """
 
     to_mechanics: Mapping[sp.Symbol, sp.Expr]
@@ -76,10 +94,10 @@ class MechanicsForm(NamedTuple):
 # ------------------------------------------------------------------- into
 def from_mechanics(lagrangian=None, q: Sequence | None = None, hol_coneqs: Sequence = (),
                    nonhol_coneqs: Sequence = (), parameters=None, name: str = "", *,
-                   bodies: Sequence = (), loads: Sequence = (), frame=None, origin=None,
-                   u: Sequence | None = None, kd_eqs: Sequence = (),
+                   bodies: Sequence = (), loads: Sequence = (), actuators: Sequence = (),
+                   frame=None, origin=None, u: Sequence | None = None, kd_eqs: Sequence = (),
                    velocity_constraints: Sequence = (),
-                   configuration_constraints: Sequence = (),
+                   configuration_constraints: Sequence = (), inputs: Sequence = (),
                    drop_redundant: bool = False) -> System:
     """Build a :class:`System` from a ``sympy.physics.mechanics`` description.
 
@@ -87,19 +105,36 @@ def from_mechanics(lagrangian=None, q: Sequence | None = None, hol_coneqs: Seque
 
     1. a Lagrangian: ``from_mechanics(L, q, hol_coneqs, nonhol_coneqs)``
        (as ``LagrangesMethod`` takes them);
-    2. bodies and loads: ``from_mechanics(q=q, bodies=..., loads=...,
-       frame=N, origin=O)``; L = T - V with T the kinetic energy of every
-       body in ``frame`` and V the potential of every constant force
-       (gravity type);
+    2. bodies, loads and actuators: ``from_mechanics(q=q, bodies=...,
+       loads=..., actuators=..., frame=N, origin=O)``; L = T - V with T the
+       kinetic energy of every body in ``frame`` and V the potential of every
+       force constant in ``frame`` (gravity type); every other load becomes a
+       generalized force (below);
     3. a ``sympy.physics.mechanics.System`` as the first argument: its
-       frame, fixed point, bodies, loads, coordinates ``q``, speeds ``u``,
-       kinematic differential equations ``kdes``, ``holonomic_constraints``
-       and ``nonholonomic_constraints`` are read as in 2.
+       frame, fixed point, bodies, loads, actuators, coordinates ``q``, speeds
+       ``u``, kinematic differential equations ``kdes``,
+       ``holonomic_constraints`` and ``nonholonomic_constraints`` are read as
+       in 2.
 
     A ``LagrangesMethod`` is read as :func:`from_lagranges_method` reads it. A
     ``KanesMethod`` is refused with a pointer to the ``System`` it is formed
     from: it holds the equations of motion, not the energies nor the point from
     which positions are measured.
+
+    Forces: the equations are d/dt(dL/dv) - dL/dq = Q - mu^T lambda
+    (``DESIGN.md`` §2), Q the generalized force on the right-hand side
+    (:attr:`System.generalized_forces`). A force F on a point P adds
+    Q_A = F . dv_P/dq'_A, with v_P the free velocity of P (the time derivative
+    of its position from ``origin`` in ``frame``); a torque T on a frame B adds
+    Q_A = T . dw_B/dq'_A, with w_B = ``B.ang_vel_in(frame)`` (partial
+    velocities, as ``KanesMethod`` counts them). A load may depend on the
+    coordinates, their first derivatives, the speeds u (replaced through
+    ``kd_eqs``), the time ``dynamicsymbols._t`` (nhham's ``t``) and the
+    ``inputs``; a force constant in ``frame`` and free of inputs and time goes
+    into V instead (-F . r(P), the same equations). An actuator
+    (``LinearSpring``, ``LinearDamper``, ``ForceActuator``,
+    ``TorqueActuator``, anything with ``to_loads()``) contributes its
+    ``to_loads()`` as loads (a spring as a force, not as a potential).
 
     Constraints written in generalized speeds u, with kinematic differential
     equations ``kd_eqs`` as ``KanesMethod`` takes them (affine in u and in
@@ -113,8 +148,9 @@ def from_mechanics(lagrangian=None, q: Sequence | None = None, hol_coneqs: Seque
     ----------
     lagrangian : sympy.Expr or sympy.physics.mechanics.System, optional
         L in the dynamicsymbols ``q`` and their first time derivatives (and
-        u when ``kd_eqs`` are given), or a ``System`` (then every other
-        argument but ``parameters`` and ``name`` must be left out).
+        u when ``kd_eqs`` are given), or a ``System`` or ``LagrangesMethod``
+        (then every other argument but ``parameters``, ``name``, ``inputs``
+        and ``drop_redundant`` must be left out).
     q : sequence of dynamicsymbols
         Generalized coordinates, each an undefined function of time
         (``dynamicsymbols('x')``); ``x(t)`` becomes coordinate ``x`` with
@@ -126,7 +162,7 @@ def from_mechanics(lagrangian=None, q: Sequence | None = None, hol_coneqs: Seque
         lhs - rhs.
     parameters : mapping or sequence, optional
         Passed to :class:`System`. Default: every remaining free symbol
-        except time, sorted by name, without values.
+        except time and the inputs, sorted by name, without values.
     name : str, optional
     bodies : sequence of RigidBody or Particle, optional
         Their kinetic energies in ``frame`` are added to L. A mass centre's
@@ -134,12 +170,15 @@ def from_mechanics(lagrangian=None, q: Sequence | None = None, hol_coneqs: Seque
         ``origin``: the free velocity, never one that a constraint was
         substituted into.
     loads : sequence, optional
-        ``Force(point, vector)`` or ``(point, vector)`` with a vector
-        constant in ``frame`` (gravity type): potential -F . r(point).
-        Anything else (torques, forces depending on the state or on time,
-        actuators) is refused with an error naming the load.
+        ``Force(point, vector)`` or ``(point, vector)``, ``Torque(frame,
+        vector)`` or ``(frame, vector)``, of any dependence on the state, the
+        time and the inputs (see Forces above). The point must be located
+        from ``origin``; the frame's angular velocity in ``frame`` known.
+    actuators : sequence, optional
+        Actuators of ``sympy.physics.mechanics`` (anything with
+        ``to_loads()``); their loads are read as ``loads``.
     frame : ReferenceFrame, optional
-        The inertial frame (needed with ``bodies`` or ``loads``).
+        The inertial frame (needed with ``bodies``, ``loads`` or ``actuators``).
     origin : Point, optional
         A point fixed in ``frame`` from which positions are measured.
     u : sequence of dynamicsymbols, optional
@@ -152,6 +191,12 @@ def from_mechanics(lagrangian=None, q: Sequence | None = None, hol_coneqs: Seque
         Constraints affine in u (or q'), each = 0.
     configuration_constraints : sequence of sympy.Expr, optional
         Holonomic constraints in q.
+    inputs : sequence of dynamicsymbols, sympy.Symbol or str, optional
+        Inputs (controls; sympy's "specified" symbols) the loads may use. A
+        dynamicsymbol ``T(t)`` becomes the plain input symbol ``T``
+        (:attr:`System.inputs`), set at run time by the numeric layer; a
+        Symbol or name ``T`` is that input too, for ``T`` and ``T(t)`` alike.
+        Inputs may not appear in L nor in the constraints.
     drop_redundant : bool, optional
         Passed to :class:`System`: drop velocity constraints that are combinations
         of the others instead of refusing them (default False).
@@ -159,6 +204,8 @@ def from_mechanics(lagrangian=None, q: Sequence | None = None, hol_coneqs: Seque
     Returns
     -------
     System
+        With ``forces`` (Q per coordinate) and ``inputs`` when loads other
+        than gravity-type forces are given.
 
     Problems found by :class:`System` name the constraints as given here
     (``nonholonomic_constraints[3]``, ``nonhol_coneqs[0]``, ``hol_coneqs[1]``).
@@ -167,28 +214,46 @@ def from_mechanics(lagrangian=None, q: Sequence | None = None, hol_coneqs: Seque
     ------
     ValidationError
         (an :class:`InputError`) naming each term nhham cannot express:
-        explicit time dependence, accelerations, functions of time that are
-        not coordinates, speeds that no kinematic equation defines, plain
-        symbols named like a coordinate or velocity, a constraint or
-        kinematic equation not affine in u, a load that is not a constant
-        force, a body whose mass centre has no position from the origin;
-        then whatever :class:`System` finds (non-affine constraints...).
+        explicit time dependence or inputs in L or the constraints,
+        accelerations, functions of time that are not coordinates (nor, in a
+        load, speeds or inputs), speeds that no kinematic equation defines,
+        plain symbols named like a coordinate or velocity, a constraint or
+        kinematic equation not affine in u, an object that is not a load or
+        an actuator, a load on a point with no position from the origin or on
+        a frame with no angular velocity in ``frame``, a load depending on
+        accelerations or on a function of time not listed in ``inputs``, a
+        body whose mass centre has no position from the origin; then
+        whatever :class:`System` finds (non-affine constraints...).
+
+    Examples
+    --------
+    A particle on a line with viscous friction and a driving force F(t):
+
+    >>> x, F = me.dynamicsymbols("x F")
+    >>> m, c = sp.symbols("m c")
+    >>> N, O = me.ReferenceFrame("N"), me.Point("O")
+    >>> P = O.locatenew("P", x * N.x)
+    >>> s = from_mechanics(q=[x], bodies=[me.Particle("p", P, m)],
+    ...                    loads=[(P, (F - c * x.diff()) * N.x)], frame=N, origin=O,
+    ...                    inputs=[F])
+    >>> s.generalized_forces.T, s.inputs
+    (Matrix([[F - c*x_dot]]), (F,))
     """
     if isinstance(lagrangian, (me.System, me.LagrangesMethod)):
         given = dict(q=q, hol_coneqs=hol_coneqs, nonhol_coneqs=nonhol_coneqs, bodies=bodies,
-                     loads=loads, frame=frame, origin=origin, u=u, kd_eqs=kd_eqs,
-                     velocity_constraints=velocity_constraints,
+                     loads=loads, actuators=actuators, frame=frame, origin=origin, u=u,
+                     kd_eqs=kd_eqs, velocity_constraints=velocity_constraints,
                      configuration_constraints=configuration_constraints)
         extra = [k for k, v in given.items() if v is not None and v != ()]
         kind = type(lagrangian).__name__
         if extra:
             raise InputError(f"from_mechanics: with a sympy.physics.mechanics.{kind} give only "
-                             f"parameters, name and drop_redundant (also given: "
+                             f"parameters, name, inputs and drop_redundant (also given: "
                              f"{', '.join(extra)})")
         if isinstance(lagrangian, me.LagrangesMethod):
-            return from_lagranges_method(lagrangian, parameters, name,
+            return from_lagranges_method(lagrangian, parameters, name, inputs=inputs,
                                          drop_redundant=drop_redundant)
-        return _from_me_system(lagrangian, parameters, name, drop_redundant)
+        return _from_me_system(lagrangian, parameters, name, drop_redundant, inputs)
     if isinstance(lagrangian, me.KanesMethod):
         raise InputError(
             "from_mechanics: a KanesMethod holds the equations of motion, not the energies "
@@ -201,9 +266,10 @@ def from_mechanics(lagrangian=None, q: Sequence | None = None, hol_coneqs: Seque
                          f"{type(lagrangian).__name__} and no q)" if lagrangian is not None
                          else "from_mechanics: the coordinates q are required")
     return _from_pieces(lagrangian, q, hol_coneqs, nonhol_coneqs, parameters, name,
-                        bodies=bodies, loads=loads, frame=frame, origin=origin, u=u,
-                        kd_eqs=kd_eqs, velocity_constraints=velocity_constraints,
-                        configuration_constraints=configuration_constraints,
+                        bodies=bodies, loads=loads, actuators=actuators, frame=frame,
+                        origin=origin, u=u, kd_eqs=kd_eqs,
+                        velocity_constraints=velocity_constraints,
+                        configuration_constraints=configuration_constraints, inputs=inputs,
                         drop_redundant=drop_redundant, labels=_ARGUMENT_LABELS)
 
 
@@ -216,21 +282,38 @@ _SYSTEM_LABELS = {"velocity": "nonholonomic_constraints",
 
 
 def _from_pieces(lagrangian, q, hol_coneqs, nonhol_coneqs, parameters, name, *, bodies, loads,
-                 frame, origin, u, kd_eqs, velocity_constraints, configuration_constraints,
-                 drop_redundant, labels) -> System:
+                 actuators, frame, origin, u, kd_eqs, velocity_constraints,
+                 configuration_constraints, inputs, drop_redundant, labels) -> System:
     """:func:`from_mechanics` once the way in is known (``labels``: names in messages)."""
     coords = _coordinate_functions(q)
     t = me.dynamicsymbols._t
     problems: list[str] = []
     to_q = _speed_substitution(coords, u, kd_eqs, t, problems, labels["kd"])
+    inputs_in, plain_inputs = _input_map(inputs, coords, to_q, problems)
     if lagrangian is None:
-        if not bodies and not loads:
+        if not bodies and not loads and not actuators:
             raise InputError("from_mechanics: give a Lagrangian, or bodies (and loads)")
         lagrangian = sp.S.Zero
     else:
         lagrangian = _as_expr("lagrangian", lagrangian)
-    if bodies or loads:
-        lagrangian = lagrangian + _lagrangian_of(bodies, loads, frame, origin, problems)
+    forces = None
+    if bodies or loads or actuators:
+        items = _load_items(loads, actuators, problems)
+        if frame is None or origin is None:
+            problems.append("frame, origin: bodies and loads need the inertial frame and a "
+                            "point fixed in it (frame=N, origin=O)")
+        else:
+            as_given = {k for k in inputs_in if isinstance(k, sp.Symbol)}
+            potential, forced = _split_loads(items, frame, as_given | set(plain_inputs),
+                                             problems)
+            lagrangian = lagrangian + _lagrangian_of(bodies, potential, frame, origin,
+                                                     problems)
+
+            def free_velocity(label, point, problems):
+                return _free_velocity(label, point, frame, origin, problems, "the point")
+
+            forces = _generalized_forces(forced, coords, frame, free_velocity, to_q,
+                                         inputs_in, problems)
     speeds = tuple(to_q) if to_q else ()
     vcons = []
     for i, c in enumerate(velocity_constraints):
@@ -249,23 +332,32 @@ def _from_pieces(lagrangian, q, hol_coneqs, nonhol_coneqs, parameters, name, *, 
                                for i in range(len(configuration_constraints))],
                             nonhol_labels=[f"nonhol_coneqs[{i}]" for i in range(len(nonhol_coneqs))]
                             + [f"{labels['velocity']}[{i}]" for i in range(len(vcons))],
-                            drop_redundant=drop_redundant)
+                            drop_redundant=drop_redundant, forces=forces, inputs=plain_inputs)
 
 
 def _from_lagrangian(lagrangian, coords, hols, nonhols, parameters, name, hol_labels,
-                     nonhol_labels, drop_redundant=False) -> System:
+                     nonhol_labels, drop_redundant=False, forces=None, inputs=()) -> System:
+    """The System of L and the constraints in dynamicsymbols; ``forces``: Q per coordinate
+    already in plain symbols (or None), ``inputs``: the plain input symbols."""
     t = me.dynamicsymbols._t
     to_plain = _plain_map(coords, t)
     reserved = {s.name for s in to_plain.values()}
     items = [("lagrangian", lagrangian)]
     items += list(zip(hol_labels, hols)) + list(zip(nonhol_labels, nonhols))
     problems, converted = [], {}
+    input_names = {u.name for u in inputs}
     for label, expr in items:
         converted[label] = _convert(label, _as_expr(label, expr), to_plain, reserved, t, problems)
+        used = sorted({s.name for s in converted[label].free_symbols} & input_names)
+        if used:
+            problems.append(f"{label}: uses the input(s) {', '.join(used)}; inputs may appear "
+                            f"in loads (forces) only")
     if problems:
         raise ValidationError(problems)
+    applied = list(forces) if forces is not None and any(f != 0 for f in forces) else None
     if parameters is None:
-        parameters = _remaining_symbols(converted.values(), reserved)
+        parameters = _remaining_symbols(list(converted.values()) + (applied or []),
+                                        reserved | input_names | {TIME.name})
     try:
         return System(
             [to_plain[f] for f in coords],
@@ -275,6 +367,8 @@ def _from_lagrangian(lagrangian, coords, hols, nonhols, parameters, name, hol_la
             parameters=parameters,
             name=name,
             drop_redundant=drop_redundant,
+            forces=applied,
+            inputs=tuple(inputs),
         )
     except ValidationError as exc:  # System's constraints[i] are the user's labels
         names = {"constraints": nonhol_labels, "holonomic": hol_labels}
@@ -286,29 +380,21 @@ def _from_lagrangian(lagrangian, coords, hols, nonhols, parameters, name, hol_la
 _CONSTRAINT_LABEL = re.compile(r"(?<![\w.\[])(constraints|holonomic)\[(\d+)\]")
 
 
-def _from_me_system(msys, parameters, name, drop_redundant=False) -> System:
+def _from_me_system(msys, parameters, name, drop_redundant=False, inputs=()) -> System:
     """Read a ``sympy.physics.mechanics.System`` (see :func:`from_mechanics`)."""
-    problems = []
-    actuators = list(getattr(msys, "actuators", ()) or ())
-    for i, act in enumerate(actuators):
-        problems.append(f"actuators[{i}]: {short(act, _QUOTE)} is an actuator; nhham takes "
-                        f"conservative loads only (forces are not supported yet)")
-    if problems:
-        raise ValidationError(problems)
     q = list(msys.q)
     if not q:
         raise InputError("from_mechanics: the System has no coordinates (add_coordinates)")
     u = list(msys.u)
     return _from_pieces(
         None, q, (), (), parameters, name,
-        bodies=list(msys.bodies), loads=list(msys.loads), frame=msys.frame,
+        bodies=list(msys.bodies), loads=list(msys.loads),
+        actuators=list(getattr(msys, "actuators", ()) or ()), frame=msys.frame,
         origin=msys.fixed_point, u=u or None, kd_eqs=list(msys.kdes),
         velocity_constraints=list(msys.nonholonomic_constraints),
-        configuration_constraints=list(msys.holonomic_constraints),
+        configuration_constraints=list(msys.holonomic_constraints), inputs=inputs,
         drop_redundant=drop_redundant, labels=_SYSTEM_LABELS,
     )
-
-
 def _speed_substitution(coords, u, kd_eqs, t, problems, kd="kd_eqs") -> dict:
     """{u_k: expression in q, q'} from the kinematic differential equations (``kd``: their
     name in messages)."""
@@ -364,12 +450,140 @@ def _check_affine(label, expr, speeds, problems) -> None:
                 return
 
 
+# ------------------------------------------------------------------- loads
+def _input_map(inputs, coords, to_q, problems) -> tuple[dict, tuple]:
+    """({input as given -> plain input symbol}, the plain input symbols in order).
+
+    A dynamicsymbol ``T(t)`` becomes ``T``; a Symbol or a name ``T`` is the plain input
+    ``T`` and stands for the dynamicsymbol ``T(t)`` too."""
+    t = me.dynamicsymbols._t
+    if isinstance(inputs, (str, sp.Basic)):
+        inputs = [inputs]
+    reserved = {f.func.__name__ for f in coords} | {
+        velocity_symbol(sp.Symbol(f.func.__name__)).name for f in coords}
+    mapping: dict = {}
+    plain: list = []
+    for i, given in enumerate(inputs):
+        label = f"inputs[{i}]"
+        if isinstance(given, AppliedUndef) and given.args == (t,):
+            if given in coords:
+                problems.append(f"{label}: {given} is a coordinate, not an input")
+                continue
+            if given in to_q:
+                problems.append(f"{label}: {given} is a generalized speed (defined by the "
+                                f"kinematic differential equations), not an input")
+                continue
+            sym = sp.Symbol(given.func.__name__)
+        elif isinstance(given, (str, sp.Symbol)):
+            sym = as_symbol(given)
+            if sym == TIME:
+                problems.append(f"{label}: t is the time, not an input (a load may use it "
+                                f"as it is)")
+                continue
+        else:
+            problems.append(f"{label}: {short(given, _QUOTE)} is not an input: give a "
+                            f"dynamicsymbol (dynamicsymbols('T')), a Symbol or a name")
+            continue
+        if sym.name in reserved:
+            problems.append(f"{label}: {sym.name} is the name of a coordinate or velocity")
+            continue
+        if sym in plain:
+            problems.append(f"{label}: {sym.name} is given twice")
+            continue
+        plain.append(sym)
+        if isinstance(given, sp.Basic) and given != sym:
+            mapping[given] = sym
+        if not isinstance(given, AppliedUndef):  # a name stands for T and for T(t)
+            mapping[sp.Function(sym.name)(t)] = sym
+    return mapping, tuple(plain)
+
+
+def _load_items(loads, actuators, problems, kind="loads") -> list:
+    """[(label, point or frame, vector)] of the loads and of the actuators' ``to_loads()``."""
+    items = []
+    for i, load in enumerate(loads):
+        pair = _load_pair(f"{kind}[{i}]", load, problems)
+        if pair is not None:
+            items.append((f"{kind}[{i}]",) + pair)
+    for j, act in enumerate(actuators):
+        to_loads = getattr(act, "to_loads", None)
+        if not callable(to_loads):
+            problems.append(f"actuators[{j}]: {short(act, _QUOTE)} is not an actuator (it has "
+                            f"no to_loads(); give sympy.physics.mechanics actuators, e.g. "
+                            f"LinearSpring, TorqueActuator)")
+            continue
+        try:
+            produced = list(to_loads())
+        except (ValueError, TypeError, AttributeError) as exc:
+            problems.append(f"actuators[{j}]: {type(act).__name__}.to_loads() failed: "
+                            f"{' '.join(str(exc).split())}")
+            continue
+        for k, load in enumerate(produced):
+            label = f"actuators[{j}].to_loads()[{k}]"
+            pair = _load_pair(label, load, problems)
+            if pair is not None:
+                items.append((label,) + pair)
+    return items
+
+
+def _load_pair(label, load, problems):
+    """(point or frame, vector) of a Force, a Torque or a pair; None (and a problem) else."""
+    if hasattr(load, "location") and hasattr(load, "vector"):
+        where, vector = load.location, load.vector
+    elif isinstance(load, (tuple, list)) and len(load) == 2:
+        where, vector = load
+    else:
+        problems.append(f"{label}: {short(load, _QUOTE)} is not a load: give Force(point, "
+                        f"vector), Torque(frame, vector) or a (point or frame, vector) pair")
+        return None
+    if not isinstance(where, (me.Point, me.ReferenceFrame)):
+        problems.append(f"{label}: {short(where, _QUOTE)} is neither a Point nor a "
+                        f"ReferenceFrame (a load acts on a point or, as a torque, on a frame)")
+        return None
+    if isinstance(vector, me.Vector):
+        return where, vector
+    if isinstance(vector, (int, sp.Expr)) and vector == 0:
+        return where, me.Vector(0)
+    problems.append(f"{label}: {short(vector, _QUOTE)} is not a Vector (write the "
+                    f"{'force' if isinstance(where, me.Point) else 'torque'} along unit vectors, "
+                    f"e.g. F*N.x)")
+    return None
+
+
+def _components(label, vector, frame, problems):
+    """The components of ``vector`` in ``frame`` (3 x 1), or None (and a problem)."""
+    if vector == 0:
+        return sp.zeros(3, 1)
+    try:
+        return vector.to_matrix(frame)
+    except ValueError as exc:
+        problems.append(f"{label}: the vector {short(vector, _QUOTE)} cannot be expressed in "
+                        f"{frame} ({' '.join(str(exc).split())})")
+        return None
+
+
+def _split_loads(items, frame, inputs, problems) -> tuple[list, list]:
+    """(loads with a potential, the others): a force on a point whose components in
+    ``frame`` are constant (no function of time, no time, no input) has the potential
+    -F . r; everything else (torques, moving forces) is a generalized force.
+    ``inputs``: the plain symbols that are inputs, as given and as nhham's."""
+    t = me.dynamicsymbols._t
+    input_symbols = set(inputs)
+    potential, forced = [], []
+    for label, where, vector in items:
+        comps = _components(label, vector, frame, problems)
+        if comps is None:
+            continue
+        constant = (isinstance(where, me.Point) and not comps.atoms(AppliedUndef)
+                    and not comps.atoms(sp.Derivative) and not comps.has(t)
+                    and not (comps.free_symbols & input_symbols))
+        (potential if constant else forced).append((label, where, vector, comps))
+    return potential, forced
+
+
 def _lagrangian_of(bodies, loads, frame, origin, problems) -> sp.Expr:
-    """T - V of rigid bodies/particles and constant (gravity-type) forces."""
-    if frame is None or origin is None:
-        problems.append("frame, origin: bodies and loads need the inertial frame and a point "
-                        "fixed in it (frame=N, origin=O)")
-        return sp.S.Zero
+    """T - V of rigid bodies/particles and constant (gravity-type) forces ``loads``:
+    ``(label, point, vector, components)``."""
     T = sp.S.Zero
     for i, body in enumerate(bodies):
         label = f"bodies[{i}] ({getattr(body, 'name', body)})"
@@ -386,26 +600,7 @@ def _lagrangian_of(bodies, loads, frame, origin, problems) -> sp.Expr:
             w = body_frame.ang_vel_in(frame)
             T += w.dot(body.central_inertia.dot(w)) / 2
     V = sp.S.Zero
-    for i, load in enumerate(loads):
-        label = f"loads[{i}]"
-        where, vector = (load.location, load.vector) if hasattr(load, "location") else (
-            tuple(load) if isinstance(load, (tuple, list)) and len(load) == 2 else (None, None))
-        if where is None:
-            problems.append(f"{label}: {short(load, _QUOTE)} is not a load (point, force)")
-            continue
-        if isinstance(where, me.ReferenceFrame):
-            problems.append(f"{label}: the torque {short(vector, _QUOTE)} on frame {where} is not "
-                            f"a potential force; nhham takes gravity-type loads only (forces are "
-                            f"not supported yet)")
-            continue
-        comps = vector.to_matrix(frame) if vector != 0 else sp.zeros(3, 1)
-        moving = sorted({str(f) for f in comps.atoms(AppliedUndef)}
-                        | ({str(me.dynamicsymbols._t)} if comps.has(me.dynamicsymbols._t) else set()))
-        if moving:
-            problems.append(f"{label}: the force {short(vector, _QUOTE)} on {where} depends on "
-                            f"{', '.join(moving)}; only forces constant in the inertial frame "
-                            f"(gravity type) have a potential; other loads are not supported yet")
-            continue
+    for label, where, vector, _ in loads:
         try:
             r = where.pos_from(origin)
         except ValueError:
@@ -416,12 +611,12 @@ def _lagrangian_of(bodies, loads, frame, origin, problems) -> sp.Expr:
     return T - V
 
 
-def _free_velocity(label, point, frame, origin, problems):
+def _free_velocity(label, point, frame, origin, problems, what="its mass centre"):
     """d/dt of the position of ``point`` from ``origin`` in ``frame``."""
     try:
         r = point.pos_from(origin)
     except ValueError:
-        problems.append(f"{label}: its mass centre {point} has no position from the origin "
+        problems.append(f"{label}: {what} {point} has no position from the origin "
                         f"{origin}; nhham needs the free velocity d/dt(position), not a "
                         f"velocity with constraints already substituted (set_vel): locate "
                         f"the point from the origin")
@@ -429,15 +624,128 @@ def _free_velocity(label, point, frame, origin, problems):
     return r.dt(frame)
 
 
+def _generalized_forces(loads, coords, frame, velocity_of, to_q, inputs_in, problems) -> list:
+    """Q_A = sum over the loads of F . dv_P/dq'_A (T . dw_B/dq'_A for a torque on B), in
+    nhham's plain symbols (coordinates, velocities, inputs, t).
+
+    ``loads``: ``(label, point or frame, vector, components in frame)``;
+    ``velocity_of(label, point, problems)``: the velocity of a point in ``frame`` (None
+    and a problem when it has none). The speeds ``to_q`` are replaced before the partial
+    derivatives are taken. The dot products are sympy's (``Vector.dot``), so a torque
+    along a frame's own axis gives its magnitude with no trigonometric leftovers."""
+    t = me.dynamicsymbols._t
+    to_plain = _plain_map(coords, t)
+    to_plain.update(inputs_in)
+    qdots = [f.diff(t) for f in coords]
+    Q = [sp.S.Zero] * len(coords)
+    for label, where, vector, comps in loads:
+        if comps == sp.zeros(3, 1):
+            continue
+        bad = _load_problems(label, where, vector, comps, coords, to_q, inputs_in, to_plain)
+        if bad:
+            problems += bad
+            continue
+        if isinstance(where, me.ReferenceFrame):
+            what = f"the angular velocity of frame {where} in {frame}"
+            try:
+                vel = where.ang_vel_in(frame)
+            except ValueError:
+                problems.append(f"{label}: the frame {where} has no angular velocity in "
+                                f"{frame} (orient it from {frame} or set_ang_vel)")
+                continue
+        else:
+            what = f"the velocity of {where} in {frame}"
+            vel = velocity_of(label, where, problems)
+            if vel is None:
+                continue
+        if to_q:
+            vector, vel = _vector_xreplace(vector, to_q), _vector_xreplace(vel, to_q)
+        vbad = _velocity_problem(label, what, vel, coords)
+        if vbad:
+            problems.append(vbad)
+            continue
+        for A, qd in enumerate(qdots):
+            partial = vel.diff(qd, frame) if vel != 0 else vel
+            if partial != 0:
+                Q[A] += sp.sympify(vector.dot(partial)).xreplace(to_plain)
+    return Q
+
+
+def _vector_xreplace(vector, rule):
+    """``vector`` with ``rule`` applied to its components (in each of its frames)."""
+    if vector == 0:
+        return vector
+    return me.Vector([(m.xreplace(rule), f) for m, f in vector.args])
+
+
+def _load_problems(label, where, vector, comps, coords, to_q, inputs_in, to_plain) -> list:
+    """Why a load's components cannot be a force of nhham's (accelerations, unknown
+    functions of time, symbols named like a coordinate or velocity), each naming it."""
+    t = me.dynamicsymbols._t
+    kind = "torque" if isinstance(where, me.ReferenceFrame) else "force"
+    head = f"{label}: the {kind} {short(vector, _QUOTE)} on {where}"
+    out = []
+    qdots = {f.diff(t) for f in coords}
+    moving = set(coords) | set(to_q)
+    for d in sorted(comps.atoms(sp.Derivative) - qdots, key=str):
+        if d.expr in moving:
+            out.append(f"{head} depends on the acceleration {d}; a load may depend on the "
+                       f"coordinates, their first derivatives (or speeds), time and inputs only")
+        else:
+            out.append(f"{head} contains the derivative {d}; a load may depend on the "
+                       f"coordinates, their first derivatives (or speeds), time and inputs "
+                       f"only (give a derivative of an input as an input of its own)")
+    known = moving | {f for f in inputs_in if isinstance(f, AppliedUndef)}
+    for f in sorted(comps.atoms(AppliedUndef) - known, key=str):
+        if any(f in d.atoms(AppliedUndef) for d in comps.atoms(sp.Derivative) - qdots):
+            continue  # already named with its derivative
+        speed = ", a speed defined by the kinematic differential equations" if to_q else ""
+        out.append(f"{head} depends on {f}, a function of time that is neither a "
+                   f"coordinate{speed} nor an input; if it is an input (a control, a "
+                   f"specified function), list it: inputs=[{f}]")
+    reserved = {s.name for s in to_plain.values()} - {s.name for s in inputs_in.values()}
+    clash = sorted(s.name for s in comps.free_symbols if s != t and s.name in reserved)
+    if clash:
+        out.append(f"{head}: plain symbol(s) {', '.join(clash)} have the name of a coordinate "
+                   f"or velocity; rename them")
+    return out
+
+
+def _velocity_problem(label, what, vel, coords) -> str:
+    """Why a velocity cannot be used: functions of time that are not coordinates (a speed
+    no kinematic equation defines) or derivatives beyond q'; '' if none."""
+    t = me.dynamicsymbols._t
+    qdots = {f.diff(t) for f in coords}
+    parts = [m for m, _ in vel.args] if vel != 0 else []
+    derivs = sorted({d for m in parts for d in m.atoms(sp.Derivative)} - qdots, key=str)
+    funcs = sorted({f for m in parts for f in m.atoms(AppliedUndef)} - set(coords), key=str)
+    if derivs or funcs:
+        culprit = (derivs or funcs)[0]
+        return (f"{label}: {what} contains {short(culprit, _QUOTE)}, a function of time that "
+                f"is not one of the coordinates q nor their first derivatives (a speed that "
+                f"no kinematic differential equation defines?)")
+    return ""
+
+
 def from_lagranges_method(lm: me.LagrangesMethod, parameters=None, name: str = "", *,
-                          drop_redundant: bool = False) -> System:
+                          inputs: Sequence = (), drop_redundant: bool = False) -> System:
     """Build a :class:`System` from a ``LagrangesMethod`` object.
 
-    Uses the Lagrangian ``lm._L``, the coordinates ``lm.q`` and the
-    constraints the object was built with: ``lm._hol_coneqs`` (holonomic)
-    and the rest of ``lm.coneqs`` (whose first entries are the time
-    derivatives of the holonomic ones; sympy 1.14 stores no other copy of
-    ``nonhol_coneqs``).
+    Uses the Lagrangian ``lm._L``, the coordinates ``lm.q``, the applied
+    forces ``lm.forcelist`` and the constraints the object was built with:
+    ``lm._hol_coneqs`` (holonomic) and the rest of ``lm.coneqs`` (whose first
+    entries are the time derivatives of the holonomic ones; sympy 1.14 stores
+    no other copy of ``nonhol_coneqs``).
+
+    The forcelist, ``(Point, Vector)`` and ``(ReferenceFrame, Vector)`` pairs,
+    gives the generalized forces as ``LagrangesMethod`` computes them:
+    Q_A = F . d(P.vel(N))/dq'_A and T . d(B.ang_vel_in(N))/dq'_A with N =
+    ``lm.inertial``, the velocities being those of the points as set
+    (``set_vel``) or found by ``Point.vel``; the equations are
+    d/dt(dL/dv) - dL/dq = Q - mu^T lambda (``DESIGN.md`` §2). Every force
+    becomes a generalized force (none goes into L). Time
+    ``dynamicsymbols._t`` becomes nhham's ``t``; other functions of time in a
+    force must be listed in ``inputs``.
 
     Parameters
     ----------
@@ -445,26 +753,58 @@ def from_lagranges_method(lm: me.LagrangesMethod, parameters=None, name: str = "
     parameters : mapping or sequence, optional
         As for :func:`from_mechanics`.
     name : str, optional
+    inputs : sequence of dynamicsymbols or sympy.Symbol, optional
+        As for :func:`from_mechanics`: the inputs the forces use (``T(t)``
+        becomes the input ``T``).
     drop_redundant : bool, optional
         As for :func:`from_mechanics`.
 
     Raises
     ------
     InputError
-        If ``lm`` carries applied forces (nhham has no force terms) or is
-        not a ``LagrangesMethod``; otherwise as :func:`from_mechanics`.
+        If ``lm`` is not a ``LagrangesMethod``, or has forces but no frame.
+    ValidationError
+        Naming ``forcelist[i]`` for a force nhham cannot express (a point
+        without a velocity in the frame, accelerations, a function of time
+        not listed in ``inputs``); otherwise as :func:`from_mechanics`.
     """
     if not isinstance(lm, me.LagrangesMethod):
         raise InputError(f"from_lagranges_method: expected a LagrangesMethod, got "
                          f"{type(lm).__name__}")
+    coords = _coordinate_functions(list(lm.q))
+    problems: list[str] = []
+    inputs_in, plain_inputs = _input_map(inputs, coords, {}, problems)
+    forces = None
     if lm.forcelist:
-        raise InputError("from_lagranges_method: the LagrangesMethod has a forcelist; nhham "
-                         "takes conservative forces through the Lagrangian only (write them "
-                         "as a potential)")
+        frame = lm.inertial
+        if frame is None:
+            raise InputError("from_lagranges_method: the LagrangesMethod has a forcelist but "
+                             "no inertial frame (LagrangesMethod(..., frame=N))")
+        items = _load_items(lm.forcelist, (), problems, kind="forcelist")
+        forced = []
+        for label, where, vector in items:
+            comps = _components(label, vector, frame, problems)
+            if comps is not None:
+                forced.append((label, where, vector, comps))
+
+        def point_velocity(label, point, problems):
+            try:
+                return point.vel(frame)
+            except ValueError:
+                problems.append(f"{label}: the point {point} has no velocity in {frame} "
+                                f"(set_vel, or locate it from a point whose velocity is set)")
+                return None
+
+        forces = _generalized_forces(forced, coords, frame, point_velocity, {}, inputs_in,
+                                     problems)
+    if problems:
+        raise ValidationError(problems)
     hol = list(lm._hol_coneqs)
     nonhol = list(lm.coneqs)[len(hol):]
-    return from_mechanics(lm._L[0], list(lm.q), hol, nonhol, parameters=parameters, name=name,
-                          drop_redundant=drop_redundant)
+    return _from_lagrangian(_as_expr("lagrangian", lm._L[0]), coords, hol, nonhol, parameters,
+                            name, hol_labels=[f"hol_coneqs[{i}]" for i in range(len(hol))],
+                            nonhol_labels=[f"nonhol_coneqs[{i}]" for i in range(len(nonhol))],
+                            drop_redundant=drop_redundant, forces=forces, inputs=plain_inputs)
 
 
 def _coordinate_functions(q):
@@ -552,6 +892,17 @@ def to_lagranges_method(system: System) -> MechanicsForm:
     Parameters stay symbols; substitute ``system.parameter_values`` for
     numbers. ``form_lagranges_equations`` is not called.
 
+    Forces: for each coordinate q_A with a generalized force Q_A != 0
+    (:attr:`System.generalized_forces`, the dissipation's included) the
+    ``forcelist`` has a point ``P_<q_A>`` whose velocity in the inertial
+    frame ``N`` (``lm.inertial``) is set to q_A'(t) N.x and the force
+    Q_A N.x on it: its partial velocities are N.x along q_A' and 0 along the
+    others, so LagrangesMethod's generalized force is exactly Q_A and
+    ``lm.eom`` reads d/dt(dL/dq') - dL/dq - Q + mu^T lam (nhham's
+    d/dt(dL/dv) - dL/dq = Q - mu^T lambda, ``DESIGN.md`` §2). Inputs become
+    dynamicsymbols of the same name (``u -> u(t)``), the time ``t`` is
+    ``dynamicsymbols._t``.
+
     Parameters
     ----------
     system : System
@@ -560,25 +911,40 @@ def to_lagranges_method(system: System) -> MechanicsForm:
     -------
     MechanicsForm
         ``(lm, q, maps)``: the LagrangesMethod, the coordinate dynamicsymbols
-        (in ``system.coordinates`` order) and the :class:`Substitutions`.
+        (in ``system.coordinates`` order) and the :class:`Substitutions`
+        (inputs included).
     """
     t = me.dynamicsymbols._t
     # Function(name)(t) equals dynamicsymbols(name) but does not run the
     # name through symbols()' range and comma syntax.
     qs = tuple(sp.Function(q.name)(t) for q in system.coordinates)
-    to_mech = {}
+    to_mech: dict = {}
     for q, v, f in zip(system.coordinates, system.velocities, qs):
         to_mech[q] = f
         to_mech[v] = f.diff(t)
-    back = {}
+    for u in system.inputs:
+        to_mech[u] = sp.Function(u.name)(t)
+    back: dict = {}
     for q, v, f in zip(system.coordinates, system.velocities, qs):
         back[f] = q
         back[f.diff(t)] = v
         back[f.diff(t, 2)] = acceleration_symbol(q)
+    for u in system.inputs:
+        back[to_mech[u]] = u
     for i in range(1, system.m + 1):
         back[sp.Function(f"lam{i}")(t)] = multiplier_symbol(i)
+    forcelist, frame = [], None
+    if system.has_forces:
+        frame = me.ReferenceFrame("N")
+        for q, f, force in zip(system.coordinates, qs, system.generalized_forces):
+            if force == 0:
+                continue
+            point = me.Point(f"P_{q.name}")
+            point.set_vel(frame, f.diff(t) * frame.x)
+            forcelist.append((point, force.xreplace(to_mech) * frame.x))
     lm = me.LagrangesMethod(
         system.lagrangian.xreplace(to_mech), list(qs),
+        forcelist=forcelist or None, frame=frame,
         hol_coneqs=[g.xreplace(to_mech) for g in system.holonomic] or None,
         nonhol_coneqs=[c.xreplace(to_mech) for c in system.constraints] or None,
     )

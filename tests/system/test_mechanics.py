@@ -266,16 +266,6 @@ def test_from_mechanics_rejects_non_coordinates():
         from_mechanics(x.diff(t)**2, [x.diff(t)])
 
 
-def test_from_lagranges_method_rejects_forces():
-    x = me.dynamicsymbols("x")
-    N = me.ReferenceFrame("N")
-    P = me.Point("P")
-    P.set_vel(N, x.diff(t) * N.x)
-    lm = me.LagrangesMethod(x.diff(t)**2 / 2, [x], forcelist=[(P, -x.diff(t) * N.x)], frame=N)
-    with pytest.raises(InputError, match="forcelist"):
-        from_lagranges_method(lm)
-
-
 def test_multipliers_are_minus_those_of_lagranges_method():
     """The multipliers sympy's LagrangesMethod solves in ``rhs()`` (from
     ``mass_matrix_full``, which appends lam_coeffs.T = -mu^T while ``eom`` has
