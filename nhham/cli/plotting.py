@@ -129,8 +129,10 @@ def plot_trajectory(result, axes=None, *, title: str | None = None):
     energy = np.asarray(result.energy, dtype=float)
     ax.plot(t, energy - energy[0], label="E(t) - E(0)", color="tab:blue", linewidth=1.2)
     if result.work is not None:
+        forced = result.model is not None and result.model.forced
         ax.plot(t, np.asarray(result.work, dtype=float), "--", color="tab:red", linewidth=1.2,
-                label="work of the constraint forces")
+                label="work of the applied, dissipative and constraint forces" if forced
+                else "work of the constraint forces")
     ax.set_ylabel("energy change")
     ax.set_xlabel("time t")
     ax.legend(fontsize=8)

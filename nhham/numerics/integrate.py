@@ -488,7 +488,7 @@ def _check_options(method, step, projection, baumgarte, model):
 
 
 def _width(n, method) -> int:
-    """Numbers a loop keeps per state: the state, and the work of the constraint forces
+    """Numbers a loop keeps per state: the state, and the work of the forces
     where the loop carries it (all but RATTLE)."""
     return 2 * n + (0 if method in ("rattle", "rattle4") else 1)
 

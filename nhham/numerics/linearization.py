@@ -234,7 +234,7 @@ class _ComplexField:
                                    "for complex-step differentiation") from None
         self._p = [float(x) for x in model.parameter_values]
         n, m, k = self.n, self.m, self.k
-        self.size = n * n + n + m * n + 3 * m + k
+        self.size = n * n + n + m * n + 3 * m + k + int(model.forced)
 
     def pieces(self, Q, V, p=None):
         """W, F, mu, drift, h, g at complex states (rows of Q, V: shape (K, n)); ``p``:
@@ -246,10 +246,11 @@ class _ComplexField:
         with np.errstate(all="ignore"):
             self._batch(Y, self._p if p is None else p, out)
         out = out.T
+        K = out.shape[0]
         i = 0
-        W = out[:, i:i + n * n].reshape(-1, n, n); i += n * n
+        W = out[:, i:i + n * n].reshape(K, n, n); i += n * n
         F = out[:, i:i + n]; i += n
-        mu = out[:, i:i + m * n].reshape(-1, m, n); i += m * n
+        mu = out[:, i:i + m * n].reshape(K, m, n); i += m * n
         drift = out[:, i:i + m]; i += m
         h = out[:, i:i + m]; i += m
         g = out[:, i:i + k]
@@ -265,7 +266,7 @@ class _ComplexField:
             self._geometry_batch(Y, self._p if p is None else p, out)
         out = out.T
         i = n * n
-        mu = out[:, i:i + m * n].reshape(-1, m, n); i += m * n
+        mu = out[:, i:i + m * n].reshape(out.shape[0], m, n); i += m * n
         h = out[:, i:i + m]; i += m
         return mu, h, out[:, i:i + k]
 

@@ -3,7 +3,7 @@
 :func:`run_scipy` drives one of :mod:`scipy.integrate`'s ``OdeSolver`` classes step by
 step on the projected field, so that a failure keeps the trajectory computed so far and
 that every step can be projected onto M_1 (``projection=True``). The state carries one
-extra entry, the work of the constraint forces. ``dense_output`` and ``events`` behave as
+extra entry, the work of the forces (constraint, applied, dissipative). ``dense_output`` and ``events`` behave as
 in :func:`scipy.integrate.solve_ivp`: event functions ``event(t, y)`` receive the state
 ``y`` of shape (2n,) and may have ``terminal`` (bool, or the number of occurrences after
 which to stop) and ``direction`` attributes; a terminal event ends the run with

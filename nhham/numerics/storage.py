@@ -200,7 +200,7 @@ class Recorder:
     def result(self, n2: int):
         """``(t (K,), y (n2, K), extra)``: new contiguous arrays of the kept rows, once at
         the end (the recorder's room is freed); ``y`` as in scipy, ``extra`` the column after the state
-        (the work of the constraint forces) or None when the rows are the state only."""
+        (the work of the forces) or None when the rows are the state only."""
         K = self.count
         y = np.ascontiguousarray(self.z[:K, :n2].T)
         extra = self.z[:K, n2].copy() if self.width > n2 else None

@@ -34,6 +34,9 @@ def dump_scene(system, initial=None, simulate=None, *, description: str = "",
     contacts : sequence of ContactPoint, optional
         The ``[contacts.<name>]`` tables (:mod:`nhham.system.contacts`).
 
+    The system's ``inputs``, ``forces`` (by coordinate) and ``dissipation`` are written
+    too; control laws are not part of a System (a scene's ``[control]``).
+
     Returns
     -------
     str
@@ -51,8 +54,9 @@ def dump_scene(system, initial=None, simulate=None, *, description: str = "",
         lines.append(f"description = {toml_string(description)}")
     lines.append(f"coordinates = {_toml_array([q.name for q in system.coordinates])}")
     values = {p.name: v for p, v in system.parameter_values.items()}
-    numeric = [p.name for p in system.parameters if p.name in values]
-    symbolic = [p.name for p in system.parameters if p.name not in values]
+    declared = system.declared_parameters  # the inputs and t are written as such
+    numeric = [p.name for p in declared if p.name in values]
+    symbolic = [p.name for p in declared if p.name not in values]
     if numeric:
         items = ", ".join(f"{_toml_key(p)} = {_toml_float(values[p], p)}" for p in numeric)
         lines.append(f"parameters = {{ {items} }}")
@@ -61,6 +65,14 @@ def dump_scene(system, initial=None, simulate=None, *, description: str = "",
     lines.append(f"lagrangian = {toml_string(to_text(system.lagrangian))}")
     lines.append(f"constraints = {_toml_array([to_text(c) for c in system.constraints])}")
     lines.append(f"holonomic = {_toml_array([to_text(g) for g in system.holonomic])}")
+    if system.inputs:
+        lines.append(f"inputs = {_toml_array([u.name for u in system.inputs])}")
+    forces = [(q.name, f) for q, f in zip(system.coordinates, system.forces) if f != 0]
+    if forces:
+        items = ", ".join(f"{_toml_key(q)} = {toml_string(to_text(f))}" for q, f in forces)
+        lines.append(f"forces = {{ {items} }}")
+    if system.dissipation != 0:
+        lines.append(f"dissipation = {toml_string(to_text(system.dissipation))}")
     if initial is not None:
         lines.append("")
         lines.append("[initial]")

@@ -1,5 +1,5 @@
 /* ---- projection onto M_1 and the explicit Runge-Kutta loop ---- */
-#define NZ (2 * NQ + 1)   /* state and the work of the constraint forces */
+#define NZ (2 * NQ + 1)   /* state and the work of the forces (constraint, applied) */
 #define SEXT 16           /* DOP853 stages with the dense-output extras */
 
 /* z (q, v) onto M_1 exactly as NumericModel.project: Newton iterations for the

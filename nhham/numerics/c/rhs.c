@@ -25,7 +25,7 @@ static int rhs_one(const double *y, const double *p, double alpha2, double beta2
     for (int i = 0; i < NQ; ++i) dy[i] = v[i];
     for (int c = 0; c < NC; ++c) pw -= lam[c] * muv[c];
 #ifdef NHHAM_FORCED
-    pw += out[NOUT - 1];               /* the applied power Q . v */
+    pw += out[NHHAM_FORCED];           /* the applied power Q . v */
 #endif
     *power = pw;
     for (int i = 0; i < 2 * NQ; ++i) if (!isfinite(dy[i])) return NHHAM_NONFINITE;

@@ -393,8 +393,8 @@ def _c_module(printed, n, m, k, npar, path, forced=False, time_slot=None) -> str
         f"#define NOUT {n * n + n + m * n + 3 * m + k + int(forced)}",
         f"#define NPAR {npar}",
     ]
-    if forced:
-        head.append("#define NHHAM_FORCED 1")
+    if forced:  # the index of the applied power Q . v in the saddle kernel's outputs
+        head.append(f"#define NHHAM_FORCED {n * n + n + m * n + 2 * m + k}")
     if time_slot is not None:
         head.append(f"#define NHHAM_TIME_SLOT {time_slot}")
     if path == "closed_form":
