@@ -13,9 +13,13 @@ The scene is examples/whipple_bicycle.toml with
 * an [initial] lean of 0.1 rad at that speed, projected onto M_1 (the pitch and the
   dependent velocities solved from the constraints).
 
-Run from the repository root: ``python examples/make_bicycle_steer_control.py``.
+Run from the repository root: ``python examples/make_bicycle_steer_control.py``;
+``--figure docs/bicycle_steer_control.png`` also draws the controlled run (lean, steer and
+the steer torque against time, with the uncontrolled bicycle from the same lean; needs
+matplotlib, the plot extra).
 """
 
+import argparse
 from pathlib import Path
 
 import numpy as np
@@ -47,6 +51,50 @@ HEADER = f"""# The Whipple bicycle of whipple_bicycle.toml with a lean torque T_
 
 def _state_line(name, value):
     return f"{name} = {float(value)!r}"
+
+
+def figure(path):
+    """Lean and steer of the controlled and the uncontrolled bicycle, and the steer torque."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    import nhham
+    from nhham.system.scene import load_scene
+    from nhham.system.evaluation import numeric_function
+
+    scene = load_scene(HERE / "bicycle_steer_control.toml")
+    closed = nhham.simulate(scene.system.closed_loop(scene.control),
+                            **scene.simulate_options(t_end=6.0))
+    free = nhham.simulate(scene.system.closed_loop({"T_phi": "0", "T_delta": "0"}),
+                          **scene.simulate_options(t_end=6.0))
+    law = scene.control["T_delta"]
+    names = sorted(law.free_symbols, key=lambda s: s.name)
+    torque = numeric_function(names, [law])(*[closed[s.name] for s in names])
+    fig, axes = plt.subplots(2, 1, figsize=(7.0, 5.5), sharex=True)
+    ax = axes[0]
+    ax.plot(closed.t, closed["phi"], label="lean phi, controlled", color="tab:blue")
+    ax.plot(closed.t, closed["delta"], label="steer delta, controlled", color="tab:orange")
+    # the uncontrolled bicycle falls over (weave): drawn until its lean passes 0.45 rad
+    fallen = np.flatnonzero(np.abs(free["phi"]) > 0.45)
+    end = fallen[0] + 1 if fallen.size else len(free.t)
+    ax.plot(free.t[:end], free["phi"][:end], "--", label="lean phi, no control (falls)",
+            color="tab:blue", alpha=0.6)
+    ax.set_ylim(-0.35, 0.5)
+    ax.set_ylabel("angle [rad]")
+    ax.legend(fontsize=8, loc="upper right")
+    ax.grid(True, alpha=0.3)
+    ax = axes[1]
+    ax.plot(closed.t, np.ravel(torque), color="tab:green")
+    ax.set_ylabel("steer torque T_delta [N m]")
+    ax.set_xlabel("time t [s]")
+    ax.grid(True, alpha=0.3)
+    fig.suptitle(f"Whipple bicycle at {SPEED:g} m/s from a lean of {LEAN:g} rad: "
+                 f"steer-torque feedback (poles {', '.join(f'{p:g}' for p in POLES)})",
+                 fontsize=10)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    print("wrote", path)
 
 
 def main():
@@ -81,4 +129,9 @@ def main():
 
 
 if __name__ == "__main__":
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--figure", metavar="PNG", help="also draw the controlled run")
+    args = parser.parse_args()
     main()
+    if args.figure:
+        figure(args.figure)

@@ -270,7 +270,7 @@ def cmd_derive(args, steps) -> CommandOutput:
         out = _derive_closed_form(args, steps, scene, side, "hamiltonian", side.analysis)
         out.result.update(form="explicit", mass_matrix=None, forcing=None,
                           constraint_jacobian=None, constraint_rhs=None, contact_forces=None)
-        return _with_case(out, at)
+        return _with_case(_with_forces(out, system), at)
     from nhham.lagrangian.analysis import analyze_constraints
     from nhham.lagrangian.geometry import lagrangian_geometry
 
@@ -283,8 +283,9 @@ def cmd_derive(args, steps) -> CommandOutput:
         implicit = _implicit_form(G)
     analysis = None if at is None else at.verdict.analysis
     if not (args.explicit or G.closed_form_affordable):
-        return _with_case(_with_contacts(
-            _derive_implicit(args, steps, scene, G, implicit, energy, analysis), scene), at)
+        return _with_case(_with_forces(_with_contacts(
+            _derive_implicit(args, steps, scene, G, implicit, energy, analysis), scene),
+            system), at)
 
     def algorithm():
         if analysis is not None:
@@ -293,7 +294,33 @@ def cmd_derive(args, steps) -> CommandOutput:
 
     out = _derive_closed_form(args, steps, scene, G, "lagrangian", algorithm)
     out.result.update(form="explicit", **implicit)
-    return _with_case(_with_contacts(out, scene), at)
+    return _with_case(_with_forces(_with_contacts(out, scene), system), at)
+
+
+def _with_forces(out: CommandOutput, system) -> CommandOutput:
+    """``out`` with the generalized forces Q (dissipation included) and the inputs: JSON
+    ``generalized_forces`` (null without forces) and ``inputs``, and a text section."""
+    import dataclasses
+
+    from nhham.cli.report import expr_text
+
+    out.result["inputs"] = [u.name for u in system.inputs]
+    if not system.has_forces:
+        out.result["generalized_forces"] = None
+        return out
+    forces = [expr_text(f) for f in system.generalized_forces]
+    out.result["generalized_forces"] = forces
+    text = out.text
+
+    def with_section():
+        lines = ["generalized forces Q (in F; d/dt dL/dv - dL/dq = Q - mu^T lambda):"]
+        lines += [f"  Q[{q.name}]  =  {f}" for q, f in zip(system.coordinates, forces)]
+        if system.inputs:
+            lines.append("inputs: " + ", ".join(u.name for u in system.inputs))
+        body = text() if callable(text) else text
+        return body + "\n" + "\n".join(lines)
+
+    return dataclasses.replace(out, text=with_section)
 
 
 def _with_contacts(out: CommandOutput, scene) -> CommandOutput:

@@ -265,7 +265,8 @@ def simulate(system_or_model, t_span, y0, *, method: str = "DOP853", rtol: float
              reference_digits: int | None = None, save_every: int = 1,
              max_points: int | None = None, backend: str = "auto", warn: bool = True,
              progress: bool = False, loop: str = "auto",
-             time_limit: float | None = None, contacts=()) -> SimulationResult:
+             time_limit: float | None = None, contacts=(),
+             controls=None) -> SimulationResult:
     """Integrate the constrained dynamics from ``y0`` over ``t_span``.
 
     Parameters
@@ -297,6 +298,11 @@ def simulate(system_or_model, t_span, y0, *, method: str = "DOP853", rtol: float
     initial_tol : float
         Largest scaled residual accepted in ``y0`` (see
         :meth:`NumericModel.scaled_residuals`).
+    controls : mapping, optional
+        The inputs: ``{input: law}`` with a law an expression in ``t``, the coordinates,
+        velocities and parameters (compiled with the field: :meth:`System.closed_loop`), or
+        a Python callable ``f(t, y) -> float`` (y the state, shape (2n,); the scipy
+        methods, evaluated at every right-hand side).
     residual_tol : float, optional
         Scaled residual above which a warning is given (default 1e-8 for
         unprojected adaptive methods, 1e-11 for projected and structure-
@@ -361,8 +367,18 @@ def simulate(system_or_model, t_span, y0, *, method: str = "DOP853", rtol: float
     if contacts and isinstance(system_or_model, NumericModel):
         raise InputError("simulate: contacts need the System (its constraints' velocity "
                          "maps), not a NumericModel", key="contacts")
+    system_or_model, callables = _with_controls(system_or_model, controls, method, contacts)
+    if callables:
+        loop = "scipy"
     model = _as_model(system_or_model, backend,
                       background=method not in ("rattle", "rattle4") and loop != "compiled")
+    if callables:
+        unknown = sorted(set(callables) - set(model.input_names))
+        if unknown:
+            raise InputError(f"controls: {', '.join(unknown)} not an input of the system "
+                             f"(inputs: {', '.join(model.input_names) or 'none'})",
+                             key="controls")
+        model = model.with_parameters(**{u: 0.0 for u in callables})  # set at every call
     t0, t1 = (float(t_span[0]), float(t_span[1]))
     if not (math.isfinite(t0) and math.isfinite(t1)) or t1 == t0:
         raise InputError(f"t_span: need two different finite times, got {t_span!r}")
@@ -392,7 +408,8 @@ def simulate(system_or_model, t_span, y0, *, method: str = "DOP853", rtol: float
             elif method in SCIPY_METHODS:
                 settings["loop"] = "scipy"
                 run = run_scipy(model, y_init, t0, t1, method, dense_output=dense_output,
-                                events=events, recorder=recorder, **adaptive)
+                                events=events, recorder=recorder, controls=callables,
+                                **adaptive)
             elif method in FIXED_STEP_METHODS:
                 opts = {"recorder": recorder, "progress": progress, "deadline": deadline}
                 if method == "rk4":
@@ -419,6 +436,29 @@ def simulate(system_or_model, t_span, y0, *, method: str = "DOP853", rtol: float
     return replace(result, contact_forces=contact_forces(
         system_or_model, contacts, result.states, result.multipliers.T,
         parameters=dict(zip(model.parameter_names, model.parameter_values))))
+
+
+def _with_controls(system_or_model, controls, method, contacts) -> tuple:
+    """(system or model, {input: callable}): expressions closed into the System, Python
+    callables kept for the scipy loop (which sets them at every evaluation)."""
+    if not controls:
+        return system_or_model, {}
+    laws = {str(u): f for u, f in controls.items() if not callable(f)}
+    callables = {str(u): f for u, f in controls.items() if callable(f)}
+    if laws:
+        if isinstance(system_or_model, NumericModel):
+            raise InputError("controls: laws given as expressions need the System (they are "
+                             "compiled with the field); give callables for a NumericModel",
+                             key="controls")
+        system_or_model = system_or_model.closed_loop(laws)
+    if callables and method not in SCIPY_METHODS:
+        raise InputError(f"controls: Python callables run with the scipy methods "
+                         f"({', '.join(SCIPY_METHODS)}), not {method!r}; give expressions to "
+                         f"compile them with the field", key="controls")
+    if callables and contacts:
+        raise InputError("controls: contact forces need the inputs as expressions (the "
+                         "multipliers at the stored states)", key="controls")
+    return system_or_model, callables
 
 
 def _run_reference(model, y0, t0, t1, digits, t_eval, settings) -> Run:

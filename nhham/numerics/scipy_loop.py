@@ -67,15 +67,33 @@ def eval_failure(status, t, y) -> NumericalFailure:
                                     f"{float(np.max(np.abs(y))):.3g})", state=y)
 
 
-def _make_fun(model, baumgarte, counter):
+def _make_fun(model, baumgarte, counter, controls=None):
     n2 = 2 * model.n
     field = model.field_function(baumgarte)
 
     timed = model.time_slot is not None
 
+    def at(t, y):
+        """The model at time t with the Python controls' input values at (t, y)."""
+        now = model.at_time(t)
+        if controls:
+            now = now.with_parameters(**{u: float(f(t, y)) for u, f in controls.items()})
+        return now
+
     def fun(t, z):
-        if timed:  # a time-dependent force: the field at this t
-            nonlocal field
+        nonlocal field
+        if controls:  # inputs from Python callables: the field with their values now
+            if z.ndim == 1:
+                field = at(t, z[:n2]).field_function(baumgarte)
+            else:
+                cols = [at(t, z[:n2, j]).evaluate(np.ascontiguousarray(z[:n2, j]), baumgarte)
+                        for j in range(z.shape[1])]
+                if any(c[3] for c in cols):
+                    raise eval_failure(next(c[3] for c in cols if c[3]), t, z[:n2, 0])
+                counter[0] += z.shape[1]
+                return np.vstack([np.column_stack([c[0] for c in cols]),
+                                  np.array([c[2] for c in cols])[None, :]])
+        elif timed:  # a time-dependent force: the field at this t
             field = model.at_time(t).field_function(baumgarte)
         if z.ndim == 1:
             out = field(z)
@@ -145,12 +163,13 @@ def _solver_options(method, n2, rtol, atol, max_step, first_step):
 
 def run_scipy(model, y0, t0, t1, method, *, rtol, atol, max_step, first_step, t_eval,
               projection, baumgarte, recorder, progress=False, dense_output=False,
-              events=None, deadline=None) -> Run:
+              events=None, deadline=None, controls=None) -> Run:
     """Integrate with scipy's ``method`` (see the module docstring); the states go into
-    ``recorder`` (a :class:`~nhham.numerics.storage.Recorder`)."""
+    ``recorder`` (a :class:`~nhham.numerics.storage.Recorder`). ``controls``:
+    ``{input: f(t, y)}`` Python callables giving inputs at every evaluation."""
     n2 = 2 * model.n
     counter = [0]
-    fun = _make_fun(model, baumgarte, counter)
+    fun = _make_fun(model, baumgarte, counter, controls)
     cls = SCIPY_METHODS[method]
     opts = _solver_options(method, n2, rtol, atol, max_step, first_step)
     z0 = np.append(y0, 0.0)

@@ -19,8 +19,10 @@ EXAMPLE_NAMES = sorted(p.name for p in EXAMPLES.glob("*.toml"))
 # (command, example) pairs left out of the every-example runs, with why: the
 # snakeboard's cross-check takes about a minute. The bicycle's cross-check
 # takes about half a minute (its linearisation and simulation are checked against the
-# benchmark in tests/numerics/test_linearization.py).
-HEAVY = {("compare", "snakeboard.toml"), ("compare", "whipple_bicycle.toml")}
+# benchmark in tests/numerics/test_linearization.py); their forced variants likewise
+# (tests/numerics/test_forced_numerics.py).
+HEAVY = {("compare", "snakeboard.toml"), ("compare", "whipple_bicycle.toml"),
+         ("compare", "snakeboard_gait.toml"), ("compare", "bicycle_steer_control.toml")}
 
 
 @functools.cache

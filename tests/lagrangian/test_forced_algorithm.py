@@ -89,3 +89,23 @@ def test_the_forced_field_is_the_field_plus_the_lift_of_the_force():
 def test_a_secondary_constraint_on_an_input_is_refused_naming_it():
     with pytest.raises(InputError, match=r"secondary\[0\].*depends on u"):
         analyze_constraints(example_3_2(u, inputs=["u"]))
+
+
+def test_the_sign_of_the_force_field():
+    """DESIGN.md §2: i_{F^v} ω_L = -F and i_{ξ_L + F^v} ω_L = dE_L - F, with ω(X, Y) = XᵀΩY
+    (Ω from the geometry), on a system with q-dependent W and a gyroscopic term."""
+    x, y, xd, yd, a, b = sp.symbols("x y x_dot y_dot a b")
+    L = (1 + x**2) * xd**2 / 2 + yd**2 / 2 + x * xd * yd + y * xd - sp.cos(x)
+    forced = nhham.System(["x", "y"], L, forces={"x": a * yd, "y": b - xd**2},
+                          inputs=["a", "b"])
+    free = nhham.System(["x", "y"], L)
+    g, g0 = lagrangian_geometry(forced), lagrangian_geometry(free)
+    Omega = g.poincare_cartan_2form
+    Fv = g.euler_lagrange_field - g0.euler_lagrange_field       # F^v
+    assert all(sp.simplify(e) == 0 for e in Fv[:2])              # vertical
+    F = sp.Matrix([a * yd, b - xd**2, 0, 0])                     # F = Q_A dq^A on TQ
+    i_Fv = (Fv.T * Omega).T                                      # (i_X ω)(Y) = Xᵀ Ω Y
+    assert all(sp.simplify(e) == 0 for e in i_Fv + F)
+    dE = g.gradient(g.energy)
+    i_xi = (g.euler_lagrange_field.T * Omega).T
+    assert all(sp.simplify(e) == 0 for e in i_xi - (dE - F))

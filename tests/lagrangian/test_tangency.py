@@ -36,9 +36,11 @@ EXAMPLES = sorted((Path(__file__).resolve().parents[2] / "examples").glob("*.tom
 # The coupled curvilinear pair (n = 6, W(q) dense) did not finish on that route in 20 minutes;
 # its stages are checked against its hand-derived header in tests/lagrangian/test_adjugate.py.
 # The four-bar cart (n = 6, W dense through the loop) is as slow there; its points route is
-# checked by tests/lagrangian/test_curved.py.
+# checked by tests/lagrangian/test_curved.py. The forced variants of the bicycle and the
+# differential drive have the same W, mu and tangency ranks (forces do not enter C).
 GALLERY = {"chaplygin_sphere", "differential_drive", "rolling_disc_3d", "whipple_bicycle",
-           "curvilinear_pair", "four_bar_cart"}
+           "curvilinear_pair", "four_bar_cart", "bicycle_steer_control",
+           "differential_drive_motors"}
 SYMBOLIC_EXAMPLES = [p for p in EXAMPLES if p.stem not in GALLERY]
 
 

@@ -201,3 +201,21 @@ def test_linearize_an_unconstrained_forced_oscillator_by_hand():
     lin = linearize(model, {"x": 0.25, "x_dot": 0.0}, neutral=False)
     np.testing.assert_allclose(lin.matrix, [[0, 1], [-2.0, -0.1]], atol=1e-14)
     np.testing.assert_allclose(lin.input_matrix, [[0], [1]], atol=1e-14)
+
+
+def test_inputs_from_a_python_callable_or_an_expression():
+    """u = 1/2 - x/5 as a callable (the scipy loop sets it at every evaluation) and as an
+    expression (compiled with the field): both the ODE x'' = -2x - x'/10 + u sin t."""
+    ref = solve_ivp(lambda t, y: [y[1], -2 * y[0] - 0.1 * y[1] + (0.5 - 0.2 * y[0]) * math.sin(t)],
+                    (0.0, 10.0), [1.0, 0.0], rtol=1e-12, atol=1e-13, method="DOP853")
+    system = driven_oscillator()
+    for law, method in ((lambda t, y: 0.5 - 0.2 * y[0], "DOP853"),
+                        (lambda t, y: 0.5 - 0.2 * y[0], "Radau"), ("1/2 - x/5", "DOP853")):
+        run = simulate(system, (0.0, 10.0), {"x": 1.0, "x_dot": 0.0}, rtol=1e-11, atol=1e-12,
+                       method=method, controls={"u": law})
+        np.testing.assert_allclose(run.y[:, -1], ref.y[:, -1], atol=1e-8)
+    with pytest.raises(InputError, match="scipy methods"):
+        simulate(system, (0.0, 1.0), {"x": 1.0, "x_dot": 0.0}, method="rk4", step=0.1,
+                 controls={"u": lambda t, y: 0.0})
+    with pytest.raises(InputError, match="not an input"):
+        simulate(system, (0.0, 1.0), {"x": 1.0, "x_dot": 0.0}, controls={"v": lambda t, y: 0})
