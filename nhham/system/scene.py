@@ -708,8 +708,8 @@ def _declare_hint(name: str | None) -> str:
     if name is None:
         return ""
     if name == "t":
-        return (" (systems are autonomous: L and the constraints may not depend on time t; "
-                "if t is a parameter, add it to parameters)")
+        return (" (systems are autonomous: L and the constraints may not depend on time t, "
+                "a force may (forces = {...}); if t is a parameter, add it to parameters)")
     if name.endswith("_ddot"):
         return " (accelerations may not appear in L or the constraints)"
     return (f" (a parameter must be declared: parameters = {{ {name} = <value> }} or "

@@ -105,7 +105,8 @@ def expression_problems(label: str, expr: sp.Expr, state, known) -> list[str]:
 def _unknown_advice(unknown) -> str:
     if "t" in unknown:
         return ("; nhham's systems are autonomous: L and the constraints may not depend on "
-                "time t explicitly (if t is a parameter, declare it in parameters)")
+                "time t explicitly, a force may (forces=...; if t is a parameter, declare it "
+                "in parameters)")
     return "; declare parameters in parameters"
 
 
