@@ -1,0 +1,69 @@
+"""The command on forced scenes: simulate's control laws, linearize's B, derive's Q, and
+the refusals (one line, exit 2, the key named)."""
+
+import json
+from pathlib import Path
+
+import numpy as np
+
+from nhham.cli.main import main
+
+EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
+DRIVE = EXAMPLES / "differential_drive_motors.toml"
+
+
+def run(capsys, *argv):
+    status = main([str(a) for a in argv])
+    out = capsys.readouterr()
+    return status, out.out, out.err
+
+
+def final_speed(out):
+    result = json.loads(out)["result"]
+    return result["y_final"][result["state"].index("x_dot")]
+
+
+def test_simulate_uses_the_scene_s_control_laws_or_the_command_line_s(capsys):
+    status, out, _ = run(capsys, "simulate", DRIVE, "--t-end", "40", "--json")
+    assert status == 0 and abs(final_speed(out) - 0.1) < 1e-9          # r tau / c
+    status, out, _ = run(capsys, "simulate", DRIVE, "--t-end", "40", "--json",
+                         "--control", "tauL=2*tau", "--control", "tauR=2*tau")
+    assert status == 0 and abs(final_speed(out) - 0.2) < 1e-9
+
+
+def test_bad_control_laws_exit_2_naming_them(capsys):
+    for law, fragment in (("tauL", "expected U=EXPR"), ("speed=1", "not an input"),
+                          ("tauL=tauR", "unknown name 'tauR'")):
+        status, out, err = run(capsys, "simulate", DRIVE, "--control", law, "--json")
+        envelope = json.loads(out)
+        assert status == 2 and fragment in envelope["error"]["message"], envelope["error"]
+        assert envelope["error"]["key"] in ("--control", "control")
+
+
+def test_linearize_gives_B_with_the_inputs_named(capsys):
+    status, out, _ = run(capsys, "linearize", DRIVE, "--json")
+    result = json.loads(out)["result"]
+    assert status == 0 and result["inputs"] == ["tauL", "tauR"]
+    B = np.array(result["input_matrix"])
+    assert B.shape == (2, 2) and np.allclose(B, B.T) and B[0, 0] > B[0, 1] > 0
+    status, out, _ = run(capsys, "linearize", DRIVE)
+    assert "input matrix B" in out and "tauL" in out
+
+
+def test_derive_shows_the_generalized_forces(capsys):
+    status, out, _ = run(capsys, "derive", DRIVE, "--json")
+    result = json.loads(out)["result"]
+    assert result["inputs"] == ["tauL", "tauR"]
+    assert result["generalized_forces"][3:] == ["-c*phiL_dot + tauL", "-c*phiR_dot + tauR"]
+    status, out, _ = run(capsys, "derive", EXAMPLES / "rolling_disk.toml", "--json")
+    assert json.loads(out)["result"]["generalized_forces"] is None
+
+
+def test_a_secondary_constraint_on_an_input_exits_2(capsys, tmp_path):
+    scene = tmp_path / "pushed.toml"
+    scene.write_text('coordinates = ["q1", "q2", "q3"]\ninputs = ["u"]\n'
+                     'lagrangian = "(q1_dot**2 + q2_dot**2 - q3_dot**2)/2 + q1**2/2"\n'
+                     'constraints = ["q1_dot + q3_dot"]\nforces = { q1 = "u" }\n')
+    status, _, err = run(capsys, "classify", scene)
+    assert status == 2 and "secondary[0]" in err and "depends on u" in err
+    assert len(err.strip().splitlines()) == 1
