@@ -3,10 +3,10 @@
 :func:`run_scipy` drives one of :mod:`scipy.integrate`'s ``OdeSolver`` classes step by
 step on the projected field, so that a failure keeps the trajectory computed so far and
 that every step can be projected onto M_1 (``projection=True``). The state carries one
-extra entry, the work of the forces (constraint, applied, dissipative). ``dense_output`` and ``events`` behave as
-in :func:`scipy.integrate.solve_ivp`: event functions ``event(t, y)`` receive the state
-``y`` of shape (2n,) and may have ``terminal`` (bool, or the number of occurrences after
-which to stop) and ``direction`` attributes; a terminal event ends the run with
+extra entry, the work of the forces (constraint, applied, dissipative). ``dense_output``
+and ``events`` behave as in :func:`scipy.integrate.solve_ivp`: event functions
+``event(t, y)`` receive the state ``y`` of shape (2n,) and may have ``terminal`` (bool, or
+the number of occurrences after which to stop) and ``direction`` attributes; a terminal event ends the run with
 ``Status.EVENT``. With projection the dense output interpolates each step from its
 projected start. No sympy here.
 """
@@ -68,13 +68,13 @@ def eval_failure(status, t, y) -> NumericalFailure:
 
 
 def _make_fun(model, baumgarte, counter, controls=None):
+    """scipy's fun(t, z); ``controls``: ``{input: f(t, y)}`` set at every evaluation."""
     n2 = 2 * model.n
     field = model.field_function(baumgarte)
-
-    timed = model.time_slot is not None
+    moving = controls or model.time_slot is not None  # the field changes with t (or y)
 
     def at(t, y):
-        """The model at time t with the Python controls' input values at (t, y)."""
+        """The model at time t with the controls' input values at (t, y)."""
         now = model.at_time(t)
         if controls:
             now = now.with_parameters(**{u: float(f(t, y)) for u, f in controls.items()})
@@ -82,31 +82,26 @@ def _make_fun(model, baumgarte, counter, controls=None):
 
     def fun(t, z):
         nonlocal field
-        if controls:  # inputs from Python callables: the field with their values now
-            if z.ndim == 1:
-                field = at(t, z[:n2]).field_function(baumgarte)
-            else:
-                cols = [at(t, z[:n2, j]).evaluate(np.ascontiguousarray(z[:n2, j]), baumgarte)
-                        for j in range(z.shape[1])]
-                if any(c[3] for c in cols):
-                    raise eval_failure(next(c[3] for c in cols if c[3]), t, z[:n2, 0])
-                counter[0] += z.shape[1]
-                return np.vstack([np.column_stack([c[0] for c in cols]),
-                                  np.array([c[2] for c in cols])[None, :]])
-        elif timed:  # a time-dependent force: the field at this t
-            field = model.at_time(t).field_function(baumgarte)
         if z.ndim == 1:
+            if moving:
+                field = at(t, z[:n2]).field_function(baumgarte)
             out = field(z)
             counter[0] += 1
             if isinstance(out, int):
                 raise eval_failure(out, t, z[:n2])
             return out
-        # Vectorised call (scipy's finite-difference Jacobian): z is (2n+1, k).
-        dY, _, P, status = model.at_time(t).evaluate(np.ascontiguousarray(z[:n2].T), baumgarte)
+        # Vectorised call (scipy's finite-difference Jacobian): z is (2n+1, k); with
+        # controls each column has its own inputs.
+        Y = np.ascontiguousarray(z[:n2].T)
+        parts = [at(t, y).evaluate(y, baumgarte) for y in Y] if controls else \
+            [model.at_time(t).evaluate(Y, baumgarte)]
         counter[0] += z.shape[1]
+        status = next((p[3] for p in parts if p[3]), 0)
         if status:
             raise eval_failure(status, t, z[:n2, 0])
-        return np.vstack([dY.T, np.atleast_1d(P)[None, :]])
+        dY = np.vstack([np.atleast_2d(p[0]) for p in parts])
+        P = np.concatenate([np.atleast_1d(p[2]) for p in parts])
+        return np.vstack([dY.T, P[None, :]])
 
     return fun
 

@@ -304,14 +304,8 @@ class System:
         by_name = {u.name: u for u in self.inputs}
         table = {s.name: s for s in self.state + self.declared_parameters}
         table["t"] = TIME
-        subs = {}
-        for key, law in laws.items():
-            name = key.name if isinstance(key, sp.Symbol) else str(key)
-            if name not in by_name:
-                problems.append(f"control.{name}: not an input of the system (inputs: "
-                                f"{', '.join(by_name) or 'none'})")
-                continue
-            subs[by_name[name]] = _to_expr(law, table, f"control.{name}", problems)
+        subs = _keyed(laws, by_name, "control", f"not an input of the system (inputs: "
+                      f"{', '.join(by_name) or 'none'})", table, problems)
         if problems:
             raise ValidationError(problems)
         known = set(table.values())
@@ -558,13 +552,9 @@ def _forces(forces, dissipation, coords, vels, table, inputs, problems):
     out = [sp.S.Zero] * n
     if isinstance(forces, Mapping):
         index = {q.name: i for i, q in enumerate(coords)}
-        for key, value in forces.items():
-            name = key.name if isinstance(key, sp.Symbol) else str(key)
-            if name not in index:
-                problems.append(f"forces.{name}: not a coordinate (forces are given by "
-                                f"coordinate: {', '.join(index)})")
-                continue
-            out[index[name]] = _to_expr(value, full, f"forces.{name}", problems)
+        for i, f in _keyed(forces, index, "forces", f"not a coordinate (forces are given by "
+                           f"coordinate: {', '.join(index)})", full, problems).items():
+            out[i] = f
     elif forces is not None:
         items = list(forces)
         if len(items) != n:
@@ -577,6 +567,20 @@ def _forces(forces, dissipation, coords, vels, table, inputs, problems):
                                                        problems)
     uses_time = any(TIME in e.free_symbols for e in out + [R])
     return tuple(out), R, uses_time
+
+
+def _keyed(entries: Mapping, allowed: Mapping, section: str, refusal: str, table,
+           problems) -> dict:
+    """``{allowed[name]: expression}`` of a table keyed by names (or Symbols); a key not in
+    ``allowed`` is the problem ``<section>.<name>: <refusal>``."""
+    out = {}
+    for key, value in entries.items():
+        name = key.name if isinstance(key, sp.Symbol) else str(key)
+        if name not in allowed:
+            problems.append(f"{section}.{name}: {refusal}")
+            continue
+        out[allowed[name]] = _to_expr(value, table, f"{section}.{name}", problems)
+    return out
 
 
 def _force_labels(forces, coords, dissipation):
