@@ -41,7 +41,7 @@ import warnings
 from dataclasses import dataclass, field, replace
 from functools import cached_property
 from types import MappingProxyType
-from typing import Any
+from typing import Any, Mapping
 
 import numpy as np
 
@@ -117,6 +117,9 @@ class SimulationResult:
         The forces of the constraints at the contact points given to ``simulate``
         (``contacts=``), at the stored states: ``contact_forces.forces[name]`` of shape
         (K, 3); None without contacts.
+    controls : mapping or None
+        The Python callables that gave inputs (``controls=``), kept so that the
+        multipliers at the stored states use the inputs the run used.
     """
 
     t: np.ndarray
@@ -141,6 +144,7 @@ class SimulationResult:
     storage: Storage | None = None
     failed_state: np.ndarray | None = field(default=None, repr=False)
     contact_forces: Any = None
+    controls: Mapping | None = field(default=None, repr=False)
 
     def __repr__(self) -> str:
         # One line: the arrays are in .t, .y (a repr printing them ran to 14 KB).
@@ -189,8 +193,18 @@ class SimulationResult:
 
     @cached_property
     def multipliers(self) -> np.ndarray:
-        """lambda at the stored states, shape (m, K) (continuous-field values)."""
-        return np.atleast_2d(self.model.multipliers(self.states)).T
+        """lambda at the stored states, shape (m, K) (continuous-field values; with
+        time-dependent forces or Python controls each state at its own time and inputs)."""
+        model, controls = self.model, self.controls or {}
+        if model.time_slot is None and not controls:
+            return np.atleast_2d(model.multipliers(self.states)).T
+        rows = []
+        for t, y in zip(self.t, self.states):
+            now = model.at_time(t)
+            if controls:
+                now = now.with_parameters(**{u: float(f(t, y)) for u, f in controls.items()})
+            rows.append(now.multipliers(y))
+        return np.atleast_2d(np.array(rows)).T
 
     def describe(self) -> str:
         """A few human-readable lines: status, cost and diagnostics."""
@@ -429,6 +443,8 @@ def simulate(system_or_model, t_span, y0, *, method: str = "DOP853", rtol: float
     wall = time.perf_counter() - start
     storage = None if method == "reference" else recorder.storage(t_eval is not None)
     result = _result(model, run, method, settings, wall, residual_tol, initial, warn, storage)
+    if callables:
+        result = replace(result, controls=MappingProxyType(dict(callables)))
     if not contacts:
         return result
     from nhham.numerics.contact_forces import contact_forces

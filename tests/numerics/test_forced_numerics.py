@@ -219,3 +219,18 @@ def test_inputs_from_a_python_callable_or_an_expression():
                  controls={"u": lambda t, y: 0.0})
     with pytest.raises(InputError, match="not an input"):
         simulate(system, (0.0, 1.0), {"x": 1.0, "x_dot": 0.0}, controls={"v": lambda t, y: 0})
+
+
+def test_multipliers_along_a_run_use_each_state_s_time_and_inputs():
+    """A particle in the plane with x' = y' (one constraint, λ = (Q_x - Q_y)/2 for unit
+    masses): with Q_x = sin t, or a callable input u(t, y) = t as Q_x, λ(t) = sin(t)/2 or
+    t/2 at every stored state."""
+    base = dict(coordinates=["x", "y"], lagrangian="(x_dot**2 + y_dot**2)/2",
+                constraints=["x_dot - y_dot"])
+    timed = nhham.System(**base, forces={"x": "sin(t)"})
+    run = simulate(timed, (0.0, 2.0), {"x": 0, "y": 0, "x_dot": 0, "y_dot": 0}, rtol=1e-10)
+    np.testing.assert_allclose(run.multipliers[0], np.sin(run.t) / 2, atol=1e-12)
+    driven = nhham.System(**base, forces={"x": "u"}, inputs=["u"])
+    run = simulate(driven, (0.0, 2.0), {"x": 0, "y": 0, "x_dot": 0, "y_dot": 0}, rtol=1e-10,
+                   controls={"u": lambda t, y: t})
+    np.testing.assert_allclose(run.multipliers[0], run.t / 2, atol=1e-12)
