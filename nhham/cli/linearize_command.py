@@ -117,7 +117,8 @@ def linearize_scene(scene, method: str = "auto", sweep=None, model=None):
 
     if scene.steady is None:
         raise InputError(f"{scene.source}: linearize needs a [steady] table with a value (or an "
-                         f"expression in the parameters) for every coordinate and velocity")
+                         f"expression in the parameters) for every coordinate and velocity",
+                         key="steady")
     if method not in ("auto", "exact", "complex-step"):
         raise InputError(f"linearize: unknown method {method!r}")
     model = numeric_model(scene.system) if model is None else model

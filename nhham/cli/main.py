@@ -559,11 +559,15 @@ def _closed_loop(scene, args):
     """The scene's system with its inputs given by the [control] laws and ``--control``
     (the command line's replace the scene's)."""
     laws = dict(scene.control)
+    given: set = set()
     for item in getattr(args, "control", None) or []:
         name, sep, expr = item.partition("=")
         if not sep or not name.strip() or not expr.strip():
             raise UsageError(f"--control {item!r}: expected U=EXPR (an input and its law)",
                              key="--control")
+        if name.strip() in given:
+            raise UsageError(f"--control: {name.strip()} is given twice", key="--control")
+        given.add(name.strip())
         laws[name.strip()] = expr.strip()
     if not laws:
         return scene.system

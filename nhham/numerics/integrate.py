@@ -522,10 +522,10 @@ def _check_options(method, step, projection, baumgarte, model):
     if model.forced and method in ("rattle", "rattle4"):
         raise InputError(f"method: {method!r} is a structure-preserving scheme for "
                          f"conservative systems; this system has forces (choose an adaptive "
-                         f"method such as DOP853)")
+                         f"method such as DOP853)", key="method")
     if model.time_slot is not None and (method in FIXED_STEP_METHODS or method == "reference"):
         raise InputError(f"method: {method!r} does not take time-dependent forces (t in the "
-                         f"forces); choose an adaptive method such as DOP853")
+                         f"forces); choose an adaptive method such as DOP853", key="method")
     unset = model.unset_inputs()
     if unset:
         raise InputError(f"inputs: no value for {', '.join(unset)} (give a control law, "

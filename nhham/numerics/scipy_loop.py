@@ -19,7 +19,7 @@ import numpy as np
 from scipy.integrate import BDF, DOP853, LSODA, RK23, RK45, OdeSolution, Radau
 from scipy.optimize import brentq
 
-from nhham.errors import ComputationError
+from nhham.errors import ComputationError, InputError
 from nhham.numerics.run import Run, report_progress
 from nhham.numerics.status import NumericalFailure, Status
 
@@ -67,6 +67,17 @@ def eval_failure(status, t, y) -> NumericalFailure:
                                     f"{float(np.max(np.abs(y))):.3g})", state=y)
 
 
+def _control_value(name, f, t, y) -> float:
+    """f(t, y) as a float, or an InputError naming the control and what went wrong."""
+    try:
+        value = float(f(t, y))
+    except Exception as exc:  # a user's callable: any failure is its own
+        raise InputError(f"controls.{name}: f(t, y) (t a float, y the state of shape "
+                         f"(2n,)) must give a number; at t = {t:.6g} it raised "
+                         f"{type(exc).__name__}: {exc}", key="controls") from None
+    return value
+
+
 def _make_fun(model, baumgarte, counter, controls=None):
     """scipy's fun(t, z); ``controls``: ``{input: f(t, y)}`` set at every evaluation."""
     n2 = 2 * model.n
@@ -77,7 +88,8 @@ def _make_fun(model, baumgarte, counter, controls=None):
         """The model at time t with the controls' input values at (t, y)."""
         now = model.at_time(t)
         if controls:
-            now = now.with_parameters(**{u: float(f(t, y)) for u, f in controls.items()})
+            now = now.with_parameters(**{u: _control_value(u, f, t, y)
+                                         for u, f in controls.items()})
         return now
 
     def fun(t, z):

@@ -279,9 +279,11 @@ def work_precision(system_or_model, y0, t_span, *, methods=None, tolerances=DEFA
                     too_slow = f"{label} {text} took {row.wall_time_s:.3g} s"
     finite = [r.error for r in rows if r.status == 0 and r.error > 0]
     if finite and ref_error * 100 > min(finite):
+        advice = ("the forces depend on time: the reference is float64 DOP853, read the "
+                  "smallest errors as its own" if model.time_slot is not None else
+                  "raise reference_digits" + (" (leave out --quick)" if quick else ""))
         warnings.warn(f"the reference error estimate {ref_error:.1e} is not 100 times "
-                      f"below the smallest error {min(finite):.1e}; raise reference_digits"
-                      + (" (leave out --quick)" if quick else ""), NumericsWarning,
+                      f"below the smallest error {min(finite):.1e}; {advice}", NumericsWarning,
                       stacklevel=2)
     return WorkPrecisionResult(tuple(rows), model.name, (t0, t1), digits, ref_error, ref_time,
                                model.backend, ref_text, tuple(skipped), forced=model.forced)

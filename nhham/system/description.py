@@ -176,6 +176,7 @@ class System:
         if uses_time or ins:
             params = params + ins + ((TIME,) if uses_time else ())
 
+        before = len(problems)
         lag = _to_expr(lagrangian, table, "lagrangian", problems)
         cons = tuple(
             _to_expr(c, table, f"constraints[{i}]", problems) for i, c in enumerate(constraints)
@@ -183,6 +184,7 @@ class System:
         hols = tuple(
             _to_expr(g, table, f"holonomic[{i}]", problems) for i, g in enumerate(holonomic)
         )
+        problems[before:] = [_input_hint(p, ins) for p in problems[before:]]
         if problems:
             raise ValidationError(problems)
 
@@ -545,7 +547,8 @@ def _forces(forces, dissipation, coords, vels, table, inputs, problems):
     if not given and dissipation is None:
         return (sp.S.Zero,) * n, sp.S.Zero, False
     if "t" in table:
-        problems.append(f"forces: the name t is the time in forces; rename the "
+        where = "forces" if given else "dissipation"
+        problems.append(f"{where}: the name t is the time in {where}; rename the "
                         f"{'coordinate' if sp.Symbol('t') in coords else 'parameter'} t")
         return (sp.S.Zero,) * n, sp.S.Zero, False
     full = dict(table, t=TIME, **{u.name: u for u in inputs})
@@ -567,6 +570,14 @@ def _forces(forces, dissipation, coords, vels, table, inputs, problems):
                                                        problems)
     uses_time = any(TIME in e.free_symbols for e in out + [R])
     return tuple(out), R, uses_time
+
+
+def _input_hint(problem: str, inputs) -> str:
+    """A problem about an unknown name that is an input, with what inputs are for."""
+    if any(f"unknown name '{u.name}'" in problem for u in inputs):
+        return (problem + " (an input may appear in the forces and the dissipation only, "
+                "not in L or the constraints)")
+    return problem
 
 
 def _keyed(entries: Mapping, allowed: Mapping, section: str, refusal: str, table,

@@ -664,8 +664,10 @@ def _parse_expressions(spec: _Spec) -> dict:
         try:
             parsed[path] = parse_expression(text, table, where=path)
         except ParseError as exc:
-            problems.append(str(exc) + _declare_hint(getattr(exc, "unknown_name", None)))
-    timed = dict(table, t=TIME, **{u: sp.Symbol(u) for u in spec.inputs})
+            problems.append(str(exc) + _declare_hint(getattr(exc, "unknown_name", None),
+                                                     spec.inputs))
+    # an input named t is refused by System ("already the time"), not here
+    timed = {**table, **{u: sp.Symbol(u) for u in spec.inputs}, "t": TIME}
     for name, text in (spec.control or {}).items():
         try:
             law = parse_expression(text, dict(table, t=TIME), where=f"control.{name}")
@@ -703,10 +705,13 @@ def _parse_expressions(spec: _Spec) -> dict:
     return parsed
 
 
-def _declare_hint(name: str | None) -> str:
+def _declare_hint(name: str | None, inputs=()) -> str:
     """Where an unknown name of a scene expression would be declared."""
     if name is None:
         return ""
+    if name in inputs:
+        return (" (an input may appear in the forces and the dissipation only, not in L or "
+                "the constraints)")
     if name == "t":
         return (" (systems are autonomous: L and the constraints may not depend on time t, "
                 "a force may (forces = {...}); if t is a parameter, add it to parameters)")

@@ -80,7 +80,8 @@ def parametric_classification(system, *, positive: Sequence = (),
         On a ``positive`` name that is not a parameter of the system, or a bad
         ``max_depth``/``near``.
     """
-    params = tuple(system.parameters)
+    # the inputs and t are not split into cases: a verdict holds for generic inputs
+    params = tuple(system.declared_parameters)
     declared = _declared_positive(system, positive)
     check_options("parametric_classification", near=near, max_depth=max_depth, points=points)
     policy = policy_of(policy, "parametric_classification", precision=precision, seed=seed)
@@ -98,7 +99,7 @@ def parametric_classification(system, *, positive: Sequence = (),
             if why:
                 dropped.append((full, why))
                 continue
-            for branch in branches(comp.equations, tuple(sysm.parameters), signs):
+            for branch in branches(comp.equations, tuple(sysm.declared_parameters), signs):
                 total = compose(sub, branch)
                 why = _bad_substitution(total, signs)
                 if why:
@@ -155,7 +156,7 @@ def _distance_to_zero(expr, at, syms) -> float:
 
 
 def _declared_positive(system, positive) -> list:
-    by_name = {p.name: p for p in system.parameters}
+    by_name = {p.name: p for p in system.declared_parameters}
     out, bad = [], []
     for item in positive:
         name = item.name if isinstance(item, sp.Symbol) else str(item)
@@ -168,7 +169,7 @@ def _declared_positive(system, positive) -> list:
                          f"{'is not a parameter' if len(bad) == 1 else 'are not parameters'} "
                          f"of the system (parameters: "
                          f"{', '.join(sorted(by_name)) or 'none'})")
-    for p in system.parameters:
+    for p in system.declared_parameters:
         if p.is_positive and p not in out:
             out.append(p)
     return out

@@ -66,13 +66,16 @@ def rebuild(system, sub, values):
 
     ``values`` gives the remaining parameters their values (None: all symbolic).
     """
-    remaining = [p for p in system.parameters if p not in sub]
+    remaining = [p for p in system.declared_parameters if p not in sub]
     params = {p.name: (values.get(p) if values else None) for p in remaining}
     x = (lambda e: sp.sympify(e).xreplace(sub)) if sub else sp.sympify
     try:
+        # the forces, substituted as L is (the inputs and t stay what they are)
         return System(system.coordinates, x(system.lagrangian),
                       [x(c) for c in system.constraints], [x(g) for g in system.holonomic],
-                      parameters=params, name=system.name, drop_redundant=True)
+                      parameters=params, name=system.name, drop_redundant=True,
+                      forces=[x(f) for f in system.forces], dissipation=x(system.dissipation),
+                      inputs=[u for u in system.inputs if u not in sub])
     except SingularLagrangianError:
         why = "the Lagrangian is singular (det W = 0): outside nhham's scope"
     except NhhamError as exc:

@@ -67,3 +67,10 @@ def test_a_secondary_constraint_on_an_input_exits_2(capsys, tmp_path):
     status, _, err = run(capsys, "classify", scene)
     assert status == 2 and "secondary[0]" in err and "depends on u" in err
     assert len(err.strip().splitlines()) == 1
+
+
+def test_a_control_given_twice_exits_2(capsys):
+    status, out, _ = run(capsys, "simulate", DRIVE, "--control", "tauL=1", "--control",
+                         "tauL=2", "--json")
+    error = json.loads(out)["error"]
+    assert status == 2 and "tauL is given twice" in error["message"]

@@ -234,3 +234,9 @@ def test_multipliers_along_a_run_use_each_state_s_time_and_inputs():
     run = simulate(driven, (0.0, 2.0), {"x": 0, "y": 0, "x_dot": 0, "y_dot": 0}, rtol=1e-10,
                    controls={"u": lambda t, y: t})
     np.testing.assert_allclose(run.multipliers[0], run.t / 2, atol=1e-12)
+
+
+def test_a_failing_control_callable_is_named():
+    with pytest.raises(InputError, match=r"controls.u: f\(t, y\).*TypeError"):
+        simulate(driven_oscillator(), (0.0, 1.0), {"x": 1.0, "x_dot": 0.0},
+                 controls={"u": lambda t: t})

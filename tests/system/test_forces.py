@@ -96,3 +96,15 @@ def test_scene_errors_name_the_key(change, message):
     with pytest.raises((SceneError, ValidationError)) as err:
         loads_scene(text)
     assert message in str(err.value)
+
+
+def test_an_input_named_t_is_refused_in_a_scene_too():
+    with pytest.raises(ValidationError, match=r"inputs\[0\]: 't' is already the time"):
+        loads_scene('coordinates = ["x"]\nlagrangian = "x_dot**2/2"\ninputs = ["t"]\n'
+                    'forces = { x = "t" }\n')
+
+
+def test_an_input_in_the_lagrangian_is_explained():
+    with pytest.raises(ValidationError, match=r"lagrangian: unknown name 'u' \(an input may "
+                                              r"appear in the forces"):
+        nhham.System(["x"], "x_dot**2/2 + u*x", inputs=["u"], forces={"x": "u"})
