@@ -52,6 +52,18 @@ def bicycle():
 
 
 @pytest.fixture(scope="session")
+def benchmark_bicycle():
+    """(scene, numeric model) of examples/whipple_bicycle_benchmark.toml (the bicycle in
+    the 25 parameters of Meijaard et al. 2007), built once."""
+    from nhham.numerics.codegen import numeric_model
+    from nhham.system.scene import load_scene
+
+    scene = load_scene(Path(__file__).resolve().parents[1] / "examples"
+                       / "whipple_bicycle_benchmark.toml")
+    return scene, numeric_model(scene.system)
+
+
+@pytest.fixture(scope="session")
 def sleigh():
     """The numeric model of the Chaplygin sleigh of tests/numerics/test_exact_solutions.py
     (its closed form there), for the tests of simulate, its loops and drivers."""

@@ -98,6 +98,11 @@ class CompiledRHS:
         self._rhs, self._rhs_batch = lib.nhham_rhs, lib.nhham_rhs_batch
         self._closed = getattr(lib, "nhham_closed", None)
         self._closed_batch = getattr(lib, "nhham_closed_batch", None)
+        self._complex = {name: getattr(lib, f"nhham_{name}_cx_batch", None)
+                         for name in ("saddle", "geometry")}
+        n, m, k = layout["n"], layout["m"], layout["k"]
+        self._complex_width = {"saddle": n * n + n + m * n + 3 * m + k + int(layout["forced"]),
+                               "geometry": n * n + m * n + m + k}
         self._local = threading.local()
         lib.nhham_rattle.restype = ctypes.c_int
         lib.nhham_erk.restype = ctypes.c_int
@@ -117,6 +122,34 @@ class CompiledRHS:
 
     def has_closed(self) -> bool:
         return self._closed is not None
+
+    def has_complex(self) -> bool:
+        """Whether the complex-step kernels were generated (every function of the system
+        has a complex continuation)."""
+        return self._complex["saddle"] is not None
+
+    def complex_batch(self, name, Y, P):
+        """The ``saddle`` or ``geometry`` kernel at k complex states.
+
+        Parameters
+        ----------
+        Y : ndarray of complex, shape (k, 2n) (``saddle``) or (k, n) (``geometry``)
+        P : ndarray of float, shape (k, parameters) or (parameters,) (the same for all)
+
+        Returns
+        -------
+        ndarray of complex, shape (k, outputs): the outputs in the layout of the real
+        kernel.
+        """
+        Y = np.ascontiguousarray(Y, dtype=complex)
+        P = np.ascontiguousarray(P, dtype=float)
+        k = Y.shape[0]
+        OUT = np.empty((k, self._complex_width[name]), dtype=complex)
+        c = ctypes
+        self._complex[name](c.c_long(k), c.c_void_p(Y.ctypes.data), c.c_long(Y.shape[1]),
+                            c.c_void_p(P.ctypes.data), c.c_long(P.shape[-1] if P.ndim == 2 else 0),
+                            c.c_void_p(OUT.ctypes.data))
+        return OUT
 
     def _scratch(self):
         s = getattr(self._local, "s", None)

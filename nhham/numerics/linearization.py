@@ -44,6 +44,8 @@ from typing import Mapping, Sequence
 import numpy as np
 
 from nhham.errors import ComputationError, InconsistentInitialDataError, InputError
+from nhham.numerics.chart import (ComplexField, chart_jacobian, chart_jacobians, choose_chart,
+                                  input_jacobians)
 
 __all__ = ["Linearization", "linearize", "linearize_many", "linearization_result", "STEP",
            "ON_TOLERANCE"]
@@ -56,12 +58,6 @@ STEP = 1e-30
 
 #: Relative tolerance for "on M_1" and "steady" (residual / natural size).
 ON_TOLERANCE = 1e-9
-
-# States per batch of the generated numpy kernel: large enough to spread one call's
-# overhead over many states, small enough to bound its temporaries (10^4 states of the
-# bicycle in one batch: 28 s for the whole sweep, a third of it in page faults; in
-# batches of 16, 32, 64, 128, 256: 17.4, 17.7, 17.6, 16.1, 15.5 s).
-BATCH_STATES = 256
 
 # A Jacobian column is zero (a neutral direction) below this, relative to max |J|.
 _NEUTRAL_TOL = 1e-10
@@ -220,157 +216,6 @@ def _sorted(ev):
     return ev[order]
 
 
-# ------------------------------------------------------------------ kernels
-class _ComplexField:
-    """The constrained field on complex states, through the generated numpy kernel."""
-
-    def __init__(self, model):
-        self.n, self.m, self.k = model.n, model.m, model.k
-        try:
-            self._batch = model.kernels.functions["saddle"][1]
-            self._geometry_batch = model.kernels.functions["geometry"][1]
-        except (AttributeError, KeyError, IndexError, TypeError):  # pragma: no cover
-            raise ComputationError("linearize: the numeric model has no numpy saddle kernel "
-                                   "for complex-step differentiation") from None
-        self._p = [float(x) for x in model.parameter_values]
-        n, m, k = self.n, self.m, self.k
-        self.size = n * n + n + m * n + 3 * m + k + int(model.forced)
-
-    def pieces(self, Q, V, p=None):
-        """W, F, mu, drift, h, g at complex states (rows of Q, V: shape (K, n)); ``p``:
-        the parameter values, one number each or one array of K values each (a row's
-        own parameters)."""
-        n, m, k = self.n, self.m, self.k
-        Y = np.ascontiguousarray(np.concatenate([Q, V], axis=1).T.astype(complex))
-        out = np.zeros((self.size, Y.shape[1]), dtype=complex)
-        with np.errstate(all="ignore"):
-            self._batch(Y, self._p if p is None else p, out)
-        out = out.T
-        K = out.shape[0]
-        i = 0
-        W = out[:, i:i + n * n].reshape(K, n, n); i += n * n
-        F = out[:, i:i + n]; i += n
-        mu = out[:, i:i + m * n].reshape(K, m, n); i += m * n
-        drift = out[:, i:i + m]; i += m
-        h = out[:, i:i + m]; i += m
-        g = out[:, i:i + k]
-        return W, F, mu, drift, h, g
-
-    def geometry(self, Q, p=None):
-        """mu, h, g at complex coordinates (rows of Q: shape (K, n)): the kernel of the
-        coordinates only (no F, no drift), for lifting points onto M_1."""
-        n, m, k = self.n, self.m, self.k
-        Y = np.ascontiguousarray(Q.T.astype(complex))
-        out = np.zeros((n * n + m * n + m + k, Y.shape[1]), dtype=complex)
-        with np.errstate(all="ignore"):
-            self._geometry_batch(Y, self._p if p is None else p, out)
-        out = out.T
-        i = n * n
-        mu = out[:, i:i + m * n].reshape(out.shape[0], m, n); i += m * n
-        h = out[:, i:i + m]; i += m
-        return mu, h, out[:, i:i + k]
-
-    def accelerations(self, Q, V, p=None):
-        W, F, mu, drift, _, _ = self.pieces(Q, V, p)
-        n, m = self.n, self.m
-        K = np.zeros((Q.shape[0], n + m, n + m), dtype=complex)
-        K[:, :n, :n] = W
-        K[:, :n, n:] = np.swapaxes(mu, 1, 2)
-        K[:, n:, :n] = mu
-        rhs = np.concatenate([F, -drift], axis=1)
-        try:
-            sol = np.linalg.solve(K, rhs[..., None])[..., 0]
-        except np.linalg.LinAlgError:
-            raise ComputationError("linearize: the saddle-point matrix [[W, mu^T], [mu, 0]] is "
-                                   "singular at the state (C singular: M_f is not M_1 here)") from None
-        return sol[:, :n]
-
-
-@dataclass(frozen=True)
-class _Chart:
-    iq: tuple   # independent coordinate indices
-    dq: tuple   # dependent coordinate indices
-    iv: tuple   # independent velocity indices
-    dv: tuple   # dependent velocity indices
-
-
-def _greedy_columns(M, count, order, tol=1e-8):
-    """``count`` columns of M (tried in ``order``) that are independent."""
-    chosen = []
-    scale = max(1.0, float(np.abs(M).max(initial=0.0)))
-    for j in order:
-        trial = chosen + [j]
-        s = np.linalg.svd(M[:, trial], compute_uv=False)
-        if s.size and s[-1] > tol * scale:
-            chosen.append(j)
-        if len(chosen) == count:
-            break
-    return chosen
-
-
-def _choose_chart(model, y0, independent) -> _Chart:
-    n, m, k = model.n, model.m, model.k
-    names = model.names
-    _, mu, _, _ = model.geometry(y0)
-    G = mu[:k]  # rows of the complete lifts: dg/dq
-    if independent is not None:
-        unknown = [s for s in independent if s not in names]
-        if unknown:
-            raise InputError(f"linearize: independent: unknown name(s) {', '.join(unknown)} "
-                             f"(state names: {', '.join(names)})")
-        iq = [i for i in range(n) if names[i] in independent]
-        iv = [i for i in range(n) if names[n + i] in independent]
-        dq = [i for i in range(n) if i not in iq]
-        dv = [i for i in range(n) if i not in iv]
-        if len(dq) != k or len(dv) != m:
-            raise InputError(f"linearize: independent: need {n - k} coordinates and {n - m} "
-                             f"velocities, got {len(iq)} and {len(iv)}")
-        if k and np.linalg.matrix_rank(G[:, dq]) < k or m and np.linalg.matrix_rank(mu[:, dv]) < m:
-            raise InputError("linearize: independent: the constraints cannot be solved for the "
-                             "other coordinates or velocities at this state")
-        return _Chart(tuple(iq), tuple(dq), tuple(iv), tuple(dv))
-    dq = _greedy_columns(G, k, range(n)) if k else []
-    if len(dq) < k:
-        raise ComputationError("linearize: the holonomic constraints are singular at the state")
-    order = list(dq) + [i for i in range(n) if i not in dq]
-    dv = _greedy_columns(mu, m, order) if m else []
-    if len(dv) < m:
-        raise ComputationError("linearize: the constraint one-forms are dependent at the state")
-    iq = [i for i in range(n) if i not in dq]
-    iv = [i for i in range(n) if i not in dv]
-    return _Chart(tuple(iq), tuple(sorted(dq)), tuple(iv), tuple(sorted(dv)))
-
-
-def _reduced_field(cf, chart, q0, X, p=None):
-    """F(x) for chart points X (K, d) complex, lifted onto M_1; q0: the coordinates the
-    dependent ones start from, (n,) or one row per point (K, n); p: as for
-    :meth:`_ComplexField.pieces`."""
-    n = cf.n
-    K = X.shape[0]
-    iq, dq, iv, dv = (list(a) for a in (chart.iq, chart.dq, chart.iv, chart.dv))
-    Q = np.array(np.broadcast_to(q0, (K, n)), dtype=complex)
-    Q[:, iq] = X[:, :len(iq)]
-    V = np.zeros((K, n), dtype=complex)
-    V[:, iv] = X[:, len(iq):]
-    if dq:
-        for _ in range(30):
-            mu, _, g = cf.geometry(Q, p)
-            G = mu[:, :cf.k, :][:, :, dq]
-            step = np.linalg.solve(G, g[..., None])[..., 0]
-            Q[:, dq] -= step
-            if np.abs(step).max() <= 1e-15 * max(1.0, np.abs(Q[:, dq].real).max()):
-                break
-        else:
-            raise ComputationError("linearize: Newton iteration for the dependent coordinates "
-                                   "did not converge")
-    if dv:
-        mu, h, _ = cf.geometry(Q, p)
-        rhs = -(np.einsum("kij,kj->ki", mu[:, :, iv], V[:, iv]) + h)
-        V[:, dv] = np.linalg.solve(mu[:, :, dv], rhs[..., None])[..., 0]
-    a = cf.accelerations(Q, V, p)
-    return np.concatenate([V[:, iq], a[:, iv]], axis=1)
-
-
 # ------------------------------------------------------------------ public
 def linearize(model, state, *, independent: Sequence[str] | None = None,
               neutral: bool | Sequence[str] = True, step: float = STEP,
@@ -417,12 +262,12 @@ def linearize(model, state, *, independent: Sequence[str] | None = None,
     y0 = model.state(state)
     _check_inputs(model)
     residuals, worst = _check_steady(model, y0)
-    chart = _choose_chart(model, y0, independent)
-    cf = _ComplexField(model)
-    J = _chart_jacobian(cf, chart, y0, step)
-    B = _input_jacobians(cf, chart, y0[None, :], step, model)[0]
+    chart = choose_chart(model, y0, independent)
+    cf = ComplexField(model)
+    J = chart_jacobian(cf, chart, y0, step)
+    B = input_jacobians(cf, chart, y0[None, :], step, model)[0]
     moved = _moved_along(y0, model.n)
-    return _from_jacobian(model, y0, chart, J, lambda: _chart_jacobian(cf, chart, moved, step),
+    return _from_jacobian(model, y0, chart, J, lambda: chart_jacobian(cf, chart, moved, step),
                           neutral, family, step, residuals, worst, B)
 
 
@@ -457,23 +302,23 @@ def linearize_many(models: Sequence, states: Sequence, independent: Sequence[str
     _check_inputs(models[0])
     Y = np.array([m.state(s) for m, s in zip(models, states)])
     checks = [_check_steady(m, y) for m, y in zip(models, Y)]
-    charts = {_choose_chart(m, y, independent) for m, y in zip(models, Y)}
+    charts = {choose_chart(m, y, independent) for m, y in zip(models, Y)}
     if len(charts) != 1:  # pragma: no cover - the names fix the chart
         raise ComputationError("linearize: the chart differs between the states")
     (chart,) = charts
-    cf = _ComplexField(models[0])
+    cf = ComplexField(models[0])
     P = np.array([m.parameter_values for m in models], dtype=float).T
-    J = _chart_jacobians(cf, chart, Y, step, P)
+    J = chart_jacobians(cf, chart, Y, step, P)
     n = models[0].n
     moved = [_moved_along(y, n) for y in Y]
     at = [i for i, y in enumerate(moved) if y is not None]
     J1: list = [None] * len(models)
     if at:
-        for i, Ji in zip(at, _chart_jacobians(cf, chart, np.array([moved[i] for i in at]),
+        for i, Ji in zip(at, chart_jacobians(cf, chart, np.array([moved[i] for i in at]),
                                                step, P[:, at])):
             J1[i] = Ji
     families = families or [None] * len(models)
-    B = _input_jacobians(cf, chart, Y, step, models[0], P)
+    B = input_jacobians(cf, chart, Y, step, models[0], P)
     return [_from_jacobian(m, y, chart, Ji, lambda J1i=J1i: J1i, neutral, fam, step, res, worst,
                            Bi)
             for m, y, Ji, J1i, fam, (res, worst), Bi
@@ -490,26 +335,6 @@ def _check_inputs(model):
         raise InputError("linearize: the forces depend on time t; a steady motion needs "
                          "autonomous forces (give the inputs constant values instead)",
                          key="forces")
-
-
-def _input_jacobians(cf, chart, Y, step, model, P=None):
-    """B at each state of Y (N, 2n): the complex-step derivative of the chart's field in
-    each input's parameter slot, shape (N, d, r)."""
-    names = model.parameter_names
-    slots = [names.index(u) for u in model.input_names]
-    n, N, r = cf.n, Y.shape[0], len(slots)
-    d = len(chart.iq) + len(chart.iv)
-    if not r:
-        return np.zeros((N, d, 0))
-    P = np.array([model.parameter_values] * N, dtype=float).T if P is None else np.asarray(P)
-    cols = list(chart.iq) + [n + i for i in chart.iv]
-    X = np.repeat(Y[:, cols].astype(complex), r, axis=0)
-    p = [np.repeat(v.astype(complex), r) for v in P]
-    for j, slot in enumerate(slots):
-        p[slot] = p[slot].copy()
-        p[slot][j::r] += 1j * step
-    F = _reduced_field(cf, chart, np.repeat(Y[:, :n], r, axis=0), X, p)
-    return np.swapaxes(F.imag.reshape(N, r, d), 1, 2) / step
 
 
 def _check_steady(model, y0):
@@ -557,36 +382,13 @@ def _from_jacobian(model, y0, chart, J, moved_jacobian, neutral, family, step, r
     Bk = None if B is None else B[keep, :]
     kept_names = [chart_names[i] for i in keep]
     if family and neutral is not False:
-        A, kept_names, extra, Bk = _divide_family(A, kept_names, family, Bk)
+        A, kept_names, extra, Bk = divide_family(A, kept_names, family, Bk)
         removed = tuple(removed) + tuple(extra)
     return linearization_result(A, tuple(kept_names), "complex-step",
                    f"float64, complex-step Jacobian (step {step:g}i, exact to rounding), "
                    f"LAPACK eigenvalues", chart_names, J, removed, dependent,
                    dict(zip(names, map(float, y0))), residuals, worst,
                    inputs=model.input_names, B=Bk)
-
-
-def _chart_jacobian(cf, chart, y, step):
-    """The complex-step Jacobian of the chart's field at the state y."""
-    return _chart_jacobians(cf, chart, y[None, :], step)[0]
-
-
-def _chart_jacobians(cf, chart, Y, step, P=None):
-    """The complex-step Jacobians of the chart's field at the states Y (N, 2n), in
-    batches of up to BATCH_STATES states (d points each); P: each parameter's N values
-    (None: the model's)."""
-    if Y.shape[0] > BATCH_STATES:
-        return np.concatenate([
-            _chart_jacobians(cf, chart, Y[i:i + BATCH_STATES], step,
-                             None if P is None else P[:, i:i + BATCH_STATES])
-            for i in range(0, Y.shape[0], BATCH_STATES)])
-    n, N = cf.n, Y.shape[0]
-    cols = list(chart.iq) + [n + i for i in chart.iv]
-    d = len(cols)
-    X = np.repeat(Y[:, cols].astype(complex), d, axis=0) + 1j * step * np.tile(np.eye(d), (N, 1))
-    p = None if P is None else [np.repeat(np.asarray(v, dtype=float), d) for v in P]
-    F = _reduced_field(cf, chart, np.repeat(Y[:, :n], d, axis=0), X, p)
-    return np.swapaxes(F.imag.reshape(N, d, d), 1, 2) / step
 
 
 def _moved_along(y0, n):
@@ -615,7 +417,7 @@ def _check_on_manifold(model, y0) -> dict:
     return {nm: float(r) for nm, r in zip(names, res)}
 
 
-def _divide_family(A, names, family, B=None):
+def divide_family(A, names, family, B=None):
     """Divide out the tangents of the steady family that A maps to zero (and change B's
     basis with A's)."""
     removed = []

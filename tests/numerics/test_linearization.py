@@ -22,7 +22,8 @@ from scipy.optimize import brentq
 
 from nhham import InconsistentInitialDataError
 from nhham.numerics.codegen import numeric_model
-from nhham.numerics.linearization import BATCH_STATES, linearize, linearize_many
+from nhham.numerics.chart import BATCH_STATES
+from nhham.numerics.linearization import linearize, linearize_many
 from nhham.numerics.steady_sweep import sweep_steady
 from nhham.system.models import chaplygin_sleigh, pendulum_cartesian
 

@@ -37,7 +37,7 @@ from nhham.numerics.kernels import CompiledRHS
 __all__ = ["c_compiler", "compile_c", "build_library", "find_library", "load_library",
            "pyext_flags", "Compilation", "LibraryBuild", "CompilerStopped"]
 
-_FLAGS = ("-O2", "-fno-math-errno", "-shared", "-fPIC", "-std=c99")
+_FLAGS = ("-O2", "-fno-math-errno", "-fcx-limited-range", "-shared", "-fPIC", "-std=c99")
 _TIMEOUT_S = 300
 
 

@@ -170,6 +170,7 @@ def _generate(system, path: str) -> dict:
         "forced": system.has_forces,
         "input_names": tuple(u.name for u in system.inputs),
         "time_slot": slot,
+        "complex_kernels": _complex_safe([printed["saddle"], printed["geometry"]]),
     }
     return {"python": python, "c": c, "layout": layout}
 
@@ -376,6 +377,106 @@ def _c_kernel(fname, printed, n, npar, with_v=True):
     return body
 
 
+class _ComplexCPrinter(_CPrinter):
+    """C99 on ``double complex`` values: the complex functions of ``<complex.h>``, and the
+    first-order continuations of |x| and atan2 (exact for the complex step, where the
+    imaginary part is a derivative times a step of 1e-30)."""
+
+    _functions = {"sin": "csin", "cos": "ccos", "tan": "ctan", "asin": "casin",
+                  "acos": "cacos", "atan": "catan", "exp": "cexp", "log": "clog",
+                  "sinh": "csinh", "cosh": "ccosh", "tanh": "ctanh", "asinh": "casinh",
+                  "acosh": "cacosh", "atanh": "catanh", "sqrt": "csqrt",
+                  "Abs": "nh_cabs", "atan2": "nh_catan2"}
+
+    def __init__(self):
+        super().__init__({"user_functions": dict(self._functions)})
+
+    def _print_Pow(self, expr):
+        b, e = expr.as_base_exp()
+        if e.is_Integer and (2 <= int(e) <= 4 or -4 <= int(e) <= -1):
+            return super()._print_Pow(expr)
+        base = self._print(b)
+        if e == sp.S.Half:
+            return f"csqrt({base})"
+        if e == -sp.S.Half:
+            return f"(1.0/csqrt({base}))"
+        return f"cpow({base}, {self._print(e)})"
+
+
+#: Functions a complex-step kernel can evaluate (the others have no analytic
+#: continuation there: the kernel is then not generated and numpy is used).
+_COMPLEX_SAFE = frozenset(_ComplexCPrinter._functions) | {"Pow", "Mul", "Add"}
+
+
+def _complex_safe(printed) -> bool:
+    """Whether every expression of the kernels uses only :data:`_COMPLEX_SAFE` functions."""
+    for temps, reduced in printed:
+        for e in [x for _, x in temps] + list(reduced):
+            for f in sp.sympify(e).atoms(sp.Function):
+                if type(f).__name__ not in _COMPLEX_SAFE:
+                    return False
+            if sp.sympify(e).has(sp.Piecewise, sp.core.relational.Relational):
+                return False
+    return True
+
+
+def _c_complex_kernel(fname, printed, n, npar, with_v=True):
+    """A kernel on ``double complex`` states and parameters (the complex step of
+    :mod:`nhham.numerics.chart`)."""
+    temps, reduced = printed
+    pr = _ComplexCPrinter()
+    cx = "double complex"
+    # Real parameters: most products have a parameter factor, and double * complex
+    # costs half of complex * complex (a study moves parameters, never differentiates in
+    # them here; the input matrix B differentiates in the inputs with numpy).
+    body = [f"static void {fname}(const {cx} *y, const double *p, {cx} *out) {{"]
+    body += [f"    const double p{i} = p[{i}]; (void)p{i};" for i in range(npar)]
+    body += [f"    const {cx} q{i} = y[{i}]; (void)q{i};" for i in range(n)]
+    if with_v:
+        body += [f"    const {cx} v{i} = y[{n + i}]; (void)v{i};" for i in range(n)]
+    body += [f"    const {cx} {sym} = {pr.doprint(expr)};" for sym, expr in temps]
+    body += [f"    out[{j}] = {pr.doprint(e)};" for j, e in enumerate(reduced)]
+    body.append("}")
+    return body
+
+
+#: The batch entry points of the complex kernels.
+_COMPLEX_BATCH = """/* Complex-step kernels (nhham.numerics.chart): the saddle and geometry kernels on
+   double complex states (real parameters), k states a call; row i of Y (stride ystride)
+   and of P (stride pstride; 0: the same parameters for every state) gives row i of OUT.
+   Compiled with -fcx-limited-range: products and quotients by the textbook formulas
+   (no recovery of infinities and NaNs, which a complex step never meets). */
+void nhham_saddle_cx_batch(long k, const double complex *Y, long ystride,
+                           const double *P, long pstride, double complex *OUT) {
+    for (long i = 0; i < k; i++) saddle_cx(Y + i * ystride, P + i * pstride, OUT + i * NOUT);
+}
+void nhham_geometry_cx_batch(long k, const double complex *Y, long ystride,
+                             const double *P, long pstride, double complex *OUT) {
+    for (long i = 0; i < k; i++)
+        geometry_cx(Y + i * ystride, P + i * pstride, OUT + i * (NQ * NQ + NC * NQ + NC + NH));
+}
+"""
+
+_COMPLEX_HELPERS = """#include <complex.h>
+static inline double complex nh_cabs(double complex z) { return creal(z) < 0 ? -z : z; }
+static inline double complex nh_catan2(double complex y, double complex x) {
+    double xr = creal(x), yr = creal(y);
+    return atan2(yr, xr) + I * ((xr * cimag(y) - yr * cimag(x)) / (xr * xr + yr * yr));
+}
+"""
+
+
+def _c_complex_section(printed, n, npar) -> list:
+    """The complex kernels and their batch entry points, or nothing when a kernel uses a
+    function without a complex continuation."""
+    if not _complex_safe([printed["saddle"], printed["geometry"]]):
+        return []
+    return ([_COMPLEX_HELPERS]
+            + _c_complex_kernel("saddle_cx", printed["saddle"], n, npar)
+            + _c_complex_kernel("geometry_cx", printed["geometry"], n, npar, with_v=False)
+            + [_COMPLEX_BATCH])
+
+
 def _c_module(printed, n, m, k, npar, path, forced=False, time_slot=None) -> str:
     """The C translation unit: generated definitions and kernels, then the runtime files.
 
@@ -408,6 +509,7 @@ def _c_module(printed, n, m, k, npar, path, forced=False, time_slot=None) -> str
     if path == "closed_form":
         lines += _c_kernel("closed", printed["closed"], n, npar)
     lines += [runtime_source(name) for name in RUNTIME_FILES]
+    lines += _c_complex_section(printed, n, npar)
     lines.append(runtime_source("closed.c" if path == "closed_form" else "pyext.c"))
     return "\n".join(lines) + "\n"
 

@@ -1,0 +1,256 @@
+"""Independent coordinates on M_1 and the complex-step Jacobian of the field in them.
+
+A chart (:class:`Chart`) splits the coordinates and velocities into independent ones and
+dependent ones solved from the constraints (Newton's method for the holonomic ones, a
+linear solve for the velocities). :func:`reduced_field` is the constrained field in the
+chart, evaluated on complex states through the generated kernels
+(:class:`ComplexField`), so that :func:`chart_jacobians` differentiates it by the complex
+step dF/dx_j = Im F(x + i h e_j) / h: exact to rounding. Shared by
+:mod:`nhham.numerics.linearization` (one state) and
+:mod:`nhham.numerics.batch_linearization` (many). No sympy.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from nhham.errors import ComputationError, InputError
+
+__all__ = ["BATCH_STATES", "Chart", "ComplexField", "chart_jacobian", "chart_jacobians",
+           "choose_chart", "greedy_columns", "input_jacobians", "reduced_field"]
+
+# States per batch of the generated numpy kernel: large enough to spread one call's
+# overhead over many states, small enough to bound its temporaries (10^4 states of the
+# bicycle in one batch: 28 s for the whole sweep, a third of it in page faults; in
+# batches of 16, 32, 64, 128, 256: 17.4, 17.7, 17.6, 16.1, 15.5 s).
+BATCH_STATES = 256
+
+
+class ComplexField:
+    """The constrained field on complex states, through the generated kernels: the
+    compiled complex ones when the model has them (:meth:`CompiledRHS.complex_batch`),
+    else the numpy batch kernels on complex arrays (the same expressions)."""
+
+    def __init__(self, model):
+        self.n, self.m, self.k = model.n, model.m, model.k
+        try:
+            self._batch = model.kernels.functions["saddle"][1]
+            self._geometry_batch = model.kernels.functions["geometry"][1]
+        except (AttributeError, KeyError, IndexError, TypeError):  # pragma: no cover
+            raise ComputationError("linearize: the numeric model has no numpy saddle kernel "
+                                   "for complex-step differentiation") from None
+        compiled = model.compiled
+        self._compiled = (compiled if compiled is not None and compiled.has_complex()
+                          else None)
+        self._p = [float(x) for x in model.parameter_values]
+        n, m, k = self.n, self.m, self.k
+        self.size = n * n + n + m * n + 3 * m + k + int(model.forced)
+
+    @property
+    def backend(self) -> str:
+        """``"c"`` (compiled complex kernels) or ``"numpy"``."""
+        return "numpy" if self._compiled is None else "c"
+
+    def _outputs(self, name, Y, p):
+        """The kernel's outputs at the complex rows Y (K, width), shape (K, outputs)."""
+        p = self._p if p is None else p
+        # the compiled kernels take real parameters (B differentiates in the inputs'
+        # parameter slots: complex ones, through numpy)
+        if self._compiled is not None and not any(np.iscomplexobj(v) for v in p):
+            if all(np.ndim(v) == 0 for v in p):
+                P = np.asarray(p, dtype=float)
+            else:
+                P = np.column_stack([np.broadcast_to(np.asarray(v, dtype=float),
+                                                     (Y.shape[0],)) for v in p])
+            with np.errstate(all="ignore"):
+                return self._compiled.complex_batch(name, Y, P)
+        size = self.size if name == "saddle" else self.n * self.n + self.m * self.n + \
+            self.m + self.k
+        YT = np.ascontiguousarray(Y.T.astype(complex))
+        out = np.zeros((size, YT.shape[1]), dtype=complex)
+        with np.errstate(all="ignore"):
+            (self._batch if name == "saddle" else self._geometry_batch)(YT, p, out)
+        return out.T
+
+    def pieces(self, Q, V, p=None):
+        """W, F, mu, drift, h, g at complex states (rows of Q, V: shape (K, n)); ``p``:
+        the parameter values, one number each or one array of K values each (a row's
+        own parameters)."""
+        n, m, k = self.n, self.m, self.k
+        out = self._outputs("saddle", np.concatenate([Q, V], axis=1), p)
+        K = out.shape[0]
+        i = 0
+        W = out[:, i:i + n * n].reshape(K, n, n); i += n * n
+        F = out[:, i:i + n]; i += n
+        mu = out[:, i:i + m * n].reshape(K, m, n); i += m * n
+        drift = out[:, i:i + m]; i += m
+        h = out[:, i:i + m]; i += m
+        g = out[:, i:i + k]
+        return W, F, mu, drift, h, g
+
+    def geometry(self, Q, p=None):
+        """mu, h, g at complex coordinates (rows of Q: shape (K, n)): the kernel of the
+        coordinates only (no F, no drift), for lifting points onto M_1."""
+        n, m, k = self.n, self.m, self.k
+        out = self._outputs("geometry", Q, p)
+        i = n * n
+        mu = out[:, i:i + m * n].reshape(out.shape[0], m, n); i += m * n
+        h = out[:, i:i + m]; i += m
+        return mu, h, out[:, i:i + k]
+
+    def accelerations(self, Q, V, p=None):
+        W, F, mu, drift, _, _ = self.pieces(Q, V, p)
+        n, m = self.n, self.m
+        K = np.zeros((Q.shape[0], n + m, n + m), dtype=complex)
+        K[:, :n, :n] = W
+        K[:, :n, n:] = np.swapaxes(mu, 1, 2)
+        K[:, n:, :n] = mu
+        rhs = np.concatenate([F, -drift], axis=1)
+        try:
+            sol = np.linalg.solve(K, rhs[..., None])[..., 0]
+        except np.linalg.LinAlgError:
+            raise ComputationError("linearize: the saddle-point matrix [[W, mu^T], [mu, 0]] is "
+                                   "singular at the state (C singular: M_f is not M_1 here)") from None
+        return sol[:, :n]
+
+
+@dataclass(frozen=True)
+class Chart:
+    iq: tuple   # independent coordinate indices
+    dq: tuple   # dependent coordinate indices
+    iv: tuple   # independent velocity indices
+    dv: tuple   # dependent velocity indices
+
+
+def greedy_columns(M, count, order, tol=1e-8):
+    """``count`` columns of M (tried in ``order``) that are independent."""
+    chosen = []
+    scale = max(1.0, float(np.abs(M).max(initial=0.0)))
+    for j in order:
+        trial = chosen + [j]
+        s = np.linalg.svd(M[:, trial], compute_uv=False)
+        if s.size and s[-1] > tol * scale:
+            chosen.append(j)
+        if len(chosen) == count:
+            break
+    return chosen
+
+
+def choose_chart(model, y0, independent) -> Chart:
+    n, m, k = model.n, model.m, model.k
+    names = model.names
+    _, mu, _, _ = model.geometry(y0)
+    G = mu[:k]  # rows of the complete lifts: dg/dq
+    if independent is not None:
+        unknown = [s for s in independent if s not in names]
+        if unknown:
+            raise InputError(f"linearize: independent: unknown name(s) {', '.join(unknown)} "
+                             f"(state names: {', '.join(names)})")
+        iq = [i for i in range(n) if names[i] in independent]
+        iv = [i for i in range(n) if names[n + i] in independent]
+        dq = [i for i in range(n) if i not in iq]
+        dv = [i for i in range(n) if i not in iv]
+        if len(dq) != k or len(dv) != m:
+            raise InputError(f"linearize: independent: need {n - k} coordinates and {n - m} "
+                             f"velocities, got {len(iq)} and {len(iv)}")
+        if k and np.linalg.matrix_rank(G[:, dq]) < k or m and np.linalg.matrix_rank(mu[:, dv]) < m:
+            raise InputError("linearize: independent: the constraints cannot be solved for the "
+                             "other coordinates or velocities at this state")
+        return Chart(tuple(iq), tuple(dq), tuple(iv), tuple(dv))
+    dq = greedy_columns(G, k, range(n)) if k else []
+    if len(dq) < k:
+        raise ComputationError("linearize: the holonomic constraints are singular at the state")
+    order = list(dq) + [i for i in range(n) if i not in dq]
+    dv = greedy_columns(mu, m, order) if m else []
+    if len(dv) < m:
+        raise ComputationError("linearize: the constraint one-forms are dependent at the state")
+    iq = [i for i in range(n) if i not in dq]
+    iv = [i for i in range(n) if i not in dv]
+    return Chart(tuple(iq), tuple(sorted(dq)), tuple(iv), tuple(sorted(dv)))
+
+
+def reduced_field(cf, chart, q0, X, p=None):
+    """F(x) for chart points X (K, d) complex, lifted onto M_1; q0: the coordinates the
+    dependent ones start from, (n,) or one row per point (K, n); p: as for
+    :meth:`ComplexField.pieces`."""
+    n = cf.n
+    K = X.shape[0]
+    iq, dq, iv, dv = (list(a) for a in (chart.iq, chart.dq, chart.iv, chart.dv))
+    Q = np.array(np.broadcast_to(q0, (K, n)), dtype=complex)
+    Q[:, iq] = X[:, :len(iq)]
+    V = np.zeros((K, n), dtype=complex)
+    V[:, iv] = X[:, len(iq):]
+    if dq:
+        for _ in range(30):
+            mu, _, g = cf.geometry(Q, p)
+            G = mu[:, :cf.k, :][:, :, dq]
+            step = np.linalg.solve(G, g[..., None])[..., 0]
+            Q[:, dq] -= step
+            if np.abs(step).max() <= 1e-15 * max(1.0, np.abs(Q[:, dq].real).max()):
+                break
+        else:
+            raise ComputationError("linearize: Newton iteration for the dependent coordinates "
+                                   "did not converge")
+    if dv:
+        mu, h, _ = cf.geometry(Q, p)
+        rhs = -(np.einsum("kij,kj->ki", mu[:, :, iv], V[:, iv]) + h)
+        V[:, dv] = np.linalg.solve(mu[:, :, dv], rhs[..., None])[..., 0]
+    a = cf.accelerations(Q, V, p)
+    return np.concatenate([V[:, iq], a[:, iv]], axis=1)
+
+
+def input_jacobians(cf, chart, Y, step, model, P=None):
+    """B at each state of Y (N, 2n): the complex-step derivative of the chart's field in
+    each input's parameter slot, shape (N, d, r)."""
+    names = model.parameter_names
+    slots = [names.index(u) for u in model.input_names]
+    n, N, r = cf.n, Y.shape[0], len(slots)
+    d = len(chart.iq) + len(chart.iv)
+    if not r:
+        return np.zeros((N, d, 0))
+    P = np.array([model.parameter_values] * N, dtype=float).T if P is None else np.asarray(P)
+    cols = list(chart.iq) + [n + i for i in chart.iv]
+    X = np.repeat(Y[:, cols].astype(complex), r, axis=0)
+    p = [np.repeat(v.astype(complex), r) for v in P]
+    for j, slot in enumerate(slots):
+        p[slot] = p[slot].copy()
+        p[slot][j::r] += 1j * step
+    F = reduced_field(cf, chart, np.repeat(Y[:, :n], r, axis=0), X, p)
+    return np.swapaxes(F.imag.reshape(N, r, d), 1, 2) / step
+
+
+def chart_jacobian(cf, chart, y, step):
+    """The complex-step Jacobian of the chart's field at the state y."""
+    return chart_jacobians(cf, chart, y[None, :], step)[0]
+
+
+def chart_jacobians(cf, chart, Y, step, P=None, columns=None):
+    """The complex-step Jacobians of the chart's field at the states Y (N, 2n), in
+    batches of up to BATCH_STATES states (d points each).
+
+    Parameters
+    ----------
+    P : sequence of arrays, optional
+        Each parameter's N values (None: the model's).
+    columns : sequence of int, optional
+        The chart variables to differentiate in (default all d): the result has one
+        column per entry, shape (N, d, len(columns)).
+    """
+    if Y.shape[0] > BATCH_STATES:
+        return np.concatenate([
+            chart_jacobians(cf, chart, Y[i:i + BATCH_STATES], step,
+                            None if P is None else [v[i:i + BATCH_STATES] for v in P],
+                            columns)
+            for i in range(0, Y.shape[0], BATCH_STATES)])
+    n, N = cf.n, Y.shape[0]
+    cols = list(chart.iq) + [n + i for i in chart.iv]
+    d = len(cols)
+    columns = list(range(d)) if columns is None else list(columns)
+    c = len(columns)
+    X = (np.repeat(Y[:, cols].astype(complex), c, axis=0)
+         + 1j * step * np.tile(np.eye(d)[columns], (N, 1)))
+    p = None if P is None else [np.repeat(np.asarray(v, dtype=float), c) for v in P]
+    F = reduced_field(cf, chart, np.repeat(Y[:, :n], c, axis=0), X, p)
+    return np.swapaxes(F.imag.reshape(N, c, d), 1, 2) / step

@@ -1,0 +1,62 @@
+"""The complex-step field: the compiled complex kernels against derivatives of the real ones.
+
+The complex kernels (``nhham_saddle_cx_batch``) continue sqrt, powers, atan2, acos, log
+and the trigonometric functions to complex arguments; the imaginary part of an output at y + i h e_j, divided by h, must be
+the derivative of the real output, here checked against central differences of the real
+numpy kernel (no complex arithmetic), to 1e-6 relative.
+"""
+
+import numpy as np
+import sympy as sp
+
+from nhham import System
+from nhham.numerics.chart import ComplexField
+from nhham.numerics.codegen import numeric_model
+
+
+def _system():
+    x, y, th = sp.symbols("x y th")
+    xd, yd, thd = sp.symbols("x_dot y_dot th_dot")
+    a = sp.Symbol("a")
+    L = ((1 + x ** 2) * xd ** 2 / 2 + sp.sqrt(2 + y ** 2) * yd ** 2 / 2 + thd ** 2 / 2
+         - sp.atan2(y, 1 + x ** 2) - sp.log(3 + x) * a - (2 + sp.cos(th)) ** sp.Rational(5, 2)
+         - sp.acos(y / 3) * sp.exp(x))
+    return System([x, y, th], L, constraints=[xd - sp.sin(th) * yd + a * thd],
+                  parameters={"a": 0.7})
+
+
+def test_complex_kernels_differentiate_like_the_real_ones():
+    model = numeric_model(_system())
+    assert model.compiled is not None and model.compiled.has_complex()
+    cf = ComplexField(model)
+    assert cf.backend == "c"
+    real = numeric_model(_system(), backend="numpy")
+    out = real.kernels.functions["saddle"][1]
+    rng = np.random.default_rng(3)
+    y0 = rng.uniform(-1, 1, 6)
+    h = 1e-30
+
+    def real_outputs(y):
+        Y = y[:, None].astype(float)
+        o = np.zeros((cf.size, 1))
+        out(Y, list(real.parameter_values), o)
+        return o[:17, 0]   # W (9), F (3), mu (3), drift (1), h (1)
+
+    for j in range(6):
+        Y = y0.astype(complex)
+        Y[j] += 1j * h
+        W, F, mu, drift, hh, g = cf.pieces(Y[None, :3], Y[None, 3:])
+        got = np.concatenate([W.ravel(), F.ravel(), mu.ravel(), drift.ravel(), hh.ravel(),
+                              g.ravel()]).imag / h
+        e = np.zeros(6)
+        e[j] = 1e-6
+        fd = (real_outputs(y0 + e) - real_outputs(y0 - e)) / 2e-6
+        assert np.allclose(got, fd, rtol=1e-6, atol=1e-7), j
+        values = np.concatenate([W.ravel(), F.ravel(), mu.ravel(), drift.ravel(), hh.ravel(),
+                                 g.ravel()]).real
+        assert np.allclose(values, real_outputs(y0), rtol=1e-14, atol=1e-14)
+
+
+def test_without_the_compiled_library_numpy_evaluates_the_complex_field():
+    model = numeric_model(_system(), backend="numpy")
+    assert ComplexField(model).backend == "numpy"
