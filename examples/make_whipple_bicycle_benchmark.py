@@ -102,8 +102,12 @@ HEADER = """\
 # these). For studies that move the trail, the head angle or a mass:
 #   nhham sweep examples/whipple_bicycle_benchmark.toml --what linearize \\
 #       --over v=0:10:201 --over c=0:0.2:101 --out map.zarr
+# What `nhham classify` reports: as for whipple_bicycle.toml (C regular on M_1, rank 5,
+#   one stage, determined, not integrable; on T*Q 0 first class, 6 second class).
 # What `nhham linearize` finds: the benchmark's weave speed 4.292382 m/s and capsize speed
-#   6.024262 m/s at c = 0.08 (as whipple_bicycle.toml, which has the same values).
+#   6.024262 m/s at c = 0.08 (as whipple_bicycle.toml, which has the same values); at any
+#   trail, head angle or mass the eigenvalues of the closed form of the paper's Appendix A
+#   (tests/numerics/test_batch_linearization.py).
 """
 
 

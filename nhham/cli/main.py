@@ -270,7 +270,7 @@ def cmd_derive(args, steps) -> CommandOutput:
         out = _derive_closed_form(args, steps, scene, side, "hamiltonian", side.analysis)
         out.result.update(form="explicit", mass_matrix=None, forcing=None,
                           constraint_jacobian=None, constraint_rhs=None, contact_forces=None)
-        return _with_case(_with_forces(out, system), at)
+        return _with_case(_with_forces(out, system, args.latex), at)
     from nhham.lagrangian.analysis import analyze_constraints
     from nhham.lagrangian.geometry import lagrangian_geometry
 
@@ -285,7 +285,7 @@ def cmd_derive(args, steps) -> CommandOutput:
     if not (args.explicit or G.closed_form_affordable):
         return _with_case(_with_forces(_with_contacts(
             _derive_implicit(args, steps, scene, G, implicit, energy, analysis), scene),
-            system), at)
+            system, args.latex), at)
 
     def algorithm():
         if analysis is not None:
@@ -294,14 +294,16 @@ def cmd_derive(args, steps) -> CommandOutput:
 
     out = _derive_closed_form(args, steps, scene, G, "lagrangian", algorithm)
     out.result.update(form="explicit", **implicit)
-    return _with_case(_with_forces(_with_contacts(out, scene), system), at)
+    return _with_case(_with_forces(_with_contacts(out, scene), system, args.latex), at)
 
 
-def _with_forces(out: CommandOutput, system) -> CommandOutput:
+def _with_forces(out: CommandOutput, system, latex: bool = False) -> CommandOutput:
     """``out`` with the generalized forces Q (dissipation included) and the inputs: JSON
-    ``generalized_forces`` (null without forces) and ``inputs``, and a text section."""
+    ``generalized_forces`` (null without forces) and ``inputs``, and a text section (rows
+    of the aligned block with ``latex``); the field is then named P(xi_L + F^v)."""
     import dataclasses
 
+    from nhham.cli import latex as tex
     from nhham.cli.report import expr_text
 
     out.result["inputs"] = [u.name for u in system.inputs]
@@ -313,11 +315,20 @@ def _with_forces(out: CommandOutput, system) -> CommandOutput:
     text = out.text
 
     def with_section():
+        body = text() if callable(text) else text
+        if latex:
+            rows = [f"Q &= {tex.matrix_latex([[f] for f in system.generalized_forces])}"]
+            if system.inputs:
+                rows.append(tex.text("inputs: " + ", ".join(u.name for u in system.inputs)))
+            head, end = body.rsplit("\\end{aligned}", 1)
+            return head.rstrip("\n") + " \\\\\n" + " \\\\\n".join(rows) + \
+                "\n\\end{aligned}" + end
         lines = ["generalized forces Q (in F; d/dt dL/dv - dL/dq = Q - mu^T lambda):"]
         lines += [f"  Q[{q.name}]  =  {f}" for q, f in zip(system.coordinates, forces)]
         if system.inputs:
             lines.append("inputs: " + ", ".join(u.name for u in system.inputs))
-        body = text() if callable(text) else text
+        body = body.replace("projected field P(xi_L) on TQ", "projected field P(xi_L + F^v) "
+                            "on TQ (F^v: the forces' vertical lift)", 1)
         return body + "\n" + "\n".join(lines)
 
     return dataclasses.replace(out, text=with_section)

@@ -268,7 +268,8 @@ def _regular_exact(system, side, sampler) -> list:
     out = []
     for name, group, pairs, what in (
             ("multipliers", lam_parts, lam_pairs, "lambda^L against lambda^H o Leg"),
-            ("field", parts + lam_parts, field_pairs, "Leg_*(P(xi_L)) against X o Leg")):
+            ("field", parts + lam_parts, field_pairs,
+             f"Leg_*(P({_field_name(system)})) against X o Leg")):
         holds, exact, decisions, names = True, True, [], []
         for label, lhs, rhs in group:
             h, e, d = _identity(lhs, rhs, everywhere)
@@ -477,6 +478,11 @@ def _check_stages(system, side, analysis, run_H) -> CheckResult:
                        decisions=tuple(decisions))
 
 
+def _field_name(system) -> str:
+    """xi_L, or xi_L + F^v when the system has forces (X then includes F^V)."""
+    return "xi_L + F^v" if system.has_forces else "xi_L"
+
+
 def _sampled(system, side: HamiltonianSide, sampler):
     """Checks at points of M_1 for a regular system, in floating point or (an
     :class:`ModularComparisonPoints`) exactly; None when C is singular there."""
@@ -526,7 +532,8 @@ def _sampled(system, side: HamiltonianSide, sampler):
                               f"v -> p = dL/dv -> Leg^-1(q, p) ({how}) against v"))
     ab, rel, ok = sampler.compare(field_pairs)
     checks.append(CheckResult("field", ok, False, ab, rel, len(field_pairs),
-                              f"Leg_*(P(xi_L)) against X o Leg, both by {how}" + skip))
+                              f"Leg_*(P({_field_name(system)})) against X o Leg, both by "
+                              f"{how}" + skip))
     ab, rel, ok = sampler.compare(lam_pairs)
     checks.append(CheckResult("multipliers", ok, False, ab, rel, len(lam_pairs),
                               "lambda^L against lambda^H o Leg"))

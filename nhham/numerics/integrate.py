@@ -526,11 +526,7 @@ def _check_options(method, step, projection, baumgarte, model):
     if model.time_slot is not None and (method in FIXED_STEP_METHODS or method == "reference"):
         raise InputError(f"method: {method!r} does not take time-dependent forces (t in the "
                          f"forces); choose an adaptive method such as DOP853", key="method")
-    unset = model.unset_inputs()
-    if unset:
-        raise InputError(f"inputs: no value for {', '.join(unset)} (give a control law, "
-                         f"[control] in a scene or System.closed_loop, or a value with "
-                         f"parameters=...)", key="inputs")
+    model.require_inputs()
     if (projection or baumgarte is not None) and method in ("rattle", "rattle4", "reference"):
         raise InputError(f"projection/baumgarte: not applicable to method {method!r} "
                          f"(it keeps the constraints itself)")

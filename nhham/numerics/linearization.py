@@ -259,6 +259,9 @@ def linearize(model, state, *, independent: Sequence[str] | None = None,
     ComputationError
         A constraint or the saddle-point matrix is singular at the state.
     """
+    if not hasattr(model, "kernels"):
+        raise InputError(f"linearize: expected a NumericModel (nhham.numeric_model(system)), "
+                         f"got {type(model).__name__}", key="model")
     y0 = model.state(state)
     _check_inputs(model)
     residuals, worst = _check_steady(model, y0)

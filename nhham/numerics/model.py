@@ -47,7 +47,7 @@ from types import MappingProxyType
 
 import numpy as np
 
-from nhham.errors import InconsistentInitialDataError
+from nhham.errors import InconsistentInitialDataError, InputError
 from nhham.numerics.kernels import CompiledRHS, GeneratedKernels
 from nhham.numerics.saddle import SingleStateSolver, cond_each, solve_saddle
 from nhham.numerics.status import NumericalFailure, Status
@@ -371,6 +371,15 @@ class NumericModel:
     def unset_inputs(self) -> tuple:
         """Names of the inputs without a value (NaN)."""
         return tuple(u for u in self.input_names if math.isnan(self.parameters[u]))
+
+    def require_inputs(self) -> None:
+        """Raise InputError naming the inputs without a value (an integration never runs
+        on a made-up value)."""
+        unset = self.unset_inputs()
+        if unset:
+            raise InputError(f"inputs: no value for {', '.join(unset)} (give a control law, "
+                             f"[control] in a scene or System.closed_loop, or a value with "
+                             f"parameters=...)", key="inputs")
 
     def rhs(self, t, y, baumgarte=None) -> np.ndarray:
         """y' = f(t, y) for y of shape (2n,) or (k, 2n); t matters only where the forces

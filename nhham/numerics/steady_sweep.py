@@ -226,6 +226,10 @@ def sweep_steady(model, state_of: Callable[[Mapping[str, float]], Mapping[str, f
     -------
     Sweep
     """
+    if parameter in model.input_names:
+        raise InputError(f"--sweep: {parameter!r} is an input, whose steady value the "
+                         f"[steady] table gives; sweep a parameter that its entry uses (e.g. "
+                         f"u = \"u0\" in [steady], then --sweep u0=...)", key="--sweep")
     if parameter not in model.parameter_names:
         raise InputError(f"--sweep: {parameter!r} is not a parameter of the scene "
                          f"(parameters: {', '.join(model.parameter_names) or 'none'})")

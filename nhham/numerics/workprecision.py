@@ -238,6 +238,7 @@ def work_precision(system_or_model, y0, t_span, *, methods=None, tolerances=DEFA
     """
     model = system_or_model if isinstance(system_or_model, NumericModel) else _model(
         system_or_model, backend)
+    model.require_inputs()
     t0, t1 = float(t_span[0]), float(t_span[1])
     if quick:
         tolerances = _QUICK_TOLERANCES

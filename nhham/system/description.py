@@ -94,11 +94,12 @@ class System:
         If True, affine constraints whose one-form is a combination of the
         previous ones (and whose h is the same combination) are dropped and
         recorded in :attr:`dropped`; if False (default) they are an error.
-    forces : mapping or sequence, optional
+    forces : mapping, sequence or expression, optional
         Generalized forces Q_A: ``{coordinate: expression}`` (the components of the
-        1-form Q_A dq^A; coordinates not named get 0) or one expression per
-        coordinate. Functions of the coordinates, velocities, parameters, the
-        ``inputs`` and the time ``t``.
+        1-form Q_A dq^A; coordinates not named get 0), one expression per coordinate,
+        or the 1-form itself, an expression (or string) linear in the differentials
+        ``d<q>`` (``"-k*x*dx + u*dy"``). Functions of the coordinates, velocities,
+        parameters, the ``inputs`` and the time ``t``.
     dissipation : sympy.Expr or str, optional
         A Rayleigh dissipation function R; it adds the force -dR/dv^A.
     inputs : sequence of str or sympy.Symbol, optional
@@ -553,7 +554,13 @@ def _forces(forces, dissipation, coords, vels, table, inputs, problems):
         return (sp.S.Zero,) * n, sp.S.Zero, False
     full = dict(table, t=TIME, **{u.name: u for u in inputs})
     out = [sp.S.Zero] * n
-    if isinstance(forces, Mapping):
+    if isinstance(forces, (str, sp.Expr)):
+        out = _one_form(forces, coords, full, problems)
+    elif forces is not None and not hasattr(forces, "__iter__"):
+        problems.append(f"forces: expected a table by coordinate, one expression per "
+                        f"coordinate or a 1-form in the differentials (e.g. '-k*x*dx'), got "
+                        f"{type(forces).__name__} {forces!r}")
+    elif isinstance(forces, Mapping):
         index = {q.name: i for i, q in enumerate(coords)}
         for i, f in _keyed(forces, index, "forces", f"not a coordinate (forces are given by "
                            f"coordinate: {', '.join(index)})", full, problems).items():
@@ -570,6 +577,33 @@ def _forces(forces, dissipation, coords, vels, table, inputs, problems):
                                                        problems)
     uses_time = any(TIME in e.free_symbols for e in out + [R])
     return tuple(out), R, uses_time
+
+
+def differential_symbols(coords) -> dict:
+    """``{"d<q>": Symbol}``: the differentials dq^A in which a force may be written as the
+    1-form Q_A dq^A."""
+    return {f"d{q.name}": sp.Symbol(f"d{q.name}") for q in coords}
+
+
+def _one_form(form, coords, table, problems) -> list:
+    """The components Q_A of a 1-form Q_A dq^A given as an expression in the differentials
+    d<q> (a string or a sympy expression)."""
+    n = len(coords)
+    ds = differential_symbols(coords)
+    clash = sorted(d for d in ds if d in table)
+    if clash:
+        problems.append(f"forces: {', '.join(clash)} is a name of the system, not only a "
+                        f"differential; give the forces by coordinate instead")
+        return [sp.S.Zero] * n
+    expr = _to_expr(form, dict(table, **ds), "forces", problems)
+    dsyms = list(ds.values())
+    Q = [sp.diff(expr, d) for d in dsyms]
+    rest = sp.expand(expr - sum(q * d for q, d in zip(Q, dsyms)))
+    if rest != 0 or any(q.has(*dsyms) for q in Q):
+        problems.append(f"forces: a 1-form is linear in the differentials "
+                        f"{', '.join(ds)} (Q_A dq^A, e.g. '-k*x*dx'); got {expr}")
+        return [sp.S.Zero] * n
+    return Q
 
 
 def _input_hint(problem: str, inputs) -> str:

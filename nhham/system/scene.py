@@ -335,7 +335,7 @@ class _Spec:
     simulate: SimulateOptions
     steady: Mapping | None = None
     contacts: Mapping | None = None
-    forces: Mapping | None = None
+    forces: Mapping | str | None = None   # a table by coordinate, or a 1-form
     dissipation: str | None = None
     inputs: tuple = ()
     control: Mapping | None = None
@@ -366,7 +366,8 @@ def _validate_structure(data: dict, source: str) -> _Spec:
     _check_name_clashes(coordinates, values, symbolic, problems)
 
     inputs = _name_list(data, "inputs", problems)
-    forces = _string_table(data, "forces", problems)
+    forces = (data["forces"] if isinstance(data.get("forces"), str)   # a 1-form
+              else _string_table(data, "forces", problems))
     dissipation = _optional_string(data, "dissipation", problems) or None
     control = _string_table(data, "control", problems)
     for key in control or {}:
@@ -675,7 +676,20 @@ def _parse_expressions(spec: _Spec) -> dict:
             problems.append(str(exc))
         else:
             parsed.setdefault("[control]", {})[name] = law
-    for name, text in (spec.forces or {}).items():
+    if isinstance(spec.forces, str):   # the 1-form Q_A dq^A in the differentials d<q>
+        from nhham.system.description import differential_symbols
+
+        ds = differential_symbols([sp.Symbol(q) for q in spec.coordinates])
+        clash = sorted(d for d in ds if d in timed)
+        try:
+            if clash:
+                raise ParseError(f"forces: {', '.join(clash)} is a name of the scene, not "
+                                 f"only a differential; give forces as a table by "
+                                 f"coordinate", key="forces")
+            parsed["forces"] = parse_expression(spec.forces, {**timed, **ds}, where="forces")
+        except ParseError as exc:
+            problems.append(str(exc))
+    for name, text in (spec.forces if isinstance(spec.forces, dict) else {}).items():
         try:
             parsed[f"forces.{name}"] = parse_expression(text, timed, where=f"forces.{name}")
         except ParseError as exc:
@@ -734,7 +748,8 @@ def _build_system(spec: _Spec, parsed: dict, drop_redundant: bool):
         parameters=dict(spec.parameters),
         name=spec.name,
         drop_redundant=drop_redundant,
-        forces={q: parsed[f"forces.{q}"] for q in spec.forces or {}},
+        forces=(parsed["forces"] if isinstance(spec.forces, str)
+                else {q: parsed[f"forces.{q}"] for q in spec.forces or {}}),
         dissipation=parsed.get("dissipation"),
         inputs=list(spec.inputs),
     )

@@ -22,7 +22,8 @@ EXAMPLE_NAMES = sorted(p.name for p in EXAMPLES.glob("*.toml"))
 # benchmark in tests/numerics/test_linearization.py); their forced variants likewise
 # (tests/numerics/test_forced_numerics.py).
 HEAVY = {("compare", "snakeboard.toml"), ("compare", "whipple_bicycle.toml"),
-         ("compare", "snakeboard_gait.toml"), ("compare", "bicycle_steer_control.toml")}
+         ("compare", "snakeboard_gait.toml"), ("compare", "bicycle_steer_control.toml"),
+         ("compare", "whipple_bicycle_benchmark.toml")}
 
 
 @functools.cache

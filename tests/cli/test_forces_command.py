@@ -74,3 +74,44 @@ def test_a_control_given_twice_exits_2(capsys):
                          "tauL=2", "--json")
     error = json.loads(out)["error"]
     assert status == 2 and "tauL is given twice" in error["message"]
+
+
+PENDULUM = """
+name = "torqued pendulum"
+coordinates = ["x"]
+parameters = { u0 = 0.5, c = 0.1 }
+lagrangian = "x_dot**2/2 + cos(x)"
+inputs = ["u"]
+forces = { x = "u" }
+dissipation = "c*x_dot**2/2"
+[initial]
+x = 0.0
+x_dot = 0.0
+[steady]
+u = "u0"
+x = "asin(u0)"
+x_dot = 0.0
+"""
+
+
+def test_bench_refuses_an_input_without_a_value(capsys, tmp_path):
+    scene = tmp_path / "pendulum.toml"
+    scene.write_text(PENDULUM)
+    status, out, err = run(capsys, "bench", scene, "--quick", "--json")
+    envelope = json.loads(out)
+    assert status == 2 and envelope["error"]["key"] == "inputs", envelope["error"]
+    assert "no value for u" in envelope["error"]["message"]
+
+
+def test_a_sweep_over_an_input_is_refused_and_over_its_parameter_is_not(capsys, tmp_path):
+    scene = tmp_path / "pendulum.toml"
+    scene.write_text(PENDULUM)
+    status, out, err = run(capsys, "linearize", scene, "--sweep", "u=0.1:0.9:3", "--json")
+    envelope = json.loads(out)
+    assert status == 2 and "'u' is an input" in envelope["error"]["message"]
+    status, out, err = run(capsys, "linearize", scene, "--sweep", "u0=0.1:0.9:3", "--json")
+    sweep = json.loads(out)["result"]["sweep"]
+    # x = asin(u0): A = [[0, 1], [-cos x, -c]], eigenvalues -c/2 +- i sqrt(cos x - c^2/4)
+    for u0, ev in zip(sweep["values"], sweep["eigenvalues"]):
+        omega = np.sqrt(np.sqrt(1 - u0 ** 2) - 0.1 ** 2 / 4)
+        assert abs(ev[0][0] + 0.05) < 1e-12 and abs(abs(ev[0][1]) - omega) < 1e-12

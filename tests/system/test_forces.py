@@ -108,3 +108,35 @@ def test_an_input_in_the_lagrangian_is_explained():
     with pytest.raises(ValidationError, match=r"lagrangian: unknown name 'u' \(an input may "
                                               r"appear in the forces"):
         nhham.System(["x"], "x_dot**2/2 + u*x", inputs=["u"], forces={"x": "u"})
+
+
+def test_forces_as_a_one_form_in_the_differentials():
+    s = nhham.System(["x", "y"], (xd**2 + yd**2) / 2, parameters={"k": 2.0},
+                     forces="-k*x*dx + u*y*dy", inputs=["u"])
+    assert list(s.forces) == [-k * x, u * y]
+    dx, dy = sp.symbols("dx dy")
+    same = nhham.System(["x", "y"], (xd**2 + yd**2) / 2, parameters={"k": 2.0},
+                        forces=-k * x * dx + u * y * dy, inputs=["u"])
+    assert same.forces == s.forces
+    scene = loads_scene(SCENE.replace('forces = { x = "u*sin(t) - k*x" }',
+                                      'forces = "(u*sin(t) - k*x)*dx"'))
+    assert list(scene.system.forces) == [u * sp.sin(TIME) - k * x, 0]
+
+
+@pytest.mark.parametrize("forces, message", [
+    (3, r"forces: expected a table by coordinate, one expression per coordinate or a 1-form"),
+    ("u", r"forces: a 1-form is linear in the differentials dx, dy"),
+    ("x*dx*dy", r"forces: a 1-form is linear in the differentials"),
+    (sp.Symbol("u"), r"forces: a 1-form is linear in the differentials"),
+])
+def test_what_is_not_a_one_form_is_refused(forces, message):
+    with pytest.raises(ValidationError, match=message):
+        nhham.System(["x", "y"], (xd**2 + yd**2) / 2, forces=forces, inputs=["u"])
+
+
+def test_a_differential_that_is_also_a_name_is_refused():
+    with pytest.raises(ValidationError, match="forces: dx is a name of the system"):
+        nhham.System(["x"], xd**2 / 2, parameters={"dx": 1.0}, forces="-dx*x*dx")
+    with pytest.raises(nhham.ParseError, match="forces: dx is a name of the scene"):
+        loads_scene(SCENE.replace("k = 2.0", "k = 2.0, dx = 1.0")
+                    .replace('forces = { x = "u*sin(t) - k*x" }', 'forces = "-k*x*dx"'))

@@ -435,3 +435,15 @@ def test_lagranges_method_force_on_an_unlisted_function_is_refused():
     with pytest.raises(ValidationError) as info:
         from_lagranges_method(lm, inputs=[F])
     assert "forcelist[2]" in str(info.value) and "tau(t)" in str(info.value)
+
+
+def test_more_refusals_name_the_culprit():
+    x, N, O, P, common = _line()
+    with pytest.raises(ValidationError, match=r"loads\[0\]: .* is not a Vector"):
+        from_mechanics(**common, loads=[(P, x)])
+    B = me.ReferenceFrame("B")   # not oriented relative to N
+    with pytest.raises(ValidationError, match=r"loads\[0\]: the vector x\(t\)\*B.z cannot be "
+                                              r"expressed in N"):
+        from_mechanics(**common, loads=[(P, x * B.z)])
+    with pytest.raises(ValidationError, match=r"inputs\[0\]: t is the time"):
+        from_mechanics(**common, inputs=[t])
