@@ -299,3 +299,35 @@ def test_a_foreign_failure_marker_is_ignored(tmp_path, monkeypatch):
     os.chown(marker, OTHER_UID, -1)
     assert Path(compile_c(SOURCE, cache)) == library and _runs(tmp_path) == 2
     assert not marker.exists()
+
+
+def test_generated_sources_are_kept_verified_and_reused(tmp_path, monkeypatch):
+    """A model of a system seen before is loaded from its kept sources (the generator is
+    not run); a tampered sources file is refused, named, and generated again."""
+    from nhham.numerics.codegen import emit
+
+    system = chaplygin_sleigh()
+    first = numeric_model(system, cache_dir=str(tmp_path))
+    kept = sorted(p.name for p in tmp_path.glob("sources_*"))
+    assert len(kept) == 2 and kept[1] == kept[0] + ".sha256"
+    path = tmp_path / kept[0]
+    digest = hashlib.sha256(path.read_bytes()).hexdigest()
+    assert (tmp_path / kept[1]).read_text().split() == [digest, kept[0]]
+
+    def refuse(*args):
+        raise AssertionError("sources generated again")
+
+    with monkeypatch.context() as m:
+        m.setattr(emit, "_SOURCES", type(emit._SOURCES)())
+        m.setattr(emit, "_generate", refuse)
+        again = numeric_model(system, cache_dir=str(tmp_path))
+    assert again.python_source == first.python_source and again.layout == first.layout
+    y = np.array(sleigh_state())
+    assert np.array_equal(again.rhs(0.0, y), first.rhs(0.0, y))
+
+    path.write_text(path.read_text().replace("def ", "def  ", 1))
+    monkeypatch.setattr(emit, "_SOURCES", type(emit._SOURCES)())
+    with pytest.warns(NumericsWarning, match=r"cached sources .*sources_.*\.json does not "
+                                             r"match its recorded SHA-256"):
+        third = numeric_model(system, cache_dir=str(tmp_path))
+    assert third.python_source == first.python_source

@@ -36,7 +36,8 @@ from nhham.numerics.codegen.background import build_in_background, take_over
 from nhham.numerics.codegen.build import (build_library, c_compiler, compile_c,
                                           find_library, load_library)
 from nhham.numerics.codegen.cache import CompileCache, cache_location
-from nhham.numerics.codegen.emit import generate_sources
+from nhham.numerics.codegen.emit import (cached_sources, generate_sources, remember_sources,
+                                         source_key)
 from nhham.numerics.kernels import GeneratedKernels
 from nhham.numerics.model import NumericModel, NumericsWarning
 
@@ -91,7 +92,7 @@ def numeric_model(system, *, backend: str = "auto", path: str = "saddle",
     if path not in _PATHS:
         raise ValueError(f"path must be one of {_PATHS}, got {path!r}")
     values = _parameter_values(system, parameters)
-    sources = generate_sources(system, path=path)
+    sources = _sources(system, path, cache_dir if backend != "numpy" else None)
     kernels = GeneratedKernels.from_source(sources["python"], sources["layout"])
     compiled, note, pending = None, "numpy backend requested", None
     if backend in ("c", "auto"):
@@ -112,6 +113,24 @@ def numeric_model(system, *, backend: str = "auto", path: str = "saddle",
         c_source=sources["c"],
         pending=pending,
     )
+
+
+def _sources(system, path, cache_dir) -> dict:
+    """The system's generated sources: from this process's memory, else from the compile
+    cache (verified), else generated (and kept there)."""
+    key = source_key(system, path)
+    if cached_sources(key) is not None:
+        return generate_sources(system, path=path)
+    try:
+        cache = CompileCache.open(cache_dir)
+    except OSError:
+        return generate_sources(system, path=path)
+    kept = cache.sources(key)
+    if kept is not None:
+        return remember_sources(key, kept)
+    sources = generate_sources(system, path=path)
+    cache.keep_sources(key, sources)
+    return sources
 
 
 def _compiled(sources, cache_dir, background: bool) -> tuple:

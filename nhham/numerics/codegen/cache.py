@@ -24,6 +24,12 @@ rules of pip's and ccache's caches):
   compiling again; a marker from another nhham version is retried once. A compiler killed
   by a signal or stopped by the time limit, or a full disk, leaves no marker.
 
+The generated sources of a model (``sources_<key>.json``, the Python and C texts and their
+layout, keyed by the system's content and a digest of nhham's own code) are kept the same
+way, with a hash record, so that a model of a system seen before is loaded without
+generating its code again (the bicycle's takes 4 s of sympy; a study's workers each
+need it).
+
 Build directories left by a process that was killed (``build-*``) are removed by a later
 process once they are an hour old. No sympy here.
 """
@@ -201,6 +207,46 @@ class CompileCache:
             return ("does not match its recorded SHA-256 (corrupted or truncated since it "
                     "was built)")
         return None
+
+    def sources(self, key: str) -> dict | None:
+        """Generated sources kept by :meth:`keep_sources` under ``key``, verified like a
+        library (their Python text is executed when a model loads), or None."""
+        path = os.path.join(self.directory, f"sources_{key}.json")
+        if not os.path.lexists(path):
+            return None
+        with self._locked(fcntl.LOCK_SH):
+            reason = self._verify(path)
+            if reason is None:
+                try:
+                    with open(path, encoding="utf-8") as fh:
+                        data = json.load(fh)
+                except (OSError, ValueError):
+                    return None
+        if reason is not None:
+            _warn(f"cached sources {path} {reason}: not used, generated again")
+            return None
+        if not isinstance(data, dict) or set(data) != {"python", "c", "layout"}:
+            return None
+        data["layout"] = {k: tuple(v) if isinstance(v, list) else v
+                          for k, v in data["layout"].items()}
+        return data
+
+    def keep_sources(self, key: str, sources: dict) -> None:
+        """Keep a model's generated sources (and their hash record) under ``key``; a
+        failure to write them (a full disk) is ignored."""
+        path = os.path.join(self.directory, f"sources_{key}.json")
+        with contextlib.suppress(OSError), self.build_directory() as build:
+            staged = os.path.join(build, os.path.basename(path))
+            with open(staged, "w", encoding="utf-8") as fh:
+                json.dump(sources, fh)
+            os.chmod(staged, 0o644)
+            record = staged + ".sha256"
+            with open(record, "w", encoding="ascii") as fh:
+                fh.write(f"{file_digest(staged)}  {os.path.basename(path)}\n")
+            os.chmod(record, 0o644)
+            with self._locked(fcntl.LOCK_EX):
+                os.replace(record, self.record(path))
+                os.replace(staged, path)
 
     def failure(self, key: str) -> str | None:
         """The compiler's message of a failed build of ``key`` remembered by this version

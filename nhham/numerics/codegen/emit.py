@@ -41,9 +41,11 @@ parameter sweep reuses one compiled library.
 
 from __future__ import annotations
 
+import functools
 import hashlib
 from collections import OrderedDict
 from importlib import resources
+from pathlib import Path
 
 import sympy as sp
 from sympy.printing.c import C99CodePrinter
@@ -54,8 +56,9 @@ from nhham.lagrangian.geometry import lagrangian_geometry
 from nhham.numerics.status import c_defines
 from nhham.system.expressions import derivative
 
-__all__ = ["generate_sources", "system_fingerprint", "expand_angle_sums", "runtime_source",
-           "RUNTIME_FILES"]
+__all__ = ["generate_sources", "system_fingerprint", "source_key", "sources_digest",
+           "code_digest", "cached_sources", "remember_sources", "expand_angle_sums",
+           "runtime_source", "RUNTIME_FILES"]
 
 #: The runtime files, in the order they follow the generated kernels (``nhham.h`` first).
 RUNTIME_FILES = ("linalg.c", "rhs.c", "rattle.c", "erk.c")
@@ -75,19 +78,52 @@ def generate_sources(system, path: str = "saddle") -> dict:
         translation unit), ``layout`` (plain dict: sizes, names and flags that
         :class:`~nhham.numerics.model.NumericModel` needs).
     """
-    key = system_fingerprint(system, path)
+    key = source_key(system, path)
+    cached = cached_sources(key)
+    return remember_sources(key, _generate(system, path)) if cached is None else cached
+
+
+def cached_sources(key: str) -> dict | None:
+    """The sources of :func:`source_key` ``key`` held by this process, or None."""
     cached = _SOURCES.get(key)
-    if cached is None:
-        cached = _generate(system, path)
-        _SOURCES[key] = cached
-        while len(_SOURCES) > _SOURCES_KEPT:
-            _SOURCES.popitem(last=False)
-    else:
+    if cached is not None:
         _SOURCES.move_to_end(key)
     return cached
 
 
-#: Generated sources by system fingerprint (strings and plain data only).
+def remember_sources(key: str, sources: dict) -> dict:
+    """Hold ``sources`` under ``key`` in this process (the last 64 kept); returns them."""
+    _SOURCES[key] = sources
+    while len(_SOURCES) > _SOURCES_KEPT:
+        _SOURCES.popitem(last=False)
+    return sources
+
+
+def source_key(system, path: str = "saddle") -> str:
+    """The key of a system's generated sources: its :func:`system_fingerprint` and a
+    digest of nhham's own code (a change of the generator never meets old sources)."""
+    return hashlib.sha256((system_fingerprint(system, path) + code_digest()).encode()
+                          ).hexdigest()[:40]
+
+
+@functools.cache
+def code_digest() -> str:
+    """SHA-256 of nhham's source files (Python and the C runtime), read once."""
+    root = Path(__file__).resolve().parents[2]
+    h = hashlib.sha256()
+    for f in sorted(root.rglob("*")):
+        if f.suffix in (".py", ".c", ".h") and "__pycache__" not in f.parts:
+            h.update(str(f.relative_to(root)).encode() + b"\0" + f.read_bytes())
+    return h.hexdigest()
+
+
+def sources_digest(sources: dict) -> str:
+    """SHA-256 of generated Python and C texts: what a study's workers check their model
+    against."""
+    return hashlib.sha256((sources["python"] + "\0" + sources["c"]).encode()).hexdigest()
+
+
+#: Generated sources by source key (strings and plain data only).
 _SOURCES: OrderedDict = OrderedDict()
 _SOURCES_KEPT = 64
 
