@@ -1,7 +1,7 @@
 """The layers of ``nhham``, read from the imports of every module (``ast``, nothing imported).
 
 Layers, lowest first: ``system`` < ``lagrangian`` < ``hamiltonian`` < ``verdict`` < ``numerics``
-< ``cli``.
+< ``study`` < ``cli``.
 The top-level modules ``errors``, ``settings``, ``lazy`` and ``budget`` are the base: every layer may
 import them and they import nothing of the package's layers. ``nhham/__init__.py`` (the
 public API, re-exported) and ``nhham/__main__.py`` are exempt. Rules:
@@ -41,7 +41,7 @@ import networkx as nx
 import pytest
 
 PACKAGE = "nhham"
-LAYERS = ("system", "lagrangian", "hamiltonian", "verdict", "numerics", "cli")
+LAYERS = ("system", "lagrangian", "hamiltonian", "verdict", "numerics", "study", "cli")
 BASE = ("errors", "settings", "lazy", "budget")
 EXEMPT = ("nhham", "nhham.__main__")
 NUMERICS = "nhham.numerics"

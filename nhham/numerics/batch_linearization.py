@@ -31,11 +31,43 @@ from nhham.numerics.chart import Chart, ComplexField, chart_jacobians, input_jac
 from nhham.numerics.linearization import (EIGENVALUE_TOLERANCE, ON_TOLERANCE, STEP,
                                           Linearization, divide_family)
 
-__all__ = ["LinearizationBatch", "linearize_batch", "STATUS_TEXT"]
+__all__ = ["ChartChoice", "LinearizationBatch", "Spectrum", "linearize_batch", "STATUS_TEXT"]
 
 #: Status of a state (``LinearizationBatch.status``): what each code means.
 STATUS_TEXT = {0: "linearised", 1: "not on M_1", 2: "not steady",
                3: "singular (the saddle-point matrix or a constraint at the state)"}
+
+
+@dataclass(frozen=True)
+class ChartChoice:
+    """What a batch takes from its reference linearisation (plain data: it crosses
+    process boundaries).
+
+    Attributes
+    ----------
+    chart : tuple of str
+        The independent coordinates and velocities.
+    neutral : tuple of str
+        Chart variables removed (and ``d/d<p>`` tangents divided out).
+    coordinates : tuple of str
+        The variables of the state matrices.
+    """
+
+    chart: tuple
+    neutral: tuple
+    coordinates: tuple
+
+    @classmethod
+    def of(cls, lin: Linearization) -> "ChartChoice":
+        return cls(tuple(lin.chart), tuple(lin.neutral), tuple(lin.coordinates))
+
+
+@dataclass(frozen=True)
+class Spectrum:
+    """Eigenvalues and the tolerance of their verdict (what locating a crossing reads)."""
+
+    eigenvalues: np.ndarray
+    tolerance: float
 
 
 @dataclass(frozen=True)
@@ -83,6 +115,12 @@ class LinearizationBatch:
         """Boolean (N,): asymptotically stable."""
         return self.verdicts == 1
 
+    def spectrum(self, i: int) -> Spectrum | None:
+        """The eigenvalues of state ``i`` with their tolerance (None: not linearised)."""
+        if self.status[i] != 0:
+            return None
+        return Spectrum(self.eigenvalues[i], float(self.tolerances[i]))
+
     @property
     def spectral_abscissa(self) -> np.ndarray:
         """max Re lambda at each state (NaN where not linearised), shape (N,)."""
@@ -94,7 +132,7 @@ class LinearizationBatch:
         return out
 
 
-def linearize_batch(model, states, parameters=None, *, reference: Linearization,
+def linearize_batch(model, states, parameters=None, *, reference: Linearization | ChartChoice,
                     families=None, step: float = STEP) -> LinearizationBatch:
     """Linearise the constrained dynamics at N steady states in the reference's chart.
 
@@ -107,9 +145,9 @@ def linearize_batch(model, states, parameters=None, *, reference: Linearization,
     parameters : array_like, shape (N, P), optional
         Every parameter's value at each state, in ``model.parameter_names`` order
         (inputs at their steady values); default: the model's at every state.
-    reference : Linearization
-        A linearisation of the same family (same chart): its ``chart``, ``neutral``
-        and ``coordinates`` are used at every state.
+    reference : Linearization or ChartChoice
+        A linearisation of the same family (same chart), or its :class:`ChartChoice`:
+        its ``chart``, ``neutral`` and ``coordinates`` are used at every state.
     families : sequence of mappings, optional
         The steady family's tangents at each state (``{parameter: {name: derivative}}``),
         needed when the reference divided one out (a ``d/d<p>`` in its ``neutral``).

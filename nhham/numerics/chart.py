@@ -171,10 +171,11 @@ def choose_chart(model, y0, independent) -> Chart:
     return Chart(tuple(iq), tuple(sorted(dq)), tuple(iv), tuple(sorted(dv)))
 
 
-def reduced_field(cf, chart, q0, X, p=None):
+def reduced_field(cf, chart, q0, X, p=None, positions=True):
     """F(x) for chart points X (K, d) complex, lifted onto M_1; q0: the coordinates the
     dependent ones start from, (n,) or one row per point (K, n); p: as for
-    :meth:`ComplexField.pieces`."""
+    :meth:`ComplexField.pieces`. ``positions=False``: the points' coordinates are those of
+    q0 (already on Q_1: only velocities moved), so no Newton iteration is needed."""
     n = cf.n
     K = X.shape[0]
     iq, dq, iv, dv = (list(a) for a in (chart.iq, chart.dq, chart.iv, chart.dv))
@@ -182,9 +183,10 @@ def reduced_field(cf, chart, q0, X, p=None):
     Q[:, iq] = X[:, :len(iq)]
     V = np.zeros((K, n), dtype=complex)
     V[:, iv] = X[:, len(iq):]
-    if dq:
+    geometry = None
+    if dq and positions:
         for _ in range(30):
-            mu, _, g = cf.geometry(Q, p)
+            geometry = mu, _, g = cf.geometry(Q, p)
             G = mu[:, :cf.k, :][:, :, dq]
             step = np.linalg.solve(G, g[..., None])[..., 0]
             Q[:, dq] -= step
@@ -194,7 +196,8 @@ def reduced_field(cf, chart, q0, X, p=None):
             raise ComputationError("linearize: Newton iteration for the dependent coordinates "
                                    "did not converge")
     if dv:
-        mu, h, _ = cf.geometry(Q, p)
+        # the last Newton iterate's mu and h: the step after it was below rounding
+        mu, h, _ = cf.geometry(Q, p) if geometry is None else geometry
         rhs = -(np.einsum("kij,kj->ki", mu[:, :, iv], V[:, iv]) + h)
         V[:, dv] = np.linalg.solve(mu[:, :, dv], rhs[..., None])[..., 0]
     a = cf.accelerations(Q, V, p)
@@ -248,9 +251,17 @@ def chart_jacobians(cf, chart, Y, step, P=None, columns=None):
     cols = list(chart.iq) + [n + i for i in chart.iv]
     d = len(cols)
     columns = list(range(d)) if columns is None else list(columns)
-    c = len(columns)
-    X = (np.repeat(Y[:, cols].astype(complex), c, axis=0)
-         + 1j * step * np.tile(np.eye(d)[columns], (N, 1)))
-    p = None if P is None else [np.repeat(np.asarray(v, dtype=float), c) for v in P]
-    F = reduced_field(cf, chart, np.repeat(Y[:, :n], c, axis=0), X, p)
-    return np.swapaxes(F.imag.reshape(N, c, d), 1, 2) / step
+    out = np.empty((N, d, len(columns)))
+    # coordinate columns move the dependent coordinates (Newton); velocity columns do not
+    for group, positions in (([j for j in columns if j < len(chart.iq)], True),
+                             ([j for j in columns if j >= len(chart.iq)], False)):
+        if not group:
+            continue
+        c = len(group)
+        X = (np.repeat(Y[:, cols].astype(complex), c, axis=0)
+             + 1j * step * np.tile(np.eye(d)[group], (N, 1)))
+        p = None if P is None else [np.repeat(np.asarray(v, dtype=float), c) for v in P]
+        F = reduced_field(cf, chart, np.repeat(Y[:, :n], c, axis=0), X, p, positions)
+        out[:, :, [columns.index(j) for j in group]] = np.swapaxes(
+            F.imag.reshape(N, c, d), 1, 2) / step
+    return out

@@ -90,6 +90,10 @@ class Deadline:
     def passed(self) -> bool:
         return time.perf_counter() > self.end
 
+    def remaining(self) -> float:
+        """Seconds left (negative once passed)."""
+        return self.end - time.perf_counter()
+
     def message(self, t) -> str:
         return (f"stopped at the time limit of {self.seconds:g} s (wall time) at t = {t:.6g}, "
                 f"before the end of the interval")

@@ -13,7 +13,8 @@ import numpy as np
 from nhham.errors import InputError
 from nhham.numerics.linearization import Linearization, linearize, linearize_many
 
-__all__ = ["Crossing", "Sweep", "sweep", "sweep_steady", "with_steady_inputs"]
+__all__ = ["Crossing", "Sweep", "crossings", "crossings_many", "sweep", "sweep_steady",
+           "with_steady_inputs"]
 
 
 @dataclass(frozen=True)
@@ -108,14 +109,135 @@ def sweep(linearize_at: Callable[[float], Linearization], parameter: str,
     lins = (list(linearize_all([float(v) for v in values])) if linearize_all is not None
             else [linearize_at(float(v)) for v in values])
     coords = lins[0].coordinates if lins else ()
-    counts = [_n_positive(lin) for lin in lins]
-    crossings = []
-    for i in range(len(values) - 1):
-        if counts[i] != counts[i + 1]:
-            crossings.extend(_locate(linearize_at, values[i], values[i + 1], lins[i],
-                                     lins[i + 1], xtol))
     return Sweep(parameter, values, tuple(lin.eigenvalues for lin in lins),
-                 tuple(lin.stable for lin in lins), tuple(crossings), tuple(coords))
+                 tuple(lin.stable for lin in lins),
+                 tuple(crossings(linearize_at, values, lins, xtol=xtol)), tuple(coords))
+
+
+def crossings(linearize_at: Callable, values: Sequence[float], spectra: Sequence, *,
+              xtol: float = 1e-12) -> list:
+    """Where an eigenvalue crosses the imaginary axis between consecutive values.
+
+    Parameters
+    ----------
+    linearize_at : callable
+        ``value -> spectrum``, called to locate each crossing.
+    values : sequence of float
+        Increasing.
+    spectra : sequence
+        At each value, an object with ``eigenvalues`` (complex array) and ``tolerance``
+        (a real part at or below it counts as 0), e.g. a :class:`Linearization`; None
+        where there is none (such a value bounds no interval).
+    xtol : float, optional
+
+    Returns
+    -------
+    list of Crossing
+        One or more per interval where the number of eigenvalues with positive real part
+        changes (see :func:`sweep`).
+    """
+    found = []
+    counts = [None if s is None else _n_positive(s) for s in spectra]
+    for i in range(len(values) - 1):
+        if None not in (counts[i], counts[i + 1]) and counts[i] != counts[i + 1]:
+            found.extend(_locate(linearize_at, values[i], values[i + 1], spectra[i],
+                                 spectra[i + 1], xtol))
+    return found
+
+
+def crossings_many(spectra_at: Callable, lines: Sequence, *, xtol: float = 1e-12,
+                   maxiter: int = 200) -> list:
+    """:func:`crossings` on many lines at once, the root finding batched across them.
+
+    Parameters
+    ----------
+    spectra_at : callable
+        ``[(line index, value), ...] -> [spectrum or None, ...]``: the spectra at many
+        points in one call (one batch of the generated kernels).
+    lines : sequence of (values, spectra)
+        Each line's increasing values and the spectra there (as for :func:`crossings`).
+    xtol : float, optional
+    maxiter : int, optional
+
+    Returns
+    -------
+    list of list of Crossing
+        Per line, as :func:`crossings` gives them. Each crossing whose eigenvalue branch
+        is found at both ends is located by the Illinois variant of regula falsi (a
+        superlinear bracketing method), all lines' brackets advanced together; the others
+        by :func:`crossings`' own search, one by one.
+    """
+    out: list = [[] for _ in lines]
+    brackets = []     # [line, a, b, fa, fb, za, zb, kind, side]
+    for k, (values, spectra) in enumerate(lines):
+        counts = [None if s is None else _n_positive(s) for s in spectra]
+        for i in range(len(values) - 1):
+            if None in (counts[i], counts[i + 1]) or counts[i] == counts[i + 1]:
+                continue
+            pairs = [(kind, *_same_branch(spectra[i], spectra[i + 1], kind))
+                     for kind in ("real", "complex")]
+            pairs = [p for p in pairs if p[1] is not None]
+            if not pairs:
+                out[k].extend(_locate(lambda v, k=k: spectra_at([(k, v)])[0], values[i],
+                                      values[i + 1], spectra[i], spectra[i + 1], xtol))
+                continue
+            for kind, za, zb in pairs:
+                brackets.append([k, float(values[i]), float(values[i + 1]), za.real, zb.real,
+                                 za, zb, kind, 0, float(values[i]), float(values[i + 1])])
+    for _ in range(maxiter):
+        active = [b for b in brackets if b[2] - b[1] > xtol + 4 * np.finfo(float).eps *
+                  max(abs(b[1]), abs(b[2])) and b[3] != 0 and b[4] != 0]
+        if not active:
+            break
+        points = []
+        for b in active:
+            _, a, c, fa, fc = b[:5]
+            x = c - fc * (c - a) / (fc - fa)
+            if not a < x < c:
+                x = 0.5 * (a + c)
+            points.append(x)
+        spectra = spectra_at([(b[0], x) for b, x in zip(active, points)])
+        for b, x, s in zip(active, points, spectra):
+            k, a0, c0 = b[0], b[9], b[10]
+            z = _branch(s, b[7], b[5] + (b[6] - b[5]) * (x - a0) / (c0 - a0))
+            if z is None:   # no spectrum there: located one by one below
+                b[8] = None
+                b[3] = b[4] = 0.0
+                continue
+            fx = z.real
+            if fx == 0:
+                b[1] = b[2] = x
+                b[3] = b[4] = 0.0
+            elif np.sign(fx) == np.sign(b[3]):
+                b[1], b[3] = x, fx
+                if b[8] == 1:       # Illinois: the other end kept twice, halve its value
+                    b[4] /= 2
+                b[8] = 1
+            else:
+                b[2], b[4] = x, fx
+                if b[8] == -1:
+                    b[3] /= 2
+                b[8] = -1
+    for b in brackets:
+        k, a, c, fa, fc = b[:5]
+        a0, c0 = b[9], b[10]
+        if b[8] is None:
+            values, spectra = lines[k]
+            i = list(values).index(a0)
+            out[k].extend(c for c in _locate(lambda v, k=k: spectra_at([(k, v)])[0], a0, c0,
+                                             spectra[i], spectra[i + 1], xtol)
+                          if c.kind == b[7])
+            continue
+        root = a if fa == 0 else c if fc == 0 else (a if abs(fa) < abs(fc) else c)
+        s = spectra_at([(k, root)])[0]
+        z = _branch(s, b[7], b[5] + (b[6] - b[5]) * (root - a0) / (c0 - a0))
+        if z is None:
+            continue
+        out[k].append(Crossing(float(root), b[7], complex(z), 1 if b[6].real > b[5].real
+                               else -1))
+    for found in out:
+        found.sort(key=lambda c: c.value)
+    return out
 
 
 def _n_positive(lin):
@@ -125,7 +247,9 @@ def _n_positive(lin):
 def _branch(lin, kind, target=None):
     """The eigenvalue of ``kind`` nearest to ``target``; without a target, the one
     of smallest |Re| among those with |Re| above the tolerance (a structural zero
-    eigenvalue is no branch)."""
+    eigenvalue is no branch). None where there is no linearisation (``lin`` None)."""
+    if lin is None:
+        return None
     ev = lin.eigenvalues
     pick = ev[ev.imag == 0] if kind == "real" else ev[ev.imag > 0]
     if target is None:
@@ -176,6 +300,8 @@ def _locate(linearize_at, a, b, lin_a, lin_b, xtol):
             except ValueError:
                 continue
             z = _branch(linearize_at(root), kind, za + (zb - za) * (root - a) / (b - a))
+            if z is None:
+                continue
             found.append(Crossing(float(root), kind, complex(z), 1 if zb.real > za.real else -1))
         if found:
             return found
@@ -183,6 +309,8 @@ def _locate(linearize_at, a, b, lin_a, lin_b, xtol):
             break
         mid = 0.5 * (a + b)
         lin_m = linearize_at(mid)
+        if lin_m is None:   # no linearisation there: the interval is all that is known
+            break
         if _n_positive(lin_m) != _n_positive(lin_a):
             b, lin_b = mid, lin_m
         else:

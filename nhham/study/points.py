@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import math
 import re
+from fractions import Fraction
 from dataclasses import dataclass
 from itertools import product
 
@@ -104,7 +105,12 @@ def parse_over(text: str) -> Axis:
     if not 1 <= count <= MAX_POINTS:
         raise InputError(f"--over: COUNT must be between 1 and {MAX_POINTS}, got {text!r}",
                          key="--over")
-    values = tuple(float(x) for x in np.linspace(start, stop, count))
+    # each value the double nearest to the exact decimal START + i (STOP - START)/(COUNT - 1),
+    # so that 0:1:11 has 0.3 (not linspace's 0.30000000000000004): a point is where the
+    # user meant it, also for the exact placement of a classify study
+    lo, hi = Fraction(a.strip()), Fraction(b.strip())
+    values = (float(lo),) if count == 1 else tuple(float(lo + i * (hi - lo) / (count - 1))
+                                                   for i in range(count))
     return Axis(name, values, (start, stop), text)
 
 

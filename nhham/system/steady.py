@@ -29,6 +29,7 @@ from functools import cached_property
 from types import MappingProxyType
 from typing import Callable, Mapping
 
+import numpy as np
 import sympy as sp
 
 from nhham.errors import MissingParameterValueError, ParseError
@@ -76,6 +77,49 @@ class SteadyState:
                     f"steady.{name}: no numeric value for parameter {', '.join(missing)}")
             out[name] = _at(name, expr, self._compiled[name], parameters)
         return out
+
+    def arrays(self, parameters: Mapping) -> dict:
+        """The state at many parameter values at once: ``{name: ndarray}``.
+
+        Parameters
+        ----------
+        parameters : mapping of str to float or ndarray
+            A value (or an array of values, all of one shape) for every parameter the
+            expressions use.
+
+        Returns
+        -------
+        dict of str to ndarray
+            Each entry at every point, of the arrays' shape; NaN where it is not a finite
+            real number there (the caller says which points those are).
+        """
+        shapes = {np.shape(v) for v in parameters.values()}
+        shape = np.broadcast_shapes(*shapes) if shapes else ()
+        out = {}
+        for name, expr in self.expressions.items():
+            if name in self._numbers:
+                out[name] = np.full(shape, self._numbers[name])
+                continue
+            names, f = self._vectorized[name]
+            missing = [s for s in names if s not in parameters]
+            if missing:
+                raise MissingParameterValueError(
+                    f"steady.{name}: no numeric value for parameter {', '.join(missing)}")
+            with np.errstate(all="ignore"):
+                value = np.asarray(f(*(np.asarray(parameters[s], dtype=float)
+                                       for s in names)))
+            if np.iscomplexobj(value):
+                value = np.where(np.abs(value.imag) <= 1e-12 * np.maximum(1, np.abs(value.real)),
+                                 value.real, np.nan)
+            out[name] = np.broadcast_to(value.astype(float), shape).copy()
+        return out
+
+    @cached_property
+    def _vectorized(self) -> dict:
+        return {name: (sorted(s.name for s in e.free_symbols),
+                       sp.lambdify(sorted(e.free_symbols, key=lambda s: s.name), e,
+                                   modules="numpy"))
+                for name, e in self.expressions.items() if e.free_symbols}
 
     def family(self, parameters: Mapping[str, float]) -> dict:
         """Tangents of the steady family: ``{p: {name: d value / d p}}`` for every

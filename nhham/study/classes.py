@@ -1,0 +1,122 @@
+"""``--what classify``: the constraint-set verdict at every point.
+
+The verdict changes only on exceptional parameter sets (polynomial equations in the
+parameters), so a study classifies once, for every value of the swept parameters
+(:func:`~nhham.verdict.parametric.parametric_classification` on the system with the
+other parameters at their values, :func:`prepare`), and each point is then placed in its
+case by exact arithmetic (its values read as the decimals they print as, as
+``classify`` reads a scene's): the generic verdict, or the first case whose equations hold
+there. A point on an exceptional set gets that set's verdict, not the generic one.
+
+Variables: ``case`` (-1 generic, else the index of ``cases`` in the attributes),
+``status`` (0 determined, 1 underdetermined, 2 inconsistent, 3 invalid), ``regular`` and
+``integrable`` (1 yes, 0 no, -1 undecided), ``rank_C``, ``stages``,
+``free_multipliers``, ``first_class``, ``second_class`` (-1 where not decided).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from nhham.errors import InputError
+
+__all__ = ["prepare", "variables", "evaluate", "STATUS_CODES"]
+
+#: ``status`` codes.
+STATUS_CODES = {"determined": 0, "underdetermined": 1, "inconsistent": 2, "invalid": 3}
+
+_FIELDS = ("status", "regular", "integrable", "rank_C", "stages", "free_multipliers",
+           "first_class", "second_class")
+
+
+def prepare(scene, design, policy=None) -> dict:
+    """The parametric classification over the swept parameters, as plain data.
+
+    Raises
+    ------
+    InputError
+        A swept name that is not a parameter with a value.
+    """
+    import sympy as sp
+
+    from nhham.system.expressions import to_text
+    from nhham.verdict.parametric import parametric_classification
+    from nhham.verdict.results import exact_value
+    from nhham.verdict.substitution import rebuild
+
+    system = scene.system
+    values = {p.name: v for p, v in system.parameter_values.items()}
+    for name in design.names:
+        if name not in values:
+            raise InputError(f"--over: {name!r} is not a parameter with a value in the scene "
+                             f"(parameters: {', '.join(values) or 'none'})", key="--over")
+    fixed = {sp.Symbol(k): exact_value(v) for k, v in values.items() if k not in design.names}
+    reduced = rebuild(system, {p: v for p, v in fixed.items() if p in system.parameters},
+                      None)
+    if not hasattr(reduced, "coordinates"):   # a Verdict: invalid at the fixed values
+        raise InputError(f"--what classify: {reduced.note}", key="parameters")
+    verdict = parametric_classification(reduced, policy=policy)
+    return {
+        "generic": _row(verdict.generic),
+        "cases": [{"conditions": [to_text(c) for c in case.conditions],
+                   "excluding": [to_text(c) for c in case.excluding],
+                   "verdict": _row(case.verdict),
+                   "describe": case.describe()} for case in verdict.cases],
+        "generic_describe": verdict.generic.describe(),
+        "notes": list(verdict.notes),
+        "names": list(design.names),
+    }
+
+
+def _row(verdict) -> dict:
+    """A verdict as the integer codes of the variables."""
+    def tri(x):
+        return -1 if x is None else int(bool(x))
+
+    def count(x):
+        return -1 if x is None else int(x)
+
+    return {"status": STATUS_CODES[verdict.status], "regular": tri(verdict.regular),
+            "integrable": tri(verdict.integrable), "rank_C": count(verdict.rank_C),
+            "stages": count(verdict.stages), "free_multipliers": count(verdict.free_multipliers),
+            "first_class": count(verdict.first_class),
+            "second_class": count(verdict.second_class)}
+
+
+def variables(design, options) -> dict:
+    """``{"point": {name: (extra dims, dtype, fill)}, "line": {}, "coords": {}}``."""
+    point: dict = {"case": ((), np.int16, -2)}
+    point.update({f: ((), np.int8 if f in ("status", "regular", "integrable") else np.int16,
+                      -1) for f in _FIELDS})
+    return {"point": point, "line": {}, "coords": {}}
+
+
+def evaluate(study, ctx, region) -> dict:
+    """Every variable on ``region``: each point placed in its case exactly."""
+    import sympy as sp
+
+    from nhham.system.expressions import parse_expression
+    from nhham.verdict.results import exact_value
+
+    opts = study.options
+    names = opts["names"]
+    table = {n: sp.Symbol(n) for n in names}
+    cases = [([parse_expression(c, table) for c in case["conditions"]],
+              [parse_expression(c, table) for c in case["excluding"]], case["verdict"])
+             for case in opts["cases"]]
+    values = study.design.values(region)
+    shape = next(iter(values.values())).shape
+    out = {f: np.empty(shape, dtype=np.int16) for f in ("case",) + _FIELDS}
+    for index in np.ndindex(*shape):
+        point = {table[n]: exact_value(float(values[n][index])) for n in names}
+        which, row = -1, opts["generic"]
+        for i, (eqs, neqs, verdict) in enumerate(cases):
+            if (all(e.xreplace(point) == 0 for e in eqs)
+                    and all(e.xreplace(point) != 0 for e in neqs)):
+                which, row = i, verdict
+                break
+        out["case"][index] = which
+        for f in _FIELDS:
+            out[f][index] = row[f]
+    return {k: v.astype(np.int16 if k == "case" or variables(None, opts)["point"][k][1]
+                        == np.int16 else np.int8) for k, v in out.items()}

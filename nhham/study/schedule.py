@@ -1,0 +1,153 @@
+"""Where a study's chunks run: in this process, or on Dask (a local cluster or a remote one).
+
+``scheduler``:
+
+- ``"processes"`` (the default with more than one worker): a
+  ``dask.distributed.LocalCluster`` of ``workers`` processes with one thread each, made
+  for the study and closed after it (nothing to set up);
+- ``"threads"``: a local cluster of one process with ``workers`` threads (the compiled
+  kernels and integration loops release the GIL);
+- ``"synchronous"`` (the default with one worker): the chunks one after the other in
+  this process, without Dask;
+- an address (``"tcp://host:8786"``): the scheduler of a running cluster;
+- in Python, a ``dask.distributed.Client`` (``client=``) is used as it is.
+
+A :class:`Pool` is started before the study is prepared and told the scene at once
+(:meth:`Pool.warm`), so each worker parses it and builds its model while this process
+makes the study's own decisions; each chunk is then one task ``evaluate(study, region)``
+with the :class:`~nhham.study.tasks.Study` (plain data) scattered to the workers once.
+Results are handed to ``on_result`` in the order they finish, so the caller writes each
+one as it comes.
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+import time
+
+from nhham.errors import BudgetExceeded, InputError, OptionalDependencyError
+from nhham.study.tasks import evaluate, warm
+
+__all__ = ["Pool", "SCHEDULERS", "default_workers"]
+
+#: The local schedulers (anything else is an address of a cluster's scheduler).
+SCHEDULERS = ("processes", "threads", "synchronous")
+
+
+def default_workers() -> int:
+    """The cores this process may use."""
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except AttributeError:  # pragma: no cover - not Linux
+        return max(1, os.cpu_count() or 1)
+
+
+class Pool:
+    """The workers of one study (see the module docstring); a context manager.
+
+    Attributes
+    ----------
+    scheduler : str
+        ``"synchronous"``, ``"processes"``, ``"threads"`` or the cluster's address.
+    workers : int
+    client : dask.distributed.Client or None
+    """
+
+    def __init__(self, scheduler: str, workers: int, client=None, owned=()):
+        self.scheduler, self.workers, self.client = scheduler, workers, client
+        self._owned = list(owned)
+        self._warming: list = []
+
+    @classmethod
+    def start(cls, scheduler: str | None = None, workers: int | None = None,
+              client=None) -> "Pool":
+        """Start the workers (a local cluster is made here; an address is connected to)."""
+        workers = default_workers() if workers is None else int(workers)
+        if workers < 1:
+            raise InputError(f"--workers: at least 1, got {workers}", key="--workers")
+        if client is None and scheduler is None:
+            scheduler = "synchronous" if workers == 1 else "processes"
+        if client is None and scheduler == "synchronous":
+            return cls("synchronous", 1)
+        scheduler = str(scheduler)
+        try:
+            from dask.distributed import Client, LocalCluster
+        except ImportError:
+            raise OptionalDependencyError(
+                "a study on Dask needs dask.distributed; install the study extra: pip "
+                "install 'nhham[study]' (or run with --workers 1)") from None
+        if client is not None:
+            return cls(str(client.scheduler.address), _count(client, workers), client)
+        if scheduler in ("processes", "threads"):
+            processes = scheduler == "processes"
+            cluster = LocalCluster(n_workers=workers if processes else 1,
+                                   threads_per_worker=1 if processes else workers,
+                                   processes=processes, dashboard_address=None,
+                                   silence_logs=logging.ERROR)
+            client = Client(cluster)
+            return cls(scheduler, workers, client, owned=(client, cluster))
+        try:
+            client = Client(scheduler, timeout="30s")
+        except (OSError, TimeoutError, ValueError) as exc:
+            raise InputError(f"--scheduler: cannot reach {scheduler!r} ({exc}); give "
+                             f"'processes', 'threads', 'synchronous' or the address of a "
+                             f"running dask scheduler", key="--scheduler") from None
+        return cls(scheduler, _count(client, workers), client, owned=(client,))
+
+    def warm(self, scene_text: str, source: str, what: str) -> None:
+        """Have every worker parse the scene and build its model now (not waited for)."""
+        if self.client is None:
+            return
+        for address in self.client.scheduler_info().get("workers", {}):
+            self._warming.append(self.client.submit(
+                warm, scene_text, source, what, workers=[address], allow_other_workers=False,
+                pure=False))
+
+    def run(self, study, regions, on_result, deadline: float | None = None) -> None:
+        """Evaluate ``study`` on every region; ``on_result(region, data)`` as each finishes.
+
+        ``deadline``: a ``time.perf_counter()`` value after which no result is waited for:
+        the chunks not finished are cancelled and
+        :class:`~nhham.errors.BudgetExceeded` is raised (what finished before was
+        handed to ``on_result``).
+        """
+        if self.client is None:
+            for region in regions:
+                if deadline is not None and time.perf_counter() > deadline:
+                    raise BudgetExceeded("the study's --budget ran out")
+                on_result(region, evaluate(study, region))
+            return
+        from dask.distributed import as_completed
+
+        shared = self.client.scatter(study, broadcast=True)
+        futures = {self.client.submit(evaluate, shared, region, pure=False): region
+                   for region in regions}
+        try:
+            timeout = None if deadline is None else max(0.0, deadline - time.perf_counter())
+            for future in as_completed(futures, timeout=timeout):
+                on_result(futures[future], future.result())
+        except TimeoutError:
+            raise BudgetExceeded("the study's --budget ran out") from None
+        finally:
+            self.client.cancel(list(futures))
+
+    def close(self) -> None:
+        if self.client is not None and self._warming:
+            self.client.cancel(self._warming)
+        for thing in self._owned:
+            try:
+                thing.close()
+            except Exception:  # pragma: no cover - closing must not hide the result
+                pass
+        self._owned = []
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+
+def _count(client, asked) -> int:
+    return len(client.scheduler_info().get("workers", {})) or asked

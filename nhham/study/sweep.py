@@ -1,0 +1,316 @@
+"""Parameter studies: :func:`sweep` over grids, samples and perturbed initial states.
+
+One call prepares a study in this process (the scene loaded, its numeric model built
+once, the decisions shared by every point made once: the chart of a linearisation, the
+parametric classification), cuts its design into chunks, runs them where the scheduler
+says (:mod:`~nhham.study.schedule`: this process, a local Dask cluster, a remote one) and
+writes each finished chunk to the store (:mod:`~nhham.study.store`), so that an
+interrupted study resumes where it stopped. The result is a :class:`SweepResult` whose
+``dataset`` is the labelled xarray Dataset.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import sys
+import time
+from dataclasses import dataclass, field
+from datetime import datetime, timezone
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from nhham.errors import BudgetExceeded, InputError
+from nhham.study.points import (Axis, Design, chunk_slices, grid, parse_over,
+                                parse_perturbation, samples)
+from nhham.study.store import Store, attrs_text, study_key
+from nhham.study.tasks import WHAT, Study, keep_context
+
+__all__ = ["sweep", "SweepResult", "CHUNK_POINTS"]
+
+#: Points per chunk by default: a chunk is a task and a unit of progress, resume and
+#: writing (about a second of work on the bicycle, a fraction of one for small systems).
+CHUNK_POINTS = {"linearize": 4096, "simulate": 256, "classify": 256}
+
+
+@dataclass(frozen=True)
+class SweepResult:
+    """A finished (or stopped) study.
+
+    Attributes
+    ----------
+    dataset : xarray.Dataset
+        The results (see the modules :mod:`~nhham.study.stability`,
+        :mod:`~nhham.study.ensemble`, :mod:`~nhham.study.classes` for the variables).
+    path : str or None
+        Where they are (None: in memory only).
+    points : int
+        Points of the design.
+    computed : int
+        Points computed by this call (the others were found done in a resumed store).
+    complete : bool
+        Every point is done (False after the budget ran out or an interruption).
+    wall_time_s : float
+        Of this call, from the scene's load to the last chunk written.
+    scheduler : str
+    workers : int
+    chunks : int
+        Chunks of the design (each a task).
+    """
+
+    dataset: Any = field(repr=False)
+    path: str | None
+    points: int
+    computed: int
+    complete: bool
+    wall_time_s: float
+    scheduler: str
+    workers: int
+    chunks: int
+
+    def to_dict(self) -> dict:
+        """JSON-ready summary (the command's ``result``)."""
+        ds = self.dataset
+        return {"path": self.path, "points": self.points, "computed": self.computed,
+                "complete": self.complete, "wall_time_s": self.wall_time_s,
+                "seconds_per_point": (self.wall_time_s / self.computed
+                                      if self.computed else None),
+                "scheduler": self.scheduler, "workers": self.workers, "chunks": self.chunks,
+                "dims": {d: int(n) for d, n in ds.sizes.items()},
+                "variables": sorted(ds.data_vars)}
+
+
+def sweep(scene, what: str, over=(), *, samples_count: int | None = None,
+          sampler: str = "lhs", seed: int = 0, initial_perturbation=(), out=None,
+          resume: bool = False, overwrite: bool = False, scheduler: str | None = None,
+          workers: int | None = None, client=None, budget: float | None = None,
+          chunk_points: int | None = None, along: str | None = None,
+          run_options: dict | None = None, policy=None, progress=None) -> SweepResult:
+    """Run a parameter study.
+
+    Parameters
+    ----------
+    scene : str or os.PathLike
+        The scene file (its text is what the workers receive).
+    what : {"linearize", "simulate", "classify"}
+        The stability of the ``[steady]`` motion (eigenvalues, verdict, boundaries along
+        ``along``), a run from the ``[initial]`` state (end state, diagnostics), or the
+        constraint-set verdict, at every point.
+    over : sequence of str or Axis
+        ``"P=START:STOP:COUNT"`` (a grid axis), ``"P=START:STOP"`` (a range to sample) or
+        ``"P=A,B,C"``; P a parameter (or, for simulate, a coordinate or velocity).
+    samples_count : int, optional
+        Draw this many points in the ranges (``sampler``: ``"lhs"``, ``"sobol"``,
+        ``"uniform"``; ``seed``) instead of the full grid.
+    initial_perturbation : sequence of str or (str, float)
+        ``"NAME=SIGMA"``: normal perturbations of initial values (simulate; with
+        ``samples_count``).
+    out : str or os.PathLike, optional
+        A ``.zarr`` directory or a ``.nc`` file; written chunk by chunk (None: memory).
+    resume, overwrite : bool
+        Continue an interrupted study at ``out``; replace an existing one.
+    scheduler, workers, client
+        Where the chunks run (:mod:`nhham.study.schedule`).
+    budget : float, optional
+        Seconds for the whole study; what finished is kept (``complete`` False).
+    chunk_points : int, optional
+        Points per chunk (default :data:`CHUNK_POINTS`).
+    along : str, optional
+        linearize on a grid: the parameter whose stability boundaries are located on
+        every line (default: the first axis).
+    run_options : dict, optional
+        simulate: ``t_end``, ``method``, ``rtol``, ``atol``, ``max_step``, ``projection``
+        (default: the scene's ``[simulate]`` table).
+    policy : nhham.Policy, optional
+        classify: the settings of the decisions.
+    progress : callable, optional
+        ``progress(done_points, total_points, elapsed_s)`` after each chunk.
+
+    Returns
+    -------
+    SweepResult
+    """
+    start = time.perf_counter()
+    deadline = None if budget is None else start + float(budget)
+    if what not in WHAT:
+        raise InputError(f"--what: one of {', '.join(WHAT)}, got {what!r}", key="--what")
+    design = _design(over, samples_count, sampler, seed, initial_perturbation, what)
+    text, source = _scene_text(scene)
+    from nhham.study.schedule import Pool
+
+    # the workers start, and parse the scene, while this process prepares the study
+    with Pool.start(scheduler, workers, client) as pool:
+        pool.warm(text, source, what)
+        loaded = _load(text, source, what)
+        options, code_hash, var_spec, model = _prepare(what, loaded, design, along,
+                                                       run_options, policy)
+        study = Study(what, text, source, code_hash, design, options)
+        keep_context(study, loaded, model)
+        attrs = _attributes(study)
+        regions = chunk_slices(design.shape, chunk_points or CHUNK_POINTS[what],
+                               whole=_whole(design, options))
+        store = Store.resume(out, attrs) if (resume and out is not None) else None
+        if store is None:
+            store = Store.create(out, _template(design, var_spec, attrs),
+                                 _chunking(regions, design), overwrite=overwrite)
+        done = store.done()
+        pending = [r for r in regions if not done[r].all()]
+        already = int(done.sum())
+        counter = {"points": already}
+
+        def on_result(region, data):
+            store.write(design.dims, region, data)
+            counter["points"] += int(np.prod([len(range(*s.indices(n)))
+                                              for s, n in zip(region, design.shape)]))
+            if progress is not None:
+                progress(counter["points"], design.size, time.perf_counter() - start)
+
+        complete = True
+        try:
+            pool.run(study, pending, on_result, deadline)
+        except BudgetExceeded:
+            complete = False
+        except KeyboardInterrupt:
+            store.finish(complete=False)
+            raise
+    dataset = store.finish(complete=complete)
+    return SweepResult(dataset, None if out is None else os.fspath(out), design.size,
+                       counter["points"] - already, complete and counter["points"] == design.size,
+                       time.perf_counter() - start, pool.scheduler, pool.workers, len(regions))
+
+
+def _design(over, count, sampler, seed, perturbation, what) -> Design:
+    axes = [a if isinstance(a, Axis) else parse_over(a) for a in over]
+    perturbations = [p if isinstance(p, tuple) else parse_perturbation(p)
+                     for p in perturbation]
+    if perturbations and what != "simulate":
+        raise InputError("--initial-perturbation: only for --what simulate",
+                         key="--initial-perturbation")
+    if count is None:
+        if perturbations:
+            raise InputError("--initial-perturbation: give --samples K (the ensemble's size)",
+                             key="--initial-perturbation")
+        if not axes:
+            raise InputError("--over: give at least one NAME=START:STOP:COUNT (or --samples "
+                             "with ranges or --initial-perturbation)", key="--over")
+        return grid(axes)
+    if not axes and not perturbations:
+        raise InputError("--samples: give ranges to sample (--over NAME=START:STOP) or "
+                         "--initial-perturbation", key="--samples")
+    return samples(axes, count, sampler=sampler, seed=seed, perturbations=perturbations)
+
+
+def _scene_text(scene) -> tuple:
+    """(text, source) of a scene file."""
+    path = Path(os.fspath(scene))
+    try:
+        return path.read_text(encoding="utf-8"), str(path)
+    except OSError as exc:
+        raise InputError(f"{path}: cannot read the scene ({exc.strerror or exc})",
+                         key="scene") from None
+
+
+def _load(text, source, what):
+    from nhham.system.scene import loads_scene
+
+    return loads_scene(text, source, check_initial=what != "simulate")
+
+
+def _prepare(what, scene, design, along, run_options, policy) -> tuple:
+    """(options, code hash, variables, numeric model) of the study, decided once here."""
+    if what == "classify":
+        from nhham.study import classes
+
+        options = classes.prepare(scene, design, policy)
+        return options, "", classes.variables(design, options), None
+    from nhham.study.tasks import study_model
+
+    model, code_hash = study_model(scene, what)
+    if what == "linearize":
+        from nhham.study import stability
+
+        options = stability.prepare(scene, model, design, along)
+        return options, code_hash, stability.variables(design, options), model
+    from nhham.study import ensemble
+
+    if along is not None:
+        raise InputError("--along: only for --what linearize", key="--along")
+    options = ensemble.prepare(scene, model, design, run_options)
+    return options, code_hash, ensemble.variables(design, options), model
+
+
+def _whole(design, options):
+    """The dimension a chunk never cuts (the one boundaries are traced along)."""
+    along = options.get("along")
+    return None if along is None else design.dims.index(along)
+
+
+def _chunking(regions, design) -> dict:
+    """Zarr chunk sizes: those of the first region (the regions form a regular grid)."""
+    first = regions[0]
+    return {d: len(range(*s.indices(n))) for d, s, n in zip(design.dims, first, design.shape)}
+
+
+def _attributes(study) -> dict:
+    from nhham.settings import __version__
+
+    attrs = {"scene": study.scene_text, "scene_source": study.scene_source,
+             "what": study.what, "design": attrs_text(study.design.description),
+             "options": attrs_text({k: v for k, v in study.options.items()}),
+             "code_hash": study.code_hash, "nhham_version": __version__}
+    attrs["study_key"] = study_key(attrs)
+    attrs["created"] = datetime.now(timezone.utc).isoformat(timespec="seconds")
+    return attrs
+
+
+def _template(design, spec, attrs):
+    """The study's Dataset filled with its fill values (NaN, -1, False)."""
+    from nhham.study.store import xarray_module
+
+    xr = xarray_module()
+    coords = {}
+    if design.kind == "grid":
+        coords.update({d: design.coordinates[d] for d in design.dims})
+    else:
+        coords["sample"] = np.arange(design.shape[0])
+        coords.update({n: ("sample", design.coordinates[n]) for n in design.names})
+    coords.update({k: v for k, v in spec["coords"].items()})
+    data = {}
+    for name, (extra, dtype, fill) in spec["point"].items():
+        shape = design.shape + tuple(len(spec["coords"][d]) for d in extra)
+        data[name] = (design.dims + extra, np.full(shape, fill, dtype=dtype))
+    line_dims = tuple(d for d in design.dims if d != _along(attrs))
+    for name, (extra, dtype, fill) in spec["line"].items():
+        shape = tuple(design.shape[design.dims.index(d)] for d in line_dims) + tuple(
+            len(spec["coords"][d]) for d in extra)
+        data[name] = (line_dims + extra, np.full(shape, fill, dtype=dtype))
+    if design.perturbed:
+        data["initial_perturbation"] = (("sample", "perturbed"), design.perturbations)
+        coords["perturbed"] = list(design.perturbed)
+    data["done"] = (design.dims, np.zeros(design.shape, dtype=bool))
+    used = {d for v in data.values() for d in v[0]}
+    coords = {k: v for k, v in coords.items()
+              if k in used or (isinstance(v, tuple) and v[0] in used)}
+    ds = xr.Dataset(data, coords=coords, attrs=attrs)
+    return ds
+
+
+def _along(attrs) -> str | None:
+    import json
+
+    return json.loads(attrs["options"]).get("along")
+
+
+def progress_line(stream=sys.stderr):
+    """A ``progress`` callable printing one updating line on a terminal."""
+    def report(done, total, elapsed):
+        rate = done / elapsed if elapsed > 0 else math.nan
+        left = (total - done) / rate if rate and rate == rate and rate > 0 else math.nan
+        stream.write(f"\r  {done}/{total} points ({100 * done / total:.0f}%), "
+                     f"{elapsed:.1f} s, ~{left:.0f} s left   ")
+        if done >= total:
+            stream.write("\n")
+        stream.flush()
+    return report
