@@ -17,13 +17,19 @@ from __future__ import annotations
 
 import math
 import numbers
+import threading
 from dataclasses import dataclass
 
-__all__ = ["__version__", "SEED", "STATE_BOX", "PARAMETER_BOX", "Precision", "MIN_DIGITS",
+__all__ = ["__version__", "COMPILER_LOCK", "SEED", "STATE_BOX", "PARAMETER_BOX", "Precision", "MIN_DIGITS",
            "MAX_DIGITS", "MAX_SAMPLES", "option_problem", "check_options", "json_number"]
 
 #: The version of nhham (the package, the command's --version and its JSON read it here).
 __version__ = "0.1.0"
+
+#: Held around every call of Python's compiler (``ast.parse``, ``compile``): CPython 3.11
+#: before 3.11.8 fails with "AST constructor recursion depth mismatch" when two threads
+#: compile at once (a study on a cluster of threads parses and loads in several).
+COMPILER_LOCK = threading.Lock()
 
 #: Default seed of seeded sample points (the year of the paper).
 SEED = 1996

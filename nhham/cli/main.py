@@ -38,6 +38,7 @@ from nhham.cli.envelope import (
     scene_info,
 )
 from nhham.cli.linearize_command import cmd_linearize
+from nhham.cli.sweep_command import cmd_sweep
 from nhham.cli.options import check_options
 from nhham.cli.report import Steps, expr_text, table
 from nhham.errors import InputError, NhhamError, UsageError
@@ -654,6 +655,7 @@ COMMANDS = {
     "simulate": cmd_simulate,
     "bench": cmd_bench,
     "linearize": cmd_linearize,
+    "sweep": cmd_sweep,
 }
 
 
@@ -681,7 +683,9 @@ def main(argv=None) -> int:
     steps = Steps(progress=sys.stderr.isatty() and not run.json)
     try:
         args.policy = _policy(args)
-        with capture_warnings() as caught, time_budget(args.policy.budget, steps):
+        # sweep keeps to its --budget itself: what finished is kept and reported
+        alarm = None if args.command == "sweep" else args.policy.budget
+        with capture_warnings() as caught, time_budget(alarm, steps):
             out = COMMANDS[args.command](args, steps)
             if not isinstance(out, CommandOutput):  # a plain dict (JSON) or text
                 out = CommandOutput(result=out if isinstance(out, dict) else {},

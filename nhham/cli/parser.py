@@ -13,6 +13,8 @@ from nhham.cli.envelope import (
 )
 from nhham.cli.linearize_command import LINEARIZE_HELP
 from nhham.cli.linearize_command import add_arguments as add_linearize_arguments
+from nhham.cli.sweep_command import SWEEP_HELP
+from nhham.cli.sweep_command import add_arguments as add_sweep_arguments
 from nhham.cli.options import DEFAULT_BUDGET, argparse_key, budget_value
 from nhham.errors import UsageError
 
@@ -53,6 +55,7 @@ _HELP = {
               "t_end against wall time, constraint residual and energy drift.",
               "nhham bench examples/chaplygin_sleigh.toml --quick --plot wp.png"),
     "linearize": LINEARIZE_HELP,
+    "sweep": SWEEP_HELP,
 }
 
 
@@ -85,7 +88,8 @@ def build_parser() -> argparse.ArgumentParser:
         p = sub.add_parser(name, help=short, description=long,
                            epilog=f"example: {example}\n{_EXIT_TEXT}",
                            formatter_class=argparse.RawDescriptionHelpFormatter)
-        add_common_arguments(p, budget=None if name in ("simulate", "bench") else DEFAULT_BUDGET)
+        add_common_arguments(p, budget=None if name in ("simulate", "bench", "sweep")
+                             else DEFAULT_BUDGET)
         _add_shared_options(p, name)
         if name in _OPTIONS:
             _OPTIONS[name](p)
@@ -195,6 +199,7 @@ _OPTIONS = {
     "simulate": _add_simulate_options,
     "bench": _add_bench_options,
     "linearize": add_linearize_arguments,
+    "sweep": add_sweep_arguments,
 }
 
 

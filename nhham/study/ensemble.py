@@ -3,8 +3,10 @@
 A point sets parameters and initial values (swept names of the scene's state, and
 ``--initial-perturbation`` draws added to them); the rest of the initial state is the
 scene's ``[initial]`` table and the rest of the options its ``[simulate]`` table (or the
-study's). An initial state the point changed is projected onto M_1 (the constraints must
-hold; ``projection_distance`` says by how much it moved). The runs are those of
+study's). An initial state off M_1 there (a point changed it, or its parameters moved M_1)
+is projected onto M_1 (the kinetic-metric projection of
+:meth:`~nhham.numerics.model.NumericModel.project`; ``projection_distance`` says by how
+much it moved, and the command warns). The runs are those of
 :func:`~nhham.numerics.ensemble.simulate_many`: each end state is what a single
 ``simulate`` gives, to rounding.
 
@@ -26,6 +28,9 @@ __all__ = ["prepare", "variables", "evaluate", "OPTIONS"]
 
 #: Run options a study takes (the scene's [simulate] table gives the defaults).
 OPTIONS = ("t_end", "method", "rtol", "atol", "max_step", "projection")
+
+#: Largest scaled residual of an initial state taken as on M_1 (``simulate``'s default).
+INITIAL_TOL = 1e-10
 
 _DEFAULTS = {"t_end": 10.0, "method": "DOP853", "rtol": 1e-9, "atol": 1e-12,
              "max_step": None, "projection": False}
@@ -66,9 +71,7 @@ def prepare(scene, model, design, run_options=None) -> dict:
         raise InputError(f"--method: a study runs the adaptive methods (DOP853, RK45, RK23, "
                          f"Radau, BDF, LSODA), not {opts['method']!r}", key="--method")
     y0 = model.state(dict(scene.initial))
-    moved = any(n in states for n in design.names) or bool(design.perturbed)
-    return {**opts, "initial": [float(x) for x in y0], "project": moved,
-            "state_names": states,
+    return {**opts, "initial": [float(x) for x in y0], "state_names": states,
             "parameters": [n for n in design.names if n in params]}
 
 
@@ -113,12 +116,11 @@ def evaluate(study, ctx, region) -> dict:
         for j, name in enumerate(study.design.perturbed):
             Y0[:, states.index(name)] += noise[:, j]
     distance = np.zeros(N)
-    if opts["project"]:
-        for i in range(N):
-            m = model if P is None else model.with_parameters(**dict(zip(params, P[i])))
-            outcome = m.project(Y0[i])
-            distance[i] = np.linalg.norm(outcome.y - Y0[i])
-            Y0[i] = outcome.y
+    for i in np.flatnonzero(_off_manifold(model, P, Y0)):
+        m = model if P is None else model.with_parameters(**dict(zip(params, P[i])))
+        outcome = m.project(Y0[i])
+        distance[i] = np.linalg.norm(outcome.y - Y0[i])
+        Y0[i] = outcome.y
     runs = simulate_many(model, Y0, (0.0, float(opts["t_end"])), parameters=P,
                          method=opts["method"], rtol=opts["rtol"], atol=opts["atol"],
                          max_step=np.inf if opts["max_step"] is None else opts["max_step"],
@@ -133,6 +135,16 @@ def evaluate(study, ctx, region) -> dict:
         "projection_distance": distance,
     }
     return {k: np.asarray(v).reshape(shape + np.asarray(v).shape[1:]) for k, v in out.items()}
+
+
+def _off_manifold(model, P, Y0) -> np.ndarray:
+    """Which initial states are not on M_1 (scaled residual above 1e-10, as ``simulate``
+    checks): a point that changed them, or whose parameters moved M_1."""
+    if P is None:
+        return model.scaled_residuals(Y0).max(axis=1, initial=0.0) > INITIAL_TOL
+    return np.array([float(np.max(model.with_parameters(
+        **dict(zip(model.parameter_names, p))).scaled_residuals(y), initial=0.0)) > INITIAL_TOL
+        for p, y in zip(P, Y0)])
 
 
 def _ends(model, P, Y0, Y1) -> tuple:

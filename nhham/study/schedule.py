@@ -97,7 +97,7 @@ class Pool:
 
     def warm(self, scene_text: str, source: str, what: str) -> None:
         """Have every worker parse the scene and build its model now (not waited for)."""
-        if self.client is None:
+        if self.client is None or self.scheduler == "threads":  # threads share this one's
             return
         for address in self.client.scheduler_info().get("workers", {}):
             self._warming.append(self.client.submit(

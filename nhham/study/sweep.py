@@ -22,6 +22,7 @@ from typing import Any
 
 import numpy as np
 
+from nhham.budget import time_budget
 from nhham.errors import BudgetExceeded, InputError
 from nhham.study.points import (Axis, Design, chunk_slices, grid, parse_over,
                                 parse_perturbation, samples)
@@ -58,6 +59,8 @@ class SweepResult:
     workers : int
     chunks : int
         Chunks of the design (each a task).
+    scene : Scene
+        The scene as loaded here.
     """
 
     dataset: Any = field(repr=False)
@@ -69,6 +72,7 @@ class SweepResult:
     scheduler: str
     workers: int
     chunks: int
+    scene: Any = field(default=None, repr=False)
 
     def to_dict(self) -> dict:
         """JSON-ready summary (the command's ``result``)."""
@@ -78,7 +82,7 @@ class SweepResult:
                 "seconds_per_point": (self.wall_time_s / self.computed
                                       if self.computed else None),
                 "scheduler": self.scheduler, "workers": self.workers, "chunks": self.chunks,
-                "dims": {d: int(n) for d, n in ds.sizes.items()},
+                "dims": {d: int(ds.sizes[d]) for d in ds["done"].dims},
                 "variables": sorted(ds.data_vars)}
 
 
@@ -133,6 +137,9 @@ def sweep(scene, what: str, over=(), *, samples_count: int | None = None,
     SweepResult
     """
     start = time.perf_counter()
+    if budget is not None and not (math.isfinite(budget) and budget > 0):
+        raise InputError(f"--budget: a positive number of seconds, got {budget!r}",
+                         key="--budget")
     deadline = None if budget is None else start + float(budget)
     if what not in WHAT:
         raise InputError(f"--what: one of {', '.join(WHAT)}, got {what!r}", key="--what")
@@ -143,9 +150,12 @@ def sweep(scene, what: str, over=(), *, samples_count: int | None = None,
     # the workers start, and parse the scene, while this process prepares the study
     with Pool.start(scheduler, workers, client) as pool:
         pool.warm(text, source, what)
-        loaded = _load(text, source, what)
-        options, code_hash, var_spec, model = _prepare(what, loaded, design, along,
-                                                       run_options, policy)
+        # the preparation (symbolic for classify) is stopped by the budget's alarm; the
+        # chunks then stop at its deadline, keeping what finished
+        with time_budget(budget):
+            loaded = _load(text, source, what)
+            options, code_hash, var_spec, model = _prepare(what, loaded, design, along,
+                                                           run_options, policy)
         study = Study(what, text, source, code_hash, design, options)
         keep_context(study, loaded, model)
         attrs = _attributes(study)
@@ -178,7 +188,8 @@ def sweep(scene, what: str, over=(), *, samples_count: int | None = None,
     dataset = store.finish(complete=complete)
     return SweepResult(dataset, None if out is None else os.fspath(out), design.size,
                        counter["points"] - already, complete and counter["points"] == design.size,
-                       time.perf_counter() - start, pool.scheduler, pool.workers, len(regions))
+                       time.perf_counter() - start, pool.scheduler, pool.workers, len(regions),
+                       loaded)
 
 
 def _design(over, count, sampler, seed, perturbation, what) -> Design:
@@ -276,7 +287,9 @@ def _template(design, spec, attrs):
     else:
         coords["sample"] = np.arange(design.shape[0])
         coords.update({n: ("sample", design.coordinates[n]) for n in design.names})
-    coords.update({k: v for k, v in spec["coords"].items()})
+    # names as variable-length strings (Zarr 3 has no fixed-length unicode type)
+    coords.update({k: np.array(v, dtype=object) if len(v) and isinstance(v[0], str)
+                   else np.asarray(v) for k, v in spec["coords"].items()})
     data = {}
     for name, (extra, dtype, fill) in spec["point"].items():
         shape = design.shape + tuple(len(spec["coords"][d]) for d in extra)
@@ -288,7 +301,7 @@ def _template(design, spec, attrs):
         data[name] = (line_dims + extra, np.full(shape, fill, dtype=dtype))
     if design.perturbed:
         data["initial_perturbation"] = (("sample", "perturbed"), design.perturbations)
-        coords["perturbed"] = list(design.perturbed)
+        coords["perturbed"] = np.array(design.perturbed, dtype=object)
     data["done"] = (design.dims, np.zeros(design.shape, dtype=bool))
     used = {d for v in data.values() for d in v[0]}
     coords = {k: v for k, v in coords.items()

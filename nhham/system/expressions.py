@@ -45,6 +45,7 @@ import sympy as sp
 from sympy.printing.str import StrPrinter
 
 from nhham.errors import ParseError
+from nhham.settings import COMPILER_LOCK
 from nhham.system.numbers import complex_string, number_problems
 
 __all__ = [
@@ -240,7 +241,7 @@ def _symbol_table(symbols) -> Mapping[str, sp.Symbol]:
 def _ast_parse(source: str, original: str, lead: int, where: str) -> ast.Expression:
     """Run :func:`ast.parse`, turning each of its failures into a ParseError."""
     try:
-        with warnings.catch_warnings():
+        with COMPILER_LOCK, warnings.catch_warnings():
             # Input such as "'\\d'" or "1 is 1" makes the compiler warn on
             # stderr; the expression is refused later anyway.
             warnings.simplefilter("ignore")

@@ -1,0 +1,217 @@
+"""``nhham sweep SCENE``: a parameter study on a grid or samples, run on Dask.
+
+Usage::
+
+    nhham sweep SCENE --what linearize|simulate|classify --over P=A:B:N [--over Q=...]
+                [--samples K [--sampler lhs|sobol|uniform] [--seed S]]
+                [--initial-perturbation NAME=SIGMA ...] --out FILE(.zarr|.nc)
+                [--resume | --overwrite] [--workers N] [--scheduler ADDRESS]
+                [--budget SECONDS] [--plot FILE]
+
+See :func:`nhham.study.sweep.sweep`. JSON (the ``result`` of the envelope, schema
+``$defs/sweep``): ``path``, ``points``, ``computed``, ``complete``, ``wall_time_s``,
+``seconds_per_point``, ``scheduler``, ``workers``, ``chunks``, ``dims``, ``variables``,
+``summary`` (by kind: the stable fraction and the boundaries' range, the runs that
+failed, the verdicts' counts) and ``plot``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from nhham.errors import InputError
+
+__all__ = ["add_arguments", "cmd_sweep", "SWEEP_HELP"]
+
+#: (short help, description, example) for ``nhham sweep --help``.
+SWEEP_HELP = (
+    "parameter studies: grids and samples on Dask",
+    "Evaluate the scene at every point of a grid (--over P=START:STOP:COUNT, one dimension "
+    "per parameter) or of samples (--samples K over P=START:STOP ranges; "
+    "--initial-perturbation for ensembles): the stability of its [steady] motion "
+    "(linearize; boundaries located along the first parameter), a run from its [initial] "
+    "state (simulate) or its constraint-set verdict (classify). Chunks run on a local Dask "
+    "cluster (or --scheduler ADDRESS) and are written to --out (.zarr, or .nc at the end) "
+    "as they finish; --resume continues an interrupted study.",
+    "nhham sweep examples/whipple_bicycle_benchmark.toml --what linearize "
+    "--over v=0:10:201 --over c=0:0.2:101 --out map.zarr --plot map.png")
+
+
+def add_arguments(parser) -> None:
+    """The command's own options (the common ones are added by ``main``)."""
+    from nhham.study.points import SAMPLERS
+
+    parser.add_argument("--what", required=True, choices=("linearize", "simulate", "classify"),
+                        help="what to compute at every point")
+    parser.add_argument("--over", action="append", default=[], metavar="P=A:B:N",
+                        help="a swept parameter (or, for simulate, initial value): a grid "
+                             "P=START:STOP:COUNT, a range P=START:STOP (with --samples) or "
+                             "values P=A,B,C; repeatable (one dimension each)")
+    parser.add_argument("--samples", dest="sample_count", type=int, default=None,
+                        metavar="K", help="draw K points in the ranges instead of a grid")
+    parser.add_argument("--sampler", choices=SAMPLERS, default="lhs",
+                        help="how samples are drawn (default: lhs, Latin hypercube)")
+    parser.add_argument("--seed", type=int, default=0, help="seed of the samples (default 0)")
+    parser.add_argument("--initial-perturbation", dest="initial_perturbation",
+                        action="append", default=[], metavar="NAME=SIGMA",
+                        help="simulate with --samples: add a normal perturbation of standard "
+                             "deviation SIGMA to an initial value; repeatable")
+    parser.add_argument("--out", required=True, metavar="FILE",
+                        help="where the results go: a .zarr directory (written chunk by "
+                             "chunk) or a .nc file (netCDF, written at the end)")
+    group = parser.add_mutually_exclusive_group()
+    group.add_argument("--resume", action="store_true",
+                       help="continue the interrupted study at --out (same scene and "
+                            "options)")
+    group.add_argument("--overwrite", action="store_true", help="replace an existing --out")
+    parser.add_argument("--workers", type=int, default=None, metavar="N",
+                        help="local worker processes (default: the cores available; 1 runs "
+                             "in this process without Dask)")
+    parser.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                        help="processes (default), threads, synchronous, or the address of "
+                             "a running dask scheduler (tcp://host:8786)")
+    parser.add_argument("--chunk", type=int, default=None, metavar="POINTS",
+                        help="points per task (default: 4096 linearize, 256 simulate and "
+                             "classify)")
+    parser.add_argument("--along", default=None, metavar="P",
+                        help="linearize: the parameter along which stability boundaries are "
+                             "located (default: the first --over)")
+    parser.add_argument("--method", default=None, help="simulate: the method (default: the "
+                                                       "scene's, else DOP853)")
+    parser.add_argument("--rtol", type=float, default=None, help="simulate: relative tolerance")
+    parser.add_argument("--atol", type=float, default=None, help="simulate: absolute tolerance")
+    parser.add_argument("--t-end", dest="t_end", type=float, default=None, metavar="T",
+                        help="simulate: the final time (default: the scene's, else 10)")
+    parser.add_argument("--plot", metavar="FILE", default=None,
+                        help="a figure: the stability map (linearize over two parameters), "
+                             "the boundaries or stable range (one), the spread of the end "
+                             "states (simulate), the verdicts (classify); needs matplotlib")
+
+
+def cmd_sweep(args, steps):
+    """The command: run the study, summarise it, draw it."""
+    from nhham.cli.envelope import CommandOutput, scene_info
+    from nhham.study.sweep import progress_line, sweep
+
+    if args.plot:
+        from nhham.study.plots import pyplot
+
+        pyplot()   # fail before the work when the extra is missing
+    if args.what != "simulate":
+        for name in ("method", "rtol", "atol", "t_end"):
+            if getattr(args, name) is not None:
+                raise InputError(f"--{name.replace('_', '-')}: only for --what simulate",
+                                 key=f"--{name.replace('_', '-')}")
+    progress = progress_line() if steps.progress else None
+    with steps.step(f"sweep ({args.what}) over "
+                    + (", ".join(args.over) or "initial perturbations")):
+        result = sweep(args.scene, args.what, args.over, samples_count=args.sample_count,
+                       sampler=args.sampler, seed=args.seed,
+                       initial_perturbation=args.initial_perturbation, out=args.out,
+                       resume=args.resume, overwrite=args.overwrite, scheduler=args.scheduler,
+                       workers=args.workers, budget=args.budget, chunk_points=args.chunk,
+                       along=args.along, policy=args.policy, progress=progress,
+                       run_options={"method": args.method, "rtol": args.rtol,
+                                    "atol": args.atol, "t_end": args.t_end})
+    args.loaded_scene = result.scene
+    data = result.to_dict()
+    data["summary"] = summary(args.what, result.dataset)
+    data["plot"] = None
+    if args.plot:
+        from nhham.study.plots import plot_study
+
+        with steps.step(f"plot {args.plot}"):
+            data["plot"] = plot_study(result.dataset, args.plot)
+    warnings = []
+    s = data["summary"]
+    if args.what == "simulate" and s["projected_starts"]:
+        warnings.append(f"{s['projected_starts']} of {s['done_points']} initial states were off "
+                        f"M_1 at their point (its values or parameters) and were projected "
+                        f"onto it (largest move {s['max_projection_distance']:.3g}; "
+                        f"projection_distance in the results)")
+    if args.what == "linearize" and s["not_linearised"]:
+        warnings.append(f"{s['not_linearised']} points have no linearisation: the [steady] "
+                        f"state is not on M_1, not steady or singular there (status in the "
+                        f"results: 1, 2, 3)")
+    failure = None
+    if not result.complete:
+        failure = (f"the --budget ran out with {data['points'] - _missing(result)} of "
+                   f"{data['points']} points done (kept in {args.out}); continue with "
+                   f"--resume")
+    return CommandOutput(result=data, text=lambda: _text(args, result, data),
+                         scene=scene_info(result.scene), failure=failure, warnings=warnings)
+
+
+def _missing(result) -> int:
+    return int((~np.asarray(result.dataset["done"].values, dtype=bool)).sum())
+
+
+def summary(what: str, ds) -> dict:
+    """What the study found, in a few numbers (JSON-ready)."""
+    done = np.asarray(ds["done"].values, dtype=bool)
+    if what == "linearize":
+        stable = np.asarray(ds["stable"].values, dtype=bool) & done
+        status = np.asarray(ds["status"].values)
+        out = {"stable_points": int(stable.sum()), "done_points": int(done.sum()),
+               "not_linearised": int(((status != 0) & done).sum())}
+        if "boundary" in ds:
+            b = np.asarray(ds["boundary"].values)
+            kinds = np.asarray(ds["boundary_kind"].values)
+            for kind, name in ((0, "real"), (1, "complex")):
+                vals = b[(kinds == kind) & np.isfinite(b)]
+                out[f"{name}_crossings"] = int(vals.size)
+                out[f"{name}_crossing_range"] = ([float(vals.min()), float(vals.max())]
+                                                 if vals.size else None)
+        return out
+    if what == "simulate":
+        success = np.asarray(ds["success"].values, dtype=bool) & done
+        err = np.abs(np.asarray(ds["energy_error"].values))[done]
+        res = np.asarray(ds["constraint_residual"].values)[done]
+        moved = np.asarray(ds["projection_distance"].values)[done]
+        return {"done_points": int(done.sum()), "failed_runs": int((done & ~success).sum()),
+                "max_energy_error": float(np.nanmax(err)) if err.size else None,
+                "max_constraint_residual": float(np.nanmax(res)) if res.size else None,
+                "projected_starts": int((moved > 0).sum()),
+                "max_projection_distance": float(moved.max()) if moved.size else None}
+    case = np.asarray(ds["case"].values)[done]
+    return {"done_points": int(done.sum()), "generic_points": int((case == -1).sum()),
+            "case_points": {str(int(c)): int((case == c).sum())
+                            for c in np.unique(case) if c >= 0}}
+
+
+def _text(args, result, data) -> str:
+    from nhham.cli.report import table
+
+    s = data["summary"]
+    dims = " x ".join(f"{d} {n}" for d, n in data["dims"].items())
+    rows = [("points", f"{data['points']} ({dims})"),
+            ("computed now", f"{data['computed']} in {data['wall_time_s']:.2f} s"
+             + (f" ({1e6 * data['seconds_per_point']:.0f} us a point)"
+                if data["seconds_per_point"] else "")),
+            ("ran on", f"{data['scheduler']} ({data['workers']} worker(s), {data['chunks']} "
+                       f"chunks)"),
+            ("results", f"{data['path']}" + ("" if result.complete else " (incomplete)"))]
+    if args.what == "linearize":
+        rows.append(("stable", f"{s['stable_points']} of {s['done_points']} points"
+                     + (f"; {s['not_linearised']} not linearised (status != 0)"
+                        if s["not_linearised"] else "")))
+        for kind, word in (("complex", "complex pair (weave-like)"), ("real", "real (capsize-like)")):
+            if s.get(f"{kind}_crossings"):
+                lo, hi = s[f"{kind}_crossing_range"]
+                rows.append((f"{kind} crossings", f"{s[f'{kind}_crossings']}, {word}, "
+                                                  f"{lo:.6g} .. {hi:.6g}"))
+    elif args.what == "simulate":
+        rows.append(("runs failed", str(s["failed_runs"])))
+        rows.append(("max |energy error|", f"{s['max_energy_error']:.3g}"
+                     if s["max_energy_error"] is not None else "-"))
+        rows.append(("max constraint residual", f"{s['max_constraint_residual']:.3g}"
+                     if s["max_constraint_residual"] is not None else "-"))
+    else:
+        rows.append(("generic verdict", f"{s['generic_points']} points"))
+        for c, n in s["case_points"].items():
+            rows.append((f"case {c}", f"{n} points"))
+    if data["plot"]:
+        rows.append(("plot", data["plot"]))
+    title = result.scene.name or str(args.scene)
+    return f"{title}: sweep ({args.what})\n" + table(rows)
+

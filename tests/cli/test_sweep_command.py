@@ -1,0 +1,133 @@
+"""``nhham sweep``: the envelope and its schema, the refusals (exit 2 naming the option),
+the budget (exit 3, results kept) and a study killed mid-run resumed to the result of an
+uninterrupted one."""
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import jsonschema
+import numpy as np
+import xarray as xr
+
+from nhham.cli.envelope import output_schema
+from nhham.cli.main import main
+
+ROOT = Path(__file__).resolve().parents[2]
+BICYCLE = ROOT / "examples" / "whipple_bicycle_benchmark.toml"
+DRIVE = ROOT / "examples" / "differential_drive_motors.toml"
+
+
+def run(capsys, *argv):
+    status = main([str(a) for a in argv])
+    out = capsys.readouterr()
+    return status, out.out, out.err
+
+
+def test_a_stability_map_with_its_plot(capsys, tmp_path):
+    out, plot = tmp_path / "map.zarr", tmp_path / "map.png"
+    status, stdout, err = run(capsys, "sweep", BICYCLE, "--what", "linearize", "--over",
+                              "v=2:8:13", "--over", "c=0.06:0.1:3", "--out", out, "--plot",
+                              plot, "--workers", "1", "--json")
+    envelope = json.loads(stdout)
+    jsonschema.validate(envelope, output_schema())
+    result = envelope["result"]
+    assert status == 0 and result["complete"] and result["points"] == 39
+    assert result["dims"] == {"v": 13, "c": 3} and result["plot"] == str(plot)
+    assert result["summary"]["complex_crossings"] == 3 and result["summary"]["real_crossings"] == 3
+    lo, hi = result["summary"]["complex_crossing_range"]
+    assert lo < 4.2923825 < hi           # the weave speed at c = 0.08 lies in the range
+    assert plot.stat().st_size > 10_000 and plot.read_bytes()[:4] == b"\x89PNG"
+    assert envelope["scene"]["name"] == "Whipple bicycle (benchmark parameters)"
+
+
+def test_refusals_name_their_option(capsys, tmp_path):
+    out = tmp_path / "x.zarr"
+    for argv, key, fragment in (
+            (["--over", "v=0:1"], "--over", "needs a COUNT"),
+            (["--over", "nope=0:1:3"], "--over", "'nope' is not a parameter"),
+            (["--over", "v=0:1:3", "--rtol", "1e-6"], "--rtol", "only for --what simulate"),
+            (["--over", "v=0:1:3", "--along", "c"], "--along", "'c' is not swept"),
+            (["--over", "v=0:1:3", "--out", tmp_path / "x.csv"], "--out", ".zarr directory")):
+        args = ["sweep", BICYCLE, "--what", "linearize", "--out", out, "--workers", "1",
+                "--json", *argv]
+        status, stdout, err = run(capsys, *args)
+        error = json.loads(stdout)["error"]
+        assert status == 2 and error["key"] == key and fragment in error["message"], error
+    status, stdout, err = run(capsys, "sweep", BICYCLE, "--what", "linearize", "--out", out)
+    assert status == 2 and "--over" in err and "Traceback" not in err
+
+
+def test_out_of_budget_exits_3_and_resume_finishes(capsys, tmp_path, monkeypatch):
+    """12 chunks made to take 0.4 s each and a budget of 2 s: the preparation fits, some
+    chunks do, the rest is left for --resume."""
+    import nhham.study.schedule as schedule
+
+    evaluate = schedule.evaluate
+
+    def slow(study, region):
+        time.sleep(0.4)
+        return evaluate(study, region)
+
+    out = tmp_path / "drive.zarr"
+    args = ["sweep", DRIVE, "--what", "simulate", "--over", "c=0.01:0.05:12", "--out", out,
+            "--workers", "1", "--chunk", "1", "--t-end", "5", "--json"]
+    with monkeypatch.context() as m:
+        m.setattr(schedule, "evaluate", slow)
+        status, stdout, err = run(capsys, *args, "--budget", "2")
+    envelope = json.loads(stdout)
+    assert status == 3 and "continue with --resume" in envelope["error"]["message"], envelope
+    assert envelope["result"]["complete"] is False
+    first = envelope["result"]["computed"]
+    assert 0 < first < 12
+    status, stdout, err = run(capsys, *args, "--resume")
+    result = json.loads(stdout)["result"]
+    assert status == 0 and result["complete"] and result["computed"] == 12 - first
+    assert result["summary"]["failed_runs"] == 0
+    assert result["summary"]["max_energy_error"] < 1e-7   # the energy balance closes
+
+
+def test_a_study_killed_mid_run_resumes_to_the_uninterrupted_result(tmp_path):
+    """SIGKILL while chunks are being computed and written; --resume then computes only
+    the chunks not marked done and gives the same arrays as a run that was not killed."""
+    killed, whole = tmp_path / "killed.zarr", tmp_path / "whole.zarr"
+    args = [sys.executable, "-m", "nhham", "sweep", str(DRIVE), "--what", "simulate",
+            "--over", "c=0.01:0.05:24", "--over", "tau=0.5,1", "--chunk", "2",
+            "--t-end", "40", "--rtol", "1e-12", "--workers", "1"]
+    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    proc = subprocess.Popen(args + ["--out", str(killed)], cwd=ROOT, env=env,
+                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    try:
+        deadline = time.time() + 120
+        done = 0
+        while time.time() < deadline and proc.poll() is None:
+            time.sleep(0.05)
+            try:
+                done = int(xr.open_zarr(killed, consolidated=False)["done"].sum())
+            except Exception:   # the store is being created
+                continue
+            if done >= 6:
+                break
+        assert proc.poll() is None, "the study finished before it could be killed"
+        os.kill(proc.pid, signal.SIGKILL)
+        proc.wait()
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    partial = int(xr.open_zarr(killed, consolidated=False)["done"].sum())
+    assert 6 <= partial < 48
+    resumed = subprocess.run(args + ["--out", str(killed), "--resume", "--json"], cwd=ROOT,
+                             env=env, capture_output=True, text=True)
+    assert resumed.returncode == 0, resumed.stderr
+    assert json.loads(resumed.stdout)["result"]["computed"] == 48 - partial
+    subprocess.run(args + ["--out", str(whole)], cwd=ROOT, env=env, check=True,
+                   capture_output=True)
+    a = xr.open_zarr(killed, consolidated=False).load()
+    b = xr.open_zarr(whole, consolidated=False).load()
+    for name in ("final_state", "t_final", "status", "nfev", "energy_error"):
+        assert np.array_equal(a[name].values, b[name].values, equal_nan=True), name
+    assert bool(a["done"].all())
