@@ -152,8 +152,8 @@ def summary(what: str, ds) -> dict:
     if what == "linearize":
         stable = np.asarray(ds["stable"].values, dtype=bool) & done
         status = np.asarray(ds["status"].values)
-        out = {"stable_points": int(stable.sum()), "done_points": int(done.sum()),
-               "not_linearised": int(((status != 0) & done).sum())}
+        out: dict = {"stable_points": int(stable.sum()), "done_points": int(done.sum()),
+                     "not_linearised": int(((status != 0) & done).sum())}
         if "boundary" in ds:
             b = np.asarray(ds["boundary"].values)
             kinds = np.asarray(ds["boundary_kind"].values)
