@@ -16,6 +16,9 @@ The package is layered; each layer imports only from those beneath it:
 ``nhham.numerics``
     numbers without sympy (generated kernels, integrators, reference,
     diagnostics, work-precision); its ``codegen`` is the one bridge in;
+``nhham.study``
+    parameter studies: grids and samples evaluated in chunks on Dask, results as
+    labelled xarray Datasets written as they come;
 ``nhham.cli``
     the ``nhham`` command, its text and JSON reports, and the plots.
 
@@ -69,6 +72,7 @@ _LAZY = by_module({
     "numerics.model": ("NumericModel",),
     "numerics.integrate": ("simulate", "SimulationResult"),
     "numerics.workprecision": ("work_precision",),
+    "numerics.ensemble": ("simulate_many", "EnsembleResult"),
     # forces of the constraints at the points they act on
     "system.contacts": ("ContactPoint",),
     "numerics.contact_forces": ("contact_forces", "ContactForces"),
@@ -76,8 +80,12 @@ _LAZY = by_module({
     "budget": ("time_budget",),
     # stability of steady motions
     "numerics.linearization": ("linearize", "linearize_many", "Linearization"),
+    "numerics.batch_linearization": ("linearize_batch", "LinearizationBatch", "ChartChoice"),
     "numerics.steady_sweep": ("sweep_steady", "Sweep"),
     "cli.linearize_command": ("linearize_scene", "plot_root_locus"),
+    # parameter studies on Dask (the study extra)
+    "study.sweep": ("sweep", "SweepResult"),
+    "study.plots": ("plot_study", "plot_stability_map", "plot_ensemble", "plot_cases"),
     # input and output
     "system.scene": ("load_scene", "loads_scene", "Scene"),
     "system.scene_dump": ("dump_scene",),

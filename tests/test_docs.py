@@ -40,7 +40,7 @@ def test_cli_doc_lists_every_result_key():
 
     doc = (DOCS / "cli.rst").read_text()
     defs = output_schema()["$defs"]
-    for command in ("classify", "derive", "compare", "simulate", "bench", "linearize",
+    for command in ("classify", "derive", "compare", "simulate", "bench", "linearize", "sweep",
                     "classify_parametric", "parameter_case"):
         spec = defs[command]
         properties = spec.get("properties") or next(

@@ -10,7 +10,7 @@ Usage::
 
 See :func:`nhham.study.sweep.sweep`. JSON (the ``result`` of the envelope, schema
 ``$defs/sweep``): ``path``, ``points``, ``computed``, ``complete``, ``wall_time_s``,
-``seconds_per_point``, ``scheduler``, ``workers``, ``chunks``, ``dims``, ``variables``,
+``run_time_s`` (the chunks alone), ``seconds_per_point`` (of the chunks), ``scheduler``, ``workers``, ``chunks``, ``dims``, ``variables``,
 ``summary`` (by kind: the stable fraction and the boundaries' range, the runs that
 failed, the verdicts' counts) and ``plot``.
 """
@@ -185,9 +185,10 @@ def _text(args, result, data) -> str:
     s = data["summary"]
     dims = " x ".join(f"{d} {n}" for d, n in data["dims"].items())
     rows = [("points", f"{data['points']} ({dims})"),
-            ("computed now", f"{data['computed']} in {data['wall_time_s']:.2f} s"
-             + (f" ({1e6 * data['seconds_per_point']:.0f} us a point)"
-                if data["seconds_per_point"] else "")),
+            ("computed now", f"{data['computed']} in {data['wall_time_s']:.2f} s (chunks "
+                             f"{data['run_time_s']:.2f} s"
+             + (f", {1e6 * data['seconds_per_point']:.0f} us a point)"
+                if data["seconds_per_point"] else ")")),
             ("ran on", f"{data['scheduler']} ({data['workers']} worker(s), {data['chunks']} "
                        f"chunks)"),
             ("results", f"{data['path']}" + ("" if result.complete else " (incomplete)"))]

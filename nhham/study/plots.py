@@ -122,10 +122,11 @@ def _boundaries_2d(ds, ax, other) -> None:
         vals = np.where(np.asarray(kind.values) == k, np.asarray(b.values), np.nan)
         if vals.ndim > 2:
             vals = vals.reshape(vals.shape[0], -1, vals.shape[-1])[:, 0, :]
-        pts = [(v, yy) for row, yy in zip(vals, y) for v in row if np.isfinite(v)]
-        if pts:
-            xs, ys = zip(*pts)
-            ax.plot(xs, ys, ".", ms=2.5, color=colour, label=label)
+        # one curve per crossing index along the lines (NaN where a line has none)
+        for j in range(vals.shape[1]):
+            if np.isfinite(vals[:, j]).any():
+                ax.plot(vals[:, j], y, "-", lw=1.6, color=colour,
+                        label=label if j == 0 or not np.isfinite(vals[:, :j]).any() else None)
 
 
 def plot_ensemble(ds, axes=None):

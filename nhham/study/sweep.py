@@ -55,6 +55,9 @@ class SweepResult:
         Every point is done (False after the budget ran out or an interruption).
     wall_time_s : float
         Of this call, from the scene's load to the last chunk written.
+    run_time_s : float
+        Of the chunks alone: from the first task handed to the workers to the last result
+        written (what more workers divide).
     scheduler : str
     workers : int
     chunks : int
@@ -69,6 +72,7 @@ class SweepResult:
     computed: int
     complete: bool
     wall_time_s: float
+    run_time_s: float
     scheduler: str
     workers: int
     chunks: int
@@ -79,7 +83,8 @@ class SweepResult:
         ds = self.dataset
         return {"path": self.path, "points": self.points, "computed": self.computed,
                 "complete": self.complete, "wall_time_s": self.wall_time_s,
-                "seconds_per_point": (self.wall_time_s / self.computed
+                "run_time_s": self.run_time_s,
+                "seconds_per_point": (self.run_time_s / self.computed
                                       if self.computed else None),
                 "scheduler": self.scheduler, "workers": self.workers, "chunks": self.chunks,
                 "dims": {d: int(ds.sizes[d]) for d in ds["done"].dims},
@@ -178,6 +183,7 @@ def sweep(scene, what: str, over=(), *, samples_count: int | None = None,
                 progress(counter["points"], design.size, time.perf_counter() - start)
 
         complete = True
+        run_start = time.perf_counter()
         try:
             pool.run(study, pending, on_result, deadline)
         except BudgetExceeded:
@@ -185,11 +191,12 @@ def sweep(scene, what: str, over=(), *, samples_count: int | None = None,
         except KeyboardInterrupt:
             store.finish(complete=False)
             raise
+        run_time = time.perf_counter() - run_start
     dataset = store.finish(complete=complete)
     return SweepResult(dataset, None if out is None else os.fspath(out), design.size,
                        counter["points"] - already, complete and counter["points"] == design.size,
-                       time.perf_counter() - start, pool.scheduler, pool.workers, len(regions),
-                       loaded)
+                       time.perf_counter() - start, run_time, pool.scheduler, pool.workers,
+                       len(regions), loaded)
 
 
 def _design(over, count, sampler, seed, perturbation, what) -> Design:

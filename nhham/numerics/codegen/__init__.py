@@ -119,12 +119,15 @@ def _sources(system, path, cache_dir) -> dict:
     """The system's generated sources: from this process's memory, else from the compile
     cache (verified), else generated (and kept there)."""
     key = source_key(system, path)
-    if cached_sources(key) is not None:
-        return generate_sources(system, path=path)
+    held = cached_sources(key)
     try:
         cache = CompileCache.open(cache_dir)
     except OSError:
         return generate_sources(system, path=path)
+    if held is not None:   # generated in this process: kept for the others too
+        if not cache.has_sources(key):
+            cache.keep_sources(key, held)
+        return held
     kept = cache.sources(key)
     if kept is not None:
         return remember_sources(key, kept)

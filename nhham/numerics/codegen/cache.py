@@ -208,6 +208,10 @@ class CompileCache:
                     "was built)")
         return None
 
+    def has_sources(self, key: str) -> bool:
+        """Whether sources are kept under ``key`` (not verified: :meth:`sources` does)."""
+        return os.path.lexists(os.path.join(self.directory, f"sources_{key}.json"))
+
     def sources(self, key: str) -> dict | None:
         """Generated sources kept by :meth:`keep_sources` under ``key``, verified like a
         library (their Python text is executed when a model loads), or None."""
