@@ -87,7 +87,7 @@ class LinearizationBatch:
         1 asymptotically stable (every Re < -tol), 0 unstable (some Re > tol), -1 not
         decided by linearisation (or not linearised).
     tolerances : ndarray, shape (N,)
-        ``|Re| <=`` this counts as 0 (1e-9 max(1, max |A|), as ``linearize``).
+        ``|Re| <=`` this counts as 0 (``1e-9 max(1, max |A|)``, as ``linearize``).
     status : ndarray of int8, shape (N,)
         0 linearised; 1 not on M_1; 2 not steady; 3 singular (:data:`STATUS_TEXT`).
     constraint_residuals : ndarray, shape (N,)

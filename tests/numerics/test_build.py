@@ -23,7 +23,9 @@ def test_compiled_library_is_cached(tmp_path):
     b = numeric_model(chaplygin_sleigh(), backend="c", cache_dir=str(tmp_path))
     assert a.backend == b.backend == "c"
     library = os.path.basename(a.compiled.path)
-    assert files == sorted([".lock", library, library + ".sha256"])
+    sources = [f for f in files if f.startswith("sources_")]   # the generated code, kept
+    assert len(sources) == 2 and sources[1] == sources[0] + ".sha256"
+    assert files == sorted([".lock", library, library + ".sha256", *sources])
     assert sorted(os.listdir(tmp_path)) == files
     assert a.compiled.path == b.compiled.path
 
