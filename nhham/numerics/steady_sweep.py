@@ -218,6 +218,7 @@ def crossings_many(spectra_at: Callable, lines: Sequence, *, xtol: float = 1e-12
                 if b[8] == -1:
                     b[3] /= 2
                 b[8] = -1
+    located = []
     for b in brackets:
         k, a, c, fa, fc = b[:5]
         a0, c0 = b[9], b[10]
@@ -228,13 +229,16 @@ def crossings_many(spectra_at: Callable, lines: Sequence, *, xtol: float = 1e-12
                                              spectra[i], spectra[i + 1], xtol)
                           if c.kind == b[7])
             continue
-        root = a if fa == 0 else c if fc == 0 else (a if abs(fa) < abs(fc) else c)
-        s = spectra_at([(k, root)])[0]
+        located.append((b, a if fa == 0 else c if fc == 0 else (a if abs(fa) < abs(fc) else c)))
+    # the crossing eigenvalues at the roots, in one batch
+    for (b, root), s in zip(located, spectra_at([(b[0], root) for b, root in located])
+                            if located else []):
+        a0, c0 = b[9], b[10]
         z = _branch(s, b[7], b[5] + (b[6] - b[5]) * (root - a0) / (c0 - a0))
         if z is None:
             continue
-        out[k].append(Crossing(float(root), b[7], complex(z), 1 if b[6].real > b[5].real
-                               else -1))
+        out[b[0]].append(Crossing(float(root), b[7], complex(z), 1 if b[6].real > b[5].real
+                                  else -1))
     for found in out:
         found.sort(key=lambda c: c.value)
     return out
