@@ -76,8 +76,11 @@ def add_arguments(parser) -> None:
     parser.add_argument("--along", default=None, metavar="P",
                         help="linearize: the parameter along which stability boundaries are "
                              "located (default: the first --over)")
-    parser.add_argument("--method", default=None, help="simulate: the method (default: the "
-                                                       "scene's, else DOP853)")
+    from nhham.study.tasks import SIMULATE_METHODS as METHODS
+
+    parser.add_argument("--method", default=None, choices=METHODS, metavar="METHOD",
+                        help="simulate: one of " + ", ".join(METHODS) + " (default: the "
+                             "scene's, else DOP853)")
     parser.add_argument("--rtol", type=float, default=None, help="simulate: relative tolerance")
     parser.add_argument("--atol", type=float, default=None, help="simulate: absolute tolerance")
     parser.add_argument("--t-end", dest="t_end", type=float, default=None, metavar="T",

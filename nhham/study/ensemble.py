@@ -23,8 +23,9 @@ import numpy as np
 
 from nhham.errors import InputError
 from nhham.numerics.ensemble import simulate_many
+from nhham.study.tasks import SIMULATE_METHODS as METHODS
 
-__all__ = ["prepare", "variables", "evaluate", "OPTIONS"]
+__all__ = ["prepare", "variables", "evaluate", "OPTIONS", "METHODS"]
 
 #: Run options a study takes (the scene's [simulate] table gives the defaults).
 OPTIONS = ("t_end", "method", "rtol", "atol", "max_step", "projection")
@@ -67,9 +68,9 @@ def prepare(scene, model, design, run_options=None) -> dict:
     opts = dict(_DEFAULTS)
     opts.update({k: v for k, v in scene.simulate.given().items() if k in OPTIONS})
     opts.update({k: v for k, v in (run_options or {}).items() if v is not None})
-    if opts["method"] in ("rattle", "rattle4", "rk4", "reference"):
-        raise InputError(f"--method: a study runs the adaptive methods (DOP853, RK45, RK23, "
-                         f"Radau, BDF, LSODA), not {opts['method']!r}", key="--method")
+    if opts["method"] not in METHODS:
+        raise InputError(f"--method: a study runs the adaptive methods ({', '.join(METHODS)}), "
+                         f"not {opts['method']!r}", key="--method")
     y0 = model.state(dict(scene.initial))
     return {**opts, "initial": [float(x) for x in y0], "state_names": states,
             "parameters": [n for n in design.names if n in params]}

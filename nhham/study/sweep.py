@@ -145,6 +145,9 @@ def sweep(scene, what: str, over=(), *, samples_count: int | None = None,
     if budget is not None and not (math.isfinite(budget) and budget > 0):
         raise InputError(f"--budget: a positive number of seconds, got {budget!r}",
                          key="--budget")
+    if chunk_points is not None and not (isinstance(chunk_points, int) and chunk_points >= 1):
+        raise InputError(f"--chunk: a positive number of points, got {chunk_points!r}",
+                         key="--chunk")
     deadline = None if budget is None else start + float(budget)
     if what not in WHAT:
         raise InputError(f"--what: one of {', '.join(WHAT)}, got {what!r}", key="--what")
