@@ -40,6 +40,7 @@ SWEEP_HELP = (
 def add_arguments(parser) -> None:
     """The command's own options (the common ones are added by ``main``)."""
     from nhham.study.points import SAMPLERS
+    from nhham.study.tasks import SIMULATE_METHODS as METHODS
 
     parser.add_argument("--what", required=True, choices=("linearize", "simulate", "classify"),
                         help="what to compute at every point")
@@ -76,8 +77,6 @@ def add_arguments(parser) -> None:
     parser.add_argument("--along", default=None, metavar="P",
                         help="linearize: the parameter along which stability boundaries are "
                              "located (default: the first --over)")
-    from nhham.study.tasks import SIMULATE_METHODS as METHODS
-
     parser.add_argument("--method", default=None, choices=METHODS, metavar="METHOD",
                         help="simulate: one of " + ", ".join(METHODS) + " (default: the "
                              "scene's, else DOP853)")

@@ -243,14 +243,7 @@ class CompileCache:
             staged = os.path.join(build, os.path.basename(path))
             with open(staged, "w", encoding="utf-8") as fh:
                 json.dump(sources, fh)
-            os.chmod(staged, 0o644)
-            record = staged + ".sha256"
-            with open(record, "w", encoding="ascii") as fh:
-                fh.write(f"{file_digest(staged)}  {os.path.basename(path)}\n")
-            os.chmod(record, 0o644)
-            with self._locked(fcntl.LOCK_EX):
-                os.replace(record, self.record(path))
-                os.replace(staged, path)
+            self._move_in(staged, path, 0o644)
 
     def failure(self, key: str) -> str | None:
         """The compiler's message of a failed build of ``key`` remembered by this version
@@ -281,17 +274,23 @@ class CompileCache:
         """Move the library ``built`` (inside a build directory) into the cache with its
         hash record; return its path."""
         library = self.library(key)
-        os.chmod(built, 0o755)
-        staged = built + ".sha256"
-        with open(staged, "w", encoding="ascii") as fh:
-            fh.write(f"{file_digest(built)}  {os.path.basename(library)}\n")
-        os.chmod(staged, 0o644)
-        with self._locked(fcntl.LOCK_EX):
-            os.replace(staged, self.record(library))
-            os.replace(built, library)
-            with contextlib.suppress(FileNotFoundError):
-                os.unlink(self.marker(library))
+        self._move_in(built, library, 0o755)
+        with contextlib.suppress(FileNotFoundError):
+            os.unlink(self.marker(library))
         return library
+
+    def _move_in(self, staged: str, target: str, mode: int) -> None:
+        """Move ``staged`` (in a build directory) to ``target`` with its hash record, both
+        by atomic renames under the exclusive lock (record first: no reader sees a file
+        without its record)."""
+        os.chmod(staged, mode)
+        record = staged + ".sha256"
+        with open(record, "w", encoding="ascii") as fh:
+            fh.write(f"{file_digest(staged)}  {os.path.basename(target)}\n")
+        os.chmod(record, 0o644)
+        with self._locked(fcntl.LOCK_EX):
+            os.replace(record, self.record(target))
+            os.replace(staged, target)
 
     def remember_failure(self, key: str, message: str, diagnostics: str,
                          build_dir: str) -> None:
