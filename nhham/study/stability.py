@@ -103,8 +103,9 @@ def prepare(scene, model, design, along: str | None = None) -> dict:
 
 
 def variables(design, options) -> dict:
-    """``{name: (extra dims, dtype, fill)}`` of a linearize study, and the extra
-    dimensions' coordinates under the key ``None``."""
+    """The variables of a linearize study: ``{"point": {name: (extra dims, dtype, fill)},
+    "line": {...}, "coords": {extra dim: its coordinate}}`` ("line": the variables of a
+    grid's lines along ``along``, without that dimension)."""
     coords = list(options["coordinates"])
     d = len(coords)
     point = {
