@@ -328,11 +328,16 @@ def _along(attrs) -> str | None:
 
 def progress_line(stream=sys.stderr):
     """A ``progress`` callable printing one updating line on a terminal."""
+    first: list = []
+
     def report(done, total, elapsed):
-        rate = done / elapsed if elapsed > 0 else math.nan
-        left = (total - done) / rate if rate and rate == rate and rate > 0 else math.nan
+        # the rate of the chunks since the first one finished (the preparation before it
+        # is not the chunks' pace)
+        first[:] = first or [done, elapsed]
+        rate = (done - first[0]) / (elapsed - first[1]) if elapsed > first[1] else 0.0
+        left = f", ~{(total - done) / rate:.0f} s left" if rate > 0 else ""
         stream.write(f"\r  {done}/{total} points ({100 * done / total:.0f}%), "
-                     f"{elapsed:.1f} s, ~{left:.0f} s left   ")
+                     f"{elapsed:.1f} s{left}   ")
         if done >= total:
             stream.write("\n")
         stream.flush()
