@@ -117,11 +117,15 @@ def evaluate(study, ctx, region) -> dict:
         for j, name in enumerate(study.design.perturbed):
             Y0[:, states.index(name)] += noise[:, j]
     distance = np.zeros(N)
-    for i in np.flatnonzero(_off_manifold(model, P, Y0)):
-        m = model if P is None else model.with_parameters(**dict(zip(params, P[i])))
-        outcome = m.project(Y0[i])
-        distance[i] = np.linalg.norm(outcome.y - Y0[i])
-        Y0[i] = outcome.y
+    off = np.flatnonzero(_off_manifold(model, P, Y0))
+    if P is None and off.size:   # one model: the starts projected in one batch
+        Y0[off], distance[off] = model.project_many(Y0[off])
+    else:
+        for i in off:
+            m = model.with_parameters(**dict(zip(params, P[i])))
+            outcome = m.project(Y0[i])
+            distance[i] = np.linalg.norm(outcome.y - Y0[i])
+            Y0[i] = outcome.y
     runs = simulate_many(model, Y0, (0.0, float(opts["t_end"])), parameters=P,
                          method=opts["method"], rtol=opts["rtol"], atol=opts["atol"],
                          max_step=np.inf if opts["max_step"] is None else opts["max_step"],

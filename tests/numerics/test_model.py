@@ -103,3 +103,21 @@ def test_projection_onto_M1_holonomic_and_affine():
     yb = ball_state(ball) + 0.01
     pb = ball.project(yb)
     assert pb.newton_iterations == 0 and pb.residual_after <= 1e-14
+
+
+def test_project_many_is_project_state_by_state():
+    """The batched projection (studies' perturbed starts) against the one-state one, with
+    a holonomic constraint (the Cartesian pendulum) and without (the sleigh)."""
+    from nhham.numerics.codegen import numeric_model
+    from nhham.system.models import chaplygin_sleigh, pendulum_cartesian
+
+    rng = np.random.default_rng(5)
+    for system in (chaplygin_sleigh(), pendulum_cartesian()):
+        model = numeric_model(system)
+        Y = rng.uniform(-1, 1, (6, 2 * model.n))
+        many, moved = model.project_many(Y)
+        for y, p, d in zip(Y, many, moved):
+            one = model.project(y)
+            assert np.allclose(p, one.y, rtol=1e-13, atol=1e-13)
+            assert np.isclose(d, np.linalg.norm(one.y - y), rtol=1e-12)
+        assert model.scaled_residuals(many).max() < 1e-13
