@@ -66,11 +66,13 @@ def add_arguments(parser) -> None:
                             "options)")
     group.add_argument("--overwrite", action="store_true", help="replace an existing --out")
     parser.add_argument("--workers", type=int, default=None, metavar="N",
-                        help="local worker processes (default: the cores available; 1 runs "
-                             "in this process without Dask)")
+                        help="local workers (default: the cores available; 1 runs in this "
+                             "process without Dask)")
     parser.add_argument("--scheduler", default=None, metavar="ADDRESS",
-                        help="processes (default), threads, synchronous, or the address of "
-                             "a running dask scheduler (tcp://host:8786)")
+                        help="threads (the default for linearize and simulate: this "
+                             "process's model shared), processes (the default for "
+                             "classify), synchronous, or the address of a running dask "
+                             "scheduler (tcp://host:8786)")
     parser.add_argument("--chunk", type=int, default=None, metavar="POINTS",
                         help="points per task (default: 4096 linearize, 256 simulate and "
                              "classify)")

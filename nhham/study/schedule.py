@@ -2,11 +2,15 @@
 
 ``scheduler``:
 
-- ``"processes"`` (the default with more than one worker): a
-  ``dask.distributed.LocalCluster`` of ``workers`` processes with one thread each, made
-  for the study and closed after it (nothing to set up);
-- ``"threads"``: a local cluster of one process with ``workers`` threads (the compiled
-  kernels and integration loops release the GIL);
+- ``"threads"`` (the default with more than one worker for ``linearize`` and
+  ``simulate``): a ``dask.distributed.LocalCluster`` of one process, this one, with
+  ``workers`` threads, made for the study and closed after it: the scene and model this
+  process prepared are shared (no worker starts an interpreter or builds a model), and
+  the compiled kernels, the integration loop and LAPACK release the GIL (the bicycle's
+  map: 0.6 of two cores, the snake ensemble 0.85, bench/RESULTS.md);
+- ``"processes"`` (the default for ``classify``, whose per-point work is sympy and holds
+  the GIL): a local cluster of ``workers`` processes with one thread each; each worker
+  parses the scene and builds its model once (warmed up while this process prepares);
 - ``"synchronous"`` (the default with one worker): the chunks one after the other in
   this process, without Dask;
 - an address (``"tcp://host:8786"``): the scheduler of a running cluster;
@@ -61,13 +65,14 @@ class Pool:
 
     @classmethod
     def start(cls, scheduler: str | None = None, workers: int | None = None,
-              client=None) -> "Pool":
-        """Start the workers (a local cluster is made here; an address is connected to)."""
+              client=None, local: str = "threads") -> "Pool":
+        """Start the workers (a local cluster is made here; an address is connected to);
+        ``local``: the scheduler when none is named and there is more than one worker."""
         workers = default_workers() if workers is None else int(workers)
         if workers < 1:
             raise InputError(f"--workers: at least 1, got {workers}", key="--workers")
         if client is None and scheduler is None:
-            scheduler = "synchronous" if workers == 1 else "processes"
+            scheduler = "synchronous" if workers == 1 else local
         if client is None and scheduler == "synchronous":
             return cls("synchronous", 1)
         scheduler = str(scheduler)

@@ -156,7 +156,9 @@ def sweep(scene, what: str, over=(), *, samples_count: int | None = None,
     from nhham.study.schedule import Pool
 
     # the workers start, and parse the scene, while this process prepares the study
-    with Pool.start(scheduler, workers, client) as pool:
+    # threads share this process's model; classify's sympy holds the GIL: processes
+    with Pool.start(scheduler, workers, client,
+                    local="processes" if what == "classify" else "threads") as pool:
         pool.warm(text, source, what)
         # the preparation (symbolic for classify) is stopped by the budget's alarm; the
         # chunks then stop at its deadline, keeping what finished
