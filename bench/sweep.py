@@ -18,8 +18,9 @@
   loop a user writes (``nhham.simulate`` per initial state, on the first 1000 of them),
   and the end states of 200 of them against single runs.
 
-Medians of ``--repeat`` runs (the map; the ensemble runs once). Run:
-``python bench/sweep.py [map|ensemble|all] [--repeat 3] [--trajectories 100000]``.
+Medians of ``--repeat`` runs (the map; the ensemble runs once); ``large-map`` is the map
+on 801 x 401 points. Run:
+``python bench/sweep.py [map|large-map|ensemble|all] [--repeat 3] [--trajectories 100000]``.
 """
 
 from __future__ import annotations
@@ -50,21 +51,23 @@ def _median(values):
     return statistics.median(values)
 
 
-def bicycle_map(repeat):
+def bicycle_map(repeat, over=OVER):
     rows, results = [], {}
+    nhham.sweep(BICYCLE, "linearize", ["v=4:5:3"], workers=1)   # imports and model, untimed
     for label, kwargs in (("nhham.sweep, 1 worker (this process)", dict(workers=1)),
+                          ("nhham.sweep, 2 threads (the default)",
+                           dict(workers=2, scheduler="threads")),
                           ("nhham.sweep, 2 worker processes",
-                           dict(workers=2, scheduler="processes")),
-                          ("nhham.sweep, 2 threads", dict(workers=2, scheduler="threads"))):
+                           dict(workers=2, scheduler="processes"))):
         walls, runs = [], []
         for _ in range(repeat):
-            r = nhham.sweep(BICYCLE, "linearize", OVER, **kwargs)
+            r = nhham.sweep(BICYCLE, "linearize", over, **kwargs)
             walls.append(r.wall_time_s)
             runs.append(r.run_time_s)
         results[label] = r
         rows.append((label, _median(walls), _median(runs), r.points))
-    v = np.linspace(0, 10, 201)
-    c = np.linspace(0, 0.2, 101)
+    v = np.asarray(results[rows[0][0]].dataset["v"].values)
+    c = np.asarray(results[rows[0][0]].dataset["c"].values)
     V, C = np.meshgrid(v, c, indexing="ij")
     limit = []
     for _ in range(max(repeat, 5)):
@@ -74,7 +77,7 @@ def bicycle_map(repeat):
         limit.append(time.perf_counter() - start)
     rows.append(("limit: numpy eig of the closed-form A(v, c)", _median(limit),
                  _median(limit), V.size))
-    print("Bicycle stability map, 201 x 101 (v, trail): seconds (median of "
+    print(f"Bicycle stability map, {len(v)} x {len(c)} (v, trail): seconds (median of "
           f"{repeat}), points per second")
     print(f"  {'':48s} {'whole':>8s} {'chunks':>8s} {'pts/s (chunks)':>15s} {'vs limit':>9s}")
     for label, wall, run, n in rows:
@@ -106,7 +109,27 @@ def snake_ensemble(count):
         opts = {"t_end": 10.0, "rtol": 1e-8, "atol": 1e-10}
         rows = []
         results = {}
+        # the user's loop first (a fresh process: nothing held yet), on the first 1000
+        # starts of the design, both ways a user calls simulate
+        loop_n = min(1000, count)
+        starts = nhham.sweep(scene, "simulate", [], samples_count=count,
+                             initial_perturbation=perturb, seed=1,
+                             run_options=dict(opts, t_end=1e-9), workers=1)
+        y0 = starts.dataset["initial_state"].values
+        loaded = nhham.load_scene(scene)
+        model = nhham.numeric_model(loaded.system)
+        loops = []
+        for label, kw in (("loop of nhham.simulate", {}),
+                          ("loop of nhham.simulate(t_eval=[10])", {"t_eval": [10.0]})):
+            start = time.perf_counter()
+            for i in range(loop_n):
+                nhham.simulate(model, (0.0, 10.0), y0[i], rtol=1e-8, atol=1e-10, warn=False,
+                               **kw)
+            loop = time.perf_counter() - start
+            loops.append((f"{label} ({loop_n} runs)", loop, loop, loop_n))
         for label, kwargs in (("nhham.sweep, 1 worker (this process)", dict(workers=1)),
+                              ("nhham.sweep, 2 threads (the default)",
+                               dict(workers=2, scheduler="threads")),
                               ("nhham.sweep, 2 worker processes",
                                dict(workers=2, scheduler="processes"))):
             r = nhham.sweep(scene, "simulate", [], samples_count=count,
@@ -115,15 +138,7 @@ def snake_ensemble(count):
             results[label] = r
             rows.append((label, r.wall_time_s, r.run_time_s, count))
         ds = results[rows[0][0]].dataset
-        loaded = nhham.load_scene(scene)
-        model = nhham.numeric_model(loaded.system)
-        y0 = ds["initial_state"].values
-        loop_n = min(1000, count)
-        start = time.perf_counter()
-        for i in range(loop_n):
-            nhham.simulate(model, (0.0, 10.0), y0[i], rtol=1e-8, atol=1e-10, warn=False)
-        loop = time.perf_counter() - start
-        rows.append((f"loop of nhham.simulate ({loop_n} runs)", loop, loop, loop_n))
+        rows.extend(loops)
         rng = np.random.default_rng(0)
         worst = 0.0
         for i in rng.choice(count, size=min(200, count), replace=False):
@@ -134,27 +149,33 @@ def snake_ensemble(count):
         print(f"8-link snake, {count} trajectories to t = 10 at rtol 1e-8: seconds, ms per "
               f"trajectory")
         print(f"  {'':48s} {'whole':>8s} {'chunks':>8s} {'ms/traj':>8s} {'vs loop':>8s}")
-        per_loop = loop / loop_n
+        per_loop = loops[0][1] / loop_n
         for label, wall, run, n in rows:
             print(f"  {label:48s} {wall:8.2f} {run:8.2f} {1e3 * run / n:8.3f} "
                   f"{(run / n) / per_loop:8.2f}")
-        print(f"  parallel efficiency of the chunks: {rows[0][2] / (2 * rows[1][2]):.2f}")
+        for label, _, run, _ in rows[1:3]:
+            print(f"  parallel efficiency of the chunks, {label[13:]}: "
+                  f"{rows[0][2] / (2 * run):.2f}")
         print(f"  end states against single runs (200 of them): max |difference| {worst:.1e}")
-        other = results[rows[1][0]].dataset
-        print("  1 and 2 workers give the same arrays: "
-              f"{np.array_equal(ds['final_state'].values, other['final_state'].values)}")
+        same = all(np.array_equal(ds["final_state"].values,
+                                  results[label].dataset["final_state"].values)
+                   for label in list(results)[1:])
+        print(f"  the three schedulers give the same arrays: {same}")
         print(f"  runs failed: {int((~ds['success'].values).sum())}; max |energy error| "
               f"{np.abs(ds['energy_error'].values).max():.1e}")
 
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("what", nargs="?", default="all", choices=("map", "ensemble", "all"))
+    parser.add_argument("what", nargs="?", default="all",
+                        choices=("map", "large-map", "ensemble", "all"))
     parser.add_argument("--repeat", type=int, default=3)
     parser.add_argument("--trajectories", type=int, default=100_000)
     args = parser.parse_args()
     if args.what in ("map", "all"):
         bicycle_map(args.repeat)
+    if args.what == "large-map":   # 16 times the points: the workers' start-up amortised
+        bicycle_map(args.repeat, ["v=0:10:801", "c=0:0.2:401"])
     if args.what in ("ensemble", "all"):
         snake_ensemble(args.trajectories)
 

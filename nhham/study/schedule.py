@@ -89,7 +89,9 @@ class Pool:
             cluster = LocalCluster(n_workers=workers if processes else 1,
                                    threads_per_worker=1 if processes else workers,
                                    processes=processes, dashboard_address=None,
-                                   silence_logs=logging.ERROR)
+                                   # the workers' heartbeats failing while the cluster
+                                   # closes are logged as errors: not the user's concern
+                                   silence_logs=logging.CRITICAL)
             client = Client(cluster)
             return cls(scheduler, workers, client, owned=(client, cluster))
         try:
