@@ -40,7 +40,7 @@ SWEEP_HELP = (
 def add_arguments(parser) -> None:
     """The command's own options (the common ones are added by ``main``)."""
     from nhham.study.points import SAMPLERS
-    from nhham.study.tasks import SIMULATE_METHODS as METHODS
+    from nhham.study.kinds import SIMULATE_METHODS as METHODS
 
     parser.add_argument("--what", required=True, choices=("linearize", "simulate", "classify"),
                         help="what to compute at every point")

@@ -174,7 +174,7 @@ def crossings_many(spectra_at: Callable, lines: Sequence, *, xtol: float = 1e-12
         for i in range(len(values) - 1):
             if None in (counts[i], counts[i + 1]) or counts[i] == counts[i + 1]:
                 continue
-            pairs = [(kind, *_same_branch(spectra[i], spectra[i + 1], kind))
+            pairs = [(kind, *_same_branch(spectra[i], spectra[i + 1], kind, at_end=True))
                      for kind in ("real", "complex")]
             pairs = [p for p in pairs if p[1] is not None]
             if not pairs:
@@ -182,7 +182,10 @@ def crossings_many(spectra_at: Callable, lines: Sequence, *, xtol: float = 1e-12
                                       values[i + 1], spectra[i], spectra[i + 1], xtol))
                 continue
             for kind, za, zb in pairs:
-                brackets.append([k, float(values[i]), float(values[i + 1]), za.real, zb.real,
+                # a real part 0 to the tolerance at an end: that end is the crossing
+                fa = 0.0 if abs(za.real) <= spectra[i].tolerance else za.real
+                fb = 0.0 if abs(zb.real) <= spectra[i + 1].tolerance else zb.real
+                brackets.append([k, float(values[i]), float(values[i + 1]), fa, fb,
                                  za, zb, kind, 0, float(values[i]), float(values[i + 1])])
     for _ in range(maxiter):
         active = [b for b in brackets if b[2] - b[1] > xtol + 4 * np.finfo(float).eps *
@@ -266,11 +269,13 @@ def _branch(lin, kind, target=None):
     return pick[np.argmin(np.abs(pick - target))]
 
 
-def _same_branch(lin_a, lin_b, kind):
+def _same_branch(lin_a, lin_b, kind, at_end=False):
     """Eigenvalues of one branch at both ends whose real parts differ in sign, or (None, None).
 
     The branch is followed from the end where it is nearest to the imaginary
     axis (a structural zero excluded) to the nearest eigenvalue at the other end.
+    ``at_end``: also a branch whose real part is 0 to the tolerance at one end (and
+    clearly not at the other): the crossing is that end (a grid value hit it).
     """
     za0, zb0 = _branch(lin_a, kind), _branch(lin_b, kind)
     pairs = []
@@ -282,6 +287,17 @@ def _same_branch(lin_a, lin_b, kind):
         if (za is not None and zb is not None and za.real * zb.real < 0
                 and abs(za.real) > lin_a.tolerance and abs(zb.real) > lin_b.tolerance):
             return za, zb
+    if not at_end:
+        return None, None
+    for lin, other in ((lin_a, lin_b), (lin_b, lin_a)):   # the branch through 0 at an end
+        ev = lin.eigenvalues
+        pick = ev[ev.imag == 0] if kind == "real" else ev[ev.imag > 0]
+        zero = pick[np.abs(pick.real) <= lin.tolerance]
+        if zero.size:
+            z0 = zero[0]
+            z1 = _branch(other, kind, z0)
+            if z1 is not None and abs(z1.real) > other.tolerance:
+                return (z0, z1) if lin is lin_a else (z1, z0)
     return None, None
 
 

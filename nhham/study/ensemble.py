@@ -23,7 +23,7 @@ import numpy as np
 
 from nhham.errors import InputError
 from nhham.numerics.ensemble import simulate_many
-from nhham.study.tasks import SIMULATE_METHODS as METHODS
+from nhham.study.kinds import SIMULATE_METHODS as METHODS
 
 __all__ = ["prepare", "variables", "evaluate", "OPTIONS", "METHODS"]
 

@@ -27,7 +27,8 @@ from nhham.errors import BudgetExceeded, InputError
 from nhham.study.points import (Axis, Design, chunk_slices, grid, parse_over,
                                 parse_perturbation, samples)
 from nhham.study.store import Store, attrs_text, study_key
-from nhham.study.tasks import WHAT, Study, keep_context
+from nhham.study.kinds import WHAT
+from nhham.study.tasks import Study, keep_context
 
 __all__ = ["sweep", "SweepResult", "CHUNK_POINTS"]
 

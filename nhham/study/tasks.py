@@ -19,14 +19,10 @@ from dataclasses import dataclass, field
 from nhham.errors import ComputationError
 from nhham.study.points import Design
 
-__all__ = ["SIMULATE_METHODS", "Study", "Context", "context", "evaluate", "keep_context", "study_model",
-           "study_system", "warm", "WHAT"]
+__all__ = ["Study", "Context", "context", "evaluate", "keep_context", "study_model",
+           "study_system", "warm"]
 
-#: What a study computes at each point.
-WHAT = ("linearize", "simulate", "classify")
 
-#: The methods of a simulation study (the adaptive ones: each run ends at t_end).
-SIMULATE_METHODS = ("DOP853", "RK45", "RK23", "Radau", "BDF", "LSODA")
 
 
 @dataclass(frozen=True)

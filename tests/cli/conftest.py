@@ -23,7 +23,11 @@ EXAMPLE_NAMES = sorted(p.name for p in EXAMPLES.glob("*.toml"))
 # (tests/numerics/test_forced_numerics.py).
 HEAVY = {("compare", "snakeboard.toml"), ("compare", "whipple_bicycle.toml"),
          ("compare", "snakeboard_gait.toml"), ("compare", "bicycle_steer_control.toml"),
-         ("compare", "whipple_bicycle_benchmark.toml")}
+         ("compare", "whipple_bicycle_benchmark.toml"),
+         # the same model as whipple_bicycle.toml in other parameters (its linearisation
+         # against the closed form: tests/numerics/test_batch_linearization.py)
+         ("classify", "whipple_bicycle_benchmark.toml"),
+         ("derive", "whipple_bicycle_benchmark.toml")}
 
 
 @functools.cache

@@ -47,13 +47,14 @@ def test_a_stability_map_with_its_plot(capsys, tmp_path):
 
 def test_refusals_name_their_option(capsys, tmp_path):
     out = tmp_path / "x.zarr"
+    robot = ROOT / "examples" / "differential_drive.toml"
     for argv, key, fragment in (
-            (["--over", "v=0:1"], "--over", "needs a COUNT"),
+            (["--over", "w=0:1"], "--over", "needs a COUNT"),
             (["--over", "nope=0:1:3"], "--over", "'nope' is not a parameter"),
-            (["--over", "v=0:1:3", "--rtol", "1e-6"], "--rtol", "only for --what simulate"),
-            (["--over", "v=0:1:3", "--along", "c"], "--along", "'c' is not swept"),
-            (["--over", "v=0:1:3", "--out", tmp_path / "x.csv"], "--out", ".zarr directory")):
-        args = ["sweep", BICYCLE, "--what", "linearize", "--out", out, "--workers", "1",
+            (["--over", "w=0:1:3", "--rtol", "1e-6"], "--rtol", "only for --what simulate"),
+            (["--over", "w=0:1:3", "--along", "d"], "--along", "'d' is not swept"),
+            (["--over", "w=0:1:3", "--out", tmp_path / "x.csv"], "--out", ".zarr directory")):
+        args = ["sweep", robot, "--what", "linearize", "--out", out, "--workers", "1",
                 "--json", *argv]
         status, stdout, err = run(capsys, *args)
         error = json.loads(stdout)["error"]

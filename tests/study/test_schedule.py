@@ -8,8 +8,8 @@ from nhham.study.sweep import sweep
 
 distributed = pytest.importorskip("dask.distributed")
 
-SCENE = "examples/whipple_bicycle_benchmark.toml"
-OVER = ["v=3:7:9", "c=0.06:0.1:3"]
+SCENE = "examples/differential_drive.toml"
+OVER = ["w=-4.5:5.5:9", "d=0.02:0.06:3"]
 
 
 @pytest.fixture(scope="module")

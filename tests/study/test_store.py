@@ -9,8 +9,9 @@ import xarray as xr
 import nhham
 from nhham.study.sweep import sweep
 
-SCENE = "examples/whipple_bicycle_benchmark.toml"
-OVER = ["v=0:10:21", "c=0.04:0.12:5"]
+# the differential drive's straight run at wheel rate w: one eigenvalue, -mc d r w / J
+SCENE = "examples/differential_drive.toml"
+OVER = ["w=-4.5:5.5:21", "d=0.02:0.1:5"]
 
 
 @pytest.fixture(scope="module")
@@ -32,13 +33,20 @@ def test_zarr_holds_the_labelled_dataset_and_what_made_it(tmp_path, in_memory):
     result = sweep(SCENE, "linearize", OVER, workers=1, out=out, chunk_points=40)
     assert result.chunks > 1 and result.path == str(out)
     ds = xr.open_zarr(out, consolidated=False)
-    assert ds["stable"].dims == ("v", "c") and list(ds["c"].values) == [0.04, 0.06, 0.08, 0.1,
-                                                                         0.12]
+    assert ds["stable"].dims == ("w", "d") and list(ds["d"].values) == [0.02, 0.04, 0.06, 0.08,
+                                                                         0.1]
     assert ds.attrs["nhham_version"] == nhham.__version__ and ds.attrs["what"] == "linearize"
     assert ds.attrs["scene"] == open(SCENE).read()
     assert json.loads(ds.attrs["design"])["over"] == OVER
-    assert json.loads(ds.attrs["options"])["along"] == "v"
+    assert json.loads(ds.attrs["options"])["along"] == "w"
     _same(in_memory, ds.load())
+    # the closed form (examples/make_differential_drive.py): lambda = -mc d r w / J
+    mc, Ic, mw, Iw, Id, r, b = 4.0, 0.08, 0.3, 0.0015, 0.001, 0.1, 0.15
+    w, d = np.meshgrid(ds["w"].values, ds["d"].values, indexing="ij")
+    J = Ic + mc * d ** 2 + 2 * (Id + mw * b ** 2) + 2 * Iw * b ** 2 / r ** 2
+    assert np.allclose(ds["eigenvalue_real"].values[..., 0], -mc * d * r * w / J, rtol=1e-12,
+                       atol=1e-14)
+    assert np.allclose(ds["boundary"].values[:, 0], 0.0, atol=1e-12)   # stable for w > 0
 
 
 def test_netcdf_is_written_when_the_study_is_complete(tmp_path, in_memory):
@@ -55,14 +63,14 @@ def test_netcdf_is_written_when_the_study_is_complete(tmp_path, in_memory):
 
 def test_an_existing_output_is_kept_unless_asked(tmp_path):
     out = tmp_path / "map.zarr"
-    sweep(SCENE, "linearize", ["v=4:5:3"], workers=1, out=out)
+    sweep(SCENE, "linearize", ["w=4:5:3"], workers=1, out=out)
     with pytest.raises(nhham.InputError, match="exists; give --resume") as info:
-        sweep(SCENE, "linearize", ["v=4:5:3"], workers=1, out=out)
+        sweep(SCENE, "linearize", ["w=4:5:3"], workers=1, out=out)
     assert info.value.key == "--out"
     with pytest.raises(nhham.InputError, match="holds another study .*design") as info:
-        sweep(SCENE, "linearize", ["v=4:6:3"], workers=1, out=out, resume=True)
-    again = sweep(SCENE, "linearize", ["v=4:6:3"], workers=1, out=out, overwrite=True)
-    assert again.complete and list(again.dataset["v"].values) == [4.0, 5.0, 6.0]
+        sweep(SCENE, "linearize", ["w=4:6:3"], workers=1, out=out, resume=True)
+    again = sweep(SCENE, "linearize", ["w=4:6:3"], workers=1, out=out, overwrite=True)
+    assert again.complete and list(again.dataset["w"].values) == [4.0, 5.0, 6.0]
 
 
 def test_an_interrupted_study_resumes_to_the_same_result(tmp_path, in_memory):
