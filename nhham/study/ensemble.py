@@ -118,8 +118,9 @@ def evaluate(study, ctx, region) -> dict:
             Y0[:, states.index(name)] += noise[:, j]
     distance = np.zeros(N)
     off = np.flatnonzero(_off_manifold(model, P, Y0))
-    if P is None and off.size:   # one model: the starts projected in one batch
-        Y0[off], distance[off] = model.project_many(Y0[off])
+    if P is None:   # one model: the starts projected in one batch
+        if off.size:
+            Y0[off], distance[off] = model.project_many(Y0[off])
     else:
         for i in off:
             m = model.with_parameters(**dict(zip(params, P[i])))
