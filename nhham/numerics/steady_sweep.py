@@ -146,7 +146,7 @@ def crossings(linearize_at: Callable, values: Sequence[float], spectra: Sequence
 
 
 def crossings_many(spectra_at: Callable, lines: Sequence, *, xtol: float = 1e-12,
-                   maxiter: int = 200) -> list:
+                   maxiter: int = 200, counts: Sequence | None = None) -> list:
     """:func:`crossings` on many lines at once, the root finding batched across them.
 
     Parameters
@@ -155,9 +155,14 @@ def crossings_many(spectra_at: Callable, lines: Sequence, *, xtol: float = 1e-12
         ``[(line index, value), ...] -> [spectrum or None, ...]``: the spectra at many
         points in one call (one batch of the generated kernels).
     lines : sequence of (values, spectra)
-        Each line's increasing values and the spectra there (as for :func:`crossings`).
+        Each line's increasing values and the spectra there (as for :func:`crossings`;
+        any sequence: only the ends of the intervals where the count changes are read).
     xtol : float, optional
     maxiter : int, optional
+    counts : sequence of sequences of int, optional
+        Per line, the number of eigenvalues with real part above the tolerance at each
+        value (-1 where there is no spectrum), when the caller has them (computed for the
+        whole batch at once); default: counted here from the spectra.
 
     Returns
     -------
@@ -170,9 +175,10 @@ def crossings_many(spectra_at: Callable, lines: Sequence, *, xtol: float = 1e-12
     out: list = [[] for _ in lines]
     brackets = []     # [line, a, b, fa, fb, za, zb, kind, side]
     for k, (values, spectra) in enumerate(lines):
-        counts = [None if s is None else _n_positive(s) for s in spectra]
+        line = ([None if s is None else _n_positive(s) for s in spectra] if counts is None
+                else [None if c < 0 else c for c in counts[k]])
         for i in range(len(values) - 1):
-            if None in (counts[i], counts[i + 1]) or counts[i] == counts[i + 1]:
+            if None in (line[i], line[i + 1]) or line[i] == line[i + 1]:
                 continue
             pairs = [(kind, *_same_branch(spectra[i], spectra[i + 1], kind, at_end=True))
                      for kind in ("real", "complex")]

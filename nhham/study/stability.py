@@ -214,11 +214,16 @@ def _boundaries(study, scene, model, choice, region, values, batch, bad) -> dict
     along_values = values[dims[a]]
     rest = shape[:a] + shape[a + 1:]
     index = np.arange(int(np.prod(shape))).reshape(shape)
-    lines, fixed = [], []
+    # the unstable eigenvalues counted for the whole chunk at once; a spectrum is made
+    # only where a line's count changes (the search reads nothing else)
+    with np.errstate(invalid="ignore"):
+        positive = (batch.eigenvalues.real > batch.tolerances[:, None]).sum(axis=1)
+    counts = np.where(bad | (batch.status != 0), -1, positive)
+    lines, fixed, line_counts = [], [], []
     for line in np.ndindex(*rest):
         at = line[:a] + (slice(None),) + line[a:]
-        lines.append((along_values[at], [None if bad[i] else batch.spectrum(i)
-                                         for i in index[at]]))
+        lines.append((along_values[at], _Spectra(batch, bad, index[at])))
+        line_counts.append(counts[index[at]].tolist())
         fixed.append({k: float(v[at][0]) for k, v in values.items() if k != dims[a]})
 
     def spectra_at(requests):
@@ -226,7 +231,7 @@ def _boundaries(study, scene, model, choice, region, values, batch, bad) -> dict
                   for k in values}
         return _spectra(scene, model, choice, points)
 
-    found = crossings_many(spectra_at, lines, xtol=XTOL)
+    found = crossings_many(spectra_at, lines, xtol=XTOL, counts=line_counts)
     out = {"boundary": np.full(rest + (CROSSINGS,), np.nan),
            "boundary_kind": np.full(rest + (CROSSINGS,), -1, dtype=np.int8),
            "boundary_direction": np.zeros(rest + (CROSSINGS,), dtype=np.int8),
@@ -238,6 +243,20 @@ def _boundaries(study, scene, model, choice, region, values, batch, bad) -> dict
             out["boundary_kind"][line + (j,)] = 0 if c.kind == "real" else 1
             out["boundary_direction"][line + (j,)] = c.direction
     return out
+
+
+class _Spectra:
+    """The spectra of some states of a batch, made when read."""
+
+    def __init__(self, batch, bad, index):
+        self.batch, self.bad, self.index = batch, bad, index
+
+    def __len__(self):
+        return len(self.index)
+
+    def __getitem__(self, i):
+        j = self.index[i]
+        return None if self.bad[j] else self.batch.spectrum(j)
 
 
 def _spectra(scene, model, choice, points) -> list:

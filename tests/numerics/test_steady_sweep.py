@@ -59,3 +59,37 @@ def test_a_real_eigenvalue_going_back_is_a_second_crossing():
     s = sweep(_branch(lambda p: [-(p - 0.5) * (p - 1.5), -2.0]), "p", np.linspace(0, 2, 8))
     assert [(c.kind, c.direction) for c in s.crossings] == [("real", 1), ("real", -1)]
     assert np.allclose([c.value for c in s.crossings], [0.5, 1.5], atol=1e-12)
+
+
+def test_crossings_many_batched_against_known_roots():
+    # line k: a real eigenvalue p - r_k (root r_k) and a complex pair whose real part is
+    # (p - h_k)^3 (a Hopf crossing at h_k, tangent-free but flat: the slow case for a
+    # secant method); the roots are the hand-written numbers, with or without counts
+    from nhham.numerics.steady_sweep import crossings_many
+
+    class Lin:
+        def __init__(self, p, r, h):
+            re = (p - h) ** 3
+            self.eigenvalues = np.array([p - r, re + 2j, re - 2j, -1.0 + 0j])
+            self.tolerance = 1e-12
+
+    roots = [(1 / 3, 0.7), (0.2, 0.45), (np.sqrt(0.5), 1 / np.e)]
+    values = np.linspace(0, 1, 6)
+    lines = [(values, [Lin(p, r, h) for p in values]) for r, h in roots]
+
+    def spectra_at(requests):
+        return [Lin(p, *roots[k]) for k, p in requests]
+
+    counts = [[int(np.sum(s.eigenvalues.real > s.tolerance)) for s in spectra]
+              for _, spectra in lines]
+    for found in (crossings_many(spectra_at, lines, xtol=1e-12),
+                  crossings_many(spectra_at, lines, xtol=1e-12, counts=counts)):
+        for (r, h), cs in zip(roots, found):
+            assert [c.kind for c in cs] == sorted(["real", "complex"],
+                                                  key=lambda k: r if k == "real" else h)
+            real = next(c for c in cs if c.kind == "real")
+            hopf = next(c for c in cs if c.kind == "complex")
+            assert abs(real.value - r) < 1e-11 and real.direction == 1
+            # |(p - h)^3| <= tolerance within 1e-4 of h: the crossing is where the real
+            # part is zero to the tolerance, so the bound is the cube root of it
+            assert abs(hopf.value - h) < 2e-4 and abs(abs(hopf.eigenvalue.imag) - 2) < 1e-9
