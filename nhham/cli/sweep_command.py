@@ -30,8 +30,8 @@ SWEEP_HELP = (
     "per parameter) or of samples (--samples K over P=START:STOP ranges; "
     "--initial-perturbation for ensembles): the stability of its [steady] motion "
     "(linearize; boundaries located along the first parameter), a run from its [initial] "
-    "state (simulate) or its constraint-set verdict (classify). Chunks run on a local Dask "
-    "cluster (or --scheduler ADDRESS) and are written to --out (.zarr, or .nc at the end) "
+    "state (simulate) or its constraint-set verdict (classify). Chunks run on Dask, locally "
+    "(threads or processes) or on a cluster (--scheduler ADDRESS), and are written to --out (.zarr, or .nc at the end) "
     "as they finish; --resume continues an interrupted study.",
     "nhham sweep examples/whipple_bicycle_benchmark.toml --what linearize "
     "--over v=0:10:201 --over c=0:0.2:101 --out map.zarr --plot map.png")

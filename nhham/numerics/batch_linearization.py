@@ -215,7 +215,7 @@ def _check_states(cf, Y, P, model):
     N = Y.shape[0]
     Q, V = Y[:, :n], Y[:, n:]
     status = np.zeros(N, dtype=np.int8)
-    W, F, mu, drift, h, g = (x.real for x in cf.pieces(Q, V, list(P.T)))
+    W, F, mu, drift, h, g = (x.real for x in cf.pieces(Q, V, P))
     phi = np.einsum("kij,kj->ki", mu, V) + h
     mnorm = np.sqrt(np.sum(mu * mu, axis=-1))
     vnorm = np.linalg.norm(V, axis=1)[:, None]

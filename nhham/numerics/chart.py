@@ -56,6 +56,14 @@ class ComplexField:
     def _outputs(self, name, Y, p):
         """The kernel's outputs at the complex rows Y (K, width), shape (K, outputs)."""
         p = self._p if p is None else p
+        if isinstance(p, np.ndarray) and p.ndim == 2:
+            # rows: each state's parameters, as the compiled kernels read them (the
+            # per-parameter arrays are not stacked again at every call: that is Python
+            # work holding the GIL, on the hot path of a threaded study)
+            if self._compiled is not None and not np.iscomplexobj(p):
+                with np.errstate(all="ignore"):
+                    return self._compiled.complex_batch(name, Y, p)
+            p = list(p.T)
         # the compiled kernels take real parameters (B differentiates in the inputs'
         # parameter slots: complex ones, through numpy)
         if self._compiled is not None and not any(np.iscomplexobj(v) for v in p):
@@ -76,8 +84,8 @@ class ComplexField:
 
     def pieces(self, Q, V, p=None):
         """W, F, mu, drift, h, g at complex states (rows of Q, V: shape (K, n)); ``p``:
-        the parameter values, one number each or one array of K values each (a row's
-        own parameters)."""
+        the parameter values, one number each or one array of K values each, or an array
+        of shape (K, parameters) (a row's own parameters)."""
         n, m, k = self.n, self.m, self.k
         out = self._outputs("saddle", np.concatenate([Q, V], axis=1), p)
         K = out.shape[0]
@@ -241,12 +249,20 @@ def chart_jacobians(cf, chart, Y, step, P=None, columns=None):
         The chart variables to differentiate in (default all d): the result has one
         column per entry, shape (N, d, len(columns)).
     """
+    # each state's parameters as a row (the layout of the compiled kernels)
+    rows = None if P is None else np.array(
+        [np.broadcast_to(np.asarray(v, dtype=float), (Y.shape[0],)) for v in P],
+        dtype=float).reshape(-1, Y.shape[0]).T
     if Y.shape[0] > BATCH_STATES:
-        return np.concatenate([
-            chart_jacobians(cf, chart, Y[i:i + BATCH_STATES], step,
-                            None if P is None else [v[i:i + BATCH_STATES] for v in P],
-                            columns)
-            for i in range(0, Y.shape[0], BATCH_STATES)])
+        return np.concatenate([_jacobians(cf, chart, Y[i:i + BATCH_STATES], step,
+                                          None if rows is None else rows[i:i + BATCH_STATES],
+                                          columns)
+                               for i in range(0, Y.shape[0], BATCH_STATES)])
+    return _jacobians(cf, chart, Y, step, rows, columns)
+
+
+def _jacobians(cf, chart, Y, step, rows, columns):
+    """:func:`chart_jacobians` on one batch; ``rows``: (N, parameters) or None."""
     n, N = cf.n, Y.shape[0]
     cols = list(chart.iq) + [n + i for i in chart.iv]
     d = len(cols)
@@ -260,7 +276,7 @@ def chart_jacobians(cf, chart, Y, step, P=None, columns=None):
         c = len(group)
         X = (np.repeat(Y[:, cols].astype(complex), c, axis=0)
              + 1j * step * np.tile(np.eye(d)[group], (N, 1)))
-        p = None if P is None else [np.repeat(np.asarray(v, dtype=float), c) for v in P]
+        p = None if rows is None else np.repeat(rows, c, axis=0)
         F = reduced_field(cf, chart, np.repeat(Y[:, :n], c, axis=0), X, p, positions)
         out[:, :, [columns.index(j) for j in group]] = np.swapaxes(
             F.imag.reshape(N, c, d), 1, 2) / step

@@ -256,7 +256,8 @@ def samples(axes, count: int, *, sampler: str = "lhs", seed: int = 0,
 
 def chunk_slices(shape: tuple, points: int, whole: int | None = None) -> list:
     """Regions (tuples of slices) covering an array of ``shape``, about ``points``
-    elements each, in C order.
+    elements each (at most ``points``, the pieces along a dimension of sizes that differ
+    by at most one), in C order.
 
     ``whole``: a dimension never cut (each region holds whole lines along it: a
     boundary traced along that dimension is found within one region).
@@ -270,6 +271,9 @@ def chunk_slices(shape: tuple, points: int, whole: int | None = None) -> list:
         take = shape[i] if i == whole else max(1, min(shape[i], room))
         sizes[i] = take
         room = max(1, room // take)
+    # as many pieces along each dimension, of sizes differing by at most one: no small
+    # last piece (a chunk of one line is a worker idle at the end)
+    sizes = [-(-n // -(-n // s)) for n, s in zip(shape, sizes)]
     ranges = [range(0, n, s) for n, s in zip(shape, sizes)]
     return [tuple(slice(a, min(a + s, n)) for a, s, n in zip(starts, sizes, shape))
             for starts in product(*ranges)]

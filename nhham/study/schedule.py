@@ -3,11 +3,13 @@
 ``scheduler``:
 
 - ``"threads"`` (the default with more than one worker for ``linearize`` and
-  ``simulate``): a ``dask.distributed.LocalCluster`` of one process, this one, with
-  ``workers`` threads, made for the study and closed after it: the scene and model this
-  process prepared are shared (no worker starts an interpreter or builds a model), and
-  the compiled kernels, the integration loop and LAPACK release the GIL (the bicycle's
-  map: 0.6 of two cores, the snake ensemble 0.85, bench/RESULTS.md);
+  ``simulate``): dask's local threaded scheduler (``dask.threaded``) with ``workers``
+  threads of this process: the scene and model this process prepared are shared (no
+  worker starts an interpreter or builds a model), and the compiled kernels, the
+  integration loop and LAPACK release the GIL (bench/RESULTS.md). No
+  ``dask.distributed`` cluster is made: its scheduler and worker event loops, in this
+  process, would compete with the chunks for the GIL (measured: 0.71 of two cores on the
+  bicycle's map against 0.79 without them);
 - ``"processes"`` (the default for ``classify``, whose per-point work is sympy and holds
   the GIL): a local cluster of ``workers`` processes with one thread each; each worker
   parses the scene and builds its model once (warmed up while this process prepares);
@@ -29,6 +31,7 @@ from __future__ import annotations
 import logging
 import os
 import time
+from functools import partial
 
 from nhham.errors import BudgetExceeded, InputError, OptionalDependencyError
 from nhham.study.tasks import evaluate, warm
@@ -75,6 +78,8 @@ class Pool:
             scheduler = "synchronous" if workers == 1 else local
         if client is None and scheduler == "synchronous":
             return cls("synchronous", 1)
+        if client is None and scheduler == "threads":
+            return cls("threads", workers)
         scheduler = str(scheduler)
         try:
             from dask.distributed import Client, LocalCluster
@@ -84,11 +89,9 @@ class Pool:
                 "install 'nhham[study]' (or run with --workers 1)") from None
         if client is not None:
             return cls(str(client.scheduler.address), _count(client, workers), client)
-        if scheduler in ("processes", "threads"):
-            processes = scheduler == "processes"
-            cluster = LocalCluster(n_workers=workers if processes else 1,
-                                   threads_per_worker=1 if processes else workers,
-                                   processes=processes, dashboard_address=None,
+        if scheduler == "processes":
+            cluster = LocalCluster(n_workers=workers, threads_per_worker=1,
+                                   processes=True, dashboard_address=None,
                                    # the workers' heartbeats failing while the cluster
                                    # closes are logged as errors: not the user's concern
                                    silence_logs=logging.CRITICAL)
@@ -104,7 +107,7 @@ class Pool:
 
     def warm(self, scene_text: str, source: str, what: str) -> None:
         """Have every worker parse the scene and build its model now (not waited for)."""
-        if self.client is None or self.scheduler == "threads":  # threads share this one's
+        if self.client is None:  # threads share this process's model
             return
         for address in self.client.scheduler_info().get("workers", {}):
             self._warming.append(self.client.submit(
@@ -119,11 +122,14 @@ class Pool:
         :class:`~nhham.errors.BudgetExceeded` is raised (what finished before was
         handed to ``on_result``).
         """
-        if self.client is None:
+        if self.scheduler == "synchronous":
             for region in regions:
                 if deadline is not None and time.perf_counter() > deadline:
                     raise BudgetExceeded("the study's --budget ran out")
                 on_result(region, evaluate(study, region))
+            return
+        if self.client is None:
+            self._run_threads(study, regions, on_result, deadline)
             return
         from dask.distributed import as_completed
 
@@ -138,6 +144,27 @@ class Pool:
             raise BudgetExceeded("the study's --budget ran out") from None
         finally:
             self.client.cancel(list(futures))
+
+    def _run_threads(self, study, regions, on_result, deadline) -> None:
+        """The chunks on dask's threaded scheduler, each result handed over (in this
+        thread) as it finishes and then dropped from dask's cache, so that a study's
+        results are never all in memory at once. The deadline is looked at as each chunk
+        finishes (a chunk is a fraction of a second to a few seconds of work)."""
+        import dask.threaded
+
+        tasks = {("nhham-chunk", i): (partial(evaluate, study, region),)
+                 for i, region in enumerate(regions)}
+
+        def finished(key, result, dsk, state, worker_id):
+            state["cache"][key] = None   # written: dask need not keep it
+            on_result(regions[key[1]], result)
+            if deadline is not None and time.perf_counter() > deadline:
+                raise BudgetExceeded("the study's --budget ran out")
+
+        # callbacks as get_async documents them: (start, start_state, pretask, posttask,
+        # finish); not the global dask.callbacks.Callback, which other threads would see
+        dask.threaded.get(tasks, list(tasks), num_workers=self.workers,
+                          callbacks=[(None, None, None, finished, None)])
 
     def close(self) -> None:
         if self.client is not None and self._warming:

@@ -3,7 +3,8 @@
 One call prepares a study in this process (the scene loaded, its numeric model built
 once, the decisions shared by every point made once: the chart of a linearisation, the
 parametric classification), cuts its design into chunks, runs them where the scheduler
-says (:mod:`~nhham.study.schedule`: this process, a local Dask cluster, a remote one) and
+says (:mod:`~nhham.study.schedule`: this process, dask's threads, a local Dask cluster of
+processes, a remote one) and
 writes each finished chunk to the store (:mod:`~nhham.study.store`), so that an
 interrupted study resumes where it stopped. The result is a :class:`SweepResult` whose
 ``dataset`` is the labelled xarray Dataset.

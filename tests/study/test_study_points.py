@@ -77,3 +77,11 @@ def test_chunks_cover_every_point_once(shape, points, whole):
     for r in regions:   # about `points` each, never less than a whole line
         assert np.prod([len(range(*s.indices(n))) for s, n in zip(r, shape)]) <= max(points,
                                                                                    line)
+
+
+def test_chunks_are_even():
+    # 101 lines of 201 points in chunks of at most 4096: 6 chunks of 17 or 16 lines (not
+    # five of 20 and a last of one, which leaves a worker idle at the end)
+    regions = chunk_slices((201, 101), 4096, 0)
+    assert sorted(r[1].stop - r[1].start for r in regions) == [16, 17, 17, 17, 17, 17]
+    assert sorted({r[0].stop - r[0].start for r in chunk_slices((1000,), 256)}) == [250]
