@@ -82,7 +82,7 @@ _LAZY = by_module({
     "numerics.linearization": ("linearize", "linearize_many", "Linearization"),
     "numerics.batch_linearization": ("linearize_batch", "LinearizationBatch", "ChartChoice"),
     "numerics.steady_sweep": ("sweep_steady", "Sweep"),
-    "cli.linearize_command": ("linearize_scene", "plot_root_locus"),
+    "cli.linearize_command": ("linearize_scene", "open_loop", "plot_root_locus"),
     # parameter studies on Dask (the study extra)
     "study.sweep": ("sweep", "SweepResult"),
     "study.plots": ("plot_study", "plot_stability_map", "plot_ensemble", "plot_cases"),

@@ -18,7 +18,10 @@ locus (needs the optional matplotlib extra; no global backend is set).
 JSON (the ``result`` of the envelope, schema ``$defs/linearize``):
 ``coordinates``, ``matrix``, ``eigenvalues`` ([re, im] pairs), ``stable``
 (bool or null), ``spectrally_stable``, ``method``, ``precision``, ``neutral``,
-``dependent``, ``chart``, ``steady_state``; ``sweep`` (null without
+``dependent``, ``chart``, ``steady_state``; ``loop`` (``closed``: the scene's
+``[control]`` laws replace its inputs, the keys above are the closed loop's),
+``control``, ``open_loop`` (null, or the open loop's linearisation with
+``inputs`` and ``input_matrix``); ``sweep`` (null without
 ``--sweep``) = {``parameter``, ``values``, ``eigenvalues``, ``crossings``
 [{``value``, ``kind``}]}; ``plot`` (the file written, or null).
 """
@@ -26,13 +29,15 @@ JSON (the ``result`` of the envelope, schema ``$defs/linearize``):
 from __future__ import annotations
 
 import re
+import textwrap
 
 import numpy as np
 
 from nhham.errors import InputError, OptionalDependencyError
 from nhham.cli.report import table
 
-__all__ = ["add_arguments", "cmd_linearize", "linearize_scene", "parse_sweep", "plot_root_locus",
+__all__ = ["add_arguments", "cmd_linearize", "linearize_scene", "open_loop",
+           "parse_sweep", "plot_root_locus",
            "rounding_level", "EXACT_MAX_N", "EXACT_DIGITS", "LINEARIZE_HELP"]
 
 #: (short help, description, example) for ``nhham linearize --help``.
@@ -41,7 +46,8 @@ LINEARIZE_HELP = (
     "Linearise the constrained dynamics about the scene's [steady] motion (an equilibrium or "
     "a steady motion, checked to lie on M_1 and to be steady) in independent coordinates, "
     "neutral directions divided out: state matrix, eigenvalues and a stability verdict "
-    "(exact for small systems, complex-step otherwise). --sweep moves a parameter (and the "
+    "(exact for small systems, complex-step otherwise); with [control] laws the closed loop, "
+    "and the open loop's (A, B) under it. --sweep moves a parameter (and the "
     "steady motion with it) and locates where an eigenvalue crosses the imaginary axis.",
     "nhham linearize examples/whipple_bicycle.toml --sweep v=0:10:101 --plot locus.png")
 
@@ -97,6 +103,11 @@ def parse_sweep(text: str):
 def linearize_scene(scene, method: str = "auto", sweep=None, model=None):
     """Linearise a scene's ``[steady]`` motion (and sweep a parameter).
 
+    The scene's system is the one its runs integrate: with ``[control]`` laws, the
+    closed loop (each input replaced by its law, :meth:`System.closed_loop`), whose
+    verdict is the scene's; without, the system with its inputs at their ``[steady]``
+    values. (The open loop's (A, B) of a scene with laws: :func:`open_loop`.)
+
     Parameters
     ----------
     scene : nhham.system.scene.Scene
@@ -105,37 +116,107 @@ def linearize_scene(scene, method: str = "auto", sweep=None, model=None):
     sweep : (str, array) or None
         Parameter name and values.
     model : NumericModel, optional
-        Reuse a model of ``scene.system``.
+        Reuse a model of the scene's system (``scene.steady_system()``).
 
     Returns
     -------
     (Linearization, Sweep or None)
+
+    Raises
+    ------
+    InputError
+        No ``[steady]`` table; a ``[control]`` law that uses ``t`` (the closed loop has
+        no steady motion) or that does not give the ``[steady]`` value of its input
+        there (key ``control``).
     """
     from nhham.numerics.codegen import numeric_model
-    from nhham.numerics.linearization import linearize
-    from nhham.numerics.steady_sweep import sweep_steady, with_steady_inputs
+    from nhham.numerics.steady_sweep import sweep_steady
 
-    if scene.steady is None:
-        raise InputError(f"{scene.source}: linearize needs a [steady] table with a value (or an "
-                         f"expression in the parameters) for every coordinate and velocity",
-                         key="steady")
+    _check_steady_table(scene)
     if method not in ("auto", "exact", "complex-step"):
         raise InputError(f"linearize: unknown method {method!r}")
-    model = numeric_model(scene.system) if model is None else model
-    model, state = with_steady_inputs(model, scene.steady.values(model.parameters))
-    family = scene.steady.family(model.parameters)
-    lin = linearize(model, state, family=family)
-    if method == "exact" or (method == "auto" and scene.system.n <= EXACT_MAX_N):
-        lin = _exact(scene, model, lin)
+    system = scene.steady_system()
+    model = numeric_model(system) if model is None else model
+    lin = _linearize(scene, system, model, method)
     result_sweep = None
     if sweep is not None:
         name, values = sweep
-        result_sweep = sweep_steady(model, scene.steady.values, name, values,
+        known = set(model.names) | set(model.input_names)   # not the inputs a law gives
+
+        def state_of(parameters):
+            return {k: v for k, v in scene.steady.values(parameters).items() if k in known}
+
+        result_sweep = sweep_steady(model, state_of, name, values,
                                     independent=lin.chart, family_of=scene.steady.family)
     return lin, result_sweep
 
 
-def _exact(scene, model, lin):
+def open_loop(scene, method: str = "auto", model=None, independent=None):
+    """The open loop of a scene: its system with the inputs held at their ``[steady]``
+    values, (A, B) of x' = A x + B u, whatever ``[control]`` says.
+
+    Parameters
+    ----------
+    scene, method : as for :func:`linearize_scene`
+    model : NumericModel, optional
+        A model of ``scene.system``.
+    independent : sequence of str, optional
+        The chart (default: chosen at the state).
+
+    Returns
+    -------
+    Linearization
+    """
+    from nhham.numerics.codegen import numeric_model
+
+    _check_steady_table(scene)
+    model = numeric_model(scene.system) if model is None else model
+    return _linearize(scene, scene.system, model, method, independent)
+
+
+def _check_steady_table(scene) -> None:
+    if scene.steady is None:
+        raise InputError(f"{scene.source}: linearize needs a [steady] table with a value (or an "
+                         f"expression in the parameters) for every coordinate and velocity",
+                         key="steady")
+
+
+def _linearize(scene, system, model, method, independent=None):
+    """The linearisation of ``system`` (``model``) about the scene's [steady] motion."""
+    from nhham.numerics.linearization import linearize
+    from nhham.numerics.steady_sweep import with_steady_inputs
+
+    values = scene.steady.values(model.parameters)
+    _check_laws(scene, system, model, values)
+    model, state = with_steady_inputs(model, values)
+    state = {k: v for k, v in state.items() if k in model.names}
+    lin = linearize(model, state, family=scene.steady.family(model.parameters),
+                    independent=independent)
+    if method == "exact" or (method == "auto" and system.n <= EXACT_MAX_N):
+        lin = _exact(scene, system, model, lin)
+    return lin
+
+
+def _check_laws(scene, system, model, values) -> None:
+    """Each [control] law closed in ``system`` gives its input's [steady] value (when the
+    table gives one) at the steady state: else the motion is not one of the closed loop."""
+    import sympy as sp
+
+    closed = {u: law for u, law in scene.control.items() if u not in model.input_names
+              and u in values}
+    if not closed or system is scene.system:
+        return
+    point = {sp.Symbol(k): sp.Float(v) for k, v in {**model.parameters, **values}.items()}
+    for u, law in sorted(closed.items()):
+        value = complex(sp.sympify(law).xreplace(point).evalf())
+        want = values[u]
+        if abs(value - want) > 1e-9 * max(1.0, abs(want)):
+            raise InputError(f"control.{u}: the law gives {value.real:.10g} at the [steady] "
+                             f"motion, where [steady] gives {u} = {want:.10g}: the motion is "
+                             f"not a steady motion of the closed loop", key="control")
+
+
+def _exact(scene, system, model, lin):
     """The same linearisation with the exact Jacobian in the numeric chart."""
     import mpmath
     import sympy as sp
@@ -143,16 +224,16 @@ def _exact(scene, model, lin):
     from nhham.lagrangian.jacobian import exact_jacobian, exact_number
     from nhham.numerics.linearization import linearization_result
 
-    params = {p.name: exact_number(v) for p, v in scene.system.parameter_values.items()}
+    params = {p.name: exact_number(v) for p, v in system.parameter_values.items()}
     params.update({u: exact_number(model.parameters[u]) for u in model.input_names})
     point = {sp.Symbol(k): v for k, v in params.items()}
     state = {}
     for name, expr in scene.steady.expressions.items():
-        if name in model.input_names:
+        if name not in model.names:   # an input's steady value
             continue
         value = sp.sympify(expr).xreplace(point)
         state[name] = value if value.is_number else exact_number(float(value.evalf()))
-    ej = exact_jacobian(scene.system, state, params, lin.chart)
+    ej = exact_jacobian(system, state, params, lin.chart)
     keep = [i for i, s in enumerate(ej.chart) if s not in lin.neutral]
     A = ej.matrix.extract(keep, keep)
     names = [ej.chart[i] for i in keep]
@@ -204,60 +285,58 @@ def cmd_linearize(args, steps):
         _matplotlib()  # fail before the work when the extra is missing
     with capture_warnings() as caught:
         with steps.step("numeric model (generated kernels)"):
-            model = numeric_model(scene.system)
+            system = scene.steady_system()
+            model = numeric_model(system)
         with steps.step(f"linearise ({args.method})"
+                        + (" the closed loop ([control])" if scene.control else "")
                         + (f", sweep {args.sweep}" if sweep else "")):
             lin, swept = linearize_scene(scene, args.method, sweep, model=model)
-    data = lin.to_dict()
-    # -0.0 is 0.0 (x + 0.0 turns the one into the other; every other value is kept)
-    data["matrix"] = [[x + 0.0 for x in row] for row in data["matrix"]]
-    data["eigenvalues"] = [[re + 0.0, im + 0.0] for re, im in data["eigenvalues"]]
+        opened = None
+        if scene.control:
+            with steps.step(f"linearise ({args.method}) the open loop"):
+                opened = open_loop(scene, args.method, independent=lin.chart)
+    data = _json(lin)
+    data["loop"] = "closed" if scene.control else "open"
+    data["control"] = {u: str(law) for u, law in scene.control.items()}
+    data["open_loop"] = None if opened is None else _json(opened)
     data["sweep"] = None if swept is None else swept.to_dict()
     data["plot"] = None
     if args.plot:
         with steps.step(f"plot {args.plot}"):
             data["plot"] = plot_root_locus(swept, args.plot, title=scene.name)
-    return CommandOutput(result=data, text=lambda: _text(scene, lin, swept, args),
+    return CommandOutput(result=data, text=lambda: _text(scene, lin, swept, args, opened),
                          scene=scene_info(scene), warnings=caught)
 
 
-def _text(scene, lin, swept, args) -> str:
-    lines = [f"{scene.name or args.scene}: linearisation about the [steady] motion"]
+def _json(lin) -> dict:
+    data = lin.to_dict()
+    # -0.0 is 0.0 (x + 0.0 turns the one into the other; every other value is kept)
+    data["matrix"] = [[x + 0.0 for x in row] for row in data["matrix"]]
+    data["eigenvalues"] = [[re + 0.0, im + 0.0] for re, im in data["eigenvalues"]]
+    return data
+
+
+def _text(scene, lin, swept, args, opened=None) -> str:
+    closed = opened is not None
+    lines = [f"{scene.name or args.scene}: linearisation about the [steady] motion"
+             + (", the loop closed by its [control] laws" if closed else "")]
     rows = [
         ("method", lin.method),
         ("independent (chart)", ", ".join(lin.chart)),
         ("dependent", ", ".join(lin.dependent) or "none"),
         ("neutral (removed)", ", ".join(lin.neutral) or "none"),
         ("coordinates", ", ".join(lin.coordinates)),
-        ("verdict", lin.verdict),
-        ("precision", lin.precision),
+        ("verdict", lin.verdict + (" (closed loop)" if closed else "")),
     ]
+    if closed:
+        rows += [("control", "; ".join(f"{u} = {law}" for u, law in scene.control.items())),
+                 ("open loop", opened.verdict + " (inputs held at their [steady] values)")]
+    rows.append(("precision", lin.precision))
     lines.append(table(rows))
-    floor = rounding_level(lin)
-    shown_as_zero = False
-
-    def num(x, digits, sign=""):
-        nonlocal shown_as_zero
-        if abs(x) <= floor:
-            shown_as_zero |= x != 0
-            return f"{0:{sign}.{digits}g}"
-        return f"{x:{sign}.{digits}g}"
-
-    if lin.matrix.size:
-        lines.append("state matrix:")
-        lines.append(table([[num(x, 10) for x in row] for row in lin.matrix],
-                           header=list(lin.coordinates)))
-    if lin.inputs and lin.matrix.size:
-        lines.append("input matrix B (x' = A x + B u, inputs at their [steady] values):")
-        lines.append(table([[name] + [num(x, 10) for x in row]
-                            for name, row in zip(lin.coordinates, lin.input_matrix)],
-                           header=["", *lin.inputs]))
-    lines.append("eigenvalues:")
-    lines.append(table([(num(z.real, 12), num(z.imag, 12, "+") + "i")
-                        for z in lin.eigenvalues] or [("none",)]))
-    if shown_as_zero:
-        lines.append(f"  (values of magnitude <= {floor:.1e} are shown as 0: rounding at this "
-                     f"precision; --json has them as computed)")
+    lines += _matrices(lin, "state matrix" + (" of the closed loop" if closed else ""))
+    if closed:
+        lines.append("open loop (inputs held at their [steady] values):")
+        lines.append(textwrap.indent("\n".join(_matrices(opened, "state matrix A")), "  "))
     if swept is not None:
         lines.append(f"sweep over {swept.parameter}: {len(swept.values)} values from "
                      f"{swept.values[0]:g} to {swept.values[-1]:g}")
@@ -273,6 +352,37 @@ def _text(scene, lin, swept, args) -> str:
         else:
             lines.append("  no crossings")
     return "\n".join(lines)
+
+
+def _matrices(lin, title) -> list:
+    """The state matrix, B and the eigenvalues of ``lin`` as lines of text."""
+    lines = []
+    floor = rounding_level(lin)
+    shown_as_zero = False
+
+    def num(x, digits, sign=""):
+        nonlocal shown_as_zero
+        if abs(x) <= floor:
+            shown_as_zero |= x != 0
+            return f"{0:{sign}.{digits}g}"
+        return f"{x:{sign}.{digits}g}"
+
+    if lin.matrix.size:
+        lines.append(f"{title}:")
+        lines.append(table([[num(x, 10) for x in row] for row in lin.matrix],
+                           header=list(lin.coordinates)))
+    if lin.inputs and lin.matrix.size:
+        lines.append("input matrix B (x' = A x + B u, inputs at their [steady] values):")
+        lines.append(table([[name] + [num(x, 10) for x in row]
+                            for name, row in zip(lin.coordinates, lin.input_matrix)],
+                           header=["", *lin.inputs]))
+    lines.append("eigenvalues:")
+    lines.append(table([(num(z.real, 12), num(z.imag, 12, "+") + "i")
+                        for z in lin.eigenvalues] or [("none",)]))
+    if shown_as_zero:
+        lines.append(f"  (values of magnitude <= {floor:.1e} are shown as 0: rounding at this "
+                     f"precision; --json has them as computed)")
+    return lines
 
 
 def rounding_level(lin) -> float:

@@ -2,12 +2,13 @@
 
 At each point the parameters take the point's values, the ``[steady]`` table gives the
 steady motion there (its entries are expressions in the parameters) and the inputs'
-steady values, and :func:`~nhham.numerics.batch_linearization.linearize_batch` gives the
+steady values (with ``[control]`` laws the loop they close is linearised, as ``nhham
+linearize`` does), and :func:`~nhham.numerics.batch_linearization.linearize_batch` gives the
 state matrix, its eigenvalues and the verdict, in the chart and with the neutral
 directions chosen once at probe points (:func:`prepare`). On a grid the crossings of the
 imaginary axis along one swept parameter (``along``; the first by default) are located
-on every line of the grid by Brent's method
-(:func:`~nhham.numerics.steady_sweep.crossings`): the stability boundaries, e.g. the
+on every line of the grid, all lines' brackets together
+(:func:`~nhham.numerics.steady_sweep.crossings_many`): the stability boundaries, e.g. the
 weave and capsize speeds of a bicycle at every trail.
 
 Variables (``variables``): ``stable`` (every eigenvalue has Re < -tol), ``verdict``
@@ -78,7 +79,7 @@ def prepare(scene, model, design, along: str | None = None) -> dict:
         params = {k: float(v.ravel()[0]) for k, v in design.values(region).items()}
         m = model.with_parameters(**params)
         try:
-            state, inputs = _state(scene, m.parameters, m.input_names)
+            state, inputs = _state(scene, m.parameters, m.input_names, m.names)
             m = m.with_parameters(**inputs)
             family = scene.steady.family(m.parameters)
             chart = found[0][3].chart if found else None
@@ -167,10 +168,11 @@ def evaluate(study, ctx, region) -> dict:
     return out
 
 
-def _state(scene, parameters, inputs) -> tuple:
-    """(state, input values) of the [steady] table at one point."""
+def _state(scene, parameters, inputs, names) -> tuple:
+    """(state, input values) of the [steady] table at one point (the entries of inputs
+    that a [control] law gives are not the model's: left out)."""
     state = scene.steady.values(parameters)
-    return ({k: v for k, v in state.items() if k not in inputs},
+    return ({k: v for k, v in state.items() if k in names},
             {u: state[u] for u in inputs if u in state})
 
 

@@ -134,11 +134,13 @@ def keep_context(study: Study, scene, model) -> None:
 
 
 def study_system(scene, what: str):
-    """The system a study of ``what`` evaluates: a simulation closes the loop with the
-    scene's ``[control]`` laws; a linearisation keeps the inputs (at their steady
-    values)."""
+    """The system a study of ``what`` evaluates: the scene's ``[control]`` laws close
+    the loop of a simulation and of a linearisation (as ``nhham simulate`` and ``nhham
+    linearize`` do; the inputs without a law stay at their steady values)."""
     if what == "simulate" and scene.control:
         return scene.system.closed_loop(dict(scene.control))
+    if what == "linearize":
+        return scene.steady_system()
     return scene.system
 
 

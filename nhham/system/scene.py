@@ -41,7 +41,7 @@ from typing import TYPE_CHECKING, Mapping
 
 import sympy as sp
 
-from nhham.errors import ParseError, SceneError, key_of
+from nhham.errors import InputError, ParseError, SceneError, key_of
 from nhham.system.contacts import contacts_structure, parse_contacts
 from nhham.system.expressions import RESERVED_NAMES, parse_expression
 from nhham.system.initial import initial_residuals
@@ -172,6 +172,26 @@ class Scene:
     steady: object = None
     contacts: tuple = ()
     control: Mapping = field(default_factory=lambda: MappingProxyType({}))
+
+    def steady_system(self) -> "System":
+        """The system whose ``[steady]`` motion is linearised: the loop closed by the
+        ``[control]`` laws (the system the scene's runs integrate), else its own.
+
+        Raises
+        ------
+        InputError
+            A law uses ``t`` (key ``control``): the closed loop then has no steady
+            motion.
+        """
+        if not self.control:
+            return self.system
+        timed = sorted(u for u, law in self.control.items()
+                       if TIME in sp.sympify(law).free_symbols)
+        if timed:
+            raise InputError(f"control.{timed[0]}: the law uses t, so the closed loop has no "
+                             f"steady motion to linearise about (the open loop's (A, B): "
+                             f"nhham.open_loop)", key="control")
+        return self.system.closed_loop(dict(self.control))
 
     def simulate_options(self, **overrides) -> dict:
         """Keyword arguments for :func:`nhham.simulate` from the scene.

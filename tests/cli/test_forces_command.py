@@ -41,13 +41,60 @@ def test_bad_control_laws_exit_2_naming_them(capsys):
 
 
 def test_linearize_gives_B_with_the_inputs_named(capsys):
+    """The drive's [control] holds both torques at tau: the closed loop is the open loop
+    with the inputs at their steady values (K = 0), and the open loop carries B."""
     status, out, _ = run(capsys, "linearize", DRIVE, "--json")
     result = json.loads(out)["result"]
-    assert status == 0 and result["inputs"] == ["tauL", "tauR"]
-    B = np.array(result["input_matrix"])
+    assert status == 0 and result["loop"] == "closed" and "inputs" not in result
+    assert result["control"] == {"tauL": "tau", "tauR": "tau"}
+    opened = result["open_loop"]
+    assert opened["inputs"] == ["tauL", "tauR"] and opened["coordinates"] == result["coordinates"]
+    B = np.array(opened["input_matrix"])
     assert B.shape == (2, 2) and np.allclose(B, B.T) and B[0, 0] > B[0, 1] > 0
+    np.testing.assert_allclose(result["matrix"], opened["matrix"], rtol=1e-12, atol=1e-14)
     status, out, _ = run(capsys, "linearize", DRIVE)
-    assert "input matrix B" in out and "tauL" in out
+    assert "input matrix B" in out and "tauL" in out and "open loop" in out
+
+
+def test_linearize_closes_the_bicycle_s_steer_controller(capsys):
+    """The headline is the scene's closed loop: the poles the controller was placed at
+    (-2, -3, -4, -5: examples/make_bicycle_steer_control.py), and its matrix the closed
+    form's A + B K (Meijaard et al. 2007 at v = 3, B = [0; M^-1], K read off the law);
+    the open loop under it weaves unstably, as the benchmark does below 4.29 m/s."""
+    import sympy as sp
+
+    from bicycle_benchmark import BENCHMARK, benchmark_matrices, benchmark_state_matrix
+
+    scene = EXAMPLES / "bicycle_steer_control.toml"
+    status, out, _ = run(capsys, "linearize", scene, "--json")
+    result = json.loads(out)["result"]
+    assert status == 0 and result["loop"] == "closed" and result["stable"] is True
+    assert result["coordinates"] == ["phi", "delta", "phi_dot", "delta_dot"]
+    poles = sorted(re for re, im in result["eigenvalues"])
+    np.testing.assert_allclose(poles, [-5, -4, -3, -2], atol=1e-7)
+    assert result["open_loop"]["stable"] is False
+    law = sp.sympify(result["control"]["T_delta"])
+    K = np.array([[0.0] * 4, [float(law.diff(sp.Symbol(s))) for s in result["coordinates"]]])
+    M = benchmark_matrices(BENCHMARK)[0]
+    B = np.vstack([np.zeros((2, 2)), np.linalg.inv(M)])
+    expected = benchmark_state_matrix(3.0) + B @ K
+    np.testing.assert_allclose(result["matrix"], expected, rtol=1e-6, atol=1e-6)
+    status, out, _ = run(capsys, "linearize", scene)
+    assert "(closed loop)" in out and "open loop            unstable" in out
+
+
+def test_linearize_refuses_a_closed_loop_without_that_steady_motion(capsys, tmp_path):
+    """A law in t (no steady motion of the closed loop) or one that does not give its
+    input's [steady] value there: exit 2, the law named."""
+    text = DRIVE.read_text()
+    for law, fragment in (('tauL = "tau*cos(t)"', "uses t"),
+                          ('tauL = "2*tau"', "not a steady motion of the closed loop")):
+        scene = tmp_path / "drive.toml"
+        scene.write_text(text.replace('[control]\ntauL = "tau"', f"[control]\n{law}"))
+        status, out, _ = run(capsys, "linearize", scene, "--json")
+        error = json.loads(out)["error"]
+        assert status == 2 and error["key"] == "control" and fragment in error["message"], error
+        assert "control.tauL" in error["message"]
 
 
 def test_derive_shows_the_generalized_forces(capsys):

@@ -85,3 +85,34 @@ def test_a_steady_motion_that_is_not_steady_everywhere_is_marked(tmp_path):
     assert list(status) == [0, 1]          # rR = 0.35: x' = v no longer rolls without slip
     assert result.dataset["verdict"].values[1] == -1
     assert np.isnan(result.dataset["eigenvalue_real"].values[1]).all()
+
+
+def test_a_controlled_bicycle_s_map_is_its_closed_loop_s():
+    """examples/bicycle_steer_control.toml: the study linearises the loop closed by its
+    [control] law, as `nhham linearize` does; every point's eigenvalues are the closed
+    form's A(v) + B K (B = [0; M^-1], K read off the law) and the boundary is where the
+    closed form's real eigenvalue crosses."""
+    import sympy as sp
+
+    from bicycle_benchmark import benchmark_matrices
+    from nhham.system.scene import load_scene
+
+    scene = "examples/bicycle_steer_control.toml"
+    law = load_scene(scene).control["T_delta"]
+    K = np.array([[0.0] * 4, [float(sp.diff(law, sp.Symbol(s)))
+                              for s in ("phi", "delta", "phi_dot", "delta_dot")]])
+    B = np.vstack([np.zeros((2, 2)), np.linalg.inv(benchmark_matrices(BENCHMARK)[0])])
+
+    def closed(v):
+        return np.linalg.eigvals(benchmark_state_matrix(v) + B @ K)
+
+    ds = sweep(scene, "linearize", ["v=1:9:9"], workers=1).dataset
+    assert "input" not in ds.dims
+    for i, v in enumerate(ds["v"].values):
+        got = ds["eigenvalue_real"].values[i] + 1j * ds["eigenvalue_imag"].values[i]
+        want = closed(v)
+        assert np.max(np.abs(np.sort_complex(got) - np.sort_complex(want))) < 1e-6
+        assert bool(ds["stable"].values[i]) == bool(np.all(want.real < 0))
+    root = brentq(lambda v: np.max(closed(v).real), 2.0, 3.0, xtol=1e-13)
+    count = int(ds["boundary_count"].values)
+    assert count == 1 and abs(ds["boundary"].values[0] - root) < 1e-6
