@@ -169,7 +169,7 @@ def linearize_batch(model, states, parameters=None, *, reference: Linearization 
     if divided and families is None:
         raise ComputationError("linearize_batch: the reference divided out "
                                f"{', '.join(divided)}; give the families")
-    cf = ComplexField(model)
+    cf = ComplexField(model, build=True)   # a study's thousands of states
     status, cres, ares = _check_states(cf, Y, P, model)
     d = len(reference.coordinates)
     r = len(model.input_names)

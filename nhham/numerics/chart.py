@@ -30,10 +30,12 @@ BATCH_STATES = 256
 
 class ComplexField:
     """The constrained field on complex states, through the generated kernels: the
-    compiled complex ones when the model has them (:meth:`CompiledRHS.complex_batch`),
-    else the numpy batch kernels on complex arrays (the same expressions)."""
+    compiled complex ones (:class:`~nhham.numerics.kernels.ComplexKernels`) when they
+    are in the compile cache or ``build`` (compiled now: worth it for thousands of
+    states, not for one linearisation), else the numpy batch kernels on complex arrays
+    (the same expressions)."""
 
-    def __init__(self, model):
+    def __init__(self, model, build: bool = False):
         self.n, self.m, self.k = model.n, model.m, model.k
         try:
             self._batch = model.kernels.functions["saddle"][1]
@@ -41,9 +43,9 @@ class ComplexField:
         except (AttributeError, KeyError, IndexError, TypeError):  # pragma: no cover
             raise ComputationError("linearize: the numeric model has no numpy saddle kernel "
                                    "for complex-step differentiation") from None
-        compiled = model.compiled
-        self._compiled = (compiled if compiled is not None and compiled.has_complex()
-                          else None)
+        from nhham.numerics.codegen.build import complex_kernels
+
+        self._compiled = complex_kernels(model, build_now=build)
         self._p = [float(x) for x in model.parameter_values]
         n, m, k = self.n, self.m, self.k
         self.size = n * n + n + m * n + 3 * m + k + int(model.forced)

@@ -19,7 +19,7 @@ import numpy as np
 
 from nhham.settings import COMPILER_LOCK
 
-__all__ = ["GeneratedKernels", "CompiledRHS", "kernel_sizes"]
+__all__ = ["GeneratedKernels", "CompiledRHS", "ComplexKernels", "kernel_sizes"]
 
 
 def kernel_sizes(layout) -> dict:
@@ -102,11 +102,6 @@ class CompiledRHS:
         self._rhs, self._rhs_batch = lib.nhham_rhs, lib.nhham_rhs_batch
         self._closed = getattr(lib, "nhham_closed", None)
         self._closed_batch = getattr(lib, "nhham_closed_batch", None)
-        self._complex = {name: getattr(lib, f"nhham_{name}_cx_batch", None)
-                         for name in ("saddle", "geometry")}
-        n, m, k = layout["n"], layout["m"], layout["k"]
-        self._complex_width = {"saddle": n * n + n + m * n + 3 * m + k + int(layout["forced"]),
-                               "geometry": n * n + m * n + m + k}
         self._local = threading.local()
         lib.nhham_rattle.restype = ctypes.c_int
         lib.nhham_erk.restype = ctypes.c_int
@@ -126,34 +121,6 @@ class CompiledRHS:
 
     def has_closed(self) -> bool:
         return self._closed is not None
-
-    def has_complex(self) -> bool:
-        """Whether the complex-step kernels were generated (every function of the system
-        has a complex continuation)."""
-        return self._complex["saddle"] is not None
-
-    def complex_batch(self, name, Y, P):
-        """The ``saddle`` or ``geometry`` kernel at k complex states.
-
-        Parameters
-        ----------
-        Y : ndarray of complex, shape (k, 2n) (``saddle``) or (k, n) (``geometry``)
-        P : ndarray of float, shape (k, parameters) or (parameters,) (the same for all)
-
-        Returns
-        -------
-        ndarray of complex, shape (k, outputs): the outputs in the layout of the real
-        kernel.
-        """
-        Y = np.ascontiguousarray(Y, dtype=complex)
-        P = np.ascontiguousarray(P, dtype=float)
-        k = Y.shape[0]
-        OUT = np.empty((k, self._complex_width[name]), dtype=complex)
-        c = ctypes
-        self._complex[name](c.c_long(k), c.c_void_p(Y.ctypes.data), c.c_long(Y.shape[1]),
-                            c.c_void_p(P.ctypes.data), c.c_long(P.shape[-1] if P.ndim == 2 else 0),
-                            c.c_void_p(OUT.ctypes.data))
-        return OUT
 
     def _scratch(self):
         s = getattr(self._local, "s", None)
@@ -222,3 +189,48 @@ class CompiledRHS:
                 ctypes.c_void_p(OUT.ctypes.data), pext)
         return OUT, bad
 
+
+class ComplexKernels:
+    """The complex-step kernels of a model: a library of their own (ctypes), built on
+    first use (:func:`nhham.numerics.codegen.build.complex_kernels`).
+
+    Entry points ``nhham_saddle_cx_batch`` and ``nhham_geometry_cx_batch`` (the saddle
+    and geometry kernels on ``double complex`` states, real parameters; ctypes releases
+    the GIL during a call).
+    """
+
+    def __init__(self, lib, path, layout):
+        self.path = path
+        self._lib = lib
+        self._kernels = {name: getattr(lib, f"nhham_{name}_cx_batch")
+                         for name in ("saddle", "geometry")}
+        n, m, k = layout["n"], layout["m"], layout["k"]
+        self._width = {"saddle": n * n + n + m * n + 3 * m + k + int(layout["forced"]),
+                       "geometry": n * n + m * n + m + k}
+
+    @classmethod
+    def load(cls, path, layout) -> "ComplexKernels":
+        return cls(ctypes.CDLL(path), path, layout)
+
+    def complex_batch(self, name, Y, P):
+        """The ``saddle`` or ``geometry`` kernel at k complex states.
+
+        Parameters
+        ----------
+        Y : ndarray of complex, shape (k, 2n) (``saddle``) or (k, n) (``geometry``)
+        P : ndarray of float, shape (k, parameters) or (parameters,) (the same for all)
+
+        Returns
+        -------
+        ndarray of complex, shape (k, outputs): the outputs in the layout of the real
+        kernel.
+        """
+        Y = np.ascontiguousarray(Y, dtype=complex)
+        P = np.ascontiguousarray(P, dtype=float)
+        k = Y.shape[0]
+        OUT = np.empty((k, self._width[name]), dtype=complex)
+        c = ctypes
+        self._kernels[name](c.c_long(k), c.c_void_p(Y.ctypes.data), c.c_long(Y.shape[1]),
+                            c.c_void_p(P.ctypes.data), c.c_long(P.shape[-1] if P.ndim == 2 else 0),
+                            c.c_void_p(OUT.ctypes.data))
+        return OUT

@@ -158,6 +158,7 @@ class NumericModel:
     backend_note: str = ""
     python_source: str = field(default="", repr=False)
     c_source: str = field(default="", repr=False)
+    c_complex_source: str = field(default="", repr=False)
     pending: Any = field(default=None, repr=False)
     # Set once by __post_init__, never changed (the model stays immutable).
     _p: np.ndarray = field(init=False, repr=False)

@@ -322,6 +322,7 @@ def test_generated_sources_are_kept_verified_and_reused(tmp_path, monkeypatch):
         m.setattr(emit, "_generate", refuse)
         again = numeric_model(system, cache_dir=str(tmp_path))
     assert again.python_source == first.python_source and again.layout == first.layout
+    assert again.c_complex_source == first.c_complex_source != ""
     y = np.array(sleigh_state())
     assert np.array_equal(again.rhs(0.0, y), first.rhs(0.0, y))
 

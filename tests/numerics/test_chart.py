@@ -12,6 +12,7 @@ import sympy as sp
 from nhham import System
 from nhham.numerics.chart import ComplexField
 from nhham.numerics.codegen import numeric_model
+from nhham.numerics.codegen.build import complex_kernels
 
 
 def _system():
@@ -27,7 +28,10 @@ def _system():
 
 def test_complex_kernels_differentiate_like_the_real_ones():
     model = numeric_model(_system())
-    assert model.compiled is not None and model.compiled.has_complex()
+    # the complex kernels are a library of their own, not in the model's (whose build
+    # they would slow several times): built here on first use
+    assert model.compiled is not None and "_cx_batch" not in model.c_source
+    assert complex_kernels(model) is not None and "saddle_cx" in model.c_complex_source
     cf = ComplexField(model)
     assert cf.backend == "c"
     real = numeric_model(_system(), backend="numpy")
@@ -60,3 +64,15 @@ def test_complex_kernels_differentiate_like_the_real_ones():
 def test_without_the_compiled_library_numpy_evaluates_the_complex_field():
     model = numeric_model(_system(), backend="numpy")
     assert ComplexField(model).backend == "numpy"
+
+
+def test_complex_kernels_build_with_sympy_s_constants():
+    # pi and E print as M_PI and M_E, which -std=c99 hides without _DEFAULT_SOURCE; the
+    # complex step of V = pi x^2 + E x is V'(x) = 2 pi x + E
+    x, xd = sp.symbols("x x_dot")
+    model = numeric_model(System([x], xd ** 2 / 2 - sp.pi * x ** 2 - sp.E * x))
+    cf = ComplexField(model, build=True)
+    assert cf.backend == "c"
+    _, F, *_ = cf.pieces(np.array([[0.3 + 1e-30j]]), np.array([[0.0 + 0j]]))
+    assert abs(F[0, 0].imag / 1e-30 - (-2 * np.pi)) < 1e-12   # dF/dx, F = -V'(x)
+    assert abs(F[0, 0].real - (-(2 * np.pi * 0.3 + np.e))) < 1e-12

@@ -111,6 +111,7 @@ def numeric_model(system, *, backend: str = "auto", path: str = "saddle",
         backend_note=note,
         python_source=sources["python"],
         c_source=sources["c"],
+        c_complex_source=sources.get("c_complex", ""),
         pending=pending,
     )
 

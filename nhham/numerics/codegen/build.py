@@ -28,13 +28,14 @@ import signal
 import subprocess
 import sys
 import sysconfig
+import threading
 from dataclasses import dataclass
 
 from nhham.errors import ComputationError
 from nhham.numerics.codegen.cache import CACHE_FORMAT, CompileCache
-from nhham.numerics.kernels import CompiledRHS
+from nhham.numerics.kernels import CompiledRHS, ComplexKernels
 
-__all__ = ["c_compiler", "compile_c", "build_library", "find_library", "load_library",
+__all__ = ["c_compiler", "compile_c", "complex_kernels", "build_library", "find_library", "load_library",
            "pyext_flags", "Compilation", "LibraryBuild", "CompilerStopped"]
 
 _FLAGS = ("-O2", "-fno-math-errno", "-fcx-limited-range", "-shared", "-fPIC", "-std=c99")
@@ -323,3 +324,50 @@ def load_library(built: LibraryBuild, layout) -> tuple:
 def _note(path: str, extension: bool) -> str:
     what = "compiled C with CPython entry points" if extension else "compiled C"
     return f"{what} ({os.path.basename(path)})"
+
+
+#: Complex-step kernels loaded in this process, by a digest of their source (None: they
+#: could not be built here, and why is not asked again).
+_COMPLEX: dict = {}
+_COMPLEX_LOCK = threading.Lock()
+
+
+def complex_kernels(model, build_now: bool = True) -> ComplexKernels | None:
+    """The model's complex-step kernels, from the compile cache or (``build_now``)
+    compiled now; None when the model has none (a function without a complex
+    continuation), runs on numpy, no compiler is available, or they are not built and
+    ``build_now`` is False: numpy then evaluates the complex step.
+
+    Only the complex step needs them, so the model's own library does not carry them:
+    their long straight-line complex code takes a C compiler several times longer than
+    the whole real library (the bicycle: 13 s against 3 s). A study, which evaluates
+    thousands of states, builds them (once: the cache keeps them); one linearisation,
+    a few evaluations, uses them when they are there and numpy otherwise.
+    """
+    source = model.c_complex_source
+    if not source or (model.compiled is None and model.pending is None):
+        return None
+    key = hashlib.sha256(source.encode()).hexdigest()
+    with _COMPLEX_LOCK:   # the threads of a study build it once
+        if key in _COMPLEX:
+            return _COMPLEX[key]
+        problems: list = []
+        try:
+            cache = CompileCache.open(None)
+            job = Compilation.of(source, tag="complex")
+            path = build(cache, job, problems) if build_now else cache.lookup(job.key,
+                                                                               problems)
+            if path is None:   # not built yet: numpy now, perhaps compiled by a study
+                return None
+            _COMPLEX[key] = ComplexKernels.load(path, model.layout)
+        except (ComputationError, OSError):
+            _COMPLEX[key] = None
+        finally:
+            if problems:
+                import warnings
+
+                from nhham.numerics.model import NumericsWarning
+
+                for problem in problems:
+                    warnings.warn(problem, NumericsWarning, stacklevel=2)
+        return _COMPLEX[key]

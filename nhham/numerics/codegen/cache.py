@@ -58,6 +58,10 @@ __all__ = ["CompileCache", "cache_location", "untrusted_reason", "file_digest"]
 #: Part of every cache key: a change of the cache's layout never meets old files.
 CACHE_FORMAT = "2"
 
+#: The texts a model's kept sources hold (what :func:`~nhham.numerics.codegen.emit.
+#: generate_sources` returns).
+SOURCE_KEYS = ("python", "c", "c_complex", "layout")
+
 _STALE_BUILD_S = 3600.0
 _LOCK = threading.Lock()
 _PRIVATE: dict = {}  # refused location -> this process's temporary directory
@@ -229,7 +233,7 @@ class CompileCache:
         if reason is not None:
             _warn(f"cached sources {path} {reason}: not used, generated again")
             return None
-        if not isinstance(data, dict) or set(data) != {"python", "c", "layout"}:
+        if not isinstance(data, dict) or set(data) != set(SOURCE_KEYS):
             return None
         data["layout"] = {k: tuple(v) if isinstance(v, list) else v
                           for k, v in data["layout"].items()}
