@@ -35,6 +35,7 @@ import numpy as np
 
 from nhham.errors import InputError, OptionalDependencyError
 from nhham.cli.report import table
+from nhham.system.expressions import to_text
 
 __all__ = ["add_arguments", "cmd_linearize", "linearize_scene", "open_loop",
            "parse_sweep", "plot_root_locus",
@@ -297,7 +298,7 @@ def cmd_linearize(args, steps):
                 opened = open_loop(scene, args.method, independent=lin.chart)
     data = _json(lin)
     data["loop"] = "closed" if scene.control else "open"
-    data["control"] = {u: str(law) for u, law in scene.control.items()}
+    data["control"] = {u: to_text(law) for u, law in scene.control.items()}
     data["open_loop"] = None if opened is None else _json(opened)
     data["sweep"] = None if swept is None else swept.to_dict()
     data["plot"] = None
@@ -329,7 +330,8 @@ def _text(scene, lin, swept, args, opened=None) -> str:
         ("verdict", lin.verdict + (" (closed loop)" if closed else "")),
     ]
     if closed:
-        rows += [("control", "; ".join(f"{u} = {law}" for u, law in scene.control.items())),
+        rows += [("control", "; ".join(f"{u} = {to_text(law)}"
+                                       for u, law in scene.control.items())),
                  ("open loop", opened.verdict + " (inputs held at their [steady] values)")]
     rows.append(("precision", lin.precision))
     lines.append(table(rows))
