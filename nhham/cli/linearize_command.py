@@ -142,12 +142,7 @@ def linearize_scene(scene, method: str = "auto", sweep=None, model=None):
     result_sweep = None
     if sweep is not None:
         name, values = sweep
-        known = set(model.names) | set(model.input_names)   # not the inputs a law gives
-
-        def state_of(parameters):
-            return {k: v for k, v in scene.steady.values(parameters).items() if k in known}
-
-        result_sweep = sweep_steady(model, state_of, name, values,
+        result_sweep = sweep_steady(model, scene.steady.values, name, values,
                                     independent=lin.chart, family_of=scene.steady.family)
     return lin, result_sweep
 
@@ -190,7 +185,6 @@ def _linearize(scene, system, model, method, independent=None):
     values = scene.steady.values(model.parameters)
     _check_laws(scene, system, model, values)
     model, state = with_steady_inputs(model, values)
-    state = {k: v for k, v in state.items() if k in model.names}
     lin = linearize(model, state, family=scene.steady.family(model.parameters),
                     independent=independent)
     if method == "exact" or (method == "auto" and system.n <= EXACT_MAX_N):

@@ -605,14 +605,7 @@ class NumericModel:
         q, it = y[:n].copy(), 0
         if k:
             q, it = self._newton_positions(q, tol, maxiter)
-        W, mu, h, _ = self.geometry(q)
-        v = v0.copy()
-        for _ in range(2):
-            r = mu @ v + h
-            if self.m == 0 or not np.any(r):
-                break
-            dv, _ = solve_saddle(W, mu, np.zeros(n), -r)
-            v = v + dv
+        v = self._velocities_onto(q, v0)
         out = np.concatenate([q, v])
         after = float(np.max(np.abs(self.residuals(out)), initial=0.0))
         return ProjectionOutcome(out, before, after, float(np.linalg.norm(q - q0)),
@@ -632,15 +625,23 @@ class NumericModel:
             _, _, _, g = self.geometry(Y)
             for i in np.flatnonzero(np.abs(g).max(axis=1) > 0):
                 Y[i, :n], _ = self._newton_positions(Y[i, :n].copy(), tol, maxiter)
-        if self.m:
-            W, mu, h, _ = self.geometry(Y)
-            for _ in range(2):
-                r = np.einsum("kij,kj->ki", mu, Y[:, n:]) + h
-                if not np.any(r):
-                    break
-                dv, _ = solve_saddle(W, mu, np.zeros((len(Y), n)), -r)
-                Y[:, n:] += dv
+        Y[:, n:] = self._velocities_onto(Y[:, :n], Y[:, n:])
         return Y, np.linalg.norm(Y - start, axis=1)
+
+    def _velocities_onto(self, q, v):
+        """The velocities v (n,) or (K, n) at q projected onto mu(q) v + h(q) = 0 in the
+        kinetic metric: dv = -W^{-1} mu^T (mu W^{-1} mu^T)^{-1} (mu v + h), one solve
+        (exact for affine constraints) and one refinement for round-off."""
+        if self.m == 0:
+            return v
+        W, mu, h, _ = self.geometry(q)
+        for _ in range(2):
+            r = (mu @ v[..., None])[..., 0] + h
+            if not np.any(r):
+                break
+            dv, _ = solve_saddle(W, mu, np.zeros_like(v), -r)
+            v = v + dv
+        return v
 
     def _newton_positions(self, q, tol, maxiter):
         k = self.k

@@ -349,9 +349,12 @@ def _locate(linearize_at, a, b, lin_a, lin_b, xtol):
 
 def with_steady_inputs(model, values: Mapping[str, float]) -> tuple:
     """(model, state): the inputs' steady values of ``values`` (a scene's ``[steady]``
-    gives one for every input) set in the model, the rest the state."""
-    state = dict(values)
-    inputs = {u: state.pop(u) for u in model.input_names if u in state}
+    gives one for every input) set in the model, its coordinates and velocities the
+    state (an input that a control law replaced is not the model's: its entry is not
+    used)."""
+    inputs = {u: values[u] for u in model.input_names if u in values}
+    names = set(model.names)
+    state = {k: v for k, v in values.items() if k in names}
     return (model.with_parameters(**inputs) if inputs else model), state
 
 

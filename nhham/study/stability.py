@@ -50,6 +50,7 @@ def prepare(scene, model, design, along: str | None = None) -> dict:
         ``along`` that is not a grid dimension.
     """
     from nhham.numerics.linearization import linearize
+    from nhham.numerics.steady_sweep import with_steady_inputs
 
     if scene.steady is None:
         raise InputError(f"{scene.source}: --what linearize needs a [steady] table (a value, "
@@ -79,8 +80,7 @@ def prepare(scene, model, design, along: str | None = None) -> dict:
         params = {k: float(v.ravel()[0]) for k, v in design.values(region).items()}
         m = model.with_parameters(**params)
         try:
-            state, inputs = _state(scene, m.parameters, m.input_names, m.names)
-            m = m.with_parameters(**inputs)
+            m, state = with_steady_inputs(m, scene.steady.values(m.parameters))
             family = scene.steady.family(m.parameters)
             chart = found[0][3].chart if found else None
             found.append((m, state, family, linearize(m, state, independent=chart,
@@ -166,14 +166,6 @@ def evaluate(study, ctx, region) -> dict:
     if opts["along"] is not None:
         out.update(_boundaries(study, scene, model, choice, region, values, batch, bad))
     return out
-
-
-def _state(scene, parameters, inputs, names) -> tuple:
-    """(state, input values) of the [steady] table at one point (the entries of inputs
-    that a [control] law gives are not the model's: left out)."""
-    state = scene.steady.values(parameters)
-    return ({k: v for k, v in state.items() if k in names},
-            {u: state[u] for u in inputs if u in state})
 
 
 def _states(scene, model, flat) -> tuple:

@@ -23,8 +23,6 @@ __all__ = ["Study", "Context", "context", "evaluate", "keep_context", "study_mod
            "study_system", "warm"]
 
 
-
-
 @dataclass(frozen=True)
 class Study:
     """A study as its workers receive it.
