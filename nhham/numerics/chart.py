@@ -58,24 +58,21 @@ class ComplexField:
     def _outputs(self, name, Y, p):
         """The kernel's outputs at the complex rows Y (K, width), shape (K, outputs)."""
         p = self._p if p is None else p
-        if isinstance(p, np.ndarray) and p.ndim == 2:
-            # rows: each state's parameters, as the compiled kernels read them (the
-            # per-parameter arrays are not stacked again at every call: that is Python
-            # work holding the GIL, on the hot path of a threaded study)
-            if self._compiled is not None and not np.iscomplexobj(p):
-                with np.errstate(all="ignore"):
-                    return self._compiled.complex_batch(name, Y, p)
-            p = list(p.T)
-        # the compiled kernels take real parameters (B differentiates in the inputs'
-        # parameter slots: complex ones, through numpy)
-        if self._compiled is not None and not any(np.iscomplexobj(v) for v in p):
-            if all(np.ndim(v) == 0 for v in p):
+        # the compiled kernels take real parameters as rows (K, parameters) or one row
+        # (B differentiates in the inputs' parameter slots: complex ones, through numpy);
+        # a study passes rows already (no restacking under the GIL at every call)
+        rows = isinstance(p, np.ndarray) and p.ndim == 2
+        if self._compiled is not None and not (np.iscomplexobj(p) if rows else
+                                               any(np.iscomplexobj(v) for v in p)):
+            if rows or all(np.ndim(v) == 0 for v in p):
                 P = np.asarray(p, dtype=float)
             else:
                 P = np.column_stack([np.broadcast_to(np.asarray(v, dtype=float),
                                                      (Y.shape[0],)) for v in p])
             with np.errstate(all="ignore"):
                 return self._compiled.complex_batch(name, Y, P)
+        if rows:
+            p = list(p.T)
         size = self.size if name == "saddle" else self.n * self.n + self.m * self.n + \
             self.m + self.k
         YT = np.ascontiguousarray(Y.T.astype(complex))
