@@ -4,39 +4,16 @@ they cross the imaginary axis (the weave and capsize speeds of a bicycle).
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from typing import Callable, Mapping, Sequence
 
 import numpy as np
 
 from nhham.errors import InputError
+from nhham.numerics.crossings import crossings
 from nhham.numerics.linearization import Linearization, linearize, linearize_many
 
-__all__ = ["Crossing", "Sweep", "crossings", "crossings_many", "sweep", "sweep_steady",
-           "with_steady_inputs"]
-
-
-@dataclass(frozen=True)
-class Crossing:
-    """A parameter value where an eigenvalue's real part changes sign.
-
-    Attributes
-    ----------
-    value : float
-        Located by Brent's method on the real part of the crossing branch.
-    kind : {"real", "complex"}
-        A real eigenvalue through 0, or a complex pair through the imaginary axis.
-    eigenvalue : complex
-        The crossing eigenvalue at ``value`` (real part ~ 0).
-    direction : int
-        +1 when the real part becomes positive with increasing parameter.
-    """
-
-    value: float
-    kind: str
-    eigenvalue: complex
-    direction: int
+__all__ = ["Sweep", "sweep", "sweep_steady", "with_steady_inputs"]
 
 
 @dataclass(frozen=True)
@@ -52,8 +29,12 @@ class Sweep:
         :class:`Linearization`).
     stable : tuple of bool or None
     crossings : tuple of Crossing
+        Located by :func:`~nhham.numerics.crossings.crossings`.
     coordinates : tuple of str
         The variables of the state matrices.
+    unlocated : tuple of Unlocated
+        Intervals where the number of unstable eigenvalues changes but no eigenvalue
+        could be put on the imaginary axis (each with its reason).
     """
 
     parameter: str
@@ -62,6 +43,7 @@ class Sweep:
     stable: tuple
     crossings: tuple
     coordinates: tuple
+    unlocated: tuple = ()
 
     def to_dict(self) -> dict:
         """``parameter``, ``values``, ``eigenvalues`` (lists of [re, im]), ``crossings``."""
@@ -73,6 +55,8 @@ class Sweep:
             "crossings": [{"value": c.value, "kind": c.kind,
                            "eigenvalue": [c.eigenvalue.real, c.eigenvalue.imag],
                            "direction": c.direction} for c in self.crossings],
+            "unlocated_crossings": [{"low": u.low, "high": u.high, "reason": u.reason}
+                                    for u in self.unlocated],
             "coordinates": list(self.coordinates),
         }
 
@@ -99,252 +83,19 @@ def sweep(linearize_at: Callable[[float], Linearization], parameter: str,
     Returns
     -------
     Sweep
-        Crossings are where the number of eigenvalues with positive real
-        part changes between consecutive values; each is located by Brent's
-        method on the real part of the crossing branch: the real eigenvalue
-        nearest to 0 ("real") or the complex eigenvalue of smallest |Re|
-        ("complex"), after bisecting on the count until one of them brackets.
+        Crossings are where the number of eigenvalues with positive real part changes
+        between consecutive values, located by
+        :func:`~nhham.numerics.crossings.crossings` (an eigenvalue on the imaginary axis
+        at every reported value).
     """
     values = np.asarray(values, dtype=float)
     lins = (list(linearize_all([float(v) for v in values])) if linearize_all is not None
             else [linearize_at(float(v)) for v in values])
     coords = lins[0].coordinates if lins else ()
+    found = crossings(linearize_at, values, lins, xtol=xtol)
     return Sweep(parameter, values, tuple(lin.eigenvalues for lin in lins),
-                 tuple(lin.stable for lin in lins),
-                 tuple(crossings(linearize_at, values, lins, xtol=xtol)), tuple(coords))
-
-
-def crossings(linearize_at: Callable, values: Sequence[float], spectra: Sequence, *,
-              xtol: float = 1e-12) -> list:
-    """Where an eigenvalue crosses the imaginary axis between consecutive values.
-
-    Parameters
-    ----------
-    linearize_at : callable
-        ``value -> spectrum``, called to locate each crossing.
-    values : sequence of float
-        Increasing.
-    spectra : sequence
-        At each value, an object with ``eigenvalues`` (complex array) and ``tolerance``
-        (a real part at or below it counts as 0), e.g. a :class:`Linearization`; None
-        where there is none (such a value bounds no interval).
-    xtol : float, optional
-
-    Returns
-    -------
-    list of Crossing
-        One or more per interval where the number of eigenvalues with positive real part
-        changes (see :func:`sweep`).
-    """
-    found = []
-    counts = [None if s is None else _n_positive(s) for s in spectra]
-    for i in range(len(values) - 1):
-        if None not in (counts[i], counts[i + 1]) and counts[i] != counts[i + 1]:
-            found.extend(_locate(linearize_at, values[i], values[i + 1], spectra[i],
-                                 spectra[i + 1], xtol))
-    return found
-
-
-def crossings_many(spectra_at: Callable, lines: Sequence, *, xtol: float = 1e-12,
-                   maxiter: int = 200, counts: Sequence | None = None) -> list:
-    """:func:`crossings` on many lines at once, the root finding batched across them.
-
-    Parameters
-    ----------
-    spectra_at : callable
-        ``[(line index, value), ...] -> [spectrum or None, ...]``: the spectra at many
-        points in one call (one batch of the generated kernels).
-    lines : sequence of (values, spectra)
-        Each line's increasing values and the spectra there (as for :func:`crossings`;
-        any sequence: only the ends of the intervals where the count changes are read).
-    xtol : float, optional
-    maxiter : int, optional
-    counts : sequence of sequences of int, optional
-        Per line, the number of eigenvalues with real part above the tolerance at each
-        value (-1 where there is no spectrum), when the caller has them (computed for the
-        whole batch at once); default: counted here from the spectra.
-
-    Returns
-    -------
-    list of list of Crossing
-        Per line, as :func:`crossings` gives them. Each crossing whose eigenvalue branch
-        is found at both ends is located by the Illinois variant of regula falsi (a
-        superlinear bracketing method), all lines' brackets advanced together; the others
-        by :func:`crossings`' own search, one by one.
-    """
-    out: list = [[] for _ in lines]
-    brackets = []     # [line, a, b, fa, fb, za, zb, kind, side]
-    for k, (values, spectra) in enumerate(lines):
-        line = ([None if s is None else _n_positive(s) for s in spectra] if counts is None
-                else [None if c < 0 else c for c in counts[k]])
-        for i in range(len(values) - 1):
-            if None in (line[i], line[i + 1]) or line[i] == line[i + 1]:
-                continue
-            pairs = [(kind, *_same_branch(spectra[i], spectra[i + 1], kind, at_end=True))
-                     for kind in ("real", "complex")]
-            pairs = [p for p in pairs if p[1] is not None]
-            if not pairs:
-                out[k].extend(_locate(lambda v, k=k: spectra_at([(k, v)])[0], values[i],
-                                      values[i + 1], spectra[i], spectra[i + 1], xtol))
-                continue
-            for kind, za, zb in pairs:
-                # a real part 0 to the tolerance at an end: that end is the crossing
-                fa = 0.0 if abs(za.real) <= spectra[i].tolerance else za.real
-                fb = 0.0 if abs(zb.real) <= spectra[i + 1].tolerance else zb.real
-                brackets.append([k, float(values[i]), float(values[i + 1]), fa, fb,
-                                 za, zb, kind, 0, float(values[i]), float(values[i + 1])])
-    for _ in range(maxiter):
-        active = [b for b in brackets if b[2] - b[1] > xtol + 4 * np.finfo(float).eps *
-                  max(abs(b[1]), abs(b[2])) and b[3] != 0 and b[4] != 0]
-        if not active:
-            break
-        points = []
-        for b in active:
-            _, a, c, fa, fc = b[:5]
-            x = c - fc * (c - a) / (fc - fa)
-            if not a < x < c:
-                x = 0.5 * (a + c)
-            points.append(x)
-        spectra = spectra_at([(b[0], x) for b, x in zip(active, points)])
-        for b, x, s in zip(active, points, spectra):
-            k, a0, c0 = b[0], b[9], b[10]
-            z = _branch(s, b[7], b[5] + (b[6] - b[5]) * (x - a0) / (c0 - a0))
-            if z is None:   # no spectrum there: located one by one below
-                b[8] = None
-                b[3] = b[4] = 0.0
-                continue
-            fx = z.real
-            if fx == 0:
-                b[1] = b[2] = x
-                b[3] = b[4] = 0.0
-            elif np.sign(fx) == np.sign(b[3]):
-                b[1], b[3] = x, fx
-                if b[8] == 1:       # Illinois: the other end kept twice, halve its value
-                    b[4] /= 2
-                b[8] = 1
-            else:
-                b[2], b[4] = x, fx
-                if b[8] == -1:
-                    b[3] /= 2
-                b[8] = -1
-    located = []
-    for b in brackets:
-        k, a, c, fa, fc = b[:5]
-        a0, c0 = b[9], b[10]
-        if b[8] is None:
-            values, spectra = lines[k]
-            i = list(values).index(a0)
-            out[k].extend(c for c in _locate(lambda v, k=k: spectra_at([(k, v)])[0], a0, c0,
-                                             spectra[i], spectra[i + 1], xtol)
-                          if c.kind == b[7])
-            continue
-        located.append((b, a if fa == 0 else c if fc == 0 else (a if abs(fa) < abs(fc) else c)))
-    # the crossing eigenvalues at the roots, in one batch
-    for (b, root), s in zip(located, spectra_at([(b[0], root) for b, root in located])
-                            if located else []):
-        a0, c0 = b[9], b[10]
-        z = _branch(s, b[7], b[5] + (b[6] - b[5]) * (root - a0) / (c0 - a0))
-        if z is None:
-            continue
-        out[b[0]].append(Crossing(float(root), b[7], complex(z), 1 if b[6].real > b[5].real
-                                  else -1))
-    for found in out:
-        found.sort(key=lambda c: c.value)
-    return out
-
-
-def _n_positive(lin):
-    return int(np.sum(lin.eigenvalues.real > lin.tolerance))
-
-
-def _branch(lin, kind, target=None):
-    """The eigenvalue of ``kind`` nearest to ``target``; without a target, the one
-    of smallest |Re| among those with |Re| above the tolerance (a structural zero
-    eigenvalue is no branch). None where there is no linearisation (``lin`` None)."""
-    if lin is None:
-        return None
-    ev = lin.eigenvalues
-    pick = ev[ev.imag == 0] if kind == "real" else ev[ev.imag > 0]
-    if target is None:
-        pick = pick[np.abs(pick.real) > lin.tolerance]
-        if not pick.size:
-            return None
-        return pick[np.argmin(np.abs(pick.real))]
-    if not pick.size:
-        return None
-    return pick[np.argmin(np.abs(pick - target))]
-
-
-def _same_branch(lin_a, lin_b, kind, at_end=False):
-    """Eigenvalues of one branch at both ends whose real parts differ in sign, or (None, None).
-
-    The branch is followed from the end where it is nearest to the imaginary
-    axis (a structural zero excluded) to the nearest eigenvalue at the other end.
-    ``at_end``: also a branch whose real part is 0 to the tolerance at one end (and
-    clearly not at the other): the crossing is that end (a grid value hit it).
-    """
-    za0, zb0 = _branch(lin_a, kind), _branch(lin_b, kind)
-    pairs = []
-    if za0 is not None:
-        pairs.append((za0, _branch(lin_b, kind, za0)))
-    if zb0 is not None:
-        pairs.append((_branch(lin_a, kind, zb0), zb0))
-    for za, zb in pairs:
-        if (za is not None and zb is not None and za.real * zb.real < 0
-                and abs(za.real) > lin_a.tolerance and abs(zb.real) > lin_b.tolerance):
-            return za, zb
-    if not at_end:
-        return None, None
-    for lin, other in ((lin_a, lin_b), (lin_b, lin_a)):   # the branch through 0 at an end
-        ev = lin.eigenvalues
-        pick = ev[ev.imag == 0] if kind == "real" else ev[ev.imag > 0]
-        zero = pick[np.abs(pick.real) <= lin.tolerance]
-        if zero.size:
-            z0 = zero[0]
-            z1 = _branch(other, kind, z0)
-            if z1 is not None and abs(z1.real) > other.tolerance:
-                return (z0, z1) if lin is lin_a else (z1, z0)
-    return None, None
-
-
-def _locate(linearize_at, a, b, lin_a, lin_b, xtol):
-    from scipy.optimize import brentq
-
-    found = []
-    for _ in range(60):
-        for kind in ("real", "complex"):
-            za, zb = _same_branch(lin_a, lin_b, kind)
-            if za is None:
-                continue
-
-            def f(p, kind=kind, a=a, b=b, za=za, zb=zb):
-                z = _branch(linearize_at(p), kind, za + (zb - za) * (p - a) / (b - a))
-                return math.nan if z is None else z.real
-
-            try:
-                root = brentq(f, a, b, xtol=xtol, rtol=4 * np.finfo(float).eps)
-            except ValueError:
-                continue
-            z = _branch(linearize_at(root), kind, za + (zb - za) * (root - a) / (b - a))
-            if z is None:
-                continue
-            found.append(Crossing(float(root), kind, complex(z), 1 if zb.real > za.real else -1))
-        if found:
-            return found
-        if b - a <= xtol:
-            break
-        mid = 0.5 * (a + b)
-        lin_m = linearize_at(mid)
-        if lin_m is None:   # no linearisation there: the interval is all that is known
-            break
-        if _n_positive(lin_m) != _n_positive(lin_a):
-            b, lin_b = mid, lin_m
-        else:
-            a, lin_a = mid, lin_m
-    kind = "real" if abs(_n_positive(lin_a) - _n_positive(lin_b)) % 2 else "complex"
-    z = _branch(lin_b, kind)
-    return [Crossing(float(0.5 * (a + b)), kind, complex(z if z is not None else 0),
-                     1 if _n_positive(lin_b) > _n_positive(lin_a) else -1)]
+                 tuple(lin.stable for lin in lins), found.crossings[0], tuple(coords),
+                 found.unlocated[0])
 
 
 def with_steady_inputs(model, values: Mapping[str, float]) -> tuple:

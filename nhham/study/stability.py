@@ -8,7 +8,7 @@ state matrix, its eigenvalues and the verdict, in the chart and with the neutral
 directions chosen once at probe points (:func:`prepare`). On a grid the crossings of the
 imaginary axis along one swept parameter (``along``; the first by default) are located
 on every line of the grid, all lines' brackets together
-(:func:`~nhham.numerics.steady_sweep.crossings_many`): the stability boundaries, e.g. the
+(:func:`~nhham.numerics.crossings.crossings_many`): the stability boundaries, e.g. the
 weave and capsize speeds of a bicycle at every trail.
 
 Variables (``variables``): ``stable`` (every eigenvalue has Re < -tol), ``verdict``
@@ -18,7 +18,9 @@ Variables (``variables``): ``stable`` (every eigenvalue has Re < -tol), ``verdic
 ``constraint_residual``, ``acceleration_residual``; on a grid ``boundary`` (the crossing
 values along ``along``, dimension ``crossing``, NaN-padded), ``boundary_kind`` (0: a real
 eigenvalue through 0, 1: a complex pair through the imaginary axis), ``boundary_direction``
-(+1: an eigenvalue's real part turns positive as the value grows) and ``boundary_count``.
+(+1: an eigenvalue's real part turns positive as the value grows), ``boundary_count`` and
+``boundary_unlocated`` (intervals of the line where the number of unstable eigenvalues
+changes but no eigenvalue is on the imaginary axis: not reported as boundaries).
 """
 
 from __future__ import annotations
@@ -129,7 +131,8 @@ def variables(design, options) -> dict:
         lines = {"boundary": (("crossing",), float, np.nan),
                  "boundary_kind": (("crossing",), np.int8, -1),
                  "boundary_direction": (("crossing",), np.int8, 0),
-                 "boundary_count": ((), np.int16, -1)}
+                 "boundary_count": ((), np.int16, -1),
+                 "boundary_unlocated": ((), np.int16, -1)}
     return {"point": point, "line": lines, "coords": extra}
 
 
@@ -199,8 +202,8 @@ def _families(scene, model, P, choice):
 
 def _boundaries(study, scene, model, choice, region, values, batch, bad) -> dict:
     """The crossings along ``along`` on every line of the region, located together
-    (:func:`~nhham.numerics.steady_sweep.crossings_many`)."""
-    from nhham.numerics.steady_sweep import crossings_many
+    (:func:`~nhham.numerics.crossings.crossings_many`)."""
+    from nhham.numerics.crossings import crossings_many
 
     dims = study.design.dims
     a = dims.index(study.options["along"])
@@ -225,13 +228,16 @@ def _boundaries(study, scene, model, choice, region, values, batch, bad) -> dict
                   for k in values}
         return _spectra(scene, model, choice, points)
 
-    found = crossings_many(spectra_at, lines, xtol=XTOL, counts=line_counts)
+    search = crossings_many(spectra_at, lines, xtol=XTOL, counts=line_counts)
     out = {"boundary": np.full(rest + (CROSSINGS,), np.nan),
            "boundary_kind": np.full(rest + (CROSSINGS,), -1, dtype=np.int8),
            "boundary_direction": np.zeros(rest + (CROSSINGS,), dtype=np.int8),
-           "boundary_count": np.zeros(rest, dtype=np.int16)}
-    for line, crossings in zip(np.ndindex(*rest), found):
+           "boundary_count": np.zeros(rest, dtype=np.int16),
+           "boundary_unlocated": np.zeros(rest, dtype=np.int16)}
+    for line, crossings, unlocated in zip(np.ndindex(*rest), search.crossings,
+                                          search.unlocated):
         out["boundary_count"][line] = len(crossings)
+        out["boundary_unlocated"][line] = len(unlocated)
         for j, c in enumerate(crossings[:CROSSINGS]):
             out["boundary"][line + (j,)] = c.value
             out["boundary_kind"][line + (j,)] = 0 if c.kind == "real" else 1

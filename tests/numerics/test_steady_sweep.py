@@ -65,7 +65,7 @@ def test_crossings_many_batched_against_known_roots():
     # line k: a real eigenvalue p - r_k (root r_k) and a complex pair whose real part is
     # (p - h_k)^3 (a Hopf crossing at h_k, tangent-free but flat: the slow case for a
     # secant method); the roots are the hand-written numbers, with or without counts
-    from nhham.numerics.steady_sweep import crossings_many
+    from nhham.numerics.crossings import crossings_many
 
     class Lin:
         def __init__(self, p, r, h):
@@ -82,8 +82,8 @@ def test_crossings_many_batched_against_known_roots():
 
     counts = [[int(np.sum(s.eigenvalues.real > s.tolerance)) for s in spectra]
               for _, spectra in lines]
-    for found in (crossings_many(spectra_at, lines, xtol=1e-12),
-                  crossings_many(spectra_at, lines, xtol=1e-12, counts=counts)):
+    for found in (crossings_many(spectra_at, lines, xtol=1e-12).crossings,
+                  crossings_many(spectra_at, lines, xtol=1e-12, counts=counts).crossings):
         for (r, h), cs in zip(roots, found):
             assert [c.kind for c in cs] == sorted(["real", "complex"],
                                                   key=lambda k: r if k == "real" else h)
