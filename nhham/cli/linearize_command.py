@@ -180,11 +180,11 @@ def _check_steady_table(scene) -> None:
 def _linearize(scene, system, model, method, independent=None):
     """The linearisation of ``system`` (``model``) about the scene's [steady] motion."""
     from nhham.numerics.linearization import linearize
-    from nhham.numerics.steady_sweep import with_steady_inputs
+    from nhham.numerics.steady_sweep import steady_state
 
     values = scene.steady.values(model.parameters)
     _check_laws(scene, system, model, values)
-    model, state = with_steady_inputs(model, values)
+    model, state = steady_state(model, values, independent)
     lin = linearize(model, state, family=scene.steady.family(model.parameters),
                     independent=independent)
     if method == "exact" or (method == "auto" and system.n <= EXACT_MAX_N):

@@ -27,7 +27,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from nhham.errors import ComputationError
-from nhham.numerics.chart import Chart, ComplexField, chart_jacobians, input_jacobians
+from nhham.numerics.chart import (Chart, ComplexField, chart_jacobians, input_jacobians,
+                                  lift)
 from nhham.numerics.linearization import (EIGENVALUE_TOLERANCE, ON_TOLERANCE, STEP,
                                           Linearization, divide_family)
 
@@ -141,7 +142,9 @@ def linearize_batch(model, states, parameters=None, *, reference: Linearization 
     model : NumericModel
         Its kernels (its own parameter values are used where ``parameters`` is None).
     states : array_like, shape (N, 2n)
-        The steady states (coordinates, then velocities, in the model's order).
+        The steady states (coordinates, then velocities, in the model's order); the
+        chart's dependent coordinates and velocities are solved from the constraints
+        first, from these values (:func:`~nhham.numerics.chart.lift`).
     parameters : array_like, shape (N, P), optional
         Every parameter's value at each state, in ``model.parameter_names`` order
         (inputs at their steady values); default: the model's at every state.
@@ -170,6 +173,10 @@ def linearize_batch(model, states, parameters=None, *, reference: Linearization 
         raise ComputationError("linearize_batch: the reference divided out "
                                f"{', '.join(divided)}; give the families")
     cf = ComplexField(model, build=True)   # a study's thousands of states
+    # the steady motion where the parameters moved it (a swept fork offset moves the
+    # bicycle's upright pitch): dependent coordinates and velocities solved in the chart;
+    # where that fails the state stays as given and is "not on M_1" below
+    Y, _ = lift(cf, chart, Y, P)
     status, cres, ares = _check_states(cf, Y, P, model)
     d = len(reference.coordinates)
     r = len(model.input_names)

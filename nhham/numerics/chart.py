@@ -19,7 +19,7 @@ import numpy as np
 from nhham.errors import ComputationError, InputError
 
 __all__ = ["BATCH_STATES", "Chart", "ComplexField", "chart_jacobian", "chart_jacobians",
-           "choose_chart", "greedy_columns", "input_jacobians", "reduced_field"]
+           "choose_chart", "greedy_columns", "input_jacobians", "lift", "reduced_field"]
 
 # States per batch of the generated numpy kernel: large enough to spread one call's
 # overhead over many states, small enough to bound its temporaries (10^4 states of the
@@ -209,6 +209,82 @@ def reduced_field(cf, chart, q0, X, p=None, positions=True):
         V[:, dv] = np.linalg.solve(mu[:, :, dv], rhs[..., None])[..., 0]
     a = cf.accelerations(Q, V, p)
     return np.concatenate([V[:, iq], a[:, iv]], axis=1)
+
+
+def lift(cf, chart, Y, P=None, iterations: int = 30) -> tuple:
+    """The states Y (N, 2n) moved onto M_1 in the chart: the dependent coordinates solved
+    from the holonomic constraints by Newton's method from their values in Y (the
+    independent ones held), then the dependent velocities from the velocity constraints.
+
+    Parameters
+    ----------
+    cf : ComplexField
+    chart : Chart
+    Y : ndarray, shape (N, 2n)
+    P : ndarray, shape (N, parameters), optional
+        Each state's parameters (default: the model's).
+    iterations : int, optional
+
+    Returns
+    -------
+    (ndarray, ndarray)
+        The lifted states, shape (N, 2n), and ``ok`` (N,): False where Newton's method did
+        not converge or a constraint matrix was singular (no state of M_1 near Y's, in
+        this chart); those rows are returned as given.
+    """
+    n, k = cf.n, cf.k
+    Y = np.asarray(Y, dtype=float)
+    N = Y.shape[0]
+    Q = Y[:, :n].astype(complex)
+    V = Y[:, n:].astype(complex)
+    ok = np.isfinite(Y).all(axis=1)
+    dq, iv, dv = list(chart.dq), list(chart.iv), list(chart.dv)
+    if dq:
+        done = ~ok
+        for _ in range(iterations):
+            mu, _, g = cf.geometry(Q, P)
+            G = mu[:, :k, :][:, :, dq]
+            step = np.zeros((N, len(dq)), dtype=complex)
+            todo = ~done
+            step[todo], singular = _solve_rows(G[todo], g[todo])
+            bad = np.flatnonzero(todo)[singular]
+            ok[bad] = False
+            done[bad] = True
+            Q[:, dq] -= step
+            small = np.abs(step).max(axis=1, initial=0.0) <= 1e-14 * np.maximum(
+                1.0, np.abs(Q[:, dq]).max(axis=1, initial=0.0))
+            done |= small & np.isfinite(Q).all(axis=1)
+            if done.all():
+                break
+        ok &= done & np.isfinite(Q).all(axis=1)
+    if dv:
+        mu, h, _ = cf.geometry(Q, P)
+        rhs = -(np.einsum("kij,kj->ki", mu[:, :, iv], V[:, iv]) + h)
+        sol, singular = _solve_rows(mu[:, :, dv], rhs)
+        V[:, dv] = sol
+        ok[singular] = False
+    out = np.concatenate([Q.real, V.real], axis=1)
+    out[~ok] = Y[~ok]
+    return out, ok
+
+
+def _solve_rows(A, b):
+    """x with A x = b row by row (A (N, r, r), b (N, r)), and a mask of singular rows
+    (their x is 0)."""
+    x = np.zeros(b.shape, dtype=np.result_type(A, b))
+    singular = np.zeros(A.shape[0], dtype=bool)
+    with np.errstate(all="ignore"):
+        try:
+            x = np.linalg.solve(A, b[..., None])[..., 0]
+        except np.linalg.LinAlgError:
+            for i in range(A.shape[0]):
+                try:
+                    x[i] = np.linalg.solve(A[i], b[i])
+                except np.linalg.LinAlgError:
+                    singular[i] = True
+    singular |= ~np.isfinite(x).all(axis=1)
+    x[singular] = 0
+    return x, singular
 
 
 def input_jacobians(cf, chart, Y, step, model, P=None):

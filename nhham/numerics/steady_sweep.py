@@ -13,7 +13,7 @@ from nhham.errors import InputError
 from nhham.numerics.crossings import crossings
 from nhham.numerics.linearization import Linearization, linearize, linearize_many
 
-__all__ = ["Sweep", "sweep", "sweep_steady", "with_steady_inputs"]
+__all__ = ["Sweep", "steady_state", "sweep", "sweep_steady", "with_steady_inputs"]
 
 
 @dataclass(frozen=True)
@@ -109,6 +109,56 @@ def with_steady_inputs(model, values: Mapping[str, float]) -> tuple:
     return (model.with_parameters(**inputs) if inputs else model), state
 
 
+def steady_state(model, values: Mapping[str, float], independent=None, *,
+                 warn: bool = True) -> tuple:
+    """(model, state): :func:`with_steady_inputs`, with the state moved onto M_1.
+
+    A ``[steady]`` table is written for the scene's parameter values; at others (a
+    swept fork offset moves the bicycle's upright pitch) the chart's dependent
+    coordinates are solved from the holonomic constraints by Newton's method from the
+    table's values and the dependent velocities from the velocity constraints, the
+    independent entries held (:func:`~nhham.numerics.chart.lift`).
+
+    Parameters
+    ----------
+    model : NumericModel
+    values : mapping
+        The table's values at the model's parameters.
+    independent : sequence of str, optional
+        The chart (default: chosen at the table's state).
+    warn : bool, optional
+        Warn (:class:`~nhham.errors.NhhamWarning`) naming every entry that moved by more
+        than 1e-9 (relative).
+
+    Raises
+    ------
+    InputError
+        No state of M_1 near the table's (key ``steady``).
+    """
+    import warnings
+
+    from nhham.errors import NhhamWarning
+    from nhham.numerics.chart import ComplexField, choose_chart, lift
+
+    model, state = with_steady_inputs(model, values)
+    names = model.names
+    y = np.array([float(state[s]) for s in names])
+    chart = choose_chart(model, y, independent)
+    Y, ok = lift(ComplexField(model), chart, y[None, :])
+    if not ok[0]:
+        dependent = [names[i] for i in chart.dq] + [names[model.n + i] for i in chart.dv]
+        raise InputError(f"[steady]: no state of M_1 near the table's at these parameter "
+                         f"values (solving {', '.join(dependent)} from the constraints "
+                         f"failed)", key="steady")
+    moved = [i for i in range(len(y)) if abs(Y[0, i] - y[i]) > 1e-9 * max(1.0, abs(y[i]))]
+    if moved and warn:
+        warnings.warn("[steady]: " + ", ".join(f"{names[i]} = {Y[0, i]:.12g} (given "
+                                              f"{y[i]:.12g})" for i in moved)
+                      + " solved from the constraints at these parameter values",
+                      NhhamWarning, stacklevel=2)
+    return model, dict(zip(names, (float(v) for v in Y[0])))
+
+
 def sweep_steady(model, state_of: Callable[[Mapping[str, float]], Mapping[str, float]],
                  parameter: str, values: Sequence[float], *, independent=None,
                  xtol: float = 1e-12, family_of=None) -> Sweep:
@@ -141,9 +191,9 @@ def sweep_steady(model, state_of: Callable[[Mapping[str, float]], Mapping[str, f
     if parameter not in model.parameter_names:
         raise InputError(f"--sweep: {parameter!r} is not a parameter of the scene "
                          f"(parameters: {', '.join(model.parameter_names) or 'none'})")
-    def model_and_state(value):
+    def model_and_state(value, chart=independent):
         m = model.with_parameters(**{parameter: value})
-        return with_steady_inputs(m, state_of(m.parameters))
+        return steady_state(m, state_of(m.parameters), chart, warn=False)
 
     def fam(value):
         if family_of is None:
@@ -158,17 +208,17 @@ def sweep_steady(model, state_of: Callable[[Mapping[str, float]], Mapping[str, f
     first = None
     neutral = None
     for value in probes:
-        lin = linearize(*model_and_state(value),
-                        independent=independent if first is None else first.chart)
+        chart = independent if first is None else first.chart
+        lin = linearize(*model_and_state(value, chart), independent=chart)
         first = first or lin
         neutral = [s for s in (lin.neutral if neutral is None else neutral) if s in lin.neutral]
 
     def at(value):
-        return linearize(*model_and_state(value), independent=first.chart, neutral=neutral,
-                         family=fam(value))
+        return linearize(*model_and_state(value, first.chart), independent=first.chart,
+                         neutral=neutral, family=fam(value))
 
     def at_all(values):
-        pairs = [model_and_state(v) for v in values]
+        pairs = [model_and_state(v, first.chart) for v in values]
         return linearize_many([m for m, _ in pairs], [s for _, s in pairs], first.chart,
                               neutral=neutral, families=[fam(v) for v in values])
 

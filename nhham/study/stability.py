@@ -52,7 +52,7 @@ def prepare(scene, model, design, along: str | None = None) -> dict:
         ``along`` that is not a grid dimension.
     """
     from nhham.numerics.linearization import linearize
-    from nhham.numerics.steady_sweep import with_steady_inputs
+    from nhham.numerics.steady_sweep import steady_state
 
     if scene.steady is None:
         raise InputError(f"{scene.source}: --what linearize needs a [steady] table (a value, "
@@ -82,9 +82,9 @@ def prepare(scene, model, design, along: str | None = None) -> dict:
         params = {k: float(v.ravel()[0]) for k, v in design.values(region).items()}
         m = model.with_parameters(**params)
         try:
-            m, state = with_steady_inputs(m, scene.steady.values(m.parameters))
-            family = scene.steady.family(m.parameters)
             chart = found[0][3].chart if found else None
+            m, state = steady_state(m, scene.steady.values(m.parameters), chart, warn=False)
+            family = scene.steady.family(m.parameters)
             found.append((m, state, family, linearize(m, state, independent=chart,
                                                       family=family)))
         except (InputError, ComputationError) as exc:
@@ -164,8 +164,9 @@ def evaluate(study, ctx, region) -> dict:
     if opts["inputs"]:
         out["input_matrix"] = batch.input_matrices
     out = {k: np.asarray(v).reshape(shape + np.asarray(v).shape[1:]) for k, v in out.items()}
+    missing = (bad | (batch.status != 0)).reshape(shape)
     for k in ("eigenvalue_real", "eigenvalue_imag", "state_matrix"):
-        out[k][bad.reshape(shape)] = np.nan
+        out[k][missing] = np.nan
     if opts["along"] is not None:
         out.update(_boundaries(study, scene, model, choice, region, values, batch, bad))
     return out
