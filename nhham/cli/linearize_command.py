@@ -29,11 +29,12 @@ JSON (the ``result`` of the envelope, schema ``$defs/linearize``):
 from __future__ import annotations
 
 import re
+import warnings
 import textwrap
 
 import numpy as np
 
-from nhham.errors import InputError, OptionalDependencyError
+from nhham.errors import InputError, NhhamWarning, OptionalDependencyError
 from nhham.cli.report import table
 from nhham.system.expressions import to_text
 
@@ -286,6 +287,9 @@ def cmd_linearize(args, steps):
                         + (" the closed loop ([control])" if scene.control else "")
                         + (f", sweep {args.sweep}" if sweep else "")):
             lin, swept = linearize_scene(scene, args.method, sweep, model=model)
+        for u in () if swept is None else swept.unlocated:
+            warnings.warn(f"--sweep: between {u.low:.10g} and {u.high:.10g}: {u.reason}; no "
+                          f"crossing reported there", NhhamWarning)
         opened = None
         if scene.control:
             with steps.step(f"linearise ({args.method}) the open loop"):
