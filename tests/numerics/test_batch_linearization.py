@@ -81,15 +81,19 @@ def test_states_off_the_manifold_or_moving_get_a_status():
     good[model.names[n]] = 1.0
     ref = linearize(model, good)
     off = dict(good)
-    off[model.names[n + 1]] = 0.3           # a sideways velocity: the constraint fails
+    off[model.names[n + 1]] = 0.3           # a sideways velocity: the constraint fails,
+    # and the chart's dependent velocity y' is solved from it (y' = a theta' = 0): the
+    # good state's linearisation
     turning = dict(good)
     turning[model.names[n + 2]] = 0.5        # turning while moving (on M_1): not steady
     turning[model.names[n + 1]] = 0.5 * 0.5  # y' = a theta'  (a = 0.5)
-    batch = linearize_batch(model, np.array([model.state(s) for s in (good, off, turning)]),
-                            reference=ref)
-    assert list(batch.status) == [0, 1, 2]
-    assert np.isnan(batch.eigenvalues[1:]).all() and list(batch.verdicts[1:]) == [-1, -1]
-    assert batch.constraint_residuals[1] > 0.01
+    nowhere = dict(good)
+    nowhere[model.names[n]] = np.nan         # no state at all
+    states = np.array([model.state(s) for s in (good, off, turning, nowhere)])
+    batch = linearize_batch(model, states, reference=ref)
+    assert list(batch.status) == [0, 0, 2, 1]
+    assert np.allclose(batch.matrices[1], batch.matrices[0], atol=1e-12)
+    assert np.isnan(batch.eigenvalues[2:]).all() and list(batch.verdicts[2:]) == [-1, -1]
     assert batch.acceleration_residuals[2] > 0.01
 
 
