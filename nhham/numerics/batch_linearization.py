@@ -196,7 +196,9 @@ def linearize_batch(model, states, parameters=None, *, reference: Linearization 
         Ak = J[:, columns, :]
         Bk = Bfull[:, columns, :]
         if divided:
-            Ak, Bk = _divide(Ak, Bk, kept, [families[i] for i in ok], divided)
+            Ak, Bk, lost = _divide(Ak, Bk, kept, [families[i] for i in ok], divided)
+            status[ok[lost]] = 3
+            ok, Ak, Bk = ok[~lost], Ak[~lost], Bk[~lost]
         A[ok], B[ok] = Ak, Bk
     elif ok.size:
         A[ok] = np.zeros((ok.size, 0, 0))
@@ -282,15 +284,22 @@ def _one_by_one(cf, chart, Y, P, step, columns, model):
 
 
 def _divide(A, B, names, families, divided):
-    """Each state's tangents of the steady family divided out, as ``linearize`` does."""
+    """Each state's tangents of the steady family divided out, as ``linearize`` does:
+    (A, B, lost), ``lost`` where a tangent is not in that state's kernel of A (its rows
+    are NaN: no matrix of the reference's size)."""
     wanted = {s[3:] for s in divided}
-    outA, outB = [], []
-    for Ai, Bi, fam in zip(A, B, families):
+    d = A.shape[1] - len(divided)
+    outA = np.full((A.shape[0], d, d), np.nan)
+    outB = np.full((A.shape[0], d, B.shape[2]), np.nan)
+    lost = np.zeros(A.shape[0], dtype=bool)
+    for i, (Ai, Bi, fam) in enumerate(zip(A, B, families)):
         fam = {p: t for p, t in (fam or {}).items() if p in wanted}
-        Ai, _, _, Bi = divide_family(Ai, list(names), fam, Bi)
-        outA.append(Ai)
-        outB.append(Bi)
-    return np.array(outA), np.array(outB)
+        Ai, _, removed, Bi = divide_family(Ai, list(names), fam, Bi)
+        if len(removed) != len(divided):
+            lost[i] = True
+            continue
+        outA[i], outB[i] = Ai, Bi
+    return outA, outB, lost
 
 
 def _spectra(A, ok):

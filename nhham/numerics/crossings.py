@@ -242,7 +242,10 @@ def _search(a, b, sa, sb, structural, xtol, budget):
     side = 0
     while b - a > xtol + 4 * np.finfo(float).eps * max(abs(a), abs(b)):
         if budget[0] <= 0:
-            return [Unlocated(a, b, f"not located within {MAX_EVALUATIONS} evaluations")]
+            found = _verified(a, b, sa, sb, ca, cb, structural, odd)
+            return [found if isinstance(found, Crossing) else
+                    Unlocated(a, b, f"not narrowed to {xtol:g} within {MAX_EVALUATIONS} "
+                                    f"evaluations")]
         budget[0] -= 1
         x = b - gb * (b - a) / (gb - ga) if falsi else 0.5 * (a + b)
         if not a < x < b:

@@ -97,7 +97,10 @@ def prepare(scene, model, design, along: str | None = None) -> dict:
     m, state, family, lin = found[0]
     common = [s for s in lin.neutral if all(s in f[3].neutral for f in found)]
     if len(common) != len(lin.neutral):
-        lin = linearize(m, state, independent=lin.chart, family=family,
+        # a family tangent divided out at every probe only (the sleigh's speed at U = 0
+        # is in A's kernel, at no other U)
+        family = {p: t for p, t in (family or {}).items() if f"d/d{p}" in common}
+        lin = linearize(m, state, independent=lin.chart, family=family or None,
                         neutral=[s for s in common if not s.startswith("d/d")])
     choice = ChartChoice.of(lin)
     return {"chart": list(choice.chart), "neutral": list(choice.neutral),

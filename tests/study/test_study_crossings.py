@@ -59,3 +59,14 @@ def test_a_pair_meeting_on_the_axis_then_a_real_root_crossing_by_both_routes(cap
                workers=1).dataset
     ev = at["eigenvalue_real"].values[0] + 1j * at["eigenvalue_imag"].values[0]
     assert np.min(np.abs(ev)) < 1e-9
+
+
+def test_a_grid_that_starts_where_the_family_tangent_is_in_the_kernel():
+    """At U = 0 the speed's tangent of the steady family is in A's kernel (the drag
+    eigenvalue -3 k U^2 / m is 0 there), at no other U: it is not divided out, and every
+    point is linearised in one chart (the first probe used to impose its division)."""
+    ds = sweep(SCENES / "sleigh_drag.toml", "linearize", ["U=0:2:41"], workers=1).dataset
+    assert (ds["status"].values == 0).all()
+    assert ds["verdict"].values[0] == -1            # a zero eigenvalue at U = 0
+    b = ds["boundary"].values
+    assert b[np.isfinite(b)].tolist() == pytest.approx([0.8], abs=1e-10)
