@@ -419,7 +419,7 @@ def plot_root_locus(swept, path, title: str = "") -> str:
     canvas for this figure only (the user's pyplot backend is left alone).
     """
     fig = root_locus_figure(swept, title)
-    fig.savefig(path, dpi=120, bbox_inches="tight")
+    fig.savefig(path, dpi=120)
     return str(path)
 
 

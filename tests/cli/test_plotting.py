@@ -178,3 +178,24 @@ def test_work_precision_legend_off_the_data_and_no_projection_title_without_vari
     legend = ax.get_legend()
     assert not _inside(legend.get_window_extent(), ax.get_window_extent())
     assert legend.get_title().get_text() == ""     # no dashed lines to explain
+
+
+def test_the_gallery_s_work_precision_times_are_medians_over_passes():
+    """bench/work_precision_figure.py: each setting's time is the median of its passes
+    (three passes with one loaded: 5, 1, 2 ms -> 2 ms), the other columns the first's."""
+    import importlib.util
+
+    from conftest import ROOT
+
+    spec = importlib.util.spec_from_file_location(
+        "work_precision_figure", ROOT / "bench" / "work_precision_figure.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    passes = []
+    for loose, tight in ((0.005, 0.004), (0.001, 0.003), (0.002, 0.0035)):
+        rows = (_row("DOP853", "rtol=1e-04", 1e-5, loose), _row("DOP853", "rtol=1e-06", 1e-7, tight))
+        passes.append(WorkPrecisionResult(rows, "t", (0.0, 1.0), 30, 1e-30, 0.1, "numpy"))
+    merged, times = module.median_of_passes(passes)
+    assert [r.wall_time_s for r in merged.rows] == [0.002, 0.0035]
+    assert [r.error for r in merged.rows] == [1e-5, 1e-7]
+    assert times[("DOP853", "rtol=1e-04")] == [0.005, 0.001, 0.002]
