@@ -198,8 +198,10 @@ def _sample_names(ds) -> list:
     return [n for n in ds.coords if ds.coords[n].dims == ("sample",) and n != "sample"]
 
 
-#: Energy errors below this (absolute, in the scene's units) are taken as rounding:
-#: about 4500 float64 epsilons, the scatter of summing E and the work along a run.
+#: Energy errors below this (absolute, in the scene's units) are taken as rounding: about
+#: 4500 float64 epsilons, what summing E and the work along a run scatters by for energies
+#: of order 1 (the Dataset holds no energy scale; the panel prints the largest error, so a
+#: reader with energies far from 1 can judge).
 ROUNDING = 1e-12
 
 
@@ -248,6 +250,8 @@ def _energy_panel(ax, err) -> None:
     """A histogram of log10 |energy error| when the errors spread over more than a decade
     above rounding; else the numbers, written in the panel (a histogram of rounding noise,
     or of values within a factor 10, shows nothing a reader can use)."""
+    from matplotlib.ticker import MaxNLocator
+
     ax.set_title("energy balance of the runs", fontsize=9)
     if not err.size:
         _panel_text(ax, "no energy error recorded")
@@ -268,6 +272,7 @@ def _energy_panel(ax, err) -> None:
             color="0.4")
     ax.set_xlabel("log10 |E(t_final) - E(0) - work|")
     ax.set_ylabel("runs")
+    ax.yaxis.set_major_locator(MaxNLocator(integer=True))   # counts: no 2.5 runs
 
 
 def _panel_text(ax, text) -> None:
