@@ -39,7 +39,7 @@ from nhham.cli.report import table
 from nhham.system.expressions import to_text
 
 __all__ = ["add_arguments", "cmd_linearize", "linearize_scene", "open_loop",
-           "parse_sweep", "plot_root_locus",
+           "parse_sweep", "plot_root_locus", "root_locus_figure",
            "rounding_level", "EXACT_MAX_N", "EXACT_DIGITS", "LINEARIZE_HELP"]
 
 #: (short help, description, example) for ``nhham linearize --help``.
@@ -413,11 +413,23 @@ def _matplotlib():
 def plot_root_locus(swept, path, title: str = "") -> str:
     """Real and imaginary parts of the eigenvalues against the parameter; saved to ``path``.
 
-    Uses matplotlib's object API with the Agg canvas for this figure only
-    (the user's pyplot backend is left alone).
+    The crossings are drawn in the colours and words of
+    :data:`nhham.study.plot_style.CROSSING_STYLE`, as in the stability maps of ``nhham
+    sweep``; the legend sits right of the axes. Uses matplotlib's object API with the Agg
+    canvas for this figure only (the user's pyplot backend is left alone).
     """
+    fig = root_locus_figure(swept, title)
+    fig.savefig(path, dpi=120)
+    return str(path)
+
+
+def root_locus_figure(swept, title: str = ""):
+    """The Figure of :func:`plot_root_locus` (not saved)."""
+    from nhham.study.plot_style import (CROSSING_STYLE, OUTSIDE_RIGHT, crossing_kind,
+                                        legend_if_labelled)
+
     Figure, FigureCanvasAgg = _matplotlib()
-    fig = Figure(figsize=(7, 5))
+    fig = Figure(figsize=(8.5, 5), layout="constrained")
     FigureCanvasAgg(fig)
     ax = fig.add_subplot(1, 1, 1)
     vals = swept.values
@@ -430,8 +442,9 @@ def plot_root_locus(swept, path, title: str = "") -> str:
         x, y = zip(*im_pts)
         ax.plot(x, y, ".", markersize=2, color="tab:gray", alpha=0.6, label="|Im(eigenvalue)|")
     for c in swept.crossings:
-        ax.axvline(c.value, color="tab:red" if c.kind == "complex" else "tab:blue",
-                   linewidth=0.8, label=f"{c.kind} crossing {swept.parameter} = {c.value:.6f}")
+        style = CROSSING_STYLE[crossing_kind(c.kind)]
+        ax.axvline(c.value, color=style["color"], linestyle=style["linestyle"], linewidth=1.0,
+                   label=f"{style['label']} ({swept.parameter} = {c.value:.6g})")
     ax.axhline(0.0, color="k", linewidth=0.5)
     ax.set_xlabel(swept.parameter)
     ax.set_ylabel("eigenvalue")
@@ -441,7 +454,5 @@ def plot_root_locus(swept, path, title: str = "") -> str:
         ax.set_ylim(lo - 1.0, max(max(finite), max((y for _, y in im_pts), default=0.0)) + 1.0)
     ax.set_title(f"root locus: {title}" if title else "root locus")
     ax.grid(True, alpha=0.3)
-    ax.legend(fontsize=7)
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    return str(path)
+    legend_if_labelled(ax, fontsize=7, **OUTSIDE_RIGHT)
+    return fig

@@ -18,6 +18,7 @@ import re
 import numpy as np
 
 from nhham.errors import OptionalDependencyError
+from nhham.study.plot_style import OUTSIDE_RIGHT, legend_if_labelled, separate_tick_labels
 
 __all__ = ["OptionalDependencyError", "plot_work_precision", "plot_trajectory", "save_figure",
            "series_styles"]
@@ -91,7 +92,7 @@ def plot_trajectory(result, axes=None, *, title: str | None = None):
     left out of the log-scale panel rather than clamped to a fake value.
     """
     if axes is None:
-        fig, axes = _new_axes(4, (7.5, 9.0))
+        fig, axes = _new_axes(4, (9.0, 9.0))
     else:
         axes = list(axes)
         if len(axes) != 4:
@@ -110,7 +111,8 @@ def plot_trajectory(result, axes=None, *, title: str | None = None):
             ax.plot(t, Y[i], label=names[i], linewidth=1.2, markersize=4, markevery=every,
                     **style)
         ax.set_ylabel(label)
-        ax.legend(fontsize=8, ncol=min(4, len(rows)), loc="best")
+        # right of the panel, off the curves (inside, "best" still covered data)
+        legend_if_labelled(ax, fontsize=8, ncol=1 + (len(rows) - 1) // 12, **OUTSIDE_RIGHT)
         ax.grid(True, alpha=0.3)
     res = np.asarray(result.diagnostics.constraint_residual, dtype=float)
     ax = axes[2]
@@ -118,8 +120,9 @@ def plot_trajectory(result, axes=None, *, title: str | None = None):
     if positive.any():
         ax.semilogy(t, np.where(positive, res, np.nan), color="black", linewidth=1)
         if not positive.all():
-            ax.text(0.01, 0.04, f"exactly 0 at {int((~positive).sum())} of {len(res)} points "
-                    "(not drawn)", transform=ax.transAxes, fontsize=7)
+            # right of the panel, where the other panels have their legends: off the data
+            ax.text(1.02, 1.0, f"exactly 0 at\n{int((~positive).sum())} of {len(res)}\n"
+                    "points (not drawn)", transform=ax.transAxes, fontsize=8, va="top")
     else:
         ax.text(0.5, 0.5, "constraint residual exactly 0 at every stored point",
                 transform=ax.transAxes, ha="center", va="center", fontsize=9)
@@ -135,7 +138,7 @@ def plot_trajectory(result, axes=None, *, title: str | None = None):
                 else "work of the constraint forces")
     ax.set_ylabel("energy change")
     ax.set_xlabel("time t")
-    ax.legend(fontsize=8)
+    legend_if_labelled(ax, fontsize=8, **OUTSIDE_RIGHT)
     ax.grid(True, alpha=0.3)
     if title is None:
         title = f"{result.method}: {_settings_text(result)}"
@@ -195,6 +198,7 @@ def plot_work_precision(result, ax=None, *, title: str | None = None):
     bases = list(dict.fromkeys(m.split("+")[0] for m in labels))
     styles = dict(zip(bases, series_styles(len(bases))))
     drawn = 0
+    times = []
     for label in labels:
         rows = [r for r in result.rows if r.method == label and r.status == 0
                 and np.isfinite(r.error) and r.error > 0]
@@ -206,11 +210,35 @@ def plot_work_precision(result, ax=None, *, title: str | None = None):
             style.update(linestyle="--", markerfacecolor="none")
         ax.loglog([r.wall_time_s for r in rows], [r.error for r in rows], label=label,
                   linewidth=1.3, markersize=5, **style)
+        times += [r.wall_time_s for r in rows if r.wall_time_s > 0]
         drawn += 1
     ax.set_xlabel("wall time [s]")
     ax.set_ylabel("relative error at t_end")
     ax.set_title(title or f"work-precision: {result.name or 'system'}")
     ax.grid(True, which="both", alpha=0.3)
-    if drawn:
-        ax.legend(fontsize=7, ncol=2, title="dashed: + projection", title_fontsize=7)
+    if times:
+        _log_ticks(ax.xaxis, min(times), max(times))
+    projected = any("+" in label for label in labels)
+    legend_if_labelled(ax, fontsize=7, title="dashed: + projection" if projected else None,
+                       title_fontsize=7, **OUTSIDE_RIGHT)
+    if times:
+        separate_tick_labels(ax.xaxis)   # at the figure's size, legend placed
     return fig
+
+
+def _log_ticks(axis, lo: float, hi: float) -> None:
+    """Tick labels of a log axis: decades when the data span two or more, else 1, 2 and
+    5 times a power of 10 in short numbers (``%.3g``); minor ticks unlabelled.
+    (matplotlib's default labels every minor tick of a short span, ``3x10^-4``,
+    ``4x10^-4``, ..., and these collide;
+    :func:`~nhham.study.plot_style.separate_tick_labels` thins what is still too dense
+    for the axes' width.)"""
+    from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
+
+    if np.log10(hi / lo) >= 2.0:
+        axis.set_major_locator(LogLocator(base=10.0, numticks=12))
+    else:
+        axis.set_major_locator(LogLocator(base=10.0, subs=(1.0, 2.0, 5.0)))
+        axis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:.3g}"))
+    axis.set_minor_locator(LogLocator(base=10.0, subs=tuple(range(2, 10)), numticks=12))
+    axis.set_minor_formatter(NullFormatter())
