@@ -22,6 +22,8 @@ DEFAULT_WIDTH = 100
 MAX_LINES = 8
 #: The pointer printed in place of an elided expression's rest.
 ELIDED = "... [{rest} more characters: the whole expression is in --json and --latex]"
+#: The same where that does not fit the line.
+ELIDED_SHORT = "... [{rest} more characters: see --json]"
 # The narrowest column an expression is wrapped into.
 _MIN_ROOM = 30
 
@@ -60,7 +62,10 @@ def wrap(text: str, room: int, max_lines: int = MAX_LINES) -> list:
         return lines
     # past max_lines: keep the first max_lines - 1 lines and say how much is left out
     left = len(text) - start + sum(len(line) for line in lines[max_lines - 1:])
-    return lines[:max_lines - 1] + [ELIDED.format(rest=f"{left:,}")]
+    pointer = ELIDED.format(rest=f"{left:,}")
+    if len(pointer) > room:
+        pointer = ELIDED_SHORT.format(rest=f"{left:,}")
+    return lines[:max_lines - 1] + [pointer]
 
 
 def _break_at(text: str, room: int) -> int:
