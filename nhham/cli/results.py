@@ -412,8 +412,26 @@ def compare_data(report, dirac=None) -> dict:
             "max_abs_difference": json_number(dirac.max_abs_difference),
             "samples": int(dirac.samples),
             "notes": [str(n) for n in dirac.notes],
+            "components": [str(z) for z in dirac.components],
+            "method": _dirac_method(dirac),
+            "error_bound": json_number(_dirac_error_bound(dirac)),
         }
     return data
+
+
+def _dirac_method(dirac) -> str:
+    """How X_D - X was decided: the least exact of its decisions."""
+    methods = {d.method for d in dirac.decisions}
+    for m in ("sampled", "exact at points"):
+        if m in methods:
+            return m
+    return "exact"
+
+
+def _dirac_error_bound(dirac):
+    """The error bound of a verdict decided at exact points (0 for a proof), else None."""
+    bounds = [d.error_bound for d in dirac.decisions if d.error_bound is not None]
+    return max(bounds) if bounds and _dirac_method(dirac) != "sampled" else None
 
 
 def compare_text(title: str, report, dirac) -> str:

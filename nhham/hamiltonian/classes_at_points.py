@@ -21,7 +21,7 @@ from nhham.hamiltonian.classes import ConstraintClasses
 from nhham.hamiltonian.classes_sampled import classes_from_samples
 from nhham.lagrangian.analysis import ConstraintAnalysis
 from nhham.lagrangian.decision import Decision
-from nhham.lagrangian.domains import evaluate, minor_degree
+from nhham.lagrangian.domains import NotExact, evaluate, minor_degree
 from nhham.lagrangian.formulas import lagrangian_bracket
 from nhham.lagrangian.geometry import LagrangianGeometry, lagrangian_geometry
 from nhham.lagrangian.linalg import (
@@ -203,20 +203,26 @@ def _coefficients_at_a_point(side, cons, labels, analysis, policy, R, kk, data) 
 
     At one random rational point of M_1 (exact, then rounded) up to
     ``policy.combination_size`` coordinates or when float points cannot be found (parameters
-    of very different sizes); beyond, at seeded float points (rational arithmetic at
-    n = 19 takes seconds a point).
+    of very different sizes); beyond, and on a curved M_1 (no rational points), at seeded
+    float points (rational arithmetic at n = 19 takes seconds a point).
     """
     if not R:
         return {labels[kk]: (1.0,)}
     mats: list = []
     seed = policy.seed
-    if side.system.n > policy.combination_size:
+    try:
+        sampler = PointSampler.on_M1(side.system, seed)
+    except NotExact:
+        sampler = None  # a curved M_1 has no rational points: float points only
+    if side.system.n > policy.combination_size or sampler is None:
         try:
             mats, _ = float_brackets(side, cons, analysis, None, 3, seed)
-        except NhhamError:
-            pass  # no float points (parameters of very different sizes): a rational one
-    if not mats:
-        sampler = PointSampler.on_M1(side.system, seed)
+        except NhhamError as exc:
+            if sampler is None:
+                raise NotExact(f"no points for the coefficients of the combination: "
+                               f"{exc}") from None
+            # no float points (parameters of very different sizes): a rational one
+    if not mats and sampler is not None:
         for _ in range(policy.max_points):
             try:
                 c = _exact_combination(_bracket_at(sampler.point().env, *data), R, kk)

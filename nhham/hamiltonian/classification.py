@@ -279,7 +279,9 @@ def _classify_exact(side, cons, labels, analysis, tol):
     R = principal_pivots(Br, samples_B, r, tol,
                           nonzero=lambda e: not Mf.vanishes(cancel(e), tol=tol).value)
     gammas, coeff_dicts = [], []
-    inv = block_inverse(Br.extract(R, R)) if R else sp.zeros(0, 0)
+    # B_RR^-1 only where a first-class combination needs it (sympy's inverse of a 4 x 4
+    # block on a curved M_f verifies invertibility by simplify: seconds).
+    inv = block_inverse(Br.extract(R, R)) if R and len(R) < k else sp.zeros(0, 0)
     for kk in (i for i in range(k) if i not in R):
         c = sp.zeros(k, 1)
         c[kk] = 1

@@ -14,16 +14,18 @@ with delta = det W and Y = adj(W) (p - a):
 
 * chi_a o Leg^{-1} = chi_a(q, Y / delta) = A_a / F_a with A_a a polynomial in the
   generators (parameters, coordinates, sines and cosines, momenta) and F_a one in q
-  alone (delta^{deg_v chi_a} times the constraint's own denominator);
-* E_ab = F_a F_b {A_a, A_b} - F_b A_a {F_a, A_b} - F_a A_b {A_a, F_b}
-  = F_a^2 F_b^2 {chi_a, chi_b} exactly (canonical bracket, derivatives by the chain
-  rule through the generators; {F_a, F_b} = 0); with one F for all it is
-  F {A_a, A_b} - A_a {F, A_b} - A_b {A_a, F} = F^3 {chi_a, chi_b}, and {A_a, A_b}
-  = F^2 {chi_a, chi_b} when F is a constant;
+  alone (delta^{deg_v chi_a} times the constraint's own denominator); a denominator of
+  parameters alone (r/(2 d)) is a constant factor s_a, and the constraint is taken as
+  s_a chi_a, so that such constraints share one F;
+* E_ab = {A_a, A_b} = {F_a chi_a, F_b chi_b} = F_a F_b {chi_a, chi_b} on M_f, where
+  every chi (hence every A) vanishes: the entries of B with one factor per row and
+  column, without the products by F and by {F, A} that the exact identity needs (they
+  vanish on M_f; with them the segway's entries ran past 20,000 terms);
 * E restricted to R + {k} is antisymmetric of odd size with rank |R| on M_f: its
   kernel is spanned by c'_a = (-1)^i Pf(E without row and column a), the signed
-  sub-Pfaffians (c'_k = Pf E_RR, nonzero); c_a = F_a^2 c'_a (c' itself for one F)
-  solves B c = 0, and gamma_k = sum_a c_a chi_a / c_k, cancelled.
+  sub-Pfaffians (c'_k = Pf E_RR, nonzero); c_a = F_a c'_a (c' itself for one F)
+  solves B c = 0 on M_f, and gamma_k = sum_a c_a chi_a / c_k, over one denominator
+  where that stays small, else as the sum of the constraints with their coefficients.
 
 Every polynomial is kept reduced modulo sin(u)^2 + cos(u)^2 - 1 (cos^2 -> 1 - sin^2)
 after each product, so nothing grows beyond what the identities allow.
@@ -49,6 +51,14 @@ _CANCEL_TERMS = 2000
 # second of sympy's sparse multiplication): the 3-link snake's bracket entries would
 # have taken 100 s to reach the term bound.
 MAX_PRODUCT_TERMS = 1_000_000
+
+# gamma_k = sum_a c_a chi_a is expanded over one denominator only up to this many products
+# of terms (c_a by chi_a o Leg^-1); beyond, it is given as the sum.
+MAX_EXPANDED_PRODUCTS = 20_000
+
+# num/den are cancelled by a gcd only up to this product of their numbers of terms (the
+# segway's 653- and 456-term coefficients: 8 s of gcd for an 11-term factor).
+_CANCEL_PRODUCT = 20_000
 
 # The closed forms are for display: they are given up after this many CPU seconds.
 TIME_LIMIT = 2.0
@@ -92,23 +102,13 @@ def closed_form_combinations(system, constraints, second_class, max_terms: int =
     R = list(second_class)
     A, F = zip(*[ctx.hamiltonian(i) for i in range(len(ctx.constraints))])
     uniform = all(f == F[0] for f in F)
-    constant = uniform and not ctx.depends_on_q(F[0])
     entries: dict = {}
 
     def E(a, b):
-        """F^2 {chi_a, chi_b} for one constant F, F^3 {chi_a, chi_b} for one F, else
-        F_a^2 F_b^2 {chi_a, chi_b}: a polynomial, proportional to B_ab with the same
-        factor in every entry (or one per row and column)."""
+        """{A_a, A_b}: F_a F_b {chi_a, chi_b} on M_f (where every A vanishes), so
+        proportional to B_ab there with one factor per row and column."""
         if (a, b) not in entries:
-            if constant:
-                entry = ctx.bracket(A[a], A[b])
-            else:
-                fa, fb = (ctx.ring.one, ctx.ring.one) if uniform else (F[a], F[b])
-                mul = ctx.mul
-                entry = (mul(mul(F[a], fb), ctx.bracket(A[a], A[b]))
-                         - mul(mul(fb, A[a]), ctx.bracket(F[a], A[b]))
-                         - mul(mul(fa, A[b]), ctx.bracket(A[a], F[b])))
-            entries[a, b] = ctx.reduce(entry)
+            entries[a, b] = ctx.reduce(ctx.bracket(A[a], A[b]))
             entries[b, a] = -entries[a, b]
         return entries[a, b]
 
@@ -124,14 +124,21 @@ def closed_form_combinations(system, constraints, second_class, max_terms: int =
         if not c[k]:
             raise NotFormed("the bracket block of the second-class set vanishes identically")
         c = ctx.without_common_factor(c)
-        # B c = 0 for c_a = c'_a (uniform F) or F_a^2 c'_a; gamma_k = sum_a c_a chi_a / c_k
-        weight = {a: ctx.ring.one if uniform else F[a] ** 2 for a in idx}
-        num = sum(((c[a] if uniform else F[a] * c[a]) * A[a] for a in idx), zero)
-        den = (F[k] if uniform else F[k] ** 2) * c[k]
-        gammas.append(ctx.expression(ctx.reduce(num), ctx.reduce(den)))
-        coefficients.append({a: ctx.expression(ctx.reduce(weight[a] * c[a]),
-                                               ctx.reduce(weight[k] * c[k]))
-                             for a in sorted(idx) if c[a]})
+        # B' c = 0 on M_f for c_a = c'_a (uniform F) or F_a c'_a, B' the brackets of the
+        # scaled constraints s_a chi_a; gamma_k = sum_a c_a s_a chi_a / (c_k s_k)
+        S = ctx.scales
+        weight = {a: (ctx.ring.one if uniform else F[a]) * S[a] for a in idx}
+        coeffs = {a: ctx.expression(ctx.reduce(weight[a] * c[a]), ctx.reduce(weight[k] * c[k]))
+                  for a in sorted(idx) if c[a]}
+        coefficients.append(coeffs)
+        if sum(len(c[a]) * len(A[a]) for a in idx) <= MAX_EXPANDED_PRODUCTS:
+            num = sum((c[a] * A[a] for a in idx), zero)
+            gammas.append(ctx.expression(ctx.reduce(num), ctx.reduce(F[k] * c[k] * S[k])))
+        else:
+            # Expanded over one denominator it would be far larger than its parts (the
+            # segway: 830,000 characters): the combination of the constraints in (q, p).
+            gammas.append(sp.Add(*[coeffs[a] * ctx.expression(A[a], F[a] * S[a])
+                                   for a in coeffs]))
     return tuple(gammas), tuple(coefficients)
 
 
@@ -154,14 +161,19 @@ class _Context:
         W = [[sp.diff(grad[i], v[j]) for j in range(n)] for i in range(n)]
         zero = {s: 0 for s in v}
         a = [g.xreplace(zero) for g in grad]
-        nums, dens = [], []
+        nums, dens, scales = [], [], []
         for c in constraints:
             num, den = sp.fraction(sp.together(sp.sympify(c)))
             if den.free_symbols & set(v):
                 raise NotFormed("a final constraint is not polynomial in the velocities")
+            # A denominator of parameters alone (r/(2 d)) is a constant factor: the
+            # constraint is taken as num (= den chi), so that every chi o Leg^-1 shares
+            # one denominator (F^3 {chi_a, chi_b} instead of F_a^2 F_b^2 {chi_a, chi_b}).
+            scale = den if not den.free_symbols & set(q) else sp.S.One
             nums.append(num)
-            dens.append(den)
-        flat = [e for row in W for e in row] + a + nums + dens + q + v + p
+            dens.append(den / scale)
+            scales.append(scale)
+        flat = [e for row in W for e in row] + a + nums + dens + scales + q + v + p
         # every sine with its cosine (and back): the derivatives stay in the ring
         angles = {f.args[0] for e in flat for f in sp.sympify(e).atoms(sp.sin, sp.cos)}
         flat += [f(u) for u in sorted(angles, key=sp.default_sort_key) for f in (sp.sin, sp.cos)]
@@ -178,6 +190,7 @@ class _Context:
         self.a = [self.reduce(next(it)) for _ in range(n)]
         self.constraints = [self.reduce(next(it)) for _ in range(k)]
         self.denominators = [self.reduce(next(it)) for _ in range(k)]
+        self.scales = [next(it) for _ in range(k)]
         self.gq, self.gv, self.gp = ([next(it) for _ in range(n)] for _ in range(3))
         self._dq = [self._coordinate_derivatives(s) for s in q]
 
@@ -236,7 +249,7 @@ class _Context:
         """num/den, their common factor in the parameters divided out, and cancelled
         when small (a gcd of large polynomials costs more than it gives)."""
         num, den = self.without_common_factor({0: num, 1: den}).values()
-        if len(num) + len(den) <= _CANCEL_TERMS:
+        if len(num) + len(den) <= _CANCEL_TERMS and len(num) * len(den) <= _CANCEL_PRODUCT:
             num, den = num.cancel(den)
         return num.as_expr() / den.as_expr()
 

@@ -14,13 +14,11 @@ from nhham.errors import ComputationError
 from nhham.hamiltonian.brackets import DiracBracket
 from nhham.hamiltonian.classes import ConstraintClasses
 from nhham.hamiltonian.classification import classify_constraints, sample_matrix
+from nhham.hamiltonian.dirac_points import DiracDifference
 from nhham.hamiltonian.side import HamiltonianSide, hamiltonian_side
-from nhham.lagrangian.engine import Policy, policy_of
+from nhham.lagrangian.engine import Policy, decide, policy_of
 from nhham.lagrangian.algebra import block_inverse, cancel
 from nhham.lagrangian.decision import Decision
-from nhham.lagrangian.domains import NotExact
-from nhham.lagrangian.linalg import ModularBackend
-from nhham.lagrangian.points import PointSampler
 from nhham.lagrangian.submanifold import Submanifold
 from nhham.settings import SEED
 from nhham.system.evaluation import Backend
@@ -94,6 +92,10 @@ class DiracProjectedReport:
     notes : tuple of str
         Caveats (first-class constraints make the Dirac flow a gauge family).
     classes : ConstraintClasses
+    components : tuple of str
+        The (q, p) variables whose component of X_D - X is nonzero on M_f: those
+        nonzero after reduction, or at an exact point (a proof); () when equal, and
+        in sampled mode those above the tolerance at some point.
     """
 
     equal: bool
@@ -105,11 +107,15 @@ class DiracProjectedReport:
     samples: int
     notes: tuple
     classes: ConstraintClasses
+    components: tuple = ()
 
     def describe(self) -> str:
         if self.equal:
+            d = self.decisions[0] if self.difference is None and self.decisions else None
+            how = "" if d is None else ": " + d.detail + (
+                f"; error <= {d.error_bound:.1e}" if d.method == "exact at points" else "")
             return ("the Dirac-bracket flow of H equals the projected (nonholonomic) field on "
-                    "M_f")
+                    "M_f" + how)
         if self.difference is None:
             return ("the Dirac-bracket flow of H is NOT the true dynamics on M_f: "
                     + self.decisions[0].detail)
@@ -126,7 +132,8 @@ class DiracProjectedReport:
                 "difference": (None if self.difference is None
                                else [str(d) for d in self.difference]),
                 "max_abs_difference": self.max_abs_difference,
-                "samples": self.samples, "notes": list(self.notes)}
+                "samples": self.samples, "notes": list(self.notes),
+                "components": list(self.components)}
 
 
 def dirac_vs_projected(system, *, precision=None, samples=6, seed=SEED,
@@ -139,10 +146,16 @@ def dirac_vs_projected(system, *, precision=None, samples=6, seed=SEED,
     For holonomic constraints the two agree on M_f; for truly nonholonomic
     constraints they do not (nonholonomic dynamics is not variational). The
     Dirac flow is taken over the maximal second-class set of the final
-    constraints. Exact mode: the difference X_D - X is reduced on M_f and
-    decided per component, and evaluated at seeded points. Sampled mode (large
-    systems): both fields are evaluated numerically at seeded points of M_f
-    and the difference is decided there (``difference`` is then None).
+    constraints. Exact mode (an exact classification, and M_f flat or n <= 3):
+    the difference X_D - X is reduced on M_f and decided per component, and
+    evaluated at seeded points. Otherwise it is decided at exact points of M_f
+    (over F_p where M_f is curved) by the decision engine: a component nonzero at
+    one point is a proof that the flows differ, zero at every point is agreement
+    with the error bound of the points
+    (:class:`~nhham.hamiltonian.dirac_points.DiracDifference`). Sampled mode
+    (``method="sampled"``, or no exact points): both fields are evaluated
+    numerically at seeded points of M_f and the difference is decided there.
+    ``difference`` is None except in exact mode.
 
     Parameters
     ----------
@@ -174,13 +187,12 @@ def dirac_vs_projected(system, *, precision=None, samples=6, seed=SEED,
             system, precision=precision, samples=samples, seed=seed, closed_form=True)
     if classes is None:
         classes = classify_constraints(side, method=method, policy=policy)
-    if classes.method == "exact at points" and precision is None \
-            and side.legendre.is_quadratic:
-        try:
-            return _dirac_vs_projected_at_points(side, classes, samples, seed)
-        except NotExact:
-            pass  # no exact points after all: sampled
-    if classes.method != "exact":
+    symbolic = _symbolic(side, classes)
+    if not symbolic and method != "sampled":
+        report = _dirac_vs_projected_at_points(side, classes, policy)
+        if report is not None:
+            return report
+    if not symbolic:
         return _dirac_vs_projected_sampled(side, classes, precision, samples, seed, tol)
     if not side.regular:
         raise ComputationError(
@@ -205,7 +217,8 @@ def dirac_vs_projected(system, *, precision=None, samples=6, seed=SEED,
     return DiracProjectedReport(
         equal=all(d.value for d in decisions), difference=reduced, dirac_field=XD,
         projected_field=X, decisions=decisions, max_abs_difference=worst,
-        samples=len(sampled), notes=notes, classes=classes)
+        samples=len(sampled), notes=notes, classes=classes,
+        components=tuple(str(z) for z, e in zip(side.variables, reduced) if e != 0))
 
 
 def _at_parameter_values(Mf, reduced, tol, variables):
@@ -251,39 +264,38 @@ def _dirac_minus_projected(be, num, hp, chis):
     return XD, X
 
 
-def _dirac_vs_projected_at_points(side, classes, samples, seed):
-    """X_D - X exactly modulo p at seeded points of M_f = M_1 (no symbolic inverse, no
-    compilation). A difference nonzero at a point proves X_D != X; zero at every
-    point is the probabilistic verdict "equal" (a nonzero rational function of the
-    drawn values vanishes at a random point of F_p with probability at most its
-    degree over p = 2^61 - 1)."""
-    system = side.system
-    be = ModularBackend()
-    R = list(classes.second_class_indices)
-    chis = [classes.constraints_TQ[a] for a in R]
-    sampler = PointSampler.on_M1(system, seed, modular=True)
-    num = side.numeric
-    used = differ = 0
-    for _ in range(2 * samples):
-        if used == samples:
-            break
-        got = _dirac_minus_projected(be, num, num.point_from_tq(be, sampler.point().env), chis)
-        if got is None:
-            continue
-        used += 1
-        differ += any(a != b for a, b in zip(*got))
-    if not used:
-        raise ComputationError("dirac_vs_projected: C^H is singular at every exact point")
-    equal = not differ
-    detail = (f"X_D - X is 0 at each of {used} exact points of M_f (arithmetic modulo "
-              f"p = 2^61 - 1)" if equal else
-              f"X_D - X is nonzero at {differ} of {used} exact points of M_f (arithmetic "
-              f"modulo p = 2^61 - 1; a proof)")
-    decision = Decision(equal, "exact at points", detail, precision=be.label, samples=used)
+def _symbolic(side, classes) -> bool:
+    """X_D - X is formed symbolically where the classification was (exact) and M_f is
+    flat or n <= 3; on a curved M_f of more coordinates, reducing the assembled fields
+    takes minutes (a rotor on a sphere, n = 4: 43 s; with more coupling > 9 min) and the
+    points over F_p answer in milliseconds."""
+    if classes.method != "exact":
+        return False
+    return side.n <= 3 or not _tq_manifold(side, classes).curved
+
+
+def _tq_manifold(side, classes) -> Submanifold:
+    return Submanifold(side.system, tuple(classes.constraints_TQ), precision=side.precision,
+                       samples=side.samples, seed=side.seed)
+
+
+def _dirac_vs_projected_at_points(side, classes, policy):
+    """X_D - X decided at exact points of M_f by the decision engine
+    (:class:`~nhham.hamiltonian.dirac_points.DiracDifference`): a component nonzero at
+    one point is a proof that the flows differ; zero at every point is "equal" with
+    the error bound of the points. None where M_f has no exact points."""
+    if not policy.exact:
+        return None
+    quantity = DiracDifference(side, classes.constraints_TQ, classes.second_class_indices)
+    manifold = _tq_manifold(side, classes)
+    verdict = decide(quantity, manifold, policy)
+    if verdict is None:
+        return None
+    decision = verdict.decision
     return DiracProjectedReport(
-        equal=equal, difference=None, dirac_field=None, projected_field=None,
-        decisions=(decision,), max_abs_difference=math.nan, samples=used,
-        notes=_gauge_note(classes), classes=classes)
+        equal=bool(decision.value), difference=None, dirac_field=None, projected_field=None,
+        decisions=(decision,), max_abs_difference=math.nan, samples=decision.samples,
+        notes=_gauge_note(classes), classes=classes, components=verdict.components)
 
 
 def _dirac_vs_projected_sampled(side, classes, precision, samples, seed, tol):
@@ -301,7 +313,7 @@ def _dirac_vs_projected_sampled(side, classes, precision, samples, seed, tol):
                       seed=seed, exact=False)
     points, resid = Mtq.points()
     num = side.numeric
-    worst, worst_rel, used = 0.0, 0.0, 0
+    worst, worst_rel, used, above = 0.0, 0.0, 0, set()
     with be.context():
         for x in points:
             got = _dirac_minus_projected(be, num, num.point_from_tq(be, x), chis)
@@ -311,6 +323,7 @@ def _dirac_vs_projected_sampled(side, classes, precision, samples, seed, tol):
             d = float(be.norm(XD - X))
             scale = max(1.0, float(be.norm(X)), float(be.norm(XD)))
             worst, worst_rel, used = max(worst, d), max(worst_rel, d / scale), used + 1
+            above |= {i for i, e in enumerate(XD - X) if float(abs(e)) > tol_ * scale}
     if not used:
         raise ComputationError("dirac_vs_projected: C^H is singular at every sample point")
     equal = worst_rel <= tol_
@@ -322,7 +335,8 @@ def _dirac_vs_projected_sampled(side, classes, precision, samples, seed, tol):
     return DiracProjectedReport(
         equal=equal, difference=None, dirac_field=None, projected_field=None,
         decisions=(decision,), max_abs_difference=worst, samples=used,
-        notes=_gauge_note(classes), classes=classes)
+        notes=_gauge_note(classes), classes=classes,
+        components=() if equal else tuple(str(side.variables[i]) for i in sorted(above)))
 
 
 def _fields_on_Mf(side: HamiltonianSide, classes: ConstraintClasses):

@@ -17,7 +17,7 @@ from typing import Callable
 from nhham.lagrangian.linalg import field_solve, zeros_like
 
 __all__ = ["bordered_matrix", "tangency_rows", "vertical_rows", "constrained_motion", "lagrangian_bracket",
-           "frobenius_terms"]
+           "dirac_difference", "frobenius_terms"]
 
 
 def bordered_matrix(W, mu, Jv):
@@ -131,6 +131,49 @@ def lagrangian_bracket(Jq, Jv, W, M, solve: Callable = field_solve):
     U = solve(W, Jv.transpose())
     JU = Jq * U
     return JU - JU.transpose() - U.transpose() * (M - M.transpose()) * U
+
+
+def dirac_difference(W, M, mu, F, drift, v, Jq, Jv, solve: Callable = field_solve):
+    """X_D − X at one point x of TQ, in the (q, p) components at Leg(x): shape (2n, 1).
+
+    X_D = X_H − X_χa (B_RR⁻¹)^ab {χ_b, H} is the Dirac flow of H over a second-class set
+    χ_R and X = X_H + λ^j Z_j^H the projected field (DESIGN.md §2), both pulled back by
+    Leg, so no H and no Leg⁻¹ are needed: X_H(χ) = ξ_L(χ) = ∂χ/∂q v + ∂χ/∂v W⁻¹ F (the
+    forced field where F has forces), B = {χ_a, χ_b}_L (:func:`lagrangian_bracket`), the
+    Hamiltonian field of χ has the components (W⁻¹ χ_v, −(χ_q − Mᵀ W⁻¹ χ_v)) and
+    X − X_H = (0, −μᵀ λ) (:func:`constrained_motion`). With U = W⁻¹ J_vᵀ and
+    y = B⁻¹ X_H(χ):  X_D − X = (−U y, (J_qᵀ − Mᵀ U) y + μᵀ λ).
+
+    Parameters
+    ----------
+    W, M : matrix, shape (n, n)
+        The Hessian d²L/dv² and the mixed Hessian (M_AB = ∂p_A/∂q^B) at the point.
+    mu, drift : matrix, shapes (m, n) and (m, 1)
+        The affine constraints' rows and ∂φ/∂q · v.
+    F, v : matrix, shape (n, 1)
+        The forcing of W a + μᵀ λ = F and the velocities.
+    Jq, Jv : matrix, shape (r, n)
+        ∂χ/∂q and ∂χ/∂v of the second-class set (r = 0: X_D = X_H).
+    solve : callable, optional
+        ``solve(A, B) -> A⁻¹ B`` in the matrices' arithmetic.
+
+    Returns
+    -------
+    matrix, shape (2n, 1)
+        ZeroDivisionError where C or B_RR is singular at the point.
+    """
+    n = W.shape[0]
+    if mu.shape[0]:
+        _, lam, _ = constrained_motion(W, mu, F, drift, solve)
+        dp = mu.transpose() * lam
+    else:
+        dp = zeros_like(W, (n, 1))
+    if not Jq.shape[0]:
+        return zeros_like(W, (n, 1)).vstack(dp)
+    U = solve(W, Jv.transpose())
+    B = lagrangian_bracket(Jq, Jv, W, M, solve)
+    y = solve(B, Jq * v + Jv * solve(W, F))
+    return (-(U * y)).vstack(dp + (Jq.transpose() - M.transpose() * U) * y)
 
 
 def frobenius_terms(M, D, dep, solve: Callable = field_solve) -> dict:

@@ -95,16 +95,21 @@ def _coupled_holonomic():
 @pytest.mark.parametrize("make, equal", [(_coupled_holonomic, True),
                                          (lambda: models.snake(3), False)])
 def test_dirac_vs_projected_at_exact_points(make, equal):
-    """Beyond the symbolic size, X_D - X is computed modulo p at exact points of M_f:
-    nonzero at a point is a proof that the Dirac flow is not the true dynamics (snake);
-    holonomic constraints give zero at every point."""
+    """Beyond the symbolic size, X_D - X is decided at exact points of M_f: nonzero at a
+    point over F_p is a proof that the Dirac flow is not the true dynamics (snake);
+    holonomic constraints give zero at every rational point, with the Schwartz-Zippel
+    bound."""
     system = make()
     assert not hamiltonian_side(system).symbolic_affordable
     report = dirac_vs_projected(system, samples=3)
     assert report.classes.method == "exact at points"
     d = report.decisions[0]
-    assert report.equal is equal and d.method == "exact at points" and report.samples == 3
-    assert math.isnan(report.max_abs_difference)
-    assert ("a proof" in d.detail) is (not equal)
+    assert report.equal is equal and math.isnan(report.max_abs_difference)
+    if equal:
+        assert d.method == "exact at points" and d.error_bound < 1e-30
+        assert report.components == ()
+    else:
+        assert d.method == "exact" and d.error_bound == 0 and report.samples == 1
+        assert "a proof" in d.detail and "p_theta1" in report.components
     sampled = dirac_vs_projected(system, method="sampled")
     assert sampled.equal is equal and sampled.decisions[0].method == "sampled"
