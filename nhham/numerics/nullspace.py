@@ -36,7 +36,7 @@ from __future__ import annotations
 import numpy as np
 
 __all__ = ["KKT_RATIO", "diagonal_ratio", "needs_null_space", "solve_null_space",
-           "kkt_solve_name", "KKT_SOLVES"]
+           "kkt_solve_name", "describe_kkt_solve", "KKT_SOLVES"]
 
 #: Largest max W_AA / min W_AA solved by the saddle-point (range-space or LU) solve.
 #: There its relative error in an acceleration stays below about eps * KKT_RATIO
@@ -48,19 +48,22 @@ __all__ = ["KKT_RATIO", "diagonal_ratio", "needs_null_space", "solve_null_space"
 #: to a few eps (the model problem at ratios 1e4 .. 1e16).
 KKT_RATIO = 4096.0
 
-#: The names of the two solves (results, JSON ``kkt_solve``).
-KKT_SOLVES = ("saddle", "null-space")
+#: What results report (``kkt_solve``, also in the JSON): the one solve used at every
+#: state considered, or both ("mixed").
+KKT_SOLVES = ("saddle", "null-space", "mixed")
 
 
 def diagonal_ratio(W):
-    """max_A |W_AA| / min_A |W_AA| of W (..., n, n): inf where a diagonal entry is 0,
-    1 for n = 0."""
-    d = np.abs(np.diagonal(np.asarray(W), axis1=-2, axis2=-1))
+    """max_A |W_AA| / min_A |W_AA| of W (..., n, n): inf where a diagonal entry is 0 beside
+    a nonzero one, 1 where the diagonal is 0 or n = 0; ``ratio > KKT_RATIO`` exactly
+    where :func:`needs_null_space` (finite entries)."""
+    d = np.abs(np.diagonal(np.asarray(W, dtype=float), axis1=-2, axis2=-1))
     if d.shape[-1] == 0:
         return np.ones(d.shape[:-1]) if d.ndim > 1 else 1.0
     hi, lo = d.max(axis=-1), d.min(axis=-1)
     with np.errstate(divide="ignore", invalid="ignore"):
-        return np.where(lo > 0, hi / np.where(lo > 0, lo, 1.0), np.inf)
+        out = np.where(lo > 0, hi / np.where(lo > 0, lo, 1.0), np.where(hi > 0, np.inf, 1.0))
+    return float(out) if np.ndim(out) == 0 else out
 
 
 def needs_null_space(W):
@@ -83,6 +86,15 @@ def kkt_solve_name(null_space) -> str:
     if not null_space.size or not null_space.any():
         return "saddle"
     return "null-space" if null_space.all() else "mixed"
+
+
+def describe_kkt_solve(name: str, ratio: float) -> str:
+    """One clause: which solve gave the constrained accelerations, and why."""
+    how = {"saddle": "the saddle-point solve", "null-space": "the null-space solve",
+           "mixed": "the saddle-point solve and, where W's diagonal spans more, the "
+                    "null-space solve"}[name]
+    return (f"constrained accelerations by {how} (largest max W_AA / min W_AA "
+            f"{ratio:.3g}; the null-space solve above {KKT_RATIO:.0f})")
 
 
 def solve_null_space(W, mu, top, bottom):
@@ -114,8 +126,8 @@ def solve_null_space(W, mu, top, bottom):
     ts = top * d
     if m == 0:
         return np.linalg.solve(Ws, ts[..., None])[..., 0] * d, np.zeros(top.shape[:-1] + (0,))
-    Q, R = np.linalg.qr(np.swapaxes(mu * d[..., None, :], -1, -2), mode="complete")
-    Q1, Q2, R1 = Q[..., :, :m], Q[..., :, m:], R[..., :m, :]
+    Q, R1 = householder_rows(np.swapaxes(mu * d[..., None, :], -1, -2))
+    Q1, Q2 = Q[..., :, :m], Q[..., :, m:]
     if np.any(np.abs(np.diagonal(R1, axis1=-2, axis2=-1)) == 0):
         raise np.linalg.LinAlgError("the constraints' one-forms are dependent")
     # the particular solution of (mu D) s = bottom of least length: s = Q1 R1^-T bottom
@@ -132,3 +144,50 @@ def solve_null_space(W, mu, top, bottom):
 
 def _mv(A, x):
     return np.einsum("...ij,...j->...i", A, x)
+
+
+def householder_rows(A):
+    """A = Q [R; 0] by Householder reflections with row pivoting: (Q (..., n, n), R
+    (..., m, m)) for A (..., n, m), n >= m.
+
+    Each step reflects onto the row of the largest remaining entry of its column (the
+    row sorting of Powell and Reid for graded least squares). Without it a kernel
+    direction close to a coordinate axis, the light coordinate's, comes out as
+    1 - (1 - t) and keeps only the absolute accuracy eps of its small components t
+    (a relative error of eps / t: 1e-10 for a mass ratio of 1e12); with it they keep
+    their relative accuracy. The same steps as ``nullspace_solve`` in
+    ``nhham/numerics/c/linalg.c``.
+    """
+    A = np.array(A, dtype=float)
+    n, m = A.shape[-2], A.shape[-1]
+    lead = A.shape[:-2]
+    A = A.reshape((-1, n, m))
+    K = A.shape[0]
+    rows = np.arange(K)
+    V = np.zeros((K, m, n))
+    beta = np.zeros((K, m))
+    piv = np.zeros((K, m), dtype=np.intp)
+    for c in range(m):
+        p = c + np.argmax(np.abs(A[:, c:, c]), axis=1)
+        piv[:, c] = p
+        A[rows, c], A[rows, p] = A[rows, p], A[rows, c].copy()
+        x = A[:, c:, c]
+        norm = np.sqrt(np.sum(x * x, axis=1))
+        alpha = np.where(x[:, 0] >= 0, -norm, norm)
+        v = x.copy()
+        v[:, 0] -= alpha                  # no cancellation: alpha has the other sign
+        vv = np.sum(v * v, axis=1)
+        b = np.where(vv > 0, 2.0 / np.where(vv > 0, vv, 1.0), 0.0)
+        V[:, c, c:], beta[:, c] = v, b
+        rest = A[:, c:, c + 1:]
+        A[:, c:, c + 1:] = rest - (b[:, None] * np.einsum("ki,kij->kj", v, rest))[:, None, :] \
+            * v[:, :, None]
+        A[:, c, c] = alpha
+        A[:, c + 1:, c] = 0.0
+    Q = np.broadcast_to(np.eye(n), (K, n, n)).copy()
+    for c in range(m - 1, -1, -1):       # Q = P_0 H_0 P_1 H_1 ... P_{m-1} H_{m-1}
+        v = V[:, c]
+        Q -= (beta[:, c, None] * np.einsum("ki,kij->kj", v, Q))[:, None, :] * v[:, :, None]
+        p = piv[:, c]
+        Q[rows, c], Q[rows, p] = Q[rows, p], Q[rows, c].copy()
+    return Q.reshape(lead + (n, n)), A[:, :m, :].reshape(lead + (m, m))

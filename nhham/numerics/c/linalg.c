@@ -55,8 +55,8 @@ static int lu_solve(int mm, const double *W, const double *mu, const double *d,
 }
 
 /* The null-space solve of [[W, mu^T], [mu, 0]] [x; y] = [top; bottom] (the steps of
-   nhham.numerics.nullspace.solve_null_space): D = diag(W)^-1/2, Householder QR
-   (mu D)^T = [Q1 Q2] [R; 0], s = Q1 R^-T bottom, (Q2^T D W D Q2) z = Q2^T (D top -
+   nhham.numerics.nullspace.solve_null_space): D = diag(W)^-1/2, Householder QR with row
+   pivoting (mu D)^T = [Q1 Q2] [R; 0], s = Q1 R^-T bottom, (Q2^T D W D Q2) z = Q2^T (D top -
    D W D s) by LU, x = D (s + Q2 z), R y = Q1^T (D top - D W D D^-1 x). Where W's
    diagonal spans orders of magnitude (a light coordinate tied to a heavy one) it keeps
    the small accelerations that the saddle solve obtains as a difference of nearly equal
@@ -66,6 +66,7 @@ static int nullspace_solve(int mm, const double *W, const double *mu, const doub
     enum { MX = NCX };
     double d[NQ], Ws[NQ * NQ], A[NQ * MX], V[MX * NQ], beta[MX], Q[NQ * NQ];
     double s[NQ], t[NQ], WQ[NQ * NQ], H[NQ * NQ], z[NQ], w[MX];
+    int piv[MX];
     const int r = NQ - mm;
     for (int i = 0; i < NQ; ++i) {
         double a = fabs(W[i * NQ + i]);
@@ -75,9 +76,21 @@ static int nullspace_solve(int mm, const double *W, const double *mu, const doub
         for (int j = 0; j < NQ; ++j) Ws[i * NQ + j] = W[i * NQ + j] * d[i] * d[j];
     for (int c = 0; c < mm; ++c)
         for (int i = 0; i < NQ; ++i) A[i * MX + c] = mu[c * NQ + i] * d[i];
-    /* Householder reflections H_c = I - beta_c v_c v_c^T: A = H_0 .. H_{mm-1} [R; 0]. */
+    /* Householder reflections H_c = I - beta_c v_c v_c^T with row pivoting (the swap P_c
+       of rows c and piv_c first: the largest remaining entry of column c, so that a
+       kernel direction near a coordinate axis keeps its small components to relative
+       accuracy, see nhham.numerics.nullspace.householder_rows):
+       A = P_0 H_0 .. P_{mm-1} H_{mm-1} [R; 0]. */
     for (int c = 0; c < mm; ++c) {
-        double norm = 0.0, vv = 0.0, *v = V + c * NQ;
+        double norm = 0.0, vv = 0.0, *v = V + c * NQ, big = -1.0;
+        for (int i = c; i < NQ; ++i)
+            if (fabs(A[i * MX + c]) > big) { big = fabs(A[i * MX + c]); piv[c] = i; }
+        if (piv[c] != c)
+            for (int k = 0; k < mm; ++k) {
+                const double t = A[c * MX + k];
+                A[c * MX + k] = A[piv[c] * MX + k];
+                A[piv[c] * MX + k] = t;
+            }
         for (int i = c; i < NQ; ++i) norm += A[i * MX + c] * A[i * MX + c];
         norm = sqrt(norm);
         if (!(norm > 0.0)) return 1;
@@ -94,7 +107,8 @@ static int nullspace_solve(int mm, const double *W, const double *mu, const doub
         }
         A[c * MX + c] = alpha;
     }
-    /* Q = H_0 .. H_{mm-1} explicitly (row-major): its first mm columns Q1, the rest Q2. */
+    /* Q = P_0 H_0 .. P_{mm-1} H_{mm-1} explicitly (row-major): its first mm columns Q1,
+       the rest Q2. */
     for (int i = 0; i < NQ; ++i)
         for (int j = 0; j < NQ; ++j) Q[i * NQ + j] = i == j ? 1.0 : 0.0;
     for (int c = mm - 1; c >= 0; --c) {
@@ -105,6 +119,12 @@ static int nullspace_solve(int mm, const double *W, const double *mu, const doub
             sd *= beta[c];
             for (int i = c; i < NQ; ++i) Q[i * NQ + j] -= sd * v[i];
         }
+        if (piv[c] != c)
+            for (int j = 0; j < NQ; ++j) {
+                const double t = Q[c * NQ + j];
+                Q[c * NQ + j] = Q[piv[c] * NQ + j];
+                Q[piv[c] * NQ + j] = t;
+            }
     }
     /* R^T w = bottom (R = the upper triangle of A), s = Q1 w. */
     for (int c = 0; c < mm; ++c) {
