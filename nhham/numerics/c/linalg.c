@@ -61,8 +61,15 @@ static int lu_solve(int mm, const double *W, const double *mu, const double *d,
    diagonal spans orders of magnitude (a light coordinate tied to a heavy one) it keeps
    the small accelerations that the saddle solve obtains as a difference of nearly equal
    terms. Returns 0, or 1 when mu is rank deficient or the reduced matrix singular. */
-static int nullspace_solve(int mm, const double *W, const double *mu, const double *top,
-                           const double *bottom, double *x, double *y) {
+#if defined(__GNUC__)
+#define COLD static __attribute__((noinline, cold))
+#else
+#define COLD static
+#endif
+/* Kept out of line (COLD): the saddle path that ksolve inlines into every field
+   evaluation stays as small as before. */
+COLD int nullspace_solve(int mm, const double *W, const double *mu, const double *top,
+                         const double *bottom, double *x, double *y) {
     enum { MX = NCX };
     double d[NQ], Ws[NQ * NQ], A[NQ * MX], V[MX * NQ], beta[MX], Q[NQ * NQ];
     double s[NQ], t[NQ], WQ[NQ * NQ], H[NQ * NQ], z[NQ], w[MX];
