@@ -146,9 +146,7 @@ def trajectory_diagnostics(model, t, y, work=None, *, residual_tol: float = 1e-8
     idx = _cond_indices(len(tf))
     with np.errstate(all="ignore"):
         cC = np.atleast_1d(_blockwise(model.cond_C, Yf[idx]))
-        cW = np.atleast_1d(_blockwise(model.cond_W, Yf[idx]))
-        ratio = np.atleast_1d(_blockwise(lambda B: diagonal_ratio(model.geometry(B)[0]),
-                                         Yf[idx]))
+        cW, ratio = np.atleast_2d(_blockwise(lambda B: _w_conditions(model, B), Yf[idx])).T
     cond_C_max = float(np.nanmax(cC)) if cC.size else 1.0
     cond_W_max = float(np.nanmax(cW)) if cW.size else 1.0
     if max(cond_W_max, cond_C_max) > cond_warn:
@@ -183,6 +181,13 @@ def trajectory_diagnostics(model, t, y, work=None, *, residual_tol: float = 1e-8
         warnings=tuple(notes), kkt_solve=kkt_solve_name(ratio > KKT_RATIO),
         kkt_ratio_max=float(np.nanmax(ratio)) if ratio.size else 1.0,
     )
+
+
+def _w_conditions(model, Y):
+    """(K, 2): cond(W) (as ``model.cond_W``) and max W_AA / min W_AA at the states Y (K, 2n),
+    from one evaluation of W."""
+    W = model.geometry(Y)[0]
+    return np.column_stack([np.linalg.cond(W), diagonal_ratio(W)])
 
 
 def _scaled_conditions(model, Y):
