@@ -225,3 +225,16 @@ def test_a_stiff_chain_with_a_non_diagonal_W(backend):
                             np.concatenate([dy_batch[3:], lam_batch])):
                     for value, want in zip(got, exact):
                         assert abs(value - float(want)) <= 8 * EPS * abs(float(want)), (e, got)
+
+
+def test_a_ratio_that_crosses_the_threshold_is_reported_mixed():
+    """L = (x'^2 + exp(x) y'^2)/2 with x' = 1, from x = 8 and y' = 0: x = 8 + t, W =
+    diag(1, e^x), so W's diagonal ratio e^(8 + t) passes KKT_RATIO = 4096 at
+    t = ln 4096 - 8 = 0.318: the states before are solved by the saddle solve, those after
+    by the null-space solve ("mixed"), the largest ratio e^9 at t = 1."""
+    system = nhham.System(["x", "y"], "(x_dot**2 + exp(x)*y_dot**2)/2", ["x_dot - 1"])
+    res = nhham.simulate(system, (0.0, 1.0), [8.0, 0.0, 1.0, 0.0], warn=False,
+                         t_eval=np.linspace(0.0, 1.0, 11))
+    assert res.kkt_solve == "mixed" and "null-space solve" in res.describe()
+    assert res.diagnostics.kkt_ratio_max == pytest.approx(np.exp(9.0), rel=1e-12)
+    assert np.allclose(res["x"], 8.0 + res.t, rtol=1e-13)
