@@ -15,8 +15,9 @@ largest to the smallest diagonal entry of W, :func:`diagonal_ratio`), and reache
 the force falls on the light coordinates.
 
 The null-space solve never forms lambda first. After the symmetric scaling D = diag(W)^-1/2
-(unit diagonal of D W D, as the saddle solve scales), the QR factorisation
-(mu D)^T = [Q1 Q2] [R; 0] gives an orthonormal basis Q2 of the kernel of mu D, and
+(unit diagonal of D W D, as the saddle solve scales), the QR factorisation with row
+pivoting (mu D)^T = [Q1 Q2] [R; 0] (:func:`householder_rows`) gives an orthonormal basis
+Q2 of the kernel of mu D, and
 
     a = D (Q1 R^-T b + Q2 z),   (Q2^T D W D Q2) z = Q2^T D (F - W D Q1 R^-T b),
     R lambda = Q1^T D (F - W a):
@@ -25,8 +26,12 @@ the reduced matrix is D W D restricted to the kernel, no worse conditioned than 
 (interlacing), and the model problem's x'' = 1/(a + b) comes out to rounding. It costs a
 QR factorisation more than the saddle solve, so it is used only where the saddle solve's
 bound eps * ratio exceeds ``KKT_RATIO * eps`` (:func:`needs_null_space`, the one
-decision: numpy here and in :mod:`nhham.numerics.saddle`, and ``ksolve`` in
+decision: :mod:`nhham.numerics.saddle` (the batched and the one-state solves), the complex
+step of :class:`nhham.numerics.chart.ComplexField` and ``ksolve`` in
 ``nhham/numerics/c/linalg.c``, which reads the same threshold as ``NHHAM_KKT_RATIO``).
+RATTLE's velocity-level solve keeps the saddle solve (``solve_saddle(...,
+null_space=False)``, ``ksolve_saddle``): its unknown is the O(1) velocity, whose small
+step increments the null-space solve kept no better (3-10x worse at a mass ratio of 1e16).
 
 No sympy here.
 """
@@ -36,7 +41,7 @@ from __future__ import annotations
 import numpy as np
 
 __all__ = ["KKT_RATIO", "diagonal_ratio", "needs_null_space", "solve_null_space",
-           "kkt_solve_name", "describe_kkt_solve", "KKT_SOLVES"]
+           "householder_rows", "kkt_solve_name", "describe_kkt_solve", "KKT_SOLVES"]
 
 #: Largest max W_AA / min W_AA solved by the saddle-point (range-space or LU) solve.
 #: There its relative error in an acceleration stays below about eps * KKT_RATIO
