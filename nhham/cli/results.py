@@ -517,6 +517,8 @@ def simulation_data(result, t_span) -> dict:
         "energy_balance_residual": json_number(d.energy_balance_residual),
         "cond_c_max": json_number(d.cond_C_max),
         "cond_w_max": json_number(d.cond_W_max),
+        "kkt_solve": str(d.kkt_solve),
+        "kkt_ratio_max": json_number(d.kkt_ratio_max),
         "settings": jsonable(dict(result.settings)),
         "initial_projection": None,
         "storage": None if result.storage is None else jsonable(result.storage.to_dict()),
@@ -593,6 +595,8 @@ def bench_data(result) -> dict:
             "reference_error_estimate": json_number(result.reference_error_estimate),
             "reference_wall_time_s": json_number(result.reference_wall_time_s),
             "rows": rows, "time_to_solution": tts,
+            "kkt_solve": str(result.kkt_solve),
+            "kkt_ratio_max": json_number(result.kkt_ratio_max),
             "skipped": [{"method": m, "setting": s, "reason": why}
                         for m, s, why in result.skipped]}
 
@@ -608,4 +612,4 @@ def bench_failure_data(t_span, args) -> dict:
     return {"t_span": [float(x) for x in t_span], "backend": "none", "reference": "none",
             "reference_digits": int(args.reference_digits), "reference_error_estimate": None,
             "reference_wall_time_s": None, "rows": [], "time_to_solution": [], "skipped": [],
-            "plot": None}
+            "kkt_solve": None, "kkt_ratio_max": None, "plot": None}

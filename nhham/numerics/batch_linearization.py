@@ -31,6 +31,7 @@ from nhham.numerics.chart import (Chart, ComplexField, chart_jacobians, input_ja
                                   lift)
 from nhham.numerics.linearization import (EIGENVALUE_TOLERANCE, ON_TOLERANCE, STEP,
                                           Linearization, divide_family)
+from nhham.numerics.saddle import solve_saddle
 
 __all__ = ["ChartChoice", "LinearizationBatch", "Spectrum", "linearize_batch", "STATUS_TEXT"]
 
@@ -245,24 +246,20 @@ def _check_states(cf, Y, P, model):
 
 
 def _accelerations(W, F, mu, drift, n):
-    """(a, singular) of the saddle-point systems, one per state."""
-    m = mu.shape[1]
-    K = np.zeros((W.shape[0], n + m, n + m))
-    K[:, :n, :n] = W
-    K[:, :n, n:] = np.swapaxes(mu, 1, 2)
-    K[:, n:, :n] = mu
-    rhs = np.concatenate([F, -drift], axis=1)[..., None]
+    """(a, singular) of the saddle-point systems, one per state (the solve of
+    :func:`~nhham.numerics.saddle.solve_saddle`: its one decision between the saddle and
+    the null-space solve)."""
     singular = np.zeros(W.shape[0], dtype=bool)
-    try:
-        sol = np.linalg.solve(K, rhs)[..., 0]
-    except np.linalg.LinAlgError:
-        sol = np.full(rhs.shape[:2], np.nan)
-        for i in range(W.shape[0]):
-            try:
-                sol[i] = np.linalg.solve(K[i], rhs[i])[:, 0]
-            except np.linalg.LinAlgError:
-                singular[i] = True
-    a = sol[:, :n]
+    with np.errstate(all="ignore"):
+        try:
+            a = solve_saddle(W, mu, F, -drift)[0]
+        except np.linalg.LinAlgError:
+            a = np.full(F.shape, np.nan)
+            for i in range(W.shape[0]):
+                try:
+                    a[i] = solve_saddle(W[i], mu[i], F[i], -drift[i])[0]
+                except np.linalg.LinAlgError:
+                    singular[i] = True
     a[singular] = 0.0
     return a, singular
 

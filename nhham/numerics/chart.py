@@ -17,6 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from nhham.errors import ComputationError, InputError
+from nhham.numerics.nullspace import needs_null_space, solve_null_space
 
 __all__ = ["BATCH_STATES", "Chart", "ComplexField", "chart_jacobian", "chart_jacobians",
            "choose_chart", "greedy_columns", "input_jacobians", "lift", "reduced_field"]
@@ -108,19 +109,55 @@ class ComplexField:
         return mu, h, out[:, i:i + k]
 
     def accelerations(self, Q, V, p=None):
+        """The accelerations at the complex states of the complex step (imaginary parts of
+        the order of its h), by the one decision of
+        :func:`~nhham.numerics.nullspace.needs_null_space`: LU on the complex saddle-point
+        matrix [[W, mu^T], [mu, 0]], or where W's diagonal spans more than KKT_RATIO (a
+        complex LU lost the derivative of a small acceleration at extreme mass ratios as
+        the real one loses the acceleration) the null-space solve of K0 z0 = r0 and
+        K0 z1 = r1 - K1 z0 for K = K0 + i K1, z = z0 + i z1, dropping K1 z1 (h^2 = 1e-60
+        against z0: below rounding)."""
         W, F, mu, drift, _, _ = self.pieces(Q, V, p)
-        n, m = self.n, self.m
-        K = np.zeros((Q.shape[0], n + m, n + m), dtype=complex)
-        K[:, :n, :n] = W
-        K[:, :n, n:] = np.swapaxes(mu, 1, 2)
-        K[:, n:, :n] = mu
-        rhs = np.concatenate([F, -drift], axis=1)
+        ill = np.asarray(needs_null_space(W.real), dtype=bool)
+        a = np.empty(F.shape, dtype=complex)
         try:
-            sol = np.linalg.solve(K, rhs[..., None])[..., 0]
+            with np.errstate(all="ignore"):
+                if not ill.any():  # the common case: no copies
+                    return _complex_lu(W, F, mu, drift)
+                if not ill.all():
+                    ok = ~ill
+                    a[ok] = _complex_lu(W[ok], F[ok], mu[ok], drift[ok])
+                if ill.any():
+                    a[ill] = _split_null_space(W[ill], F[ill], mu[ill], drift[ill])
         except np.linalg.LinAlgError:
             raise ComputationError("linearize: the saddle-point matrix [[W, mu^T], [mu, 0]] is "
                                    "singular at the state (C singular: M_f is not M_1 here)") from None
-        return sol[:, :n]
+        return a
+
+
+def _complex_lu(W, F, mu, drift):
+    """The accelerations of [[W, mu^T], [mu, 0]] [a; lambda] = [F; -drift], complex LU."""
+    n, m = W.shape[-1], mu.shape[1]
+    K = np.zeros((W.shape[0], n + m, n + m), dtype=complex)
+    K[:, :n, :n] = W
+    K[:, :n, n:] = np.swapaxes(mu, 1, 2)
+    K[:, n:, :n] = mu
+    rhs = np.concatenate([F, -drift], axis=1)
+    return np.linalg.solve(K, rhs[..., None])[..., 0][:, :n]
+
+
+def _split_null_space(W, F, mu, drift):
+    """The same by the null-space solve of the real part and of the first-order imaginary
+    part (see :meth:`ComplexField.accelerations`)."""
+    W0, mu0 = W.real, mu.real
+    a0, lam0 = solve_null_space(W0, mu0, F.real, -drift.real)
+    top1 = F.imag - _mv(W.imag, a0) - _mv(np.swapaxes(mu.imag, 1, 2), lam0)
+    a1, _ = solve_null_space(W0, mu0, top1, -drift.imag - _mv(mu.imag, a0))
+    return a0 + 1j * a1
+
+
+def _mv(A, x):
+    return np.einsum("...ij,...j->...i", A, x)
 
 
 @dataclass(frozen=True)

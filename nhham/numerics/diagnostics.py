@@ -19,6 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from nhham.numerics.model import COND_C_WARN
+from nhham.numerics.nullspace import KKT_RATIO, diagonal_ratio, kkt_solve_name
 
 __all__ = ["Diagnostics", "trajectory_diagnostics", "Singularity", "singularity_at"]
 
@@ -74,6 +75,12 @@ class Diagnostics:
     cond_C_sampled : int
         Number of states at which cond was evaluated.
     warnings : tuple of str
+    kkt_solve : {"saddle", "null-space", "mixed"}
+        Which solve gave the constrained accelerations at those states (the decision of
+        :func:`nhham.numerics.nullspace.needs_null_space`; "mixed": some states each).
+    kkt_ratio_max : float
+        The largest max W_AA / min W_AA there (the null-space solve above
+        :data:`~nhham.numerics.nullspace.KKT_RATIO`).
     """
 
     energy: np.ndarray
@@ -88,6 +95,8 @@ class Diagnostics:
     cond_W_max: float
     cond_C_sampled: int
     warnings: tuple
+    kkt_solve: str = "saddle"
+    kkt_ratio_max: float = 1.0
 
 
 def trajectory_diagnostics(model, t, y, work=None, *, residual_tol: float = 1e-8,
@@ -137,19 +146,25 @@ def trajectory_diagnostics(model, t, y, work=None, *, residual_tol: float = 1e-8
     idx = _cond_indices(len(tf))
     with np.errstate(all="ignore"):
         cC = np.atleast_1d(_blockwise(model.cond_C, Yf[idx]))
-        cW = np.atleast_1d(_blockwise(model.cond_W, Yf[idx]))
+        cW, ratio = np.atleast_2d(_blockwise(lambda B: _w_conditions(model, B), Yf[idx])).T
     cond_C_max = float(np.nanmax(cC)) if cC.size else 1.0
     cond_W_max = float(np.nanmax(cW)) if cW.size else 1.0
-    if cond_W_max > cond_warn:  # then C = -mu W^-1 mu^T is not what to look at
+    if max(cond_W_max, cond_C_max) > cond_warn:
+        # a spread of W's diagonal (a mass ratio, units) is no near-singularity: the
+        # warnings read the conditions with the diagonals scaled to 1, as the solves scale
+        with np.errstate(all="ignore"):
+            cW, cC = _blockwise(lambda B: _scaled_conditions(model, B), Yf[idx]).T
+    if np.nanmax(cW, initial=1.0) > cond_warn:  # then C is not what to look at
         first = tf[idx][np.argmax(cW > cond_warn)]
-        notes.append(f"cond(W) = {cond_W_max:.3g} exceeds {cond_warn:.0e} (first at t = "
-                     f"{first:.6g}): W = d2L/dv2 is close to singular, the Lagrangian nearly "
-                     f"degenerate there")
-    elif cond_C_max > cond_warn:
+        notes.append(f"cond(W) = {np.nanmax(cW):.3g} (its diagonal scaled to 1) exceeds "
+                     f"{cond_warn:.0e} (first at t = {first:.6g}): W = d2L/dv2 is close to "
+                     f"singular, the Lagrangian nearly degenerate there")
+    elif np.nanmax(cC, initial=1.0) > cond_warn:
+        c = float(np.nanmax(cC))
         first = tf[idx][np.argmax(cC > cond_warn)]
-        notes.append(f"cond(C) = {cond_C_max:.3g} exceeds {cond_warn:.0e} (first at t = {first:.6g}): "
-                     f"errors grow like cond(C)*eps ~ {cond_C_max * 2.2e-16:.1g}; the constraint "
-                     f"matrix is close to singular")
+        notes.append(f"cond(C) = {c:.3g} (its diagonal scaled to 1) exceeds {cond_warn:.0e} "
+                     f"(first at t = {first:.6g}): errors grow like cond(C)*eps ~ "
+                     f"{c * 2.2e-16:.1g}; the constraint matrix is close to singular")
     if np.any(rrel > residual_tol):
         first = tf[np.argmax(rrel > residual_tol)]
         notes.append(f"constraint residual {float(rrel.max()):.3g} (scaled) exceeds the tolerance "
@@ -163,8 +178,37 @@ def trajectory_diagnostics(model, t, y, work=None, *, residual_tol: float = 1e-8
                                        np.finfo(float).tiny),
         energy_balance_residual=balance,
         cond_C_max=cond_C_max, cond_W_max=cond_W_max, cond_C_sampled=int(len(idx)),
-        warnings=tuple(notes),
+        warnings=tuple(notes), kkt_solve=kkt_solve_name(ratio > KKT_RATIO),
+        kkt_ratio_max=float(np.nanmax(ratio)) if ratio.size else 1.0,
     )
+
+
+def _w_conditions(model, Y):
+    """(K, 2): cond(W) (as ``model.cond_W``) and max W_AA / min W_AA at the states Y (K, 2n),
+    from one evaluation of W."""
+    W = model.geometry(Y)[0]
+    return np.column_stack([np.linalg.cond(W), diagonal_ratio(W)])
+
+
+def _scaled_conditions(model, Y):
+    """(K, 2): cond(D W D) and cond(E C E) at the states Y, with D, E the inverse square
+    roots of the diagonals of W and of C = mu W^-1 mu^T (inf where singular)."""
+    W, mu, _, _ = model.geometry(Y)
+    dW = np.abs(np.diagonal(W, axis1=1, axis2=2))
+    d = 1.0 / np.sqrt(np.where(dW > 0, dW, 1.0))
+    Ws = W * d[:, :, None] * d[:, None, :]
+    out = np.ones((len(Y), 2))
+    out[:, 0] = np.linalg.cond(Ws)
+    if model.m:
+        mus = mu * d[:, None, :]
+        try:
+            C = mus @ np.linalg.solve(Ws, np.swapaxes(mus, 1, 2))
+        except np.linalg.LinAlgError:  # a singular W: C is not what to look at there
+            C = np.stack([mus[i] @ np.linalg.pinv(Ws[i]) @ mus[i].T for i in range(len(Y))])
+        dC = np.abs(np.diagonal(C, axis1=1, axis2=2))
+        e = 1.0 / np.sqrt(np.where(dC > 0, dC, 1.0))
+        out[:, 1] = np.linalg.cond(C * e[:, :, None] * e[:, None, :])
+    return np.where(np.isfinite(out), out, np.inf)
 
 
 def _cond_indices(K):

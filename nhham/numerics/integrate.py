@@ -50,6 +50,7 @@ from nhham.numerics.compiled_loop import COMPILED_METHODS, run_compiled
 from nhham.numerics.diagnostics import (Diagnostics, Singularity, singularity_at,
                                         trajectory_diagnostics)
 from nhham.numerics.integrators import FIXED_STEP_METHODS, run_fixed_step
+from nhham.numerics.nullspace import describe_kkt_solve
 from nhham.numerics.model import (LibraryReady, NumericModel, NumericsWarning,
                                   ProjectionOutcome)
 from nhham.numerics.run import Deadline, Run
@@ -95,7 +96,8 @@ class SimulationResult:
     diagnostics : Diagnostics
         See :class:`nhham.numerics.diagnostics.Diagnostics`; its main fields are also
         attributes here (``constraint_residual_max``, ``energy_drift``,
-        ``energy_balance_residual``, ``cond_C_max``, ``cond_W_max``).
+        ``energy_balance_residual``, ``cond_C_max``, ``cond_W_max``, ``kkt_solve``: which
+        solve gave the constrained accelerations, "saddle", "null-space" or "mixed").
     warnings : tuple of str
         Also issued as :class:`~nhham.numerics.model.NumericsWarning` unless
         ``warn=False`` was passed.
@@ -177,6 +179,7 @@ class SimulationResult:
     energy_balance_residual = property(lambda self: self.diagnostics.energy_balance_residual)
     cond_C_max = property(lambda self: self.diagnostics.cond_C_max)
     cond_W_max = property(lambda self: self.diagnostics.cond_W_max)
+    kkt_solve = property(lambda self: self.diagnostics.kkt_solve)
     energy = property(lambda self: self.diagnostics.energy)
     work = property(lambda self: self.diagnostics.work)
 
@@ -218,6 +221,7 @@ class SimulationResult:
             f"  energy drift {d.energy_drift:.2e} (relative {d.energy_drift_rel:.2e}), "
             f"energy balance residual {d.energy_balance_residual:.2e}",
             f"  max cond(C) {d.cond_C_max:.3g}, max cond(W) {d.cond_W_max:.3g}",
+            f"  {describe_kkt_solve(d.kkt_solve, d.kkt_ratio_max)}",
         ]
         if self.storage is not None:
             lines.append(f"  {self.storage.describe(self.nsteps)}")
@@ -258,6 +262,7 @@ class SimulationResult:
             "energy_drift": d.energy_drift, "energy_drift_rel": d.energy_drift_rel,
             "energy_balance_residual": d.energy_balance_residual,
             "cond_C_max": d.cond_C_max, "cond_W_max": d.cond_W_max,
+            "kkt_solve": d.kkt_solve, "kkt_ratio_max": d.kkt_ratio_max,
             "warnings": list(self.warnings), "final_state": self.final_state,
             "settings": dict(self.settings),
             "storage": None if self.storage is None else self.storage.to_dict(),

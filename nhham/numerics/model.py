@@ -29,7 +29,8 @@ symbolically. The numpy path solves the saddle matrix by LU after a symmetric
 scaling (unit diagonal of W, unit rows of mu); the compiled path by Cholesky
 of W and of the Schur complement mu W^-1 mu^T, falling back to that scaled LU
 when W is indefinite or nearly singular (see ``ksolve`` in
-``nhham/numerics/c/linalg.c`` and :mod:`nhham.numerics.saddle`).
+``nhham/numerics/c/linalg.c`` and :mod:`nhham.numerics.saddle`); both by the null-space
+method where W's diagonal spans more than ``KKT_RATIO`` (:mod:`nhham.numerics.nullspace`).
 
 Failures are statuses of :class:`~nhham.numerics.status.Status` (``evaluate``) or a
 :class:`~nhham.numerics.status.NumericalFailure` carrying one (``rhs``, ``project``).

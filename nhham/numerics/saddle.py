@@ -3,8 +3,10 @@
 ``[[W, mu^T], [mu, 0]] [x; y] = [top; bottom]`` after a symmetric scaling (unit diagonal
 of W, unit rows of mu): :func:`solve_saddle` for any batch shape,
 :class:`SingleStateSolver` for one state with as few numpy calls as possible. The compiled
-path solves the same system in C (``ksolve`` in ``nhham/numerics/c/linalg.c``). No sympy
-here.
+path solves the same system in C (``ksolve`` in ``nhham/numerics/c/linalg.c``). Where W's
+diagonal spans more than :data:`~nhham.numerics.nullspace.KKT_RATIO` (extreme mass
+ratios) every one of them solves by the null-space method instead
+(:mod:`nhham.numerics.nullspace`: one decision, :func:`needs_null_space`). No sympy here.
 """
 
 from __future__ import annotations
@@ -14,12 +16,13 @@ import math
 import numpy as np
 from scipy.linalg.lapack import dgesv
 
+from nhham.numerics.nullspace import KKT_RATIO, needs_null_space, solve_null_space
 from nhham.numerics.status import Status
 
 __all__ = ["solve_saddle", "SingleStateSolver", "gauss", "cond_each"]
 
 
-def solve_saddle(W, mu, top, bottom):
+def solve_saddle(W, mu, top, bottom, *, null_space: bool | None = None):
     """Solve [[W, mu^T], [mu, 0]] [x; y] = [top; bottom] after symmetric scaling.
 
     Parameters
@@ -28,6 +31,10 @@ def solve_saddle(W, mu, top, bottom):
     mu : ndarray, shape (..., m, n)
     top : ndarray, shape (..., n)
     bottom : ndarray, shape (..., m)
+    null_space : bool, optional
+        None (default): the null-space solve where
+        :func:`~nhham.numerics.nullspace.needs_null_space` says so; False: the saddle
+        solve everywhere (the velocity-level solve of RATTLE).
 
     Returns
     -------
@@ -44,8 +51,26 @@ def solve_saddle(W, mu, top, bottom):
     backward, not relative per component: at mass ratios of 1e16 an
     acceleration that is the difference of nearly equal terms
     (x'' = (1 - lambda)/a with lambda = 1 - 1e-16) keeps only its absolute
-    accuracy. Raises numpy.linalg.LinAlgError if exactly singular.
+    accuracy. Such states (:func:`~nhham.numerics.nullspace.needs_null_space`) are
+    solved by :func:`~nhham.numerics.nullspace.solve_null_space` instead. Raises
+    numpy.linalg.LinAlgError if exactly singular.
     """
+    ill = needs_null_space(W) if null_space is None else False
+    if np.any(ill):
+        if np.ndim(ill) == 0:
+            return solve_null_space(W, mu, top, bottom)
+        top = np.broadcast_to(top, W.shape[:-1])
+        bottom = np.broadcast_to(bottom, mu.shape[:-1])
+        x, y = np.empty(top.shape), np.empty(bottom.shape)
+        x[ill], y[ill] = solve_null_space(W[ill], mu[ill], top[ill], bottom[ill])
+        if np.any(~ill):
+            x[~ill], y[~ill] = _solve_scaled(W[~ill], mu[~ill], top[~ill], bottom[~ill])
+        return x, y
+    return _solve_scaled(W, mu, top, bottom)
+
+
+def _solve_scaled(W, mu, top, bottom):
+    """:func:`solve_saddle` by scaled LU (with one refinement step where needed)."""
     n, m = W.shape[-1], mu.shape[-2]
     diag = np.abs(np.diagonal(W, axis1=-2, axis2=-1))
     d = np.where(diag > 0, 1.0 / np.sqrt(np.where(diag > 0, diag, 1.0)), 1.0)
@@ -108,6 +133,7 @@ class SingleStateSolver:
                 dst += [(n + c) * N + j, j * N + n + c]
         self.src, self.dst = np.array(src, dtype=np.intp), np.array(dst, dtype=np.intp)
         self.diag = np.arange(n) * (n + 1)
+        self.diag_list = self.diag.tolist()
         self.F = slice(n * n, n * n + n)
         self.mu = slice(base, base + m * n)
         self.drift = slice(base + m * n, base + m * n + m)
@@ -117,9 +143,40 @@ class SingleStateSolver:
         self.forced = bool(layout.get("forced", False))
 
     def __call__(self, flat, y, a2, b2):
+        w = [abs(flat[i]) for i in self.diag_list]
+        if w and max(w) > KKT_RATIO * min(w):  # needs_null_space, without numpy
+            return self._null_space(flat, y, a2, b2)
         if self.N <= 10:
             return self._python(flat, y, a2, b2)
         return self._numpy(flat, y, a2, b2)
+
+    def _bottom(self, out, v, a2, b2):
+        """(mu, mu v, the constraint rows' right-hand side) from the kernel's output."""
+        mu = out[self.mu].reshape(self.m, self.n)
+        muv = mu @ v
+        bottom = -out[self.drift]
+        if a2:
+            bottom -= a2 * (muv + out[self.h])
+        if b2 and self.k:
+            bottom[:self.k] -= b2 * out[self.g]
+        return mu, muv, bottom
+
+    def _null_space(self, flat, y, a2, b2):
+        """The solve of :func:`~nhham.numerics.nullspace.solve_null_space` (W's diagonal
+        spans more than KKT_RATIO)."""
+        n, m = self.n, self.m
+        out = np.array(flat, dtype=float)
+        v = y[n:]
+        mu, muv, bottom = self._bottom(out, v, a2, b2)
+        try:
+            with np.errstate(all="ignore"):
+                a, lam = solve_null_space(out[:n * n].reshape(n, n), mu, out[self.F], bottom)
+        except np.linalg.LinAlgError:
+            return np.full(2 * n, np.nan), np.full(m, np.nan), math.nan, Status.SINGULAR
+        power = -float(lam @ muv) + (float(out[-1]) if self.forced else 0.0)
+        dy = np.concatenate((v, a))
+        ok = math.isfinite(power) and bool(np.isfinite(dy).all())
+        return dy, lam, power, (Status.SUCCESS if ok else Status.NONFINITE)
 
     def _python(self, out, y, a2, b2):
         """Pure-Python scaled elimination: for small systems each numpy call on a
@@ -175,15 +232,9 @@ class SingleStateSolver:
         d = np.ones(N)
         d[:n] = 1.0 / np.sqrt(w)
         v = y[n:]
-        mu = out[self.mu].reshape(m, n)
-        muv = mu @ v
+        mu, muv, bottom = self._bottom(out, v, a2, b2)
         rhs = np.empty(N)
         rhs[:n] = out[self.F]
-        bottom = -out[self.drift]
-        if a2:
-            bottom -= a2 * (muv + out[self.h])
-        if b2 and self.k:
-            bottom[:self.k] -= b2 * out[self.g]
         rhs[n:] = bottom
         if m:
             norms = np.sqrt(((mu * d[:n]) ** 2).sum(axis=1))

@@ -31,6 +31,8 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 from nhham.numerics.diagnostics import singularity_at
+from nhham.numerics.nullspace import (KKT_RATIO, describe_kkt_solve, diagonal_ratio,
+                                      kkt_solve_name)
 from nhham.numerics.integrate import SCIPY_METHODS, simulate
 from nhham.numerics.model import NumericModel, NumericsWarning
 from nhham.numerics.status import NumericalFailure, Status
@@ -112,6 +114,11 @@ class WorkPrecisionResult:
         The system has forces: energy is not conserved, and the table shows the energy
         balance residual max |E(t) - E(0) - ∫ P dt| (P the power of the applied, dissipative
         and constraint forces) instead of the energy drift.
+    kkt_solve : {"saddle", "null-space", "mixed"}
+        Which solve gave the constrained accelerations at the initial state and the
+        reference's end (:func:`nhham.numerics.nullspace.needs_null_space`).
+    kkt_ratio_max : float
+        The larger max W_AA / min W_AA of the two.
     """
 
     rows: tuple
@@ -124,6 +131,8 @@ class WorkPrecisionResult:
     reference: str = ""
     skipped: tuple = ()
     forced: bool = False
+    kkt_solve: str = "saddle"
+    kkt_ratio_max: float = 1.0
 
     def methods(self) -> tuple:
         seen = []
@@ -152,6 +161,7 @@ class WorkPrecisionResult:
             "reference_error_estimate": self.reference_error_estimate,
             "reference_wall_time_s": self.reference_wall_time_s,
             "rows": self.as_dicts(),
+            "kkt_solve": self.kkt_solve, "kkt_ratio_max": self.kkt_ratio_max,
             "skipped": [list(s) for s in self.skipped],
             "time_to_solution": {"1e-06": self.time_to_solution(1e-6),
                                  "1e-10": self.time_to_solution(1e-10)},
@@ -161,7 +171,8 @@ class WorkPrecisionResult:
         """The table and the time to solution at relative errors 1e-6 and 1e-10."""
         lines = [f"work-precision: {self.name or 'system'}, t in {list(self.t_span)}, backend "
                  f"{self.backend}; reference: {self.reference} (estimated error "
-                 f"{self.reference_error_estimate:.1e}, {self.reference_wall_time_s:.3g} s)",
+                 f"{self.reference_error_estimate:.1e}, {self.reference_wall_time_s:.3g} s); "
+                 f"{describe_kkt_solve(self.kkt_solve, self.kkt_ratio_max)}",
                  "", self.table(), ""]
         if self.skipped:
             lines.append("skipped: " + "; ".join(f"{m} {s} ({why})"
@@ -286,8 +297,11 @@ def work_precision(system_or_model, y0, t_span, *, methods=None, tolerances=DEFA
         warnings.warn(f"the reference error estimate {ref_error:.1e} is not 100 times "
                       f"below the smallest error {min(finite):.1e}; {advice}", NumericsWarning,
                       stacklevel=2)
+    ratio = diagonal_ratio(model.geometry(np.array([y_init, y_ref], dtype=float))[0])
     return WorkPrecisionResult(tuple(rows), model.name, (t0, t1), digits, ref_error, ref_time,
-                               model.backend, ref_text, tuple(skipped), forced=model.forced)
+                               model.backend, ref_text, tuple(skipped), forced=model.forced,
+                               kkt_solve=kkt_solve_name(ratio > KKT_RATIO),
+                               kkt_ratio_max=float(np.nanmax(ratio)))
 
 
 def _fixed_step_methods(model) -> list:

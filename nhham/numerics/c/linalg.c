@@ -54,6 +54,144 @@ static int lu_solve(int mm, const double *W, const double *mu, const double *d,
     return 0;
 }
 
+/* The null-space solve of [[W, mu^T], [mu, 0]] [x; y] = [top; bottom] (the steps of
+   nhham.numerics.nullspace.solve_null_space): D = diag(W)^-1/2, Householder QR with row
+   pivoting (mu D)^T = [Q1 Q2] [R; 0], s = Q1 R^-T bottom, (Q2^T D W D Q2) z = Q2^T (D top -
+   D W D s) by LU, x = D (s + Q2 z), R y = Q1^T (D top - D W D D^-1 x). Where W's
+   diagonal spans orders of magnitude (a light coordinate tied to a heavy one) it keeps
+   the small accelerations that the saddle solve obtains as a difference of nearly equal
+   terms. Returns 0, or 1 when mu is rank deficient or the reduced matrix singular. */
+#if defined(__GNUC__)
+#define COLD static __attribute__((noinline, cold))
+#else
+#define COLD static
+#endif
+/* Kept out of line (COLD): the saddle path that ksolve inlines into every field
+   evaluation stays as small as before. */
+COLD int nullspace_solve(int mm, const double *W, const double *mu, const double *top,
+                         const double *bottom, double *x, double *y) {
+    enum { MX = NCX };
+    double d[NQ], Ws[NQ * NQ], A[NQ * MX], V[MX * NQ], beta[MX], Q[NQ * NQ];
+    double s[NQ], t[NQ], WQ[NQ * NQ], H[NQ * NQ], z[NQ], w[MX];
+    int piv[MX];
+    const int r = NQ - mm;
+    for (int i = 0; i < NQ; ++i) {
+        double a = fabs(W[i * NQ + i]);
+        d[i] = a > 0.0 ? 1.0 / sqrt(a) : 1.0;
+    }
+    for (int i = 0; i < NQ; ++i)
+        for (int j = 0; j < NQ; ++j) Ws[i * NQ + j] = W[i * NQ + j] * d[i] * d[j];
+    for (int c = 0; c < mm; ++c)
+        for (int i = 0; i < NQ; ++i) A[i * MX + c] = mu[c * NQ + i] * d[i];
+    /* Householder reflections H_c = I - beta_c v_c v_c^T with row pivoting (the swap P_c
+       of rows c and piv_c first: the largest remaining entry of column c, so that a
+       kernel direction near a coordinate axis keeps its small components to relative
+       accuracy, see nhham.numerics.nullspace.householder_rows):
+       A = P_0 H_0 .. P_{mm-1} H_{mm-1} [R; 0]. */
+    for (int c = 0; c < mm; ++c) {
+        double norm = 0.0, vv = 0.0, *v = V + c * NQ, big = -1.0;
+        for (int i = c; i < NQ; ++i)
+            if (fabs(A[i * MX + c]) > big) { big = fabs(A[i * MX + c]); piv[c] = i; }
+        if (piv[c] != c)
+            for (int k = 0; k < mm; ++k) {
+                const double t = A[c * MX + k];
+                A[c * MX + k] = A[piv[c] * MX + k];
+                A[piv[c] * MX + k] = t;
+            }
+        for (int i = c; i < NQ; ++i) norm += A[i * MX + c] * A[i * MX + c];
+        norm = sqrt(norm);
+        if (!(norm > 0.0)) return 1;
+        const double alpha = A[c * MX + c] >= 0.0 ? -norm : norm;
+        for (int i = 0; i < NQ; ++i) v[i] = i < c ? 0.0 : A[i * MX + c];
+        v[c] -= alpha;                 /* no cancellation: alpha has the other sign */
+        for (int i = c; i < NQ; ++i) vv += v[i] * v[i];
+        beta[c] = 2.0 / vv;
+        for (int k = c + 1; k < mm; ++k) {
+            double sd = 0.0;
+            for (int i = c; i < NQ; ++i) sd += v[i] * A[i * MX + k];
+            sd *= beta[c];
+            for (int i = c; i < NQ; ++i) A[i * MX + k] -= sd * v[i];
+        }
+        A[c * MX + c] = alpha;
+    }
+    /* Q = P_0 H_0 .. P_{mm-1} H_{mm-1} explicitly (row-major): its first mm columns Q1,
+       the rest Q2. */
+    for (int i = 0; i < NQ; ++i)
+        for (int j = 0; j < NQ; ++j) Q[i * NQ + j] = i == j ? 1.0 : 0.0;
+    for (int c = mm - 1; c >= 0; --c) {
+        const double *v = V + c * NQ;
+        for (int j = 0; j < NQ; ++j) {
+            double sd = 0.0;
+            for (int i = c; i < NQ; ++i) sd += v[i] * Q[i * NQ + j];
+            sd *= beta[c];
+            for (int i = c; i < NQ; ++i) Q[i * NQ + j] -= sd * v[i];
+        }
+        if (piv[c] != c)
+            for (int j = 0; j < NQ; ++j) {
+                const double t = Q[c * NQ + j];
+                Q[c * NQ + j] = Q[piv[c] * NQ + j];
+                Q[piv[c] * NQ + j] = t;
+            }
+    }
+    /* R^T w = bottom (R = the upper triangle of A), s = Q1 w. */
+    for (int c = 0; c < mm; ++c) {
+        double a = bottom[c];
+        for (int k = 0; k < c; ++k) a -= A[k * MX + c] * w[k];
+        w[c] = a / A[c * MX + c];
+    }
+    for (int i = 0; i < NQ; ++i) {
+        double a = 0.0;
+        for (int c = 0; c < mm; ++c) a += Q[i * NQ + c] * w[c];
+        s[i] = a;
+    }
+    for (int i = 0; i < NQ; ++i) {
+        double a = top[i] * d[i];
+        for (int j = 0; j < NQ; ++j) a -= Ws[i * NQ + j] * s[j];
+        t[i] = a;
+    }
+    /* (Q2^T Ws Q2) z = Q2^T t. */
+    for (int i = 0; i < NQ; ++i)
+        for (int b = 0; b < r; ++b) {
+            double a = 0.0;
+            for (int j = 0; j < NQ; ++j) a += Ws[i * NQ + j] * Q[j * NQ + mm + b];
+            WQ[i * NQ + b] = a;
+        }
+    for (int a = 0; a < r; ++a) {
+        double ra = 0.0;
+        for (int i = 0; i < NQ; ++i) ra += Q[i * NQ + mm + a] * t[i];
+        z[a] = ra;
+        for (int b = 0; b < r; ++b) {
+            double h = 0.0;
+            for (int i = 0; i < NQ; ++i) h += Q[i * NQ + mm + a] * WQ[i * NQ + b];
+            H[a * r + b] = h;
+        }
+    }
+    if (r > 0 && gsolve(r, H, z)) return 1;
+    for (int i = 0; i < NQ; ++i) {
+        double a = s[i];
+        for (int b = 0; b < r; ++b) a += Q[i * NQ + mm + b] * z[b];
+        s[i] = a;                      /* D^-1 x */
+        x[i] = a * d[i];
+    }
+    /* R y = Q1^T (D top - Ws D^-1 x). */
+    for (int i = 0; i < NQ; ++i) {
+        double a = top[i] * d[i];
+        for (int j = 0; j < NQ; ++j) a -= Ws[i * NQ + j] * s[j];
+        t[i] = a;
+    }
+    for (int c = 0; c < mm; ++c) {
+        double a = 0.0;
+        for (int i = 0; i < NQ; ++i) a += Q[i * NQ + c] * t[i];
+        w[c] = a;
+    }
+    for (int c = mm - 1; c >= 0; --c) {
+        double a = w[c];
+        for (int k = c + 1; k < mm; ++k) a -= A[c * MX + k] * y[k];
+        y[c] = a / A[c * MX + c];
+    }
+    return 0;
+}
+
 /* Smallest accepted Cholesky pivot of W relative to its diagonal entry (a
    pivot of the unit-diagonal scaled W; the smallest pivot bounds the
    smallest eigenvalue from above, a cheap condition estimate): below it W
@@ -90,8 +228,8 @@ HOT int cholesky(int n, const double *A, int lda, double *L, int ldl, double rat
     return 0;
 }
 
-/* [[W, mu^T], [mu, 0]] [x; y] = [top; bottom] with the first mm rows of mu
-   (row stride NQ); W symmetric.
+/* The saddle-point solve of ksolve (below): [[W, mu^T], [mu, 0]] [x; y] = [top; bottom]
+   with the first mm rows of mu (row stride NQ); W symmetric.
 
    When W = L L^T (Cholesky, every pivot above CHOL_MIN times its diagonal
    entry) the range-space method: [Z | u] = L^-1 [mu^T | top], the Schur
@@ -108,8 +246,8 @@ HOT int cholesky(int n, const double *A, int lda, double *L, int ldl, double rat
    Returns 0, or 1 when the matrix is singular.
    Forced inline (with the Cholesky it calls) on purpose: it is the innermost call of every
    field evaluation, and the Cholesky factors live on its stack for the LU fallback's decision. */
-HOT int ksolve(int mm, const double *W, const double *mu, const double *top,
-               const double *bottom, double *x, double *y) {
+HOT int ksolve_saddle(int mm, const double *W, const double *mu, const double *top,
+                      const double *bottom, double *x, double *y) {
     enum { M1 = NCX + 1 };
     double L[NQ * NQ], Z[M1 * NQ], G[M1 * M1], r[NCX];
     /* Cholesky W = L L^T. */
@@ -171,4 +309,22 @@ lu:
         }
         return lu_solve(mm, W, mu, d, e, top, bottom, x, y);
     }
+}
+
+/* [[W, mu^T], [mu, 0]] [x; y] = [top; bottom] with the first mm rows of mu (row stride
+   NQ), W symmetric: the one decision of nhham.numerics.nullspace.needs_null_space. Where
+   W's diagonal spans more than NHHAM_KKT_RATIO (max W_AA > ratio * min W_AA) the saddle
+   solve's relative error in an acceleration, up to eps * max W_AA / min W_AA, is above
+   ~1e-12 and the null-space solve takes over; otherwise ksolve_saddle. Returns 0, or 1
+   when the matrix is singular. */
+HOT int ksolve(int mm, const double *W, const double *mu, const double *top,
+               const double *bottom, double *x, double *y) {
+    double hi = 0.0, lo = INFINITY;
+    for (int i = 0; i < NQ; ++i) {
+        const double a = fabs(W[i * NQ + i]);
+        if (a > hi) hi = a;
+        if (a < lo) lo = a;
+    }
+    if (hi > NHHAM_KKT_RATIO * lo) return nullspace_solve(mm, W, mu, top, bottom, x, y);
+    return ksolve_saddle(mm, W, mu, top, bottom, x, y);
 }

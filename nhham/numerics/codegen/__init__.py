@@ -11,7 +11,8 @@ are compiled with lives in ``nhham/numerics/c/`` (package data):
 
 - the saddle solve ``ksolve``: Cholesky of W and of the Schur complement mu W^-1 mu^T
   (W is positive definite for mechanical Lagrangians), LU with partial pivoting of the
-  scaled saddle matrix when W is indefinite or nearly singular (``linalg.c``);
+  scaled saddle matrix when W is indefinite or nearly singular, the null-space solve when
+  W's diagonal spans more than ``NHHAM_KKT_RATIO`` (``linalg.c``);
 - the right-hand side for one state and for a batch (``rhs.c``), the nonholonomic RATTLE
   loop for constant W (``rattle.c``), and scipy's explicit Runge-Kutta methods (RK23,
   RK45, DOP853) as one loop with projection onto M_1 (``erk.c``, used by

@@ -54,6 +54,7 @@ from sympy.printing.numpy import NumPyPrinter
 from sympy.printing.pycode import MpmathPrinter, PythonCodePrinter
 
 from nhham.lagrangian.geometry import lagrangian_geometry
+from nhham.numerics.nullspace import KKT_RATIO
 from nhham.numerics.status import c_defines
 from nhham.system.expressions import derivative
 
@@ -551,6 +552,7 @@ def _c_module(printed, n, m, k, npar, path, forced=False, time_slot=None) -> str
         f"#define NN {n + m}",
         f"#define NOUT {n * n + n + m * n + 3 * m + k + int(forced)}",
         f"#define NPAR {npar}",
+        f"#define NHHAM_KKT_RATIO {KKT_RATIO!r}  /* nhham.numerics.nullspace.KKT_RATIO */",
     ]
     if forced:  # the index of the applied power Q . v in the saddle kernel's outputs
         head.append(f"#define NHHAM_FORCED {n * n + n + m * n + 2 * m + k}")
