@@ -40,7 +40,7 @@ from nhham.cli.envelope import (
 from nhham.cli.linearize_command import cmd_linearize
 from nhham.cli.sweep_command import cmd_sweep
 from nhham.cli.options import check_options
-from nhham.cli.report import Steps, expr_text, table
+from nhham.cli.report import Steps, expr_text
 from nhham.errors import InputError, NhhamError, UsageError
 from nhham.lagrangian.engine import Policy
 from nhham.cli.parser import FIXED_STEP, METHODS, build_parser, unknown_options
@@ -159,7 +159,9 @@ def cmd_classify(args, steps) -> CommandOutput:
 
     scene = _load(args, steps, drop_redundant=True)
     if getattr(args, "parametric", False):
-        return _classify_parametric(args, steps, scene)
+        from nhham.cli.parametric_command import classify_parametric
+
+        return classify_parametric(args, steps, scene)
     # The verdict layer calls the Hamiltonian classification directly (no callback
     # into this module): the walk goes down the layers.
     at = _at_values(args, steps, scene,
@@ -176,79 +178,6 @@ def cmd_classify(args, steps) -> CommandOutput:
                         lambda: classify_text(title, data) + note)
     return CommandOutput(result=data, text=text, scene=scene_info(scene),
                          warnings=classify_warnings(analysis, classes) + list(at.warnings))
-
-
-def _classify_parametric(args, steps, scene) -> CommandOutput:
-    """classify --parametric: the generic verdict and every exceptional case."""
-    from nhham.cli.results import classify_data
-    from nhham.hamiltonian.classification import classify_constraints
-    from nhham.verdict.parametric import parametric_classification
-
-    if args.latex:
-        raise InputError("classify --parametric: --latex is not available (use --json or text)")
-    positive = [p.strip() for p in (args.positive or "").split(",") if p.strip()]
-    with steps.step("verdicts for every parameter value (generic run, exceptional sets, "
-                    "one run per case)"):
-        pv = parametric_classification(
-            scene.system, positive=positive, max_depth=3 if args.depth is None else args.depth,
-            policy=args.policy,
-            classes=functools.partial(classify_constraints, policy=args.policy))
-
-    def verdict_data(v):
-        if v.status == "invalid":
-            return {"status": "invalid", "note": v.note}
-        out = classify_data(v.analysis, v.classes)
-        out["note"] = None
-        return out
-
-    data = {
-        "parameters": [p.name for p in pv.parameters],
-        "positive": [p.name for p in pv.positive],
-        "values": {p.name: float(v) for p, v in pv.values.items()},
-        "generic": verdict_data(pv.generic),
-        "cases": [{"conditions": [expr_text(c) for c in case.conditions],
-                   "excluding": [expr_text(c) for c in case.excluding],
-                   "reasons": list(case.reasons),
-                   "verdict": verdict_data(case.verdict)} for case in pv.cases],
-        "scene_case": pv.scene_case,
-        "dropped": [{"conditions": [expr_text(c) for c in eqs], "reason": why}
-                    for eqs, why in pv.dropped],
-        "notes": list(pv.notes),
-    }
-
-    def text():
-        names = ", ".join(data["parameters"]) or "(none)"
-        pos = ", ".join(data["positive"])
-        lines = [f"{_title(scene, args)}: verdicts for every value of the parameters {names}"
-                 + (f" (declared positive: {pos})" if pos else "")]
-        lines.append("generic (where no case below holds):")
-        lines.append(table([("verdict", pv.generic.describe())]))
-        for i, case in enumerate(pv.cases):
-            lines.append(f"case {i}: " + " and ".join(
-                f"{c} = 0" for c in data["cases"][i]["conditions"]))
-            rows = []
-            if case.excluding:
-                rows.append(("excluding", ", ".join(
-                    f"{c} = 0" for c in data["cases"][i]["excluding"])))
-            rows.append(("verdict", case.verdict.describe()))
-            diff = case.verdict.differences(pv.generic)
-            if diff and case.verdict.status != "invalid":
-                rows.append(("differs in", ", ".join(diff)))
-            rows.append(("why", "; ".join(case.reasons)))
-            lines.append(table(rows))
-        if pv.dropped:
-            lines.append("dropped (no real solution with the declared signs):")
-            lines.append(table([(", ".join(f"{c} = 0" for c in d["conditions"]), d["reason"])
-                                for d in data["dropped"]]))
-        if data["values"]:
-            where = "generic" if pv.scene_case is None else f"case {pv.scene_case}"
-            lines.append("scene values " + ", ".join(
-                f"{k} = {v}" for k, v in data["values"].items()) + f": {where}")
-        lines += [f"note: {n}" for n in data["notes"]]
-        return "\n".join(lines)
-
-    return CommandOutput(result=data, text=text, scene=scene_info(scene),
-                         warnings=list(pv.warnings))
 
 
 # ------------------------------------------------------------------ derive
@@ -458,6 +387,8 @@ def cmd_compare(args, steps) -> CommandOutput:
             from nhham.hamiltonian.dirac import dirac_vs_projected
 
             dirac = dirac_vs_projected(system, side=side, policy=args.policy)
+        except BudgetExceeded:  # the budget ran out: exit 3, not a warning
+            raise
         except NhhamError as exc:
             warnings.append(f"Dirac comparison not available: {one_line(exc)}")
     data = compare_data(report, dirac)
@@ -608,6 +539,8 @@ def _free_multipliers(system) -> tuple:
         from nhham.lagrangian.analysis import analyze_constraints
 
         return tuple(s.name for s in analyze_constraints(system).free_multiplier_symbols)
+    except BudgetExceeded:
+        raise
     except Exception:  # the message is a hint; never fail while writing it
         return ()
 
@@ -690,7 +623,11 @@ def main(argv=None) -> int:
             if not isinstance(out, CommandOutput):  # a plain dict (JSON) or text
                 out = CommandOutput(result=out if isinstance(out, dict) else {},
                                     text=out if isinstance(out, str) else "")
-            text = None if run.json else out.render_text()
+            if not run.json:
+                with steps.step("write the text report"):
+                    text = out.render_text()
+            else:
+                text = None
     except BudgetExceeded as exc:
         return run.fail("budget", f"{exc}; finished before it: {steps.decided()}; allow more "
                                   f"with a larger --budget (or --budget none)", prefix="nhham: ",

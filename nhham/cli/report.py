@@ -129,6 +129,14 @@ class Steps:
         # Only finished steps are recorded (a budget that runs out interrupts one).
         self.records.append((what, time.perf_counter() - start))
 
+    def where(self) -> str:
+        """The step running now, for a budget's message: the innermost open step, else
+        (between steps) the last one finished, else start-up."""
+        if self.current:
+            return self.current
+        done = [what for what, t in self.records if t is not None]
+        return f"after '{done[-1]}', between steps" if done else "start-up"
+
     def decided(self) -> str:
         """The steps finished and the notes recorded so far, on one line."""
         done = [what for what, t in self.records]

@@ -19,7 +19,7 @@ from typing import Callable, Sequence
 
 import sympy as sp
 
-from nhham.errors import InputError
+from nhham.errors import BudgetExceeded, InputError
 from nhham.lagrangian.exceptional import POINTS
 from nhham.lagrangian.engine import Policy, policy_of
 from nhham.settings import SEED, check_options
@@ -195,6 +195,8 @@ def _no_real_solution(eqs, signs) -> str | None:
         d = sp.sympify(e).xreplace(signs)
         try:
             definite = bool(d.is_positive) or bool(d.is_negative)
+        except BudgetExceeded:  # an expiry is not an undecided sign
+            raise
         except Exception:  # pragma: no cover
             definite = False
         if definite:
