@@ -139,7 +139,7 @@ def _check_combinations(args, problems) -> None:
     if getattr(args, "json", False) and getattr(args, "latex", False):
         problems.append("--latex: not with --json (the envelope has the expressions as text)")
     if not getattr(args, "parametric", True):
-        for key in ("positive", "depth"):
+        for key in ("positive", "depth", "symbolic"):
             if getattr(args, key, None) is not None:
                 problems.append(f"{_option(key)}: only with --parametric")
     if getattr(args, "sweep", "") is None and getattr(args, "plot", None) is not None:

@@ -9,7 +9,7 @@ import functools
 
 from nhham.cli.envelope import CommandOutput, scene_info
 from nhham.cli.report import expr_text, table
-from nhham.errors import InputError
+from nhham.errors import InputError, UsageError
 
 __all__ = ["classify_parametric"]
 
@@ -22,11 +22,12 @@ def classify_parametric(args, steps, scene) -> CommandOutput:
     if args.latex:
         raise InputError("classify --parametric: --latex is not available (use --json or text)")
     positive = [p.strip() for p in (args.positive or "").split(",") if p.strip()]
+    symbolic = symbolic_names(scene.system, getattr(args, "symbolic", None))
     with steps.step("verdicts for every parameter value (generic run, exceptional sets, "
                     "one run per case)"):
         pv = parametric_classification(
             scene.system, positive=positive, max_depth=3 if args.depth is None else args.depth,
-            policy=args.policy,
+            policy=args.policy, symbolic=symbolic, progress=steps.part,
             classes=functools.partial(classify_constraints, policy=args.policy))
     # The report forms what the runs left lazy (integrability, classes): a step of its own,
     # so that a budget running out there is named.
@@ -35,6 +36,39 @@ def classify_parametric(args, steps, scene) -> CommandOutput:
     title = scene.name or str(args.scene)
     return CommandOutput(result=data, text=functools.partial(parametric_text, title, pv, data),
                          scene=scene_info(scene), warnings=list(pv.warnings))
+
+
+def symbolic_names(system, text: str | None) -> list:
+    """The parameters ``--symbolic`` keeps symbolic (names).
+
+    None (not given): :func:`~nhham.verdict.parametric.classifying_parameters`, and every
+    parameter without a value (it cannot be held); ``all``: every parameter.
+
+    Raises
+    ------
+    UsageError
+        A name that is not a parameter (key ``--symbolic``), with the closest one.
+    """
+    import difflib
+
+    from nhham.verdict.parametric import classifying_parameters
+
+    params = [p.name for p in system.declared_parameters]
+    if text is None:
+        keep = set(classifying_parameters(system))
+        return [p.name for p in system.declared_parameters
+                if p in keep or p not in system.parameter_values]
+    names = [n.strip() for n in text.split(",") if n.strip()]
+    if names == ["all"]:
+        return params
+    for n in names:
+        if n not in params:
+            close = difflib.get_close_matches(n, params, n=1)
+            raise UsageError(f"--symbolic: {n!r} is not a parameter of the scene"
+                             + (f"; did you mean {close[0]!r}?" if close else
+                                f" (parameters: {', '.join(params) or 'none'})"),
+                             key="--symbolic")
+    return names
 
 
 def _verdict_data(v) -> dict:
@@ -53,6 +87,7 @@ def parametric_data(pv) -> dict:
         "parameters": [p.name for p in pv.parameters],
         "positive": [p.name for p in pv.positive],
         "values": {p.name: float(v) for p, v in pv.values.items()},
+        "held": {p.name: float(v) for p, v in pv.held.items()},
         "generic": _verdict_data(pv.generic),
         "cases": [{"conditions": [expr_text(c) for c in case.conditions],
                    "excluding": [expr_text(c) for c in case.excluding],
@@ -71,6 +106,10 @@ def parametric_text(title: str, pv, data: dict) -> str:
     pos = ", ".join(data["positive"])
     lines = [f"{title}: verdicts for every value of the parameters {names}"
              + (f" (declared positive: {pos})" if pos else "")]
+    if data["held"]:
+        lines.append("held at their values: " + ", ".join(
+            f"{k} = {v:g}" for k, v in data["held"].items())
+            + " (--symbolic NAMES keeps others symbolic; --symbolic all every one)")
     lines.append("generic (where no case below holds):")
     lines.append(table([("verdict", pv.generic.describe())]))
     for i, case in enumerate(pv.cases):

@@ -131,6 +131,12 @@ def _add_classify_options(p) -> None:
                         "positive; conditions without a real solution are dropped")
     p.add_argument("--depth", type=int, default=None, metavar="N",
                    help="with --parametric: bound on the nesting of cases (default: 3)")
+    p.add_argument("--symbolic", default=None, metavar="NAMES",
+                   help="with --parametric: comma-separated parameters kept symbolic, the "
+                        "others held at the scene's values ('all': every one); default: "
+                        "those in L and the constraints, the ones that can change the "
+                        "verdict where C is regular (not those only in forces, dissipation "
+                        "or control laws)")
 
 
 def _add_derive_options(p) -> None:
