@@ -272,7 +272,7 @@ def cmd_linearize(args, steps):
     from nhham.system.scene import load_scene
 
     with steps.step(f"load scene {args.scene}"):
-        scene = load_scene(args.scene)
+        scene = load_scene(args.scene, check_initial=False)  # [steady], not [initial]
     sweep = parse_sweep(args.sweep) if args.sweep else None
     if args.plot and sweep is None:
         raise InputError("--plot draws the root locus of a sweep: give --sweep too")

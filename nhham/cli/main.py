@@ -52,11 +52,10 @@ def _load(args, steps, drop_redundant=False):
     from nhham.errors import RedundantConstraintError
     from nhham.system.scene import load_scene
 
-    # With --project-initial the initial data are projected later, not refused here.
-    check = not getattr(args, "project_initial", False)
+    # [initial] is checked by the commands that use it (_initial), not here.
     with steps.step(f"load scene {args.scene}"):
         try:
-            scene = load_scene(args.scene, check_initial=check, drop_redundant=drop_redundant
+            scene = load_scene(args.scene, check_initial=False, drop_redundant=drop_redundant
                                or getattr(args, "drop_redundant", False))
         except RedundantConstraintError as exc:  # the command's way to drop it
             raise RedundantConstraintError(
@@ -64,6 +63,20 @@ def _load(args, steps, drop_redundant=False):
                  for p in exc.problems]) from None
     args.loaded_scene = scene  # the envelope of a later failure names the scene
     return scene
+
+
+def _initial(args, steps, scene) -> tuple:
+    """(initial state, warnings) of a command that integrates: ``[initial]`` completed
+    (the values left out solved, named in a warning) and checked against the constraints,
+    unless ``--project-initial`` projects it."""
+    with steps.step("initial state: [initial] completed and checked"):
+        y0 = scene.checked_initial(project=getattr(args, "project_initial", False))
+    if not scene.initial_solved:
+        return dict(y0), []
+    from nhham.system.initial_solve import solved_text
+
+    return dict(y0), [f"initial: solved from the constraints: "
+                      f"{solved_text(y0, scene.initial_solved)}"]
 
 
 def _title(scene, args) -> str:
@@ -457,9 +470,7 @@ def cmd_simulate(args, steps) -> CommandOutput:
     from nhham.numerics.integrate import simulate, storage_plan
 
     scene = _load(args, steps)
-    if scene.initial is None:
-        raise InputError(f"{args.scene}: simulate needs an [initial] table with a value for "
-                         f"every coordinate and velocity")
+    y0, solved = _initial(args, steps, scene)
     t_end, opts = _simulate_options(args, scene)
     system = _closed_loop(scene, args)
     t_span = (0.0, float(t_end))
@@ -467,7 +478,7 @@ def cmd_simulate(args, steps) -> CommandOutput:
         plan = storage_plan(scene.system.n, opts.get("method", "DOP853"),
                             opts.get("save_every", 1), opts.get("max_points"))
         with steps.step(f"simulate with {opts.get('method', 'DOP853')} ({plan})"):
-            result = simulate(system, t_span=t_span, y0=dict(scene.initial),
+            result = simulate(system, t_span=t_span, y0=y0,
                               project_initial=args.project_initial, progress=steps.progress,
                               contacts=scene.contacts, **opts)
     data = simulation_data(result, t_span)
@@ -483,7 +494,8 @@ def cmd_simulate(args, steps) -> CommandOutput:
         with steps.step(f"plot {args.plot}"):
             fig = plot_trajectory(result, title=f"{_title(scene, args)}: {result.method}")
             data["plot"] = save_figure(fig, args.plot)
-    warnings = [w for w in list(result.warnings) + caught if not w.startswith("run stopped")]
+    warnings = solved + [w for w in list(result.warnings) + caught
+                         if not w.startswith("run stopped")]
     failure = None
     if not result.success:
         free = ()
@@ -552,14 +564,13 @@ def cmd_bench(args, steps) -> CommandOutput:
     from nhham.numerics.workprecision import work_precision
 
     scene = _load(args, steps)
-    if scene.initial is None:
-        raise InputError(f"{args.scene}: bench needs an [initial] table")
+    y0, solved = _initial(args, steps, scene)
     t_end = args.t_end if args.t_end is not None else (scene.simulate.t_end or 10.0)
     study = "work-precision study" + (" (--quick)" if args.quick else "")
     try:
         with capture_warnings() as caught:
             with steps.step(study):
-                result = work_precision(_closed_loop(scene, args), dict(scene.initial),
+                result = work_precision(_closed_loop(scene, args), y0,
                                         (0.0, t_end),
                                         quick=args.quick, progress=steps.progress,
                                         reference_digits=args.reference_digits)
@@ -577,7 +588,7 @@ def cmd_bench(args, steps) -> CommandOutput:
         with steps.step(f"plot {args.plot}"):
             data["plot"] = save_figure(plot_work_precision(result), args.plot)
     return CommandOutput(result=data, text=result.describe, scene=scene_info(scene),
-                         warnings=caught)
+                         warnings=solved + list(caught))
 
 
 # -------------------------------------------------------------------- main

@@ -45,6 +45,7 @@ from nhham.errors import InputError, ParseError, SceneError, key_of
 from nhham.system.contacts import contacts_structure, parse_contacts
 from nhham.system.expressions import RESERVED_NAMES, parse_expression
 from nhham.system.initial import initial_residuals
+from nhham.system.initial_solve import complete_initial, initial_entry, parse_initial
 from nhham.system.naming import TIME, acceleration_symbol, momentum_symbol, velocity_symbol
 from nhham.system.steady import parse_steady, state_table, steady_structure
 
@@ -148,7 +149,9 @@ class Scene:
     system : nhham.system.System
         The validated system.
     initial : mapping of str to float, or None
-        Initial value of every coordinate and velocity, or None.
+        Initial value of every coordinate and velocity (those left out of ``[initial]``
+        solved from the constraints), or None: no ``[initial]``, or one that could not be
+        completed (:meth:`checked_initial` raises why).
     simulate : SimulateOptions
         Simulation defaults (all None if the scene has no ``[simulate]``).
     source : str
@@ -161,6 +164,12 @@ class Scene:
         The ``[control]`` laws: each input as an expression in ``t``, the coordinates,
         velocities and parameters (empty when the scene gives none). ``simulate`` closes
         the loop with them (:meth:`System.closed_loop`).
+    initial_given : nhham.system.initial_solve.InitialData or None
+        ``[initial]`` as written (values by name, Newton's starting points).
+    initial_solved : tuple of str
+        The names left out of ``[initial]`` and solved from the constraints.
+    initial_problem : InputError or None
+        Why ``[initial]`` could not be completed (raised by :meth:`checked_initial`).
     """
 
     name: str
@@ -172,6 +181,37 @@ class Scene:
     steady: object = None
     contacts: tuple = ()
     control: Mapping = field(default_factory=lambda: MappingProxyType({}))
+    initial_given: object = None
+    initial_solved: tuple = ()
+    initial_problem: Exception | None = None
+
+    def checked_initial(self, project: bool = False) -> Mapping:
+        """The initial state, completed and checked against the constraints.
+
+        Parameters
+        ----------
+        project : bool, optional
+            The state will be projected onto M_1 (``--project-initial``): given values
+            off the constraints are not refused here.
+
+        Raises
+        ------
+        SceneError
+            The scene has no ``[initial]`` table.
+        InputError
+            A value left out could not be solved (see :mod:`nhham.system.initial_solve`),
+            or the state violates the constraints (``InconsistentInitialDataError``,
+            naming each and its residual).
+        """
+        if self.initial_given is None:
+            raise SceneError(f"{self.source}: needs an [initial] table (the independent "
+                             f"coordinates and velocities; the others are solved)")
+        if self.initial_problem is not None:
+            raise self.initial_problem
+        if not project:
+            initial_residuals(self)
+        assert self.initial is not None
+        return self.initial
 
     def steady_system(self) -> "System":
         """The system whose ``[steady]`` motion is linearised: the loop closed by the
@@ -210,12 +250,10 @@ class Scene:
         SceneError
             If the scene has no ``[initial]`` table.
         """
-        if self.initial is None:
-            raise SceneError(f"{self.source}: simulating needs an [initial] table with a value "
-                             f"for every coordinate and velocity")
+        y0 = self.checked_initial(project=bool(overrides.get("project_initial")))
         opts = self.simulate.given() | overrides
         t_end = float(opts.pop("t_end", 10.0))
-        return {"t_span": (0.0, t_end), "y0": dict(self.initial), **opts}
+        return {"t_span": (0.0, t_end), "y0": dict(y0), **opts}
 
 
 # -------------------------------------------------------------------- load
@@ -298,19 +336,30 @@ def loads_scene(text: str, source: str = "<string>", *, check_initial: bool = Tr
     spec = _validate_structure(data, source)
     expressions = _parse_expressions(spec)
     system = _build_system(spec, expressions, drop_redundant)
+    data = expressions.get("[initial]")
+    initial, solved, problem = None, (), None
+    if data is not None:
+        try:
+            values, solved = complete_initial(system, data)
+            initial = MappingProxyType(values)
+        except InputError as exc:  # raised where the initial data are used
+            problem = exc
     scene = Scene(
         name=spec.name,
         description=spec.description,
         system=system,
-        initial=spec.initial,
+        initial=initial,
         simulate=spec.simulate,
         source=source,
         steady=expressions.get("[steady]"),
         contacts=expressions.get("[contacts]", ()),
         control=MappingProxyType(expressions.get("[control]", {})),
+        initial_given=data,
+        initial_solved=solved,
+        initial_problem=problem,
     )
-    if check_initial and scene.initial is not None:
-        initial_residuals(scene)
+    if check_initial and data is not None:
+        scene.checked_initial()
     return scene
 
 
@@ -351,7 +400,7 @@ class _Spec:
     lagrangian: str
     constraints: tuple
     holonomic: tuple
-    initial: Mapping[str, float] | None
+    initial: Mapping | None
     simulate: SimulateOptions
     steady: Mapping | None = None
     contacts: Mapping | None = None
@@ -540,13 +589,13 @@ def _parameter_table(value, problems) -> dict:
         path = _key_path("parameters", key)
         if not _check_name(key, path, problems):
             continue
-        number = _finite_number(item, path, problems)
+        number = finite_number(item, path, problems)
         if number is not None:
             result[key] = number
     return result
 
 
-def _finite_number(value, path, problems) -> float | None:
+def finite_number(value, path, problems) -> float | None:
     """A finite real number (TOML integer or float, not boolean) as float."""
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         hint = (" (for a parameter without a value use symbolic_parameters)"
@@ -585,14 +634,16 @@ def _check_name_clashes(coordinates, values, symbolic, problems) -> None:
 
 
 def _initial_table(value, coordinates, problems):
-    """``[initial]``: a finite value for exactly every coordinate and velocity."""
+    """``[initial]``: a finite number, an expression in the parameters or a coordinate's
+    ``{ guess = number }`` for some coordinates and velocities (the others are solved:
+    :mod:`nhham.system.initial_solve`)."""
     if value is None:
         return None
     if not isinstance(value, dict):
         problems.append(f"initial: expected a table, got {_type_name(value)}")
         return None
-    return state_table(value, coordinates, _finite_number, problems,
-                       section="initial", path=partial(_key_path, "initial"))
+    return state_table(value, coordinates, initial_entry(coordinates), problems,
+                       section="initial", path=partial(_key_path, "initial"), required=False)
 
 
 def _simulate_table(value, problems) -> SimulateOptions:
@@ -614,7 +665,7 @@ def _simulate_table(value, problems) -> SimulateOptions:
                 problems.append(f"{path}: expected a method name, got {_type_name(value[key])}"
                                 if not isinstance(value[key], str) else f"{path}: empty method name")
             continue
-        number = _finite_number(value[key], path, problems)
+        number = finite_number(value[key], path, problems)
         if number is None:
             continue
         problem = simulate_option_problem(key, number, options.get("t_end"))
@@ -720,6 +771,7 @@ def _parse_expressions(spec: _Spec) -> dict:
                                                      where="dissipation")
         except ParseError as exc:
             problems.append(str(exc))
+    parsed["[initial]"] = parse_initial(spec.initial, spec.parameters, problems)
     steady, steady_problems = parse_steady(spec.steady, spec.parameters)
     problems.extend(steady_problems)
     if steady is not None:
