@@ -49,14 +49,14 @@ __all__ = ["main", "build_parser", "COMMANDS", "METHODS"]
 
 
 def _load(args, steps, drop_redundant=False):
+    from nhham.cli.loading import load_for
     from nhham.errors import RedundantConstraintError
-    from nhham.system.scene import load_scene
 
     # [initial] is checked by the commands that use it (_initial), not here.
     with steps.step(f"load scene {args.scene}"):
         try:
-            scene = load_scene(args.scene, check_initial=False, drop_redundant=drop_redundant
-                               or getattr(args, "drop_redundant", False))
+            scene = load_for(args, check_initial=False, drop_redundant=drop_redundant
+                             or getattr(args, "drop_redundant", False))
         except RedundantConstraintError as exc:  # the command's way to drop it
             raise RedundantConstraintError(
                 [p.replace(exc.ADVICE, "run with --drop-redundant to drop it")
@@ -656,6 +656,10 @@ def main(argv=None) -> int:
                         + ("" if args.debug else " (run with --debug for a traceback)"),
                         prefix=f"nhham: {kind}: ", warnings=caught)
     warnings = list(out.warnings) + [w for w in caught if w not in out.warnings]
+    if getattr(args, "parameter_values", None):  # the values this run used, said once
+        warnings.insert(0, "--set: " + ", ".join(f"{k} = {v:g}" for k, v in
+                                                 args.parameter_values.items())
+                        + " for this run (instead of the scene's values)")
     try:
         return _print_output(args, out, text, warnings, steps)
     except BrokenPipeError:  # the reader stopped early (| head): not an error of ours

@@ -32,6 +32,7 @@ from nhham.errors import (
     ParseError,
 )
 from nhham.system.expressions import parse_expression
+from nhham.system.scene_numbers import finite_number
 
 if TYPE_CHECKING:
     from nhham.system.description import System
@@ -64,8 +65,6 @@ def initial_entry(coordinates):
     """The entry check of ``[initial]`` for :func:`nhham.system.steady.state_table`: a
     finite number, an expression (a string, parsed later) or ``{ guess = number }`` for a
     coordinate."""
-    from nhham.system.scene import finite_number
-
     def entry(item, where, problems):
         if isinstance(item, str):
             return item

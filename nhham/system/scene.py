@@ -46,6 +46,13 @@ from nhham.system.contacts import contacts_structure, parse_contacts
 from nhham.system.expressions import RESERVED_NAMES, parse_expression
 from nhham.system.initial import initial_residuals
 from nhham.system.initial_solve import complete_initial, initial_entry, parse_initial
+from nhham.system.scene_numbers import (
+    finite_number,
+    scene_number,
+    toml_float,
+    type_name,
+    with_values,
+)
 from nhham.system.naming import TIME, acceleration_symbol, momentum_symbol, velocity_symbol
 from nhham.system.steady import parse_steady, state_table, steady_structure
 
@@ -61,6 +68,7 @@ __all__ = [
     "MIN_RTOL",
     "MAX_FIXED_STEPS",
     "simulate_option_problem",
+    "scene_number",
 ]
 
 #: Largest scene file accepted, checked before parsing.
@@ -170,6 +178,9 @@ class Scene:
         The names left out of ``[initial]`` and solved from the constraints.
     initial_problem : InputError or None
         Why ``[initial]`` could not be completed (raised by :meth:`checked_initial`).
+    values_set : mapping of str to float
+        The parameter values given when loading (``values=``, ``--set``), replacing the
+        scene's.
     """
 
     name: str
@@ -184,6 +195,7 @@ class Scene:
     initial_given: object = None
     initial_solved: tuple = ()
     initial_problem: Exception | None = None
+    values_set: Mapping = field(default_factory=lambda: MappingProxyType({}))
 
     def checked_initial(self, project: bool = False) -> Mapping:
         """The initial state, completed and checked against the constraints.
@@ -257,7 +269,8 @@ class Scene:
 
 
 # -------------------------------------------------------------------- load
-def load_scene(path, *, check_initial: bool = True, drop_redundant: bool = False) -> Scene:
+def load_scene(path, *, check_initial: bool = True, drop_redundant: bool = False,
+               values: Mapping | None = None) -> Scene:
     """Load a scene file.
 
     Parameters
@@ -270,6 +283,9 @@ def load_scene(path, *, check_initial: bool = True, drop_redundant: bool = False
     drop_redundant : bool, optional
         Passed to :class:`~nhham.system.System`: drop affine constraints that
         are combinations of the others instead of raising (default False).
+    values : mapping of str to float, optional
+        Parameter values replacing the scene's (a symbolic parameter gets one); a name
+        that is not a parameter raises InputError (key ``values``).
 
     Returns
     -------
@@ -305,11 +321,11 @@ def load_scene(path, *, check_initial: bool = True, drop_redundant: bool = False
             f"is it a binary file?"
         ) from None
     return loads_scene(text, source=source, check_initial=check_initial,
-                       drop_redundant=drop_redundant)
+                       drop_redundant=drop_redundant, values=values)
 
 
 def loads_scene(text: str, source: str = "<string>", *, check_initial: bool = True,
-                drop_redundant: bool = False) -> Scene:
+                drop_redundant: bool = False, values: Mapping | None = None) -> Scene:
     """Load a scene from TOML text.
 
     Parameters
@@ -322,6 +338,8 @@ def loads_scene(text: str, source: str = "<string>", *, check_initial: bool = Tr
         Check that the initial data satisfy the constraints (default True).
     drop_redundant : bool, optional
         Passed to :class:`~nhham.system.System` (default False).
+    values : mapping of str to float, optional
+        As for :func:`load_scene`.
 
     Returns
     -------
@@ -333,15 +351,15 @@ def loads_scene(text: str, source: str = "<string>", *, check_initial: bool = Tr
         As for :func:`load_scene`.
     """
     data = _parse_toml(text, source)
-    spec = _validate_structure(data, source)
+    spec = with_values(_validate_structure(data, source), values)
     expressions = _parse_expressions(spec)
     system = _build_system(spec, expressions, drop_redundant)
     data = expressions.get("[initial]")
     initial, solved, problem = None, (), None
     if data is not None:
         try:
-            values, solved = complete_initial(system, data)
-            initial = MappingProxyType(values)
+            state, solved = complete_initial(system, data)
+            initial = MappingProxyType(state)
         except InputError as exc:  # raised where the initial data are used
             problem = exc
     scene = Scene(
@@ -357,6 +375,7 @@ def loads_scene(text: str, source: str = "<string>", *, check_initial: bool = Tr
         initial_given=data,
         initial_solved=solved,
         initial_problem=problem,
+        values_set=MappingProxyType(dict(values or {})),
     )
     if check_initial and data is not None:
         scene.checked_initial()
@@ -374,7 +393,7 @@ def _parse_toml(text, source) -> dict:
     if "\x00" in text:
         raise SceneError(f"{source}: contains NUL bytes; is it a binary file?")
     try:
-        data = tomllib.loads(text)
+        data = tomllib.loads(text, parse_float=toml_float)
     except tomllib.TOMLDecodeError as exc:
         # The message carries tomllib's "(at line L, column C)".
         raise SceneError(f"{source}: TOML syntax error: {exc}") from None
@@ -481,19 +500,10 @@ def _check_keys(table: dict, prefix: str, known, aliases, problems) -> None:
 
 
 # How a TOML value's type is called in messages; bool before int, which it subclasses.
-_TYPE_NAMES = ((bool, "a boolean"), (int, "an integer"), (float, "a float"),
-               (str, "a string"), (list, "an array"), (dict, "a table"))
-
-
-def _type_name(value) -> str:
-    """How a TOML value's type is called in messages (the only other TOML type: date/time)."""
-    return next((name for kind, name in _TYPE_NAMES if isinstance(value, kind)), "a date/time")
-
-
 def _optional_string(data, key, problems) -> str:
     value = data.get(key, "")
     if not isinstance(value, str):
-        problems.append(f"{key}: expected a string, got {_type_name(value)}")
+        problems.append(f"{key}: expected a string, got {type_name(value)}")
         return ""
     return value
 
@@ -502,14 +512,14 @@ def _string_list(data, key, problems) -> list[str]:
     """An optional array of strings (empty when absent)."""
     value = data.get(key, [])
     if not isinstance(value, list):
-        problems.append(f"{key}: expected an array of strings, got {_type_name(value)}")
+        problems.append(f"{key}: expected an array of strings, got {type_name(value)}")
         return []
     good = []
     for i, item in enumerate(value):
         if isinstance(item, str):
             good.append(item)
         else:
-            problems.append(f"{key}[{i}]: expected a string, got {_type_name(item)}")
+            problems.append(f"{key}[{i}]: expected a string, got {type_name(item)}")
     return good
 
 
@@ -520,7 +530,7 @@ def _string_table(data, key, problems) -> dict | None:
         return None
     if not isinstance(value, dict):
         problems.append(f"{key}: expected a table of name = \"expression\", got "
-                        f"{_type_name(value)}")
+                        f"{type_name(value)}")
         return None
     good = {}
     for name, item in value.items():
@@ -530,7 +540,7 @@ def _string_table(data, key, problems) -> dict | None:
             good[name] = repr(item)
         else:
             problems.append(f"{key}.{name}: expected an expression string or a number, got "
-                            f"{_type_name(item)}")
+                            f"{type_name(item)}")
     return good
 
 
@@ -582,7 +592,7 @@ def _parameter_table(value, problems) -> dict:
         hint = (" (for parameters without a value use symbolic_parameters = [...])"
                 if isinstance(value, list) else "")
         problems.append(f"parameters: expected a table of name = number, got "
-                        f"{_type_name(value)}{hint}")
+                        f"{type_name(value)}{hint}")
         return {}
     result = {}
     for key, item in value.items():
@@ -593,23 +603,6 @@ def _parameter_table(value, problems) -> dict:
         if number is not None:
             result[key] = number
     return result
-
-
-def finite_number(value, path, problems) -> float | None:
-    """A finite real number (TOML integer or float, not boolean) as float."""
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        hint = (" (for a parameter without a value use symbolic_parameters)"
-                if path.startswith("parameters.") and isinstance(value, str) else "")
-        problems.append(f"{path}: expected a number, got {_type_name(value)}{hint}")
-        return None
-    try:
-        number = float(value)
-    except OverflowError:
-        number = math.inf
-    if not math.isfinite(number):
-        problems.append(f"{path}: expected a finite number, got {value!r}")
-        return None
-    return number
 
 
 def _check_name_clashes(coordinates, values, symbolic, problems) -> None:
@@ -640,7 +633,7 @@ def _initial_table(value, coordinates, problems):
     if value is None:
         return None
     if not isinstance(value, dict):
-        problems.append(f"initial: expected a table, got {_type_name(value)}")
+        problems.append(f"initial: expected a table, got {type_name(value)}")
         return None
     return state_table(value, coordinates, initial_entry(coordinates), problems,
                        section="initial", path=partial(_key_path, "initial"), required=False)
@@ -650,7 +643,7 @@ def _simulate_table(value, problems) -> SimulateOptions:
     if value is None:
         return SimulateOptions()
     if not isinstance(value, dict):
-        problems.append(f"simulate: expected a table, got {_type_name(value)}")
+        problems.append(f"simulate: expected a table, got {type_name(value)}")
         return SimulateOptions()
     _check_keys(value, "simulate", _SIMULATE_KEYS, _SIMULATE_ALIASES, problems)
     options = {}
@@ -662,7 +655,7 @@ def _simulate_table(value, problems) -> SimulateOptions:
             if isinstance(value[key], str) and value[key].strip():
                 options[key] = value[key]
             else:
-                problems.append(f"{path}: expected a method name, got {_type_name(value[key])}"
+                problems.append(f"{path}: expected a method name, got {type_name(value[key])}"
                                 if not isinstance(value[key], str) else f"{path}: empty method name")
             continue
         number = finite_number(value[key], path, problems)
