@@ -79,8 +79,9 @@ def time_budget(seconds: float | None, what: Callable[[], str] | None = None) ->
         late = [b for b in _DEADLINES if b[0] <= time.monotonic() + 1e-3] or _DEADLINES
         _, total, name = late[0]
         step = name()
-        raise BudgetExceeded(f"the budget of {total:g} s ran out"
-                             + (f" during '{step}'" if step else ""))
+        where = "" if not step else f" {step}" if step.startswith("after ") else \
+            f" during '{step}'"
+        raise BudgetExceeded(f"the budget of {total:g} s ran out{where}")
 
     previous = signal.signal(signal.SIGALRM, expire)
     signal.setitimer(signal.ITIMER_REAL, max(deadline - now, 1e-6), REPEAT_S)

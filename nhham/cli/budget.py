@@ -24,5 +24,5 @@ def time_budget(seconds: float | None, steps):
         None: no bound.
     steps : nhham.cli.report.Steps
     """
-    with _library_budget(seconds, lambda: steps.current or "start-up"):
+    with _library_budget(seconds, steps.where):
         yield

@@ -191,9 +191,11 @@ def scene_info(scene) -> dict:
     multipliers = [multiplier_symbol(i + 1).name for i in range(max(system.m, len(
         getattr(system, "constraints", ()))))]
     names = coords + vels + momenta + [p["name"] for p in params] + multipliers
+    given = getattr(scene, "values_set", {}) or {}
     return {"path": str(scene.source), "name": scene.name, "coordinates": coords,
             "velocities": vels, "momenta": momenta, "parameters": params,
-            "names": list(dict.fromkeys(names))}
+            "names": list(dict.fromkeys(names)),
+            "set": {k: json_number(v) for k, v in given.items()}}
 
 
 def print_json(data) -> None:

@@ -269,11 +269,11 @@ def _exact(scene, system, model, lin):
 def cmd_linearize(args, steps):
     """The command: load, linearise, sweep; a :class:`~nhham.cli.envelope.CommandOutput`."""
     from nhham.cli.envelope import CommandOutput, capture_warnings, scene_info
+    from nhham.cli.loading import load_for
     from nhham.numerics.codegen import numeric_model
-    from nhham.system.scene import load_scene
 
     with steps.step(f"load scene {args.scene}"):
-        scene = load_scene(args.scene)
+        scene = load_for(args, check_initial=False)  # [steady], not [initial]
     sweep = parse_sweep(args.sweep) if args.sweep else None
     if args.plot and sweep is None:
         raise InputError("--plot draws the root locus of a sweep: give --sweep too")

@@ -40,7 +40,7 @@ from nhham.cli.envelope import (
 from nhham.cli.linearize_command import cmd_linearize
 from nhham.cli.sweep_command import cmd_sweep
 from nhham.cli.options import check_options
-from nhham.cli.report import Steps, expr_text, table
+from nhham.cli.report import Steps, expr_text
 from nhham.errors import InputError, NhhamError, UsageError
 from nhham.lagrangian.engine import Policy
 from nhham.cli.parser import FIXED_STEP, METHODS, build_parser, unknown_options
@@ -49,21 +49,34 @@ __all__ = ["main", "build_parser", "COMMANDS", "METHODS"]
 
 
 def _load(args, steps, drop_redundant=False):
+    from nhham.cli.loading import load_for
     from nhham.errors import RedundantConstraintError
-    from nhham.system.scene import load_scene
 
-    # With --project-initial the initial data are projected later, not refused here.
-    check = not getattr(args, "project_initial", False)
+    # [initial] is checked by the commands that use it (_initial), not here.
     with steps.step(f"load scene {args.scene}"):
         try:
-            scene = load_scene(args.scene, check_initial=check, drop_redundant=drop_redundant
-                               or getattr(args, "drop_redundant", False))
+            scene = load_for(args, check_initial=False, drop_redundant=drop_redundant
+                             or getattr(args, "drop_redundant", False))
         except RedundantConstraintError as exc:  # the command's way to drop it
             raise RedundantConstraintError(
                 [p.replace(exc.ADVICE, "run with --drop-redundant to drop it")
                  for p in exc.problems]) from None
     args.loaded_scene = scene  # the envelope of a later failure names the scene
     return scene
+
+
+def _initial(args, steps, scene) -> tuple:
+    """(initial state, warnings) of a command that integrates: ``[initial]`` completed
+    (the values left out solved, named in a warning) and checked against the constraints,
+    unless ``--project-initial`` projects it."""
+    with steps.step("initial state: [initial] completed and checked"):
+        y0 = scene.checked_initial(project=getattr(args, "project_initial", False))
+    if not scene.initial_solved:
+        return dict(y0), []
+    from nhham.system.initial_solve import solved_text
+
+    return dict(y0), [f"initial: solved from the constraints: "
+                      f"{solved_text(y0, scene.initial_solved)}"]
 
 
 def _title(scene, args) -> str:
@@ -159,7 +172,9 @@ def cmd_classify(args, steps) -> CommandOutput:
 
     scene = _load(args, steps, drop_redundant=True)
     if getattr(args, "parametric", False):
-        return _classify_parametric(args, steps, scene)
+        from nhham.cli.parametric_command import classify_parametric
+
+        return classify_parametric(args, steps, scene)
     # The verdict layer calls the Hamiltonian classification directly (no callback
     # into this module): the walk goes down the layers.
     at = _at_values(args, steps, scene,
@@ -176,79 +191,6 @@ def cmd_classify(args, steps) -> CommandOutput:
                         lambda: classify_text(title, data) + note)
     return CommandOutput(result=data, text=text, scene=scene_info(scene),
                          warnings=classify_warnings(analysis, classes) + list(at.warnings))
-
-
-def _classify_parametric(args, steps, scene) -> CommandOutput:
-    """classify --parametric: the generic verdict and every exceptional case."""
-    from nhham.cli.results import classify_data
-    from nhham.hamiltonian.classification import classify_constraints
-    from nhham.verdict.parametric import parametric_classification
-
-    if args.latex:
-        raise InputError("classify --parametric: --latex is not available (use --json or text)")
-    positive = [p.strip() for p in (args.positive or "").split(",") if p.strip()]
-    with steps.step("verdicts for every parameter value (generic run, exceptional sets, "
-                    "one run per case)"):
-        pv = parametric_classification(
-            scene.system, positive=positive, max_depth=3 if args.depth is None else args.depth,
-            policy=args.policy,
-            classes=functools.partial(classify_constraints, policy=args.policy))
-
-    def verdict_data(v):
-        if v.status == "invalid":
-            return {"status": "invalid", "note": v.note}
-        out = classify_data(v.analysis, v.classes)
-        out["note"] = None
-        return out
-
-    data = {
-        "parameters": [p.name for p in pv.parameters],
-        "positive": [p.name for p in pv.positive],
-        "values": {p.name: float(v) for p, v in pv.values.items()},
-        "generic": verdict_data(pv.generic),
-        "cases": [{"conditions": [expr_text(c) for c in case.conditions],
-                   "excluding": [expr_text(c) for c in case.excluding],
-                   "reasons": list(case.reasons),
-                   "verdict": verdict_data(case.verdict)} for case in pv.cases],
-        "scene_case": pv.scene_case,
-        "dropped": [{"conditions": [expr_text(c) for c in eqs], "reason": why}
-                    for eqs, why in pv.dropped],
-        "notes": list(pv.notes),
-    }
-
-    def text():
-        names = ", ".join(data["parameters"]) or "(none)"
-        pos = ", ".join(data["positive"])
-        lines = [f"{_title(scene, args)}: verdicts for every value of the parameters {names}"
-                 + (f" (declared positive: {pos})" if pos else "")]
-        lines.append("generic (where no case below holds):")
-        lines.append(table([("verdict", pv.generic.describe())]))
-        for i, case in enumerate(pv.cases):
-            lines.append(f"case {i}: " + " and ".join(
-                f"{c} = 0" for c in data["cases"][i]["conditions"]))
-            rows = []
-            if case.excluding:
-                rows.append(("excluding", ", ".join(
-                    f"{c} = 0" for c in data["cases"][i]["excluding"])))
-            rows.append(("verdict", case.verdict.describe()))
-            diff = case.verdict.differences(pv.generic)
-            if diff and case.verdict.status != "invalid":
-                rows.append(("differs in", ", ".join(diff)))
-            rows.append(("why", "; ".join(case.reasons)))
-            lines.append(table(rows))
-        if pv.dropped:
-            lines.append("dropped (no real solution with the declared signs):")
-            lines.append(table([(", ".join(f"{c} = 0" for c in d["conditions"]), d["reason"])
-                                for d in data["dropped"]]))
-        if data["values"]:
-            where = "generic" if pv.scene_case is None else f"case {pv.scene_case}"
-            lines.append("scene values " + ", ".join(
-                f"{k} = {v}" for k, v in data["values"].items()) + f": {where}")
-        lines += [f"note: {n}" for n in data["notes"]]
-        return "\n".join(lines)
-
-    return CommandOutput(result=data, text=text, scene=scene_info(scene),
-                         warnings=list(pv.warnings))
 
 
 # ------------------------------------------------------------------ derive
@@ -458,6 +400,8 @@ def cmd_compare(args, steps) -> CommandOutput:
             from nhham.hamiltonian.dirac import dirac_vs_projected
 
             dirac = dirac_vs_projected(system, side=side, policy=args.policy)
+        except BudgetExceeded:  # the budget ran out: exit 3, not a warning
+            raise
         except NhhamError as exc:
             warnings.append(f"Dirac comparison not available: {one_line(exc)}")
     data = compare_data(report, dirac)
@@ -526,9 +470,7 @@ def cmd_simulate(args, steps) -> CommandOutput:
     from nhham.numerics.integrate import simulate, storage_plan
 
     scene = _load(args, steps)
-    if scene.initial is None:
-        raise InputError(f"{args.scene}: simulate needs an [initial] table with a value for "
-                         f"every coordinate and velocity")
+    y0, solved = _initial(args, steps, scene)
     t_end, opts = _simulate_options(args, scene)
     system = _closed_loop(scene, args)
     t_span = (0.0, float(t_end))
@@ -536,7 +478,7 @@ def cmd_simulate(args, steps) -> CommandOutput:
         plan = storage_plan(scene.system.n, opts.get("method", "DOP853"),
                             opts.get("save_every", 1), opts.get("max_points"))
         with steps.step(f"simulate with {opts.get('method', 'DOP853')} ({plan})"):
-            result = simulate(system, t_span=t_span, y0=dict(scene.initial),
+            result = simulate(system, t_span=t_span, y0=y0,
                               project_initial=args.project_initial, progress=steps.progress,
                               contacts=scene.contacts, **opts)
     data = simulation_data(result, t_span)
@@ -552,7 +494,8 @@ def cmd_simulate(args, steps) -> CommandOutput:
         with steps.step(f"plot {args.plot}"):
             fig = plot_trajectory(result, title=f"{_title(scene, args)}: {result.method}")
             data["plot"] = save_figure(fig, args.plot)
-    warnings = [w for w in list(result.warnings) + caught if not w.startswith("run stopped")]
+    warnings = solved + [w for w in list(result.warnings) + caught
+                         if not w.startswith("run stopped")]
     failure = None
     if not result.success:
         free = ()
@@ -608,6 +551,8 @@ def _free_multipliers(system) -> tuple:
         from nhham.lagrangian.analysis import analyze_constraints
 
         return tuple(s.name for s in analyze_constraints(system).free_multiplier_symbols)
+    except BudgetExceeded:
+        raise
     except Exception:  # the message is a hint; never fail while writing it
         return ()
 
@@ -619,14 +564,13 @@ def cmd_bench(args, steps) -> CommandOutput:
     from nhham.numerics.workprecision import work_precision
 
     scene = _load(args, steps)
-    if scene.initial is None:
-        raise InputError(f"{args.scene}: bench needs an [initial] table")
+    y0, solved = _initial(args, steps, scene)
     t_end = args.t_end if args.t_end is not None else (scene.simulate.t_end or 10.0)
     study = "work-precision study" + (" (--quick)" if args.quick else "")
     try:
         with capture_warnings() as caught:
             with steps.step(study):
-                result = work_precision(_closed_loop(scene, args), dict(scene.initial),
+                result = work_precision(_closed_loop(scene, args), y0,
                                         (0.0, t_end),
                                         quick=args.quick, progress=steps.progress,
                                         reference_digits=args.reference_digits)
@@ -644,7 +588,7 @@ def cmd_bench(args, steps) -> CommandOutput:
         with steps.step(f"plot {args.plot}"):
             data["plot"] = save_figure(plot_work_precision(result), args.plot)
     return CommandOutput(result=data, text=result.describe, scene=scene_info(scene),
-                         warnings=caught)
+                         warnings=solved + list(caught))
 
 
 # -------------------------------------------------------------------- main
@@ -690,7 +634,11 @@ def main(argv=None) -> int:
             if not isinstance(out, CommandOutput):  # a plain dict (JSON) or text
                 out = CommandOutput(result=out if isinstance(out, dict) else {},
                                     text=out if isinstance(out, str) else "")
-            text = None if run.json else out.render_text()
+            if not run.json:
+                with steps.step("write the text report"):
+                    text = out.render_text()
+            else:
+                text = None
     except BudgetExceeded as exc:
         return run.fail("budget", f"{exc}; finished before it: {steps.decided()}; allow more "
                                   f"with a larger --budget (or --budget none)", prefix="nhham: ",
@@ -708,6 +656,10 @@ def main(argv=None) -> int:
                         + ("" if args.debug else " (run with --debug for a traceback)"),
                         prefix=f"nhham: {kind}: ", warnings=caught)
     warnings = list(out.warnings) + [w for w in caught if w not in out.warnings]
+    if getattr(args, "parameter_values", None):  # the values this run used, said once
+        warnings.insert(0, "--set: " + ", ".join(f"{k} = {v:g}" for k, v in
+                                                 args.parameter_values.items())
+                        + " for this run (instead of the scene's values)")
     try:
         return _print_output(args, out, text, warnings, steps)
     except BrokenPipeError:  # the reader stopped early (| head): not an error of ours

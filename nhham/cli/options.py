@@ -23,7 +23,8 @@ from nhham.errors import InputError, UsageError
 from nhham.settings import MAX_DIGITS, MIN_DIGITS, option_problem
 from nhham.system.scene import simulate_option_problem
 
-__all__ = ["DEFAULT_BUDGET", "MAX_BUDGET", "budget_value", "check_options", "argparse_key"]
+__all__ = ["DEFAULT_BUDGET", "MAX_BUDGET", "budget_value", "check_options", "argparse_key",
+           "set_values"]
 
 #: Default ``--budget`` (seconds) of the symbolic commands (classify, derive, compare,
 #: linearize); simulate and bench have none (they report their progress).
@@ -97,6 +98,10 @@ def check_options(args: argparse.Namespace) -> None:
             problem = _output_problem(getattr(args, key), key == "plot")
             if problem:
                 problems.append(f"--{key}: {problem}")
+    try:
+        args.parameter_values = set_values(getattr(args, "set_values", None) or [])
+    except InputError as exc:
+        problems.append(str(exc))
     sweep = getattr(args, "sweep", None)
     if sweep is not None:
         from nhham.cli.linearize_command import parse_sweep
@@ -108,6 +113,34 @@ def check_options(args: argparse.Namespace) -> None:
     if problems:  # each starts with its option
         option = re.match(r"--[a-z-]+", problems[0])
         raise UsageError("; ".join(problems), key=option.group() if option else None)
+
+
+def set_values(items) -> dict:
+    """``--set NAME=VALUE`` (repeatable) as ``{name: value}``, each value checked as a
+    scene's number is (:func:`nhham.system.scene.scene_number`: ``1e-400`` is refused);
+    whether NAME is a parameter is checked when the scene loads.
+
+    Raises
+    ------
+    InputError
+        Naming ``--set`` and the item at fault.
+    """
+    from nhham.system.scene_numbers import scene_number
+
+    out: dict = {}
+    for item in items:
+        name, sep, value = item.partition("=")
+        name = name.strip()
+        if not sep or not name or not value.strip():
+            raise InputError(f"--set: expected NAME=VALUE (e.g. --set m=2.5), got {item!r}",
+                             key="--set")
+        if name in out:
+            raise InputError(f"--set: {name!r} given twice", key="--set")
+        try:
+            out[name] = scene_number(value, f"--set {name}")
+        except InputError as exc:
+            raise InputError(str(exc), key="--set") from None
+    return out
 
 
 def _option(dest: str) -> str:
@@ -139,7 +172,7 @@ def _check_combinations(args, problems) -> None:
     if getattr(args, "json", False) and getattr(args, "latex", False):
         problems.append("--latex: not with --json (the envelope has the expressions as text)")
     if not getattr(args, "parametric", True):
-        for key in ("positive", "depth"):
+        for key in ("positive", "depth", "symbolic"):
             if getattr(args, key, None) is not None:
                 problems.append(f"{_option(key)}: only with --parametric")
     if getattr(args, "sweep", "") is None and getattr(args, "plot", None) is not None:

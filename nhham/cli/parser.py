@@ -91,6 +91,12 @@ def build_parser() -> argparse.ArgumentParser:
         add_common_arguments(p, budget=None if name in ("simulate", "bench", "sweep")
                              else DEFAULT_BUDGET)
         _add_shared_options(p, name)
+        if name != "sweep":  # a study sets its parameters with --over
+            p.add_argument("--set", action="append", default=[], dest="set_values",
+                           metavar="NAME=VALUE",
+                           help="give the parameter NAME the value VALUE for this run (a "
+                                "number as a scene writes one; repeatable); the JSON's "
+                                "scene.parameters has the values used")
         if name in _OPTIONS:
             _OPTIONS[name](p)
     return parser
@@ -131,6 +137,12 @@ def _add_classify_options(p) -> None:
                         "positive; conditions without a real solution are dropped")
     p.add_argument("--depth", type=int, default=None, metavar="N",
                    help="with --parametric: bound on the nesting of cases (default: 3)")
+    p.add_argument("--symbolic", default=None, metavar="NAMES",
+                   help="with --parametric: comma-separated parameters kept symbolic, the "
+                        "others held at the scene's values ('all': every one); default: "
+                        "those in L and the constraints, the ones that can change the "
+                        "verdict where C is regular (not those only in forces, dissipation "
+                        "or control laws)")
 
 
 def _add_derive_options(p) -> None:

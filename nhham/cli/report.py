@@ -115,6 +115,7 @@ class Steps:
     progress: bool = False
     records: list = field(default_factory=list)
     current: str | None = None
+    opened: str | None = None
 
     @contextmanager
     def step(self, what: str):
@@ -122,12 +123,30 @@ class Steps:
             print(f"nhham: {what} ...", file=sys.stderr, flush=True)
         start = time.perf_counter()
         outer, self.current = self.current, what
+        opened, self.opened = self.opened, what
         try:
             yield
         finally:
-            self.current = outer
+            self.current, self.opened = outer, opened
         # Only finished steps are recorded (a budget that runs out interrupts one).
         self.records.append((what, time.perf_counter() - start))
+
+    def part(self, what: str, note: str = "") -> None:
+        """A part of the open step begins (a run of a long step): the step's name in a
+        budget's message gains ``what``; on a terminal ``what`` and ``note`` (progress,
+        an estimate) are shown."""
+        self.current = f"{self.opened}: {what}" if self.opened else what
+        if self.progress:
+            print(f"nhham:   {what}" + (f" ({note})" if note else ""), file=sys.stderr,
+                  flush=True)
+
+    def where(self) -> str:
+        """The step running now, for a budget's message: the innermost open step, else
+        (between steps) the last one finished, else start-up."""
+        if self.current:
+            return self.current
+        done = [what for what, t in self.records if t is not None]
+        return f"after '{done[-1]}', between steps" if done else "start-up"
 
     def decided(self) -> str:
         """The steps finished and the notes recorded so far, on one line."""

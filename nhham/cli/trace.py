@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import sympy as sp
 
+from nhham.errors import BudgetExceeded
 from nhham.lagrangian.engine import Policy
 
 __all__ = ["dot_names", "latex_summary", "report_lines", "run_text", "run_latex",
@@ -132,6 +133,8 @@ def analysis_text(analysis) -> str:
             for b in analysis.blocks))
     try:
         integ = analysis.integrability.describe()
+    except BudgetExceeded:  # an expiry is not an undecided integrability
+        raise
     except Exception as exc:  # pragma: no cover - report must not fail
         integ = f"not decided ({exc})"
     lines.append(f"integrability of the constraint distribution: {integ}")

@@ -15,7 +15,7 @@ from typing import cast
 import numpy as np
 import sympy as sp
 
-from nhham.errors import ComputationError, NhhamError
+from nhham.errors import BudgetExceeded, ComputationError, NhhamError
 from nhham.hamiltonian.brackets import connected_blocks
 from nhham.hamiltonian.classes import ConstraintClasses
 from nhham.hamiltonian.classes_sampled import classes_from_samples
@@ -217,6 +217,8 @@ def _coefficients_at_a_point(side, cons, labels, analysis, policy, R, kk, data) 
     if side.system.n > policy.combination_size or sampler is None:
         try:
             mats, _ = float_brackets(side, cons, analysis, None, 3, seed)
+        except BudgetExceeded:  # an expiry is not a lack of float points
+            raise
         except NhhamError as exc:
             if sampler is None:
                 raise NotExact(f"no points for the coefficients of the combination: "

@@ -39,7 +39,7 @@ import networkx as nx
 import numpy as np
 import sympy as sp
 
-from nhham.errors import ComputationError
+from nhham.errors import BudgetExceeded, ComputationError
 from nhham.lagrangian.adjugate import divide_out, scale_factors
 from nhham.lagrangian.algebra import cancel
 from nhham.lagrangian.submanifold import Submanifold
@@ -529,6 +529,8 @@ def _sign_definite(expr) -> bool:
     e = expr.xreplace(real)
     try:
         return bool(e.is_positive) or bool(e.is_negative)
+    except BudgetExceeded:  # an expiry is not an undecided sign
+        raise
     except Exception:  # pragma: no cover - assumption system failure
         return False
 

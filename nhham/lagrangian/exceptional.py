@@ -52,6 +52,7 @@ from sympy.external.gmpy import MPQ
 from sympy.polys.domains import GF, RealField
 from sympy.polys.matrices import DomainMatrix
 
+from nhham.errors import BudgetExceeded
 from nhham.lagrangian.analysis import ConstraintAnalysis
 from nhham.lagrangian.domains import PRIME, Angle, NotExact, evaluate
 from nhham.lagrangian.formulas import bordered_matrix, frobenius_terms, lagrangian_bracket
@@ -623,12 +624,16 @@ def _components(values, params) -> list:
     exprs = list(dict.fromkeys(r.as_expr() for r in rest))
     try:
         basis = sp.groebner(exprs, *params, order="lex")
+    except BudgetExceeded:  # an expiry is not a sympy failure: it must reach the command
+        raise
     except Exception:  # pragma: no cover - sympy failure
         return out
     if list(basis.exprs) == [1]:
         return out
     try:
         sols = sp.solve(list(basis.exprs), list(params), dict=True)
+    except BudgetExceeded:
+        raise
     except Exception:  # pragma: no cover - sympy cannot solve: carry the relations
         sols = None
     if not sols:

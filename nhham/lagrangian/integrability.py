@@ -32,7 +32,7 @@ from functools import cached_property
 import numpy as np
 import sympy as sp
 
-from nhham.errors import ComputationError
+from nhham.errors import BudgetExceeded, ComputationError
 from nhham.lagrangian.algebra import cancel
 from nhham.lagrangian.decision import Decision
 from nhham.lagrangian.domains import Degree, ModP, NotExact, evaluate
@@ -438,6 +438,8 @@ def _potential(row, q):
                 F += sp.integrate(rest, q[A])
         if any(cancel(sp.diff(F, q[A]) - row[A]) != 0 for A in range(n)):
             return None
+    except BudgetExceeded:  # an expiry is not a failed integration
+        raise
     except Exception:  # pragma: no cover - sympy integration failure
         return None
     return sp.simplify(F) if sp.count_ops(F) < 40 else F

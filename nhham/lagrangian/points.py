@@ -34,6 +34,7 @@ import sympy as sp
 from sympy.external.gmpy import MPQ
 from sympy.polys.matrices import DomainMatrix
 
+from nhham.errors import BudgetExceeded
 from nhham.lagrangian.algebra import solve_for_coordinates
 from nhham.lagrangian.curved import curved_chart
 from nhham.lagrangian.domains import (
@@ -491,6 +492,8 @@ class ParameterFieldSampler:
                                (m, 1), K)
             try:
                 sol = block.lu_solve(rhs).to_list()
+            except BudgetExceeded:  # an expiry is not a singular point
+                raise
             except Exception as exc:  # singular at this point: draw again
                 raise ZeroDivisionError(str(exc)) from exc
             for pos, j in enumerate(self.dep):

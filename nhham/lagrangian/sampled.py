@@ -15,6 +15,7 @@ import mpmath
 import numpy as np
 import sympy as sp
 
+from nhham.errors import BudgetExceeded
 from nhham.settings import STATE_BOX
 from nhham.system.expressions import short
 
@@ -200,6 +201,8 @@ def zero_test(expr, residual=(), parameters=(), values=None):
         return (None, None) if expr.has(sp.nan, sp.zoo, sp.oo) else (False, None)
     try:
         num = sp.numer(sp.together(sp.expand_trig(expr)))
+    except BudgetExceeded:  # an expiry is not an undecided vanishing
+        raise
     except Exception:  # pragma: no cover - sympy failure on exotic input
         return None, None
     rep, rel = {}, []
@@ -218,6 +221,8 @@ def zero_test(expr, residual=(), parameters=(), values=None):
     for r in residual:
         try:
             rn = sp.numer(sp.together(sp.expand_trig(r)))
+        except BudgetExceeded:
+            raise
         except Exception:  # pragma: no cover
             return None, None
         for atom in rn.atoms(sp.Function):

@@ -19,7 +19,7 @@ import numpy as np
 from scipy.integrate import BDF, DOP853, LSODA, RK23, RK45, OdeSolution, Radau
 from scipy.optimize import brentq
 
-from nhham.errors import ComputationError, InputError
+from nhham.errors import BudgetExceeded, ComputationError, InputError
 from nhham.numerics.run import Run, report_progress
 from nhham.numerics.status import NumericalFailure, Status
 
@@ -71,6 +71,8 @@ def _control_value(name, f, t, y) -> float:
     """f(t, y) as a float, or an InputError naming the control and what went wrong."""
     try:
         value = float(f(t, y))
+    except BudgetExceeded:  # the budget ran out while the callable ran: not its failure
+        raise
     except Exception as exc:  # a user's callable: any failure is its own
         raise InputError(f"controls.{name}: f(t, y) (t a float, y the state of shape "
                          f"(2n,)) must give a number; at t = {t:.6g} it raised "

@@ -31,6 +31,7 @@ import numpy as np
 import sympy as sp
 
 from nhham.errors import (
+    BudgetExceeded,
     NonAffineConstraintError,
     RedundantConstraintError,
     SingularLagrangianError,
@@ -842,6 +843,8 @@ def _check_regular_lagrangian(system):
         W = sp.hessian(system.lagrangian, system.velocities)  # as the message always showed it
         try:
             null = W.nullspace(simplify=True)
+        except BudgetExceeded:
+            raise
         except Exception:  # pragma: no cover - sympy failure; message still useful
             null = []
         raise SingularLagrangianError([_singular_message(W, max(ranks), null)])

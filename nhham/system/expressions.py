@@ -44,7 +44,7 @@ from typing import Iterable, Mapping
 import sympy as sp
 from sympy.printing.str import StrPrinter
 
-from nhham.errors import ParseError
+from nhham.errors import BudgetExceeded, ParseError
 from nhham.settings import COMPILER_LOCK
 from nhham.system.numbers import complex_string, number_problems
 
@@ -352,6 +352,8 @@ class _Builder:
         """The source text of ``node``, quoted and shortened for messages."""
         try:
             segment = ast.get_source_segment(self.text, node)
+        except BudgetExceeded:
+            raise
         except Exception:  # positions missing or odd: quote nothing rather than fail
             segment = None
         return _quote(segment if segment else type(node).__name__)

@@ -45,6 +45,14 @@ from nhham.errors import InputError, ParseError, SceneError, key_of
 from nhham.system.contacts import contacts_structure, parse_contacts
 from nhham.system.expressions import RESERVED_NAMES, parse_expression
 from nhham.system.initial import initial_residuals
+from nhham.system.initial_solve import complete_initial, initial_entry, parse_initial
+from nhham.system.scene_numbers import (
+    finite_number,
+    scene_number,
+    toml_float,
+    type_name,
+    with_values,
+)
 from nhham.system.naming import TIME, acceleration_symbol, momentum_symbol, velocity_symbol
 from nhham.system.steady import parse_steady, state_table, steady_structure
 
@@ -60,6 +68,7 @@ __all__ = [
     "MIN_RTOL",
     "MAX_FIXED_STEPS",
     "simulate_option_problem",
+    "scene_number",
 ]
 
 #: Largest scene file accepted, checked before parsing.
@@ -148,7 +157,9 @@ class Scene:
     system : nhham.system.System
         The validated system.
     initial : mapping of str to float, or None
-        Initial value of every coordinate and velocity, or None.
+        Initial value of every coordinate and velocity (those left out of ``[initial]``
+        solved from the constraints), or None: no ``[initial]``, or one that could not be
+        completed (:meth:`checked_initial` raises why).
     simulate : SimulateOptions
         Simulation defaults (all None if the scene has no ``[simulate]``).
     source : str
@@ -161,6 +172,15 @@ class Scene:
         The ``[control]`` laws: each input as an expression in ``t``, the coordinates,
         velocities and parameters (empty when the scene gives none). ``simulate`` closes
         the loop with them (:meth:`System.closed_loop`).
+    initial_given : nhham.system.initial_solve.InitialData or None
+        ``[initial]`` as written (values by name, Newton's starting points).
+    initial_solved : tuple of str
+        The names left out of ``[initial]`` and solved from the constraints.
+    initial_problem : InputError or None
+        Why ``[initial]`` could not be completed (raised by :meth:`checked_initial`).
+    values_set : mapping of str to float
+        The parameter values given when loading (``values=``, ``--set``), replacing the
+        scene's.
     """
 
     name: str
@@ -172,6 +192,38 @@ class Scene:
     steady: object = None
     contacts: tuple = ()
     control: Mapping = field(default_factory=lambda: MappingProxyType({}))
+    initial_given: object = None
+    initial_solved: tuple = ()
+    initial_problem: Exception | None = None
+    values_set: Mapping = field(default_factory=lambda: MappingProxyType({}))
+
+    def checked_initial(self, project: bool = False) -> Mapping:
+        """The initial state, completed and checked against the constraints.
+
+        Parameters
+        ----------
+        project : bool, optional
+            The state will be projected onto M_1 (``--project-initial``): given values
+            off the constraints are not refused here.
+
+        Raises
+        ------
+        SceneError
+            The scene has no ``[initial]`` table.
+        InputError
+            A value left out could not be solved (see :mod:`nhham.system.initial_solve`),
+            or the state violates the constraints (``InconsistentInitialDataError``,
+            naming each and its residual).
+        """
+        if self.initial_given is None:
+            raise SceneError(f"{self.source}: needs an [initial] table (the independent "
+                             f"coordinates and velocities; the others are solved)")
+        if self.initial_problem is not None:
+            raise self.initial_problem
+        if not project:
+            initial_residuals(self)
+        assert self.initial is not None
+        return self.initial
 
     def steady_system(self) -> "System":
         """The system whose ``[steady]`` motion is linearised: the loop closed by the
@@ -210,16 +262,15 @@ class Scene:
         SceneError
             If the scene has no ``[initial]`` table.
         """
-        if self.initial is None:
-            raise SceneError(f"{self.source}: simulating needs an [initial] table with a value "
-                             f"for every coordinate and velocity")
+        y0 = self.checked_initial(project=bool(overrides.get("project_initial")))
         opts = self.simulate.given() | overrides
         t_end = float(opts.pop("t_end", 10.0))
-        return {"t_span": (0.0, t_end), "y0": dict(self.initial), **opts}
+        return {"t_span": (0.0, t_end), "y0": dict(y0), **opts}
 
 
 # -------------------------------------------------------------------- load
-def load_scene(path, *, check_initial: bool = True, drop_redundant: bool = False) -> Scene:
+def load_scene(path, *, check_initial: bool = True, drop_redundant: bool = False,
+               values: Mapping | None = None) -> Scene:
     """Load a scene file.
 
     Parameters
@@ -232,6 +283,9 @@ def load_scene(path, *, check_initial: bool = True, drop_redundant: bool = False
     drop_redundant : bool, optional
         Passed to :class:`~nhham.system.System`: drop affine constraints that
         are combinations of the others instead of raising (default False).
+    values : mapping of str to float, optional
+        Parameter values replacing the scene's (a symbolic parameter gets one); a name
+        that is not a parameter raises InputError (key ``values``).
 
     Returns
     -------
@@ -267,11 +321,11 @@ def load_scene(path, *, check_initial: bool = True, drop_redundant: bool = False
             f"is it a binary file?"
         ) from None
     return loads_scene(text, source=source, check_initial=check_initial,
-                       drop_redundant=drop_redundant)
+                       drop_redundant=drop_redundant, values=values)
 
 
 def loads_scene(text: str, source: str = "<string>", *, check_initial: bool = True,
-                drop_redundant: bool = False) -> Scene:
+                drop_redundant: bool = False, values: Mapping | None = None) -> Scene:
     """Load a scene from TOML text.
 
     Parameters
@@ -284,6 +338,8 @@ def loads_scene(text: str, source: str = "<string>", *, check_initial: bool = Tr
         Check that the initial data satisfy the constraints (default True).
     drop_redundant : bool, optional
         Passed to :class:`~nhham.system.System` (default False).
+    values : mapping of str to float, optional
+        As for :func:`load_scene`.
 
     Returns
     -------
@@ -295,22 +351,34 @@ def loads_scene(text: str, source: str = "<string>", *, check_initial: bool = Tr
         As for :func:`load_scene`.
     """
     data = _parse_toml(text, source)
-    spec = _validate_structure(data, source)
+    spec = with_values(_validate_structure(data, source), values)
     expressions = _parse_expressions(spec)
     system = _build_system(spec, expressions, drop_redundant)
+    data = expressions.get("[initial]")
+    initial, solved, problem = None, (), None
+    if data is not None:
+        try:
+            state, solved = complete_initial(system, data)
+            initial = MappingProxyType(state)
+        except InputError as exc:  # raised where the initial data are used
+            problem = exc
     scene = Scene(
         name=spec.name,
         description=spec.description,
         system=system,
-        initial=spec.initial,
+        initial=initial,
         simulate=spec.simulate,
         source=source,
         steady=expressions.get("[steady]"),
         contacts=expressions.get("[contacts]", ()),
         control=MappingProxyType(expressions.get("[control]", {})),
+        initial_given=data,
+        initial_solved=solved,
+        initial_problem=problem,
+        values_set=MappingProxyType(dict(values or {})),
     )
-    if check_initial and scene.initial is not None:
-        initial_residuals(scene)
+    if check_initial and data is not None:
+        scene.checked_initial()
     return scene
 
 
@@ -325,7 +393,7 @@ def _parse_toml(text, source) -> dict:
     if "\x00" in text:
         raise SceneError(f"{source}: contains NUL bytes; is it a binary file?")
     try:
-        data = tomllib.loads(text)
+        data = tomllib.loads(text, parse_float=toml_float)
     except tomllib.TOMLDecodeError as exc:
         # The message carries tomllib's "(at line L, column C)".
         raise SceneError(f"{source}: TOML syntax error: {exc}") from None
@@ -351,7 +419,7 @@ class _Spec:
     lagrangian: str
     constraints: tuple
     holonomic: tuple
-    initial: Mapping[str, float] | None
+    initial: Mapping | None
     simulate: SimulateOptions
     steady: Mapping | None = None
     contacts: Mapping | None = None
@@ -432,19 +500,10 @@ def _check_keys(table: dict, prefix: str, known, aliases, problems) -> None:
 
 
 # How a TOML value's type is called in messages; bool before int, which it subclasses.
-_TYPE_NAMES = ((bool, "a boolean"), (int, "an integer"), (float, "a float"),
-               (str, "a string"), (list, "an array"), (dict, "a table"))
-
-
-def _type_name(value) -> str:
-    """How a TOML value's type is called in messages (the only other TOML type: date/time)."""
-    return next((name for kind, name in _TYPE_NAMES if isinstance(value, kind)), "a date/time")
-
-
 def _optional_string(data, key, problems) -> str:
     value = data.get(key, "")
     if not isinstance(value, str):
-        problems.append(f"{key}: expected a string, got {_type_name(value)}")
+        problems.append(f"{key}: expected a string, got {type_name(value)}")
         return ""
     return value
 
@@ -453,14 +512,14 @@ def _string_list(data, key, problems) -> list[str]:
     """An optional array of strings (empty when absent)."""
     value = data.get(key, [])
     if not isinstance(value, list):
-        problems.append(f"{key}: expected an array of strings, got {_type_name(value)}")
+        problems.append(f"{key}: expected an array of strings, got {type_name(value)}")
         return []
     good = []
     for i, item in enumerate(value):
         if isinstance(item, str):
             good.append(item)
         else:
-            problems.append(f"{key}[{i}]: expected a string, got {_type_name(item)}")
+            problems.append(f"{key}[{i}]: expected a string, got {type_name(item)}")
     return good
 
 
@@ -471,7 +530,7 @@ def _string_table(data, key, problems) -> dict | None:
         return None
     if not isinstance(value, dict):
         problems.append(f"{key}: expected a table of name = \"expression\", got "
-                        f"{_type_name(value)}")
+                        f"{type_name(value)}")
         return None
     good = {}
     for name, item in value.items():
@@ -481,7 +540,7 @@ def _string_table(data, key, problems) -> dict | None:
             good[name] = repr(item)
         else:
             problems.append(f"{key}.{name}: expected an expression string or a number, got "
-                            f"{_type_name(item)}")
+                            f"{type_name(item)}")
     return good
 
 
@@ -533,34 +592,17 @@ def _parameter_table(value, problems) -> dict:
         hint = (" (for parameters without a value use symbolic_parameters = [...])"
                 if isinstance(value, list) else "")
         problems.append(f"parameters: expected a table of name = number, got "
-                        f"{_type_name(value)}{hint}")
+                        f"{type_name(value)}{hint}")
         return {}
     result = {}
     for key, item in value.items():
         path = _key_path("parameters", key)
         if not _check_name(key, path, problems):
             continue
-        number = _finite_number(item, path, problems)
+        number = finite_number(item, path, problems)
         if number is not None:
             result[key] = number
     return result
-
-
-def _finite_number(value, path, problems) -> float | None:
-    """A finite real number (TOML integer or float, not boolean) as float."""
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        hint = (" (for a parameter without a value use symbolic_parameters)"
-                if path.startswith("parameters.") and isinstance(value, str) else "")
-        problems.append(f"{path}: expected a number, got {_type_name(value)}{hint}")
-        return None
-    try:
-        number = float(value)
-    except OverflowError:
-        number = math.inf
-    if not math.isfinite(number):
-        problems.append(f"{path}: expected a finite number, got {value!r}")
-        return None
-    return number
 
 
 def _check_name_clashes(coordinates, values, symbolic, problems) -> None:
@@ -585,21 +627,23 @@ def _check_name_clashes(coordinates, values, symbolic, problems) -> None:
 
 
 def _initial_table(value, coordinates, problems):
-    """``[initial]``: a finite value for exactly every coordinate and velocity."""
+    """``[initial]``: a finite number, an expression in the parameters or a coordinate's
+    ``{ guess = number }`` for some coordinates and velocities (the others are solved:
+    :mod:`nhham.system.initial_solve`)."""
     if value is None:
         return None
     if not isinstance(value, dict):
-        problems.append(f"initial: expected a table, got {_type_name(value)}")
+        problems.append(f"initial: expected a table, got {type_name(value)}")
         return None
-    return state_table(value, coordinates, _finite_number, problems,
-                       section="initial", path=partial(_key_path, "initial"))
+    return state_table(value, coordinates, initial_entry(coordinates), problems,
+                       section="initial", path=partial(_key_path, "initial"), required=False)
 
 
 def _simulate_table(value, problems) -> SimulateOptions:
     if value is None:
         return SimulateOptions()
     if not isinstance(value, dict):
-        problems.append(f"simulate: expected a table, got {_type_name(value)}")
+        problems.append(f"simulate: expected a table, got {type_name(value)}")
         return SimulateOptions()
     _check_keys(value, "simulate", _SIMULATE_KEYS, _SIMULATE_ALIASES, problems)
     options = {}
@@ -611,10 +655,10 @@ def _simulate_table(value, problems) -> SimulateOptions:
             if isinstance(value[key], str) and value[key].strip():
                 options[key] = value[key]
             else:
-                problems.append(f"{path}: expected a method name, got {_type_name(value[key])}"
+                problems.append(f"{path}: expected a method name, got {type_name(value[key])}"
                                 if not isinstance(value[key], str) else f"{path}: empty method name")
             continue
-        number = _finite_number(value[key], path, problems)
+        number = finite_number(value[key], path, problems)
         if number is None:
             continue
         problem = simulate_option_problem(key, number, options.get("t_end"))
@@ -720,6 +764,7 @@ def _parse_expressions(spec: _Spec) -> dict:
                                                      where="dissipation")
         except ParseError as exc:
             problems.append(str(exc))
+    parsed["[initial]"] = parse_initial(spec.initial, spec.parameters, problems)
     steady, steady_problems = parse_steady(spec.steady, spec.parameters)
     problems.extend(steady_problems)
     if steady is not None:

@@ -196,7 +196,8 @@ def state_names(coordinates) -> list:
 
 
 def state_table(table: Mapping, coordinates, entry: Callable, problems: list, *,
-                section: str, path: Callable[[object], str], inputs=()) -> Mapping:
+                section: str, path: Callable[[object], str], inputs=(),
+                required: bool = True) -> Mapping:
     """The entries of a scene table that gives a value for exactly every state name.
 
     The one check behind ``[initial]`` and ``[steady]``: an unknown key (with the
@@ -219,6 +220,8 @@ def state_table(table: Mapping, coordinates, entry: Callable, problems: list, *,
         ``path(key)``: how a problem names an entry.
     inputs : sequence of str, optional
         Input names that need a value too (after the state names).
+    required : bool, optional
+        False: names may be left out (``[initial]``: the dependent ones are solved).
 
     Returns
     -------
@@ -239,7 +242,7 @@ def state_table(table: Mapping, coordinates, entry: Callable, problems: list, *,
         if value is not None:
             kept[key] = value
     missing = [name for name in wanted if name not in table]
-    if missing:
+    if missing and required:
         every = "coordinate, velocity and input" if inputs else "coordinate and velocity"
         problems.append(f"{section}: missing value for {', '.join(map(repr, missing))} "
                         f"(every {every} needs one)")

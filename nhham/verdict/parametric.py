@@ -14,12 +14,13 @@ names, or sympy assumptions on the parameter symbols) are dropped and reported.
 from __future__ import annotations
 
 import math
+import time
 from types import MappingProxyType
 from typing import Callable, Sequence
 
 import sympy as sp
 
-from nhham.errors import InputError
+from nhham.errors import BudgetExceeded, InputError
 from nhham.lagrangian.exceptional import POINTS
 from nhham.lagrangian.engine import Policy, policy_of
 from nhham.settings import SEED, check_options
@@ -35,14 +36,16 @@ from nhham.verdict.results import (
 from nhham.verdict.substitution import branches, canonical, compose, rebuild
 from nhham.verdict.values import examine
 
-__all__ = ["parametric_classification"]
+__all__ = ["parametric_classification", "classifying_parameters"]
 
 
 def parametric_classification(system, *, positive: Sequence = (),
                               classes: Callable | None = None, max_depth: int = MAX_DEPTH,
                               precision: int | None = None, seed: int = SEED,
                               near: float = NEAR, points: int = POINTS,
-                              policy: Policy | None = None) -> ParametricVerdict:
+                              policy: Policy | None = None, symbolic: Sequence | None = None,
+                              progress: Callable[[str, str], None] | None = None
+                              ) -> ParametricVerdict:
     """The verdict for generic parameters and every case where it changes.
 
     Parameters
@@ -69,6 +72,15 @@ def parametric_classification(system, *, positive: Sequence = (),
         Exact points per decision datum.
     policy : Policy, optional
         The settings of the decisions, instead of ``precision`` and ``seed``.
+    symbolic : sequence of str or sympy.Symbol, optional
+        The parameters kept symbolic; every other one is held at its value (it must have
+        one) for the whole exploration. None (default): every parameter symbolic.
+        :func:`classifying_parameters` names those that can change the verdict where C is
+        regular.
+    progress : callable, optional
+        ``progress(run, note)`` before each run of the classification: ``run`` names it
+        (``"generic run"``, ``"run 3: b - 1 = 0"``), ``note`` tells the runs done, their
+        time and the estimated time of the runs known to be pending.
 
     Returns
     -------
@@ -81,19 +93,27 @@ def parametric_classification(system, *, positive: Sequence = (),
         ``max_depth``/``near``.
     """
     # the inputs and t are not split into cases: a verdict holds for generic inputs
-    params = tuple(system.declared_parameters)
     declared = _declared_positive(system, positive)
     check_options("parametric_classification", near=near, max_depth=max_depth, points=points)
     policy = policy_of(policy, "parametric_classification", precision=precision, seed=seed)
+    held = _held_values(system, symbolic)
+    values = {p: v for p, v in system.parameter_values.items() if p not in held}
+    original, system = system, _holding(system, held)
+    params = tuple(system.declared_parameters)
+    declared = [p for p in declared if p in params]
     opts = dict(classes=classes, policy=policy, points=points)
     base = rebuild(system, {}, None)
     signs = _sign_dummies(params, declared)
+    clock = _Clock(progress)
+    clock.start("generic run")
     generic, comps, notes, _, _ = examine(base, params, **opts)
+    clock.done(len(comps))
     notes = list(notes)
     nodes, dropped, seen = [], [], set()
 
     def visit(sysm, sub, conditions, reasons_here, verdict_here, comps, depth):
         for comp in comps:
+            clock.skip()  # this component is no longer pending (its runs are counted on)
             full = tuple(conditions) + tuple(comp.equations)
             why = _no_real_solution(comp.equations, signs)
             if why:
@@ -114,7 +134,9 @@ def parametric_classification(system, *, positive: Sequence = (),
                     nodes.append((full, total, spec, verdict_here, comp.reasons))
                     continue
                 remaining = tuple(p for p in params if p not in total)
+                clock.start("run " + " and ".join(f"{short(e)} = 0" for e in full))
                 verdict, sub_comps, sub_notes, _, _ = examine(spec, remaining, **opts)
+                clock.done(len(sub_comps) if depth + 1 < max_depth else 0)
                 notes.extend(sub_notes)
                 nodes.append((full, total, verdict, verdict_here, comp.reasons))
                 if depth + 1 < max_depth:
@@ -128,7 +150,7 @@ def parametric_classification(system, *, positive: Sequence = (),
 
     visit(base, {}, (), (), generic, comps, 0)
     cases = _order_cases(nodes)
-    values = dict(system.parameter_values)
+    notes += _held_note(original, held, [generic] + [c.verdict for c in cases])
     scene_case, warnings = None, []
     if values:
         for i, case in enumerate(cases):
@@ -140,7 +162,99 @@ def parametric_classification(system, *, positive: Sequence = (),
         generic=generic, cases=tuple(cases), scene_case=scene_case,
         dropped=tuple(_dedupe(dropped)), notes=tuple(dict.fromkeys(notes)),
         warnings=tuple(warnings), parameters=params, positive=tuple(declared),
-        values=MappingProxyType(values))
+        values=MappingProxyType(values), held=MappingProxyType(
+            {p: original.parameter_values[p] for p in held}))
+
+
+def classifying_parameters(system) -> tuple:
+    """The parameters that enter L, the affine or the holonomic constraints.
+
+    Only they can change the verdict where C is regular on M_1: the rank of C, M_1, the
+    integrability and the classes are formed from W, mu and the holonomic constraints. A
+    parameter entering only the forces or the dissipation enters the tangency equations,
+    which decide the verdict where C is singular (the secondary constraints); one that
+    enters only a control law does not enter the system at all.
+    """
+    used = set(sp.sympify(system.lagrangian).free_symbols)
+    for e in tuple(system.constraints) + tuple(system.holonomic):
+        used |= sp.sympify(e).free_symbols
+    return tuple(p for p in system.declared_parameters if p in used)
+
+
+def _held_note(system, held, verdicts) -> list:
+    """A note when a held parameter could change a verdict: one entering the forces or the
+    dissipation, where C is singular (there they enter the secondary constraints)."""
+    forced = set(sp.sympify(system.dissipation).free_symbols)
+    for f in system.forces:
+        forced |= sp.sympify(f).free_symbols
+    names = sorted(p.name for p in held if p in forced)
+    if not names or all(v.regular is not False for v in verdicts):
+        return []
+    return [f"C is singular in a verdict above, where the forces enter the secondary "
+            f"constraints: the held {', '.join(names)} could change it there (keep "
+            f"{'it' if len(names) == 1 else 'them'} symbolic: symbolic=, the command's "
+            f"--symbolic)"]
+
+
+def _held_values(system, symbolic) -> dict:
+    """Parameter -> its value, for the parameters not in ``symbolic`` (None: none held)."""
+    if symbolic is None:
+        return {}
+    by_name = {p.name: p for p in system.declared_parameters}
+    names = [s.name if isinstance(s, sp.Symbol) else str(s) for s in symbolic]
+    bad = [n for n in names if n not in by_name]
+    if bad:
+        raise InputError(f"symbolic: {', '.join(map(repr, bad))} "
+                         f"{'is not a parameter' if len(bad) == 1 else 'are not parameters'} "
+                         f"of the system (parameters: {', '.join(sorted(by_name)) or 'none'})",
+                         key="symbolic")
+    held = [p for p in system.declared_parameters if p.name not in names]
+    missing = [p.name for p in held if p not in system.parameter_values]
+    if missing:
+        raise InputError(f"symbolic: {', '.join(map(repr, missing))} "
+                         f"{'has' if len(missing) == 1 else 'have'} no value to be held at; "
+                         f"keep {'it' if len(missing) == 1 else 'them'} symbolic",
+                         key="symbolic")
+    return {p: system.parameter_values[p] for p in held}
+
+
+def _holding(system, held):
+    """The system with the held parameters substituted (their exact decimal values)."""
+    if not held:
+        return system
+    spec = rebuild(system, {p: exact_value(v) for p, v in held.items()},
+                   {p: v for p, v in system.parameter_values.items() if p not in held})
+    if isinstance(spec, Verdict):
+        raise InputError(f"at the values of the held parameters "
+                         f"{', '.join(f'{p.name} = {v}' for p, v in held.items())} "
+                         f"{spec.note}", key="symbolic")
+    return spec
+
+
+class _Clock:
+    """Tells ``progress`` of each run: the runs done, their time, and an estimate of
+    what the runs known to be pending will take (more may appear below them)."""
+
+    def __init__(self, progress):
+        self.progress, self.runs, self.pending = progress, 0, 0
+        self.begin = time.monotonic()
+
+    def start(self, what: str) -> None:
+        if self.progress is None:
+            return
+        spent = time.monotonic() - self.begin
+        note = f"{self.runs} run{'s' if self.runs != 1 else ''} done in {spent:.1f} s"
+        if self.runs:  # this run and those pending, at the mean time of a run so far
+            note += (f"; about {spent / self.runs * (self.pending + 1):.0f} s for this run "
+                     f"and the {self.pending} more known")
+        self.progress(what, note)
+
+    def done(self, found: int) -> None:
+        self.runs += 1
+        self.pending += found
+
+    def skip(self) -> None:
+        self.pending = max(self.pending - 1, 0)
 
 
 def _distance_to_zero(expr, at, syms) -> float:
@@ -195,6 +309,8 @@ def _no_real_solution(eqs, signs) -> str | None:
         d = sp.sympify(e).xreplace(signs)
         try:
             definite = bool(d.is_positive) or bool(d.is_negative)
+        except BudgetExceeded:  # an expiry is not an undecided sign
+            raise
         except Exception:  # pragma: no cover
             definite = False
         if definite:

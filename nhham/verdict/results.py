@@ -178,7 +178,9 @@ class ParametricVerdict:
     positive : tuple of sympy.Symbol
         Parameters declared positive.
     values : Mapping
-        The system's parameter values.
+        The system's parameter values (of the parameters kept symbolic).
+    held : Mapping
+        The parameters held at their values (``symbolic=``), with those values.
     """
 
     generic: Verdict
@@ -190,6 +192,7 @@ class ParametricVerdict:
     parameters: tuple
     positive: tuple
     values: Mapping = field(default_factory=dict)
+    held: Mapping = field(default_factory=dict)
 
     @property
     def scene_verdict(self) -> Verdict:

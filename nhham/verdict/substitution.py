@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import sympy as sp
 
-from nhham.errors import NhhamError, SingularLagrangianError
+from nhham.errors import BudgetExceeded, NhhamError, SingularLagrangianError
 from nhham.system.description import System
 from nhham.verdict.results import Verdict
 
@@ -76,6 +76,8 @@ def rebuild(system, sub, values):
                       parameters=params, name=system.name, drop_redundant=True,
                       forces=[x(f) for f in system.forces], dissipation=x(system.dissipation),
                       inputs=[u for u in system.inputs if u not in sub])
+    except BudgetExceeded:  # an expiry says nothing about the system's validity
+        raise
     except SingularLagrangianError:
         why = "the Lagrangian is singular (det W = 0): outside nhham's scope"
     except NhhamError as exc:

@@ -255,7 +255,7 @@ def test_simulate_refuses_inconsistent_initial_data(tmp_path):
     scene = tmp_path / "bad_initial.toml"
     scene.write_text(text)
     proc = run("simulate", scene, check_status=2)
-    assert "constraints[0]" in proc.stderr and "residual" in proc.stderr
+    assert "constraints[0] = 0.5" in proc.stderr and "--project-initial" in proc.stderr
     d = run_json("simulate", scene, "--project-initial")
     assert d["success"] and d["constraint_residual_max"] < 1e-9
 

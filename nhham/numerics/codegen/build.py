@@ -31,7 +31,7 @@ import sysconfig
 import threading
 from dataclasses import dataclass
 
-from nhham.errors import ComputationError
+from nhham.errors import BudgetExceeded, ComputationError
 from nhham.numerics.codegen.cache import CACHE_FORMAT, CompileCache
 from nhham.numerics.kernels import CompiledRHS, ComplexKernels
 
@@ -64,6 +64,8 @@ def pyext_flags():
             return None
         flags = ["-DNHHAM_PYEXT", f"-I{include}", f"-I{numpy.get_include()}"]
         return flags, f"{sysconfig.get_config_var('EXT_SUFFIX')} numpy {numpy.__version__}"
+    except BudgetExceeded:  # an expiry is not an exotic installation
+        raise
     except Exception:  # pragma: no cover - exotic installations
         return None
 
@@ -212,8 +214,12 @@ def kill_group(process) -> None:
     runs the compiler may call it: a second ``communicate`` would close the pipe under
     the first, whose read then fails with EBADF instead of reporting the signal."""
     signal_group(process)
-    with contextlib.suppress(Exception):
+    try:
         process.communicate()
+    except BudgetExceeded:  # the group is killed: the expiry goes on to the command
+        raise
+    except Exception:  # reaping is best effort
+        pass
 
 
 # -------------------------------------------------------- a model's library

@@ -1,0 +1,271 @@
+"""A scene's ``[initial]`` table as the user gives it, completed from the constraints.
+
+The user gives the independent values (numbers, or expressions in the parameters such as
+``"v0/R"``) and leaves the dependent ones out:
+
+- a velocity left out is solved from the velocity-level constraints (the affine ones and
+  the time derivatives of the holonomic ones), which are linear in the velocities: exactly,
+  by a least-squares solve that must leave no residual;
+- a coordinate left out is solved from the holonomic constraints by Newton's method, from
+  0 or from the value written ``z = { guess = 0.9 }`` (a curved M_1 has several branches:
+  the guess picks one).
+
+Nothing given is changed. A velocity left out that the constraints do not fix, or given
+values that over-determine the ones left out inconsistently (the given ones are then not
+independent), are refused with the names at fault.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from types import MappingProxyType
+from typing import TYPE_CHECKING, Mapping
+
+import numpy as np
+import sympy as sp
+
+from nhham.errors import (
+    InconsistentInitialDataError,
+    InputError,
+    MissingParameterValueError,
+    ParseError,
+)
+from nhham.system.expressions import parse_expression
+from nhham.system.scene_numbers import finite_number
+
+if TYPE_CHECKING:
+    from nhham.system.description import System
+
+__all__ = ["InitialData", "initial_entry", "parse_initial", "complete_initial",
+           "solved_text"]
+
+# Relative tolerance of the solves (residuals and rank), as the residual check's.
+_TOL = 1e-9
+_NEWTON_STEPS = 100
+
+
+@dataclass(frozen=True)
+class InitialData:
+    """``[initial]`` as given.
+
+    Attributes
+    ----------
+    given : mapping of str to sympy.Expr
+        The values given, by state name (numbers, or expressions in the parameters).
+    guesses : mapping of str to float
+        Starting points of Newton's method for coordinates left out.
+    """
+
+    given: Mapping = field(default_factory=dict)
+    guesses: Mapping = field(default_factory=dict)
+
+
+def initial_entry(coordinates):
+    """The entry check of ``[initial]`` for :func:`nhham.system.steady.state_table`: a
+    finite number, an expression (a string, parsed later) or ``{ guess = number }`` for a
+    coordinate."""
+    def entry(item, where, problems):
+        if isinstance(item, str):
+            return item
+        if isinstance(item, dict):
+            name = where.split(".", 1)[1] if "." in where else where
+            if set(item) != {"guess"}:
+                problems.append(f"{where}: expected a number, an expression or "
+                                f"{{ guess = number }}, got a table with "
+                                f"{', '.join(map(repr, item)) or 'no keys'}")
+                return None
+            if name not in coordinates:
+                problems.append(f"{where}: a guess is for a coordinate left out (solved by "
+                                f"Newton's method); a velocity left out is solved exactly")
+                return None
+            value = finite_number(item["guess"], f"{where}.guess", problems)
+            return None if value is None else ("guess", value)
+        return finite_number(item, where, problems)
+
+    return entry
+
+
+def parse_initial(table, parameters, problems) -> InitialData | None:
+    """The checked raw table as :class:`InitialData` (expressions parsed against the
+    parameter names; each failure appended to ``problems``)."""
+    if table is None:
+        return None
+    symbols = {p: sp.Symbol(p) for p in parameters}
+    given, guesses = {}, {}
+    for name, item in table.items():
+        if isinstance(item, tuple):
+            guesses[name] = item[1]
+        elif isinstance(item, str):
+            try:
+                given[name] = parse_expression(item, symbols, where=f"initial.{name}")
+            except ParseError as exc:
+                problems.append(str(exc) + " (an [initial] value may use the parameters)")
+        else:
+            given[name] = sp.Float(item)
+    return InitialData(MappingProxyType(given), MappingProxyType(guesses))
+
+
+def solved_text(values, solved) -> str:
+    """``x_dot = 2, y_dot = 0``: the values nhham solved, for a warning."""
+    return ", ".join(f"{n} = {values[n]:.10g}" for n in solved)
+
+
+# ------------------------------------------------------------------ completion
+def complete_initial(system: "System", data: InitialData) -> tuple[dict, tuple]:
+    """Every coordinate and velocity: the given values, the others solved.
+
+    Returns
+    -------
+    (dict, tuple of str)
+        The values in state order, and the names that were solved.
+
+    Raises
+    ------
+    MissingParameterValueError
+        A value uses a parameter without a value.
+    InputError
+        A value left out that the constraints do not determine (named).
+    InconsistentInitialDataError
+        Given values over-determine those left out and disagree (the constraint named).
+    """
+    params = {p: sp.Float(v) for p, v in system.parameter_values.items()}
+    values = {name: _number(name, expr, params) for name, expr in data.given.items()}
+    q_names = [q.name for q in system.coordinates]
+    v_names = [v.name for v in system.velocities]
+    missing_q = [n for n in q_names if n not in values]
+    missing_v = [n for n in v_names if n not in values]
+    if missing_q:
+        values.update(_coordinates(system, values, missing_q, data.guesses, params))
+    if missing_v:
+        values.update(_velocities(system, values, missing_v, params))
+    order = q_names + v_names
+    return {n: values[n] for n in order}, tuple(n for n in order
+                                                if n in missing_q or n in missing_v)
+
+
+def _number(name, expr, params) -> float:
+    missing = sorted(s.name for s in expr.free_symbols if s not in params)
+    if missing:
+        raise MissingParameterValueError(
+            f"initial.{name}: no value for parameter {', '.join(map(repr, missing))} "
+            f"(give it in parameters or with --set)", key=f"initial.{name}")
+    try:
+        value = complex(expr.xreplace(params).evalf())
+    except (TypeError, ValueError, OverflowError, ZeroDivisionError):
+        value = complex(math.nan)
+    if value.imag or not math.isfinite(value.real):
+        raise InputError(f"initial.{name}: {expr} is not a finite real number at the "
+                         f"parameter values", key=f"initial.{name}")
+    return value.real
+
+
+def _coordinates(system, values, missing, guesses, params) -> dict:
+    """The coordinates left out, by Newton's method on the holonomic constraints."""
+    names = ", ".join(missing)
+    if not system.holonomic:
+        raise InputError(f"initial: no value for {names}: only coordinates that holonomic "
+                         f"constraints determine may be left out, and the scene has none",
+                         key="initial")
+    unknowns = [sp.Symbol(n) for n in missing]
+    known = dict(params)
+    known.update({sp.Symbol(n): sp.Float(v) for n, v in values.items()})
+    labelled = [(f"holonomic[{i}]", sp.sympify(g).xreplace(known))
+                for i, g in enumerate(system.holonomic)]
+    eqs = [(lab, g) for lab, g in labelled if g.free_symbols & set(unknowns)]
+    rest = sorted(s.name for _, g in eqs for s in g.free_symbols if s not in unknowns)
+    if rest:  # a velocity cannot be in a holonomic constraint: a value is missing
+        raise InputError(f"initial: the holonomic constraints need {', '.join(rest)} to "
+                         f"solve {names}", key="initial")
+    if len(eqs) < len(missing):
+        raise InputError(f"initial: {names} left out, but the holonomic constraints fix at "
+                         f"most {len(eqs)} of them: give a value for the others",
+                         key="initial")
+    F = sp.lambdify(unknowns, [g for _, g in eqs], "math")
+    J = sp.lambdify(unknowns, sp.Matrix([g for _, g in eqs]).jacobian(unknowns).tolist(),
+                    "math")
+    x = np.array([guesses.get(n, 0.0) for n in missing], dtype=float)
+    for _ in range(_NEWTON_STEPS):
+        try:
+            r = np.array(F(*x), dtype=float)
+            step = np.linalg.lstsq(np.array(J(*x), dtype=float), -r, rcond=None)[0]
+        except (ValueError, ZeroDivisionError, OverflowError):
+            break
+        x = x + step
+        if np.max(np.abs(step)) <= 1e-15 * (1.0 + np.max(np.abs(x))):
+            break
+    start = ", ".join(f"{n} = {guesses.get(n, 0.0):g}" for n in missing)
+    try:
+        r = np.array(F(*x), dtype=float)
+        jac = np.array(J(*x), dtype=float)
+    except (ValueError, ZeroDivisionError, OverflowError):
+        r = np.full(len(eqs), np.nan)
+        jac = np.full((len(eqs), len(missing)), np.nan)
+    if not np.all(np.isfinite(r)) or \
+            np.max(np.abs(r)) > _TOL * max(1.0, float(np.max(np.abs(x)))):
+        at = f" (residual {float(np.max(np.abs(r))):.3g})" if np.all(np.isfinite(r)) else ""
+        raise InconsistentInitialDataError(
+            f"initial: Newton's method from {start} found no point of the holonomic "
+            f"constraints for {names}{at}: give a starting point, e.g. "
+            f"{missing[0]} = {{ guess = 1.0 }}, or the values", key="initial")
+    if np.linalg.matrix_rank(jac, tol=_TOL * max(1.0, float(np.max(np.abs(jac))))) < \
+            len(missing):
+        raise InputError(f"initial: the holonomic constraints do not determine {names} "
+                         f"at the point found (their Jacobian in them is singular there): "
+                         f"give a value for one of them", key="initial")
+    return {n: float(v) for n, v in zip(missing, x)}
+
+
+def _velocity_rows(system):
+    """(label, expression) of every velocity-level constraint: the affine ones and the
+    time derivatives of the holonomic ones."""
+    from nhham.system.initial import labelled_constraints
+
+    return [(lab, sp.sympify(e)) for lab, e in labelled_constraints(system)
+            if lab.startswith("constraints[") or lab.endswith("(time derivative)")]
+
+
+def _velocities(system, values, missing, params) -> dict:
+    """The velocities left out, from the velocity-level constraints (linear in them)."""
+    unknowns = [sp.Symbol(n) for n in missing]
+    known = dict(params)
+    known.update({sp.Symbol(n): sp.Float(v) for n, v in values.items()})
+    rows = _velocity_rows(system)
+    at = [e.xreplace(known) for _, e in rows]
+    zero = {u: 0 for u in unknowns}
+    A = np.array([[float(sp.diff(e, u)) for u in unknowns] for e in at],
+                 dtype=float).reshape(len(rows), len(unknowns))
+    b = np.array([float(e.xreplace(zero)) for e in at], dtype=float)
+    scale = max(1.0, float(np.max(np.abs(A), initial=0.0)),
+                float(np.max(np.abs(b), initial=0.0)))
+    # a constraint without a velocity left out relates given ones: not independent
+    given = {v for v in system.velocities if v.name not in missing}
+    related = [(lab, sorted(s.name for s in e.free_symbols & given))
+               for (lab, e), row in zip(rows, A) if not np.any(np.abs(row) > _TOL * scale)]
+    _, sv, vt = np.linalg.svd(A) if len(rows) else (None, np.zeros(0), np.eye(len(missing)))
+    rank = int(np.sum(sv > _TOL * scale))
+    if rank < len(missing):
+        free = [n for j, n in enumerate(missing) if np.any(np.abs(vt[rank:, j]) > 1e-8)]
+        one = len(free) == 1
+        raise InputError(
+            f"initial: {', '.join(free)} {'is' if one else 'are'} not fixed by the "
+            f"constraints and the velocities given: give "
+            + ("its value" if one else f"values for {len(missing) - rank} of them")
+            + _related(related), key="initial")
+    x = np.linalg.lstsq(A, -b, rcond=None)[0]
+    residual = A @ x + b
+    bad = [(lab, float(r)) for (lab, _), r in zip(rows, residual) if abs(r) > _TOL * scale]
+    if bad:
+        raise InconsistentInitialDataError(
+            f"initial: the velocities given over-determine {', '.join(missing)}: "
+            + "; ".join(f"{lab} = {r:.6g}" for lab, r in bad) + " with them solved"
+            + (_related(related) or "; leave one more velocity out"), key="initial")
+    return {n: float(v) for n, v in zip(missing, x)}
+
+
+def _related(related) -> str:
+    parts = [f"{lab} relates {', '.join(names)}" for lab, names in related if len(names) > 1]
+    if not parts:
+        return ""
+    return ("; the velocities given are not independent (" + "; ".join(parts)
+            + "): leave one of each out")
