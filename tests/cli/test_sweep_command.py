@@ -70,9 +70,9 @@ def test_out_of_budget_exits_3_and_resume_finishes(capsys, tmp_path, monkeypatch
 
     evaluate = schedule.evaluate
 
-    def slow(study, region):
+    def slow(study, region, *deadline):
         time.sleep(0.4)
-        return evaluate(study, region)
+        return evaluate(study, region, *deadline)
 
     out = tmp_path / "drive.zarr"
     args = ["sweep", DRIVE, "--what", "simulate", "--over", "c=0.01:0.05:12", "--out", out,

@@ -47,15 +47,16 @@ def test_threads_share_this_process_s_model(here):
 
 def test_threads_stop_at_the_budget_and_resume(tmp_path, here):
     """Threads (dask's threaded scheduler): the first chunk's report outlasts the budget,
-    so only it is written (a whole line of 9 points: the boundary is traced along w);
-    --resume computes the other two, to the arrays of one process."""
+    so only it is written (3 points: a piece of a line along w, which --chunk cuts);
+    --resume computes the other eight, to the arrays of one process (the boundaries of
+    the pieces merged into those of the whole lines)."""
     import time
 
     out = tmp_path / "drive.zarr"
     stopped = sweep(SCENE, "linearize", OVER, scheduler="threads", workers=2, chunk_points=3,
                     out=out, budget=2.0, progress=lambda done, total, elapsed: time.sleep(2.0))
-    assert not stopped.complete and stopped.computed == 9 and stopped.scheduler == "threads"
+    assert not stopped.complete and stopped.computed == 3 and stopped.scheduler == "threads"
     resumed = sweep(SCENE, "linearize", OVER, scheduler="threads", workers=2, chunk_points=3,
                     out=out, resume=True)
-    assert resumed.complete and resumed.computed == 18
+    assert resumed.complete and resumed.computed == 24
     _same(here, resumed.dataset)
