@@ -183,10 +183,8 @@ class Store:
     def lines(self, dims: tuple, region: tuple, names) -> dict:
         """The per-line variables ``names`` stored for the lines of ``region``."""
         where = {d: s for d, s in zip(dims, region) if d in self.line_dims}
-        if self.target is None:
-            return {n: self.dataset[n].isel(where).values.copy() for n in names}
-        ds = _open(self.working)
-        return {n: np.asarray(ds[n].isel(where).values) for n in names}
+        # on disk the layout is lazy: its values are read from the store now
+        return {n: np.array(self.dataset[n].isel(where).values) for n in names}
 
     def write(self, dims: tuple, region: tuple, data: dict) -> None:
         """Write one finished chunk: ``data`` (variable -> array of the region's shape and

@@ -149,11 +149,11 @@ def study_attrs(path) -> dict | None:
                 warnings.simplefilter("ignore")
                 attrs = dict(zarr.open_group(str(path), mode="r").attrs)
         elif path.is_file():
-            from nhham.study.store import xarray_module
+            import xarray as xr
 
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")
-                with xarray_module().open_dataset(path) as ds:
+                with xr.open_dataset(path) as ds:
                     attrs = dict(ds.attrs)
         else:
             return None
