@@ -328,8 +328,12 @@ class Pool:
     def __enter__(self):
         return self
 
-    def __exit__(self, *exc):
-        self.close()
+    def __exit__(self, exc_type, *exc):
+        # Ctrl-C anywhere in the study (its preparation too): nothing waits on workers
+        if exc_type is not None and issubclass(exc_type, KeyboardInterrupt):
+            self.abandon()
+        else:
+            self.close()
 
 
 def _kill_workers(cluster) -> None:

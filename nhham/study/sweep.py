@@ -220,9 +220,7 @@ def sweep(scene, what: str, over=(), *, samples_count: int | None = None,
             stopped = "budget"
         except OutputUnwritable as exc:   # what finished is kept; exit 3 saying so
             stopped = str(exc)
-        except KeyboardInterrupt:
-            pool.abandon()   # what finished is in the store; nothing waits on the workers
-            raise
+        # Ctrl-C: what finished is in the store; the pool is abandoned as it is left
         run_time = time.perf_counter() - run_start
     complete = counter["points"] == design.size
     try:
