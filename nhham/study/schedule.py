@@ -86,9 +86,11 @@ def max_workers() -> int:
     return max(8, 4 * default_workers())
 
 
-def check_scheduler(scheduler: str | None, workers: int | None) -> str | None:
+def check_scheduler(scheduler: str | None, workers: int | None,
+                    warn: bool = True) -> str | None:
     """The scheme of a remote scheduler's address (None for a local one); refuses a
-    scheme that is not supported, an address that is not one, and too many workers.
+    scheme that is not supported, an address that is not one, and too many workers;
+    warns (``warn``) about a plain ``tcp://`` address off this machine.
 
     Raises
     ------
@@ -115,7 +117,7 @@ def check_scheduler(scheduler: str | None, workers: int | None) -> str | None:
         raise InputError(f"--scheduler: the address scheme {scheme}:// is not supported (give "
                          f"tls://host:port, or tcp://host:port on a trusted network)",
                          key="--scheduler")
-    if scheme == "tcp" and not _loopback(match.group(2)):
+    if warn and scheme == "tcp" and not _loopback(match.group(2)):
         warnings.warn(f"--scheduler {scheduler}: a plain tcp:// address off this machine: "
                       f"the scene and options travel in clear text and the results the "
                       f"cluster sends back are unpickled here (a compromised scheduler runs "

@@ -168,8 +168,8 @@ def sweep(scene, what: str, over=(), *, samples_count: int | None = None,
     # the results go, the scheduler and the workers
     design = _design(over, samples_count, sampler, seed, initial_perturbation, what)
     target = check_out(out, resume=resume, overwrite=overwrite)
-    if client is None:
-        check_scheduler(scheduler, workers)
+    if client is None:   # (its warning, if any, is given once, by Pool.start)
+        check_scheduler(scheduler, workers, warn=False)
     text, source = _scene_text(scene)
     from nhham.study.schedule import Pool
 

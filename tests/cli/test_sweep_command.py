@@ -241,3 +241,26 @@ def test_ctrl_c_exits_130_at_once_keeping_what_finished(tmp_path, scheduler, to_
     assert int(xr.open_zarr(out, consolidated=False)["done"].sum()) >= done
     gone = psutil.wait_procs(children, timeout=10)[1]
     assert not gone, f"worker processes left: {gone}"
+
+
+def test_the_budget_bounds_connecting_and_plain_tcp_off_this_machine_is_warned_once(capsys,
+                                                                                   tmp_path):
+    import socket
+
+    robot = ROOT / "examples" / "differential_drive.toml"
+    with socket.socket() as s:           # a port where nothing listens
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    common = ["sweep", robot, "--what", "linearize", "--over", "w=0:1:3", "--json",
+              "--budget", "1", "--out", tmp_path / "x.zarr"]
+    status, stdout, err = run(capsys, *common, "--scheduler", f"tcp://127.0.0.1:{port}")
+    envelope = json.loads(stdout)
+    assert status == 3 and envelope["error"]["kind"] == "budget"
+    assert "while connecting to the scheduler" in envelope["error"]["message"]
+    assert envelope["warnings"] == []                 # loopback: nothing to warn about
+    # TEST-NET-1 (RFC 5737): not this machine; whatever answers there (nothing, or not a
+    # dask scheduler), the one warning is given
+    status, stdout, err = run(capsys, *common, "--scheduler", "tcp://192.0.2.1:8786")
+    envelope = json.loads(stdout)
+    assert status in (2, 3) and envelope["error"]["key"] in (None, "--scheduler")
+    assert len(envelope["warnings"]) == 1 and "clear text" in envelope["warnings"][0]
