@@ -146,9 +146,10 @@ def cmd_sweep(args, steps):
                         f"results: 1, 2, 3)")
     failure = None
     if not result.complete:
-        failure = (f"the --budget ran out with {data['points'] - _missing(result)} of "
-                   f"{data['points']} points done (kept in {result.kept}); continue with "
-                   f"--resume" if result.stopped == "budget" else result.stopped)
+        done = f"{data['points'] - _missing(result)} of {data['points']} points done"
+        failure = (result.stopped if result.stopped not in (None, "budget") else
+                   f"{'the --budget ran out' if result.stopped else 'the study stopped'} "
+                   f"with {done} (kept in {result.kept}); continue with --resume")
     return CommandOutput(result=data, text=lambda: _text(args, result, data),
                          scene=scene_info(result.scene), failure=failure, warnings=warnings)
 

@@ -131,12 +131,20 @@ def sweep(scene, what: str, over=(), *, samples_count: int | None = None,
         ``samples_count``).
     out : str or os.PathLike, optional
         A ``.zarr`` directory or a ``.nc`` file; written chunk by chunk (None: memory).
+        Checked before any work (:func:`~nhham.study.target.check_out`).
     resume, overwrite : bool
-        Continue an interrupted study at ``out``; replace an existing one.
+        Continue an interrupted study at ``out`` (made by this nhham, from the same code,
+        scene and options; chunks whose data are missing are computed again); replace a
+        study nhham wrote there, once the new one is complete (anything else at ``out``
+        is refused).
     scheduler, workers, client
-        Where the chunks run (:mod:`nhham.study.schedule`).
+        Where the chunks run (:mod:`nhham.study.schedule`; a remote scheduler's results
+        are unpickled here: use only a cluster you trust, over ``tls://``).
     budget : float, optional
-        Seconds for the whole study; what finished is kept (``complete`` False).
+        Seconds for the whole study (connecting to a scheduler, the preparation, each
+        chunk's runs); what finished is kept (``complete`` False, ``stopped``
+        ``"budget"``). A failed write (a full disk) also keeps what finished
+        (``stopped`` says why).
     chunk_points : int, optional
         Points per chunk (default :data:`CHUNK_POINTS`).
     along : str, optional
