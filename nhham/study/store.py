@@ -167,14 +167,15 @@ class Store:
         chunks = self.dataset["done"].encoding.get("chunks")
         return None if chunks is None else tuple(int(c) for c in chunks)
 
-    def done(self, regions=None) -> np.ndarray:
+    def done(self, regions=None, names=None) -> np.ndarray:
         """Boolean array of the design's shape: the points already computed. With
-        ``regions`` (on disk), a region marked done whose data files are not all there
-        (deleted, or never written) is taken as not done, to be computed again."""
+        ``regions`` (on disk), a region marked done whose data files (of the variables
+        ``names``, those each chunk writes; default all) are not all there (deleted, or
+        never written) is taken as not done, to be computed again."""
         done = np.array(self.dataset["done"].values, dtype=bool)   # a copy
         if regions is None or self.target is None:
             return done
-        present = _ChunkFiles(self.working, self.dataset)
+        present = _ChunkFiles(self.working, self.dataset, names)
         for region in regions:
             if done[region].all() and not present.all_there(region):
                 done[region] = False
@@ -256,7 +257,7 @@ class Store:
 class _ChunkFiles:
     """Which chunk files of a Zarr store are on disk (the store's own layout of keys)."""
 
-    def __init__(self, working: Path, ds):
+    def __init__(self, working: Path, ds, names=None):
         self.working, self.ds = Path(working), ds
         self.arrays: dict = {}
         try:
@@ -265,6 +266,8 @@ class _ChunkFiles:
             group = zarr.open_group(str(working), mode="r")
             for name, var in ds.data_vars.items():
                 chunks = var.encoding.get("chunks")
+                if names is not None and name not in names or var.size == 0:
+                    continue   # not written by the chunks (or no file at all)
                 if chunks is not None:
                     self.arrays[name] = (group[name].metadata, var.dims, tuple(chunks))
         except Exception:   # a layout of keys not known here: nothing is checked

@@ -204,7 +204,7 @@ def sweep(scene, what: str, over=(), *, samples_count: int | None = None,
             store = Store.create(target, _template(design, var_spec, attrs,
                                                    None if target is None else chunking),
                                  chunking, _fills(var_spec))
-        done = store.done(regions)
+        done = store.done(regions, [*var_spec["point"], *var_spec["line"]])
         pending = [r for r in regions if not done[r].all()]
         already = int(done.sum())
         counter = {"points": already}

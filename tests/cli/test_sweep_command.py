@@ -65,9 +65,13 @@ def test_refusals_name_their_option(capsys, tmp_path):
 
 
 def test_out_of_budget_exits_3_and_resume_finishes(capsys, tmp_path, monkeypatch):
-    """12 chunks made to take 0.4 s each and a budget of 2 s: the preparation fits, some
-    chunks do, the rest is left for --resume."""
+    """12 chunks made to take 0.4 s each and a budget of 3 s: the preparation fits (the
+    modules imported and the model built once before), some chunks do, the rest is left
+    for --resume."""
     import nhham.study.schedule as schedule
+    from nhham.study.sweep import sweep
+
+    assert sweep(DRIVE, "simulate", ["c=0.01:0.05:2"], workers=1).complete
 
     evaluate = schedule.evaluate
 
@@ -80,7 +84,7 @@ def test_out_of_budget_exits_3_and_resume_finishes(capsys, tmp_path, monkeypatch
             "--workers", "1", "--chunk", "1", "--t-end", "5", "--json"]
     with monkeypatch.context() as m:
         m.setattr(schedule, "evaluate", slow)
-        status, stdout, err = run(capsys, *args, "--budget", "2")
+        status, stdout, err = run(capsys, *args, "--budget", "3")
     envelope = json.loads(stdout)
     assert status == 3 and "continue with --resume" in envelope["error"]["message"], envelope
     assert envelope["result"]["complete"] is False
