@@ -89,7 +89,7 @@ def test_the_budget_stops_a_chunk_inside_its_runs(tmp_path):
     assert sweep(drive, "simulate", ["c=0.01:0.05:2"], workers=1).complete
     for scheduler in ("synchronous", "threads"):
         stopped = sweep(drive, "simulate", ["c=0.01:0.05:2"], workers=2, chunk_points=1,
-                        scheduler=scheduler, budget=1.5, run_options={"t_end": 1e9},
+                        scheduler=scheduler, budget=3.0, run_options={"t_end": 1e9},
                         out=out, overwrite=True)
         assert not stopped.complete and stopped.stopped == "budget" and stopped.computed == 0
 
