@@ -34,6 +34,7 @@ __all__ = [
     "EmptySubmanifoldError",
     "NhhamWarning",
     "OptionalDependencyError",
+    "OutputUnwritable",
     "key_of",
 ]
 
@@ -163,3 +164,8 @@ class EmptySubmanifoldError(InputError, ComputationError):
     constraint without a real solution), and still a :class:`ComputationError` for
     the constraint algorithm, which records an empty M_k as an inconsistency.
     """
+
+
+class OutputUnwritable(ComputationError):
+    """A result could not be written (a full disk, a quota, a folder made read-only while
+    the command ran): the command ran, and exits 3 saying what it kept and what to do."""

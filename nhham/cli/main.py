@@ -41,7 +41,7 @@ from nhham.cli.linearize_command import cmd_linearize
 from nhham.cli.sweep_command import cmd_sweep
 from nhham.cli.options import check_options
 from nhham.cli.report import Steps, expr_text
-from nhham.errors import InputError, NhhamError, UsageError
+from nhham.errors import InputError, NhhamError, OutputUnwritable, UsageError
 from nhham.lagrangian.engine import Policy
 from nhham.cli.parser import FIXED_STEP, METHODS, build_parser, unknown_options
 
@@ -646,6 +646,8 @@ def main(argv=None) -> int:
     except InputError as exc:
         return run.fail("usage" if isinstance(exc, UsageError) else "input", str(exc), exc.key,
                         warnings=caught)
+    except OutputUnwritable as exc:  # a full disk: the command ran; what it kept is said
+        return run.fail("failed", str(exc), exc.key, prefix="nhham: ", warnings=caught)
     except KeyboardInterrupt:
         return run.fail("interrupted", "interrupted", prefix="nhham: ", warnings=caught)
     except Exception as exc:  # internal failure: say so, traceback on request

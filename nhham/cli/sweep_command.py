@@ -62,17 +62,24 @@ def add_arguments(parser) -> None:
                              "chunk) or a .nc file (netCDF, written at the end)")
     group = parser.add_mutually_exclusive_group()
     group.add_argument("--resume", action="store_true",
-                       help="continue the interrupted study at --out (same scene and "
-                            "options)")
-    group.add_argument("--overwrite", action="store_true", help="replace an existing --out")
+                       help="continue the interrupted study at --out (same scene, options "
+                            "and nhham; chunks whose data are missing are computed again)")
+    group.add_argument("--overwrite", action="store_true",
+                       help="replace a study nhham wrote at --out (only once the new one is "
+                            "complete; anything else there is refused, untouched)")
     parser.add_argument("--workers", type=int, default=None, metavar="N",
-                        help="local workers (default: the cores available; 1 runs in this "
-                             "process without Dask)")
+                        help="local workers (default: the cores available, at most four per "
+                             "core; 1 runs in this process without Dask)")
     parser.add_argument("--scheduler", default=None, metavar="ADDRESS",
                         help="threads (the default for linearize and simulate: this "
                              "process's model shared), processes (the default for "
                              "classify), synchronous, or the address of a running dask "
-                             "scheduler (tcp://host:8786)")
+                             "scheduler: tls://host:8786 (certificates from your dask "
+                             "configuration) or tcp://host:8786. Security: what the cluster "
+                             "sends back is unpickled in this process, so a hostile or "
+                             "compromised scheduler runs code here, and on tcp:// the scene "
+                             "and options travel in clear text; use only a cluster you trust, "
+                             "over tls:// off this machine")
     parser.add_argument("--chunk", type=int, default=None, metavar="POINTS",
                         help="points per task (default: 4096 linearize, 256 simulate and "
                              "classify)")
@@ -139,9 +146,10 @@ def cmd_sweep(args, steps):
                         f"results: 1, 2, 3)")
     failure = None
     if not result.complete:
-        failure = (f"the --budget ran out with {data['points'] - _missing(result)} of "
-                   f"{data['points']} points done (kept in {args.out}); continue with "
-                   f"--resume")
+        done = f"{data['points'] - _missing(result)} of {data['points']} points done"
+        failure = (result.stopped if result.stopped not in (None, "budget") else
+                   f"{'the --budget ran out' if result.stopped else 'the study stopped'} "
+                   f"with {done} (kept in {result.kept}); continue with --resume")
     return CommandOutput(result=data, text=lambda: _text(args, result, data),
                          scene=scene_info(result.scene), failure=failure, warnings=warnings)
 

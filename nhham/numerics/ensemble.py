@@ -60,7 +60,8 @@ class EnsembleResult:
 
 def simulate_many(model, y0, t_span, *, parameters=None, method: str = "DOP853",
                   rtol: float = 1e-9, atol: float = 1e-12, max_step: float = np.inf,
-                  projection: bool = False, time_limit: float | None = None) -> EnsembleResult:
+                  projection: bool = False, time_limit: float | None = None,
+                  deadline: Deadline | None = None) -> EnsembleResult:
     """Integrate from each of N initial states; keep the ends.
 
     Parameters
@@ -78,6 +79,9 @@ def simulate_many(model, y0, t_span, *, parameters=None, method: str = "DOP853",
     time_limit : float, optional
         Seconds for all runs together; the runs not finished then end with
         ``Status.TIME_LIMIT`` (those not started keep t_final = t_span[0]).
+    deadline : Deadline, optional
+        Instead of ``time_limit``: the :class:`~nhham.numerics.run.Deadline` the runs stop
+        at (a parameter study's passes also when the study is interrupted).
 
     Returns
     -------
@@ -93,7 +97,7 @@ def simulate_many(model, y0, t_span, *, parameters=None, method: str = "DOP853",
     t0, t1 = float(t_span[0]), float(t_span[1])
     compiled = (method in COMPILED_METHODS and model.compiled is not None
                 and model.path == "saddle")
-    deadline = Deadline.after(time_limit)
+    deadline = deadline if deadline is not None else Deadline.after(time_limit)
     out_t, out_y = np.full(N, t0), Y0.copy()
     work = np.full(N, np.nan)
     status = np.full(N, int(Status.TIME_LIMIT), dtype=np.int8)

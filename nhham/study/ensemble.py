@@ -21,9 +21,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from nhham.errors import InputError
+from nhham.errors import BudgetExceeded, InputError
 from nhham.numerics.ensemble import simulate_many
+from nhham.numerics.status import Status
 from nhham.study.kinds import SIMULATE_METHODS as METHODS
+from nhham.study.stop import chunk_deadline
 
 __all__ = ["prepare", "variables", "evaluate", "OPTIONS", "METHODS"]
 
@@ -94,8 +96,13 @@ def variables(design, options) -> dict:
     return {"point": point, "line": {}, "coords": {"state": list(options["state_names"])}}
 
 
-def evaluate(study, ctx, region) -> dict:
-    """Every variable on ``region`` (see the module docstring)."""
+def evaluate(study, ctx, region, until: float | None = None) -> dict:
+    """Every variable on ``region`` (see the module docstring).
+
+    ``until``: a ``time.time()`` at which the runs stop (inside a run: the compiled loop
+    looks at its deadline every few milliseconds); a chunk not finished by then raises
+    :class:`~nhham.errors.BudgetExceeded` (a run cut short is not a result to keep).
+    """
     model, opts = ctx.model, study.options
     values = study.design.values(region)
     shape = next(iter(values.values())).shape if values else \
@@ -127,10 +134,13 @@ def evaluate(study, ctx, region) -> dict:
             outcome = m.project(Y0[i])
             distance[i] = np.linalg.norm(outcome.y - Y0[i])
             Y0[i] = outcome.y
+    deadline = chunk_deadline(until)
     runs = simulate_many(model, Y0, (0.0, float(opts["t_end"])), parameters=P,
                          method=opts["method"], rtol=opts["rtol"], atol=opts["atol"],
                          max_step=np.inf if opts["max_step"] is None else opts["max_step"],
-                         projection=bool(opts["projection"]))
+                         projection=bool(opts["projection"]), deadline=deadline)
+    if (runs.status == int(Status.TIME_LIMIT)).any():
+        raise BudgetExceeded("the study's --budget ran out during a chunk's runs")
     E0, E1, residual = _ends(model, P, Y0, runs.y_final)
     work = np.where(np.isnan(runs.work), 0.0, runs.work)
     out = {

@@ -25,7 +25,7 @@ import numpy as np
 from nhham.errors import InputError
 
 __all__ = ["Axis", "Design", "parse_over", "parse_perturbation", "grid", "samples",
-           "chunk_slices", "SAMPLERS", "MAX_POINTS"]
+           "chunk_slices", "check_seed", "SAMPLERS", "MAX_POINTS"]
 
 #: Ways to draw samples: Latin hypercube, scrambled Sobol, independent uniform.
 SAMPLERS = ("lhs", "sobol", "uniform")
@@ -45,28 +45,87 @@ class Axis:
     Attributes
     ----------
     name : str
-    values : tuple of float
-        The grid's values (empty for a range to sample).
+    listed : tuple of float
+        Values given one by one (``P=A,B,C``; empty otherwise).
     bounds : (float, float)
         The range: the first and last value of a grid, or where samples are drawn.
     text : str
         As the user wrote it (``--over``).
+    spacing : tuple
+        A grid ``P=START:STOP:COUNT``: ``(START, STOP, COUNT)`` (the two as the exact
+        decimals written, :class:`fractions.Fraction`); its values are made only when
+        asked (:meth:`array`), after the size of the whole design was checked.
     """
 
     name: str
-    values: tuple
+    listed: tuple
     bounds: tuple
     text: str
+    spacing: tuple = ()
 
     @property
     def count(self) -> int | None:
         """Number of grid values (None for a range to sample)."""
-        return len(self.values) or None
+        return self.spacing[2] if self.spacing else (len(self.listed) or None)
+
+    @property
+    def values(self) -> tuple:
+        """The grid's values (empty for a range to sample)."""
+        return tuple(self.array().tolist())
+
+    def array(self) -> np.ndarray:
+        """The grid's values as float64: each the double nearest to the exact decimal
+        START + i (STOP - START)/(COUNT - 1), so that 0:1:11 has 0.3 (not linspace's
+        0.30000000000000004): a point is where the user meant it, also for the exact
+        placement of a classify study."""
+        if not self.spacing:
+            return np.asarray(self.listed, dtype=float)
+        return _decimal_grid(*self.spacing)
+
+
+def _decimal_grid(lo: Fraction, hi: Fraction, count: int) -> np.ndarray:
+    """The correctly rounded values of lo + i (hi - lo)/(count - 1), i < count.
+
+    Written as integers (A + i B)/D over a common denominator: when numerators and D are
+    below 2**53 they are exact doubles and one IEEE division rounds correctly (vectorised:
+    10**7 values in a fraction of a second); otherwise Python's int/int true division,
+    also correctly rounded, one value at a time.
+    """
+    if count == 1:
+        return np.array([float(lo)])
+    n = count - 1
+    D = math.lcm(lo.denominator, hi.denominator) * n
+    A = lo.numerator * (D // lo.denominator)
+    B = ((hi - lo) * D / n).numerator   # an integer: D holds both denominators and n
+    exact = 2 ** 53
+    if max(abs(A), abs(A + n * B), D) <= exact:
+        numerators = A + np.arange(count, dtype=np.int64) * np.int64(B)
+        return numerators.astype(np.float64) / float(D)
+    return np.array([(A + i * B) / D for i in range(count)], dtype=float)
+
+
+def _number(text: str, whole: str) -> float:
+    """A value of ``--over``: a finite float that is the number written (``1e-400``,
+    which a double reads as 0, is refused as a scene's literal is)."""
+    value = float(text)   # ValueError: the caller names the option
+    if value == 0.0:
+        try:
+            exact = Fraction(text.strip())
+        except ValueError:
+            exact = Fraction(0)
+        if exact != 0:
+            raise InputError(f"--over: the number {text.strip()!r} is outside the range of "
+                             f"double precision (about 1e-308 to 1e308), in {whole!r}",
+                             key="--over")
+    return value
 
 
 def parse_over(text: str) -> Axis:
     """``"v=0:10:201"`` (a grid: START:STOP:COUNT, both ends included), ``"c=0:0.2"`` (a
     range, for samples) or ``"m=1,2,5"`` (listed values) -> :class:`Axis`.
+
+    A grid's values are not made here (:meth:`Axis.array`): the size of the design is
+    checked first, from the counts alone.
 
     Raises
     ------
@@ -78,12 +137,15 @@ def parse_over(text: str) -> Axis:
     if listed:
         name, items = listed.groups()
         try:
-            values = tuple(float(s) for s in items.split(","))
+            values = tuple(_number(s, text) for s in items.split(","))
         except ValueError:
             raise InputError(f"--over: listed values must be numbers, got {text!r}",
                              key="--over") from None
         if not all(math.isfinite(v) for v in values) or len(set(values)) != len(values):
             raise InputError(f"--over: listed values must be finite and distinct, got {text!r}",
+                             key="--over")
+        if len(values) > MAX_POINTS:
+            raise InputError(f"--over: at most {MAX_POINTS} values, got {len(values)}",
                              key="--over")
         return Axis(name, values, (min(values), max(values)), text)
     match = _RANGE.match(text)
@@ -93,7 +155,7 @@ def parse_over(text: str) -> Axis:
                          key="--over")
     name, a, b, c = match.groups()
     try:
-        start, stop = float(a), float(b)
+        start, stop = _number(a, text), _number(b, text)
         count = None if c is None else int(c)
     except ValueError:
         raise InputError(f"--over: START and STOP must be numbers and COUNT an integer, "
@@ -105,13 +167,7 @@ def parse_over(text: str) -> Axis:
     if not 1 <= count <= MAX_POINTS:
         raise InputError(f"--over: COUNT must be between 1 and {MAX_POINTS}, got {text!r}",
                          key="--over")
-    # each value the double nearest to the exact decimal START + i (STOP - START)/(COUNT - 1),
-    # so that 0:1:11 has 0.3 (not linspace's 0.30000000000000004): a point is where the
-    # user meant it, also for the exact placement of a classify study
-    lo, hi = Fraction(a.strip()), Fraction(b.strip())
-    values = (float(lo),) if count == 1 else tuple(float(lo + i * (hi - lo) / (count - 1))
-                                                   for i in range(count))
-    return Axis(name, values, (start, stop), text)
+    return Axis(name, (), (start, stop), text, (Fraction(a.strip()), Fraction(b.strip()), count))
 
 
 def parse_perturbation(text: str) -> tuple:
@@ -189,10 +245,9 @@ def grid(axes) -> Design:
                          f"values; {', '.join(missing)} is a range (give --samples to sample "
                          f"it)", key="--over")
     shape = tuple(a.count for a in axes)
-    _check_size(shape)
+    _check_size(shape)   # from the counts: no value is made for a design refused
     names = tuple(a.name for a in axes)
-    return Design("grid", names, names, shape,
-                  {a.name: np.asarray(a.values, dtype=float) for a in axes}, (),
+    return Design("grid", names, names, shape, {a.name: a.array() for a in axes}, (),
                   np.zeros(shape + (0,)),
                   {"kind": "grid", "over": [a.text for a in axes]})
 
@@ -226,6 +281,7 @@ def samples(axes, count: int, *, sampler: str = "lhs", seed: int = 0,
                          key="--sampler")
     if not 1 <= count <= MAX_POINTS:
         raise InputError(f"--samples: between 1 and {MAX_POINTS}, got {count}", key="--samples")
+    check_seed(seed)
     names = tuple(a.name for a in axes)
     rng = np.random.default_rng(seed)
     if axes:
@@ -254,19 +310,35 @@ def samples(axes, count: int, *, sampler: str = "lhs", seed: int = 0,
                    "initial_perturbation": [f"{n}={s!r}" for n, s in perturbations]})
 
 
-def chunk_slices(shape: tuple, points: int, whole: int | None = None) -> list:
+def check_seed(seed) -> None:
+    """A seed of the samples is a non-negative integer (numpy's generators take no other).
+
+    Raises
+    ------
+    InputError
+        Naming ``--seed``.
+    """
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+        raise InputError(f"--seed: a non-negative integer, got {seed!r}", key="--seed")
+
+
+def chunk_slices(shape: tuple, points: int, whole: int | None = None,
+                 first: int | None = None) -> list:
     """Regions (tuples of slices) covering an array of ``shape``, about ``points``
     elements each (at most ``points``, the pieces along a dimension of sizes that differ
     by at most one), in C order.
 
     ``whole``: a dimension never cut (each region holds whole lines along it: a
-    boundary traced along that dimension is found within one region).
+    boundary traced along that dimension is found within one region). ``first``: a
+    dimension filled first (whole lines along it when a line fits in ``points``, else
+    pieces of lines of at most ``points``).
     """
     points = max(1, int(points))
     sizes = [1] * len(shape)
     room = points
-    order = ([whole] if whole is not None else []) + [i for i in reversed(range(len(shape)))
-                                                      if i != whole]
+    lead = whole if whole is not None else first
+    order = ([lead] if lead is not None else []) + [i for i in reversed(range(len(shape)))
+                                                    if i != lead]
     for i in order:
         take = shape[i] if i == whole else max(1, min(shape[i], room))
         sizes[i] = take
@@ -287,7 +359,7 @@ def _distinct(axes) -> None:
 
 
 def _check_size(shape) -> None:
-    size = int(np.prod(shape, dtype=np.int64))
+    size = math.prod(shape)   # Python's integers: three axes of 10**7 do not wrap around
     if size > MAX_POINTS:
         raise InputError(f"--over: {' x '.join(map(str, shape))} = {size} points; at most "
                          f"{MAX_POINTS} in one study", key="--over")

@@ -24,11 +24,14 @@ from typing import Any
 import numpy as np
 
 from nhham.budget import time_budget
-from nhham.errors import BudgetExceeded, InputError
-from nhham.study.points import (Axis, Design, chunk_slices, grid, parse_over,
-                                parse_perturbation, samples)
-from nhham.study.store import Store, attrs_text, study_key
+from nhham.errors import BudgetExceeded, InputError, OutputUnwritable
 from nhham.study.kinds import WHAT
+from nhham.study.lines import LINE_VARIABLES, merged
+from nhham.study.points import (Axis, Design, check_seed, chunk_slices, grid, parse_over,
+                                parse_perturbation, samples)
+from nhham.study.schedule import check_scheduler
+from nhham.study.store import Store, attrs_text, regions_of, study_key
+from nhham.study.target import check_out
 from nhham.study.tasks import Study, keep_context
 
 __all__ = ["sweep", "SweepResult", "CHUNK_POINTS"]
@@ -66,6 +69,12 @@ class SweepResult:
         Chunks of the design (each a task).
     scene : Scene
         The scene as loaded here.
+    stopped : str or None
+        Why an incomplete study stopped: ``"budget"`` (its budget ran out), or the
+        failure to write its store (one line); None when it is complete.
+    kept : str or None
+        Where its results are on disk: the output when complete, else the store to
+        ``--resume`` (None: in memory).
     """
 
     dataset: Any = field(repr=False)
@@ -79,6 +88,8 @@ class SweepResult:
     workers: int
     chunks: int
     scene: Any = field(default=None, repr=False)
+    stopped: str | None = None
+    kept: str | None = None
 
     def to_dict(self) -> dict:
         """JSON-ready summary (the command's ``result``)."""
@@ -120,12 +131,20 @@ def sweep(scene, what: str, over=(), *, samples_count: int | None = None,
         ``samples_count``).
     out : str or os.PathLike, optional
         A ``.zarr`` directory or a ``.nc`` file; written chunk by chunk (None: memory).
+        Checked before any work (:func:`~nhham.study.target.check_out`).
     resume, overwrite : bool
-        Continue an interrupted study at ``out``; replace an existing one.
+        Continue an interrupted study at ``out`` (made by this nhham, from the same code,
+        scene and options; chunks whose data are missing are computed again); replace a
+        study nhham wrote there, once the new one is complete (anything else at ``out``
+        is refused).
     scheduler, workers, client
-        Where the chunks run (:mod:`nhham.study.schedule`).
+        Where the chunks run (:mod:`nhham.study.schedule`; a remote scheduler's results
+        are unpickled here: use only a cluster you trust, over ``tls://``).
     budget : float, optional
-        Seconds for the whole study; what finished is kept (``complete`` False).
+        Seconds for the whole study (connecting to a scheduler, the preparation, each
+        chunk's runs); what finished is kept (``complete`` False, ``stopped``
+        ``"budget"``). A failed write (a full disk) also keeps what finished
+        (``stopped`` says why).
     chunk_points : int, optional
         Points per chunk (default :data:`CHUNK_POINTS`).
     along : str, optional
@@ -153,60 +172,95 @@ def sweep(scene, what: str, over=(), *, samples_count: int | None = None,
     deadline = None if budget is None else start + float(budget)
     if what not in WHAT:
         raise InputError(f"--what: one of {', '.join(WHAT)}, got {what!r}", key="--what")
+    # every option is checked before any work: the design's size from its counts, where
+    # the results go, the scheduler and the workers
     design = _design(over, samples_count, sampler, seed, initial_perturbation, what)
+    target = check_out(out, resume=resume, overwrite=overwrite)
+    if client is None:   # (its warning, if any, is given once, by Pool.start)
+        check_scheduler(scheduler, workers, warn=False)
     text, source = _scene_text(scene)
     from nhham.study.schedule import Pool
 
     # the workers start, and parse the scene, while this process prepares the study
     # threads share this process's model; classify's sympy holds the GIL: processes
-    with Pool.start(scheduler, workers, client,
+    with Pool.start(scheduler, workers, client, deadline=deadline,
                     local="processes" if what == "classify" else "threads") as pool:
         pool.warm(text, source, what)
         # the preparation (symbolic for classify) is stopped by the budget's alarm; the
         # chunks then stop at its deadline, keeping what finished
-        with time_budget(budget):
-            loaded = _load(text, source, what)
-            options, code_hash, var_spec, model = _prepare(what, loaded, design, along,
-                                                           run_options, policy)
+        loaded, options, code_hash, var_spec, model = _prepared(
+            text, source, what, design, along, run_options, policy, budget, deadline)
         study = Study(what, text, source, code_hash, design, options)
         keep_context(study, loaded, model)
         attrs = _attributes(study)
+        along_axis = _along_axis(design, options)
         regions = chunk_slices(design.shape, chunk_points or CHUNK_POINTS[what],
-                               whole=_whole(design, options))
-        store = Store.resume(out, attrs) if (resume and out is not None) else None
-        if store is None:
-            store = Store.create(out, _template(design, var_spec, attrs),
-                                 _chunking(regions, design), overwrite=overwrite)
-        done = store.done()
+                               first=along_axis)
+        chunking = _chunking(regions, design)
+        if target is not None and target.resuming:
+            store = Store.resume(target, attrs)
+            regions = _resumed_regions(store, design, regions, chunk_points)
+        else:
+            store = Store.create(target, _template(design, var_spec, attrs,
+                                                   None if target is None else chunking),
+                                 chunking, _fills(var_spec))
+        done = store.done(regions, [*var_spec["point"], *var_spec["line"]])
         pending = [r for r in regions if not done[r].all()]
         already = int(done.sum())
         counter = {"points": already}
+        cut = along_axis is not None and any(r[along_axis] != slice(0, design.shape[along_axis])
+                                             for r in regions)
 
         def on_result(region, data):
+            if cut:   # a piece of a line: its crossings merged with the line's stored ones
+                data = merged(store.lines(design.dims, region, LINE_VARIABLES), data)
             store.write(design.dims, region, data)
-            counter["points"] += int(np.prod([len(range(*s.indices(n)))
-                                              for s, n in zip(region, design.shape)]))
+            counter["points"] += int((~done[region]).sum())
+            done[region] = True
             if progress is not None:
                 progress(counter["points"], design.size, time.perf_counter() - start)
 
-        complete = True
+        stopped = None
         run_start = time.perf_counter()
         try:
             pool.run(study, pending, on_result, deadline)
         except BudgetExceeded:
-            complete = False
-        except KeyboardInterrupt:
-            store.finish(complete=False)
-            raise
+            stopped = "budget"
+        except OutputUnwritable as exc:   # what finished is kept; exit 3 saying so
+            stopped = str(exc)
+        # Ctrl-C: what finished is in the store; the pool is abandoned as it is left
         run_time = time.perf_counter() - run_start
-    dataset = store.finish(complete=complete)
+    complete = counter["points"] == design.size
+    try:
+        dataset = store.finish(complete=complete)
+    except OutputUnwritable as exc:
+        stopped, complete, dataset = str(exc), False, store.finish(complete=False)
     return SweepResult(dataset, None if out is None else os.fspath(out), design.size,
-                       counter["points"] - already, complete and counter["points"] == design.size,
-                       time.perf_counter() - start, run_time, pool.scheduler, pool.workers,
-                       len(regions), loaded)
+                       counter["points"] - already, complete, time.perf_counter() - start,
+                       run_time, pool.scheduler, pool.workers, len(regions), loaded,
+                       stopped=stopped if not complete else None,
+                       kept=None if target is None else os.fspath(
+                           target.path if complete else target.working))
+
+
+def _prepared(text, source, what, design, along, run_options, policy, budget,
+              deadline) -> tuple:
+    """(scene, options, code hash, variables, model): the study prepared within what is
+    left of its budget (symbolic work is stopped by the budget's alarm)."""
+    try:
+        if deadline is not None and deadline - time.perf_counter() <= 0:
+            raise BudgetExceeded("")
+        with time_budget(None if deadline is None else deadline - time.perf_counter()):
+            loaded = _load(text, source, what)
+            return (loaded,) + _prepare(what, loaded, design, along, run_options, policy)
+    except BudgetExceeded:
+        raise BudgetExceeded(f"the study's --budget of {budget:g} s ran out before its "
+                             f"first chunk (starting the workers, loading the scene, "
+                             f"building the model and the study's decisions)") from None
 
 
 def _design(over, count, sampler, seed, perturbation, what) -> Design:
+    check_seed(seed)
     axes = [a if isinstance(a, Axis) else parse_over(a) for a in over]
     perturbations = [p if isinstance(p, tuple) else parse_perturbation(p)
                      for p in perturbation]
@@ -266,10 +320,34 @@ def _prepare(what, scene, design, along, run_options, policy) -> tuple:
     return options, code_hash, ensemble.variables(design, options), model
 
 
-def _whole(design, options):
-    """The dimension a chunk never cuts (the one boundaries are traced along)."""
+def _along_axis(design, options):
+    """The dimension boundaries are traced along (filled first by a chunk; a line longer
+    than a chunk is cut into pieces: :mod:`~nhham.study.lines`)."""
     along = options.get("along")
     return None if along is None else design.dims.index(along)
+
+
+def _resumed_regions(store, design, regions, chunk_points) -> list:
+    """The regions of a resumed study: those of its store's chunks (a region written is
+    a chunk of the store). Another ``--chunk`` than the store's is refused."""
+    sizes = store.chunk_sizes(design.dims)
+    if sizes is None or sizes == tuple(_chunking(regions, design).values()):
+        return regions
+    if chunk_points is not None:
+        raise InputError(f"--chunk: the study at {store.working} is stored in chunks of "
+                         f"{' x '.join(map(str, sizes))} points, not "
+                         f"{' x '.join(map(str, _chunking(regions, design).values()))}; "
+                         f"resume it without --chunk (or with the --chunk it was made with)",
+                         key="--chunk")
+    return regions_of(design.shape, sizes)
+
+
+def _fills(spec) -> dict:
+    """Each variable's fill value (what a point not computed holds)."""
+    fills = {name: fill for group in ("point", "line") for name, (_, _, fill) in
+             spec[group].items()}
+    fills["done"] = False
+    return fills
 
 
 def _chunking(regions, design) -> dict:
@@ -290,11 +368,20 @@ def _attributes(study) -> dict:
     return attrs
 
 
-def _template(design, spec, attrs):
-    """The study's Dataset filled with its fill values (NaN, -1, False)."""
+def _template(design, spec, attrs, chunking=None):
+    """The study's Dataset filled with its fill values (NaN, -1, False); with
+    ``chunking`` ({dim: size}, a store on disk) its variables are lazy Dask arrays of
+    those chunks (nothing of the size of the study is made in memory)."""
     from nhham.study.store import xarray_module
 
     xr = xarray_module()
+    full = np.full
+    if chunking is not None:
+        import dask.array as da
+
+        def full(shape, fill, dtype, dims=()):   # noqa: F811 - lazy on disk
+            return da.full(shape, fill, dtype=dtype,
+                           chunks=tuple(chunking.get(d, n) for d, n in zip(dims, shape)))
     coords = {}
     if design.kind == "grid":
         coords.update({d: design.coordinates[d] for d in design.dims})
@@ -307,21 +394,28 @@ def _template(design, spec, attrs):
     data = {}
     for name, (extra, dtype, fill) in spec["point"].items():
         shape = design.shape + tuple(len(spec["coords"][d]) for d in extra)
-        data[name] = (design.dims + extra, np.full(shape, fill, dtype=dtype))
+        dims = design.dims + extra
+        data[name] = (dims, full(shape, fill, dtype=dtype, **_dims(chunking, dims)))
     line_dims = tuple(d for d in design.dims if d != _along(attrs))
     for name, (extra, dtype, fill) in spec["line"].items():
         shape = tuple(design.shape[design.dims.index(d)] for d in line_dims) + tuple(
             len(spec["coords"][d]) for d in extra)
-        data[name] = (line_dims + extra, np.full(shape, fill, dtype=dtype))
+        dims = line_dims + extra
+        data[name] = (dims, full(shape, fill, dtype=dtype, **_dims(chunking, dims)))
     if design.perturbed:
         data["initial_perturbation"] = (("sample", "perturbed"), design.perturbations)
         coords["perturbed"] = np.array(design.perturbed, dtype=object)
-    data["done"] = (design.dims, np.zeros(design.shape, dtype=bool))
+    data["done"] = (design.dims, full(design.shape, False, dtype=bool,
+                                      **_dims(chunking, design.dims)))
     used = {d for v in data.values() for d in v[0]}
     coords = {k: v for k, v in coords.items()
               if k in used or (isinstance(v, tuple) and v[0] in used)}
     ds = xr.Dataset(data, coords=coords, attrs=attrs)
     return ds
+
+
+def _dims(chunking, dims) -> dict:
+    return {} if chunking is None else {"dims": dims}
 
 
 def _along(attrs) -> str | None:

@@ -13,10 +13,12 @@ the study was made with; it keeps the model for every later chunk of the same st
 from __future__ import annotations
 
 import threading
+import time
 from collections import OrderedDict
 from dataclasses import dataclass, field
 
-from nhham.errors import ComputationError
+from nhham.errors import BudgetExceeded, ComputationError
+from nhham.study.lines import extended, trimmed
 from nhham.study.points import Design
 
 __all__ = ["Study", "Context", "context", "evaluate", "keep_context", "study_model",
@@ -142,8 +144,14 @@ def study_system(scene, what: str):
     return scene.system
 
 
-def evaluate(study: Study, region: tuple) -> dict:
+def evaluate(study: Study, region: tuple, until: float | None = None) -> dict:
     """The study's variables on one region of its design (one slice per dimension).
+
+    ``until``: a ``time.time()`` after which the chunk is not finished (a simulation
+    stops inside its runs, whatever their length):
+    :class:`~nhham.errors.BudgetExceeded` is raised and nothing of the chunk is kept.
+    A wall-clock time, the same in every process of one machine (``time.perf_counter``
+    is not).
 
     Returns
     -------
@@ -153,5 +161,16 @@ def evaluate(study: Study, region: tuple) -> dict:
     """
     from nhham.study import classes, ensemble, stability
 
-    module = {"linearize": stability, "simulate": ensemble, "classify": classes}[study.what]
-    return module.evaluate(study, context(study), region)
+    if until is not None and time.time() > until:
+        raise BudgetExceeded("the study's --budget ran out")
+    if study.what == "simulate":
+        return ensemble.evaluate(study, context(study), region, until=until)
+    if study.what == "classify":
+        return classes.evaluate(study, context(study), region)
+    along = study.options.get("along")
+    if along is None:
+        return stability.evaluate(study, context(study), region)
+    # a piece of a line longer than a chunk: with the point before it (lines.py)
+    axis = study.design.dims.index(along)
+    grown, added = extended(region, axis)
+    return trimmed(stability.evaluate(study, context(study), grown), axis, added)

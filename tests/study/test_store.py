@@ -98,6 +98,8 @@ def test_a_study_out_of_budget_keeps_what_it_has(tmp_path):
 
     out = tmp_path / "drive.zarr"
     drive = "examples/differential_drive_motors.toml"
+    # the model built and the modules imported first: the preparation then fits the budget
+    assert sweep(drive, "simulate", ["c=0.01:0.05:4"], workers=1).complete
     stopped = sweep(drive, "simulate", ["c=0.01:0.05:4"], workers=1, out=out, chunk_points=1,
                     budget=2.0, progress=lambda done, total, elapsed: time.sleep(2.0))
     assert not stopped.complete and stopped.computed == 1

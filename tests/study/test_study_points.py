@@ -85,3 +85,55 @@ def test_chunks_are_even():
     regions = chunk_slices((201, 101), 4096, 0)
     assert sorted(r[1].stop - r[1].start for r in regions) == [16, 17, 17, 17, 17, 17]
     assert sorted({r[0].stop - r[0].start for r in chunk_slices((1000,), 256)}) == [250]
+
+
+def test_grid_values_are_the_exact_decimals_rounded_also_for_many_points():
+    """Each value is the double nearest to START + i (STOP - START)/(COUNT - 1), the exact
+    decimal (Fraction arithmetic, one value at a time, is the reference), on the
+    vectorised path and on the one for many-digit decimals."""
+    from fractions import Fraction
+
+    for text in ("v=-3.7:12.123:997", "x=0.1:0.7:20003", "y=1e-300:1e-299:5",
+                 "z=1.23456789012345678:2:7", "w=-1e20:3e20:11"):
+        name, ends = text.split("=")
+        lo, hi, count = ends.split(":")
+        lo, hi, count = Fraction(lo), Fraction(hi), int(count)
+        expected = [float(lo + i * (hi - lo) / (count - 1)) for i in range(count)]
+        assert list(grid([parse_over(text)]).coordinates[name]) == expected, text
+
+
+def test_a_grid_too_large_is_refused_from_its_counts_before_any_value_is_made(monkeypatch):
+    import nhham.study.points as points
+
+    def no_values(*args):
+        raise AssertionError("values made for a design that is refused")
+
+    monkeypatch.setattr(points, "_decimal_grid", no_values)
+    axes = [parse_over("a=0:1:10000000"), parse_over("b=0:1:10000000"),
+            parse_over("c=0:1:10000000")]
+    with pytest.raises(InputError, match=r"10000000 x 10000000 x 10000000 = "
+                                         r"1000000000000000000000 points; at most 10000000"):
+        grid(axes)
+
+
+@pytest.mark.parametrize("text", ["k=1e-400:1:3", "k=0:1e-400:3", "k=1e-400,1", "k=-1e-999:1"])
+def test_a_number_beyond_double_precision_is_refused_as_in_a_scene(text):
+    with pytest.raises(InputError, match="'-?1e-[0-9]+' is outside the range of double "
+                                         "precision") as info:
+        parse_over(text)
+    assert info.value.key == "--over"
+    assert parse_over("k=1e-310:1:3").values[0] == 1e-310      # subnormal: a double
+
+
+def test_a_negative_seed_is_refused_naming_it():
+    with pytest.raises(InputError, match="--seed: a non-negative integer, got -1") as info:
+        samples([parse_over("x=0:1")], 4, seed=-1)
+    assert info.value.key == "--seed"
+
+
+def test_a_line_longer_than_a_chunk_is_cut_when_filled_first():
+    regions = chunk_slices((1000, 3), 256, first=0)
+    assert len(regions) == 12 and all(r[1] == slice(0, 1) for r in regions[::3])
+    assert {r[0].stop - r[0].start for r in regions} == {250}
+    # a line that fits is kept whole, as many lines as fit
+    assert chunk_slices((10, 30), 25, first=0)[0] == (slice(0, 10), slice(0, 2))
