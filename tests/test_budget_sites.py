@@ -135,6 +135,10 @@ def test_bracket_coefficients_let_an_expiry_through(monkeypatch):
     class Side:
         system = type("S", (), {"n": 5})()
 
+    class Sampler:   # rational points are there; n > combination_size asks for floats
+        on_M1 = staticmethod(lambda system, seed: object())
+
+    monkeypatch.setattr(classes_at_points, "PointSampler", Sampler)
     monkeypatch.setattr(classes_at_points, "float_brackets", _expire)
     with pytest.raises(BudgetExceeded, match="planted"):
         classes_at_points._coefficients_at_a_point(Side(), [], ["a", "b"], None,
