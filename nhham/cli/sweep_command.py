@@ -144,6 +144,11 @@ def cmd_sweep(args, steps):
         warnings.append(f"{s['not_linearised']} points have no linearisation: the [steady] "
                         f"state is not on M_1, not steady or singular there (status in the "
                         f"results: 1, 2, 3)")
+    if args.what == "linearize" and s.get("unlocated_crossings"):
+        warnings.append(f"{s['unlocated_crossings']} grid intervals along the boundaries' "
+                        f"parameter change their number of unstable eigenvalues with no "
+                        f"eigenvalue on the imaginary axis (a jump of the linearisation): no "
+                        f"boundary is reported there (boundary_unlocated in the results)")
     failure = None
     if not result.complete:
         done = f"{data['points'] - _missing(result)} of {data['points']} points done"
@@ -174,6 +179,8 @@ def summary(what: str, ds) -> dict:
                 out[f"{name}_crossings"] = int(vals.size)
                 out[f"{name}_crossing_range"] = ([float(vals.min()), float(vals.max())]
                                                  if vals.size else None)
+            unlocated = np.asarray(ds["boundary_unlocated"].values)
+            out["unlocated_crossings"] = int(unlocated[unlocated > 0].sum())
         return out
     if what == "simulate":
         success = np.asarray(ds["success"].values, dtype=bool) & done
@@ -208,7 +215,10 @@ def _text(args, result, data) -> str:
         rows.append(("stable", f"{s['stable_points']} of {s['done_points']} points"
                      + (f"; {s['not_linearised']} not linearised (status != 0)"
                         if s["not_linearised"] else "")))
-        for kind, word in (("complex", "complex pair (weave-like)"), ("real", "real (capsize-like)")):
+        from nhham.study.plot_style import CROSSING_STYLE
+
+        for kind in ("complex", "real"):
+            word = CROSSING_STYLE[kind]["label"]
             if s.get(f"{kind}_crossings"):
                 lo, hi = s[f"{kind}_crossing_range"]
                 rows.append((f"{kind} crossings", f"{s[f'{kind}_crossings']}, {word}, "

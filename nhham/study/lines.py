@@ -18,7 +18,8 @@ import numpy as np
 __all__ = ["LINE_VARIABLES", "extended", "trimmed", "merged"]
 
 #: The per-line variables of a linearize grid.
-LINE_VARIABLES = ("boundary", "boundary_kind", "boundary_direction", "boundary_count")
+LINE_VARIABLES = ("boundary", "boundary_kind", "boundary_direction", "boundary_count",
+                  "boundary_unlocated")
 
 
 def extended(region: tuple, axis: int) -> tuple:
@@ -46,7 +47,11 @@ def merged(old: dict, new: dict) -> dict:
     lines; a count of -1: nothing stored yet); the other variables of ``new`` as they
     are."""
     out = dict(new)
-    value, kind, direction, count = (np.array(old[k]) for k in LINE_VARIABLES)
+    value, kind, direction, count = (np.array(old[k]) for k in LINE_VARIABLES[:4])
+    # unlocated intervals: each belongs to one piece (pieces share no bracket), so the
+    # pieces' counts add up
+    unlocated = (np.maximum(np.asarray(old.get("boundary_unlocated", 0)), 0)
+                 + np.maximum(np.asarray(new.get("boundary_unlocated", 0)), 0))
     room = value.shape[-1]
     for line in np.ndindex(*count.shape):
         have = _entries(old, line)
@@ -63,7 +68,8 @@ def merged(old: dict, new: dict) -> dict:
         for j, (v, k, d) in enumerate(entries):
             value[line + (j,)], kind[line + (j,)], direction[line + (j,)] = v, k, d
     out.update({"boundary": value, "boundary_kind": kind, "boundary_direction": direction,
-                "boundary_count": count})
+                "boundary_count": count,
+                "boundary_unlocated": np.broadcast_to(unlocated, count.shape).astype(np.int16)})
     return out
 
 

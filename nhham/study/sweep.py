@@ -294,7 +294,12 @@ def _scene_text(scene) -> tuple:
 def _load(text, source, what):
     from nhham.system.scene import loads_scene
 
-    return loads_scene(text, source, check_initial=what != "simulate")
+    # [initial] is a simulate study's start (projected onto M_1 at each point): what
+    # cannot be completed is refused there; the other kinds do not read it
+    scene = loads_scene(text, source, check_initial=False)
+    if what == "simulate" and scene.initial_problem is not None:
+        raise scene.initial_problem
+    return scene
 
 
 def _prepare(what, scene, design, along, run_options, policy) -> tuple:
