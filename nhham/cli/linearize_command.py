@@ -181,10 +181,12 @@ def _linearize(scene, system, model, method, independent=None):
     """The linearisation of ``system`` (``model``) about the scene's [steady] motion."""
     from nhham.numerics.linearization import linearize
     from nhham.numerics.steady_sweep import with_steady_inputs
+    from nhham.system.force_checks import check_forces_at
 
     values = scene.steady.values(model.parameters)
     _check_laws(scene, system, model, values)
     model, state = with_steady_inputs(model, values)
+    check_forces_at(system, values, where="the [steady] motion")
     lin = linearize(model, state, family=scene.steady.family(model.parameters),
                     independent=independent)
     if method == "exact" or (method == "auto" and system.n <= EXACT_MAX_N):
@@ -273,6 +275,7 @@ def cmd_linearize(args, steps):
 
     with steps.step(f"load scene {args.scene}"):
         scene = load_scene(args.scene)
+    args.loaded_scene = scene  # the envelope of a later failure names the scene
     sweep = parse_sweep(args.sweep) if args.sweep else None
     if args.plot and sweep is None:
         raise InputError("--plot draws the root locus of a sweep: give --sweep too")

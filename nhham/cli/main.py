@@ -532,6 +532,10 @@ def cmd_simulate(args, steps) -> CommandOutput:
     t_end, opts = _simulate_options(args, scene)
     system = _closed_loop(scene, args)
     t_span = (0.0, float(t_end))
+    if not args.project_initial:   # a force undefined there: say which (exactly)
+        from nhham.system.force_checks import check_forces_at
+
+        check_forces_at(system, scene.initial, where="the initial state")
     with capture_warnings() as caught:
         plan = storage_plan(scene.system.n, opts.get("method", "DOP853"),
                             opts.get("save_every", 1), opts.get("max_points"))
