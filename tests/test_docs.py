@@ -120,6 +120,22 @@ def test_no_dangling_design_references():
         assert section in text
 
 
+def test_the_paper_is_cited_by_its_title_and_journal():
+    """The paper nhham implements is the Extracta Mathematicae one (1996), not the
+    authors' J. Math. Phys. paper of the same year; every full citation says so."""
+    sources = [ROOT / "README.md", ROOT / "DESIGN.md", *DOCS.glob("*.md"), *DOCS.glob("*.rst"),
+               *(ROOT / "nhham").rglob("*.py"), *(ROOT / "tests").rglob("*.py")]
+    here = Path(__file__).resolve()
+    wrong = [p.name for p in sources if p.resolve() != here
+             and ("J. Math. Phys" in p.read_text() or "On the geometry of non" in p.read_text())]
+    assert wrong == []
+    title = "Solving\nnon-holonomic Lagrangian dynamics in terms of almost product structures"
+    for path in (ROOT / "DESIGN.md", DOCS / "paper-errata.md", ROOT / "README.md"):
+        text = " ".join(path.read_text().split())
+        assert " ".join(title.split()) in text and "Extracta Mathematicae 11 (1996) 325–347" \
+            in text, path.name
+
+
 def test_packaging_files():
     for name in ("LICENSE", "CHANGELOG.md", "nhham/py.typed",
                  "nhham/cli/schemas/output.schema.json"):
