@@ -301,11 +301,11 @@ def cmd_derive(args, steps) -> CommandOutput:
 def _with_forces(out: CommandOutput, system, latex: bool = False) -> CommandOutput:
     """``out`` with the generalized forces Q (dissipation included) and the inputs: JSON
     ``generalized_forces`` (null without forces) and ``inputs``, and a text section (rows
-    of the aligned block with ``latex``); the field is then named P(xi_L + F^v)."""
+    of the aligned block with ``latex``); the text names the field P(xi_L + F^v)."""
     import dataclasses
 
     from nhham.cli import latex as tex
-    from nhham.cli.report import expr_text
+    from nhham.cli.report import expr_text, labelled, paragraph
 
     out.result["inputs"] = [u.name for u in system.inputs]
     if not system.has_forces:
@@ -324,12 +324,11 @@ def _with_forces(out: CommandOutput, system, latex: bool = False) -> CommandOutp
             head, end = body.rsplit("\\end{aligned}", 1)
             return head.rstrip("\n") + " \\\\\n" + " \\\\\n".join(rows) + \
                 "\n\\end{aligned}" + end
-        lines = ["generalized forces Q (in F; d/dt dL/dv - dL/dq = Q - mu^T lambda):"]
-        lines += [f"  Q[{q.name}]  =  {f}" for q, f in zip(system.coordinates, forces)]
+        lines = [paragraph("generalized forces Q (in F; d/dt dL/dv - dL/dq = Q - mu^T "
+                           "lambda):"),
+                 table([(f"Q[{q.name}]", "=", f) for q, f in zip(system.coordinates, forces)])]
         if system.inputs:
-            lines.append("inputs: " + ", ".join(u.name for u in system.inputs))
-        body = body.replace("projected field P(xi_L) on TQ", "projected field P(xi_L + F^v) "
-                            "on TQ (F^v: the forces' vertical lift)", 1)
+            lines.append(labelled("inputs", ", ".join(u.name for u in system.inputs)))
         return body + "\n" + "\n".join(lines)
 
     return dataclasses.replace(out, text=with_section)

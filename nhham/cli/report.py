@@ -79,6 +79,15 @@ def labelled(label: str, text: str) -> str:
     return "\n".join([f"{label}: {pieces[0]}"] + [hang + p for p in pieces[1:]])
 
 
+def paragraph(text: str, hang: int = 2) -> str:
+    """A heading or sentence wrapped to the width, continuation lines ``hang`` columns in
+    (no elision: it is the report's own text)."""
+    from nhham.cli.layout import width, wrap
+
+    pieces = wrap(text, width() - hang, max_lines=10**6)
+    return "\n".join([pieces[0]] + [" " * hang + p for p in pieces[1:]])
+
+
 def matrix_table(cells, name: str, rows, cols, indent="  ") -> str:
     """A matrix of expression strings: a grid when it fits the width, else its entries.
 

@@ -14,7 +14,7 @@ import sympy as sp
 from nhham.cli import latex as tex
 from nhham.cli.envelope import jsonable
 from nhham.settings import json_number
-from nhham.cli.report import expr_text, labelled, matrix_table, table
+from nhham.cli.report import expr_text, labelled, matrix_table, paragraph, table
 from nhham.cli.layout import grid_fits as table_fits
 from nhham.cli.simplify import display_form
 
@@ -213,7 +213,9 @@ def derive_data(side: str, variables, field, multipliers, C, energy, free) -> di
 def derive_text(title: str, data: dict) -> str:
     what = "Hamiltonian field on T*Q" if data["side"] == "hamiltonian" else \
         "projected field P(xi_L) on TQ"
-    lines = [f"{title}: {what}"]
+    if data.get("generalized_forces") and data["side"] != "hamiltonian":
+        what = "projected field P(xi_L + F^v) on TQ (F^v: the forces' vertical lift)"
+    lines = [paragraph(f"{title}: {what}")]
     lines.append(table([(f"{n}'", "=", t) for n, t in zip(data["state"], data["field"])]))
     if data["multipliers"]:
         lines.append("multipliers:")
@@ -320,8 +322,8 @@ def contact_text(data: dict | None) -> str:
 def implicit_text(title: str, data: dict) -> str:
     """derive without closed forms: W a + mu^T lambda = F, mu a = rhs, and M_f."""
     q = [n[:-4] for n in data["state"][len(data["state"]) // 2:]]
-    lines = [f"{title}: dynamics in implicit form (W a + mu^T lambda = F, mu a = rhs), "
-             f"a = ({', '.join(data['accelerations'])})"]
+    lines = [paragraph(f"{title}: dynamics in implicit form (W a + mu^T lambda = F, "
+                       f"mu a = rhs), a = ({', '.join(data['accelerations'])})")]
     lines.append("mass matrix W (rows and columns: " + ", ".join(q) + "):")
     lines.append(matrix_table(data["mass_matrix"], "W", q, q))
     lines.append("forcing F (the row of each coordinate):")
