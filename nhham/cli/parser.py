@@ -232,7 +232,8 @@ def add_common_arguments(p: argparse.ArgumentParser, budget: float | None = None
     p.add_argument("scene", help="scene file (TOML); see examples/")
     p.add_argument("--json", action="store_true",
                    help="print one JSON envelope {command, nhham_version, scene, result, "
-                        "warnings} on stdout")
+                        "warnings, error} on stdout, whatever the exit status (error: null "
+                        "on success, else {kind, message, key})")
     p.add_argument("--verbose", action="store_true",
                    help="list on stderr what was derived, how decisions were made, and timings")
     p.add_argument("--debug", action="store_true", help="tracebacks for internal errors")
