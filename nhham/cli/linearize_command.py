@@ -31,11 +31,7 @@ from __future__ import annotations
 import re
 import textwrap
 
-import numpy as np
-
 from nhham.errors import InputError, OptionalDependencyError
-from nhham.cli.report import table
-from nhham.system.expressions import to_text
 
 __all__ = ["add_arguments", "cmd_linearize", "linearize_scene", "open_loop",
            "parse_sweep", "plot_root_locus",
@@ -83,6 +79,8 @@ def parse_sweep(text: str):
     InputError
         Naming what is wrong with the option.
     """
+    import numpy as np
+
     match = _SWEEP.match(text or "")
     if not match:
         raise InputError(f"--sweep: expected PARAMETER=START:STOP:COUNT (e.g. v=0:10:101), "
@@ -216,6 +214,7 @@ def _check_laws(scene, system, model, values) -> None:
 def _exact(scene, system, model, lin):
     """The same linearisation with the exact Jacobian in the numeric chart."""
     import mpmath
+    import numpy as np
     import sympy as sp
 
     from nhham.lagrangian.jacobian import exact_jacobian, exact_number
@@ -271,6 +270,7 @@ def cmd_linearize(args, steps):
     """The command: load, linearise, sweep; a :class:`~nhham.cli.envelope.CommandOutput`."""
     from nhham.cli.envelope import CommandOutput, capture_warnings, scene_info
     from nhham.numerics.codegen import numeric_model
+    from nhham.system.expressions import to_text
     from nhham.system.scene import load_scene
 
     with steps.step(f"load scene {args.scene}"):
@@ -315,6 +315,9 @@ def _json(lin) -> dict:
 
 
 def _text(scene, lin, swept, args, opened=None) -> str:
+    from nhham.cli.report import table
+    from nhham.system.expressions import to_text
+
     closed = opened is not None
     lines = [f"{scene.name or args.scene}: linearisation about the [steady] motion"
              + (", the loop closed by its [control] laws" if closed else "")]
@@ -355,6 +358,8 @@ def _text(scene, lin, swept, args, opened=None) -> str:
 
 def _matrices(lin, title) -> list:
     """The state matrix, B and the eigenvalues of ``lin`` as lines of text."""
+    from nhham.cli.report import table
+
     lines = []
     floor = rounding_level(lin)
     shown_as_zero = False
@@ -393,6 +398,8 @@ def rounding_level(lin) -> float:
     float64; the exact method's matrix is exact and its eigenvalues are computed
     at :data:`EXACT_DIGITS` digits.
     """
+    import numpy as np
+
     scale = max(1.0, float(np.abs(lin.matrix).max(initial=0.0)))
     eps = 10.0 ** -EXACT_DIGITS if lin.method == "exact" else float(np.finfo(float).eps)
     return 64 * eps * scale
@@ -415,6 +422,8 @@ def plot_root_locus(swept, path, title: str = "") -> str:
     Uses matplotlib's object API with the Agg canvas for this figure only
     (the user's pyplot backend is left alone).
     """
+    import numpy as np
+
     Figure, FigureCanvasAgg = _matplotlib()
     fig = Figure(figsize=(7, 5))
     FigureCanvasAgg(fig)

@@ -38,7 +38,6 @@ from nhham.cli.envelope import (
     scene_info,
 )
 from nhham.cli.linearize_command import cmd_linearize
-from nhham.cli.sweep_command import cmd_sweep
 from nhham.cli.options import check_options
 from nhham.cli.report import Steps, expr_text, table
 from nhham.errors import InputError, NhhamError, UsageError
@@ -650,6 +649,13 @@ def cmd_bench(args, steps) -> CommandOutput:
                          warnings=caught)
 
 
+def cmd_sweep(args, steps) -> CommandOutput:
+    """A parameter study (:mod:`nhham.cli.sweep_command`, imported when it runs)."""
+    from nhham.cli.sweep_command import cmd_sweep as run
+
+    return run(args, steps)
+
+
 # -------------------------------------------------------------------- main
 COMMANDS = {
     "classify": cmd_classify,
@@ -665,6 +671,11 @@ COMMANDS = {
 def main(argv=None) -> int:
     """Run the command; returns the exit status."""
     argv = sys.argv[1:] if argv is None else list(argv)
+    if argv == ["--version"]:   # needs no parser (whose commands import numpy)
+        from nhham.settings import __version__
+
+        print(f"nhham {__version__}")
+        return EXIT_OK
     parser = build_parser()
     words = [a for a in argv if a in COMMANDS]
     # Where failures are reported, as far as the command line was understood.

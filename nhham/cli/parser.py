@@ -11,10 +11,6 @@ import argparse
 from nhham.cli.envelope import (
     one_line,
 )
-from nhham.cli.linearize_command import LINEARIZE_HELP
-from nhham.cli.linearize_command import add_arguments as add_linearize_arguments
-from nhham.cli.sweep_command import SWEEP_HELP
-from nhham.cli.sweep_command import add_arguments as add_sweep_arguments
 from nhham.cli.options import DEFAULT_BUDGET, argparse_key, budget_value
 from nhham.errors import UsageError
 
@@ -54,8 +50,7 @@ _HELP = {
               "Measure every method against a high-precision mpmath reference: error at "
               "t_end against wall time, constraint residual and energy drift.",
               "nhham bench examples/chaplygin_sleigh.toml --quick --plot wp.png"),
-    "linearize": LINEARIZE_HELP,
-    "sweep": SWEEP_HELP,
+    # linearize and sweep: their modules' (imported when the parser is built)
 }
 
 
@@ -84,15 +79,21 @@ def build_parser() -> argparse.ArgumentParser:
         epilog=_EXIT_TEXT + ". Run `nhham COMMAND --help` for a command's options.")
     parser.add_argument("--version", action="version", version=f"nhham {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
-    for name, (short, long, example) in _HELP.items():
+    from nhham.cli import linearize_command, sweep_command
+
+    helps = dict(_HELP, linearize=linearize_command.LINEARIZE_HELP,
+                 sweep=sweep_command.SWEEP_HELP)
+    options = dict(_OPTIONS, linearize=linearize_command.add_arguments,
+                   sweep=sweep_command.add_arguments)
+    for name, (short, long, example) in helps.items():
         p = sub.add_parser(name, help=short, description=long,
                            epilog=f"example: {example}\n{_EXIT_TEXT}",
                            formatter_class=argparse.RawDescriptionHelpFormatter)
         add_common_arguments(p, budget=None if name in ("simulate", "bench", "sweep")
                              else DEFAULT_BUDGET)
         _add_shared_options(p, name)
-        if name in _OPTIONS:
-            _OPTIONS[name](p)
+        if name in options:
+            options[name](p)
     return parser
 
 
@@ -198,8 +199,6 @@ _OPTIONS = {
     "compare": _add_compare_options,
     "simulate": _add_simulate_options,
     "bench": _add_bench_options,
-    "linearize": add_linearize_arguments,
-    "sweep": add_sweep_arguments,
 }
 
 

@@ -12,13 +12,13 @@ import time
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 
-import sympy as sp
-
-__all__ = ["table", "matrix_table", "labelled", "expr_text", "Steps"]
+__all__ = ["table", "matrix_table", "labelled", "paragraph", "expr_text", "Steps"]
 
 
 def expr_text(expr) -> str:
     """An expression as text that ``sympy.sympify`` parses back."""
+    import sympy as sp
+
     from nhham.system.expressions import to_text
 
     return to_text(sp.sympify(expr))
