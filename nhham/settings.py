@@ -86,7 +86,7 @@ def option_problem(key: str, value) -> str | None:
     """What is wrong with ``key = value`` for an option every entry point shares, or None.
 
     ``precision`` None or MIN_DIGITS..MAX_DIGITS digits; ``samples`` 1..MAX_SAMPLES;
-    ``seed`` a whole number; ``max_stages`` None or at least 1; ``tol`` None or a
+    ``seed`` a whole number >= 0; ``max_stages`` None or at least 1; ``tol`` None or a
     positive finite number; ``near`` a finite number >= 0; ``max_depth`` a whole number
     >= 0; ``points`` at least 1.
 
@@ -108,10 +108,10 @@ def option_problem(key: str, value) -> str | None:
         if (value is None and key == "max_stages") or (_whole(value) and value >= 1):
             return None
         return f"expected a whole number >= 1{' or None' if key == 'max_stages' else ''}, got {value!r}"
-    if key in ("seed", "max_depth"):
-        if _whole(value) and (key == "seed" or value >= 0):
+    if key in ("seed", "max_depth"):   # numpy's generators take seeds >= 0 only
+        if _whole(value) and value >= 0:
             return None
-        return f"expected a whole number{' >= 0' if key == 'max_depth' else ''}, got {value!r}"
+        return f"expected a whole number >= 0, got {value!r}"
     if key in ("tol", "near"):
         if value is None and key == "tol":
             return None

@@ -1,6 +1,6 @@
 """Independently derived reference values for the printed examples of
 de León & Martín de Diego (1996), "Solving non-holonomic Lagrangian dynamics in
-terms of almost product structures".
+terms of almost product structures", Extracta Mathematicae 11 (1996) 325–347.
 
 This module does NOT import nhham.  Every value below is written out by hand from
 the conventions of ``DESIGN.md`` §2 (W_AB = d^2L/dv^A dv^B; omega_L = dq^A ^ dp_A;

@@ -58,16 +58,124 @@ def notebook_code(path):
 NOTEBOOKS = ["first_steps.ipynb", "simulation.ipynb", "stability.ipynb"]
 
 
+# What changes from run to run in a notebook's outputs and is not the tutorial's point:
+# timings, object addresses, and which backend ran (the C library may still be compiling).
+_VOLATILE = [(re.compile(r"wall time [0-9.e+-]+ s"), "wall time <t> s"),
+             (re.compile(r"(wall_time_s[^0-9]*)[0-9.e+-]+"), r"\1<t>"),
+             (re.compile(r"\b[0-9.]+(?:e[+-]?\d+)? ?(?:ms|µs|s)\b"), "<t>"),
+             (re.compile(r"0x[0-9a-fA-F]+"), "0x?"),
+             (re.compile(r"\b(?:c|numpy) backend\b"), "<backend> backend")]
+_NUMBER = re.compile(r"[-+]?(?:\d+\.\d*|\.\d+|\d+)(?:[eE][-+]?\d+)?")
+
+
+def _shown(output) -> dict:
+    """{mime or "stream": text} of one output, the volatile parts normalised (images:
+    only that there is one)."""
+    if output["output_type"] == "stream":
+        texts = {"stream": "".join(output["text"])}
+    else:
+        texts = {k: ("<image>" if k.startswith("image/") else
+                     "".join(v) if isinstance(v, list) else str(v))
+                 for k, v in output["data"].items()}
+    for key, text in texts.items():
+        for pattern, by in _VOLATILE:
+            text = pattern.sub(by, text)
+        texts[key] = text
+    return texts
+
+
+def _same_text(fresh: str, stored: str) -> bool:
+    """The same words, and numbers equal to 1e-6 relative (1e-9 absolute: round-off
+    residuals of 1e-13 differ between the compiled and the numpy kernels)."""
+    if _NUMBER.sub("#", fresh) != _NUMBER.sub("#", stored):
+        return False
+    for a, b in zip(_NUMBER.findall(fresh), _NUMBER.findall(stored)):
+        x, y = float(a), float(b)
+        if abs(x - y) > 1e-6 * max(abs(x), abs(y)) + 1e-9:
+            return False
+    return True
+
+
 @pytest.mark.parametrize("name", NOTEBOOKS)
-def test_tutorial_notebook_runs(name):
-    """Every code cell, in order, in a fresh interpreter from the repository root
-    (the cells carry their own assertions)."""
+def test_tutorial_notebook_runs_and_shows_its_stored_outputs(name):
+    """Every code cell, in order, in a fresh interpreter from the repository root (the
+    cells carry their own assertions), by docs/tutorials/execute.py; what each cell shows
+    is what the notebook stores (timings, addresses and the backend aside; numbers to
+    1e-6): a stale stored output fails (rerun execute.py to refresh them)."""
     pytest.importorskip("matplotlib")
-    code = notebook_code(DOCS / "tutorials" / name)
     env = dict(os.environ, MPLBACKEND="Agg")
-    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                          timeout=600, cwd=ROOT, env=env)
+    proc = subprocess.run([sys.executable, str(DOCS / "tutorials" / "execute.py"), "--stdout",
+                           name], capture_output=True, text=True, timeout=600, cwd=ROOT,
+                          env=env)
     assert proc.returncode == 0, proc.stderr[-3000:]
+    fresh = json.loads(proc.stdout.strip().splitlines()[-1])
+    nb = json.loads((DOCS / "tutorials" / name).read_text())
+    stored = [c["outputs"] for c in nb["cells"] if c["cell_type"] == "code"]
+    assert len(fresh) == len(stored)
+    for i, (now, kept) in enumerate(zip(fresh, stored)):
+        assert [o["output_type"] for o in now] == [o["output_type"] for o in kept], (name, i)
+        for a, b in zip(map(_shown, now), map(_shown, kept)):
+            assert sorted(a) == sorted(b), (name, i)
+            for key in a:
+                assert _same_text(a[key], b[key]), (name, i, key, a[key], b[key])
+
+
+def test_stale_notebook_outputs_are_told_apart():
+    """The comparison above is not blind: a changed word or a number off by 1e-4 is a
+    difference; a timing, an address, the backend or a round-off residual is not."""
+    out = {"output_type": "stream", "text": ["energy drift 7.31e-13, wall time 0.0002 s, c "
+                                             "backend at 0x7f00ab, x = 16.04835336\n"]}
+    same = {"output_type": "stream", "text": ["energy drift 7.30e-13, wall time 0.09 s, numpy "
+                                              "backend at 0x55aa01, x = 16.048353361\n"]}
+    assert _same_text(_shown(out)["stream"], _shown(same)["stream"])
+    for changed in ("energy drift 7.31e-13, wall time 0.0002 s, c backend at 0x7f00ab, "
+                    "x = 16.04995336\n",
+                    "energy  drift 7.31e-13, wall time 0.0002 s, c backend at 0x7f00ab, "
+                    "x = 16.04835336\n"):
+        other = {"output_type": "stream", "text": [changed]}
+        assert not _same_text(_shown(out)["stream"], _shown(other)["stream"])
+
+
+_CONFLICT = re.compile(r"^(<{7}|={7}|>{7})(?: .*)?$", re.M)
+
+
+def test_no_merge_conflict_markers_in_the_docs_or_the_readme():
+    """A leftover ``=======`` line renders as text and Sphinx does not warn (it is a
+    valid section underline only under a title of at most 7 characters)."""
+    found = []
+    for path in [ROOT / "README.md", ROOT / "DESIGN.md", ROOT / "CHANGELOG.md",
+                 *DOCS.rglob("*.rst"), *DOCS.rglob("*.md"), *DOCS.rglob("*.ipynb")]:
+        if "_build" in path.parts:
+            continue
+        lines = path.read_text().splitlines()
+        for i, line in enumerate(lines):
+            if not _CONFLICT.match(line.strip('" ,').replace("\\n", "")):
+                continue
+            # an RST title underline (or overline) of the title's length is not a marker
+            title = lines[i - 1].strip() if i else ""
+            if line.startswith("=") and title and len(title) <= len(line) and \
+                    not _CONFLICT.match(title):
+                continue
+            found.append(f"{path.relative_to(ROOT)}:{i + 1}")
+    assert found == []
+
+
+def test_every_help_describes_the_whole_envelope():
+    """``--json`` in every command's --help lists the envelope's keys, ``error`` too."""
+    from nhham.cli.envelope import envelope
+    from nhham.cli.main import COMMANDS, build_parser
+
+    keys = sorted(envelope("classify", {}))
+    parser = build_parser()
+    sub = next(a for a in parser._actions if a.choices and "classify" in a.choices)
+    for command in COMMANDS:
+        text = " ".join(sub.choices[command].format_help().split())
+        listed = re.search(r"envelope \{([^}]*)\}", text)
+        assert listed, command
+        assert sorted(k.strip() for k in listed.group(1).split(",")) == keys, command
+    simulation = (DOCS / "tutorials" / "simulation.ipynb").read_text()
+    for listed in re.findall(r"envelope `\{([^}]*)\}`", simulation.replace('\\n",\n    "', "")):
+        assert sorted(k.strip() for k in listed.split(",")) == keys
 
 
 def test_every_notebook_is_listed_and_stored_with_its_outputs():
@@ -118,6 +226,22 @@ def test_no_dangling_design_references():
     text = (ROOT / "DESIGN.md").read_text()
     for section in ("## 2. Mathematics", "## 3. Contracts", "## 4. Shape of the code"):
         assert section in text
+
+
+def test_the_paper_is_cited_by_its_title_and_journal():
+    """The paper nhham implements is the Extracta Mathematicae one (1996), not the
+    authors' J. Math. Phys. paper of the same year; every full citation says so."""
+    sources = [ROOT / "README.md", ROOT / "DESIGN.md", *DOCS.glob("*.md"), *DOCS.glob("*.rst"),
+               *(ROOT / "nhham").rglob("*.py"), *(ROOT / "tests").rglob("*.py")]
+    here = Path(__file__).resolve()
+    wrong = [p.name for p in sources if p.resolve() != here
+             and ("J. Math. Phys" in p.read_text() or "On the geometry of non" in p.read_text())]
+    assert wrong == []
+    title = "Solving\nnon-holonomic Lagrangian dynamics in terms of almost product structures"
+    for path in (ROOT / "DESIGN.md", DOCS / "paper-errata.md", ROOT / "README.md"):
+        text = " ".join(path.read_text().split())
+        assert " ".join(title.split()) in text and "Extracta Mathematicae 11 (1996) 325–347" \
+            in text, path.name
 
 
 def test_packaging_files():

@@ -2,9 +2,11 @@
 
 Usage, from the repository's root::
 
-    python docs/tutorials/execute.py [NOTEBOOK ...]
+    python docs/tutorials/execute.py [--stdout] [NOTEBOOK ...]
 
-(default: every ``*.ipynb`` beside this file). The code cells run in order in one
+(default: every ``*.ipynb`` beside this file; ``--stdout``: print the outputs, a JSON list
+per notebook with one list of outputs per code cell, instead of storing them; the docs
+test compares them with the stored ones). The code cells run in order in one
 namespace, in this interpreter, from the repository's root; each cell's printed text
 becomes a ``stream`` output and the value of its last line, if an expression, an
 ``execute_result`` with ``text/plain`` and, where the object has them, ``text/latex``,
@@ -58,8 +60,9 @@ def _run_cell(source: str, namespace: dict, count: int) -> list:
     return outputs
 
 
-def execute(path: Path) -> None:
-    """Run ``path``'s code cells and write their outputs into it."""
+def execute(path: Path, store: bool = True) -> list:
+    """Run ``path``'s code cells; their outputs (one list per code cell), written into the
+    notebook when ``store``."""
     notebook = json.loads(path.read_text())
     namespace: dict = {"__name__": "__main__"}
     count = 0
@@ -69,7 +72,9 @@ def execute(path: Path) -> None:
         count += 1
         cell["execution_count"] = count
         cell["outputs"] = _run_cell("".join(cell["source"]), namespace, count)
-    path.write_text(json.dumps(notebook, indent=1, ensure_ascii=False) + "\n")
+    if store:
+        path.write_text(json.dumps(notebook, indent=1, ensure_ascii=False) + "\n")
+    return [c["outputs"] for c in notebook["cells"] if c["cell_type"] == "code"]
 
 
 def main(argv) -> int:
@@ -80,9 +85,14 @@ def main(argv) -> int:
     matplotlib.use("Agg")
     os.chdir(ROOT)
     sys.path.insert(0, str(ROOT))
-    for name in argv or sorted(p.name for p in HERE.glob("*.ipynb")):
-        execute(HERE / Path(name).name)
-        print(f"stored the outputs of {name}")
+    store = "--stdout" not in argv
+    names = [a for a in argv if a != "--stdout"]
+    for name in names or sorted(p.name for p in HERE.glob("*.ipynb")):
+        outputs = execute(HERE / Path(name).name, store)
+        if store:
+            print(f"stored the outputs of {name}")
+        else:
+            print(json.dumps(outputs, ensure_ascii=False))
     return 0
 
 

@@ -17,7 +17,7 @@ import re
 
 import sympy as sp
 
-__all__ = ["latex", "name_latex", "matrix_latex", "aligned", "text"]
+__all__ = ["latex", "name_latex", "matrix_latex", "aligned", "text", "free_letter"]
 
 _MULTIPLIER = re.compile(r"^lambda_(\d+)$")
 
@@ -38,6 +38,24 @@ def name_latex(name: str) -> str:
     if match:
         return rf"\lambda_{{{match.group(1)}}}"
     return sp.latex(sp.Symbol(name))
+
+
+def free_letter(candidates, used) -> str:
+    r"""The first of ``candidates`` (LaTeX letters) that no printed name in ``used`` shows:
+    a name's LaTeX shows ``\phi`` when the command appears in it (``\phi``,
+    ``\phi_{1}``, ``\dot{\phi}``), not when it is part of another (``\varphi``).
+
+    The last candidate should be one no name prints (:func:`name_latex` never gives
+    ``\mathsf``): it is taken when all the others are shown.
+
+    >>> free_letter([r"\phi", r"\varphi", r"\mathsf{c}"], {r"\dot{\phi}", "x"})
+    '\\varphi'
+    """
+    for c in candidates:
+        pattern = re.compile(re.escape(c) + r"(?![A-Za-z])")
+        if not any(pattern.search(u) for u in used):
+            return c
+    return candidates[-1]
 
 
 def _accent(accent: str, base: str) -> str:

@@ -12,6 +12,7 @@ first character, and beyond :data:`MAX_LINES` lines elided with a pointer to
 from __future__ import annotations
 
 import os
+import re
 import shutil
 
 __all__ = ["width", "wrap", "grid_fits", "MAX_LINES", "ELIDED"]
@@ -57,7 +58,7 @@ def wrap(text: str, room: int, max_lines: int = MAX_LINES) -> list:
         while start < len(text) and text[start] == " ":
             start += 1
     if len(lines) < max_lines:
-        return lines + [text[start:]]
+        return lines + [text[start:]] if start < len(text) or not lines else lines
     if start >= len(text):
         return lines
     # past max_lines: keep the first max_lines - 1 lines and say how much is left out
@@ -68,10 +69,17 @@ def wrap(text: str, room: int, max_lines: int = MAX_LINES) -> list:
     return lines[:max_lines - 1] + [pointer]
 
 
+#: The tokens of an expression: a number (with its exponent), a name, ``**``, or one
+#: other character. A line breaks only between two of them.
+_TOKEN = re.compile(r"(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?|[^\W\d]\w*|\*\*|.", re.S)
+
+
 def _break_at(text: str, room: int) -> int:
     """Where to break ``text`` (longer than ``room``): the space within the line that
     is shallowest in parentheses, preferring one before ``+`` or ``-``, then the latest;
-    a hard break at ``room`` when the line has no space past its first third."""
+    without a space past its first third, the shallowest (then latest) boundary between
+    two tokens (never inside a name or a number); without one, after the first token
+    (a line longer than ``room`` rather than a name cut in two)."""
     best, best_key, depth = None, None, 0
     for i, ch in enumerate(text[:room + 1]):
         if ch in "([{":
@@ -83,7 +91,37 @@ def _break_at(text: str, room: int) -> int:
             key = (depth, text[i + 1:i + 2] not in ("+", "-"), -i)
             if best_key is None or key < best_key:
                 best, best_key = i, key
-    return best if best is not None else room
+    if best is not None:
+        return best
+    return _token_break(text, room)
+
+
+def _token_break(text: str, room: int) -> int:
+    """A token boundary in ``text[1:room + 1]``: one after an operator (``*``, ``/``),
+    a comma or an opening bracket first, then one past the line's first third, then the
+    shallowest in brackets, then the latest. Never before a closing bracket, a comma,
+    ``**`` or the bracket of a call, nor after ``**`` (``cos(phi)``, ``x**2`` stay
+    whole)."""
+    best, best_key, depth, before = None, None, 0, ""
+    for match in _TOKEN.finditer(text):
+        i, token = match.start(), match.group()
+        if i > room:
+            break
+        call = token == "(" and (before[-1:].isalnum() or before[-1:] == "_")
+        if 0 < i and token not in (")", "]", "}", ",", "**") and before != "**" and not call:
+            # after an operator or an opening bracket first: cos(phi) stays whole
+            key = (before not in ("*", "/", ",", "(", "[", "="), i <= room // 3, depth, -i)
+            if best_key is None or key < best_key:
+                best, best_key = i, key
+        before = token
+        if token in ("(", "[", "{"):
+            depth += 1
+        elif token in (")", "]", "}"):
+            depth -= 1
+    if best is not None:
+        return best
+    first = _TOKEN.match(text)
+    return first.end() if first else room
 
 
 def grid_fits(rows, indent: int = 2, total: int | None = None) -> bool:

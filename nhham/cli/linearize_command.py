@@ -32,11 +32,7 @@ import re
 import warnings
 import textwrap
 
-import numpy as np
-
 from nhham.errors import InputError, NhhamWarning, OptionalDependencyError
-from nhham.cli.report import table
-from nhham.system.expressions import to_text
 
 __all__ = ["add_arguments", "cmd_linearize", "linearize_scene", "open_loop",
            "parse_sweep", "plot_root_locus", "root_locus_figure",
@@ -84,6 +80,8 @@ def parse_sweep(text: str):
     InputError
         Naming what is wrong with the option.
     """
+    import numpy as np
+
     match = _SWEEP.match(text or "")
     if not match:
         raise InputError(f"--sweep: expected PARAMETER=START:STOP:COUNT (e.g. v=0:10:101), "
@@ -182,9 +180,11 @@ def _linearize(scene, system, model, method, independent=None):
     """The linearisation of ``system`` (``model``) about the scene's [steady] motion."""
     from nhham.numerics.linearization import linearize
     from nhham.numerics.steady_sweep import steady_state
+    from nhham.system.force_checks import check_forces_at
 
     values = scene.steady.values(model.parameters)
     _check_laws(scene, system, model, values)
+    check_forces_at(system, values, where="the [steady] motion")
     model, state = steady_state(model, values, independent)
     lin = linearize(model, state, family=scene.steady.family(model.parameters),
                     independent=independent)
@@ -215,6 +215,7 @@ def _check_laws(scene, system, model, values) -> None:
 def _exact(scene, system, model, lin):
     """The same linearisation with the exact Jacobian in the numeric chart."""
     import mpmath
+    import numpy as np
     import sympy as sp
 
     from nhham.lagrangian.jacobian import exact_jacobian, exact_number
@@ -271,9 +272,11 @@ def cmd_linearize(args, steps):
     from nhham.cli.envelope import CommandOutput, capture_warnings, scene_info
     from nhham.cli.loading import load_for
     from nhham.numerics.codegen import numeric_model
+    from nhham.system.expressions import to_text
 
     with steps.step(f"load scene {args.scene}"):
         scene = load_for(args, check_initial=False)  # [steady], not [initial]
+    args.loaded_scene = scene  # the envelope of a later failure names the scene
     sweep = parse_sweep(args.sweep) if args.sweep else None
     if args.plot and sweep is None:
         raise InputError("--plot draws the root locus of a sweep: give --sweep too")
@@ -316,6 +319,9 @@ def _json(lin) -> dict:
 
 
 def _text(scene, lin, swept, args, opened=None) -> str:
+    from nhham.cli.report import table
+    from nhham.system.expressions import to_text
+
     closed = opened is not None
     lines = [f"{scene.name or args.scene}: linearisation about the [steady] motion"
              + (", the loop closed by its [control] laws" if closed else "")]
@@ -356,6 +362,8 @@ def _text(scene, lin, swept, args, opened=None) -> str:
 
 def _matrices(lin, title) -> list:
     """The state matrix, B and the eigenvalues of ``lin`` as lines of text."""
+    from nhham.cli.report import table
+
     lines = []
     floor = rounding_level(lin)
     shown_as_zero = False
@@ -394,6 +402,8 @@ def rounding_level(lin) -> float:
     float64; the exact method's matrix is exact and its eigenvalues are computed
     at :data:`EXACT_DIGITS` digits.
     """
+    import numpy as np
+
     scale = max(1.0, float(np.abs(lin.matrix).max(initial=0.0)))
     eps = 10.0 ** -EXACT_DIGITS if lin.method == "exact" else float(np.finfo(float).eps)
     return 64 * eps * scale
@@ -425,6 +435,8 @@ def plot_root_locus(swept, path, title: str = "") -> str:
 
 def root_locus_figure(swept, title: str = ""):
     """The Figure of :func:`plot_root_locus` (not saved)."""
+    import numpy as np
+
     from nhham.study.plot_style import (CROSSING_STYLE, OUTSIDE_RIGHT, crossing_kind,
                                         legend_if_labelled)
 

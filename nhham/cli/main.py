@@ -38,9 +38,8 @@ from nhham.cli.envelope import (
     scene_info,
 )
 from nhham.cli.linearize_command import cmd_linearize
-from nhham.cli.sweep_command import cmd_sweep
 from nhham.cli.options import check_options
-from nhham.cli.report import Steps, expr_text
+from nhham.cli.report import Steps, expr_text, table
 from nhham.errors import InputError, NhhamError, OutputUnwritable, UsageError
 from nhham.lagrangian.engine import Policy
 from nhham.cli.parser import FIXED_STEP, METHODS, build_parser, unknown_options
@@ -243,11 +242,11 @@ def cmd_derive(args, steps) -> CommandOutput:
 def _with_forces(out: CommandOutput, system, latex: bool = False) -> CommandOutput:
     """``out`` with the generalized forces Q (dissipation included) and the inputs: JSON
     ``generalized_forces`` (null without forces) and ``inputs``, and a text section (rows
-    of the aligned block with ``latex``); the field is then named P(xi_L + F^v)."""
+    of the aligned block with ``latex``); the text names the field P(xi_L + F^v)."""
     import dataclasses
 
     from nhham.cli import latex as tex
-    from nhham.cli.report import expr_text
+    from nhham.cli.report import expr_text, labelled, paragraph
 
     out.result["inputs"] = [u.name for u in system.inputs]
     if not system.has_forces:
@@ -266,12 +265,11 @@ def _with_forces(out: CommandOutput, system, latex: bool = False) -> CommandOutp
             head, end = body.rsplit("\\end{aligned}", 1)
             return head.rstrip("\n") + " \\\\\n" + " \\\\\n".join(rows) + \
                 "\n\\end{aligned}" + end
-        lines = ["generalized forces Q (in F; d/dt dL/dv - dL/dq = Q - mu^T lambda):"]
-        lines += [f"  Q[{q.name}]  =  {f}" for q, f in zip(system.coordinates, forces)]
+        lines = [paragraph("generalized forces Q (in F; d/dt dL/dv - dL/dq = Q - mu^T "
+                           "lambda):"),
+                 table([(f"Q[{q.name}]", "=", f) for q, f in zip(system.coordinates, forces)])]
         if system.inputs:
-            lines.append("inputs: " + ", ".join(u.name for u in system.inputs))
-        body = body.replace("projected field P(xi_L) on TQ", "projected field P(xi_L + F^v) "
-                            "on TQ (F^v: the forces' vertical lift)", 1)
+            lines.append(labelled("inputs", ", ".join(u.name for u in system.inputs)))
         return body + "\n" + "\n".join(lines)
 
     return dataclasses.replace(out, text=with_section)
@@ -474,6 +472,10 @@ def cmd_simulate(args, steps) -> CommandOutput:
     t_end, opts = _simulate_options(args, scene)
     system = _closed_loop(scene, args)
     t_span = (0.0, float(t_end))
+    if not args.project_initial:   # a force undefined there: say which (exactly)
+        from nhham.system.force_checks import check_forces_at
+
+        check_forces_at(system, scene.initial, where="the initial state")
     with capture_warnings() as caught:
         plan = storage_plan(scene.system.n, opts.get("method", "DOP853"),
                             opts.get("save_every", 1), opts.get("max_points"))
@@ -591,6 +593,13 @@ def cmd_bench(args, steps) -> CommandOutput:
                          warnings=solved + list(caught))
 
 
+def cmd_sweep(args, steps) -> CommandOutput:
+    """A parameter study (:mod:`nhham.cli.sweep_command`, imported when it runs)."""
+    from nhham.cli.sweep_command import cmd_sweep as run
+
+    return run(args, steps)
+
+
 # -------------------------------------------------------------------- main
 COMMANDS = {
     "classify": cmd_classify,
@@ -606,6 +615,11 @@ COMMANDS = {
 def main(argv=None) -> int:
     """Run the command; returns the exit status."""
     argv = sys.argv[1:] if argv is None else list(argv)
+    if argv == ["--version"]:   # needs no parser (whose commands import numpy)
+        from nhham.settings import __version__
+
+        print(f"nhham {__version__}")
+        return EXIT_OK
     parser = build_parser()
     words = [a for a in argv if a in COMMANDS]
     # Where failures are reported, as far as the command line was understood.

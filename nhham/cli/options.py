@@ -21,7 +21,6 @@ from pathlib import Path
 
 from nhham.errors import InputError, UsageError
 from nhham.settings import MAX_DIGITS, MIN_DIGITS, option_problem
-from nhham.system.scene import simulate_option_problem
 
 __all__ = ["DEFAULT_BUDGET", "MAX_BUDGET", "budget_value", "check_options", "argparse_key",
            "set_values"]
@@ -90,6 +89,8 @@ def check_options(args: argparse.Namespace) -> None:
     for key in _SIMULATE_RANGES:
         value = getattr(args, key, None)
         if value is not None:
+            from nhham.system.scene import simulate_option_problem
+
             problem = simulate_option_problem(key, value, t_end)
             if problem:
                 problems.append(f"{_option(key)}: {problem}")

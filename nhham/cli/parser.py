@@ -11,10 +11,6 @@ import argparse
 from nhham.cli.envelope import (
     one_line,
 )
-from nhham.cli.linearize_command import LINEARIZE_HELP
-from nhham.cli.linearize_command import add_arguments as add_linearize_arguments
-from nhham.cli.sweep_command import SWEEP_HELP
-from nhham.cli.sweep_command import add_arguments as add_sweep_arguments
 from nhham.cli.options import DEFAULT_BUDGET, argparse_key, budget_value
 from nhham.errors import UsageError
 
@@ -54,8 +50,7 @@ _HELP = {
               "Measure every method against a high-precision mpmath reference: error at "
               "t_end against wall time, constraint residual and energy drift.",
               "nhham bench examples/chaplygin_sleigh.toml --quick --plot wp.png"),
-    "linearize": LINEARIZE_HELP,
-    "sweep": SWEEP_HELP,
+    # linearize and sweep: their modules' (imported when the parser is built)
 }
 
 
@@ -84,7 +79,13 @@ def build_parser() -> argparse.ArgumentParser:
         epilog=_EXIT_TEXT + ". Run `nhham COMMAND --help` for a command's options.")
     parser.add_argument("--version", action="version", version=f"nhham {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
-    for name, (short, long, example) in _HELP.items():
+    from nhham.cli import linearize_command, sweep_command
+
+    helps = dict(_HELP, linearize=linearize_command.LINEARIZE_HELP,
+                 sweep=sweep_command.SWEEP_HELP)
+    options = dict(_OPTIONS, linearize=linearize_command.add_arguments,
+                   sweep=sweep_command.add_arguments)
+    for name, (short, long, example) in helps.items():
         p = sub.add_parser(name, help=short, description=long,
                            epilog=f"example: {example}\n{_EXIT_TEXT}",
                            formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -97,8 +98,8 @@ def build_parser() -> argparse.ArgumentParser:
                            help="give the parameter NAME the value VALUE for this run (a "
                                 "number as a scene writes one; repeatable); the JSON's "
                                 "scene.parameters has the values used")
-        if name in _OPTIONS:
-            _OPTIONS[name](p)
+        if name in options:
+            options[name](p)
     return parser
 
 
@@ -210,8 +211,6 @@ _OPTIONS = {
     "compare": _add_compare_options,
     "simulate": _add_simulate_options,
     "bench": _add_bench_options,
-    "linearize": add_linearize_arguments,
-    "sweep": add_sweep_arguments,
 }
 
 
@@ -244,7 +243,8 @@ def add_common_arguments(p: argparse.ArgumentParser, budget: float | None = None
     p.add_argument("scene", help="scene file (TOML); see examples/")
     p.add_argument("--json", action="store_true",
                    help="print one JSON envelope {command, nhham_version, scene, result, "
-                        "warnings} on stdout")
+                        "warnings, error} on stdout, whatever the exit status (error: null "
+                        "on success, else {kind, message, key})")
     p.add_argument("--verbose", action="store_true",
                    help="list on stderr what was derived, how decisions were made, and timings")
     p.add_argument("--debug", action="store_true", help="tracebacks for internal errors")

@@ -12,13 +12,13 @@ import time
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 
-import sympy as sp
-
-__all__ = ["table", "matrix_table", "labelled", "expr_text", "Steps"]
+__all__ = ["table", "matrix_table", "labelled", "paragraph", "expr_text", "Steps"]
 
 
 def expr_text(expr) -> str:
     """An expression as text that ``sympy.sympify`` parses back."""
+    import sympy as sp
+
     from nhham.system.expressions import to_text
 
     return to_text(sp.sympify(expr))
@@ -77,6 +77,15 @@ def labelled(label: str, text: str) -> str:
     hang = " " * (len(label) + 2)
     pieces = wrap(text, width() - len(hang))
     return "\n".join([f"{label}: {pieces[0]}"] + [hang + p for p in pieces[1:]])
+
+
+def paragraph(text: str, hang: int = 2) -> str:
+    """A heading or sentence wrapped to the width, continuation lines ``hang`` columns in
+    (no elision: it is the report's own text)."""
+    from nhham.cli.layout import width, wrap
+
+    pieces = wrap(text, width() - hang, max_lines=10**6)
+    return "\n".join([pieces[0]] + [" " * hang + p for p in pieces[1:]])
 
 
 def matrix_table(cells, name: str, rows, cols, indent="  ") -> str:

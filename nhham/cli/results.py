@@ -14,7 +14,7 @@ import sympy as sp
 from nhham.cli import latex as tex
 from nhham.cli.envelope import jsonable
 from nhham.settings import json_number
-from nhham.cli.report import expr_text, labelled, matrix_table, table
+from nhham.cli.report import expr_text, labelled, matrix_table, paragraph, table
 from nhham.cli.layout import grid_fits as table_fits
 from nhham.cli.simplify import display_form
 
@@ -141,21 +141,43 @@ def _combination_text(coefficients: list) -> str:
     return " + ".join(terms).replace("+ -", "- ")
 
 
-def _label_latex(label: str) -> str:
-    """``constraints[0]`` -> phi_1, ``secondary[1]`` -> chi^{(2)}, others as text."""
+#: The letters of the constraints' labels, the paper's first; the last of each is one no
+#: name of a scene prints (``\mathsf``), taken when the others are the scene's own.
+LABEL_LETTERS = {"constraints": (r"\phi", r"\Phi", r"\varphi", r"\mathsf{c}"),
+                 "secondary": (r"\psi", r"\Psi", r"\mathsf{s}"),
+                 "holonomic": ("g", r"\mathsf{g}")}
+
+
+def label_letters(used) -> dict:
+    """``{kind: letter}`` of :data:`LABEL_LETTERS`: for each kind the first letter none of
+    the printed names ``used`` shows (a coordinate ``phi`` moves the constraints to
+    ``\varphi``), no two kinds the same."""
+    out: dict = {}
+    for kind, candidates in LABEL_LETTERS.items():
+        out[kind] = tex.free_letter(candidates, set(used) | set(out.values()))
+    return out
+
+
+def _label_latex(label: str, letters=None) -> str:
+    """``constraints[0]`` -> phi_1, ``secondary[1]`` -> psi_2, ``holonomic[0]`` -> g_1
+    (``.lift``: g_1^c), others as text; ``letters`` from :func:`label_letters`."""
     import re
 
-    m = re.fullmatch(r"constraints\[(\d+)\]", label)
+    letters = letters or {kind: c[0] for kind, c in LABEL_LETTERS.items()}
+    m = re.fullmatch(r"(constraints|secondary)\[(\d+)\]", label)
     if m:
-        return rf"\phi_{{{int(m.group(1)) + 1}}}"
-    m = re.fullmatch(r"secondary\[(\d+)\]", label)
-    if m:
-        return rf"\psi_{{{int(m.group(1)) + 1}}}"
+        return rf"{letters[m.group(1)]}_{{{int(m.group(2)) + 1}}}"
     m = re.fullmatch(r"holonomic\[(\d+)\](\.lift)?", label)
     if m:
-        base = rf"g_{{{int(m.group(1)) + 1}}}"
+        base = rf"{letters['holonomic']}_{{{int(m.group(1)) + 1}}}"
         return base + "^{c}" if m.group(2) else base
     return tex.text(label)
+
+
+def _printed_names(exprs) -> set:
+    """The LaTeX of every name in ``exprs`` (sympy expressions)."""
+    return {tex.name_latex(s.name) for e in exprs for s in e.free_symbols
+            if isinstance(s, sp.Symbol)}
 
 
 def classify_latex(title: str, data: dict, parse) -> str:
@@ -168,12 +190,16 @@ def classify_latex(title: str, data: dict, parse) -> str:
              + (r"\ (\text{regular})" if data["regular"] else r"\ (\text{singular})")),
             (tex.text("status"), tex.text(data["status"]))]
     defined: set = set()
+    shown = [parse(c) for s in data["stages"] for c in s["constraints"]] + \
+        [parse(c) for c in data["first_class_combinations"]]
+    letters = label_letters(_printed_names(shown) | {
+        tex.name_latex(n) for n in data["free_multiplier_symbols"]})
     for s in data["stages"]:
         for lab, c in zip(s["labels"], s["constraints"]):
             if lab not in defined:
                 defined.add(lab)
-                rows.append((_label_latex(lab), tex.latex(parse(c))))
-        zero = " = ".join(_label_latex(lab) for lab in s["labels"]) or r"\emptyset"
+                rows.append((_label_latex(lab, letters), tex.latex(parse(c))))
+        zero = " = ".join(_label_latex(lab, letters) for lab in s["labels"]) or r"\emptyset"
         rows.append((f"M_{{{s['index']}}}", r"\{" + zero + r" = 0\},\quad "
                      + rf"\operatorname{{rank}} (Z_i(\chi_j)) = {s['rank']}"))
     if data["free_multiplier_symbols"]:
@@ -213,7 +239,9 @@ def derive_data(side: str, variables, field, multipliers, C, energy, free) -> di
 def derive_text(title: str, data: dict) -> str:
     what = "Hamiltonian field on T*Q" if data["side"] == "hamiltonian" else \
         "projected field P(xi_L) on TQ"
-    lines = [f"{title}: {what}"]
+    if data.get("generalized_forces") and data["side"] != "hamiltonian":
+        what = "projected field P(xi_L + F^v) on TQ (F^v: the forces' vertical lift)"
+    lines = [paragraph(f"{title}: {what}")]
     lines.append(table([(f"{n}'", "=", t) for n, t in zip(data["state"], data["field"])]))
     if data["multipliers"]:
         lines.append("multipliers:")
@@ -320,8 +348,8 @@ def contact_text(data: dict | None) -> str:
 def implicit_text(title: str, data: dict) -> str:
     """derive without closed forms: W a + mu^T lambda = F, mu a = rhs, and M_f."""
     q = [n[:-4] for n in data["state"][len(data["state"]) // 2:]]
-    lines = [f"{title}: dynamics in implicit form (W a + mu^T lambda = F, mu a = rhs), "
-             f"a = ({', '.join(data['accelerations'])})"]
+    lines = [paragraph(f"{title}: dynamics in implicit form (W a + mu^T lambda = F, "
+                       f"mu a = rhs), a = ({', '.join(data['accelerations'])})")]
     lines.append("mass matrix W (rows and columns: " + ", ".join(q) + "):")
     lines.append(matrix_table(data["mass_matrix"], "W", q, q))
     lines.append("forcing F (the row of each coordinate):")

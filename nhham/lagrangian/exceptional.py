@@ -68,6 +68,7 @@ from nhham.lagrangian.linalg import (
 )
 from nhham.lagrangian.points import DRAW_BITS, ParameterFieldSampler, jacobian_row
 from nhham.lagrangian.submanifold import Submanifold
+from nhham.lagrangian.unexamined import unexamined_notes
 from nhham.settings import SEED
 from nhham.system.expressions import short
 
@@ -472,14 +473,16 @@ class ExceptionalData:
         if not self._has_points(env0, K, "the exceptional sets were not computed: no exact "
                                 "points of M_1 with symbolic parameters"):
             return out
+        unexamined: list = []
         for reason, fn in items:
             try:
                 vals = fn(env0, K)
             except (NotExact, ZeroDivisionError) as exc:
-                self.notes.append(f"not examined ({exc}): whether {reason}")
+                unexamined.append((str(exc), reason))
                 continue
             if any(vals):
                 out.append((reason, vals))
+        self.notes += unexamined_notes(self.system, unexamined, "not examined")
         return out
 
     def _with_shifts(self, fn, base, values, K=QQ):
@@ -513,7 +516,7 @@ class ExceptionalData:
             Data nonzero for generic parameters that vanish identically at the values.
         close : list of (reason, relative distance)
         """
-        hits, close = [], []
+        hits, close, unexamined = [], [], []
         values = {p: _exact_mpq(x) for p, x in values.items()}
         base = self.env(at=values)
         items = self.items()
@@ -538,7 +541,7 @@ class ExceptionalData:
                     v0, shifted = self._with_shifts(fn, base, values)
                     nonzero = [bool(x) for x in v0]
             except (NotExact, ZeroDivisionError) as exc:
-                self.notes.append(f"not examined at the values ({exc}): whether {reason}")
+                unexamined.append((str(exc), reason))
                 continue
             if not v0:
                 continue  # nothing assumed nonzero (e.g. a bracket matrix of rank 0)
@@ -549,6 +552,7 @@ class ExceptionalData:
             distance = _relative_distance(v0, nonzero, shifted, values)
             if distance < near:
                 close.append((reason, distance))
+        self.notes += unexamined_notes(self.system, unexamined, "not examined at the values")
         return hits, close
 
     def _estimate(self, fn, base, values, nonzero, near):

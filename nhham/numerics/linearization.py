@@ -138,12 +138,19 @@ class Linearization:
 
     def state_space(self):
         """``scipy.signal.StateSpace(A, B, I, 0)``: the linearisation as a system with the
-        inputs u and the full state of :attr:`coordinates` as outputs."""
+        inputs u and the full state of :attr:`coordinates` as outputs.
+
+        Without inputs (a closed loop, a system without any) B and D have no columns,
+        shape (d, 0): no input is made up. scipy takes such a system (``lsim`` with
+        ``U=None`` gives its free response, ``to_discrete`` works), but its
+        transfer-function routes (``poles``, ``zeros``, ``to_tf``, ``bode``,
+        ``impulse``) need an input and raise; the poles are :attr:`eigenvalues`.
+        """
         from scipy import signal
 
         d, r = self.matrix.shape[0], len(self.inputs)
-        B = self.input_matrix if r else np.zeros((d, 1))
-        return signal.StateSpace(self.matrix, B, np.eye(d), np.zeros((d, B.shape[1])))
+        B = self.input_matrix if r else np.zeros((d, 0))
+        return signal.StateSpace(self.matrix, B, np.eye(d), np.zeros((d, r)))
 
     def to_dict(self) -> dict:
         """JSON-ready: ``coordinates``, ``matrix``, ``eigenvalues`` ([re, im]), ``stable``..."""

@@ -99,7 +99,10 @@ def _make_fun(model, baumgarte, counter, controls=None):
         if z.ndim == 1:
             if moving:
                 field = at(t, z[:n2]).field_function(baumgarte)
-            out = field(z)
+            try:
+                out = field(z)
+            except (ArithmeticError, ValueError):   # the Python kernels' 1/0, sqrt(-1)
+                out = int(Status.NONFINITE)        # (where compiled code returns NaN)
             counter[0] += 1
             if isinstance(out, int):
                 raise eval_failure(out, t, z[:n2])
@@ -107,8 +110,11 @@ def _make_fun(model, baumgarte, counter, controls=None):
         # Vectorised call (scipy's finite-difference Jacobian): z is (2n+1, k); with
         # controls each column has its own inputs.
         Y = np.ascontiguousarray(z[:n2].T)
-        parts = [at(t, y).evaluate(y, baumgarte) for y in Y] if controls else \
-            [model.at_time(t).evaluate(Y, baumgarte)]
+        try:
+            parts = [at(t, y).evaluate(y, baumgarte) for y in Y] if controls else \
+                [model.at_time(t).evaluate(Y, baumgarte)]
+        except (ArithmeticError, ValueError):
+            raise eval_failure(Status.NONFINITE, t, z[:n2, 0]) from None
         counter[0] += z.shape[1]
         status = next((p[3] for p in parts if p[3]), 0)
         if status:

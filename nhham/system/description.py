@@ -38,6 +38,7 @@ from nhham.errors import (
     ValidationError,
 )
 from nhham.settings import PARAMETER_BOX, STATE_BOX
+from nhham.system.force_checks import dissipation_problems
 from nhham.system.naming import TIME, as_symbol, velocity_symbol
 from nhham.system.rank import float_rank, precise_ranks
 from nhham.system.screening import coordinate_symbols, expression_problems
@@ -203,6 +204,7 @@ class System:
                     f"holonomic[{i}]: a holonomic constraint must not involve velocities; "
                     f"{g} uses {', '.join(used)} (give it as an affine constraint instead)"
                 )
+        problems += dissipation_problems(diss, coords, vels, values)
         if problems:
             raise ValidationError(problems)
 

@@ -12,6 +12,7 @@ are the other, compiled, route (C and numpy code for integration).
 
 from __future__ import annotations
 
+import functools
 from typing import Callable, Sequence
 
 import mpmath
@@ -52,8 +53,23 @@ def numeric_function(args: Sequence, exprs, precision: int | None = None,
     printer = (NumPyPrinter if precision is None else MpmathPrinter)(
         {"fully_qualified_modules": False, "inline": True, "allow_unknown_functions": True,
          "user_functions": {}, "order": "none"})
-    return sp.lambdify(list(args), exprs, modules=numeric_module(precision), cse=cse,
-                       printer=printer)
+    modules = numeric_module(precision)
+    return sp.lambdify(list(args), exprs, cse=cse, printer=printer,
+                       modules=[_numpy_namespace()] if modules == "numpy" else modules)
+
+
+@functools.cache
+def _numpy_namespace() -> dict:
+    """The names lambdify's ``"numpy"`` module gives its functions, without its ``from
+    numpy import *``: that star import loads every submodule numpy keeps lazy (f2py,
+    testing, ...; 0.4 s of a command's start) for names no generated code uses."""
+    from sympy.utilities.lambdify import NUMPY_DEFAULT, NUMPY_TRANSLATIONS
+
+    loaded = {n: getattr(np, n) for n in np.__all__ if n in vars(np)}
+    namespace = {"numpy": np, **loaded,
+                 **{n: getattr(np.linalg, n) for n in np.linalg.__all__}, **NUMPY_DEFAULT}
+    namespace.update({k: namespace[v] for k, v in NUMPY_TRANSLATIONS.items()})
+    return namespace
 
 
 # ======================================================================

@@ -2,6 +2,7 @@
 the refusals (one line, exit 2, the key named)."""
 
 import json
+import re
 from pathlib import Path
 
 import numpy as np
@@ -162,3 +163,49 @@ def test_a_sweep_over_an_input_is_refused_and_over_its_parameter_is_not(capsys, 
     for u0, ev in zip(sweep["values"], sweep["eigenvalues"]):
         omega = np.sqrt(np.sqrt(1 - u0 ** 2) - 0.1 ** 2 / 4)
         assert abs(ev[0][0] + 0.05) < 1e-12 and abs(abs(ev[0][1]) - omega) < 1e-12
+
+
+LONG_FORCES = """
+name = "a cart with a long name for its implicit form and long forces on every coordinate"
+coordinates = ["x", "y", "theta", "phiL", "phiR"]
+parameters = { c = 0.5, k = 2.0 }
+lagrangian = "(x_dot**2 + y_dot**2 + theta_dot**2 + phiL_dot**2 + phiR_dot**2)/2"
+constraints = ["x_dot - cos(theta)*phiL_dot", "y_dot - sin(theta)*phiR_dot"]
+forces = { x = "-k*x*cos(theta)*sin(theta)*cos(phiL)*sin(phiR)*x_dot*y_dot*theta_dot*phiL_dot", y = "-c*y_dot", phiR = "-k*phiR*cos(phiL)*cos(theta)*sin(theta)*cos(phiR)*sin(phiL)*x_dot*y_dot*phiR_dot" }
+"""
+
+
+def test_derive_wraps_and_aligns_the_forces_and_the_implicit_header(capsys, tmp_path,
+                                                                     monkeypatch):
+    """At COLUMNS=80 every line of derive's text fits, the Q rows have their '=' in one
+    column (as the F rows), and a wrapped line never ends inside a name."""
+    monkeypatch.setenv("COLUMNS", "80")
+    path = tmp_path / "long.toml"
+    path.write_text(LONG_FORCES)
+    status, out, _ = run(capsys, "derive", path)
+    assert status == 0
+    lines = out.splitlines()
+    assert all(len(line) <= 80 for line in lines), [x for x in lines if len(x) > 80]
+    assert lines[0].startswith("a cart with a long name") and lines[1].startswith("  ")
+    block = lines[lines.index("generalized forces Q (in F; d/dt dL/dv - dL/dq = Q - mu^T "
+                              "lambda):") + 1:]
+    rows = [x for x in block if x.startswith("  Q[")]
+    assert [x.split("=")[0].strip() for x in rows] == ["Q[x]", "Q[y]", "Q[theta]", "Q[phiL]",
+                                                       "Q[phiR]"]
+    assert len({x.index(" = ") for x in rows}) == 1
+    # the long Q[x] continues on lines aligned under its first character, and every
+    # name on every line of the report is whole
+    i = block.index(rows[0])
+    start = rows[0].index("-k*")
+    assert block[i + 1].startswith(" " * start) and block[i + 1][start] != " "
+    names = {"x", "y", "k", "c", "theta", "phiL", "phiR", "cos", "sin", "x_dot", "y_dot",
+             "theta_dot", "phiL_dot", "phiR_dot", "lambda_1", "lambda_2"}
+    for x in lines[3:]:
+        for word in re.findall(r"[A-Za-z_]\w*", x.split(" =  ", 1)[-1]):
+            assert word in names or not x.startswith(" "), (word, x)
+    # the implicit form of the drive (W not inverted): its header wraps too
+    status, out, _ = run(capsys, "derive", DRIVE)
+    lines = out.splitlines()
+    assert status == 0 and all(len(line) <= 80 for line in lines)
+    assert "dynamics in implicit form" in lines[0] and lines[1].startswith("  ")
+    assert "phiR_ddot)" in lines[1] + lines[2]

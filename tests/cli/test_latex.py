@@ -79,3 +79,33 @@ def test_every_aligned_row_has_its_ampersand():
     rows = body.split(" \\\\\n")
     assert len(rows) > 5 and all("&" in row for row in rows), rows[:2]
     assert rows[0].startswith(r"& \text{paper Example 3.2: }")
+
+
+def test_constraint_labels_never_take_a_letter_the_scene_prints():
+    """The rolling disk's coordinate phi: its constraints are Phi_1, Phi_2 (not \\phi_1,
+    which reads as the coordinate); paper 3.2 (coordinates q1..q3) keeps the paper's
+    phi_1 (test above)."""
+    out = text_of("classify", str(EXAMPLES / "rolling_disk.toml"), "--latex")
+    assert r"\Phi_{1} &= - R \dot{\phi}" in out and r"\Phi_{2} &=" in out
+    assert r"M_{1} &= \{\Phi_{1} = \Phi_{2} = 0\}" in out
+    assert r"\phi_{1}" not in out
+
+
+def test_label_letters_fall_back_to_one_no_name_prints(tmp_path):
+    """Coordinates phi, Phi and varphi and a parameter g in a holonomic constraint: the
+    constraints are \\mathsf{c}_i and the holonomic one \\mathsf{g}_1 (no name prints
+    \\mathsf)."""
+    from nhham.cli.latex import free_letter
+    from nhham.cli.results import label_letters
+
+    assert free_letter([r"\phi", r"\Phi"], {r"\varphi", r"\dot{x}"}) == r"\phi"
+    assert free_letter([r"\phi", r"\Phi"], {r"\dot{\phi}_{2}"}) == r"\Phi"
+    assert label_letters({r"\phi", r"\Phi", r"\varphi", "g", r"\psi"}) == {
+        "constraints": r"\mathsf{c}", "secondary": r"\Psi", "holonomic": r"\mathsf{g}"}
+    path = tmp_path / "letters.toml"
+    path.write_text('coordinates = ["phi", "Phi", "varphi"]\nparameters = { g = 1.0 }\n'
+                    'lagrangian = "(phi_dot**2 + Phi_dot**2 + varphi_dot**2)/2"\n'
+                    'constraints = ["phi_dot - Phi*varphi_dot"]\n'
+                    'holonomic = ["g*phi + Phi - varphi"]\n')
+    out = text_of("classify", str(path), "--latex")
+    assert r"\mathsf{c}_{1} &= " in out and r"\mathsf{g}_{1} &= \Phi + g \phi" in out, out

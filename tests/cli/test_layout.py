@@ -35,3 +35,33 @@ def test_width_from_columns(monkeypatch):
     assert layout.width() == 132
     monkeypatch.setenv("COLUMNS", "20")
     assert layout.width() == 60                  # never narrower than 60
+
+
+# A product without spaces (sympy prints none around * and /): names and numbers of
+# several characters, calls and powers.
+PRODUCT = ("d*mc*theta_dot**2*cos(theta)*sin(phi)*x_dot*y_dot*Ic*Iw*phiL_dot*phiR_dot*"
+           "cos(phi)*sin(theta)*2.5e-10*x_dot**2*(mc/2 + mw)*1.25e+3*omega_12")
+
+
+def _tokens(text):
+    """Names and numbers, by hand (a regular expression independent of the layout's)."""
+    return re.findall(r"[0-9.]+e[+-]\d+|[0-9.]+|[A-Za-z_][A-Za-z_0-9]*", text)
+
+
+def test_a_line_breaks_between_tokens_never_inside_a_name_or_a_number():
+    for room in range(30, 90, 3):
+        lines = layout.wrap(PRODUCT, room, max_lines=100)
+        assert all(len(line) <= room for line in lines), (room, lines)
+        # every line is made of whole names and numbers: the tokens of the lines are
+        # those of the text, in order
+        assert [t for line in lines for t in _tokens(line)] == _tokens(PRODUCT), (room, lines)
+        # calls and powers stay whole: no line ends in a name that a '(' continues,
+        # nor starts or ends inside '**'
+        for a, b in zip(lines, lines[1:]):
+            assert not (re.search(r"\w$", a) and b.startswith("(")), (a, b)
+            assert not a.endswith("**") and not b.startswith("**"), (a, b)
+
+
+def test_a_name_longer_than_the_line_is_kept_whole():
+    assert layout.wrap("a" * 80, 30) == ["a" * 80]
+    assert layout.wrap("x*" + "b" * 40 + "*y", 30) == ["x*", "b" * 40, "*y"]

@@ -16,7 +16,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from scipy import signal
 from scipy.integrate import solve_ivp
+from scipy.linalg import expm
 
 import nhham
 from nhham.errors import InputError
@@ -68,6 +70,13 @@ def test_the_steer_controller_places_its_poles_and_returns_upright(bicycle):
                     family=scene.steady.family(model.parameters))
     np.testing.assert_allclose(np.sort(lin.eigenvalues.real), [-5, -4, -3, -2], atol=1e-8)
     np.testing.assert_allclose(lin.eigenvalues.imag, 0, atol=1e-8)
+    # the closed loop has no input: B and D have no column (none is made up), and
+    # scipy's free response is exp(A t) x0
+    ss = lin.state_space()
+    assert ss.B.shape == (4, 0) and ss.D.shape == (4, 0) and np.array_equal(ss.A, lin.matrix)
+    x0 = np.array([0.1, 0.0, 0.0, 0.0])
+    _, y, _ = signal.lsim(ss, None, [0.0, 0.5, 1.0], X0=x0)
+    np.testing.assert_allclose(y[-1], expm(lin.matrix) @ x0, rtol=1e-6, atol=1e-9)
     run = simulate(closed, (0.0, 10.0), dict(scene.initial), rtol=1e-10)
     assert run.success and scene.initial["phi"] == 0.1
     assert abs(run["phi"][-1]) < 1e-6 and abs(run["delta"][-1]) < 1e-6

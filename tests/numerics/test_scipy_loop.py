@@ -73,3 +73,19 @@ def test_events_located_and_terminal():
         simulate(model, (0, 1), y0, method="rattle", step=0.1, events=theta_is_1)
     with pytest.raises(InputError, match="dense_output and events"):
         simulate(model, (0, 1), y0, loop="compiled", dense_output=True)
+
+
+def test_a_python_kernel_that_raises_mid_run_stops_the_run_not_the_process():
+    """sqrt(1 - x) is not real past x = 1 (x = t here): the numpy kernels raise where the
+    compiled ones give NaN; both stop the run with the non-finite status."""
+    import nhham
+    from nhham.numerics.integrate import simulate
+    from nhham.numerics.model import NumericsWarning
+
+    s = nhham.System(["x", "y"], "(x_dot**2 + y_dot**2)/2", constraints=["x_dot - y_dot"],
+                     forces={"x": "sqrt(1 - x)"})
+    with pytest.warns(NumericsWarning, match="run stopped: non-finite"):
+        result = simulate(s, (0.0, 3.0), {"x": 0.0, "y": 0.0, "x_dot": 1.0, "y_dot": 1.0},
+                          backend="numpy")
+    assert not result.success and int(result.status) == -2
+    assert 0.5 < result.t[-1] < 1.0   # x'' = sqrt(1 - x)/2 > 0: x passes 1 before t = 1

@@ -27,10 +27,10 @@ u = "-x_dot + cos(t)"
 
 
 def test_generalized_forces_are_the_forces_minus_the_dissipation_gradient():
-    s = nhham.System(["x", "y"], (xd**2 + yd**2) / 2, parameters={"c": 0.5},
-                     forces=["u*y", 0], dissipation="c*x_dot**2/2 + x_dot*y_dot",
+    s = nhham.System(["x", "y"], (xd**2 + yd**2) / 2, parameters={"c": 2.5},
+                     forces=["u*y", 0], dissipation="c*x_dot**2/2 + x_dot*y_dot + y_dot**2",
                      inputs=["u"])
-    assert list(s.generalized_forces) == [u * y - c * xd - yd, -xd]
+    assert list(s.generalized_forces) == [u * y - c * xd - yd, -xd - 2 * yd]
     assert s.parameters == (c, u) and s.declared_parameters == (c,) and s.time is None
     assert s.has_forces and not nhham.System(["x"], xd**2 / 2).has_forces
 
