@@ -221,8 +221,9 @@ class SimulationResult:
             f"  energy drift {d.energy_drift:.2e} (relative {d.energy_drift_rel:.2e}), "
             f"energy balance residual {d.energy_balance_residual:.2e}",
             f"  max cond(C) {d.cond_C_max:.3g}, max cond(W) {d.cond_W_max:.3g}",
-            f"  {describe_kkt_solve(d.kkt_solve, d.kkt_ratio_max)}",
         ]
+        if d.kkt_solve != "saddle":   # the usual solve is said in the JSON only
+            lines.append(f"  {describe_kkt_solve(d.kkt_solve, d.kkt_ratio_max)}")
         if self.storage is not None:
             lines.append(f"  {self.storage.describe(self.nsteps)}")
         if self.initial_projection is not None:
