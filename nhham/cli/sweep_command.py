@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from nhham.errors import InputError
+from nhham.errors import InputError, NhhamError
 
 __all__ = ["add_arguments", "cmd_sweep", "SWEEP_HELP"]
 
@@ -116,14 +116,19 @@ def cmd_sweep(args, steps):
     progress = progress_line() if steps.progress else None
     with steps.step(f"sweep ({args.what}) over "
                     + (", ".join(args.over) or "initial perturbations")):
-        result = sweep(args.scene, args.what, args.over, samples_count=args.sample_count,
-                       sampler=args.sampler, seed=args.seed,
-                       initial_perturbation=args.initial_perturbation, out=args.out,
-                       resume=args.resume, overwrite=args.overwrite, scheduler=args.scheduler,
-                       workers=args.workers, budget=args.budget, chunk_points=args.chunk,
-                       along=args.along, policy=args.policy, progress=progress,
-                       run_options={"method": args.method, "rtol": args.rtol,
-                                    "atol": args.atol, "t_end": args.t_end})
+        try:
+            result = sweep(args.scene, args.what, args.over, samples_count=args.sample_count,
+                           sampler=args.sampler, seed=args.seed,
+                           initial_perturbation=args.initial_perturbation, out=args.out,
+                           resume=args.resume, overwrite=args.overwrite,
+                           scheduler=args.scheduler, workers=args.workers,
+                           budget=args.budget, chunk_points=args.chunk, along=args.along,
+                           policy=args.policy, progress=progress,
+                           run_options={"method": args.method, "rtol": args.rtol,
+                                        "atol": args.atol, "t_end": args.t_end})
+        except NhhamError:
+            _name_the_scene(args)
+            raise
     args.loaded_scene = result.scene
     data = result.to_dict()
     data["summary"] = summary(args.what, result.dataset)
@@ -157,6 +162,17 @@ def cmd_sweep(args, steps):
                    f"with {done} (kept in {result.kept}); continue with --resume")
     return CommandOutput(result=data, text=lambda: _text(args, result, data),
                          scene=scene_info(result.scene), failure=failure, warnings=warnings)
+
+
+def _name_the_scene(args) -> None:
+    """The scene of a study that failed after loading it, for the envelope (loaded again
+    here, on the failure's path only; a scene that does not load names none)."""
+    from nhham.system.scene import load_scene
+
+    try:
+        args.loaded_scene = load_scene(args.scene, check_initial=False)
+    except NhhamError:
+        pass
 
 
 def _missing(result) -> int:

@@ -268,3 +268,14 @@ def test_the_budget_bounds_connecting_and_plain_tcp_off_this_machine_is_warned_o
     envelope = json.loads(stdout)
     assert status in (2, 3) and envelope["error"]["key"] in (None, "--scheduler")
     assert len(envelope["warnings"]) == 1 and "clear text" in envelope["warnings"][0]
+
+
+def test_a_refusal_after_the_scene_is_loaded_names_the_scene_in_the_envelope(capsys,
+                                                                           tmp_path):
+    """--over names no parameter of the scene: exit 2, and the JSON envelope carries the
+    scene it refers to (not null)."""
+    status = main(["sweep", "examples/rolling_disk.toml", "--what", "classify",
+                   "--over", "nothere=0:1:3", "--out", str(tmp_path / "s.zarr"), "--json"])
+    env = json.loads(capsys.readouterr().out)
+    assert status == 2 and env["error"]["kind"] == "input"
+    assert env["scene"] is not None and env["scene"]["name"] == "vertical rolling disk"
