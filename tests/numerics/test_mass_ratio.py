@@ -140,11 +140,12 @@ def test_mass_ratios_through_the_command(tmp_path, e):
 
 def test_a_well_scaled_system_keeps_the_saddle_solve():
     """The Chaplygin sleigh: W = diag(m, m, I) = diag(1, 1, 1/4), ratio 4 by hand: the
-    saddle-point solve, said in the result and its description."""
+    saddle-point solve, said in the result (the description names only a solve that is
+    not the usual one)."""
     scene = nhham.load_scene(str(EXAMPLE.parent / "chaplygin_sleigh.toml"))
     res = nhham.simulate(scene.system, (0.0, 0.5), scene.initial, warn=False)
     assert res.kkt_solve == "saddle" and res.diagnostics.kkt_ratio_max == 4.0
-    assert "by the saddle-point solve" in res.describe()
+    assert "constrained accelerations by" not in res.describe()
     assert res.summary()["kkt_solve"] == "saddle"
 
 
