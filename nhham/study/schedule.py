@@ -167,6 +167,28 @@ def _sigint_ignored_by_children():
         signal.signal(signal.SIGINT, previous)
 
 
+def _quiet_resource_tracker() -> None:
+    """Start multiprocessing's resource tracker with its leak warning off: the workers of
+    a local cluster killed on Ctrl-C leave semaphores that the tracker reports on stderr
+    when nhham exits, after the one line `nhham: interrupted` (it cleans them up all the
+    same). The tracker takes its warning filters from this interpreter's -W options when
+    it starts; a tracker already running is left as it is."""
+    import sys
+
+    try:
+        from multiprocessing import resource_tracker
+    except ImportError:   # pragma: no cover - no tracker on this platform
+        return
+    option = "ignore::UserWarning:multiprocessing.resource_tracker"
+    sys.warnoptions.append(option)
+    try:
+        resource_tracker.ensure_running()
+    except OSError:   # pragma: no cover - it starts again where it is needed
+        pass
+    finally:
+        sys.warnoptions.remove(option)
+
+
 class Pool:
     """The workers of one study (see the module docstring); a context manager.
 
@@ -208,6 +230,7 @@ class Pool:
         if client is not None:
             return cls(str(client.scheduler.address), _count(client, workers), client)
         if scheduler == "processes":
+            _quiet_resource_tracker()
             with _sigint_ignored_by_children():
                 cluster = LocalCluster(n_workers=workers, threads_per_worker=1,
                                        processes=True, dashboard_address=None,
