@@ -193,7 +193,10 @@ def sweep_steady(model, state_of: Callable[[Mapping[str, float]], Mapping[str, f
                          f"(parameters: {', '.join(model.parameter_names) or 'none'})")
     def model_and_state(value, chart=independent):
         m = model.with_parameters(**{parameter: value})
-        return steady_state(m, state_of(m.parameters), chart, warn=False)
+        try:
+            return steady_state(m, state_of(m.parameters), chart, warn=False)
+        except InputError as exc:
+            raise InputError(f"{exc} ({parameter} = {value:g})", key=exc.key) from None
 
     def fam(value):
         if family_of is None:

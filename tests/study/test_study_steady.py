@@ -86,3 +86,10 @@ def test_sweeping_the_bicycle_s_fork_offset(tmp_path, capsys):
                 assert np.allclose(single, study, atol=1e-8)
             said = " ".join(env["warnings"])
             assert ("pitch = " in said) == (given == 0.0)
+
+
+def test_a_sweep_through_values_with_no_steady_state_names_the_value(capsys):
+    assert main(["linearize", str(SCENES / "pendulum_steady.toml"), "--sweep",
+                 "L2=-1:3:5"]) == 2
+    err = capsys.readouterr().err
+    assert "no state of M_1 near the table's" in err and "(L2 = -1)" in err
