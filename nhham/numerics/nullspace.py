@@ -40,7 +40,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["KKT_RATIO", "diagonal_ratio", "needs_null_space", "solve_null_space",
+__all__ = ["KKT_RATIO", "diagonal_ratio", "diagonal_scaling", "needs_null_space", "solve_null_space",
            "householder_rows", "kkt_solve_name", "describe_kkt_solve", "KKT_SOLVES"]
 
 #: Largest max W_AA / min W_AA solved by the saddle-point (range-space or LU) solve.
@@ -102,6 +102,14 @@ def describe_kkt_solve(name: str, ratio: float) -> str:
             f"{ratio:.3g}; the null-space solve above {KKT_RATIO:.0f})")
 
 
+def diagonal_scaling(W) -> tuple:
+    """(d, D W D) with D = diag(d), d = |W_AA|^(-1/2) (1 where W_AA = 0): W with a unit
+    diagonal, the scaling both solves of the accelerations start from."""
+    diag = np.abs(np.diagonal(W, axis1=-2, axis2=-1))
+    d = np.where(diag > 0, 1.0 / np.sqrt(np.where(diag > 0, diag, 1.0)), 1.0)
+    return d, W * d[..., :, None] * d[..., None, :]
+
+
 def solve_null_space(W, mu, top, bottom):
     """Solve [[W, mu^T], [mu, 0]] [x; y] = [top; bottom] by the null-space method.
 
@@ -125,9 +133,7 @@ def solve_null_space(W, mu, top, bottom):
     W, mu = np.asarray(W, dtype=float), np.asarray(mu, dtype=float)
     top, bottom = np.asarray(top, dtype=float), np.asarray(bottom, dtype=float)
     n, m = W.shape[-1], mu.shape[-2]
-    diag = np.abs(np.diagonal(W, axis1=-2, axis2=-1))
-    d = np.where(diag > 0, 1.0 / np.sqrt(np.where(diag > 0, diag, 1.0)), 1.0)
-    Ws = W * d[..., :, None] * d[..., None, :]
+    d, Ws = diagonal_scaling(W)
     ts = top * d
     if m == 0:
         return np.linalg.solve(Ws, ts[..., None])[..., 0] * d, np.zeros(top.shape[:-1] + (0,))

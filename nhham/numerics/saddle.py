@@ -16,7 +16,8 @@ import math
 import numpy as np
 from scipy.linalg.lapack import dgesv
 
-from nhham.numerics.nullspace import KKT_RATIO, needs_null_space, solve_null_space
+from nhham.numerics.nullspace import (KKT_RATIO, diagonal_scaling, needs_null_space,
+                                      solve_null_space)
 from nhham.numerics.status import Status
 
 __all__ = ["solve_saddle", "SingleStateSolver", "gauss", "cond_each"]
@@ -72,9 +73,7 @@ def solve_saddle(W, mu, top, bottom, *, null_space: bool | None = None):
 def _solve_scaled(W, mu, top, bottom):
     """:func:`solve_saddle` by scaled LU (with one refinement step where needed)."""
     n, m = W.shape[-1], mu.shape[-2]
-    diag = np.abs(np.diagonal(W, axis1=-2, axis2=-1))
-    d = np.where(diag > 0, 1.0 / np.sqrt(np.where(diag > 0, diag, 1.0)), 1.0)
-    Ws = W * d[..., :, None] * d[..., None, :]
+    d, Ws = diagonal_scaling(W)
     rhs_top = top * d
     if m == 0:
         x = np.linalg.solve(Ws, rhs_top[..., None])[..., 0]
