@@ -192,10 +192,12 @@ def numeric_bracket_matrix(Gq: np.ndarray, Gp: np.ndarray, Hq: np.ndarray | None
     Gq, Gp : array, shape (k, n)
         d f_a / dq and d f_a / dp at the point.
     Hq, Hp : array, shape (l, n), optional
-        Gradients of the g_b (default the f_a themselves).
+        Gradients of the g_b (default the f_a themselves); both or neither.
     """
-    if Hq is None:
+    if Hq is None and Hp is None:
         Hq, Hp = Gq, Gp
+    elif Hq is None or Hp is None:
+        raise TypeError("numeric_bracket_matrix: give both Hq and Hp, or neither")
     return Gq @ Hp.T - Gp @ Hq.T
 
 

@@ -219,9 +219,9 @@ def _numerically_regular(side, precision, samples, seed, tol) -> bool:
     if precision is None and side.legendre.is_quadratic:
         try:
             sampler = PointSampler.on_M1(system, seed, modular=True)
-            be = ModularBackend()
+            mod = ModularBackend()
             for _ in range(3):
-                C = side.numeric.point_from_tq(be, sampler.point().env).C
+                C = side.numeric.point_from_tq(mod, sampler.point().env).C
                 if exact_rank([list(row) for row in C])[0] == system.m:
                     return True
         except (NotExact, ZeroDivisionError):

@@ -287,8 +287,9 @@ class LegendreMap:
             p = be.vector(p)
             params = list(be.vector(params)) if len(params) else []
             v = be.zeros(self.n)
-            tol = be.scalar(1e-13 if precision is None and tol is None else
-                            (tol if tol is not None else 10.0 ** (2 - precision)))
+            if tol is None:
+                tol = 1e-13 if precision is None else 10.0 ** (2 - precision)
+            tol = be.scalar(tol)
             scale = 1 + be.norm(p)
             for _ in range(maxiter):
                 r = be.vector(F(*q, *v, *params)) - p

@@ -163,7 +163,7 @@ def linearize_batch(model, states, parameters=None, *, reference: Linearization 
     LinearizationBatch
     """
     Y = np.atleast_2d(np.asarray(states, dtype=float))
-    N, n = Y.shape[0], model.n
+    N = Y.shape[0]
     P = (np.tile(np.asarray(model.parameter_values, dtype=float), (N, 1)) if parameters is None
          else np.atleast_2d(np.asarray(parameters, dtype=float)))
     chart = _chart(model, reference.chart)

@@ -39,13 +39,16 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 from types import MappingProxyType
-from typing import Mapping, Sequence
+from typing import TYPE_CHECKING, Mapping, Sequence
 
 import numpy as np
 
 from nhham.errors import ComputationError, InconsistentInitialDataError, InputError
 from nhham.numerics.chart import (ComplexField, chart_jacobian, chart_jacobians, choose_chart,
                                   input_jacobians)
+
+if TYPE_CHECKING:  # the exact matrix comes from the symbolic side; numerics never imports it
+    import sympy
 
 __all__ = ["Linearization", "linearize", "linearize_many", "linearization_result", "STEP",
            "ON_TOLERANCE"]
@@ -132,7 +135,7 @@ class Linearization:
     state: Mapping[str, float]
     residuals: Mapping[str, float] = field(default_factory=dict)
     acceleration_residual: float = 0.0
-    exact_matrix: object = None
+    exact_matrix: sympy.Matrix | None = None
     inputs: tuple = ()
     input_matrix: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
 
