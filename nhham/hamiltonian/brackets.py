@@ -51,6 +51,14 @@ def canonical_bracket(f, g, q: Sequence[sp.Symbol], p: Sequence[sp.Symbol]) -> s
         Functions of (q, p) (and parameters).
     q, p : sequence of sympy.Symbol, length n
         Coordinates and their conjugate momenta.
+
+    Examples
+    --------
+    >>> import sympy as sp
+    >>> from nhham import canonical_bracket
+    >>> q, p = sp.symbols("q p")
+    >>> canonical_bracket(q**2, p, [q], [p]), canonical_bracket(p**2 / 2, q, [q], [p])
+    (2*q, -p)
     """
     f, g = sp.sympify(f), sp.sympify(g)
     return sum((sp.diff(f, qa) * sp.diff(g, pa) - sp.diff(f, pa) * sp.diff(g, qa)
@@ -83,6 +91,15 @@ class BracketAlgebra:
     -----
     Gradients and brackets are cached by expression; {g, f} is served as
     -{f, g} when the latter is known.
+
+    Examples
+    --------
+    >>> import sympy as sp
+    >>> from nhham import BracketAlgebra
+    >>> q, p = sp.symbols("q p")
+    >>> algebra = BracketAlgebra([q], [p])
+    >>> algebra.bracket(q, p), algebra.bracket(q * p, q)
+    (1, -q)
     """
 
     def __init__(self, coordinates: Sequence[sp.Symbol], momenta: Sequence[sp.Symbol],

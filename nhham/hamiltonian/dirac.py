@@ -48,6 +48,17 @@ def dirac_bracket(source, classes: ConstraintClasses | None = None, *,
     Returns
     -------
     DiracBracket
+
+    Examples
+    --------
+    On the circle of the Cartesian pendulum, {x, p_x}_D = 1 - x**2/(x**2 + y**2).
+
+    >>> import sympy as sp
+    >>> from nhham import dirac_bracket, models
+    >>> D = dirac_bracket(models.pendulum_cartesian())
+    >>> x, y = D.algebra.coordinates
+    >>> sp.simplify(D(x, D.algebra.momenta[0]))
+    y**2/(x**2 + y**2)
     """
     if isinstance(source, ConstraintClasses):
         classes = source
@@ -186,6 +197,17 @@ def dirac_vs_projected(system, *, precision=None, samples=6, seed=SEED,
     Returns
     -------
     DiracProjectedReport
+
+    Examples
+    --------
+    A holonomic constraint: the Dirac flow is the true one. The sleigh's constraint is
+    first class, so its Dirac bracket is the canonical one, whose flow ignores it.
+
+    >>> from nhham import dirac_vs_projected, models
+    >>> dirac_vs_projected(models.pendulum_cartesian()).equal
+    True
+    >>> dirac_vs_projected(models.chaplygin_sleigh()).equal
+    False
     """
     policy = policy_of(policy, "dirac_vs_projected", precision=precision, samples=samples,
                        seed=seed, tol=tol)

@@ -143,6 +143,15 @@ def exceptional_conditions(analysis: ConstraintAnalysis, parameters: Sequence | 
     Returns
     -------
     tuple of Condition
+
+    Examples
+    --------
+    >>> import nhham
+    >>> system = nhham.System(["q1", "q2", "q3"], "(a*q1_dot**2 + q2_dot**2 - q3_dot**2)/2",
+    ...                       ["q2_dot + b*q3_dot"], parameters={"a": 1.0, "b": 1.0})
+    >>> conditions = nhham.exceptional_conditions(nhham.analyze_constraints(system))
+    >>> [c.equations for c in conditions]         # det W = a, C = -(1 - b**2)
+    [(a,), (b - 1,), (b + 1,)]
     """
     system = analysis.system
     params = tuple(system.parameters if parameters is None else parameters)

@@ -154,6 +154,19 @@ def integrability(system, *, precision: int | None = None, samples: int = 6,
     Returns
     -------
     Integrability
+
+    Examples
+    --------
+    The rolling disk's constraints dx - R cos(theta) dphi, dy - R sin(theta) dphi: by hand,
+    d mu_1(X_1, X_2) = R sin(theta) and d mu_2(X_1, X_2) = -R cos(theta) on the kernel
+    basis X_1 = d/dtheta, X_2 = R cos(theta) d/dx + R sin(theta) d/dy + d/dphi.
+
+    >>> from nhham import integrability, models
+    >>> result = integrability(models.rolling_disk(symbolic=True))
+    >>> result.integrable, result.method
+    (False, 'exact')
+    >>> [str(term) for _, _, _, term in result.obstructions]
+    ['R*sin(theta)', '-R*cos(theta)']
     """
     policy = policy_of(policy, "integrability", precision=precision, samples=samples,
                        seed=seed, exact=exact)

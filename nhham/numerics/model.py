@@ -149,6 +149,17 @@ class NumericModel:
         L = 1/2 v^T W(q) v - V(q) (what the RATTLE-type integrator needs).
     linear_constraints : bool
         Every h_i is zero (energy is conserved).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from nhham import models, numeric_model
+    >>> model = numeric_model(models.chaplygin_sleigh(), backend="numpy")
+    >>> model.parameters
+    {'m': 1.0, 'I': 0.25, 'a': 0.5}
+    >>> y = model.state(dict(x=0.0, y=0.0, theta=0.0, x_dot=1.0, y_dot=0.5, theta_dot=1.0))
+    >>> print(np.round(model.multipliers(y), 12))    # I theta'' = a lambda, theta'' = -1
+    [-0.5]
     """
 
     layout: MappingProxyType

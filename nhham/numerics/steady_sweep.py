@@ -35,6 +35,16 @@ class Sweep:
     unlocated : tuple of Unlocated
         Intervals where the number of unstable eigenvalues changes but no eigenvalue
         could be put on the imaginary axis (each with its reason).
+
+    Examples
+    --------
+    >>> from nhham import models, numeric_model
+    >>> model = numeric_model(models.chaplygin_sleigh(), backend="numpy")
+    >>> forward = dict(x=0.0, y=0.0, theta=0.0, x_dot=2.0, y_dot=0.0, theta_dot=0.0)
+    >>> from nhham import sweep_steady
+    >>> swept = sweep_steady(model, lambda parameters: forward, "a", [0.25, 0.5, 1.0])
+    >>> swept.coordinates, [e.round(12) for e in swept.eigenvalues]
+    (('theta_dot',), [array([-1.6+0.j]), array([-2.+0.j]), array([-1.6+0.j])])
     """
 
     parameter: str
@@ -183,6 +193,18 @@ def sweep_steady(model, state_of: Callable[[Mapping[str, float]], Mapping[str, f
     Returns
     -------
     Sweep
+
+    Examples
+    --------
+    >>> from nhham import models, numeric_model
+    >>> model = numeric_model(models.chaplygin_sleigh(), backend="numpy")
+    >>> forward = dict(x=0.0, y=0.0, theta=0.0, x_dot=2.0, y_dot=0.0, theta_dot=0.0)
+    >>> from nhham import sweep_steady
+    >>> swept = sweep_steady(model, lambda parameters: forward, "a", [-0.5, -0.25, 0.25, 0.5])
+    >>> swept.stable                     # -m a u / (I + m a**2) changes sign at a = 0
+    (False, False, True, True)
+    >>> [(c.value, c.kind) for c in swept.crossings]
+    [(0.0, 'real')]
     """
     if parameter in model.input_names:
         raise InputError(f"--sweep: {parameter!r} is an input, whose steady value the "
