@@ -390,9 +390,10 @@ class ExceptionalData:
             sampler = exact_sampler(Submanifold(self.system, cons, seed=self.seed),
                                     self.seed, modular=True)
             env, cache = sampler.point().env, {}
-            B = lagrangian_bracket(*(ListMatrix([evaluate(r, env, cache) for r in rows],
-                                                len(rows[0])) for rows in self._bracket_rows()),
-                                   solve=field_solve)
+            # every argument has n columns (also with no final constraint: no rows)
+            Jq, Jv, W, M = (ListMatrix([evaluate(r, env, cache) for r in rows], self.system.n)
+                            for rows in self._bracket_rows())
+            B = lagrangian_bracket(Jq, Jv, W, M, solve=field_solve)
             rank = exact_rank(B.rows)[0]
         except (NotExact, ZeroDivisionError):
             return None
