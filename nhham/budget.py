@@ -56,6 +56,17 @@ def time_budget(seconds: float | None, what: Callable[[], str] | None = None) ->
     what : callable returning str, optional
         Names the step that was running, for the message (the command passes the name
         of its current step).
+
+    Examples
+    --------
+    >>> import time
+    >>> from nhham import BudgetExceeded, time_budget
+    >>> try:
+    ...     with time_budget(0.05):
+    ...         time.sleep(2)
+    ... except BudgetExceeded as exc:
+    ...     print(exc)
+    the budget of 0.05 s ran out
     """
     if seconds is None:
         yield

@@ -66,6 +66,15 @@ class NhhamError(Exception):
     message : str
     key : str, optional
         The key path or option the error is about, when one is known.
+
+    Examples
+    --------
+    >>> import nhham
+    >>> try:
+    ...     nhham.parse_expression("x + y", ["x"], where="constraints[1]")
+    ... except nhham.NhhamError as exc:
+    ...     print(type(exc).__name__, exc.key)
+    ParseError constraints[1]
     """
 
     def __init__(self, message: str = "", *, key: str | None = None):
@@ -74,7 +83,17 @@ class NhhamError(Exception):
 
 
 class InputError(NhhamError):
-    """The user's input (system description, scene, options) is invalid."""
+    """The user's input (system description, scene, options) is invalid.
+
+    Examples
+    --------
+    >>> from nhham import time_budget
+    >>> with time_budget(-1):
+    ...     pass
+    Traceback (most recent call last):
+        ...
+    nhham.errors.InputError: time_budget: seconds must be a positive finite number, got -1
+    """
 
 
 class UsageError(InputError):
@@ -82,11 +101,29 @@ class UsageError(InputError):
 
 
 class ParseError(InputError):
-    """An expression could not be parsed against the symbol table."""
+    """An expression could not be parsed against the symbol table.
+
+    Examples
+    --------
+    >>> from nhham import parse_expression
+    >>> parse_expression("x + y", ["x"], where="constraints[1]")
+    Traceback (most recent call last):
+        ...
+    nhham.errors.ParseError: constraints[1]: unknown name 'y'
+    """
 
 
 class SceneError(InputError):
-    """A scene file is malformed: syntax, unknown keys, wrong types."""
+    """A scene file is malformed: syntax, unknown keys, wrong types.
+
+    Examples
+    --------
+    >>> from nhham import loads_scene
+    >>> loads_scene('coordinates = ["x"]\\nlagrangian = "x_dot**2/2"\\nmass = 1')
+    Traceback (most recent call last):
+        ...
+    nhham.errors.SceneError: <string>: mass: unknown key (known keys: name, ...)
+    """
 
 
 class ValidationError(InputError):
@@ -97,6 +134,14 @@ class ValidationError(InputError):
     problems : sequence of str
         Every problem found, each naming the offending key or expression.
         Validation collects all problems before raising once.
+
+    Examples
+    --------
+    >>> from nhham import System
+    >>> System(["x"], "x_dot**2/2 + q")
+    Traceback (most recent call last):
+        ...
+    nhham.errors.ValidationError: lagrangian: unknown name 'q'
     """
 
     def __init__(self, problems, *, key: str | None = None):
@@ -110,11 +155,29 @@ class ValidationError(InputError):
 
 
 class SingularLagrangianError(ValidationError):
-    """The Hessian W = d2L/dv dv is singular (outside the paper's scope)."""
+    """The Hessian W = d2L/dv dv is singular (outside the paper's scope).
+
+    Examples
+    --------
+    >>> from nhham import System
+    >>> System(["x", "y"], "x_dot**2/2")
+    Traceback (most recent call last):
+        ...
+    nhham.errors.SingularLagrangianError: lagrangian: the Hessian W = d2L/dv dv is singular (rank 1 of 2; null direction [0, 1]); ...
+    """
 
 
 class NonAffineConstraintError(ValidationError):
-    """A velocity constraint is not affine in the velocities."""
+    """A velocity constraint is not affine in the velocities.
+
+    Examples
+    --------
+    >>> from nhham import System
+    >>> System(["x", "y"], "(x_dot**2 + y_dot**2)/2", ["x_dot**2 - y_dot"])
+    Traceback (most recent call last):
+        ...
+    nhham.errors.NonAffineConstraintError: constraints[0]: x_dot**2 - y_dot is not affine in the velocities (offending term x_dot**2); ...
+    """
 
 
 class RedundantConstraintError(ValidationError):
@@ -122,6 +185,14 @@ class RedundantConstraintError(ValidationError):
 
     A problem that dropping the constraint would solve ends with :attr:`ADVICE`
     (the command says ``--drop-redundant`` instead).
+
+    Examples
+    --------
+    >>> from nhham import System
+    >>> System(["x", "y"], "(x_dot**2 + y_dot**2)/2", ["x_dot - y_dot", "2*x_dot - 2*y_dot"])
+    Traceback (most recent call last):
+        ...
+    nhham.errors.RedundantConstraintError: constraints[1]: 2*x_dot - 2*y_dot is redundant, a combination of the others: constraints[1] = (2)*constraints[0] (pass drop_redundant=True to drop it)
     """
 
     #: How the Python API drops a redundant velocity constraint.
@@ -129,23 +200,75 @@ class RedundantConstraintError(ValidationError):
 
 
 class MissingParameterValueError(InputError):
-    """A numeric value is needed for a parameter that has none."""
+    """A numeric value is needed for a parameter that has none.
+
+    Examples
+    --------
+    >>> from nhham import System, numeric_model
+    >>> spring = System(["x"], "m*x_dot**2/2 - k*x**2/2", parameters={"m": 1.0, "k": None})
+    >>> numeric_model(spring, backend="numpy")
+    Traceback (most recent call last):
+        ...
+    nhham.errors.MissingParameterValueError: parameters: no numeric value for k (needed for numbers)
+    """
 
 
 class InconsistentInitialDataError(InputError):
-    """Initial data do not satisfy the constraints."""
+    """Initial data do not satisfy the constraints.
+
+    Examples
+    --------
+    The Cartesian pendulum (l = 1) at y = -0.5: g = x**2 + y**2 - l**2 = -0.75.
+
+    >>> from nhham import linearize, models, numeric_model
+    >>> model = numeric_model(models.pendulum_cartesian(), backend="numpy")
+    >>> linearize(model, dict(x=0.0, y=-0.5, x_dot=0.0, y_dot=0.0))
+    Traceback (most recent call last):
+        ...
+    nhham.errors.InconsistentInitialDataError: steady: the state is not on M_1: holonomic[0] (position) = -0.75
+    """
 
 
 class OptionalDependencyError(InputError, ImportError):
-    """The requested output needs an optional extra that is not installed."""
+    """The requested output needs an optional extra that is not installed.
+
+    Examples
+    --------
+    ``except ImportError`` catches it too:
+
+    >>> from nhham import InputError, OptionalDependencyError
+    >>> issubclass(OptionalDependencyError, ImportError), issubclass(OptionalDependencyError, InputError)
+    (True, True)
+    """
 
 
 class ComputationError(NhhamError):
-    """A computation could not be carried out (not the user's fault)."""
+    """A computation could not be carried out (not the user's fault).
+
+    Examples
+    --------
+    >>> from nhham import classify_constraints, dirac_bracket, models
+    >>> sampled = classify_constraints(models.pendulum_cartesian(), method="sampled")
+    >>> dirac_bracket(sampled)
+    Traceback (most recent call last):
+        ...
+    nhham.errors.ComputationError: the Dirac bracket needs the constraints in (q, p): classify with method='exact' (this classification: 'sampled')
+    """
 
 
 class BudgetExceeded(NhhamError):
-    """A time budget (``nhham.time_budget``, the command's ``--budget``) ran out."""
+    """A time budget (``nhham.time_budget``, the command's ``--budget``) ran out.
+
+    Examples
+    --------
+    >>> import time
+    >>> from nhham import BudgetExceeded, time_budget
+    >>> with time_budget(0.05):
+    ...     time.sleep(2)
+    Traceback (most recent call last):
+        ...
+    nhham.errors.BudgetExceeded: the budget of 0.05 s ran out
+    """
 
 
 class ClosedFormTooLarge(ComputationError):
@@ -154,7 +277,19 @@ class ClosedFormTooLarge(ComputationError):
 
 
 class NhhamWarning(UserWarning):
-    """A result or a request that deserves the user's attention (not an error)."""
+    """A result or a request that deserves the user's attention (not an error).
+
+    Examples
+    --------
+    >>> import warnings
+    >>> from nhham import NhhamWarning
+    >>> with warnings.catch_warnings():
+    ...     warnings.simplefilter("error", NhhamWarning)   # every such warning an error
+    ...     warnings.warn("a doubtful decision", NhhamWarning)
+    Traceback (most recent call last):
+        ...
+    nhham.errors.NhhamWarning: a doubtful decision
+    """
 
 
 class EmptySubmanifoldError(InputError, ComputationError):

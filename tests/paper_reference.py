@@ -288,7 +288,6 @@ def example_4_1():
     x1, x2, y1, y2 = q = list(sp.symbols("x1 x2 y1 y2"))
     x1d, x2d, y1d, y2d = v = [_vel(s) for s in q]
     g, l = sp.symbols("g l")
-    z = q + v
     X, Y = x2 - x1, y2 - y1
     U, V = x2d - x1d, y2d - y1d
     Sx, Sy = x1d + x2d, y1d + y2d

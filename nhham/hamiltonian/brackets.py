@@ -51,6 +51,14 @@ def canonical_bracket(f, g, q: Sequence[sp.Symbol], p: Sequence[sp.Symbol]) -> s
         Functions of (q, p) (and parameters).
     q, p : sequence of sympy.Symbol, length n
         Coordinates and their conjugate momenta.
+
+    Examples
+    --------
+    >>> import sympy as sp
+    >>> from nhham import canonical_bracket
+    >>> q, p = sp.symbols("q p")
+    >>> canonical_bracket(q**2, p, [q], [p]), canonical_bracket(p**2 / 2, q, [q], [p])
+    (2*q, -p)
     """
     f, g = sp.sympify(f), sp.sympify(g)
     return sum((sp.diff(f, qa) * sp.diff(g, pa) - sp.diff(f, pa) * sp.diff(g, qa)
@@ -83,6 +91,15 @@ class BracketAlgebra:
     -----
     Gradients and brackets are cached by expression; {g, f} is served as
     -{f, g} when the latter is known.
+
+    Examples
+    --------
+    >>> import sympy as sp
+    >>> from nhham import BracketAlgebra
+    >>> q, p = sp.symbols("q p")
+    >>> algebra = BracketAlgebra([q], [p])
+    >>> algebra.bracket(q, p), algebra.bracket(q * p, q)
+    (1, -q)
     """
 
     def __init__(self, coordinates: Sequence[sp.Symbol], momenta: Sequence[sp.Symbol],
@@ -192,10 +209,12 @@ def numeric_bracket_matrix(Gq: np.ndarray, Gp: np.ndarray, Hq: np.ndarray | None
     Gq, Gp : array, shape (k, n)
         d f_a / dq and d f_a / dp at the point.
     Hq, Hp : array, shape (l, n), optional
-        Gradients of the g_b (default the f_a themselves).
+        Gradients of the g_b (default the f_a themselves); both or neither.
     """
-    if Hq is None:
+    if Hq is None and Hp is None:
         Hq, Hp = Gq, Gp
+    elif Hq is None or Hp is None:
+        raise TypeError("numeric_bracket_matrix: give both Hq and Hp, or neither")
     return Gq @ Hp.T - Gp @ Hq.T
 
 

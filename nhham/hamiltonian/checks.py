@@ -83,6 +83,14 @@ class CrossCheckReport:
         Wall time of the cross-check.
     skipped_points : int
         Seeded points dropped because C is not of its generic rank there.
+
+    Examples
+    --------
+    >>> from nhham import cross_check, models
+    >>> report = cross_check(models.rolling_disk())
+    >>> [(check.name, check.agree) for check in report.checks]
+    [('stages', True), ('legendre inverse', True), ('field', True), ('multipliers', True),
+     ('symplectic form', True), ('Poisson map', True)]
     """
 
     agree: bool

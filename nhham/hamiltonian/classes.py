@@ -57,6 +57,20 @@ class ConstraintClasses:
     side : HamiltonianSide
     analysis : object or None
         The ConstraintAnalysis the constraints came from.
+
+    Examples
+    --------
+    The rolling disk's constraints p_x/m - R cos(theta) p_phi/I2 and p_y/m - R sin(theta)
+    p_phi/I2 commute (neither depends on p_theta): both first class.
+
+    >>> from nhham import classify_constraints, models
+    >>> classes = classify_constraints(models.rolling_disk())
+    >>> classes
+    <ConstraintClasses: 2 final constraint(s), 0 second class, 2 first class (exact)>
+    >>> classes.bracket_matrix
+    Matrix([
+    [0, 0],
+    [0, 0]])
     """
 
     labels: tuple

@@ -131,6 +131,20 @@ def classify_constraints(source, constraints: Sequence | None = None,
     Returns
     -------
     ConstraintClasses
+
+    Examples
+    --------
+    The Cartesian pendulum: g = x**2 + y**2 - l**2 and its lift are second class, by hand
+    {g, g^c} = 2 x (2 x / m) + 2 y (2 y / m).
+
+    >>> from nhham import classify_constraints, models
+    >>> classes = classify_constraints(models.pendulum_cartesian())
+    >>> classes.second_class, classes.first_class
+    (2, 0)
+    >>> classes.bracket_matrix
+    Matrix([
+    [                    0, (4*x**2 + 4*y**2)/m],
+    [-(4*x**2 + 4*y**2)/m,                    0]])
     """
     if method not in ("auto", "exact", "sampled"):
         raise InputError(f"classify: method must be 'auto', 'exact' or 'sampled', got {method!r}")
@@ -219,9 +233,9 @@ def _numerically_regular(side, precision, samples, seed, tol) -> bool:
     if precision is None and side.legendre.is_quadratic:
         try:
             sampler = PointSampler.on_M1(system, seed, modular=True)
-            be = ModularBackend()
+            mod = ModularBackend()
             for _ in range(3):
-                C = side.numeric.point_from_tq(be, sampler.point().env).C
+                C = side.numeric.point_from_tq(mod, sampler.point().env).C
                 if exact_rank([list(row) for row in C])[0] == system.m:
                     return True
         except (NotExact, ZeroDivisionError):

@@ -117,6 +117,13 @@ def cross_check(system, precision: int | None = None, samples: int = 6, seed: in
     Returns
     -------
     CrossCheckReport
+
+    Examples
+    --------
+    >>> from nhham import cross_check, models
+    >>> report = cross_check(models.rolling_disk())
+    >>> report.agree, report.exact, report.statuses
+    (True, True, ('determined', 'determined'))
     """
     if method not in METHODS:
         raise InputError(f"cross_check: method must be one of {', '.join(map(repr, METHODS))}, "

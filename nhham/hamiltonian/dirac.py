@@ -48,26 +48,45 @@ def dirac_bracket(source, classes: ConstraintClasses | None = None, *,
     Returns
     -------
     DiracBracket
+
+    Examples
+    --------
+    On the circle of the Cartesian pendulum, {x, p_x}_D = 1 - x**2/(x**2 + y**2).
+
+    >>> import sympy as sp
+    >>> from nhham import dirac_bracket, models
+    >>> D = dirac_bracket(models.pendulum_cartesian())
+    >>> x, y = D.algebra.coordinates
+    >>> sp.simplify(D(x, D.algebra.momenta[0]))
+    y**2/(x**2 + y**2)
     """
     if isinstance(source, ConstraintClasses):
         classes = source
     if classes is None:
         classify_options.setdefault("method", "exact")
         classes = classify_constraints(source, **classify_options)
-    if classes.constraints is None:
-        raise ComputationError("the Dirac bracket needs the constraints in (q, p): classify "
-                               "with method='exact'")
+    constraints, bracket_matrix, _ = _exact_parts(classes, "the Dirac bracket")
     side = classes.side
     R = list(classes.second_class_indices)
-    chi = [classes.constraints[a] for a in R]
+    chi = [constraints[a] for a in R]
     if on_manifold:
-        B = classes.bracket_matrix.extract(R, R)
+        B = bracket_matrix.extract(R, R)
         label_index = {lab: i for i, lab in enumerate(classes.second_class_set)}
         blocks = [[label_index[lab] for lab in blk if lab in label_index]
                   for blk in classes.blocks]
         blocks = [b for b in blocks if b]
         return DiracBracket(side.algebra, chi, blocks=blocks, matrix=B)
     return DiracBracket(side.algebra, chi)
+
+
+def _exact_parts(classes: ConstraintClasses,
+                 what: str) -> tuple[tuple, sp.Matrix, Submanifold]:
+    """(chi in (q, p), B reduced on M_f, M_f) of an exact classification; only exact
+    mode has them (at points and sampled: None)."""
+    if classes.constraints is None or classes.bracket_matrix is None or classes.manifold is None:
+        raise ComputationError(f"{what} needs the constraints in (q, p): classify with "
+                               f"method='exact' (this classification: {classes.method!r})")
+    return classes.constraints, classes.bracket_matrix, classes.manifold
 
 
 @dataclass(frozen=True)
@@ -178,6 +197,17 @@ def dirac_vs_projected(system, *, precision=None, samples=6, seed=SEED,
     Returns
     -------
     DiracProjectedReport
+
+    Examples
+    --------
+    A holonomic constraint: the Dirac flow is the true one. The sleigh's constraint is
+    first class, so its Dirac bracket is the canonical one, whose flow ignores it.
+
+    >>> from nhham import dirac_vs_projected, models
+    >>> dirac_vs_projected(models.pendulum_cartesian()).equal
+    True
+    >>> dirac_vs_projected(models.chaplygin_sleigh()).equal
+    False
     """
     policy = policy_of(policy, "dirac_vs_projected", precision=precision, samples=samples,
                        seed=seed, tol=tol)
@@ -199,7 +229,7 @@ def dirac_vs_projected(system, *, precision=None, samples=6, seed=SEED,
             "dirac_vs_projected: C^H is singular on M_1; the projected field is a family "
             "(see nhham.lagrangian.algorithm) and the comparison is defined for regular systems only")
     XD, X, diff = _fields_on_Mf(side, classes)
-    Mf = classes.manifold
+    _, _, Mf = _exact_parts(classes, "dirac_vs_projected")
     decisions = tuple(Mf.vanishes(d, tol=tol) for d in diff)
     reduced = sp.Matrix([0 if d.value else e for d, e in zip(decisions, diff)])
     notes = _gauge_note(classes)
@@ -346,11 +376,11 @@ def _fields_on_Mf(side: HamiltonianSide, classes: ConstraintClasses):
     X = X_H + Z_j^H lambda^j; reducing the small factors before multiplying
     keeps the expressions small (reducing the assembled fields is far slower).
     """
-    Mf = classes.manifold
+    constraints, bracket_matrix, Mf = _exact_parts(classes, "dirac_vs_projected")
     alg = side.algebra
     R = list(classes.second_class_indices)
-    chi = [classes.constraints[a] for a in R]
-    B = classes.bracket_matrix.extract(R, R)
+    chi = [constraints[a] for a in R]
+    B = bracket_matrix.extract(R, R)
     label_index = {lab: i for i, lab in enumerate(classes.second_class_set)}
     blocks = [[label_index[lab] for lab in blk if lab in label_index] for blk in classes.blocks]
     blocks = [b for b in blocks if b]

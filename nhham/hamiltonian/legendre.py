@@ -58,6 +58,12 @@ def legendre_map(system) -> "LegendreMap":
     Returns
     -------
     LegendreMap
+
+    Examples
+    --------
+    >>> from nhham import legendre_map, models
+    >>> legendre_map(models.rolling_disk(symbolic=True)).momenta.T
+    Matrix([[m*x_dot, m*y_dot, I1*theta_dot, I2*phi_dot]])
     """
     return LegendreMap(system)
 
@@ -81,6 +87,13 @@ class LegendreMap:
         q^A and v^A of the system.
     momentum_symbols : tuple of sympy.Symbol
         p_A, named ``p_<q>``.
+
+    Examples
+    --------
+    >>> from nhham import legendre_map, models
+    >>> leg = legendre_map(models.rolling_disk(symbolic=True))
+    >>> leg.is_quadratic, leg.inverse
+    (True, {x_dot: p_x/m, y_dot: p_y/m, theta_dot: p_theta/I1, phi_dot: p_phi/I2})
     """
 
     system: System
@@ -287,8 +300,9 @@ class LegendreMap:
             p = be.vector(p)
             params = list(be.vector(params)) if len(params) else []
             v = be.zeros(self.n)
-            tol = be.scalar(1e-13 if precision is None and tol is None else
-                            (tol if tol is not None else 10.0 ** (2 - precision)))
+            if tol is None:
+                tol = 1e-13 if precision is None else 10.0 ** (2 - precision)
+            tol = be.scalar(tol)
             scale = 1 + be.norm(p)
             for _ in range(maxiter):
                 r = be.vector(F(*q, *v, *params)) - p

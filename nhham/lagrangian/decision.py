@@ -93,6 +93,19 @@ class Decision:
         Where an exact answer holds when that is less than all of M for all parameter
         values: a proof at a point of a curved M holds on the component of M through
         the point, at the parameter values ("" otherwise). Also ends ``detail``.
+
+    Examples
+    --------
+    On the rolling disk's M_1 = {phi = 0}: twice a constraint vanishes there, x' does not.
+
+    >>> from nhham import Submanifold, models
+    >>> disk = models.rolling_disk(symbolic=True)
+    >>> M1 = Submanifold(disk, disk.phi)
+    >>> decision = M1.vanishes(2 * disk.phi[0])
+    >>> decision.value, decision.method
+    (True, 'exact')
+    >>> M1.vanishes(disk.velocities[0]).value
+    False
     """
 
     value: object

@@ -99,6 +99,15 @@ class Policy:
     symbolic_values_size : int
         Up to this n + m the verdict at the parameter values names its conditions
         with the parameters kept symbolic.
+
+    Examples
+    --------
+    >>> from nhham import Policy, integrability, models
+    >>> policy = Policy(samples=4, seed=7)
+    >>> policy.precision is None, policy.samples, policy.seed
+    (True, 4, 7)
+    >>> integrability(models.rolling_disk(), policy=policy).integrable
+    False
     """
 
     precision: int | None = None

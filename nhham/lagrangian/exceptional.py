@@ -143,6 +143,15 @@ def exceptional_conditions(analysis: ConstraintAnalysis, parameters: Sequence | 
     Returns
     -------
     tuple of Condition
+
+    Examples
+    --------
+    >>> import nhham
+    >>> system = nhham.System(["q1", "q2", "q3"], "(a*q1_dot**2 + q2_dot**2 - q3_dot**2)/2",
+    ...                       ["q2_dot + b*q3_dot"], parameters={"a": 1.0, "b": 1.0})
+    >>> conditions = nhham.exceptional_conditions(nhham.analyze_constraints(system))
+    >>> [c.equations for c in conditions]         # det W = a, C = -(1 - b**2)
+    [(a,), (b - 1,), (b + 1,)]
     """
     system = analysis.system
     params = tuple(system.parameters if parameters is None else parameters)
@@ -381,9 +390,10 @@ class ExceptionalData:
             sampler = exact_sampler(Submanifold(self.system, cons, seed=self.seed),
                                     self.seed, modular=True)
             env, cache = sampler.point().env, {}
-            B = lagrangian_bracket(*(ListMatrix([evaluate(r, env, cache) for r in rows],
-                                                len(rows[0])) for rows in self._bracket_rows()),
-                                   solve=field_solve)
+            # every argument has n columns (also with no final constraint: no rows)
+            Jq, Jv, W, M = (ListMatrix([evaluate(r, env, cache) for r in rows], self.system.n)
+                            for rows in self._bracket_rows())
+            B = lagrangian_bracket(Jq, Jv, W, M, solve=field_solve)
             rank = exact_rank(B.rows)[0]
         except (NotExact, ZeroDivisionError):
             return None

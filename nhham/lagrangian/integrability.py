@@ -154,10 +154,24 @@ def integrability(system, *, precision: int | None = None, samples: int = 6,
     Returns
     -------
     Integrability
+
+    Examples
+    --------
+    The rolling disk's constraints dx - R cos(theta) dphi, dy - R sin(theta) dphi: by hand,
+    d mu_1(X_1, X_2) = R sin(theta) and d mu_2(X_1, X_2) = -R cos(theta) on the kernel
+    basis X_1 = d/dtheta, X_2 = R cos(theta) d/dx + R sin(theta) d/dy + d/dphi.
+
+    >>> from nhham import integrability, models
+    >>> result = integrability(models.rolling_disk(symbolic=True))
+    >>> result.integrable, result.method
+    (False, 'exact')
+    >>> [str(term) for _, _, _, term in result.obstructions]
+    ['R*sin(theta)', '-R*cos(theta)']
     """
     policy = policy_of(policy, "integrability", precision=precision, samples=samples,
                        seed=seed, exact=exact)
-    return decide(*_question(system, policy), policy)
+    question, Q1 = _question(system, policy)
+    return decide(question, Q1, policy)
 
 
 def integrability_proved_at_values(system, policy: Policy) -> Integrability | None:
@@ -167,10 +181,11 @@ def integrability_proved_at_values(system, policy: Policy) -> Integrability | No
     A reduction decides for generic parameters; this says whether the scene's own
     values are among the exceptions (:mod:`nhham.lagrangian.exceptional` asks it where
     Q_1 has no rational points)."""
-    return proof_at_a_point(*_question(system, policy), policy)
+    question, Q1 = _question(system, policy)
+    return proof_at_a_point(question, Q1, policy)
 
 
-def _question(system, policy):
+def _question(system, policy) -> tuple["Frobenius", Submanifold]:
     """The Frobenius question and Q_1 = {g = 0} it is asked on."""
     labels = tuple(f"{lab}.lift" if i < len(system.holonomic) else lab
                    for i, lab in enumerate(system.constraint_labels))
@@ -315,12 +330,12 @@ def frobenius_sampled(system, labels, *, precision: int | None = None, samples: 
     how = (f"{len(points)} seeded points of Q_1 ({prec.label}); largest |dmu_i(X_a, X_b)| / "
            f"|dmu_i| = {worst:.3g}")
     if found is not None:
-        i, a, b, value = found
+        i, lo, hi, value = found
         dec = Decision(False, "sampled", "a term is clearly nonzero at " + how,
                        precision=prec.label, samples=len(points), max_abs=worst,
                        point_residual=residual)
-        return Integrability(False, n - m, None, ((labels[i], a, b, sp.Float(value, 6)),),
-                             ((f"d{labels[i]}(X_{a + 1}, X_{b + 1})", dec),), "sampled", (),
+        return Integrability(False, n - m, None, ((labels[i], lo, hi, sp.Float(value, 6)),),
+                             ((f"d{labels[i]}(X_{lo + 1}, X_{hi + 1})", dec),), "sampled", (),
                              **common)
     warn = (f"terms neither clearly zero nor clearly nonzero at {prec.label}",) \
         if doubtful else ()

@@ -101,6 +101,18 @@ def constant_of_motion(geometry, F) -> ConservationTest:
         With C regular on M_1.
     F : sympy.Expr
         A function of coordinates, velocities and parameters.
+
+    Examples
+    --------
+    The rolling disk keeps its energy; x' changes (x'' = -R sin(theta) theta' phi').
+
+    >>> from nhham import constant_of_motion, lagrangian_geometry, models
+    >>> disk = models.rolling_disk()
+    >>> geometry = lagrangian_geometry(disk)
+    >>> constant_of_motion(geometry, disk.lagrangian).conserved.value
+    True
+    >>> bool(constant_of_motion(geometry, disk.velocities[0]))
+    False
     """
     F = sp.sympify(F)
     M1 = geometry.M1
@@ -123,6 +135,16 @@ def cyclic_constants(geometry) -> dict:
     -------
     dict
         ``{coordinate: ConservationTest}`` for every cyclic coordinate.
+
+    Examples
+    --------
+    Every coordinate of the rolling disk is cyclic; the constraint forces change m x' and
+    m y', while theta' and phi' stay constant ((I2 + m R^2) phi'' = 0 by hand).
+
+    >>> from nhham import cyclic_constants, lagrangian_geometry, models
+    >>> tests = cyclic_constants(lagrangian_geometry(models.rolling_disk()))
+    >>> {str(q): bool(test) for q, test in tests.items()}
+    {'x': False, 'y': False, 'theta': True, 'phi': True}
     """
     L = geometry.system.lagrangian
     out = {}
@@ -133,7 +155,16 @@ def cyclic_constants(geometry) -> dict:
 
 
 def complete_lift(system, X) -> sp.Matrix:
-    """X^c = X^A d/dq^A + (dX^A/dq^B) v^B d/dv^A, as a 2n-vector."""
+    """X^c = X^A d/dq^A + (dX^A/dq^B) v^B d/dv^A, as a 2n-vector.
+
+    Examples
+    --------
+    >>> from nhham import complete_lift, models
+    >>> disk = models.rolling_disk()
+    >>> x, y, theta, phi = disk.coordinates
+    >>> complete_lift(disk, [-y, x, 1, 0]).T    # a rotation of the plane, lifted to TQ
+    Matrix([[-y, x, 1, 0, -y_dot, x_dot, 0, 0]])
+    """
     X = [sp.sympify(x) for x in X]
     if len(X) != system.n:
         from nhham.errors import InputError
@@ -158,6 +189,17 @@ def lie_symmetry(geometry, X) -> LieSymmetryTest:
     holonomic constraints) and [X^c, Lambda] = 0 on M_1, where Lambda is
     represented by its extension P(xi_L); both fields being tangent to M_1,
     the bracket on M_1 does not depend on the extensions.
+
+    Examples
+    --------
+    Rotating the rolling disk's plane (and its heading with it) is a symmetry.
+
+    >>> from nhham import lagrangian_geometry, lie_symmetry, models
+    >>> disk = models.rolling_disk()
+    >>> x, y, theta, phi = disk.coordinates
+    >>> test = lie_symmetry(lagrangian_geometry(disk), [-y, x, 1, 0])
+    >>> test.tangent.value, test.commutes.value
+    (True, True)
     """
     system = geometry.system
     Xc = complete_lift(system, X)

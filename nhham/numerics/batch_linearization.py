@@ -53,6 +53,15 @@ class ChartChoice:
         Chart variables removed (and ``d/d<p>`` tangents divided out).
     coordinates : tuple of str
         The variables of the state matrices.
+
+    Examples
+    --------
+    >>> from nhham import models, numeric_model
+    >>> model = numeric_model(models.chaplygin_sleigh(), backend="numpy")
+    >>> forward = dict(x=0.0, y=0.0, theta=0.0, x_dot=2.0, y_dot=0.0, theta_dot=0.0)
+    >>> from nhham import ChartChoice, linearize
+    >>> ChartChoice.of(linearize(model, forward))
+    ChartChoice(chart=('x', 'y', 'theta', 'x_dot', 'theta_dot'), neutral=('x', 'y', 'theta', 'x_dot'), coordinates=('theta_dot',))
     """
 
     chart: tuple
@@ -99,6 +108,19 @@ class LinearizationBatch:
     inputs : tuple of str
     input_matrices : ndarray, shape (N, d, len(inputs))
         B of x' = A x + B u.
+
+    Examples
+    --------
+    >>> from nhham import models, numeric_model
+    >>> model = numeric_model(models.chaplygin_sleigh(), backend="numpy")
+    >>> forward = dict(x=0.0, y=0.0, theta=0.0, x_dot=2.0, y_dot=0.0, theta_dot=0.0)
+    >>> from nhham import ChartChoice, linearize, linearize_batch
+    >>> reference = ChartChoice.of(linearize(model, forward))
+    >>> parameters = [[1.0, 0.25, 0.5], [1.0, 0.25, 1.0]]     # m, I, a
+    >>> batch = linearize_batch(model, [model.state(forward)] * 2, parameters,
+    ...                         reference=reference)
+    >>> batch.coordinates, batch.matrices.round(12).ravel()   # a = 0.5, 1: -2, -1.6
+    (('theta_dot',), array([-2. , -1.6]))
     """
 
     coordinates: tuple
@@ -161,9 +183,20 @@ def linearize_batch(model, states, parameters=None, *, reference: Linearization 
     Returns
     -------
     LinearizationBatch
+
+    Examples
+    --------
+    >>> from nhham import models, numeric_model
+    >>> model = numeric_model(models.chaplygin_sleigh(), backend="numpy")
+    >>> forward = dict(x=0.0, y=0.0, theta=0.0, x_dot=2.0, y_dot=0.0, theta_dot=0.0)
+    >>> from nhham import ChartChoice, linearize, linearize_batch
+    >>> reference = ChartChoice.of(linearize(model, forward))
+    >>> states = [model.state({**forward, "x_dot": u}) for u in (1.0, 2.0, -1.0)]
+    >>> linearize_batch(model, states, reference=reference).eigenvalues.round(12).ravel()
+    array([-1.+0.j, -2.+0.j,  1.+0.j])
     """
     Y = np.atleast_2d(np.asarray(states, dtype=float))
-    N, n = Y.shape[0], model.n
+    N = Y.shape[0]
     P = (np.tile(np.asarray(model.parameter_values, dtype=float), (N, 1)) if parameters is None
          else np.atleast_2d(np.asarray(parameters, dtype=float)))
     chart = _chart(model, reference.chart)

@@ -17,6 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from nhham.errors import ComputationError, InputError
+from nhham.numerics.kernels import columns
 from nhham.numerics.nullspace import needs_null_space, solve_null_space
 
 __all__ = ["BATCH_STATES", "Chart", "ComplexField", "chart_jacobian", "chart_jacobians",
@@ -89,24 +90,16 @@ class ComplexField:
         n, m, k = self.n, self.m, self.k
         out = self._outputs("saddle", np.concatenate([Q, V], axis=1), p)
         K = out.shape[0]
-        i = 0
-        W = out[:, i:i + n * n].reshape(K, n, n); i += n * n
-        F = out[:, i:i + n]; i += n
-        mu = out[:, i:i + m * n].reshape(K, m, n); i += m * n
-        drift = out[:, i:i + m]; i += m
-        h = out[:, i:i + m]; i += m
-        g = out[:, i:i + k]
-        return W, F, mu, drift, h, g
+        W, F, mu, drift, h, g = columns(out, (n * n, n, m * n, m, m, k))
+        return W.reshape(K, n, n), F, mu.reshape(K, m, n), drift, h, g
 
     def geometry(self, Q, p=None):
         """mu, h, g at complex coordinates (rows of Q: shape (K, n)): the kernel of the
         coordinates only (no F, no drift), for lifting points onto M_1."""
         n, m, k = self.n, self.m, self.k
         out = self._outputs("geometry", Q, p)
-        i = n * n
-        mu = out[:, i:i + m * n].reshape(out.shape[0], m, n); i += m * n
-        h = out[:, i:i + m]; i += m
-        return mu, h, out[:, i:i + k]
+        _, mu, h, g = columns(out, (n * n, m * n, m, k))
+        return mu.reshape(out.shape[0], m, n), h, g
 
     def accelerations(self, Q, V, p=None):
         """The accelerations at the complex states of the complex step (imaginary parts of

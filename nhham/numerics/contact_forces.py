@@ -49,6 +49,23 @@ class ContactForces:
     rank : dict
         name -> the smallest rank of J_P over the states (3: f_P is unique).
     warnings : tuple of str
+
+    Examples
+    --------
+    >>> import sympy as sp
+    >>> from nhham import ContactPoint, models
+    >>> sleigh = models.chaplygin_sleigh()
+    >>> theta, (x_dot, y_dot, theta_dot), a = sleigh.coordinates[2], sleigh.velocities, sp.Symbol("a")
+    >>> blade = ContactPoint("blade", (x_dot + a * sp.sin(theta) * theta_dot,
+    ...                                y_dot - a * sp.cos(theta) * theta_dot, 0), ("constraints[0]",))
+    >>> from nhham import contact_forces, numeric_model
+    >>> model = numeric_model(sleigh, backend="numpy")
+    >>> y = model.state(dict(x=0.0, y=0.0, theta=0.0, x_dot=1.0, y_dot=0.5, theta_dot=1.0))
+    >>> forces = contact_forces(sleigh, [blade], y, model.multipliers(y))
+    >>> forces.points, forces.rank      # the vertical force is no constraint's
+    (('blade',), {'blade': 2})
+    >>> forces.warnings
+    ("contacts.blade: the point's velocity map has rank 2 < 3: ...",)
     """
 
     points: tuple
@@ -85,6 +102,22 @@ def contact_forces(system, contacts, states, multipliers, parameters=None) -> Co
     Returns
     -------
     ContactForces
+
+    Examples
+    --------
+    >>> import sympy as sp
+    >>> from nhham import ContactPoint, models
+    >>> sleigh = models.chaplygin_sleigh()
+    >>> theta, (x_dot, y_dot, theta_dot), a = sleigh.coordinates[2], sleigh.velocities, sp.Symbol("a")
+    >>> blade = ContactPoint("blade", (x_dot + a * sp.sin(theta) * theta_dot,
+    ...                                y_dot - a * sp.cos(theta) * theta_dot, 0), ("constraints[0]",))
+    >>> import numpy as np
+    >>> from nhham import contact_forces, numeric_model
+    >>> model = numeric_model(sleigh, backend="numpy")
+    >>> y = model.state(dict(x=0.0, y=0.0, theta=0.0, x_dot=1.0, y_dot=0.5, theta_dot=1.0))
+    >>> forces = contact_forces(sleigh, [blade], y, model.multipliers(y))
+    >>> print(np.round(forces.forces["blade"], 12) + 0.0)   # m y'' = 0.5 across the blade
+    [[0.  0.5 0. ]]
     """
     Y = np.atleast_2d(np.asarray(states, dtype=float))
     lam = np.atleast_2d(np.asarray(multipliers, dtype=float))

@@ -95,7 +95,7 @@ class CrossingSearch:
     unlocated: tuple
 
 
-def crossings(spectrum_at: Callable, values: Sequence[float], spectra: Sequence, *,
+def crossings(spectrum_at: Callable, values: Sequence[float] | np.ndarray, spectra: Sequence, *,
               xtol: float = 1e-12) -> CrossingSearch:
     """:func:`crossings_many` on one line, ``spectrum_at(value)`` one spectrum at a time.
 

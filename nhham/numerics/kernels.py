@@ -11,6 +11,7 @@ and used by :class:`~nhham.numerics.model.NumericModel`. No sympy here.
 from __future__ import annotations
 
 import ctypes
+import itertools
 import threading
 from dataclasses import dataclass
 from types import MappingProxyType
@@ -19,7 +20,7 @@ import numpy as np
 
 from nhham.settings import COMPILER_LOCK
 
-__all__ = ["GeneratedKernels", "CompiledRHS", "ComplexKernels", "kernel_sizes"]
+__all__ = ["GeneratedKernels", "CompiledRHS", "ComplexKernels", "kernel_sizes", "columns"]
 
 
 def kernel_sizes(layout) -> dict:
@@ -32,6 +33,19 @@ def kernel_sizes(layout) -> dict:
         "jphi": m * n,
         "closed": n + m,
     }
+
+
+def columns(out: np.ndarray, widths) -> list[np.ndarray]:
+    """The consecutive blocks of the last axis of a kernel's output, of the given
+    widths (views), e.g. W, F, mu, ... of the saddle kernel.
+
+    Examples
+    --------
+    >>> [b.tolist() for b in columns(np.arange(6.0), (1, 2, 3))]
+    [[0.0], [1.0, 2.0], [3.0, 4.0, 5.0]]
+    """
+    offsets = list(itertools.accumulate(widths, initial=0))
+    return [out[..., a:b] for a, b in zip(offsets[:-1], offsets[1:])]
 
 
 @dataclass(frozen=True)
@@ -115,6 +129,8 @@ class CompiledRHS:
 
             loader = importlib.machinery.ExtensionFileLoader("nhham_ext", path)
             spec = importlib.util.spec_from_file_location("nhham_ext", path, loader=loader)
+            if spec is None:  # a path without a loadable suffix
+                raise ImportError(f"not a loadable extension module: {path}")
             ext = importlib.util.module_from_spec(spec)
             loader.exec_module(ext)
         return cls(ctypes.CDLL(path), path, layout, ext)

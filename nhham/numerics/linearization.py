@@ -39,13 +39,16 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 from types import MappingProxyType
-from typing import Mapping, Sequence
+from typing import TYPE_CHECKING, Mapping, Sequence
 
 import numpy as np
 
 from nhham.errors import ComputationError, InconsistentInitialDataError, InputError
 from nhham.numerics.chart import (ComplexField, chart_jacobian, chart_jacobians, choose_chart,
                                   input_jacobians)
+
+if TYPE_CHECKING:  # the exact matrix comes from the symbolic side; numerics never imports it
+    import sympy
 
 __all__ = ["Linearization", "linearize", "linearize_many", "linearization_result", "STEP",
            "ON_TOLERANCE"]
@@ -114,6 +117,18 @@ class Linearization:
     input_matrix : ndarray, shape (d, len(inputs))
         B of x' = A x + B u in the variables of :attr:`matrix`, the inputs at their
         steady values (complex-step derivative in each input, exact to rounding).
+
+    Examples
+    --------
+    >>> from nhham import models, numeric_model
+    >>> model = numeric_model(models.chaplygin_sleigh(), backend="numpy")
+    >>> forward = dict(x=0.0, y=0.0, theta=0.0, x_dot=2.0, y_dot=0.0, theta_dot=0.0)
+    >>> from nhham import linearize
+    >>> lin = linearize(model, {**forward, "x_dot": -2.0})     # backwards: w grows
+    >>> lin.eigenvalues.round(12), lin.stable
+    (array([2.+0.j]), False)
+    >>> lin.neutral
+    ('x', 'y', 'theta', 'x_dot')
     """
 
     coordinates: tuple
@@ -132,7 +147,7 @@ class Linearization:
     state: Mapping[str, float]
     residuals: Mapping[str, float] = field(default_factory=dict)
     acceleration_residual: float = 0.0
-    exact_matrix: object = None
+    exact_matrix: sympy.Matrix | None = None
     inputs: tuple = ()
     input_matrix: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
 
@@ -265,6 +280,16 @@ def linearize(model, state, *, independent: Sequence[str] | None = None,
         residuals).
     ComputationError
         A constraint or the saddle-point matrix is singular at the state.
+
+    Examples
+    --------
+    >>> from nhham import models, numeric_model
+    >>> model = numeric_model(models.chaplygin_sleigh(), backend="numpy")
+    >>> forward = dict(x=0.0, y=0.0, theta=0.0, x_dot=2.0, y_dot=0.0, theta_dot=0.0)
+    >>> from nhham import linearize
+    >>> lin = linearize(model, forward)     # w' = -m a u w / (I + m a**2) = -2 w at u = 2
+    >>> lin.coordinates, lin.eigenvalues.round(12), lin.stable
+    (('theta_dot',), array([-2.+0.j]), True)
     """
     if not hasattr(model, "kernels"):
         raise InputError(f"linearize: expected a NumericModel (nhham.numeric_model(system)), "
@@ -306,6 +331,18 @@ def linearize_many(models: Sequence, states: Sequence, independent: Sequence[str
     -------
     list of Linearization
         The same as :func:`linearize` at each pair, to rounding.
+
+    Examples
+    --------
+    >>> from nhham import models, numeric_model
+    >>> model = numeric_model(models.chaplygin_sleigh(), backend="numpy")
+    >>> forward = dict(x=0.0, y=0.0, theta=0.0, x_dot=2.0, y_dot=0.0, theta_dot=0.0)
+    >>> from nhham import linearize, linearize_many
+    >>> chart = linearize(model, forward).chart
+    >>> lins = linearize_many([model.with_parameters(a=a) for a in (0.5, 1.0)],
+    ...                       [forward, forward], chart)
+    >>> [lin.eigenvalues.round(12) for lin in lins]    # -m a u / (I + m a**2)
+    [array([-2.+0.j]), array([-1.6+0.j])]
     """
     if not models:
         return []

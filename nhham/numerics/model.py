@@ -49,7 +49,7 @@ from types import MappingProxyType
 import numpy as np
 
 from nhham.errors import InconsistentInitialDataError, InputError
-from nhham.numerics.kernels import CompiledRHS, GeneratedKernels
+from nhham.numerics.kernels import CompiledRHS, GeneratedKernels, columns
 from nhham.numerics.saddle import SingleStateSolver, cond_each, solve_saddle
 from nhham.numerics.status import NumericalFailure, Status
 
@@ -149,6 +149,17 @@ class NumericModel:
         L = 1/2 v^T W(q) v - V(q) (what the RATTLE-type integrator needs).
     linear_constraints : bool
         Every h_i is zero (energy is conserved).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from nhham import models, numeric_model
+    >>> model = numeric_model(models.chaplygin_sleigh(), backend="numpy")
+    >>> model.parameters
+    {'m': 1.0, 'I': 0.25, 'a': 0.5}
+    >>> y = model.state(dict(x=0.0, y=0.0, theta=0.0, x_dot=1.0, y_dot=0.5, theta_dot=1.0))
+    >>> print(np.round(model.multipliers(y), 12))    # I theta'' = a lambda, theta'' = -1
+    [-0.5]
     """
 
     layout: MappingProxyType
@@ -403,10 +414,11 @@ class NumericModel:
                 if type(out) is int:
                     raise NumericalFailure(out, _failure_message(out, y))
                 return out
-        if (baumgarte is None and self.backend == "c"
+        compiled = self.compiled
+        if (baumgarte is None and compiled is not None and self.backend == "c"
                 and type(y) is np.ndarray and y.ndim == 1 and y.shape[0] == 2 * self.n):
             # The hot path (what an integrator calls): no extras.
-            out, status = self.compiled.one(y, self._block0.pointer, self.path == "closed_form")
+            out, status = compiled.one(y, self._block0.pointer, self.path == "closed_form")
             if status:
                 raise NumericalFailure(status, _failure_message(status, y))
             return out[:2 * self.n].copy()
@@ -426,14 +438,8 @@ class NumericModel:
     def _unpack_saddle(self, out):
         n, m, k = self.n, self.m, self.k
         lead = out.shape[:-1]
-        i = 0
-        W = out[..., i:i + n * n].reshape(lead + (n, n)); i += n * n
-        F = out[..., i:i + n]; i += n
-        mu = out[..., i:i + m * n].reshape(lead + (m, n)); i += m * n
-        drift = out[..., i:i + m]; i += m
-        h = out[..., i:i + m]; i += m
-        g = out[..., i:i + k]
-        return W, F, mu, drift, h, g
+        W, F, mu, drift, h, g = columns(out, (n * n, n, m * n, m, m, k))
+        return W.reshape(lead + (n, n)), F, mu.reshape(lead + (m, n)), drift, h, g
 
     def _evaluate_numpy(self, y, a2, b2):
         if y.ndim == 1:
@@ -505,11 +511,8 @@ class NumericModel:
         else:
             out = self.kernels.batch("geometry", y[:, :n], self._plist)
         lead = out.shape[:-1]
-        W = out[..., :n * n].reshape(lead + (n, n))
-        mu = out[..., n * n:n * n + m * n].reshape(lead + (m, n))
-        h = out[..., n * n + m * n:n * n + m * n + m]
-        g = out[..., n * n + m * n + m:]
-        return W, mu, h, g
+        W, mu, h, g = columns(out, (n * n, m * n, m, k))
+        return W.reshape(lead + (n, n)), mu.reshape(lead + (m, n)), h, g
 
     def residuals(self, y) -> np.ndarray:
         """Constraint residuals [phi_1..phi_m, g_1..g_k], shape (m+k,) or (K, m+k).

@@ -35,6 +35,16 @@ class Sweep:
     unlocated : tuple of Unlocated
         Intervals where the number of unstable eigenvalues changes but no eigenvalue
         could be put on the imaginary axis (each with its reason).
+
+    Examples
+    --------
+    >>> from nhham import models, numeric_model
+    >>> model = numeric_model(models.chaplygin_sleigh(), backend="numpy")
+    >>> forward = dict(x=0.0, y=0.0, theta=0.0, x_dot=2.0, y_dot=0.0, theta_dot=0.0)
+    >>> from nhham import sweep_steady
+    >>> swept = sweep_steady(model, lambda parameters: forward, "a", [0.25, 0.5, 1.0])
+    >>> swept.coordinates, [e.round(12) for e in swept.eigenvalues]
+    (('theta_dot',), [array([-1.6+0.j]), array([-2.+0.j]), array([-1.6+0.j])])
     """
 
     parameter: str
@@ -62,7 +72,7 @@ class Sweep:
 
 
 def sweep(linearize_at: Callable[[float], Linearization], parameter: str,
-          values: Sequence[float], *, xtol: float = 1e-12,
+          values: Sequence[float] | np.ndarray, *, xtol: float = 1e-12,
           linearize_all: Callable[[Sequence[float]], list] | None = None) -> Sweep:
     """Eigenvalues along a parameter, with the crossings of the imaginary axis.
 
@@ -88,12 +98,12 @@ def sweep(linearize_at: Callable[[float], Linearization], parameter: str,
         :func:`~nhham.numerics.crossings.crossings` (an eigenvalue on the imaginary axis
         at every reported value).
     """
-    values = np.asarray(values, dtype=float)
-    lins = (list(linearize_all([float(v) for v in values])) if linearize_all is not None
-            else [linearize_at(float(v)) for v in values])
+    grid = np.asarray(values, dtype=float)
+    lins = (list(linearize_all([float(v) for v in grid])) if linearize_all is not None
+            else [linearize_at(float(v)) for v in grid])
     coords = lins[0].coordinates if lins else ()
-    found = crossings(linearize_at, values, lins, xtol=xtol)
-    return Sweep(parameter, values, tuple(lin.eigenvalues for lin in lins),
+    found = crossings(linearize_at, grid, lins, xtol=xtol)
+    return Sweep(parameter, grid, tuple(lin.eigenvalues for lin in lins),
                  tuple(lin.stable for lin in lins), found.crossings[0], tuple(coords),
                  found.unlocated[0])
 
@@ -160,7 +170,7 @@ def steady_state(model, values: Mapping[str, float], independent=None, *,
 
 
 def sweep_steady(model, state_of: Callable[[Mapping[str, float]], Mapping[str, float]],
-                 parameter: str, values: Sequence[float], *, independent=None,
+                 parameter: str, values: Sequence[float] | np.ndarray, *, independent=None,
                  xtol: float = 1e-12, family_of=None) -> Sweep:
     """:func:`sweep` of a steady motion that moves with a parameter.
 
@@ -183,6 +193,18 @@ def sweep_steady(model, state_of: Callable[[Mapping[str, float]], Mapping[str, f
     Returns
     -------
     Sweep
+
+    Examples
+    --------
+    >>> from nhham import models, numeric_model
+    >>> model = numeric_model(models.chaplygin_sleigh(), backend="numpy")
+    >>> forward = dict(x=0.0, y=0.0, theta=0.0, x_dot=2.0, y_dot=0.0, theta_dot=0.0)
+    >>> from nhham import sweep_steady
+    >>> swept = sweep_steady(model, lambda parameters: forward, "a", [-0.5, -0.25, 0.25, 0.5])
+    >>> swept.stable                     # -m a u / (I + m a**2) changes sign at a = 0
+    (False, False, True, True)
+    >>> [(c.value, c.kind) for c in swept.crossings]
+    [(0.0, 'real')]
     """
     if parameter in model.input_names:
         raise InputError(f"--sweep: {parameter!r} is an input, whose steady value the "
@@ -206,23 +228,23 @@ def sweep_steady(model, state_of: Callable[[Mapping[str, float]], Mapping[str, f
     # One chart and one set of neutral directions for every value: those
     # found neutral at the first, middle and last values (a direction can be
     # neutral at an isolated value only, e.g. the yaw rate of a disc at rest).
-    values = np.asarray(values, dtype=float)
-    probes = [values[0], values[len(values) // 2], values[-1]] if len(values) else []
-    first = None
-    neutral = None
-    for value in probes:
-        chart = independent if first is None else first.chart
+    grid = np.asarray(values, dtype=float)
+    if grid.size == 0:
+        raise InputError(f"--sweep: no values of {parameter!r} to sweep", key="--sweep")
+    first = linearize(*model_and_state(grid[0], independent), independent=independent)
+    chart = first.chart
+    neutral = list(first.neutral)
+    for value in (grid[len(grid) // 2], grid[-1]):
         lin = linearize(*model_and_state(value, chart), independent=chart)
-        first = first or lin
-        neutral = [s for s in (lin.neutral if neutral is None else neutral) if s in lin.neutral]
+        neutral = [s for s in neutral if s in lin.neutral]
 
     def at(value):
-        return linearize(*model_and_state(value, first.chart), independent=first.chart,
+        return linearize(*model_and_state(value, chart), independent=chart,
                          neutral=neutral, family=fam(value))
 
     def at_all(values):
-        pairs = [model_and_state(v, first.chart) for v in values]
-        return linearize_many([m for m, _ in pairs], [s for _, s in pairs], first.chart,
+        pairs = [model_and_state(v, chart) for v in values]
+        return linearize_many([m for m, _ in pairs], [s for _, s in pairs], chart,
                               neutral=neutral, families=[fam(v) for v in values])
 
-    return sweep(at, parameter, values, xtol=xtol, linearize_all=at_all)
+    return sweep(at, parameter, grid, xtol=xtol, linearize_all=at_all)

@@ -47,11 +47,29 @@ class ContactPoint:
         v_P in the inertial frame, affine in the velocities.
     constraints : tuple of str
         Labels of the constraints it carries.
+
+    Examples
+    --------
+    >>> import sympy as sp
+    >>> from nhham import ContactPoint, models
+    >>> sleigh = models.chaplygin_sleigh()
+    >>> theta, (x_dot, y_dot, theta_dot), a = sleigh.coordinates[2], sleigh.velocities, sp.Symbol("a")
+    >>> blade = ContactPoint("blade", (x_dot + a * sp.sin(theta) * theta_dot,
+    ...                                y_dot - a * sp.cos(theta) * theta_dot, 0), ("constraints[0]",))
+    >>> blade.constraints
+    ('constraints[0]',)
     """
 
     name: str
     velocity: tuple
     constraints: tuple
+
+    def __post_init__(self):
+        # a plain number (0: the height of a point on a plane) is a constant expression;
+        # text is never sympified here (it is parsed, see the module docstring)
+        object.__setattr__(self, "velocity", tuple(
+            sp.Integer(v) if isinstance(v, int) else sp.Float(v) if isinstance(v, float)
+            else v for v in self.velocity))
 
 
 def contacts_structure(value, problems) -> Mapping | None:

@@ -121,11 +121,6 @@ def parse_expression(text: str, symbols: Mapping[str, sp.Symbol] | Iterable,
     JSON of the ``nhham`` command, :func:`to_text`): with the names it may
     use, a parameter called ``I`` is a real symbol, not sympy's imaginary unit.
 
-    >>> parse_expression("I*theta_dot**2/2", ["theta", "theta_dot", "I"])
-    I*theta_dot**2/2
-    >>> _.has(sp.I)
-    False
-
     Parameters
     ----------
     text : str
@@ -157,6 +152,13 @@ def parse_expression(text: str, symbols: Mapping[str, sp.Symbol] | Iterable,
         zero, a number that is not real or not a double, text not in Unicode
         normal form NFKC, or input too large or too deeply nested to handle in
         bounded time and memory. Its ``key`` is ``where``.
+
+    Examples
+    --------
+    >>> from nhham import parse_expression
+    >>> energy = parse_expression("I*theta_dot**2/2", ["theta", "theta_dot", "I"])
+    >>> energy, sorted(map(str, energy.free_symbols))    # I is a name, not sqrt(-1)
+    (I*theta_dot**2/2, ['I', 'theta_dot'])
     """
     try:
         return _parse(text, symbols, where)

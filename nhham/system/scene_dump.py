@@ -46,6 +46,21 @@ def dump_scene(system, initial=None, simulate=None, *, description: str = "",
     ------
     SceneError
         A value cannot be written (non-finite number).
+
+    Examples
+    --------
+    >>> from nhham import dump_scene, loads_scene, models
+    >>> text = dump_scene(models.chaplygin_sleigh())
+    >>> print(text)
+    name = "Chaplygin sleigh"
+    coordinates = ["x", "y", "theta"]
+    parameters = { m = 1.0, I = 0.25, a = 0.5 }
+    lagrangian = "I*theta_dot**2/2 + m*(x_dot**2 + y_dot**2)/2"
+    constraints = ["-a*theta_dot - x_dot*sin(theta) + y_dot*cos(theta)"]
+    holonomic = []
+    <BLANKLINE>
+    >>> loads_scene(text).system.mu == models.chaplygin_sleigh().mu
+    True
     """
     lines = []
     if system.name:

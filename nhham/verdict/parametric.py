@@ -91,6 +91,19 @@ def parametric_classification(system, *, positive: Sequence = (),
     InputError
         On a ``positive`` name that is not a parameter of the system, or a bad
         ``max_depth``/``near``.
+
+    Examples
+    --------
+    >>> import nhham
+    >>> system = nhham.System(["q1", "q2", "q3"], "(a*q1_dot**2 + q2_dot**2 - q3_dot**2)/2",
+    ...                       ["q2_dot + b*q3_dot"], parameters={"a": 1.0, "b": 1.0})
+    >>> verdicts = nhham.parametric_classification(system, positive=["a"])
+    >>> verdicts.generic.status          # C = -(1 - b**2) by hand
+    'determined'
+    >>> [(str(case.conditions[0]), case.verdict.status) for case in verdicts.cases]
+    [('b - 1', 'underdetermined'), ('b + 1', 'underdetermined')]
+    >>> verdicts.scene_case              # a = b = 1
+    0
     """
     # the inputs and t are not split into cases: a verdict holds for generic inputs
     declared = _declared_positive(system, positive)

@@ -57,6 +57,13 @@ class Verdict:
         The system the verdict was computed on (the case's condition substituted), its
         :class:`~nhham.lagrangian.analysis.ConstraintAnalysis` and, when a ``classes``
         function was given, its first/second-class result (not compared).
+
+    Examples
+    --------
+    >>> from nhham import classification_at_values, models
+    >>> verdict = classification_at_values(models.rolling_disk()).verdict
+    >>> verdict.status, verdict.rank_C, verdict.integrable, verdict.first_class
+    ('determined', 2, False, 2)
     """
 
     status: str
@@ -181,6 +188,21 @@ class ParametricVerdict:
         The system's parameter values (of the parameters kept symbolic).
     held : Mapping
         The parameters held at their values (``symbolic=``), with those values.
+
+    Examples
+    --------
+    >>> import nhham
+    >>> system = nhham.System(["q1", "q2", "q3"], "(a*q1_dot**2 + q2_dot**2 - q3_dot**2)/2",
+    ...                       ["q2_dot + b*q3_dot"], parameters={"a": 1.0, "b": 1.0})
+    >>> print(nhham.parametric_classification(system, positive=["a"]))
+    parameters: a, b (positive: a)
+    generic: C regular yes (rank 1), determined, 1 stage(s), 0 free multiplier(s), ...
+    case 0: b - 1 = 0
+      verdict: C regular no (rank 0), underdetermined, 1 stage(s), 1 free multiplier(s), ...
+      why: the rank of (Z_i(chi_j)) on M_1 drops below 1 (C singular)
+    case 1: b + 1 = 0
+    ...
+    values a = 1.0, b = 1.0: case 0
     """
 
     generic: Verdict
@@ -244,6 +266,15 @@ class ValuesVerdict:
         Values near an exceptional set; the depth bound hit; every check that was not
         made and why (no exact points, a datum not evaluable): an unchecked answer is
         not silently a checked one.
+
+    Examples
+    --------
+    >>> import nhham
+    >>> system = nhham.System(["q1", "q2", "q3"], "(a*q1_dot**2 + q2_dot**2 - q3_dot**2)/2",
+    ...                       ["q2_dot + b*q3_dot"], parameters={"a": 1.0, "b": 1.0})
+    >>> at = nhham.classification_at_values(system)
+    >>> at.verdict.free_multipliers, at.generic.free_multipliers, at.conditions
+    (1, 0, (b - 1,))
     """
 
     verdict: Verdict

@@ -56,6 +56,15 @@ def classification_at_values(system, *, classes: Callable | None = None,
     Returns
     -------
     ValuesVerdict
+
+    Examples
+    --------
+    >>> import nhham
+    >>> system = nhham.System(["q1", "q2", "q3"], "(a*q1_dot**2 + q2_dot**2 - q3_dot**2)/2",
+    ...                       ["q2_dot + b*q3_dot"], parameters={"a": 1.0, "b": 1.0})
+    >>> at = nhham.classification_at_values(system)     # b = 1: C = -(1 - b**2) = 0
+    >>> at.verdict.status, at.generic.status, at.conditions
+    ('underdetermined', 'determined', (b - 1,))
     """
     check_options("classification_at_values", near=near, max_depth=max_depth, points=points)
     policy = policy_of(policy, "classification_at_values", precision=precision, seed=seed)

@@ -297,7 +297,7 @@ def test_holonomic_constraint_without_real_solution_is_bad_input(schema):
 
 def test_redundant_constraint_advice_is_the_commands_option(schema):
     rc, out, err = in_process("derive", BAD / "dependent_constraints.toml", "--json")
-    env = assert_failure(rc, out, err, schema, 2, "input", "constraints[1]")
+    assert_failure(rc, out, err, schema, 2, "input", "constraints[1]")
     assert "run with --drop-redundant" in err and "drop_redundant=True" not in err
     rc, out, err = in_process("derive", BAD / "dependent_constraints.toml", "--drop-redundant",
                               "--json")

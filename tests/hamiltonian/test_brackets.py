@@ -121,6 +121,13 @@ def test_numeric_bracket_matrix_matches_symbolic():
     Gp = np.array([[float(sp.diff(f, v).subs(pt)) for v in P] for f in fs])
     sym = np.array(alg.bracket_matrix(fs).matrix.subs(pt), dtype=float)
     assert np.allclose(numeric_bracket_matrix(Gq, Gp), sym)
+    # {f_a, g_b} against other functions g = (q2, p1): Gq Hp^T - Gp Hq^T by hand
+    Hq, Hp = np.array([[0.0, 1.0], [0.0, 0.0]]), np.array([[0.0, 0.0], [1.0, 0.0]])
+    other = np.array(sp.Matrix([[alg.bracket(f, g) for g in (q2, p1)] for f in fs]).subs(pt),
+                     dtype=float)
+    assert np.allclose(numeric_bracket_matrix(Gq, Gp, Hq, Hp), other)
+    with pytest.raises(TypeError, match="both Hq and Hp"):
+        numeric_bracket_matrix(Gq, Gp, Hq)
 
 
 def test_connected_blocks():

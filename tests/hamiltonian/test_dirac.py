@@ -14,6 +14,7 @@ import sympy as sp
 import handmade
 import nhham
 from nhham import models
+from nhham.errors import ComputationError
 from nhham.hamiltonian.classification import classify_constraints
 from nhham.hamiltonian.dirac import dirac_bracket, dirac_vs_projected
 from nhham.hamiltonian.side import hamiltonian_side
@@ -42,6 +43,13 @@ def test_dirac_bracket_kills_second_class_constraints():
     Dm = dirac_bracket(c, on_manifold=True)
     for chi in c.second_class_constraints:
         assert on(c, Dm(chi, x * px))
+
+
+def test_dirac_bracket_of_a_classification_without_constraints_is_refused():
+    sampled = classify_constraints(handmade.sphere_with_knife(), method="sampled")
+    for on_manifold in (False, True):
+        with pytest.raises(ComputationError, match="method='exact'.*'sampled'"):
+            dirac_bracket(sampled, on_manifold=on_manifold)
 
 
 # ---------------------------------------------------- Dirac flow vs projected field

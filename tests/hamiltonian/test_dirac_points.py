@@ -66,7 +66,7 @@ def _true_p_phi_rate(point):
     """d/dt (J (phi' + x')) on the bead with a rotor, from the Euler-Lagrange equations
     with multipliers of g^c and the rotor constraint, solved by sympy at the point."""
     t = sp.Symbol("t")
-    m, J, g, R = 1, sp.Rational(1, 2), sp.Rational(981, 100), 1
+    m, J, g = 1, sp.Rational(1, 2), sp.Rational(981, 100)
     x, y, z, phi = (sp.Function(n)(t) for n in ("x", "y", "z", "phi"))
     qs = [x, y, z, phi]
     L = (m * (x.diff(t)**2 + y.diff(t)**2 + z.diff(t)**2) / 2

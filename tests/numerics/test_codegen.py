@@ -156,7 +156,6 @@ def test_numeric_side_never_imports_sympy():
 
 
 def test_missing_parameter_value_is_named():
-    xd, = sp.symbols("x_dot"),
     system = nhham.System(["x", "y"], "m*(x_dot**2 + y_dot**2)/2 - k*x**2/2",
                           ["y_dot - x*x_dot"], parameters={"m": 1.0, "k": None})
     with pytest.raises(MissingParameterValueError, match="k"):

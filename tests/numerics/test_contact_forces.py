@@ -125,3 +125,19 @@ def test_simulate_keeps_the_contact_forces_with_the_trajectory(rolling_disc):
     assert nhham.simulate(system, (0.0, 0.1), y0, warn=False).contact_forces is None
     with pytest.raises(nhham.InputError, match="contacts need the System"):
         nhham.simulate(model, (0.0, 0.1), y0, contacts=(contact,))
+
+
+def test_the_sleighs_blade_with_a_plain_zero_height():
+    """The Chaplygin sleigh at theta = 0 with x' = 1, theta' = 1 (y' = a theta' = 0.5):
+    by hand w' = -m a u w / (I + m a^2) = -1 and y'' = u w + a w' = 0.5, so the blade
+    pushes m y'' = 0.5 across itself; its height, a plain 0, is a constant expression."""
+    sleigh = nhham.models.chaplygin_sleigh()
+    theta, (xd, yd, thd), a = sleigh.coordinates[2], sleigh.velocities, sp.Symbol("a")
+    blade = ContactPoint("blade", (xd + a * sp.sin(theta) * thd, yd - a * sp.cos(theta) * thd,
+                                   0), ("constraints[0]",))
+    assert blade.velocity[2] == 0 and isinstance(blade.velocity[2], sp.Integer)
+    model = numeric_model(sleigh, backend="numpy")
+    y = model.state(dict(x=0.0, y=0.0, theta=0.0, x_dot=1.0, y_dot=0.5, theta_dot=1.0))
+    out = contact_forces(sleigh, [blade], y, model.multipliers(y))
+    assert np.allclose(out.forces["blade"][0], [0.0, 0.5, 0.0], atol=1e-12)
+    assert out.rank["blade"] == 2

@@ -30,6 +30,13 @@ def test_unknown_sweep_parameter(bicycle):
         sweep_steady(model, scene.steady.values, "w", [0.0, 1.0])
 
 
+def test_empty_sweep_is_refused_naming_the_parameter(bicycle):
+    scene, model = bicycle
+    with pytest.raises(InputError, match="no values of 'v'") as info:
+        sweep_steady(model, scene.steady.values, "v", [])
+    assert info.value.key == "--sweep"
+
+
 def _branch(eigenvalues):
     """A linearisation whose eigenvalues at parameter p are ``eigenvalues(p)``."""
     class Lin:

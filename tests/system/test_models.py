@@ -123,7 +123,7 @@ def test_snake_rejects_bad_link_count():
 
 def test_nonholonomic_particle_potential():
     system = nonholonomic_particle(potential="k*(x**2 + y**2)/2", potential_parameters={"k": 3.0})
-    x, y = S("x"), S("y")
+    x = S("x")
     assert sp.expand(system.lagrangian.diff(x)) == -S("k") * x
     assert system.parameter_values[S("k")] == 3.0
     with pytest.raises(InputError):
@@ -134,7 +134,7 @@ def test_nonholonomic_particle_potential():
 def test_rolling_disk_mu_Z_and_C():
     """mu_1 = dx - R cos(theta) dphi, mu_2 = dy - R sin(theta) dphi; DESIGN's Z_1 check."""
     system = rolling_disk(symbolic=True)
-    m, I1, I2, R, th = S("m"), S("I1"), S("I2"), S("R"), S("theta")
+    m, I2, R, th = S("m"), S("I2"), S("R"), S("theta")
     assert system.mu == sp.Matrix([[1, 0, 0, -R * sp.cos(th)], [0, 1, 0, -R * sp.sin(th)]])
     assert system.h == sp.zeros(2, 1)
     geo = lagrangian_geometry(system)

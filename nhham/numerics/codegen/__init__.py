@@ -87,6 +87,21 @@ def numeric_model(system, *, backend: str = "auto", path: str = "saddle",
         When a parameter used by the system has no numeric value.
     ValueError
         For an unknown backend or path.
+
+    Examples
+    --------
+    The sleigh at theta = 0 moving with u = x' = 1, w = theta' = 1 (so y' = a w = 0.5): by
+    hand u' = a w**2 = 0.5 and w' = -m a u w / (I + m a**2) = -1, so x'' = u' - a w**2 = 0
+    and y'' = u w + a w' = 0.5.
+
+    >>> import numpy as np
+    >>> from nhham import models, numeric_model
+    >>> model = numeric_model(models.chaplygin_sleigh(), backend="numpy")
+    >>> model
+    NumericModel('Chaplygin sleigh', n=3, m=1, k=0, backend='numpy', path='saddle')
+    >>> y = model.state(dict(x=0.0, y=0.0, theta=0.0, x_dot=1.0, y_dot=0.5, theta_dot=1.0))
+    >>> print(np.round(model.rhs(0.0, y), 12) + 0.0)
+    [ 1.   0.5  1.   0.   0.5 -1. ]
     """
     if backend not in _BACKENDS:
         raise ValueError(f"backend must be one of {_BACKENDS}, got {backend!r}")

@@ -1,0 +1,92 @@
+"""Every public function and class of ``nhham`` (``nhham.__all__``) carries an
+``Examples`` section, and its examples run and print what they say (doctest, on the
+object's own docstring: methods are not collected).
+
+The examples start from a fresh namespace (each imports what it uses), so that they
+can be pasted as they stand; an exception's example raises it. A module exported as a
+name (``nhham.models``) is left out.
+"""
+
+import doctest
+import importlib
+import inspect
+import re
+
+import pytest
+
+import nhham
+
+# Names whose docstrings are being rewritten elsewhere (the journeys layer, the
+# integrator registry, the split of the system modules, the one projection object):
+# the lead writes their Examples and removes them from here.
+_PENDING = frozenset({
+    # a module over 700 lines, to be split before it grows (issue 35)
+    "Submanifold",
+    # the system description, scene files and the mechanics adapter (being split)
+    "System", "DroppedConstraint", "load_scene", "loads_scene", "Scene",
+    "from_mechanics", "from_lagranges_method",
+    # the projection of Section 4 (one object for the four classes)
+    "lagrangian_geometry", "LagrangianGeometry", "DynamicsIngredients",
+    "analyze_constraints", "ConstraintAnalysis", "run_algorithm",
+    "hamiltonian_side", "HamiltonianSide", "nonholonomic_bracket",
+    # simulation (the method registry), work-precision and ensembles
+    "simulate", "SimulationResult", "work_precision", "simulate_many", "EnsembleResult",
+    # what moves to the journeys: linearize a scene, studies, reports and plots
+    "linearize_scene", "open_loop", "plot_root_locus",
+    "sweep", "SweepResult", "plot_study", "plot_stability_map", "plot_ensemble",
+    "plot_cases", "report", "plot_trajectory", "plot_work_precision", "output_schema",
+})
+
+_FLAGS = doctest.NORMALIZE_WHITESPACE | doctest.ELLIPSIS
+_SECTION = re.compile(r"^Examples\n-{8,}\n", re.M)
+
+
+def _documented(name):
+    """The object ``nhham.<name>`` when it needs an Examples section, else None."""
+    obj = getattr(nhham, name)
+    if not (inspect.isfunction(obj) or inspect.isclass(obj)):
+        return None
+    return obj
+
+
+@pytest.mark.parametrize("name", [n for n in nhham.__all__ if n not in _PENDING])
+def test_public_name_has_running_examples(name):
+    obj = _documented(name)
+    if obj is None:
+        pytest.skip(f"{name} is a module")
+    assert _SECTION.search(inspect.getdoc(obj) or ""), f"{name}: no Examples section"
+    finder = doctest.DocTestFinder(recurse=False)
+    module = importlib.import_module(obj.__module__)
+    tests = [t for t in finder.find(obj, name, module=module, globs={}) if t.examples]
+    assert tests, f"{name}: the Examples section has no example"
+    runner = doctest.DocTestRunner(optionflags=_FLAGS)
+    report = []
+    for test in tests:
+        runner.run(test, out=report.append)
+    assert runner.failures == 0, "".join(report)
+
+
+def test_pending_names_are_public():
+    """A name left for later is still exported (no stale entry hides a new name)."""
+    assert _PENDING <= set(nhham.__all__)
+
+
+def test_a_missing_or_failing_example_is_caught():
+    """The checks above fail on a docstring without the section and on a wrong output."""
+    def bare():
+        """Nothing to show."""
+
+    def wrong():
+        """Two.
+
+        Examples
+        --------
+        >>> 1 + 1
+        3
+        """
+
+    assert not _SECTION.search(inspect.getdoc(bare))
+    runner = doctest.DocTestRunner(optionflags=_FLAGS)
+    for test in doctest.DocTestFinder(recurse=False).find(wrong, "wrong", globs={}):
+        runner.run(test, out=lambda _: None)
+    assert runner.failures == 1
