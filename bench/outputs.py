@@ -1,8 +1,9 @@
 """Every example's ``--json`` answers, saved or compared against a saved set.
 
 A refactoring of the exact half must leave the answers alone. This script runs
-``nhham classify``, ``nhham derive`` and ``nhham compare`` with ``--json`` on
-every scene in ``examples/`` (one process a command, as a user runs them) and
+``nhham classify``, ``derive``, ``compare``, ``linearize`` and ``simulate`` with
+``--json`` on every scene in ``examples/`` (one process a command, as a user runs
+them; ``--commands`` chooses) and
 
 * ``save DIR``: writes ``DIR/<scene>.<command>.json``;
 * ``diff DIR``: runs them again and prints every difference against ``DIR``,
@@ -30,7 +31,7 @@ from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-COMMANDS = ("classify", "derive", "compare")
+COMMANDS = ("classify", "derive", "compare", "linearize", "simulate")
 TIMING_KEYS = frozenset({"elapsed", "timings"})
 
 
@@ -84,8 +85,8 @@ def differences(a: object, b: object, path: str = "") -> Iterator[str]:
         yield f"{path}: {str(a)[:120]!r} -> {str(b)[:120]!r}"
 
 
-def jobs(only: str | None) -> list[tuple[Path, str]]:
-    return [(scene, command) for scene in scenes(only) for command in COMMANDS]
+def jobs(only: str | None, commands: tuple = COMMANDS) -> list[tuple[Path, str]]:
+    return [(scene, command) for scene in scenes(only) for command in commands]
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -93,9 +94,11 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("mode", choices=("save", "diff"))
     parser.add_argument("directory", type=Path)
     parser.add_argument("--only", help="comma-separated scene names (file stems)")
+    parser.add_argument("--commands", default=",".join(COMMANDS),
+                        help="comma-separated commands (default: %(default)s)")
     parser.add_argument("--workers", type=int, default=2)
     args = parser.parse_args(argv)
-    todo = jobs(args.only)
+    todo = jobs(args.only, tuple(args.commands.split(",")))
     with ThreadPoolExecutor(args.workers) as pool:
         results = list(pool.map(lambda job: run(*job), todo))
     changed = 0

@@ -95,7 +95,7 @@ _LAZY = by_module({
     # reports, figures and the command's JSON contract
     "cli.display": ("report",),
     "cli.plotting": ("plot_trajectory", "plot_work_precision"),
-    "cli.envelope": ("output_schema",),
+    "render.schema": ("output_schema",),
 })
 
 __all__ = list(_LAZY)

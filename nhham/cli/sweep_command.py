@@ -215,7 +215,7 @@ def summary(what: str, ds) -> dict:
 
 
 def _text(args, result, data) -> str:
-    from nhham.cli.report import table
+    from nhham.render.text import table
 
     s = data["summary"]
     dims = " x ".join(f"{d} {n}" for d, n in data["dims"].items())
@@ -231,7 +231,7 @@ def _text(args, result, data) -> str:
         rows.append(("stable", f"{s['stable_points']} of {s['done_points']} points"
                      + (f"; {s['not_linearised']} not linearised (status != 0)"
                         if s["not_linearised"] else "")))
-        from nhham.study.plot_style import CROSSING_STYLE
+        from nhham.render.plot_style import CROSSING_STYLE
 
         for kind in ("complex", "real"):
             word = CROSSING_STYLE[kind]["label"]

@@ -25,9 +25,12 @@ changes but no eigenvalue is on the imaginary axis: not reported as boundaries).
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 
 from nhham.errors import ComputationError, InputError
+from nhham.journeys.stability import steady_states
 from nhham.numerics.batch_linearization import ChartChoice, linearize_batch
 
 __all__ = ["prepare", "variables", "evaluate", "CROSSINGS", "XTOL"]
@@ -51,13 +54,11 @@ def prepare(scene, model, design, along: str | None = None) -> dict:
         No ``[steady]`` table, a swept name that is not a parameter (or is an input), an
         ``along`` that is not a grid dimension.
     """
+    from nhham.journeys.stability import check_steady_table, steady_linearization
     from nhham.numerics.linearization import linearize
-    from nhham.numerics.steady_sweep import steady_state
 
-    if scene.steady is None:
-        raise InputError(f"{scene.source}: --what linearize needs a [steady] table (a value, "
-                         f"or an expression in the parameters, for every coordinate and "
-                         f"velocity)", key="steady")
+    check_steady_table(scene)
+    system = scene.steady_system()
     names = model.parameter_names
     for name in design.names:
         if name in model.input_names:
@@ -83,10 +84,12 @@ def prepare(scene, model, design, along: str | None = None) -> dict:
         m = model.with_parameters(**params)
         try:
             chart = found[0][3].chart if found else None
-            m, state = steady_state(m, scene.steady.values(m.parameters), chart, warn=False)
-            family = scene.steady.family(m.parameters)
-            found.append((m, state, family, linearize(m, state, independent=chart,
-                                                      family=family)))
+            # the command's linearisation there (laws and forces checked), numerically
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")   # a probe's notes are not the study's
+                lin = steady_linearization(scene, system, m, "complex-step", chart)
+            state = np.array([lin.state[name] for name in m.names])
+            found.append((m, state, scene.steady.family(m.parameters), lin))
         except (InputError, ComputationError) as exc:
             problems.append(f"at {params}: {exc}")
     if not found:
@@ -148,7 +151,7 @@ def evaluate(study, ctx, region) -> dict:
     values = study.design.values(region)
     shape = next(iter(values.values())).shape if values else ()
     flat = {k: v.ravel() for k, v in values.items()}
-    Y, P, bad = _states(scene, model, flat)
+    Y, P, bad = steady_states(scene, model, flat)
     batch = linearize_batch(model, Y, P, reference=choice,
                             families=_families(scene, model, P, choice))
     status = batch.status.copy()
@@ -173,27 +176,6 @@ def evaluate(study, ctx, region) -> dict:
     if opts["along"] is not None:
         out.update(_boundaries(study, scene, model, choice, region, values, batch, bad))
     return out
-
-
-def _states(scene, model, flat) -> tuple:
-    """(Y (N, 2n), P (N, parameters), bad (N,)): the steady states and parameters at the
-    points (``flat``: swept name -> values); bad where an entry of [steady] is not a
-    finite real number there."""
-    names = model.parameter_names
-    N = len(next(iter(flat.values()))) if flat else 1
-    P = np.tile(np.asarray(model.parameter_values, dtype=float), (N, 1))
-    for k, v in flat.items():
-        P[:, names.index(k)] = v
-    params = {k: P[:, i] for i, k in enumerate(names)}
-    steady = scene.steady.arrays(params)
-    for u in model.input_names:
-        if u in steady:
-            P[:, names.index(u)] = steady[u]
-    Y = np.column_stack([steady[s] for s in model.names])
-    bad = ~np.isfinite(Y).all(axis=1) | ~np.isfinite(P).all(axis=1)
-    Y[bad] = 0.0
-    P[bad] = np.where(np.isfinite(P[bad]), P[bad], 0.0)
-    return Y, P, bad
 
 
 def _families(scene, model, P, choice):
@@ -266,7 +248,7 @@ class _Spectra:
 def _spectra(scene, model, choice, points) -> list:
     """The spectra at many points (``points``: swept name -> values), None where there is
     no linearisation."""
-    Y, P, bad = _states(scene, model, points)
+    Y, P, bad = steady_states(scene, model, points)
     batch = linearize_batch(model, Y, P, reference=choice,
                             families=_families(scene, model, P, choice))
     return [None if bad[i] else batch.spectrum(i) for i in range(len(Y))]

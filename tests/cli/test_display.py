@@ -70,7 +70,7 @@ def test_scene_simulate_options():
 
 
 def test_the_trace_of_the_algorithm_is_in_the_report(disk):
-    """The stages and decisions are rendered here (nhham.cli.trace), not by the results:
+    """The stages and decisions are rendered here (nhham.render.trace), not by the results:
     the analysis' report carries its trace, and a bare run of the algorithm has one."""
     analysis = nhham.analyze_constraints(disk)
     text = str(nhham.report(analysis))

@@ -50,7 +50,7 @@ def test_json_keys_and_exact_verdict(capsys, sleigh):
 
 
 def test_sweep_json_with_crossing(capsys, sleigh):
-    from nhham.cli.envelope import output_schema
+    from nhham.render.schema import output_schema
 
     status, out, _ = run(capsys, "linearize", sleigh, "--json", "--numeric",
                          "--sweep", "u=-1:1.5:6")
