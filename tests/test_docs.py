@@ -28,7 +28,7 @@ def test_docs_build_without_warnings(tmp_path):
     api = (tmp_path / "html" / "api.html").read_text()
     assert api.count('class="sig-name') > 25
     # the public linearisation, the scipy-ready right-hand side and the scene writer
-    for name in ("nhham.linearize_scene", "nhham.linearize", "nhham.Linearization",
+    for name in ("nhham.classify", "nhham.linearize", "nhham.Linearization",
                  "nhham.sweep_steady", "nhham.dump_scene", "nhham.NumericModel.rhs"):
         assert f'id="{name}"' in api, name
 

@@ -26,10 +26,10 @@ def test_classify_path_does_not_import_the_integrators():
 
 
 def test_linearize_is_public():
-    """nhham.linearize (a model's steady state) and nhham.linearize_scene (a scene's
-    [steady] table) are the Python side of ``nhham linearize``."""
-    assert nhham.linearize.__module__ == "nhham.numerics.linearization"
-    assert nhham.linearize_scene.__module__ == "nhham.cli.linearize_command"
+    """nhham.linearize (a scene's [steady] motion) is ``nhham linearize``'s journey; the
+    model-level function is nhham.numerics.linearization.linearize."""
+    assert nhham.linearize.__module__ == "nhham.journeys.stability"
+    assert nhham.linearize_scene.__module__ == "nhham.journeys.stability"
     for name in ("linearize", "linearize_scene", "Linearization", "sweep_steady", "Sweep",
                  "plot_root_locus", "dump_scene", "NumericModel"):
         assert name in nhham.__all__, name

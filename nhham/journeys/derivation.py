@@ -55,8 +55,8 @@ def derive(scene, *, side: str = "lagrangian", explicit: bool = False,
     >>> answer = derive(models.rolling_disk())
     >>> answer.data["form"], answer.data["state"][:4]
     ('explicit', ['x', 'y', 'theta', 'phi'])
-    >>> answer.data["multipliers"]
-    ['-I2*m*phi_dot*theta_dot*sin(theta)/(I2 + R**2*m)', 'I2*m*phi_dot*theta_dot*cos(theta)/(I2 + R**2*m)']
+    >>> answer.data["multipliers"]   # by hand: lambda = m R theta' phi' (sin, -cos)(theta)
+    ['R*m*phi_dot*theta_dot*sin(theta)', '-R*m*phi_dot*theta_dot*cos(theta)']
     """
     if side not in SIDES:
         raise InputError(f"derive: side {side!r} is not one of {', '.join(SIDES)}", key="side")

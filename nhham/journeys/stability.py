@@ -28,7 +28,8 @@ from nhham.errors import InputError, NhhamWarning
 from nhham.journeys.answer import Answer, as_scene, capture_warnings, quiet_steps
 from nhham.lagrangian.jacobian import EXACT_DIGITS
 
-__all__ = ["linearize", "steady_linearization", "open_loop", "check_steady_table",
+__all__ = ["linearize", "linearize_scene", "steady_linearization", "open_loop",
+           "check_steady_table",
            "steady_states", "law_mismatch", "METHODS", "EXACT_MAX_N", "EXACT_DIGITS"]
 
 #: How the Jacobian is formed: ``auto`` (exact for n <= :data:`EXACT_MAX_N`),
@@ -40,7 +41,8 @@ EXACT_MAX_N = 4
 
 
 
-def linearize(scene, *, method: str = "auto", sweep=None, model=None, steps=None) -> Answer:
+def linearize(scene, *args, method: str = "auto", sweep=None, model=None, steps=None,
+              **kwargs) -> Answer:
     """The stability of a scene's ``[steady]`` motion (``nhham linearize``).
 
     Parameters
@@ -83,15 +85,24 @@ def linearize(scene, *, method: str = "auto", sweep=None, model=None, steps=None
     ... x_dot = 0.0
     ... \'\'\')
     >>> answer = linearize(scene)
-    >>> [[round(re, 12), round(im, 12)] for re, im in answer.data["eigenvalues"]]
-    [[0.0, -2.0], [0.0, 2.0]]
-    >>> answer.data["stable"], answer.data["method"]
-    (False, 'exact')
+    >>> sorted((round(re, 12), round(im, 12)) for re, im in answer.data["eigenvalues"])
+    [(0.0, -2.0), (0.0, 2.0)]
+    >>> answer.data["stable"], answer.data["method"]   # a centre: not decided by A alone
+    (None, 'exact')
     """
     from nhham.numerics.codegen import numeric_model
+    from nhham.numerics.model import NumericModel
     from nhham.numerics.steady_sweep import sweep_steady
     from nhham.render.linearize import linearize_data, linearize_text
 
+    if isinstance(scene, NumericModel):   # the model-level function, renamed
+        from nhham.numerics.linearization import linearize as at_state
+
+        warnings.warn("nhham.linearize(model, state) is now "
+                      "nhham.numerics.linearization.linearize; nhham.linearize takes a scene "
+                      "(the old form goes in the next release)", DeprecationWarning,
+                      stacklevel=2)
+        return at_state(scene, *args, **kwargs)
     scene = as_scene(scene, check_initial=False)
     steps = quiet_steps(steps)
     check_steady_table(scene)
@@ -336,3 +347,16 @@ def law_mismatch(scene, model, Y, P, steady) -> np.ndarray:
         want = np.asarray(steady[u], dtype=float)
         out |= ~(np.abs(value - want) <= 1e-9 * np.maximum(1.0, np.abs(want)))
     return out
+
+
+def linearize_scene(scene, method: str = "auto", sweep=None, model=None) -> tuple:
+    """Deprecated: ``(linearization, sweep)`` of :func:`linearize`'s payload.
+
+    Use ``nhham.linearize(scene, ...)``; its ``payload`` holds both (this name goes in the
+    next release).
+    """
+    warnings.warn("nhham.linearize_scene is deprecated: use nhham.linearize(scene) (its "
+                  "payload['linearization'] and payload['sweep'])", DeprecationWarning,
+                  stacklevel=2)
+    answer = linearize(scene, method=method, sweep=sweep, model=model)
+    return answer.payload["linearization"], answer.payload["sweep"]

@@ -54,8 +54,8 @@ def classify(scene, *, policy: Policy | None = None, steps=None) -> Answer:
     >>> answer = classify(models.rolling_disk())
     >>> answer.data["status"], answer.data["regular"], answer.data["integrable"]
     ('determined', True, False)
-    >>> answer.data["first_class"], answer.data["second_class"]
-    (0, 2)
+    >>> answer.data["first_class"], answer.data["second_class"]   # {psi_1, psi_2} = 0
+    (2, 0)
     """
     from nhham.lagrangian.analysis import ConstraintAnalysis
     from nhham.render.results import (classify_data, classify_latex, classify_text,
@@ -166,7 +166,7 @@ def classify_parametric(scene, *, policy: Policy | None = None, positive=(),
     >>> from nhham.journeys import classify_parametric
     >>> scene = loads_scene('''
     ... coordinates = ["x", "y", "z"]
-    ... parameters = ["a", "b"]
+    ... symbolic_parameters = ["a", "b"]
     ... lagrangian = "(x_dot**2 + y_dot**2 + z_dot**2)/2"
     ... constraints = ["x_dot + a*y", "y_dot + b*x"]
     ... ''')

@@ -260,7 +260,7 @@ def plot_root_locus(swept, path, title: str = "") -> str:
     """Real and imaginary parts of the eigenvalues against the parameter; saved to ``path``.
 
     The crossings are drawn in the colours and words of
-    :data:`nhham.study.plot_style.CROSSING_STYLE`, as in the stability maps of ``nhham
+    :data:`nhham.render.plot_style.CROSSING_STYLE`, as in the stability maps of ``nhham
     sweep``; the legend sits right of the axes. Uses matplotlib's object API with the Agg
     canvas for this figure only (the user's pyplot backend is left alone).
     """
@@ -273,8 +273,7 @@ def root_locus_figure(swept, title: str = ""):
     """The Figure of :func:`plot_root_locus` (not saved)."""
     import numpy as np
 
-    from nhham.study.plot_style import (CROSSING_STYLE, OUTSIDE_RIGHT, crossing_kind,
-                                        legend_if_labelled)
+    from nhham.render.plot_style import CROSSING_STYLE, crossing_kind
 
     Figure, FigureCanvasAgg = require_matplotlib()
     fig = Figure(figsize=(8.5, 5), layout="constrained")

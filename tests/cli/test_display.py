@@ -47,7 +47,7 @@ def test_report_of_a_classification_decided_at_points():
 
 
 def test_report_of_a_linearization():
-    lin, _ = nhham.linearize_scene(load_scene(EXAMPLES / "differential_drive.toml"))
+    lin = nhham.linearize(load_scene(EXAMPLES / "differential_drive.toml")).payload["linearization"]
     r = nhham.report(lin)
     assert "asymptotically stable" in repr(r) and "\n" not in repr(r)
     assert "<table>" in r._repr_html_() and "phiR_dot" in r._repr_html_()

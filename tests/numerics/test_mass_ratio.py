@@ -171,7 +171,7 @@ def test_the_linearisation_of_a_steady_motion_at_extreme_ratios(backend):
     for e in (4, 8, 12, 16):
         b = 10.0 ** e
         model = base.with_parameters(b=b)
-        lin = nhham.linearize(model, y0, independent=["x", "y", "x_dot"], neutral=["y"])
+        lin = nhham.numerics.linearization.linearize(model, y0, independent=["x", "y", "x_dot"], neutral=["y"])
         assert lin.coordinates == ("x", "x_dot")
         s = 1.0 + b
         expected = np.array([[0.0, 1.0], [-1.0 / s, -1.0 / s]])

@@ -19,7 +19,7 @@ xr = pytest.importorskip("xarray")
 
 from matplotlib.colors import to_rgba  # noqa: E402
 
-from nhham.cli.linearize_command import root_locus_figure  # noqa: E402
+from nhham.render.plotting import root_locus_figure  # noqa: E402
 from nhham.render.plot_style import GENERIC_COLOUR, case_colour  # noqa: E402
 from nhham.study.plots import plot_cases, plot_ensemble, plot_stability_map  # noqa: E402
 
