@@ -12,7 +12,7 @@ from typing import Mapping
 from nhham.errors import BudgetExceeded, InputError
 from nhham.journeys.answer import Answer, as_scene, capture_warnings, quiet_steps
 
-__all__ = ["simulate", "closed_loop", "initial_state"]
+__all__ = ["simulate", "closed_loop", "initial_state", "initial_at"]
 
 
 def simulate(scene, *, t_end: float | None = None, options: Mapping | None = None,
@@ -122,6 +122,43 @@ def initial_state(scene, project: bool = False, steps=None) -> tuple:
 
     return dict(y0), [f"initial: solved from the constraints: "
                       f"{solved_text(y0, scene.initial_solved)}"]
+
+
+def initial_at(scene, values: Mapping, given: Mapping | None = None) -> tuple:
+    """``[initial]`` completed at other parameter values, as ``nhham simulate --set`` starts.
+
+    Parameters
+    ----------
+    scene : Scene
+        With an ``[initial]`` table.
+    values : mapping of str to float
+        Parameter values replacing the scene's (its expressions use them).
+    given : mapping of str to float, optional
+        Values of coordinates or velocities replacing (or added to) ``[initial]``'s.
+
+    Returns
+    -------
+    (dict, tuple of str)
+        Every coordinate and velocity by name, and the names solved from the
+        constraints.
+
+    Raises
+    ------
+    InputError
+        A value left out that the constraints do not determine there, or given values
+        that over-determine it and disagree (as the command refuses them).
+    """
+    import dataclasses
+
+    import sympy as sp
+
+    from nhham.system.initial_solve import complete_initial
+
+    data = scene.initial_given
+    if given:
+        data = dataclasses.replace(data, given={
+            **data.given, **{k: sp.Float(v) for k, v in given.items()}})
+    return complete_initial(scene.system, data, values)
 
 
 def closed_loop(scene, control: Mapping | None = None):

@@ -291,12 +291,12 @@ def steady_states(scene, model, points) -> tuple:
 
     Returns
     -------
-    (Y, P, bad)
+    (Y, P, bad, missed)
         ``Y`` (N, 2n) the steady states, ``P`` (N, parameters) every parameter's value
         (inputs at their ``[steady]`` values), ``bad`` (N,) where an entry of ``[steady]``
-        is not a finite real number or a ``[control]`` law does not give its input's
-        ``[steady]`` value (:func:`law_mismatch`): no steady motion of the closed loop
-        there, which ``nhham linearize`` refuses.
+        is not a finite real number, ``missed`` (N,) where a ``[control]`` law does not
+        give its input's ``[steady]`` value (:func:`law_mismatch`): no steady motion of the
+        closed loop there, which ``nhham linearize`` refuses.
     """
     names = model.parameter_names
     N = len(next(iter(points.values()))) if points else 1
@@ -310,10 +310,10 @@ def steady_states(scene, model, points) -> tuple:
             P[:, names.index(u)] = steady[u]
     Y = np.column_stack([steady[s] for s in model.names])
     bad = ~np.isfinite(Y).all(axis=1) | ~np.isfinite(P).all(axis=1)
-    bad |= law_mismatch(scene, model, Y, P, steady)
+    missed = law_mismatch(scene, model, Y, P, steady) & ~bad
     Y[bad] = 0.0
     P[bad] = np.where(np.isfinite(P[bad]), P[bad], 0.0)
-    return Y, P, bad
+    return Y, P, bad, missed
 
 
 def law_mismatch(scene, model, Y, P, steady) -> np.ndarray:

@@ -14,7 +14,8 @@ weave and capsize speeds of a bicycle at every trail.
 Variables (``variables``): ``stable`` (every eigenvalue has Re < -tol), ``verdict``
 (1 stable, 0 unstable, -1 undecided or not linearised), ``spectral_abscissa`` (max Re),
 ``eigenvalue_real``/``eigenvalue_imag`` (dimension ``mode``), ``state_matrix`` (``row``,
-``column``), ``status`` (0 linearised, 1 not on M_1, 2 not steady, 3 singular),
+``column``), ``status`` (0 linearised, 1 not on M_1, 2 not steady (or a ``[control]`` law that does
+not give its input's ``[steady]`` value there, which ``nhham linearize`` refuses), 3 singular),
 ``constraint_residual``, ``acceleration_residual``; on a grid ``boundary`` (the crossing
 values along ``along``, dimension ``crossing``, NaN-padded), ``boundary_kind`` (0: a real
 eigenvalue through 0, 1: a complex pair through the imaginary axis), ``boundary_direction``
@@ -151,11 +152,13 @@ def evaluate(study, ctx, region) -> dict:
     values = study.design.values(region)
     shape = next(iter(values.values())).shape if values else ()
     flat = {k: v.ravel() for k, v in values.items()}
-    Y, P, bad = steady_states(scene, model, flat)
+    Y, P, bad, missed = steady_states(scene, model, flat)
     batch = linearize_batch(model, Y, P, reference=choice,
                             families=_families(scene, model, P, choice))
     status = batch.status.copy()
     status[bad] = 1
+    status[missed] = 2   # not a steady motion of the closed loop: the command refuses it
+    bad = bad | missed
     out = {
         "stable": batch.stable & ~bad,
         "verdict": np.where(bad, -1, batch.verdicts).astype(np.int8),
@@ -248,7 +251,8 @@ class _Spectra:
 def _spectra(scene, model, choice, points) -> list:
     """The spectra at many points (``points``: swept name -> values), None where there is
     no linearisation."""
-    Y, P, bad = steady_states(scene, model, points)
+    Y, P, bad, missed = steady_states(scene, model, points)
+    bad = bad | missed
     batch = linearize_batch(model, Y, P, reference=choice,
                             families=_families(scene, model, P, choice))
     return [None if bad[i] else batch.spectrum(i) for i in range(len(Y))]

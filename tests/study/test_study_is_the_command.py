@@ -91,3 +91,31 @@ def test_a_classify_point_is_the_command_s_answer(capsys, classes_map, a, b):
         return
     assert status == 0
     assert got == row_of(env["result"])
+
+
+START = "tests/study/scenes/disk_start.toml"
+
+
+@pytest.fixture(scope="module")
+def start_runs():
+    return sweep(START, "simulate", ["w=1.0,3.0", "R=0.5,1.0"], workers=1).dataset
+
+
+@pytest.mark.parametrize("w", [1.0, 3.0])
+@pytest.mark.parametrize("R", [0.5, 1.0])
+def test_a_simulate_point_is_the_command_s_run(capsys, start_runs, w, R):
+    """[initial] completed at the point as the command completes it (x_dot = R w, not the
+    scene's value projected), the same run, the same end."""
+    point = start_runs.sel(w=w, R=R)
+    assert int(point["status"]) == 0 and float(point["projection_distance"]) == 0.0
+    status, env = command(capsys, "simulate", START, *settings(w=w, R=R))
+    assert status == 0
+    names = list(start_runs["state"].values)
+    start = dict(zip(names, point["initial_state"].values))
+    assert start["x_dot"] == pytest.approx(R * w, abs=1e-14)
+    np.testing.assert_allclose(point["final_state"].values, env["result"]["y_final"],
+                               rtol=1e-12, atol=1e-12)
+    assert float(point["t_final"]) == env["result"]["t_final"] == 1.0
+    end = dict(zip(names, point["final_state"].values))
+    assert end["x"] == pytest.approx(R * w * math.sin(1.0), abs=1e-9)
+    assert end["y"] == pytest.approx(R * w * (1 - math.cos(1.0)), abs=1e-9)
