@@ -23,7 +23,8 @@ import numpy as np
 
 from nhham.errors import InputError
 
-__all__ = ["prepare", "variables", "evaluate", "STATUS_CODES"]
+__all__ = ["prepare", "variables", "evaluate", "summary", "summary_warnings", "summary_rows",
+           "STATUS_CODES", "row_of", "command_row"]
 
 #: ``status`` codes.
 STATUS_CODES = {"determined": 0, "underdetermined": 1, "inconsistent": 2, "invalid": 3}
@@ -32,7 +33,7 @@ _FIELDS = ("status", "regular", "integrable", "rank_C", "stages", "free_multipli
            "first_class", "second_class")
 
 
-def prepare(scene, design, policy=None) -> dict:
+def prepare(scene, model, design, *, along=None, run_options=None, policy=None) -> dict:
     """The parametric classification over the swept parameters, as plain data.
 
     Raises
@@ -104,7 +105,7 @@ def variables(design, options) -> dict:
     return {"point": point, "line": {}, "coords": {}}
 
 
-def evaluate(study, ctx, region) -> dict:
+def evaluate(study, ctx, region, until: float | None = None) -> dict:
     """Every variable on ``region``: each point placed in its case exactly."""
     import sympy as sp
 
@@ -181,3 +182,23 @@ def row_of(data: dict) -> dict:
             "free_multipliers": count(data["free_multipliers"]),
             "first_class": count(data["first_class"]),
             "second_class": count(data["second_class"])}
+
+
+def summary(ds) -> dict:
+    """What the study found, in a few numbers (JSON-ready): points per case."""
+    done = np.asarray(ds["done"].values, dtype=bool)
+    case = np.asarray(ds["case"].values)[done]
+    return {"done_points": int(done.sum()), "generic_points": int((case == -1).sum()),
+            "case_points": {str(int(c)): int((case == c).sum())
+                            for c in np.unique(case) if c >= 0}}
+
+
+def summary_warnings(s: dict) -> list:
+    """The warnings a summary calls for (none)."""
+    return []
+
+
+def summary_rows(s: dict) -> list:
+    """(label, text) rows of the command's report."""
+    return [("generic verdict", f"{s['generic_points']} points")] + [
+        (f"case {c}", f"{n} points") for c, n in s["case_points"].items()]

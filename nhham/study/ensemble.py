@@ -32,7 +32,8 @@ from nhham.numerics.status import Status
 from nhham.study.kinds import SIMULATE_METHODS as METHODS
 from nhham.study.stop import chunk_deadline
 
-__all__ = ["prepare", "variables", "evaluate", "OPTIONS", "METHODS", "NOT_STARTED"]
+__all__ = ["prepare", "variables", "evaluate", "summary", "summary_warnings", "summary_rows",
+           "OPTIONS", "METHODS", "NOT_STARTED"]
 
 #: ``status`` of a point whose start ``nhham simulate`` refuses (``[initial]`` cannot be
 #: completed there): not run.
@@ -48,7 +49,7 @@ _DEFAULTS = {"t_end": 10.0, "method": "DOP853", "rtol": 1e-9, "atol": 1e-12,
              "max_step": None, "projection": False}
 
 
-def prepare(scene, model, design, run_options=None) -> dict:
+def prepare(scene, model, design, *, along=None, run_options=None, policy=None) -> dict:
     """The options of a simulate study: the run's settings, where each swept name goes.
 
     Raises
@@ -217,3 +218,37 @@ def _ends(model, P, Y0, Y1) -> tuple:
         E0[i], E1[i] = m.energy(Y0[i]), m.energy(Y1[i])
         res[i] = float(np.max(m.scaled_residuals(Y1[i]), initial=0.0))
     return E0, E1, res
+
+
+def summary(ds) -> dict:
+    """What the study found, in a few numbers (JSON-ready)."""
+    done = np.asarray(ds["done"].values, dtype=bool)
+    success = np.asarray(ds["success"].values, dtype=bool) & done
+    err = np.abs(np.asarray(ds["energy_error"].values))[done]
+    res = np.asarray(ds["constraint_residual"].values)[done]
+    moved = np.asarray(ds["projection_distance"].values)[done]
+    return {"done_points": int(done.sum()), "failed_runs": int((done & ~success).sum()),
+            "max_energy_error": float(np.nanmax(err)) if np.isfinite(err).any() else None,
+            "max_constraint_residual": (float(np.nanmax(res)) if np.isfinite(res).any()
+                                        else None),
+            "projected_starts": int((moved > 0).sum()),
+            "max_projection_distance": (float(np.nanmax(moved)) if np.isfinite(moved).any()
+                                        else None)}
+
+
+def summary_warnings(s: dict) -> list:
+    """The warnings a summary calls for (one line each)."""
+    if not s["projected_starts"]:
+        return []
+    return [f"{s['projected_starts']} of {s['done_points']} initial states were off M_1 at "
+            f"their point (its values or parameters) and were projected onto it (largest "
+            f"move {s['max_projection_distance']:.3g}; projection_distance in the results)"]
+
+
+def summary_rows(s: dict) -> list:
+    """(label, text) rows of the command's report."""
+    return [("runs failed", str(s["failed_runs"])),
+            ("max |energy error|", f"{s['max_energy_error']:.3g}"
+             if s["max_energy_error"] is not None else "-"),
+            ("max constraint residual", f"{s['max_constraint_residual']:.3g}"
+             if s["max_constraint_residual"] is not None else "-")]

@@ -46,9 +46,9 @@ def pyplot():
 
 def plot_study(ds, path, dpi: int = 150) -> str:
     """Draw the picture of a study's Dataset (by its kind) and save it to ``path``."""
-    what = ds.attrs.get("what")
-    fig = {"linearize": plot_stability_map, "simulate": plot_ensemble,
-           "classify": plot_cases}[what](ds)
+    from nhham.study.kinds import kind_of
+
+    fig = globals()[kind_of(ds.attrs.get("what")).plot](ds)
     fig.savefig(path, dpi=dpi, bbox_inches="tight")
     return str(path)
 

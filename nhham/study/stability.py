@@ -34,7 +34,8 @@ from nhham.errors import ComputationError, InputError
 from nhham.journeys.stability import steady_states
 from nhham.numerics.batch_linearization import ChartChoice, linearize_batch
 
-__all__ = ["prepare", "variables", "evaluate", "CROSSINGS", "XTOL"]
+__all__ = ["prepare", "variables", "evaluate", "summary", "summary_warnings", "summary_rows",
+           "CROSSINGS", "XTOL"]
 
 #: Room for crossings per line (a line with more keeps the first and says so in
 #: ``boundary_count``).
@@ -44,7 +45,8 @@ CROSSINGS = 8
 XTOL = 1e-12
 
 
-def prepare(scene, model, design, along: str | None = None) -> dict:
+def prepare(scene, model, design, *, along: str | None = None, run_options=None,
+            policy=None) -> dict:
     """The options of a linearize study, decided once: the chart and neutral directions
     (from probes at the first, middle and last points), the parameter slots and the
     boundary dimension.
@@ -143,7 +145,7 @@ def variables(design, options) -> dict:
     return {"point": point, "line": lines, "coords": extra}
 
 
-def evaluate(study, ctx, region) -> dict:
+def evaluate(study, ctx, region, until: float | None = None) -> dict:
     """Every variable on ``region`` (see the module docstring)."""
     scene, model = ctx.scene, ctx.model
     opts = study.options
@@ -258,3 +260,55 @@ def _spectra(scene, model, choice, points) -> list:
     return [None if bad[i] else batch.spectrum(i) for i in range(len(Y))]
 
 
+
+
+def summary(ds) -> dict:
+    """What the study found, in a few numbers (JSON-ready): stable and unlinearised
+    points, the crossings of each kind and their range, the unlocated ones."""
+    done = np.asarray(ds["done"].values, dtype=bool)
+    stable = np.asarray(ds["stable"].values, dtype=bool) & done
+    status = np.asarray(ds["status"].values)
+    out: dict = {"stable_points": int(stable.sum()), "done_points": int(done.sum()),
+                 "not_linearised": int(((status != 0) & done).sum())}
+    if "boundary" in ds:
+        b = np.asarray(ds["boundary"].values)
+        kinds = np.asarray(ds["boundary_kind"].values)
+        for kind, name in ((0, "real"), (1, "complex")):
+            vals = b[(kinds == kind) & np.isfinite(b)]
+            out[f"{name}_crossings"] = int(vals.size)
+            out[f"{name}_crossing_range"] = ([float(vals.min()), float(vals.max())]
+                                             if vals.size else None)
+        unlocated = np.asarray(ds["boundary_unlocated"].values)
+        out["unlocated_crossings"] = int(unlocated[unlocated > 0].sum())
+    return out
+
+
+def summary_warnings(s: dict) -> list:
+    """The warnings a summary calls for (one line each)."""
+    out = []
+    if s["not_linearised"]:
+        out.append(f"{s['not_linearised']} points have no linearisation: the [steady] "
+                   f"state is not on M_1, not steady or singular there (status in the "
+                   f"results: 1, 2, 3)")
+    if s.get("unlocated_crossings"):
+        out.append(f"{s['unlocated_crossings']} grid intervals along the boundaries' "
+                   f"parameter change their number of unstable eigenvalues with no "
+                   f"eigenvalue on the imaginary axis (a jump of the linearisation): no "
+                   f"boundary is reported there (boundary_unlocated in the results)")
+    return out
+
+
+def summary_rows(s: dict) -> list:
+    """(label, text) rows of the command's report."""
+    from nhham.render.plot_style import CROSSING_STYLE
+
+    rows = [("stable", f"{s['stable_points']} of {s['done_points']} points"
+             + (f"; {s['not_linearised']} not linearised (status != 0)"
+                if s["not_linearised"] else ""))]
+    for kind in ("complex", "real"):
+        word = CROSSING_STYLE[kind]["label"]
+        if s.get(f"{kind}_crossings"):
+            lo, hi = s[f"{kind}_crossing_range"]
+            rows.append((f"{kind} crossings", f"{s[f'{kind}_crossings']}, {word}, "
+                                              f"{lo:.6g} .. {hi:.6g}"))
+    return rows
