@@ -33,3 +33,12 @@ def test_linearize_is_public():
     for name in ("linearize", "linearize_scene", "Linearization", "sweep_steady", "Sweep",
                  "plot_root_locus", "dump_scene", "NumericModel"):
         assert name in nhham.__all__, name
+
+
+def test_the_command_exports_nothing_to_the_library():
+    """What a user does with a scene is a journey (nhham.journeys); nhham.cli only parses,
+    calls it and prints: no public name comes from it."""
+    from_cli = sorted(name for name, module in nhham._LAZY.items() if module.startswith("cli"))
+    assert from_cli == []
+    for name in ("classify", "classify_parametric", "derive", "compare", "linearize", "bench"):
+        assert getattr(nhham, name).__module__.startswith("nhham.journeys."), name
