@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import functools
 import warnings
+from typing import Any
 
 import numpy as np
 
@@ -42,7 +43,7 @@ EXACT_MAX_N = 4
 
 
 def linearize(scene, *args, method: str = "auto", sweep=None, model=None, steps=None,
-              **kwargs) -> Answer:
+              **kwargs) -> Any:
     """The stability of a scene's ``[steady]`` motion (``nhham linearize``).
 
     Parameters
@@ -60,7 +61,9 @@ def linearize(scene, *args, method: str = "auto", sweep=None, model=None, steps=
     Returns
     -------
     Answer
-        ``data``: the ``result`` of ``nhham linearize --json`` (``matrix``,
+        (A :class:`~nhham.numerics.linearization.Linearization` for the deprecated form
+        ``linearize(model, state, ...)``.) ``data``: the ``result`` of ``nhham linearize
+        --json`` (``matrix``,
         ``eigenvalues``, ``stable``, ``chart``, ``loop``, ``open_loop``, ``sweep``...);
         ``payload``: ``linearization``, ``open_loop`` and ``sweep`` (a
         :class:`~nhham.numerics.steady_sweep.Sweep` or None).

@@ -168,7 +168,7 @@ def command_row(scene_text: str, source: str, values: dict, policy=None) -> dict
     return row_of(data)
 
 
-def row_of(data: dict) -> dict:
+def row_of(data) -> dict:
     """The integer codes of the variables of a ``nhham classify`` result."""
     def tri(x):
         return -1 if x is None else int(bool(x))
