@@ -193,8 +193,9 @@ def _families(scene, model, P, choice):
 
 def _boundaries(study, scene, model, choice, region, values, batch, bad) -> dict:
     """The crossings along ``along`` on every line of the region, located together
-    (:func:`~nhham.numerics.crossings.crossings_many`)."""
-    from nhham.numerics.crossings import crossings_many
+    (:class:`~nhham.numerics.crossings.CrossingFinder`: it asks for spectra, this study
+    computes them)."""
+    from nhham.numerics.crossings import CrossingFinder
 
     dims = study.design.dims
     a = dims.index(study.options["along"])
@@ -214,12 +215,13 @@ def _boundaries(study, scene, model, choice, region, values, batch, bad) -> dict
         line_counts.append(counts[index[at]].tolist())
         fixed.append({k: float(v[at][0]) for k, v in values.items() if k != dims[a]})
 
-    def spectra_at(requests):
-        points = {k: np.array([dict(fixed[line], **{dims[a]: x})[k] for line, x in requests])
-                  for k in values}
-        return _spectra(scene, model, choice, points)
-
-    search = crossings_many(spectra_at, lines, xtol=XTOL, counts=line_counts)
+    # the finder asks for spectra; this study computes them in batches of its own
+    finder = CrossingFinder(lines, xtol=XTOL, counts=line_counts)
+    while finder.requests:
+        points = {k: np.array([dict(fixed[line], **{dims[a]: x})[k]
+                               for line, x in finder.requests]) for k in values}
+        finder.supply(_spectra(scene, model, choice, points))
+    search = finder.result()
     out = {"boundary": np.full(rest + (CROSSINGS,), np.nan),
            "boundary_kind": np.full(rest + (CROSSINGS,), -1, dtype=np.int8),
            "boundary_direction": np.zeros(rest + (CROSSINGS,), dtype=np.int8),
