@@ -50,6 +50,15 @@ class Answer:
         simulation result...), by name.
     system : System or None
         The system the answer is for (the scene's, at its values).
+
+    Examples
+    --------
+    >>> from nhham import models, classify
+    >>> answer = classify(models.rolling_disk())
+    >>> answer.journey, answer.succeeded, answer.to_dict()["status"]
+    ('classify', True, 'determined')
+    >>> print(answer.text().splitlines()[0])
+    vertical rolling disk: n = 4 coordinates, m = 2 velocity constraints
     """
 
     journey: str
@@ -120,7 +129,8 @@ def as_scene(scene_or_system, **load_options):
     if isinstance(scene_or_system, (str, Path)):
         return load_scene(scene_or_system, **load_options)
     if isinstance(scene_or_system, System):
-        return Scene(name="", description="", system=scene_or_system, initial=None,
+        return Scene(name=scene_or_system.name, description="", system=scene_or_system,
+                     initial=None,
                      simulate=SimulateOptions(), source="<System>")
     raise InputError(f"expected a Scene, a System or a scene file's path, got "
                      f"{type(scene_or_system).__name__}")

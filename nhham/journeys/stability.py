@@ -156,6 +156,28 @@ def open_loop(scene, method: str = "auto", model=None, independent=None):
     Returns
     -------
     Linearization
+
+    Examples
+    --------
+    A torque u holds a damped pendulum at x0 = asin(u0): x'' = -sin(x) + u - c x', so
+    A = [[0, 1], [-cos(x0), -c]] and B = [[0], [1]]:
+
+    >>> from nhham import loads_scene, open_loop
+    >>> scene = loads_scene('''
+    ... coordinates = ["x"]
+    ... parameters = { u0 = 0.5, c = 0.1 }
+    ... lagrangian = "x_dot**2/2 + cos(x)"
+    ... inputs = ["u"]
+    ... forces = { x = "u" }
+    ... dissipation = "c*x_dot**2/2"
+    ... [steady]
+    ... u = "u0"
+    ... x = "asin(u0)"
+    ... x_dot = 0.0
+    ... ''')
+    >>> lin = open_loop(scene)
+    >>> lin.matrix.round(6).tolist(), lin.input_matrix.tolist()
+    ([[0.0, 1.0], [-0.866025, -0.1]], [[0.0], [1.0]])
     """
     from nhham.numerics.codegen import numeric_model
 
@@ -357,6 +379,18 @@ def linearize_scene(scene, method: str = "auto", sweep=None, model=None) -> tupl
 
     Use ``nhham.linearize(scene, ...)``; its ``payload`` holds both (this name goes in the
     next release).
+
+    Examples
+    --------
+    >>> import warnings
+    >>> from nhham import loads_scene, linearize_scene
+    >>> scene = loads_scene('coordinates = ["x"]\\nlagrangian = "x_dot**2/2 - x**2/2"\\n'
+    ...                     '[steady]\\nx = 0.0\\nx_dot = 0.0\\n')
+    >>> with warnings.catch_warnings():
+    ...     warnings.simplefilter("ignore", DeprecationWarning)
+    ...     lin, swept = linearize_scene(scene)
+    >>> sorted(float(round(z.imag, 12)) for z in lin.eigenvalues), swept
+    ([-1.0, 1.0], None)
     """
     warnings.warn("nhham.linearize_scene is deprecated: use nhham.linearize(scene) (its "
                   "payload['linearization'] and payload['sweep'])", DeprecationWarning,

@@ -107,6 +107,13 @@ def report(obj) -> Report:
     ------
     TypeError
         For anything else.
+
+    Examples
+    --------
+    >>> from nhham import models, analyze_constraints, report
+    >>> r = report(analyze_constraints(models.rolling_disk()))
+    >>> "determined" in r.text, "rank" in r.latex
+    (True, True)
     """
     from nhham.render import results as R
 

@@ -91,6 +91,16 @@ def plot_trajectory(result, axes=None, *, title: str | None = None):
     (coordinates in the scene's units, velocities per unit time). Where the
     constraint residual is exactly zero (at t0, or after a projection) it is
     left out of the log-scale panel rather than clamped to a fake value.
+
+    Examples
+    --------
+    >>> from nhham import models, simulate, plot_trajectory
+    >>> run = simulate(models.rolling_disk(), (0.0, 1.0),
+    ...                {"x": 0, "y": 0, "theta": 0, "phi": 0, "x_dot": 1, "y_dot": 0,
+    ...                 "theta_dot": 1, "phi_dot": 1})
+    >>> fig = plot_trajectory(run, title="rolling disk")
+    >>> len(fig.axes)   # coordinates, velocities, residual, energy
+    4
     """
     if axes is None:
         fig, axes = _new_axes(4, (9.0, 9.0))
@@ -189,6 +199,21 @@ def plot_work_precision(result, ax=None, *, title: str | None = None):
     setting (tolerance or step, coarse to fine), so a line never zig-zags
     because two runs happened to take the same time. Runs that failed or
     whose error is not positive and finite are not drawn.
+
+    Examples
+    --------
+    >>> from nhham import loads_scene, bench, plot_work_precision
+    >>> scene = loads_scene('''
+    ... coordinates = ["x"]
+    ... lagrangian = "x_dot**2/2 - x**2/2"
+    ... constraints = []
+    ... [initial]
+    ... x = 1.0
+    ... x_dot = 0.0
+    ... ''')
+    >>> fig = plot_work_precision(bench(scene, t_end=1.0, quick=True).payload["result"])
+    >>> fig.axes[0].get_xscale(), fig.axes[0].get_yscale()
+    ('log', 'log')
     """
     if ax is None:
         Figure = _figure_class()
@@ -263,6 +288,27 @@ def plot_root_locus(swept, path, title: str = "") -> str:
     :data:`nhham.render.plot_style.CROSSING_STYLE`, as in the stability maps of ``nhham
     sweep``; the legend sits right of the axes. Uses matplotlib's object API with the Agg
     canvas for this figure only (the user's pyplot backend is left alone).
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> import numpy as np
+    >>> from nhham import loads_scene, linearize, plot_root_locus
+    >>> scene = loads_scene('''
+    ... coordinates = ["x"]
+    ... parameters = { c = 0.5 }
+    ... lagrangian = "x_dot**2/2 - x**2/2"
+    ... dissipation = "c*x_dot**2/2"
+    ... [steady]
+    ... x = 0.0
+    ... x_dot = 0.0
+    ... ''')
+    >>> swept = linearize(scene, sweep=("c", np.linspace(-1, 1, 21))).payload["sweep"]
+    >>> [(c.kind, round(c.value, 9)) for c in swept.crossings]   # damping through 0
+    [('complex', 0.0)]
+    >>> path = plot_root_locus(swept, os.path.join(tempfile.mkdtemp(), "locus.png"))
+    >>> os.path.getsize(path) > 0
+    True
     """
     fig = root_locus_figure(swept, title)
     fig.savefig(path, dpi=120)

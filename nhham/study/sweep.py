@@ -71,6 +71,11 @@ class SweepResult:
     kept : str or None
         Where its results are on disk: the output when complete, else the store to
         ``--resume`` (None: in memory).
+
+    Examples
+    --------
+    See :func:`sweep`: ``result.dataset`` is the xarray Dataset, ``result.to_dict()`` what
+    ``nhham sweep --json`` prints.
     """
 
     dataset: Any = field(repr=False)
@@ -159,6 +164,17 @@ def sweep(scene, what: str, over=(), *, samples_count: int | None = None,
     Returns
     -------
     SweepResult
+
+    Examples
+    --------
+    The verdict of the scene whose constraint vanishes at a = 0 (W singular there) and
+    turns underdetermined at b = +-1, at three points:
+
+    >>> from nhham.study.sweep import sweep
+    >>> ds = sweep("examples/parametric_null_constraint.toml", "classify", ["b=0.5,1.0"],
+    ...            workers=1).dataset
+    >>> ds["status"].values.ravel().tolist()   # 0 determined, 1 underdetermined
+    [0, 1]
     """
     start = time.perf_counter()
     if budget is not None and not (math.isfinite(budget) and budget > 0):
