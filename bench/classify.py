@@ -265,7 +265,7 @@ AFTER_IMPORTS = {
         "import importlib\n"
         "from nhham.cli.main import main\n"
         # the modules classify uses, under the names of this tree and of older ones
-        "for name in ('nhham.cli.results', 'nhham.hamiltonian.classification',\n"
+        "for name in ('nhham.render.results', 'nhham.hamiltonian.classification',\n"
         "             'nhham.hamiltonian.crosscheck', 'nhham.lagrangian.analysis',\n"
         "             'nhham.lagrangian.parametric', 'nhham.lagrangian.exceptional',\n"
         "             'nhham.verdict.values', 'nhham.system.scene'):\n"

@@ -28,7 +28,7 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "examples"))
 
-from nhham.cli.linearize_command import linearize_scene  # noqa: E402
+from nhham.journeys.stability import linearize  # noqa: E402
 from nhham.numerics.codegen import numeric_model  # noqa: E402
 from nhham.numerics.integrate import simulate  # noqa: E402
 from nhham.system.scene import load_scene  # noqa: E402
@@ -70,9 +70,11 @@ def main():
         scene, t_load = clock(lambda: load_scene(ROOT / "examples" / scene_file))
         with tempfile.TemporaryDirectory() as cache:
             model, t_model = clock(lambda: numeric_model(scene.system, cache_dir=cache))
-            (lin, _), t_lin = clock(lambda: linearize_scene(scene, "complex-step", model=model))
-            (_, sw), t_sweep = clock(lambda: linearize_scene(
-                scene, "complex-step", (p, np.linspace(lo, hi, 101)), model=model))
+            answer, t_lin = clock(lambda: linearize(scene, method="complex-step", model=model))
+            lin = answer.payload["linearization"]
+            swept, t_sweep = clock(lambda: linearize(
+                scene, method="complex-step", sweep=(p, np.linspace(lo, hi, 101)), model=model))
+            sw = swept.payload["sweep"]
             res, _ = clock(lambda: simulate(model, (0.0, 10.0), dict(scene.initial),
                                             method="DOP853", rtol=1e-10))
         cross = ", ".join(f"{c.kind} {p} = {c.value:.6f}" for c in sw.crossings) or "none"

@@ -181,7 +181,7 @@ def main(argv=None):
         print(wp.describe())
         print(f"(study took {time.perf_counter() - start:.0f} s)")
         if args.plot:
-            from nhham.cli.plotting import plot_work_precision, save_figure
+            from nhham.render.plotting import plot_work_precision, save_figure
 
             os.makedirs(args.plot, exist_ok=True)
             path = os.path.join(args.plot, name.replace(" ", "_") + ".png")

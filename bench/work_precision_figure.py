@@ -27,7 +27,7 @@ import sys
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
 import nhham  # noqa: E402
-from nhham.cli.plotting import plot_work_precision, save_figure  # noqa: E402
+from nhham.render.plotting import plot_work_precision, save_figure  # noqa: E402
 from nhham.numerics.codegen import numeric_model  # noqa: E402
 from nhham.numerics.workprecision import (WorkPrecisionResult, WorkPrecisionRow,  # noqa: E402
                                           work_precision)

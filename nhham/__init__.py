@@ -1,6 +1,7 @@
 """nhham: mechanical systems with non-holonomic constraints.
 
-The package is layered; each layer imports only from those beneath it:
+The package is layered (a tree: ``numerics`` stands beside the exact side, on
+``lagrangian``); each layer imports only from those beneath it:
 
 ``nhham.system``
     what the user describes: :class:`System`, the safe expression parser,
@@ -16,11 +17,16 @@ The package is layered; each layer imports only from those beneath it:
 ``nhham.numerics``
     numbers without sympy (generated kernels, integrators, reference,
     diagnostics, work-precision); its ``codegen`` is the one bridge in;
+``nhham.render``
+    the text, LaTeX and JSON forms of results, and their figures;
+``nhham.journeys``
+    what a user does with a scene, one function each (classify, derive, compare,
+    linearize, simulate, bench): what the command runs and the studies evaluate;
 ``nhham.study``
     parameter studies: grids and samples evaluated in chunks on Dask, results as
     labelled xarray Datasets written as they come;
 ``nhham.cli``
-    the ``nhham`` command, its text and JSON reports, and the plots.
+    the ``nhham`` command: its options, and the envelope of its output.
 
 Public names are re-exported here explicitly, each imported on first use
 (PEP 562), so that ``import nhham`` is quick (the command
@@ -34,6 +40,12 @@ from nhham.settings import __version__ as __version__
 
 # module that defines them -> public names
 _LAZY = by_module({
+    # what a user does with a scene, named like the commands (``nhham.journeys``)
+    "journeys.answer": ("Answer",),
+    "journeys.verdict": ("classify", "classify_parametric"),
+    "journeys.derivation": ("derive",),
+    "journeys.comparison": ("compare",),
+    "journeys.benchmark": ("bench",),
     # the exceptions, rooted at NhhamError
     "errors": (
         "NhhamError", "InputError", "ParseError", "SceneError", "ValidationError",
@@ -79,10 +91,10 @@ _LAZY = by_module({
     # a bound on the time of a computation (the command's --budget)
     "budget": ("time_budget",),
     # stability of steady motions
-    "numerics.linearization": ("linearize", "linearize_many", "Linearization"),
+    "numerics.linearization": ("linearize_many", "Linearization"),
     "numerics.batch_linearization": ("linearize_batch", "LinearizationBatch", "ChartChoice"),
     "numerics.steady_sweep": ("sweep_steady", "Sweep"),
-    "cli.linearize_command": ("linearize_scene", "open_loop", "plot_root_locus"),
+    "journeys.stability": ("linearize", "open_loop", "linearize_scene"),
     # parameter studies on Dask (the study extra)
     "study.sweep": ("sweep", "SweepResult"),
     "study.plots": ("plot_study", "plot_stability_map", "plot_ensemble", "plot_cases"),
@@ -93,9 +105,9 @@ _LAZY = by_module({
     "system.mechanics": ("from_mechanics", "from_lagranges_method"),
     "system.models": ("models",),
     # reports, figures and the command's JSON contract
-    "cli.display": ("report",),
-    "cli.plotting": ("plot_trajectory", "plot_work_precision"),
-    "cli.envelope": ("output_schema",),
+    "render.display": ("report",),
+    "render.plotting": ("plot_trajectory", "plot_work_precision", "plot_root_locus"),
+    "render.schema": ("output_schema",),
 })
 
 __all__ = list(_LAZY)

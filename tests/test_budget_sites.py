@@ -15,7 +15,7 @@ import pytest
 import sympy as sp
 
 from nhham import System
-from nhham.cli.report import Steps
+from nhham.render.text import Steps
 from nhham.errors import BudgetExceeded
 
 
@@ -198,7 +198,7 @@ def test_compiler_probes_let_an_expiry_through(monkeypatch):
 
 
 def test_the_trace_lets_an_expiry_through(monkeypatch):
-    from nhham.cli.trace import analysis_text
+    from nhham.render.trace import analysis_text
     from nhham.lagrangian.analysis import analyze_constraints
 
     analysis = analyze_constraints(_disk())

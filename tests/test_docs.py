@@ -28,7 +28,7 @@ def test_docs_build_without_warnings(tmp_path):
     api = (tmp_path / "html" / "api.html").read_text()
     assert api.count('class="sig-name') > 25
     # the public linearisation, the scipy-ready right-hand side and the scene writer
-    for name in ("nhham.linearize_scene", "nhham.linearize", "nhham.Linearization",
+    for name in ("nhham.classify", "nhham.linearize", "nhham.Linearization",
                  "nhham.sweep_steady", "nhham.dump_scene", "nhham.NumericModel.rhs"):
         assert f'id="{name}"' in api, name
 
@@ -36,7 +36,7 @@ def test_docs_build_without_warnings(tmp_path):
 def test_cli_doc_lists_every_result_key():
     """docs/cli.rst names every key of every command's result in the JSON Schema
     (linearize's were missing)."""
-    from nhham.cli.envelope import output_schema
+    from nhham.render.schema import output_schema
 
     doc = (DOCS / "cli.rst").read_text()
     defs = output_schema()["$defs"]
@@ -202,8 +202,8 @@ def test_every_notebook_is_listed_and_stored_with_its_outputs():
                 assert "execute_result" in kinds, (name, source[:60])
 
 
-@pytest.mark.parametrize("module", ["nhham.cli.latex", "nhham.cli.envelope", "nhham.cli.display",
-                                    "nhham.system.expressions", "nhham.cli.plotting"])
+@pytest.mark.parametrize("module", ["nhham.render.latex", "nhham.cli.envelope", "nhham.render.display",
+                                    "nhham.system.expressions", "nhham.render.plotting"])
 def test_docstring_examples(module):
     mod = importlib.import_module(module)
     result = doctest.testmod(mod, optionflags=doctest.ELLIPSIS)
@@ -246,7 +246,7 @@ def test_the_paper_is_cited_by_its_title_and_journal():
 
 def test_packaging_files():
     for name in ("LICENSE", "CHANGELOG.md", "nhham/py.typed",
-                 "nhham/cli/schemas/output.schema.json"):
+                 "nhham/render/schemas/output.schema.json"):
         assert (ROOT / name).is_file(), name
     assert "BSD 3-Clause" in (ROOT / "LICENSE").read_text()
     pyproject = (ROOT / "pyproject.toml").read_text()

@@ -22,7 +22,7 @@ def time_budget(seconds: float | None, steps):
     ----------
     seconds : float or None
         None: no bound.
-    steps : nhham.cli.report.Steps
+    steps : nhham.render.text.Steps
     """
     with _library_budget(seconds, steps.where):
         yield

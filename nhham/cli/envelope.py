@@ -16,7 +16,8 @@ as numbers, ``null`` for "not available"). Expressions are strings printed
 by :func:`nhham.system.expressions.to_text`; read them back with
 ``nhham.parse_expression(text, envelope["scene"]["names"])`` (``I``, ``E``,
 ``S``, ``N`` are then the scene's parameters, not sympy's constants). The
-JSON Schema is :func:`output_schema` (the file ``nhham/cli/schemas/output.schema.json``).
+JSON Schema is :func:`nhham.render.schema.output_schema` (the file
+``nhham/render/schemas/output.schema.json``).
 
 Exit status: :data:`EXIT_OK` (0) success, :data:`EXIT_INTERNAL` (1) an
 internal failure, :data:`EXIT_INPUT` (2) bad input or usage,
@@ -37,13 +38,12 @@ from __future__ import annotations
 
 import json
 import sys
-import warnings as _warnings
-from contextlib import contextmanager
 from dataclasses import dataclass, field
-from functools import lru_cache
-from importlib import resources
-from typing import Any, Callable, Iterator
+from typing import Any, Callable
 
+from nhham.render.schema import jsonable
+from nhham.journeys.answer import capture_warnings
+from nhham.render.text import one_line
 from nhham.settings import json_number
 
 __all__ = [
@@ -61,8 +61,6 @@ __all__ = [
     "print_json",
     "one_line",
     "capture_warnings",
-    "output_schema",
-    "jsonable",
 ]
 
 EXIT_OK = 0
@@ -108,11 +106,6 @@ class CommandOutput:
 
     def render_text(self) -> str:
         return self.text() if callable(self.text) else str(self.text)
-
-
-def one_line(message) -> str:
-    """A message as one line (whitespace runs, including newlines, become one space)."""
-    return " ".join(str(message).split())
 
 
 def _dedupe(lines) -> list:
@@ -179,22 +172,20 @@ def scene_info(scene) -> dict:
     ``names`` lists coordinates, velocities, momenta, parameters and the
     multipliers ``lambda_i``: pass it to :func:`nhham.parse_expression`.
     """
-    from nhham.system.naming import momentum_symbol, multiplier_symbol
+    from nhham.render.names import output_names
+    from nhham.system.naming import momentum_symbol
 
     system = scene.system
-    coords = [q.name for q in system.coordinates]
-    vels = [v.name for v in system.velocities]
-    momenta = [momentum_symbol(q).name for q in system.coordinates]
     values = {p: v for p, v in getattr(system, "parameter_values", {}).items()}
     params = [{"name": p.name, "value": json_number(values[p]) if p in values else None}
               for p in system.parameters]
-    multipliers = [multiplier_symbol(i + 1).name for i in range(max(system.m, len(
-        getattr(system, "constraints", ()))))]
-    names = coords + vels + momenta + [p["name"] for p in params] + multipliers
+    coords = [q.name for q in system.coordinates]
+    vels = [v.name for v in system.velocities]
+    momenta = [momentum_symbol(q).name for q in system.coordinates]
     given = getattr(scene, "values_set", {}) or {}
     return {"path": str(scene.source), "name": scene.name, "coordinates": coords,
             "velocities": vels, "momenta": momenta, "parameters": params,
-            "names": list(dict.fromkeys(names)),
+            "names": output_names(system),
             "set": {k: json_number(v) for k, v in given.items()}}
 
 
@@ -232,50 +223,3 @@ class FailureReport:
                                 scene=None if scene is None else scene_info(scene),
                                 error=error_info(kind, message, key)))
         return ERROR_KINDS[kind]
-
-
-@contextmanager
-def capture_warnings() -> Iterator[list]:
-    """Collect Python warnings issued inside the block as one-line messages.
-
-    Nothing is printed: the command reports them itself (in the envelope, or
-    one ``nhham: warning:`` line each on stderr).
-    """
-    caught: list[str] = []
-    with _warnings.catch_warnings(record=True) as records:
-        _warnings.simplefilter("always")
-        try:
-            yield caught
-        finally:
-            caught.extend(one_line(r.message) for r in records)
-
-
-def jsonable(value: Any) -> Any:
-    """Plain JSON data: numpy scalars and arrays, tuples and mappings converted."""
-    import numpy as np
-
-    if isinstance(value, dict) or hasattr(value, "items"):
-        return {str(k): jsonable(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple, np.ndarray)):
-        seq = value.tolist() if isinstance(value, np.ndarray) else value
-        return [jsonable(v) for v in seq]
-    if isinstance(value, (bool, np.bool_)):
-        return bool(value)
-    if isinstance(value, (int, np.integer)):
-        return int(value)
-    if isinstance(value, (float, np.floating)):
-        return json_number(value)
-    if value is None or isinstance(value, str):
-        return value
-    return str(value)
-
-
-@lru_cache(maxsize=1)
-def _schema_text() -> str:
-    return resources.files("nhham.cli").joinpath("schemas/output.schema.json").read_text(
-        encoding="utf-8")
-
-
-def output_schema() -> dict:
-    """The JSON Schema (draft 2020-12) of the envelope and of each command's result."""
-    return json.loads(_schema_text())

@@ -39,11 +39,12 @@ SWEEP_HELP = (
 
 def add_arguments(parser) -> None:
     """The command's own options (the common ones are added by ``main``)."""
+    from nhham.study.kinds import KINDS, SIMULATE_METHODS as METHODS
     from nhham.study.points import SAMPLERS
-    from nhham.study.kinds import SIMULATE_METHODS as METHODS
 
-    parser.add_argument("--what", required=True, choices=("linearize", "simulate", "classify"),
-                        help="what to compute at every point")
+    parser.add_argument("--what", required=True, choices=tuple(KINDS),
+                        help="what to compute at every point: " + "; ".join(
+                            f"{k.name}: {k.help}" for k in KINDS.values()))
     parser.add_argument("--over", action="append", default=[], metavar="P=A:B:N",
                         help="a swept parameter (or, for simulate, initial value): a grid "
                              "P=START:STOP:COUNT, a range P=START:STOP (with --samples) or "
@@ -102,17 +103,19 @@ def add_arguments(parser) -> None:
 def cmd_sweep(args, steps):
     """The command: run the study, summarise it, draw it."""
     from nhham.cli.envelope import CommandOutput, scene_info
+    from nhham.study.kinds import KINDS, kind_of
     from nhham.study.sweep import progress_line, sweep
 
     if args.plot:
         from nhham.study.plots import pyplot
 
         pyplot()   # fail before the work when the extra is missing
-    if args.what != "simulate":
-        for name in ("method", "rtol", "atol", "t_end"):
-            if getattr(args, name) is not None:
-                raise InputError(f"--{name.replace('_', '-')}: only for --what simulate",
-                                 key=f"--{name.replace('_', '-')}")
+    kind = kind_of(args.what)
+    for name in ("method", "rtol", "atol", "t_end"):
+        if getattr(args, name) is not None and name not in kind.run_options:
+            takers = ", ".join(k.name for k in KINDS.values() if name in k.run_options)
+            raise InputError(f"--{name.replace('_', '-')}: only for --what {takers}",
+                             key=f"--{name.replace('_', '-')}")
     progress = progress_line() if steps.progress else None
     with steps.step(f"sweep ({args.what}) over "
                     + (", ".join(args.over) or "initial perturbations")):
@@ -131,36 +134,22 @@ def cmd_sweep(args, steps):
             raise
     args.loaded_scene = result.scene
     data = result.to_dict()
-    data["summary"] = summary(args.what, result.dataset)
+    module = kind.load()
+    data["summary"] = module.summary(result.dataset)
     data["plot"] = None
     if args.plot:
         from nhham.study.plots import plot_study
 
         with steps.step(f"plot {args.plot}"):
             data["plot"] = plot_study(result.dataset, args.plot)
-    warnings = []
-    s = data["summary"]
-    if args.what == "simulate" and s["projected_starts"]:
-        warnings.append(f"{s['projected_starts']} of {s['done_points']} initial states were off "
-                        f"M_1 at their point (its values or parameters) and were projected "
-                        f"onto it (largest move {s['max_projection_distance']:.3g}; "
-                        f"projection_distance in the results)")
-    if args.what == "linearize" and s["not_linearised"]:
-        warnings.append(f"{s['not_linearised']} points have no linearisation: the [steady] "
-                        f"state is not on M_1, not steady or singular there (status in the "
-                        f"results: 1, 2, 3)")
-    if args.what == "linearize" and s.get("unlocated_crossings"):
-        warnings.append(f"{s['unlocated_crossings']} grid intervals along the boundaries' "
-                        f"parameter change their number of unstable eigenvalues with no "
-                        f"eigenvalue on the imaginary axis (a jump of the linearisation): no "
-                        f"boundary is reported there (boundary_unlocated in the results)")
+    warnings = module.summary_warnings(data["summary"])
     failure = None
     if not result.complete:
         done = f"{data['points'] - _missing(result)} of {data['points']} points done"
         failure = (result.stopped if result.stopped not in (None, "budget") else
                    f"{'the --budget ran out' if result.stopped else 'the study stopped'} "
                    f"with {done} (kept in {result.kept}); continue with --resume")
-    return CommandOutput(result=data, text=lambda: _text(args, result, data),
+    return CommandOutput(result=data, text=lambda: _text(args, result, data, module),
                          scene=scene_info(result.scene), failure=failure, warnings=warnings)
 
 
@@ -179,45 +168,9 @@ def _missing(result) -> int:
     return int((~np.asarray(result.dataset["done"].values, dtype=bool)).sum())
 
 
-def summary(what: str, ds) -> dict:
-    """What the study found, in a few numbers (JSON-ready)."""
-    done = np.asarray(ds["done"].values, dtype=bool)
-    if what == "linearize":
-        stable = np.asarray(ds["stable"].values, dtype=bool) & done
-        status = np.asarray(ds["status"].values)
-        out: dict = {"stable_points": int(stable.sum()), "done_points": int(done.sum()),
-                     "not_linearised": int(((status != 0) & done).sum())}
-        if "boundary" in ds:
-            b = np.asarray(ds["boundary"].values)
-            kinds = np.asarray(ds["boundary_kind"].values)
-            for kind, name in ((0, "real"), (1, "complex")):
-                vals = b[(kinds == kind) & np.isfinite(b)]
-                out[f"{name}_crossings"] = int(vals.size)
-                out[f"{name}_crossing_range"] = ([float(vals.min()), float(vals.max())]
-                                                 if vals.size else None)
-            unlocated = np.asarray(ds["boundary_unlocated"].values)
-            out["unlocated_crossings"] = int(unlocated[unlocated > 0].sum())
-        return out
-    if what == "simulate":
-        success = np.asarray(ds["success"].values, dtype=bool) & done
-        err = np.abs(np.asarray(ds["energy_error"].values))[done]
-        res = np.asarray(ds["constraint_residual"].values)[done]
-        moved = np.asarray(ds["projection_distance"].values)[done]
-        return {"done_points": int(done.sum()), "failed_runs": int((done & ~success).sum()),
-                "max_energy_error": float(np.nanmax(err)) if err.size else None,
-                "max_constraint_residual": float(np.nanmax(res)) if res.size else None,
-                "projected_starts": int((moved > 0).sum()),
-                "max_projection_distance": float(moved.max()) if moved.size else None}
-    case = np.asarray(ds["case"].values)[done]
-    return {"done_points": int(done.sum()), "generic_points": int((case == -1).sum()),
-            "case_points": {str(int(c)): int((case == c).sum())
-                            for c in np.unique(case) if c >= 0}}
+def _text(args, result, data, module) -> str:
+    from nhham.render.text import table
 
-
-def _text(args, result, data) -> str:
-    from nhham.cli.report import table
-
-    s = data["summary"]
     dims = " x ".join(f"{d} {n}" for d, n in data["dims"].items())
     rows = [("points", f"{data['points']} ({dims})"),
             ("computed now", f"{data['computed']} in {data['wall_time_s']:.2f} s (chunks "
@@ -227,28 +180,7 @@ def _text(args, result, data) -> str:
             ("ran on", f"{data['scheduler']} ({data['workers']} worker(s), {data['chunks']} "
                        f"chunks)"),
             ("results", f"{data['path']}" + ("" if result.complete else " (incomplete)"))]
-    if args.what == "linearize":
-        rows.append(("stable", f"{s['stable_points']} of {s['done_points']} points"
-                     + (f"; {s['not_linearised']} not linearised (status != 0)"
-                        if s["not_linearised"] else "")))
-        from nhham.study.plot_style import CROSSING_STYLE
-
-        for kind in ("complex", "real"):
-            word = CROSSING_STYLE[kind]["label"]
-            if s.get(f"{kind}_crossings"):
-                lo, hi = s[f"{kind}_crossing_range"]
-                rows.append((f"{kind} crossings", f"{s[f'{kind}_crossings']}, {word}, "
-                                                  f"{lo:.6g} .. {hi:.6g}"))
-    elif args.what == "simulate":
-        rows.append(("runs failed", str(s["failed_runs"])))
-        rows.append(("max |energy error|", f"{s['max_energy_error']:.3g}"
-                     if s["max_energy_error"] is not None else "-"))
-        rows.append(("max constraint residual", f"{s['max_constraint_residual']:.3g}"
-                     if s["max_constraint_residual"] is not None else "-"))
-    else:
-        rows.append(("generic verdict", f"{s['generic_points']} points"))
-        for c, n in s["case_points"].items():
-            rows.append((f"case {c}", f"{n} points"))
+    rows += module.summary_rows(data["summary"])
     if data["plot"]:
         rows.append(("plot", data["plot"]))
     title = result.scene.name or str(args.scene)

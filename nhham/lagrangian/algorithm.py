@@ -27,7 +27,7 @@ index of the constraint φ_i in ``System.phi``, see :mod:`nhham.system.naming`).
 
 :func:`run_algorithm` is the generic loop (used by both the Lagrangian and the
 Hamiltonian side); its records are :mod:`nhham.lagrangian.records`, its trace as text
-:mod:`nhham.cli.trace`;
+:mod:`nhham.render.trace`;
 :func:`nhham.lagrangian.analysis.analyze_constraints` is the Lagrangian entry point.
 """
 

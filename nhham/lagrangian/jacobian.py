@@ -29,7 +29,10 @@ import sympy as sp
 from nhham.errors import ComputationError, InputError
 from nhham.lagrangian.geometry import lagrangian_geometry
 
-__all__ = ["ExactJacobian", "exact_jacobian", "exact_number"]
+__all__ = ["ExactJacobian", "exact_jacobian", "exact_number", "EXACT_DIGITS"]
+
+#: Digits of the eigenvalues computed from an exact state matrix (``nhham linearize``).
+EXACT_DIGITS = 30
 
 
 @dataclass(frozen=True)

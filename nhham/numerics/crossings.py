@@ -40,7 +40,8 @@ from typing import Callable, Sequence
 
 import numpy as np
 
-__all__ = ["Crossing", "CrossingSearch", "Unlocated", "crossings", "crossings_many"]
+__all__ = ["Crossing", "CrossingSearch", "CrossingFinder", "Unlocated", "crossings",
+           "crossings_many"]
 
 #: Bound on the spectra one bracket may ask for (bisection from a width of 1e6 to 1e-12
 #: takes 60; a split bracket shares its parent's bound).
@@ -118,6 +119,77 @@ def crossings(spectrum_at: Callable, values: Sequence[float] | np.ndarray, spect
     return crossings_many(at, [(values, spectra)], xtol=xtol)
 
 
+class CrossingFinder:
+    """The crossings on many lines, located together, asked for spectra rather than
+    calling for them: the caller reads :attr:`requests`, computes the spectra there however
+    it computes them (a study's batch, a sweep's model) and hands them to :meth:`supply`,
+    until nothing is requested; :meth:`result` then holds the crossings.
+
+    Parameters
+    ----------
+    lines, xtol, counts
+        As for :func:`crossings_many`.
+
+    Examples
+    --------
+    One line on which the eigenvalue p - 0.3 crosses 0:
+
+    >>> import numpy as np
+    >>> from types import SimpleNamespace
+    >>> def spectrum(p):
+    ...     return SimpleNamespace(eigenvalues=np.array([p - 0.3 + 0j, -1 + 0j]),
+    ...                            tolerance=1e-12)
+    >>> values = np.linspace(0.0, 1.0, 5)
+    >>> finder = CrossingFinder([(values, [spectrum(v) for v in values])])
+    >>> while finder.requests:
+    ...     finder.supply([spectrum(x) for _, x in finder.requests])
+    >>> [round(c.value, 12) for c in finder.result().crossings[0]]
+    [0.3]
+    """
+
+    def __init__(self, lines: Sequence, *, xtol: float = 1e-12,
+                 counts: Sequence | None = None) -> None:
+        self._found: list = [[] for _ in lines]
+        self._unlocated: list = [[] for _ in lines]
+        searches = []
+        for k, (values, spectra) in enumerate(lines):
+            line = ([_count(s) for s in spectra] if counts is None
+                    else [None if c < 0 else int(c) for c in counts[k]])
+            for i in range(len(values) - 1):
+                if None in (line[i], line[i + 1]) or line[i] == line[i + 1]:
+                    continue
+                sa, sb = spectra[i], spectra[i + 1]
+                gen = _search(float(values[i]), float(values[i + 1]), sa, sb,
+                              _structural(sa, sb), xtol, [MAX_EVALUATIONS])
+                searches.append((k, gen))
+        self._active = [(k, gen, x) for k, gen in searches
+                        if (x := self._step(k, gen, None)) is not None]
+
+    @property
+    def requests(self) -> list:
+        """``[(line index, value), ...]``: where spectra are wanted next (empty: done)."""
+        return [(k, x) for k, _, x in self._active]
+
+    def supply(self, spectra: Sequence) -> None:
+        """The spectra at :attr:`requests`, in their order (None where there is none)."""
+        self._active = [(k, gen, x) for (k, gen, _), s in zip(self._active, spectra)
+                        if (x := self._step(k, gen, s)) is not None]
+
+    def result(self) -> CrossingSearch:
+        """The crossings found (sorted along each line) and the intervals left unlocated."""
+        return CrossingSearch(tuple(tuple(sorted(f, key=lambda c: c.value))
+                                    for f in self._found),
+                              tuple(tuple(u) for u in self._unlocated))
+
+    def _step(self, k, gen, spectrum):
+        try:
+            return gen.send(spectrum)
+        except StopIteration as stop:
+            for item in stop.value:
+                (self._found if isinstance(item, Crossing) else self._unlocated)[k].append(item)
+            return None
+
+
 def crossings_many(spectra_at: Callable, lines: Sequence, *, xtol: float = 1e-12,
                    counts: Sequence | None = None) -> CrossingSearch:
     """The crossings of the imaginary axis on many lines, located together.
@@ -141,38 +213,13 @@ def crossings_many(spectra_at: Callable, lines: Sequence, *, xtol: float = 1e-12
     Returns
     -------
     CrossingSearch
-        See the module docstring for what makes a crossing.
+        See the module docstring for what makes a crossing. (:class:`CrossingFinder`
+        is the same search for a caller that computes the spectra itself.)
     """
-    searches = []
-    for k, (values, spectra) in enumerate(lines):
-        line = ([_count(s) for s in spectra] if counts is None
-                else [None if c < 0 else int(c) for c in counts[k]])
-        for i in range(len(values) - 1):
-            if None in (line[i], line[i + 1]) or line[i] == line[i + 1]:
-                continue
-            sa, sb = spectra[i], spectra[i + 1]
-            gen = _search(float(values[i]), float(values[i + 1]), sa, sb,
-                          _structural(sa, sb), xtol, [MAX_EVALUATIONS])
-            searches.append((k, gen))
-    found: list = [[] for _ in lines]
-    unlocated: list = [[] for _ in lines]
-
-    def step(k, gen, spectrum):
-        try:
-            return gen.send(spectrum)
-        except StopIteration as stop:
-            for item in stop.value:
-                (found if isinstance(item, Crossing) else unlocated)[k].append(item)
-            return None
-
-    active = [(k, gen, x) for k, gen in searches
-              if (x := step(k, gen, None)) is not None]
-    while active:
-        spectra = spectra_at([(k, x) for k, _, x in active])
-        active = [(k, gen, x) for (k, gen, _), s in zip(active, spectra)
-                  if (x := step(k, gen, s)) is not None]
-    return CrossingSearch(tuple(tuple(sorted(f, key=lambda c: c.value)) for f in found),
-                          tuple(tuple(u) for u in unlocated))
+    finder = CrossingFinder(lines, xtol=xtol, counts=counts)
+    while finder.requests:
+        finder.supply(spectra_at(finder.requests))
+    return finder.result()
 
 
 def _count(s):

@@ -5,8 +5,11 @@ parameters), so a study classifies once, for every value of the swept parameters
 (:func:`~nhham.verdict.parametric.parametric_classification` on the system with the
 other parameters at their values, :func:`prepare`), and each point is then placed in its
 case by exact arithmetic (its values read as the decimals they print as, as
-``classify`` reads a scene's): the generic verdict, or the first case whose equations hold
-there. A point on an exceptional set gets that set's verdict, not the generic one.
+``classify`` reads a scene's): the generic region, or the first case whose equations hold
+there. The verdict of a case is what ``nhham classify`` answers at its first point met
+(:func:`nhham.journeys.classify` on the scene at that point's values; once per case and
+process): a point's variables are the command's answer there, and the other points of
+its case share it because the verdict is constant on a case.
 
 Variables: ``case`` (-1 generic, else the index of ``cases`` in the attributes),
 ``status`` (0 determined, 1 underdetermined, 2 inconsistent, 3 invalid), ``regular`` and
@@ -20,7 +23,8 @@ import numpy as np
 
 from nhham.errors import InputError
 
-__all__ = ["prepare", "variables", "evaluate", "STATUS_CODES"]
+__all__ = ["prepare", "variables", "evaluate", "summary", "summary_warnings", "summary_rows",
+           "STATUS_CODES", "row_of", "command_row"]
 
 #: ``status`` codes.
 STATUS_CODES = {"determined": 0, "underdetermined": 1, "inconsistent": 2, "invalid": 3}
@@ -29,7 +33,7 @@ _FIELDS = ("status", "regular", "integrable", "rank_C", "stages", "free_multipli
            "first_class", "second_class")
 
 
-def prepare(scene, design, policy=None) -> dict:
+def prepare(scene, model, design, *, along=None, run_options=None, policy=None) -> dict:
     """The parametric classification over the swept parameters, as plain data.
 
     Raises
@@ -65,7 +69,17 @@ def prepare(scene, design, policy=None) -> dict:
         "generic_describe": verdict.generic.describe(),
         "notes": list(verdict.notes),
         "names": list(design.names),
+        # the settings of the command run at a point of each case (its budget aside)
+        "policy": _policy_data(policy),
     }
+
+
+def _policy_data(policy) -> dict | None:
+    import dataclasses
+
+    if policy is None:
+        return None
+    return {k: v for k, v in dataclasses.asdict(policy).items() if k != "budget"}
 
 
 def _row(verdict) -> dict:
@@ -91,7 +105,7 @@ def variables(design, options) -> dict:
     return {"point": point, "line": {}, "coords": {}}
 
 
-def evaluate(study, ctx, region) -> dict:
+def evaluate(study, ctx, region, until: float | None = None) -> dict:
     """Every variable on ``region``: each point placed in its case exactly."""
     import sympy as sp
 
@@ -102,21 +116,89 @@ def evaluate(study, ctx, region) -> dict:
     names = opts["names"]
     table = {n: sp.Symbol(n) for n in names}
     cases = [([parse_expression(c, table) for c in case["conditions"]],
-              [parse_expression(c, table) for c in case["excluding"]], case["verdict"])
+              [parse_expression(c, table) for c in case["excluding"]])
              for case in opts["cases"]]
     values = study.design.values(region)
     shape = next(iter(values.values())).shape
     out = {f: np.empty(shape, dtype=np.int16) for f in ("case",) + _FIELDS}
     for index in np.ndindex(*shape):
-        point = {table[n]: exact_value(float(values[n][index])) for n in names}
-        which, row = -1, opts["generic"]
-        for i, (eqs, neqs, verdict) in enumerate(cases):
+        values_here = {n: float(values[n][index]) for n in names}
+        point = {table[n]: exact_value(v) for n, v in values_here.items()}
+        which = -1
+        for i, (eqs, neqs) in enumerate(cases):
             if (all(e.xreplace(point) == 0 for e in eqs)
                     and all(e.xreplace(point) != 0 for e in neqs)):
-                which, row = i, verdict
+                which = i
                 break
+        row = _case_row(study, which, values_here)
         out["case"][index] = which
         for f in _FIELDS:
             out[f][index] = row[f]
-    return {k: v.astype(np.int16 if k == "case" or variables(None, opts)["point"][k][1]
-                        == np.int16 else np.int8) for k, v in out.items()}
+    return out
+
+
+#: The command's answer per (scene, case), in this process.
+_ROWS: dict = {}
+
+
+def _case_row(study, which: int, values: dict) -> dict:
+    """The variables of case ``which`` (-1: the generic region): ``nhham classify`` at
+    ``values`` (the first point of the case met in this process)."""
+    # a case's index means something only in its study (its cases, names and policy)
+    key = (study.scene_text, repr(sorted(study.options.items())), which)
+    if key not in _ROWS:
+        _ROWS[key] = command_row(study.scene_text, study.scene_source, values,
+                                 study.options.get("policy"))
+    return _ROWS[key]
+
+
+def command_row(scene_text: str, source: str, values: dict, policy=None) -> dict:
+    """The study's variables of ``nhham classify`` on the scene at ``values`` (a
+    parameter name -> value mapping, as ``--set`` gives them)."""
+    from nhham.journeys.verdict import classify
+    from nhham.lagrangian.engine import Policy
+    from nhham.system.scene import loads_scene
+
+    try:
+        scene = loads_scene(scene_text, source, check_initial=False, drop_redundant=True,
+                            values=values)
+        data = classify(scene, policy=Policy(**policy) if policy else None).data
+    except InputError:   # the command refuses the system there (W singular, ...)
+        return dict.fromkeys(_FIELDS, -1) | {"status": STATUS_CODES["invalid"]}
+    return row_of(data)
+
+
+def row_of(data) -> dict:
+    """The integer codes of the variables of a ``nhham classify`` result."""
+    def tri(x):
+        return -1 if x is None else int(bool(x))
+
+    def count(x):
+        return -1 if x is None else int(x)
+
+    return {"status": STATUS_CODES[data["status"]], "regular": tri(data["regular"]),
+            "integrable": tri(data["integrable"]), "rank_C": count(data["rank_c"]),
+            "stages": count(len(data["stages"])),
+            "free_multipliers": count(data["free_multipliers"]),
+            "first_class": count(data["first_class"]),
+            "second_class": count(data["second_class"])}
+
+
+def summary(ds) -> dict:
+    """What the study found, in a few numbers (JSON-ready): points per case."""
+    done = np.asarray(ds["done"].values, dtype=bool)
+    case = np.asarray(ds["case"].values)[done]
+    return {"done_points": int(done.sum()), "generic_points": int((case == -1).sum()),
+            "case_points": {str(int(c)): int((case == c).sum())
+                            for c in np.unique(case) if c >= 0}}
+
+
+def summary_warnings(s: dict) -> list:
+    """The warnings a summary calls for (none)."""
+    return []
+
+
+def summary_rows(s: dict) -> list:
+    """(label, text) rows of the command's report."""
+    return [("generic verdict", f"{s['generic_points']} points")] + [
+        (f"case {c}", f"{n} points") for c, n in s["case_points"].items()]

@@ -3,8 +3,13 @@
 A point sets parameters and initial values (swept names of the scene's state, and
 ``--initial-perturbation`` draws added to them); the rest of the initial state is the
 scene's ``[initial]`` table and the rest of the options its ``[simulate]`` table (or the
-study's). An initial state off M_1 there (a point changed it, or its parameters moved M_1)
-is projected onto M_1 (the kinetic-metric projection of
+study's). Where the start depends on the point (``[initial]`` leaves values to be solved
+from the constraints, or its expressions use a swept parameter), it is completed at each
+point as ``nhham simulate --set`` completes it
+(:func:`nhham.journeys.simulation.initial_at`; a point where the command would refuse it,
+the values left out not determined there, is not run: ``status`` :data:`NOT_STARTED`).
+Perturbations are added to the completed start. An initial state still off M_1 there is
+projected onto M_1 (the kinetic-metric projection of
 :meth:`~nhham.numerics.model.NumericModel.project`; ``projection_distance`` says by how
 much it moved, and the command warns). The runs are those of
 :func:`~nhham.numerics.ensemble.simulate_many`: each end state is what a single
@@ -27,7 +32,12 @@ from nhham.numerics.status import Status
 from nhham.study.kinds import SIMULATE_METHODS as METHODS
 from nhham.study.stop import chunk_deadline
 
-__all__ = ["prepare", "variables", "evaluate", "OPTIONS", "METHODS"]
+__all__ = ["prepare", "variables", "evaluate", "summary", "summary_warnings", "summary_rows",
+           "OPTIONS", "METHODS", "NOT_STARTED"]
+
+#: ``status`` of a point whose start ``nhham simulate`` refuses (``[initial]`` cannot be
+#: completed there): not run.
+NOT_STARTED = -10
 
 #: Run options a study takes (the scene's [simulate] table gives the defaults).
 OPTIONS = ("t_end", "method", "rtol", "atol", "max_step", "projection")
@@ -39,7 +49,7 @@ _DEFAULTS = {"t_end": 10.0, "method": "DOP853", "rtol": 1e-9, "atol": 1e-12,
              "max_step": None, "projection": False}
 
 
-def prepare(scene, model, design, run_options=None) -> dict:
+def prepare(scene, model, design, *, along=None, run_options=None, policy=None) -> dict:
     """The options of a simulate study: the run's settings, where each swept name goes.
 
     Raises
@@ -74,8 +84,12 @@ def prepare(scene, model, design, run_options=None) -> dict:
         raise InputError(f"--method: a study runs the adaptive methods ({', '.join(METHODS)}), "
                          f"not {opts['method']!r}", key="--method")
     y0 = model.state(dict(scene.initial))
+    swept = [n for n in design.names if n in params]
+    uses = set().union(*(e.free_symbols for e in scene.initial_given.given.values())) \
+        if scene.initial_given is not None else set()
+    complete = bool(scene.initial_solved) or any(s.name in swept for s in uses)
     return {**opts, "initial": [float(x) for x in y0], "state_names": states,
-            "parameters": [n for n in design.names if n in params]}
+            "parameters": swept, "complete": complete}
 
 
 def variables(design, options) -> dict:
@@ -119,6 +133,9 @@ def evaluate(study, ctx, region, until: float | None = None) -> dict:
     if P is not None:
         for name in opts["parameters"]:
             P[:, params.index(name)] = values[name].ravel()
+    unstarted = np.zeros(N, dtype=bool)
+    if opts.get("complete"):
+        unstarted = _complete_starts(ctx.scene, opts, values, states, Y0)
     if study.design.perturbed:
         noise = study.design.perturbation(region).reshape(N, -1)
         for j, name in enumerate(study.design.perturbed):
@@ -135,6 +152,7 @@ def evaluate(study, ctx, region, until: float | None = None) -> dict:
             distance[i] = np.linalg.norm(outcome.y - Y0[i])
             Y0[i] = outcome.y
     deadline = chunk_deadline(until)
+    Y0[unstarted] = np.asarray(opts["initial"], dtype=float)   # not run (below)
     runs = simulate_many(model, Y0, (0.0, float(opts["t_end"])), parameters=P,
                          method=opts["method"], rtol=opts["rtol"], atol=opts["atol"],
                          max_step=np.inf if opts["max_step"] is None else opts["max_step"],
@@ -143,14 +161,40 @@ def evaluate(study, ctx, region, until: float | None = None) -> dict:
         raise BudgetExceeded("the study's --budget ran out during a chunk's runs")
     E0, E1, residual = _ends(model, P, Y0, runs.y_final)
     work = np.where(np.isnan(runs.work), 0.0, runs.work)
+    status = np.where(unstarted, NOT_STARTED, runs.status)
+    Y1 = np.where(unstarted[:, None], np.nan, runs.y_final)
     out = {
-        "final_state": runs.y_final, "initial_state": Y0, "t_final": runs.t_final,
-        "status": runs.status, "success": runs.status >= 0, "nfev": runs.nfev,
+        "final_state": Y1, "initial_state": np.where(unstarted[:, None], np.nan, Y0),
+        "t_final": np.where(unstarted, np.nan, runs.t_final),
+        "status": status, "success": status >= 0, "nfev": runs.nfev,
         "nsteps": runs.nsteps, "wall_time": runs.wall_time_s,
         "constraint_residual": residual, "energy_error": E1 - E0 - work,
         "projection_distance": distance,
     }
+    for k in ("constraint_residual", "energy_error", "projection_distance", "wall_time"):
+        out[k] = np.where(unstarted, np.nan, out[k])
+    for k in ("nfev", "nsteps"):
+        out[k] = np.where(unstarted, -1, out[k])
     return {k: np.asarray(v).reshape(shape + np.asarray(v).shape[1:]) for k, v in out.items()}
+
+
+def _complete_starts(scene, opts, values, states, Y0) -> np.ndarray:
+    """``Y0`` (N, 2n) completed in place at each point's swept values, as the command
+    completes ``[initial]``; returns where that is refused (not determined there)."""
+    from nhham.journeys.simulation import initial_at
+
+    flat = {k: v.ravel() for k, v in values.items()}
+    refused = np.zeros(len(Y0), dtype=bool)
+    for i in range(len(Y0)):
+        params = {k: float(flat[k][i]) for k in opts["parameters"]}
+        given = {k: float(v[i]) for k, v in flat.items() if k in states}
+        try:
+            y, _ = initial_at(scene, params, given)
+        except InputError:
+            refused[i] = True
+            continue
+        Y0[i] = [y[name] for name in states]
+    return refused
 
 
 def _off_manifold(model, P, Y0) -> np.ndarray:
@@ -174,3 +218,37 @@ def _ends(model, P, Y0, Y1) -> tuple:
         E0[i], E1[i] = m.energy(Y0[i]), m.energy(Y1[i])
         res[i] = float(np.max(m.scaled_residuals(Y1[i]), initial=0.0))
     return E0, E1, res
+
+
+def summary(ds) -> dict:
+    """What the study found, in a few numbers (JSON-ready)."""
+    done = np.asarray(ds["done"].values, dtype=bool)
+    success = np.asarray(ds["success"].values, dtype=bool) & done
+    err = np.abs(np.asarray(ds["energy_error"].values))[done]
+    res = np.asarray(ds["constraint_residual"].values)[done]
+    moved = np.asarray(ds["projection_distance"].values)[done]
+    return {"done_points": int(done.sum()), "failed_runs": int((done & ~success).sum()),
+            "max_energy_error": float(np.nanmax(err)) if np.isfinite(err).any() else None,
+            "max_constraint_residual": (float(np.nanmax(res)) if np.isfinite(res).any()
+                                        else None),
+            "projected_starts": int((moved > 0).sum()),
+            "max_projection_distance": (float(np.nanmax(moved)) if np.isfinite(moved).any()
+                                        else None)}
+
+
+def summary_warnings(s: dict) -> list:
+    """The warnings a summary calls for (one line each)."""
+    if not s["projected_starts"]:
+        return []
+    return [f"{s['projected_starts']} of {s['done_points']} initial states were off M_1 at "
+            f"their point (its values or parameters) and were projected onto it (largest "
+            f"move {s['max_projection_distance']:.3g}; projection_distance in the results)"]
+
+
+def summary_rows(s: dict) -> list:
+    """(label, text) rows of the command's report."""
+    return [("runs failed", str(s["failed_runs"])),
+            ("max |energy error|", f"{s['max_energy_error']:.3g}"
+             if s["max_energy_error"] is not None else "-"),
+            ("max constraint residual", f"{s['max_constraint_residual']:.3g}"
+             if s["max_constraint_residual"] is not None else "-")]

@@ -12,7 +12,7 @@
 - :func:`plot_cases`: classify: each point's case, the first ``--over`` across, a legend
   of the cases present (the generic verdict in grey).
 
-Colours and words are those of :mod:`nhham.study.plot_style`, shared with the root locus
+Colours and words are those of :mod:`nhham.render.plot_style`, shared with the root locus
 of ``nhham linearize --sweep --plot``; every legend sits right of the axes, off the data,
 and is drawn only when there is something to label.
 
@@ -27,7 +27,7 @@ import json
 import numpy as np
 
 from nhham.errors import OptionalDependencyError
-from nhham.study.plot_style import (CROSSING_STYLE, OUTSIDE_RIGHT, VERDICT_STYLE, case_colour,
+from nhham.render.plot_style import (CROSSING_STYLE, OUTSIDE_RIGHT, VERDICT_STYLE, case_colour,
                                     crossing_kind, legend_if_labelled, separate_tick_labels)
 
 __all__ = ["plot_study", "plot_stability_map", "plot_ensemble", "plot_cases", "pyplot"]
@@ -46,9 +46,9 @@ def pyplot():
 
 def plot_study(ds, path, dpi: int = 150) -> str:
     """Draw the picture of a study's Dataset (by its kind) and save it to ``path``."""
-    what = ds.attrs.get("what")
-    fig = {"linearize": plot_stability_map, "simulate": plot_ensemble,
-           "classify": plot_cases}[what](ds)
+    from nhham.study.kinds import kind_of
+
+    fig = globals()[kind_of(ds.attrs.get("what")).plot](ds)
     fig.savefig(path, dpi=dpi, bbox_inches="tight")
     return str(path)
 

@@ -14,7 +14,8 @@ weave and capsize speeds of a bicycle at every trail.
 Variables (``variables``): ``stable`` (every eigenvalue has Re < -tol), ``verdict``
 (1 stable, 0 unstable, -1 undecided or not linearised), ``spectral_abscissa`` (max Re),
 ``eigenvalue_real``/``eigenvalue_imag`` (dimension ``mode``), ``state_matrix`` (``row``,
-``column``), ``status`` (0 linearised, 1 not on M_1, 2 not steady, 3 singular),
+``column``), ``status`` (0 linearised, 1 not on M_1, 2 not steady (or a ``[control]`` law that does
+not give its input's ``[steady]`` value there, which ``nhham linearize`` refuses), 3 singular),
 ``constraint_residual``, ``acceleration_residual``; on a grid ``boundary`` (the crossing
 values along ``along``, dimension ``crossing``, NaN-padded), ``boundary_kind`` (0: a real
 eigenvalue through 0, 1: a complex pair through the imaginary axis), ``boundary_direction``
@@ -25,12 +26,16 @@ changes but no eigenvalue is on the imaginary axis: not reported as boundaries).
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 
 from nhham.errors import ComputationError, InputError
+from nhham.journeys.stability import steady_states
 from nhham.numerics.batch_linearization import ChartChoice, linearize_batch
 
-__all__ = ["prepare", "variables", "evaluate", "CROSSINGS", "XTOL"]
+__all__ = ["prepare", "variables", "evaluate", "summary", "summary_warnings", "summary_rows",
+           "CROSSINGS", "XTOL"]
 
 #: Room for crossings per line (a line with more keeps the first and says so in
 #: ``boundary_count``).
@@ -40,7 +45,8 @@ CROSSINGS = 8
 XTOL = 1e-12
 
 
-def prepare(scene, model, design, along: str | None = None) -> dict:
+def prepare(scene, model, design, *, along: str | None = None, run_options=None,
+            policy=None) -> dict:
     """The options of a linearize study, decided once: the chart and neutral directions
     (from probes at the first, middle and last points), the parameter slots and the
     boundary dimension.
@@ -51,13 +57,11 @@ def prepare(scene, model, design, along: str | None = None) -> dict:
         No ``[steady]`` table, a swept name that is not a parameter (or is an input), an
         ``along`` that is not a grid dimension.
     """
+    from nhham.journeys.stability import check_steady_table, steady_linearization
     from nhham.numerics.linearization import linearize
-    from nhham.numerics.steady_sweep import steady_state
 
-    if scene.steady is None:
-        raise InputError(f"{scene.source}: --what linearize needs a [steady] table (a value, "
-                         f"or an expression in the parameters, for every coordinate and "
-                         f"velocity)", key="steady")
+    check_steady_table(scene)
+    system = scene.steady_system()
     names = model.parameter_names
     for name in design.names:
         if name in model.input_names:
@@ -83,10 +87,12 @@ def prepare(scene, model, design, along: str | None = None) -> dict:
         m = model.with_parameters(**params)
         try:
             chart = found[0][3].chart if found else None
-            m, state = steady_state(m, scene.steady.values(m.parameters), chart, warn=False)
-            family = scene.steady.family(m.parameters)
-            found.append((m, state, family, linearize(m, state, independent=chart,
-                                                      family=family)))
+            # the command's linearisation there (laws and forces checked), numerically
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")   # a probe's notes are not the study's
+                lin = steady_linearization(scene, system, m, "complex-step", chart)
+            state = np.array([lin.state[name] for name in m.names])
+            found.append((m, state, scene.steady.family(m.parameters), lin))
         except (InputError, ComputationError) as exc:
             problems.append(f"at {params}: {exc}")
     if not found:
@@ -139,7 +145,7 @@ def variables(design, options) -> dict:
     return {"point": point, "line": lines, "coords": extra}
 
 
-def evaluate(study, ctx, region) -> dict:
+def evaluate(study, ctx, region, until: float | None = None) -> dict:
     """Every variable on ``region`` (see the module docstring)."""
     scene, model = ctx.scene, ctx.model
     opts = study.options
@@ -148,11 +154,13 @@ def evaluate(study, ctx, region) -> dict:
     values = study.design.values(region)
     shape = next(iter(values.values())).shape if values else ()
     flat = {k: v.ravel() for k, v in values.items()}
-    Y, P, bad = _states(scene, model, flat)
+    Y, P, bad, missed = steady_states(scene, model, flat)
     batch = linearize_batch(model, Y, P, reference=choice,
                             families=_families(scene, model, P, choice))
     status = batch.status.copy()
     status[bad] = 1
+    status[missed] = 2   # not a steady motion of the closed loop: the command refuses it
+    bad = bad | missed
     out = {
         "stable": batch.stable & ~bad,
         "verdict": np.where(bad, -1, batch.verdicts).astype(np.int8),
@@ -175,27 +183,6 @@ def evaluate(study, ctx, region) -> dict:
     return out
 
 
-def _states(scene, model, flat) -> tuple:
-    """(Y (N, 2n), P (N, parameters), bad (N,)): the steady states and parameters at the
-    points (``flat``: swept name -> values); bad where an entry of [steady] is not a
-    finite real number there."""
-    names = model.parameter_names
-    N = len(next(iter(flat.values()))) if flat else 1
-    P = np.tile(np.asarray(model.parameter_values, dtype=float), (N, 1))
-    for k, v in flat.items():
-        P[:, names.index(k)] = v
-    params = {k: P[:, i] for i, k in enumerate(names)}
-    steady = scene.steady.arrays(params)
-    for u in model.input_names:
-        if u in steady:
-            P[:, names.index(u)] = steady[u]
-    Y = np.column_stack([steady[s] for s in model.names])
-    bad = ~np.isfinite(Y).all(axis=1) | ~np.isfinite(P).all(axis=1)
-    Y[bad] = 0.0
-    P[bad] = np.where(np.isfinite(P[bad]), P[bad], 0.0)
-    return Y, P, bad
-
-
 def _families(scene, model, P, choice):
     """Each point's tangents of the steady family, where the chart divides one out."""
     if not any(s.startswith("d/d") for s in choice.neutral):
@@ -206,8 +193,9 @@ def _families(scene, model, P, choice):
 
 def _boundaries(study, scene, model, choice, region, values, batch, bad) -> dict:
     """The crossings along ``along`` on every line of the region, located together
-    (:func:`~nhham.numerics.crossings.crossings_many`)."""
-    from nhham.numerics.crossings import crossings_many
+    (:class:`~nhham.numerics.crossings.CrossingFinder`: it asks for spectra, this study
+    computes them)."""
+    from nhham.numerics.crossings import CrossingFinder
 
     dims = study.design.dims
     a = dims.index(study.options["along"])
@@ -227,12 +215,13 @@ def _boundaries(study, scene, model, choice, region, values, batch, bad) -> dict
         line_counts.append(counts[index[at]].tolist())
         fixed.append({k: float(v[at][0]) for k, v in values.items() if k != dims[a]})
 
-    def spectra_at(requests):
-        points = {k: np.array([dict(fixed[line], **{dims[a]: x})[k] for line, x in requests])
-                  for k in values}
-        return _spectra(scene, model, choice, points)
-
-    search = crossings_many(spectra_at, lines, xtol=XTOL, counts=line_counts)
+    # the finder asks for spectra; this study computes them in batches of its own
+    finder = CrossingFinder(lines, xtol=XTOL, counts=line_counts)
+    while finder.requests:
+        points = {k: np.array([dict(fixed[line], **{dims[a]: x})[k]
+                               for line, x in finder.requests]) for k in values}
+        finder.supply(_spectra(scene, model, choice, points))
+    search = finder.result()
     out = {"boundary": np.full(rest + (CROSSINGS,), np.nan),
            "boundary_kind": np.full(rest + (CROSSINGS,), -1, dtype=np.int8),
            "boundary_direction": np.zeros(rest + (CROSSINGS,), dtype=np.int8),
@@ -266,9 +255,62 @@ class _Spectra:
 def _spectra(scene, model, choice, points) -> list:
     """The spectra at many points (``points``: swept name -> values), None where there is
     no linearisation."""
-    Y, P, bad = _states(scene, model, points)
+    Y, P, bad, missed = steady_states(scene, model, points)
+    bad = bad | missed
     batch = linearize_batch(model, Y, P, reference=choice,
                             families=_families(scene, model, P, choice))
     return [None if bad[i] else batch.spectrum(i) for i in range(len(Y))]
 
 
+
+
+def summary(ds) -> dict:
+    """What the study found, in a few numbers (JSON-ready): stable and unlinearised
+    points, the crossings of each kind and their range, the unlocated ones."""
+    done = np.asarray(ds["done"].values, dtype=bool)
+    stable = np.asarray(ds["stable"].values, dtype=bool) & done
+    status = np.asarray(ds["status"].values)
+    out: dict = {"stable_points": int(stable.sum()), "done_points": int(done.sum()),
+                 "not_linearised": int(((status != 0) & done).sum())}
+    if "boundary" in ds:
+        b = np.asarray(ds["boundary"].values)
+        kinds = np.asarray(ds["boundary_kind"].values)
+        for kind, name in ((0, "real"), (1, "complex")):
+            vals = b[(kinds == kind) & np.isfinite(b)]
+            out[f"{name}_crossings"] = int(vals.size)
+            out[f"{name}_crossing_range"] = ([float(vals.min()), float(vals.max())]
+                                             if vals.size else None)
+        unlocated = np.asarray(ds["boundary_unlocated"].values)
+        out["unlocated_crossings"] = int(unlocated[unlocated > 0].sum())
+    return out
+
+
+def summary_warnings(s: dict) -> list:
+    """The warnings a summary calls for (one line each)."""
+    out = []
+    if s["not_linearised"]:
+        out.append(f"{s['not_linearised']} points have no linearisation: the [steady] "
+                   f"state is not on M_1, not steady or singular there (status in the "
+                   f"results: 1, 2, 3)")
+    if s.get("unlocated_crossings"):
+        out.append(f"{s['unlocated_crossings']} grid intervals along the boundaries' "
+                   f"parameter change their number of unstable eigenvalues with no "
+                   f"eigenvalue on the imaginary axis (a jump of the linearisation): no "
+                   f"boundary is reported there (boundary_unlocated in the results)")
+    return out
+
+
+def summary_rows(s: dict) -> list:
+    """(label, text) rows of the command's report."""
+    from nhham.render.plot_style import CROSSING_STYLE
+
+    rows = [("stable", f"{s['stable_points']} of {s['done_points']} points"
+             + (f"; {s['not_linearised']} not linearised (status != 0)"
+                if s["not_linearised"] else ""))]
+    for kind in ("complex", "real"):
+        word = CROSSING_STYLE[kind]["label"]
+        if s.get(f"{kind}_crossings"):
+            lo, hi = s[f"{kind}_crossing_range"]
+            rows.append((f"{kind} crossings", f"{s[f'{kind}_crossings']}, {word}, "
+                                              f"{lo:.6g} .. {hi:.6g}"))
+    return rows

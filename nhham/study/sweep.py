@@ -25,7 +25,7 @@ import numpy as np
 
 from nhham.budget import time_budget
 from nhham.errors import BudgetExceeded, InputError, OutputUnwritable
-from nhham.study.kinds import WHAT
+from nhham.study.kinds import KINDS, kind_of
 from nhham.study.lines import LINE_VARIABLES, merged
 from nhham.study.points import (Axis, Design, check_seed, chunk_slices, grid, parse_over,
                                 parse_perturbation, samples)
@@ -34,11 +34,7 @@ from nhham.study.store import Store, attrs_text, regions_of, study_key
 from nhham.study.target import check_out
 from nhham.study.tasks import Study, keep_context
 
-__all__ = ["sweep", "SweepResult", "CHUNK_POINTS"]
-
-#: Points per chunk by default: a chunk is a task and a unit of progress, resume and
-#: writing (about a second of work on the bicycle, a fraction of one for small systems).
-CHUNK_POINTS = {"linearize": 4096, "simulate": 256, "classify": 256}
+__all__ = ["sweep", "SweepResult"]
 
 
 @dataclass(frozen=True)
@@ -75,6 +71,11 @@ class SweepResult:
     kept : str or None
         Where its results are on disk: the output when complete, else the store to
         ``--resume`` (None: in memory).
+
+    Examples
+    --------
+    See :func:`sweep`: ``result.dataset`` is the xarray Dataset, ``result.to_dict()`` what
+    ``nhham sweep --json`` prints.
     """
 
     dataset: Any = field(repr=False)
@@ -146,7 +147,9 @@ def sweep(scene, what: str, over=(), *, samples_count: int | None = None,
         ``"budget"``). A failed write (a full disk) also keeps what finished
         (``stopped`` says why).
     chunk_points : int, optional
-        Points per chunk (default :data:`CHUNK_POINTS`).
+        Points per chunk (default: the kind's ``chunk_points``, :data:`~nhham.study.kinds.KINDS`:
+        a chunk is a task and a unit of progress, resume and writing, about a second of
+        work on the bicycle).
     along : str, optional
         linearize on a grid: the parameter whose stability boundaries are located on
         every line (default: the first axis).
@@ -161,6 +164,17 @@ def sweep(scene, what: str, over=(), *, samples_count: int | None = None,
     Returns
     -------
     SweepResult
+
+    Examples
+    --------
+    The verdict of the scene whose constraint vanishes at a = 0 (W singular there) and
+    turns underdetermined at b = +-1, at three points:
+
+    >>> from nhham.study.sweep import sweep
+    >>> ds = sweep("examples/parametric_null_constraint.toml", "classify", ["b=0.5,1.0"],
+    ...            workers=1).dataset
+    >>> ds["status"].values.ravel().tolist()   # 0 determined, 1 underdetermined
+    [0, 1]
     """
     start = time.perf_counter()
     if budget is not None and not (math.isfinite(budget) and budget > 0):
@@ -170,8 +184,7 @@ def sweep(scene, what: str, over=(), *, samples_count: int | None = None,
         raise InputError(f"--chunk: a positive number of points, got {chunk_points!r}",
                          key="--chunk")
     deadline = None if budget is None else start + float(budget)
-    if what not in WHAT:
-        raise InputError(f"--what: one of {', '.join(WHAT)}, got {what!r}", key="--what")
+    kind = kind_of(what)
     # every option is checked before any work: the design's size from its counts, where
     # the results go, the scheduler and the workers
     design = _design(over, samples_count, sampler, seed, initial_perturbation, what)
@@ -183,8 +196,7 @@ def sweep(scene, what: str, over=(), *, samples_count: int | None = None,
 
     # the workers start, and parse the scene, while this process prepares the study
     # threads share this process's model; classify's sympy holds the GIL: processes
-    with Pool.start(scheduler, workers, client, deadline=deadline,
-                    local="processes" if what == "classify" else "threads") as pool:
+    with Pool.start(scheduler, workers, client, deadline=deadline, local=kind.local) as pool:
         pool.warm(text, source, what)
         # the preparation (symbolic for classify) is stopped by the budget's alarm; the
         # chunks then stop at its deadline, keeping what finished
@@ -194,7 +206,7 @@ def sweep(scene, what: str, over=(), *, samples_count: int | None = None,
         keep_context(study, loaded, model)
         attrs = _attributes(study)
         along_axis = _along_axis(design, options)
-        regions = chunk_slices(design.shape, chunk_points or CHUNK_POINTS[what],
+        regions = chunk_slices(design.shape, chunk_points or kind.chunk_points,
                                first=along_axis)
         chunking = _chunking(regions, design)
         if target is not None and target.resuming:
@@ -264,8 +276,9 @@ def _design(over, count, sampler, seed, perturbation, what) -> Design:
     axes = [a if isinstance(a, Axis) else parse_over(a) for a in over]
     perturbations = [p if isinstance(p, tuple) else parse_perturbation(p)
                      for p in perturbation]
-    if perturbations and what != "simulate":
-        raise InputError("--initial-perturbation: only for --what simulate",
+    if perturbations and not kind_of(what).perturbations:
+        raise InputError("--initial-perturbation: only for --what "
+                         + ", ".join(k.name for k in KINDS.values() if k.perturbations),
                          key="--initial-perturbation")
     if count is None:
         if perturbations:
@@ -304,25 +317,18 @@ def _load(text, source, what):
 
 def _prepare(what, scene, design, along, run_options, policy) -> tuple:
     """(options, code hash, variables, numeric model) of the study, decided once here."""
-    if what == "classify":
-        from nhham.study import classes
-
-        options = classes.prepare(scene, design, policy)
-        return options, "", classes.variables(design, options), None
     from nhham.study.tasks import study_model
 
+    kind = kind_of(what)
+    if along is not None and not kind.along:
+        raise InputError(f"--along: only for --what "
+                         f"{', '.join(k.name for k in KINDS.values() if k.along)}",
+                         key="--along")
     model, code_hash = study_model(scene, what)
-    if what == "linearize":
-        from nhham.study import stability
-
-        options = stability.prepare(scene, model, design, along)
-        return options, code_hash, stability.variables(design, options), model
-    from nhham.study import ensemble
-
-    if along is not None:
-        raise InputError("--along: only for --what linearize", key="--along")
-    options = ensemble.prepare(scene, model, design, run_options)
-    return options, code_hash, ensemble.variables(design, options), model
+    module = kind.load()
+    options = module.prepare(scene, model, design, along=along, run_options=run_options,
+                             policy=policy)
+    return options, code_hash, module.variables(design, options), model
 
 
 def _along_axis(design, options):

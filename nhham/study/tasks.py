@@ -18,6 +18,7 @@ from collections import OrderedDict
 from dataclasses import dataclass, field
 
 from nhham.errors import BudgetExceeded, ComputationError
+from nhham.study.kinds import kind_of
 from nhham.study.lines import extended, trimmed
 from nhham.study.points import Design
 
@@ -83,7 +84,7 @@ def warm(scene_text: str, source: str, what: str) -> str:
 
 def study_model(scene, what) -> tuple:
     """(numeric model or None, the hash of its generated code) of a study of ``what``."""
-    if what == "classify":
+    if kind_of(what).system is None:
         return None, ""
     from nhham.numerics.codegen import numeric_model
     from nhham.numerics.codegen.emit import sources_digest
@@ -137,10 +138,11 @@ def study_system(scene, what: str):
     """The system a study of ``what`` evaluates: the scene's ``[control]`` laws close
     the loop of a simulation and of a linearisation (as ``nhham simulate`` and ``nhham
     linearize`` do; the inputs without a law stay at their steady values)."""
-    if what == "simulate" and scene.control:
-        return scene.system.closed_loop(dict(scene.control))
-    if what == "linearize":
+    system = kind_of(what).system
+    if system == "steady":
         return scene.steady_system()
+    if system == "closed loop" and scene.control:
+        return scene.system.closed_loop(dict(scene.control))
     return scene.system
 
 
@@ -159,18 +161,13 @@ def evaluate(study: Study, region: tuple, until: float | None = None) -> dict:
         By variable name (see ``variables`` of the module of ``study.what``), each of the
         region's shape followed by the variable's own dimensions.
     """
-    from nhham.study import classes, ensemble, stability
-
     if until is not None and time.time() > until:
         raise BudgetExceeded("the study's --budget ran out")
-    if study.what == "simulate":
-        return ensemble.evaluate(study, context(study), region, until=until)
-    if study.what == "classify":
-        return classes.evaluate(study, context(study), region)
+    evaluate_kind = kind_of(study.what).load().evaluate
     along = study.options.get("along")
     if along is None:
-        return stability.evaluate(study, context(study), region)
+        return evaluate_kind(study, context(study), region, until=until)
     # a piece of a line longer than a chunk: with the point before it (lines.py)
     axis = study.design.dims.index(along)
     grown, added = extended(region, axis)
-    return trimmed(stability.evaluate(study, context(study), grown), axis, added)
+    return trimmed(evaluate_kind(study, context(study), grown, until=until), axis, added)

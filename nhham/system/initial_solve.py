@@ -112,8 +112,12 @@ def solved_text(values, solved) -> str:
 
 
 # ------------------------------------------------------------------ completion
-def complete_initial(system: "System", data: InitialData) -> tuple[dict, tuple]:
+def complete_initial(system: "System", data: InitialData,
+                     values: Mapping | None = None) -> tuple[dict, tuple]:
     """Every coordinate and velocity: the given values, the others solved.
+
+    ``values`` (parameter name -> value) replace the system's parameter values (the
+    start at another point of a study, as ``--set`` gives it).
 
     Returns
     -------
@@ -130,6 +134,9 @@ def complete_initial(system: "System", data: InitialData) -> tuple[dict, tuple]:
         Given values over-determine those left out and disagree (the constraint named).
     """
     params = {p: sp.Float(v) for p, v in system.parameter_values.items()}
+    given_values = dict(values or {})
+    params.update({p: sp.Float(given_values[p.name]) for p in system.parameters
+                   if p.name in given_values})
     values = {name: _number(name, expr, params) for name, expr in data.given.items()}
     q_names = [q.name for q in system.coordinates]
     v_names = [v.name for v in system.velocities]

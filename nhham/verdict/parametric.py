@@ -40,7 +40,7 @@ __all__ = ["parametric_classification", "classifying_parameters"]
 
 
 def parametric_classification(system, *, positive: Sequence = (),
-                              classes: Callable | None = None, max_depth: int = MAX_DEPTH,
+                              max_depth: int = MAX_DEPTH,
                               precision: int | None = None, seed: int = SEED,
                               near: float = NEAR, points: int = POINTS,
                               policy: Policy | None = None, symbolic: Sequence | None = None,
@@ -56,11 +56,6 @@ def parametric_classification(system, *, positive: Sequence = (),
     positive : sequence of str or sympy.Symbol, optional
         Parameters declared positive (masses, lengths); parameter symbols carrying
         sympy sign assumptions count as declared too.
-    classes : callable, optional
-        ``classes(analysis) -> result with first_class, second_class`` (e.g.
-        :func:`nhham.hamiltonian.classification.classify_constraints`), called on
-        every case's analysis; by default the counts come from the rank of the
-        bracket matrix at exact points of M_f with the parameters symbolic.
     max_depth : int, optional
         Bound on the nesting of cases (a note says when it was hit).
     precision, seed
@@ -114,7 +109,7 @@ def parametric_classification(system, *, positive: Sequence = (),
     original, system = system, _holding(system, held)
     params = tuple(system.declared_parameters)
     declared = [p for p in declared if p in params]
-    opts = dict(classes=classes, policy=policy, points=points)
+    opts = dict(policy=policy, points=points)
     base = rebuild(system, {}, None)
     signs = _sign_dummies(params, declared)
     clock = _Clock(progress)

@@ -10,11 +10,10 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from typing import Callable
 
 import sympy as sp
-from sympy import QQ
 
+from nhham.hamiltonian.classification import classify_constraints
 from nhham.lagrangian.analysis import analyze_constraints
 from nhham.lagrangian.exceptional import (
     POINTS,
@@ -29,8 +28,7 @@ from nhham.verdict.substitution import branches, compose, rebuild
 
 __all__ = ["classification_at_values", "examine"]
 
-def classification_at_values(system, *, classes: Callable | None = None,
-                             max_depth: int = MAX_DEPTH, precision: int | None = None,
+def classification_at_values(system, *, max_depth: int = MAX_DEPTH, precision: int | None = None,
                              seed: int = SEED, near: float = NEAR,
                              points: int = POINTS,
                              policy: Policy | None = None) -> ValuesVerdict:
@@ -46,7 +44,7 @@ def classification_at_values(system, *, classes: Callable | None = None,
     Parameters
     ----------
     system : nhham.System
-    classes, max_depth, precision, seed, near, points
+    max_depth, precision, seed, near, points
         As in :func:`nhham.verdict.parametric.parametric_classification`.
     policy : Policy, optional
         The settings of the decisions (instead of ``precision`` and ``seed``); its
@@ -70,7 +68,7 @@ def classification_at_values(system, *, classes: Callable | None = None,
     policy = policy_of(policy, "classification_at_values", precision=precision, seed=seed)
     seed = policy.seed
     valued = tuple(p for p in system.parameters if p in system.parameter_values)
-    opts = dict(classes=classes, policy=policy, points=points, near=near)
+    opts = dict(policy=policy, points=points, near=near)
     values = {p: system.parameter_values[p] for p in valued}
     exact = {p: exact_value(v) for p, v in values.items()}
     generic, _, notes, hits, close = examine(system, (), values=values, **opts)
@@ -156,8 +154,10 @@ def _close_warnings(close, values) -> list:
 
 
 # ================================================================= one run
-def examine(system, params, *, classes, policy, points, values=None, near=NEAR):
-    """The ordinary classification of ``system`` and the data of its decisions.
+def examine(system, params, *, policy, points, values=None, near=NEAR):
+    """The ordinary classification of ``system`` (with the classes of its final
+    constraints on T*Q, :func:`~nhham.hamiltonian.classification.classify_constraints`) and
+    the data of its decisions.
 
     Returns (Verdict, conditions, notes, hits, close): with ``params`` the exceptional
     conditions in those parameters (kept symbolic); with ``values`` the data that
@@ -167,8 +167,8 @@ def examine(system, params, *, classes, policy, points, values=None, near=NEAR):
     analysis = analyze_constraints(system, policy=policy)
     integrable = analysis.integrable
     cls = None
-    if classes is not None and analysis.status != "inconsistent":
-        cls = classes(analysis)
+    if analysis.status != "inconsistent":
+        cls = classify_constraints(analysis, policy=policy)
     data = ExceptionalData(system, analysis, policy.seed, points)
     if cls is not None and tuple(cls.labels) == tuple(analysis.final_labels):
         # The second-class set the classification chose (for generic parameters when it
@@ -179,18 +179,9 @@ def examine(system, params, *, classes, policy, points, values=None, near=NEAR):
         comps = exceptional_components(data.symbolic(tuple(params)), tuple(params))
     if values:
         hits, close = data.at_values(values, near)
+    first = second = None
     if cls is not None:
         first, second = int(cls.first_class), int(cls.second_class)
-    else:
-        if params:
-            K = QQ.frac_field(*params)
-            rank = data.bracket_rank(data.env(gens=dict(zip(params, K.gens))), K)
-        else:
-            # the ordinary classification's answer: for generic parameters
-            rank = data.bracket_rank(data.env(generic=True), QQ)
-        first = second = None
-        if analysis.status != "inconsistent" and rank is not None:
-            first, second = len(analysis.final_constraints) - rank, rank
     verdict = Verdict(
         status=analysis.status, regular=bool(analysis.regular), rank_C=int(analysis.rank_C),
         stages=len(analysis.stages), free_multipliers=int(analysis.free_multipliers),

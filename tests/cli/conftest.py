@@ -73,7 +73,7 @@ def pairs():
 
 @pytest.fixture(scope="session")
 def schema():
-    from nhham.cli.envelope import output_schema
+    from nhham.render.schema import output_schema
 
     return output_schema()
 

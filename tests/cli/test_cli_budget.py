@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from nhham.cli.budget import BudgetExceeded, time_budget
-from nhham.cli.report import Steps
+from nhham.render.text import Steps
 from nhham.numerics.codegen import numeric_model
 from nhham.numerics.integrate import simulate
 

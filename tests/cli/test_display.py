@@ -47,7 +47,7 @@ def test_report_of_a_classification_decided_at_points():
 
 
 def test_report_of_a_linearization():
-    lin, _ = nhham.linearize_scene(load_scene(EXAMPLES / "differential_drive.toml"))
+    lin = nhham.linearize(load_scene(EXAMPLES / "differential_drive.toml")).payload["linearization"]
     r = nhham.report(lin)
     assert "asymptotically stable" in repr(r) and "\n" not in repr(r)
     assert "<table>" in r._repr_html_() and "phiR_dot" in r._repr_html_()
@@ -70,7 +70,7 @@ def test_scene_simulate_options():
 
 
 def test_the_trace_of_the_algorithm_is_in_the_report(disk):
-    """The stages and decisions are rendered here (nhham.cli.trace), not by the results:
+    """The stages and decisions are rendered here (nhham.render.trace), not by the results:
     the analysis' report carries its trace, and a bare run of the algorithm has one."""
     analysis = nhham.analyze_constraints(disk)
     text = str(nhham.report(analysis))

@@ -4,7 +4,7 @@ import re
 
 import sympy as sp
 
-from nhham.cli.latex import latex, name_latex
+from nhham.render.latex import latex, name_latex
 
 from conftest import EXAMPLES, run_inprocess
 
@@ -95,8 +95,8 @@ def test_label_letters_fall_back_to_one_no_name_prints(tmp_path):
     """Coordinates phi, Phi and varphi and a parameter g in a holonomic constraint: the
     constraints are \\mathsf{c}_i and the holonomic one \\mathsf{g}_1 (no name prints
     \\mathsf)."""
-    from nhham.cli.latex import free_letter
-    from nhham.cli.results import label_letters
+    from nhham.render.latex import free_letter
+    from nhham.render.results import label_letters
 
     assert free_letter([r"\phi", r"\Phi"], {r"\varphi", r"\dot{x}"}) == r"\phi"
     assert free_letter([r"\phi", r"\Phi"], {r"\dot{\phi}_{2}"}) == r"\Phi"

@@ -4,7 +4,7 @@
 import re
 
 from conftest import long_expression
-from nhham.cli import layout
+from nhham.render import layout
 
 
 def test_wrap_keeps_every_character_and_the_width():

@@ -50,7 +50,7 @@ def test_json_keys_and_exact_verdict(capsys, sleigh):
 
 
 def test_sweep_json_with_crossing(capsys, sleigh):
-    from nhham.cli.envelope import output_schema
+    from nhham.render.schema import output_schema
 
     status, out, _ = run(capsys, "linearize", sleigh, "--json", "--numeric",
                          "--sweep", "u=-1:1.5:6")
@@ -127,13 +127,13 @@ def test_rounding_is_shown_as_zero_and_said(sleigh):
 
     import numpy as np
 
-    from nhham.cli.linearize_command import _text, rounding_level
+    from nhham.render.linearize import linearize_text, rounding_level
     from nhham.numerics.linearization import linearization_result
 
     A = np.array([[-0.0, 1.0e-17], [2.0, -1.5]])
     lin = linearization_result(A, ("phi", "phi_dot"), "complex-step", "float64", ("phi", "phi_dot"),
                                A, (), (), {}, {}, 0.0)
-    text = _text(SimpleNamespace(name="toy"), lin, None, SimpleNamespace(scene="toy.toml"))
+    text = linearize_text("toy", SimpleNamespace(name="toy", control={}), lin, None)
     matrix = text.split("state matrix:\n", 1)[1].split("eigenvalues:", 1)[0]
     assert "-0 " not in matrix + " " and "e-17" not in matrix
     assert matrix.splitlines()[2].split() == ["0", "0"]

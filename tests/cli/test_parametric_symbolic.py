@@ -17,7 +17,7 @@ import pytest
 import sympy as sp
 
 from nhham import loads_scene
-from nhham.cli.report import Steps
+from nhham.render.text import Steps
 from nhham.errors import InputError
 from nhham.verdict.parametric import classifying_parameters, parametric_classification
 from tests.cli.conftest import run_inprocess

@@ -10,7 +10,7 @@ import pytest
 pytest.importorskip("matplotlib")
 
 import nhham  # noqa: E402
-from nhham.cli.plotting import plot_trajectory, plot_work_precision, series_styles  # noqa: E402
+from nhham.render.plotting import plot_trajectory, plot_work_precision, series_styles  # noqa: E402
 from nhham.numerics.workprecision import WorkPrecisionResult, WorkPrecisionRow  # noqa: E402
 
 from conftest import EXAMPLES  # noqa: E402
@@ -85,7 +85,7 @@ def test_work_precision_lines_in_tolerance_order_one_colour_per_method():
 
 def test_plotting_never_chooses_the_backend():
     code = ("import matplotlib, sys; b = matplotlib.get_backend(); "
-            "import nhham.cli.plotting as p; from nhham.cli.main import main; "
+            "import nhham.render.plotting as p; from nhham.cli.main import main; "
             "print(matplotlib.get_backend() == b, 'matplotlib.pyplot' in sys.modules)")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          env={"MPLBACKEND": "svg", "PATH": ""}).stdout.split()
@@ -131,7 +131,7 @@ def test_work_precision_time_labels_never_overlap(lo, hi):
     3x10^-4, 4x10^-4, ...): at 4 inches wide those of 1.2e-4 .. 1.5e-3 s collide."""
     from matplotlib.figure import Figure
 
-    from nhham.study.plot_style import drawn_tick_labels, labels_overlap
+    from nhham.render.plot_style import drawn_tick_labels, labels_overlap
 
     fig = Figure(figsize=(4, 3), layout="constrained")
     ax = fig.subplots()
@@ -148,7 +148,7 @@ def test_the_overlap_check_sees_labels_that_collide():
     """The check the test above relies on: ten long labels on a narrow axis collide."""
     from matplotlib.figure import Figure
 
-    from nhham.study.plot_style import labels_overlap, separate_tick_labels
+    from nhham.render.plot_style import labels_overlap, separate_tick_labels
 
     fig = Figure(figsize=(3, 2))
     ax = fig.subplots()

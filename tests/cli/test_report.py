@@ -1,9 +1,9 @@
-"""Plain-text rendering (nhham.cli.report): tables whose last cell is wrapped without
+"""Plain-text rendering (nhham.render.text): tables whose last cell is wrapped without
 padding the other rows, matrices listed by entry when they do not fit, and the record of
 the steps a command took."""
 
 from conftest import long_expression
-from nhham.cli.report import Steps, labelled, matrix_table, table
+from nhham.render.text import Steps, labelled, matrix_table, table
 
 
 def test_a_long_cell_does_not_pad_the_other_rows():

@@ -7,8 +7,8 @@ import sympy as sp
 import nhham
 
 from conftest import EXAMPLES, long_expression, run_inprocess
-from nhham.cli import layout
-from nhham.cli.results import classify_text
+from nhham.render import layout
+from nhham.render.results import classify_text
 
 
 def envelope(*args):

@@ -4,7 +4,7 @@ import random
 
 import sympy as sp
 
-from nhham.cli.simplify import display_form
+from nhham.render.simplify import display_form
 from nhham.lagrangian.geometry import lagrangian_geometry
 from nhham.system.scene import load_scene
 

@@ -15,7 +15,7 @@ import pytest
 import numpy as np
 import xarray as xr
 
-from nhham.cli.envelope import output_schema
+from nhham.render.schema import output_schema
 from nhham.cli.main import main
 
 ROOT = Path(__file__).resolve().parents[2]

@@ -1,8 +1,8 @@
-"""The constraint algorithm's trace as text and LaTeX (nhham.cli.trace): stages, ranks,
+"""The constraint algorithm's trace as text and LaTeX (nhham.render.trace): stages, ranks,
 how each decision was made, the multipliers."""
 
 from handmade import example_3_2 as ex32
-from nhham.cli.trace import analysis_latex, analysis_text
+from nhham.render.trace import analysis_latex, analysis_text
 from nhham.lagrangian.analysis import analyze_constraints
 
 

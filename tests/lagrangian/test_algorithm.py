@@ -14,7 +14,7 @@ import pytest
 import sympy as sp
 
 from nhham import System
-from nhham.cli.trace import analysis_text
+from nhham.render.trace import analysis_text
 from nhham.lagrangian.algorithm import run_algorithm
 from nhham.lagrangian.analysis import ConstraintAnalysis, analyze_constraints
 from nhham.errors import RedundantConstraintError

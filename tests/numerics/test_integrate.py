@@ -147,7 +147,7 @@ def test_backward_integration(sleigh):
 
 
 def test_plots_need_matplotlib_or_say_so(tmp_path, sleigh):
-    from nhham.cli.plotting import OptionalDependencyError, plot_trajectory, save_figure
+    from nhham.render.plotting import OptionalDependencyError, plot_trajectory, save_figure
 
     res = simulate(sleigh, (0, 1), sleigh_state(), warn=False)
     try:

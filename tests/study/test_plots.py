@@ -19,8 +19,8 @@ xr = pytest.importorskip("xarray")
 
 from matplotlib.colors import to_rgba  # noqa: E402
 
-from nhham.cli.linearize_command import root_locus_figure  # noqa: E402
-from nhham.study.plot_style import GENERIC_COLOUR, case_colour  # noqa: E402
+from nhham.render.plotting import root_locus_figure  # noqa: E402
+from nhham.render.plot_style import GENERIC_COLOUR, case_colour  # noqa: E402
 from nhham.study.plots import plot_cases, plot_ensemble, plot_stability_map  # noqa: E402
 
 V = np.array([1.0, 2.0, 3.0, 4.0, 5.0])       # the first --over (along)

@@ -18,9 +18,10 @@ import re
 import numpy as np
 
 from nhham.errors import OptionalDependencyError
-from nhham.study.plot_style import OUTSIDE_RIGHT, legend_if_labelled, separate_tick_labels
+from nhham.render.plot_style import OUTSIDE_RIGHT, legend_if_labelled, separate_tick_labels
 
 __all__ = ["OptionalDependencyError", "plot_work_precision", "plot_trajectory", "save_figure",
+           "plot_root_locus", "root_locus_figure", "require_matplotlib",
            "series_styles"]
 
 _LINESTYLES = ("-", "--", "-.", ":")
@@ -90,6 +91,16 @@ def plot_trajectory(result, axes=None, *, title: str | None = None):
     (coordinates in the scene's units, velocities per unit time). Where the
     constraint residual is exactly zero (at t0, or after a projection) it is
     left out of the log-scale panel rather than clamped to a fake value.
+
+    Examples
+    --------
+    >>> from nhham import models, simulate, plot_trajectory
+    >>> run = simulate(models.rolling_disk(), (0.0, 1.0),
+    ...                {"x": 0, "y": 0, "theta": 0, "phi": 0, "x_dot": 1, "y_dot": 0,
+    ...                 "theta_dot": 1, "phi_dot": 1})
+    >>> fig = plot_trajectory(run, title="rolling disk")
+    >>> len(fig.axes)   # coordinates, velocities, residual, energy
+    4
     """
     if axes is None:
         fig, axes = _new_axes(4, (9.0, 9.0))
@@ -188,6 +199,21 @@ def plot_work_precision(result, ax=None, *, title: str | None = None):
     setting (tolerance or step, coarse to fine), so a line never zig-zags
     because two runs happened to take the same time. Runs that failed or
     whose error is not positive and finite are not drawn.
+
+    Examples
+    --------
+    >>> from nhham import loads_scene, bench, plot_work_precision
+    >>> scene = loads_scene('''
+    ... coordinates = ["x"]
+    ... lagrangian = "x_dot**2/2 - x**2/2"
+    ... constraints = []
+    ... [initial]
+    ... x = 1.0
+    ... x_dot = 0.0
+    ... ''')
+    >>> fig = plot_work_precision(bench(scene, t_end=1.0, quick=True).payload["result"])
+    >>> fig.axes[0].get_xscale(), fig.axes[0].get_yscale()
+    ('log', 'log')
     """
     if ax is None:
         Figure = _figure_class()
@@ -231,7 +257,7 @@ def _log_ticks(axis, lo: float, hi: float) -> None:
     5 times a power of 10 in short numbers (``%.3g``); minor ticks unlabelled.
     (matplotlib's default labels every minor tick of a short span, ``3x10^-4``,
     ``4x10^-4``, ..., and these collide;
-    :func:`~nhham.study.plot_style.separate_tick_labels` thins what is still too dense
+    :func:`~nhham.render.plot_style.separate_tick_labels` thins what is still too dense
     for the axes' width.)"""
     from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
 
@@ -242,3 +268,84 @@ def _log_ticks(axis, lo: float, hi: float) -> None:
         axis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:.3g}"))
     axis.set_minor_locator(LogLocator(base=10.0, subs=tuple(range(2, 10)), numticks=12))
     axis.set_minor_formatter(NullFormatter())
+
+
+def require_matplotlib():
+    try:
+        from matplotlib.backends.backend_agg import FigureCanvasAgg
+        from matplotlib.figure import Figure
+    except ImportError as exc:
+        raise OptionalDependencyError(
+            "plotting needs matplotlib, an optional extra: pip install 'nhham[plot]' "
+            "(or pip install matplotlib)") from exc
+    return Figure, FigureCanvasAgg
+
+
+def plot_root_locus(swept, path, title: str = "") -> str:
+    """Real and imaginary parts of the eigenvalues against the parameter; saved to ``path``.
+
+    The crossings are drawn in the colours and words of
+    :data:`nhham.render.plot_style.CROSSING_STYLE`, as in the stability maps of ``nhham
+    sweep``; the legend sits right of the axes. Uses matplotlib's object API with the Agg
+    canvas for this figure only (the user's pyplot backend is left alone).
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> import numpy as np
+    >>> from nhham import loads_scene, linearize, plot_root_locus
+    >>> scene = loads_scene('''
+    ... coordinates = ["x"]
+    ... parameters = { c = 0.5 }
+    ... lagrangian = "x_dot**2/2 - x**2/2"
+    ... dissipation = "c*x_dot**2/2"
+    ... [steady]
+    ... x = 0.0
+    ... x_dot = 0.0
+    ... ''')
+    >>> swept = linearize(scene, sweep=("c", np.linspace(-1, 1, 21))).payload["sweep"]
+    >>> [(c.kind, round(c.value, 9)) for c in swept.crossings]   # damping through 0
+    [('complex', 0.0)]
+    >>> path = plot_root_locus(swept, os.path.join(tempfile.mkdtemp(), "locus.png"))
+    >>> os.path.getsize(path) > 0
+    True
+    """
+    fig = root_locus_figure(swept, title)
+    fig.savefig(path, dpi=120)
+    return str(path)
+
+
+def root_locus_figure(swept, title: str = ""):
+    """The Figure of :func:`plot_root_locus` (not saved)."""
+    import numpy as np
+
+    from nhham.render.plot_style import CROSSING_STYLE, crossing_kind
+
+    Figure, FigureCanvasAgg = require_matplotlib()
+    fig = Figure(figsize=(8.5, 5), layout="constrained")
+    FigureCanvasAgg(fig)
+    ax = fig.add_subplot(1, 1, 1)
+    vals = swept.values
+    re_pts = [(v, z.real) for v, ev in zip(vals, swept.eigenvalues) for z in ev]
+    im_pts = [(v, abs(z.imag)) for v, ev in zip(vals, swept.eigenvalues) for z in ev if z.imag]
+    if re_pts:
+        x, y = zip(*re_pts)
+        ax.plot(x, y, ".", markersize=3, color="k", label="Re(eigenvalue)")
+    if im_pts:
+        x, y = zip(*im_pts)
+        ax.plot(x, y, ".", markersize=2, color="tab:gray", alpha=0.6, label="|Im(eigenvalue)|")
+    for c in swept.crossings:
+        style = CROSSING_STYLE[crossing_kind(c.kind)]
+        ax.axvline(c.value, color=style["color"], linestyle=style["linestyle"], linewidth=1.0,
+                   label=f"{style['label']} ({swept.parameter} = {c.value:.6g})")
+    ax.axhline(0.0, color="k", linewidth=0.5)
+    ax.set_xlabel(swept.parameter)
+    ax.set_ylabel("eigenvalue")
+    finite = [y for _, y in re_pts if np.isfinite(y)]
+    if finite:
+        lo = max(min(finite), -10.0 * max(1.0, max(abs(y) for _, y in im_pts) if im_pts else 1.0))
+        ax.set_ylim(lo - 1.0, max(max(finite), max((y for _, y in im_pts), default=0.0)) + 1.0)
+    ax.set_title(f"root locus: {title}" if title else "root locus")
+    ax.grid(True, alpha=0.3)
+    legend_if_labelled(ax, fontsize=7, **OUTSIDE_RIGHT)
+    return fig

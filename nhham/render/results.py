@@ -11,12 +11,12 @@ from __future__ import annotations
 
 import sympy as sp
 
-from nhham.cli import latex as tex
-from nhham.cli.envelope import jsonable
+from nhham.render import latex as tex
+from nhham.render.schema import jsonable
 from nhham.settings import json_number
-from nhham.cli.report import expr_text, labelled, matrix_table, paragraph, table
-from nhham.cli.layout import grid_fits as table_fits
-from nhham.cli.simplify import display_form
+from nhham.render.text import expr_text, labelled, matrix_table, paragraph, table
+from nhham.render.layout import grid_fits as table_fits
+from nhham.render.simplify import display_form
 
 __all__ = [
     "classify_data", "classify_text", "classify_latex",
@@ -218,7 +218,7 @@ def classify_latex(title: str, data: dict, parse) -> str:
 # ------------------------------------------------------------------ derive
 def derive_data(side: str, variables, field, multipliers, C, energy, free) -> dict:
     """The ``result`` of ``nhham derive`` (expressions simplified for display,
-    :func:`nhham.cli.simplify.display_form`, grouped by the velocities or momenta)."""
+    :func:`nhham.render.simplify.display_form`, grouped by the velocities or momenta)."""
     group = list(variables)[len(variables) // 2:]
     field = [display_form(f, group) for f in field]
     multipliers = [display_form(f, group) for f in multipliers]
@@ -464,7 +464,7 @@ def _dirac_error_bound(dirac):
 
 def compare_text(title: str, report, dirac) -> str:
     """The reports' own lines, each wrapped (and elided) to the width of the terminal."""
-    from nhham.cli.layout import width, wrap
+    from nhham.render.layout import width, wrap
 
     lines = [f"{title}: Lagrangian vs Hamiltonian"]
     for line in [report.describe()] + ([] if dirac is None else [dirac.describe()]):
@@ -635,9 +635,30 @@ def bench_failure(exc, scene_path: str) -> str:
             f"{scene_path}` to see why")
 
 
-def bench_failure_data(t_span, args) -> dict:
+def bench_failure_data(t_span, reference_digits: int) -> dict:
     """The ``result`` of a bench whose reference could not be computed: no rows."""
     return {"t_span": [float(x) for x in t_span], "backend": "none", "reference": "none",
-            "reference_digits": int(args.reference_digits), "reference_error_estimate": None,
+            "reference_digits": int(reference_digits), "reference_error_estimate": None,
             "reference_wall_time_s": None, "rows": [], "time_to_solution": [], "skipped": [],
             "kkt_solve": None, "kkt_ratio_max": None, "plot": None}
+
+
+def forces_text(system, forces) -> str:
+    """The text section of the generalized forces Q (``forces``: their printed forms) and
+    the inputs."""
+    lines = [paragraph("generalized forces Q (in F; d/dt dL/dv - dL/dq = Q - mu^T "
+                       "lambda):"),
+             table([(f"Q[{q.name}]", "=", f) for q, f in zip(system.coordinates, forces)])]
+    if system.inputs:
+        lines.append(labelled("inputs", ", ".join(u.name for u in system.inputs)))
+    return "\n".join(lines)
+
+
+def forces_latex(body: str, system) -> str:
+    """``body`` (a LaTeX report ending in an aligned block) with the rows of Q and the
+    inputs added to its block."""
+    rows = [f"Q &= {tex.matrix_latex([[f] for f in system.generalized_forces])}"]
+    if system.inputs:
+        rows.append(tex.text("inputs: " + ", ".join(u.name for u in system.inputs)))
+    head, end = body.rsplit("\\end{aligned}", 1)
+    return head.rstrip("\n") + " \\\\\n" + " \\\\\n".join(rows) + "\n\\end{aligned}" + end

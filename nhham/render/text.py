@@ -12,7 +12,12 @@ import time
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 
-__all__ = ["table", "matrix_table", "labelled", "paragraph", "expr_text", "Steps"]
+__all__ = ["table", "matrix_table", "labelled", "paragraph", "expr_text", "one_line", "Steps"]
+
+
+def one_line(message) -> str:
+    """A message as one line (whitespace runs, including newlines, become one space)."""
+    return " ".join(str(message).split())
 
 
 def expr_text(expr) -> str:
@@ -29,9 +34,9 @@ def table(rows, header=None, indent="  ", total=None) -> str:
 
     The last cell (an expression, a sentence) does not set the width of its
     column: it is wrapped into the room left of ``total`` columns, continuation
-    lines aligned under it, and elided past :data:`nhham.cli.layout.MAX_LINES`
+    lines aligned under it, and elided past :data:`nhham.render.layout.MAX_LINES`
     lines with a pointer to ``--json`` and ``--latex`` (see
-    :mod:`nhham.cli.layout`). With less than 30 columns of room it starts on a
+    :mod:`nhham.render.layout`). With less than 30 columns of room it starts on a
     line of its own.
 
     Parameters
@@ -40,9 +45,9 @@ def table(rows, header=None, indent="  ", total=None) -> str:
     header : sequence of str, optional
     indent : str
     total : int, optional
-        The width to fit (default :func:`nhham.cli.layout.width`).
+        The width to fit (default :func:`nhham.render.layout.width`).
     """
-    from nhham.cli.layout import width, wrap
+    from nhham.render.layout import width, wrap
 
     rows = [[str(c) for c in r] for r in rows]
     if header:
@@ -72,7 +77,7 @@ def table(rows, header=None, indent="  ", total=None) -> str:
 
 def labelled(label: str, text: str) -> str:
     """``label: text``, the text wrapped (and elided) under its first character."""
-    from nhham.cli.layout import width, wrap
+    from nhham.render.layout import width, wrap
 
     hang = " " * (len(label) + 2)
     pieces = wrap(text, width() - len(hang))
@@ -82,7 +87,7 @@ def labelled(label: str, text: str) -> str:
 def paragraph(text: str, hang: int = 2) -> str:
     """A heading or sentence wrapped to the width, continuation lines ``hang`` columns in
     (no elision: it is the report's own text)."""
-    from nhham.cli.layout import width, wrap
+    from nhham.render.layout import width, wrap
 
     pieces = wrap(text, width() - hang, max_lines=10**6)
     return "\n".join([pieces[0]] + [" " * hang + p for p in pieces[1:]])
@@ -99,7 +104,7 @@ def matrix_table(cells, name: str, rows, cols, indent="  ") -> str:
     rows, cols : sequence of str
         Labels of the rows and columns in the entry list.
     """
-    from nhham.cli.layout import grid_fits
+    from nhham.render.layout import grid_fits
 
     if grid_fits(cells, len(indent)):
         return table(cells, indent=indent)

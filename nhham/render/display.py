@@ -5,7 +5,7 @@ Lagrangian geometry, the Hamiltonian side, a cross-check, a simulation, a
 work-precision study, a linearisation, or any sympy expression or matrix) in a
 :class:`Report` whose ``_repr_latex_`` / ``_repr_html_`` Jupyter shows, with
 the same data, labels and notation as the ``nhham`` command (the builders of
-:mod:`nhham.cli.results`), and whose ``repr`` is one short line.
+:mod:`nhham.render.results`), and whose ``repr`` is one short line.
 
 >>> import nhham
 >>> disk = nhham.models.rolling_disk(symbolic=True)
@@ -23,8 +23,8 @@ from typing import Any
 
 import sympy as sp
 
-from nhham.cli import latex as tex
-from nhham.cli import trace
+from nhham.render import latex as tex
+from nhham.render import trace
 
 __all__ = ["Report", "report"]
 
@@ -107,8 +107,15 @@ def report(obj) -> Report:
     ------
     TypeError
         For anything else.
+
+    Examples
+    --------
+    >>> from nhham import models, analyze_constraints, report
+    >>> r = report(analyze_constraints(models.rolling_disk()))
+    >>> "determined" in r.text, "rank" in r.latex
+    (True, True)
     """
-    from nhham.cli import results as R
+    from nhham.render import results as R
 
     kind = type(obj).__name__
     analysis: Any = None
