@@ -31,10 +31,8 @@ _PENDING = frozenset({
     "hamiltonian_side", "HamiltonianSide", "nonholonomic_bracket",
     # simulation (the method registry), work-precision and ensembles
     "simulate", "SimulationResult", "work_precision", "simulate_many", "EnsembleResult",
-    # what moves to the journeys: linearize a scene, studies, reports and plots
-    "linearize_scene", "open_loop", "plot_root_locus",
-    "sweep", "SweepResult", "plot_study", "plot_stability_map", "plot_ensemble",
-    "plot_cases", "report", "plot_trajectory", "plot_work_precision", "output_schema",
+    # the study's result and pictures
+    "SweepResult", "plot_study", "plot_stability_map", "plot_ensemble", "plot_cases",
 })
 
 _FLAGS = doctest.NORMALIZE_WHITESPACE | doctest.ELLIPSIS
