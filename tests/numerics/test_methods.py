@@ -150,6 +150,18 @@ def test_takes_forces_against_a_damped_oscillator(name, damped):
     assert res.success and abs(res["x"][-1] - exact) < 1e-7, (res["x"][-1], exact)
 
 
+@pytest.mark.parametrize("name", names(lambda m: m.batched_jacobian))
+def test_a_batched_jacobian_of_a_forced_model_on_the_python_kernels(name, damped):
+    """The batched saddle kernel carries the applied power of a forced system (its
+    output had no room for it: IndexError in Radau's and BDF's Jacobian)."""
+    res = simulate(damped, (0.0, 1.0), {"x": 1.0, "x_dot": 0.0}, method=name,
+                   backend="numpy", rtol=1e-10, atol=1e-12, warn=False)
+    w = math.sqrt(15 / 16)
+    exact = math.exp(-0.25) * (math.cos(w) + math.sin(w) / (4 * w))
+    assert res.settings["backend"] == "numpy" and res.njev > 0
+    assert res.success and abs(res["x"][-1] - exact) < 1e-7
+
+
 @pytest.mark.parametrize("name", ALL)
 def test_takes_time_against_a_driven_particle(name, timed):
     """x'' = sin t from rest: x(t) = t - sin t."""
@@ -310,3 +322,20 @@ def test_no_method_name_outside_the_registry(tmp_path):
                        '    return m in ("rattle", "rattle4")\n')
     assert method_name_literals(tmp_path) == ["nhham/numerics/planted.py:7: 'rattle'",
                                               "nhham/numerics/planted.py:7: 'rattle4'"]
+
+
+def test_a_scene_s_options_for_another_method_leave_out_the_table_s_tolerances():
+    """The sleigh's [simulate] table gives rtol (for its adaptive method): asked for
+    rattle, the scene's keywords drop it, and simulate runs them."""
+    from nhham.system.scene import load_scene
+
+    scene = load_scene(ROOT / "examples" / "chaplygin_sleigh.toml")
+    assert "rtol" in scene.simulate.given()
+    table = scene.simulate_options(t_end=0.1)
+    assert table["rtol"] == scene.simulate.given()["rtol"]
+    opts = scene.simulate_options(t_end=0.1, method="rattle", step=0.01)
+    assert "rtol" not in opts and opts["step"] == 0.01
+    assert simulate(scene.system, warn=False, **opts).success
+    with pytest.raises(InputError, match="rtol applies to the adaptive methods"):
+        simulate(scene.system, **scene.simulate_options(t_end=0.1, method="rattle",
+                                                        step=0.01, rtol=1e-6))
