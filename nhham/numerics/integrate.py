@@ -390,6 +390,30 @@ def simulate(system_or_model, t_span, y0, *, method: str | Method = DEFAULT_METH
     InputError
         For an unknown method or inconsistent options (``dense_output`` or
         ``events`` with a method that is not a scipy one, for instance).
+    TypeError
+        For a keyword that is not an option.
+
+    Examples
+    --------
+    A particle on a line, x'' = -x from x = 1: x(1) = cos 1.
+
+    >>> import math, nhham
+    >>> from nhham.numerics.simulate_options import FixedStepOptions, RunOptions
+    >>> spring = nhham.System(["x"], "x_dot**2/2 - x**2/2")
+    >>> run = simulate(spring, (0.0, 1.0), {"x": 1.0, "x_dot": 0.0}, method="rk4", step=0.01,
+    ...                backend="numpy")
+    >>> bool(abs(run["x"][-1] - math.cos(1.0)) < 1e-9)
+    True
+    >>> same = simulate(spring, (0.0, 1.0), {"x": 1.0, "x_dot": 0.0}, method="rk4",
+    ...                 options=RunOptions(backend="numpy"),
+    ...                 method_options=FixedStepOptions(step=0.01))
+    >>> bool((same.y == run.y).all())
+    True
+    >>> simulate(spring, (0.0, 1.0), {"x": 1.0, "x_dot": 0.0}, method="rk4", step=0.01,
+    ...          rtol=1e-6)  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    nhham.errors.InputError: rtol applies to the adaptive methods, not to the fixed-step ...
     """
     spec = lookup(method)
     common, own = split_options(spec, options, method_options, **keywords)

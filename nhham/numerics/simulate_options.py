@@ -121,6 +121,7 @@ _FAMILY = dict(zip(FAMILIES, (
     (ReferenceOptions, {"reference_digits": "digits"}))))
 assert {f: tuple(k) for f, (_, k) in _FAMILY.items()} == dict(FAMILY_OPTIONS)
 _COMMON = frozenset(f.name for f in fields(RunOptions))
+_FAMILY_KEYWORDS = frozenset(k for _, spelled in _FAMILY.values() for k in spelled)
 
 #: Common options that a method may refuse, and when they count as given.
 _FLAGS = {"projection": bool, "baumgarte": lambda v: v is not None,
@@ -174,12 +175,13 @@ def split_options(method=DEFAULT_METHOD, options: RunOptions | None = None,
     """
     spec = lookup(method)
     family = {k: v for k, v in keywords.items() if k not in _COMMON}
-    known = {k for _, fields_of in _FAMILY.values() for k in fields_of}
     for key in family:
-        if key not in known:
+        if key not in _FAMILY_KEYWORDS:
             raise TypeError(f"simulate() got an unexpected keyword argument {key!r}")
-    common = replace(options or RunOptions(),
-                     **{k: v for k, v in keywords.items() if k in _COMMON})
+    mine = {k: v for k, v in keywords.items() if k in _COMMON}
+    # (simulate runs this at every call: no copy of options when nothing replaces a field)
+    common = (RunOptions(**mine) if options is None else
+              replace(options, **mine) if mine else options)
     given = {k for k, v in family.items() if v is not None}
     given |= {k for k, counts in _FLAGS.items() if counts(getattr(common, k))}
     cls, spelled = _FAMILY[spec.family]

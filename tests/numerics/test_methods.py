@@ -24,8 +24,8 @@ import scipy.integrate
 import nhham
 from nhham.cli.parser import COMMAND_LINE, METHODS as COMMAND_METHODS
 from nhham.errors import InputError, UsageError
+from nhham.numerics import integrate, simulate_options
 from nhham.numerics import methods as registry
-from nhham.numerics import simulate_options
 from nhham.numerics.codegen import numeric_model
 from nhham.numerics.integrate import simulate
 from nhham.numerics.methods import FAMILY_OPTIONS, METHODS, lookup, names
@@ -279,7 +279,7 @@ def test_the_registry_imports_neither_numpy_nor_scipy():
     assert out.stdout.strip() == "[]"
 
 
-@pytest.mark.parametrize("module", [registry, simulate_options])
+@pytest.mark.parametrize("module", [registry, simulate_options, integrate])
 def test_the_examples_run(module):
     result = doctest.testmod(module, optionflags=doctest.ELLIPSIS)
     assert result.attempted > 0 and result.failed == 0
