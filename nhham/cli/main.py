@@ -41,7 +41,9 @@ from nhham.cli.options import check_options
 from nhham.render.text import Steps
 from nhham.errors import InputError, NhhamError, OutputUnwritable, UsageError
 from nhham.lagrangian.engine import Policy
-from nhham.cli.parser import FIXED_STEP, METHODS, build_parser, unknown_options
+from nhham.cli.parser import COMMAND_LINE, METHODS, build_parser, unknown_options
+from nhham.numerics.methods import DEFAULT_METHOD, FAMILY_OPTIONS, lookup
+from nhham.numerics.simulate_options import check_method_options
 
 __all__ = ["main", "build_parser", "COMMANDS", "METHODS"]
 
@@ -129,30 +131,17 @@ def _simulate_options(args, scene):
                                            "save_every", "max_points")
              if getattr(args, k, None) is not None}
     opts.update(given)
-    method = opts.get("method", "DOP853")
+    method = opts.get("method", DEFAULT_METHOD)
     if method not in METHODS:
         raise InputError(f"method {method!r} (from the scene's [simulate] table) is not one of "
                          f"{', '.join(METHODS)}", key="simulate.method")
-    if method in FIXED_STEP and opts.get("step") is None:
-        raise UsageError(f"--method {method} is a fixed-step method and needs --step DT "
-                         f"(e.g. --step 0.01)", key="--step")
-    if method not in FIXED_STEP and "step" in given:
-        raise UsageError(f"--step applies to the fixed-step methods ({', '.join(FIXED_STEP)}), "
-                         f"not to {method}" + ("" if method == "reference" else
-                                               "; use --max-step to bound its steps"),
-                         key="--step")
-    if method in FIXED_STEP or method == "reference":
-        # The reference integrates to its own digits: tolerances would be ignored.
-        for key in ("rtol", "atol", "max_step"):
-            if key in given:
-                option = "--" + key.replace("_", "-")
-                raise UsageError(f"{option} applies to the adaptive methods, not to "
-                                 + (f"the fixed-step {method}; choose its --step instead"
-                                    if method in FIXED_STEP else
-                                    "reference, which integrates to 30 digits"), key=option)
-            opts.pop(key, None)
-    else:
-        opts.pop("step", None)
+    spec = lookup(method)
+    # The library's check, in the command's words; the scene's values of another
+    # family's options are left out (the command line's are refused).
+    flags = {"projection"} if getattr(args, "projection", False) else set()
+    check_method_options(spec, set(given) | flags, available=opts, spelling=COMMAND_LINE)
+    other = {k for family in FAMILY_OPTIONS.values() for k in family} - set(spec.options)
+    opts = {k: v for k, v in opts.items() if k not in other}
     if "step" in opts:
         where = "--step" if "step" in given else "simulate.step"
         problem = simulate_option_problem("step", opts["step"], opts.get("t_end", 10.0))
@@ -160,9 +149,6 @@ def _simulate_options(args, scene):
             raise (UsageError if "step" in given else InputError)(f"{where}: {problem}",
                                                                    key=where)
     if getattr(args, "projection", False):
-        if method in ("rattle", "rattle4", "reference"):
-            raise UsageError(f"--projection: {method} keeps the constraints itself; "
-                             f"use it without --projection", key="--projection")
         opts["projection"] = True
     t_end = opts.pop("t_end", 10.0)
     return t_end, opts

@@ -13,16 +13,28 @@ from nhham.cli.envelope import (
 )
 from nhham.cli.options import DEFAULT_BUDGET, argparse_key, budget_value
 from nhham.errors import UsageError
+from nhham.numerics.methods import DEFAULT_METHOD, names
+from nhham.numerics.simulate_options import Spelling
 
-__all__ = ["METHODS", "FIXED_STEP", "build_parser", "add_common_arguments", "unknown_options"]
-
-
-#: Integration methods of ``nhham simulate`` (those of :func:`nhham.simulate`).
-METHODS = ("DOP853", "RK45", "RK23", "Radau", "BDF", "LSODA", "rattle", "rattle4", "rk4",
-           "reference")
+__all__ = ["METHODS", "FIXED_STEP", "COMMAND_LINE", "build_parser", "add_common_arguments", "unknown_options"]
 
 
-FIXED_STEP = ("rattle", "rattle4", "rk4")
+#: Integration methods of ``nhham simulate`` (those of :func:`nhham.simulate`: the
+#: registry :data:`nhham.numerics.methods.METHODS`).
+METHODS = names()
+
+
+FIXED_STEP = names(lambda m: m.fixed_step)
+
+
+def _option(key: str) -> str:
+    return "--" + key.replace("_", "-")
+
+
+#: How ``simulate``'s options are written on the command line, for the library's checks
+#: (:func:`nhham.numerics.simulate_options.check_method_options`): ``--step 0.01``.
+COMMAND_LINE = Spelling(key=_option, assign=lambda k, v: f"{_option(k)} {v}", method=str,
+                        error=UsageError)
 
 
 _HELP = {
@@ -162,11 +174,16 @@ def _add_compare_options(p) -> None:
                    help="seeded points of M_f for sampled checks (default: 6)")
 
 
+def _listed(words) -> str:
+    """``a, b and c``."""
+    return " and ".join([", ".join(words[:-1]), words[-1]] if len(words) > 1 else words)
+
+
 def _add_simulate_options(p) -> None:
     """simulate: method, tolerances, steps, output and memory."""
     p.add_argument("--method", default=None, choices=METHODS, metavar="METHOD",
                    help="one of " + ", ".join(METHODS) + " (default: the scene's, else "
-                        "DOP853); rattle, rattle4 and rk4 need --step")
+                        f"{DEFAULT_METHOD}); {_listed(FIXED_STEP)} need --step")
     p.add_argument("--rtol", type=float, default=None,
                    help="relative tolerance of adaptive methods (default: scene's, else "
                         "1e-9)")
@@ -174,12 +191,14 @@ def _add_simulate_options(p) -> None:
                    help="absolute tolerance of adaptive methods (default: scene's, else "
                         "1e-12)")
     p.add_argument("--step", type=float, default=None, metavar="DT",
-                   help="step size of the fixed-step methods rattle, rattle4, rk4")
+                   help="step size of the fixed-step methods " + ", ".join(FIXED_STEP))
     p.add_argument("--max-step", dest="max_step", type=float, default=None, metavar="DT",
                    help="largest step of adaptive methods (default: unbounded)")
     p.add_argument("--projection", action="store_true",
                    help="project onto the constraints after every step (adaptive "
-                        "methods and rk4): residual at round-off for a small cost")
+                        "methods and "
+                        + _listed(names(lambda m: m.takes_projection and not m.adaptive))
+                        + "): residual at round-off for a small cost")
     p.add_argument("--output", metavar="FILE", default=None,
                    help="write the trajectory (the kept states): .npz (numpy) or "
                         "otherwise CSV")

@@ -63,6 +63,7 @@ def simulate(scene, *, t_end: float | None = None, options: Mapping | None = Non
     (True, -0.416146837)
     """
     from nhham.numerics.integrate import simulate as integrate, storage_plan
+    from nhham.numerics.methods import DEFAULT_METHOD
     from nhham.render.results import simulation_data, simulation_failure
 
     scene = as_scene(scene, check_initial=False)
@@ -76,7 +77,7 @@ def simulate(scene, *, t_end: float | None = None, options: Mapping | None = Non
         from nhham.system.force_checks import check_forces_at
 
         check_forces_at(system, scene.initial, where="the initial state")
-    method = opts.get("method", "DOP853")
+    method = opts.get("method", DEFAULT_METHOD)
     with capture_warnings() as caught:
         plan = storage_plan(scene.system.n, method, opts.get("save_every", 1),
                             opts.get("max_points"))

@@ -7,12 +7,15 @@ Python calls), ``saddle`` (the saddle-point solve in numpy), ``model`` (the nume
 behind an array API), ``status`` (the one status vocabulary and failure exception),
 ``run`` (the raw output of an integration loop), ``scipy_loop`` and ``compiled_loop``
 (scipy's solvers stepped here; the explicit Runge-Kutta methods as one compiled loop),
-``integrators`` (fixed-step RATTLE and RK4), ``reference`` (the mpmath reference
+``methods`` (the integration methods as data), ``simulate_options`` (``simulate``'s
+options), ``integrators`` (fixed-step RATTLE and RK4), ``reference`` (the mpmath reference
 integrator), ``diagnostics`` (residual, energy, conditioning along a trajectory),
 ``integrate`` (:func:`simulate`), ``workprecision`` (the speed/accuracy study).
 
-A new integrator goes beside ``integrators`` (fixed step) or ``scipy_loop`` (adaptive),
-returns a :class:`~nhham.numerics.run.Run` and is dispatched by ``integrate.simulate``.
+The integration methods are records of ``methods`` (``METHODS``), their options those of
+``simulate_options``. A new integrator is one record there plus its stepper (a function
+beside ``integrators.rk4`` for a fixed-step scheme, returning a
+:class:`~nhham.numerics.run.Run`); ``integrate.simulate`` dispatches by the record.
 """
 
 from nhham.lazy import by_module, lazy_exports

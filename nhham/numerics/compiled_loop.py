@@ -16,14 +16,15 @@ from functools import cache
 
 import numpy as np
 
+from nhham.numerics.methods import names
 from nhham.numerics.run import PAUSE_SECONDS, Run, report_progress
 from nhham.numerics.scipy_loop import SCIPY_METHODS, WORK_ATOL, eval_failure
 from nhham.numerics.status import Status
 
 __all__ = ["COMPILED_METHODS", "run_compiled"]
 
-#: scipy methods that also run as one compiled loop.
-COMPILED_METHODS = ("RK23", "RK45", "DOP853")
+#: scipy methods that also run as one compiled loop (their records list the loop).
+COMPILED_METHODS = names(lambda m: m.compiled_loop, cheapest_first=True)
 
 _EXTRA_STAGES = 16  # DOP853's stages with the dense-output extras (SEXT in the C source)
 
@@ -37,7 +38,8 @@ def _coefficients(method):
     A0 = np.asarray(cls.A, dtype=float)
     A[:, :A0.shape[1]] = A0[:s]
     B, C = np.asarray(cls.B, dtype=float), np.asarray(cls.C, dtype=float)[:s]
-    if method == "DOP853":
+    dop = hasattr(cls, "A_EXTRA")  # DOP853's tableau: two error estimates, extra stages
+    if dop:
         E, E3, P = cls.E5, cls.E3, np.zeros((s + 1, 0))
         Aext, Cext, D = cls.A_EXTRA, cls.C_EXTRA, cls.D
     else:
@@ -48,7 +50,7 @@ def _coefficients(method):
                           np.asarray(Aext, dtype=float).ravel(), Cext,
                           np.asarray(D, dtype=float).ravel()])
     tab.flags.writeable = False  # shared by every run (the C code only reads it)
-    info = (s, int(method == "DOP853"), P.shape[1], cls.error_estimator_order)
+    info = (s, int(dop), P.shape[1], cls.error_estimator_order)
     return info, np.ascontiguousarray(tab)
 
 

@@ -16,7 +16,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from nhham.errors import InputError
-from nhham.numerics.compiled_loop import COMPILED_METHODS, run_compiled
+from nhham.numerics.compiled_loop import run_compiled
+from nhham.numerics.methods import DEFAULT_METHOD, lookup
 from nhham.numerics.run import Deadline
 from nhham.numerics.status import Status
 from nhham.numerics.storage import Recorder
@@ -58,7 +59,7 @@ class EnsembleResult:
     loop: str
 
 
-def simulate_many(model, y0, t_span, *, parameters=None, method: str = "DOP853",
+def simulate_many(model, y0, t_span, *, parameters=None, method: str = DEFAULT_METHOD,
                   rtol: float = 1e-9, atol: float = 1e-12, max_step: float = np.inf,
                   projection: bool = False, time_limit: float | None = None,
                   deadline: Deadline | None = None) -> EnsembleResult:
@@ -95,7 +96,7 @@ def simulate_many(model, y0, t_span, *, parameters=None, method: str = "DOP853",
         raise InputError(f"y0: expected states of {2 * model.n} values, got shape {Y0.shape}")
     P = None if parameters is None else np.atleast_2d(np.asarray(parameters, dtype=float))
     t0, t1 = float(t_span[0]), float(t_span[1])
-    compiled = (method in COMPILED_METHODS and model.compiled is not None
+    compiled = (lookup(method).compiled_loop and model.compiled is not None
                 and model.path == "saddle")
     deadline = deadline if deadline is not None else Deadline.after(time_limit)
     out_t, out_y = np.full(N, t0), Y0.copy()

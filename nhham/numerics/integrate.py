@@ -2,7 +2,11 @@
 
 Methods
 -------
-``"RK23"``, ``"RK45"``, ``"DOP853"``, ``"Radau"``, ``"BDF"``, ``"LSODA"``
+The methods are the records of :data:`nhham.numerics.methods.METHODS` (name, family,
+order, what each takes); ``simulate`` reads them to check the options and to choose the
+loop. By family:
+
+adaptive: RK23, RK45, DOP853, Radau, BDF, LSODA
     The :mod:`scipy.integrate` solvers on the projected field (stepped here,
     so that a failure keeps the trajectory computed so far:
     :mod:`nhham.numerics.scipy_loop`; ``dense_output`` and ``events`` as in
@@ -18,11 +22,11 @@ Methods
     ``baumgarte=(alpha, beta)`` replaces d(phi)/dt = 0 by
     d(phi)/dt = -2 alpha phi - beta^2 g. Implicit methods get their
     finite-difference Jacobian from one batched evaluation.
-``"rattle"``, ``"rattle4"``, ``"rk4"``
+fixed-step: rattle, rattle4, rk4
     Fixed step ``step`` (:mod:`nhham.numerics.integrators`): the structure-preserving
     nonholonomic RATTLE scheme (order 2), its triple-jump composition
     (order 4), classical RK4 (with ``projection``/``baumgarte`` if asked).
-``"reference"``
+reference
     High-precision extrapolation in mpmath with ``reference_digits`` digits
     (:mod:`nhham.numerics.reference`), for measuring errors.
 
@@ -46,24 +50,25 @@ from typing import Any, Mapping
 import numpy as np
 
 from nhham.errors import InconsistentInitialDataError, InputError
-from nhham.numerics.compiled_loop import COMPILED_METHODS, run_compiled
+from nhham.numerics.compiled_loop import run_compiled
 from nhham.numerics.diagnostics import (Diagnostics, Singularity, singularity_at,
                                         trajectory_diagnostics)
-from nhham.numerics.integrators import FIXED_STEP_METHODS, run_fixed_step
 from nhham.numerics.nullspace import describe_kkt_solve
 from nhham.numerics.model import (LibraryReady, NumericModel, NumericsWarning,
                                   ProjectionOutcome)
 from nhham.numerics.run import Deadline, Run
-from nhham.numerics.scipy_loop import SCIPY_METHODS, DenseOutput, run_scipy
+from nhham.numerics.methods import DEFAULT_METHOD, METHODS, Method, lookup, names
+from nhham.numerics.scipy_loop import DenseOutput, run_scipy
+from nhham.numerics.simulate_options import (AdaptiveOptions, FixedStepOptions, MethodOptions,
+                                             ReferenceOptions, RunOptions, split_options)
 from nhham.numerics.status import Status
 from nhham.numerics.storage import (Recorder, Storage, check_plan, default_max_points,
                                     memory_text, storage_bytes)
 
-__all__ = ["simulate", "SimulationResult", "SCIPY_METHODS", "COMPILED_METHODS", "METHODS",
-           "storage_plan"]
+__all__ = ["simulate", "SimulationResult", "METHODS", "RunOptions", "AdaptiveOptions",
+           "FixedStepOptions", "ReferenceOptions", "storage_plan"]
 
 _LOOPS = ("auto", "compiled", "scipy")
-METHODS = tuple(SCIPY_METHODS) + tuple(FIXED_STEP_METHODS) + ("reference",)
 
 
 @dataclass(frozen=True, eq=False)
@@ -276,17 +281,9 @@ class SimulationResult:
         return out
 
 
-def simulate(system_or_model, t_span, y0, *, method: str = "DOP853", rtol: float = 1e-9,
-             atol: float = 1e-12, step: float | None = None, t_eval=None,
-             dense_output: bool = False, events=None,
-             max_step: float = np.inf, first_step: float | None = None,
-             projection: bool = False, baumgarte=None, project_initial: bool = False,
-             initial_tol: float = 1e-10, residual_tol: float | None = None,
-             reference_digits: int | None = None, save_every: int = 1,
-             max_points: int | None = None, backend: str = "auto", warn: bool = True,
-             progress: bool = False, loop: str = "auto",
-             time_limit: float | None = None, contacts=(),
-             controls=None) -> SimulationResult:
+def simulate(system_or_model, t_span, y0, *, method: str | Method = DEFAULT_METHOD,
+             options: RunOptions | None = None, method_options: MethodOptions | None = None,
+             **keywords) -> SimulationResult:
     """Integrate the constrained dynamics from ``y0`` over ``t_span``.
 
     Parameters
@@ -297,8 +294,18 @@ def simulate(system_or_model, t_span, y0, *, method: str = "DOP853", rtol: float
         ``y0``).
     y0 : mapping or array_like
         ``{name: value}`` for every coordinate and velocity, or shape (2n,).
-    method : str
-        One of :data:`METHODS` (see the module docstring).
+    method : str or Method
+        One of :data:`~nhham.numerics.methods.METHODS` (see the module docstring).
+    options : RunOptions, optional
+        The options every method takes (below); a keyword overrides its field.
+    method_options : AdaptiveOptions, FixedStepOptions or ReferenceOptions, optional
+        The options of the method's family (below); a keyword overrides its field.
+        An option the method does not take is refused, and so is a fixed-step method
+        without ``step``
+        (:func:`~nhham.numerics.simulate_options.check_method_options`).
+
+    Other Parameters
+    ----------------
     rtol, atol : float
         Tolerances of the adaptive methods.
     step : float
@@ -328,7 +335,7 @@ def simulate(system_or_model, t_span, y0, *, method: str = "DOP853", rtol: float
         unprojected adaptive methods, 1e-11 for projected and structure-
         preserving ones).
     reference_digits : int, optional
-        Digits of the ``"reference"`` method (default 30).
+        Digits of the reference method (default 30).
     save_every : int
         Keep every j-th step (and the last state); every method but the reference.
     max_points : int, optional
@@ -383,15 +390,41 @@ def simulate(system_or_model, t_span, y0, *, method: str = "DOP853", rtol: float
     InputError
         For an unknown method or inconsistent options (``dense_output`` or
         ``events`` with a method that is not a scipy one, for instance).
+    TypeError
+        For a keyword that is not an option.
+
+    Examples
+    --------
+    A particle on a line, x'' = -x from x = 1: x(1) = cos 1.
+
+    >>> import math, nhham
+    >>> from nhham.numerics.simulate_options import FixedStepOptions, RunOptions
+    >>> spring = nhham.System(["x"], "x_dot**2/2 - x**2/2")
+    >>> run = simulate(spring, (0.0, 1.0), {"x": 1.0, "x_dot": 0.0}, method="rk4", step=0.01,
+    ...                backend="numpy")
+    >>> bool(abs(run["x"][-1] - math.cos(1.0)) < 1e-9)
+    True
+    >>> same = simulate(spring, (0.0, 1.0), {"x": 1.0, "x_dot": 0.0}, method="rk4",
+    ...                 options=RunOptions(backend="numpy"),
+    ...                 method_options=FixedStepOptions(step=0.01))
+    >>> bool((same.y == run.y).all())
+    True
+    >>> simulate(spring, (0.0, 1.0), {"x": 1.0, "x_dot": 0.0}, method="rk4", step=0.01,
+    ...          rtol=1e-6)  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    nhham.errors.InputError: rtol applies to the adaptive methods, not to the fixed-step ...
     """
+    spec = lookup(method)
+    common, own = split_options(spec, options, method_options, **keywords)
+    contacts, controls = common.contacts, common.controls
     if contacts and isinstance(system_or_model, NumericModel):
         raise InputError("simulate: contacts need the System (its constraints' velocity "
                          "maps), not a NumericModel", key="contacts")
-    system_or_model, callables = _with_controls(system_or_model, controls, method, contacts)
-    if callables:
-        loop = "scipy"
-    model = _as_model(system_or_model, backend,
-                      background=method not in ("rattle", "rattle4") and loop != "compiled")
+    system_or_model, callables = _with_controls(system_or_model, controls, spec, contacts)
+    loop = "scipy" if callables else common.loop
+    model = _as_model(system_or_model, common.backend,
+                      background=spec.background_build and loop != "compiled")
     if callables:
         unknown = sorted(set(callables) - set(model.input_names))
         if unknown:
@@ -402,53 +435,51 @@ def simulate(system_or_model, t_span, y0, *, method: str = "DOP853", rtol: float
     t0, t1 = (float(t_span[0]), float(t_span[1]))
     if not (math.isfinite(t0) and math.isfinite(t1)) or t1 == t0:
         raise InputError(f"t_span: need two different finite times, got {t_span!r}")
-    _check_options(method, step, projection, baumgarte, model)
-    _check_scipy_only(method, dense_output, events)
-    compiled_loop = _use_compiled_loop(model, method, loop, dense_output or events is not None)
-    y_init, initial = _initial_state(model, y0, project_initial, initial_tol)
-    recorder = _recorder(model, method, t_eval, save_every, max_points)
-    settings = {"rtol": rtol, "atol": atol, "step": step, "projection": projection,
-                "baumgarte": None if baumgarte is None else tuple(map(float, baumgarte)),
-                "backend": model.backend, "backend_note": model.backend_note,
-                "path": model.path, "save_every": int(save_every),
-                "max_points": recorder.max_points}
+    _check_model(spec, common.baumgarte, model)
+    scipy_features = common.dense_output or common.events is not None
+    compiled_loop = _use_compiled_loop(model, spec, loop, scipy_features)
+    y_init, initial = _initial_state(model, y0, common.project_initial, common.initial_tol)
+    recorder = _recorder(model, spec, common)
+    settings = _settings(spec, own, common, model, recorder)
+    residual_tol = common.residual_tol
     if residual_tol is None:
-        exact = projection or method in ("rattle", "rattle4", "reference")
-        residual_tol = 1e-11 if exact else 1e-8
+        residual_tol = 1e-11 if common.projection or spec.keeps_constraints else 1e-8
     start = time.perf_counter()
-    deadline = Deadline.after(time_limit)
-    adaptive = dict(rtol=rtol, atol=atol, max_step=max_step, first_step=first_step,
-                    t_eval=t_eval, projection=projection, baumgarte=baumgarte,
-                    progress=progress, deadline=deadline)
+    deadline = Deadline.after(common.time_limit)
     while True:
         try:
             if compiled_loop:
                 settings["loop"] = "compiled"
-                run = run_compiled(model, y_init, t0, t1, method, recorder=recorder, **adaptive)
-            elif method in SCIPY_METHODS:
+                run = run_compiled(model, y_init, t0, t1, spec.name, recorder=recorder,
+                                   **_adaptive(own, common, deadline))
+            elif spec.adaptive:
                 settings["loop"] = "scipy"
-                run = run_scipy(model, y_init, t0, t1, method, dense_output=dense_output,
-                                events=events, recorder=recorder, controls=callables,
-                                **adaptive)
-            elif method in FIXED_STEP_METHODS:
-                opts = {"recorder": recorder, "progress": progress, "deadline": deadline}
-                if method == "rk4":
-                    opts.update(projection=projection, baumgarte=baumgarte)
-                run = run_fixed_step(method, model, y_init, t0, t1, float(step), **opts)
+                run = run_scipy(model, y_init, t0, t1, spec.name,
+                                dense_output=common.dense_output, events=common.events,
+                                recorder=recorder, controls=callables,
+                                **_adaptive(own, common, deadline))
+            elif spec.fixed_step:
+                assert isinstance(own, FixedStepOptions)
+                opts = {"recorder": recorder, "progress": common.progress,
+                        "deadline": deadline}
+                if spec.takes_projection:
+                    opts.update(projection=common.projection, baumgarte=common.baumgarte)
+                run = spec.load()(model, y_init, t0, t1, float(own.step), **opts)
                 settings.update(step=run.step, newton_iterations=run.newton_iterations)
             else:
-                run = _run_reference(model, y_init, t0, t1, reference_digits, t_eval,
+                assert isinstance(own, ReferenceOptions)
+                run = _run_reference(spec, model, y_init, t0, t1, own.digits, common.t_eval,
                                      settings)
             break
         except LibraryReady:  # the background build won: the whole run on compiled code
             model = model.with_library()
-            compiled_loop = _use_compiled_loop(model, method, loop, dense_output or
-                                               events is not None)
+            compiled_loop = _use_compiled_loop(model, spec, loop, scipy_features)
             settings.update(backend=model.backend, backend_note=model.backend_note)
-            recorder = _recorder(model, method, t_eval, save_every, max_points)
+            recorder = _recorder(model, spec, common)
     wall = time.perf_counter() - start
-    storage = None if method == "reference" else recorder.storage(t_eval is not None)
-    result = _result(model, run, method, settings, wall, residual_tol, initial, warn, storage)
+    storage = None if spec.reference else recorder.storage(common.t_eval is not None)
+    result = _result(model, run, spec.name, settings, wall, residual_tol, initial,
+                     common.warn, storage)
     if callables:
         result = replace(result, controls=MappingProxyType(dict(callables)))
     if not contacts:
@@ -458,6 +489,30 @@ def simulate(system_or_model, t_span, y0, *, method: str = "DOP853", rtol: float
     return replace(result, contact_forces=contact_forces(
         system_or_model, contacts, result.states, result.multipliers.T,
         parameters=dict(zip(model.parameter_names, model.parameter_values))))
+
+
+def _adaptive(own, common, deadline) -> dict:
+    """The keywords of the adaptive loops."""
+    assert isinstance(own, AdaptiveOptions)
+    return dict(rtol=own.rtol, atol=own.atol, max_step=own.max_step,
+                first_step=own.first_step, t_eval=common.t_eval,
+                projection=common.projection, baumgarte=common.baumgarte,
+                progress=common.progress, deadline=deadline)
+
+
+def _settings(spec, own, common, model, recorder) -> dict:
+    """``result.settings``. rtol and atol are listed for every method (the adaptive
+    defaults for the others), step for every method (None for the adaptive ones), so
+    that the JSON of every run has the same keys."""
+    adaptive = own if isinstance(own, AdaptiveOptions) else AdaptiveOptions()
+    baumgarte = common.baumgarte
+    return {"rtol": adaptive.rtol, "atol": adaptive.atol,
+            "step": own.step if isinstance(own, FixedStepOptions) else None,
+            "projection": common.projection,
+            "baumgarte": None if baumgarte is None else tuple(map(float, baumgarte)),
+            "backend": model.backend, "backend_note": model.backend_note,
+            "path": model.path, "save_every": int(common.save_every),
+            "max_points": recorder.max_points}
 
 
 def _with_controls(system_or_model, controls, method, contacts) -> tuple:
@@ -473,9 +528,10 @@ def _with_controls(system_or_model, controls, method, contacts) -> tuple:
                              "compiled with the field); give callables for a NumericModel",
                              key="controls")
         system_or_model = system_or_model.closed_loop(laws)
-    if callables and method not in SCIPY_METHODS:
+    if callables and not method.scipy_loop:
+        scipy = ", ".join(names(lambda m: m.scipy_loop, cheapest_first=True))
         raise InputError(f"controls: Python callables run with the scipy methods "
-                         f"({', '.join(SCIPY_METHODS)}), not {method!r}; give expressions to "
+                         f"({scipy}), not {method.name!r}; give expressions to "
                          f"compile them with the field", key="controls")
     if callables and contacts:
         raise InputError("controls: contact forces need the inputs as expressions (the "
@@ -483,11 +539,9 @@ def _with_controls(system_or_model, controls, method, contacts) -> tuple:
     return system_or_model, callables
 
 
-def _run_reference(model, y0, t0, t1, digits, t_eval, settings) -> Run:
-    from nhham.numerics.reference import reference_solution
-
-    digits = 30 if digits is None else int(digits)
-    ref = reference_solution(model, y0, (t0, t1), digits=digits, t_eval=t_eval)
+def _run_reference(spec, model, y0, t0, t1, digits, t_eval, settings) -> Run:
+    digits = int(digits)
+    ref = spec.load()(model, y0, (t0, t1), digits=digits, t_eval=t_eval)
     settings.update(digits=digits, tol=ref.tol, error_estimate=ref.error_estimate)
     return Run(ref.t, ref.y, ref.work, ref.status, ref.message, ref.nfev, ref.nsteps)
 
@@ -520,22 +574,22 @@ def _as_model(obj, backend, background=False) -> NumericModel:
     return numeric_model(obj, backend=backend, background=background)
 
 
-def _check_options(method, step, projection, baumgarte, model):
-    if method not in METHODS:
-        raise InputError(f"method: unknown method {method!r}; choose one of {', '.join(METHODS)}")
-    if method in FIXED_STEP_METHODS and step is None:
-        raise InputError(f"step: method {method!r} is fixed-step and needs step=...")
-    if model.forced and method in ("rattle", "rattle4"):
-        raise InputError(f"method: {method!r} is a structure-preserving scheme for "
-                         f"conservative systems; this system has forces (choose an adaptive "
-                         f"method such as DOP853)", key="method")
-    if model.time_slot is not None and (method in FIXED_STEP_METHODS or method == "reference"):
-        raise InputError(f"method: {method!r} does not take time-dependent forces (t in the "
-                         f"forces); choose an adaptive method such as DOP853", key="method")
+def _check_model(spec, baumgarte, model):
+    """What the method needs of the model (the options are checked by
+    :func:`~nhham.numerics.simulate_options.check_method_options`)."""
+    if model.forced and not spec.takes_forces:
+        raise InputError(f"method: {spec.name!r} is {spec.forces_refused}; this system has "
+                         f"forces (choose an adaptive method such as {DEFAULT_METHOD})",
+                         key="method")
+    if model.time_slot is not None and not spec.takes_time:
+        raise InputError(f"method: {spec.name!r} does not take time-dependent forces (t in "
+                         f"the forces); choose an adaptive method such as {DEFAULT_METHOD}",
+                         key="method")
+    if spec.needs_quadratic and not model.quadratic:
+        raise InputError(f"method {spec.name!r} needs L = 1/2 v^T W(q) v - V(q) (no terms "
+                         f"linear in the velocities, W independent of v); use a scipy method "
+                         f"for this system", key="method")
     model.require_inputs()
-    if (projection or baumgarte is not None) and method in ("rattle", "rattle4", "reference"):
-        raise InputError(f"projection/baumgarte: not applicable to method {method!r} "
-                         f"(it keeps the constraints itself)")
     if baumgarte is not None:
         if len(baumgarte) != 2 or not all(math.isfinite(float(x)) and float(x) >= 0
                                           for x in baumgarte):
@@ -545,30 +599,28 @@ def _check_options(method, step, projection, baumgarte, model):
             raise InputError("baumgarte: needs the saddle path (path='saddle')")
 
 
-def _width(n, method) -> int:
+def _width(n, spec) -> int:
     """Numbers a loop keeps per state: the state, and the work of the forces
-    where the loop carries it (all but RATTLE)."""
-    return 2 * n + (0 if method in ("rattle", "rattle4") else 1)
+    where the loop carries it."""
+    return 2 * n + (1 if spec.carries_work else 0)
 
 
-def storage_plan(n: int, method: str, save_every: int = 1, max_points=None) -> str:
+def storage_plan(n: int, method: str | Method, save_every: int = 1, max_points=None) -> str:
     """What a run of ``method`` on n coordinates will keep, and the memory that takes at
     most (without t_eval)."""
-    width = _width(n, method)
+    width = _width(n, lookup(method))
     bound = default_max_points(width) if max_points is None else int(max_points)
     kept = "every step" if save_every == 1 else f"one step in {save_every}"
     return f"keeps {kept}, at most {bound} states: {memory_text(storage_bytes(bound, width))}"
 
 
-def _recorder(model, method, t_eval, save_every, max_points) -> Recorder:
+def _recorder(model, spec, common) -> Recorder:
     """Where the loop puts the states: the t_eval points (refused beyond max_points),
     or every save_every-th step within max_points."""
-    width = _width(model.n, method)
+    t_eval, save_every, max_points = common.t_eval, common.save_every, common.max_points
+    width = _width(model.n, spec)
     bound = default_max_points(width) if max_points is None else int(max_points)
-    if t_eval is not None and method in FIXED_STEP_METHODS:
-        raise InputError(f"t_eval: the fixed-step method {method!r} keeps its grid points "
-                         f"(every save_every-th step); t_eval is for the adaptive methods")
-    if t_eval is not None and method != "reference":
+    if t_eval is not None and not spec.reference:
         points = len(np.atleast_1d(t_eval))
         check_plan(points, bound, width, "t_eval")
         return Recorder(width, max(2, points), thin=False)
@@ -577,20 +629,15 @@ def _recorder(model, method, t_eval, save_every, max_points) -> Recorder:
     return Recorder(width, bound, int(save_every))
 
 
-def _check_scipy_only(method, dense_output, events):
-    if (dense_output or events is not None) and method not in SCIPY_METHODS:
-        raise InputError(f"dense_output/events: only with the scipy methods "
-                         f"({', '.join(SCIPY_METHODS)}), not {method!r}")
-
-
-def _use_compiled_loop(model, method, loop, scipy_features=False) -> bool:
+def _use_compiled_loop(model, spec, loop, scipy_features=False) -> bool:
     if loop not in _LOOPS:
         raise InputError(f"loop: expected one of {', '.join(_LOOPS)}, got {loop!r}")
-    possible = (method in COMPILED_METHODS and model.compiled is not None
+    possible = (spec.compiled_loop and model.compiled is not None
                 and model.path == "saddle" and not scipy_features)
     if loop == "compiled" and not possible:
-        why = (f"it is for {', '.join(COMPILED_METHODS)}, not {method!r}"
-               if method not in COMPILED_METHODS else
+        compiled = ", ".join(names(lambda m: m.compiled_loop, cheapest_first=True))
+        why = (f"it is for {compiled}, not {spec.name!r}"
+               if not spec.compiled_loop else
                f"the model has no compiled C backend ({model.backend_note})"
                if model.compiled is None else "the compiled loop needs the saddle path"
                if model.path != "saddle" else "dense_output and events run scipy's loop")

@@ -57,10 +57,10 @@ from nhham.numerics.saddle import solve_saddle
 from nhham.numerics.status import NumericalFailure, Status
 from nhham.numerics.storage import Recorder, default_max_points
 
-__all__ = ["FixedStepRun", "rattle", "rattle4", "rk4", "rattle_step", "FIXED_STEP_METHODS"]
+__all__ = ["FixedStepRun", "rattle", "rattle4", "rk4", "rattle_step"]
 
-#: Fixed-step methods and their classical order.
-FIXED_STEP_METHODS = {"rattle": 2, "rattle4": 4, "rk4": 4}
+# The methods' records (order, what each takes) are in nhham.numerics.methods; a new
+# fixed-step scheme is a function with rk4's signature here and one record there.
 
 # Yoshida / Suzuki triple jump: a symmetric method of order 2 composed with
 # these substeps is symmetric of order 4.
@@ -86,7 +86,7 @@ def _grid(t0, t1, h):
 def _check_quadratic(model):
     if not model.quadratic:
         raise InputError(
-            "method 'rattle' needs L = 1/2 v^T W(q) v - V(q) (no terms linear in the "
+            "RATTLE needs L = 1/2 v^T W(q) v - V(q) (no terms linear in the "
             "velocities, W independent of v); use a scipy method for this system")
 
 
@@ -485,14 +485,3 @@ def rk4(model, y0, t0, t1, h, *, projection: bool = False, baumgarte=None,
     _, status, msg, nsteps, hh = _run_fixed(step, recorder, z0, t0, t1, h, progress, deadline)
     t, y, work = recorder.result(n2)
     return Run(t, y, work, status, msg, counter["nfev"], nsteps, step=hh)
-
-
-def run_fixed_step(method, model, y0, t0, t1, h, **options) -> FixedStepRun:
-    """Dispatch by name to :func:`rattle`, :func:`rattle4` or :func:`rk4`."""
-    if method == "rattle":
-        return rattle(model, y0, t0, t1, h, **options)
-    if method == "rattle4":
-        return rattle4(model, y0, t0, t1, h, **options)
-    if method == "rk4":
-        return rk4(model, y0, t0, t1, h, **options)
-    raise InputError(f"method: unknown fixed-step method {method!r}")

@@ -26,7 +26,8 @@ __all__ = ["GeneratedKernels", "CompiledRHS", "ComplexKernels", "kernel_sizes", 
 def kernel_sizes(layout) -> dict:
     n, m, k = layout["n"], layout["m"], layout["k"]
     return {
-        "saddle": n * n + n + m * n + 3 * m + k,
+        # With forces the saddle kernel ends with the applied power Q . v.
+        "saddle": n * n + n + m * n + 3 * m + k + int(bool(layout.get("forced"))),
         "geometry": n * n + m * n + m + k,
         "energy": 1,
         "lq": n,

@@ -16,17 +16,18 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.integrate import BDF, DOP853, LSODA, RK23, RK45, OdeSolution, Radau
+from scipy.integrate import BDF, LSODA, OdeSolution  # restarted by their own rules
 from scipy.optimize import brentq
 
 from nhham.errors import BudgetExceeded, ComputationError, InputError
+from nhham.numerics.methods import METHODS
 from nhham.numerics.run import Run, report_progress
 from nhham.numerics.status import NumericalFailure, Status
 
 __all__ = ["SCIPY_METHODS", "WORK_ATOL", "DenseOutput", "run_scipy", "eval_failure"]
 
-SCIPY_METHODS = {"RK23": RK23, "RK45": RK45, "DOP853": DOP853, "Radau": Radau, "BDF": BDF,
-                 "LSODA": LSODA}
+#: The scipy solver class of each adaptive method (:data:`~nhham.numerics.methods.METHODS`).
+SCIPY_METHODS = {m.name: m.load() for m in METHODS.values() if m.scipy_name is not None}
 
 #: Absolute tolerance of the work integral that rides along as an extra state: it must
 #: not steer the step size (finite: scipy's numerical Jacobian scales by atol).
@@ -169,7 +170,7 @@ class _Events:
 def _solver_options(method, n2, rtol, atol, max_step, first_step):
     atol_z = np.append(np.broadcast_to(np.asarray(atol, dtype=float), (n2,)), WORK_ATOL)
     opts = {"rtol": rtol, "atol": atol_z, "max_step": max_step}
-    if method in ("Radau", "BDF"):
+    if METHODS[method].batched_jacobian:
         opts["vectorized"] = True
     if first_step is not None:
         opts["first_step"] = first_step

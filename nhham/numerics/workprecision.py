@@ -33,7 +33,8 @@ import numpy as np
 from nhham.numerics.diagnostics import singularity_at
 from nhham.numerics.nullspace import (KKT_RATIO, describe_kkt_solve, diagonal_ratio,
                                       kkt_solve_name)
-from nhham.numerics.integrate import SCIPY_METHODS, simulate
+from nhham.numerics.integrate import simulate
+from nhham.numerics.methods import DEFAULT_METHOD, lookup, names
 from nhham.numerics.model import NumericModel, NumericsWarning
 from nhham.numerics.status import NumericalFailure, Status
 
@@ -55,7 +56,7 @@ class WorkPrecisionRow:
     Attributes
     ----------
     method : str
-        Method label (``"DOP853"``, ``"DOP853+projection"``, ``"rattle"``...).
+        Method label (``DOP853``, ``DOP853+projection``, ``rattle``...).
     setting : str
         ``"rtol=1e-08"`` or ``"h=0.01"``.
     error : float
@@ -213,8 +214,9 @@ def work_precision(system_or_model, y0, t_span, *, methods=None, tolerances=DEFA
         A state on M_1.
     t_span : (float, float)
     methods : sequence of str, optional
-        Default: every scipy method, ``"rattle"``, ``"rattle4"`` (when L is
-        quadratic) and ``"rk4"``.
+        Default: every adaptive method, and the fixed-step ones that take the system
+        (RATTLE and its composition when L is quadratic and there are no forces, RK4
+        unless the forces depend on t); with ``quick`` DOP853, Radau, LSODA and those.
     tolerances : sequence of float
         rtol ladder of the adaptive methods (atol = rtol * 1e-3).
     steps : sequence of float, optional
@@ -255,7 +257,7 @@ def work_precision(system_or_model, y0, t_span, *, methods=None, tolerances=DEFA
         tolerances = _QUICK_TOLERANCES
         steps = steps or [(t1 - t0) / N for N in _QUICK_DIVISIONS]
         if methods is None:
-            methods = ["DOP853", "Radau", "LSODA"] + _fixed_step_methods(model)
+            methods = list(names(lambda m: m.quick_bench)) + _fixed_step_methods(model)
     min_time = (0.02 if quick else 0.2) if min_time is None else float(min_time)
     slow = (0.5 if quick else 20.0) if slow is None else float(slow)
     say = _say if progress else (lambda *a, **k: None)
@@ -263,16 +265,18 @@ def work_precision(system_or_model, y0, t_span, *, methods=None, tolerances=DEFA
     y_ref, ref_error, ref_time, ref_text, digits = _reference(
         model, y_init, (t0, t1), quick, reference_digits, progress)
     if methods is None:
-        methods = list(SCIPY_METHODS) + _fixed_step_methods(model)
+        methods = list(names(lambda m: m.adaptive, cheapest_first=True))
+        methods += _fixed_step_methods(model)
     if steps is None:
         steps = [(t1 - t0) / N for N in _STEP_DIVISIONS]
     rows, skipped = [], []
     for method in methods:
-        variants = [False, True] if projection_variants and method not in ("rattle",
-                                                                          "rattle4") else [False]
+        spec = lookup(method, key="methods")
+        variants = ([False, True] if projection_variants and spec.takes_projection
+                    else [False])
         for projection in variants:
             label = method + ("+projection" if projection else "")
-            settings = steps if method in ("rattle", "rattle4", "rk4") else tolerances
+            settings = steps if spec.fixed_step else tolerances
             too_slow = None
             for s in settings:
                 text = _setting_text(method, s)
@@ -305,10 +309,11 @@ def work_precision(system_or_model, y0, t_span, *, methods=None, tolerances=DEFA
 
 
 def _fixed_step_methods(model) -> list:
-    """The fixed-step methods that apply: RATTLE for conservative systems with L quadratic,
-    rk4 unless the forces depend on time."""
-    rattle = ["rattle", "rattle4"] if model.quadratic and not model.forced else []
-    return rattle + (["rk4"] if model.time_slot is None else [])
+    """The fixed-step methods that take the model (RATTLE for conservative systems with L
+    quadratic, rk4 unless the forces depend on time)."""
+    return list(names(lambda m: m.fixed_step and (model.quadratic or not m.needs_quadratic)
+                      and (not model.forced or m.takes_forces)
+                      and (model.time_slot is None or m.takes_time)))
 
 
 def _say(*args, **kwargs):
@@ -332,7 +337,7 @@ def _reference(model, y0, t_span, quick, digits, progress):
     timed = model.time_slot is not None  # the mpmath reference takes autonomous fields
     if quick or timed:
         say(f"  reference: DOP853 rtol={QUICK_REFERENCE_RTOL:.0e} with projection ...", end="")
-        runs = [simulate(model, t_span, y0, method="DOP853", rtol=r, atol=r * 1e-3,
+        runs = [simulate(model, t_span, y0, method=DEFAULT_METHOD, rtol=r, atol=r * 1e-3,
                          projection=True, warn=False, save_every=10**9)
                 for r in (QUICK_REFERENCE_RTOL, 10 * QUICK_REFERENCE_RTOL)]
         ref, looser = runs
@@ -377,17 +382,18 @@ def _reference_failure(model, status, message, t, y) -> NumericalFailure:
 
 
 def _setting_text(method, setting) -> str:
-    return f"h={setting:.3g}" if method in ("rattle", "rattle4", "rk4") else f"rtol={setting:.0e}"
+    return f"h={setting:.3g}" if lookup(method).fixed_step else f"rtol={setting:.0e}"
 
 
 def _one_row(model, y0, t_span, method, label, setting, projection, y_ref, repeats, loop,
              min_time, slow):
+    spec = lookup(method)
     kw = {"warn": False, "projection": projection, "time_limit": 2 * slow}
-    if method in SCIPY_METHODS:
+    if spec.scipy_loop:
         kw["loop"] = loop
-    if method in ("rattle", "rattle4", "rk4"):
+    if spec.fixed_step:
         kw["step"] = setting
-        if method != "rk4":
+        if not spec.takes_projection:
             kw.pop("projection")
     else:
         # Every step is stored so that the residual and energy columns are

@@ -18,6 +18,7 @@ import re
 import numpy as np
 
 from nhham.errors import OptionalDependencyError
+from nhham.numerics.methods import lookup
 from nhham.render.plot_style import OUTSIDE_RIGHT, legend_if_labelled, separate_tick_labels
 
 __all__ = ["OptionalDependencyError", "plot_work_precision", "plot_trajectory", "save_figure",
@@ -159,9 +160,10 @@ def plot_trajectory(result, axes=None, *, title: str | None = None):
 
 def _settings_text(result) -> str:
     s = dict(result.settings)
-    if result.method in ("rattle", "rattle4", "rk4"):
+    method = lookup(result.method)
+    if method.fixed_step:
         return f"step {s.get('step')}"
-    if result.method == "reference":
+    if method.reference:
         return f"mpmath {s.get('digits')} digits"
     text = f"rtol {s.get('rtol'):g}" if s.get("rtol") is not None else ""
     return text + (", projection" if s.get("projection") else "")

@@ -17,6 +17,7 @@ from nhham.settings import json_number
 from nhham.render.text import expr_text, labelled, matrix_table, paragraph, table
 from nhham.render.layout import grid_fits as table_fits
 from nhham.render.simplify import display_form
+from nhham.numerics.methods import lookup, names
 
 __all__ = [
     "classify_data", "classify_text", "classify_latex",
@@ -596,7 +597,8 @@ def simulation_failure(result, scene_path: str, free_multipliers=()) -> str:
                 "a smaller --rtol or --max-step")
         return (f"simulation stopped {where}: the Newton iteration of the step (or of the "
                 f"projection onto the constraints) did not converge; try {todo}")
-    stiff = "" if result.method in ("Radau", "BDF", "LSODA") else "--method Radau or "
+    stiff = ("" if lookup(result.method).stiff else
+             f"--method {names(lambda m: m.stiff)[0]} or ")
     return f"simulation stopped {where}: {result.message}; try {stiff}a looser --rtol"
 
 

@@ -28,6 +28,7 @@ import numpy as np
 
 from nhham.errors import BudgetExceeded, InputError
 from nhham.numerics.ensemble import simulate_many
+from nhham.numerics.methods import DEFAULT_METHOD
 from nhham.numerics.status import Status
 from nhham.study.kinds import SIMULATE_METHODS as METHODS
 from nhham.study.stop import chunk_deadline
@@ -45,7 +46,7 @@ OPTIONS = ("t_end", "method", "rtol", "atol", "max_step", "projection")
 #: Largest scaled residual of an initial state taken as on M_1 (``simulate``'s default).
 INITIAL_TOL = 1e-10
 
-_DEFAULTS = {"t_end": 10.0, "method": "DOP853", "rtol": 1e-9, "atol": 1e-12,
+_DEFAULTS = {"t_end": 10.0, "method": DEFAULT_METHOD, "rtol": 1e-9, "atol": 1e-12,
              "max_step": None, "projection": False}
 
 

@@ -24,6 +24,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from importlib import import_module
 
+from nhham.numerics.methods import names
+
 __all__ = ["StudyKind", "KINDS", "WHAT", "kind_of", "SIMULATE_METHODS"]
 
 
@@ -89,8 +91,9 @@ KINDS = {k.name: k for k in (
 #: The ``--what`` names.
 WHAT = tuple(KINDS)
 
-#: The methods of a simulation study (the adaptive ones: each run ends at t_end).
-SIMULATE_METHODS = ("DOP853", "RK45", "RK23", "Radau", "BDF", "LSODA")
+#: The methods of a simulation study (the adaptive ones: each run ends at t_end; the
+#: registry :mod:`nhham.numerics.methods` is as light as this module).
+SIMULATE_METHODS = names(lambda m: m.adaptive)
 
 
 def kind_of(name: str) -> StudyKind:

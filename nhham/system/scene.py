@@ -251,7 +251,10 @@ class Scene:
         ``t_span`` runs from 0 to the ``[simulate]`` table's ``t_end`` (10 if
         it gives none), ``y0`` is the ``[initial]`` table, and the table's
         ``method``, ``rtol``, ``atol``, ``step``, ``max_step`` follow; any
-        keyword given here (``t_end`` too) replaces the scene's value.
+        keyword given here (``t_end`` too) replaces the scene's value; a ``method``
+        other than the table's leaves out the table's ``rtol``, ``atol``, ``step`` and
+        ``max_step`` (chosen for its method; ``simulate`` refuses the options a method
+        does not take).
 
         >>> scene = load_scene("examples/rolling_disk.toml")       # doctest: +SKIP
         >>> result = nhham.simulate(scene.system, **scene.simulate_options(rtol=1e-6))
@@ -263,7 +266,11 @@ class Scene:
             If the scene has no ``[initial]`` table.
         """
         y0 = self.checked_initial(project=bool(overrides.get("project_initial")))
-        opts = self.simulate.given() | overrides
+        opts = self.simulate.given()
+        if overrides.get("method", opts.get("method")) != opts.get("method"):
+            opts = {k: v for k, v in opts.items()
+                    if k not in ("rtol", "atol", "step", "max_step")}
+        opts |= overrides
         t_end = float(opts.pop("t_end", 10.0))
         return {"t_span": (0.0, t_end), "y0": dict(y0), **opts}
 
