@@ -166,32 +166,49 @@ static int wsolve(const double *W, const double *b, double *x) {
     return gsolve(NQ, A, x);
 }
 
-/* The residuals r (2n + m) of the step's equations at z = (p_h, q1, lam0):
+/* The pieces of the residual at z = (p_h, q1, lam0): what depends on p_h (u0 = W0^-1
+   p_h, L_q(q0, u0)), on q1 (geometry at q1 and at qm = (q0 + q1)/2), on both (u1 =
+   W(q1)^-1 p_h); none depends on lam0. A column of the Jacobian recomputes only the
+   pieces its unknown enters (the same operations on the same numbers as the whole
+   residual: the same bits, at a third of the kernel calls). */
+typedef struct {
+    double U0[NQ], Lq0[NQ], U1[NQ], geo1[NGEO], geom[NGEO];
+} rattle_parts;
+
+static int parts_of_p(const rattle_start *s, const double *z, rattle_parts *pt) {
+    double y[2 * NQ];
+    if (wsolve(s->W0, z, pt->U0)) return 1;
+    for (int i = 0; i < NQ; ++i) { y[i] = s->q0[i]; y[NQ + i] = pt->U0[i]; }
+    lagr_q(y, s->p, pt->Lq0);
+    return 0;
+}
+
+static void parts_of_q(const rattle_start *s, const double *z, rattle_parts *pt) {
+    double qm[NQ];
+    geometry(z + NQ, s->p, pt->geo1);
+    for (int i = 0; i < NQ; ++i) qm[i] = 0.5 * (s->q0[i] + z[NQ + i]);
+    if (NC > 0) geometry(qm, s->p, pt->geom);
+}
+
+/* The residuals r (2n + m) of the step's equations at z from its pieces:
      p_h - p0 - h/2 [L_q(q0, W0^-1 p_h) - mu0^T lam0],
      q1 - q0 - h/2 [W0^-1 + W(q1)^-1] p_h,
      mu(qm) (q1 - q0)/h + h(qm), qm = (q0 + q1)/2 (nonholonomic rows), g(q1) (holonomic),
    and, when size is not NULL, the size of each constraint row's terms, which its
-   round-off is relative to (as _RattleStepper._r3). Returns 1 when a W is singular. */
-static int rattle_residual(const rattle_start *s, const double *z, double *r, double *size) {
+   round-off is relative to (as _RattleStepper._r3). */
+static void assemble(const rattle_start *s, const double *z, const rattle_parts *pt,
+                     double *r, double *size) {
     const double *P = z, *Q1 = z + NQ, *lam = z + 2 * NQ, h = s->h;
-    double y[2 * NQ], U0[NQ], U1[NQ], Lq0[NQ], geo1[NGEO], geom[NGEO], qm[NQ], u[NQ];
-    if (wsolve(s->W0, P, U0)) return 1;
-    for (int i = 0; i < NQ; ++i) { y[i] = s->q0[i]; y[NQ + i] = U0[i]; }
-    lagr_q(y, s->p, Lq0);
-    geometry(Q1, s->p, geo1);
-    if (wsolve(geo1, P, U1)) return 1;
+    double u[NQ];
     for (int i = 0; i < NQ; ++i) {
         double a = 0.0;
         for (int c = 0; c < NC; ++c) a += lam[c] * s->mu0[c * NQ + i];
-        r[i] = P[i] - s->p0[i] - 0.5 * h * (Lq0[i] - a);
-        r[NQ + i] = Q1[i] - s->q0[i] - 0.5 * h * (U0[i] + U1[i]);
-        qm[i] = 0.5 * (s->q0[i] + Q1[i]);
+        r[i] = P[i] - s->p0[i] - 0.5 * h * (pt->Lq0[i] - a);
+        r[NQ + i] = Q1[i] - s->q0[i] - 0.5 * h * (pt->U0[i] + pt->U1[i]);
         u[i] = (Q1[i] - s->q0[i]) / h;
     }
-    if (NC == 0) return 0;
-    geometry(qm, s->p, geom);
-    const double *mum = geom + NQ * NQ, *hm = mum + NC * NQ;
-    const double *mu1 = geo1 + NQ * NQ, *g1 = mu1 + NC * NQ + NC;
+    const double *mum = pt->geom + NQ * NQ, *hm = mum + NC * NQ;
+    const double *mu1 = pt->geo1 + NQ * NQ, *g1 = mu1 + NC * NQ + NC;
     for (int c = 0; c < NC; ++c) {
         double t = 0.0, a = 1.0 + fabs(hm[c]);
         for (int j = 0; j < NQ; ++j) {
@@ -209,6 +226,38 @@ static int rattle_residual(const rattle_start *s, const double *z, double *r, do
             size[c] = a;
         }
     }
+}
+
+/* The whole residual at z (its pieces in pt). Returns 1 when a W is singular. */
+static int rattle_residual(const rattle_start *s, const double *z, rattle_parts *pt,
+                           double *r, double *size) {
+    parts_of_q(s, z, pt);
+    if (parts_of_p(s, z, pt) || wsolve(pt->geo1, z, pt->U1)) return 1;
+    assemble(s, z, pt, r, size);
+    return 0;
+}
+
+/* The forward-difference Jacobian at z (r: the residual there, base: its pieces), steps
+   sqrt(eps) max(|z_j|, scale_j) as _RattleStepper._fd_jacobian. Returns 1 when a W is
+   singular. */
+static int rattle_jacobian(const rattle_start *s, const double *z, const double *r,
+                           const rattle_parts *base, const double *scale, double *J) {
+    const double root_eps = 1.4901161193847656e-08;   /* sqrt(2^-52) */
+    double zj[NZG], rj[NZG];
+    rattle_parts pt;
+    for (int j = 0; j < NZG; ++j) {
+        const double e = root_eps * fmax(fabs(z[j]), scale[j]);
+        for (int i = 0; i < NZG; ++i) zj[i] = z[i];
+        zj[j] += e;
+        pt = *base;
+        if (j < 2 * NQ) {
+            if (j >= NQ) parts_of_q(s, zj, &pt);
+            else if (parts_of_p(s, zj, &pt)) return 1;
+            if (wsolve(pt.geo1, zj, pt.U1)) return 1;
+        }
+        assemble(s, zj, &pt, rj, NULL);
+        for (int i = 0; i < NZG; ++i) J[i * NZG + j] = (rj[i] - r[i]) / e;
+    }
     return 0;
 }
 
@@ -222,7 +271,7 @@ static int rattle_step_general(double *q, double *v, double h, double *lam, cons
                                double tol, int maxiter, long *newton) {
     rattle_start s;
     double geo[NGEO], y[2 * NQ], Lq[NQ], z[NZG], r[NZG], scale[NZG], size[NCX];
-    double J[NZG * NZG], A[NZG * NZG], zj[NZG], rj[NZG];
+    double J[NZG * NZG], A[NZG * NZG];
     s.h = h; s.p = p;
     geometry(q, p, geo);
     for (int i = 0; i < NQ * NQ; ++i) s.W0[i] = geo[i];
@@ -247,11 +296,11 @@ static int rattle_step_general(double *q, double *v, double h, double *lam, cons
     if (wsolve(s.W0, z, z + NQ)) return NHHAM_SINGULAR;
     for (int i = 0; i < NQ; ++i) z[NQ + i] = q[i] + h * z[NQ + i];
     for (int c = 0; c < NC; ++c) { z[2 * NQ + c] = lam[c]; scale[2 * NQ + c] = 1.0 + lmax; }
-    const double root_eps = 1.4901161193847656e-08;   /* sqrt(2^-52) */
+    rattle_parts base;
     double best = INFINITY;
     int have_J = 0, it;
     for (it = 0; it < maxiter; ++it) {
-        if (rattle_residual(&s, z, r, size)) return NHHAM_SINGULAR;
+        if (rattle_residual(&s, z, &base, r, size)) return NHHAM_SINGULAR;
         double err = 0.0;
         for (int i = 0; i < NZG; ++i) {
             double e = fabs(r[i]) / (i < 2 * NQ ? scale[i]
@@ -262,13 +311,7 @@ static int rattle_step_general(double *q, double *v, double h, double *lam, cons
         if (err <= tol) break;
         if (it > 3 && err >= best) { if (err > 1e-9) return NHHAM_NOT_CONVERGED; break; }
         if (!have_J || err > 0.1 * best) {
-            for (int j = 0; j < NZG; ++j) {
-                const double e = root_eps * fmax(fabs(z[j]), scale[j]);
-                for (int i = 0; i < NZG; ++i) zj[i] = z[i];
-                zj[j] += e;
-                if (rattle_residual(&s, zj, rj, NULL)) return NHHAM_SINGULAR;
-                for (int i = 0; i < NZG; ++i) J[i * NZG + j] = (rj[i] - r[i]) / e;
-            }
+            if (rattle_jacobian(&s, z, r, &base, scale, J)) return NHHAM_SINGULAR;
             have_J = 1;
         }
         if (err < best) best = err;
@@ -278,10 +321,8 @@ static int rattle_step_general(double *q, double *v, double h, double *lam, cons
         ++*newton;
     }
     if (it == maxiter) return NHHAM_NOT_CONVERGED;
-    double u1[NQ];
-    geometry(z + NQ, p, geo);
-    if (wsolve(geo, z, u1)) return NHHAM_SINGULAR;
-    return rattle_finish(q, v, z + NQ, z, u1, h, lam, p, geo, geo);
+    /* the pieces at the last z: geometry(q1) and u1 = W(q1)^-1 p_h */
+    return rattle_finish(q, v, z + NQ, z, base.U1, h, lam, p, base.geo1, base.geo1);
 }
 
 /* Steps of size h from y (2n: q, v; updated in place) until info[0] = nsteps, a
