@@ -150,7 +150,8 @@ class CompiledRHS:
         c = ctypes
         return self._lib.nhham_rattle(
             c.c_void_p(y.ctypes.data), c.c_double(h), c.c_long(nsteps), c.c_long(stride),
-            c.c_int(composition), c.c_int(int(general)), c.c_void_p(out.ctypes.data), c.c_long(out.shape[0]), pext,
+            c.c_int(composition), c.c_int(int(general)), c.c_void_p(out.ctypes.data),
+            c.c_long(out.shape[0]), pext,
             c.c_void_p(lam.ctypes.data), c.c_void_p(wsp.ctypes.data), c.c_int(int(first)),
             c.c_double(tol), c.c_int(maxiter), c.c_double(pause_s),
             c.c_void_p(info.ctypes.data))

@@ -195,3 +195,21 @@ def test_pauses_and_the_recorder_leave_the_run_unchanged(monkeypatch, capsys, ho
     kept = np.searchsorted(whole.t, thin.t)
     assert len(thin.t) <= 16 and np.array_equal(whole.t[kept], thin.t)
     assert np.array_equal(whole.y[:, kept], thin.y)
+
+
+@needs_cc
+def test_whipple_bicycle_compiled_as_the_python_stepper(monkeypatch):
+    """The issue's case: examples/whipple_bicycle.toml (n = 8, W(q), 4 rolling rows and
+    the front contact's holonomic row on a curved M_1), 50 steps of 1 ms."""
+    from pathlib import Path
+
+    scene = nhham.load_scene(Path(__file__).resolve().parents[2] / "examples"
+                             / "whipple_bicycle.toml")
+    model = numeric_model(scene.system)
+    y0 = model.state(scene.checked_initial())
+    fast = integrators.rattle(model, y0, 0.0, 0.05, 0.001)
+    _python_stepper(monkeypatch)
+    slow = integrators.rattle(model, y0, 0.0, 0.05, 0.001)
+    assert fast.status == slow.status == Status.SUCCESS and fast.nsteps == 50
+    assert np.max(np.abs(fast.y - slow.y)) <= 1e-10
+    assert np.max(np.abs(model.residuals(fast.y.T))) <= 1e-12
