@@ -42,7 +42,10 @@ Restrictions: L must be quadratic in v without linear terms
 (``model.quadratic``); otherwise :class:`~nhham.errors.InputError` is raised.
 The nonlinear equations are solved by Newton's method: for constant W only
 for lam0 (m unknowns, analytic Jacobian); otherwise for (p_h, q1, lam0) with a
-finite-difference Jacobian evaluated in one batched call.
+finite-difference Jacobian. A model with a compiled library runs the whole loop in C
+(``nhham/numerics/c/rattle.c``: the same equations and the same Newton iterations, the
+states agree with the Python stepper's to round-off); :class:`_RattleStepper` (numpy,
+the Jacobian's columns in one batched call) is the fallback of a model without one.
 """
 
 from __future__ import annotations
@@ -194,6 +197,7 @@ class _RattleStepper:
             q1 = q_free + dq_dlam @ lam
             r, size = self._r3(q0, q1, h)
             err = float(np.max(np.abs(r) / size))
+            _finite_or_fail(err)
             if err <= self.tol:
                 break
             if it > 2 and err >= best:
@@ -247,10 +251,12 @@ class _RattleStepper:
         best = np.inf
         for it in range(self.maxiter):
             r = self._residual(z[None], q0, p0, W0, mu0, h)[0]
-            err = float(np.max(np.abs(r[:2 * n]) / scale[:2 * n]))
+            size = scale.copy()
             if m:
-                size = np.maximum(self._r3(q0, z[n:2 * n], h)[1], 1.0 + np.max(np.abs(p0)))
-                err = max(err, float(np.max(np.abs(r[2 * n:]) / size)))
+                size[2 * n:] = np.maximum(self._r3(q0, z[n:2 * n], h)[1],
+                                          1.0 + np.max(np.abs(p0)))
+            err = float(np.max(np.abs(r) / size))
+            _finite_or_fail(err)
             if err <= self.tol:
                 break
             if it > 3 and err >= best:
@@ -275,6 +281,13 @@ class _RattleStepper:
         Z = z[None, :] + np.diag(eps)
         R = self._residual(Z, q0, p0, W0, mu0, h)
         return ((R - r[None, :]) / eps[:, None]).T
+
+
+def _finite_or_fail(err):
+    """A non-finite residual: the step left the domain (as the compiled step says)."""
+    if not math.isfinite(err):
+        raise NumericalFailure(Status.NONFINITE, "non-finite residual in the Newton "
+                               "iteration of the RATTLE step; the run was stopped")
 
 
 def _floor_or_fail(err):
@@ -393,8 +406,10 @@ def rattle4(model, y0, t0, t1, h, *, save_every: int = 1, tol=None, recorder=Non
 
 
 def _compiled_ok(model):
-    """The compiled loop handles constant W (the common case); else Python."""
-    return model.compiled is not None and model.constant_W and model.path == "saddle"
+    """The compiled loop runs every model with a compiled library (constant W and W(q),
+    nonholonomic and holonomic rows, either path: the step uses the geometry kernels
+    only); the Python stepper is the fallback of a model without one."""
+    return model.compiled is not None
 
 
 _REDUCE_THE_STEP = {Status.NOT_CONVERGED: "; reduce the step"}
@@ -418,7 +433,8 @@ def _compiled_rattle(model, st, y0, t0, t1, h, recorder, composition, progress, 
     while True:
         before = int(info[0])
         t_room, z_room = recorder.room()
-        status = Status(model.compiled.rattle(y, h, N, recorder.stride, composition, z_room,
+        status = Status(model.compiled.rattle(y, h, N, recorder.stride, composition,
+                                              not model.constant_W, z_room,
                                               pointer, lam, wsp, first, st.tol, st.maxiter,
                                               PAUSE_SECONDS, info))
         first = False

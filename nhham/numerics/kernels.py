@@ -98,8 +98,8 @@ class CompiledRHS:
     C entry points (ctypes): ``nhham_rhs(y, out, pext)`` and
     ``nhham_rhs_batch(k, Y, OUT, pext)`` (``nhham_closed*`` for the
     closed-form path) with ``pext = [parameters, 2 alpha, beta^2]`` and
-    ``out = [dy (2n), lambda (m), power]``; ``nhham_rattle`` (the RATTLE loop
-    for constant W) and ``nhham_erk`` (scipy's explicit Runge-Kutta methods
+    ``out = [dy (2n), lambda (m), power]``; ``nhham_rattle`` (the RATTLE loop,
+    constant W or W(q)) and ``nhham_erk`` (scipy's explicit Runge-Kutta methods
     with projection, :meth:`erk`).
 
     When the library was also built as a CPython extension (``ext``, the
@@ -155,18 +155,20 @@ class CompiledRHS:
         status = (self._closed if closed else self._rhs)(yp, op, pext)
         return obuf, status
 
-    def rattle(self, y, h, nsteps, stride, composition, out, pext, lam, wsp, first, tol,
-               maxiter, pause_s, info):
-        """One call of the compiled RATTLE loop (constant W, ``nhham_rattle``): steps from
-        ``y`` (updated in place) until ``info[0] = nsteps``, a failure or ``pause_s``
-        seconds; every stride-th step goes to the rows of ``out`` (its first dimension
-        is the room). ``lam`` (m + 1), ``wsp`` (2 n*n: W, W^-1, filled when ``first``)
-        and ``info`` (int64: steps done, Newton iterations, rows stored by the call) are
-        carried from call to call. Returns the status (see the C source)."""
+    def rattle(self, y, h, nsteps, stride, composition, general, out, pext, lam, wsp, first,
+               tol, maxiter, pause_s, info):
+        """One call of the compiled RATTLE loop (``nhham_rattle``; ``general``: W depends
+        on q): steps from ``y`` (updated in place) until ``info[0] = nsteps``, a failure
+        or ``pause_s`` seconds; every stride-th step goes to the rows of ``out`` (its
+        first dimension is the room). ``lam`` (m + 1), ``wsp`` (2 n*n: W, W^-1 for
+        constant W, filled when ``first``) and ``info`` (int64: steps done, Newton
+        iterations, rows stored by the call) are carried from call to call. Returns the
+        status (see the C source)."""
         c = ctypes
         return self._lib.nhham_rattle(
             c.c_void_p(y.ctypes.data), c.c_double(h), c.c_long(nsteps), c.c_long(stride),
-            c.c_int(composition), c.c_void_p(out.ctypes.data), c.c_long(out.shape[0]), pext,
+            c.c_int(composition), c.c_int(int(general)), c.c_void_p(out.ctypes.data),
+            c.c_long(out.shape[0]), pext,
             c.c_void_p(lam.ctypes.data), c.c_void_p(wsp.ctypes.data), c.c_int(int(first)),
             c.c_double(tol), c.c_int(maxiter), c.c_double(pause_s),
             c.c_void_p(info.ctypes.data))

@@ -14,7 +14,7 @@ are compiled with lives in ``nhham/numerics/c/`` (package data):
   scaled saddle matrix when W is indefinite or nearly singular, the null-space solve when
   W's diagonal spans more than ``NHHAM_KKT_RATIO`` (``linalg.c``);
 - the right-hand side for one state and for a batch (``rhs.c``), the nonholonomic RATTLE
-  loop for constant W (``rattle.c``), and scipy's explicit Runge-Kutta methods (RK23,
+  loop, constant W or W(q) (``rattle.c``), and scipy's explicit Runge-Kutta methods (RK23,
   RK45, DOP853) as one loop with projection onto M_1 (``erk.c``, used by
   :func:`nhham.numerics.integrate.simulate`);
 - when the Python and numpy headers are installed, CPython entry points for the
