@@ -124,6 +124,7 @@ def cmd_sweep(args, steps):
                            scheduler=args.scheduler, workers=args.workers,
                            budget=args.budget, chunk_points=args.chunk, along=args.along,
                            policy=args.policy, progress=progress,
+                           values=getattr(args, "parameter_values", None),
                            run_options={"method": args.method, "rtol": args.rtol,
                                         "atol": args.atol, "t_end": args.t_end})
         except NhhamError:
@@ -170,7 +171,8 @@ def _name_the_scene(args) -> None:
     from nhham.system.scene import load_scene
 
     try:
-        args.loaded_scene = load_scene(args.scene, check_initial=False)
+        args.loaded_scene = load_scene(args.scene, check_initial=False,
+                                       values=getattr(args, "parameter_values", None))
     except NhhamError:
         pass
 

@@ -109,7 +109,8 @@ def sweep(scene, what: str, over=(), *, samples_count: int | None = None,
           resume: bool = False, overwrite: bool = False, scheduler: str | None = None,
           workers: int | None = None, client=None, budget: float | None = None,
           chunk_points: int | None = None, along: str | None = None,
-          run_options: dict | None = None, policy=None, progress=None) -> SweepResult:
+          run_options: dict | None = None, policy=None, progress=None,
+          values=None) -> SweepResult:
     """Run a parameter study.
 
     Parameters
@@ -157,6 +158,10 @@ def sweep(scene, what: str, over=(), *, samples_count: int | None = None,
         classify: the settings of the decisions.
     progress : callable, optional
         ``progress(done_points, total_points, elapsed_s)`` after each chunk.
+    values : mapping of str to float, optional
+        Parameter values every point has (the command's ``--set``), replacing the scene's
+        (a symbolic parameter gets one); a swept name cannot have one. Stored with the
+        options (``values``): a resumed study must be given the same.
 
     Returns
     -------
@@ -175,6 +180,7 @@ def sweep(scene, what: str, over=(), *, samples_count: int | None = None,
     # every option is checked before any work: the design's size from its counts, where
     # the results go, the scheduler and the workers
     design = _design(over, samples_count, sampler, seed, initial_perturbation, what)
+    fixed = _set_values(values, design)
     target = check_out(out, resume=resume, overwrite=overwrite)
     if client is None:   # (its warning, if any, is given once, by Pool.start)
         check_scheduler(scheduler, workers, warn=False)
@@ -185,11 +191,13 @@ def sweep(scene, what: str, over=(), *, samples_count: int | None = None,
     # threads share this process's model; classify's sympy holds the GIL: processes
     with Pool.start(scheduler, workers, client, deadline=deadline,
                     local="processes" if what == "classify" else "threads") as pool:
-        pool.warm(text, source, what)
+        pool.warm(text, source, what, fixed)
         # the preparation (symbolic for classify) is stopped by the budget's alarm; the
         # chunks then stop at its deadline, keeping what finished
         loaded, options, code_hash, var_spec, model = _prepared(
-            text, source, what, design, along, run_options, policy, budget, deadline)
+            text, source, what, design, along, run_options, policy, budget, deadline, fixed)
+        if fixed:   # what the workers load the scene with, and part of the study's key
+            options = {**options, "values": dict(fixed)}
         study = Study(what, text, source, code_hash, design, options)
         keep_context(study, loaded, model)
         attrs = _attributes(study)
@@ -244,14 +252,14 @@ def sweep(scene, what: str, over=(), *, samples_count: int | None = None,
 
 
 def _prepared(text, source, what, design, along, run_options, policy, budget,
-              deadline) -> tuple:
+              deadline, fixed=()) -> tuple:
     """(scene, options, code hash, variables, model): the study prepared within what is
     left of its budget (symbolic work is stopped by the budget's alarm)."""
     try:
         if deadline is not None and deadline - time.perf_counter() <= 0:
             raise BudgetExceeded("")
         with time_budget(None if deadline is None else deadline - time.perf_counter()):
-            loaded = _load(text, source, what)
+            loaded = _load(text, source, what, fixed)
             return (loaded,) + _prepare(what, loaded, design, along, run_options, policy)
     except BudgetExceeded:
         raise BudgetExceeded(f"the study's --budget of {budget:g} s ran out before its "
@@ -291,12 +299,29 @@ def _scene_text(scene) -> tuple:
                          key="scene") from None
 
 
-def _load(text, source, what):
+def _set_values(values, design) -> tuple:
+    """The ``--set`` values as (name, float) pairs; a name also swept is refused (which
+    of the two should a point have?)."""
+    fixed = tuple((str(k), float(v)) for k, v in dict(values or {}).items())
+    both = [name for name, _ in fixed if name in design.names]
+    if both:
+        raise InputError(f"--set {both[0]}: {both[0]!r} is also swept (--over "
+                         f"{both[0]}=...); give it either a value (--set) or a range "
+                         f"(--over), not both", key="--set")
+    return fixed
+
+
+def _load(text, source, what, fixed=()):
     from nhham.system.scene import loads_scene
 
     # [initial] is a simulate study's start (projected onto M_1 at each point): what
     # cannot be completed is refused there; the other kinds do not read it
-    scene = loads_scene(text, source, check_initial=False)
+    try:
+        scene = loads_scene(text, source, check_initial=False, values=dict(fixed))
+    except InputError as exc:   # a --set name that is not a parameter
+        if exc.key != "values":
+            raise
+        raise InputError(str(exc).replace("values: ", "--set: ", 1), key="--set") from None
     if what == "simulate" and scene.initial_problem is not None:
         raise scene.initial_problem
     return scene
