@@ -17,6 +17,8 @@ failed, the verdicts' counts) and ``plot``.
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 
 from nhham.errors import InputError, NhhamError
@@ -29,7 +31,8 @@ SWEEP_HELP = (
     "Evaluate the scene at every point of a grid (--over P=START:STOP:COUNT, one dimension "
     "per parameter) or of samples (--samples K over P=START:STOP ranges; "
     "--initial-perturbation for ensembles): the stability of its [steady] motion "
-    "(linearize; boundaries located along the first parameter), a run from its [initial] "
+    "(linearize; boundaries located along the first parameter, and along the second on a "
+    "grid of two or more), a run from its [initial] "
     "state (simulate) or its constraint-set verdict (classify). Chunks run on Dask, locally "
     "(threads or processes) or on a cluster (--scheduler ADDRESS), and are written to --out (.zarr, or .nc at the end) "
     "as they finish; --resume continues an interrupted study.",
@@ -150,6 +153,11 @@ def cmd_sweep(args, steps):
         warnings.append(f"{s['not_linearised']} points have no linearisation: the [steady] "
                         f"state is not on M_1, not steady or singular there (status in the "
                         f"results: 1, 2, 3)")
+    if args.what == "linearize" and s.get("across_unlocated_crossings"):
+        warnings.append(f"{s['across_unlocated_crossings']} grid intervals along {s['across']} "
+                        f"change their number of unstable eigenvalues with no eigenvalue on "
+                        f"the imaginary axis: no boundary is reported there "
+                        f"(boundary_across_unlocated in the results)")
     if args.what == "linearize" and s.get("unlocated_crossings"):
         warnings.append(f"{s['unlocated_crossings']} grid intervals along the boundaries' "
                         f"parameter change their number of unstable eigenvalues with no "
@@ -190,15 +198,11 @@ def summary(what: str, ds) -> dict:
         out: dict = {"stable_points": int(stable.sum()), "done_points": int(done.sum()),
                      "not_linearised": int(((status != 0) & done).sum())}
         if "boundary" in ds:
-            b = np.asarray(ds["boundary"].values)
-            kinds = np.asarray(ds["boundary_kind"].values)
-            for kind, name in ((0, "real"), (1, "complex")):
-                vals = b[(kinds == kind) & np.isfinite(b)]
-                out[f"{name}_crossings"] = int(vals.size)
-                out[f"{name}_crossing_range"] = ([float(vals.min()), float(vals.max())]
-                                                 if vals.size else None)
-            unlocated = np.asarray(ds["boundary_unlocated"].values)
-            out["unlocated_crossings"] = int(unlocated[unlocated > 0].sum())
+            out.update(_crossings(ds, "boundary", ""))
+        if "boundary_across" in ds:   # along the grid's second axis
+            options = json.loads(ds.attrs.get("options", "{}"))
+            out["across"] = options.get("across")
+            out.update(_crossings(ds, "boundary_across", "across_"))
         return out
     if what == "simulate":
         success = np.asarray(ds["success"].values, dtype=bool) & done
@@ -214,6 +218,22 @@ def summary(what: str, ds) -> dict:
     return {"done_points": int(done.sum()), "generic_points": int((case == -1).sum()),
             "case_points": {str(int(c)): int((case == c).sum())
                             for c in np.unique(case) if c >= 0}}
+
+
+def _crossings(ds, variable: str, prefix: str) -> dict:
+    """The located crossings of ``variable`` (and its ``_kind``, ``_unlocated``) by kind:
+    their number and range, and the intervals with no crossing located."""
+    out: dict = {}
+    b = np.asarray(ds[variable].values)
+    kinds = np.asarray(ds[f"{variable}_kind"].values)
+    for kind, name in ((0, "real"), (1, "complex")):
+        vals = b[(kinds == kind) & np.isfinite(b)]
+        out[f"{prefix}{name}_crossings"] = int(vals.size)
+        out[f"{prefix}{name}_crossing_range"] = ([float(vals.min()), float(vals.max())]
+                                                 if vals.size else None)
+    unlocated = np.asarray(ds[f"{variable}_unlocated"].values)
+    out[f"{prefix}unlocated_crossings"] = int(unlocated[unlocated > 0].sum())
+    return out
 
 
 def _text(args, result, data) -> str:
@@ -235,12 +255,14 @@ def _text(args, result, data) -> str:
                         if s["not_linearised"] else "")))
         from nhham.study.plot_style import CROSSING_STYLE
 
-        for kind in ("complex", "real"):
-            word = CROSSING_STYLE[kind]["label"]
-            if s.get(f"{kind}_crossings"):
-                lo, hi = s[f"{kind}_crossing_range"]
-                rows.append((f"{kind} crossings", f"{s[f'{kind}_crossings']}, {word}, "
-                                                  f"{lo:.6g} .. {hi:.6g}"))
+        for prefix, where in (("", ""), ("across_", f" along {s.get('across')}")):
+            for kind in ("complex", "real"):
+                word = CROSSING_STYLE[kind]["label"]
+                if s.get(f"{prefix}{kind}_crossings"):
+                    lo, hi = s[f"{prefix}{kind}_crossing_range"]
+                    rows.append((f"{kind} crossings{where}",
+                                 f"{s[f'{prefix}{kind}_crossings']}, {word}, "
+                                 f"{lo:.6g} .. {hi:.6g}"))
     elif args.what == "simulate":
         rows.append(("runs failed", str(s["failed_runs"])))
         rows.append(("max |energy error|", f"{s['max_energy_error']:.3g}"

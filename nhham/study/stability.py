@@ -9,7 +9,14 @@ directions chosen once at probe points (:func:`prepare`). On a grid the crossing
 imaginary axis along one swept parameter (``along``; the first by default) are located
 on every line of the grid, all lines' brackets together
 (:func:`~nhham.numerics.crossings.crossings_many`): the stability boundaries, e.g. the
-weave and capsize speeds of a bicycle at every trail.
+weave and capsize speeds of a bicycle at every trail. On a grid of two or more dimensions
+the crossings along its second axis (``across``, the first dimension other than
+``along``, recorded in the options) are located as well, on every line along it: the
+edge of the stable region where it runs along the first axis, which the lines along
+``along`` cross at a grazing angle or not at all. Chunks are slabs that hold whole lines
+along ``along`` where they fit, so a line along ``across`` is cut into pieces, each
+evaluated with the point before it and merged as written (:mod:`~nhham.study.lines`),
+which also holds after ``--resume``.
 
 Variables (``variables``): ``stable`` (every eigenvalue has Re < -tol), ``verdict``
 (1 stable, 0 unstable, -1 undecided or not linearised), ``spectral_abscissa`` (max Re),
@@ -20,7 +27,10 @@ values along ``along``, dimension ``crossing``, NaN-padded), ``boundary_kind`` (
 eigenvalue through 0, 1: a complex pair through the imaginary axis), ``boundary_direction``
 (+1: an eigenvalue's real part turns positive as the value grows), ``boundary_count`` and
 ``boundary_unlocated`` (intervals of the line where the number of unstable eigenvalues
-changes but no eigenvalue is on the imaginary axis: not reported as boundaries).
+changes but no eigenvalue is on the imaginary axis: not reported as boundaries); along
+the second axis the same five as ``boundary_across``, ``boundary_across_kind``,
+``boundary_across_direction``, ``boundary_across_count`` and
+``boundary_across_unlocated``, with the grid's dimensions other than ``across``.
 """
 
 from __future__ import annotations
@@ -29,8 +39,10 @@ import numpy as np
 
 from nhham.errors import ComputationError, InputError
 from nhham.numerics.batch_linearization import ChartChoice, linearize_batch
+from nhham.study.lines import ACROSS_VARIABLES, LINE_VARIABLES
 
-__all__ = ["prepare", "variables", "evaluate", "CROSSINGS", "XTOL"]
+__all__ = ["prepare", "variables", "evaluate", "across_of", "across_variables", "CROSSINGS",
+           "XTOL"]
 
 #: Room for crossings per line (a line with more keeps the first and says so in
 #: ``boundary_count``).
@@ -136,7 +148,8 @@ def variables(design, options) -> dict:
                  "boundary_direction": (("crossing",), np.int8, 0),
                  "boundary_count": ((), np.int16, -1),
                  "boundary_unlocated": ((), np.int16, -1)}
-    return {"point": point, "line": lines, "coords": extra}
+    return {"point": point, "line": lines, "across": across_variables(design, options),
+            "coords": extra}
 
 
 def evaluate(study, ctx, region) -> dict:
@@ -206,11 +219,42 @@ def _families(scene, model, P, choice):
 
 def _boundaries(study, scene, model, choice, region, values, batch, bad) -> dict:
     """The crossings along ``along`` on every line of the region, located together
-    (:func:`~nhham.numerics.crossings.crossings_many`)."""
+    (:func:`~nhham.numerics.crossings.crossings_many`); on a grid of two or more
+    dimensions those along ``across`` as well (the ``boundary_across`` variables)."""
+    out = _line_crossings(study, scene, model, choice, region, values, batch, bad,
+                          study.options["along"], LINE_VARIABLES)
+    if study.options.get("across") is not None:
+        out.update(_line_crossings(study, scene, model, choice, region, values, batch, bad,
+                                   study.options["across"], ACROSS_VARIABLES))
+    return out
+
+
+def across_variables(design, options) -> dict:
+    """The variables of the lines along ``across`` (``{}`` without a second axis): those
+    of the lines along ``along``, named ``boundary_across...``."""
+    if options.get("across") is None:
+        return {}
+    return dict(zip(ACROSS_VARIABLES, (
+        (("crossing",), float, np.nan), (("crossing",), np.int8, -1),
+        (("crossing",), np.int8, 0), ((), np.int16, -1), ((), np.int16, -1))))
+
+
+def across_of(design, along) -> str | None:
+    """The second axis of a grid whose crossings are located too: its first dimension
+    other than ``along`` (None for one dimension, samples, or no ``along``)."""
+    if along is None or design.kind != "grid" or len(design.dims) < 2:
+        return None
+    return next(d for d in design.dims if d != along)
+
+
+def _line_crossings(study, scene, model, choice, region, values, batch, bad, axis_name,
+                    names) -> dict:
+    """The crossings along ``axis_name`` on every line of the region, as the variables
+    ``names`` (:data:`~nhham.study.lines.LINE_VARIABLES` or ``ACROSS_VARIABLES``)."""
     from nhham.numerics.crossings import crossings_many
 
     dims = study.design.dims
-    a = dims.index(study.options["along"])
+    a = dims.index(axis_name)
     shape = tuple(len(range(*s.indices(n))) for s, n in zip(region, study.design.shape))
     along_values = values[dims[a]]
     rest = shape[:a] + shape[a + 1:]
@@ -233,19 +277,20 @@ def _boundaries(study, scene, model, choice, region, values, batch, bad) -> dict
         return _spectra(scene, model, choice, points)
 
     search = crossings_many(spectra_at, lines, xtol=XTOL, counts=line_counts)
-    out = {"boundary": np.full(rest + (CROSSINGS,), np.nan),
-           "boundary_kind": np.full(rest + (CROSSINGS,), -1, dtype=np.int8),
-           "boundary_direction": np.zeros(rest + (CROSSINGS,), dtype=np.int8),
-           "boundary_count": np.zeros(rest, dtype=np.int16),
-           "boundary_unlocated": np.zeros(rest, dtype=np.int16)}
+    value, kind, direction, count, unlocated_count = names
+    out = {value: np.full(rest + (CROSSINGS,), np.nan),
+           kind: np.full(rest + (CROSSINGS,), -1, dtype=np.int8),
+           direction: np.zeros(rest + (CROSSINGS,), dtype=np.int8),
+           count: np.zeros(rest, dtype=np.int16),
+           unlocated_count: np.zeros(rest, dtype=np.int16)}
     for line, crossings, unlocated in zip(np.ndindex(*rest), search.crossings,
                                           search.unlocated):
-        out["boundary_count"][line] = len(crossings)
-        out["boundary_unlocated"][line] = len(unlocated)
+        out[count][line] = len(crossings)
+        out[unlocated_count][line] = len(unlocated)
         for j, c in enumerate(crossings[:CROSSINGS]):
-            out["boundary"][line + (j,)] = c.value
-            out["boundary_kind"][line + (j,)] = 0 if c.kind == "real" else 1
-            out["boundary_direction"][line + (j,)] = c.direction
+            out[value][line + (j,)] = c.value
+            out[kind][line + (j,)] = 0 if c.kind == "real" else 1
+            out[direction][line + (j,)] = c.direction
     return out
 
 

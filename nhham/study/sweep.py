@@ -26,7 +26,7 @@ import numpy as np
 from nhham.budget import time_budget
 from nhham.errors import BudgetExceeded, InputError, OutputUnwritable
 from nhham.study.kinds import WHAT
-from nhham.study.lines import LINE_VARIABLES, merged
+from nhham.study.lines import ACROSS_VARIABLES, LINE_VARIABLES, merged
 from nhham.study.points import (Axis, Design, check_seed, chunk_slices, grid, parse_over,
                                 parse_perturbation, samples)
 from nhham.study.schedule import check_scheduler
@@ -212,16 +212,24 @@ def sweep(scene, what: str, over=(), *, samples_count: int | None = None,
             store = Store.create(target, _template(design, var_spec, attrs,
                                                    None if target is None else chunking),
                                  chunking, _fills(var_spec))
-        done = store.done(regions, [*var_spec["point"], *var_spec["line"]])
+        done = store.done(regions, [*var_spec["point"], *var_spec["line"],
+                                    *var_spec.get("across", {})])
         pending = [r for r in regions if not done[r].all()]
         already = int(done.sum())
         counter = {"points": already}
         cut = along_axis is not None and any(r[along_axis] != slice(0, design.shape[along_axis])
                                              for r in regions)
+        across_axis = (design.dims.index(options["across"]) if options.get("across")
+                       else None)
+        cut_across = across_axis is not None and any(
+            r[across_axis] != slice(0, design.shape[across_axis]) for r in regions)
 
         def on_result(region, data):
             if cut:   # a piece of a line: its crossings merged with the line's stored ones
                 data = merged(store.lines(design.dims, region, LINE_VARIABLES), data)
+            if cut_across:   # the same for the lines along the second axis
+                data = merged(store.lines(design.dims, region, ACROSS_VARIABLES), data,
+                              ACROSS_VARIABLES)
             store.write(design.dims, region, data)
             counter["points"] += int((~done[region]).sum())
             done[region] = True
@@ -341,6 +349,9 @@ def _prepare(what, scene, design, along, run_options, policy) -> tuple:
         from nhham.study import stability
 
         options = stability.prepare(scene, model, design, along)
+        across = stability.across_of(design, options.get("along"))
+        if across is not None:   # crossings located along the grid's second axis too
+            options = {**options, "across": across}
         return options, code_hash, stability.variables(design, options), model
     from nhham.study import ensemble
 
@@ -374,8 +385,8 @@ def _resumed_regions(store, design, regions, chunk_points) -> list:
 
 def _fills(spec) -> dict:
     """Each variable's fill value (what a point not computed holds)."""
-    fills = {name: fill for group in ("point", "line") for name, (_, _, fill) in
-             spec[group].items()}
+    fills = {name: fill for group in ("point", "line", "across") for name, (_, _, fill) in
+             spec.get(group, {}).items()}
     fills["done"] = False
     return fills
 
@@ -426,12 +437,13 @@ def _template(design, spec, attrs, chunking=None):
         shape = design.shape + tuple(len(spec["coords"][d]) for d in extra)
         dims = design.dims + extra
         data[name] = (dims, full(shape, fill, dtype=dtype, **_dims(chunking, dims)))
-    line_dims = tuple(d for d in design.dims if d != _along(attrs))
-    for name, (extra, dtype, fill) in spec["line"].items():
-        shape = tuple(design.shape[design.dims.index(d)] for d in line_dims) + tuple(
-            len(spec["coords"][d]) for d in extra)
-        dims = line_dims + extra
-        data[name] = (dims, full(shape, fill, dtype=dtype, **_dims(chunking, dims)))
+    for group, axis in (("line", _along(attrs)), ("across", _option(attrs, "across"))):
+        line_dims = tuple(d for d in design.dims if d != axis)
+        for name, (extra, dtype, fill) in spec.get(group, {}).items():
+            shape = tuple(design.shape[design.dims.index(d)] for d in line_dims) + tuple(
+                len(spec["coords"][d]) for d in extra)
+            dims = line_dims + extra
+            data[name] = (dims, full(shape, fill, dtype=dtype, **_dims(chunking, dims)))
     if design.perturbed:
         data["initial_perturbation"] = (("sample", "perturbed"), design.perturbations)
         coords["perturbed"] = np.array(design.perturbed, dtype=object)
@@ -449,9 +461,13 @@ def _dims(chunking, dims) -> dict:
 
 
 def _along(attrs) -> str | None:
+    return _option(attrs, "along")
+
+
+def _option(attrs, name):
     import json
 
-    return json.loads(attrs["options"]).get("along")
+    return json.loads(attrs["options"]).get(name)
 
 
 def progress_line(stream=sys.stderr):

@@ -183,7 +183,13 @@ def evaluate(study: Study, region: tuple, until: float | None = None) -> dict:
     along = study.options.get("along")
     if along is None:
         return stability.evaluate(study, context(study), region)
-    # a piece of a line longer than a chunk: with the point before it (lines.py)
+    # a piece of a line longer than a chunk: with the point before it (lines.py), along
+    # the grid's second axis too
     axis = study.design.dims.index(along)
-    grown, added = extended(region, axis)
-    return trimmed(stability.evaluate(study, context(study), grown), axis, added)
+    across = study.options.get("across")
+    if across is None:
+        grown, added = extended(region, axis)
+        return trimmed(stability.evaluate(study, context(study), grown), axis, added)
+    b = study.design.dims.index(across)
+    grown, (added, added_b) = extended(region, axis, b)
+    return trimmed(stability.evaluate(study, context(study), grown), axis, added, b, added_b)
