@@ -1,7 +1,8 @@
 """Start-up: each command imports what it needs when it needs it. Checked on
 ``sys.modules`` in a fresh interpreter (no timing): ``nhham --version`` and the import of
 the command's module load neither sympy nor numpy; a scene parse loads no scipy,
-matplotlib or parameter-study (Dask, xarray, Zarr) module; generating a numeric function
+matplotlib, networkx or parameter-study (Dask, xarray, Zarr) module, and neither does a
+plain classify (or derive, compare) of a small example; generating a numeric function
 does not load the submodules numpy keeps lazy (its star import would)."""
 
 import json
@@ -45,6 +46,23 @@ def test_a_scene_parse_loads_no_numerics_plotting_or_study_module(example):
                         f"load_scene('examples/{example}')")
     assert "sympy" in mods                  # the parse itself
     assert not mods & set(HEAVY), sorted(mods & set(HEAVY))
+
+
+@pytest.mark.parametrize("command, says", [("classify", "status                  determined"),
+                                           ("derive", "projected field P(xi_L)"),
+                                           ("compare", "AGREE exactly")])
+def test_a_plain_classification_loads_no_graph_numerics_plotting_or_study_module(command, says):
+    """networkx is imported only when someone asks for the provenance graph."""
+    mods = loaded_after("import contextlib, io\nfrom nhham.__main__ import run\n"
+                        "out = io.StringIO()\nwith contextlib.redirect_stdout(out):\n"
+                        f"    assert run(['{command}', 'examples/rolling_disk.toml']) == 0\n"
+                        f"assert {says!r} in out.getvalue(), out.getvalue()")
+    assert "sympy" in mods
+    assert not mods & set(HEAVY), sorted(mods & set(HEAVY))
+    later = loaded_after("from nhham import load_scene, analyze_constraints\n"
+                         "a = analyze_constraints(load_scene('examples/rolling_disk.toml')"
+                         ".system)\nassert a.provenance.number_of_nodes() == 2")
+    assert "networkx" in later          # the graph, once asked for
 
 
 def test_a_numeric_function_does_not_load_numpy_s_lazy_submodules():

@@ -104,12 +104,13 @@ def build_parser() -> argparse.ArgumentParser:
         add_common_arguments(p, budget=None if name in ("simulate", "bench", "sweep")
                              else DEFAULT_BUDGET)
         _add_shared_options(p, name)
-        if name != "sweep":  # a study sets its parameters with --over
-            p.add_argument("--set", action="append", default=[], dest="set_values",
-                           metavar="NAME=VALUE",
-                           help="give the parameter NAME the value VALUE for this run (a "
-                                "number as a scene writes one; repeatable); the JSON's "
-                                "scene.parameters has the values used")
+        p.add_argument("--set", action="append", default=[], dest="set_values",
+                       metavar="NAME=VALUE",
+                       help="give the parameter NAME the value VALUE for this run (a "
+                            "number as a scene writes one; repeatable); the JSON's "
+                            "scene.parameters has the values used"
+                            + ("; a study's every point has it (a name cannot be both "
+                               "--set and swept by --over)" if name == "sweep" else ""))
         if name in options:
             options[name](p)
     return parser

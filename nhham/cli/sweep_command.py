@@ -17,6 +17,7 @@ failed, the verdicts' counts) and ``plot``.
 
 from __future__ import annotations
 
+
 import numpy as np
 
 from nhham.errors import InputError, NhhamError
@@ -29,7 +30,8 @@ SWEEP_HELP = (
     "Evaluate the scene at every point of a grid (--over P=START:STOP:COUNT, one dimension "
     "per parameter) or of samples (--samples K over P=START:STOP ranges; "
     "--initial-perturbation for ensembles): the stability of its [steady] motion "
-    "(linearize; boundaries located along the first parameter), a run from its [initial] "
+    "(linearize; boundaries located along the first parameter, and along the second on a "
+    "grid of two or more), a run from its [initial] "
     "state (simulate) or its constraint-set verdict (classify). Chunks run on Dask, locally "
     "(threads or processes) or on a cluster (--scheduler ADDRESS), and are written to --out (.zarr, or .nc at the end) "
     "as they finish; --resume continues an interrupted study.",
@@ -127,6 +129,7 @@ def cmd_sweep(args, steps):
                            scheduler=args.scheduler, workers=args.workers,
                            budget=args.budget, chunk_points=args.chunk, along=args.along,
                            policy=args.policy, progress=progress,
+                           values=getattr(args, "parameter_values", None),
                            run_options={"method": args.method, "rtol": args.rtol,
                                         "atol": args.atol, "t_end": args.t_end})
         except NhhamError:
@@ -159,7 +162,8 @@ def _name_the_scene(args) -> None:
     from nhham.system.scene import load_scene
 
     try:
-        args.loaded_scene = load_scene(args.scene, check_initial=False)
+        args.loaded_scene = load_scene(args.scene, check_initial=False,
+                                       values=getattr(args, "parameter_values", None))
     except NhhamError:
         pass
 

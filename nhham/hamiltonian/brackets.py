@@ -23,11 +23,11 @@ from functools import cached_property
 from itertools import combinations
 from typing import Callable, Sequence
 
-import networkx as nx
 import numpy as np
 import sympy as sp
 
 from nhham.lagrangian.algebra import block_inverse, cancel
+from nhham.lagrangian.graphs import connected_components
 
 __all__ = [
     "canonical_bracket",
@@ -233,11 +233,9 @@ def connected_blocks(nonzero: np.ndarray | Sequence) -> list[list[int]]:
     """
     nz = np.asarray(nonzero, dtype=bool)
     k = nz.shape[0]
-    graph = nx.Graph()
-    graph.add_nodes_from(range(k))
-    graph.add_edges_from((a, b) for a in range(k) for b in range(a + 1, k)
-                         if nz[a, b] or nz[b, a])
-    return sorted((sorted(c) for c in nx.connected_components(graph)), key=lambda c: c[0])
+    edges = [(a, b) for a in range(k) for b in range(a + 1, k) if nz[a, b] or nz[b, a]]
+    return sorted((sorted(c) for c in connected_components(range(k), edges)),
+                  key=lambda c: c[0])
 
 
 class BivectorBracket:

@@ -69,7 +69,8 @@ class NotFormed(Exception):
 
 
 def closed_form_combinations(system, constraints, second_class, max_terms: int = 20000,
-                             time_limit: float = TIME_LIMIT):
+                             time_limit: float = TIME_LIMIT,
+                             max_coefficient_terms: int | None = None):
     """The first-class combinations gamma_k (k outside ``second_class``) in (q, p).
 
     Parameters
@@ -85,6 +86,10 @@ def closed_form_combinations(system, constraints, second_class, max_terms: int =
         more than MAX_PRODUCT_TERMS pairs of terms).
     time_limit : float
         Give up (NotFormed) after this many seconds.
+    max_coefficient_terms : int, optional
+        Give up (NotFormed) when a coefficient's numerator (a sub-Pfaffian) has more
+        terms, before it is written out: the caller then forms the coefficients reduced
+        on M_f (:mod:`nhham.hamiltonian.reduced_combinations`), far shorter there.
 
     Returns
     -------
@@ -123,6 +128,9 @@ def closed_form_combinations(system, constraints, second_class, max_terms: int =
             for i, a in enumerate(idx)}
         if not c[k]:
             raise NotFormed("the bracket block of the second-class set vanishes identically")
+        if max_coefficient_terms is not None and \
+                max(len(x) for x in c.values()) > max_coefficient_terms:
+            raise NotFormed(f"a coefficient of more than {max_coefficient_terms} terms")
         c = ctx.without_common_factor(c)
         # B' c = 0 on M_f for c_a = c'_a (uniform F) or F_a c'_a, B' the brackets of the
         # scaled constraints s_a chi_a; gamma_k = sum_a c_a s_a chi_a / (c_k s_k)

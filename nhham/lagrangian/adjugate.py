@@ -34,7 +34,6 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-import networkx as nx
 import sympy as sp
 
 from sympy.polys.matrices import DomainMatrix
@@ -42,6 +41,7 @@ from sympy.polys.matrices.exceptions import DMNotAField
 
 from nhham.errors import ComputationError
 from nhham.lagrangian.algebra import POLYNOMIAL_ERRORS, trig_normal
+from nhham.lagrangian.graphs import connected_components
 
 __all__ = ["ScaledInverse", "scaled_inverse", "divide_out", "scale_factors"]
 
@@ -166,13 +166,9 @@ def divide_out(expr, factors) -> sp.Expr:
 # ------------------------------------------------------------------ helpers
 def _diagonal_blocks(W) -> list:
     """Index sets of the diagonal blocks of W (connected components of its pattern)."""
-    G = nx.Graph()
-    G.add_nodes_from(range(W.rows))
-    for i in range(W.rows):
-        for j in range(i + 1, W.cols):
-            if W[i, j] != 0 or W[j, i] != 0:
-                G.add_edge(i, j)
-    return sorted(sorted(c) for c in nx.connected_components(G))
+    edges = [(i, j) for i in range(W.rows) for j in range(i + 1, W.cols)
+             if W[i, j] != 0 or W[j, i] != 0]
+    return sorted(sorted(c) for c in connected_components(range(W.rows), edges))
 
 
 def _adjugate(Wk):

@@ -35,13 +35,13 @@ from __future__ import annotations
 
 from typing import Callable, Sequence
 
-import networkx as nx
 import numpy as np
 import sympy as sp
 
 from nhham.errors import BudgetExceeded, ComputationError
 from nhham.lagrangian.adjugate import divide_out, scale_factors
 from nhham.lagrangian.algebra import cancel
+from nhham.lagrangian.graphs import Provenance
 from nhham.lagrangian.submanifold import Submanifold
 from nhham.system.expressions import short
 from nhham.system.naming import multiplier_symbol
@@ -153,9 +153,9 @@ def run_algorithm(base_field, vertical_fields, primary: Sequence, labels: Sequen
         raise ComputationError(f"{len(labels)} labels for {len(primary)} primary constraints")
     bound = N if max_stages is None else int(max_stages)
 
-    graph = nx.DiGraph()
+    graph = Provenance()
     for lab, chi in zip(labels, primary):
-        graph.add_node(lab, expr=chi, stage=1, kind=constraint_kind(lab))
+        graph = graph.with_node(lab, expr=chi, stage=1, kind=constraint_kind(lab))
     loop = _Loop(xi, Z, variables, lam, manifold_factory, graph, secondary_start,
                  secondary_prefix, scale=scale, closed_fields=closed_fields)
     return loop.run(primary, labels, bound)
@@ -336,9 +336,9 @@ class _Loop:
             evidence.append(Evidence(subject, dec, f"new constraint {label} = {short(expr)}"))
             new.append(expr)
             labels.append(label)
-            self.graph.add_node(label, expr=expr, stage=k + 1, kind="secondary")
+            self.graph = self.graph.with_node(label, expr=expr, stage=k + 1, kind="secondary")
             for src in dict.fromkeys(sources):
-                self.graph.add_edge(src, label, stage=k, label=f"stage {k}")
+                self.graph = self.graph.with_edge(src, label, stage=k, label=f"stage {k}")
         return new, labels, None
 
     def _rank_drop_check(self, k, M, A, rows, cols, chis):
@@ -410,7 +410,7 @@ class _Loop:
             status=status, stages=tuple(stages), final_constraints=tuple(chis),
             final_labels=tuple(labs), rank=rank, block=(tuple(rows), tuple(cols)),
             multiplier_symbols=self.lam, free_multiplier_symbols=free,
-            provenance=self.graph, inconsistency=inconsistency,
+            provenance_data=self.graph, inconsistency=inconsistency,
             warnings=tuple(dict.fromkeys(self.warnings)), converged=converged,
             dimension=dimension, variables=self.variables,
             fields=self._closed_fields(), manifold=M,
@@ -469,7 +469,7 @@ def rank_drop_warnings(k, manifold, base_field, vertical_fields, variables, mult
     not): the symbolic check of the loop, for callers that decided the rank elsewhere.
     ``scale``: δ when the fields (and A) are scaled by δ (see :func:`run_algorithm`)."""
     loop = _Loop(base_field, vertical_fields, tuple(variables), tuple(multipliers),
-                 lambda eqs: manifold.with_equations(eqs), nx.DiGraph(), 0, "secondary",
+                 lambda eqs: manifold.with_equations(eqs), Provenance(), 0, "secondary",
                  scale=scale)
     loop._rank_drop_check(k, manifold, A, list(rows), list(cols), list(chis))
     return loop.warnings

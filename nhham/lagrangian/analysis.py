@@ -18,12 +18,12 @@ from functools import cached_property
 from types import MappingProxyType
 from typing import TYPE_CHECKING, Mapping, cast
 
-import networkx as nx
 import sympy as sp
 
 from nhham.errors import ComputationError, InputError
 from nhham.lagrangian.algebra import cancel
 from nhham.lagrangian.decision import Assumption
+from nhham.lagrangian.graphs import Provenance, connected_components
 from nhham.lagrangian.engine import Policy, decide, policy_of
 from nhham.lagrangian.points import jacobian_row
 from nhham.lagrangian.algorithm import (
@@ -95,10 +95,12 @@ class ConstraintAnalysis:
     dropped : tuple of nhham.DroppedConstraint
         Redundant constraints dropped before the algorithm ran
         (``System(..., drop_redundant=True)``).
-    provenance : networkx.DiGraph
+    provenance_data : Provenance
         Nodes: constraint labels (``holonomic[0]``, ``holonomic[0].lift``,
         ``constraints[1]``, ``secondary[0]``) with attributes ``expr``, ``stage``,
         ``kind`` and ``block``; edges labelled by ``stage``: primary -> secondary -> ...
+    provenance : networkx.DiGraph (computed on first use)
+        The same as a graph (networkx is imported only then).
     blocks : tuple of Block
         The independent blocks, each analysed on its own.
     inconsistency : str or None
@@ -132,7 +134,7 @@ class ConstraintAnalysis:
     regular: bool
     free_multiplier_symbols: tuple
     dropped: tuple
-    provenance: nx.DiGraph
+    provenance_data: Provenance
     blocks: tuple
     inconsistency: str | None
     warnings: tuple
@@ -146,6 +148,11 @@ class ConstraintAnalysis:
     def free_multipliers(self) -> int:
         """Number of free multipliers."""
         return len(self.free_multiplier_symbols)
+
+    @cached_property
+    def provenance(self):
+        """The provenance as a ``networkx.DiGraph`` (see the class docstring)."""
+        return self.provenance_data.graph()
 
     @cached_property
     def multipliers(self) -> Mapping:
@@ -321,7 +328,7 @@ def analyze_constraints(system, *, precision: int | None = None, samples: int = 
                                    seed=policy.seed, closed_form=None)
     for spec in specs:
         run = _run_block(system, spec, policy, max_stages, start, geometry)
-        start += sum(1 for _, d in run.provenance.nodes(data=True) if d["kind"] == "secondary")
+        start += len(run.provenance_data.labels(kind="secondary"))
         blocks.append(Block(tuple(system.coordinates[i] for i in spec["coords"]),
                             tuple(spec["labels"]), run))
     _check_autonomous(system, blocks)
@@ -378,8 +385,7 @@ def _decompose(system):
     index = {}
     for i, (q, v) in enumerate(zip(system.coordinates, system.velocities)):
         index[q] = index[v] = i
-    G = nx.Graph()
-    G.add_nodes_from(("q", i) for i in range(n))
+    edges: list = []      # the coupling graph: ("q", A), ("g", k), ("c", p) nodes
     parts = getattr(system, "quadratic_parts", None)
     if parts is None:
         terms = sp.Add.make_args(sp.expand(system.lagrangian))
@@ -399,21 +405,23 @@ def _decompose(system):
         idx = sorted({index[s] for s in t.free_symbols if s in index})
         term_sets.append((t, idx))
         for a, b in zip(idx, idx[1:]):
-            G.add_edge(("q", a), ("q", b))
+            edges.append((("q", a), ("q", b)))
     if system.has_forces:  # a force on q^A couples A to the coordinates it depends on
         for A, f in enumerate(system.generalized_forces):
             for s in f.free_symbols:
                 if s in index:
-                    G.add_edge(("q", A), ("q", index[s]))
+                    edges.append((("q", A), ("q", index[s])))
     for k, g in enumerate(system.holonomic):
         for s in g.free_symbols:
             if s in index:
-                G.add_edge(("g", k), ("q", index[s]))
+                edges.append((("g", k), ("q", index[s])))
     for p in range(nh, system.m):
         for s in system.phi[p].free_symbols:
             if s in index:
-                G.add_edge(("c", p), ("q", index[s]))
-    comps = [sorted(c, key=lambda x: (x[0] != "q", x[1])) for c in nx.connected_components(G)]
+                edges.append((("c", p), ("q", index[s])))
+    nodes = [("q", i) for i in range(n)] + [x for edge in edges for x in edge]
+    comps = [sorted(c, key=lambda x: (x[0] != "q", x[1]))
+             for c in connected_components(nodes, edges)]
     constrained, free = [], []
     for c in comps:
         coords = sorted(i for kind, i in c if kind == "q")
@@ -486,15 +494,14 @@ def _run_block(system, spec, policy, max_stages, start, geometry):
         secondary_start=start, scale=geo.field_scale,
         closed_fields=lambda: (geo.euler_lagrange_field, geo.vertical_fields),
     )
+    graph = run.provenance_data
     for i in spec["hol"]:
         lift = f"holonomic[{i}].lift"
-        if run.provenance.has_node(lift):
-            run.provenance.add_edge(f"holonomic[{i}]", lift, stage=1,
+        if graph.has_node(lift):
+            graph = graph.with_edge(f"holonomic[{i}]", lift, stage=1,
                                     label="stage 1 (complete lift)")
-    block_name = ",".join(q.name for q in view.coordinates)
-    for node in run.provenance.nodes:
-        run.provenance.nodes[node]["block"] = block_name
-    return run
+    return replace(run, provenance_data=graph.with_attribute(
+        "block", ",".join(q.name for q in view.coordinates)))
 
 
 
@@ -540,9 +547,9 @@ def _stage_one_at_points(view, geo, exprs, labels, lam, factory, policy):
                   new_labels=(), rank=r, augmented_rank=r,
                   block=(tuple(labels[j] for j in rows), tuple(lam[i] for i in cols)),
                   conditions=conditions, decisions=evidence)
-    graph = nx.DiGraph()
+    graph = Provenance()
     for lab, chi in zip(labels, exprs):
-        graph.add_node(lab, expr=chi, stage=1, kind=constraint_kind(lab))
+        graph = graph.with_node(lab, expr=chi, stage=1, kind=constraint_kind(lab))
     warnings = [w for d in (verdict.rank, verdict.consistent, verdict.jacobian_rank)
                 for w in d.warnings]
     M = factory(tuple(exprs))
@@ -558,7 +565,7 @@ def _stage_one_at_points(view, geo, exprs, labels, lam, factory, policy):
     return AlgorithmRun(
         status="determined", stages=(stage,), final_constraints=tuple(exprs),
         final_labels=tuple(labels), rank=r, block=(tuple(rows), tuple(cols)),
-        multiplier_symbols=tuple(lam), free_multiplier_symbols=(), provenance=graph,
+        multiplier_symbols=tuple(lam), free_multiplier_symbols=(), provenance_data=graph,
         inconsistency=None, warnings=tuple(warnings), converged=True, dimension=dimension,
         variables=tuple(view.state),
         fields=lambda: (geo.euler_lagrange_field, geo.vertical_fields), manifold=M,
@@ -613,7 +620,6 @@ def _merge(system, blocks, opts, policy, geometry) -> ConstraintAnalysis:
         warnings += [(f"block {tag.strip()}: " if tag else "") + w for w in r.warnings]
     first = stages[0] if stages else None
     rank_C = first.rank if first else 0
-    provenance = nx.compose_all([r.provenance for r in runs]) if runs else nx.DiGraph()
     dims = [r.dimension for r in runs]
     return ConstraintAnalysis(
         system=system, status=status, stages=tuple(stages),
@@ -621,7 +627,8 @@ def _merge(system, blocks, opts, policy, geometry) -> ConstraintAnalysis:
         final_labels=sum((r.final_labels for r in runs), ()),
         rank_C=rank_C, regular=(rank_C == system.m),
         free_multiplier_symbols=free,
-        dropped=tuple(getattr(system, "dropped", ())), provenance=provenance,
+        dropped=tuple(getattr(system, "dropped", ())),
+        provenance_data=Provenance.union(r.provenance_data for r in runs),
         blocks=tuple(blocks), inconsistency=inconsistency, warnings=tuple(warnings),
         converged=all(r.converged for r in runs),
         dimension=None if None in dims else sum(dims), options=opts, policy=policy, geometry=geometry,

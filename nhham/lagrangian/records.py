@@ -11,12 +11,12 @@ from functools import cached_property
 from types import MappingProxyType
 from typing import Callable, Mapping
 
-import networkx as nx
 import sympy as sp
 
 from nhham.errors import ComputationError
 from nhham.lagrangian.algebra import cancel, solve_linear, tidy, tidy_light
 from nhham.lagrangian.decision import Decision
+from nhham.lagrangian.graphs import Provenance
 from nhham.lagrangian.submanifold import Submanifold
 
 __all__ = ["Evidence", "Stage", "AlgorithmRun", "tangency_matrix", "solve_on"]
@@ -146,10 +146,12 @@ class AlgorithmRun:
         ξ + λ^i Z_i with the determined λ substituted and the free λ^α as symbols.
     tangency_matrix, tangency_rhs : sympy.Matrix (computed on first use)
         A_ji = Z_i(χ_j) and b_j = ξ(χ_j) over the final constraints.
-    provenance : networkx.DiGraph
+    provenance_data : Provenance
         Constraint labels as nodes (attributes ``expr``, ``stage``, ``kind``); an
         edge a -> b (attribute ``stage``) when the condition that produced b at
         that stage involves the tangency equation of a.
+    provenance : networkx.DiGraph (computed on first use)
+        The same as a graph (networkx is imported only then).
     inconsistency : str or None
         At which stage and why the problem has no solution.
     warnings : tuple of str
@@ -188,7 +190,7 @@ class AlgorithmRun:
     block: tuple
     multiplier_symbols: tuple
     free_multiplier_symbols: tuple
-    provenance: nx.DiGraph
+    provenance_data: Provenance
     inconsistency: str | None
     warnings: tuple
     converged: bool
@@ -198,6 +200,11 @@ class AlgorithmRun:
     manifold: Submanifold | None = field(default=None, compare=False, repr=False)
     scaled_fields: Callable | None = field(default=None, compare=False, repr=False)
     denominator: object = field(default=None, compare=False, repr=False)
+
+    @cached_property
+    def provenance(self):
+        """The provenance as a ``networkx.DiGraph`` (see the class docstring)."""
+        return self.provenance_data.graph()
 
     @cached_property
     def scale(self) -> sp.Expr:

@@ -37,7 +37,8 @@ def classify_data(analysis, classes=None) -> dict:
     system = analysis.system
     momenta = [momentum_symbol(q) for q in system.coordinates]
     formed = classes is not None and classes.first_class_combinations is not None
-    combos = [expr_text(display_form(c, momenta))
+    state = set(system.coordinates) | set(momenta)
+    combos = [expr_text(_combination_form(c, momenta, state))
               for c in classes.first_class_combinations] if formed else []
     coefficients = [[{"label": lab, "coefficient": expr_text(display_form(c, momenta))}
                      for lab, c in d.items()]
@@ -126,6 +127,17 @@ def classify_text(title: str, data: dict) -> str:
     if data["inconsistency"]:
         lines.append(f"inconsistent: {data['inconsistency']}")
     return "\n".join(lines)
+
+
+def _combination_form(gamma, momenta, state):
+    """A combination for display: term by term when it is a sum of constraints whose
+    coefficients have denominators in the state (over one denominator it would be far
+    longer, and forming it takes seconds: the segway's), else as a whole."""
+    terms = sp.Add.make_args(gamma)
+    if len(terms) > 1 and any(sp.fraction(sp.together(t))[1].free_symbols & state
+                              for t in terms):
+        return sp.Add(*[display_form(t, momenta) for t in terms])
+    return display_form(gamma, momenta)
 
 
 def _combination_text(coefficients: list) -> str:

@@ -147,7 +147,9 @@ def _case_row(study, which: int, values: dict) -> dict:
     # a case's index means something only in its study (its cases, names and policy)
     key = (study.scene_text, repr(sorted(study.options.items())), which)
     if key not in _ROWS:
-        _ROWS[key] = command_row(study.scene_text, study.scene_source, values,
+        # the point's values over those every point has (--set)
+        given = {**dict(study.options.get("values") or {}), **values}
+        _ROWS[key] = command_row(study.scene_text, study.scene_source, given,
                                  study.options.get("policy"))
     return _ROWS[key]
 

@@ -3,7 +3,9 @@
 - :func:`plot_stability_map`: linearize over two parameters: each cell tinted by its
   verdict (stable, unstable, undecided), the first ``--over`` (or ``along``) across, with
   the located boundaries drawn as curves (a complex pair crossing the imaginary axis,
-  e.g. a bicycle's weave speed; a real eigenvalue crossing 0, its capsize speed); over
+  e.g. a bicycle's weave speed; a real eigenvalue crossing 0, its capsize speed), and
+  those located along the second axis (``boundary_across``) as marked points on the
+  same colours (the edge of the stable region where it runs along the first axis); over
   one parameter, the spectral abscissa with the stable stretches tinted and the
   boundaries marked; over samples, the points coloured by their verdict.
 - :func:`plot_ensemble`: simulate: the spread of the end states (the first two swept or
@@ -99,6 +101,7 @@ def plot_stability_map(ds, ax=None):
         X, Y = ds.coords[along].values, ds.coords[other].values
         handles = _verdict_mesh(ax, X, Y, np.asarray(shown.values, dtype=float))
         handles += _boundaries_2d(ds, ax, other)
+        handles += _boundaries_across_2d(ds, ax, along, other)
         ax.set_xlabel(along)
         ax.set_ylabel(other)
         ax.set_xlim(X.min(), X.max())
@@ -188,6 +191,35 @@ def _boundaries_2d(ds, ax, other) -> list:
                 (line,) = ax.plot(vals[:, j], y, lw=1.6, color=style["color"],
                                   ls=style["linestyle"],
                                   label=style["label"] if first else "_nolegend_")
+                if first:
+                    handles.append(line)
+                first = False
+    return handles
+
+
+def _boundaries_across_2d(ds, ax, along, other) -> list:
+    """The crossings located along the second axis (``boundary_across``: the edge of the
+    stable region seen along ``other`` at each value of ``along``) as marked curves in
+    the colours of their kind; their legend handles."""
+    if "boundary_across" not in ds or ds["boundary_across"].dims[0] != along:
+        return []
+    x = ds.coords[along].values
+    vals = np.asarray(ds["boundary_across"].values)
+    kind = np.asarray(ds["boundary_across_kind"].values)
+    if vals.ndim > 2:   # more swept parameters: the first value of the others
+        vals = vals.reshape(vals.shape[0], -1, vals.shape[-1])[:, 0, :]
+        kind = kind.reshape(kind.shape[0], -1, kind.shape[-1])[:, 0, :]
+    handles = []
+    for code in (1, 0):
+        style = CROSSING_STYLE[crossing_kind(code)]
+        picked = np.where(kind == code, vals, np.nan)
+        first = True
+        for j in range(picked.shape[1]):
+            if np.isfinite(picked[:, j]).any():
+                (line,) = ax.plot(x, picked[:, j], lw=0.8, color=style["color"],
+                                  ls="none", marker="o", ms=3.5, mfc="white",
+                                  label=(f"{style['label']} (located along {other})"
+                                         if first else "_nolegend_"))
                 if first:
                     handles.append(line)
                 first = False

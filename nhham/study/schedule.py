@@ -256,14 +256,15 @@ class Pool:
                              f"running dask scheduler", key="--scheduler") from None
         return cls(scheduler, _count(client, workers), client, owned=(client,))
 
-    def warm(self, scene_text: str, source: str, what: str) -> None:
-        """Have every worker parse the scene and build its model now (not waited for)."""
+    def warm(self, scene_text: str, source: str, what: str, values: tuple = ()) -> None:
+        """Have every worker parse the scene (with the parameter ``values``, pairs) and
+        build its model now (not waited for)."""
         if self.client is None:  # threads share this process's model
             return
         for address in self.client.scheduler_info().get("workers", {}):
             self._warming.append(self.client.submit(
-                warm, scene_text, source, what, workers=[address], allow_other_workers=False,
-                pure=False))
+                warm, scene_text, source, what, values, workers=[address],
+                allow_other_workers=False, pure=False))
 
     def run(self, study, regions, on_result, deadline: float | None = None) -> None:
         """Evaluate ``study`` on every region; ``on_result(region, data)`` as each finishes.

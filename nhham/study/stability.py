@@ -9,7 +9,14 @@ directions chosen once at probe points (:func:`prepare`). On a grid the crossing
 imaginary axis along one swept parameter (``along``; the first by default) are located
 on every line of the grid, all lines' brackets together
 (:func:`~nhham.numerics.crossings.crossings_many`): the stability boundaries, e.g. the
-weave and capsize speeds of a bicycle at every trail.
+weave and capsize speeds of a bicycle at every trail. On a grid of two or more dimensions
+the crossings along its second axis (``across``, the first dimension other than
+``along``, recorded in the options) are located as well, on every line along it: the
+edge of the stable region where it runs along the first axis, which the lines along
+``along`` cross at a grazing angle or not at all. Chunks are slabs that hold whole lines
+along ``along`` where they fit, so a line along ``across`` is cut into pieces, each
+evaluated with the point before it and merged as written (:mod:`~nhham.study.lines`),
+which also holds after ``--resume``.
 
 Variables (``variables``): ``stable`` (every eigenvalue has Re < -tol), ``verdict``
 (1 stable, 0 unstable, -1 undecided or not linearised), ``spectral_abscissa`` (max Re),
@@ -21,7 +28,10 @@ values along ``along``, dimension ``crossing``, NaN-padded), ``boundary_kind`` (
 eigenvalue through 0, 1: a complex pair through the imaginary axis), ``boundary_direction``
 (+1: an eigenvalue's real part turns positive as the value grows), ``boundary_count`` and
 ``boundary_unlocated`` (intervals of the line where the number of unstable eigenvalues
-changes but no eigenvalue is on the imaginary axis: not reported as boundaries).
+changes but no eigenvalue is on the imaginary axis: not reported as boundaries); along
+the second axis the same five as ``boundary_across``, ``boundary_across_kind``,
+``boundary_across_direction``, ``boundary_across_count`` and
+``boundary_across_unlocated``, with the grid's dimensions other than ``across``.
 """
 
 from __future__ import annotations
@@ -33,9 +43,10 @@ import numpy as np
 from nhham.errors import ComputationError, InputError
 from nhham.journeys.stability import steady_states
 from nhham.numerics.batch_linearization import ChartChoice, linearize_batch
+from nhham.study.lines import ACROSS_VARIABLES, LINE_VARIABLES
 
 __all__ = ["prepare", "variables", "evaluate", "summary", "summary_warnings", "summary_rows",
-           "CROSSINGS", "XTOL"]
+           "across_of", "across_variables", "CROSSINGS", "XTOL"]
 
 #: Room for crossings per line (a line with more keeps the first and says so in
 #: ``boundary_count``).
@@ -109,9 +120,13 @@ def prepare(scene, model, design, *, along: str | None = None, run_options=None,
         lin = linearize(m, state, independent=lin.chart, family=family or None,
                         neutral=[s for s in common if not s.startswith("d/d")])
     choice = ChartChoice.of(lin)
-    return {"chart": list(choice.chart), "neutral": list(choice.neutral),
-            "coordinates": list(choice.coordinates), "along": along,
-            "inputs": list(model.input_names)}
+    options = {"chart": list(choice.chart), "neutral": list(choice.neutral),
+               "coordinates": list(choice.coordinates), "along": along,
+               "inputs": list(model.input_names)}
+    across = across_of(design, along)
+    if across is not None:   # crossings located along the grid's second axis too
+        options["across"] = across
+    return options
 
 
 def variables(design, options) -> dict:
@@ -142,7 +157,8 @@ def variables(design, options) -> dict:
                  "boundary_direction": (("crossing",), np.int8, 0),
                  "boundary_count": ((), np.int16, -1),
                  "boundary_unlocated": ((), np.int16, -1)}
-    return {"point": point, "line": lines, "coords": extra}
+    return {"point": point, "line": lines, "across": across_variables(design, options),
+            "coords": extra}
 
 
 def evaluate(study, ctx, region, until: float | None = None) -> dict:
@@ -194,11 +210,42 @@ def _families(scene, model, P, choice):
 def _boundaries(study, scene, model, choice, region, values, batch, bad) -> dict:
     """The crossings along ``along`` on every line of the region, located together
     (:class:`~nhham.numerics.crossings.CrossingFinder`: it asks for spectra, this study
-    computes them)."""
+    computes them); on a grid of two or more
+    dimensions those along ``across`` as well (the ``boundary_across`` variables)."""
+    out = _line_crossings(study, scene, model, choice, region, values, batch, bad,
+                          study.options["along"], LINE_VARIABLES)
+    if study.options.get("across") is not None:
+        out.update(_line_crossings(study, scene, model, choice, region, values, batch, bad,
+                                   study.options["across"], ACROSS_VARIABLES))
+    return out
+
+
+def across_variables(design, options) -> dict:
+    """The variables of the lines along ``across`` (``{}`` without a second axis): those
+    of the lines along ``along``, named ``boundary_across...``."""
+    if options.get("across") is None:
+        return {}
+    return dict(zip(ACROSS_VARIABLES, (
+        (("crossing",), float, np.nan), (("crossing",), np.int8, -1),
+        (("crossing",), np.int8, 0), ((), np.int16, -1), ((), np.int16, -1))))
+
+
+def across_of(design, along) -> str | None:
+    """The second axis of a grid whose crossings are located too: its first dimension
+    other than ``along`` (None for one dimension, samples, or no ``along``)."""
+    if along is None or design.kind != "grid" or len(design.dims) < 2:
+        return None
+    return next(d for d in design.dims if d != along)
+
+
+def _line_crossings(study, scene, model, choice, region, values, batch, bad, axis_name,
+                    names) -> dict:
+    """The crossings along ``axis_name`` on every line of the region, as the variables
+    ``names`` (:data:`~nhham.study.lines.LINE_VARIABLES` or ``ACROSS_VARIABLES``)."""
     from nhham.numerics.crossings import CrossingFinder
 
     dims = study.design.dims
-    a = dims.index(study.options["along"])
+    a = dims.index(axis_name)
     shape = tuple(len(range(*s.indices(n))) for s, n in zip(region, study.design.shape))
     along_values = values[dims[a]]
     rest = shape[:a] + shape[a + 1:]
@@ -222,19 +269,20 @@ def _boundaries(study, scene, model, choice, region, values, batch, bad) -> dict
                                for line, x in finder.requests]) for k in values}
         finder.supply(_spectra(scene, model, choice, points))
     search = finder.result()
-    out = {"boundary": np.full(rest + (CROSSINGS,), np.nan),
-           "boundary_kind": np.full(rest + (CROSSINGS,), -1, dtype=np.int8),
-           "boundary_direction": np.zeros(rest + (CROSSINGS,), dtype=np.int8),
-           "boundary_count": np.zeros(rest, dtype=np.int16),
-           "boundary_unlocated": np.zeros(rest, dtype=np.int16)}
+    value, kind, direction, count, unlocated_count = names
+    out = {value: np.full(rest + (CROSSINGS,), np.nan),
+           kind: np.full(rest + (CROSSINGS,), -1, dtype=np.int8),
+           direction: np.zeros(rest + (CROSSINGS,), dtype=np.int8),
+           count: np.zeros(rest, dtype=np.int16),
+           unlocated_count: np.zeros(rest, dtype=np.int16)}
     for line, crossings, unlocated in zip(np.ndindex(*rest), search.crossings,
                                           search.unlocated):
-        out["boundary_count"][line] = len(crossings)
-        out["boundary_unlocated"][line] = len(unlocated)
+        out[count][line] = len(crossings)
+        out[unlocated_count][line] = len(unlocated)
         for j, c in enumerate(crossings[:CROSSINGS]):
-            out["boundary"][line + (j,)] = c.value
-            out["boundary_kind"][line + (j,)] = 0 if c.kind == "real" else 1
-            out["boundary_direction"][line + (j,)] = c.direction
+            out[value][line + (j,)] = c.value
+            out[kind][line + (j,)] = 0 if c.kind == "real" else 1
+            out[direction][line + (j,)] = c.direction
     return out
 
 
@@ -266,22 +314,36 @@ def _spectra(scene, model, choice, points) -> list:
 
 def summary(ds) -> dict:
     """What the study found, in a few numbers (JSON-ready): stable and unlinearised
-    points, the crossings of each kind and their range, the unlocated ones."""
+    points, the crossings of each kind and their range, the unlocated ones (along the
+    grid's second axis too, ``across_...``)."""
+    import json
+
     done = np.asarray(ds["done"].values, dtype=bool)
     stable = np.asarray(ds["stable"].values, dtype=bool) & done
     status = np.asarray(ds["status"].values)
     out: dict = {"stable_points": int(stable.sum()), "done_points": int(done.sum()),
                  "not_linearised": int(((status != 0) & done).sum())}
     if "boundary" in ds:
-        b = np.asarray(ds["boundary"].values)
-        kinds = np.asarray(ds["boundary_kind"].values)
-        for kind, name in ((0, "real"), (1, "complex")):
-            vals = b[(kinds == kind) & np.isfinite(b)]
-            out[f"{name}_crossings"] = int(vals.size)
-            out[f"{name}_crossing_range"] = ([float(vals.min()), float(vals.max())]
-                                             if vals.size else None)
-        unlocated = np.asarray(ds["boundary_unlocated"].values)
-        out["unlocated_crossings"] = int(unlocated[unlocated > 0].sum())
+        out.update(_crossings(ds, "boundary", ""))
+    if "boundary_across" in ds:   # along the grid's second axis
+        out["across"] = json.loads(ds.attrs.get("options", "{}")).get("across")
+        out.update(_crossings(ds, "boundary_across", "across_"))
+    return out
+
+
+def _crossings(ds, variable: str, prefix: str) -> dict:
+    """The located crossings of ``variable`` (and its ``_kind``, ``_unlocated``) by kind:
+    their number and range, and the intervals with no crossing located."""
+    out: dict = {}
+    b = np.asarray(ds[variable].values)
+    kinds = np.asarray(ds[f"{variable}_kind"].values)
+    for kind, name in ((0, "real"), (1, "complex")):
+        vals = b[(kinds == kind) & np.isfinite(b)]
+        out[f"{prefix}{name}_crossings"] = int(vals.size)
+        out[f"{prefix}{name}_crossing_range"] = ([float(vals.min()), float(vals.max())]
+                                                 if vals.size else None)
+    unlocated = np.asarray(ds[f"{variable}_unlocated"].values)
+    out[f"{prefix}unlocated_crossings"] = int(unlocated[unlocated > 0].sum())
     return out
 
 
@@ -292,6 +354,11 @@ def summary_warnings(s: dict) -> list:
         out.append(f"{s['not_linearised']} points have no linearisation: the [steady] "
                    f"state is not on M_1, not steady or singular there (status in the "
                    f"results: 1, 2, 3)")
+    if s.get("across_unlocated_crossings"):
+        out.append(f"{s['across_unlocated_crossings']} grid intervals along {s['across']} "
+                   f"change their number of unstable eigenvalues with no eigenvalue on "
+                   f"the imaginary axis: no boundary is reported there "
+                   f"(boundary_across_unlocated in the results)")
     if s.get("unlocated_crossings"):
         out.append(f"{s['unlocated_crossings']} grid intervals along the boundaries' "
                    f"parameter change their number of unstable eigenvalues with no "
@@ -307,10 +374,12 @@ def summary_rows(s: dict) -> list:
     rows = [("stable", f"{s['stable_points']} of {s['done_points']} points"
              + (f"; {s['not_linearised']} not linearised (status != 0)"
                 if s["not_linearised"] else ""))]
-    for kind in ("complex", "real"):
-        word = CROSSING_STYLE[kind]["label"]
-        if s.get(f"{kind}_crossings"):
-            lo, hi = s[f"{kind}_crossing_range"]
-            rows.append((f"{kind} crossings", f"{s[f'{kind}_crossings']}, {word}, "
-                                              f"{lo:.6g} .. {hi:.6g}"))
+    for prefix, where in (("", ""), ("across_", f" along {s.get('across')}")):
+        for kind in ("complex", "real"):
+            word = CROSSING_STYLE[kind]["label"]
+            if s.get(f"{prefix}{kind}_crossings"):
+                lo, hi = s[f"{prefix}{kind}_crossing_range"]
+                rows.append((f"{kind} crossings{where}",
+                             f"{s[f'{prefix}{kind}_crossings']}, {word}, "
+                             f"{lo:.6g} .. {hi:.6g}"))
     return rows

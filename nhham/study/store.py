@@ -183,9 +183,11 @@ class Store:
 
     def lines(self, dims: tuple, region: tuple, names) -> dict:
         """The per-line variables ``names`` stored for the lines of ``region``."""
-        where = {d: s for d, s in zip(dims, region) if d in self.line_dims}
-        # on disk the layout is lazy: its values are read from the store now
-        return {n: np.array(self.dataset[n].isel(where).values) for n in names}
+        # each variable's own lines (those along the second axis have other dims); on
+        # disk the layout is lazy: its values are read from the store now
+        return {n: np.array(self.dataset[n].isel(
+            {d: s for d, s in zip(dims, region) if d in self.dataset[n].dims}).values)
+            for n in names}
 
     def write(self, dims: tuple, region: tuple, data: dict) -> None:
         """Write one finished chunk: ``data`` (variable -> array of the region's shape and
@@ -211,10 +213,13 @@ class Store:
                     self.dataset[name].values[at] = value
             self.dataset["done"].values[region] = True
             return
-        line_where = {d: where[d] for d in self.line_dims}
+        groups: dict = {}   # the per-line variables by the design dims of their lines
+        for name, (var_dims, value) in line.items():
+            line_at = {d: where[d] for d in var_dims if d in where}
+            groups.setdefault(tuple(line_at), ({}, line_at))[0][name] = (var_dims, value)
         shape = tuple(len(range(*s.indices(n))) for s, n in
                       zip(region, self.dataset["done"].shape))
-        targets: list = [(point, where), (line, line_where),
+        targets: list = [(point, where), *groups.values(),
                          ({"done": (dims, np.ones(shape, dtype=bool))}, where)]
         try:
             for group, at in targets:

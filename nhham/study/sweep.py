@@ -26,7 +26,7 @@ import numpy as np
 from nhham.budget import time_budget
 from nhham.errors import BudgetExceeded, InputError, OutputUnwritable
 from nhham.study.kinds import KINDS, kind_of
-from nhham.study.lines import LINE_VARIABLES, merged
+from nhham.study.lines import ACROSS_VARIABLES, LINE_VARIABLES, merged
 from nhham.study.points import (Axis, Design, check_seed, chunk_slices, grid, parse_over,
                                 parse_perturbation, samples)
 from nhham.study.schedule import check_scheduler
@@ -110,7 +110,8 @@ def sweep(scene, what: str, over=(), *, samples_count: int | None = None,
           resume: bool = False, overwrite: bool = False, scheduler: str | None = None,
           workers: int | None = None, client=None, budget: float | None = None,
           chunk_points: int | None = None, along: str | None = None,
-          run_options: dict | None = None, policy=None, progress=None) -> SweepResult:
+          run_options: dict | None = None, policy=None, progress=None,
+          values=None) -> SweepResult:
     """Run a parameter study.
 
     Parameters
@@ -160,6 +161,10 @@ def sweep(scene, what: str, over=(), *, samples_count: int | None = None,
         classify: the settings of the decisions.
     progress : callable, optional
         ``progress(done_points, total_points, elapsed_s)`` after each chunk.
+    values : mapping of str to float, optional
+        Parameter values every point has (the command's ``--set``), replacing the scene's
+        (a symbolic parameter gets one); a swept name cannot have one. Stored with the
+        options (``values``): a resumed study must be given the same.
 
     Returns
     -------
@@ -188,6 +193,7 @@ def sweep(scene, what: str, over=(), *, samples_count: int | None = None,
     # every option is checked before any work: the design's size from its counts, where
     # the results go, the scheduler and the workers
     design = _design(over, samples_count, sampler, seed, initial_perturbation, what)
+    fixed = _set_values(values, design)
     target = check_out(out, resume=resume, overwrite=overwrite)
     if client is None:   # (its warning, if any, is given once, by Pool.start)
         check_scheduler(scheduler, workers, warn=False)
@@ -197,11 +203,13 @@ def sweep(scene, what: str, over=(), *, samples_count: int | None = None,
     # the workers start, and parse the scene, while this process prepares the study
     # threads share this process's model; classify's sympy holds the GIL: processes
     with Pool.start(scheduler, workers, client, deadline=deadline, local=kind.local) as pool:
-        pool.warm(text, source, what)
+        pool.warm(text, source, what, fixed)
         # the preparation (symbolic for classify) is stopped by the budget's alarm; the
         # chunks then stop at its deadline, keeping what finished
         loaded, options, code_hash, var_spec, model = _prepared(
-            text, source, what, design, along, run_options, policy, budget, deadline)
+            text, source, what, design, along, run_options, policy, budget, deadline, fixed)
+        if fixed:   # what the workers load the scene with, and part of the study's key
+            options = {**options, "values": dict(fixed)}
         study = Study(what, text, source, code_hash, design, options)
         keep_context(study, loaded, model)
         attrs = _attributes(study)
@@ -216,16 +224,24 @@ def sweep(scene, what: str, over=(), *, samples_count: int | None = None,
             store = Store.create(target, _template(design, var_spec, attrs,
                                                    None if target is None else chunking),
                                  chunking, _fills(var_spec))
-        done = store.done(regions, [*var_spec["point"], *var_spec["line"]])
+        done = store.done(regions, [*var_spec["point"], *var_spec["line"],
+                                    *var_spec.get("across", {})])
         pending = [r for r in regions if not done[r].all()]
         already = int(done.sum())
         counter = {"points": already}
         cut = along_axis is not None and any(r[along_axis] != slice(0, design.shape[along_axis])
                                              for r in regions)
+        across_axis = (design.dims.index(options["across"]) if options.get("across")
+                       else None)
+        cut_across = across_axis is not None and any(
+            r[across_axis] != slice(0, design.shape[across_axis]) for r in regions)
 
         def on_result(region, data):
             if cut:   # a piece of a line: its crossings merged with the line's stored ones
                 data = merged(store.lines(design.dims, region, LINE_VARIABLES), data)
+            if cut_across:   # the same for the lines along the second axis
+                data = merged(store.lines(design.dims, region, ACROSS_VARIABLES), data,
+                              ACROSS_VARIABLES)
             store.write(design.dims, region, data)
             counter["points"] += int((~done[region]).sum())
             done[region] = True
@@ -256,14 +272,14 @@ def sweep(scene, what: str, over=(), *, samples_count: int | None = None,
 
 
 def _prepared(text, source, what, design, along, run_options, policy, budget,
-              deadline) -> tuple:
+              deadline, fixed=()) -> tuple:
     """(scene, options, code hash, variables, model): the study prepared within what is
     left of its budget (symbolic work is stopped by the budget's alarm)."""
     try:
         if deadline is not None and deadline - time.perf_counter() <= 0:
             raise BudgetExceeded("")
         with time_budget(None if deadline is None else deadline - time.perf_counter()):
-            loaded = _load(text, source, what)
+            loaded = _load(text, source, what, fixed)
             return (loaded,) + _prepare(what, loaded, design, along, run_options, policy)
     except BudgetExceeded:
         raise BudgetExceeded(f"the study's --budget of {budget:g} s ran out before its "
@@ -304,12 +320,29 @@ def _scene_text(scene) -> tuple:
                          key="scene") from None
 
 
-def _load(text, source, what):
+def _set_values(values, design) -> tuple:
+    """The ``--set`` values as (name, float) pairs; a name also swept is refused (which
+    of the two should a point have?)."""
+    fixed = tuple((str(k), float(v)) for k, v in dict(values or {}).items())
+    both = [name for name, _ in fixed if name in design.names]
+    if both:
+        raise InputError(f"--set {both[0]}: {both[0]!r} is also swept (--over "
+                         f"{both[0]}=...); give it either a value (--set) or a range "
+                         f"(--over), not both", key="--set")
+    return fixed
+
+
+def _load(text, source, what, fixed=()):
     from nhham.system.scene import loads_scene
 
     # [initial] is a simulate study's start (projected onto M_1 at each point): what
     # cannot be completed is refused there; the other kinds do not read it
-    scene = loads_scene(text, source, check_initial=False)
+    try:
+        scene = loads_scene(text, source, check_initial=False, values=dict(fixed))
+    except InputError as exc:   # a --set name that is not a parameter
+        if exc.key != "values":
+            raise
+        raise InputError(str(exc).replace("values: ", "--set: ", 1), key="--set") from None
     if what == "simulate" and scene.initial_problem is not None:
         raise scene.initial_problem
     return scene
@@ -355,8 +388,8 @@ def _resumed_regions(store, design, regions, chunk_points) -> list:
 
 def _fills(spec) -> dict:
     """Each variable's fill value (what a point not computed holds)."""
-    fills = {name: fill for group in ("point", "line") for name, (_, _, fill) in
-             spec[group].items()}
+    fills = {name: fill for group in ("point", "line", "across") for name, (_, _, fill) in
+             spec.get(group, {}).items()}
     fills["done"] = False
     return fills
 
@@ -407,12 +440,13 @@ def _template(design, spec, attrs, chunking=None):
         shape = design.shape + tuple(len(spec["coords"][d]) for d in extra)
         dims = design.dims + extra
         data[name] = (dims, full(shape, fill, dtype=dtype, **_dims(chunking, dims)))
-    line_dims = tuple(d for d in design.dims if d != _along(attrs))
-    for name, (extra, dtype, fill) in spec["line"].items():
-        shape = tuple(design.shape[design.dims.index(d)] for d in line_dims) + tuple(
-            len(spec["coords"][d]) for d in extra)
-        dims = line_dims + extra
-        data[name] = (dims, full(shape, fill, dtype=dtype, **_dims(chunking, dims)))
+    for group, axis in (("line", _along(attrs)), ("across", _option(attrs, "across"))):
+        line_dims = tuple(d for d in design.dims if d != axis)
+        for name, (extra, dtype, fill) in spec.get(group, {}).items():
+            shape = tuple(design.shape[design.dims.index(d)] for d in line_dims) + tuple(
+                len(spec["coords"][d]) for d in extra)
+            dims = line_dims + extra
+            data[name] = (dims, full(shape, fill, dtype=dtype, **_dims(chunking, dims)))
     if design.perturbed:
         data["initial_perturbation"] = (("sample", "perturbed"), design.perturbations)
         coords["perturbed"] = np.array(design.perturbed, dtype=object)
@@ -430,9 +464,13 @@ def _dims(chunking, dims) -> dict:
 
 
 def _along(attrs) -> str | None:
+    return _option(attrs, "along")
+
+
+def _option(attrs, name):
     import json
 
-    return json.loads(attrs["options"]).get("along")
+    return json.loads(attrs["options"]).get(name)
 
 
 def progress_line(stream=sys.stderr):

@@ -23,7 +23,7 @@ from nhham.study.lines import extended, trimmed
 from nhham.study.points import Design
 
 __all__ = ["Study", "Context", "context", "evaluate", "keep_context", "study_model",
-           "study_system", "warm"]
+           "study_system", "study_values", "warm"]
 
 
 @dataclass(frozen=True)
@@ -44,7 +44,8 @@ class Study:
     options : dict
         What the evaluation of ``what`` needs (plain data; see the modules
         :mod:`~nhham.study.stability`, :mod:`~nhham.study.ensemble`,
-        :mod:`~nhham.study.classes`).
+        :mod:`~nhham.study.classes`). ``options["values"]``, when present: the
+        parameter values every point has (``--set``), replacing the scene's.
     """
 
     what: str
@@ -68,15 +69,16 @@ _KEPT = 4
 _LOCK = threading.Lock()
 
 
-def warm(scene_text: str, source: str, what: str) -> str:
+def warm(scene_text: str, source: str, what: str, values: tuple = ()) -> str:
     """Build this worker's context for a scene before its study arrives (the scene
-    parsed, its model generated or found in the compile cache); returns the code hash."""
+    parsed with the parameter ``values``, pairs; its model generated or found in the
+    compile cache); returns the code hash."""
     from nhham.system.scene import loads_scene
 
-    scene = loads_scene(scene_text, source, check_initial=False)
+    scene = loads_scene(scene_text, source, check_initial=False, values=dict(values))
     model, code_hash = study_model(scene, what)
     with _LOCK:
-        _CONTEXTS[(code_hash, scene_text)] = Context(scene, model)
+        _CONTEXTS[(code_hash, scene_text, tuple(values))] = Context(scene, model)
         while len(_CONTEXTS) > _KEPT:
             _CONTEXTS.popitem(last=False)
     return code_hash
@@ -102,7 +104,7 @@ def context(study: Study) -> Context:
         When the model built here has other code than the study's (another version of
         nhham on this worker).
     """
-    key = (study.code_hash, study.scene_text)
+    key = _key(study)
     with _LOCK:
         ctx = _CONTEXTS.get(key)
         if ctx is not None:
@@ -110,7 +112,8 @@ def context(study: Study) -> Context:
             return ctx
     from nhham.system.scene import loads_scene
 
-    scene = loads_scene(study.scene_text, study.scene_source, check_initial=False)
+    scene = loads_scene(study.scene_text, study.scene_source, check_initial=False,
+                        values=dict(study_values(study)))
     model, built = study_model(scene, study.what)
     if built != study.code_hash:
         raise ComputationError(
@@ -129,9 +132,19 @@ def keep_context(study: Study, scene, model) -> None:
     """Hold the scene and model the study was prepared with in this process, so that
     chunks run here (synchronously, or by a cluster of threads) do not build them again."""
     with _LOCK:
-        _CONTEXTS[(study.code_hash, study.scene_text)] = Context(scene, model)
+        _CONTEXTS[_key(study)] = Context(scene, model)
         while len(_CONTEXTS) > _KEPT:
             _CONTEXTS.popitem(last=False)
+
+
+def study_values(study: Study) -> tuple:
+    """The parameter values every point of ``study`` has (``--set``), as pairs."""
+    return tuple((str(k), float(v)) for k, v in study.options.get("values", {}).items())
+
+
+def _key(study: Study) -> tuple:
+    """A worker's context is the same for the same code, scene text and set values."""
+    return (study.code_hash, study.scene_text, study_values(study))
 
 
 def study_system(scene, what: str):
@@ -167,7 +180,14 @@ def evaluate(study: Study, region: tuple, until: float | None = None) -> dict:
     along = study.options.get("along")
     if along is None:
         return evaluate_kind(study, context(study), region, until=until)
-    # a piece of a line longer than a chunk: with the point before it (lines.py)
+    # a piece of a line longer than a chunk: with the point before it (lines.py), along
+    # the grid's second axis too
     axis = study.design.dims.index(along)
-    grown, added = extended(region, axis)
-    return trimmed(evaluate_kind(study, context(study), grown, until=until), axis, added)
+    across = study.options.get("across")
+    if across is None:
+        grown, added = extended(region, axis)
+        return trimmed(evaluate_kind(study, context(study), grown, until=until), axis, added)
+    b = study.design.dims.index(across)
+    grown, (added, added_b) = extended(region, axis, b)
+    return trimmed(evaluate_kind(study, context(study), grown, until=until), axis, added, b,
+                   added_b)

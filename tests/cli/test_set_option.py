@@ -1,5 +1,5 @@
-"""``--set NAME=VALUE``: a parameter's value for one run, on every command but sweep
-(issue 34, item 5). Checked as a scene's value is: an unknown name exits 2 with the closest
+"""``--set NAME=VALUE``: a parameter's value for one run, on every command (issue 34,
+item 5; on sweep every point has it, and a name cannot be both set and swept). Checked as a scene's value is: an unknown name exits 2 with the closest
 one, the value is a number as a scene writes one, ``1e-400`` is refused.
 
 Expected values by hand: issue 11's scene (C = -(1 - b^2), singular at b = +-1; see
@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import json
 import math
+from pathlib import Path
 
 import pytest
 
@@ -109,7 +110,58 @@ def test_the_library_names_an_unknown_value():
     assert info.value.key == "values" and "'mass' is not a parameter" in str(info.value)
 
 
-def test_sweep_has_no_set():
-    rc, _, err = run("sweep", EXAMPLES / "rolling_disk.toml", "--what", "classify", "--over",
-                     "m=1:2:2", "--out", "x.nc", "--set", "m=1")
-    assert rc == 2 and "sweep has no option --set" in err
+SLEIGH = Path(__file__).resolve().parents[1] / "study" / "scenes" / "sleigh_drag.toml"
+
+
+def test_set_on_sweep_moves_the_boundary(tmp_path):
+    """c = 0.3, m = 2 (a = -0.5): the yaw eigenvalue crosses 0 at U* = -c / (m a) = 0.3,
+    not at the scene's 0.8; the values are stored with the study."""
+    out = tmp_path / "s.zarr"
+    rc, env, err = run("sweep", SLEIGH, "--what", "linearize", "--over", "U=-1:3:9",
+                       "--set", "c=0.3", "--set", "m=2", "--out", out, "--workers", "1",
+                       "--json")
+    assert rc == 0, err
+    s = env["result"]["summary"]
+    assert s["real_crossings"] == 1
+    assert s["real_crossing_range"] == pytest.approx([0.3, 0.3], abs=1e-10)
+    assert env["scene"]["set"] == {"c": 0.3, "m": 2.0}
+    assert env["warnings"][0] == ("--set: c = 0.3, m = 2 for this run (instead of the "
+                                  "scene's values)")
+    import xarray as xr
+
+    with xr.open_zarr(out) as ds:
+        assert json.loads(ds.attrs["options"])["values"] == {"c": 0.3, "m": 2.0}
+
+
+def test_set_and_over_on_one_name_is_a_usage_error(tmp_path):
+    out = tmp_path / "s.zarr"
+    rc, env, err = run("sweep", SLEIGH, "--what", "linearize", "--over", "U=-1:3:9",
+                       "--over", "c=0.1,0.2", "--set", "c=0.3", "--out", out, "--json")
+    assert rc == 2 and err.count("\n") == 1
+    assert err == ("nhham: error: --set c: 'c' is also swept (--over c=...); give it either "
+                   "a value (--set) or a range (--over), not both\n")
+    assert env["error"]["key"] == "--set" and not out.exists()
+
+
+def test_sweep_names_an_unknown_set_name(tmp_path):
+    rc, _, err = run("sweep", SLEIGH, "--what", "linearize", "--over", "U=-1:3:9",
+                     "--set", "cc=0.3", "--out", tmp_path / "s.zarr", "--workers", "1")
+    assert rc == 2 and err.endswith("--set: 'cc' is not a parameter of the scene; did you "
+                                    "mean 'c'?\n")
+
+
+def test_a_worker_loads_the_study_s_scene_with_its_values():
+    """What a worker of another process does with a study (tasks.context): the scene
+    parsed with the set values; the same text with other values is another context."""
+    from nhham.study.points import grid, parse_over
+    from nhham.study.tasks import Study, context
+
+    text = SLEIGH.read_text()
+    design = grid([parse_over("U=0:1:2")])
+    contexts = [context(Study("classify", text, "sleigh", "", design, options))
+                for options in ({"values": {"c": 0.3, "m": 2.0}}, {"values": {"c": 0.5}}, {})]
+    got = [{p.name: v for p, v in ctx.scene.system.parameter_values.items()}
+           for ctx in contexts]
+    assert (got[0]["c"], got[0]["m"]) == (0.3, 2.0)
+    assert (got[1]["c"], got[1]["m"]) == (0.5, 1.0)
+    assert (got[2]["c"], got[2]["m"]) == (0.4, 1.0)
