@@ -18,9 +18,9 @@ def test_a_line_in_pieces_gives_what_the_whole_line_gives(monkeypatch):
     sizes = []
     evaluate = stability.evaluate
 
-    def recorded(study, ctx, region):
+    def recorded(study, ctx, region, until=None):
         sizes.append(region[0].stop - region[0].start)
-        return evaluate(study, ctx, region)
+        return evaluate(study, ctx, region, until=until)
 
     monkeypatch.setattr(stability, "evaluate", recorded)
     cut = sweep(SCENE, "linearize", LINE, workers=1, chunk_points=9)
