@@ -2,8 +2,8 @@
 
 Layers, lowest first: ``system`` < ``lagrangian`` < ``hamiltonian`` < ``verdict`` < ``numerics``
 < ``study`` < ``cli``.
-The top-level modules ``errors``, ``settings``, ``lazy`` and ``budget`` are the base: every layer may
-import them and they import nothing of the package's layers. ``nhham/__init__.py`` (the
+The top-level modules ``errors``, ``settings``, ``lazy``, ``budget`` and ``autonomy`` are the
+base: every layer may import them and they import nothing of the package's layers. ``nhham/__init__.py`` (the
 public API, re-exported) and ``nhham/__main__.py`` are exempt. Rules:
 
 1. a module imports only from its own layer, lower layers or the base (module-level and
@@ -42,7 +42,7 @@ import pytest
 
 PACKAGE = "nhham"
 LAYERS = ("system", "lagrangian", "hamiltonian", "verdict", "numerics", "study", "cli")
-BASE = ("errors", "settings", "lazy", "budget")
+BASE = ("errors", "settings", "lazy", "budget", "autonomy")
 EXEMPT = ("nhham", "nhham.__main__")
 NUMERICS = "nhham.numerics"
 BRIDGE = "nhham.numerics.codegen"

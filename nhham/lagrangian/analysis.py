@@ -21,11 +21,11 @@ from typing import TYPE_CHECKING, Mapping, cast
 import networkx as nx
 import sympy as sp
 
-from nhham.errors import ComputationError, InputError
-from nhham.lagrangian.algebra import cancel
+from nhham.autonomy import require_autonomous
 from nhham.lagrangian.decision import Assumption
 from nhham.lagrangian.engine import Policy, decide, policy_of
 from nhham.lagrangian.points import jacobian_row
+from nhham.lagrangian.projection import Projected
 from nhham.lagrangian.algorithm import (
     constraint_kind,
     rank_drop_warnings,
@@ -65,7 +65,7 @@ class Block:
 
 
 @dataclass(frozen=True)
-class ConstraintAnalysis:
+class ConstraintAnalysis(Projected):
     """What the constraint algorithm says about a Lagrangian system.
 
     Attributes
@@ -142,11 +142,6 @@ class ConstraintAnalysis:
     policy: Policy = field(default_factory=Policy, compare=False, repr=False)
     geometry: object = field(default=None, compare=False, repr=False)
 
-    @property
-    def free_multipliers(self) -> int:
-        """Number of free multipliers."""
-        return len(self.free_multiplier_symbols)
-
     @cached_property
     def multipliers(self) -> Mapping:
         """Determined ``{lambda_i: expression}`` over all blocks (computed on first use)."""
@@ -207,19 +202,6 @@ class ConstraintAnalysis:
     def projector_Q(self) -> sp.Matrix | None:
         """The paper's Q on M_f as a 2n x 2n matrix (block-diagonal over the blocks)."""
         return self._assemble("projector_Q")
-
-    @cached_property
-    def projector_P(self) -> sp.Matrix | None:
-        """P = id − Q on M_f (2n x 2n); P(X) solves the problem for every solution X."""
-        Q = self.projector_Q
-        return None if Q is None else sp.eye(2 * self.system.n) - Q
-
-    def project(self, X) -> sp.Matrix:
-        """P(X) for a field X = ξ_L + λ^i Z_i (any λ), shape (2n, 1)."""
-        P = self.projector_P
-        if P is None:
-            raise ComputationError("the problem is inconsistent: there is no projector")
-        return (P * sp.Matrix(X)).applyfunc(cancel)
 
     def _assemble(self, name):
         n = self.system.n
@@ -339,12 +321,8 @@ def _check_autonomous(system, blocks) -> None:
         for stage in block.run.stages:
             for label, chi in zip(stage.new_labels, stage.new_constraints):
                 used = sorted(s.name for s in sp.sympify(chi).free_symbols & moving)
-                if used:
-                    raise InputError(
-                        f"forces: the secondary constraint {label} = {short(chi)} depends on "
-                        f"{', '.join(used)}; the constraint algorithm needs forces that do "
-                        f"not depend on time or inputs where C is singular (give the inputs "
-                        f"as parameters with values)", key="forces")
+                require_autonomous("secondary", bool(used), label=label,
+                                   expression=short(chi), names=", ".join(used))
 
 
 # ------------------------------------------------------------- blocks and merging

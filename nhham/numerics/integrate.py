@@ -45,6 +45,7 @@ from typing import Any, Mapping
 
 import numpy as np
 
+from nhham.autonomy import require_autonomous
 from nhham.errors import InconsistentInitialDataError, InputError
 from nhham.numerics.compiled_loop import COMPILED_METHODS, run_compiled
 from nhham.numerics.diagnostics import (Diagnostics, Singularity, singularity_at,
@@ -529,9 +530,8 @@ def _check_options(method, step, projection, baumgarte, model):
         raise InputError(f"method: {method!r} is a structure-preserving scheme for "
                          f"conservative systems; this system has forces (choose an adaptive "
                          f"method such as DOP853)", key="method")
-    if model.time_slot is not None and (method in FIXED_STEP_METHODS or method == "reference"):
-        raise InputError(f"method: {method!r} does not take time-dependent forces (t in the "
-                         f"forces); choose an adaptive method such as DOP853", key="method")
+    require_autonomous("method", model.time_slot is not None and (
+        method in FIXED_STEP_METHODS or method == "reference"), method=method)
     model.require_inputs()
     if (projection or baumgarte is not None) and method in ("rattle", "rattle4", "reference"):
         raise InputError(f"projection/baumgarte: not applicable to method {method!r} "
