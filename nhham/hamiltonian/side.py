@@ -207,7 +207,7 @@ class HamiltonianSide(ConstraintMatrixRank):
         """The §4 projection of X_H by Z_i^H and d phi_i^H
         (:class:`~nhham.lagrangian.projection.Projection`), every entry cancelled; refused
         beyond the closed-form size unless ``closed_form``."""
-        return Projection(self.X_H, self.vertical_fields, self.constraint_gradients,
+        return Projection(lambda: self.X_H, self.vertical_fields, self.constraint_gradients,
                           derivatives=lambda: self.constraint_derivatives, normal=cancel,
                           owner=None if self.closed_form else "hamiltonian_side")
 

@@ -527,7 +527,7 @@ class LagrangianGeometry(ConstraintMatrixRank):
         """The §4 projection of ξ_L by Z_i and dφ_i (:class:`~nhham.lagrangian.projection.
         Projection`): C = −μ W⁻¹ μᵀ and ξ_L(φ) from the ingredients, solves without
         cancellation, refused beyond the closed-form size unless ``closed_form``."""
-        return Projection(self.euler_lagrange_field if self.m else None,
+        return Projection(lambda: self.euler_lagrange_field,
                           self.vertical_fields, self.constraint_gradients,
                           matrix=self.constraint_matrix,
                           derivatives=lambda: self.constraint_derivatives,

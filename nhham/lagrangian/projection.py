@@ -153,9 +153,9 @@ class Projection(Projected):
 
     Attributes
     ----------
-    field : sympy.Matrix of shape (N, 1), or None
-        ξ (None when only Q is asked for; ``derivatives`` must then be given for the
-        multipliers).
+    field : sympy.Matrix of shape (N, 1), callable or None
+        ξ, or a function forming it on first use (None when only Q is asked for;
+        ``derivatives`` must then be given for the multipliers).
     vertical : sympy.Matrix, shape (m, N)
         The rows Z_i.
     gradients : sympy.Matrix, shape (m, N)
@@ -193,7 +193,7 @@ class Projection(Projected):
     True
     """
 
-    field: sp.Matrix | None
+    field: object
     vertical: sp.Matrix
     gradients: sp.Matrix
     matrix: sp.Matrix | None = None
@@ -201,6 +201,11 @@ class Projection(Projected):
     solve: Callable = solve_linear
     normal: Callable | None = None
     owner: str | None = None
+
+    @cached_property
+    def xi(self) -> sp.Matrix | None:
+        """ξ (``field``, formed on first use when given as a function)."""
+        return self.field() if callable(self.field) else cast("sp.Matrix | None", self.field)
 
     @property
     def m(self) -> int:
@@ -232,9 +237,9 @@ class Projection(Projected):
         """ξ(φ_i), shape (m, 1)."""
         d = self.derivatives
         if d is None:
-            if self.field is None:
+            if self.xi is None:
                 raise ComputationError("a projection without a field has no multipliers")
-            _, d = tangency_equations(self.gradients, self.field, None, self.normal or _same)
+            _, d = tangency_equations(self.gradients, self.xi, None, self.normal or _same)
         elif callable(d):
             d = d()
         return d
@@ -251,8 +256,8 @@ class Projection(Projected):
     def projected_field(self) -> sp.Matrix:
         """P(ξ) = ξ − C^{ij} ξ(φ_i) Z_j = ξ + λ^j Z_j, shape (N, 1)."""
         if not self.m:
-            return self.field
-        return self._normal(self.field + self.vertical.T * self.multipliers)
+            return self.xi
+        return self._normal(self.xi + self.vertical.T * self.multipliers)
 
     @cached_property
     def projector_Q(self) -> sp.Matrix:

@@ -82,10 +82,10 @@ def test_projected_field_is_tangent_and_the_papers_formula(tq):
     # ξ(φ) + λ^j Z_j(φ) = 0: the projected field is tangent to every φ_i
     assert zero(tq.gradients * X)
     assert zero(X - sp.Matrix([xd, yd, thd, phd, -R * thd * phd * s, R * thd * phd * c, 0, 0]))
-    assert zero(tq.project(tq.field) - X)
+    assert zero(tq.project(tq.xi) - X)
     # P(ξ + a Z_1 + b Z_2) = P(ξ) for any a, b
     a, b = sp.symbols("a b")
-    assert zero(tq.project(tq.field + a * tq.vertical.row(0).T + b * tq.vertical.row(1).T) - X)
+    assert zero(tq.project(tq.xi + a * tq.vertical.row(0).T + b * tq.vertical.row(1).T) - X)
 
 
 def test_cotangent_instance_agrees_through_the_legendre_map(tq, tstar):
@@ -146,6 +146,6 @@ def test_bordered_system_eliminates_to_the_tangency_equations(tq):
     Winv = W.inv()
     A = -Jv * Winv * MU.T
     b = -cvec[4:, 0] + Jv * Winv * cvec[:4, 0]
-    rows_A, rows_b = tangency_equations(tq.gradients, tq.field, tq.vertical)
+    rows_A, rows_b = tangency_equations(tq.gradients, tq.xi, tq.vertical)
     assert zero(A - rows_A) and zero(b - rows_b)
     assert zero(rows_A - tq.constraint_matrix.T)
