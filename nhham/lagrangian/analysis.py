@@ -25,13 +25,13 @@ from nhham.autonomy import require_autonomous
 from nhham.lagrangian.decision import Assumption
 from nhham.lagrangian.engine import Policy, decide, policy_of
 from nhham.lagrangian.points import jacobian_row
-from nhham.lagrangian.projection import Projected
 from nhham.lagrangian.algorithm import (
     constraint_kind,
     rank_drop_warnings,
     run_algorithm,
 )
-from nhham.lagrangian.records import AlgorithmRun, Evidence, Stage, tangency_matrix
+from nhham.lagrangian.records import (AlgorithmRun, ConstraintOutcome, Evidence, Stage,
+                                      tangency_matrix)
 from nhham.lagrangian.submanifold import Submanifold, has_real_point
 from nhham.settings import SEED, check_options
 from nhham.system.description import System
@@ -65,7 +65,7 @@ class Block:
 
 
 @dataclass(frozen=True)
-class ConstraintAnalysis(Projected):
+class ConstraintAnalysis(ConstraintOutcome):
     """What the constraint algorithm says about a Lagrangian system.
 
     Attributes
@@ -124,20 +124,10 @@ class ConstraintAnalysis(Projected):
     """
 
     system: System
-    status: str
-    stages: tuple
-    final_constraints: tuple
-    final_labels: tuple
     rank_C: int
     regular: bool
-    free_multiplier_symbols: tuple
     dropped: tuple
-    provenance: nx.DiGraph
     blocks: tuple
-    inconsistency: str | None
-    warnings: tuple
-    converged: bool
-    dimension: int | None
     options: Mapping
     policy: Policy = field(default_factory=Policy, compare=False, repr=False)
     geometry: object = field(default=None, compare=False, repr=False)

@@ -138,11 +138,6 @@ class Projected:
             raise ComputationError("the problem is inconsistent: there is no projector")
         return (P * sp.Matrix(X)).applyfunc(cancel)
 
-    @property
-    def free_multipliers(self) -> int:
-        """Number of free multipliers (none for a regular C)."""
-        return len(getattr(self, "free_multiplier_symbols", ()))
-
 
 @dataclass(frozen=True, eq=False)
 class Projection(Projected):

@@ -19,7 +19,7 @@ from nhham.lagrangian.decision import Decision
 from nhham.lagrangian.projection import Projected, Projection, gradient_rows, tangency_equations
 from nhham.lagrangian.submanifold import Submanifold
 
-__all__ = ["Evidence", "Stage", "AlgorithmRun", "tangency_matrix", "solve_on"]
+__all__ = ["Evidence", "Stage", "ConstraintOutcome", "AlgorithmRun", "tangency_matrix", "solve_on"]
 
 
 # ====================================================================== records
@@ -119,8 +119,54 @@ class Stage:
 
 
 # ======================================================================= generic
+@dataclass(frozen=True, kw_only=True)
+class ConstraintOutcome(Projected):
+    """What the constraint algorithm concludes: the names a run on one block
+    (:class:`AlgorithmRun`) and the whole system's analysis
+    (:class:`~nhham.lagrangian.analysis.ConstraintAnalysis`) both answer, in one place
+    (given by keyword).
+
+    Attributes
+    ----------
+    status : {"determined", "underdetermined", "inconsistent"}
+    stages : tuple of Stage
+    final_constraints, final_labels : tuple
+        The constraints defining M_f and their labels.
+    free_multiplier_symbols : tuple of sympy.Symbol
+        The multipliers left free.
+    provenance : networkx.DiGraph
+        Which constraint generated which, stage by stage.
+    inconsistency : str or None
+        At which stage and why the problem has no solution.
+    warnings : tuple of str
+    converged : bool
+        False when the stage bound was hit while new constraints were still appearing.
+    dimension : int or None
+        dim M_f.
+
+    Each result derives ``multipliers``, ``dynamics`` and ``projector_Q``; ``projector_P``
+    and ``project`` follow from Q (:class:`~nhham.lagrangian.projection.Projected`).
+    """
+
+    status: str
+    stages: tuple
+    final_constraints: tuple
+    final_labels: tuple
+    free_multiplier_symbols: tuple
+    provenance: nx.DiGraph
+    inconsistency: str | None
+    warnings: tuple
+    converged: bool
+    dimension: int | None
+
+    @property
+    def free_multipliers(self) -> int:
+        """Number of free multipliers."""
+        return len(self.free_multiplier_symbols)
+
+
 @dataclass(frozen=True)
-class AlgorithmRun(Projected):
+class AlgorithmRun(ConstraintOutcome):
     """Result of :func:`run_algorithm` on one (block of a) system.
 
     Attributes
@@ -180,19 +226,9 @@ class AlgorithmRun(Projected):
         δ of ``scaled_fields`` (1 when unscaled).
     """
 
-    status: str
-    stages: tuple
-    final_constraints: tuple
-    final_labels: tuple
     rank: int | None
     block: tuple
     multiplier_symbols: tuple
-    free_multiplier_symbols: tuple
-    provenance: nx.DiGraph
-    inconsistency: str | None
-    warnings: tuple
-    converged: bool
-    dimension: int | None
     variables: tuple
     fields: Callable = field(compare=False, repr=False)
     manifold: Submanifold | None = field(default=None, compare=False, repr=False)
