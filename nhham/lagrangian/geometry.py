@@ -547,8 +547,6 @@ class LagrangianGeometry(ConstraintMatrixRank):
     @property
     def projected_field(self) -> sp.Matrix:
         """P(xi_L) = xi_L - C^{ij} xi_L(phi_i) Z_j = xi_L + lambda^j Z_j."""
-        if self.m == 0:
-            return self.euler_lagrange_field
         return self.projection.projected_field
 
     @property

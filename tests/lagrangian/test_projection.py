@@ -149,3 +149,18 @@ def test_bordered_system_eliminates_to_the_tangency_equations(tq):
     rows_A, rows_b = tangency_equations(tq.gradients, tq.xi, tq.vertical)
     assert zero(A - rows_A) and zero(b - rows_b)
     assert zero(rows_A - tq.constraint_matrix.T)
+
+
+def test_a_geometry_shares_its_siblings_closed_forms_but_keeps_its_guard():
+    """lagrangian_geometry(closed_form=False) built after a closed_form=True sibling has
+    formed λ starts from that λ, and still refuses large closed forms itself."""
+    system = System(["x", "y"], "x_dot**2/2 + y_dot**2/2", constraints=["y_dot - x*x_dot"])
+    free = lagrangian_geometry(system, closed_form=True)
+    lam = free.multipliers
+    guarded = lagrangian_geometry(system)
+    assert guarded is not free and guarded.projection.owner == "lagrangian_geometry"
+    assert free.projection.owner is None
+    assert vars(guarded.projection)["multipliers"] is lam
+    # λ = −C⁻¹ ξ(φ) with C = −(1 + x²), ξ(φ) = −x_dot²: λ = −x_dot² / (1 + x²)
+    x, xd = sp.symbols("x x_dot")
+    assert sp.simplify(_rename(lam[0], system) + xd**2 / (1 + x**2)) == 0
