@@ -5,8 +5,8 @@ Layers form a tree, each importing only the layers listed for it in :data:`MAY_I
 ``hamiltonian`` < ``verdict``, and beside it ``numerics`` (on ``lagrangian``, through its
 bridge); ``render`` (text, LaTeX, JSON and figures of results) on both; ``journeys`` (what
 a user does with a scene) on ``render``; ``study`` on ``journeys``; ``cli`` on top.
-The top-level modules ``errors``, ``settings``, ``lazy`` and ``budget`` are the base: every layer may
-import them and they import nothing of the package's layers. ``nhham/__init__.py`` (the
+The top-level modules ``errors``, ``settings``, ``lazy``, ``budget`` and ``autonomy`` are the
+base: every layer may import them and they import nothing of the package's layers. ``nhham/__init__.py`` (the
 public API, re-exported) and ``nhham/__main__.py`` are exempt. Rules:
 
 1. a module imports only from its own layer, the layers :data:`MAY_IMPORT` lists for it or
@@ -60,7 +60,7 @@ MAY_IMPORT = {
             "journeys", "study"),
 }
 LAYERS = tuple(MAY_IMPORT)
-BASE = ("errors", "settings", "lazy", "budget")
+BASE = ("errors", "settings", "lazy", "budget", "autonomy")
 EXEMPT = ("nhham", "nhham.__main__")
 NUMERICS = "nhham.numerics"
 BRIDGE = "nhham.numerics.codegen"

@@ -35,8 +35,9 @@ import sympy as sp
 from nhham.errors import ComputationError
 from nhham.hamiltonian.brackets import BivectorBracket, BracketAlgebra, numeric_bracket_matrix
 from nhham.hamiltonian.legendre import LegendreMap, canonical_form_matrix
-from nhham.lagrangian.algebra import cancel, guard_closed_form, solve_linear
+from nhham.lagrangian.algebra import cancel, solve_linear
 from nhham.lagrangian.geometry import ConstraintMatrixRank
+from nhham.lagrangian.projection import Projection
 from nhham.lagrangian.submanifold import Submanifold
 from nhham.settings import SEED
 from nhham.system.evaluation import Backend, Lambdified
@@ -202,11 +203,20 @@ class HamiltonianSide(ConstraintMatrixRank):
         return sp.Matrix([[sp.diff(f, z) for z in self.variables] for f in self.constraints])
 
     @cached_property
+    def projection(self) -> Projection:
+        """The §4 projection of X_H by Z_i^H and d phi_i^H
+        (:class:`~nhham.lagrangian.projection.Projection`), every entry cancelled; refused
+        beyond the closed-form size unless ``closed_form``."""
+        return Projection(lambda: self.X_H, self.vertical_fields, self.constraint_gradients,
+                          derivatives=lambda: self.constraint_derivatives, normal=cancel,
+                          owner=None if self.closed_form else "hamiltonian_side")
+
+    @property
     def constraint_matrix(self) -> sp.Matrix:
         """C^H_ij = Z_i^H(phi_j^H) = -mu_iA d phi_j^H / d p_A, shape (m, m)."""
         if not self.m:
             return sp.zeros(0, 0)
-        return (self.vertical_fields * self.constraint_gradients.T).applyfunc(cancel)
+        return self.projection.constraint_matrix
 
     @cached_property
     def constraint_derivatives(self) -> sp.Matrix:
@@ -217,41 +227,33 @@ class HamiltonianSide(ConstraintMatrixRank):
             return (self.constraint_gradients * self.X_H).applyfunc(cancel)
         return sp.Matrix([self.algebra.bracket(f, self.H) for f in self.constraints])
 
-    @cached_property
+    @property
     def multipliers(self) -> sp.Matrix:
         """lambda^j = -(C^H)^{ij} X_H(phi_i^H): a solve with (C^H)^T, shape (m, 1).
 
         Defined where C^H is invertible (the regular case); singular systems
         go through :meth:`analysis`.
         """
-        if not self.m:
-            return sp.zeros(0, 1)
-        if not self.closed_form:
-            guard_closed_form(self.constraint_matrix, "multipliers", "hamiltonian_side")
-        return (-solve_linear(self.constraint_matrix.T, self.constraint_derivatives)).applyfunc(
-            cancel)
+        return self.projection.multipliers
 
-    @cached_property
+    @property
     def projected_field(self) -> sp.Matrix:
         """X = X_H + lambda^j Z_j^H, shape (2n, 1)."""
-        if not self.m:
-            return self.X_H
-        return (self.X_H + self.vertical_fields.T * self.multipliers).applyfunc(cancel)
+        return self.projection.projected_field
 
-    @cached_property
+    @property
     def projector_Q(self) -> sp.Matrix:
         """Q = (C^H)^{ij} Z_j^H (x) d phi_i^H as a (2n, 2n) matrix acting on columns."""
-        if not self.m:
-            return sp.zeros(2 * self.n, 2 * self.n)
-        if not self.closed_form:
-            guard_closed_form(self.constraint_matrix, "projector_Q", "hamiltonian_side")
-        return (self.vertical_fields.T
-                * solve_linear(self.constraint_matrix.T, self.constraint_gradients)).applyfunc(cancel)
+        return self.projection.projector_Q
 
-    @cached_property
+    @property
     def projector_P(self) -> sp.Matrix:
         """P = id - Q on T*Q; P(X_H) is the projected field."""
-        return sp.eye(2 * self.n) - self.projector_Q
+        return self.projection.projector_P
+
+    def project(self, X) -> sp.Matrix:
+        """P(X) for a field X on T*Q (2n-vector), each entry cancelled."""
+        return self.projection.project(X)
 
     @cached_property
     def equations_of_motion(self) -> tuple:
@@ -548,6 +550,7 @@ class JacobiatorReport:
     def describe(self) -> str:
         if self.vanishes:
             return "the nonholonomic bracket satisfies the Jacobi identity on M_1"
+        assert self.witness is not None  # a bracket that fails has a witness
         (i, j, k), value = self.witness
         return (f"the nonholonomic bracket fails the Jacobi identity on M_1: "
                 f"Jac({i}, {j}, {k}) = {value}")

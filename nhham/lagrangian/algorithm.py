@@ -42,6 +42,7 @@ from nhham.errors import BudgetExceeded, ComputationError
 from nhham.lagrangian.adjugate import divide_out, scale_factors
 from nhham.lagrangian.algebra import cancel
 from nhham.lagrangian.graphs import Provenance
+from nhham.lagrangian.projection import gradient_rows, tangency_equations
 from nhham.lagrangian.submanifold import Submanifold
 from nhham.system.expressions import short
 from nhham.system.naming import multiplier_symbol
@@ -182,12 +183,10 @@ class _Loop:
     def row(self, chi):
         """(dχ, Z_i(χ) for every i, ξ(χ)) cached by expression."""
         if chi not in self.rows:
-            grad = sp.Matrix([[sp.diff(chi, s) for s in self.variables]])
+            grad = gradient_rows([chi], self.variables)
             # Polynomial rows of scaled fields need no cancellation, only expansion.
-            normal = sp.expand if self.scaled else cancel
-            a = [normal((grad * self.Z.row(i).T)[0]) for i in range(self.Z.rows)]
-            b = normal((grad * self.xi)[0])
-            self.rows[chi] = (grad, a, b)
+            A, b = tangency_equations(grad, self.xi, self.Z, sp.expand if self.scaled else cancel)
+            self.rows[chi] = (grad, list(A.row(0)) if A.cols else [], b[0])
         return self.rows[chi]
 
     def unscaled(self, psi):

@@ -20,8 +20,7 @@ from typing import TYPE_CHECKING, Mapping, cast
 
 import sympy as sp
 
-from nhham.errors import ComputationError, InputError
-from nhham.lagrangian.algebra import cancel
+from nhham.autonomy import require_autonomous
 from nhham.lagrangian.decision import Assumption
 from nhham.lagrangian.graphs import Provenance, connected_components
 from nhham.lagrangian.engine import Policy, decide, policy_of
@@ -31,7 +30,8 @@ from nhham.lagrangian.algorithm import (
     rank_drop_warnings,
     run_algorithm,
 )
-from nhham.lagrangian.records import AlgorithmRun, Evidence, Stage, tangency_matrix
+from nhham.lagrangian.records import (AlgorithmRun, ConstraintOutcome, Evidence, Stage,
+                                      tangency_matrix)
 from nhham.lagrangian.submanifold import Submanifold, has_real_point
 from nhham.settings import SEED, check_options
 from nhham.system.description import System
@@ -65,7 +65,7 @@ class Block:
 
 
 @dataclass(frozen=True)
-class ConstraintAnalysis:
+class ConstraintAnalysis(ConstraintOutcome):
     """What the constraint algorithm says about a Lagrangian system.
 
     Attributes
@@ -126,33 +126,13 @@ class ConstraintAnalysis:
     """
 
     system: System
-    status: str
-    stages: tuple
-    final_constraints: tuple
-    final_labels: tuple
     rank_C: int
     regular: bool
-    free_multiplier_symbols: tuple
     dropped: tuple
-    provenance_data: Provenance
     blocks: tuple
-    inconsistency: str | None
-    warnings: tuple
-    converged: bool
-    dimension: int | None
     options: Mapping
     policy: Policy = field(default_factory=Policy, compare=False, repr=False)
     geometry: object = field(default=None, compare=False, repr=False)
-
-    @property
-    def free_multipliers(self) -> int:
-        """Number of free multipliers."""
-        return len(self.free_multiplier_symbols)
-
-    @cached_property
-    def provenance(self):
-        """The provenance as a ``networkx.DiGraph`` (see the class docstring)."""
-        return self.provenance_data.graph()
 
     @cached_property
     def multipliers(self) -> Mapping:
@@ -214,19 +194,6 @@ class ConstraintAnalysis:
     def projector_Q(self) -> sp.Matrix | None:
         """The paper's Q on M_f as a 2n x 2n matrix (block-diagonal over the blocks)."""
         return self._assemble("projector_Q")
-
-    @cached_property
-    def projector_P(self) -> sp.Matrix | None:
-        """P = id − Q on M_f (2n x 2n); P(X) solves the problem for every solution X."""
-        Q = self.projector_Q
-        return None if Q is None else sp.eye(2 * self.system.n) - Q
-
-    def project(self, X) -> sp.Matrix:
-        """P(X) for a field X = ξ_L + λ^i Z_i (any λ), shape (2n, 1)."""
-        P = self.projector_P
-        if P is None:
-            raise ComputationError("the problem is inconsistent: there is no projector")
-        return (P * sp.Matrix(X)).applyfunc(cancel)
 
     def _assemble(self, name):
         n = self.system.n
@@ -346,12 +313,8 @@ def _check_autonomous(system, blocks) -> None:
         for stage in block.run.stages:
             for label, chi in zip(stage.new_labels, stage.new_constraints):
                 used = sorted(s.name for s in sp.sympify(chi).free_symbols & moving)
-                if used:
-                    raise InputError(
-                        f"forces: the secondary constraint {label} = {short(chi)} depends on "
-                        f"{', '.join(used)}; the constraint algorithm needs forces that do "
-                        f"not depend on time or inputs where C is singular (give the inputs "
-                        f"as parameters with values)", key="forces")
+                require_autonomous("secondary", bool(used), label=label,
+                                   expression=short(chi), names=", ".join(used))
 
 
 # ------------------------------------------------------------- blocks and merging

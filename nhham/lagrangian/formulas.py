@@ -16,7 +16,7 @@ from typing import Callable
 
 from nhham.lagrangian.linalg import field_solve, zeros_like
 
-__all__ = ["bordered_matrix", "tangency_rows", "vertical_rows", "constrained_motion", "lagrangian_bracket",
+__all__ = ["bordered_matrix", "bordered_system", "tangency_rows", "vertical_rows", "constrained_motion", "lagrangian_bracket",
            "dirac_difference", "frobenius_terms"]
 
 
@@ -41,6 +41,44 @@ def bordered_matrix(W, mu, Jv):
     """
     zero = zeros_like(Jv, (Jv.shape[0], mu.shape[0]))
     return W.hstack(mu.transpose()).vstack(Jv.hstack(zero))
+
+
+def bordered_system(W, mu, F, Jq_v, Jv):
+    """(K, c) of the tangency equations K [a; λ] = c of constraints χ: the one home of
+    their inverse-free form.
+
+    K = [[W, μᵀ], [∂χ/∂v, 0]] (:func:`bordered_matrix`) and c = [F; −∂χ/∂q · v], from
+    W a + μᵀ λ = F and d/dt χ = (∂χ/∂q) v + (∂χ/∂v) a = 0. Eliminating a gives the rows
+    A λ + b = 0 of :func:`tangency_rows` (A_ji = Z_i(χ_j), b_j = ξ_L(χ_j)), which are the
+    rows :func:`nhham.lagrangian.projection.tangency_equations` forms from the fields.
+
+    Parameters
+    ----------
+    W : matrix, shape (n, n)
+    mu : matrix, shape (m, n)
+    F : matrix, shape (n, 1)
+    Jq_v : matrix, shape (k, 1)
+        ∂χ/∂q · v.
+    Jv : matrix, shape (k, n)
+        ∂χ/∂v.
+
+    Returns
+    -------
+    K : matrix, shape (n + k, n + m)
+    c : matrix, shape (n + k, 1)
+
+    Examples
+    --------
+    A particle in the plane, W = I, one constraint χ = y_dot − x x_dot (μ = (−x, 1)):
+
+    >>> from nhham.lagrangian.linalg import ListMatrix
+    >>> K, c = bordered_system(ListMatrix([[1, 0], [0, 1]]), ListMatrix([[-2, 1]]),
+    ...                        ListMatrix([[0], [0]]), ListMatrix([[-9]]),
+    ...                        ListMatrix([[-2, 1]]))
+    >>> K.rows, c.rows
+    ([[1, 0, -2], [0, 1, 1], [-2, 1, 0]], [[0], [0], [9]])
+    """
+    return bordered_matrix(W, mu, Jv), F.vstack(-Jq_v)
 
 
 def tangency_rows(W, mu, F, Jq_v, Jv, solve: Callable = field_solve):

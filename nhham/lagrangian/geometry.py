@@ -32,8 +32,9 @@ import sympy as sp
 
 from nhham.settings import SEED
 from nhham.lagrangian.adjugate import ScaledInverse, scaled_inverse
-from nhham.lagrangian.algebra import guard_closed_form, solve_linear
+from nhham.lagrangian.algebra import solve_linear
 from nhham.lagrangian.decision import Decision, DecisionSettings
+from nhham.lagrangian.projection import Projection
 from nhham.lagrangian.submanifold import Submanifold
 from nhham.system.expressions import derivative
 from nhham.system.naming import acceleration_symbol, multiplier_symbol
@@ -115,8 +116,13 @@ def lagrangian_geometry(system, precision: int | None = None, samples: int = 6,
         sibling = shared.get(key[:3] + (not key[3],))
         if sibling is not None:
             settings = {f.name for f in fields(LagrangianGeometry)}  # the arguments
-            formed = {k: v for k, v in vars(sibling).items() if k not in settings}
+            formed = {k: v for k, v in vars(sibling).items()
+                      if k not in settings and k != "projection"}
             vars(geometry).update(formed)
+            if "projection" in vars(sibling):  # its closed forms, not its size guard
+                inputs = {f.name for f in fields(Projection)}
+                vars(geometry.projection).update(
+                    {k: v for k, v in vars(sibling.projection).items() if k not in inputs})
         shared[key] = geometry
     return shared[key]
 
@@ -517,41 +523,45 @@ class LagrangianGeometry(ConstraintMatrixRank):
         return ing.drift + ing.mu * self.accelerations
 
     @cached_property
+    def projection(self) -> Projection:
+        """The §4 projection of ξ_L by Z_i and dφ_i (:class:`~nhham.lagrangian.projection.
+        Projection`): C = −μ W⁻¹ μᵀ and ξ_L(φ) from the ingredients, solves without
+        cancellation, refused beyond the closed-form size unless ``closed_form``."""
+        return Projection(lambda: self.euler_lagrange_field,
+                          self.vertical_fields, self.constraint_gradients,
+                          matrix=self.constraint_matrix,
+                          derivatives=lambda: self.constraint_derivatives,
+                          solve=_solve_unsimplified,
+                          owner=None if self.closed_form else "lagrangian_geometry")
+
+    @property
     def multipliers(self) -> sp.Matrix:
         """lambda^j = -C^{ij} xi_L(phi_i), from a solve with C^T (size m)."""
-        if self.m == 0:
-            return sp.zeros(0, 1)
-        C = self.constraint_matrix
-        if not self.closed_form:
-            guard_closed_form(C, "multipliers", "lagrangian_geometry")
-        return -solve_linear(C.T, self.constraint_derivatives, simplify=None)
+        return self.projection.multipliers
 
     @cached_property
     def multiplier_symbols(self) -> tuple[sp.Symbol, ...]:
         """``lambda_1 .. lambda_m``."""
         return tuple(multiplier_symbol(i + 1) for i in range(self.m))
 
-    @cached_property
+    @property
     def projected_field(self) -> sp.Matrix:
         """P(xi_L) = xi_L - C^{ij} xi_L(phi_i) Z_j = xi_L + lambda^j Z_j."""
-        if self.m == 0:
-            return self.euler_lagrange_field
-        return self.euler_lagrange_field + self.vertical_fields.T * self.multipliers
+        return self.projection.projected_field
 
-    @cached_property
+    @property
     def projector_Q(self) -> sp.Matrix:
         """Q = C^{ij} Z_j (x) d phi_i as a 2n x 2n matrix: Z^T C^{-T} dphi."""
-        if self.m == 0:
-            return sp.zeros(2 * self.n, 2 * self.n)
-        C = self.constraint_matrix
-        if not self.closed_form:
-            guard_closed_form(C, "projector_Q", "lagrangian_geometry")
-        return self.vertical_fields.T * solve_linear(C.T, self.constraint_gradients, simplify=None)
+        return self.projection.projector_Q
 
-    @cached_property
+    @property
     def projector_P(self) -> sp.Matrix:
         """P = id - Q (P^2 = P); P(xi_L) is the constrained dynamics."""
-        return sp.eye(2 * self.n) - self.projector_Q
+        return self.projection.projector_P
+
+    def project(self, X) -> sp.Matrix:
+        """P(X) for a field X on TQ (2n-vector), each entry cancelled."""
+        return self.projection.project(X)
 
     @cached_property
     def acceleration_symbols(self) -> tuple[sp.Symbol, ...]:
@@ -591,6 +601,12 @@ class LagrangianGeometry(ConstraintMatrixRank):
         """M_1 = {phi_i = 0, g = 0} with this geometry's precision settings."""
         return Submanifold(self.system, self.system.holonomic + self.system.phi,
                            precision=self.precision, samples=self.samples, seed=self.seed)
+
+
+def _solve_unsimplified(A: sp.Matrix, B: sp.Matrix) -> sp.Matrix:
+    """A⁻¹ B without cancelling the entries (the closed forms of TQ are cancelled by
+    whoever prints them)."""
+    return solve_linear(A, B, simplify=None)
 
 
 def _coordinate_derivatives(expr, qidx) -> dict:

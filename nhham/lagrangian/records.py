@@ -9,17 +9,17 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from functools import cached_property
 from types import MappingProxyType
-from typing import Callable, Mapping
+from typing import Callable, Mapping, cast
 
 import sympy as sp
 
-from nhham.errors import ComputationError
 from nhham.lagrangian.algebra import cancel, solve_linear, tidy, tidy_light
 from nhham.lagrangian.decision import Decision
 from nhham.lagrangian.graphs import Provenance
+from nhham.lagrangian.projection import Projected, Projection, gradient_rows, tangency_equations
 from nhham.lagrangian.submanifold import Submanifold
 
-__all__ = ["Evidence", "Stage", "AlgorithmRun", "tangency_matrix", "solve_on"]
+__all__ = ["Evidence", "Stage", "ConstraintOutcome", "AlgorithmRun", "tangency_matrix", "solve_on"]
 
 
 # ====================================================================== records
@@ -119,8 +119,60 @@ class Stage:
 
 
 # ======================================================================= generic
+@dataclass(frozen=True, kw_only=True)
+class ConstraintOutcome(Projected):
+    """What the constraint algorithm concludes: the names a run on one block
+    (:class:`AlgorithmRun`) and the whole system's analysis
+    (:class:`~nhham.lagrangian.analysis.ConstraintAnalysis`) both answer, in one place
+    (given by keyword).
+
+    Attributes
+    ----------
+    status : {"determined", "underdetermined", "inconsistent"}
+    stages : tuple of Stage
+    final_constraints, final_labels : tuple
+        The constraints defining M_f and their labels.
+    free_multiplier_symbols : tuple of sympy.Symbol
+        The multipliers left free.
+    provenance_data : Provenance
+        Which constraint generated which, stage by stage (plain nodes and edges);
+        ``provenance`` is the same as a ``networkx.DiGraph``, formed on first use.
+    inconsistency : str or None
+        At which stage and why the problem has no solution.
+    warnings : tuple of str
+    converged : bool
+        False when the stage bound was hit while new constraints were still appearing.
+    dimension : int or None
+        dim M_f.
+
+    Each result derives ``multipliers``, ``dynamics`` and ``projector_Q``; ``projector_P``
+    and ``project`` follow from Q (:class:`~nhham.lagrangian.projection.Projected`).
+    """
+
+    status: str
+    stages: tuple
+    final_constraints: tuple
+    final_labels: tuple
+    free_multiplier_symbols: tuple
+    provenance_data: Provenance
+    inconsistency: str | None
+    warnings: tuple
+    converged: bool
+    dimension: int | None
+
+    @cached_property
+    def provenance(self):
+        """The provenance as a ``networkx.DiGraph`` (networkx is imported only then)."""
+        return self.provenance_data.graph()
+
+    @property
+    def free_multipliers(self) -> int:
+        """Number of free multipliers."""
+        return len(self.free_multiplier_symbols)
+
+
 @dataclass(frozen=True)
-class AlgorithmRun:
+class AlgorithmRun(ConstraintOutcome):
     """Result of :func:`run_algorithm` on one (block of a) system.
 
     Attributes
@@ -182,29 +234,14 @@ class AlgorithmRun:
         δ of ``scaled_fields`` (1 when unscaled).
     """
 
-    status: str
-    stages: tuple
-    final_constraints: tuple
-    final_labels: tuple
     rank: int | None
     block: tuple
     multiplier_symbols: tuple
-    free_multiplier_symbols: tuple
-    provenance_data: Provenance
-    inconsistency: str | None
-    warnings: tuple
-    converged: bool
-    dimension: int | None
     variables: tuple
     fields: Callable = field(compare=False, repr=False)
     manifold: Submanifold | None = field(default=None, compare=False, repr=False)
     scaled_fields: Callable | None = field(default=None, compare=False, repr=False)
     denominator: object = field(default=None, compare=False, repr=False)
-
-    @cached_property
-    def provenance(self):
-        """The provenance as a ``networkx.DiGraph`` (see the class docstring)."""
-        return self.provenance_data.graph()
 
     @cached_property
     def scale(self) -> sp.Expr:
@@ -245,30 +282,41 @@ class AlgorithmRun:
         return self._scaled[:2]
 
     @cached_property
-    def _loop_tangency(self):
-        """(A, b) over the final constraints from the loop's fields (δ A, δ b if scaled)."""
-        if self.scaled_fields is None:
-            return self.tangency_matrix, self.tangency_rhs
+    def projection(self) -> Projection | None:
+        """The §4 projection on M_f over the regular block (rows J, multipliers I), from
+        the loop's fields: C = (Z_i(χ_j))_{J, I}ᵀ, the free λ^α (columns F) in
+        ξ(χ_J) + Z_F(χ_J) λ_F, solves on M_f; None when inconsistent. Its entries are
+        as solved (``multipliers`` and ``projector_Q`` tidy them)."""
+        if self.status == "inconsistent":
+            return None
+        rows, cols = list(self.block[0]), list(self.block[1])
+        N = len(self.variables)
+        grads = gradient_rows([self.final_constraints[j] for j in rows], self.variables)
         xi, Z = self._loop_fields
-        return (tangency_matrix(self.final_constraints, Z, self.variables, expand=True),
-                _tangency_rhs(self.final_constraints, xi, self.variables, expand=True))
+        normal = sp.expand if self.scaled_fields is not None else cancel
+        A = cast(sp.Matrix, tangency_equations(grads, None, Z, normal)[0])
+        free = [i for i in range(len(self.multiplier_symbols)) if i not in cols]
+
+        def derivatives():
+            _, b = tangency_equations(grads, xi, None, normal)
+            if free:
+                b = b + A.extract(list(range(len(rows))), free) * sp.Matrix(
+                    [self.multiplier_symbols[i] for i in free])
+            return b
+
+        return Projection(None, Z.extract(cols, list(range(N))), grads,
+                          matrix=A.extract(list(range(len(rows))), cols).T,
+                          derivatives=derivatives,
+                          solve=lambda B, rhs: solve_on(self.manifold, B, rhs))
 
     @cached_property
     def multipliers(self) -> Mapping:
         """Determined ``{λ^i: expression}`` (see the class docstring); the same from the
         scaled fields (δ cancels in λ_I = −B^{-1}(b_J + A[J, F] λ_F))."""
-        if self.status == "inconsistent":
+        cols = list(self.block[1])
+        if self.projection is None or not cols:
             return MappingProxyType({})
-        A, b = self._loop_tangency
-        rows, cols = list(self.block[0]), list(self.block[1])
-        if not cols:
-            return MappingProxyType({})
-        free_cols = [i for i in range(len(self.multiplier_symbols)) if i not in cols]
-        rhs = b.extract(rows, [0])
-        if free_cols:
-            rhs = rhs + A.extract(rows, free_cols) * sp.Matrix(
-                [self.multiplier_symbols[i] for i in free_cols])
-        solved = -solve_on(self.manifold, A.extract(rows, cols), rhs)
+        solved = self.projection.multipliers
         return MappingProxyType({self.multiplier_symbols[i]: tidy(solved[pos])
                                  for pos, i in enumerate(cols)})
 
@@ -282,54 +330,17 @@ class AlgorithmRun:
         lam = sp.Matrix(self.multiplier_symbols).xreplace(dict(self.multipliers))
         return (self.base_field + self.vertical_fields.T * lam).applyfunc(tidy_light)
 
-    @property
-    def free_multipliers(self) -> int:
-        """Number of free multipliers."""
-        return len(self.free_multiplier_symbols)
-
-    @cached_property
-    def _block_solve(self):
-        """B^{-1} dχ_J (r x N) on M_f, or None when inconsistent."""
-        if self.status == "inconsistent":
-            return None
-        rows, cols = self.block
-        grads = sp.Matrix([[sp.diff(self.final_constraints[j], s) for s in self.variables]
-                           for j in rows]) if rows else sp.zeros(0, len(self.variables))
-        # B from the loop's fields: Z_I^T B^{-1} does not change when Z is scaled by δ.
-        Z = self._loop_fields[1]
-        A = tangency_matrix([self.final_constraints[j] for j in rows], Z, self.variables,
-                            expand=self.scaled_fields is not None)
-        B = A.extract(list(range(len(rows))), list(cols)) if rows else sp.zeros(0, 0)
-        return solve_on(self.manifold, B, grads) if rows else grads
-
     @cached_property
     def projector_Q(self) -> sp.Matrix | None:
         """Q = Z_I^T B^{-1} dχ_J as an N x N matrix (Q^2 = Q); None if inconsistent.
 
         The paper's Q = (C')^{i'j'} Z_{j'} ⊗ dχ_{i'} over the regular block: it maps
-        Z_i (i in I) to itself and vanishes on vectors tangent to every χ_j (j in J).
+        Z_i (i in I) to itself and vanishes on vectors tangent to every χ_j (j in J);
+        Z_I^T B^{-1} does not change when Z is scaled by δ.
         """
-        if self._block_solve is None:
+        if self.projection is None:
             return None
-        N = len(self.variables)
-        cols = list(self.block[1])
-        if not cols:
-            return sp.zeros(N, N)
-        Z_I = self._loop_fields[1].extract(cols, list(range(N)))
-        return (Z_I.T * self._block_solve).applyfunc(cancel)
-
-    @cached_property
-    def projector_P(self) -> sp.Matrix | None:
-        """P = id − Q (N x N); P(X) solves the constrained problem for every solution X."""
-        Q = self.projector_Q
-        return None if Q is None else sp.eye(len(self.variables)) - Q
-
-    def project(self, X) -> sp.Matrix:
-        """P(X) for a vector field X (N-vector); for X = ξ + λ^i Z_i this is ``dynamics``."""
-        P = self.projector_P
-        if P is None:
-            raise ComputationError("the problem is inconsistent: there is no projector")
-        return (P * sp.Matrix(X)).applyfunc(cancel)
+        return self.projection.projector_Q.applyfunc(cancel)
 
     def __repr__(self) -> str:
         return (f"<AlgorithmRun: {self.status}, rank {self.rank}, {len(self.stages)} stage(s), "
@@ -338,22 +349,18 @@ class AlgorithmRun:
 
 def tangency_matrix(chis, Z, variables, expand: bool = False) -> sp.Matrix:
     """A_ji = Z_i(χ_j) for the listed constraints (``expand``: polynomial fields, the
-    entries are expanded instead of cancelled)."""
-    normal = sp.expand if expand else cancel
-    rows = []
-    for chi in chis:
-        grad = sp.Matrix([[sp.diff(chi, s) for s in variables]])
-        rows.append([normal((grad * Z.row(i).T)[0]) for i in range(Z.rows)])
-    return sp.Matrix(rows) if rows else sp.zeros(0, Z.rows)
+    entries are expanded instead of cancelled; :func:`~nhham.lagrangian.projection.
+    tangency_equations`)."""
+    A, _ = tangency_equations(gradient_rows(list(chis), variables), None, Z,
+                         sp.expand if expand else cancel)
+    return A
 
 
 def _tangency_rhs(chis, xi, variables, expand: bool = False) -> sp.Matrix:
     """b_j = ξ(χ_j) for the listed constraints (``expand`` as in :func:`tangency_matrix`)."""
-    if not chis:
-        return sp.zeros(0, 1)
-    normal = sp.expand if expand else cancel
-    return sp.Matrix([normal((sp.Matrix([[sp.diff(c, s) for s in variables]]) * xi)[0])
-                      for c in chis])
+    _, b = tangency_equations(gradient_rows(list(chis), variables), xi, None,
+                         sp.expand if expand else cancel)
+    return b
 
 
 def solve_on(M, B, rhs):

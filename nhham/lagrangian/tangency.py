@@ -24,13 +24,14 @@ from __future__ import annotations
 
 from dataclasses import dataclass, replace
 from functools import cached_property
+from typing import cast
 
 import sympy as sp
 
 from nhham.lagrangian.decision import Decision
 from nhham.lagrangian.domains import NotExact, evaluate, minor_degree
 from nhham.lagrangian.engine import Policy, decide
-from nhham.lagrangian.formulas import bordered_matrix, vertical_rows
+from nhham.lagrangian.formulas import bordered_system, vertical_rows
 from nhham.lagrangian.linalg import ListMatrix, exact_rank
 from nhham.lagrangian.points import jacobian_row
 from nhham.lagrangian.submanifold import Submanifold
@@ -108,7 +109,7 @@ def tangency_at_points(system, hessian, forcing, primary, *, seed: int,
 class Tangency:
     """Stage 1 of the constraint algorithm as a question for
     :func:`~nhham.lagrangian.engine.decide`: the ranks of K, [K | c] and the Jacobian
-    of the constraints on M_1 (the data: :func:`nhham.lagrangian.formulas.bordered_matrix`).
+    of the constraints on M_1 (the data: :func:`nhham.lagrangian.formulas.bordered_system`).
 
     The answer is a :class:`TangencyVerdict`. No exact reduction: where M_1 has no
     exact points, systems up to ``policy.closed_form_size`` coordinates are left to
@@ -164,10 +165,10 @@ class Tangency:
         F = evaluate(self.F, env, cache)
         vel = [env[s] for s in self.v]
         n = self.n
-        K = bordered_matrix(ListMatrix(W), ListMatrix(mu, n), ListMatrix(Jv, n)).rows
-        c = F + [-sum((a * b for a, b in zip(row, vel)), 0) for row in Jq]
+        K, c = bordered_system(ListMatrix(W), ListMatrix(mu, n), _column(F),
+                               ListMatrix(Jq, n) * _column(vel), ListMatrix(Jv, n))
         J = [a + b for a, b in zip(Jq, Jv)]
-        return K, c, J
+        return K.rows, [x for x, in c.rows], J
 
     # ------------------------------------------------------------ modulo p
     @property
@@ -353,9 +354,10 @@ def tangency_sampled(system, hessian, forcing, primary, manifold) -> TangencyVer
     mu = system.mu
     Jv = sp.Matrix([jacobian_row(c, v) for c in chis]) if chis else sp.zeros(0, n)
     Jq = sp.Matrix([jacobian_row(c, q) for c in chis]) if chis else sp.zeros(0, n)
-    K = sp.Matrix.vstack(sp.Matrix.hstack(hessian, mu.T),
-                         sp.Matrix.hstack(Jv, sp.zeros(len(chis), m)))
-    c = sp.Matrix.vstack(forcing, -Jq * sp.Matrix(v))
+    K, c = (sp.Matrix(part.rows) for part in bordered_system(
+        ListMatrix(hessian.tolist(), n), ListMatrix(mu.tolist(), n),
+        ListMatrix(forcing.tolist(), 1), ListMatrix(Jq.tolist(), n) * _column(v),
+        ListMatrix(Jv.tolist(), n)))
     # One lambdified function for the three matrices (K is inside [K | c]).
     rK, rAug, jac = manifold.sampled_ranks([K, sp.Matrix.hstack(K, c),
                                             sp.Matrix.hstack(Jq, Jv) if chis else sp.zeros(0, 0)])
@@ -373,8 +375,13 @@ def tangency_sampled(system, hessian, forcing, primary, manifold) -> TangencyVer
                            rK.samples)
 
 
+def _column(values) -> ListMatrix:
+    """The values as an (k, 1) column."""
+    return ListMatrix([[x] for x in values], 1)
+
+
 def _shifted(decision: Decision, shift: int, what: str) -> Decision:
-    return Decision(int(decision.value) + shift, decision.method, f"{what}: {decision.detail}",
+    return Decision(int(cast(int, decision.value)) + shift, decision.method, f"{what}: {decision.detail}",
                     precision=decision.precision, samples=decision.samples,
                     singular_values=decision.singular_values,
                     point_residual=decision.point_residual, warnings=decision.warnings)

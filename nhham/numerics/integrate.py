@@ -49,6 +49,7 @@ from typing import Any, Mapping
 
 import numpy as np
 
+from nhham.autonomy import require_autonomous
 from nhham.errors import InconsistentInitialDataError, InputError
 from nhham.numerics.compiled_loop import run_compiled
 from nhham.numerics.diagnostics import (Diagnostics, Singularity, singularity_at,
@@ -581,10 +582,8 @@ def _check_model(spec, baumgarte, model):
         raise InputError(f"method: {spec.name!r} is {spec.forces_refused}; this system has "
                          f"forces (choose an adaptive method such as {DEFAULT_METHOD})",
                          key="method")
-    if model.time_slot is not None and not spec.takes_time:
-        raise InputError(f"method: {spec.name!r} does not take time-dependent forces (t in "
-                         f"the forces); choose an adaptive method such as {DEFAULT_METHOD}",
-                         key="method")
+    require_autonomous("method", model.time_slot is not None and not spec.takes_time,
+                       method=spec.name)
     if spec.needs_quadratic and not model.quadratic:
         raise InputError(f"method {spec.name!r} needs L = 1/2 v^T W(q) v - V(q) (no terms "
                          f"linear in the velocities, W independent of v); use a scipy method "

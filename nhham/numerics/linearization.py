@@ -43,6 +43,7 @@ from typing import TYPE_CHECKING, Mapping, Sequence
 
 import numpy as np
 
+from nhham.autonomy import require_autonomous
 from nhham.errors import ComputationError, InconsistentInitialDataError, InputError
 from nhham.numerics.chart import (ComplexField, chart_jacobian, chart_jacobians, choose_chart,
                                   input_jacobians)
@@ -378,10 +379,7 @@ def _check_inputs(model):
         raise InputError(f"linearize: no steady value for the input(s) {', '.join(unset)} "
                          f"(a scene's [steady] gives one for every input; in Python: "
                          f"model.with_parameters({unset[0]}=...))", key="steady")
-    if model.time_slot is not None:
-        raise InputError("linearize: the forces depend on time t; a steady motion needs "
-                         "autonomous forces (give the inputs constant values instead)",
-                         key="forces")
+    require_autonomous("linearize", model.time_slot is not None)
 
 
 def _check_steady(model, y0):

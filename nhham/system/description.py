@@ -37,6 +37,7 @@ from nhham.errors import (
     SingularLagrangianError,
     ValidationError,
 )
+from nhham.autonomy import time_slot
 from nhham.settings import PARAMETER_BOX, STATE_BOX
 from nhham.system.force_checks import dissipation_problems
 from nhham.system.naming import TIME, as_symbol, velocity_symbol
@@ -262,6 +263,12 @@ class System:
     def time(self) -> sp.Symbol | None:
         """The time ``t`` when the forces depend on it (a parameter then), else None."""
         return TIME if TIME in self.parameters[len(self.parameters) - 1:] else None
+
+    @property
+    def time_slot(self) -> int | None:
+        """The index of ``t`` in :attr:`parameters` (to the generated code's time slot), or
+        None: the one datum "this system depends on t" (:mod:`nhham.autonomy`)."""
+        return time_slot(self.parameters, self.time)
 
     @property
     def has_forces(self) -> bool:

@@ -40,6 +40,7 @@ import sympy as sp
 from sympy.core.function import AppliedUndef
 from sympy.physics import mechanics as me
 
+from nhham.autonomy import nonautonomous
 from nhham.errors import InputError, ValidationError
 from nhham.system.expressions import short
 from nhham.system.naming import (
@@ -874,7 +875,7 @@ def _inexpressible(term, to_plain, t):
         return (f"contains {short(funcs[0], _QUOTE)}, a function of time that is not one of the "
                 f"coordinates q")
     if t in term.xreplace(to_plain).free_symbols:
-        return f"depends explicitly on time {t}; nhham handles autonomous systems only"
+        return nonautonomous("mechanics", t=t)
     return ""
 
 

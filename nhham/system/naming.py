@@ -8,6 +8,8 @@ from __future__ import annotations
 
 import sympy as sp
 
+from nhham.autonomy import TIME_NAME
+
 __all__ = [
     "velocity_symbol",
     "acceleration_symbol",
@@ -19,7 +21,7 @@ __all__ = [
 
 #: The time t, the only name a force, a dissipation function or a control law may use for
 #: time (``System.forces``); L and the constraints are autonomous.
-TIME = sp.Symbol("t")
+TIME = sp.Symbol(TIME_NAME)
 
 
 def as_symbol(name_or_symbol) -> sp.Symbol:

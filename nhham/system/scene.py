@@ -41,6 +41,7 @@ from typing import TYPE_CHECKING, Mapping
 
 import sympy as sp
 
+from nhham.autonomy import nonautonomous
 from nhham.errors import InputError, ParseError, SceneError, key_of
 from nhham.system.contacts import contacts_structure, parse_contacts
 from nhham.system.expressions import RESERVED_NAMES, parse_expression
@@ -799,8 +800,7 @@ def _declare_hint(name: str | None, inputs=()) -> str:
         return (" (an input may appear in the forces and the dissipation only, not in L or "
                 "the constraints)")
     if name == "t":
-        return (" (systems are autonomous: L and the constraints may not depend on time t, "
-                "a force may (forces = {...}); if t is a parameter, add it to parameters)")
+        return nonautonomous("scene")
     if name.endswith("_ddot"):
         return " (accelerations may not appear in L or the constraints)"
     return (f" (a parameter must be declared: parameters = {{ {name} = <value> }} or "

@@ -24,6 +24,7 @@ import unicodedata
 import sympy as sp
 from sympy.core.function import AppliedUndef
 
+from nhham.autonomy import nonautonomous
 from nhham.system.expressions import short, to_text
 from nhham.system.naming import as_symbol
 from nhham.system.numbers import number_problems
@@ -104,9 +105,7 @@ def expression_problems(label: str, expr: sp.Expr, state, known) -> list[str]:
 
 def _unknown_advice(unknown) -> str:
     if "t" in unknown:
-        return ("; nhham's systems are autonomous: L and the constraints may not depend on "
-                "time t explicitly, a force may (forces=...; if t is a parameter, declare it "
-                "in parameters)")
+        return nonautonomous("screening")
     return "; declare parameters in parameters"
 
 

@@ -189,8 +189,8 @@ def _parameter_values(system, overrides) -> dict:
     # Inputs are NaN until set (a field evaluated with one unset fails, never uses a
     # made-up value); the time slot is set by the loops.
     values.update({u.name: math.nan for u in system.inputs})
-    if system.time is not None:
-        values[system.time.name] = 0.0
+    if system.time_slot is not None:
+        values[system.parameters[system.time_slot].name] = 0.0
     values.update({k: float(v) for k, v in overrides.items()})
     missing = [p.name for p in system.parameters if p.name not in values]
     if missing:

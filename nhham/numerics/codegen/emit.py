@@ -196,7 +196,7 @@ def _generate(system, path: str) -> dict:
     printed = {name: _cse(expand_angle_sums(outputs, qs))
                for name, (_, outputs) in kernels.items()}
     python = _python_module(kernels, printed, n, len(system.parameters))
-    slot = system.parameters.index(system.time) if system.time is not None else None
+    slot = system.time_slot
     c = _c_module(printed, n, m, k, len(system.parameters), path,
                   forced=system.has_forces, time_slot=slot)
     c_complex = _c_complex_module(printed, n, m, k, len(system.parameters),
