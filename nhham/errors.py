@@ -74,7 +74,13 @@ class NhhamError(Exception):
 
 
 class InputError(NhhamError):
-    """The user's input (system description, scene, options) is invalid."""
+    """The user's input (system description, scene, options) is invalid.
+
+    ``problems``: every problem found, when a check collected several before raising
+    once (empty otherwise).
+    """
+
+    problems: tuple[str, ...] = ()
 
 
 class UsageError(InputError):
