@@ -38,11 +38,12 @@ there.
 from __future__ import annotations
 
 import contextlib
+import contextvars
 import math
 import random
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import reduce
-from typing import Sequence
+from typing import Any, Sequence
 
 import numpy as np
 import sympy as sp
@@ -151,6 +152,11 @@ def exceptional_conditions(analysis: ConstraintAnalysis, parameters: Sequence | 
     return exceptional_components(ExceptionalData(system, analysis, seed, points).symbolic(params), params)
 
 
+# True while data are evaluated at the first seeded point only (_first_point_only).
+_FIRST_POINT_ONLY = contextvars.ContextVar("first_point_only", default=False)
+
+
+@dataclass(frozen=True, eq=False)
 class ExceptionalData:
     """The data the generic decisions of one analysis rest on, as evaluators.
 
@@ -159,23 +165,38 @@ class ExceptionalData:
     taking the values of ``env0`` (generators of K = Q(p) to keep them symbolic, or
     exact rationals). The same seed gives the same free coordinates and velocities
     for every ``env0``, so values at nearby parameter points can be compared.
+
+    Frozen (its caches fill as data are evaluated): ``second_class``, the indices of the
+    second-class set a classification chose, is the principal block of the bracket
+    datum; without it the block is chosen for generic parameters.
     """
 
-    def __init__(self, system, analysis, seed, points):
-        self.system, self.analysis = system, analysis
-        self.seed, self.points = seed, int(points)
-        rng = random.Random(seed + 104729)
-        values = dict(system.parameter_values)
+    system: Any
+    analysis: ConstraintAnalysis
+    seed: int
+    points: int
+    second_class: tuple[int, ...] | None = None
+    fixed: dict = field(init=False, repr=False)
+    random: dict = field(init=False, repr=False)
+    W: list = field(init=False, repr=False)
+    notes: list[str] = field(init=False, repr=False, default_factory=list)
+    _pivots: dict = field(init=False, repr=False, default_factory=dict)
+    _points_cache: dict = field(init=False, repr=False, default_factory=dict)
+    _memos: dict = field(init=False, repr=False, default_factory=dict)
+
+    def __post_init__(self):
+        params, values = self.system.parameters, dict(self.system.parameter_values)
+        rng = random.Random(self.seed + 104729)
+        draw = lambda: MPQ(rng.randint(1, 2 ** DRAW_BITS))
         # Parameters without values (and without generators) take these fixed values.
-        self.fixed = {p: (_exact_mpq(values[p]) if p in values else
-                          MPQ(rng.randint(1, 2 ** DRAW_BITS))) for p in system.parameters}
-        self.random = {p: MPQ(rng.randint(1, 2 ** DRAW_BITS)) for p in system.parameters}
-        geo = analysis.geometry
-        self.W = [list(geo.hessian.row(i)) for i in range(system.n)]
-        self.notes: list[str] = []
-        self._pivots: dict = {}
-        self._points_cache: dict = {}
-        self._memos: dict = {}
+        object.__setattr__(self, "fixed", {p: _exact_mpq(values[p]) if p in values else draw()
+                                           for p in params})
+        object.__setattr__(self, "random", {p: draw() for p in params})
+        hessian = self.analysis.geometry.hessian
+        object.__setattr__(self, "W", [list(hessian.row(i)) for i in range(self.system.n)])
+        object.__setattr__(self, "points", int(self.points))
+        if self.second_class is not None:
+            self._pivots["R"] = list(self.second_class)
 
     def env(self, gens=None, at=None, generic=False) -> dict:
         """Parameter values: ``gens`` (symbol -> field element) first, then ``at``
@@ -189,11 +210,11 @@ class ExceptionalData:
     @contextlib.contextmanager
     def _first_point_only(self):
         """Evaluate data at the first seeded point only (the same point as always)."""
-        saved, self.points = self.points, 1
+        token = _FIRST_POINT_ONLY.set(True)
         try:
             yield
         finally:
-            self.points = saved
+            _FIRST_POINT_ONLY.reset(token)
 
     def _pts(self, eqs, env0, K, tag):
         # The points stay exact when the data are evaluated in another field. The same
@@ -205,12 +226,13 @@ class ExceptionalData:
             known = self._points_cache.get(key, [])
         except TypeError:  # unhashable parameter values: no caching
             key, known = None, []
-        if len(known) >= self.points:
-            return known[:self.points]
+        count = 1 if _FIRST_POINT_ONLY.get() else self.points
+        if len(known) >= count:
+            return known[:count]
         sampler = ParameterFieldSampler(self.system, eqs, env0, exact,
                                         random.Random(f"{self.seed}:{tag}"),
                                         lambda: Submanifold(self.system, eqs).reduction)
-        out = [sampler.point() for _ in range(self.points)]
+        out = [sampler.point() for _ in range(count)]
         if key is not None:
             self._points_cache[key] = out
         return out
@@ -389,10 +411,6 @@ class ExceptionalData:
             return None
         return rank if rank == k - k % 2 else None
 
-    def use_second_class_set(self, indices) -> None:
-        """Take the principal block of the bracket datum from a classification."""
-        self._pivots["R"] = list(indices)
-
     def _bracket_minor(self, env0, K):
         if "R" not in self._pivots:
             # The principal block is chosen for generic parameters (modulo p, at random
@@ -482,7 +500,7 @@ class ExceptionalData:
                 continue
             if any(vals):
                 out.append((reason, vals))
-        self.notes += unexamined_notes(self.system, unexamined, "not examined")
+        self.notes.extend(unexamined_notes(self.system, unexamined, "not examined"))
         return out
 
     def _with_shifts(self, fn, base, values, K=QQ):
@@ -552,7 +570,8 @@ class ExceptionalData:
             distance = _relative_distance(v0, nonzero, shifted, values)
             if distance < near:
                 close.append((reason, distance))
-        self.notes += unexamined_notes(self.system, unexamined, "not examined at the values")
+        self.notes.extend(unexamined_notes(self.system, unexamined,
+                                           "not examined at the values"))
         return hits, close
 
     def _estimate(self, fn, base, values, nonzero, near):

@@ -160,11 +160,11 @@ def examine(system, params, *, classes, policy, points, values=None, near=NEAR):
     cls = None
     if classes is not None and analysis.status != "inconsistent":
         cls = classes(analysis)
-    data = ExceptionalData(system, analysis, policy.seed, points)
-    if cls is not None and tuple(cls.labels) == tuple(analysis.final_labels):
-        # The second-class set the classification chose (for generic parameters when it
-        # decided symbolically): at values where B drops rank its minor is the datum.
-        data.use_second_class_set(cls.second_class_indices)
+    # The second-class set the classification chose (for generic parameters when it
+    # decided symbolically): at values where B drops rank its minor is the datum.
+    second = (tuple(cls.second_class_indices) if cls is not None
+              and tuple(cls.labels) == tuple(analysis.final_labels) else None)
+    data = ExceptionalData(system, analysis, policy.seed, points, second_class=second)
     comps, hits, close = (), [], []
     if params:
         comps = exceptional_components(data.symbolic(tuple(params)), tuple(params))
