@@ -61,9 +61,9 @@ from typing import Any, Protocol, cast
 
 from nhham.settings import SEED, check_options
 
-__all__ = ["Policy", "decide", "policy_of", "answers_by_step", "proof_at_a_point",
-           "Quantity", "Reduced", "ProvedModuloP", "AtExactPoints", "Sampled", "STEPS",
-           "offers"]
+__all__ = ["Policy", "DEFAULT_POLICY", "decide", "policy_of", "answers_by_step",
+           "proof_at_a_point", "Quantity", "Reduced", "ProvedModuloP", "AtExactPoints",
+           "Sampled", "STEPS", "offers"]
 
 
 @dataclass(frozen=True)
@@ -136,6 +136,10 @@ class Policy:
             if not (isinstance(value, int) and not isinstance(value, bool) and value >= 0):
                 raise InputError(f"Policy: {key} must be a whole number >= 0, got {value!r}",
                                  key=key)
+
+
+#: The settings of a call that gives none.
+DEFAULT_POLICY = Policy()
 
 
 # ----------------------------------------------------------- the protocol
@@ -355,16 +359,51 @@ def _real(sampler, manifold, policy) -> bool:
 
 
 def policy_of(policy: Policy | None, where: str, **options) -> Policy:
-    """The policy of a library call: ``policy`` itself, or one built from the call's
-    keyword options (``precision``, ``samples``, ``seed``, ``tol``, ``exact``).
+    """The policy of a library call: ``policy`` itself, or, from the deprecated keyword
+    options, one built from them.
+
+    A :class:`Policy` is the one way to pass decision settings to a public function
+    (``policy=Policy(samples=3)``). The loose keywords ``precision``, ``samples``,
+    ``seed``, ``tol`` and ``exact`` that eight functions took before are kept for one
+    release: one that differs from its default raises a ``DeprecationWarning`` naming the
+    replacement, and is used.
+
+    Parameters
+    ----------
+    policy : Policy or None
+    where : str
+        The public function, named in messages.
+    **options
+        The function's loose keywords as given (their defaults are Policy's).
 
     Raises
     ------
     InputError
         When both are given and a keyword differs from its default (which would be
-        silently ignored otherwise).
+        silently ignored otherwise), or ``policy`` is not a Policy.
+
+    Examples
+    --------
+    >>> import warnings
+    >>> policy_of(Policy(samples=3), "f").samples
+    3
+    >>> with warnings.catch_warnings(record=True) as caught:
+    ...     warnings.simplefilter("always")
+    ...     policy_of(None, "f", samples=3, seed=Policy().seed).samples
+    3
+    >>> print(caught[0].category.__name__, caught[0].message)
+    DeprecationWarning f: samples= is deprecated; pass policy=nhham.Policy(samples=3) instead
     """
+    given = {k: v for k, v in options.items() if v != getattr(DEFAULT_POLICY, k)}
     if policy is None:
+        if given:
+            import warnings
+
+            settings = ", ".join(f"{k}={v!r}" for k, v in given.items())
+            warnings.warn(f"{where}: {'= and '.join(given)}= "
+                          f"{'is' if len(given) == 1 else 'are'} deprecated; pass "
+                          f"policy=nhham.Policy({settings}) instead", DeprecationWarning,
+                          stacklevel=3)
         # Named after the caller, not the policy, when an option is out of range.
         check_options(where, **{k: v for k, v in options.items() if k != "exact"})
         return Policy(**options)
@@ -373,13 +412,12 @@ def policy_of(policy: Policy | None, where: str, **options) -> Policy:
 
         raise InputError(f"{where}: policy must be a nhham.Policy, got "
                          f"{type(policy).__name__}", key="policy")
-    default = Policy()
-    clash = [k for k, v in options.items() if v != getattr(default, k)]
-    if clash:
+    if given:
         from nhham.errors import InputError
 
-        raise InputError(f"{where}: {clash[0]} is given both as a keyword and in the policy; "
-                         f"give it in the policy only", key=clash[0])
+        clash = next(iter(given))
+        raise InputError(f"{where}: {clash} is given both as a keyword and in the policy; "
+                         f"give it in the policy only", key=clash)
     return policy
 
 

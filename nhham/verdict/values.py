@@ -46,10 +46,13 @@ def classification_at_values(system, *, classes: Callable | None = None,
     Parameters
     ----------
     system : nhham.System
-    classes, max_depth, precision, seed, near, points
+    classes, max_depth, near, points
         As in :func:`nhham.verdict.parametric.parametric_classification`.
+    precision, seed : optional
+        Deprecated (a ``DeprecationWarning``; removed in the next release): give them in
+        ``policy``.
     policy : Policy, optional
-        The settings of the decisions (instead of ``precision`` and ``seed``); its
+        Every setting of the decisions (default ``Policy()``); its
         ``symbolic_values_size`` bounds n + m up to which the condition the values
         satisfy is named with the parameters kept symbolic.
 

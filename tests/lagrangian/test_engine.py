@@ -4,11 +4,14 @@ against each other (a wrong formula planted in one of them is caught)."""
 import ast
 import importlib
 import inspect
+import warnings
 from pathlib import Path
 
 import pytest
 
+import nhham
 from nhham import load_scene
+from nhham.lagrangian import engine
 from nhham.errors import InputError
 from nhham.lagrangian.domains import ModP, NotExact
 from nhham.lagrangian.engine import (
@@ -148,11 +151,47 @@ def test_a_bad_policy_is_refused_naming_the_key(key, value):
 
 
 def test_a_policy_and_a_differing_keyword_together_are_refused():
-    assert policy_of(None, "f", samples=9).samples == 9
+    with pytest.warns(DeprecationWarning, match=r"f: samples= is deprecated"):
+        assert policy_of(None, "f", samples=9).samples == 9
     given = Policy(samples=9)
-    assert policy_of(given, "f", samples=6) is given  # 6 is the default: not given
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # a policy alone is not deprecated
+        assert policy_of(given, "f", samples=6) is given  # 6 is the default: not given
+        assert policy_of(None, "f", samples=6, exact=True) == Policy()
     with pytest.raises(InputError, match="seed"):
         policy_of(given, "f", seed=3)
+
+
+class Stop(Exception):
+    """Raised right after the deprecation warning: the call goes no further."""
+
+
+# The public functions that took loose decision keywords, each called with one.
+LOOSE = {
+    "analyze_constraints": lambda **kw: nhham.analyze_constraints(DISK, **kw),
+    "integrability": lambda **kw: nhham.integrability(DISK, **kw),
+    "classify_constraints": lambda **kw: nhham.classify_constraints(DISK, **kw),
+    "cross_check": lambda **kw: nhham.cross_check(DISK, **kw),
+    "dirac_vs_projected": lambda **kw: nhham.dirac_vs_projected(DISK, **kw),
+    "classification_at_values": lambda **kw: nhham.classification_at_values(DISK, **kw),
+    "parametric_classification": lambda **kw: nhham.parametric_classification(DISK, **kw),
+}
+DISK = nhham.models.rolling_disk()
+
+
+@pytest.mark.parametrize("name", sorted(LOOSE))
+def test_a_loose_decision_keyword_is_deprecated_naming_the_policy(monkeypatch, name):
+    def stop(*args, **kwargs):
+        raise Stop
+
+    monkeypatch.setattr(engine, "check_options", stop)  # policy_of's next step
+    with pytest.warns(DeprecationWarning) as caught, pytest.raises(Stop):
+        LOOSE[name](seed=3, precision=30)
+    ours = [w for w in caught if w.category is DeprecationWarning]
+    assert [str(w.message) for w in ours] == [
+        f"{name}: precision= and seed= are deprecated; pass "
+        f"policy=nhham.Policy(precision=30, seed=3) instead"]
+    assert ours[0].filename == __file__  # the warning names the caller's line
 
 
 # ------------------------------------------------------- the quantity protocol
