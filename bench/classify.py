@@ -62,14 +62,14 @@ from sympy.core.cache import clear_cache
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from nhham import System  # noqa: E402
+from nhham import Policy, System  # noqa: E402
 from nhham.lagrangian.analysis import analyze_constraints  # noqa: E402
 from nhham.errors import RedundantConstraintError  # noqa: E402
 
 MODES = {
-    "exact": dict(),
-    "float64": dict(exact=False),
-    "mp30": dict(exact=False, precision=30),
+    "exact": dict(policy=Policy()),
+    "float64": dict(policy=Policy(exact=False)),
+    "mp30": dict(policy=Policy(exact=False, precision=30)),
 }
 TARGET = 1.0  # seconds: every paper example, full analysis, every mode (issue 3)
 

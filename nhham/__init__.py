@@ -53,7 +53,8 @@ _LAZY = by_module({
         "MissingParameterValueError", "InconsistentInitialDataError",
         "OptionalDependencyError", "ComputationError", "BudgetExceeded", "NhhamWarning"),
     # the system description
-    "system.description": ("System", "DroppedConstraint"),
+    "system.description": ("System",),
+    "system.sampled_checks": ("DroppedConstraint",),
     # Lagrangian side (paper Sections 2, 4, 5)
     "lagrangian.geometry": ("lagrangian_geometry", "LagrangianGeometry", "DynamicsIngredients"),
     "lagrangian.submanifold": ("Submanifold",),

@@ -85,6 +85,9 @@ class NhhamError(Exception):
 class InputError(NhhamError):
     """The user's input (system description, scene, options) is invalid.
 
+    ``problems``: every problem found, when a check collected several before raising
+    once (empty otherwise).
+
     Examples
     --------
     >>> from nhham import time_budget
@@ -94,6 +97,8 @@ class InputError(NhhamError):
         ...
     nhham.errors.InputError: time_budget: seconds must be a positive finite number, got -1
     """
+
+    problems: tuple[str, ...] = ()
 
 
 class UsageError(InputError):

@@ -56,7 +56,7 @@ def test_an_option_out_of_range_is_named(where, key, value):
 
 
 def test_options_in_range_are_taken():
-    assert nhham.analyze_constraints(DISK, precision=30, samples=4, seed=3,
+    assert nhham.analyze_constraints(DISK, policy=nhham.Policy(precision=30, samples=4, seed=3),
                                      max_stages=2).status == "determined"
     for key, value in [("precision", None), ("precision", 16), ("samples", 1),
                        ("tol", None), ("tol", 1e-3), ("near", 0), ("max_depth", 0),

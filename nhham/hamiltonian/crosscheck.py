@@ -81,18 +81,13 @@ def cross_check(system, precision: int | None = None, samples: int = 6, seed: in
     Parameters
     ----------
     system : nhham.System
-    precision : int or None
-        None for float64, an integer for mpmath digits (sample points and
-        numeric evaluation).
-    samples, seed : int
-        Seeded points of M_f for the numeric comparisons and sampled decisions.
-    tol : float, optional
-        Relative tolerance of sampled agreement (default 1e-9 in float64,
-        10**(3 - digits) in mpmath).
+    precision, samples, seed, tol : optional
+        Deprecated (a ``DeprecationWarning``; removed in the next release): give them in
+        ``policy``, e.g. ``policy=Policy(samples=3)``.
     method : {"auto", "exact", "points", "sampled"}
         ``"exact"``: symbolic differences (cancelled, or reduced on M_f) plus
         the sampled numbers; ``"points"``: both sides evaluated in exact
-        rational arithmetic at ``samples`` seeded exact points of M_1 (no
+        rational arithmetic at ``policy.samples`` seeded exact points of M_1 (no
         symbolic inverse, no compilation; every difference must be exactly 0,
         the tolerance is 0); ``"sampled"``: the same computations in floating
         point at sampled points. When C is singular, ``"points"`` runs the
@@ -104,15 +99,17 @@ def cross_check(system, precision: int | None = None, samples: int = 6, seed: in
         ``method`` says so). ``"auto"``: exact when
         :attr:`HamiltonianSide.symbolic_affordable` (exact Legendre inverse and W
         diagonal, q-independent or n <= 3), else points when L is quadratic in
-        v, ``precision`` is None and M_1 has exact points, else sampled.
+        v, ``policy.precision`` is None and M_1 has exact points, else sampled.
     max_stages : int, optional
         Bound of the constraint algorithm (default 2n).
     side : HamiltonianSide, optional
         The T*Q side of ``system`` when the caller has it (its numeric layer is
         built once for several checks).
     policy : Policy, optional
-        The settings of the decisions, instead of ``precision``, ``samples``, ``seed``
-        and ``tol``.
+        Every setting of the decisions (:class:`~nhham.lagrangian.engine.Policy`): the
+        precision (None: float64, else mpmath digits), the number and seed of the points
+        of M_f for the numeric comparisons, the relative tolerance of sampled agreement
+        (default 1e-9 in float64, 10**(3 - digits) in mpmath); default ``Policy()``.
 
     Returns
     -------

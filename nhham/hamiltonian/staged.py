@@ -109,9 +109,10 @@ def staged_at_points(system, side: HamiltonianSide, samples, seed, max_stages):
         the algorithm's generic ones (parameter values where they drop).
     """
     from nhham.lagrangian.analysis import analyze_constraints
+    from nhham.lagrangian.engine import Policy
 
-    analysis = analyze_constraints(system, samples=samples, seed=seed,
-                                   max_stages=max_stages, decompose=False)
+    analysis = analyze_constraints(system, max_stages=max_stages, decompose=False,
+                                   policy=Policy(samples=samples, seed=seed))
     inconsistent = analysis.status == "inconsistent"
     samplers = [ModularComparisonPoints.on(system, st.constraints, samples, seed + st.index)
                 for st in analysis.stages]

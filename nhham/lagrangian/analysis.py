@@ -260,23 +260,19 @@ def analyze_constraints(system, *, precision: int | None = None, samples: int = 
     system : nhham.System
         Redundant constraints must already be dropped
         (``System(..., drop_redundant=True)``); they are reported in ``dropped``.
-    precision : int or None, optional
-        Precision of sampled decisions: None for float64, an integer for mpmath with
-        that many digits (slower, decides near-singular cases).
-    samples, seed : int, optional
-        Number and seed of the sample points of sampled decisions.
+    precision, samples, seed, exact : optional
+        Deprecated (a ``DeprecationWarning``; removed in the next release): give them in
+        ``policy``, e.g. ``policy=Policy(exact=False)``.
     max_stages : int, optional
         Bound on the number of stages (default 2n of each block).
-    exact : bool, optional
-        True: decide by exact reduction where possible and sample otherwise;
-        False: decide every rank and vanishing at sample points only.
     decompose : bool, optional
         Split into independent blocks (constraints and coordinates that do not
         interact, the Lagrangian being a sum over the blocks) and analyse each on
         its own; False analyses the system as one block.
     policy : Policy, optional
-        Every setting of the decisions in one object (thresholds included), instead
-        of ``precision``, ``samples``, ``seed`` and ``exact``.
+        Every setting of the decisions (:class:`~nhham.lagrangian.engine.Policy`:
+        precision and sampling of sampled decisions, ``exact=False`` to decide at
+        sample points only, thresholds); default ``Policy()``.
 
     Returns
     -------

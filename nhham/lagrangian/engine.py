@@ -27,39 +27,43 @@ Steps 2 and 3 draw their points from the one exact sampler of M
 gives way to the next. The data of a quantity are the formulas of
 :mod:`nhham.lagrangian.formulas`, evaluated in the arithmetic of the point.
 
-A quantity is any object with a ``what`` (str) and some of the methods
+A quantity is a :class:`Quantity` (a ``what``, str) offering some of the steps, each
+declared by a :class:`typing.Protocol` of its own (a quantity lacking a step's members
+skips that step; :func:`offers` tells which it has, looked up on the class):
 
-``reduced(manifold, policy)``
+:class:`Reduced`: ``reduced(manifold, policy)``
     the answer by exact reduction, or None;
-``value(env, degrees=False)``
-    the datum at one point in the arithmetic of ``env`` (rationals, residues, or
-    :class:`~nhham.lagrangian.domains.Degree` bounds with ``degrees``); raises
-    ZeroDivisionError where a denominator vanishes (the point is drawn again);
-``proved_modulo_p(value)``
-    the answer a point over F_p proves, or None;
-``observe(value)``
-    records a rational point's value; True when the answer is decided (a proof);
-``pending_error(degrees, count, bound)``
-    the error bound of the verdicts still open after ``count`` points, None when none
-    is (``bound``: the sampler's :class:`~nhham.lagrangian.domains.ErrorBound`, called
-    with a numerator degree and the number of points);
-``conclude(count, degrees, bound)``
-    the answer from the points observed;
-``residues``
-    True when ``value``, ``observe`` and ``conclude`` also take residues modulo p:
-    the quantity is then decided at smooth points over F_p of a curved M (step 3).
-``sampled(manifold, policy)``
+:class:`ProvedModuloP`: ``value`` and ``proved_modulo_p(value)``
+    ``value(env, degrees=False)`` is the datum at one point in the arithmetic of
+    ``env`` (rationals, residues, or :class:`~nhham.lagrangian.domains.Degree` bounds
+    with ``degrees``); it raises ZeroDivisionError where a denominator vanishes (the
+    point is drawn again). ``proved_modulo_p`` gives the answer a point over F_p
+    proves, or None (a property may give None for the whole step);
+:class:`AtExactPoints`: ``value``, ``observe``, ``pending_error``, ``conclude``
+    ``observe(value)`` records a rational point's value, True when the answer is
+    decided (a proof); ``pending_error(degrees, count, bound)`` is the error bound of
+    the verdicts still open after ``count`` points, None when none is (``bound``: the
+    sampler's :class:`~nhham.lagrangian.domains.ErrorBound`, called with a numerator
+    degree and the number of points); ``conclude(count, degrees, bound)`` is the
+    answer from the points observed. A class attribute ``residues = True`` says that
+    ``value``, ``observe`` and ``conclude`` also take residues modulo p: the quantity
+    is then decided at smooth points over F_p of a curved M (step 3);
+:class:`Sampled`: ``sampled(manifold, policy)``
     the answer at floating-point points, or None.
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any, Protocol, cast
 
 from nhham.settings import SEED, check_options
 
-__all__ = ["Policy", "decide", "policy_of", "answers_by_step", "proof_at_a_point"]
+__all__ = ["Policy", "DEFAULT_POLICY", "decide", "policy_of", "answers_by_step",
+           "proof_at_a_point", "Quantity", "Reduced", "ProvedModuloP", "AtExactPoints",
+           "Sampled", "STEPS", "offers"]
 
 
 @dataclass(frozen=True)
@@ -143,13 +147,77 @@ class Policy:
                                  key=key)
 
 
-def decide(quantity, manifold, policy: Policy):
+#: The settings of a call that gives none.
+DEFAULT_POLICY = Policy()
+
+
+# ----------------------------------------------------------- the protocol
+class Quantity(Protocol):
+    """A question on M that :func:`decide` answers: what it asks, in words."""
+
+    what: str
+
+
+class Reduced(Quantity, Protocol):
+    """Step 1: the answer by exact reduction on M, or None."""
+
+    def reduced(self, manifold: Any, policy: Policy) -> Any: ...
+
+
+class ProvedModuloP(Quantity, Protocol):
+    """Step 2: the datum at a random point of M over F_p, and what it proves."""
+
+    def value(self, env: Any, degrees: bool = False) -> Any: ...
+
+    @property
+    def proved_modulo_p(self) -> Callable[[Any], Any] | None: ...
+
+
+class AtExactPoints(Quantity, Protocol):
+    """Step 3: the data at random exact points until the error bound is met."""
+
+    def value(self, env: Any, degrees: bool = False) -> Any: ...
+
+    def observe(self, value: Any) -> bool: ...
+
+    def pending_error(self, degrees: Any, count: int, bound: Any) -> float | None: ...
+
+    def conclude(self, count: int, degrees: Any, bound: Any) -> Any: ...
+
+
+class Sampled(Quantity, Protocol):
+    """Step 4: the answer at floating-point points of M."""
+
+    def sampled(self, manifold: Any, policy: Policy) -> Any: ...
+
+
+#: The members each step's protocol asks of a quantity.
+STEPS: dict[type, tuple[str, ...]] = {
+    Reduced: ("reduced",),
+    ProvedModuloP: ("value", "proved_modulo_p"),
+    AtExactPoints: ("value", "observe", "pending_error", "conclude"),
+    Sampled: ("sampled",),
+}
+
+
+def offers(quantity: Quantity, step: type) -> bool:
+    """Whether ``quantity`` has every member of ``step`` (one of :data:`STEPS`).
+
+    Looked up on the class: a property (``proved_modulo_p``) is evaluated only when the
+    step runs.
+    """
+    cls = type(quantity)
+    return all(getattr(cls, name, None) is not None for name in STEPS[step])
+
+
+# ------------------------------------------------------------- the cascade
+def decide(quantity: Quantity, manifold, policy: Policy):
     """Answer ``quantity`` on ``manifold`` by the first step of the cascade that decides.
 
     Parameters
     ----------
-    quantity
-        A question on M (see the module docstring for the steps it may offer).
+    quantity : Quantity
+        A question on M, offering some of the steps (see the module docstring).
     manifold : Submanifold
         M, the zero set of the constraints the question is asked on.
     policy : Policy
@@ -172,17 +240,19 @@ def decide(quantity, manifold, policy: Policy):
     return None
 
 
-def _reduced(quantity, manifold, policy):
-    reduced = getattr(quantity, "reduced", None)
-    return None if reduced is None else reduced(manifold, policy)
+def _reduced(quantity: Quantity, manifold, policy):
+    if not offers(quantity, Reduced):
+        return None
+    return cast(Reduced, quantity).reduced(manifold, policy)
 
 
-def _sampled(quantity, manifold, policy):
-    sampled = getattr(quantity, "sampled", None)
-    return None if sampled is None else sampled(manifold, policy)
+def _sampled(quantity: Quantity, manifold, policy):
+    if not offers(quantity, Sampled):
+        return None
+    return cast(Sampled, quantity).sampled(manifold, policy)
 
 
-def proof_at_a_point(quantity, manifold, policy: Policy):
+def proof_at_a_point(quantity: Quantity, manifold, policy: Policy):
     """Step 2 alone: the answer a random point of M over F_p (the parameters at their
     values) proves, scoped to the component through it on a curved M; None when no
     point proves it. For the verdict at the parameter values, whose generic decisions
@@ -190,11 +260,13 @@ def proof_at_a_point(quantity, manifold, policy: Policy):
     return _proof_modulo_p(quantity, manifold, policy)
 
 
-def _proof_modulo_p(quantity, manifold, policy):
+def _proof_modulo_p(quantity: Quantity, manifold, policy):
     """The answer a random point of M over F_p proves, else None."""
-    # Looked up on the class: a property is evaluated only once M has exact points.
-    if getattr(type(quantity), "proved_modulo_p", None) is None:
+    # Looked up on the class (offers): a property is evaluated only once M has exact
+    # points.
+    if not offers(quantity, ProvedModuloP):
         return None
+    q = cast(ProvedModuloP, quantity)
     from nhham.lagrangian.decision import scoped
     from nhham.lagrangian.domains import NotExact
     from nhham.lagrangian.points import exact_sampler
@@ -203,12 +275,12 @@ def _proof_modulo_p(quantity, manifold, policy):
         sampler = exact_sampler(manifold, policy.seed, modular=True)
     except NotExact:
         return None
-    proved = quantity.proved_modulo_p
+    proved = q.proved_modulo_p
     if proved is None or not _real(sampler, manifold, policy):
         return None
     for _ in range(policy.proof_tries):
         try:
-            answer = proved(quantity.value(sampler.point().env))
+            answer = proved(q.value(sampler.point().env))
         except (ZeroDivisionError, NotExact):
             continue
         if answer is not None:
@@ -216,7 +288,7 @@ def _proof_modulo_p(quantity, manifold, policy):
     return None
 
 
-def _at_exact_points(quantity, manifold, policy):
+def _at_exact_points(quantity: Quantity, manifold, policy):
     """The answer at random exact points of M with its error bound, else None (M has
     no exact points, or the datum is not exact there).
 
@@ -226,8 +298,9 @@ def _at_exact_points(quantity, manifold, policy):
     smooth points over F_p (the Bézout bound of
     :class:`~nhham.lagrangian.domains.ErrorBound`, which more points do not lower).
     """
-    if getattr(quantity, "observe", None) is None:
+    if not offers(quantity, AtExactPoints):
         return None
+    q = cast(AtExactPoints, quantity)
     from nhham.lagrangian.decision import scoped
     from nhham.lagrangian.domains import NotExact
     from nhham.lagrangian.points import REDRAWS
@@ -236,25 +309,27 @@ def _at_exact_points(quantity, manifold, policy):
         sampler = _exact_points(quantity, manifold, policy)
         if sampler is None:
             return None
-        count, degrees, bound, point = 0, None, None, None
+        count, degrees = 0, None
+        bound: Any = None
+        point: Any = None
         while count < policy.max_points:
             value = None
             for _ in range(1 + REDRAWS):
                 point = sampler.point()
                 try:
-                    value = quantity.value(point.env)
+                    value = q.value(point.env)
                     break
                 except ZeroDivisionError:
                     continue  # a denominator vanishes at this point: draw another
             if value is None:
                 break
             count += 1
-            if quantity.observe(value):
+            if q.observe(value):
                 break
             if degrees is None:
-                degrees = quantity.value(point.degrees, degrees=True)
+                degrees = q.value(point.degrees, degrees=True)
                 bound = sampler.error_bound(point.degrees)
-            error = quantity.pending_error(degrees, count, bound)
+            error = q.pending_error(degrees, count, bound)
             if error is None or error < policy.target_error:
                 break
             if bound.variety_degree and count >= policy.samples:
@@ -263,13 +338,13 @@ def _at_exact_points(quantity, manifold, policy):
             return None
         if bound is None:
             bound = sampler.error_bound(point.degrees)
-        answer = quantity.conclude(count, degrees, bound)
+        answer = q.conclude(count, degrees, bound)
         return scoped(answer, sampler.points_scope(count))
     except NotExact:
         return None
 
 
-def _exact_points(quantity, manifold, policy):
+def _exact_points(quantity: Quantity, manifold, policy):
     """The sampler of the exact points of M: rational, or over F_p on a curved M for a
     quantity that takes residues; None when neither applies."""
     from nhham.lagrangian.domains import NotExact
@@ -293,16 +368,51 @@ def _real(sampler, manifold, policy) -> bool:
 
 
 def policy_of(policy: Policy | None, where: str, **options) -> Policy:
-    """The policy of a library call: ``policy`` itself, or one built from the call's
-    keyword options (``precision``, ``samples``, ``seed``, ``tol``, ``exact``).
+    """The policy of a library call: ``policy`` itself, or, from the deprecated keyword
+    options, one built from them.
+
+    A :class:`Policy` is the one way to pass decision settings to a public function
+    (``policy=Policy(samples=3)``). The loose keywords ``precision``, ``samples``,
+    ``seed``, ``tol`` and ``exact`` that eight functions took before are kept for one
+    release: one that differs from its default raises a ``DeprecationWarning`` naming the
+    replacement, and is used.
+
+    Parameters
+    ----------
+    policy : Policy or None
+    where : str
+        The public function, named in messages.
+    **options
+        The function's loose keywords as given (their defaults are Policy's).
 
     Raises
     ------
     InputError
         When both are given and a keyword differs from its default (which would be
-        silently ignored otherwise).
+        silently ignored otherwise), or ``policy`` is not a Policy.
+
+    Examples
+    --------
+    >>> import warnings
+    >>> policy_of(Policy(samples=3), "f").samples
+    3
+    >>> with warnings.catch_warnings(record=True) as caught:
+    ...     warnings.simplefilter("always")
+    ...     policy_of(None, "f", samples=3, seed=Policy().seed).samples
+    3
+    >>> print(caught[0].category.__name__, caught[0].message)
+    DeprecationWarning f: samples= is deprecated; pass policy=nhham.Policy(samples=3) instead
     """
+    given = {k: v for k, v in options.items() if v != getattr(DEFAULT_POLICY, k)}
     if policy is None:
+        if given:
+            import warnings
+
+            settings = ", ".join(f"{k}={v!r}" for k, v in given.items())
+            warnings.warn(f"{where}: {'= and '.join(given)}= "
+                          f"{'is' if len(given) == 1 else 'are'} deprecated; pass "
+                          f"policy=nhham.Policy({settings}) instead", DeprecationWarning,
+                          stacklevel=3)
         # Named after the caller, not the policy, when an option is out of range.
         check_options(where, **{k: v for k, v in options.items() if k != "exact"})
         return Policy(**options)
@@ -311,13 +421,12 @@ def policy_of(policy: Policy | None, where: str, **options) -> Policy:
 
         raise InputError(f"{where}: policy must be a nhham.Policy, got "
                          f"{type(policy).__name__}", key="policy")
-    default = Policy()
-    clash = [k for k, v in options.items() if v != getattr(default, k)]
-    if clash:
+    if given:
         from nhham.errors import InputError
 
-        raise InputError(f"{where}: {clash[0]} is given both as a keyword and in the policy; "
-                         f"give it in the policy only", key=clash[0])
+        clash = next(iter(given))
+        raise InputError(f"{where}: {clash} is given both as a keyword and in the policy; "
+                         f"give it in the policy only", key=clash)
     return policy
 
 

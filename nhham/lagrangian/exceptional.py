@@ -38,11 +38,12 @@ there.
 from __future__ import annotations
 
 import contextlib
+import contextvars
 import math
 import random
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import reduce
-from typing import Sequence
+from typing import Any, Sequence
 
 import numpy as np
 import sympy as sp
@@ -59,11 +60,8 @@ from nhham.lagrangian.formulas import bordered_matrix, frobenius_terms, lagrangi
 from nhham.lagrangian.linalg import (
     FLOAT64,
     FloatMatrix,
-    ListMatrix,
     adjacent_column_sets,
-    exact_rank,
     field_det,
-    field_solve,
     maximal_minors,
 )
 from nhham.lagrangian.points import DRAW_BITS, ParameterFieldSampler, jacobian_row
@@ -160,6 +158,11 @@ def exceptional_conditions(analysis: ConstraintAnalysis, parameters: Sequence | 
     return exceptional_components(ExceptionalData(system, analysis, seed, points).symbolic(params), params)
 
 
+# True while data are evaluated at the first seeded point only (_first_point_only).
+_FIRST_POINT_ONLY = contextvars.ContextVar("first_point_only", default=False)
+
+
+@dataclass(frozen=True, eq=False)
 class ExceptionalData:
     """The data the generic decisions of one analysis rest on, as evaluators.
 
@@ -168,23 +171,38 @@ class ExceptionalData:
     taking the values of ``env0`` (generators of K = Q(p) to keep them symbolic, or
     exact rationals). The same seed gives the same free coordinates and velocities
     for every ``env0``, so values at nearby parameter points can be compared.
+
+    Frozen (its caches fill as data are evaluated): ``second_class``, the indices of the
+    second-class set a classification chose, is the principal block of the bracket
+    datum; without it the block is chosen for generic parameters.
     """
 
-    def __init__(self, system, analysis, seed, points):
-        self.system, self.analysis = system, analysis
-        self.seed, self.points = seed, int(points)
-        rng = random.Random(seed + 104729)
-        values = dict(system.parameter_values)
+    system: Any
+    analysis: ConstraintAnalysis
+    seed: int
+    points: int
+    second_class: tuple[int, ...] | None = None
+    fixed: dict = field(init=False, repr=False)
+    random: dict = field(init=False, repr=False)
+    W: list = field(init=False, repr=False)
+    notes: list[str] = field(init=False, repr=False, default_factory=list)
+    _pivots: dict = field(init=False, repr=False, default_factory=dict)
+    _points_cache: dict = field(init=False, repr=False, default_factory=dict)
+    _memos: dict = field(init=False, repr=False, default_factory=dict)
+
+    def __post_init__(self):
+        params, values = self.system.parameters, dict(self.system.parameter_values)
+        rng = random.Random(self.seed + 104729)
+        draw = lambda: MPQ(rng.randint(1, 2 ** DRAW_BITS))
         # Parameters without values (and without generators) take these fixed values.
-        self.fixed = {p: (_exact_mpq(values[p]) if p in values else
-                          MPQ(rng.randint(1, 2 ** DRAW_BITS))) for p in system.parameters}
-        self.random = {p: MPQ(rng.randint(1, 2 ** DRAW_BITS)) for p in system.parameters}
-        geo = analysis.geometry
-        self.W = [list(geo.hessian.row(i)) for i in range(system.n)]
-        self.notes: list[str] = []
-        self._pivots: dict = {}
-        self._points_cache: dict = {}
-        self._memos: dict = {}
+        object.__setattr__(self, "fixed", {p: _exact_mpq(values[p]) if p in values else draw()
+                                           for p in params})
+        object.__setattr__(self, "random", {p: draw() for p in params})
+        hessian = self.analysis.geometry.hessian
+        object.__setattr__(self, "W", [list(hessian.row(i)) for i in range(self.system.n)])
+        object.__setattr__(self, "points", int(self.points))
+        if self.second_class is not None:
+            self._pivots["R"] = list(self.second_class)
 
     def env(self, gens=None, at=None, generic=False) -> dict:
         """Parameter values: ``gens`` (symbol -> field element) first, then ``at``
@@ -198,11 +216,11 @@ class ExceptionalData:
     @contextlib.contextmanager
     def _first_point_only(self):
         """Evaluate data at the first seeded point only (the same point as always)."""
-        saved, self.points = self.points, 1
+        token = _FIRST_POINT_ONLY.set(True)
         try:
             yield
         finally:
-            self.points = saved
+            _FIRST_POINT_ONLY.reset(token)
 
     def _pts(self, eqs, env0, K, tag):
         # The points stay exact when the data are evaluated in another field. The same
@@ -214,12 +232,13 @@ class ExceptionalData:
             known = self._points_cache.get(key, [])
         except TypeError:  # unhashable parameter values: no caching
             key, known = None, []
-        if len(known) >= self.points:
-            return known[:self.points]
+        count = 1 if _FIRST_POINT_ONLY.get() else self.points
+        if len(known) >= count:
+            return known[:count]
         sampler = ParameterFieldSampler(self.system, eqs, env0, exact,
                                         random.Random(f"{self.seed}:{tag}"),
                                         lambda: Submanifold(self.system, eqs).reduction)
-        out = [sampler.point() for _ in range(self.points)]
+        out = [sampler.point() for _ in range(count)]
         if key is not None:
             self._points_cache[key] = out
         return out
@@ -338,7 +357,8 @@ class ExceptionalData:
         """(dchi/dq, dchi/dv, W, mixed Hessian) as rows, over the final constraints: the
         arguments of :func:`~nhham.lagrangian.formulas.lagrangian_bracket`."""
         system, cons = self.system, list(self.analysis.final_constraints)
-        Mx = [list(self.analysis.geometry.mixed_hessian.row(i)) for i in range(system.n)]
+        geometry: Any = self.analysis.geometry   # a LagrangianGeometry (typed loosely there)
+        Mx = [list(geometry.mixed_hessian.row(i)) for i in range(system.n)]
         return ([jacobian_row(c, system.coordinates) for c in cons],
                 [jacobian_row(c, system.velocities) for c in cons], self.W, Mx)
 
@@ -351,57 +371,6 @@ class ExceptionalData:
             cache = self._memo(env)
             mats.append(lagrangian_bracket(*(self._matrix(K, r, env, cache) for r in rows)))
         return mats
-
-    def bracket_rank(self, env0, K):
-        """Rank of the bracket matrix on M_f (None when not evaluated exactly)."""
-        if self.analysis.status == "inconsistent":
-            return None
-        if not self.analysis.final_constraints:
-            return 0
-        try:
-            if K.is_QQ:
-                # Rank modulo p at the first point is a lower bound of the rank over Q
-                # at every point of the datum: full there, it is the answer.
-                k = len(self.analysis.final_constraints)
-                try:
-                    with self._first_point_only():
-                        B, = self._brackets(env0, MODULAR, count=1)
-                    if B.rank() == k:
-                        return k
-                except ZeroDivisionError:
-                    pass
-            return max(B.rank() for B in self._brackets(env0, K))
-        except (NotExact, ZeroDivisionError) as exc:
-            rank = self._rank_at_a_point_over_Fp()
-            if rank is None:
-                self.notes.append(f"bracket matrix on M_f not evaluated exactly ({exc})")
-            return rank
-
-    def _rank_at_a_point_over_Fp(self):
-        """The rank of B proved at a point of M_f over F_p with the parameters at their
-        values (where the points over Q(p) do not exist: a curved M_f, an angle
-        parameter drawn on the circle), when it is the largest an antisymmetric matrix
-        has: a rank at the values bounds the generic rank from below. None otherwise."""
-        from nhham.lagrangian.points import exact_sampler
-
-        cons = tuple(self.analysis.final_constraints)
-        k = len(cons)
-        try:
-            sampler = exact_sampler(Submanifold(self.system, cons, seed=self.seed),
-                                    self.seed, modular=True)
-            env, cache = sampler.point().env, {}
-            # every argument has n columns (also with no final constraint: no rows)
-            Jq, Jv, W, M = (ListMatrix([evaluate(r, env, cache) for r in rows], self.system.n)
-                            for rows in self._bracket_rows())
-            B = lagrangian_bracket(Jq, Jv, W, M, solve=field_solve)
-            rank = exact_rank(B.rows)[0]
-        except (NotExact, ZeroDivisionError):
-            return None
-        return rank if rank == k - k % 2 else None
-
-    def use_second_class_set(self, indices) -> None:
-        """Take the principal block of the bracket datum from a classification."""
-        self._pivots["R"] = list(indices)
 
     def _bracket_minor(self, env0, K):
         if "R" not in self._pivots:
@@ -492,7 +461,7 @@ class ExceptionalData:
                 continue
             if any(vals):
                 out.append((reason, vals))
-        self.notes += unexamined_notes(self.system, unexamined, "not examined")
+        self.notes.extend(unexamined_notes(self.system, unexamined, "not examined"))
         return out
 
     def _with_shifts(self, fn, base, values, K=QQ):
@@ -562,7 +531,8 @@ class ExceptionalData:
             distance = _relative_distance(v0, nonzero, shifted, values)
             if distance < near:
                 close.append((reason, distance))
-        self.notes += unexamined_notes(self.system, unexamined, "not examined at the values")
+        self.notes.extend(unexamined_notes(self.system, unexamined,
+                                           "not examined at the values"))
         return hits, close
 
     def _estimate(self, fn, base, values, nonzero, near):

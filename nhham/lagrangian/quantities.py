@@ -14,16 +14,18 @@ reduction and the sampled tests.
 from __future__ import annotations
 
 from collections.abc import Callable
+from typing import cast
 
 import sympy as sp
 
+from nhham.errors import ComputationError
 from nhham.lagrangian.algebra import cancel
 from nhham.lagrangian.decision import Decision
 from nhham.lagrangian.domains import Degree, evaluate, minor_degree
 from nhham.lagrangian.linalg import exact_rank
 from nhham.system.expressions import short
 
-__all__ = ["Vanishing", "Rank"]
+__all__ = ["Vanishing", "Rank", "exact_full_rank", "rank_certificate"]
 
 
 class Vanishing:
@@ -69,7 +71,7 @@ class Vanishing:
         reduced = self.residue = manifold.reduce(self.expr)
         if reduced == 0:
             return Decision(True, "exact", "vanishes after exact reduction")
-        verdict, warning = manifold._zero_test(reduced)
+        verdict, warning = manifold.exact_zero_test(reduced)
         if verdict is True:
             return Decision(True, "exact",
                             "Groebner remainder 0 modulo sin^2+cos^2=1 and the equations the "
@@ -82,7 +84,7 @@ class Vanishing:
 
     def sampled(self, manifold, policy) -> Decision:
         expr = cancel(self.expr) if self.residue is None else self.residue
-        return manifold._sampled_vanishes(expr, self.tol)
+        return manifold.sampled_vanishes(expr, self.tol)
 
 
 class Rank:
@@ -145,14 +147,14 @@ class Rank:
         if not manifold.exact or not _reducible(manifold, policy):
             return None
         reduced = self.residue = self.matrix.applyfunc(manifold.reduce)
-        self.certify = lambda d: manifold._rank_certificate(reduced, d,
+        self.certify = lambda d: rank_certificate(manifold, reduced, d,
                                                             policy.exact_minor_size)
         if not reduced.free_symbols:
             r = reduced.rank()
             return Decision(r, "exact", f"entries reduce to numbers; rank {r}")
-        if all(manifold._zero_test(e)[0] is True for e in reduced):
+        if all(manifold.exact_zero_test(e)[0] is True for e in reduced):
             return Decision(0, "exact", "every entry vanishes on M")
-        return manifold._exact_full_rank(reduced, policy.exact_minor_size)
+        return exact_full_rank(manifold, reduced, policy.exact_minor_size)
 
     def sampled(self, manifold, policy) -> Decision:
         if self.residue is None:
@@ -162,7 +164,7 @@ class Rank:
         reduced = self.residue
         sampled = manifold.sampled_ranks([reduced], self.tol)[0]
         if 0 < sampled.value < min(reduced.shape):
-            certificate = manifold._rank_certificate(reduced, sampled, policy.exact_minor_size)
+            certificate = rank_certificate(manifold, reduced, sampled, policy.exact_minor_size)
             if certificate is not None:
                 return certificate
         return sampled
@@ -173,3 +175,57 @@ def _reducible(manifold, policy) -> bool:
     ``policy.closed_form_size`` coordinates, where solving the velocities symbolically
     costs minutes (the bicycle's M_1) and the points over F_p answer in milliseconds."""
     return len(manifold.system.coordinates) <= policy.closed_form_size or not manifold.curved
+
+
+def exact_full_rank(manifold, reduced, size: int) -> Decision | None:
+    """Full rank proved exactly: a maximal minor of ``reduced`` (a matrix reduced on
+    ``manifold``, at most ``size`` rows or columns) is a nonzero function on M.
+
+    Only for small matrices and when the reduction parametrises M
+    completely (no residual equations), so that a nonzero reduced
+    expression is a nonzero function on M.
+    """
+    k = min(reduced.shape)
+    if k > size or manifold.reduction.residual:
+        return None
+    square = reduced if reduced.rows == reduced.cols else (
+        reduced * reduced.T if reduced.rows < reduced.cols else reduced.T * reduced)
+    det = cancel(square.det(method="berkowitz"))
+    verdict, warning = ((False, None) if det.is_number and det != 0
+                        else manifold.exact_zero_test(det))
+    if verdict is not False:
+        return None
+    return Decision(k, "exact", f"full rank {k}: the determinant reduces to the nonzero "
+                                f"function {short(det)} on M",
+                    warnings=(warning,) if warning else ())
+
+
+def rank_certificate(manifold, reduced, sampled: Decision, size: int) -> Decision | None:
+    """Prove the sampled rank r of ``reduced`` exactly: a nonzero r x r minor on
+    ``manifold`` (r at most ``size``) whose Schur complement vanishes on M; None when no
+    such certificate is found."""
+    r = cast(int, sampled.value)  # a sampled rank
+    if r > size or manifold.reduction.residual:
+        return None
+    try:
+        rows, cols, _ = manifold.regular_block(reduced, r)
+    except ComputationError:
+        return None
+    B = reduced.extract(rows, cols)
+    det = cancel(B.det(method="berkowitz"))
+    verdict, warning = ((False, None) if det.is_number and det != 0
+                        else manifold.exact_zero_test(det))
+    if verdict is not False:
+        return None
+    other_rows = [i for i in range(reduced.rows) if i not in rows]
+    other_cols = [j for j in range(reduced.cols) if j not in cols]
+    X = B.LUsolve(reduced.extract(rows, other_cols))
+    schur = reduced.extract(other_rows, other_cols) - reduced.extract(other_rows, cols) * X
+    if not all(manifold.exact_zero_test(cancel(e))[0] is True for e in schur):
+        return None
+    return Decision(
+        r, "exact",
+        f"rank {r}: the minor (rows {rows}, columns {cols}) is the nonzero function "
+        f"{short(det)} on M and its Schur complement vanishes on M",
+        singular_values=sampled.singular_values, warnings=(warning,) if warning else (),
+    )

@@ -77,7 +77,6 @@ from nhham.lagrangian.sampled import (
 )
 from nhham.settings import PARAMETER_BOX, SEED, STATE_BOX, Precision
 from nhham.system.evaluation import numeric_function
-from nhham.system.expressions import short
 
 __all__ = ["Submanifold", "has_real_point"]
 
@@ -331,8 +330,15 @@ class Submanifold:
                                         points=record(points, self.variables))
         return rows, cols, Decision((rows, cols), "exact", detail + " (constant entries)")
 
-    def _zero_test(self, expr):
-        """Exact zero test of a reduced expression on M: (True | False | None, warning)."""
+    def exact_zero_test(self, expr):
+        """Exact zero test of a reduced expression on M: (True | False | None, warning).
+
+        True: zero on M (rational cancellation, or a Groebner remainder 0 modulo
+        sin^2 + cos^2 = 1 and the residual equations of :attr:`reduction`); False: a
+        nonzero function on M (only when the reduction parametrises M completely);
+        None: undecided. The warning names a nonzero expression that vanishes at the
+        given parameter values.
+        """
         return zero_test(expr, self.reduction.residual, self.system.parameters,
                           self.system.parameter_values)
 
@@ -440,53 +446,6 @@ class Submanifold:
             singular_values=tuple(tuple(float(x) for x in s) for s in plain),
             point_residual=resid, warnings=tuple(warnings),
             points=record(points, self.variables),
-        )
-
-    def _exact_full_rank(self, reduced, size):
-        """Full rank proved exactly: a maximal minor is a nonzero function on M.
-
-        Only for small matrices and when the reduction parametrises M
-        completely (no residual equations), so that a nonzero reduced
-        expression is a nonzero function on M.
-        """
-        k = min(reduced.shape)
-        if k > size or self.reduction.residual:
-            return None
-        square = reduced if reduced.rows == reduced.cols else (
-            reduced * reduced.T if reduced.rows < reduced.cols else reduced.T * reduced)
-        det = cancel(square.det(method="berkowitz"))
-        verdict, warning = (False, None) if det.is_number and det != 0 else self._zero_test(det)
-        if verdict is not False:
-            return None
-        return Decision(k, "exact", f"full rank {k}: the determinant reduces to the nonzero "
-                                    f"function {short(det)} on M",
-                        warnings=(warning,) if warning else ())
-
-    def _rank_certificate(self, reduced, sampled, size):
-        """Prove the sampled rank r exactly: a nonzero r x r minor, vanishing Schur complement."""
-        r = sampled.value
-        if r > size or self.reduction.residual:
-            return None
-        try:
-            rows, cols, _ = self.regular_block(reduced, r)
-        except ComputationError:
-            return None
-        B = reduced.extract(rows, cols)
-        det = cancel(B.det(method="berkowitz"))
-        verdict, warning = (False, None) if det.is_number and det != 0 else self._zero_test(det)
-        if verdict is not False:
-            return None
-        other_rows = [i for i in range(reduced.rows) if i not in rows]
-        other_cols = [j for j in range(reduced.cols) if j not in cols]
-        X = B.LUsolve(reduced.extract(rows, other_cols))
-        schur = reduced.extract(other_rows, other_cols) - reduced.extract(other_rows, cols) * X
-        if not all(self._zero_test(cancel(e))[0] is True for e in schur):
-            return None
-        return Decision(
-            r, "exact",
-            f"rank {r}: the minor (rows {rows}, columns {cols}) is the nonzero function "
-            f"{short(det)} on M and its Schur complement vanishes on M",
-            singular_values=sampled.singular_values, warnings=(warning,) if warning else (),
         )
 
     # ------------------------------------------------------------ sampling
@@ -658,7 +617,22 @@ class Submanifold:
             return tol
         return Precision(self.precision).tolerance
 
-    def _sampled_vanishes(self, expr, tol):
+    def sampled_vanishes(self, expr, tol: float | None = None) -> Decision:
+        """Whether ``expr`` vanishes at the seeded sample points of M (as
+        :meth:`vanishes` with ``exact=False``), relative to the size of its terms.
+
+        Parameters
+        ----------
+        expr : sympy.Expr
+        tol : float, optional
+            Relative tolerance (default: the precision's, see :meth:`vanishes`).
+
+        Returns
+        -------
+        Decision
+            Sampled, with the largest values, the points and warnings where the
+            answer is doubtful at this precision.
+        """
         points, resid = self.points()
         tol = self._tol(tol)
         f = self._lambdify([expr])
@@ -677,7 +651,7 @@ class Submanifold:
             scale = float(abs(scale))
             worst_rel = max(worst_rel, a / scale if scale else (0.0 if a == 0 else math.inf))
         vanishes = worst_rel <= tol
-        warnings = ()
+        warnings: tuple[str, ...] = ()
         zero = self._zero_level(resid)
         if not vanishes and worst_rel <= 1e3 * tol:
             warnings = (f"largest relative value {worst_rel:.3g} is within 1e3 of the "

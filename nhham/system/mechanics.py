@@ -27,6 +27,10 @@ is nhham's order of :attr:`System.phi`. So ``lam<i>(t)`` in ``lm.eom``
 corresponds to ``lambda_<i>``. Beware: sympy 1.14's ``mass_matrix`` appends
 ``lam_coeffs.T`` itself, so the multipliers solved from
 ``mass_matrix_full``/``rhs()`` are the negatives of those in ``lm.eom``.
+
+The pieces: :mod:`nhham.system.dynamicsymbols` turns dynamicsymbols into plain symbols
+(and speeds into q'), :mod:`nhham.system.loads` turns loads and actuators into a
+potential and generalized forces; this module assembles the :class:`System`.
 """
 
 from __future__ import annotations
@@ -37,20 +41,29 @@ from types import MappingProxyType
 from typing import Mapping, NamedTuple, Sequence
 
 import sympy as sp
-from sympy.core.function import AppliedUndef
 from sympy.physics import mechanics as me
 
-from nhham.autonomy import nonautonomous
 from nhham.errors import InputError, ValidationError
-from nhham.system.expressions import short
-from nhham.system.naming import (
-    TIME,
-    acceleration_symbol,
-    as_symbol,
-    multiplier_symbol,
-    velocity_symbol,
-)
 from nhham.system.description import System
+from nhham.system.dynamicsymbols import (
+    as_expr,
+    check_affine,
+    convert,
+    coordinate_functions,
+    plain_map,
+    remaining_symbols,
+    speed_substitution,
+)
+from nhham.system.loads import (
+    components,
+    free_velocity,
+    generalized_forces,
+    input_map,
+    lagrangian_of,
+    load_items,
+    split_loads,
+)
+from nhham.system.naming import TIME, acceleration_symbol, multiplier_symbol
 
 __all__ = [
     "from_mechanics",
@@ -59,10 +72,6 @@ __all__ = [
     "MechanicsForm",
     "Substitutions",
 ]
-
-# Longest expression quoted in an error message.
-_QUOTE = 80
-
 
 @dataclass(frozen=True)
 class Substitutions:
@@ -286,40 +295,40 @@ def _from_pieces(lagrangian, q, hol_coneqs, nonhol_coneqs, parameters, name, *, 
                  actuators, frame, origin, u, kd_eqs, velocity_constraints,
                  configuration_constraints, inputs, drop_redundant, labels) -> System:
     """:func:`from_mechanics` once the way in is known (``labels``: names in messages)."""
-    coords = _coordinate_functions(q)
+    coords = coordinate_functions(q)
     t = me.dynamicsymbols._t
     problems: list[str] = []
-    to_q = _speed_substitution(coords, u, kd_eqs, t, problems, labels["kd"])
-    inputs_in, plain_inputs = _input_map(inputs, coords, to_q, problems)
+    to_q = speed_substitution(coords, u, kd_eqs, t, problems, labels["kd"])
+    inputs_in, plain_inputs = input_map(inputs, coords, to_q, problems)
     if lagrangian is None:
         if not bodies and not loads and not actuators:
             raise InputError("from_mechanics: give a Lagrangian, or bodies (and loads)")
         lagrangian = sp.S.Zero
     else:
-        lagrangian = _as_expr("lagrangian", lagrangian)
+        lagrangian = as_expr("lagrangian", lagrangian)
     forces = None
     if bodies or loads or actuators:
-        items = _load_items(loads, actuators, problems)
+        items = load_items(loads, actuators, problems)
         if frame is None or origin is None:
             problems.append("frame, origin: bodies and loads need the inertial frame and a "
                             "point fixed in it (frame=N, origin=O)")
         else:
             as_given = {k for k in inputs_in if isinstance(k, sp.Symbol)}
-            potential, forced = _split_loads(items, frame, as_given | set(plain_inputs),
-                                             problems)
-            lagrangian = lagrangian + _lagrangian_of(bodies, potential, frame, origin,
-                                                     problems)
+            potential, forced = split_loads(items, frame, as_given | set(plain_inputs),
+                                            problems)
+            lagrangian = lagrangian + lagrangian_of(bodies, potential, frame, origin,
+                                                    problems)
 
-            def free_velocity(label, point, problems):
-                return _free_velocity(label, point, frame, origin, problems, "the point")
+            def velocity_of(label, point, problems):
+                return free_velocity(label, point, frame, origin, problems, "the point")
 
-            forces = _generalized_forces(forced, coords, frame, free_velocity, to_q,
-                                         inputs_in, problems)
+            forces = generalized_forces(forced, coords, frame, velocity_of, to_q,
+                                        inputs_in, problems)
     speeds = tuple(to_q) if to_q else ()
     vcons = []
     for i, c in enumerate(velocity_constraints):
-        c = _as_expr(f"{labels['velocity']}[{i}]", c)
-        _check_affine(f"{labels['velocity']}[{i}]", c, speeds, problems)
+        c = as_expr(f"{labels['velocity']}[{i}]", c)
+        check_affine(f"{labels['velocity']}[{i}]", c, speeds, problems)
         vcons.append(c)
     if problems:
         raise ValidationError(problems)
@@ -341,14 +350,15 @@ def _from_lagrangian(lagrangian, coords, hols, nonhols, parameters, name, hol_la
     """The System of L and the constraints in dynamicsymbols; ``forces``: Q per coordinate
     already in plain symbols (or None), ``inputs``: the plain input symbols."""
     t = me.dynamicsymbols._t
-    to_plain = _plain_map(coords, t)
+    to_plain = plain_map(coords, t)
     reserved = {s.name for s in to_plain.values()}
     items = [("lagrangian", lagrangian)]
     items += list(zip(hol_labels, hols)) + list(zip(nonhol_labels, nonhols))
-    problems, converted = [], {}
+    problems: list[str] = []
+    converted: dict = {}
     input_names = {u.name for u in inputs}
     for label, expr in items:
-        converted[label] = _convert(label, _as_expr(label, expr), to_plain, reserved, t, problems)
+        converted[label] = convert(label, as_expr(label, expr), to_plain, reserved, t, problems)
         used = sorted({s.name for s in converted[label].free_symbols} & input_names)
         if used:
             problems.append(f"{label}: uses the input(s) {', '.join(used)}; inputs may appear "
@@ -357,8 +367,8 @@ def _from_lagrangian(lagrangian, coords, hols, nonhols, parameters, name, hol_la
         raise ValidationError(problems)
     applied = list(forces) if forces is not None and any(f != 0 for f in forces) else None
     if parameters is None:
-        parameters = _remaining_symbols(list(converted.values()) + (applied or []),
-                                        reserved | input_names | {TIME.name})
+        parameters = remaining_symbols(list(converted.values()) + (applied or []),
+                                       reserved | input_names | {TIME.name})
     try:
         return System(
             [to_plain[f] for f in coords],
@@ -396,337 +406,6 @@ def _from_me_system(msys, parameters, name, drop_redundant=False, inputs=()) -> 
         configuration_constraints=list(msys.holonomic_constraints), inputs=inputs,
         drop_redundant=drop_redundant, labels=_SYSTEM_LABELS,
     )
-def _speed_substitution(coords, u, kd_eqs, t, problems, kd="kd_eqs") -> dict:
-    """{u_k: expression in q, q'} from the kinematic differential equations (``kd``: their
-    name in messages)."""
-    if not kd_eqs:
-        if u:
-            problems.append(f"{kd}: speeds u were given but no kinematic differential "
-                            f"equations define them")
-        return {}
-    qset = set(coords) | {f.diff(t) for f in coords}
-    eqs = [_as_expr(f"{kd}[{i}]", e) for i, e in enumerate(kd_eqs)]
-    if u is None:
-        found = set()
-        for e in eqs:
-            found |= {f for f in e.atoms(AppliedUndef) if f.args == (t,) and f not in qset}
-        u = sorted(found, key=lambda f: f.func.__name__)
-    u = list(u)
-    bad = [f for f in u if not (isinstance(f, AppliedUndef) and f.args == (t,))]
-    for f in bad:
-        problems.append(f"u: {f} is not a dynamicsymbol")
-    if bad:
-        return {}
-    if len(eqs) != len(u):
-        problems.append(f"{kd}: {len(eqs)} kinematic differential equations for {len(u)} "
-                        f"speeds {', '.join(map(str, u))}; one per speed is needed")
-        return {}
-    for i, e in enumerate(eqs):
-        _check_affine(f"{kd}[{i}]", e, tuple(u), problems)
-    if problems:
-        return {}
-    B = sp.Matrix([[sp.diff(e, s) for s in u] for e in eqs])
-    rest = sp.Matrix([e.xreplace({s: 0 for s in u}) for e in eqs])
-    try:
-        sol = B.LUsolve(-rest)
-    except (ValueError, ZeroDivisionError, sp.matrices.exceptions.NonInvertibleMatrixError):
-        problems.append(f"{kd}: cannot be solved for the speeds {', '.join(map(str, u))} "
-                        f"(the coefficient matrix of u is singular)")
-        return {}
-    return {s: sp.simplify(x) if B != -sp.eye(len(u)) else sp.expand(x) for s, x in zip(u, sol)}
-
-
-def _check_affine(label, expr, speeds, problems) -> None:
-    """Record the terms of ``expr`` that are not affine in the speeds."""
-    if not speeds:
-        return
-    sset = set(speeds)
-    for term in sp.Add.make_args(sp.expand(expr)):
-        for s in speeds:
-            d = sp.diff(term, s)
-            if d.atoms(AppliedUndef) & sset:
-                problems.append(f"{label}: the term {short(term, _QUOTE)} is not affine in the "
-                                f"speeds ({s} appears nonlinearly); nhham needs constraints "
-                                f"affine in u")
-                return
-
-
-# ------------------------------------------------------------------- loads
-def _input_map(inputs, coords, to_q, problems) -> tuple[dict, tuple]:
-    """({input as given -> plain input symbol}, the plain input symbols in order).
-
-    A dynamicsymbol ``T(t)`` becomes ``T``; a Symbol or a name ``T`` is the plain input
-    ``T`` and stands for the dynamicsymbol ``T(t)`` too."""
-    t = me.dynamicsymbols._t
-    if isinstance(inputs, (str, sp.Basic)):
-        inputs = [inputs]
-    reserved = {f.func.__name__ for f in coords} | {
-        velocity_symbol(sp.Symbol(f.func.__name__)).name for f in coords}
-    mapping: dict = {}
-    plain: list = []
-    for i, given in enumerate(inputs):
-        label = f"inputs[{i}]"
-        if isinstance(given, AppliedUndef) and given.args == (t,):
-            if given in coords:
-                problems.append(f"{label}: {given} is a coordinate, not an input")
-                continue
-            if given in to_q:
-                problems.append(f"{label}: {given} is a generalized speed (defined by the "
-                                f"kinematic differential equations), not an input")
-                continue
-            sym = sp.Symbol(given.func.__name__)
-        elif isinstance(given, (str, sp.Symbol)):
-            sym = as_symbol(given)
-            if sym == TIME:
-                problems.append(f"{label}: t is the time, not an input (a load may use it "
-                                f"as it is)")
-                continue
-        else:
-            problems.append(f"{label}: {short(given, _QUOTE)} is not an input: give a "
-                            f"dynamicsymbol (dynamicsymbols('T')), a Symbol or a name")
-            continue
-        if sym.name in reserved:
-            problems.append(f"{label}: {sym.name} is the name of a coordinate or velocity")
-            continue
-        if sym in plain:
-            problems.append(f"{label}: {sym.name} is given twice")
-            continue
-        plain.append(sym)
-        if isinstance(given, sp.Basic) and given != sym:
-            mapping[given] = sym
-        if not isinstance(given, AppliedUndef):  # a name stands for T and for T(t)
-            mapping[sp.Function(sym.name)(t)] = sym
-    return mapping, tuple(plain)
-
-
-def _load_items(loads, actuators, problems, kind="loads") -> list:
-    """[(label, point or frame, vector)] of the loads and of the actuators' ``to_loads()``."""
-    items = []
-    for i, load in enumerate(loads):
-        pair = _load_pair(f"{kind}[{i}]", load, problems)
-        if pair is not None:
-            items.append((f"{kind}[{i}]",) + pair)
-    for j, act in enumerate(actuators):
-        to_loads = getattr(act, "to_loads", None)
-        if not callable(to_loads):
-            problems.append(f"actuators[{j}]: {short(act, _QUOTE)} is not an actuator (it has "
-                            f"no to_loads(); give sympy.physics.mechanics actuators, e.g. "
-                            f"LinearSpring, TorqueActuator)")
-            continue
-        try:
-            produced = list(to_loads())
-        except (ValueError, TypeError, AttributeError) as exc:
-            problems.append(f"actuators[{j}]: {type(act).__name__}.to_loads() failed: "
-                            f"{' '.join(str(exc).split())}")
-            continue
-        for k, load in enumerate(produced):
-            label = f"actuators[{j}].to_loads()[{k}]"
-            pair = _load_pair(label, load, problems)
-            if pair is not None:
-                items.append((label,) + pair)
-    return items
-
-
-def _load_pair(label, load, problems):
-    """(point or frame, vector) of a Force, a Torque or a pair; None (and a problem) else."""
-    if hasattr(load, "location") and hasattr(load, "vector"):
-        where, vector = load.location, load.vector
-    elif isinstance(load, (tuple, list)) and len(load) == 2:
-        where, vector = load
-    else:
-        problems.append(f"{label}: {short(load, _QUOTE)} is not a load: give Force(point, "
-                        f"vector), Torque(frame, vector) or a (point or frame, vector) pair")
-        return None
-    if not isinstance(where, (me.Point, me.ReferenceFrame)):
-        problems.append(f"{label}: {short(where, _QUOTE)} is neither a Point nor a "
-                        f"ReferenceFrame (a load acts on a point or, as a torque, on a frame)")
-        return None
-    if isinstance(vector, me.Vector):
-        return where, vector
-    if isinstance(vector, (int, sp.Expr)) and vector == 0:
-        return where, me.Vector(0)
-    problems.append(f"{label}: {short(vector, _QUOTE)} is not a Vector (write the "
-                    f"{'force' if isinstance(where, me.Point) else 'torque'} along unit vectors, "
-                    f"e.g. F*N.x)")
-    return None
-
-
-def _components(label, vector, frame, problems):
-    """The components of ``vector`` in ``frame`` (3 x 1), or None (and a problem)."""
-    if vector == 0:
-        return sp.zeros(3, 1)
-    try:
-        return vector.to_matrix(frame)
-    except ValueError as exc:
-        problems.append(f"{label}: the vector {short(vector, _QUOTE)} cannot be expressed in "
-                        f"{frame} ({' '.join(str(exc).split())})")
-        return None
-
-
-def _split_loads(items, frame, inputs, problems) -> tuple[list, list]:
-    """(loads with a potential, the others): a force on a point whose components in
-    ``frame`` are constant (no function of time, no time, no input) has the potential
-    -F . r; everything else (torques, moving forces) is a generalized force.
-    ``inputs``: the plain symbols that are inputs, as given and as nhham's."""
-    t = me.dynamicsymbols._t
-    input_symbols = set(inputs)
-    potential, forced = [], []
-    for label, where, vector in items:
-        comps = _components(label, vector, frame, problems)
-        if comps is None:
-            continue
-        constant = (isinstance(where, me.Point) and not comps.atoms(AppliedUndef)
-                    and not comps.atoms(sp.Derivative) and not comps.has(t)
-                    and not (comps.free_symbols & input_symbols))
-        (potential if constant else forced).append((label, where, vector, comps))
-    return potential, forced
-
-
-def _lagrangian_of(bodies, loads, frame, origin, problems) -> sp.Expr:
-    """T - V of rigid bodies/particles and constant (gravity-type) forces ``loads``:
-    ``(label, point, vector, components)``."""
-    T = sp.S.Zero
-    for i, body in enumerate(bodies):
-        label = f"bodies[{i}] ({getattr(body, 'name', body)})"
-        point = getattr(body, "masscenter", None) or getattr(body, "point", None)
-        if point is None or not hasattr(body, "mass"):
-            problems.append(f"{label}: not a RigidBody or Particle")
-            continue
-        vel = _free_velocity(label, point, frame, origin, problems)
-        if vel is None:
-            continue
-        T += body.mass * vel.dot(vel) / 2
-        body_frame = getattr(body, "frame", None)
-        if body_frame is not None and hasattr(body, "central_inertia"):
-            w = body_frame.ang_vel_in(frame)
-            T += w.dot(body.central_inertia.dot(w)) / 2
-    V = sp.S.Zero
-    for label, where, vector, _ in loads:
-        try:
-            r = where.pos_from(origin)
-        except ValueError:
-            problems.append(f"{label}: the point {where} has no position from the origin "
-                            f"{origin}; locate it from there (locatenew)")
-            continue
-        V -= vector.dot(r)
-    return T - V
-
-
-def _free_velocity(label, point, frame, origin, problems, what="its mass centre"):
-    """d/dt of the position of ``point`` from ``origin`` in ``frame``."""
-    try:
-        r = point.pos_from(origin)
-    except ValueError:
-        problems.append(f"{label}: {what} {point} has no position from the origin "
-                        f"{origin}; nhham needs the free velocity d/dt(position), not a "
-                        f"velocity with constraints already substituted (set_vel): locate "
-                        f"the point from the origin")
-        return None
-    return r.dt(frame)
-
-
-def _generalized_forces(loads, coords, frame, velocity_of, to_q, inputs_in, problems) -> list:
-    """Q_A = sum over the loads of F . dv_P/dq'_A (T . dw_B/dq'_A for a torque on B), in
-    nhham's plain symbols (coordinates, velocities, inputs, t).
-
-    ``loads``: ``(label, point or frame, vector, components in frame)``;
-    ``velocity_of(label, point, problems)``: the velocity of a point in ``frame`` (None
-    and a problem when it has none). The speeds ``to_q`` are replaced before the partial
-    derivatives are taken. The dot products are sympy's (``Vector.dot``), so a torque
-    along a frame's own axis gives its magnitude with no trigonometric leftovers."""
-    t = me.dynamicsymbols._t
-    to_plain = _plain_map(coords, t)
-    to_plain.update(inputs_in)
-    qdots = [f.diff(t) for f in coords]
-    Q = [sp.S.Zero] * len(coords)
-    for label, where, vector, comps in loads:
-        if comps == sp.zeros(3, 1):
-            continue
-        bad = _load_problems(label, where, vector, comps, coords, to_q, inputs_in, to_plain)
-        if bad:
-            problems += bad
-            continue
-        if isinstance(where, me.ReferenceFrame):
-            what = f"the angular velocity of frame {where} in {frame}"
-            try:
-                vel = where.ang_vel_in(frame)
-            except ValueError:
-                problems.append(f"{label}: the frame {where} has no angular velocity in "
-                                f"{frame} (orient it from {frame} or set_ang_vel)")
-                continue
-        else:
-            what = f"the velocity of {where} in {frame}"
-            vel = velocity_of(label, where, problems)
-            if vel is None:
-                continue
-        if to_q:
-            vector, vel = _vector_xreplace(vector, to_q), _vector_xreplace(vel, to_q)
-        vbad = _velocity_problem(label, what, vel, coords)
-        if vbad:
-            problems.append(vbad)
-            continue
-        for A, qd in enumerate(qdots):
-            partial = vel.diff(qd, frame) if vel != 0 else vel
-            if partial != 0:
-                Q[A] += sp.sympify(vector.dot(partial)).xreplace(to_plain)
-    return Q
-
-
-def _vector_xreplace(vector, rule):
-    """``vector`` with ``rule`` applied to its components (in each of its frames)."""
-    if vector == 0:
-        return vector
-    return me.Vector([(m.xreplace(rule), f) for m, f in vector.args])
-
-
-def _load_problems(label, where, vector, comps, coords, to_q, inputs_in, to_plain) -> list:
-    """Why a load's components cannot be a force of nhham's (accelerations, unknown
-    functions of time, symbols named like a coordinate or velocity), each naming it."""
-    t = me.dynamicsymbols._t
-    kind = "torque" if isinstance(where, me.ReferenceFrame) else "force"
-    head = f"{label}: the {kind} {short(vector, _QUOTE)} on {where}"
-    out = []
-    qdots = {f.diff(t) for f in coords}
-    moving = set(coords) | set(to_q)
-    for d in sorted(comps.atoms(sp.Derivative) - qdots, key=str):
-        if d.expr in moving:
-            out.append(f"{head} depends on the acceleration {d}; a load may depend on the "
-                       f"coordinates, their first derivatives (or speeds), time and inputs only")
-        else:
-            out.append(f"{head} contains the derivative {d}; a load may depend on the "
-                       f"coordinates, their first derivatives (or speeds), time and inputs "
-                       f"only (give a derivative of an input as an input of its own)")
-    known = moving | {f for f in inputs_in if isinstance(f, AppliedUndef)}
-    for f in sorted(comps.atoms(AppliedUndef) - known, key=str):
-        if any(f in d.atoms(AppliedUndef) for d in comps.atoms(sp.Derivative) - qdots):
-            continue  # already named with its derivative
-        speed = ", a speed defined by the kinematic differential equations" if to_q else ""
-        out.append(f"{head} depends on {f}, a function of time that is neither a "
-                   f"coordinate{speed} nor an input; if it is an input (a control, a "
-                   f"specified function), list it: inputs=[{f}]")
-    reserved = {s.name for s in to_plain.values()} - {s.name for s in inputs_in.values()}
-    clash = sorted(s.name for s in comps.free_symbols if s != t and s.name in reserved)
-    if clash:
-        out.append(f"{head}: plain symbol(s) {', '.join(clash)} have the name of a coordinate "
-                   f"or velocity; rename them")
-    return out
-
-
-def _velocity_problem(label, what, vel, coords) -> str:
-    """Why a velocity cannot be used: functions of time that are not coordinates (a speed
-    no kinematic equation defines) or derivatives beyond q'; '' if none."""
-    t = me.dynamicsymbols._t
-    qdots = {f.diff(t) for f in coords}
-    parts = [m for m, _ in vel.args] if vel != 0 else []
-    derivs = sorted({d for m in parts for d in m.atoms(sp.Derivative)} - qdots, key=str)
-    funcs = sorted({f for m in parts for f in m.atoms(AppliedUndef)} - set(coords), key=str)
-    if derivs or funcs:
-        culprit = (derivs or funcs)[0]
-        return (f"{label}: {what} contains {short(culprit, _QUOTE)}, a function of time that "
-                f"is not one of the coordinates q nor their first derivatives (a speed that "
-                f"no kinematic differential equation defines?)")
-    return ""
-
 
 def from_lagranges_method(lm: me.LagrangesMethod, parameters=None, name: str = "", *,
                           inputs: Sequence = (), drop_redundant: bool = False) -> System:
@@ -772,19 +451,19 @@ def from_lagranges_method(lm: me.LagrangesMethod, parameters=None, name: str = "
     if not isinstance(lm, me.LagrangesMethod):
         raise InputError(f"from_lagranges_method: expected a LagrangesMethod, got "
                          f"{type(lm).__name__}")
-    coords = _coordinate_functions(list(lm.q))
+    coords = coordinate_functions(list(lm.q))
     problems: list[str] = []
-    inputs_in, plain_inputs = _input_map(inputs, coords, {}, problems)
+    inputs_in, plain_inputs = input_map(inputs, coords, {}, problems)
     forces = None
     if lm.forcelist:
         frame = lm.inertial
         if frame is None:
             raise InputError("from_lagranges_method: the LagrangesMethod has a forcelist but "
                              "no inertial frame (LagrangesMethod(..., frame=N))")
-        items = _load_items(lm.forcelist, (), problems, kind="forcelist")
+        items = load_items(lm.forcelist, (), problems, kind="forcelist")
         forced = []
         for label, where, vector in items:
-            comps = _components(label, vector, frame, problems)
+            comps = components(label, vector, frame, problems)
             if comps is not None:
                 forced.append((label, where, vector, comps))
 
@@ -796,92 +475,16 @@ def from_lagranges_method(lm: me.LagrangesMethod, parameters=None, name: str = "
                                 f"(set_vel, or locate it from a point whose velocity is set)")
                 return None
 
-        forces = _generalized_forces(forced, coords, frame, point_velocity, {}, inputs_in,
-                                     problems)
+        forces = generalized_forces(forced, coords, frame, point_velocity, {}, inputs_in,
+                                    problems)
     if problems:
         raise ValidationError(problems)
     hol = list(lm._hol_coneqs)
     nonhol = list(lm.coneqs)[len(hol):]
-    return _from_lagrangian(_as_expr("lagrangian", lm._L[0]), coords, hol, nonhol, parameters,
+    return _from_lagrangian(as_expr("lagrangian", lm._L[0]), coords, hol, nonhol, parameters,
                             name, hol_labels=[f"hol_coneqs[{i}]" for i in range(len(hol))],
                             nonhol_labels=[f"nonhol_coneqs[{i}]" for i in range(len(nonhol))],
                             drop_redundant=drop_redundant, forces=forces, inputs=plain_inputs)
-
-
-def _coordinate_functions(q):
-    """Check that every coordinate is a distinct function of time alone."""
-    t = me.dynamicsymbols._t
-    coords, problems = [], []
-    for i, f in enumerate(q):
-        if not (isinstance(f, AppliedUndef) and f.args == (t,)):
-            problems.append(f"q[{i}]: {f} is not a dynamicsymbol (an undefined function of "
-                            f"{t} alone, e.g. dynamicsymbols('x'))")
-        else:
-            coords.append(f)
-    names = [f.func.__name__ for f in coords]
-    dupes = sorted({n for n in names if names.count(n) > 1})
-    if dupes:
-        problems.append(f"q: duplicate coordinate names {', '.join(dupes)}")
-    if problems:
-        raise ValidationError(problems)
-    return coords
-
-
-def _plain_map(coords, t):
-    """q(t) -> q and q'(t) -> q_dot (coordinates first, then velocities)."""
-    plain = {}
-    for f in coords:
-        plain[f] = sp.Symbol(f.func.__name__)
-    for f in coords:
-        plain[f.diff(t)] = velocity_symbol(plain[f])
-    return plain
-
-
-def _as_expr(label, expr):
-    if isinstance(expr, sp.Equality):
-        return expr.lhs - expr.rhs
-    if isinstance(expr, sp.MatrixBase) and expr.shape == (1, 1):
-        return expr[0, 0]
-    try:
-        return sp.sympify(expr, strict=True)
-    except (sp.SympifyError, TypeError):
-        raise InputError(f"{label}: expected a sympy expression, got "
-                         f"{type(expr).__name__} {expr!r}") from None
-
-
-def _convert(label, expr, to_plain, reserved, t, problems):
-    """Replace dynamicsymbols by plain symbols; record what cannot be expressed."""
-    clash = sorted(s.name for s in expr.free_symbols if s != t and s.name in reserved)
-    if clash:
-        problems.append(f"{label}: plain symbol(s) {', '.join(clash)} have the name of a "
-                        f"coordinate or velocity; rename them")
-    for term in sp.Add.make_args(expr):
-        reason = _inexpressible(term, to_plain, t)
-        if reason:
-            problems.append(f"{label}: the term {short(term, _QUOTE)} {reason}")
-    # xreplace replaces a Derivative node before looking inside it, so
-    # q'(t) becomes q_dot rather than d(q)/dt.
-    return expr.xreplace(to_plain)
-
-
-def _inexpressible(term, to_plain, t):
-    """Why a term cannot be part of an autonomous system on TQ, or ''."""
-    derivs = [d for d in term.atoms(sp.Derivative) if d not in to_plain]
-    if derivs:
-        return (f"contains {short(derivs[0], _QUOTE)}: only coordinates and their first "
-                f"derivatives may appear")
-    funcs = [f for f in term.xreplace(to_plain).atoms(AppliedUndef)]
-    if funcs:
-        return (f"contains {short(funcs[0], _QUOTE)}, a function of time that is not one of the "
-                f"coordinates q")
-    if t in term.xreplace(to_plain).free_symbols:
-        return nonautonomous("mechanics", t=t)
-    return ""
-
-
-def _remaining_symbols(exprs, reserved):
-    names = sorted({s.name for e in exprs for s in e.free_symbols} - reserved)
-    return names
 
 
 # ------------------------------------------------------------------- out of

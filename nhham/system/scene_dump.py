@@ -11,7 +11,7 @@ from nhham.errors import (
     SceneError,
 )
 from nhham.system.expressions import to_text
-from nhham.system.scene import BARE_KEY, SimulateOptions, toml_string
+from nhham.system.scene_structure import BARE_KEY, SimulateOptions, toml_string
 
 __all__ = ["dump_scene"]
 

@@ -276,7 +276,7 @@ def _steady_entry(item, path, problems):
     return item
 
 
-def parse_steady(raw: Mapping, parameters) -> tuple[SteadyState | None, list]:
+def parse_steady(raw: Mapping | None, parameters) -> tuple[SteadyState | None, list]:
     """Parse the entries of a checked ``[steady]`` table against the parameters.
 
     Returns

@@ -58,15 +58,17 @@ def parametric_classification(system, *, positive: Sequence = (),
         sympy sign assumptions count as declared too.
     max_depth : int, optional
         Bound on the nesting of cases (a note says when it was hit).
-    precision, seed
-        As in :func:`~nhham.lagrangian.analysis.analyze_constraints`.
+    precision, seed : optional
+        Deprecated (a ``DeprecationWarning``; removed in the next release): give them in
+        ``policy``.
     near : float, optional
         Relative distance to an exceptional set below which the values are warned
         about.
     points : int, optional
         Exact points per decision datum.
     policy : Policy, optional
-        The settings of the decisions, instead of ``precision`` and ``seed``.
+        Every setting of the decisions (:class:`~nhham.lagrangian.engine.Policy`);
+        default ``Policy()``.
     symbolic : sequence of str or sympy.Symbol, optional
         The parameters kept symbolic; every other one is held at its value (it must have
         one) for the whole exploration. None (default): every parameter symbolic.

@@ -44,10 +44,13 @@ def classification_at_values(system, *, max_depth: int = MAX_DEPTH, precision: i
     Parameters
     ----------
     system : nhham.System
-    max_depth, precision, seed, near, points
+    max_depth, near, points
         As in :func:`nhham.verdict.parametric.parametric_classification`.
+    precision, seed : optional
+        Deprecated (a ``DeprecationWarning``; removed in the next release): give them in
+        ``policy``.
     policy : Policy, optional
-        The settings of the decisions (instead of ``precision`` and ``seed``); its
+        Every setting of the decisions (default ``Policy()``); its
         ``symbolic_values_size`` bounds n + m up to which the condition the values
         satisfy is named with the parameters kept symbolic.
 
@@ -169,11 +172,11 @@ def examine(system, params, *, policy, points, values=None, near=NEAR):
     cls = None
     if analysis.status != "inconsistent":
         cls = classify_constraints(analysis, policy=policy)
-    data = ExceptionalData(system, analysis, policy.seed, points)
-    if cls is not None and tuple(cls.labels) == tuple(analysis.final_labels):
-        # The second-class set the classification chose (for generic parameters when it
-        # decided symbolically): at values where B drops rank its minor is the datum.
-        data.use_second_class_set(cls.second_class_indices)
+    # The second-class set the classification chose (for generic parameters when it
+    # decided symbolically): at values where B drops rank its minor is the datum.
+    second = (tuple(cls.second_class_indices) if cls is not None
+              and tuple(cls.labels) == tuple(analysis.final_labels) else None)
+    data = ExceptionalData(system, analysis, policy.seed, points, second_class=second)
     comps, hits, close = (), [], []
     if params:
         comps = exceptional_components(data.symbolic(tuple(params)), tuple(params))

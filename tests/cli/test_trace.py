@@ -2,6 +2,7 @@
 how each decision was made, the multipliers."""
 
 from handmade import example_3_2 as ex32
+from nhham.lagrangian.engine import Policy
 from nhham.render.trace import analysis_latex, analysis_text
 from nhham.lagrangian.analysis import analyze_constraints
 
@@ -11,7 +12,7 @@ def test_report_prints_stages_ranks_and_evidence():
     for piece in ["Stage 1", "Stage 2", "Stage 3", "rank (Z_i(chi_j)) = 1", "secondary[1]",
                   "(exact, exact)", "lambda_1 = q1", "integrab"]:
         assert piece in text
-    sampled = analysis_text(analyze_constraints(ex32(), exact=False, precision=30))
+    sampled = analysis_text(analyze_constraints(ex32(), policy=Policy(exact=False, precision=30)))
     assert "sampled, mpmath:30" in sampled and "seeded points" in sampled
 
 

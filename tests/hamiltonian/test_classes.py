@@ -7,12 +7,14 @@ import pytest
 import sympy as sp
 
 import handmade
+from nhham.lagrangian.engine import Policy
 from nhham.hamiltonian.classification import classify_constraints
 
 
 @pytest.mark.parametrize("precision", [None, 30])
 def test_to_dict_is_json(precision):
-    c = classify_constraints(handmade.sphere_with_knife(), precision=precision)
+    c = classify_constraints(handmade.sphere_with_knife(),
+                             policy=Policy(precision=precision))
     d = json.loads(json.dumps(c.to_dict()))
     assert d["first_class"] == 1 and d["second_class"] == 2
     assert sp.sympify(d["first_class_combinations"][0]).free_symbols

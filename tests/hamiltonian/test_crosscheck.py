@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 import sympy as sp
 
+from nhham.lagrangian.engine import Policy
 from nhham import models
 from nhham.errors import InputError
 from nhham.hamiltonian.classification import classify_constraints
@@ -92,7 +93,8 @@ def test_singular_systems_compare_stages_and_multipliers():
 
 
 def test_mpmath_precision():
-    report = cross_check(models.rolling_disk(), precision=30, method="sampled")
+    report = cross_check(models.rolling_disk(), method="sampled",
+                         policy=Policy(precision=30))
     assert report.precision == "mpmath:30" and report.tolerance == pytest.approx(1e-27)
     assert report.agree and report.max_abs_difference < 1e-25
 
@@ -106,7 +108,7 @@ def test_snake_sampled_cross_check():
 def test_snake_cross_check_at_exact_points():
     """Beyond the symbolic size, "auto" compares both sides exactly modulo p at exact
     points of M_1: every difference is exactly 0 and the tolerance is 0."""
-    report = cross_check(models.snake(4), samples=3)
+    report = cross_check(models.snake(4), policy=Policy(samples=3))
     assert report.method == "points" and report.agree and not report.exact
     assert report.precision == "exact mod p = 2^61 - 1" and report.tolerance == 0
     assert report.max_abs_difference == 0 and report.samples == 3
@@ -139,8 +141,8 @@ def test_exact_points_see_what_floating_point_cannot(monkeypatch):
 
     monkeypatch.setattr(HamiltonianPoint, "X_H", _perturbed_X_H(MPQ(1, 10 ** 13)))
     system = models.snake(2)
-    assert cross_check(system, method="sampled", samples=3).detail["field"].agree
-    report = cross_check(system, method="points", samples=3)
+    assert cross_check(system, method="sampled", policy=Policy(samples=3)).detail["field"].agree
+    report = cross_check(system, method="points", policy=Policy(samples=3))
     assert not report.agree and not report.detail["field"].agree
     assert report.detail["legendre inverse"].agree and report.detail["Poisson map"].agree
     assert "DIFFERS (points)" in report.describe()
@@ -153,7 +155,7 @@ def test_a_wrong_sign_is_detected_at_exact_points(monkeypatch):
 
     monkeypatch.setattr(HamiltonianPoint, "vertical",
                         lambda self: np.concatenate([self.mu * 0, self.mu], axis=1))
-    report = cross_check(models.snake(2), method="points", samples=2)
+    report = cross_check(models.snake(2), method="points", policy=Policy(samples=2))
     assert not report.detail["field"].agree and report.detail["multipliers"].agree
 
 

@@ -12,6 +12,7 @@ import pytest
 import sympy as sp
 
 import handmade
+from nhham.lagrangian.engine import Policy
 import nhham
 from nhham import models
 from nhham.errors import ComputationError
@@ -109,7 +110,7 @@ def test_dirac_vs_projected_at_exact_points(make, equal):
     bound."""
     system = make()
     assert not hamiltonian_side(system).symbolic_affordable
-    report = dirac_vs_projected(system, samples=3)
+    report = dirac_vs_projected(system, policy=Policy(samples=3))
     assert report.classes.method == "exact at points"
     d = report.decisions[0]
     assert report.equal is equal and math.isnan(report.max_abs_difference)

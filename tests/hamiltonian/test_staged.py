@@ -9,6 +9,7 @@ import sympy as sp
 
 import pytest
 
+from nhham.lagrangian.engine import Policy
 from nhham import models
 from nhham.hamiltonian.crosscheck import cross_check
 
@@ -33,7 +34,7 @@ def test_singular_C_is_checked_at_exact_points_of_every_M_k(make, status, ranks,
     """C singular: the T*Q data at Leg of exact points of each M_k equal the TQ data, so
     both sides have the hand-derived stages (ranks known by hand: the systems are
     changes of coordinates of hand-solved ones), and the fields agree on M_f."""
-    report = cross_check(make(), method="points", samples=3)
+    report = cross_check(make(), method="points", policy=Policy(samples=3))
     assert report.method == "points" and report.agree, report.describe()
     assert {c.how for c in report.checks} == {"points"} and set(report.detail) == CHECKS
     assert report.statuses == (status, status)
@@ -45,7 +46,7 @@ def test_singular_C_is_checked_at_exact_points_of_every_M_k(make, status, ranks,
 def test_singular_C_at_points_matches_the_symbolic_route():
     """Example 3.2 both ways: the stages found at exact points are those of the T*Q
     algorithm run symbolically (H written out)."""
-    points = cross_check(models.paper_example_3_2(), method="points", samples=3)
+    points = cross_check(models.paper_example_3_2(), method="points", policy=Policy(samples=3))
     exact = cross_check(models.paper_example_3_2(), method="exact")
     assert exact.method == "exact" and exact.agree
     assert points.hamiltonian_stages == exact.hamiltonian_stages
@@ -57,7 +58,7 @@ def test_an_inconsistent_singular_system_at_exact_points():
     T*Q data equal the TQ data at points of M_1 and M_2, so the T*Q run is inconsistent
     too; its stages are those of the symbolic T*Q algorithm."""
     system = _curvilinear("curvilinear_inconsistent")
-    report = cross_check(system, method="points", samples=3)
+    report = cross_check(system, method="points", policy=Policy(samples=3))
     assert report.method == "points" and report.agree
     assert report.statuses == ("inconsistent", "inconsistent")
     assert [(s["rank"], s["augmented_rank"]) for s in report.hamiltonian_stages] == \
@@ -74,7 +75,7 @@ def test_the_coupled_pair_is_compared_at_exact_points():
     import nhham
 
     system = nhham.load_scene(EXAMPLES / "curvilinear_pair.toml").system
-    report = cross_check(system, samples=3)
+    report = cross_check(system, policy=Policy(samples=3))
     assert report.method == "points" and report.agree
     assert [s["rank"] for s in report.hamiltonian_stages] == [0, 0, 2]
     assert [s["constraints"] for s in report.hamiltonian_stages] == [2, 4, 6]
@@ -91,7 +92,7 @@ def test_a_wrong_chain_rule_is_detected_on_M_k(monkeypatch):
 
     original = TransportedFunctions.gradients
     monkeypatch.setattr(TransportedFunctions, "gradients", wrong)
-    report = cross_check(_curvilinear("curvilinear_3_2"), method="points", samples=2)
+    report = cross_check(_curvilinear("curvilinear_3_2"), method="points", policy=Policy(samples=2))
     assert report.method == "points" and not report.detail["stages"].agree
     assert "differ from Z_i(chi), xi_L(chi)" in report.detail["stages"].detail
 
@@ -105,7 +106,7 @@ def test_a_wrong_vertical_field_is_detected_with_free_multipliers(monkeypatch):
     monkeypatch.setattr(HamiltonianPoint, "vertical",
                         lambda self: np.concatenate([self.mu * 0, self.mu], axis=1))
     report = cross_check(_curvilinear("curvilinear_free_multiplier"), method="points",
-                         samples=2)
+                         policy=Policy(samples=2))
     assert not report.detail["field"].agree and report.detail["multipliers"].agree
 
 
@@ -119,8 +120,8 @@ def test_singular_C_without_exact_points_falls_back_to_the_symbolic_route():
     v1, v2, v3 = sp.symbols("q1_dot q2_dot q3_dot")
     system = nhham.System(["q1", "q2", "q3"], (v1**2 + v2**2 - v3**2) / 2 + sp.cos(q1),
                           [v1 + v3])
-    report = cross_check(system, method="points", samples=2)
+    report = cross_check(system, method="points", policy=Policy(samples=2))
     assert report.method == "exact" and report.agree
     null = nhham.load_scene(EXAMPLES / "parametric_null_constraint.toml").system
-    report = cross_check(null, method="points", samples=2)
+    report = cross_check(null, method="points", policy=Policy(samples=2))
     assert report.method == "exact" and report.agree

@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 import sympy as sp
 
+from nhham.lagrangian.engine import Policy
 from nhham import System
 from nhham.render.trace import analysis_text
 from nhham.lagrangian.algorithm import run_algorithm
@@ -416,7 +417,7 @@ def _signature(a):
 def test_sampled_decisions_agree_with_exact(make, precision):
     system = make()
     exact = analyze_constraints(system)
-    sampled = analyze_constraints(system, exact=False, precision=precision)
+    sampled = analyze_constraints(system, policy=Policy(exact=False, precision=precision))
     assert _signature(sampled) == _signature(exact)
     assert len(sampled.warnings) == len(exact.warnings)  # only rank_drop warns, both ways
     # Every rank and vanishing decision was sampled (the choice of a regular block
@@ -439,11 +440,11 @@ def test_near_singular_case_warns_in_float64():
     s = System(["q1", "q2", "q3"], (v1**2 + v2**2 + v3**2) / 2, [v1, v1 + eps * v2])
     exact = analyze_constraints(s)
     assert exact.regular and exact.status == "determined" and exact.warnings == ()
-    f64 = analyze_constraints(s, exact=False)
+    f64 = analyze_constraints(s, policy=Policy(exact=False))
     assert f64.rank_C == 1  # the float64 answer differs from the exact one ...
     assert any("near-singular" in w for w in f64.warnings)  # ... and says it is doubtful
     assert "WARNING" in analysis_text(f64)
-    mp = analyze_constraints(s, exact=False, precision=30)
+    mp = analyze_constraints(s, policy=Policy(exact=False, precision=30))
     assert mp.regular and mp.status == "determined" and mp.warnings == ()
 
 

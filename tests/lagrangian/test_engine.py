@@ -1,14 +1,31 @@
 """The decision engine: the cascade's order, the policy, and the arithmetics checked
 against each other (a wrong formula planted in one of them is caught)."""
 
+import ast
+import importlib
+import inspect
+import warnings
 from pathlib import Path
 
 import pytest
 
+import nhham
 from nhham import load_scene
+from nhham.lagrangian import engine
 from nhham.errors import InputError
 from nhham.lagrangian.domains import ModP, NotExact
-from nhham.lagrangian.engine import Policy, answers_by_step, decide, policy_of
+from nhham.lagrangian.engine import (
+    STEPS,
+    AtExactPoints,
+    Policy,
+    ProvedModuloP,
+    Reduced,
+    Sampled,
+    answers_by_step,
+    decide,
+    offers,
+    policy_of,
+)
 from nhham.lagrangian.geometry import LagrangianGeometry
 from nhham.lagrangian.submanifold import Submanifold
 from nhham.lagrangian.tangency import Tangency
@@ -66,6 +83,14 @@ def test_no_exact_points_gives_way_to_the_next_step():
 
         def value(self, env, degrees=False):
             raise NotExact("a parameter value inside a sine")
+
+        def pending_error(self, degrees, count, bound):
+            raise AssertionError("never reached: the value raises")
+
+        def conclude(self, count, degrees, bound):
+            raise AssertionError("never reached: the value raises")
+
+    assert offers(NoPoints({}, []), AtExactPoints)  # the step is tried, and gives way
 
     system, geo, exprs, M = _tangency("rolling_disk")
     log = []
@@ -126,8 +151,130 @@ def test_a_bad_policy_is_refused_naming_the_key(key, value):
 
 
 def test_a_policy_and_a_differing_keyword_together_are_refused():
-    assert policy_of(None, "f", samples=9).samples == 9
+    with pytest.warns(DeprecationWarning, match=r"f: samples= is deprecated"):
+        assert policy_of(None, "f", samples=9).samples == 9
     given = Policy(samples=9)
-    assert policy_of(given, "f", samples=6) is given  # 6 is the default: not given
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # a policy alone is not deprecated
+        assert policy_of(given, "f", samples=6) is given  # 6 is the default: not given
+        assert policy_of(None, "f", samples=6, exact=True) == Policy()
     with pytest.raises(InputError, match="seed"):
         policy_of(given, "f", seed=3)
+
+
+class Stop(Exception):
+    """Raised right after the deprecation warning: the call goes no further."""
+
+
+# The public functions that took loose decision keywords, each called with one.
+LOOSE = {
+    "analyze_constraints": lambda **kw: nhham.analyze_constraints(DISK, **kw),
+    "integrability": lambda **kw: nhham.integrability(DISK, **kw),
+    "classify_constraints": lambda **kw: nhham.classify_constraints(DISK, **kw),
+    "cross_check": lambda **kw: nhham.cross_check(DISK, **kw),
+    "dirac_vs_projected": lambda **kw: nhham.dirac_vs_projected(DISK, **kw),
+    "classification_at_values": lambda **kw: nhham.classification_at_values(DISK, **kw),
+    "parametric_classification": lambda **kw: nhham.parametric_classification(DISK, **kw),
+}
+DISK = nhham.models.rolling_disk()
+
+
+@pytest.mark.parametrize("name", sorted(LOOSE))
+def test_a_loose_decision_keyword_is_deprecated_naming_the_policy(monkeypatch, name):
+    def stop(*args, **kwargs):
+        raise Stop
+
+    monkeypatch.setattr(engine, "check_options", stop)  # policy_of's next step
+    with pytest.warns(DeprecationWarning) as caught, pytest.raises(Stop):
+        LOOSE[name](seed=3, precision=30)
+    ours = [w for w in caught if w.category is DeprecationWarning]
+    assert [str(w.message) for w in ours] == [
+        f"{name}: precision= and seed= are deprecated; pass "
+        f"policy=nhham.Policy(precision=30, seed=3) instead"]
+    assert ours[0].filename == __file__  # the warning names the caller's line
+
+
+# ------------------------------------------------------- the quantity protocol
+PACKAGE = Path(__file__).resolve().parents[2] / "nhham"
+# The members that make a step of its own (``value`` is shared by steps 2 and 3).
+OWN = {Reduced: ("reduced",), ProvedModuloP: ("proved_modulo_p",),
+       AtExactPoints: ("observe", "pending_error", "conclude"), Sampled: ("sampled",)}
+
+
+def quantity_classes() -> dict:
+    """``{name: class}`` of every class of the package that sets ``what`` in its body and
+    has a member of a step of the engine: the quantities :func:`decide` is given."""
+    members = {name for names in STEPS.values() for name in names}
+    found = {}
+    for path in sorted(PACKAGE.rglob("*.py")):
+        tree = ast.parse(path.read_text(encoding="utf-8"))
+        for node in ast.walk(tree):
+            if not isinstance(node, ast.ClassDef):
+                continue
+            body = {t.id for n in node.body if isinstance(n, ast.Assign)
+                    for t in n.targets if isinstance(t, ast.Name)}
+            body |= {n.target.id for n in node.body
+                     if isinstance(n, ast.AnnAssign) and isinstance(n.target, ast.Name)}
+            defs = {n.name for n in node.body if isinstance(n, ast.FunctionDef)}
+            if "what" in body and defs & members:
+                module = ".".join(path.relative_to(PACKAGE.parent).with_suffix("").parts)
+                found[node.name] = getattr(importlib.import_module(module), node.name)
+    return found
+
+
+def protocol_problems(cls) -> list:
+    """How ``cls`` breaks the engine's quantity protocol (``nhham.lagrangian.engine``)."""
+    problems = []
+    if not isinstance(getattr(cls, "what", None), str):
+        problems.append(f"{cls.__name__}: no what (str)")
+    offered = [step for step in STEPS if offers(cls.__new__(cls), step)]
+    for step, own in OWN.items():
+        present = [n for n in own if getattr(cls, n, None) is not None]
+        if present and step not in offered:
+            missing = [n for n in STEPS[step] if getattr(cls, n, None) is None]
+            problems.append(f"{cls.__name__}: {step.__name__} without {', '.join(missing)}")
+    if getattr(cls, "value", None) is not None and not {ProvedModuloP, AtExactPoints} & set(
+            offered):
+        problems.append(f"{cls.__name__}: value without a step at exact points")
+    if not offered:
+        problems.append(f"{cls.__name__}: offers no step")
+    for step in offered:
+        for name in STEPS[step]:
+            ours, theirs = inspect.getattr_static(cls, name), getattr(step, name)
+            if isinstance(ours, property) or isinstance(theirs, property):
+                continue
+            have = ", ".join(inspect.signature(ours).parameters)
+            need = ", ".join(inspect.signature(theirs).parameters)
+            if have.count(",") != need.count(","):
+                problems.append(f"{cls.__name__}.{name}: parameters ({have}), the "
+                                f"protocol's ({need})")
+    return problems
+
+
+def test_the_quantities_are_found():
+    assert {"Vanishing", "Rank", "Tangency", "Frobenius", "BracketRank",
+            "DiracDifference"} <= set(quantity_classes())
+
+
+@pytest.mark.parametrize("name, cls", sorted(quantity_classes().items()))
+def test_every_quantity_offers_whole_steps_of_the_protocol(name, cls):
+    assert protocol_problems(cls) == []
+
+
+def test_a_quantity_with_half_a_step_is_reported():
+    class Half:
+        what = "half"
+
+        def value(self, env, degrees=False):
+            return 0
+
+        def observe(self, value):
+            return True
+
+        def sampled(self, manifold):  # one parameter short
+            return None
+
+    assert protocol_problems(Half) == [
+        "Half: AtExactPoints without pending_error, conclude",
+        "Half: value without a step at exact points",
+        "Half.sampled: parameters (self, manifold), the protocol's (self, manifold, policy)"]

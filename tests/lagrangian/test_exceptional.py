@@ -99,3 +99,36 @@ def test_non_integrability_by_reduction_is_proved_again_at_the_values():
     assert proved.integrable is False and proved.method == "exact"
     assert integrability_proved_at_values(pendulum_cartesian(), Policy()) is None
 
+
+
+def test_exceptional_data_are_built_once_and_frozen():
+    """The second-class set is given when the data are built, never set afterwards.
+
+    Two particles on a line, q = (x, y), L = m (x_dot^2 + y_dot^2) / 2 with the
+    holonomic constraint g = x - y: M_f = {g = 0, g^c = 0} and the bracket
+    {g, g^c} = dg W^-1 dg^T = 2/m, so B = [[0, 2/m], [-2/m, 0]] and det B = 4/m^2 = 4
+    at m = 1, at every point. With no set given the block is the generic choice (both
+    constraints, B regular); with an empty set there is no minor to evaluate."""
+    from dataclasses import FrozenInstanceError
+
+    import pytest
+    from sympy import QQ
+
+    from nhham import System
+    from nhham.lagrangian.exceptional import ExceptionalData
+
+    system = System(["x", "y"], "m*(x_dot**2 + y_dot**2)/2", holonomic=["x - y"],
+                    parameters={"m": 1.0})
+    analysis = analyze_constraints(system)
+    generic = ExceptionalData(system, analysis, 7, 2)
+    assert generic._bracket_minor(generic.env(), QQ) == [4, 4]
+    given = ExceptionalData(system, analysis, 7, 2, second_class=(0, 1))
+    assert given._bracket_minor(given.env(), QQ) == [4, 4]
+    empty = ExceptionalData(system, analysis, 7, 2, second_class=())
+    assert empty._bracket_minor(empty.env(), QQ) == []
+    with pytest.raises(FrozenInstanceError):
+        generic.points = 1
+    assert not hasattr(ExceptionalData, "use_second_class_set")
+    with generic._first_point_only():  # one point, without changing the object
+        assert generic.points == 2 and generic._bracket_minor(generic.env(), QQ) == [4]
+    assert len(generic._bracket_minor(generic.env(), QQ)) == 2

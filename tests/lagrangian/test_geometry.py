@@ -352,28 +352,29 @@ def test_magnetic_forcing_by_hand():
 # ------------------------------------------------ System validation numerics
 def test_fast_sample_values_match_evalf():
     """Validation's one-pass numeric evaluation equals xreplace + evalf."""
-    from nhham.system.description import _VALIDATION_SAMPLES, _numeric, _numeric_samples, _sample_q
+    from nhham.system.sampled_checks import (
+        VALIDATION_SAMPLES, numeric, numeric_samples, sample_q)
 
     system = _snake_chain(3)
     x, y = system.coordinates[:2]
     extra = sp.Matrix([[sp.sqrt(2 + sp.sin(x)) * sp.exp(y), sp.log(1 + x**2) / (3 + sp.cos(y)),
                         sp.atan(x) * sp.tanh(y), (x - 2) ** sp.Rational(1, 3), sp.pi * sp.I * x]])
     for matrix in (system.hessian, system.mu, extra):
-        points = _sample_q(system, np.random.default_rng(3), _VALIDATION_SAMPLES)
-        fast = _numeric_samples(matrix, points)
-        slow = [_numeric(matrix, p) for p in points]
+        points = sample_q(system, np.random.default_rng(3), VALIDATION_SAMPLES)
+        fast = numeric_samples(matrix, points)
+        slow = [numeric(matrix, p) for p in points]
         assert all(np.allclose(a, b, rtol=1e-12, atol=1e-12) for a, b in zip(fast, slow))
 
 
 def test_fast_sample_values_fall_back_for_unknown_nodes():
     """Derivative objects (non-smooth L) take sympy's path and its error message."""
     from nhham.errors import ValidationError
-    from nhham.system.description import _numeric_samples
+    from nhham.system.sampled_checks import numeric_samples
 
     x, xd = sp.symbols("x x_dot")
     W = sp.hessian(sp.Abs(xd) ** 2 + x, (xd,))
     with pytest.raises(ValidationError, match="smooth in the velocities"):
-        _numeric_samples(W, [{x: 0.3, xd: 0.4}])
+        numeric_samples(W, [{x: 0.3, xd: 0.4}])
 
 
 @pytest.mark.parametrize("name", sorted(FAST_PATH_SYSTEMS))

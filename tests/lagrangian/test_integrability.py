@@ -8,6 +8,7 @@ for X, Y in ker mu, mu_i([X, Y]) = -dmu_i(X, Y).
 import pytest
 import sympy as sp
 
+from nhham.lagrangian.engine import Policy
 from nhham import System
 from nhham.lagrangian.integrability import frobenius, integrability
 from nhham.lagrangian.submanifold import Submanifold
@@ -123,7 +124,7 @@ CASES = [
 @pytest.mark.parametrize("precision", [None, 30], ids=["float64", "mp30"])
 def test_sampled_agrees_with_exact(case, precision):
     make, expected = CASES[case]
-    res = integrability(make(), exact=False, precision=precision)
+    res = integrability(make(), policy=Policy(exact=False, precision=precision))
     assert res.integrable is expected and res.method == "sampled" and res.warnings == ()
 
 
@@ -136,17 +137,17 @@ def test_tiny_obstruction_is_undecided_in_float64():
     c = sp.sin(q3)**2 + sp.cos(q3)**2 - 1 + eps
     s = System(["q1", "q2", "q3"], T3, [v3 - c * q1 * v2])
     assert integrability(s).integrable is False
-    f64 = integrability(s, exact=False)
+    f64 = integrability(s, policy=Policy(exact=False))
     assert f64.integrable is None and f64.warnings
     assert "undecided" in f64.describe()
-    assert integrability(s, exact=False, precision=30).integrable is False
+    assert integrability(s, policy=Policy(exact=False, precision=30)).integrable is False
 
 
 def test_small_obstruction_is_decided_whatever_the_units():
     """eps = 1e-11 as a coefficient (a choice of units for q2): dmu ^ mu = -eps dq1 ^ dq2 ^ dq3
     is one term, as far from zero as with eps = 1, so sampling decides it too."""
     for eps in (sp.Rational(1, 10**11), sp.Integer(10**11)):
-        assert integrability(heisenberg(eps), exact=False).integrable is False
+        assert integrability(heisenberg(eps), policy=Policy(exact=False)).integrable is False
 
 
 def _with_circle(constraints):

@@ -1,0 +1,315 @@
+"""The checks of a :class:`~nhham.system.System` under construction that need numbers.
+
+Two properties of the input are decided at seeded random points of the state and of
+the parameters (reproducible run to run): the constraint one-forms are independent
+(:func:`check_dependence`: a dependent row is refused, or dropped and recorded as a
+:class:`DroppedConstraint` with ``drop_redundant``), and the Lagrangian is regular
+(:func:`check_regular_lagrangian`: W = d2L/dv dv invertible). A float64 rank deficiency
+is confirmed in high precision before it is reported (units such as m = 1e-16).
+The values at the points come from one fast pass over the expression trees
+(:func:`numeric_samples`), with sympy's ``evalf`` as the fallback.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from types import MappingProxyType
+from typing import Mapping
+
+import numpy as np
+import sympy as sp
+
+from nhham.errors import (
+    BudgetExceeded,
+    RedundantConstraintError,
+    SingularLagrangianError,
+    ValidationError,
+)
+from nhham.settings import PARAMETER_BOX, STATE_BOX
+from nhham.system.rank import float_rank, precise_ranks
+from nhham.system.velocities import one_forms
+
+__all__ = ["DroppedConstraint", "check_dependence", "check_regular_lagrangian",
+           "numeric_samples", "numeric", "sample_q", "evaluate_at", "NoFastEvaluation",
+           "VALIDATION_SEED", "VALIDATION_SAMPLES"]
+
+# Random points used for generic-rank decisions are drawn from this seed so
+# that validation is reproducible run to run.
+VALIDATION_SEED = 20261121
+VALIDATION_SAMPLES = 4
+
+
+@dataclass(frozen=True)
+class DroppedConstraint:
+    """A constraint removed because its one-form is a combination of others.
+
+    Attributes
+    ----------
+    label : str
+        Key path of the dropped constraint (``constraints[2]``).
+    expression : sympy.Expr
+        The dropped phi.
+    combination : dict
+        ``{label: coefficient}`` with phi_dropped = sum coefficient * phi_label
+        (coefficients are functions of q).
+    """
+
+    label: str
+    expression: sp.Expr
+    combination: Mapping[str, sp.Expr]
+
+
+# ----------------------------------------------------- numeric sample values
+class NoFastEvaluation(Exception):
+    """The fast evaluator met something it does not handle; use sympy's evalf."""
+
+
+_NUMPY_FUNCTIONS = {
+    sp.sin: np.sin, sp.cos: np.cos, sp.tan: np.tan, sp.exp: np.exp, sp.log: np.log,
+    sp.sinh: np.sinh, sp.cosh: np.cosh, sp.tanh: np.tanh,
+    sp.asin: np.arcsin, sp.acos: np.arccos, sp.atan: np.arctan,
+    sp.cot: lambda z: 1 / np.tan(z), sp.sec: lambda z: 1 / np.cos(z),
+    sp.csc: lambda z: 1 / np.sin(z),
+}
+
+
+def evaluate_at(exprs, points):
+    """Values of ``exprs`` at all ``points`` at once, shape (len(exprs), len(points)).
+
+    Complex float64 arithmetic over one walk of the expression trees (shared
+    subexpressions evaluated once). Raises :class:`NoFastEvaluation` for any
+    node it does not know and for non-finite values, so that the caller falls
+    back to ``xreplace(...).evalf()`` and keeps its exact behaviour there.
+    """
+    symbols = set().union(*(p.keys() for p in points)) if points else set()
+    env = {s: np.array([complex(p[s]) for p in points]) for s in symbols}
+    memo: dict = {}
+
+    def ev(e):
+        hit = memo.get(e)
+        if hit is not None:
+            return hit
+        if e.is_Symbol:
+            if e not in env:
+                raise NoFastEvaluation
+            val = env[e]
+        elif e.is_Atom:
+            if not e.is_number:
+                raise NoFastEvaluation
+            try:
+                val = np.complex128(complex(e))
+            except (TypeError, ValueError, OverflowError):
+                raise NoFastEvaluation from None
+        elif e.is_Add:
+            val = ev(e.args[0])
+            for a in e.args[1:]:
+                val = val + ev(a)
+        elif e.is_Mul:
+            val = ev(e.args[0])
+            for a in e.args[1:]:
+                val = val * ev(a)
+        elif e.is_Pow:
+            base, exp = ev(e.base), e.exp
+            if exp.is_Integer and abs(int(exp)) <= 64:
+                k = int(exp)
+                val = base ** k if k >= 0 else 1 / base ** (-k)
+            else:
+                val = base ** ev(exp)
+        elif e.func in _NUMPY_FUNCTIONS and len(e.args) == 1:
+            val = _NUMPY_FUNCTIONS[e.func](ev(e.args[0]))
+        else:
+            raise NoFastEvaluation
+        memo[e] = val
+        return val
+
+    try:
+        with np.errstate(all="ignore"):
+            out = np.array([np.broadcast_to(ev(sp.sympify(e)), (len(points),)) for e in exprs],
+                           dtype=complex).reshape(len(exprs), len(points))
+    except (ArithmeticError, TypeError, ValueError):
+        raise NoFastEvaluation from None
+    if not np.all(np.isfinite(out)):
+        raise NoFastEvaluation
+    return out
+
+
+def numeric_samples(matrix, points, label="lagrangian"):
+    """``[numeric(matrix, p, label) for p in points]``, by one fast numeric pass.
+
+    Falls back to :func:`numeric` (sympy evalf, with its error messages)
+    whenever the fast pass cannot give finite values.
+    """
+    rows, cols = matrix.shape
+    if rows * cols and points:
+        try:
+            values = evaluate_at(list(matrix), points).real
+        except NoFastEvaluation:
+            pass
+        else:
+            return [values[:, k].reshape(rows, cols).astype(float) for k in range(len(points))]
+    return [numeric(matrix, p, label) for p in points]
+
+
+def sample_q(system, rng, count):
+    """Random numeric substitutions for coordinates and parameters."""
+    points = []
+    for _ in range(count):
+        sub = {q: rng.uniform(*STATE_BOX) for q in system.coordinates}
+        sub.update({v: rng.uniform(*STATE_BOX) for v in system.velocities})
+        for p in system.parameters:
+            sub[p] = system.parameter_values.get(p, rng.uniform(*PARAMETER_BOX))
+        points.append(sub)
+    return points
+
+
+def numeric(matrix, sub, label="lagrangian"):
+    """Evaluate a symbolic matrix at a sample point; non-numeric results are input errors."""
+    try:
+        return np.array(matrix.xreplace(sub).evalf(), dtype=complex).real.astype(float)
+    except (TypeError, ValueError) as exc:
+        raise ValidationError([
+            f"{label}: cannot evaluate second derivatives at a sample point "
+            f"({' '.join(str(exc).split())}); the "
+            f"Lagrangian must be smooth in the velocities (no Abs, sign or other kinks)"
+        ]) from None
+
+
+def check_dependence(system, cons, hols, drop_redundant):
+    """Find affine constraints whose mu row is a combination of earlier rows.
+
+    The generic rank over functions of q is decided at seeded random points
+    (a row is dependent when it is dependent at every sample); the exact
+    combination is then solved symbolically to name it.
+
+    Returns (kept constraints, dropped, mu of lifts + constraints or None
+    when a row was dropped or there are none).
+    """
+    rows = list(system.complete_lifts) + list(cons)  # holonomic is set before this runs
+    labels = [f"holonomic[{i}]" for i in range(len(hols))] + [
+        f"constraints[{i}]" for i in range(len(cons))
+    ]
+    if not rows:
+        return tuple(cons), (), None
+    vels = system.velocities
+    mu = one_forms(rows, vels)
+    rng = np.random.default_rng(VALIDATION_SEED)
+    points = sample_q(system, rng, VALIDATION_SAMPLES)
+    samples = numeric_samples(mu, points)
+    independent: list[int] = []
+    dependent: list[tuple[int, dict]] = []
+    for i in range(len(rows)):
+        trial = independent + [i]
+        full = len(trial)
+        # A float64 deficiency may come from the units: confirm it in high precision.
+        if (max(float_rank(S[trial]) for S in samples) == full
+                or precise_ranks(mu, points, [trial])[0] == full):
+            independent.append(i)
+            continue
+        dependent.append((i, _combination(mu, rows, independent, i, vels)))
+    if not dependent:
+        return tuple(cons), (), mu
+    problems, dropped = [], []
+    points = sample_q(system, np.random.default_rng(VALIDATION_SEED + 2), VALIDATION_SAMPLES)
+    for i, coeffs in dependent:
+        combo = " + ".join(f"({c})*{labels[j]}" for j, c in coeffs.items()) or "0"
+        # Redundant only if h is the same combination; otherwise phi_i minus
+        # the combination is a function of q alone: a hidden position constraint.
+        rest = sp.expand(rows[i] - sum((c * rows[j] for j, c in coeffs.items()), sp.S.Zero))
+        position_part = rest.xreplace({v: 0 for v in vels})
+        if not _vanishes_at(position_part, points):
+            problems.append(
+                f"{labels[i]}: its one-form is {combo} but the affine parts differ: together "
+                f"they imply the position constraint {sp.trigsimp(position_part)} = 0; give "
+                f"that as a holonomic constraint instead"
+            )
+        elif labels[i].startswith("holonomic"):  # drop_redundant drops velocity constraints
+            problems.append(
+                f"{labels[i]}: the complete lift {rows[i]} is a combination of the others: "
+                f"{labels[i]} = {combo}; the constraint is redundant: remove it from holonomic"
+            )
+        elif not drop_redundant:
+            problems.append(
+                f"{labels[i]}: {rows[i]} is redundant, a combination of the others: "
+                f"{labels[i]} = {combo} ({RedundantConstraintError.ADVICE})"
+            )
+        else:
+            dropped.append(DroppedConstraint(labels[i], rows[i],
+                                             MappingProxyType({labels[j]: c for j, c in coeffs.items()})))
+    if problems:
+        raise RedundantConstraintError(problems)
+    gone = {d.label for d in dropped}
+    kept = tuple(c for k, c in enumerate(cons) if f"constraints[{k}]" not in gone)
+    return kept, tuple(dropped), None
+
+
+def _combination(mu, rows, independent, i, vels):
+    """Coefficients c_j(q) with mu_i = sum_j c_j mu_j over the independent rows.
+
+    Solves the square subsystem on the k velocity columns where the rows are
+    best conditioned at a sample point (an overdetermined symbolic solve
+    would miss trigonometric identities), then tidies each coefficient.
+    """
+    if not independent:
+        return {}
+    A = mu.extract(independent, list(range(mu.cols)))  # k x n
+    rng = np.random.default_rng(VALIDATION_SEED + 3)
+    sample = {s: rng.uniform(*STATE_BOX) for s in A.free_symbols}
+    An = np.array(A.xreplace(sample).evalf(), dtype=float)
+    import scipy.linalg
+
+    cols = sorted(scipy.linalg.qr(An, pivoting=True)[2][: len(independent)])
+    block = A.extract(list(range(len(independent))), cols)  # k x k, invertible
+    target = mu.extract([i], cols)
+    coeffs = block.T.LUsolve(target.T)
+    out = {}
+    for j, c in zip(independent, coeffs):
+        c = sp.trigsimp(sp.cancel(c))
+        if c != 0:
+            out[j] = c
+    return out
+
+
+def _vanishes_at(expr, points, tol=1e-9):
+    """True when ``expr`` is numerically zero at every sample point."""
+    for pt in points:
+        value = complex(sp.sympify(sp.sympify(expr).xreplace(pt)).evalf())
+        if abs(value) > tol * max(1.0, abs(value)):
+            return False
+    return True
+
+
+def check_regular_lagrangian(system):
+    """Raise unless the Lagrangian is regular: W = d2L/dv dv invertible (generic rank n;
+    singular at every sampled point raises). Not C's regularity on M_1, which is a
+    verdict (``LagrangianGeometry.regular``), never an input error."""
+    W = system.hessian
+    n = system.n
+    if not W.free_symbols:
+        rank = W.rank()
+        if rank < n:
+            W = sp.hessian(system.lagrangian, system.velocities)  # as the message always showed it
+            raise SingularLagrangianError([_singular_message(W, rank, W.nullspace())])
+        return
+    rng = np.random.default_rng(VALIDATION_SEED + 1)
+    points = sample_q(system, rng, VALIDATION_SAMPLES)
+    ranks = [float_rank(S) for S in numeric_samples(W, points)]
+    if max(ranks) < n:
+        # A float64 deficiency may come from the units (m = 1e-16): confirm it.
+        ranks = precise_ranks(W, points, [list(range(n))])
+    if max(ranks) < n:
+        W = sp.hessian(system.lagrangian, system.velocities)  # as the message always showed it
+        try:
+            null = W.nullspace(simplify=True)
+        except BudgetExceeded:
+            raise
+        except Exception:  # pragma: no cover - sympy failure; message still useful
+            null = []
+        raise SingularLagrangianError([_singular_message(W, max(ranks), null)])
+
+
+def _singular_message(W, rank, null):
+    direction = f"; null direction {list(null[0])}" if null else ""
+    return (
+        f"lagrangian: the Hessian W = d2L/dv dv is singular (rank {rank} of {W.rows}"
+        f"{direction}); singular Lagrangians are outside the paper's scope"
+    )
