@@ -50,7 +50,7 @@ from typing import Any, Mapping
 import numpy as np
 
 from nhham.autonomy import require_autonomous
-from nhham.errors import InconsistentInitialDataError, InputError
+from nhham.errors import ComputationError, InconsistentInitialDataError, InputError
 from nhham.numerics.compiled_loop import run_compiled
 from nhham.numerics.diagnostics import (Diagnostics, Singularity, singularity_at,
                                         trajectory_diagnostics)
@@ -205,6 +205,9 @@ class SimulationResult:
         """lambda at the stored states, shape (m, K) (continuous-field values; with
         time-dependent forces or Python controls each state at its own time and inputs)."""
         model, controls = self.model, self.controls or {}
+        if model is None:   # a result read back from a file
+            raise ComputationError("the multipliers need the run's model; a result read "
+                                   "from a file has none (simulate again to have them)")
         if model.time_slot is None and not controls:
             return np.atleast_2d(model.multipliers(self.states)).T
         rows = []

@@ -215,7 +215,8 @@ def run_scipy(model, y0, t0, t1, method, *, rtol, atol, max_step, first_step, t_
             dense = solver.dense_output() if dense_output or watch is not None else None
             t_stop = watch.check(t_old, solver.t, solver.y, dense) if watch else None
             t_end = solver.t if t_stop is None else t_stop
-            store.add(t_end, dense(t_end) if t_stop is not None else solver.y,
+            store.add(t_end, dense(t_end) if t_stop is not None and dense is not None
+                      else solver.y,
                       solver.dense_output if dense is None else (lambda d=dense: d))
             if dense_output:
                 knots.append(t_end)
