@@ -134,7 +134,7 @@ class _RattleStepper:
 
     def _r3_jac_q1(self, q0, q1, h):
         """d r3 / d q1 (m x n)."""
-        n, k = self.n, self.k
+        k = self.k
         qm = 0.5 * (q0 + q1)
         u = (q1 - q0) / h
         _, mu_m, _, _ = self.model.geometry(qm)
@@ -219,7 +219,7 @@ class _RattleStepper:
     # -------------------------------------------------------- general W
     def _residual(self, Z, q0, p0, W0, mu0, h):
         """Residuals of (p_h, q1, lam0) for a batch Z (K, 2n+m) in one call each."""
-        n, m, k = self.n, self.m, self.k
+        n, k = self.n, self.k
         P, Q1, Lam = Z[:, :n], Z[:, n:2 * n], Z[:, 2 * n:]
         U0 = np.linalg.solve(W0, P.T).T
         Lq0 = self.model.lagrangian_q(np.concatenate([np.broadcast_to(q0, U0.shape), U0], axis=1))
@@ -276,7 +276,6 @@ class _RattleStepper:
         return np.concatenate([q1, v1]), lam1
 
     def _fd_jacobian(self, z, r, q0, p0, W0, mu0, h, scale):
-        d = z.size
         eps = np.sqrt(np.finfo(float).eps) * np.maximum(np.abs(z), scale)
         Z = z[None, :] + np.diag(eps)
         R = self._residual(Z, q0, p0, W0, mu0, h)
