@@ -4,7 +4,7 @@
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import sympy as sp
 
@@ -18,7 +18,10 @@ __all__ = ["check_initial", "initial_residuals", "INITIAL_TOLERANCE", "INITIAL_A
 
 if TYPE_CHECKING:
     from nhham.system.description import System
-    from nhham.system.scene import Scene
+
+#: What the checks read of a scene (``system``, ``initial``, ``source``...): typed
+#: loosely so that this module, which the scene loader imports, does not import it back.
+Scene = Any
 
 
 #: Relative tolerance on constraint residuals at the initial state.
