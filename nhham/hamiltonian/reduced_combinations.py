@@ -162,8 +162,25 @@ def _ring(exprs):
     return ring, [trig_reduce(p) for p in polys[:len(exprs)]]
 
 
-def _dot(row, col, zero):
-    return trig_reduce(sum((x * y for x, y in zip(row, col) if x and y), zero))
+#: Largest product of two polynomials (terms of the one times terms of the other) the
+#: reduction forms before giving up: past it the reduced form is not the small one it is
+#: for (a 3-link snake's products run to millions of terms; the segway's to hundreds).
+PRODUCT_TERMS = 20000
+
+
+def _dot(row, col, zero, deadline=None):
+    total = zero
+    for x, y in zip(row, col):
+        if not (x and y):
+            continue
+        if len(x) * len(y) > PRODUCT_TERMS:
+            raise NotFormed(f"a product of {len(x)} by {len(y)} terms: not a small form")
+        total += x * y
+        if deadline is not None:
+            _check_time(deadline)
+    if len(total) > PRODUCT_TERMS:
+        raise NotFormed(f"a sum of {len(total)} terms: not a small form")
+    return trig_reduce(total)
 
 
 def _coefficients(system, chis, R, sub, inverse, Jv, deadline) -> list:
@@ -192,10 +209,10 @@ def _coefficients(system, chis, R, sub, inverse, Jv, deadline) -> list:
     polys = polys[k * n:]
     Or = [polys[i * n:(i + 1) * n] for i in range(n)]
     zero = ring.zero
-    Y = [[_dot(Sr[i], Jvr[b], zero) for b in range(k)] for i in range(n)]   # delta W^-1 J_v^T
+    Y = [[_dot(Sr[i], Jvr[b], zero, deadline) for b in range(k)] for i in range(n)]   # delta W^-1 J_v^T
     Ycols = [[Y[i][b] for i in range(n)] for b in range(k)]
-    JY = [[_dot(Jr[a], Ycols[b], zero) for b in range(k)] for a in range(k)]
-    OY = [[_dot(Or[i], Ycols[b], zero) for b in range(k)] for i in range(n)]
+    JY = [[_dot(Jr[a], Ycols[b], zero, deadline) for b in range(k)] for a in range(k)]
+    OY = [[_dot(Or[i], Ycols[b], zero, deadline) for b in range(k)] for i in range(n)]
     _check_time(deadline)
     E: dict = {}
 
