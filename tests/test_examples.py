@@ -20,17 +20,6 @@ import nhham
 # integrator registry, the split of the system modules, the one projection object):
 # the lead writes their Examples and removes them from here.
 _PENDING = frozenset({
-    # a module over 700 lines, to be split before it grows (issue 35)
-    "Submanifold",
-    # the system description, scene files and the mechanics adapter (being split)
-    "System", "DroppedConstraint", "load_scene", "loads_scene", "Scene",
-    "from_mechanics", "from_lagranges_method",
-    # the projection of Section 4 (one object for the four classes)
-    "lagrangian_geometry", "LagrangianGeometry", "DynamicsIngredients",
-    "analyze_constraints", "ConstraintAnalysis", "run_algorithm",
-    "hamiltonian_side", "HamiltonianSide", "nonholonomic_bracket",
-    # simulation (the method registry), work-precision and ensembles
-    "simulate", "SimulationResult", "work_precision", "simulate_many", "EnsembleResult",
     # the study's result and pictures
     "SweepResult", "plot_study", "plot_stability_map", "plot_ensemble", "plot_cases",
 })
