@@ -16,25 +16,6 @@ import pytest
 
 import nhham
 
-# Names whose docstrings are being rewritten elsewhere (the journeys layer, the
-# integrator registry, the split of the system modules, the one projection object):
-# the lead writes their Examples and removes them from here.
-_PENDING = frozenset({
-    # a module over 700 lines, to be split before it grows (issue 35)
-    "Submanifold",
-    # the system description, scene files and the mechanics adapter (being split)
-    "System", "DroppedConstraint", "load_scene", "loads_scene", "Scene",
-    "from_mechanics", "from_lagranges_method",
-    # the projection of Section 4 (one object for the four classes)
-    "lagrangian_geometry", "LagrangianGeometry", "DynamicsIngredients",
-    "analyze_constraints", "ConstraintAnalysis", "run_algorithm",
-    "hamiltonian_side", "HamiltonianSide", "nonholonomic_bracket",
-    # simulation (the method registry), work-precision and ensembles
-    "simulate", "SimulationResult", "work_precision", "simulate_many", "EnsembleResult",
-    # the study's result and pictures
-    "SweepResult", "plot_study", "plot_stability_map", "plot_ensemble", "plot_cases",
-})
-
 _FLAGS = doctest.NORMALIZE_WHITESPACE | doctest.ELLIPSIS
 _SECTION = re.compile(r"^Examples\n-{8,}\n", re.M)
 
@@ -47,7 +28,7 @@ def _documented(name):
     return obj
 
 
-@pytest.mark.parametrize("name", [n for n in nhham.__all__ if n not in _PENDING])
+@pytest.mark.parametrize("name", nhham.__all__)
 def test_public_name_has_running_examples(name):
     obj = _documented(name)
     if obj is None:
@@ -62,11 +43,6 @@ def test_public_name_has_running_examples(name):
     for test in tests:
         runner.run(test, out=report.append)
     assert runner.failures == 0, "".join(report)
-
-
-def test_pending_names_are_public():
-    """A name left for later is still exported (no stale entry hides a new name)."""
-    assert _PENDING <= set(nhham.__all__)
 
 
 def test_a_missing_or_failing_example_is_caught():

@@ -71,6 +71,21 @@ def hamiltonian_side(system, precision: int | None = None, samples: int = 6,
     closed_form : bool, optional
         As for :func:`nhham.lagrangian.geometry.lagrangian_geometry`: True forms the
         closed forms that need a symbolic solve with C^H whatever their size.
+
+    Examples
+    --------
+    The rolling disk's C^H is its C (the same at every point: C depends on q only), so at
+    theta = 0 with m = 1, R = 1, I2 = 0.5 it is diag(-1/m - R**2/I2, -1/m) = diag(-3, -1).
+
+    >>> from nhham import hamiltonian_side, models
+    >>> disk = models.rolling_disk()
+    >>> side = hamiltonian_side(disk)
+    >>> side.state
+    (x, y, theta, phi, p_x, p_y, p_theta, p_phi)
+    >>> side.constraint_matrix.subs(disk.parameter_values).subs("theta", 0)
+    Matrix([
+    [-3.0,    0],
+    [   0, -1.0]])
     """
     return HamiltonianSide(system, precision=precision, samples=samples, seed=seed, exact=exact,
                            closed_form=closed_form)
@@ -88,6 +103,19 @@ class HamiltonianSide(ConstraintMatrixRank):
     ``constraint_rank`` and ``regular`` (C^H regular on M_1, as
     :class:`~nhham.lagrangian.geometry.ConstraintMatrixRank` says for both sides); the
     constraint functions are ``constraints`` (phi^H = phi o Leg^-1).
+
+    Examples
+    --------
+    A particle on y' = x x' (p = v): the multiplier is the Lagrangian one,
+    -x'^2/(1 + x^2), written in p.
+
+    >>> from nhham import System, hamiltonian_side
+    >>> s = System(["x", "y"], "(x_dot**2 + y_dot**2)/2", constraints=["y_dot - x*x_dot"])
+    >>> side = hamiltonian_side(s)
+    >>> side.constraints, side.constraint_matrix, side.regular
+    ((-p_x*x + p_y,), Matrix([[-x**2 - 1]]), True)
+    >>> side.multipliers
+    Matrix([[-p_x**2/(x**2 + 1)]])
     """
 
     exact: bool = True
@@ -630,5 +658,22 @@ class NonholonomicBracket(BivectorBracket):
 
 
 def nonholonomic_bracket(system, precision=None, samples=6, seed=SEED) -> NonholonomicBracket:
-    """The nonholonomic bracket of ``system`` on T*Q (see :class:`NonholonomicBracket`)."""
+    """The nonholonomic bracket of ``system`` on T*Q (see :class:`NonholonomicBracket`).
+
+    Examples
+    --------
+    A particle on y' = x x': {q^i, p_j}_nh is the orthogonal projector onto the allowed
+    velocities (1, x), i.e. (1, x)(1, x)^T / (1 + x^2); the constraint is integrable
+    (y - x^2/2 is constant), and the bracket satisfies the Jacobi identity.
+
+    >>> import sympy as sp
+    >>> from nhham import System, nonholonomic_bracket
+    >>> s = System(["x", "y"], "(x_dot**2 + y_dot**2)/2", constraints=["y_dot - x*x_dot"])
+    >>> bracket = nonholonomic_bracket(s)
+    >>> x, y, p_x, p_y = sp.symbols("x y p_x p_y")
+    >>> [sp.factor(bracket(q, p)) for q, p in [(x, p_x), (x, p_y), (y, p_y)]]
+    [1/(x**2 + 1), x/(x**2 + 1), x**2/(x**2 + 1)]
+    >>> bracket.jacobiator_tensor()
+    {}
+    """
     return hamiltonian_side(system, precision, samples, seed).nonholonomic_bracket

@@ -130,6 +130,24 @@ def run_algorithm(base_field, vertical_fields, primary: Sequence, labels: Sequen
     reduction on M_k when that is much smaller; factors without zeros (numbers,
     parameters, definite-sign factors) are dropped and repeated factors taken once,
     which keeps the zero set and the regularity of the constraint.
+
+    Examples
+    --------
+    L = (x'^2 - y'^2)/2 - x^2/2 with phi = x' + y': C = -(1 - 1) = 0 and xi_L(phi) =
+    -x, so x = 0 is a secondary constraint, its tangency x' = 0 another, and the tangency
+    of x' = 0, x'' = -x - lambda = 0, fixes lambda = -x.
+
+    >>> import sympy as sp
+    >>> from nhham import Submanifold, System, run_algorithm
+    >>> s = System(["x", "y"], "(x_dot**2 - y_dot**2)/2 - x**2/2", constraints=["x_dot + y_dot"])
+    >>> x, y, vx, vy = s.coordinates + s.velocities
+    >>> xi = sp.Matrix([vx, vy, -x, 0])       # x'' = -x, y'' = 0
+    >>> Z = sp.Matrix([[0, 0, -1, 1]])         # -W^-1 mu^T with W = diag(1, -1), mu = (1, 1)
+    >>> run = run_algorithm(xi, Z, s.phi, ["constraints[0]"], lambda eqs: Submanifold(s, eqs))
+    >>> run.status, run.final_constraints, dict(run.multipliers)
+    ('determined', (x_dot + y_dot, -x, -x_dot), {lambda_1: -x})
+    >>> run.final_labels
+    ('constraints[0]', 'secondary[0]', 'secondary[1]')
     """
     xi = sp.Matrix(base_field)
     Z = sp.Matrix(vertical_fields)

@@ -123,6 +123,18 @@ class ConstraintAnalysis(ConstraintOutcome):
     ``integrability`` / ``integrable``
     (Frobenius test of the constraint distribution), ``projector_Q``,
     ``projector_P`` and :meth:`project` (the almost product structure on M_f).
+
+    Examples
+    --------
+    The rolling disk: phi'' = 0, so the centre's acceleration R phi' theta' (-sin, cos)
+    is -lambda/m, and M_f = M_1 has dimension 8 - 2.
+
+    >>> from nhham import analyze_constraints, models
+    >>> analysis = analyze_constraints(models.rolling_disk())
+    >>> analysis.status, analysis.regular, analysis.dimension, analysis.integrable
+    ('determined', True, 6, False)
+    >>> dict(analysis.multipliers)
+    {lambda_1: R*m*phi_dot*theta_dot*sin(theta), lambda_2: -R*m*phi_dot*theta_dot*cos(theta)}
     """
 
     system: System
@@ -277,6 +289,20 @@ def analyze_constraints(system, *, precision: int | None = None, samples: int = 
     Returns
     -------
     ConstraintAnalysis
+
+    Examples
+    --------
+    Example 3.1 of the paper: L = (q1'^2 + q2'^2 - q3'^2)/2 and phi = q2' + q3', so
+    C = -(1 - 1) = 0 and xi_L(phi) = 0: no new constraint, one free multiplier.
+
+    >>> from nhham import System, analyze_constraints
+    >>> s = System(["q1", "q2", "q3"], "(q1_dot**2 + q2_dot**2 - q3_dot**2)/2",
+    ...            constraints=["q2_dot + q3_dot"])
+    >>> analysis = analyze_constraints(s)
+    >>> analysis.status, analysis.rank_C, analysis.free_multiplier_symbols
+    ('underdetermined', 0, (lambda_1,))
+    >>> analysis.dynamics.T          # q2'' = -lambda_1, q3'' = lambda_1
+    Matrix([[q1_dot, q2_dot, q3_dot, 0, -lambda_1, lambda_1]])
     """
     check_options("analyze_constraints", max_stages=max_stages)
     policy = policy_of(policy, "analyze_constraints", precision=precision, samples=samples,

@@ -64,6 +64,22 @@ class DynamicsIngredients:
         Constraint one-forms.
     drift : sympy.Matrix, shape (m, 1)
         (d phi_i / d q^A) v^A, so that xi(phi_i) = drift_i + mu_i . a.
+
+    Examples
+    --------
+    >>> from nhham import lagrangian_geometry, models
+    >>> parts = lagrangian_geometry(models.rolling_disk()).ingredients
+    >>> parts.W, parts.mu
+    (Matrix([
+    [m, 0,  0,  0],
+    [0, m,  0,  0],
+    [0, 0, I1,  0],
+    [0, 0,  0, I2]]), Matrix([
+    [1, 0, 0, -R*cos(theta)],
+    [0, 1, 0, -R*sin(theta)]]))
+    >>> parts.drift.T, parts.forcing.T      # d(-R cos(theta) phi')/dtheta theta', ...
+    (Matrix([[R*phi_dot*theta_dot*sin(theta), -R*phi_dot*theta_dot*cos(theta)]]),
+     Matrix([[0, 0, 0, 0]]))
     """
 
     W: sp.Matrix
@@ -100,6 +116,21 @@ def lagrangian_geometry(system, precision: int | None = None, samples: int = 6,
         returns the first call's geometry, so that what it has formed (W, the
         forcing, the fibre derivatives) is formed once per command. A System is
         frozen, so its geometry cannot go stale.
+
+    Examples
+    --------
+    The rolling disk's C = -mu W^-1 mu^T at theta = 0 with m = 1, R = 1, I2 = 0.5:
+    diag(-1/m - R**2/I2, -1/m) = diag(-3, -1).
+
+    >>> from nhham import lagrangian_geometry, models
+    >>> disk = models.rolling_disk()
+    >>> geometry = lagrangian_geometry(disk)
+    >>> geometry is lagrangian_geometry(disk)
+    True
+    >>> geometry.constraint_matrix.subs(disk.parameter_values).subs("theta", 0)
+    Matrix([
+    [-3.0,    0],
+    [   0, -1.0]])
     """
     # Kept on the system itself (a cycle the collector frees with it); a weak-keyed
     # table would keep every system alive through its geometry's reference to it.
@@ -171,6 +202,20 @@ class LagrangianGeometry(ConstraintMatrixRank):
     :func:`lagrangian_geometry`, plus ``fast`` (default True): use the
     quadratic fast path when L is quadratic in the velocities; False always
     differentiates L (the general path, for comparisons).
+
+    Examples
+    --------
+    A particle on y' = x x': with x'' = x lambda and y'' = -lambda, y'' = x'^2 + x x''
+    gives lambda = -x'^2/(1 + x^2).
+
+    >>> import sympy as sp
+    >>> from nhham import System, lagrangian_geometry
+    >>> s = System(["x", "y"], "(x_dot**2 + y_dot**2)/2", constraints=["y_dot - x*x_dot"])
+    >>> geometry = lagrangian_geometry(s)
+    >>> geometry.regular, geometry.constraint_matrix
+    (True, Matrix([[-x**2 - 1]]))
+    >>> [sp.factor(a) for a in geometry.projected_field[2:]]     # x'', y''
+    [-x*x_dot**2/(x**2 + 1), x_dot**2/(x**2 + 1)]
     """
 
     # fast=False forces the general path (differentiate L) even for a

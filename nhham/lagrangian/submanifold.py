@@ -107,12 +107,9 @@ class Submanifold:
     equations : sequence of sympy.Expr
         The constraints defining M (each = 0).
     precision : int or None, optional
-        ``None`` for float64 sampling; an integer for mpmath with that many
-        significant digits (slower, more reliable near singular cases).
-    samples : int, optional
-        Number of seeded sample points for sampled decisions.
-    seed : int, optional
-        Seed of the sample points (decisions are reproducible).
+        ``None`` for float64 sampling; an integer for mpmath with that many digits.
+    samples, seed : int, optional
+        Number and seed of the sample points of sampled decisions (reproducible).
     fibre : sequence of sympy.Symbol, optional
         The fibre variables: the velocities (default, M in TQ) or the
         momenta (M in T*Q), or ``()`` for a submanifold of Q. The variables
@@ -121,6 +118,15 @@ class Submanifold:
         If False, :meth:`vanishes` and :meth:`rank` skip the exact reduction
         and decide at sample points only (the reduction itself stays
         available through :meth:`reduce`).
+
+    Examples
+    --------
+    >>> import sympy as sp
+    >>> from nhham import Submanifold, System
+    >>> x_dot, y_dot = sp.symbols("x_dot y_dot")
+    >>> M = Submanifold(System(["x", "y"], "(x_dot**2 + y_dot**2)/2"), [y_dot])
+    >>> M.vanishes(y_dot**2).value, M.vanishes(x_dot).value, M.rank(sp.Matrix([[y_dot, 1]])).value
+    (True, False, 1)
     """
 
     def __init__(self, system, equations: Sequence[sp.Expr], precision: int | None = None,

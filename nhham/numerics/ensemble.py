@@ -46,6 +46,20 @@ class EnsembleResult:
         The message of each run that did not succeed (``index: message``).
     loop : str
         ``"compiled"`` or ``"simulate"``.
+
+    Examples
+    --------
+    x'' = -x over a quarter period: (x, x') = (1, 0) goes to (0, -1), (0, 1) to (1, 0).
+
+    >>> import numpy as np
+    >>> from nhham import System, numeric_model, simulate_many
+    >>> model = numeric_model(System(["x"], "x_dot**2/2 - x**2/2"), backend="numpy")
+    >>> ends = simulate_many(model, [[1.0, 0.0], [0.0, 1.0]], (0.0, np.pi / 2))
+    >>> np.round(ends.y_final, 8) + 0.0, ends.status, ends.messages
+    (array([[ 0., -1.],
+           [ 1.,  0.]]), array([0, 0], dtype=int8), ())
+    >>> np.round(ends.t_final, 4)
+    array([1.5708, 1.5708])
     """
 
     t_final: np.ndarray
@@ -87,6 +101,19 @@ def simulate_many(model, y0, t_span, *, parameters=None, method: str = DEFAULT_M
     Returns
     -------
     EnsembleResult
+
+    Examples
+    --------
+    x'' = -k x from x = 1, at k = 1 and k = 4: x(pi/2) = cos(sqrt(k) pi/2) = 0 and -1.
+
+    >>> import numpy as np
+    >>> from nhham import System, numeric_model, simulate_many
+    >>> spring = System(["x"], "x_dot**2/2 - k*x**2/2", parameters={"k": 1.0})
+    >>> model = numeric_model(spring, backend="numpy")
+    >>> ends = simulate_many(model, [[1.0, 0.0], [1.0, 0.0]], (0.0, np.pi / 2),
+    ...                      parameters=[[1.0], [4.0]])
+    >>> np.round(ends.y_final[:, 0], 8) + 0.0
+    array([ 0., -1.])
     """
     from nhham.numerics.integrate import simulate
 

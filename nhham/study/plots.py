@@ -47,7 +47,35 @@ def pyplot():
 
 
 def plot_study(ds, path, dpi: int = 150) -> str:
-    """Draw the picture of a study's Dataset (by its kind) and save it to ``path``."""
+    """Draw the picture of a study's Dataset (by its kind) and save it to ``path``.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A study's results (:attr:`SweepResult.dataset <nhham.study.sweep.SweepResult>`).
+    path : str or os.PathLike
+        The image file; its suffix chooses the format (``.png``, ``.pdf``, ``.svg``).
+    dpi : int, optional
+        Resolution of a raster image.
+
+    Returns
+    -------
+    str
+        ``path``.
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> from nhham import plot_study
+    >>> from nhham.study.sweep import sweep
+    >>> ds = sweep("examples/parametric_null_constraint.toml", "classify", ["b=0.5,1.0"],
+    ...            workers=1).dataset
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     path = plot_study(ds, os.path.join(folder, "cases.png"), dpi=50)
+    ...     with open(path, "rb") as image:
+    ...         image.read(4)
+    b'\\x89PNG'
+    """
     from nhham.study.kinds import kind_of
 
     fig = globals()[kind_of(ds.attrs.get("what")).plot](ds)
@@ -65,7 +93,37 @@ def _title(ds) -> str:
 
 
 def plot_stability_map(ds, ax=None):
-    """The stability of a linearize study (see the module docstring)."""
+    """The stability of a linearize study (see the module docstring).
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A linearize study's results.
+    ax : matplotlib.axes.Axes, optional
+        Where to draw (default: the axes of a new Figure).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+
+    Examples
+    --------
+    The sleigh with drag (see the scene): with J = I + m a^2 = 0.5, the drag's eigenvalue
+    is -3 k U^2 / m = -0.9 U^2 and the yaw's -(m a U + c) / J = U - 0.8, so the spectral
+    abscissa is the larger, and the boundary is drawn at U* = 0.8.
+
+    >>> from nhham import plot_stability_map
+    >>> from nhham.study.sweep import sweep
+    >>> ds = sweep("tests/study/scenes/sleigh_drag.toml", "linearize", ["U=0.3:1.3:6"],
+    ...            workers=1).dataset
+    >>> ax, = plot_stability_map(ds).axes
+    >>> ax.get_xlabel(), ax.get_ylabel()
+    ('U', 'max Re(eigenvalue)')
+    >>> ax.lines[0].get_xydata().round(3).tolist()
+    [[0.3, -0.081], [0.5, -0.225], [0.7, -0.1], [0.9, 0.1], [1.1, 0.3], [1.3, 0.5]]
+    >>> [round(float(u), 6) for u in ax.lines[2].get_xdata()]
+    [0.8, 0.8]
+    """
     fig, ax = _axes(ax)
     dims = _design_dims(ds)
     done = np.asarray(ds["done"].values, dtype=bool)
@@ -238,7 +296,34 @@ ROUNDING = 1e-12
 
 
 def plot_ensemble(ds, axes=None):
-    """The spread of a simulate study's end states, and its runs' energy errors."""
+    """The spread of a simulate study's end states, and its runs' energy errors.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A simulate study's results.
+    axes : pair of matplotlib.axes.Axes, optional
+        Where to draw the end states and the energy errors (default: a new Figure's).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+
+    Examples
+    --------
+    The rolling disk started with spin w (see the scene): x(1) = R w sin(1) and
+    y(1) = R w (1 - cos(1)), i.e. (0.8415, 0.4597) w.
+
+    >>> from nhham import plot_ensemble
+    >>> from nhham.study.sweep import sweep
+    >>> ds = sweep("tests/study/scenes/disk_start.toml", "simulate", ["w=1,2"],
+    ...            workers=1).dataset
+    >>> ends, energy = plot_ensemble(ds).axes
+    >>> ends.get_xlabel(), ends.get_ylabel(), energy.get_title()
+    ('x at t_final', 'y at t_final', 'energy balance of the runs')
+    >>> ends.collections[0].get_offsets().round(4).tolist()
+    [[0.8415, 0.4597], [1.6829, 0.9194]]
+    """
     Figure = pyplot()
     if axes is None:
         fig = Figure(figsize=(9.5, 3.8), layout="constrained")
@@ -315,7 +400,32 @@ def _panel_text(ax, text) -> None:
 
 def plot_cases(ds, ax=None):
     """Each point's case of a classify study: the first ``--over`` across, a legend of the
-    cases present (the generic verdict in grey, each case in a colour of its own)."""
+    cases present (the generic verdict in grey, each case in a colour of its own).
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A classify study's results.
+    ax : matplotlib.axes.Axes, optional
+        Where to draw (default: the axes of a new Figure).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+
+    Examples
+    --------
+    phi = q2' + b q3' with W = diag(a, 1, -1): C = -(1 - b^2), regular at b = 0.5 (the
+    generic verdict) and zero at b = 1 (the case b - 1 = 0).
+
+    >>> from nhham import plot_cases
+    >>> from nhham.study.sweep import sweep
+    >>> ds = sweep("examples/parametric_null_constraint.toml", "classify", ["b=0.5,1.0"],
+    ...            workers=1).dataset
+    >>> ax, = plot_cases(ds).axes
+    >>> ax.get_xlabel(), [text.get_text() for text in ax.get_legend().get_texts()]
+    ('b', ['generic', 'case 0: b - 1 = 0'])
+    """
     from matplotlib.colors import ListedColormap
 
     fig, ax = _axes(ax)

@@ -74,8 +74,19 @@ class SweepResult:
 
     Examples
     --------
-    See :func:`sweep`: ``result.dataset`` is the xarray Dataset, ``result.to_dict()`` what
-    ``nhham sweep --json`` prints.
+    The sleigh with drag (see the scene): its yaw eigenvalue -(m a U + c) / J crosses 0 at
+    U* = -c / (m a) = 0.8, stable below. ``result.to_dict()`` is what ``nhham sweep
+    --json`` prints.
+
+    >>> from nhham.study.sweep import sweep
+    >>> result = sweep("tests/study/scenes/sleigh_drag.toml", "linearize", ["U=0.3:1.3:6"],
+    ...                workers=1)
+    >>> result.points, result.computed, result.complete, result.stopped, result.path
+    (6, 6, True, None, None)
+    >>> result.dataset["stable"].values.tolist()       # U = 0.3, 0.5, ..., 1.3
+    [True, True, True, False, False, False]
+    >>> round(float(result.dataset["boundary"][0]), 6)
+    0.8
     """
 
     dataset: Any = field(repr=False)

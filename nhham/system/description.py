@@ -99,6 +99,24 @@ class System:
     Compared and hashed by identity (``eq=False``): systems are keys of caches. No
     field is an argument of a generated ``__init__``, so ``dataclasses.replace`` does
     not apply (it raises): build a new ``System(...)`` from changed inputs instead.
+
+    Examples
+    --------
+    A particle in the plane whose velocity must satisfy y' = x x' (phi = mu.v + h):
+
+    >>> from nhham import System
+    >>> s = System(["x", "y"], "m*(x_dot**2 + y_dot**2)/2", constraints=["y_dot - x*x_dot"],
+    ...            parameters={"m": 1.0}, name="particle")
+    >>> s
+    System('particle', n=2, m=1, holonomic=0)
+    >>> s.velocities, s.phi, s.mu, s.hessian
+    ((x_dot, y_dot), (-x*x_dot + y_dot,), Matrix([[-x, 1]]), Matrix([
+    [m, 0],
+    [0, m]]))
+    >>> System(["x"], "x_dot**2/2", constraints=["x_dot**2"])  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    nhham.errors.NonAffineConstraintError: constraints[0]: x_dot**2 is not affine ...
     """
 
     # Set once by __init__ from the validated inputs (see Notes).

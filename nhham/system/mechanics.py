@@ -239,6 +239,8 @@ def from_mechanics(lagrangian=None, q: Sequence | None = None, hol_coneqs: Seque
     --------
     A particle on a line with viscous friction and a driving force F(t):
 
+    >>> import sympy as sp, sympy.physics.mechanics as me
+    >>> from nhham import from_mechanics
     >>> x, F = me.dynamicsymbols("x F")
     >>> m, c = sp.symbols("m c")
     >>> N, O = me.ReferenceFrame("N"), me.Point("O")
@@ -447,6 +449,24 @@ def from_lagranges_method(lm: me.LagrangesMethod, parameters=None, name: str = "
         Naming ``forcelist[i]`` for a force nhham cannot express (a point
         without a velocity in the frame, accelerations, a function of time
         not listed in ``inputs``); otherwise as :func:`from_mechanics`.
+
+    Examples
+    --------
+    A particle in the plane on y' = x x', pulled back to y = 0 by a spring:
+
+    >>> import sympy as sp, sympy.physics.mechanics as me
+    >>> from nhham import from_lagranges_method
+    >>> x, y = me.dynamicsymbols("x y")
+    >>> m, k = sp.symbols("m k")
+    >>> N, O = me.ReferenceFrame("N"), me.Point("O")
+    >>> P = O.locatenew("P", x * N.x + y * N.y)
+    >>> P.set_vel(N, P.pos_from(O).dt(N))
+    >>> L = me.Lagrangian(N, me.Particle("p", P, m))
+    >>> lm = me.LagrangesMethod(L, [x, y], nonhol_coneqs=[y.diff() - x * x.diff()],
+    ...                         forcelist=[(P, -k * y * N.y)], frame=N)
+    >>> s = from_lagranges_method(lm, parameters={"m": 1.0, "k": 2.0})
+    >>> s.lagrangian, s.phi, s.generalized_forces.T
+    (m*(x_dot**2 + y_dot**2)/2, (-x*x_dot + y_dot,), Matrix([[0, -k*y]]))
     """
     if not isinstance(lm, me.LagrangesMethod):
         raise InputError(f"from_lagranges_method: expected a LagrangesMethod, got "

@@ -52,6 +52,19 @@ class DroppedConstraint:
     combination : dict
         ``{label: coefficient}`` with phi_dropped = sum coefficient * phi_label
         (coefficients are functions of q).
+
+    Examples
+    --------
+    The second constraint is x times the first:
+
+    >>> from nhham import System
+    >>> s = System(["x", "y"], "(x_dot**2 + y_dot**2)/2",
+    ...            constraints=["y_dot - x*x_dot", "x*y_dot - x**2*x_dot"], drop_redundant=True)
+    >>> s.m, s.phi
+    (1, (-x*x_dot + y_dot,))
+    >>> dropped, = s.dropped
+    >>> dropped.label, dropped.expression, dict(dropped.combination)
+    ('constraints[1]', -x**2*x_dot + x*y_dot, {'constraints[0]': x})
     """
 
     label: str

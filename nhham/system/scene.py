@@ -113,6 +113,26 @@ class Scene:
     values_set : mapping of str to float
         The parameter values given when loading (``values=``, ``--set``), replacing the
         scene's.
+
+    Examples
+    --------
+    A bead on a line driven along y' = x': y' is left out of ``[initial]`` and solved.
+
+    >>> from nhham import loads_scene
+    >>> scene = loads_scene('''
+    ... name = "bead"
+    ... coordinates = ["x", "y"]
+    ... lagrangian = "(x_dot**2 + y_dot**2)/2"
+    ... constraints = ["y_dot - x_dot"]
+    ... [initial]
+    ... x = 0.0
+    ... y = 0.0
+    ... x_dot = 3.0
+    ... ''')
+    >>> scene.name, scene.source, scene.initial_solved, scene.initial["y_dot"]
+    ('bead', '<string>', ('y_dot',), 3.0)
+    >>> scene.simulate_options()["t_span"]
+    (0.0, 10.0)
     """
 
     name: str
@@ -241,6 +261,17 @@ def load_scene(path, *, check_initial: bool = True, drop_redundant: bool = False
         The system is mechanically invalid (raised by :class:`System`).
     InconsistentInitialDataError, MissingParameterValueError
         From the initial-data check, see :func:`check_initial`.
+
+    Examples
+    --------
+    >>> from nhham import load_scene
+    >>> scene = load_scene("examples/rolling_disk.toml", values={"m": 2.0})
+    >>> scene.name, scene.system.n, scene.system.m, scene.values_set
+    ('vertical rolling disk', 4, 2, mappingproxy({'m': 2.0}))
+    >>> load_scene("examples/no_such_scene.toml")  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    nhham.errors.SceneError: examples/no_such_scene.toml: cannot read scene file: ...
     """
     source = os.fspath(path)
     try:
@@ -288,6 +319,21 @@ def loads_scene(text: str, source: str = "<string>", *, check_initial: bool = Tr
     ------
     SceneError, ParseError, ValidationError, InconsistentInitialDataError, MissingParameterValueError
         As for :func:`load_scene`.
+
+    Examples
+    --------
+    >>> from nhham import loads_scene
+    >>> scene = loads_scene('''
+    ... coordinates = ["x"]
+    ... parameters = { k = 4.0 }
+    ... lagrangian = "x_dot**2/2 - k*x**2/2"
+    ... ''')
+    >>> scene.system, scene.system.parameter_values, scene.initial
+    (System(n=1, m=0, holonomic=0), mappingproxy({k: 4.0}), None)
+    >>> loads_scene('coordinates = ["x"]', source="bad.toml")  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    nhham.errors.SceneError: bad.toml: ...
     """
     data = _parse_toml(text, source)
     spec = with_values(validate_structure(data, source), values)
