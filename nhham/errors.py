@@ -225,7 +225,8 @@ class InconsistentInitialDataError(InputError):
     --------
     The Cartesian pendulum (l = 1) at y = -0.5: g = x**2 + y**2 - l**2 = -0.75.
 
-    >>> from nhham import linearize, models, numeric_model
+    >>> from nhham import models, numeric_model
+    >>> from nhham.numerics.linearization import linearize
     >>> model = numeric_model(models.pendulum_cartesian(), backend="numpy")
     >>> linearize(model, dict(x=0.0, y=-0.5, x_dot=0.0, y_dot=0.0))
     Traceback (most recent call last):

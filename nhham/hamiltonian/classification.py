@@ -228,6 +228,12 @@ def _with_combinations(classes: ConstraintClasses, policy: Policy) -> Constraint
                    decisions={**classes.decisions, "combinations": decision})
 
 
+#: Largest n for which the coefficients are reduced on M_f: the reduction forms
+#: delta W^-1 symbolically, which past n = 6 (a 5-link snake, n = 7: minutes) costs more
+#: than the closed form it would shorten.
+REDUCED_MAX_N = 6
+
+
 def _combinations(system, constraints, second_class) -> tuple:
     """(gammas, coefficients): in (q, p) from the brackets of the transported constraints
     while their coefficients stay small; else with the coefficients reduced on M_f (the
@@ -237,10 +243,12 @@ def _combinations(system, constraints, second_class) -> tuple:
                                         max_coefficient_terms=COEFFICIENT_TERMS)
     except NotFormed:
         pass
-    try:
-        return reduced_combinations(system, constraints, second_class)
-    except NotFormed:
-        return closed_form_combinations(system, constraints, second_class)
+    if system.n <= REDUCED_MAX_N:
+        try:
+            return reduced_combinations(system, constraints, second_class)
+        except NotFormed:
+            pass
+    return closed_form_combinations(system, constraints, second_class)
 
 
 def _numerically_regular(side, precision, samples, seed, tol) -> bool:

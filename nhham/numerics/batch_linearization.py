@@ -59,7 +59,8 @@ class ChartChoice:
     >>> from nhham import models, numeric_model
     >>> model = numeric_model(models.chaplygin_sleigh(), backend="numpy")
     >>> forward = dict(x=0.0, y=0.0, theta=0.0, x_dot=2.0, y_dot=0.0, theta_dot=0.0)
-    >>> from nhham import ChartChoice, linearize
+    >>> from nhham import ChartChoice
+    >>> from nhham.numerics.linearization import linearize
     >>> ChartChoice.of(linearize(model, forward))
     ChartChoice(chart=('x', 'y', 'theta', 'x_dot', 'theta_dot'), neutral=('x', 'y', 'theta', 'x_dot'), coordinates=('theta_dot',))
     """
@@ -114,7 +115,8 @@ class LinearizationBatch:
     >>> from nhham import models, numeric_model
     >>> model = numeric_model(models.chaplygin_sleigh(), backend="numpy")
     >>> forward = dict(x=0.0, y=0.0, theta=0.0, x_dot=2.0, y_dot=0.0, theta_dot=0.0)
-    >>> from nhham import ChartChoice, linearize, linearize_batch
+    >>> from nhham import ChartChoice, linearize_batch
+    >>> from nhham.numerics.linearization import linearize
     >>> reference = ChartChoice.of(linearize(model, forward))
     >>> parameters = [[1.0, 0.25, 0.5], [1.0, 0.25, 1.0]]     # m, I, a
     >>> batch = linearize_batch(model, [model.state(forward)] * 2, parameters,
@@ -189,7 +191,8 @@ def linearize_batch(model, states, parameters=None, *, reference: Linearization 
     >>> from nhham import models, numeric_model
     >>> model = numeric_model(models.chaplygin_sleigh(), backend="numpy")
     >>> forward = dict(x=0.0, y=0.0, theta=0.0, x_dot=2.0, y_dot=0.0, theta_dot=0.0)
-    >>> from nhham import ChartChoice, linearize, linearize_batch
+    >>> from nhham import ChartChoice, linearize_batch
+    >>> from nhham.numerics.linearization import linearize
     >>> reference = ChartChoice.of(linearize(model, forward))
     >>> states = [model.state({**forward, "x_dot": u}) for u in (1.0, 2.0, -1.0)]
     >>> linearize_batch(model, states, reference=reference).eigenvalues.round(12).ravel()

@@ -124,7 +124,7 @@ class Linearization:
     >>> from nhham import models, numeric_model
     >>> model = numeric_model(models.chaplygin_sleigh(), backend="numpy")
     >>> forward = dict(x=0.0, y=0.0, theta=0.0, x_dot=2.0, y_dot=0.0, theta_dot=0.0)
-    >>> from nhham import linearize
+    >>> from nhham.numerics.linearization import linearize
     >>> lin = linearize(model, {**forward, "x_dot": -2.0})     # backwards: w grows
     >>> lin.eigenvalues.round(12), lin.stable
     (array([2.+0.j]), False)
@@ -287,7 +287,7 @@ def linearize(model, state, *, independent: Sequence[str] | None = None,
     >>> from nhham import models, numeric_model
     >>> model = numeric_model(models.chaplygin_sleigh(), backend="numpy")
     >>> forward = dict(x=0.0, y=0.0, theta=0.0, x_dot=2.0, y_dot=0.0, theta_dot=0.0)
-    >>> from nhham import linearize
+    >>> from nhham.numerics.linearization import linearize
     >>> lin = linearize(model, forward)     # w' = -m a u w / (I + m a**2) = -2 w at u = 2
     >>> lin.coordinates, lin.eigenvalues.round(12), lin.stable
     (('theta_dot',), array([-2.+0.j]), True)
@@ -338,7 +338,8 @@ def linearize_many(models: Sequence, states: Sequence, independent: Sequence[str
     >>> from nhham import models, numeric_model
     >>> model = numeric_model(models.chaplygin_sleigh(), backend="numpy")
     >>> forward = dict(x=0.0, y=0.0, theta=0.0, x_dot=2.0, y_dot=0.0, theta_dot=0.0)
-    >>> from nhham import linearize, linearize_many
+    >>> from nhham import linearize_many
+    >>> from nhham.numerics.linearization import linearize
     >>> chart = linearize(model, forward).chart
     >>> lins = linearize_many([model.with_parameters(a=a) for a in (0.5, 1.0)],
     ...                       [forward, forward], chart)
