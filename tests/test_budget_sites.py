@@ -213,11 +213,11 @@ def test_free_multipliers_hint_lets_an_expiry_through(monkeypatch):
 
     from nhham.lagrangian import analysis
 
-    main = importlib.import_module("nhham.cli.main")
+    simulation = importlib.import_module("nhham.journeys.simulation")
 
     monkeypatch.setattr(analysis, "analyze_constraints", _expire)
     with pytest.raises(BudgetExceeded, match="planted"):
-        main._free_multipliers(_disk())
+        simulation._free_multipliers(_disk())
 
 
 def test_compare_exits_3_when_the_budget_runs_out_in_the_dirac_comparison(monkeypatch,
