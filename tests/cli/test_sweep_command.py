@@ -215,7 +215,7 @@ def test_ctrl_c_exits_130_at_once_keeping_what_finished(tmp_path, scheduler, to_
 
     out = tmp_path / "runs.zarr"
     args = [sys.executable, "-m", "nhham", "sweep", str(DRIVE), "--what", "simulate",
-            "--over", "c=0.01:0.05:40", "--chunk", "1", "--t-end", "200", "--rtol", "1e-12",
+            "--over", "c=0.01:0.05:400", "--chunk", "1", "--t-end", "200", "--rtol", "1e-12",
             "--workers", "1" if scheduler == "processes" else "2", "--scheduler", scheduler,
             "--out", str(out)]
     env = dict(os.environ, PYTHONPATH=str(ROOT))
