@@ -37,6 +37,10 @@ __all__ = ["linearize", "linearize_scene", "steady_linearization", "open_loop",
 #: ``exact`` (symbolic, implicit differentiation), ``complex-step``.
 METHODS = ("auto", "exact", "complex-step")
 
+#: Relative distance of a ``[control]`` law's value from its input's ``[steady]`` value
+#: above which the motion is not a steady motion of the closed loop (one point and many).
+LAW_TOL = 1e-9
+
 #: Largest number of coordinates for which ``auto`` uses the exact Jacobian.
 EXACT_MAX_N = 4
 
@@ -242,7 +246,7 @@ def _check_laws_at(scene, system, model, values) -> None:
     for u, law in sorted(closed.items()):
         value = complex(sp.sympify(law).xreplace(point).evalf())
         want = values[u]
-        if abs(value - want) > 1e-9 * max(1.0, abs(want)):
+        if abs(value - want) > LAW_TOL * max(1.0, abs(want)):
             raise InputError(f"control.{u}: the law gives {value.real:.10g} at the [steady] "
                              f"motion, where [steady] gives {u} = {want:.10g}: the motion is "
                              f"not a steady motion of the closed loop", key="control")
@@ -343,7 +347,7 @@ def steady_states(scene, model, points) -> tuple:
 
 def law_mismatch(scene, model, Y, P, steady) -> np.ndarray:
     """Where a ``[control]`` law closed in ``model`` does not give its input's ``[steady]``
-    value (relative 1e-9, as :func:`steady_linearization` checks one point).
+    value (relative :data:`LAW_TOL`, as :func:`steady_linearization` checks one point).
 
     Parameters
     ----------
@@ -370,7 +374,7 @@ def law_mismatch(scene, model, Y, P, steady) -> np.ndarray:
         with np.errstate(all="ignore"):
             value = np.broadcast_to(np.asarray(f(*columns.T), dtype=complex), out.shape)
         want = np.asarray(steady[u], dtype=float)
-        out |= ~(np.abs(value - want) <= 1e-9 * np.maximum(1.0, np.abs(want)))
+        out |= ~(np.abs(value - want) <= LAW_TOL * np.maximum(1.0, np.abs(want)))
     return out
 
 

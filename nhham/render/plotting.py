@@ -30,13 +30,7 @@ _MARKERS = ("o", "s", "^", "D", "v", "P", "X", "*", "<", ">")
 
 
 def _figure_class():
-    try:
-        from matplotlib.figure import Figure
-    except ImportError as exc:
-        raise OptionalDependencyError(
-            "plotting needs matplotlib, an optional extra: pip install 'nhham[plot]' "
-            "(or pip install matplotlib)") from exc
-    return Figure
+    return require_matplotlib()[0]
 
 
 def series_styles(count: int) -> list:
