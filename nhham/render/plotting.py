@@ -29,10 +29,6 @@ _LINESTYLES = ("-", "--", "-.", ":")
 _MARKERS = ("o", "s", "^", "D", "v", "P", "X", "*", "<", ">")
 
 
-def _figure_class():
-    return require_matplotlib()[0]
-
-
 def series_styles(count: int) -> list:
     """``count`` distinguishable styles: dicts of colour, marker and line style.
 
@@ -57,7 +53,7 @@ def save_figure(fig, path, dpi: int = 150) -> str:
 
 
 def _new_axes(nrows, figsize, sharex=True):
-    Figure = _figure_class()
+    Figure = require_matplotlib()[0]
     fig = Figure(figsize=figsize, layout="constrained")
     axes = fig.subplots(nrows, 1, sharex=sharex, squeeze=False)[:, 0]
     return fig, list(axes)
@@ -212,7 +208,7 @@ def plot_work_precision(result, ax=None, *, title: str | None = None):
     ('log', 'log')
     """
     if ax is None:
-        Figure = _figure_class()
+        Figure = require_matplotlib()[0]
         fig = Figure(figsize=(7.5, 5.5), layout="constrained")
         ax = fig.subplots()
     fig = ax.figure
