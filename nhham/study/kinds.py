@@ -26,7 +26,7 @@ from importlib import import_module
 
 from nhham.numerics.methods import names
 
-__all__ = ["StudyKind", "KINDS", "WHAT", "kind_of", "SIMULATE_METHODS"]
+__all__ = ["StudyKind", "KINDS", "kind_of", "SIMULATE_METHODS"]
 
 
 @dataclass(frozen=True)
@@ -87,9 +87,6 @@ KINDS = {k.name: k for k in (
     StudyKind("classify", "the constraint-set verdict", "nhham.study.classes", None, 256,
               "processes", "plot_cases"),
 )}
-
-#: The ``--what`` names.
-WHAT = tuple(KINDS)
 
 #: The methods of a simulation study (the adaptive ones: each run ends at t_end; the
 #: registry :mod:`nhham.numerics.methods` is as light as this module).
