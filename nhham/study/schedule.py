@@ -338,6 +338,7 @@ class Pool:
             return
         cluster = next((c for c in self._owned if c is not self.client), None)
         if cluster is not None:
+            _silence_distributed()
             _kill_workers(cluster)
         self._warming = []
         owned, self._owned = self._owned, []
@@ -360,6 +361,17 @@ class Pool:
             self.abandon()
         else:
             self.close()
+
+
+def _silence_distributed() -> None:
+    """Turn off dask.distributed's logging in this process: the scheduler of a local
+    cluster whose workers are killed logs each closed connection at CRITICAL, with a
+    traceback, after the one line `nhham: interrupted`. Nothing it says then concerns the
+    user, whose study stopped; it stays off for the rest of the process (which, for the
+    command, ends now)."""
+    for name in ["distributed", *logging.root.manager.loggerDict]:
+        if name == "distributed" or name.startswith("distributed."):
+            logging.getLogger(name).setLevel(logging.CRITICAL + 1)
 
 
 def _kill_workers(cluster) -> None:
