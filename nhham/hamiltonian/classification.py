@@ -162,7 +162,7 @@ def classify_constraints(source, constraints: Sequence | None = None,
     system = source.system if isinstance(source, HamiltonianSide) else getattr(
         source, "system", source)
     side = side_in if side_in is not None else hamiltonian_side(
-        system, precision=precision, samples=samples, seed=seed)
+        system, policy=Policy(precision=precision, samples=samples, seed=seed))
     requested = method
     if method == "auto":
         method = "exact" if _exact_affordable(side) else "sampled"

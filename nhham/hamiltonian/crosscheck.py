@@ -132,8 +132,8 @@ def cross_check(system, precision: int | None = None, samples: int = 6, seed: in
     start = time.perf_counter()
     if side is None:
         # closed forms only where symbolic_affordable chose them
-        side = hamiltonian_side(system, precision=precision, samples=samples, seed=seed,
-                                closed_form=True)
+        side = hamiltonian_side(system, closed_form=True, policy=Policy(
+            precision=precision, samples=samples, seed=seed))
     requested, tol_given = method, tol
     sampler = None
     if method == "auto":

@@ -214,7 +214,8 @@ def dirac_vs_projected(system, *, precision=None, samples=6, seed=SEED,
     precision, samples, seed, tol = policy.precision, policy.samples, policy.seed, policy.tol
     if side is None:
         side = classes.side if classes is not None else hamiltonian_side(
-            system, precision=precision, samples=samples, seed=seed, closed_form=True)
+            system, closed_form=True, policy=Policy(precision=precision, samples=samples,
+                                                     seed=seed))
     if classes is None:
         classes = classify_constraints(side, method=method, policy=policy)
     symbolic = _symbolic(side, classes)

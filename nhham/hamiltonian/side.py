@@ -36,6 +36,7 @@ from nhham.errors import ComputationError
 from nhham.hamiltonian.brackets import BivectorBracket, BracketAlgebra, numeric_bracket_matrix
 from nhham.hamiltonian.legendre import LegendreMap, canonical_form_matrix
 from nhham.lagrangian.algebra import cancel, solve_linear
+from nhham.lagrangian.engine import Policy, policy_of
 from nhham.lagrangian.geometry import ConstraintMatrixRank
 from nhham.lagrangian.projection import Projection
 from nhham.lagrangian.submanifold import Submanifold
@@ -56,18 +57,20 @@ __all__ = [
 
 def hamiltonian_side(system, precision: int | None = None, samples: int = 6,
                      seed: int = SEED, exact: bool = True,
-                     closed_form: bool = False) -> "HamiltonianSide":
+                     closed_form: bool = False, *,
+                     policy: Policy | None = None) -> "HamiltonianSide":
     """The Hamiltonian-side objects of ``system`` (frozen, lazy).
 
     Parameters
     ----------
     system : nhham.System
-    precision : int or None, optional
-        Precision of sampled decisions on T*Q (None: float64; int: mpmath digits).
-    samples, seed : int, optional
-        Number and seed of the sample points of sampled decisions.
-    exact : bool, optional
-        False: decisions on submanifolds of T*Q are taken at sample points only.
+    precision, samples, seed, exact : optional
+        Deprecated (a ``DeprecationWarning``; removed in the next release): give them in
+        ``policy``.
+    policy : nhham.Policy, optional
+        The decision settings on T*Q: ``precision`` (None: float64; int: mpmath digits),
+        ``samples`` and ``seed`` of sampled decisions, ``exact`` (False: decisions on
+        submanifolds of T*Q are taken at sample points only).
     closed_form : bool, optional
         As for :func:`nhham.lagrangian.geometry.lagrangian_geometry`: True forms the
         closed forms that need a symbolic solve with C^H whatever their size.
@@ -87,8 +90,10 @@ def hamiltonian_side(system, precision: int | None = None, samples: int = 6,
     [-3.0,    0],
     [   0, -1.0]])
     """
-    return HamiltonianSide(system, precision=precision, samples=samples, seed=seed, exact=exact,
-                           closed_form=closed_form)
+    policy = policy_of(policy, "hamiltonian_side", precision=precision, samples=samples,
+                       seed=seed, exact=exact)
+    return HamiltonianSide(system, precision=policy.precision, samples=policy.samples,
+                           seed=policy.seed, exact=policy.exact, closed_form=closed_form)
 
 
 @dataclass(frozen=True, eq=False, repr=False)
@@ -657,8 +662,13 @@ class NonholonomicBracket(BivectorBracket):
         return JacobiatorReport(witness is None, comps, decisions, witness)
 
 
-def nonholonomic_bracket(system, precision=None, samples=6, seed=SEED) -> NonholonomicBracket:
+def nonholonomic_bracket(system, precision=None, samples=6, seed=SEED, *,
+                         policy: Policy | None = None) -> NonholonomicBracket:
     """The nonholonomic bracket of ``system`` on T*Q (see :class:`NonholonomicBracket`).
+
+    ``policy`` (:class:`nhham.Policy`) holds the settings of its sampled decisions;
+    ``precision``, ``samples`` and ``seed`` are deprecated (a ``DeprecationWarning``;
+    removed in the next release).
 
     Examples
     --------
@@ -676,4 +686,6 @@ def nonholonomic_bracket(system, precision=None, samples=6, seed=SEED) -> Nonhol
     >>> bracket.jacobiator_tensor()
     {}
     """
-    return hamiltonian_side(system, precision, samples, seed).nonholonomic_bracket
+    policy = policy_of(policy, "nonholonomic_bracket", precision=precision, samples=samples,
+                       seed=seed)
+    return hamiltonian_side(system, policy=policy).nonholonomic_bracket

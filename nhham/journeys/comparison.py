@@ -52,8 +52,8 @@ def compare(scene, *, policy: Policy | None = None, steps=None) -> Answer:
     at = at_values(scene, policy, steps)
     system = scene.system if at is None else at.system
     # One T*Q side for both checks: its numeric layer is built once.
-    side = hamiltonian_side(system, precision=policy.precision, samples=policy.samples,
-                            closed_form=True)
+    side = hamiltonian_side(system, closed_form=True, policy=Policy(
+        precision=policy.precision, samples=policy.samples))
     with steps.step("cross-check through the Legendre map"):
         report = cross_check(system, side=side, policy=policy)
     dirac = None

@@ -67,7 +67,7 @@ def derive(scene, *, side: str = "lagrangian", explicit: bool = False,
         from nhham.lagrangian.geometry import lagrangian_geometry
 
         # One geometry for the journey: the analysis at the values takes this one.
-        lagrangian_geometry(scene.system, precision=policy.precision, closed_form=True)
+        lagrangian_geometry(scene.system, closed_form=True, policy=Policy(precision=policy.precision))
     at = at_values(scene, policy, steps)
     system = scene.system if at is None else at.system
     if side == "hamiltonian":
@@ -80,7 +80,7 @@ def derive(scene, *, side: str = "lagrangian", explicit: bool = False,
 def _hamiltonian(scene, system, policy, steps) -> Answer:
     from nhham.hamiltonian.side import hamiltonian_side
 
-    side = hamiltonian_side(system, precision=policy.precision, closed_form=True)
+    side = hamiltonian_side(system, closed_form=True, policy=Policy(precision=policy.precision))
     with steps.step("Legendre map and Hamiltonian H = E_L o Leg^-1"):
         side.energy
     answer = _closed_form(scene, side, "hamiltonian", side.analysis, steps)
@@ -96,7 +96,7 @@ def _lagrangian(scene, system, at, explicit, policy, steps) -> Answer:
 
     # derive forms closed forms only where it decided to (W cheap, or explicit asked):
     # the budget bounds them, not the library's size guard.
-    G = lagrangian_geometry(system, precision=policy.precision, closed_form=True)
+    G = lagrangian_geometry(system, closed_form=True, policy=Policy(precision=policy.precision))
     with steps.step("energy E_L"):
         energy = G.energy
     with steps.step("implicit form: W, F, mu and mu a = -(dphi/dq) v"):

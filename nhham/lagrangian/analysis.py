@@ -313,8 +313,8 @@ def analyze_constraints(system, *, precision: int | None = None, samples: int = 
     blocks, start = [], 0
     from nhham.lagrangian.geometry import lagrangian_geometry
 
-    geometry = lagrangian_geometry(system, precision=policy.precision, samples=policy.samples,
-                                   seed=policy.seed, closed_form=None)
+    geometry = lagrangian_geometry(system, closed_form=None, policy=Policy(
+        precision=policy.precision, samples=policy.samples, seed=policy.seed))
     for spec in specs:
         run = _run_block(system, spec, policy, max_stages, start, geometry)
         start += len(run.provenance_data.labels(kind="secondary"))

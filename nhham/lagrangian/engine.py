@@ -373,7 +373,7 @@ def policy_of(policy: Policy | None, where: str, **options) -> Policy:
 
     A :class:`Policy` is the one way to pass decision settings to a public function
     (``policy=Policy(samples=3)``). The loose keywords ``precision``, ``samples``,
-    ``seed``, ``tol`` and ``exact`` that eight functions took before are kept for one
+    ``seed``, ``tol`` and ``exact`` that eleven functions took before are kept for one
     release: one that differs from its default raises a ``DeprecationWarning`` naming the
     replacement, and is used.
 

@@ -34,6 +34,7 @@ from nhham.settings import SEED
 from nhham.lagrangian.adjugate import ScaledInverse, scaled_inverse
 from nhham.lagrangian.algebra import solve_linear
 from nhham.lagrangian.decision import Decision, DecisionSettings
+from nhham.lagrangian.engine import Policy, policy_of
 from nhham.lagrangian.projection import Projection
 from nhham.lagrangian.submanifold import Submanifold
 from nhham.system.expressions import derivative
@@ -89,18 +90,19 @@ class DynamicsIngredients:
 
 
 def lagrangian_geometry(system, precision: int | None = None, samples: int = 6,
-                        seed: int = SEED, closed_form: bool | None = False
-                        ) -> "LagrangianGeometry":
+                        seed: int = SEED, closed_form: bool | None = False, *,
+                        policy: Policy | None = None) -> "LagrangianGeometry":
     """The Lagrangian-side objects of ``system``, computed lazily.
 
     Parameters
     ----------
     system : nhham.System
-    precision : int or None, optional
-        Precision of sampled "on M_1" decisions (None: float64; an integer:
-        mpmath digits).
-    samples, seed : int, optional
-        Number and seed of the sample points of sampled decisions.
+    precision, samples, seed : optional
+        Deprecated (a ``DeprecationWarning``; removed in the next release): give them in
+        ``policy``.
+    policy : nhham.Policy, optional
+        The decision settings; its ``precision`` (None: float64; an integer: mpmath
+        digits), ``samples`` and ``seed`` are those of the sampled "on M_1" decisions.
     closed_form : bool, optional
         True: form the closed forms that need a symbolic solve with C (``multipliers``,
         ``projected_field``, ``projector_Q``) whatever their size. False (default): refuse
@@ -132,6 +134,9 @@ def lagrangian_geometry(system, precision: int | None = None, samples: int = 6,
     [-3.0,    0],
     [   0, -1.0]])
     """
+    policy = policy_of(policy, "lagrangian_geometry", precision=precision, samples=samples,
+                       seed=seed)
+    precision, samples, seed = policy.precision, policy.samples, policy.seed
     # Kept on the system itself (a cycle the collector frees with it); a weak-keyed
     # table would keep every system alive through its geometry's reference to it.
     shared = system.__dict__.setdefault("_lagrangian_geometries", {})

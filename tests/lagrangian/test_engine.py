@@ -175,6 +175,9 @@ LOOSE = {
     "dirac_vs_projected": lambda **kw: nhham.dirac_vs_projected(DISK, **kw),
     "classification_at_values": lambda **kw: nhham.classification_at_values(DISK, **kw),
     "parametric_classification": lambda **kw: nhham.parametric_classification(DISK, **kw),
+    "lagrangian_geometry": lambda **kw: nhham.lagrangian_geometry(DISK, **kw),
+    "hamiltonian_side": lambda **kw: nhham.hamiltonian_side(DISK, **kw),
+    "nonholonomic_bracket": lambda **kw: nhham.nonholonomic_bracket(DISK, **kw),
 }
 DISK = nhham.models.rolling_disk()
 
