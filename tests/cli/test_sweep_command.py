@@ -10,12 +10,10 @@ import sys
 import time
 from pathlib import Path
 
-import jsonschema
 import pytest
 import numpy as np
 import xarray as xr
 
-from nhham.render.schema import output_schema
 from nhham.cli.main import main
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -27,23 +25,6 @@ def run(capsys, *argv):
     status = main([str(a) for a in argv])
     out = capsys.readouterr()
     return status, out.out, out.err
-
-
-def test_a_stability_map_with_its_plot(capsys, tmp_path):
-    out, plot = tmp_path / "map.zarr", tmp_path / "map.png"
-    status, stdout, err = run(capsys, "sweep", BICYCLE, "--what", "linearize", "--over",
-                              "v=2:8:13", "--over", "c=0.06:0.1:3", "--out", out, "--plot",
-                              plot, "--workers", "1", "--json")
-    envelope = json.loads(stdout)
-    jsonschema.validate(envelope, output_schema())
-    result = envelope["result"]
-    assert status == 0 and result["complete"] and result["points"] == 39
-    assert result["dims"] == {"v": 13, "c": 3} and result["plot"] == str(plot)
-    assert result["summary"]["complex_crossings"] == 3 and result["summary"]["real_crossings"] == 3
-    lo, hi = result["summary"]["complex_crossing_range"]
-    assert lo < 4.2923825 < hi           # the weave speed at c = 0.08 lies in the range
-    assert plot.stat().st_size > 10_000 and plot.read_bytes()[:4] == b"\x89PNG"
-    assert envelope["scene"]["name"] == "Whipple bicycle (benchmark parameters)"
 
 
 def test_refusals_name_their_option(capsys, tmp_path):

@@ -12,10 +12,12 @@ p1 = 1 - p2 (each where it lies inside the grid).
 import json
 from pathlib import Path
 
+import jsonschema
 import numpy as np
 import pytest
 import xarray as xr
 
+from nhham.render.schema import output_schema
 from nhham.study.sweep import sweep
 
 SCENE = Path(__file__).resolve().parent / "scenes" / "two_parameter_spring.toml"
@@ -84,6 +86,10 @@ def test_the_command_summarises_and_draws_them(capsys, tmp_path):
                    "--workers", "1", "--json"])
     envelope = json.loads(capsys.readouterr().out)
     assert status == 0
+    jsonschema.validate(envelope, output_schema())
+    assert envelope["result"]["complete"] and envelope["result"]["points"] == 24
+    assert envelope["result"]["dims"] == {"p1": 6, "p2": 4}
+    assert envelope["result"]["plot"] == str(plot)
     s = envelope["result"]["summary"]
     assert s["across"] == "p2" and s["across_real_crossings"] == 4
     assert s["across_real_crossing_range"] == pytest.approx([0.2, 0.8], abs=1e-9)
