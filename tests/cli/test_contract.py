@@ -155,8 +155,8 @@ def _expressions(command, result):
             yield from d["difference"]
 
 
-def _same_values(a, b, points=2):
-    """a == b at seeded random points (values in [0.3, 1.3]: no singular denominators)."""
+def _same_values(a, b, points=1):
+    """a == b at a seeded random point (values in [0.3, 1.3]: no singular denominators)."""
     import random
 
     rng = random.Random(1)
