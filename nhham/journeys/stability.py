@@ -112,13 +112,14 @@ def linearize(scene, *args, method: str = "auto", sweep=None, model=None, steps=
         return at_state(scene, *args, **kwargs)
     scene = as_scene(scene, check_initial=False)
     steps = quiet_steps(steps)
-    check_steady_table(scene)
     if method not in METHODS:
         raise InputError(f"linearize: method {method!r} is not one of {', '.join(METHODS)}",
                          key="method")
     with capture_warnings() as caught:
         with steps.step("numeric model (generated kernels)"):
+            # a law in t has no steady motion: said before a missing [steady] table
             system = scene.steady_system()
+            check_steady_table(scene)
             model = numeric_model(system) if model is None else model
         with steps.step(f"linearise ({method})"
                         + (" the closed loop ([control])" if scene.control else "")

@@ -17,6 +17,7 @@ import sympy as sp
 
 import nhham
 from nhham.cli.main import main
+from nhham.errors import InputError
 from nhham.journeys.answer import as_scene
 
 DISK = "examples/rolling_disk.toml"
@@ -91,3 +92,11 @@ def test_the_old_model_level_linearize_still_answers_with_a_warning():
     with pytest.warns(DeprecationWarning, match="nhham.numerics.linearization.linearize"):
         lin = nhham.linearize(model, [0.0, 0.0])
     assert sorted(abs(z.imag) for z in lin.eigenvalues) == pytest.approx([2.0, 2.0])
+
+
+def test_a_law_in_t_is_named_before_a_missing_steady_table():
+    """examples/snakeboard_gait.toml has neither a steady motion of its closed loop (its law
+    uses t) nor a [steady] table: the root cause, the law, is what linearize names."""
+    with pytest.raises(InputError) as info:
+        nhham.linearize("examples/snakeboard_gait.toml")
+    assert info.value.key == "control" and "the law uses t" in str(info.value)
