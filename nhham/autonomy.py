@@ -43,6 +43,10 @@ _MESSAGES = {
     # a steady motion of a system whose forces depend on t
     "linearize": ("linearize: the forces depend on time t; a steady motion needs autonomous "
                   "forces (give the inputs constant values instead)", "forces"),
+    # the cross-check through Leg of a Lagrangian in t (Leg then moves with t)
+    "compare": ("lagrangian: depends on time t; the cross-check through the Legendre map "
+                "compares fields at a fixed instant and needs L autonomous (Leg would "
+                "move with t); time-dependent constraints are compared", "lagrangian"),
     # a steady motion of a system whose L or constraints depend on t
     "linearize_geometry": ("{key}: depends on time t; a steady motion (and its "
                            "linearisation) needs L and the constraints autonomous", None),
@@ -77,7 +81,7 @@ def time_slot(parameters: Sequence, time) -> int | None:
 
 def nonautonomous(where: str, **details) -> str:
     """The words of a refusal of time at ``where``, one of ``"mechanics"``,
-    ``"secondary"``, ``"method"``, ``"linearize"``, ``"linearize_geometry"``.
+    ``"secondary"``, ``"method"``, ``"linearize"``, ``"linearize_geometry"``, ``"compare"``.
 
     Parameters
     ----------
@@ -103,7 +107,8 @@ def require_autonomous(where: str, depends: bool, **details) -> None:
     Parameters
     ----------
     where : str
-        ``"secondary"``, ``"method"``, ``"linearize"`` or ``"linearize_geometry"``.
+        ``"secondary"``, ``"method"``, ``"linearize"``, ``"linearize_geometry"`` or
+        ``"compare"``.
     depends : bool
         Whether what is asked depends on time (or, for ``"secondary"``, on an input).
     **details
