@@ -91,3 +91,17 @@ def test_linearize_refuses_a_time_dependent_constraint_naming_it(bead):
     with pytest.raises(InputError, match="holonomic.0.: depends on time t") as e:
         linearize(model, model.state(bead.initial))
     assert e.value.key == "holonomic[0]"
+
+
+def test_a_study_reads_the_ends_of_a_run_at_their_times(bead):
+    # the residual at the end is on M_1(t_end), and E(t_end) − E(0) is the motor's work:
+    # E = m (r'² + Ω² r²)/2 with r = cosh t, E(0) = 1/2, E(2) = (sinh² 2 + cosh² 2)/2
+    from nhham.study.ensemble import _ends
+
+    model = numeric_model(bead.system)
+    y0 = model.state(bead.initial)
+    result = simulate(model, (0.0, 2.0), y0, rtol=1e-12, atol=1e-12)
+    E0, E1, residual = _ends(model, None, y0[None], result.y[:, -1][None], np.array([2.0]))
+    assert residual[0] < 1e-10
+    assert abs(E0[0] - 0.5) < 1e-12
+    assert abs(E1[0] - (math.sinh(2) ** 2 + math.cosh(2) ** 2) / 2) < 1e-9
