@@ -6,8 +6,8 @@ or a force does: t is then its last parameter (``System.time``, its index
 instant: a verdict holds for all t but a proper algebraic subset, as for a parameter
 without a value) and the slot the generated code's loops set
 (``NumericModel.time_slot``, from the same index). Every refusal of time — by the
-sympy.physics.mechanics adapter, the constraint algorithm (an input in a secondary
-constraint), the integrators and the linearisation — takes its words from
+constraint algorithm (an input in a secondary constraint), the integrators, the
+linearisation and the cross-check through Leg — takes its words from
 :func:`nonautonomous`, and every refusal that raises goes through
 :func:`require_autonomous`.
 
@@ -29,9 +29,6 @@ TIME_NAME = "t"
 
 # where -> (message, key of the InputError or None for a message that is not raised)
 _MESSAGES = {
-    # a term of a sympy.physics.mechanics Lagrangian or constraint
-    "mechanics": ("depends explicitly on time {t}; nhham handles autonomous systems only",
-                  None),
     # the constraint algorithm (C singular) met a secondary constraint in an input
     "secondary": ("forces: the secondary constraint {label} = {expression} depends on "
                   "{names}; the constraint algorithm needs forces that do not depend on "
@@ -80,14 +77,13 @@ def time_slot(parameters: Sequence, time) -> int | None:
 
 
 def nonautonomous(where: str, **details) -> str:
-    """The words of a refusal of time at ``where``, one of ``"mechanics"``,
-    ``"secondary"``, ``"method"``, ``"linearize"``, ``"linearize_geometry"``, ``"compare"``.
+    """The words of a refusal of time at ``where``, one of ``"secondary"``, ``"method"``, ``"linearize"``, ``"linearize_geometry"``, ``"compare"``.
 
     Parameters
     ----------
     where : str
     **details
-        The fields of that message: ``t`` (mechanics), ``label``, ``expression``,
+        The fields of that message: ``label``, ``expression``,
         ``names`` (secondary), ``method`` and ``what`` (method; default
         :data:`TIME_IN_FORCES`), ``key`` (linearize_geometry).
 

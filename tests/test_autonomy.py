@@ -7,7 +7,7 @@ gathered in nhham.autonomy (a user sees the same words).
 import pytest
 import sympy as sp
 
-from nhham.autonomy import nonautonomous, require_autonomous
+from nhham.autonomy import require_autonomous
 from nhham.errors import InputError
 from nhham.system.description import System
 from nhham.system.naming import TIME
@@ -22,11 +22,6 @@ def test_time_slot_is_the_index_of_t_among_the_parameters():
     assert plain.time is None and plain.time_slot is None
     closed = timed.closed_loop({"u": "cos(t)"})
     assert closed.time_slot == len(closed.parameters) - 1 == 1
-
-
-def test_the_advice_of_the_mechanics_adapter():
-    assert nonautonomous("mechanics", t="t") == ("depends explicitly on time t; nhham "
-                                                 "handles autonomous systems only")
 
 
 @pytest.mark.parametrize("where, details, key, text", [
