@@ -1,14 +1,15 @@
 """Time as one datum, and the one place that says what a time-dependent system cannot do.
 
-A system depends on the time t when its forces do: t is then its last parameter
-(``System.time``, its index ``System.time_slot``), a parameter without a value for the
-exact geometry (any instant) and the slot the generated code's loops set
-(``NumericModel.time_slot``, from the same index). L and the constraints are
-autonomous. Every refusal of time — by the scene parser, the sympy.physics.mechanics
-adapter, the screening of unknown names, the constraint algorithm, the integrators
-and the linearisation — takes its words from :func:`nonautonomous`, and every refusal
-that raises goes through :func:`require_autonomous`: time-dependent constraints will
-change this module and the places that call it, nothing else.
+A system depends on the time t when its Lagrangian, a constraint (affine or holonomic)
+or a force does: t is then its last parameter (``System.time``, its index
+``System.time_slot``), a parameter without a value for the exact geometry (a generic
+instant: a verdict holds for all t but a proper algebraic subset, as for a parameter
+without a value) and the slot the generated code's loops set
+(``NumericModel.time_slot``, from the same index). Every refusal of time — by the
+constraint algorithm (an input in a secondary constraint), the integrators, the
+linearisation and the cross-check through Leg — takes its words from
+:func:`nonautonomous`, and every refusal that raises goes through
+:func:`require_autonomous`.
 
 This module belongs to the base (no sympy, no layer imported), so that the numeric
 layer reads it too.
@@ -20,36 +21,38 @@ from collections.abc import Sequence
 
 from nhham.errors import InputError
 
-__all__ = ["TIME_NAME", "time_slot", "nonautonomous", "require_autonomous"]
+__all__ = ["TIME_NAME", "TIME_IN_FORCES", "TIME_IN_GEOMETRY", "time_slot", "nonautonomous",
+           "require_autonomous"]
 
 #: The name of the time in scenes, force expressions and control laws.
 TIME_NAME = "t"
 
 # where -> (message, key of the InputError or None for a message that is not raised)
 _MESSAGES = {
-    # L or a constraint names t (the scene parser's hint to an unknown name)
-    "scene": (" (systems are autonomous: L and the constraints may not depend on time t, "
-              "a force may (forces = {{...}}); if t is a parameter, add it to parameters)",
-              None),
-    # the same, where expressions are screened before parsing
-    "screening": ("; nhham's systems are autonomous: L and the constraints may not depend "
-                  "on time t explicitly, a force may (forces=...; if t is a parameter, "
-                  "declare it in parameters)", None),
-    # a term of a sympy.physics.mechanics Lagrangian or constraint
-    "mechanics": ("depends explicitly on time {t}; nhham handles autonomous systems only",
-                  None),
-    # the constraint algorithm (C singular) met a secondary constraint in t or an input
+    # the constraint algorithm (C singular) met a secondary constraint in an input
     "secondary": ("forces: the secondary constraint {label} = {expression} depends on "
-                  "{names}; the constraint algorithm needs forces that do not depend on time "
-                  "or inputs where C is singular (give the inputs as parameters with values)",
+                  "{names}; the constraint algorithm needs forces that do not depend on "
+                  "inputs where C is singular (give the inputs as parameters with values)",
                   "forces"),
     # a fixed-step integrator or the mpmath reference
-    "method": ("method: {method!r} does not take time-dependent forces (t in the forces); "
-               "choose an adaptive method such as DOP853", "method"),
-    # a steady motion
+    "method": ("method: {method!r} does not take time-dependent {what}; choose an adaptive "
+               "method such as DOP853", "method"),
+    # a steady motion of a system whose forces depend on t
     "linearize": ("linearize: the forces depend on time t; a steady motion needs autonomous "
                   "forces (give the inputs constant values instead)", "forces"),
+    # the cross-check through Leg of a Lagrangian in t (Leg then moves with t)
+    "compare": ("lagrangian: depends on time t; the cross-check through the Legendre map "
+                "compares fields at a fixed instant and needs L autonomous (Leg would "
+                "move with t); time-dependent constraints are compared", "lagrangian"),
+    # a steady motion of a system whose L or constraints depend on t
+    "linearize_geometry": ("{key}: depends on time t; a steady motion (and its "
+                           "linearisation) needs L and the constraints autonomous", None),
 }
+
+#: The ``what`` of the "method" refusal: where the time enters.
+TIME_IN_FORCES = "forces (t in the forces)"
+TIME_IN_GEOMETRY = ("L or constraints (t in L or the constraints: the method's steps are "
+                    "made for an autonomous constrained field)")
 
 
 def time_slot(parameters: Sequence, time) -> int | None:
@@ -74,21 +77,23 @@ def time_slot(parameters: Sequence, time) -> int | None:
 
 
 def nonautonomous(where: str, **details) -> str:
-    """The words of a refusal of time at ``where``, one of ``"scene"``, ``"screening"``,
-    ``"mechanics"``, ``"secondary"``, ``"method"``, ``"linearize"``.
+    """The words of a refusal of time at ``where``, one of ``"secondary"``, ``"method"``, ``"linearize"``, ``"linearize_geometry"``, ``"compare"``.
 
     Parameters
     ----------
     where : str
     **details
-        The fields of that message: ``t`` (mechanics), ``label``, ``expression``,
-        ``names`` (secondary), ``method`` (method).
+        The fields of that message: ``label``, ``expression``,
+        ``names`` (secondary), ``method`` and ``what`` (method; default
+        :data:`TIME_IN_FORCES`), ``key`` (linearize_geometry).
 
     Examples
     --------
     >>> nonautonomous("method", method="rk4")
     "method: 'rk4' does not take time-dependent forces (t in the forces); choose an adaptive method such as DOP853"
     """
+    if where == "method":
+        details.setdefault("what", TIME_IN_FORCES)
     return _MESSAGES[where][0].format(**details)
 
 
@@ -98,7 +103,8 @@ def require_autonomous(where: str, depends: bool, **details) -> None:
     Parameters
     ----------
     where : str
-        ``"secondary"``, ``"method"`` or ``"linearize"``.
+        ``"secondary"``, ``"method"``, ``"linearize"``, ``"linearize_geometry"`` or
+        ``"compare"``.
     depends : bool
         Whether what is asked depends on time (or, for ``"secondary"``, on an input).
     **details
@@ -107,7 +113,8 @@ def require_autonomous(where: str, depends: bool, **details) -> None:
     Raises
     ------
     InputError
-        When ``depends``; its key names the option to change (``forces`` or ``method``).
+        When ``depends``; its key names the option or scene key to change (``forces``,
+        ``method``, or the ``key`` given: ``lagrangian``, ``constraints[0]``).
 
     Examples
     --------
@@ -119,5 +126,5 @@ def require_autonomous(where: str, depends: bool, **details) -> None:
     forces
     """
     if depends:
-        text, key = _MESSAGES[where]
-        raise InputError(text.format(**details), key=key)
+        key = _MESSAGES[where][1] or details.get("key")
+        raise InputError(nonautonomous(where, **details), key=key)

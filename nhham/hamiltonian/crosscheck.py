@@ -42,6 +42,7 @@ import time
 import numpy as np
 import sympy as sp
 
+from nhham.autonomy import require_autonomous
 from nhham.errors import InputError
 from nhham.hamiltonian.checks import CheckResult, CrossCheckReport, stage_summaries
 from nhham.hamiltonian.comparison import (
@@ -126,6 +127,8 @@ def cross_check(system, precision: int | None = None, samples: int = 6, seed: in
         raise InputError(f"cross_check: method must be one of {', '.join(map(repr, METHODS))}, "
                          f"got {method!r}")
     check_options("cross_check", max_stages=max_stages)
+    require_autonomous("compare", getattr(system, "lagrangian_depends_on_time", False),
+                       key="lagrangian")
     policy = policy_of(policy, "cross_check", precision=precision, samples=samples, seed=seed,
                        tol=tol)
     precision, samples, seed, tol = policy.precision, policy.samples, policy.seed, policy.tol

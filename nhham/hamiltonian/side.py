@@ -38,7 +38,7 @@ from nhham.hamiltonian.legendre import LegendreMap, canonical_form_matrix
 from nhham.lagrangian.algebra import cancel, solve_linear
 from nhham.lagrangian.engine import Policy, policy_of
 from nhham.lagrangian.geometry import ConstraintMatrixRank
-from nhham.lagrangian.projection import Projection
+from nhham.lagrangian.projection import Projection, time_rates
 from nhham.lagrangian.submanifold import Submanifold
 from nhham.settings import SEED
 from nhham.system.evaluation import Backend, Lambdified
@@ -253,12 +253,17 @@ class HamiltonianSide(ConstraintMatrixRank):
 
     @cached_property
     def constraint_derivatives(self) -> sp.Matrix:
-        """X_H(phi_i^H) = {phi_i^H, H} (+ F^V(phi_i^H) with forces), shape (m, 1)."""
+        """X_H(phi_i^H) = {phi_i^H, H} (+ F^V(phi_i^H) with forces, + d phi_i^H/dt when
+        the system depends on the time: the consistency condition on R x T*Q), shape
+        (m, 1)."""
         if not self.m:
             return sp.zeros(0, 1)
         if self.system.has_forces:
-            return (self.constraint_gradients * self.X_H).applyfunc(cancel)
-        return sp.Matrix([self.algebra.bracket(f, self.H) for f in self.constraints])
+            out = (self.constraint_gradients * self.X_H).applyfunc(cancel)
+        else:
+            out = sp.Matrix([self.algebra.bracket(f, self.H) for f in self.constraints])
+        rates = time_rates(self.constraints, self.system.time)
+        return out if rates is None else (out + rates).applyfunc(cancel)
 
     @property
     def multipliers(self) -> sp.Matrix:
@@ -362,6 +367,7 @@ def _algorithm_arguments(side: HamiltonianSide, max_stages: int) -> dict:
         max_stages=max_stages,
         multiplier_symbols=[multiplier_symbol(i + 1) for i in range(side.m)],
         variables=side.variables,
+        time=sysm.time,
     )
 
 
@@ -405,6 +411,7 @@ class HamiltonianPoint:
     Phip: np.ndarray
     mu: np.ndarray
     round_trip: float
+    phi_t: object = None  # d phi_i/dt at (q, v) of a time-dependent system, else None
 
     @property
     def X_H(self) -> np.ndarray:
@@ -418,8 +425,9 @@ class HamiltonianPoint:
 
     @property
     def X_H_phi(self) -> np.ndarray:
-        """X_H(phi_i^H) = {phi_i^H, H}, shape (m,)."""
-        return self.Phiq @ self.Hp - self.Phip @ self.Hq
+        """X_H(phi_i^H) = {phi_i^H, H} (+ d phi_i^H/dt), shape (m,)."""
+        out = self.Phiq @ self.Hp - self.Phip @ self.Hq
+        return out if self.phi_t is None else out + self.phi_t
 
     def vertical(self) -> np.ndarray:
         """Z_i^H as rows (0, -mu_i), shape (m, 2n)."""
@@ -454,6 +462,10 @@ class NumericHamiltonian:
         self._Lq = Lambdified(self.args, lq, (n,))
         self._phi = self.functions(list(sysm.phi))
         self._functions: dict = {}
+        # d phi/dt at fixed (q, v) is d phi^H/dt at fixed (q, p) while L is autonomous
+        # (compare refuses L in t)
+        self._phit = None if sysm.time is None else Lambdified(
+            self.args, [sp.diff(f, sysm.time) for f in sysm.phi], (m,))
 
     def functions(self, exprs: Sequence) -> "TransportedFunctions":
         """Compiled values and gradients of functions chi(q, v) (cached by tuple)."""
@@ -489,7 +501,8 @@ class NumericHamiltonian:
         phi, Phiq, Phip = self._phi.gradients(backend, vals, W, M)
         mu = self._mu(backend, vals)
         return HamiltonianPoint(q, p, v, params, W, M, Hq, Hp, phi, Phiq, Phip, mu,
-                                round_trip)
+                                round_trip, None if self._phit is None else
+                                self._phit(backend, vals))
 
     def point_from_tq(self, backend: Backend, x: dict) -> HamiltonianPoint:
         """The point Leg(x) for x a dict (coordinates, velocities, parameters) on TQ.

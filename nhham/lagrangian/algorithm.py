@@ -42,7 +42,7 @@ from nhham.errors import BudgetExceeded, ComputationError
 from nhham.lagrangian.adjugate import divide_out, scale_factors
 from nhham.lagrangian.algebra import cancel
 from nhham.lagrangian.graphs import Provenance
-from nhham.lagrangian.projection import gradient_rows, tangency_equations
+from nhham.lagrangian.projection import gradient_rows, tangency_equations, time_rates
 from nhham.lagrangian.submanifold import Submanifold
 from nhham.system.expressions import short
 from nhham.system.naming import multiplier_symbol
@@ -60,7 +60,7 @@ def run_algorithm(base_field, vertical_fields, primary: Sequence, labels: Sequen
                   max_stages: int | None = None, multiplier_symbols: Sequence | None = None,
                   variables: Sequence | None = None, secondary_start: int = 0,
                   secondary_prefix: str = "secondary", scale=None,
-                  closed_fields: Callable | None = None) -> AlgorithmRun:
+                  closed_fields: Callable | None = None, time=None) -> AlgorithmRun:
     """Run the constraint algorithm (paper §3) for any number of constraints.
 
     Parameters
@@ -109,6 +109,10 @@ def run_algorithm(base_field, vertical_fields, primary: Sequence, labels: Sequen
         With ``scale``: ``closed_fields() -> (ξ, Z)``, the unscaled fields, formed only
         when ``base_field``, ``vertical_fields`` or ``dynamics`` of the run are asked
         for; default (ξ̃/δ, Z̃/δ).
+    time : sympy.Symbol, optional
+        The time t when the system depends on it (``System.time``): the tangency rows
+        gain ∂χ/∂t (δ ∂χ/∂t with ``scale``), the field on ℝ × TQ being ∂/∂t + ξ; t is a
+        parameter of M_k without a value (``DESIGN.md`` §2).
 
     Returns
     -------
@@ -177,6 +181,7 @@ def run_algorithm(base_field, vertical_fields, primary: Sequence, labels: Sequen
         graph = graph.with_node(lab, expr=chi, stage=1, kind=constraint_kind(lab))
     loop = _Loop(xi, Z, variables, lam, manifold_factory, graph, secondary_start,
                  secondary_prefix, scale=scale, closed_fields=closed_fields)
+    loop.time = time
     return loop.run(primary, labels, bound)
 
 
@@ -196,6 +201,7 @@ class _Loop:
         self.scale = sp.S.One if scale is None else sp.sympify(scale)
         self.scale_factors = scale_factors(self.scale)
         self.closed_fields = closed_fields
+        self.time = None  # the time t of a time-dependent system (run_algorithm's time)
 
     # ------------------------------------------------------------ tangency rows
     def row(self, chi):
@@ -203,7 +209,8 @@ class _Loop:
         if chi not in self.rows:
             grad = gradient_rows([chi], self.variables)
             # Polynomial rows of scaled fields need no cancellation, only expansion.
-            A, b = tangency_equations(grad, self.xi, self.Z, sp.expand if self.scaled else cancel)
+            A, b = tangency_equations(grad, self.xi, self.Z, sp.expand if self.scaled else cancel,
+                                      time_rates([chi], self.time, self.scale))
             self.rows[chi] = (grad, list(A.row(0)) if A.cols else [], b[0])
         return self.rows[chi]
 
@@ -432,7 +439,7 @@ class _Loop:
             dimension=dimension, variables=self.variables,
             fields=self._closed_fields(), manifold=M,
             scaled_fields=_constant_fields(self.xi, self.Z, self.scale) if self.scaled else None,
-            denominator=self.scale if self.scaled else None,
+            denominator=self.scale if self.scaled else None, time=self.time,
         )
 
     def _closed_fields(self):

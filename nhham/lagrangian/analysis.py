@@ -325,10 +325,10 @@ def analyze_constraints(system, *, precision: int | None = None, samples: int = 
 
 
 def _check_autonomous(system, blocks) -> None:
-    """Refuse secondary constraints that depend on the time or on an input: their tangency
-    would need d/dt of the forces, which the algorithm (for autonomous fields) does not
-    form."""
-    moving = set(system.inputs) | ({system.time} if system.time is not None else set())
+    """Refuse secondary constraints that depend on an input: their tangency would need
+    d/dt of the input, which a control law sets at run time. The time t is a parameter
+    of M_k whose ∂χ/∂t the tangency rows carry (``run_algorithm``'s ``time``)."""
+    moving = set(system.inputs)
     if not moving:
         return
     for block in blocks:
@@ -445,6 +445,7 @@ class _BlockSystem:
                    if self.phi else sp.zeros(0, self.n))
         self.hessian = sp.hessian(self.lagrangian, self.velocities)
         self.has_forces, self.inputs = system.has_forces, system.inputs
+        self.time = system.time
         self.generalized_forces = sp.Matrix([system.generalized_forces[i]
                                              for i in spec["coords"]])
 
@@ -478,6 +479,7 @@ def _run_block(system, spec, policy, max_stages, start, geometry):
         max_stages=bound, multiplier_symbols=lam, variables=view.state,
         secondary_start=start, scale=geo.field_scale,
         closed_fields=lambda: (geo.euler_lagrange_field, geo.vertical_fields),
+        time=view.time,
     )
     graph = run.provenance_data
     for i in spec["hol"]:
@@ -555,7 +557,7 @@ def _stage_one_at_points(view, geo, exprs, labels, lam, factory, policy):
         variables=tuple(view.state),
         fields=lambda: (geo.euler_lagrange_field, geo.vertical_fields), manifold=M,
         scaled_fields=lambda: (geo.scaled_euler_lagrange_field, geo.scaled_vertical_fields,
-                               geo.field_scale),
+                               geo.field_scale), time=view.time,
     )
 
 

@@ -43,12 +43,12 @@ def bordered_matrix(W, mu, Jv):
     return W.hstack(mu.transpose()).vstack(Jv.hstack(zero))
 
 
-def bordered_system(W, mu, F, Jq_v, Jv):
+def bordered_system(W, mu, F, Jq_v, Jv, Jt=None):
     """(K, c) of the tangency equations K [a; λ] = c of constraints χ: the one home of
     their inverse-free form.
 
-    K = [[W, μᵀ], [∂χ/∂v, 0]] (:func:`bordered_matrix`) and c = [F; −∂χ/∂q · v], from
-    W a + μᵀ λ = F and d/dt χ = (∂χ/∂q) v + (∂χ/∂v) a = 0. Eliminating a gives the rows
+    K = [[W, μᵀ], [∂χ/∂v, 0]] (:func:`bordered_matrix`) and c = [F; −∂χ/∂q · v − ∂χ/∂t],
+    from W a + μᵀ λ = F and d/dt χ = (∂χ/∂q) v + (∂χ/∂v) a + ∂χ/∂t = 0. Eliminating a gives the rows
     A λ + b = 0 of :func:`tangency_rows` (A_ji = Z_i(χ_j), b_j = ξ_L(χ_j)), which are the
     rows :func:`nhham.lagrangian.projection.tangency_equations` forms from the fields.
 
@@ -61,6 +61,8 @@ def bordered_system(W, mu, F, Jq_v, Jv):
         ∂χ/∂q · v.
     Jv : matrix, shape (k, n)
         ∂χ/∂v.
+    Jt : matrix of shape (k, 1), or None
+        ∂χ/∂t for constraints that depend on the time (None: autonomous).
 
     Returns
     -------
@@ -78,7 +80,8 @@ def bordered_system(W, mu, F, Jq_v, Jv):
     >>> K.rows, c.rows
     ([[1, 0, -2], [0, 1, 1], [-2, 1, 0]], [[0], [0], [9]])
     """
-    return bordered_matrix(W, mu, Jv), F.vstack(-Jq_v)
+    rhs = -Jq_v if Jt is None else -(Jq_v + Jt)
+    return bordered_matrix(W, mu, Jv), F.vstack(rhs)
 
 
 def tangency_rows(W, mu, F, Jq_v, Jv, solve: Callable = field_solve):

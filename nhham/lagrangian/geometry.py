@@ -405,6 +405,10 @@ class LagrangianGeometry(ConstraintMatrixRank):
             free = dLdq - self.mixed_hessian * self._v
         else:
             free = self._quadratic_forcing()
+        t = getattr(self.system, "time", None)
+        if t is not None and t in self.system.lagrangian.free_symbols:
+            # d/dt(dL/dv) has the term d2L/dv dt when L depends on t (DESIGN.md §2)
+            free -= sp.Matrix([sp.diff(p, t) for p in self.momenta])
         if self.system.has_forces:
             return free + self.system.generalized_forces
         return free
@@ -442,18 +446,26 @@ class LagrangianGeometry(ConstraintMatrixRank):
 
     @cached_property
     def drift(self) -> sp.Matrix:
-        """(d phi_i / d q^A) v^A, shape (m, 1) (term by term, only by the q a term has)."""
+        """(d phi_i / d q^A) v^A + d phi_i / dt, shape (m, 1) (term by term, only by the q a
+        term has; the time's term when phi_i depends on t, DESIGN.md §2), so that
+        d/dt phi_i = drift_i + mu_i . a along a motion."""
         sysm = self.system
         if not sysm.phi:
             return sp.zeros(0, 1)
         v = sysm.velocities
         if not self.fast:
-            return sp.Matrix([
+            drift = sp.Matrix([
                 sum((sp.diff(f, q) * w for q, w in zip(sysm.coordinates, v)), sp.S.Zero)
                 for f in sysm.phi])
-        return sp.Matrix([
-            sp.Add(*[d * v[A] for A, d in sorted(_coordinate_derivatives(f, self._qidx).items())])
-            for f in sysm.phi])
+        else:
+            drift = sp.Matrix([
+                sp.Add(*[d * v[A] for A, d in
+                         sorted(_coordinate_derivatives(f, self._qidx).items())])
+                for f in sysm.phi])
+        t = getattr(sysm, "time", None)
+        if t is not None:
+            drift += sp.Matrix([sp.diff(f, t) for f in sysm.phi])
+        return drift
 
     @cached_property
     def ingredients(self) -> DynamicsIngredients:

@@ -32,7 +32,7 @@ import sympy as sp
 from nhham.errors import ComputationError
 from nhham.lagrangian.algebra import cancel, guard_closed_form, solve_linear
 
-__all__ = ["Projection", "Projected", "tangency_equations", "gradient_rows"]
+__all__ = ["Projection", "Projected", "tangency_equations", "gradient_rows", "time_rates"]
 
 
 def gradient_rows(functions: Sequence, variables: Sequence) -> sp.Matrix:
@@ -53,13 +53,14 @@ def gradient_rows(functions: Sequence, variables: Sequence) -> sp.Matrix:
 
 
 def tangency_equations(gradients: sp.Matrix, field: sp.Matrix | None, vertical: sp.Matrix | None,
-                  normal: Callable = cancel) -> tuple[sp.Matrix | None, sp.Matrix | None]:
+                  normal: Callable = cancel, rates: sp.Matrix | None = None
+                  ) -> tuple[sp.Matrix | None, sp.Matrix | None]:
     """(A, b) of the tangency equations A λ + b = 0 of constraints χ_j for X = ξ + λ^i Z_i.
 
-    A_ji = Z_i(χ_j) = dχ_j · Z_i and b_j = ξ(χ_j) = dχ_j · ξ, each entry passed through
-    ``normal`` (:func:`~nhham.lagrangian.algebra.cancel` for rational entries,
-    :func:`sympy.expand` for the polynomial rows of scaled fields). With χ = φ, A is Cᵀ
-    and b the ξ(φ_i) of the multipliers.
+    A_ji = Z_i(χ_j) = dχ_j · Z_i and b_j = ξ(χ_j) + ∂χ_j/∂t = dχ_j · ξ + ``rates``_j, each
+    entry passed through ``normal`` (:func:`~nhham.lagrangian.algebra.cancel` for rational
+    entries, :func:`sympy.expand` for the polynomial rows of scaled fields). With χ = φ,
+    A is Cᵀ and b the ξ(φ_i) (+ ∂φ_i/∂t) of the multipliers.
 
     Parameters
     ----------
@@ -70,6 +71,9 @@ def tangency_equations(gradients: sp.Matrix, field: sp.Matrix | None, vertical: 
     vertical : sympy.Matrix of shape (m, N), or None
         The rows Z_i; None: A is not formed (returned as None).
     normal : callable, optional
+    rates : sympy.Matrix of shape (k, 1), or None
+        ∂χ_j/∂t for constraints that depend on the time (times δ for scaled fields,
+        :func:`time_rates`); None: autonomous constraints.
 
     Returns
     -------
@@ -96,9 +100,27 @@ def tangency_equations(gradients: sp.Matrix, field: sp.Matrix | None, vertical: 
         A = sp.Matrix(k, vertical.rows, lambda j, i: normal(
             (gradients.row(j) * vertical.row(i).T)[0])) if k else sp.zeros(0, vertical.rows)
     if field is not None:
-        b = sp.Matrix(k, 1, lambda j, _: normal((gradients.row(j) * field)[0])) if k \
-            else sp.zeros(0, 1)
+        b = sp.Matrix(k, 1, lambda j, _: normal((gradients.row(j) * field)[0]
+                                                + (rates[j] if rates is not None else 0))) \
+            if k else sp.zeros(0, 1)
     return A, b
+
+
+def time_rates(functions: Sequence, time, scale=1) -> sp.Matrix | None:
+    """δ ∂χ_j/∂t as a column, the time's part of b_j in :func:`tangency_equations`
+    (``DESIGN.md`` §2: on ℝ × TQ the field is ∂/∂t + ξ); None when ``time`` is None.
+
+    Examples
+    --------
+    >>> import sympy as sp
+    >>> x, t = sp.symbols("x t")
+    >>> time_rates([x - sp.sin(t), x], t).T
+    Matrix([[-cos(t), 0]])
+    """
+    if time is None:
+        return None
+    return sp.Matrix([scale * sp.diff(f, time) for f in functions]) if functions \
+        else sp.zeros(0, 1)
 
 
 def _same(expr):

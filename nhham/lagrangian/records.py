@@ -16,7 +16,8 @@ import sympy as sp
 from nhham.lagrangian.algebra import cancel, solve_linear, tidy, tidy_light
 from nhham.lagrangian.decision import Decision
 from nhham.lagrangian.graphs import Provenance
-from nhham.lagrangian.projection import Projected, Projection, gradient_rows, tangency_equations
+from nhham.lagrangian.projection import (Projected, Projection, gradient_rows,
+                                         tangency_equations, time_rates)
 from nhham.lagrangian.submanifold import Submanifold
 
 __all__ = ["Evidence", "Stage", "ConstraintOutcome", "AlgorithmRun", "tangency_matrix", "solve_on"]
@@ -232,6 +233,9 @@ class AlgorithmRun(ConstraintOutcome):
         None.
     scale : sympy.Expr (computed on first use)
         δ of ``scaled_fields`` (1 when unscaled).
+    time : sympy.Symbol or None
+        The time t of a time-dependent system: b_j gains ∂χ_j/∂t (δ ∂χ_j/∂t for the
+        scaled fields); None for an autonomous one.
     """
 
     rank: int | None
@@ -242,6 +246,7 @@ class AlgorithmRun(ConstraintOutcome):
     manifold: Submanifold | None = field(default=None, compare=False, repr=False)
     scaled_fields: Callable | None = field(default=None, compare=False, repr=False)
     denominator: object = field(default=None, compare=False, repr=False)
+    time: object = field(default=None, compare=False, repr=False)
 
     @cached_property
     def scale(self) -> sp.Expr:
@@ -272,7 +277,8 @@ class AlgorithmRun(ConstraintOutcome):
     @cached_property
     def tangency_rhs(self) -> sp.Matrix:
         """b_j = ξ(χ_j) over the final constraints."""
-        return _tangency_rhs(self.final_constraints, self.base_field, self.variables)
+        return _tangency_rhs(self.final_constraints, self.base_field, self.variables,
+                             time=self.time)
 
     @cached_property
     def _loop_fields(self):
@@ -298,7 +304,10 @@ class AlgorithmRun(ConstraintOutcome):
         free = [i for i in range(len(self.multiplier_symbols)) if i not in cols]
 
         def derivatives():
-            _, b = tangency_equations(grads, xi, None, normal)
+            chis = [self.final_constraints[j] for j in rows]
+            scale = self.scale if self.scaled_fields is not None else 1
+            _, b = tangency_equations(grads, xi, None, normal,
+                                      time_rates(chis, self.time, scale))
             if free:
                 b = b + A.extract(list(range(len(rows))), free) * sp.Matrix(
                     [self.multiplier_symbols[i] for i in free])
@@ -356,10 +365,11 @@ def tangency_matrix(chis, Z, variables, expand: bool = False) -> sp.Matrix:
     return A
 
 
-def _tangency_rhs(chis, xi, variables, expand: bool = False) -> sp.Matrix:
-    """b_j = ξ(χ_j) for the listed constraints (``expand`` as in :func:`tangency_matrix`)."""
+def _tangency_rhs(chis, xi, variables, expand: bool = False, time=None) -> sp.Matrix:
+    """b_j = ξ(χ_j) (+ ∂χ_j/∂t with ``time``) for the listed constraints (``expand`` as in
+    :func:`tangency_matrix`)."""
     _, b = tangency_equations(gradient_rows(list(chis), variables), xi, None,
-                         sp.expand if expand else cancel)
+                         sp.expand if expand else cancel, time_rates(list(chis), time))
     return b
 
 

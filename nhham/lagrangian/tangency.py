@@ -139,6 +139,12 @@ class Tangency:
         return [jacobian_row(c, self.system.coordinates) for c in self.chis]
 
     @cached_property
+    def Jt(self) -> list | None:
+        """∂χ/∂t of each constraint when the system depends on the time, else None."""
+        t = getattr(self.system, "time", None)
+        return None if t is None else [sp.diff(c, t) for c in self.chis]
+
+    @cached_property
     def Jv(self) -> list:
         rows_of = {f: i for i, f in enumerate(self.system.phi)}
         return [self.mu[rows_of[c]] if c in rows_of else jacobian_row(c, self.v)
@@ -165,8 +171,9 @@ class Tangency:
         F = evaluate(self.F, env, cache)
         vel = [env[s] for s in self.v]
         n = self.n
+        Jt = None if self.Jt is None else _column(evaluate(self.Jt, env, cache))
         K, c = bordered_system(ListMatrix(W), ListMatrix(mu, n), _column(F),
-                               ListMatrix(Jq, n) * _column(vel), ListMatrix(Jv, n))
+                               ListMatrix(Jq, n) * _column(vel), ListMatrix(Jv, n), Jt)
         J = [a + b for a, b in zip(Jq, Jv)]
         return K.rows, [x for x, in c.rows], J
 
@@ -227,7 +234,8 @@ class Tangency:
         still = [j for j in still if lifts.get(self.chis[j]) not in chis]
         known = {sp.expand(c) for c in self.chis} if still else set()
         for j in still:
-            lift = sp.expand(sum((a * b for a, b in zip(self.Jq[j], self.v)), sp.S.Zero))
+            lift = sp.expand(sum((a * b for a, b in zip(self.Jq[j], self.v)),
+                                 self.Jt[j] if self.Jt is not None else sp.S.Zero))
             if lift != 0 and lift not in known and -lift not in known:
                 return None
         return moving if len(moving) == self.m else None
@@ -354,10 +362,12 @@ def tangency_sampled(system, hessian, forcing, primary, manifold) -> TangencyVer
     mu = system.mu
     Jv = sp.Matrix([jacobian_row(c, v) for c in chis]) if chis else sp.zeros(0, n)
     Jq = sp.Matrix([jacobian_row(c, q) for c in chis]) if chis else sp.zeros(0, n)
+    t = getattr(system, "time", None)
+    Jt = None if t is None or not chis else ListMatrix([[sp.diff(c, t)] for c in chis], 1)
     K, c = (sp.Matrix(part.rows) for part in bordered_system(
         ListMatrix(hessian.tolist(), n), ListMatrix(mu.tolist(), n),
         ListMatrix(forcing.tolist(), 1), ListMatrix(Jq.tolist(), n) * _column(v),
-        ListMatrix(Jv.tolist(), n)))
+        ListMatrix(Jv.tolist(), n), Jt))
     # One lambdified function for the three matrices (K is inside [K | c]).
     rK, rAug, jac = manifold.sampled_ranks([K, sp.Matrix.hstack(K, c),
                                             sp.Matrix.hstack(Jq, Jv) if chis else sp.zeros(0, 0)])

@@ -132,10 +132,11 @@ def trajectory_diagnostics(model, t, y, work=None, *, residual_tol: float = 1e-8
         nan = float("nan")
         return Diagnostics(np.array([]), np.array([]), np.array([]), nan, nan, nan, nan, nan,
                            nan, nan, 0, tuple(notes))
+    each = _at_times(model, tf)
     with np.errstate(all="ignore"):
-        E = np.atleast_1d(_blockwise(model.energy, Yf))
-        rmax = _blockwise(lambda B: _row_max(np.abs(model.residuals(B))), Yf)
-        rrel = _blockwise(lambda B: _row_max(model.scaled_residuals(B)), Yf)
+        E = np.atleast_1d(each(lambda M, B: np.atleast_1d(M.energy(B)), Yf))
+        rmax = each(lambda M, B: _row_max(np.abs(M.residuals(B))), Yf)
+        rrel = each(lambda M, B: _row_max(M.scaled_residuals(B)), Yf)
     if work is None:
         work = _trapezoid_work(model, tf, Yf)
     else:
@@ -144,16 +145,17 @@ def trajectory_diagnostics(model, t, y, work=None, *, residual_tol: float = 1e-8
     e_drift = float(drift.max())
     balance = float(np.max(np.abs(E - E[0] - work)))
     idx = _cond_indices(len(tf))
+    each = _at_times(model, tf[idx])
     with np.errstate(all="ignore"):
-        cC = np.atleast_1d(_blockwise(model.cond_C, Yf[idx]))
-        cW, ratio = np.atleast_2d(_blockwise(lambda B: _w_conditions(model, B), Yf[idx])).T
+        cC = np.atleast_1d(each(lambda M, B: np.atleast_1d(M.cond_C(B)), Yf[idx]))
+        cW, ratio = np.atleast_2d(each(_w_conditions, Yf[idx])).T
     cond_C_max = float(np.nanmax(cC)) if cC.size else 1.0
     cond_W_max = float(np.nanmax(cW)) if cW.size else 1.0
     if max(cond_W_max, cond_C_max) > cond_warn:
         # a spread of W's diagonal (a mass ratio, units) is no near-singularity: the
         # warnings read the conditions with the diagonals scaled to 1, as the solves scale
         with np.errstate(all="ignore"):
-            cW, cC = _blockwise(lambda B: _scaled_conditions(model, B), Yf[idx]).T
+            cW, cC = each(_scaled_conditions, Yf[idx]).T
     if np.nanmax(cW, initial=1.0) > cond_warn:  # then C is not what to look at
         first = tf[idx][np.argmax(cW > cond_warn)]
         notes.append(f"cond(W) = {np.nanmax(cW):.3g} (its diagonal scaled to 1) exceeds "
@@ -218,10 +220,25 @@ def _cond_indices(K):
     return np.unique(idx)
 
 
+def _at_times(model, times):
+    """``each(f, Y)``: f(model, block) over the rows of Y (blockwise), or row by row with
+    the model at each row's time when t enters L or the constraints (E_L, the residuals,
+    the conditions and the power change with t there; with t in the forces alone they
+    do not, or the integrator carries them)."""
+    if not model.time_in_geometry:
+        return lambda f, Y: _blockwise(lambda B: f(model, B), Y)
+
+    def each(f, Y):
+        rows = [np.asarray(f(model.at_time(tk), Y[k:k + 1]))[0] for k, tk in enumerate(times)]
+        return np.array(rows)
+
+    return each
+
+
 def _trapezoid_work(model, t, Y):
     with np.errstate(all="ignore"):
-        P = _blockwise(lambda B: np.atleast_1d(model.evaluate(B)[2]), Y) if len(t) > 1 \
-            else np.zeros(1)
+        P = _at_times(model, t)(lambda M, B: np.atleast_1d(M.evaluate(B)[2]), Y) \
+            if len(t) > 1 else np.zeros(1)
     if len(t) == 1:
         return np.zeros(1)
     inc = 0.5 * (P[1:] + P[:-1]) * np.diff(t)

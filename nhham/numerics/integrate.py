@@ -49,7 +49,7 @@ from typing import Any, Mapping
 
 import numpy as np
 
-from nhham.autonomy import require_autonomous
+from nhham.autonomy import TIME_IN_GEOMETRY, require_autonomous
 from nhham.errors import ComputationError, InconsistentInitialDataError, InputError
 from nhham.numerics.compiled_loop import run_compiled
 from nhham.numerics.diagnostics import (Diagnostics, Singularity, singularity_at,
@@ -459,7 +459,9 @@ def simulate(system_or_model, t_span, y0, *, method: str | Method = DEFAULT_METH
     _check_model(spec, common.baumgarte, model)
     scipy_features = common.dense_output or common.events is not None
     compiled_loop = _use_compiled_loop(model, spec, loop, scipy_features)
-    y_init, initial = _initial_state(model, y0, common.project_initial, common.initial_tol)
+    # on M_1(t0) when t enters the constraints (at_time: the model itself otherwise)
+    y_init, initial = _initial_state(model.at_time(t0), y0, common.project_initial,
+                                     common.initial_tol)
     recorder = _recorder(model, spec, common)
     settings = _settings(spec, own, common, model, recorder)
     residual_tol = common.residual_tol
@@ -598,6 +600,8 @@ def _as_model(obj, backend, background=False) -> NumericModel:
 def _check_model(spec, baumgarte, model):
     """What the method needs of the model (the options are checked by
     :func:`~nhham.numerics.simulate_options.check_method_options`)."""
+    require_autonomous("method", model.time_in_geometry and not spec.takes_time,
+                       method=spec.name, what=TIME_IN_GEOMETRY)
     if model.forced and not spec.takes_forces:
         raise InputError(f"method: {spec.name!r} is {spec.forces_refused}; this system has "
                          f"forces (choose an adaptive method such as {DEFAULT_METHOD})",

@@ -380,6 +380,7 @@ def _check_inputs(model):
         raise InputError(f"linearize: no steady value for the input(s) {', '.join(unset)} "
                          f"(a scene's [steady] gives one for every input; in Python: "
                          f"model.with_parameters({unset[0]}=...))", key="steady")
+    require_autonomous("linearize_geometry", model.time_in_geometry, key=model.timed_key)
     require_autonomous("linearize", model.time_slot is not None)
 
 

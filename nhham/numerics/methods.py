@@ -224,7 +224,7 @@ METHODS = MappingProxyType({m.name: m for m in (
            loops=("fixed",), takes_time=False, summary="classical Runge-Kutta 4"),
     Method("reference", family="reference", order=0,
            stepper="nhham.numerics.reference:reference_solution", loops=("mpmath",),
-           keeps_constraints=True, takes_time=False,
+           keeps_constraints=True,
            summary="Gragg-Bulirsch-Stoer extrapolation in mpmath (for measuring errors)"),
 )})
 

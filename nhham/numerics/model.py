@@ -212,6 +212,12 @@ class NumericModel:
     forced = property(lambda self: self.layout.get("forced", False))
     input_names = property(lambda self: self.layout.get("input_names", ()))
     time_slot = property(lambda self: self.layout.get("time_slot"))
+    #: t in L or a constraint (not only in the forces): E_L, the residuals and the
+    #: conditions of a state depend on its time.
+    time_in_geometry = property(lambda self: bool(self.layout.get("time_in_geometry")))
+    #: The first scene key whose expression uses t (``lagrangian``, ``constraints[0]``),
+    #: or "" (t in the forces only, or not at all).
+    timed_key = property(lambda self: self.layout.get("time_in_geometry") or "")
 
     @property
     def names(self) -> tuple:

@@ -75,9 +75,15 @@ class _MpField:
         self.n, self.m, self.k = model.n, model.m, model.k
         self.p = [mpmath.mpf(x) for x in model.parameter_values]
         self.nfev = 0
+        # a time-dependent system: t is the state's last entry (t' = 1), copied into its
+        # parameter slot at every evaluation
+        self.slot = model.time_slot
+        self.timed = int(self.slot is not None)  # entries after the work in the state
 
     def __call__(self, z):
         n, m = self.n, self.m
+        if self.slot is not None:
+            self.p[self.slot] = z[-1]
         out = self.model.kernels.mp("saddle", z[:2 * n], self.p)
         self.nfev += 1
         N = n + m
@@ -101,8 +107,8 @@ class _MpField:
         x = list(mpmath.lu_solve(K, rhs))
         power = -mpmath.fsum(x[n + c] * muv[c] for c in range(m)) if m else mpmath.mpf(0)
         if self.model.layout.get("forced"):
-            power += out[-1]  # the applied power Q . v
-        return list(v) + x[:n] + [power]
+            power += out[-1]  # the applied power Q . v (- dL/dt)
+        return list(v) + x[:n] + [power] + ([mpmath.mpf(1)] if self.slot is not None else [])
 
 
 def reference_solution(model, y0, t_span, *, digits: int = 30, t_eval=None, tol=None,
@@ -141,6 +147,8 @@ def _integrate(model, y0, t0, t1, digits, t_eval, tol, kmax, max_steps, progress
     z = [mpmath.mpf(float(x)) if not isinstance(x, mpmath.mpf) else x for x in y0]
     z.append(mpmath.mpf(0))
     T0, T1 = mpmath.mpf(t0), mpmath.mpf(t1)
+    if f.slot is not None:
+        z.append(T0)  # the time, integrated exactly by every stage (t' = 1)
     outputs = [mpmath.mpf(float(x)) for x in t_eval] if t_eval is not None else None
     direction = 1 if t1 > t0 else -1
     t = T0
@@ -219,7 +227,7 @@ def _gbs_step(f, z, H, kmax, tol):
         T.append(row)
         if j >= 3:
             a, b = row[-1], row[-2]
-            err = max(abs(a[i] - b[i]) / (1 + abs(a[i])) for i in range(d - 1))
+            err = max(abs(a[i] - b[i]) / (1 + abs(a[i])) for i in range(d - 1 - f.timed))
             if err <= tol:
                 return a, err, j
     return None

@@ -273,8 +273,8 @@ class _Store:
                                         else (t_eval[self.i] >= t)):
             dense = make_dense() if dense is None else dense
             point = np.asarray(dense(t_eval[self.i]), dtype=float)
-            if self.projection:
-                point[:-1] = self.model.project(point[:-1]).y
+            if self.projection:  # onto M_1 at that time (t may enter the constraints)
+                point[:-1] = self.model.at_time(t_eval[self.i]).project(point[:-1]).y
             self.recorder.add(float(t_eval[self.i]), point)
             self.i += 1
 
@@ -288,7 +288,7 @@ def _project_solver(solver, model, fun, cls, t1, opts):
     """Project the solver's current state onto M_1 and make the solver consistent."""
     n2 = 2 * model.n
     z = solver.y.copy()
-    z[:n2] = model.project(z[:n2]).y
+    z[:n2] = model.at_time(solver.t).project(z[:n2]).y  # M_1 at the step's time
     if isinstance(solver, LSODA):
         return _reset_lsoda(solver, z, fun, cls, t1, opts)
     solver.y = z

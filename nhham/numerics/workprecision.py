@@ -112,9 +112,10 @@ class WorkPrecisionResult:
     skipped : tuple of (method, setting, reason)
         Settings not run (a looser one of the same method was already slow).
     forced : bool
-        The system has forces: energy is not conserved, and the table shows the energy
-        balance residual max |E(t) - E(0) - ∫ P dt| (P the power of the applied, dissipative
-        and constraint forces) instead of the energy drift.
+        The system has forces, or t in L or a constraint: energy is not conserved, and the
+        table shows the energy balance residual max |E(t) - E(0) - ∫ P dt| (P the power of
+        the applied, dissipative and constraint forces, and -dL/dt) instead of the energy
+        drift.
     kkt_solve : {"saddle", "null-space", "mixed"}
         Which solve gave the constrained accelerations at the initial state and the
         reference's end (:func:`nhham.numerics.nullspace.needs_null_space`).
@@ -309,7 +310,7 @@ def work_precision(system_or_model, y0, t_span, *, methods=None, tolerances=DEFA
                     too_slow = f"{label} {text} took {row.wall_time_s:.3g} s"
     finite = [r.error for r in rows if r.status == 0 and r.error > 0]
     if finite and ref_error * 100 > min(finite):
-        advice = ("the forces depend on time: the reference is float64 DOP853, read the "
+        advice = (f"{_timed(model)}: the reference is float64 DOP853, read the "
                   "smallest errors as its own" if model.time_slot is not None else
                   "raise reference_digits" + (" (leave out --quick)" if quick else ""))
         warnings.warn(f"the reference error estimate {ref_error:.1e} is not 100 times "
@@ -317,7 +318,8 @@ def work_precision(system_or_model, y0, t_span, *, methods=None, tolerances=DEFA
                       stacklevel=2)
     ratio = diagonal_ratio(model.geometry(np.array([y_init, y_ref], dtype=float))[0])
     return WorkPrecisionResult(tuple(rows), model.name, (t0, t1), digits, ref_error, ref_time,
-                               model.backend, ref_text, tuple(skipped), forced=model.forced,
+                               model.backend, ref_text, tuple(skipped),
+                               forced=model.forced or model.time_in_geometry,
                                kkt_solve=kkt_solve_name(ratio > KKT_RATIO),
                                kkt_ratio_max=float(np.nanmax(ratio)))
 
@@ -328,6 +330,13 @@ def _fixed_step_methods(model) -> list:
     return list(names(lambda m: m.fixed_step and (model.quadratic or not m.needs_quadratic)
                       and (not model.forced or m.takes_forces)
                       and (model.time_slot is None or m.takes_time)))
+
+
+def _timed(model) -> str:
+    """Where the time enters, for the words about the reference of a timed system (the
+    mpmath reference takes t, but at the bench's digits it would take minutes)."""
+    return ("t enters L or the constraints" if model.time_in_geometry
+            else "the forces depend on time")
 
 
 def _say(*args, **kwargs):
@@ -361,7 +370,7 @@ def _reference(model, y0, t_span, quick, digits, progress):
         scale = float(np.linalg.norm(y_ref)) or 1.0
         error = (float(np.linalg.norm(looser.y[:, -1] - y_ref)) / scale if looser.success
                  else math.inf)
-        why = "--quick" if quick else "the forces depend on time: no mpmath reference"
+        why = "--quick" if quick else f"{_timed(model)}: no mpmath reference"
         text = (f"float64 DOP853 rtol={QUICK_REFERENCE_RTOL:.0e} with projection ({why}; "
                 f"error estimated by a run at 10x the tolerance)")
         digits = 16

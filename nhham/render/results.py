@@ -61,7 +61,21 @@ def classify_data(analysis, classes=None) -> dict:
         "first_class_coefficients": coefficients,
         "inconsistency": inconsistency,
     })
+    if system.time is not None:  # (only then: autonomous answers keep their keys)
+        out["time"] = time_data(system)
     return out
+
+
+def time_data(system) -> dict:
+    """Which question a verdict on a time-dependent system answers, and where t enters:
+    t is a parameter without a value (DESIGN.md §2), so the verdict is the one at a
+    generic instant (for all t but a proper algebraic subset)."""
+    labels = system.m1_labels
+    return {"name": str(system.time), "question": "generic instant (for all t but a proper "
+            "algebraic subset; t a parameter without a value)",
+            "lagrangian": bool(system.lagrangian_depends_on_time),
+            "constraints": [{"label": lab, "time_dependent": bool(dep)}
+                            for lab, dep in zip(labels, system.time_dependent)]}
 
 
 def classify_warnings(analysis, classes=None) -> list:
@@ -97,6 +111,11 @@ def classify_text(title: str, data: dict) -> str:
     if data["first_class"] is not None:
         rows += [("first class", str(data["first_class"])),
                  ("second class", str(data["second_class"]))]
+    if data.get("time"):
+        timed = [c["label"] for c in data["time"]["constraints"] if c["time_dependent"]]
+        rows += [("time t", data["time"]["question"]),
+                 ("depends on t", ", ".join((["L"] if data["time"]["lagrangian"] else [])
+                                            + timed) or "the forces only")]
     lines.append(table(rows))
     lines.append("stages:")
     lines.append(table([(f"M_{s['index']}", f"rank {s['rank']}", ", ".join(s["labels"]))

@@ -160,7 +160,7 @@ def evaluate(study, ctx, region, until: float | None = None) -> dict:
                          projection=bool(opts["projection"]), deadline=deadline)
     if (runs.status == int(Status.TIME_LIMIT)).any():
         raise BudgetExceeded("the study's --budget ran out during a chunk's runs")
-    E0, E1, residual = _ends(model, P, Y0, runs.y_final)
+    E0, E1, residual = _ends(model, P, Y0, runs.y_final, runs.t_final)
     work = np.where(np.isnan(runs.work), 0.0, runs.work)
     status = np.where(unstarted, NOT_STARTED, runs.status)
     Y1 = np.where(unstarted[:, None], np.nan, runs.y_final)
@@ -208,8 +208,11 @@ def _off_manifold(model, P, Y0) -> np.ndarray:
         for p, y in zip(P, Y0)])
 
 
-def _ends(model, P, Y0, Y1) -> tuple:
-    """(E at the start, E at the end, largest scaled residual at the end), one per run."""
+def _ends(model, P, Y0, Y1, T1=None) -> tuple:
+    """(E at the start, E at the end, largest scaled residual at the end), one per run
+    (at t = 0 and at the runs' end times ``T1`` when t enters L or a constraint)."""
+    if model.time_in_geometry:
+        return _timed_ends(model, P, Y0, Y1, T1)
     if P is None:
         return model.energy(Y0), model.energy(Y1), model.scaled_residuals(Y1).max(
             axis=1, initial=0.0)
@@ -218,6 +221,19 @@ def _ends(model, P, Y0, Y1) -> tuple:
         m = model.with_parameters(**dict(zip(model.parameter_names, p)))
         E0[i], E1[i] = m.energy(Y0[i]), m.energy(Y1[i])
         res[i] = float(np.max(m.scaled_residuals(Y1[i]), initial=0.0))
+    return E0, E1, res
+
+
+def _timed_ends(model, P, Y0, Y1, T1) -> tuple:
+    """:func:`_ends` with the model at each state's time."""
+    E0, E1, res = np.empty(len(Y0)), np.empty(len(Y0)), np.empty(len(Y0))
+    for i in range(len(Y0)):
+        m = model if P is None else model.with_parameters(
+            **dict(zip(model.parameter_names, P[i])))
+        E0[i] = m.at_time(0.0).energy(Y0[i])
+        end = m.at_time(T1[i])
+        E1[i] = end.energy(Y1[i])
+        res[i] = float(np.max(end.scaled_residuals(Y1[i]), initial=0.0))
     return E0, E1, res
 
 

@@ -167,22 +167,27 @@ class System:
         ins = _input_symbols(inputs, table, problems)
         applied, diss, uses_time = _forces(forces, dissipation, coords, vels, table, ins,
                                            problems)
-        if uses_time or ins:
-            params = params + ins + ((TIME,) if uses_time else ())
 
         before = len(problems)
-        lag = _to_expr(lagrangian, table, "lagrangian", problems)
+        # t is the time in L and the constraints too, unless a parameter is named t
+        timed = table if "t" in table else dict(table, t=TIME)
+        lag = _to_expr(lagrangian, timed, "lagrangian", problems)
         cons = tuple(
-            _to_expr(c, table, f"constraints[{i}]", problems) for i, c in enumerate(constraints)
+            _to_expr(c, timed, f"constraints[{i}]", problems) for i, c in enumerate(constraints)
         )
         hols = tuple(
-            _to_expr(g, table, f"holonomic[{i}]", problems) for i, g in enumerate(holonomic)
+            _to_expr(g, timed, f"holonomic[{i}]", problems) for i, g in enumerate(holonomic)
         )
         problems[before:] = [_input_hint(p, ins) for p in problems[before:]]
         if problems:
             raise ValidationError(problems)
+        uses_time = uses_time or (timed is not table and any(
+            TIME in e.free_symbols for e in (lag,) + cons + hols))
+        if uses_time or ins:
+            params = params + ins + ((TIME,) if uses_time else ())
+        self.__dict__["_time_appended"] = uses_time  # read by the property ``time``
 
-        known = set(table.values())
+        known = set(timed.values())
         for label, expr in [("lagrangian", lag)] + _labelled(cons, hols):
             problems += expression_problems(label, expr, coords + vels, known)
         forced = known | set(ins) | {TIME}
@@ -251,8 +256,9 @@ class System:
 
     @property
     def time(self) -> sp.Symbol | None:
-        """The time ``t`` when the forces depend on it (a parameter then), else None."""
-        return TIME if TIME in self.parameters[len(self.parameters) - 1:] else None
+        """The time ``t`` when L, a constraint or a force depends on it (the last parameter
+        then), else None (a parameter declared under the name t is no time)."""
+        return TIME if self.__dict__.get("_time_appended") else None
 
     @property
     def time_slot(self) -> int | None:
@@ -341,11 +347,27 @@ class System:
     # ----------------------------------------------------- constraint pieces
     @cached_property
     def complete_lifts(self) -> tuple[sp.Expr, ...]:
-        """g^c = (dg/dq^A) v^A for every holonomic constraint g."""
+        """g^c = (dg/dq^A) v^A (+ dg/dt when g depends on the time) for every holonomic
+        constraint g: d/dt g along a motion, an affine constraint (``DESIGN.md`` §2)."""
+        t = self.time
         return tuple(
-            sum((sp.diff(g, q) * v for q, v in zip(self.coordinates, self.velocities)), sp.S.Zero)
+            sum((sp.diff(g, q) * v for q, v in zip(self.coordinates, self.velocities)),
+                sp.diff(g, t) if t is not None else sp.S.Zero)
             for g in self.holonomic
         )
+
+    @cached_property
+    def time_dependent(self) -> tuple[bool, ...]:
+        """Whether each constraint of :attr:`m1_labels` (the g, then the rows of phi)
+        depends explicitly on the time t."""
+        t = self.time
+        return tuple(t is not None and t in sp.sympify(e).free_symbols
+                     for e in self.holonomic + self.phi)
+
+    @property
+    def lagrangian_depends_on_time(self) -> bool:
+        """True when L depends explicitly on the time t (dE_L/dt then gains -dL/dt)."""
+        return self.time is not None and self.time in self.lagrangian.free_symbols
 
     @cached_property
     def phi(self) -> tuple[sp.Expr, ...]:

@@ -2,9 +2,9 @@
 
 A coordinate ``q1(t)`` becomes the symbol ``q1`` and its derivative ``q1_dot``
 (:func:`plain_map`); generalized speeds u are replaced by the q' they stand for through
-the kinematic differential equations (:func:`speed_substitution`); a term that cannot
-be part of an autonomous system on TQ (a second derivative, an unknown function of
-time, the time itself) is named in a problem (:func:`convert`). Every check appends to
+the kinematic differential equations (:func:`speed_substitution`); sympy's time is
+nhham's ``t`` (``System.time``); a term that cannot be part of a system on TQ (a second
+derivative, an unknown function of time) is named in a problem (:func:`convert`). Every check appends to
 the caller's list of problems, so that the user sees them all at once.
 """
 
@@ -14,7 +14,6 @@ import sympy as sp
 from sympy.core.function import AppliedUndef
 from sympy.physics import mechanics as me
 
-from nhham.autonomy import nonautonomous
 from nhham.errors import InputError, ValidationError
 from nhham.system.expressions import short
 from nhham.system.naming import velocity_symbol
@@ -138,7 +137,7 @@ def convert(label, expr, to_plain, reserved, t, problems):
 
 
 def inexpressible(term, to_plain, t):
-    """Why a term cannot be part of an autonomous system on TQ, or ''."""
+    """Why a term cannot be part of a system on TQ (an explicit t is the time), or ''."""
     derivs = [d for d in term.atoms(sp.Derivative) if d not in to_plain]
     if derivs:
         return (f"contains {short(derivs[0], QUOTE)}: only coordinates and their first "
@@ -147,9 +146,7 @@ def inexpressible(term, to_plain, t):
     if funcs:
         return (f"contains {short(funcs[0], QUOTE)}, a function of time that is not one of the "
                 f"coordinates q")
-    if t in term.xreplace(to_plain).free_symbols:
-        return nonautonomous("mechanics", t=t)
-    return ""
+    return ""  # an explicit t is the time (System.time)
 
 
 def remaining_symbols(exprs, reserved):

@@ -71,6 +71,8 @@ def initial_residuals(scene: Scene) -> dict:
     system: System = scene.system
     point = {sp.Symbol(name): sp.Float(value) for name, value in (scene.initial or {}).items()}
     point.update({p: sp.Float(v) for p, v in system.parameter_values.items()})
+    if system.time is not None:  # a scene's runs start at t = 0
+        point[system.time] = sp.Float(0)
     residuals, problems = {}, []
     for path, expr in labelled_constraints(system):
         missing = sorted(s.name for s in expr.free_symbols if s not in point)
@@ -99,8 +101,8 @@ def labelled_constraints(system):
     """(key path, expression) for every constraint the initial state must meet."""
     items = []
     for i, g in enumerate(system.holonomic):
-        lift = sum((sp.diff(g, q) * v for q, v in zip(system.coordinates, system.velocities)),
-                   sp.S.Zero)
+        # the complete lift: dg/dq v (+ dg/dt when g depends on the time)
+        lift = system.complete_lifts[i]
         items.append((f"holonomic[{i}]", g))
         items.append((f"holonomic[{i}] (time derivative)", lift))
     labels = getattr(system, "constraint_labels", ())

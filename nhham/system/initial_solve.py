@@ -137,6 +137,8 @@ def complete_initial(system: "System", data: InitialData,
     given_values = dict(values or {})
     params.update({p: sp.Float(given_values[p.name]) for p in system.parameters
                    if p.name in given_values})
+    if system.time is not None:  # a scene's runs start at t = 0
+        params.setdefault(system.time, sp.Float(0))
     values = {name: _number(name, expr, params) for name, expr in data.given.items()}
     q_names = [q.name for q in system.coordinates]
     v_names = [v.name for v in system.velocities]

@@ -36,7 +36,6 @@ from typing import TYPE_CHECKING, Mapping
 
 import sympy as sp
 
-from nhham.autonomy import nonautonomous
 from nhham.errors import InputError, ParseError, SceneError, key_of
 from nhham.system.contacts import parse_contacts
 from nhham.system.expressions import parse_expression
@@ -410,9 +409,12 @@ def _parse_expressions(spec: SceneSpec) -> dict:
     items += [(f"constraints[{i}]", c) for i, c in enumerate(spec.constraints)]
     items += [(f"holonomic[{i}]", g) for i, g in enumerate(spec.holonomic)]
     parsed, problems = {}, []
+    # the time t may appear in L and the constraints (DESIGN.md §2), unless a parameter
+    # is named t
+    scene_table = table if "t" in table else dict(table, t=TIME)
     for path, text in items:
         try:
-            parsed[path] = parse_expression(text, table, where=path)
+            parsed[path] = parse_expression(text, scene_table, where=path)
         except ParseError as exc:
             problems.append(str(exc) + _declare_hint(getattr(exc, "unknown_name", None),
                                                      spec.inputs))
@@ -476,8 +478,6 @@ def _declare_hint(name: str | None, inputs=()) -> str:
     if name in inputs:
         return (" (an input may appear in the forces and the dissipation only, not in L or "
                 "the constraints)")
-    if name == "t":
-        return nonautonomous("scene")
     if name.endswith("_ddot"):
         return " (accelerations may not appear in L or the constraints)"
     return (f" (a parameter must be declared: parameters = {{ {name} = <value> }} or "

@@ -5,8 +5,7 @@ problem one line starting with the key path (``lagrangian``, ``constraints[1]``)
 
 - plain symbols only: a ``sympy.physics.mechanics`` dynamicsymbol ``x(t)`` or its
   derivative is pointed to :func:`nhham.from_mechanics`, an unknown symbol to the
-  ``parameters`` (and a time ``t`` to the fact that systems are autonomous: declaring
-  it a parameter would freeze time);
+  ``parameters`` (the time ``t`` is known to :class:`~nhham.system.System` itself);
 - real data (:func:`nhham.system.numbers.number_problems`): ``asin(2)`` or
   ``sympy.I`` would otherwise lose their imaginary part in the numbers;
 - smooth functions of the state: ``Abs``, ``sign`` and other kinks or jumps of the
@@ -24,7 +23,6 @@ import unicodedata
 import sympy as sp
 from sympy.core.function import AppliedUndef
 
-from nhham.autonomy import nonautonomous
 from nhham.system.expressions import short, to_text
 from nhham.system.naming import as_symbol
 from nhham.system.numbers import number_problems
@@ -104,8 +102,6 @@ def expression_problems(label: str, expr: sp.Expr, state, known) -> list[str]:
 
 
 def _unknown_advice(unknown) -> str:
-    if "t" in unknown:
-        return nonautonomous("screening")
     return "; declare parameters in parameters"
 
 

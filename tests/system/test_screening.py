@@ -59,11 +59,11 @@ def test_dynamicsymbols_are_pointed_to_from_mechanics():
     assert "from_mechanics" in str(error)
 
 
-def test_explicit_time_is_not_advised_to_be_a_parameter():
-    """Declaring t a parameter would freeze time: the advice says systems are autonomous."""
-    error = refused(constraints=[xd - sp.Symbol("t") * yd])
-    assert "constraints[0]: unknown symbol(s) t" in str(error)
-    assert "autonomous" in str(error) and "declare parameters" not in str(error)
+def test_explicit_time_is_the_time_and_other_names_are_parameters_to_declare():
+    """t in a constraint is the time (System.time, the last parameter), not unknown."""
+    system = nhham.System(["x", "y", "z"], L_free, parameters={"m": 1.0},
+                          constraints=[xd - sp.Symbol("t") * yd])
+    assert system.time == sp.Symbol("t") and system.parameters[-1] == system.time
     other = refused(lagrangian=L_free + sp.Symbol("k") * x)
     assert "unknown symbol(s) k" in str(other) and "declare parameters in parameters" in str(other)
 

@@ -53,6 +53,20 @@ static int project_state(double *z, const double *p, double tol, int maxiter) {
     return NHHAM_SUCCESS;
 }
 
+/* project_state onto M_1 at the time t: a time-dependent constraint reads t from its
+   parameter slot. */
+static int project_at(double *z, const double *pext, double t, double tol, int maxiter) {
+#ifdef NHHAM_TIME_SLOT
+    double pt[NPAR + 2];
+    for (int i = 0; i < NPAR + 2; ++i) pt[i] = pext[i];
+    pt[NHHAM_TIME_SLOT] = t;
+    return project_state(z, pt, tol, maxiter);
+#else
+    (void)t;
+    return project_state(z, pext, tol, maxiter);
+#endif
+}
+
 /* f = (dy, power) at z; on failure the time and state go to fail. */
 static int erk_field(const double *z, double t, const double *pext, double *f, long *nfev,
                      double *fail) {
@@ -237,7 +251,7 @@ int nhham_erk(const int *info, const double *tab, double *st, double t_bound, do
         ++*nsteps;
         for (int i = 0; i < 2 * NQ; ++i) if (!isfinite(z[i]) || fabs(z[i]) > 1e150) return NHHAM_NONFINITE;
         if (projection) {
-            if ((status = project_state(z, pext, proj_tol, proj_maxiter))) return status;
+            if ((status = project_at(z, pext, *t, proj_tol, proj_maxiter))) return status;
             if ((status = erk_field(z, *t, pext, f, nfev, fail))) return status;
         }
         if (n_eval == 0) {
@@ -277,7 +291,8 @@ int nhham_erk(const int *info, const double *tab, double *st, double t_bound, do
             }
             double *o = out_z + *nout * NZ;
             erk_dense(dop, s, np_, K, P, F, zold, h, (t_eval[*i_eval] - t0) / h, o);
-            if (projection && (status = project_state(o, pext, proj_tol, proj_maxiter)))
+            if (projection && (status = project_at(o, pext, t_eval[*i_eval], proj_tol,
+                                                   proj_maxiter)))
                 return status;
             out_t[*nout] = t_eval[*i_eval];
             ++*nout;

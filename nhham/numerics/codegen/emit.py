@@ -177,9 +177,14 @@ def _generate(system, path: str) -> dict:
 
     # With forces the saddle kernel ends with the applied power Q . v (dE_L/dt gains
     # it: the energy balance of a forced or dissipative system).
+    # With L depending on t the same entry carries -dL/dt: dE_L/dt = Q . v - dL/dt
+    # - lambda . (mu v) (DESIGN.md §2).
+    timed_L = system.lagrangian_depends_on_time
+    powered = system.has_forces or timed_L
     applied = ([R(sp.Add(*[f * v for f, v in zip(system.generalized_forces,
-                                                  system.velocities)]))]
-               if system.has_forces else [])
+                                                  system.velocities)])
+                  - (sp.diff(system.lagrangian, system.time) if timed_L else 0))]
+               if powered else [])
     kernels = {
         "saddle": ("qv", W + F + mu + drift + h + g + applied),
         "geometry": ("q", W + mu + h + g),
@@ -198,9 +203,9 @@ def _generate(system, path: str) -> dict:
     python = _python_module(kernels, printed, n, len(system.parameters))
     slot = system.time_slot
     c = _c_module(printed, n, m, k, len(system.parameters), path,
-                  forced=system.has_forces, time_slot=slot)
+                  forced=powered, time_slot=slot)
     c_complex = _c_complex_module(printed, n, m, k, len(system.parameters),
-                                  forced=system.has_forces)
+                                  forced=powered)
     layout = {
         "n": n, "m": m, "k": k,
         "coordinate_names": tuple(q.name for q in system.coordinates),
@@ -213,12 +218,27 @@ def _generate(system, path: str) -> dict:
         "linear_constraints": system.is_linear,
         "name": system.name,
         "kernels": tuple(kernels),
-        "forced": system.has_forces,
+        "forced": powered,
+        # t in L or a constraint: the energy, residuals and conditions change with t;
+        # the first scene key that uses it ("" for none)
+        "time_in_geometry": _first_timed_key(system),
         "input_names": tuple(u.name for u in system.inputs),
         "time_slot": slot,
         "complex_kernels": bool(c_complex),
     }
     return {"python": python, "c": c, "c_complex": c_complex, "layout": layout}
+
+
+def _first_timed_key(system) -> str:
+    """``lagrangian``, ``holonomic[i]`` or ``constraints[i]``: the first that depends on
+    the time t, or ""."""
+    if system.lagrangian_depends_on_time:
+        return "lagrangian"
+    nh = len(system.holonomic)
+    labels = system.m1_labels[:nh] + system.constraint_labels[nh:]
+    timed = [lab for lab, dep in zip(labels, system.time_dependent[:nh] +
+                                     system.time_dependent[2 * nh:]) if dep]
+    return timed[0] if timed else ""
 
 
 def _renaming(system) -> dict:

@@ -1,0 +1,68 @@
+"""The command on the time-dependent examples (in process): the verdict says which
+question it answers, simulate reaches the closed forms of the scenes' headers, derive
+shows the multiplier worked out by hand."""
+
+import json
+import math
+from pathlib import Path
+
+import sympy as sp
+
+from nhham import parse_expression
+from nhham.cli.main import main
+
+EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
+BALL = EXAMPLES / "ball_on_turntable_spun_up.toml"
+BEAD = EXAMPLES / "bead_on_turning_wire.toml"
+
+
+def run(capsys, *argv):
+    status = main([str(a) for a in argv])
+    out = capsys.readouterr()
+    return status, json.loads(out.out) if "--json" in argv else out.out
+
+
+def test_classify_says_the_verdict_is_at_a_generic_instant_and_what_depends_on_t(capsys):
+    status, envelope = run(capsys, "classify", BALL, "--json")
+    result = envelope["result"]
+    assert status == 0 and result["regular"] and result["status"] == "determined"
+    assert result["integrable"] is False
+    time = result["time"]
+    assert time["name"] == "t" and "generic instant" in time["question"]
+    assert not time["lagrangian"]
+    assert [c["time_dependent"] for c in time["constraints"]] == [True, True]
+    status, text = run(capsys, "classify", BALL)
+    assert status == 0 and "depends on t            constraints[0], constraints[1]" in text
+
+
+def test_simulate_the_spun_up_ball_to_its_closed_form(capsys):
+    status, envelope = run(capsys, "simulate", BALL, "--json")
+    result = envelope["result"]
+    y = dict(zip(result["state"], result["y_final"]))
+    assert status == 0 and result["t_final"] == 3.0
+    assert abs(y["x"] + 1.8357633850033281069) < 1e-10
+    assert abs(y["y"] - 2.7697346008192437249) < 1e-10
+
+
+def test_simulate_and_derive_the_bead_on_a_turning_wire(capsys):
+    status, envelope = run(capsys, "simulate", BEAD, "--json")
+    y = dict(zip(envelope["result"]["state"], envelope["result"]["y_final"]))
+    assert status == 0
+    assert abs(y["x"] - math.cosh(2) * math.cos(2)) < 1e-10
+    assert abs(y["y"] - math.cosh(2) * math.sin(2)) < 1e-10
+    # r' = sinh t along the wire, r Ω across: the multiplier −2 m Ω r' (header) at t = 2
+    assert envelope["result"]["energy_balance_residual"] < 1e-9
+    status, envelope = run(capsys, "derive", BEAD, "--json")
+    assert status == 0
+    names = envelope["scene"]["names"]
+    lam = parse_expression(envelope["result"]["multipliers"][0], names)
+    at = {sp.Symbol(k): v for k, v in y.items()} | {sp.Symbol("t"): 2, sp.Symbol("m"): 1,
+                                                    sp.Symbol("Omega"): 1}
+    assert abs(float(lam.subs(at)) + 2 * math.sinh(2)) < 1e-9
+
+
+def test_rk4_is_refused_with_the_reason_in_one_line(capsys):
+    status = main(["simulate", str(BEAD), "--method", "rk4", "--step", "0.01"])
+    err = capsys.readouterr().err
+    assert status == 2 and "does not take time-dependent L or constraints" in err
+    assert len(err.strip().splitlines()) == 1
