@@ -34,6 +34,7 @@ from nhham.lagrangian.records import (AlgorithmRun, ConstraintOutcome, Evidence,
                                       tangency_matrix)
 from nhham.lagrangian.submanifold import Submanifold, has_real_point
 from nhham.settings import SEED, check_options
+from nhham.system.chetaev import NOT_APPLICABLE, constraint_records
 from nhham.system.description import System
 from nhham.system.expressions import short
 from nhham.system.naming import multiplier_symbol
@@ -244,6 +245,9 @@ class ConstraintAnalysis(ConstraintOutcome):
             "integrable": self.integrable,
             "affine_parts": not system.is_linear,
             "inconsistency": self.inconsistency,
+            # only with a nonlinear constraint, so that affine scenes answer as before
+            **({} if system.is_affine else {"velocity_constraints": constraint_records(system),
+                                            "integrability": NOT_APPLICABLE}),
         }
 
     def __repr__(self) -> str:

@@ -327,7 +327,8 @@ def _fixed_step_methods(model) -> list:
     quadratic, rk4 unless the forces depend on time)."""
     return list(names(lambda m: m.fixed_step and (model.quadratic or not m.needs_quadratic)
                       and (not model.forced or m.takes_forces)
-                      and (model.time_slot is None or m.takes_time)))
+                      and (model.time_slot is None or m.takes_time)
+                      and (not model.nonlinear or m.takes_nonlinear)))
 
 
 def _say(*args, **kwargs):

@@ -21,11 +21,15 @@ import sympy as sp
 
 from nhham.system.velocities import non_affine_terms
 
-__all__ = ["AFFINE", "CHETAEV", "constraint_kind", "degenerate_reactions"]
+__all__ = ["AFFINE", "CHETAEV", "constraint_kind", "constraint_records", "degenerate_reactions",
+           "NOT_APPLICABLE"]
 
 #: The kinds of a velocity constraint, as ``classify`` labels them.
 AFFINE = "affine"
 CHETAEV = "nonlinear (Chetaev)"
+
+#: What the Frobenius test answers for a system with nonlinear constraints.
+NOT_APPLICABLE = "not applicable for nonlinear constraints"
 
 _POINTS = 4          # random points of M_1 tried
 _ITERATIONS = 200    # Gauss-Newton steps at most (linear convergence near a double root)
@@ -44,6 +48,21 @@ def constraint_kind(expr, velocities) -> str:
     ('affine', 'nonlinear (Chetaev)')
     """
     return CHETAEV if non_affine_terms(expr, velocities) else AFFINE
+
+
+def constraint_records(system) -> list[dict]:
+    """``[{"label", "kind"}]`` for every velocity constraint (rows of ``system.phi``, the
+    complete lifts of holonomic constraints first): ``classify``'s JSON per constraint.
+
+    Examples
+    --------
+    >>> from nhham import System
+    >>> constraint_records(System(["x", "y", "z"], "(x_dot**2 + y_dot**2 + z_dot**2)/2",
+    ...                           constraints=["x_dot*y_dot"], holonomic=["z"]))
+    [{'label': 'holonomic[0].lift', 'kind': 'affine'}, {'label': 'constraints[0]', 'kind': 'nonlinear (Chetaev)'}]
+    """
+    labels = system.m1_labels[len(system.holonomic):]
+    return [{"label": lab, "kind": kind} for lab, kind in zip(labels, system.constraint_kinds)]
 
 
 def degenerate_reactions(system, labels, rows) -> list[str]:
