@@ -443,6 +443,8 @@ class _BlockSystem:
         self.lagrangian = spec["lagrangian"]
         self.holonomic = tuple(system.holonomic[i] for i in spec["hol"])
         self.phi = tuple(system.phi[p] for p in spec["phi"])
+        self.constraint_kinds = tuple(system.constraint_kinds[p] for p in spec["phi"])
+        self.is_affine = all(k == "affine" for k in self.constraint_kinds)
         self.n, self.m = len(self.coordinates), len(self.phi)
         self.state = self.coordinates + self.velocities
         self.mu = (sp.Matrix([[sp.diff(f, v) for v in self.velocities] for f in self.phi])

@@ -290,7 +290,12 @@ class PointSampler:
 def _refuse_nonlinear(system, equations) -> None:
     """NotExact where M has a nonlinear (Chetaev) constraint: its dependent velocities
     solve φ(q, v) = 0, in general no rational function of the others."""
-    nonlinear = [f for f, kind in zip(system.phi, system.constraint_kinds) if kind != "affine"]
+    kinds = getattr(system, "constraint_kinds", None)  # a view of a System may lack it
+    if kinds is None:
+        from nhham.system.chetaev import constraint_kind
+
+        kinds = [constraint_kind(f, system.velocities) for f in system.phi]
+    nonlinear = [f for f, kind in zip(system.phi, kinds) if kind != "affine"]
     if set(nonlinear) & set(equations):
         raise NotExact("nonlinear (Chetaev) constraints: the dependent velocities of M_1 are "
                        "no rational functions of the others")
