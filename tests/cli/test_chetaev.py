@@ -88,3 +88,15 @@ def test_rattle_and_a_degenerate_constraint_are_refused_in_one_line(capsys, tmp_
     status, out, err = run(capsys, "classify", scene, "--json")
     assert status == 2 and "constraints[0]" in err and "vanishes on M_1" in err
     assert json.loads(out)["error"]["key"] == "constraints[0]"
+
+
+def test_linearize_refuses_a_nonlinear_constraint_naming_it(capsys, tmp_path):
+    # uniform motion at speed c is steady, but the chart on M_1 is linear in v
+    scene = tmp_path / "free.toml"
+    scene.write_text('name = "f"\ncoordinates = ["x", "y"]\nparameters = { c = 2.0 }\n'
+                     'lagrangian = "(x_dot**2 + y_dot**2)/2"\n'
+                     'constraints = ["(x_dot**2 + y_dot**2 - c**2)/2"]\n'
+                     '[steady]\nx = 0.0\ny = 0.0\nx_dot = "c"\ny_dot = 0.0\n')
+    status, out, err = run(capsys, "linearize", scene, "--json")
+    assert status == 2 and "Chetaev" in err and len(err.strip().splitlines()) == 1
+    assert json.loads(out)["error"]["key"] == "constraints"
