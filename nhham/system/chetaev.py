@@ -65,7 +65,7 @@ def constraint_records(system) -> list[dict]:
     return [{"label": lab, "kind": kind} for lab, kind in zip(labels, system.constraint_kinds)]
 
 
-def degenerate_reactions(system, labels, rows) -> list[str]:
+def degenerate_reactions(system, labels, rows, kinds=None) -> list[str]:
     """One problem for every nonlinear constraint whose d phi/d v vanishes on all of M_1.
 
     Parameters
@@ -77,6 +77,9 @@ def degenerate_reactions(system, labels, rows) -> list[str]:
     rows : sequence of sympy.Expr
         The velocity constraints phi of the system (complete lifts included), the
         nonlinear ones checked.
+    kinds : sequence of str, optional
+        Their kinds when known (:attr:`System.constraint_kinds`); read from ``rows``
+        otherwise.
 
     Returns
     -------
@@ -98,7 +101,9 @@ def degenerate_reactions(system, labels, rows) -> list[str]:
     []
     """
     vels = system.velocities
-    nonlinear = [i for i, f in enumerate(rows) if constraint_kind(f, vels) == CHETAEV]
+    if kinds is None:
+        kinds = [constraint_kind(f, vels) for f in rows]
+    nonlinear = [i for i, kind in enumerate(kinds) if kind == CHETAEV]
     if not nonlinear:
         return []
     vanish = _vanishing_on_m1(system, list(rows), nonlinear)

@@ -217,7 +217,8 @@ class System:
                     constraint_labels=tuple(f"holonomic[{i}]" for i in range(len(hols)))
                     + tuple(_kept_labels(cons, dropped)))
         m, n = len(self.phi), len(coords)
-        degenerate = degenerate_reactions(self, self.m1_labels[len(hols):], self.phi)
+        degenerate = degenerate_reactions(self, self.m1_labels[len(hols):], self.phi,
+                                          self.constraint_kinds)
         if degenerate:
             raise NonAffineConstraintError(degenerate)
         if m >= n:
@@ -374,7 +375,9 @@ class System:
         ...        constraints=["z_dot - y*x_dot", "x_dot**2 + y_dot**2 - 1"]).constraint_kinds
         ('affine', 'nonlinear (Chetaev)')
         """
-        return tuple(constraint_kind(f, self.velocities) for f in self.phi)
+        # complete lifts are affine by construction (and may be long: not read again)
+        return (AFFINE,) * len(self.complete_lifts) + tuple(
+            constraint_kind(f, self.velocities) for f in self.constraints)
 
     @property
     def is_affine(self) -> bool:
