@@ -112,8 +112,8 @@ class WorkPrecisionResult:
     skipped : tuple of (method, setting, reason)
         Settings not run (a looser one of the same method was already slow).
     forced : bool
-        The system has forces: energy is not conserved, and the table shows the energy
-        balance residual max |E(t) - E(0) - ∫ P dt| (P the power of the applied, dissipative
+        The system has forces, or a nonlinear (Chetaev) constraint whose reaction does
+        work: energy is not conserved, and the table shows the energy balance residual max |E(t) - E(0) - ∫ P dt| (P the power of the applied, dissipative
         and constraint forces) instead of the energy drift.
     kkt_solve : {"saddle", "null-space", "mixed"}
         Which solve gave the constrained accelerations at the initial state and the
@@ -317,7 +317,8 @@ def work_precision(system_or_model, y0, t_span, *, methods=None, tolerances=DEFA
                       stacklevel=2)
     ratio = diagonal_ratio(model.geometry(np.array([y_init, y_ref], dtype=float))[0])
     return WorkPrecisionResult(tuple(rows), model.name, (t0, t1), digits, ref_error, ref_time,
-                               model.backend, ref_text, tuple(skipped), forced=model.forced,
+                               model.backend, ref_text, tuple(skipped),
+                               forced=model.forced or model.nonlinear,
                                kkt_solve=kkt_solve_name(ratio > KKT_RATIO),
                                kkt_ratio_max=float(np.nanmax(ratio)))
 

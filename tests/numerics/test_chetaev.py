@@ -132,3 +132,17 @@ def test_rattle_refuses_a_nonlinear_constraint_with_the_reason(method):
     model = numeric_model(isokinetic(), backend="numpy")
     with pytest.raises(InputError, match="takes no constraint nonlinear in the velocities"):
         simulate(model, (0.0, 0.1), [0, 0, 2.0, 0], method=method, step=0.01, warn=False)
+
+
+def test_work_precision_shows_the_energy_balance_with_a_working_reaction():
+    # the isokinetic reaction does work (E changes by m g y): the table's energy column is
+    # the balance |E(t) - E(0) - W(t)|, small, not the drift of order 1
+    from nhham.numerics.workprecision import work_precision
+
+    model = numeric_model(isokinetic(0.7, 2.0), backend="numpy")
+    result = work_precision(model, [0, 0, 2.0, 0], (0.0, 1.0), methods=["DOP853"],
+                            tolerances=(1e-8,), projection_variants=False, quick=True)
+    assert result.forced
+    rows = [r for r in result.rows if r.method == "DOP853"]
+    assert rows and all(r.energy_balance_residual < 1e-6 and r.energy_drift > 1.0
+                        for r in rows)
