@@ -146,3 +146,14 @@ def test_work_precision_shows_the_energy_balance_with_a_working_reaction():
     rows = [r for r in result.rows if r.method == "DOP853"]
     assert rows and all(r.energy_balance_residual < 1e-6 and r.energy_drift > 1.0
                         for r in rows)
+
+
+def test_reference_method_keeps_the_isokinetic_closed_form():
+    # the mpmath extrapolation on phi(q, v) = 0 (Chetaev's rule in the mp kernels)
+    c = 2.0
+    res = simulate(numeric_model(isokinetic(0.7, c), backend="numpy"), (0.0, 0.2),
+                   [0, 0, c, 0], method="reference", warn=False)
+    u = G * 0.2 / c
+    exact = [c**2 / G * 2 * math.atan(math.tanh(u / 2)), -c**2 / G * math.log(math.cosh(u)),
+             c / math.cosh(u), -c * math.tanh(u)]
+    assert np.max(np.abs(res.y[:, -1] - exact)) < 1e-13
