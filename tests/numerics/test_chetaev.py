@@ -157,3 +157,19 @@ def test_reference_method_keeps_the_isokinetic_closed_form():
     exact = [c**2 / G * 2 * math.atan(math.tanh(u / 2)), -c**2 / G * math.log(math.cosh(u)),
              c / math.cosh(u), -c * math.tanh(u)]
     assert np.max(np.abs(res.y[:, -1] - exact)) < 1e-13
+
+
+def test_every_method_record_says_whether_it_takes_a_nonlinear_constraint():
+    from nhham.numerics.methods import METHODS
+
+    model = numeric_model(isokinetic(0.7, 2.0), backend="numpy")
+    for name, method in METHODS.items():
+        options = dict(step=0.01) if method.fixed_step else {}
+        if method.takes_nonlinear:
+            res = simulate(model, (0.0, 0.05), [0, 0, 2.0, 0], method=name, warn=False,
+                           **options)
+            assert res.success and abs(np.hypot(*res.y[2:, -1]) - 2.0) < 1e-6, name
+        else:
+            with pytest.raises(InputError, match=method.nonlinear_refused[:30]):
+                simulate(model, (0.0, 0.05), [0, 0, 2.0, 0], method=name, warn=False,
+                         **options)
