@@ -173,15 +173,16 @@ class SingularLagrangianError(ValidationError):
 
 
 class NonAffineConstraintError(ValidationError):
-    """A velocity constraint is not affine in the velocities.
+    """A velocity constraint not affine in the velocities that Chetaev's rule cannot take:
+    its d phi/d v vanishes on all of M_1, so it would have no reaction (``DESIGN.md`` §2).
 
     Examples
     --------
     >>> from nhham import System
-    >>> System(["x", "y"], "(x_dot**2 + y_dot**2)/2", ["x_dot**2 - y_dot"])
+    >>> System(["x", "y"], "(x_dot**2 + y_dot**2)/2", ["(x_dot - y_dot)**2"])
     Traceback (most recent call last):
         ...
-    nhham.errors.NonAffineConstraintError: constraints[0]: x_dot**2 - y_dot is not affine in the velocities (offending term x_dot**2); ...
+    nhham.errors.NonAffineConstraintError: constraints[0]: d phi/d v = (2*x_dot - 2*y_dot, -2*x_dot + 2*y_dot) vanishes on M_1 ...
     """
 
 

@@ -264,7 +264,8 @@ def _regular_exact(system, side, sampler) -> list:
         ("Leg_* Z_j = Z_j^H o Leg",
          sp.Matrix.hstack(*[leg.tangent_map(geo.vertical_fields.row(j).T)
                             for j in range(system.m)]) if system.m else sp.zeros(0, 1),
-         side.vertical_fields.T if system.m else sp.zeros(0, 1)),
+         (side.vertical_fields.T if system.is_affine  # Z^H in p only for Chetaev's rule
+          else side.vertical_fields.T.applyfunc(pull)) if system.m else sp.zeros(0, 1)),
     ]
     lam_parts = [
         ("C = C^H o Leg", geo.constraint_matrix, side.constraint_matrix.applyfunc(pull)),

@@ -225,8 +225,13 @@ class HamiltonianSide(ConstraintMatrixRank):
 
     @cached_property
     def vertical_fields(self) -> sp.Matrix:
-        """Z_i^H = -mu_iA d/dp_A as rows, shape (m, 2n); q-components zero."""
-        return sp.Matrix.hstack(sp.zeros(self.m, self.n), -self.system.mu)
+        """Z_i^H = -mu_iA d/dp_A as rows, shape (m, 2n); q-components zero.
+
+        For a nonlinear (Chetaev) constraint mu = d phi/d v is taken at Leg^-1(q, p)."""
+        mu = self.system.mu
+        if not self.system.is_affine:
+            mu = mu.applyfunc(self.legendre.transport)
+        return sp.Matrix.hstack(sp.zeros(self.m, self.n), -mu)
 
     @cached_property
     def constraint_gradients(self) -> sp.Matrix:
@@ -636,7 +641,13 @@ class NonholonomicBracket(BivectorBracket):
         side = self.side
         if not side.m:
             return sp.zeros(0, 1)
-        rhs = sp.Matrix([side.system.h[j] - side.constraints[j] for j in range(side.m)])
+        sysm = side.system
+        if sysm.is_affine:
+            rhs = sp.Matrix([sysm.h[j] - side.constraints[j] for j in range(side.m)])
+        else:  # h_j - phi_j = -mu_j v for affine phi; -mu_j(q, v) v o Leg^-1 in general
+            rhs = sp.Matrix([-side.legendre.transport(
+                sum((a * v for a, v in zip(sysm.mu.row(j), sysm.velocities)), sp.S.Zero))
+                for j in range(side.m)])
         return solve_linear(side.constraint_matrix, rhs).applyfunc(cancel)
 
     def extra_term(self, f) -> sp.Expr:

@@ -522,7 +522,8 @@ def _exactly_empty(M):
     """A reason why M is empty, proved by the reduction (a nonzero constant residual)."""
     if not M.exact:
         return None
-    state = set(M.system.coordinates) | set(M.system.velocities)
+    # the fibre too: on T*Q the residual of a nonlinear (Chetaev) constraint is in p
+    state = set(M.system.coordinates) | set(M.system.velocities) | set(M.fibre)
     for r in M.reduction.residual:
         if r.is_number and r != 0:
             return f"the reduction leaves the equation 0 = {r}"

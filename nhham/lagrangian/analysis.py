@@ -34,6 +34,7 @@ from nhham.lagrangian.records import (AlgorithmRun, ConstraintOutcome, Evidence,
                                       tangency_matrix)
 from nhham.lagrangian.submanifold import Submanifold, has_real_point
 from nhham.settings import SEED, check_options
+from nhham.system.chetaev import NOT_APPLICABLE, constraint_records
 from nhham.system.description import System
 from nhham.system.expressions import short
 from nhham.system.naming import multiplier_symbol
@@ -244,6 +245,9 @@ class ConstraintAnalysis(ConstraintOutcome):
             "integrable": self.integrable,
             "affine_parts": not system.is_linear,
             "inconsistency": self.inconsistency,
+            # only with a nonlinear constraint, so that affine scenes answer as before
+            **({} if system.is_affine else {"velocity_constraints": constraint_records(system),
+                                            "integrability": NOT_APPLICABLE}),
         }
 
     def __repr__(self) -> str:
@@ -439,6 +443,8 @@ class _BlockSystem:
         self.lagrangian = spec["lagrangian"]
         self.holonomic = tuple(system.holonomic[i] for i in spec["hol"])
         self.phi = tuple(system.phi[p] for p in spec["phi"])
+        self.constraint_kinds = tuple(system.constraint_kinds[p] for p in spec["phi"])
+        self.is_affine = all(k == "affine" for k in self.constraint_kinds)
         self.n, self.m = len(self.coordinates), len(self.phi)
         self.state = self.coordinates + self.velocities
         self.mu = (sp.Matrix([[sp.diff(f, v) for v in self.velocities] for f in self.phi])

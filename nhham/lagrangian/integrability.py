@@ -44,7 +44,8 @@ from nhham.lagrangian.submanifold import Submanifold
 from nhham.settings import SEED, Precision
 from nhham.system.expressions import short
 
-__all__ = ["Integrability", "Frobenius", "integrability", "frobenius", "frobenius_sampled"]
+__all__ = ["Integrability", "Frobenius", "integrability", "frobenius", "frobenius_sampled",
+           "not_applicable"]
 
 
 @dataclass(frozen=True)
@@ -70,7 +71,8 @@ class Integrability:
     decisions : tuple of (str, Decision)
         Every vanishing decision with its evidence.
     method : str
-        ``"exact"`` when every decision was exact, else ``"sampled"``.
+        ``"exact"`` when every decision was exact, ``"sampled"`` otherwise, and
+        ``"not applicable"`` for nonlinear (Chetaev) constraints (:func:`not_applicable`).
     warnings : tuple of str
     mu : sympy.Matrix, shape (m, n)
     coordinates : tuple of sympy.Symbol
@@ -118,6 +120,9 @@ class Integrability:
 
     def describe(self) -> str:
         """One line: the verdict and how it was reached."""
+        if self.method == "not applicable":
+            return ("not applicable (nonlinear constraints: ker d phi/d v depends on v, no "
+                    "distribution on Q)")
         if self.integrable is None:
             verdict = "undecided"
         else:
@@ -170,6 +175,8 @@ def integrability(system, *, precision: int | None = None, samples: int = 6,
     """
     policy = policy_of(policy, "integrability", precision=precision, samples=samples,
                        seed=seed, exact=exact)
+    if not system.is_affine:
+        return not_applicable(system)
     question, Q1 = _question(system, policy)
     return decide(question, Q1, policy)
 
@@ -344,6 +351,27 @@ def frobenius_sampled(system, labels, *, precision: int | None = None, samples: 
                    point_residual=residual, warnings=warn)
     return Integrability(None if doubtful else True, n - m, None, (),
                          (("dmu_i(X_a, X_b) on Q_1", dec),), "sampled", warn, **common)
+
+
+def not_applicable(system) -> Integrability:
+    """The answer for a system with nonlinear (Chetaev) constraints: ker dφ/dv depends on
+    the velocities, so it is no distribution on Q and Frobenius' theorem does not apply
+    (``integrable`` None, ``method`` "not applicable"; ``DESIGN.md`` §2).
+
+    Examples
+    --------
+    >>> from nhham import System
+    >>> s = System(["x", "y"], "(x_dot**2 + y_dot**2)/2", ["x_dot**2 + y_dot**2 - 1"])
+    >>> answer = not_applicable(s)
+    >>> answer.integrable, answer.method
+    (None, 'not applicable')
+    >>> answer.describe()
+    'not applicable (nonlinear constraints: ker d phi/d v depends on v, no distribution on Q)'
+    """
+    labels = system.m1_labels[len(system.holonomic):]
+    return Integrability(None, system.n - system.m, None, (), (), "not applicable", (),
+                         mu=sp.Matrix(system.mu), coordinates=tuple(system.coordinates),
+                         labels=tuple(labels))
 
 
 def _distribution(system, labels):

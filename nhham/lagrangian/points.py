@@ -287,6 +287,20 @@ class PointSampler:
         return ExactPoint(env, deg)
 
 
+def _refuse_nonlinear(system, equations) -> None:
+    """NotExact where M has a nonlinear (Chetaev) constraint: its dependent velocities
+    solve φ(q, v) = 0, in general no rational function of the others."""
+    kinds = getattr(system, "constraint_kinds", None)  # a view of a System may lack it
+    if kinds is None:
+        from nhham.system.chetaev import constraint_kind
+
+        kinds = [constraint_kind(f, system.velocities) for f in system.phi]
+    nonlinear = [f for f, kind in zip(system.phi, kinds) if kind != "affine"]
+    if set(nonlinear) & set(equations):
+        raise NotExact("nonlinear (Chetaev) constraints: the dependent velocities of M_1 are "
+                       "no rational functions of the others")
+
+
 def exact_sampler(manifold, seed: int, *, modular: bool = False) -> PointSampler:
     """The exact points of a submanifold M = {constraints = 0} over Q (or F_p).
 
@@ -323,6 +337,7 @@ def exact_sampler(manifold, seed: int, *, modular: bool = False) -> PointSampler
                             context=(system.lagrangian,))
     if tuple(manifold.fibre) != tuple(system.velocities):
         raise NotExact("exact points are drawn in TQ and Q")
+    _refuse_nonlinear(system, equations)
     if equations == set(holonomic) | set(system.phi):
         return PointSampler.on_M1(system, seed, modular=modular)
     solved, affine = _split(system, manifold.equations)
@@ -432,6 +447,7 @@ class ParameterFieldSampler:
         self.q, self.v = tuple(system.coordinates), tuple(system.velocities)
         self.env0, self.K, self.rng = env0, K, rng
         eqs = tuple(sp.sympify(e) for e in equations)
+        _refuse_nonlinear(system, eqs)
         phis = set(system.phi)
         self.affine = not system.holonomic and all(e in phis for e in eqs)
         self.dep = None

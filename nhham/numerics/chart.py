@@ -38,6 +38,10 @@ class ComplexField:
     (the same expressions)."""
 
     def __init__(self, model, build: bool = False):
+        if getattr(model, "nonlinear", False):
+            raise InputError("linearize: a constraint nonlinear in the velocities (Chetaev's "
+                             "rule) is not taken: the chart on M_1 solves the dependent "
+                             "velocities linearly from mu(q) v + h(q) = 0", key="constraints")
         self.n, self.m, self.k = model.n, model.m, model.k
         try:
             self._batch = model.kernels.functions["saddle"][1]

@@ -116,6 +116,9 @@ class Method:
         while it runs can take over (``simulate`` starts again on it).
     forces_refused : str
         Why it takes no forces (completes "METHOD is ...").
+    nonlinear_refused : str
+        Why it takes no constraint nonlinear in the velocities (Chetaev's rule), or ""
+        when it takes them.
     quick_bench : bool
         One of the adaptive methods of the quick work-precision study
         (``nhham bench --quick``: one explicit, one implicit, one switching).
@@ -137,6 +140,7 @@ class Method:
     background_build: bool = True
     forces_refused: str = ""
     quick_bench: bool = False
+    nonlinear_refused: str = ""
 
     def __post_init__(self):
         # The registry is data that other modules trust: an entry that contradicts
@@ -169,6 +173,11 @@ class Method:
         return not self.keeps_constraints
 
     @property
+    def takes_nonlinear(self) -> bool:
+        """Constraints nonlinear in the velocities (Chetaev's rule) are allowed."""
+        return not self.nonlinear_refused
+
+    @property
     def takes_t_eval(self) -> bool:
         """Output at given times (a fixed-step method keeps its grid points)."""
         return not self.fixed_step
@@ -197,7 +206,9 @@ class Method:
 _CONSERVATIVE = "a structure-preserving scheme for conservative systems"
 _RATTLE: dict[str, Any] = dict(family="fixed-step", loops=("fixed",), keeps_constraints=True,
                takes_forces=False, takes_time=False, needs_quadratic=True, carries_work=False,
-               background_build=False, forces_refused=_CONSERVATIVE)
+               background_build=False, forces_refused=_CONSERVATIVE,
+               nonlinear_refused="its discrete constraints and their multipliers are linear in "
+               "the velocities (mu(q) v + h(q) = 0 at every point of the scheme)")
 _SCIPY: dict[str, Any] = dict(family="adaptive", loops=("scipy",))
 _ERK: dict[str, Any] = dict(family="adaptive", loops=("compiled", "scipy"))
 

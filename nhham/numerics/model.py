@@ -49,6 +49,7 @@ from types import MappingProxyType
 import numpy as np
 
 from nhham.errors import InconsistentInitialDataError, InputError
+from nhham.numerics.chetaev import padded, velocities_newton
 from nhham.numerics.kernels import CompiledRHS, GeneratedKernels, columns
 from nhham.numerics.saddle import SingleStateSolver, cond_each, solve_saddle
 from nhham.numerics.status import NumericalFailure, Status
@@ -218,6 +219,8 @@ class NumericModel:
     #: The first scene key whose expression uses t (``lagrangian``, ``constraints[0]``),
     #: or "" (t in the forces only, or not at all).
     timed_key = property(lambda self: self.layout.get("time_in_geometry") or "")
+    #: A constraint not affine in v (Chetaev's rule): the geometry kernel reads (q, v).
+    nonlinear = property(lambda self: self.layout.get("nonlinear_constraints", False))
 
     @property
     def names(self) -> tuple:
@@ -512,10 +515,11 @@ class NumericModel:
         """
         y = np.asarray(y, dtype=float)
         n, m, k = self.n, self.m, self.k
+        width = 2 * n if self.nonlinear else n  # (q, v) with a nonlinear constraint
         if y.ndim == 1:
-            out = self.kernels.scalar("geometry", y[:n].tolist(), self._plist)
+            out = self.kernels.scalar("geometry", y[:width].tolist(), self._plist)
         else:
-            out = self.kernels.batch("geometry", y[:, :n], self._plist)
+            out = self.kernels.batch("geometry", y[:, :width], self._plist)
         lead = out.shape[:-1]
         W, mu, h, g = columns(out, (n * n, m * n, m, k))
         return W.reshape(lead + (n, n)), mu.reshape(lead + (m, n)), h, g
@@ -644,6 +648,8 @@ class NumericModel:
         (exact for affine constraints) and one refinement for round-off."""
         if self.m == 0:
             return v
+        if self.nonlinear:
+            return velocities_newton(self.geometry, q, v)
         W, mu, h, _ = self.geometry(q)
         for _ in range(2):
             r = (mu @ v[..., None])[..., 0] + h
@@ -657,7 +663,7 @@ class NumericModel:
         k = self.k
         best = np.inf
         for it in range(1, maxiter + 1):
-            W, mu, _, g = self.geometry(q)
+            W, mu, _, g = self.geometry(padded(q, self.nonlinear))
             err = float(np.max(np.abs(g)))
             scale = 1.0 + float(np.max(np.abs(q)))
             if err <= tol * scale:
@@ -667,7 +673,7 @@ class NumericModel:
             best = min(best, err)
             dq, _ = solve_saddle(W, mu[:k], np.zeros(self.n), -g)
             q = q + dq
-        W, mu, _, g = self.geometry(q)
+        W, mu, _, g = self.geometry(padded(q, self.nonlinear))
         err = float(np.max(np.abs(g)))
         if err <= max(tol, 1e-12) * (1.0 + float(np.max(np.abs(q)))):
             return q, maxiter

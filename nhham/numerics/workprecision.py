@@ -112,9 +112,10 @@ class WorkPrecisionResult:
     skipped : tuple of (method, setting, reason)
         Settings not run (a looser one of the same method was already slow).
     forced : bool
-        The system has forces, or t in L or a constraint: energy is not conserved, and the
-        table shows the energy balance residual max |E(t) - E(0) - ∫ P dt| (P the power of
-        the applied, dissipative and constraint forces, and -dL/dt) instead of the energy
+        The system has forces, t in L or a constraint, or a nonlinear (Chetaev)
+        constraint whose reaction does work: energy is not conserved, and the table shows
+        the energy balance residual max |E(t) - E(0) - ∫ P dt| (P the power of the
+        applied, dissipative and constraint forces, and -dL/dt) instead of the energy
         drift.
     kkt_solve : {"saddle", "null-space", "mixed"}
         Which solve gave the constrained accelerations at the initial state and the
@@ -319,7 +320,8 @@ def work_precision(system_or_model, y0, t_span, *, methods=None, tolerances=DEFA
     ratio = diagonal_ratio(model.geometry(np.array([y_init, y_ref], dtype=float))[0])
     return WorkPrecisionResult(tuple(rows), model.name, (t0, t1), digits, ref_error, ref_time,
                                model.backend, ref_text, tuple(skipped),
-                               forced=model.forced or model.time_in_geometry,
+                               forced=model.forced or model.time_in_geometry
+                               or model.nonlinear,
                                kkt_solve=kkt_solve_name(ratio > KKT_RATIO),
                                kkt_ratio_max=float(np.nanmax(ratio)))
 
@@ -329,7 +331,8 @@ def _fixed_step_methods(model) -> list:
     quadratic, rk4 unless the forces depend on time)."""
     return list(names(lambda m: m.fixed_step and (model.quadratic or not m.needs_quadratic)
                       and (not model.forced or m.takes_forces)
-                      and (model.time_slot is None or m.takes_time)))
+                      and (model.time_slot is None or m.takes_time)
+                      and (not model.nonlinear or m.takes_nonlinear)))
 
 
 def _timed(model) -> str:

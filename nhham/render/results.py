@@ -86,6 +86,8 @@ def classify_warnings(analysis, classes=None) -> list:
 def _integrable_text(data: dict) -> str:
     """What the Frobenius test of ker mu says about the constraints themselves."""
     verdict = data["integrable"]
+    if "integrability" in data:  # nonlinear (Chetaev) constraints
+        return data["integrability"]
     if verdict is None:
         return "undecided"
     if not verdict:
@@ -108,6 +110,7 @@ def classify_text(title: str, data: dict) -> str:
         ("redundant (dropped)", ", ".join(data["redundant"]) or "none"),
         ("integrable (Frobenius)", _integrable_text(data)),
     ]
+    rows += [(f"  {r['label']}", r["kind"]) for r in data.get("velocity_constraints", ())]
     if data["first_class"] is not None:
         rows += [("first class", str(data["first_class"])),
                  ("second class", str(data["second_class"]))]

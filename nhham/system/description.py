@@ -6,7 +6,9 @@ subclass whose message names the offending key (``lagrangian``,
 ``constraints[1]``, ``holonomic[0]``, ``parameters``) or expression.
 
 Conventions (``DESIGN.md`` §2): coordinates q^A (A = 1..n) with velocities
-``<q>_dot``; affine constraints phi_i = mu_iA(q) v^A + h_i(q); a holonomic
+``<q>_dot``; affine constraints phi_i = mu_iA(q) v^A + h_i(q), or constraints
+phi_i(q, v) not affine in v taken with Chetaev's rule (mu_i = d phi_i/d v, a function of
+q and v; :mod:`nhham.system.chetaev`); a holonomic
 constraint g(q) = 0 contributes its complete lift g^c = (dg/dq^A) v^A as an
 affine constraint (paper §4) and g = 0 is imposed on Q. In :attr:`System.phi`
 the complete lifts come first (the paper's Example 4.1 order), then the user's
@@ -40,7 +42,8 @@ from nhham.system.sampled_checks import (
     check_regular_lagrangian,
 )
 from nhham.system.screening import coordinate_symbols, expression_problems
-from nhham.system.velocities import QuadraticParts, non_affine_terms, one_forms, quadratic_parts
+from nhham.system.chetaev import AFFINE, constraint_kind, degenerate_reactions
+from nhham.system.velocities import QuadraticParts, one_forms, quadratic_parts
 
 __all__ = ["System", "DroppedConstraint"]
 
@@ -57,7 +60,8 @@ class System:
         L(q, v) in coordinates, velocities and parameters. Strings are parsed
         against the symbol table, never evaluated as Python.
     constraints : sequence of sympy.Expr or str, optional
-        Affine constraints phi_i = mu_i(q).v + h_i(q) (each = 0).
+        Velocity constraints phi_i(q, v) = 0: affine ones mu_i(q).v + h_i(q), or any
+        smooth phi_i, taken with Chetaev's rule (reaction lambda^i d phi_i/d v).
     holonomic : sequence of sympy.Expr or str, optional
         Holonomic constraints g(q) = 0; no velocities allowed.
     parameters : mapping or sequence, optional
@@ -87,8 +91,8 @@ class System:
         With every problem found: unknown symbols, dynamicsymbols (pointed to
         :func:`nhham.from_mechanics`), numbers that are not real, functions
         that are not smooth in the state (``Abs``, ``sign``), expressions too
-        large to expand (see :mod:`nhham.system.screening`), non-affine
-        constraints, holonomic constraints with velocities, m >= n, dependent
+        large to expand (see :mod:`nhham.system.screening`), a nonlinear
+        constraint whose d phi/d v vanishes on M_1 (``NonAffineConstraintError``), holonomic constraints with velocities, m >= n, dependent
         constraint one-forms, a singular Hessian W.
 
     Notes
@@ -113,10 +117,11 @@ class System:
     ((x_dot, y_dot), (-x*x_dot + y_dot,), Matrix([[-x, 1]]), Matrix([
     [m, 0],
     [0, m]]))
-    >>> System(["x"], "x_dot**2/2", constraints=["x_dot**2"])  # doctest: +ELLIPSIS
+    >>> System(["x", "y"], "(x_dot**2 + y_dot**2)/2", constraints=["(x_dot - y_dot)**2"])
+    ... # doctest: +ELLIPSIS
     Traceback (most recent call last):
     ...
-    nhham.errors.NonAffineConstraintError: constraints[0]: x_dot**2 is not affine ...
+    nhham.errors.NonAffineConstraintError: constraints[0]: d phi/d v = ... vanishes on M_1 ...
     """
 
     # Set once by __init__ from the validated inputs (see Notes).
@@ -204,18 +209,6 @@ class System:
         if problems:
             raise ValidationError(problems)
 
-        nonaffine = []
-        for i, c in enumerate(cons):
-            bad = non_affine_terms(c, vels)
-            if bad:
-                nonaffine.append(
-                    f"constraints[{i}]: {c} is not affine in the velocities "
-                    f"(offending term {bad[0]}); nonlinear (Chetaev-type) constraints are "
-                    f"outside nhham's scope"
-                )
-        if nonaffine:
-            raise NonAffineConstraintError(nonaffine)
-
         _set_fields(self, name=str(name), coordinates=coords, velocities=vels,
                     parameters=params, parameter_values=MappingProxyType(dict(values)),
                     lagrangian=lag, holonomic=hols, forces=applied, dissipation=diss,
@@ -229,6 +222,10 @@ class System:
                     constraint_labels=tuple(f"holonomic[{i}]" for i in range(len(hols)))
                     + tuple(_kept_labels(cons, dropped)))
         m, n = len(self.phi), len(coords)
+        degenerate = degenerate_reactions(self, self.m1_labels[len(hols):], self.phi,
+                                          self.constraint_kinds)
+        if degenerate:
+            raise NonAffineConstraintError(degenerate)
         if m >= n:
             raise ValidationError(
                 [f"constraints: m = {m} independent velocity constraints (holonomic ones "
@@ -384,8 +381,30 @@ class System:
 
     @cached_property
     def mu(self) -> sp.Matrix:
-        """The m x n matrix of one-form coefficients mu_iA(q) = d phi_i / d v^A."""
+        """The m x n matrix mu_iA = d phi_i / d v^A: one-form coefficients mu_iA(q) for affine
+        constraints, functions of q and v for nonlinear (Chetaev) ones."""
         return one_forms(self.phi, self.velocities) if self.phi else sp.zeros(0, self.n)
+
+    @cached_property
+    def constraint_kinds(self) -> tuple[str, ...]:
+        """The kind of every row of :attr:`phi`: ``"affine"``, or ``"nonlinear (Chetaev)"``
+        for a constraint not affine in v (its reaction lambda d phi/d v, ``DESIGN.md`` §2).
+
+        Examples
+        --------
+        >>> from nhham import System
+        >>> System(["x", "y", "z"], "(x_dot**2 + y_dot**2 + z_dot**2)/2",
+        ...        constraints=["z_dot - y*x_dot", "x_dot**2 + y_dot**2 - 1"]).constraint_kinds
+        ('affine', 'nonlinear (Chetaev)')
+        """
+        # complete lifts are affine by construction (and may be long: not read again)
+        return (AFFINE,) * len(self.complete_lifts) + tuple(
+            constraint_kind(f, self.velocities) for f in self.constraints)
+
+    @property
+    def is_affine(self) -> bool:
+        """True when every velocity constraint is affine in v (mu depends on q only)."""
+        return all(k == AFFINE for k in self.constraint_kinds)
 
     @cached_property
     def h(self) -> sp.Matrix:

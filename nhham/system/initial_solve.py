@@ -5,7 +5,8 @@ The user gives the independent values (numbers, or expressions in the parameters
 
 - a velocity left out is solved from the velocity-level constraints (the affine ones and
   the time derivatives of the holonomic ones), which are linear in the velocities: exactly,
-  by a least-squares solve that must leave no residual;
+  by a least-squares solve that must leave no residual (a velocity that enters a
+  nonlinear (Chetaev) constraint nonlinearly is refused: give its value);
 - a coordinate left out is solved from the holonomic constraints by Newton's method, from
   0 or from the value written ``z = { guess = 0.9 }`` (a curved M_1 has several branches:
   the guess picks one).
@@ -242,6 +243,16 @@ def _velocities(system, values, missing, params) -> dict:
     rows = _velocity_rows(system)
     at = [e.xreplace(known) for _, e in rows]
     zero = {u: 0 for u in unknowns}
+    for (lab, _), e in zip(rows, at):  # Chetaev: phi may have several roots in them
+        inside = sorted(u.name for u in unknowns if any(
+            sp.diff(e, w).free_symbols & {u} for w in unknowns))
+        if inside:
+            one = len(inside) == 1
+            raise InputError(f"initial: {', '.join(inside)} {'enters' if one else 'enter'} "
+                             f"{lab} nonlinearly, so {'it is' if one else 'they are'} not "
+                             f"solved from it (a nonlinear constraint may have several "
+                             f"roots): give {'its value' if one else 'their values'}",
+                             key="initial")
     A = np.array([[float(sp.diff(e, u)) for u in unknowns] for e in at],
                  dtype=float).reshape(len(rows), len(unknowns))
     b = np.array([float(e.xreplace(zero)) for e in at], dtype=float)

@@ -47,7 +47,6 @@ from nhham.errors import InputError, ValidationError
 from nhham.system.description import System
 from nhham.system.dynamicsymbols import (
     as_expr,
-    check_affine,
     convert,
     coordinate_functions,
     plain_map,
@@ -149,8 +148,8 @@ def from_mechanics(lagrangian=None, q: Sequence | None = None, hol_coneqs: Seque
     Constraints written in generalized speeds u, with kinematic differential
     equations ``kd_eqs`` as ``KanesMethod`` takes them (affine in u and in
     q'; e.g. ``q1' - u1``), are brought to nhham's (q, q') form by solving
-    the ``kd_eqs`` for u; ``velocity_constraints`` (affine in u) become
-    affine constraints, ``configuration_constraints`` holonomic ones.
+    the ``kd_eqs`` for u; ``velocity_constraints`` become velocity constraints
+    (affine, or nonlinear with Chetaev's rule), ``configuration_constraints`` holonomic ones.
     Angular velocities and point velocities given in u are converted the
     same way.
 
@@ -168,8 +167,8 @@ def from_mechanics(lagrangian=None, q: Sequence | None = None, hol_coneqs: Seque
     hol_coneqs : sequence of sympy.Expr, optional
         Holonomic constraints g(q(t)) = 0 (as for ``LagrangesMethod``).
     nonhol_coneqs : sequence of sympy.Expr, optional
-        Constraints affine in q'(t) (each = 0). ``Eq`` objects are read as
-        lhs - rhs.
+        Velocity constraints in q'(t) (each = 0): affine, or nonlinear ones taken with
+        Chetaev's rule. ``Eq`` objects are read as lhs - rhs.
     parameters : mapping or sequence, optional
         Passed to :class:`System`. Default: every remaining free symbol
         except time and the inputs, sorted by name, without values.
@@ -198,7 +197,8 @@ def from_mechanics(lagrangian=None, q: Sequence | None = None, hol_coneqs: Seque
         Kinematic differential equations (each = 0), affine in u and q',
         one per speed.
     velocity_constraints : sequence of sympy.Expr, optional
-        Constraints affine in u (or q'), each = 0.
+        Constraints in u (or q'), each = 0: affine, or nonlinear ones taken with
+        Chetaev's rule (the kd_eqs are affine, so the rule is the same in u and q').
     configuration_constraints : sequence of sympy.Expr, optional
         Holonomic constraints in q.
     inputs : sequence of dynamicsymbols, sympy.Symbol or str, optional
@@ -326,11 +326,9 @@ def _from_pieces(lagrangian, q, hol_coneqs, nonhol_coneqs, parameters, name, *, 
 
             forces = generalized_forces(forced, coords, frame, velocity_of, to_q,
                                         inputs_in, problems)
-    speeds = tuple(to_q) if to_q else ()
     vcons = []
     for i, c in enumerate(velocity_constraints):
         c = as_expr(f"{labels['velocity']}[{i}]", c)
-        check_affine(f"{labels['velocity']}[{i}]", c, speeds, problems)
         vcons.append(c)
     if problems:
         raise ValidationError(problems)

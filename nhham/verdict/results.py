@@ -94,9 +94,12 @@ class Verdict:
         if self.status == "invalid":
             return f"invalid: {self.note}"
         yn = {True: "yes", False: "no", None: "undecided"}
+        integrable = yn[self.integrable]
+        if self.integrable is None and not getattr(self.system, "is_affine", True):
+            integrable = "not applicable (nonlinear constraints)"
         text = (f"C regular {yn[self.regular]} (rank {self.rank_C}), {self.status}, "
                 f"{self.stages} stage(s), {self.free_multipliers} free multiplier(s), "
-                f"integrable {yn[self.integrable]}")
+                f"integrable {integrable}")
         if self.first_class is not None:
             text += f", {self.first_class} first class, {self.second_class} second class"
         if self.redundant:

@@ -306,3 +306,18 @@ def test_multipliers_are_minus_those_of_lagranges_method():
     assert np.allclose(model.rhs(0.0, state)[4:], reference[4:8], atol=1e-12)
     assert np.allclose(lam, -reference[8:], atol=1e-12)
     assert np.isclose(values[m] * reference[4], -lam[0], atol=1e-12)
+
+
+def test_from_mechanics_brings_nonlinear_velocity_constraints():
+    # x'^2 + y'^2 = c^2 (the isokinetic particle) in q'(t) and in a speed u = x'.
+    x, y = me.dynamicsymbols("x y")
+    u = me.dynamicsymbols("u")
+    c = sp.Symbol("c")
+    L = (x.diff(t)**2 + y.diff(t)**2) / 2
+    system = from_mechanics(L, [x, y], nonhol_coneqs=[x.diff(t)**2 + y.diff(t)**2 - c**2])
+    xd, yd = S("x_dot"), S("y_dot")
+    assert system.constraint_kinds == ("nonlinear (Chetaev)",)
+    assert system.mu == sp.Matrix([[2 * xd, 2 * yd]])
+    kane = from_mechanics(L, [x, y], u=[u], kd_eqs=[u - x.diff(t)],
+                          velocity_constraints=[u**2 + y.diff(t)**2 - c**2])
+    assert sp.expand(kane.constraints[0] - (xd**2 + yd**2 - S("c")**2)) == 0

@@ -14,6 +14,8 @@ sin/cos are computed anyway are expanded first, see :func:`expand_angle_sums`):
     time: no symbolic inverse is ever formed.
 ``geometry(q)``
     W, mu, h, g: what projection onto M_1 and the structure-preserving integrator need.
+    With a nonlinear (Chetaev) constraint it is ``geometry(q, v)``: mu = d phi/d v at
+    (q, v) and h = phi - mu v (so that mu v + h = phi), in the saddle kernel too.
 ``energy(q, v)``
     E_L (v^T W v / 2 + V for L = v^T W v / 2 + b . v - V, read from the terms of L).
 ``lq(q, v)``, ``jphi(q, v)``
@@ -166,6 +168,12 @@ def _generate(system, path: str) -> dict:
     mu = [R(ing.mu[i, j]) for i in range(m) for j in range(n)]
     drift = [R(e) for e in ing.drift]
     h = [R(e) for e in system.h]
+    # Chetaev's rule (DESIGN.md §2): mu = d phi/d v depends on v, and "h" is phi - mu v, so
+    # that mu v + h is phi where the kernels and the loops form the residual.
+    nonlinear = not system.is_affine
+    if nonlinear:
+        h = [R(f - sum((a * v for a, v in zip(ing.mu.row(i), system.velocities)), sp.S.Zero))
+             for i, f in enumerate(system.phi)]
     g = [R(e) for e in system.holonomic]
     qs = [rename[q] for q in system.coordinates]
     vs = [rename[v] for v in system.velocities]
@@ -187,7 +195,7 @@ def _generate(system, path: str) -> dict:
                if powered else [])
     kernels = {
         "saddle": ("qv", W + F + mu + drift + h + g + applied),
-        "geometry": ("q", W + mu + h + g),
+        "geometry": ("qv" if nonlinear else "q", W + mu + h + g),
         "energy": ("qv", [_energy(system, L, vs, W)]),
         "lq": ("qv", lq),
         "jphi": ("qv", jphi),
@@ -203,9 +211,11 @@ def _generate(system, path: str) -> dict:
     python = _python_module(kernels, printed, n, len(system.parameters))
     slot = system.time_slot
     c = _c_module(printed, n, m, k, len(system.parameters), path,
-                  forced=powered, time_slot=slot)
-    c_complex = _c_complex_module(printed, n, m, k, len(system.parameters),
-                                  forced=powered)
+                  forced=powered, time_slot=slot, geometry_v=nonlinear)
+    # the complex step's geometry kernel reads q only: none for nonlinear constraints
+    c_complex = "" if nonlinear else _c_complex_module(printed, n, m, k,
+                                                       len(system.parameters),
+                                                       forced=powered)
     layout = {
         "n": n, "m": m, "k": k,
         "coordinate_names": tuple(q.name for q in system.coordinates),
@@ -225,6 +235,8 @@ def _generate(system, path: str) -> dict:
         "input_names": tuple(u.name for u in system.inputs),
         "time_slot": slot,
         "complex_kernels": bool(c_complex),
+        # only with a nonlinear (Chetaev) constraint: the geometry kernel reads (q, v)
+        **({"nonlinear_constraints": True} if nonlinear else {}),
     }
     return {"python": python, "c": c, "c_complex": c_complex, "layout": layout}
 
@@ -556,7 +568,8 @@ def _c_complex_module(printed, n, m, k, npar, forced=False) -> str:
     return "\n".join(lines) + "\n"
 
 
-def _c_module(printed, n, m, k, npar, path, forced=False, time_slot=None) -> str:
+def _c_module(printed, n, m, k, npar, path, forced=False, time_slot=None,
+              geometry_v=False) -> str:
     """The C translation unit: generated definitions and kernels, then the runtime files.
 
     Layout of the saddle kernel outputs (``out``): W (n*n, row-major), F (n), mu (m*n),
@@ -583,7 +596,7 @@ def _c_module(printed, n, m, k, npar, path, forced=False, time_slot=None) -> str
     lines = ["\n".join(head), c_defines(), runtime_source("nhham.h")]
     # Parameters may be unused; the (void) casts in the kernels keep compilers quiet.
     lines += _c_kernel("saddle", printed["saddle"], n, npar)
-    lines += _c_kernel("geometry", printed["geometry"], n, npar, with_v=False)
+    lines += _c_kernel("geometry", printed["geometry"], n, npar, with_v=geometry_v)
     lines += _c_kernel("lagr_q", printed["lq"], n, npar)
     lines += _c_kernel("jphi", printed["jphi"], n, npar)
     if path == "closed_form":
