@@ -74,7 +74,8 @@ _LAZY = by_module({
     # Hamiltonian side (Section 6)
     "hamiltonian.legendre": ("legendre_map", "LegendreMap"),
     "hamiltonian.brackets": ("canonical_bracket", "BracketAlgebra"),
-    "hamiltonian.side": ("hamiltonian_side", "HamiltonianSide", "nonholonomic_bracket"),
+    "hamiltonian.side": ("hamiltonian_side", "HamiltonianSide"),
+    "hamiltonian.almost_poisson": ("nonholonomic_bracket",),
     "hamiltonian.classification": ("classify_constraints",),
     "hamiltonian.classes": ("ConstraintClasses",),
     "hamiltonian.dirac": ("dirac_bracket", "dirac_vs_projected"),

@@ -2,7 +2,8 @@
 
 Modules: ``legendre`` (Leg, its inverse, transport of functions and forms),
 ``brackets`` (canonical, bivector and Dirac brackets), ``side`` (H, X_H,
-constraints and the projected field on T*Q; the nonholonomic bracket),
+constraints and the projected field on T*Q), ``almost_poisson`` (the nonholonomic
+bracket and its Jacobiator),
 ``classes`` (the ConstraintClasses result), ``classification`` (first and second
 class), ``classes_at_points`` (the split decided at exact points of M_f), ``dirac`` (the
 Dirac bracket, the Dirac flow against the projected field), ``crosscheck`` (both sides
@@ -15,7 +16,8 @@ from nhham.lazy import by_module, lazy_exports
 _LAZY = by_module({
     "legendre": ("legendre_map", "LegendreMap"),
     "brackets": ("canonical_bracket", "BracketAlgebra"),
-    "side": ("hamiltonian_side", "HamiltonianSide", "nonholonomic_bracket"),
+    "side": ("hamiltonian_side", "HamiltonianSide"),
+    "almost_poisson": ("nonholonomic_bracket", "NonholonomicBracket", "JacobiatorReport"),
     "classification": ("classify_constraints",),
     "classes": ("ConstraintClasses",),
     "dirac": ("dirac_bracket", "dirac_vs_projected"),

@@ -20,7 +20,8 @@ import numpy as np
 
 from nhham.settings import COMPILER_LOCK
 
-__all__ = ["GeneratedKernels", "CompiledRHS", "ComplexKernels", "kernel_sizes", "columns"]
+__all__ = ["GeneratedKernels", "CompiledRHS", "ComplexKernels", "kernel_sizes", "columns",
+           "ParameterBlock", "baumgarte_terms"]
 
 
 def kernel_sizes(layout) -> dict:
@@ -253,3 +254,26 @@ class ComplexKernels:
                             c.c_void_p(P.ctypes.data), c.c_long(P.shape[-1] if P.ndim == 2 else 0),
                             c.c_void_p(OUT.ctypes.data))
         return OUT
+
+
+@dataclass(frozen=True)
+class ParameterBlock:
+    """``[parameters..., 2 alpha, beta^2]`` as the compiled code reads them.
+
+    ``pointer`` (ctypes) and ``address`` (int, for the CPython entry points) point into
+    ``array``: keep the block while the C code may read it.
+    """
+
+    array: np.ndarray
+    pointer: ctypes.c_void_p
+    address: int
+
+    @classmethod
+    def of(cls, parameters, a2: float = 0.0, b2: float = 0.0) -> "ParameterBlock":
+        arr = np.array([*parameters, a2, b2], dtype=float)
+        return cls(arr, ctypes.c_void_p(arr.ctypes.data), int(arr.ctypes.data))
+
+
+def baumgarte_terms(baumgarte) -> tuple:
+    """(2 alpha, beta^2) of ``baumgarte = (alpha, beta)``; (0, 0) for None."""
+    return (0.0, 0.0) if baumgarte is None else (2.0 * baumgarte[0], baumgarte[1] ** 2)

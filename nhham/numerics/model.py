@@ -39,7 +39,6 @@ This module must not import sympy (``DESIGN.md`` §4).
 
 from __future__ import annotations
 
-import ctypes
 import math
 import warnings
 from typing import Any
@@ -50,7 +49,8 @@ import numpy as np
 
 from nhham.errors import InconsistentInitialDataError, InputError
 from nhham.numerics.chetaev import padded, velocities_newton
-from nhham.numerics.kernels import CompiledRHS, GeneratedKernels, columns
+from nhham.numerics.kernels import (CompiledRHS, GeneratedKernels, ParameterBlock,
+                                    baumgarte_terms, columns)
 from nhham.numerics.saddle import SingleStateSolver, cond_each, solve_saddle
 from nhham.numerics.status import NumericalFailure, Status
 
@@ -73,29 +73,6 @@ class LibraryReady(Exception):
     caller can run again on :meth:`NumericModel.with_library` (not an error: deliberately
     not a :class:`~nhham.errors.NhhamError`, so no loop mistakes it for a failed step).
     """
-
-
-@dataclass(frozen=True)
-class ParameterBlock:
-    """``[parameters..., 2 alpha, beta^2]`` as the compiled code reads them.
-
-    ``pointer`` (ctypes) and ``address`` (int, for the CPython entry points) point into
-    ``array``: keep the block while the C code may read it.
-    """
-
-    array: np.ndarray
-    pointer: ctypes.c_void_p
-    address: int
-
-    @classmethod
-    def of(cls, parameters, a2: float = 0.0, b2: float = 0.0) -> "ParameterBlock":
-        arr = np.array([*parameters, a2, b2], dtype=float)
-        return cls(arr, ctypes.c_void_p(arr.ctypes.data), int(arr.ctypes.data))
-
-
-def baumgarte_terms(baumgarte) -> tuple:
-    """(2 alpha, beta^2) of ``baumgarte = (alpha, beta)``; (0, 0) for None."""
-    return (0.0, 0.0) if baumgarte is None else (2.0 * baumgarte[0], baumgarte[1] ** 2)
 
 
 # --------------------------------------------------------------- results

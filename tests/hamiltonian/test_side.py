@@ -11,7 +11,8 @@ import nhham
 
 import handmade
 from nhham.errors import ComputationError
-from nhham.hamiltonian.side import hamiltonian_side, nonholonomic_bracket
+from nhham.hamiltonian.almost_poisson import nonholonomic_bracket
+from nhham.hamiltonian.side import hamiltonian_side
 from nhham.hamiltonian.legendre import Backend
 
 S = sp.Symbol
