@@ -195,8 +195,10 @@ def test_ctrl_c_exits_130_at_once_keeping_what_finished(tmp_path, scheduler, to_
     import psutil
 
     out = tmp_path / "runs.zarr"
+    # about 0.5 s a chunk: minutes in all, so the signal always lands mid-study (with runs
+    # to t = 200 the study could end, on a loaded machine, before the store was read)
     args = [sys.executable, "-m", "nhham", "sweep", str(DRIVE), "--what", "simulate",
-            "--over", "c=0.01:0.05:400", "--chunk", "1", "--t-end", "200", "--rtol", "1e-12",
+            "--over", "c=0.01:0.05:400", "--chunk", "1", "--t-end", "2000", "--rtol", "1e-12",
             "--workers", "1" if scheduler == "processes" else "2", "--scheduler", scheduler,
             "--out", str(out)]
     env = dict(os.environ, PYTHONPATH=str(ROOT))
