@@ -66,10 +66,14 @@ def test_linearize_closes_the_bicycle_s_steer_controller(capsys):
 
     from bicycle_benchmark import BENCHMARK, benchmark_matrices, benchmark_state_matrix
 
+    import nhham
+
     scene = EXAMPLES / "bicycle_steer_control.toml"
-    status, out, _ = run(capsys, "linearize", scene, "--json")
-    result = json.loads(out)["result"]
-    assert status == 0 and result["loop"] == "closed" and result["stable"] is True
+    # the command's answer (its JSON result and its text are the journey's data and text:
+    # tests/journeys), computed once
+    answer = nhham.linearize(scene)
+    result = answer.to_dict()
+    assert answer.failure is None and result["loop"] == "closed" and result["stable"] is True
     assert result["coordinates"] == ["phi", "delta", "phi_dot", "delta_dot"]
     poles = sorted(re for re, im in result["eigenvalues"])
     np.testing.assert_allclose(poles, [-5, -4, -3, -2], atol=1e-7)
@@ -80,7 +84,7 @@ def test_linearize_closes_the_bicycle_s_steer_controller(capsys):
     B = np.vstack([np.zeros((2, 2)), np.linalg.inv(M)])
     expected = benchmark_state_matrix(3.0) + B @ K
     np.testing.assert_allclose(result["matrix"], expected, rtol=1e-6, atol=1e-6)
-    status, out, _ = run(capsys, "linearize", scene)
+    out = answer.text()
     assert "(closed loop)" in out and "open loop            unstable" in out
 
 
