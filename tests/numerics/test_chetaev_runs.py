@@ -173,3 +173,23 @@ def test_every_method_record_says_whether_it_takes_a_nonlinear_constraint():
             with pytest.raises(InputError, match=method.nonlinear_refused[:30]):
                 simulate(model, (0.0, 0.05), [0, 0, 2.0, 0], method=name, warn=False,
                          **options)
+
+
+def test_a_speed_prescribed_in_time_is_both_kinds_at_once():
+    """phi = sqrt(x'^2 + y'^2) - (1 + t) (nonlinear and time-dependent), L = |v|^2/2.
+
+    By hand, from the origin with velocity (1, 0): the reaction -lambda v/|v| is along v,
+    so the motion stays on the x axis with x' = 1 + t, x = t + t^2/2; x'' = 1 = -lambda, so
+    lambda = -1; E = (1 + t)^2/2 grows by the reaction's power -lambda |v| = 1 + t."""
+    system = nhham.System(["x", "y"], "(x_dot**2 + y_dot**2)/2",
+                          ["sqrt(x_dot**2 + y_dot**2) - (1 + t)"])
+    assert system.constraint_kinds == ("nonlinear (Chetaev)",) and system.time is not None
+    t = np.linspace(0.0, 2.0, 5)
+    res = simulate(numeric_model(system, backend="numpy"), (0.0, 2.0), [0, 0, 1.0, 0],
+                   t_eval=t, **TIGHT)
+    assert res.success, res.message
+    exact = np.array([t + t**2 / 2, 0 * t, 1 + t, 0 * t])
+    assert np.max(np.abs(res.y - exact)) < 1e-9
+    assert np.max(np.abs(res.multipliers[0] + 1.0)) < 1e-8
+    assert np.max(np.abs(res.diagnostics.energy - (1 + t)**2 / 2)) < 1e-9
+    assert res.diagnostics.energy_balance_residual < 1e-9
