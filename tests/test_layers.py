@@ -38,6 +38,7 @@ from __future__ import annotations
 
 import ast
 import doctest
+import functools
 import sys
 from pathlib import Path
 
@@ -115,9 +116,15 @@ def read_package(root: Path, package: str = PACKAGE) -> dict:
     modules = {}
     for path in sorted((root / package).rglob("*.py")):
         name = _module_name(path, root)
-        tree = ast.parse(path.read_text(encoding="utf-8"), filename=str(path))
-        modules[name] = _imports(tree, name, path.name == "__init__.py")
+        modules[name] = _imports_of(path.read_text(encoding="utf-8"), name,
+                                    path.name == "__init__.py")
     return modules
+
+
+@functools.lru_cache(maxsize=None)
+def _imports_of(text: str, module: str, is_package: bool) -> tuple:
+    # The planted copies repeat the package's text: each module is parsed once per run.
+    return tuple(_imports(ast.parse(text), module, is_package))
 
 
 # ---------------------------------------------------------------- checking

@@ -52,3 +52,27 @@ def test_generated_sources_are_kept_by_content_not_by_identity():
     del a
     gc.collect()
     assert ref() is None
+
+
+def test_the_key_of_an_expression_is_its_structure_not_how_it_was_built():
+    """Equal Lagrangians give one fingerprint whether a subexpression is one shared object
+    or two equal copies (a pickle wrote them differently: the bicycle's sources were
+    generated again for every load after its geometry, 8 times in the suite); a symbol's
+    assumptions and an exact 1 against a float 1.0 still tell expressions apart."""
+    import pickle
+
+    from nhham.numerics.codegen.emit import expression_digest, system_fingerprint
+
+    x, xd, m = sp.symbols("x x_dot m", real=True)
+    shared = m * sp.sin(x)
+    one = sp.cos(shared) * xd ** 2 + sp.sin(shared)  # one object, twice in the tree
+    sp.core.cache.clear_cache()  # the next product is a new object, equal to the first
+    copy = sp.Mul(m, sp.sin(x))
+    two = sp.cos(shared) * xd ** 2 + sp.sin(copy)
+    assert one == two and copy is not shared
+    assert pickle.dumps(one, protocol=4) != pickle.dumps(two, protocol=4)  # the old key
+    assert expression_digest(one) == expression_digest(two)
+    systems = [nhham.System(["x"], L, parameters={"m": 1.0}, name="same") for L in (one, two)]
+    assert system_fingerprint(systems[0]) == system_fingerprint(systems[1])
+    assert expression_digest(sp.Symbol("x") * xd) != expression_digest(x * xd)
+    assert expression_digest(sp.Float(1.0) * x) != expression_digest(sp.Integer(1) * x)

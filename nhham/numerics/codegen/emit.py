@@ -45,7 +45,6 @@ from __future__ import annotations
 
 import functools
 import hashlib
-import pickle
 from collections import OrderedDict
 from importlib import resources
 from pathlib import Path
@@ -60,8 +59,8 @@ from nhham.numerics.nullspace import KKT_RATIO
 from nhham.numerics.status import c_defines
 from nhham.system.expressions import derivative
 
-__all__ = ["generate_sources", "system_fingerprint", "source_key", "sources_digest",
-           "code_digest", "cached_sources", "remember_sources", "expand_angle_sums",
+__all__ = ["generate_sources", "system_fingerprint", "expression_digest", "source_key",
+           "sources_digest", "code_digest", "cached_sources", "remember_sources", "expand_angle_sums",
            "runtime_source", "RUNTIME_FILES"]
 
 #: The runtime files, in the order they follow the generated kernels (``nhham.h`` first).
@@ -138,10 +137,9 @@ def system_fingerprint(system, path: str = "saddle") -> str:
 
     The coordinates, parameters (with their assumptions), the Lagrangian, the affine
     constraints phi (complete lifts first), the holonomic constraints, their labels, the
-    generalized forces, the name and the path; the expressions by their pickles (the
-    whole tree, symbols with their assumptions, in a few ms where ``srepr`` of the
-    bicycle's L took 0.3 s): equal pickles are equal expressions, and an equal
-    expression built in another order only misses the cache.
+    generalized forces, the name and the path; the expressions by their structure
+    (:func:`expression_digest`): equal expressions give equal fingerprints in any
+    process, however they were built.
     """
     exprs: tuple = (tuple(system.coordinates), tuple(system.parameters), system.lagrangian,
                     tuple(system.phi), tuple(system.holonomic))
@@ -149,9 +147,48 @@ def system_fingerprint(system, path: str = "saddle") -> str:
         exprs += (tuple(system.generalized_forces),)
     h = hashlib.sha256("\0".join([path, system.name,
                                   repr(tuple(system.constraint_labels))]).encode())
+    memo: dict = {}
     for e in exprs:
-        h.update(b"\0" + pickle.dumps(e, protocol=4))
+        h.update(b"\0" + expression_digest(e, memo))
     return h.hexdigest()
+
+
+def expression_digest(expr, memo: dict | None = None) -> bytes:
+    """SHA-256 of an expression's tree (a Merkle hash: class, then its arguments' digests).
+
+    Canonical where pickles are not: a pickle writes a subexpression shared by two
+    parents once and an equal copy twice, so the bicycle's Lagrangian loaded twice in one
+    process pickled differently and missed the cache every time. Symbols carry their
+    assumptions, numbers their exact value (a Float its mpf and precision). ``memo`` (by
+    expression) makes a shared subtree cost once.
+    """
+    memo = {} if memo is None else memo
+    if isinstance(expr, (tuple, list)):
+        h = hashlib.sha256(b"(")
+        for e in expr:
+            h.update(expression_digest(e, memo))
+        return h.digest()
+    expr = sp.sympify(expr)
+    key = (type(expr), expr)  # Float(1.0) == 1 in older sympy: never one memo entry
+    found = memo.get(key)
+    if found is not None:
+        return found
+    if isinstance(expr, sp.Symbol):
+        text = f"{type(expr).__name__}:{expr.name}:{sorted(expr.assumptions0.items())}"
+        if isinstance(expr, sp.Dummy):
+            text += f":{expr.dummy_index}"
+        digest = hashlib.sha256(text.encode()).digest()
+    elif isinstance(expr, sp.Float):
+        digest = hashlib.sha256(f"Float:{expr._mpf_}:{expr._prec}".encode()).digest()
+    elif expr.is_Atom:
+        digest = hashlib.sha256(sp.srepr(expr).encode()).digest()
+    else:
+        h = hashlib.sha256(type(expr).__name__.encode() + b"(")
+        for a in expr.args:
+            h.update(expression_digest(a, memo))
+        digest = h.digest()
+    memo[key] = digest
+    return digest
 
 
 def _generate(system, path: str) -> dict:
