@@ -245,9 +245,8 @@ class ConstraintAnalysis(ConstraintOutcome):
             "integrable": self.integrable,
             "affine_parts": not system.is_linear,
             "inconsistency": self.inconsistency,
-            # only with a nonlinear constraint, so that affine scenes answer as before
-            **({} if system.is_affine else {"velocity_constraints": constraint_records(system),
-                                            "integrability": NOT_APPLICABLE}),
+            "constraint_kinds": constraint_records(system),
+            **({} if system.is_affine else {"integrability": NOT_APPLICABLE}),
         }
 
     def __repr__(self) -> str:

@@ -18,6 +18,7 @@ from nhham.render.text import expr_text, labelled, matrix_table, paragraph, tabl
 from nhham.render.layout import grid_fits as table_fits
 from nhham.render.simplify import display_form
 from nhham.numerics.methods import lookup, names
+from nhham.system.chetaev import CHETAEV
 
 __all__ = [
     "classify_data", "classify_text", "classify_latex",
@@ -70,12 +71,9 @@ def time_data(system) -> dict:
     """Which question a verdict on a time-dependent system answers, and where t enters:
     t is a parameter without a value (DESIGN.md §2), so the verdict is the one at a
     generic instant (for all t but a proper algebraic subset)."""
-    labels = system.m1_labels
     return {"name": str(system.time), "question": "generic instant (for all t but a proper "
             "algebraic subset; t a parameter without a value)",
-            "lagrangian": bool(system.lagrangian_depends_on_time),
-            "constraints": [{"label": lab, "time_dependent": bool(dep)}
-                            for lab, dep in zip(labels, system.time_dependent)]}
+            "lagrangian": bool(system.lagrangian_depends_on_time)}
 
 
 def classify_warnings(analysis, classes=None) -> list:
@@ -110,12 +108,14 @@ def classify_text(title: str, data: dict) -> str:
         ("redundant (dropped)", ", ".join(data["redundant"]) or "none"),
         ("integrable (Frobenius)", _integrable_text(data)),
     ]
-    rows += [(f"  {r['label']}", r["kind"]) for r in data.get("velocity_constraints", ())]
+    if any(r["kind"] == CHETAEV or r["time_dependent"] for r in data["constraint_kinds"]):
+        rows += [(f"  {r['label']}", r["kind"] + ", in t" * r["time_dependent"])
+                 for r in data["constraint_kinds"]]
     if data["first_class"] is not None:
         rows += [("first class", str(data["first_class"])),
                  ("second class", str(data["second_class"]))]
     if data.get("time"):
-        timed = [c["label"] for c in data["time"]["constraints"] if c["time_dependent"]]
+        timed = [c["label"] for c in data["constraint_kinds"] if c["time_dependent"]]
         rows += [("time t", data["time"]["question"]),
                  ("depends on t", ", ".join((["L"] if data["time"]["lagrangian"] else [])
                                             + timed) or "the forces only")]

@@ -21,12 +21,15 @@ import sympy as sp
 
 from nhham.system.velocities import non_affine_terms
 
-__all__ = ["AFFINE", "CHETAEV", "constraint_kind", "constraint_records", "degenerate_reactions",
+__all__ = ["AFFINE", "CHETAEV", "HOLONOMIC", "LINEAR", "constraint_kind", "constraint_records", "degenerate_reactions",
            "NOT_APPLICABLE"]
 
 #: The kinds of a velocity constraint, as ``classify`` labels them.
 AFFINE = "affine"
 CHETAEV = "nonlinear (Chetaev)"
+#: Finer kinds in ``classify``'s records: an affine constraint with h = 0, and g(q, t) = 0.
+LINEAR = "linear"
+HOLONOMIC = "holonomic"
 
 #: What the Frobenius test answers for a system with nonlinear constraints.
 NOT_APPLICABLE = "not applicable for nonlinear constraints"
@@ -51,18 +54,31 @@ def constraint_kind(expr, velocities) -> str:
 
 
 def constraint_records(system) -> list[dict]:
-    """``[{"label", "kind"}]`` for every velocity constraint (rows of ``system.phi``, the
-    complete lifts of holonomic constraints first): ``classify``'s JSON per constraint.
+    """``[{"label", "kind", "time_dependent"}]`` for every constraint of M_1 (the holonomic
+    g, then the rows of phi, their complete lifts first): ``classify``'s JSON per constraint.
+
+    ``kind`` is ``"holonomic"`` for g(q, t) = 0; for a velocity constraint ``"linear"``
+    (mu(q) v = 0), ``"affine"`` (mu(q) v + h = 0, h != 0: a lift of a g that moves with t,
+    or a rheonomic constraint) or ``"nonlinear (Chetaev)"``; ``time_dependent`` whether it
+    depends explicitly on t.
 
     Examples
     --------
     >>> from nhham import System
-    >>> constraint_records(System(["x", "y", "z"], "(x_dot**2 + y_dot**2 + z_dot**2)/2",
-    ...                           constraints=["x_dot*y_dot"], holonomic=["z"]))
-    [{'label': 'holonomic[0].lift', 'kind': 'affine'}, {'label': 'constraints[0]', 'kind': 'nonlinear (Chetaev)'}]
+    >>> system = System(["x", "y", "z", "w"], "(x_dot**2 + y_dot**2 + z_dot**2 + w_dot**2)/2",
+    ...                 constraints=["x_dot*y_dot", "y_dot - t"], holonomic=["z"])
+    >>> for r in constraint_records(system):
+    ...     print(r)
+    {'label': 'holonomic[0]', 'kind': 'holonomic', 'time_dependent': False}
+    {'label': 'holonomic[0].lift', 'kind': 'linear', 'time_dependent': False}
+    {'label': 'constraints[0]', 'kind': 'nonlinear (Chetaev)', 'time_dependent': False}
+    {'label': 'constraints[1]', 'kind': 'affine', 'time_dependent': True}
     """
-    labels = system.m1_labels[len(system.holonomic):]
-    return [{"label": lab, "kind": kind} for lab, kind in zip(labels, system.constraint_kinds)]
+    kinds = (HOLONOMIC,) * len(system.holonomic) + tuple(
+        LINEAR if kind == AFFINE and vanishes else kind
+        for kind, vanishes in zip(system.constraint_kinds, system.h_vanishes))
+    return [{"label": lab, "kind": kind, "time_dependent": bool(dep)}
+            for lab, kind, dep in zip(system.m1_labels, kinds, system.time_dependent)]
 
 
 def degenerate_reactions(system, labels, rows, kinds=None) -> list[str]:

@@ -413,9 +413,14 @@ class System:
         return sp.Matrix([f.subs(zero) for f in self.phi]) if self.phi else sp.zeros(0, 1)
 
     @cached_property
+    def h_vanishes(self) -> tuple[bool, ...]:
+        """Whether each h_i vanishes identically (simplified to 0)."""
+        return tuple(sp.simplify(x) == 0 for x in self.h)
+
+    @property
     def is_linear(self) -> bool:
         """True when every h_i vanishes (constraints linear in v)."""
-        return all(sp.simplify(x) == 0 for x in self.h)
+        return all(self.h_vanishes)
 
     @cached_property
     def quadratic_parts(self) -> QuadraticParts | None:

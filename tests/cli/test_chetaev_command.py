@@ -30,8 +30,8 @@ def result(capsys, *argv):
                                    "perpendicular_velocities"])
 def test_classify_labels_each_constraint_and_frobenius_does_not_apply(capsys, scene):
     r = result(capsys, "classify", EXAMPLES / f"{scene}.toml")
-    assert r["velocity_constraints"] == [{"label": "constraints[0]",
-                                          "kind": "nonlinear (Chetaev)"}]
+    assert r["constraint_kinds"] == [{"label": "constraints[0]", "kind": "nonlinear (Chetaev)",
+                                      "time_dependent": False}]
     assert r["integrable"] is None
     assert r["integrability"] == "not applicable for nonlinear constraints"
     assert r["status"] == "determined" and r["regular"] and r["rank_c"] == 1

@@ -71,7 +71,11 @@ def test_classify_text_lists_each_constraint_once():
             "final_labels": ["holonomic[0]", "constraints[0]"],
             "final_constraints": [long_expression(), "x_dot"],
             "first_class_combinations": [], "first_class_coefficients": None,
-            "inconsistency": None}
+            "inconsistency": None,
+            "constraint_kinds": [{"label": "holonomic[0]", "kind": "holonomic",
+                                  "time_dependent": False},
+                                 {"label": "constraints[0]", "kind": "linear",
+                                  "time_dependent": False}]}
     out = classify_text("bicycle", data)
     assert out.count("k0*sin(q0)") == 1
     assert "  M_1  rank 5  holonomic[0], constraints[0]" in out

@@ -30,7 +30,9 @@ def test_classify_says_the_verdict_is_at_a_generic_instant_and_what_depends_on_t
     time = result["time"]
     assert time["name"] == "t" and "generic instant" in time["question"]
     assert not time["lagrangian"]
-    assert [c["time_dependent"] for c in time["constraints"]] == [True, True]
+    assert "constraints" not in time  # one record per constraint: constraint_kinds
+    assert [(c["kind"], c["time_dependent"]) for c in result["constraint_kinds"]] == [
+        ("affine", True), ("affine", True)]
     status, text = run(capsys, "classify", BALL)
     assert status == 0 and "depends on t            constraints[0], constraints[1]" in text
 

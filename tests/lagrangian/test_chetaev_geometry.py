@@ -56,13 +56,29 @@ def test_nonlinear_constraints_integrability_not_applicable_and_kinds():
     answer = integrability(s)
     assert answer.integrable is None and answer.method == "not applicable"
     data = analyze_constraints(s).to_dict()
-    assert data["velocity_constraints"] == [{"label": "constraints[0]",
-                                             "kind": "nonlinear (Chetaev)"}]
+    assert data["constraint_kinds"] == [{"label": "constraints[0]", "kind": "nonlinear (Chetaev)",
+                                         "time_dependent": False}]
     assert data["integrability"] == "not applicable for nonlinear constraints"
     assert data["status"] == "determined" and data["regular"] and data["rank_c"] == 1
 
 
-def test_affine_system_keeps_its_keys():
+def test_every_constraint_of_M1_is_labelled_by_kind_and_time():
+    """One record per constraint of M_1 on every system: g(q, t) holonomic, its lift linear
+    (affine when g moves with t: the lift gains dg/dt), mu(q) v linear, mu(q) v + h(q, t)
+    affine, and the Frobenius answer keeps its usual key for affine constraints."""
+    t = sp.Symbol("t")
     s = nhham.System(["x", "y", "z"], (xd**2 + yd**2 + zd**2) / 2, [zd - y * xd])
     data = analyze_constraints(s).to_dict()
-    assert "velocity_constraints" not in data and "integrability" not in data
+    assert data["constraint_kinds"] == [{"label": "constraints[0]", "kind": "linear",
+                                         "time_dependent": False}]
+    assert "integrability" not in data
+    w, wd, u, ud = sp.symbols("w w_dot u u_dot")
+    moving = nhham.System(["x", "y", "z", "w", "u"],
+                          (xd**2 + yd**2 + zd**2 + wd**2 + ud**2) / 2,
+                          [zd - y * xd, yd - sp.sin(t)], holonomic=[x - t**2, w - y])
+    kinds = [(r["label"], r["kind"], r["time_dependent"])
+             for r in analyze_constraints(moving).to_dict()["constraint_kinds"]]
+    assert kinds == [("holonomic[0]", "holonomic", True), ("holonomic[1]", "holonomic", False),
+                     ("holonomic[0].lift", "affine", True),
+                     ("holonomic[1].lift", "linear", False),
+                     ("constraints[0]", "linear", False), ("constraints[1]", "affine", True)]
