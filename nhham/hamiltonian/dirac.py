@@ -282,8 +282,8 @@ def _dirac_minus_projected(be, num, hp, chis):
     """X_D - X at one point of the numeric layer (``be`` arithmetic), or None where C^H
     is singular (outside the domain of X).
 
-    X_D = X_H - X_{chi_a} (B_RR^{-1})^{ab} {chi_b, H} with X_chi = (chi_p, -chi_q),
-    X = X_H + lambda^j Z_j^H.
+    X_D = X_H - X_{chi_a} (B_RR^{-1})^{ab} ({chi_b, H} + d chi_b/dt) with
+    X_chi = (chi_p, -chi_q), X = X_H + lambda^j Z_j^H.
     """
     try:
         X, _ = num.projected_field(be, hp)
@@ -293,7 +293,7 @@ def _dirac_minus_projected(be, num, hp, chis):
     if chis:
         _, Gq, Gp = num.gradients(be, hp, chis)
         B = Gq @ Gp.T - Gp @ Gq.T
-        y = be.solve(B, Gq @ hp.Hp - Gp @ hp.Hq)
+        y = be.solve(B, Gq @ hp.Hp - Gp @ hp.Hq + num.time_derivatives(be, hp, chis))
         XD = XD - np.concatenate([Gp.T @ y, -(Gq.T @ y)])
     return XD, X
 
@@ -394,6 +394,9 @@ def _fields_on_Mf(side: HamiltonianSide, classes: ConstraintClasses):
                                   sp.S.Zero))) for c in chi]
     else:
         s = [Mf.reduce(alg.bracket(c, side.H)) for c in chi]
+    time = side.system.time
+    if time is not None:  # {chi_b, H} + d chi_b/dt: constraints moving with t (DESIGN.md §2)
+        s = [cancel(e + Mf.reduce(sp.diff(c, time))) for e, c in zip(s, chi)]
     XH = [Mf.reduce(e) for e in side.X_H]
     lam = [Mf.reduce(e) for e in side.multipliers]
     Z = side.vertical_fields

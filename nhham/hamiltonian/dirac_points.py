@@ -16,6 +16,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from functools import cached_property
 
+import sympy as sp
+
 from nhham.lagrangian.decision import Decision
 from nhham.lagrangian.domains import Degree, evaluate
 from nhham.lagrangian.formulas import dirac_difference
@@ -68,7 +70,7 @@ class DiracDifference:
 
     @cached_property
     def data(self) -> tuple:
-        """The rows of W, M, μ, F, drift, v, ∂χ_R/∂q and ∂χ_R/∂v (sympy)."""
+        """The rows of W, M, μ, F, drift, v, ∂χ_R/∂q, ∂χ_R/∂v and ∂χ_R/∂t (sympy)."""
         system = self.side.system
         geo = lagrangian_geometry(system)
         n = system.n
@@ -78,16 +80,18 @@ class DiracDifference:
                 [list(system.mu.row(i)) for i in range(system.m)],
                 [[e] for e in geo.forcing], [[e] for e in geo.drift], [[s] for s in v],
                 [jacobian_row(c, q) for c in self.chis],
-                [jacobian_row(c, v) for c in self.chis])
+                [jacobian_row(c, v) for c in self.chis],
+                [[sp.S.Zero if system.time is None else sp.diff(c, system.time)]
+                 for c in self.chis])
 
     def value(self, env, degrees: bool = False) -> list:
         """The 2n components of X_D − X at the point (Degree bounds with ``degrees``)."""
         cache: dict = {}
         n = self.side.system.n
-        W, M, mu, F, drift, v, Jq, Jv = (ListMatrix([evaluate(r, env, cache) for r in rows], n)
-                                          for rows in self.data)
+        W, M, mu, F, drift, v, Jq, Jv, Jt = (
+            ListMatrix([evaluate(r, env, cache) for r in rows], n) for rows in self.data)
         D = dirac_difference(W, M, mu, F, drift, v, Jq, Jv,
-                             solve=degree_solve if degrees else field_solve)
+                             solve=degree_solve if degrees else field_solve, Jt=Jt)
         return [row[0] for row in D.to_list()]
 
     def _differing(self, values) -> tuple:

@@ -461,6 +461,10 @@ class NumericHamiltonian:
         # (compare refuses L in t)
         self._phit = None if sysm.time is None else Lambdified(
             self.args, [sp.diff(f, sysm.time) for f in sysm.phi], (m,))
+        # d2L/dt dv where L depends on t (Leg^{-1} then moves with t)
+        self._Lvt = None if not sysm.lagrangian_depends_on_time else Lambdified(
+            self.args, [sp.diff(sysm.lagrangian, v, sysm.time) for v in sysm.velocities],
+            (n,))
 
     def functions(self, exprs: Sequence) -> "TransportedFunctions":
         """Compiled values and gradients of functions chi(q, v) (cached by tuple)."""
@@ -532,6 +536,22 @@ class NumericHamiltonian:
         vals = list(pt.q) + list(pt.v) + list(pt.params)
         return self.functions(exprs).gradients(backend, vals, pt.W, pt.M)
 
+    def time_derivatives(self, backend: Backend, pt: HamiltonianPoint, exprs: Sequence):
+        """d/dt of chi o Leg^{-1} at fixed (q, p) for chi(q, v, t) in ``exprs``, shape (k,).
+
+        d chi/dt - d chi/dv W^{-1} d2L/dt dv: Leg^{-1} moves with t where L does
+        (p = dL/dv fixed gives W dv/dt = -d2L/dt dv). Zeros for an autonomous system.
+        """
+        functions = self.functions(exprs)
+        if functions.time_derivative is None:
+            return backend.zeros(len(exprs))
+        vals = list(pt.q) + list(pt.v) + list(pt.params)
+        out = functions.time_derivative(backend, vals)
+        if self._Lvt is not None:
+            _, _, gv = functions.gradients(backend, vals, pt.W, pt.M)
+            out = out - gv @ backend.solve(pt.W, self._Lvt(backend, vals))
+        return out
+
     def bracket_matrix(self, backend: Backend, pt: HamiltonianPoint, exprs: Sequence):
         """{chi_a o Leg^{-1}, chi_b o Leg^{-1}} at ``pt``, shape (k, k)."""
         _, Gq, Gp = self.gradients(backend, pt, exprs)
@@ -547,6 +567,9 @@ class TransportedFunctions:
         self.exprs = exprs
         k = len(exprs)
         self._val = Lambdified(args, list(exprs), (k,))
+        #: d chi/dt at fixed (q, v), or None for an autonomous system
+        self.time_derivative = None if system.time is None else Lambdified(
+            args, [sp.diff(e, system.time) for e in exprs], (k,))
         self._dq = Lambdified(args, [derivative(e, s) for e in exprs for s in q], (k, n))
         self._dv = Lambdified(args, [derivative(e, s) for e in exprs for s in v], (k, n))
 

@@ -174,7 +174,7 @@ def lagrangian_bracket(Jq, Jv, W, M, solve: Callable = field_solve):
     return JU - JU.transpose() - U.transpose() * (M - M.transpose()) * U
 
 
-def dirac_difference(W, M, mu, F, drift, v, Jq, Jv, solve: Callable = field_solve):
+def dirac_difference(W, M, mu, F, drift, v, Jq, Jv, solve: Callable = field_solve, Jt=None):
     """X_D − X at one point x of TQ, in the (q, p) components at Leg(x): shape (2n, 1).
 
     X_D = X_H − X_χa (B_RR⁻¹)^ab {χ_b, H} is the Dirac flow of H over a second-class set
@@ -183,7 +183,9 @@ def dirac_difference(W, M, mu, F, drift, v, Jq, Jv, solve: Callable = field_solv
     forced field where F has forces), B = {χ_a, χ_b}_L (:func:`lagrangian_bracket`), the
     Hamiltonian field of χ has the components (W⁻¹ χ_v, −(χ_q − Mᵀ W⁻¹ χ_v)) and
     X − X_H = (0, −μᵀ λ) (:func:`constrained_motion`). With U = W⁻¹ J_vᵀ and
-    y = B⁻¹ X_H(χ):  X_D − X = (−U y, (J_qᵀ − Mᵀ U) y + μᵀ λ).
+    y = B⁻¹ X_H(χ):  X_D − X = (−U y, (J_qᵀ − Mᵀ U) y + μᵀ λ). Constraints that depend on
+    the time keep themselves along X_D only with their ∂χ/∂t: X_D = X_H − X_χa (B_RR⁻¹)^ab
+    ({χ_b, H} + ∂χ_b/∂t), so y = B⁻¹ (ξ_L(χ) + ∂χ/∂t) (``Jt``).
 
     Parameters
     ----------
@@ -197,6 +199,8 @@ def dirac_difference(W, M, mu, F, drift, v, Jq, Jv, solve: Callable = field_solv
         ∂χ/∂q and ∂χ/∂v of the second-class set (r = 0: X_D = X_H).
     solve : callable, optional
         ``solve(A, B) -> A⁻¹ B`` in the matrices' arithmetic.
+    Jt : matrix, shape (r, 1), optional
+        ∂χ/∂t at fixed (q, v) where the second-class set depends on the time t.
 
     Returns
     -------
@@ -213,7 +217,8 @@ def dirac_difference(W, M, mu, F, drift, v, Jq, Jv, solve: Callable = field_solv
         return zeros_like(W, (n, 1)).vstack(dp)
     U = solve(W, Jv.transpose())
     B = lagrangian_bracket(Jq, Jv, W, M, solve)
-    y = solve(B, Jq * v + Jv * solve(W, F))
+    rate = Jq * v + Jv * solve(W, F)
+    y = solve(B, rate if Jt is None else rate + Jt)
     return (-(U * y)).vstack(dp + (Jq.transpose() - M.transpose() * U) * y)
 
 

@@ -204,11 +204,11 @@ def test_the_formula_against_the_hamiltonian_numeric_layer(make):
     chis = [classes.constraints_TQ[a] for a in classes.second_class_indices]
     for x in points[:3]:
         vals = [float(x[s]) for s in args]
-        W, M, mu, F, drift, v, Jq, Jv = (FloatMatrix(np.array(f(*vals), dtype=float)
+        W, M, mu, F, drift, v, Jq, Jv, Jt = (FloatMatrix(np.array(f(*vals), dtype=float)
                                                      .reshape(len(r), -1) if r else
                                                      np.zeros((0, n))) for f, r in
                                           zip(rows, q.data))
-        got = dirac_difference(W, M, mu, F, drift, v, Jq, Jv).a.ravel()
+        got = dirac_difference(W, M, mu, F, drift, v, Jq, Jv, Jt=Jt).a.ravel()
         want = _hamiltonian_route(side, chis, x)
         assert np.allclose(got, want, rtol=1e-9, atol=1e-12)
         assert np.max(np.abs(got)) > 1e-6

@@ -35,3 +35,38 @@ def test_compare_refuses_a_lagrangian_in_t_naming_it():
     with pytest.raises(InputError, match="Legendre map") as e:
         cross_check(s)
     assert e.value.key == "lagrangian"
+
+
+def wall(a=0.7):
+    """A particle pushed by a wall moving as x = a t²/2 (holonomic, linear in x): the true
+    motion has x'' = a, the wall's push m a, y free in gravity."""
+    return System(["x", "y"], "m*(x_dot**2 + y_dot**2)/2 - m*g*y",
+                  holonomic=["x - a*t**2/2"], parameters={"m": 2.0, "g": 9.81, "a": a})
+
+
+@pytest.mark.parametrize("system", [bead(), wall()], ids=["bead", "wall"])
+@pytest.mark.parametrize("method", ["auto", "sampled"])
+def test_the_dirac_flow_of_a_moving_holonomic_constraint_is_the_true_motion(system, method):
+    """Second-class constraints χ(q, p, t) stay satisfied along X_D = {z, H}_D − {z, χ_a}
+    C^ab ∂χ_b/∂t only with the ∂χ/∂t term, and a holonomic constraint's Dirac flow is then
+    the true motion (Dirac 1950). The wall by hand: χ = (x − a t²/2, p_x/m − a t),
+    {χ, H} = (p_x/m, 0), ∂χ/∂t = (−a t, −a): the correction cancels q-motion's error on
+    M_f and p_x' = m a; without ∂χ/∂t the flow left p_x constant and the report said the
+    flows differ."""
+    from nhham import dirac_vs_projected
+
+    report = dirac_vs_projected(system, method=method)
+    assert report.equal, report.components
+
+
+def test_the_dirac_flow_at_exact_points_carries_the_time_derivative():
+    """The route at exact points of M_f (the wall's M_f is flat: points over Q) decides
+    X_D − X = 0 with ∂χ/∂t in (without it, the points proved X_D − X ≠ 0)."""
+    from nhham.hamiltonian.classification import classify_constraints
+    from nhham.hamiltonian.dirac import _dirac_vs_projected_at_points
+    from nhham.lagrangian.engine import Policy
+
+    side = hamiltonian_side(wall())
+    classes = classify_constraints(side, policy=Policy(combination_size=0))
+    report = _dirac_vs_projected_at_points(side, classes, Policy())
+    assert report is not None and report.equal
