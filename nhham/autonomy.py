@@ -7,7 +7,7 @@ instant: a verdict holds for all t but a proper algebraic subset, as for a param
 without a value) and the slot the generated code's loops set
 (``NumericModel.time_slot``, from the same index). Every refusal of time — by the
 constraint algorithm (an input in a secondary constraint), the integrators, the
-linearisation and the cross-check through Leg — takes its words from
+linearisation — takes its words from
 :func:`nonautonomous`, and every refusal that raises goes through
 :func:`require_autonomous`.
 
@@ -40,10 +40,6 @@ _MESSAGES = {
     # a steady motion of a system whose forces depend on t
     "linearize": ("linearize: the forces depend on time t; a steady motion needs autonomous "
                   "forces (give the inputs constant values instead)", "forces"),
-    # the cross-check through Leg of a Lagrangian in t (Leg then moves with t)
-    "compare": ("lagrangian: depends on time t; the cross-check through the Legendre map "
-                "compares fields at a fixed instant and needs L autonomous (Leg would "
-                "move with t); time-dependent constraints are compared", "lagrangian"),
     # a steady motion of a system whose L or constraints depend on t
     "linearize_geometry": ("{key}: depends on time t; a steady motion (and its "
                            "linearisation) needs L and the constraints autonomous", None),
@@ -77,7 +73,7 @@ def time_slot(parameters: Sequence, time) -> int | None:
 
 
 def nonautonomous(where: str, **details) -> str:
-    """The words of a refusal of time at ``where``, one of ``"secondary"``, ``"method"``, ``"linearize"``, ``"linearize_geometry"``, ``"compare"``.
+    """The words of a refusal of time at ``where``, one of ``"secondary"``, ``"method"``, ``"linearize"``, ``"linearize_geometry"``.
 
     Parameters
     ----------
@@ -103,8 +99,7 @@ def require_autonomous(where: str, depends: bool, **details) -> None:
     Parameters
     ----------
     where : str
-        ``"secondary"``, ``"method"``, ``"linearize"``, ``"linearize_geometry"`` or
-        ``"compare"``.
+        ``"secondary"``, ``"method"``, ``"linearize"`` or ``"linearize_geometry"``.
     depends : bool
         Whether what is asked depends on time (or, for ``"secondary"``, on an input).
     **details

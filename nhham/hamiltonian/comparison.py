@@ -179,35 +179,39 @@ class NumericLagrangian:
         self._mu = Lambdified(args, list(ing.mu), (m, n))
         self._drift = Lambdified(args, list(ing.drift), (m,))
         self._M = Lambdified(args, list(geo.mixed_hessian), (n, n))
+        # Leg's own rate d2L/dt dv where L depends on t (zero otherwise)
+        rate = list(geo.momenta.diff(system.time)) if system.lagrangian_depends_on_time \
+            else []
+        self._rate = Lambdified(args, rate, (n,)) if rate else None
         self.args = args
         self.system = system
         self._grads: dict = {}
 
     def projected(self, be: Backend, vals):
-        """(Leg_* P(xi_L) as a 2n-vector at Leg(x), lambda, C) at x."""
-        n = self.n
+        """(d/dt Leg along P(xi_L) as a 2n-vector at Leg(x), lambda, C) at x: Leg_* P(xi_L),
+        plus d2L/dt dv where L depends on t."""
         W, F, M = self._W(be, vals), self._F(be, vals), self._M(be, vals)
-        v = np.array(vals[n:2 * n], dtype=object if be.precision else float)
         if self.m:
             mu, drift = FloatMatrix(self._mu(be, vals)), FloatMatrix(self._drift(be, vals))
             acc, lam, C = (x.a for x in constrained_motion(
                 FloatMatrix(W), mu, FloatMatrix(F), drift, solve=backend_solve(be)))
         else:
             lam, C, acc = be.zeros(0), be.zeros(0, 0), be.solve(W, F)
-        return self._pushed(v, acc, W, M), lam, C
+        return self._pushed(be, vals, acc, W, M), lam, C
 
     def field(self, be: Backend, vals, lam):
-        """Leg_*(xi_L + lambda^i Z_i) at x for given multipliers lambda, a 2n-vector."""
-        n = self.n
+        """Leg_*(xi_L + lambda^i Z_i) at x for given multipliers lambda, a 2n-vector
+        (with Leg's own rate where L depends on t)."""
         W, F, M, mu = self._W(be, vals), self._F(be, vals), self._M(be, vals), \
             self._mu(be, vals)
-        v = np.array(vals[n:2 * n], dtype=object if be.precision else float)
-        return self._pushed(v, be.solve(W, F) - be.solve(W, mu.T) @ lam, W, M)
+        return self._pushed(be, vals, be.solve(W, F) - be.solve(W, mu.T) @ lam, W, M)
 
-    @staticmethod
-    def _pushed(v, acc, W, M):
-        """Leg_* (v, acc) = (v, M v + W acc)."""
-        return np.concatenate([v, M @ v + W @ acc])
+    def _pushed(self, be, vals, acc, W, M):
+        """d/dt Leg along (v, acc): (v, M v + W acc + d2L/dt dv)."""
+        n = self.n
+        v = np.array(vals[n:2 * n], dtype=object if be.precision else float)
+        dp = M @ v + W @ acc
+        return np.concatenate([v, dp if self._rate is None else dp + self._rate(be, vals)])
 
     def gradients(self, be, vals, exprs):
         key = tuple(exprs)

@@ -147,6 +147,23 @@ class LegendreMap:
                                          [self.mixed_hessian, self.hessian]]))
 
     @cached_property
+    def time_derivative(self) -> sp.Matrix:
+        """d Leg/dt at fixed (q, v): (0, d2L/dt dv), shape (2n, 1); zero unless L depends
+        on the time t (then Leg moves with t, DESIGN.md §2)."""
+        n, system = self.n, self.system
+        if not system.lagrangian_depends_on_time:
+            return sp.zeros(2 * n, 1)
+        return sp.zeros(n, 1).col_join(self.momenta.diff(system.time))
+
+    def flow_map(self, field: sp.Matrix) -> sp.Matrix:
+        """d/dt Leg(x(t)) along a motion whose velocity on TQ is ``field``: Leg_* X + d Leg/dt,
+        shape (2n, 1). It is :meth:`tangent_map` for an autonomous L; with L in t the
+        Hamiltonian field X_H(t) o Leg_t is Leg_* xi_L plus the map's own rate
+        (p = dL/dv(q, v, t) changes at fixed (q, v) by d2L/dt dv).
+        """
+        return self.tangent_map(field) + self.time_derivative
+
+    @cached_property
     def _to_momenta(self) -> dict:
         return dict(zip(self.momentum_symbols, self.momenta))
 

@@ -457,8 +457,8 @@ class NumericHamiltonian:
         self._Lq = Lambdified(self.args, lq, (n,))
         self._phi = self.functions(list(sysm.phi))
         self._functions: dict = {}
-        # d phi/dt at fixed (q, v) is d phi^H/dt at fixed (q, p) while L is autonomous
-        # (compare refuses L in t)
+        # d phi/dt at fixed (q, v); d phi^H/dt at fixed (q, p) subtracts Phip L_vt where
+        # L depends on t (point())
         self._phit = None if sysm.time is None else Lambdified(
             self.args, [sp.diff(f, sysm.time) for f in sysm.phi], (m,))
         # d2L/dt dv where L depends on t (Leg^{-1} then moves with t)
@@ -499,9 +499,11 @@ class NumericHamiltonian:
         Hq, Hp = -self._Lq(backend, vals), v
         phi, Phiq, Phip = self._phi.gradients(backend, vals, W, M)
         mu = self._mu(backend, vals)
+        phit = None if self._phit is None else self._phit(backend, vals)
+        if self._Lvt is not None:  # d phi^H/dt at fixed p: Leg^{-1} moves (W dv/dt = -L_vt)
+            phit = phit - Phip @ self._Lvt(backend, vals)
         return HamiltonianPoint(q, p, v, params, W, M, Hq, Hp, phi, Phiq, Phip, mu,
-                                round_trip, None if self._phit is None else
-                                self._phit(backend, vals))
+                                round_trip, phit)
 
     def point_from_tq(self, backend: Backend, x: dict) -> HamiltonianPoint:
         """The point Leg(x) for x a dict (coordinates, velocities, parameters) on TQ.
