@@ -29,7 +29,7 @@ def test_time_slot_is_the_index_of_t_among_the_parameters():
      "forces: the secondary constraint secondary[0] = x - u depends on u; the constraint "
      "algorithm needs forces that do not depend on inputs where C is singular (give "
      "the inputs as parameters with values)"),
-    ("method", {"method": "rk4"}, "method", "method: 'rk4' does not take time-dependent "
+    ("method", {"method": "rattle"}, "method", "method: 'rattle' does not take time-dependent "
      "forces (t in the forces); choose an adaptive method such as DOP853"),
     ("linearize", {}, "forces", "linearize: the forces depend on time t; a steady motion "
      "needs autonomous forces (give the inputs constant values instead)"),

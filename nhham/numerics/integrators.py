@@ -468,31 +468,40 @@ def rk4(model, y0, t0, t1, h, *, projection: bool = False, baumgarte=None,
         deadline=None) -> FixedStepRun:
     """Classical fourth-order Runge-Kutta on the projected field.
 
-    With ``projection`` every step ends with :meth:`NumericModel.project`
-    (Newton for g, kinetic-metric projection of v). The work of the
+    Each stage sets the model's time to its own (t, t + h/2, t + h) where L, a
+    constraint or a force depends on t. With ``projection`` every step ends with
+    :meth:`NumericModel.project` at the step's end time (Newton for g,
+    kinetic-metric projection of v onto M_1(t + h)). The work of the
     constraint forces is integrated with the same weights as the state.
     ``save_every`` and ``recorder`` as in :func:`rattle` (the recorder's width is
     2n + 1: the state and the work).
     """
     n2 = 2 * model.n
-    counter = {"nfev": 0}
+    counter = {"nfev": 0, "steps": 0}
     field = model.field_function(baumgarte)  # z (2n + 1) -> [dy, power] or a status
+    timed = model.time_slot is not None
 
-    def f(z):
-        out = field(z)
+    def at(t):
+        # t in L, a constraint or a force: the model with its time slot at the stage's t
+        return model.at_time(t) if timed else model
+
+    def f(z, t):
+        out = (at(t).field_function(baumgarte) if timed else field)(z)
         counter["nfev"] += 1
         if isinstance(out, int):
             raise NumericalFailure(out)
         return out
 
     def step(z, h):
-        k1 = f(z)
-        k2 = f(z + 0.5 * h * k1)
-        k3 = f(z + 0.5 * h * k2)
-        k4 = f(z + h * k3)
+        t = t0 + counter["steps"] * h  # the grid's time (as _run_fixed counts it)
+        counter["steps"] += 1
+        k1 = f(z, t)
+        k2 = f(z + 0.5 * h * k1, t + 0.5 * h)
+        k3 = f(z + 0.5 * h * k2, t + 0.5 * h)
+        k4 = f(z + h * k3, t + h)
         z = z + (h / 6.0) * (k1 + 2 * k2 + 2 * k3 + k4)
         if projection:
-            z[:n2] = model.project(z[:n2]).y
+            z[:n2] = at(t + h).project(z[:n2]).y  # onto M_1(t + h)
         return z
 
     z0 = np.append(np.asarray(y0, dtype=float), 0.0)

@@ -101,7 +101,8 @@ class Method:
     takes_forces : bool
         Applied and dissipative forces are allowed (else ``forces_refused`` says why).
     takes_time : bool
-        Forces that depend on the time t are allowed.
+        t may enter L, the constraints and the forces (the stages set the time; rattle's
+        scheme is built for an autonomous constrained field and refuses it).
     needs_quadratic : bool
         L must be 1/2 v^T W(q) v - V(q).
     stiff : bool
@@ -232,7 +233,7 @@ METHODS = MappingProxyType({m.name: m for m in (
     Method("rattle4", order=4, stepper="nhham.numerics.integrators:rattle4",
            summary="RATTLE composed by the triple jump", **_RATTLE),
     Method("rk4", family="fixed-step", order=4, stepper="nhham.numerics.integrators:rk4",
-           loops=("fixed",), takes_time=False, summary="classical Runge-Kutta 4"),
+           loops=("fixed",), summary="classical Runge-Kutta 4"),
     Method("reference", family="reference", order=0,
            stepper="nhham.numerics.reference:reference_solution", loops=("mpmath",),
            keeps_constraints=True,

@@ -63,8 +63,8 @@ def test_simulate_and_derive_the_bead_on_a_turning_wire(capsys):
     assert abs(float(lam.subs(at)) + 2 * math.sinh(2)) < 1e-9
 
 
-def test_rk4_is_refused_with_the_reason_in_one_line(capsys):
-    status = main(["simulate", str(BEAD), "--method", "rk4", "--step", "0.01"])
+def test_rattle_is_refused_with_the_reason_in_one_line(capsys):
+    status = main(["simulate", str(BEAD), "--method", "rattle", "--step", "0.01"])
     err = capsys.readouterr().err
     assert status == 2 and "does not take time-dependent L or constraints" in err
     assert len(err.strip().splitlines()) == 1
