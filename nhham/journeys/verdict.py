@@ -70,6 +70,13 @@ def classify(scene, *, policy: Policy | None = None, steps=None) -> Answer:
         for d in stage.decisions:
             steps.note(f"stage {stage.index}: {d.describe()}")
     data = classify_data(analysis, classes)
+    if scene.system.time is not None and classes is not None:
+        from nhham.hamiltonian.instants import split_instants
+
+        with steps.step("instants where the first/second-class split changes"):
+            found = split_instants(classes)
+        if found is not None:
+            data["time"]["class_split"] = found.to_dict()
     data["parameter_case"], note = parameter_case(at)
     title = scene.name or str(scene.source)
     return Answer("classify", data, lambda: classify_text(title, data) + note,

@@ -68,9 +68,7 @@ def classify_data(analysis, classes=None) -> dict:
 
 
 def time_data(system) -> dict:
-    """Which question a verdict on a time-dependent system answers, and where t enters:
-    t is a parameter without a value (DESIGN.md §2), so the verdict is the one at a
-    generic instant (for all t but a proper algebraic subset)."""
+    """The question a verdict in t answers: a generic instant (DESIGN.md §2)."""
     return {"name": str(system.time), "question": "generic instant (for all t but a proper "
             "algebraic subset; t a parameter without a value)",
             "lagrangian": bool(system.lagrangian_depends_on_time)}
@@ -119,6 +117,8 @@ def classify_text(title: str, data: dict) -> str:
         rows += [("time t", data["time"]["question"]),
                  ("depends on t", ", ".join((["L"] if data["time"]["lagrangian"] else [])
                                             + timed) or "the forces only")]
+        split = data["time"].get("class_split")  # where the split changes (the journey's)
+        rows += [("class split in t", split["text"])] if split else []
     lines.append(table(rows))
     lines.append("stages:")
     lines.append(table([(f"M_{s['index']}", f"rank {s['rank']}", ", ".join(s["labels"]))

@@ -31,6 +31,8 @@ def test_classify_says_the_verdict_is_at_a_generic_instant_and_what_depends_on_t
     assert time["name"] == "t" and "generic instant" in time["question"]
     assert not time["lagrangian"]
     assert "constraints" not in time  # one record per constraint: constraint_kinds
+    # {Ψ_1, Ψ_2} on M_f does not depend on t (C is the rolling ball's): one split always
+    assert time["class_split"]["changes"] is False and time["class_split"]["instants"] == []
     assert [(c["kind"], c["time_dependent"]) for c in result["constraint_kinds"]] == [
         ("affine", True), ("affine", True)]
     status, text = run(capsys, "classify", BALL)
