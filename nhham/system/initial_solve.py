@@ -5,8 +5,10 @@ The user gives the independent values (numbers, or expressions in the parameters
 
 - a velocity left out is solved from the velocity-level constraints (the affine ones and
   the time derivatives of the holonomic ones), which are linear in the velocities: exactly,
-  by a least-squares solve that must leave no residual (a velocity that enters a
-  nonlinear (Chetaev) constraint nonlinearly is refused: give its value);
+  by a least-squares solve that must leave no residual; a velocity that enters a
+  nonlinear (Chetaev) constraint nonlinearly needs its value or a starting point
+  ``y_dot = { guess = 1.0 }`` (the roots are branches: Newton's method from the guess
+  picks one);
 - a coordinate left out is solved from the holonomic constraints by Newton's method, from
   0 or from the value written ``z = { guess = 0.9 }`` (a curved M_1 has several branches:
   the guess picks one).
@@ -55,30 +57,26 @@ class InitialData:
     given : mapping of str to sympy.Expr
         The values given, by state name (numbers, or expressions in the parameters).
     guesses : mapping of str to float
-        Starting points of Newton's method for coordinates left out.
+        Starting points of Newton's method for coordinates and velocities left out.
     """
 
     given: Mapping = field(default_factory=dict)
     guesses: Mapping = field(default_factory=dict)
 
 
-def initial_entry(coordinates):
+def initial_entry():
     """The entry check of ``[initial]`` for :func:`nhham.system.steady.state_table`: a
-    finite number, an expression (a string, parsed later) or ``{ guess = number }`` for a
-    coordinate."""
+    finite number, an expression (a string, parsed later) or ``{ guess = number }`` (a
+    coordinate or a velocity left out, solved by Newton's method from it; the table's
+    names are checked by ``state_table``)."""
     def entry(item, where, problems):
         if isinstance(item, str):
             return item
         if isinstance(item, dict):
-            name = where.split(".", 1)[1] if "." in where else where
             if set(item) != {"guess"}:
                 problems.append(f"{where}: expected a number, an expression or "
                                 f"{{ guess = number }}, got a table with "
                                 f"{', '.join(map(repr, item)) or 'no keys'}")
-                return None
-            if name not in coordinates:
-                problems.append(f"{where}: a guess is for a coordinate left out (solved by "
-                                f"Newton's method); a velocity left out is solved exactly")
                 return None
             value = finite_number(item["guess"], f"{where}.guess", problems)
             return None if value is None else ("guess", value)
@@ -148,7 +146,7 @@ def complete_initial(system: "System", data: InitialData,
     if missing_q:
         values.update(_coordinates(system, values, missing_q, data.guesses, params))
     if missing_v:
-        values.update(_velocities(system, values, missing_v, params))
+        values.update(_velocities(system, values, missing_v, params, data.guesses))
     order = q_names + v_names
     return {n: values[n] for n in order}, tuple(n for n in order
                                                 if n in missing_q or n in missing_v)
@@ -191,26 +189,9 @@ def _coordinates(system, values, missing, guesses, params) -> dict:
         raise InputError(f"initial: {names} left out, but the holonomic constraints fix at "
                          f"most {len(eqs)} of them: give a value for the others",
                          key="initial")
-    F = sp.lambdify(unknowns, [g for _, g in eqs], "math")
-    J = sp.lambdify(unknowns, sp.Matrix([g for _, g in eqs]).jacobian(unknowns).tolist(),
-                    "math")
-    x = np.array([guesses.get(n, 0.0) for n in missing], dtype=float)
-    for _ in range(_NEWTON_STEPS):
-        try:
-            r = np.array(F(*x), dtype=float)
-            step = np.linalg.lstsq(np.array(J(*x), dtype=float), -r, rcond=None)[0]
-        except (ValueError, ZeroDivisionError, OverflowError):
-            break
-        x = x + step
-        if np.max(np.abs(step)) <= 1e-15 * (1.0 + np.max(np.abs(x))):
-            break
+    x, r, jac = _newton([g for _, g in eqs], unknowns,
+                        [guesses.get(n, 0.0) for n in missing])
     start = ", ".join(f"{n} = {guesses.get(n, 0.0):g}" for n in missing)
-    try:
-        r = np.array(F(*x), dtype=float)
-        jac = np.array(J(*x), dtype=float)
-    except (ValueError, ZeroDivisionError, OverflowError):
-        r = np.full(len(eqs), np.nan)
-        jac = np.full((len(eqs), len(missing)), np.nan)
     if not np.all(np.isfinite(r)) or \
             np.max(np.abs(r)) > _TOL * max(1.0, float(np.max(np.abs(x)))):
         at = f" (residual {float(np.max(np.abs(r))):.3g})" if np.all(np.isfinite(r)) else ""
@@ -226,6 +207,29 @@ def _coordinates(system, values, missing, guesses, params) -> dict:
     return {n: float(v) for n, v in zip(missing, x)}
 
 
+def _newton(exprs, unknowns, start) -> tuple:
+    """(x, residual, Jacobian) after Gauss-Newton steps on exprs = 0 from ``start`` (least-
+    squares steps: more equations than unknowns are fine); NaN where they cannot be
+    evaluated at the point reached."""
+    F = sp.lambdify(unknowns, list(exprs), "math")
+    J = sp.lambdify(unknowns, sp.Matrix(list(exprs)).jacobian(unknowns).tolist(), "math")
+    x = np.array(start, dtype=float)
+    for _ in range(_NEWTON_STEPS):
+        try:
+            r = np.array(F(*x), dtype=float)
+            step = np.linalg.lstsq(np.array(J(*x), dtype=float), -r, rcond=None)[0]
+        except (ValueError, ZeroDivisionError, OverflowError):
+            break
+        x = x + step
+        if np.max(np.abs(step)) <= 1e-15 * (1.0 + np.max(np.abs(x))):
+            break
+    try:
+        return x, np.array(F(*x), dtype=float), np.array(J(*x), dtype=float)
+    except (ValueError, ZeroDivisionError, OverflowError):
+        return (x, np.full(len(exprs), np.nan),
+                np.full((len(exprs), len(unknowns)), np.nan))
+
+
 def _velocity_rows(system):
     """(label, expression) of every velocity-level constraint: the affine ones and the
     time derivatives of the holonomic ones."""
@@ -235,24 +239,30 @@ def _velocity_rows(system):
             if lab.startswith("constraints[") or lab.endswith("(time derivative)")]
 
 
-def _velocities(system, values, missing, params) -> dict:
-    """The velocities left out, from the velocity-level constraints (linear in them)."""
+def _velocities(system, values, missing, params, guesses=None) -> dict:
+    """The velocities left out, from the velocity-level constraints: exactly where they
+    enter linearly, by Newton's method from the user's guesses where a nonlinear
+    (Chetaev) constraint has them inside (its roots are branches: the guess picks one)."""
     unknowns = [sp.Symbol(n) for n in missing]
     known = dict(params)
     known.update({sp.Symbol(n): sp.Float(v) for n, v in values.items()})
     rows = _velocity_rows(system)
     at = [e.xreplace(known) for _, e in rows]
     zero = {u: 0 for u in unknowns}
+    guesses = dict(guesses or {})
     for (lab, _), e in zip(rows, at):  # Chetaev: phi may have several roots in them
         inside = sorted(u.name for u in unknowns if any(
             sp.diff(e, w).free_symbols & {u} for w in unknowns))
+        unguessed = [n for n in inside if n not in guesses]
+        if unguessed:
+            one = len(unguessed) == 1
+            raise InputError(f"initial: {', '.join(unguessed)} {'enters' if one else 'enter'} "
+                             f"{lab} nonlinearly (a nonlinear constraint may have several "
+                             f"roots): give {'its value' if one else 'their values'} or a "
+                             f"starting point for Newton's method, e.g. "
+                             f"{unguessed[0]} = {{ guess = 1.0 }}", key="initial")
         if inside:
-            one = len(inside) == 1
-            raise InputError(f"initial: {', '.join(inside)} {'enters' if one else 'enter'} "
-                             f"{lab} nonlinearly, so {'it is' if one else 'they are'} not "
-                             f"solved from it (a nonlinear constraint may have several "
-                             f"roots): give {'its value' if one else 'their values'}",
-                             key="initial")
+            return _velocities_by_newton(rows, at, missing, unknowns, guesses)
     A = np.array([[float(sp.diff(e, u)) for u in unknowns] for e in at],
                  dtype=float).reshape(len(rows), len(unknowns))
     b = np.array([float(e.xreplace(zero)) for e in at], dtype=float)
@@ -280,6 +290,25 @@ def _velocities(system, values, missing, params) -> dict:
             f"initial: the velocities given over-determine {', '.join(missing)}: "
             + "; ".join(f"{lab} = {r:.6g}" for lab, r in bad) + " with them solved"
             + (_related(related) or "; leave one more velocity out"), key="initial")
+    return {n: float(v) for n, v in zip(missing, x)}
+
+
+def _velocities_by_newton(rows, at, missing, unknowns, guesses) -> dict:
+    names = ", ".join(missing)
+    x, r, jac = _newton(at, unknowns, [guesses.get(n, 0.0) for n in missing])
+    start = ", ".join(f"{n} = {guesses.get(n, 0.0):g}" for n in missing)
+    scale = max(1.0, float(np.max(np.abs(x), initial=0.0)))
+    if not np.all(np.isfinite(r)) or np.max(np.abs(r), initial=0.0) > _TOL * scale:
+        worst = int(np.nanargmax(np.abs(r))) if np.any(np.isfinite(r)) else 0
+        raise InconsistentInitialDataError(
+            f"initial: Newton's method from {start} found no velocities {names} on the "
+            f"constraints ({rows[worst][0]} not met): give another guess or the values",
+            key="initial")
+    if np.linalg.matrix_rank(jac, tol=_TOL * max(1.0, float(np.max(np.abs(jac))))) < \
+            len(missing):
+        raise InputError(f"initial: the constraints do not determine {names} at the "
+                         f"velocities found (their Jacobian in them is singular there): "
+                         f"give a value for one of them", key="initial")
     return {n: float(v) for n, v in zip(missing, x)}
 
 

@@ -331,7 +331,7 @@ def _initial_table(value, coordinates, problems):
     if not isinstance(value, dict):
         problems.append(f"initial: expected a table, got {type_name(value)}")
         return None
-    return state_table(value, coordinates, initial_entry(coordinates), problems,
+    return state_table(value, coordinates, initial_entry(), problems,
                        section="initial", path=partial(key_path, "initial"), required=False)
 
 

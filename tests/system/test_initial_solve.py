@@ -16,7 +16,6 @@ from nhham.errors import (
     InputError,
     MissingParameterValueError,
     ParseError,
-    SceneError,
 )
 from nhham.system.initial import check_initial
 from nhham.system.scene import loads_scene
@@ -120,9 +119,45 @@ def test_a_coordinate_left_out_needs_a_holonomic_constraint():
         disk("theta_dot = 1.0\nphi_dot = 1.0\n")
 
 
-def test_a_guess_is_for_coordinates():
-    with pytest.raises(SceneError, match="initial.phi_dot: a guess is for a coordinate"):
-        disk("theta = 0.0\ntheta_dot = 1.0\nphi_dot = { guess = 1.0 }\n")
+def test_a_guess_does_not_change_a_velocity_solved_exactly():
+    """x' = R cos(0) phi' = 0.5 whatever the guess: it enters its constraint linearly."""
+    scene = disk("theta = 0.0\ntheta_dot = 1.0\nphi_dot = 1.0\nx_dot = { guess = 7.0 }\n")
+    assert scene.initial["x_dot"] == 0.5 and scene.initial["y_dot"] == 0.0
+
+
+ISOKINETIC = """name = "isokinetic particle"
+coordinates = ["x", "y"]
+parameters = { m = 1.0, g = 9.81, c = 2.0 }
+lagrangian = "m*(x_dot**2 + y_dot**2)/2 - m*g*y"
+constraints = ["x_dot**2 + y_dot**2 - c**2"]
+
+[initial]
+x = 0.0
+y = 0.0
+x_dot = 1.2
+"""
+
+
+@pytest.mark.parametrize("guess, sign", [(1.0, 1), (-3.0, -1)])
+def test_a_velocity_inside_a_nonlinear_constraint_is_solved_from_its_guess(guess, sign):
+    """x'^2 + y'^2 = c^2 with x' = 1.2, c = 2: y' = +-1.6 (the branch of the guess)."""
+    scene = loads_scene(ISOKINETIC + f"y_dot = {{ guess = {guess} }}\n")
+    assert scene.initial_solved == ("y_dot",)
+    assert scene.initial["y_dot"] == pytest.approx(sign * 1.6, rel=1e-14)
+
+
+def test_a_velocity_inside_a_nonlinear_constraint_without_a_guess_asks_for_one():
+    with pytest.raises(InputError) as info:
+        loads_scene(ISOKINETIC)
+    assert "y_dot enters constraints[0] nonlinearly" in str(info.value)
+    assert "y_dot = { guess = 1.0 }" in str(info.value)
+
+
+def test_a_speed_beyond_the_constraint_has_no_velocity_to_solve():
+    """x' = 2.5 > c = 2: x'^2 + y'^2 = 4 has no real y'."""
+    with pytest.raises(InconsistentInitialDataError, match="found no velocities y_dot"):
+        loads_scene(ISOKINETIC.replace("x_dot = 1.2", "x_dot = 2.5")
+                    + "y_dot = { guess = 1.0 }\n")
 
 
 @pytest.mark.parametrize("guess, sign", [(1.0, 1), (-0.5, -1)])
