@@ -7,7 +7,8 @@ quoted in the assertion's message); one more checks the closed forms against
 ``derive --json`` at points of M_1 built here by hand (velocities solved from the
 constraints), with the scene's parameter values read from its file. The expected values
 come from the headers' formulas, evaluated here without nhham. DESIGN.md §2's signs:
-m a = F - lambda dphi/dv, the reaction's power -lambda (dphi/dv . v).
+m a = F - lambda dphi/dv, so the reaction's power is -lambda (dphi/dv . v) (the balance
+nhham.numerics.model reports).
 
 Not checked here: the values a simulation reaches (zeta(3) of the ball, the bead at
 t = 2, s(t) and the isokinetic motion at t_end), which tests/cli/test_time_dependent_command.py,
@@ -92,9 +93,9 @@ def not_applicable(r, line):
     assert r["integrability"] == "not applicable for nonlinear constraints", line
 
 
-def one_stage_determined(r):
-    assert len(r["stages"]) == 1 and r["final_labels"] == r["stages"][0]["labels"]
-    assert r["status"] == "determined" and r["free_multipliers"] == 0
+def one_stage_determined(r, line):
+    assert len(r["stages"]) == 1 and r["final_labels"] == r["stages"][0]["labels"], line
+    assert r["status"] == "determined" and r["free_multipliers"] == 0, line
 
 
 def at_a_generic_instant(envelope, line):
@@ -140,7 +141,7 @@ def test_ball_on_turntable_spun_up_classify_as_its_header_says():
     line = "regular: yes; C does not depend on h, so it is the rolling ball's: rank 2"
     assert r["regular"] is True and r["rank_c"] == 2, line
     line = "constraint algorithm: M_f = M_1 (one stage); status: determined; free multipliers: 0"
-    one_stage_determined(r)
+    one_stage_determined(r, line)
     assert r["free_multiplier_symbols"] == [], line
     line = "integrability: the linear part is the rolling ball's: not integrable"
     assert r["integrable"] is False, line
@@ -221,7 +222,7 @@ def test_bead_on_turning_wire_classify_as_its_header_says():
     line = "regular: yes (C = -1/m)"  # C's value: the derive test
     assert r["regular"] is True and r["rank_c"] == 1, line
     line = "constraint algorithm: M_f = M_1 (one stage); determined"
-    one_stage_determined(r)
+    one_stage_determined(r, line)
     line = "integrable: yes (holonomic)"
     assert r["integrable"] is True, line
     line = "the constraint is time-dependent"
@@ -277,7 +278,7 @@ def test_appell_hamel_classify_as_its_header_says():
     single_time_independent_chetaev(r, line)
     assert r["rank_c"] == 1 and r["regular"] is True, line  # C's value: the derive test
     line = "multiplier: lambda = m g/(1 + a^2) (constant)"  # its value: the derive test
-    one_stage_determined(r)
+    one_stage_determined(r, line)
     assert r["free_multiplier_symbols"] == [], line
     line = "integrability: not applicable (nonlinear constraint)"
     not_applicable(r, line)
@@ -329,7 +330,7 @@ def test_isokinetic_particle_classify_as_its_header_says():
     single_time_independent_chetaev(r, line)
     assert r["rank_c"] == 1 and r["regular"] is True, line  # C's value: the derive test
     line = "multiplier: lambda = -m g y'/c^2"  # its value: the derive test
-    one_stage_determined(r)
+    one_stage_determined(r, line)
     assert r["free_multiplier_symbols"] == [], line
     line = "integrability: not applicable (nonlinear constraint)"
     not_applicable(r, line)
@@ -382,7 +383,8 @@ PERPENDICULAR_POINTS = [
 
 
 def test_perpendicular_velocities_classify_as_its_header_says():
-    r = result_of("classify", PERPENDICULAR)["result"]
+    envelope = result_of("classify", PERPENDICULAR)
+    r = envelope["result"]
     line = "constraints[0]: nonlinear (Chetaev); C = -(|v2|^2/m1 + |v1|^2/m2): C regular on M_1"
     single_time_independent_chetaev(r, line)
     assert r["regular"] is True, line  # C's value: the derive test
@@ -390,10 +392,9 @@ def test_perpendicular_velocities_classify_as_its_header_says():
     assert r["rank_c"] == 1, line
     line = "d phi/d v = (x2', y2', x1', y1') vanishes only where both particles are at rest " \
         "(points of M_1, not all of it)"
-    assert any("drops from 1 to 0" in w for w in result_of(
-        "classify", PERPENDICULAR)["warnings"]), line
+    assert any("drops from 1 to 0" in w for w in envelope["warnings"]), line
     line = "multiplier: lambda = (F1.v2/m1 + F2.v1/m2)/(|v2|^2/m1 + |v1|^2/m2)"
-    one_stage_determined(r)
+    one_stage_determined(r, line)
     assert r["free_multiplier_symbols"] == [], line
     line = "integrability: not applicable (nonlinear constraint)"
     not_applicable(r, line)
