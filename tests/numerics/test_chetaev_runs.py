@@ -25,7 +25,7 @@ def appell_hamel(m=1.3, a=0.5):
     By hand: m x'' = -lambda a x'/s (so the horizontal direction is fixed), m z'' =
     -m g + lambda, and z'' = a s' = -lambda a^2/m give lambda = m g/(1 + a^2),
     s(t) = s0 - a g t/(1 + a^2), z'' = -a^2 g/(1 + a^2); phi is homogeneous of degree 1
-    in v, so the reaction's power lambda (d phi/d v) v = lambda phi vanishes: E conserved.
+    in v, so the reaction's power -lambda (d phi/d v) v = -lambda phi vanishes: E conserved.
     """
     return nhham.System(["x", "y", "z"], "m*(x_dot**2 + y_dot**2 + z_dot**2)/2 - m*g*z",
                         ["a*sqrt(x_dot**2 + y_dot**2) - z_dot"],
