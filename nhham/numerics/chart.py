@@ -3,7 +3,8 @@
 A chart (:class:`Chart`) splits the coordinates and velocities into independent ones and
 dependent ones solved from the constraints (Newton's method for the holonomic ones, a
 linear solve for the velocities). :func:`reduced_field` is the constrained field in the
-chart, evaluated on complex states through the generated kernels
+chart (the dependent velocities of a nonlinear (Chetaev) constraint by Newton's method from
+the state's own: its branch), evaluated on complex states through the generated kernels
 (:class:`ComplexField`), so that :func:`chart_jacobians` differentiates it by the complex
 step dF/dx_j = Im F(x + i h e_j) / h: exact to rounding. Shared by
 :mod:`nhham.numerics.linearization` (one state) and
@@ -21,7 +22,8 @@ from nhham.numerics.kernels import columns
 from nhham.numerics.nullspace import needs_null_space, solve_null_space
 
 __all__ = ["BATCH_STATES", "Chart", "ComplexField", "chart_jacobian", "chart_jacobians",
-           "choose_chart", "greedy_columns", "input_jacobians", "lift", "reduced_field"]
+           "choose_chart", "dependent_velocities", "greedy_columns", "input_jacobians", "lift",
+           "reduced_field"]
 
 # States per batch of the generated numpy kernel: large enough to spread one call's
 # overhead over many states, small enough to bound its temporaries (10^4 states of the
@@ -38,11 +40,10 @@ class ComplexField:
     (the same expressions)."""
 
     def __init__(self, model, build: bool = False):
-        if getattr(model, "nonlinear", False):
-            raise InputError("linearize: a constraint nonlinear in the velocities (Chetaev's "
-                             "rule) is not taken: the chart on M_1 solves the dependent "
-                             "velocities linearly from mu(q) v + h(q) = 0", key="constraints")
         self.n, self.m, self.k = model.n, model.m, model.k
+        # a nonlinear (Chetaev) constraint: mu and h read (q, v), the dependent velocities
+        # are solved by Newton's method (dependent_velocities)
+        self.nonlinear = bool(getattr(model, "nonlinear", False))
         try:
             self._batch = model.kernels.functions["saddle"][1]
             self._geometry_batch = model.kernels.functions["geometry"][1]
@@ -97,11 +98,13 @@ class ComplexField:
         W, F, mu, drift, h, g = columns(out, (n * n, n, m * n, m, m, k))
         return W.reshape(K, n, n), F, mu.reshape(K, m, n), drift, h, g
 
-    def geometry(self, Q, p=None):
+    def geometry(self, Q, p=None, V=None):
         """mu, h, g at complex coordinates (rows of Q: shape (K, n)): the kernel of the
-        coordinates only (no F, no drift), for lifting points onto M_1."""
+        coordinates only (no F, no drift), for lifting points onto M_1; with a nonlinear
+        constraint it reads the velocities V (K, n) too."""
         n, m, k = self.n, self.m, self.k
-        out = self._outputs("geometry", Q, p)
+        out = self._outputs("geometry", np.concatenate([Q, V], axis=1) if self.nonlinear
+                            else Q, p)
         _, mu, h, g = columns(out, (n * n, m * n, m, k))
         return mu.reshape(out.shape[0], m, n), h, g
 
@@ -212,22 +215,25 @@ def choose_chart(model, y0, independent) -> Chart:
     return Chart(tuple(iq), tuple(sorted(dq)), tuple(iv), tuple(sorted(dv)))
 
 
-def reduced_field(cf, chart, q0, X, p=None, positions=True):
+def reduced_field(cf, chart, q0, X, p=None, positions=True, v0=None):
     """F(x) for chart points X (K, d) complex, lifted onto M_1; q0: the coordinates the
     dependent ones start from, (n,) or one row per point (K, n); p: as for
     :meth:`ComplexField.pieces`. ``positions=False``: the points' coordinates are those of
-    q0 (already on Q_1: only velocities moved), so no Newton iteration is needed."""
+    q0 (already on Q_1: only velocities moved), so no Newton iteration is needed. ``v0``:
+    the velocities Newton's method starts the dependent ones from, with a nonlinear
+    constraint (its branch)."""
     n = cf.n
     K = X.shape[0]
     iq, dq, iv, dv = (list(a) for a in (chart.iq, chart.dq, chart.iv, chart.dv))
     Q = np.array(np.broadcast_to(q0, (K, n)), dtype=complex)
     Q[:, iq] = X[:, :len(iq)]
-    V = np.zeros((K, n), dtype=complex)
+    V = np.zeros((K, n), dtype=complex) if v0 is None else np.array(
+        np.broadcast_to(v0, (K, n)), dtype=complex)
     V[:, iv] = X[:, len(iq):]
     geometry = None
     if dq and positions:
         for _ in range(30):
-            geometry = mu, _, g = cf.geometry(Q, p)
+            geometry = mu, _, g = cf.geometry(Q, p, V)
             G = mu[:, :cf.k, :][:, :, dq]
             step = np.linalg.solve(G, g[..., None])[..., 0]
             Q[:, dq] -= step
@@ -236,7 +242,12 @@ def reduced_field(cf, chart, q0, X, p=None, positions=True):
         else:
             raise ComputationError("linearize: Newton iteration for the dependent coordinates "
                                    "did not converge")
-    if dv:
+    if dv and cf.nonlinear:
+        V[:, dv], singular = dependent_velocities(cf, Q, V, dv, p)
+        if singular.any():
+            raise ComputationError("linearize: Newton's method for the dependent velocities "
+                                   "(a nonlinear constraint) did not converge")
+    elif dv:
         # the last Newton iterate's mu and h: the step after it was below rounding
         mu, h, _ = cf.geometry(Q, p) if geometry is None else geometry
         rhs = -(np.einsum("kij,kj->ki", mu[:, :, iv], V[:, iv]) + h)
@@ -276,7 +287,7 @@ def lift(cf, chart, Y, P=None, iterations: int = 30) -> tuple:
     if dq:
         done = ~ok
         for _ in range(iterations):
-            mu, _, g = cf.geometry(Q, P)
+            mu, _, g = cf.geometry(Q, P, V)
             G = mu[:, :k, :][:, :, dq]
             step = np.zeros((N, len(dq)), dtype=complex)
             todo = ~done
@@ -291,7 +302,10 @@ def lift(cf, chart, Y, P=None, iterations: int = 30) -> tuple:
             if done.all():
                 break
         ok &= done & np.isfinite(Q).all(axis=1)
-    if dv:
+    if dv and cf.nonlinear:
+        V[:, dv], singular = dependent_velocities(cf, Q, V, dv, P, iterations)
+        ok[singular] = False
+    elif dv:
         mu, h, _ = cf.geometry(Q, P)
         rhs = -(np.einsum("kij,kj->ki", mu[:, :, iv], V[:, iv]) + h)
         sol, singular = _solve_rows(mu[:, :, dv], rhs)
@@ -300,6 +314,25 @@ def lift(cf, chart, Y, P=None, iterations: int = 30) -> tuple:
     out = np.concatenate([Q.real, V.real], axis=1)
     out[~ok] = Y[~ok]
     return out, ok
+
+
+def dependent_velocities(cf, Q, V, dv, p=None, iterations: int = 30) -> tuple:
+    """The dependent velocities of a nonlinear (Chetaev) constraint phi(q, v) = 0, by
+    Newton's method from their values in V (the branch they start on): phi = mu v + h
+    with mu = d phi/d v, so each step solves mu_dv dv = -phi. On complex states (the
+    complex step) the iteration converges in both parts. Returns (V[:, dv] (K, len(dv)),
+    singular (K,)): rows where a step was singular or the iteration did not converge."""
+    V = np.array(V, dtype=complex)
+    singular = np.zeros(V.shape[0], dtype=bool)
+    for _ in range(iterations):
+        mu, h, _ = cf.geometry(Q, p, V)
+        phi = np.einsum("kij,kj->ki", mu, V) + h
+        step, bad = _solve_rows(mu[:, :, dv], phi)
+        singular |= bad
+        V[:, dv] -= step
+        if np.abs(step).max(initial=0.0) <= 1e-15 * max(1.0, np.abs(V[:, dv]).max(initial=0.0)):
+            return V[:, dv], singular
+    return V[:, dv], np.ones(V.shape[0], dtype=bool)
 
 
 def _solve_rows(A, b):
@@ -337,7 +370,8 @@ def input_jacobians(cf, chart, Y, step, model, P=None):
     for j, slot in enumerate(slots):
         p[slot] = p[slot].copy()
         p[slot][j::r] += 1j * step
-    F = reduced_field(cf, chart, np.repeat(Y[:, :n], r, axis=0), X, p)
+    F = reduced_field(cf, chart, np.repeat(Y[:, :n], r, axis=0), X, p,
+                      v0=np.repeat(Y[:, n:], r, axis=0))
     return np.swapaxes(F.imag.reshape(N, r, d), 1, 2) / step
 
 
@@ -386,7 +420,8 @@ def _jacobians(cf, chart, Y, step, rows, columns):
         X = (np.repeat(Y[:, cols].astype(complex), c, axis=0)
              + 1j * step * np.tile(np.eye(d)[group], (N, 1)))
         p = None if rows is None else np.repeat(rows, c, axis=0)
-        F = reduced_field(cf, chart, np.repeat(Y[:, :n], c, axis=0), X, p, positions)
+        F = reduced_field(cf, chart, np.repeat(Y[:, :n], c, axis=0), X, p, positions,
+                          v0=np.repeat(Y[:, n:], c, axis=0))
         out[:, :, [columns.index(j) for j in group]] = np.swapaxes(
             F.imag.reshape(N, c, d), 1, 2) / step
     return out
