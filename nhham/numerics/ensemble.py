@@ -124,7 +124,7 @@ def simulate_many(model, y0, t_span, *, parameters=None, method: str = DEFAULT_M
     P = None if parameters is None else np.atleast_2d(np.asarray(parameters, dtype=float))
     t0, t1 = float(t_span[0]), float(t_span[1])
     compiled = (lookup(method).compiled_loop and model.compiled is not None
-                and model.path == "saddle" and not model.nonlinear)
+                and model.path == "saddle")
     deadline = deadline if deadline is not None else Deadline.after(time_limit)
     out_t, out_y = np.full(N, t0), Y0.copy()
     work = np.full(N, np.nan)

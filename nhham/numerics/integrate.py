@@ -660,16 +660,14 @@ def _use_compiled_loop(model, spec, loop, scipy_features=False) -> bool:
     if loop not in _LOOPS:
         raise InputError(f"loop: expected one of {', '.join(_LOOPS)}, got {loop!r}")
     possible = (spec.compiled_loop and model.compiled is not None
-                and model.path == "saddle" and not scipy_features and not model.nonlinear)
+                and model.path == "saddle" and not scipy_features)
     if loop == "compiled" and not possible:
         compiled = ", ".join(names(lambda m: m.compiled_loop, cheapest_first=True))
         why = (f"it is for {compiled}, not {spec.name!r}"
                if not spec.compiled_loop else
                f"the model has no compiled C backend ({model.backend_note})"
                if model.compiled is None else "the compiled loop needs the saddle path"
-               if model.path != "saddle" else "its projection onto M_1 is linear in v; a "
-               "nonlinear (Chetaev) constraint runs scipy's loop" if model.nonlinear
-               else "dense_output and events run scipy's loop")
+               if model.path != "saddle" else "dense_output and events run scipy's loop")
         raise InputError(f"loop: 'compiled' is not possible: {why}")
     return possible and loop != "scipy"
 

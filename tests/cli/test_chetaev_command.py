@@ -90,13 +90,18 @@ def test_rattle_and_a_degenerate_constraint_are_refused_in_one_line(capsys, tmp_
     assert json.loads(out)["error"]["key"] == "constraints[0]"
 
 
-def test_linearize_refuses_a_nonlinear_constraint_naming_it(capsys, tmp_path):
-    # uniform motion at speed c is steady, but the chart on M_1 is linear in v
+def test_linearize_a_uniform_motion_under_a_nonlinear_constraint(capsys, tmp_path):
+    """|v| = c without forces: lambda = 0 and a = 0 at every state of M_1 (the reaction
+    lambda v does no work only at lambda = 0, and mu . a = 0 with W a = -lambda mu), so
+    the chart's field is zero near the uniform motion: A = 0 in (x, y, y_dot), x_dot
+    solved by Newton's method from c (its branch)."""
     scene = tmp_path / "free.toml"
     scene.write_text('name = "f"\ncoordinates = ["x", "y"]\nparameters = { c = 2.0 }\n'
                      'lagrangian = "(x_dot**2 + y_dot**2)/2"\n'
                      'constraints = ["(x_dot**2 + y_dot**2 - c**2)/2"]\n'
                      '[steady]\nx = 0.0\ny = 0.0\nx_dot = "c"\ny_dot = 0.0\n')
     status, out, err = run(capsys, "linearize", scene, "--json")
-    assert status == 2 and "Chetaev" in err and len(err.strip().splitlines()) == 1
-    assert json.loads(out)["error"]["key"] == "constraints"
+    assert status == 0, err
+    result = json.loads(out)["result"]
+    assert result["dependent"] == ["x_dot"]
+    assert all(abs(e) < 1e-12 for row in result["matrix"] for e in row)

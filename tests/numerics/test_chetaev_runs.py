@@ -102,6 +102,23 @@ def test_isokinetic_particle_closed_form():
     assert res.diagnostics.energy_balance_residual < 1e-9
 
 
+@pytest.mark.skipif(nhham.numerics.codegen.c_compiler() is None, reason="no C compiler")
+@pytest.mark.parametrize("projection", [False, True])
+def test_the_compiled_loop_takes_a_nonlinear_constraint(projection):
+    """The isokinetic particle's closed form by the compiled DOP853 loop (its C projection
+    onto M_1 is Newton's method for a nonlinear constraint): x = (c^2/g) gd(u),
+    y = -(c^2/g) ln cosh(u), u = g t/c; the kinetic energy constant."""
+    m, c = 0.7, 2.0
+    res = simulate(numeric_model(isokinetic(m, c), backend="c"), (0.0, 1.0), [0, 0, c, 0],
+                   loop="compiled", projection=projection, **TIGHT)
+    assert res.success and res.settings["loop"] == "compiled"
+    u = G / c
+    exact = [c**2 / G * 2 * math.atan(math.tanh(u / 2)), -c**2 / G * math.log(math.cosh(u))]
+    assert np.max(np.abs(res.y[:2, -1] - exact)) < 1e-9
+    kinetic = (res.y[2]**2 + res.y[3]**2) / 2
+    assert np.max(np.abs(kinetic - c**2 / 2)) < (1e-13 if projection else 1e-10)
+
+
 def test_perpendicular_velocities_multiplier_and_energy():
     m1, m2, k = 1.0, 2.0, 3.0
     res = simulate(numeric_model(perpendicular(m1, m2, k), backend="numpy"), (0.0, 1.0),

@@ -35,6 +35,27 @@ static int project_state(double *z, const double *p, double tol, int maxiter) {
             if (!(err <= fmax(tol, 1e-12) * (1.0 + scale))) return NHHAM_NOT_CONVERGED;
         }
     }
+#ifdef NHHAM_GEOMETRY_V
+    /* A nonlinear (Chetaev) constraint: mu = d phi/d v and h = phi - mu v read v (the
+       geometry kernel reads z = (q, v)), so the metric step is a Newton step, repeated
+       until phi stops decreasing (as nhham.numerics.chetaev.velocities_newton). */
+    double best_v = INFINITY;
+    for (int pass = 0; pass < maxiter && NC > 0; ++pass) {
+        geometry(z, p, geo);
+        const double *W = geo, *mu = geo + NQ * NQ, *h = mu + NC * NQ;
+        double err = 0.0;
+        for (int c = 0; c < NC; ++c) {
+            double s = 0.0;
+            for (int j = 0; j < NQ; ++j) s += mu[c * NQ + j] * v[j];
+            r[c] = -(s + h[c]);
+            if (fabs(r[c]) > err) err = fabs(r[c]);
+        }
+        if (err == 0.0 || err >= best_v) break;
+        best_v = err;
+        if (ksolve(NC, W, mu, zero, r, dq, lam)) return NHHAM_SINGULAR;
+        for (int i = 0; i < NQ; ++i) v[i] += dq[i];
+    }
+#else
     geometry(q, p, geo);
     const double *W = geo, *mu = geo + NQ * NQ, *h = mu + NC * NQ;
     for (int pass = 0; pass < 2 && NC > 0; ++pass) {
@@ -49,6 +70,7 @@ static int project_state(double *z, const double *p, double tol, int maxiter) {
         if (ksolve(NC, W, mu, zero, r, dq, lam)) return NHHAM_SINGULAR;
         for (int i = 0; i < NQ; ++i) v[i] += dq[i];
     }
+#endif
     for (int i = 0; i < 2 * NQ; ++i) if (!isfinite(z[i])) return NHHAM_NOT_CONVERGED;
     return NHHAM_SUCCESS;
 }

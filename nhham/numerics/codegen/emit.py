@@ -628,6 +628,8 @@ def _c_module(printed, n, m, k, npar, path, forced=False, time_slot=None,
         head.append(f"#define NHHAM_FORCED {n * n + n + m * n + 2 * m + k}")
     if time_slot is not None:
         head.append(f"#define NHHAM_TIME_SLOT {time_slot}")
+    if geometry_v:  # a nonlinear (Chetaev) constraint: the geometry kernel reads (q, v)
+        head.append("#define NHHAM_GEOMETRY_V 1")
     if path == "closed_form":
         head.append("#define NHHAM_CLOSED_FORM 1")
     lines = ["\n".join(head), c_defines(), runtime_source("nhham.h")]
