@@ -1,0 +1,292 @@
+"""Abelian Chaplygin reduction: the constrained dynamics on the shape space.
+
+A system is of Chaplygin type (abelian) when its coordinates split as q = (r, s) with
+
+- L, the constraints and the forces free of s (the s are cyclic: translations in s are
+  symmetries), and
+- the constraints, linear in the velocities, solving for every s-velocity:
+  s' = -A(r) r' (mu_s invertible, A = mu_s^{-1} mu_r).
+
+Then the motion of r obeys the reduced Lagrange–d'Alembert equations on the shape space
+S (Bloch–Krishnaprasad–Marsden–Murray; Koiller 1992): with L_c(r, r') = L(r, r', -A r'),
+J_a = dL/ds'^a at s' = -A r' and the curvature B^a_{ab} = d_a A^a_b - d_b A^a_a,
+
+    d/dt dL_c/dr'^a - dL_c/dr^a = J_a B^a_{ab} r'^b,
+
+and s is reconstructed by s' = -A r'. (By hand: the variations obey ds = -A dr, so the
+Lagrange–d'Alembert equation is [EL(L)]_r - A^T d/dt J = 0; writing it in L_c the terms
+d/dt J cancel and the curvature is what is left.) The reduced accelerations lifted back
+must equal those of P(xi_L) on M_1: :func:`chaplygin_reduction` checks that exactly.
+"""
+
+from __future__ import annotations
+
+import itertools
+from dataclasses import dataclass
+from typing import Any
+
+import sympy as sp
+
+from nhham.errors import InputError
+from nhham.lagrangian.algebra import cancel
+from nhham.lagrangian.decision import Decision
+
+__all__ = ["ChaplyginReduction", "chaplygin_reduction"]
+
+
+@dataclass(frozen=True)
+class ChaplyginReduction:
+    """The reduced data of an abelian Chaplygin system.
+
+    Attributes
+    ----------
+    system : System
+    shape, symmetry : tuple of sympy.Symbol
+        The shape coordinates r (k of them) and the symmetry coordinates s (m).
+    connection : sympy.Matrix, shape (m, k)
+        A(r) with s' = -A r' (the reconstruction).
+    lagrangian : sympy.Expr
+        L_c(r, r') = L(r, r', -A r').
+    momenta : sympy.Matrix, shape (m, 1)
+        J_a = dL/ds'^a at s' = -A r' (functions of r, r').
+    curvature : tuple of sympy.Matrix, each (k, k)
+        B^a_{ab} = d A^a_b/d r^a - d A^a_a/d r^b, one per symmetry coordinate.
+    gyroscopic : sympy.Matrix, shape (k, 1)
+        J_a B^a_{ab} r'^b, the right-hand side of the reduced equations.
+    accelerations : sympy.Matrix, shape (k, 1)
+        r'' from the reduced equations.
+    check : Decision
+        The reduced r'' against P(xi_L)'s on M_1 (s' = -A r'), decided exactly.
+    """
+
+    system: Any
+    shape: tuple
+    symmetry: tuple
+    connection: sp.Matrix
+    lagrangian: sp.Expr
+    momenta: sp.Matrix
+    curvature: tuple
+    gyroscopic: sp.Matrix
+    accelerations: sp.Matrix
+    check: Decision
+
+    @property
+    def shape_velocities(self) -> tuple:
+        velocity = dict(zip(self.system.coordinates, self.system.velocities))
+        return tuple(velocity[r] for r in self.shape)
+
+    @property
+    def reconstruction(self) -> sp.Matrix:
+        """s' = -A r', shape (m, 1)."""
+        return -self.connection * sp.Matrix(self.shape_velocities)
+
+    def to_dict(self) -> dict:
+        text = str
+        return {
+            "shape_coordinates": [text(r) for r in self.shape],
+            "symmetry_coordinates": [text(s) for s in self.symmetry],
+            "connection": [[text(e) for e in self.connection.row(i)]
+                           for i in range(self.connection.rows)],
+            "reduced_lagrangian": text(self.lagrangian),
+            "momenta": [text(e) for e in self.momenta],
+            "curvature": [[[text(e) for e in B.row(i)] for i in range(B.rows)]
+                          for B in self.curvature],
+            "gyroscopic": [text(e) for e in self.gyroscopic],
+            "accelerations": [text(e) for e in self.accelerations],
+            "reconstruction": [text(e) for e in self.reconstruction],
+            "check": {"agrees": bool(self.check.value), "method": self.check.method,
+                      "detail": self.check.detail},
+        }
+
+
+def chaplygin_reduction(system, symmetry=None) -> ChaplyginReduction:
+    """Reduce an abelian Chaplygin system to its shape space.
+
+    Parameters
+    ----------
+    system : System
+        Linear velocity constraints solving for m cyclic coordinates, no holonomic
+        constraint, autonomous.
+    symmetry : sequence of str, optional
+        The symmetry coordinates s (default: among the cyclic coordinates, those whose
+        velocities the constraints solve for everywhere, the simplest A first).
+
+    Returns
+    -------
+    ChaplyginReduction
+
+    Raises
+    ------
+    InputError
+        When the system is not of Chaplygin type, saying why (key ``constraints``).
+
+    Examples
+    --------
+    The nonholonomic particle z' = y x': s = z, A = (-y, 0), L_c = ((1 + y^2) x'^2 + y'^2)/2,
+    J = y x', B_xy = 1, so d/dt((1 + y^2) x') = y x' y' and y'' = -y x'^2 + y x'^2 = 0.
+
+    >>> from nhham import System
+    >>> red = chaplygin_reduction(System(["x", "y", "z"], "(x_dot**2 + y_dot**2 + z_dot**2)/2",
+    ...                                  ["z_dot - y*x_dot"]))
+    >>> red.shape, red.symmetry, red.lagrangian
+    ((x, y), (z,), x_dot**2*y**2/2 + x_dot**2/2 + y_dot**2/2)
+    >>> red.curvature[0], red.accelerations.T, red.check.value
+    (Matrix([
+    [ 0, 1],
+    [-1, 0]]), Matrix([[-x_dot*y*y_dot/(y**2 + 1), 0]]), True)
+    """
+    symmetry, A = _split(system, symmetry)
+    q, v = list(system.coordinates), list(system.velocities)
+    shape = tuple(c for c in q if c not in symmetry)
+    vel = dict(zip(q, v))
+    rdot = sp.Matrix([vel[r] for r in shape])
+    sdot = [vel[s] for s in symmetry]
+    on_m1 = dict(zip(sdot, -A * rdot))
+    L_c = sp.expand(system.lagrangian.xreplace(on_m1))
+    J = sp.Matrix([cancel(sp.diff(system.lagrangian, w).xreplace(on_m1)) for w in sdot])
+    k = len(shape)
+    curvature = tuple(
+        sp.Matrix(k, k, lambda i, j: cancel(sp.diff(A[a, j], shape[i])
+                                            - sp.diff(A[a, i], shape[j])))
+        for a in range(len(symmetry)))
+    gyro = sp.Matrix([cancel(sum((J[a] * curvature[a][i, j] * rdot[j]
+                                  for a in range(len(symmetry)) for j in range(k)),
+                                 sp.S.Zero)) for i in range(k)])
+    acc = _reduced_accelerations(system, shape, L_c, rdot, gyro)
+    check = _check(system, shape, on_m1, acc)
+    return ChaplyginReduction(system, shape, tuple(symmetry), A, L_c, J, curvature, gyro,
+                              acc, check)
+
+
+def _split(system, symmetry=None) -> tuple:
+    """(symmetry coordinates, A) or InputError saying why the system is not Chaplygin."""
+    def refuse(why):
+        raise InputError(f"reduce: not of Chaplygin type: {why}", key="constraints")
+
+    if system.holonomic:
+        refuse("it has holonomic constraints (eliminate them with coordinates on Q first)")
+    if system.time is not None:
+        refuse("it depends on the time t")
+    if not system.is_affine or not system.is_linear:
+        refuse("its constraints are not linear in the velocities (mu(q) v = 0)")
+    m = system.m
+    if m == 0:
+        refuse("it has no velocity constraint")
+    used = set(system.lagrangian.free_symbols)
+    for e in list(system.phi) + (list(system.generalized_forces) if system.has_forces else []):
+        used |= sp.sympify(e).free_symbols
+    cyclic = [c for c in system.coordinates if c not in used]
+    if len(cyclic) < m:
+        refuse(f"{m} constraint(s) need as many cyclic coordinates (absent from L, the "
+               f"constraints and the forces); found {len(cyclic)}"
+               + (f" ({', '.join(map(str, cyclic))})" if cyclic else ""))
+    mu = system.mu
+    index = {c: i for i, c in enumerate(system.coordinates)}
+    if symmetry is not None:
+        named = {str(c): c for c in system.coordinates}
+        unknown = [s for s in symmetry if s not in named]
+        if unknown or len(symmetry) != m:
+            refuse(f"symmetry: {m} coordinate(s) of the system expected, got "
+                   f"{', '.join(symmetry) or 'none'}")
+        not_cyclic = [s for s in symmetry if named[s] not in cyclic]
+        if not_cyclic:
+            refuse(f"symmetry: {', '.join(not_cyclic)} not cyclic (it enters L, a "
+                   f"constraint or a force)")
+        groups = [tuple(named[s] for s in symmetry)]
+    else:
+        groups = list(itertools.combinations(cyclic, m))
+    found = []
+    for group in groups:
+        cols = [index[c] for c in group]
+        mu_s = mu.extract(list(range(m)), cols)
+        det = cancel(mu_s.det())
+        if det != 0:
+            rest = [i for i in range(system.n) if i not in cols]
+            A = (mu_s.inv() * mu.extract(list(range(m)), rest)).applyfunc(cancel)
+            # prefer s' solved everywhere (det mu_s constant), then the simplest A
+            found.append(((bool(det.free_symbols & set(system.coordinates)),
+                           sp.count_ops(A)), group, A))
+    if not found:
+        refuse("the constraints do not solve for the velocities of "
+               + ("the symmetry coordinates given" if symmetry is not None else
+                  f"any {m} of the cyclic coordinates {', '.join(map(str, cyclic))}"))
+    _, group, A = min(found, key=lambda f: f[0])
+    return group, A
+
+
+def _reduced_accelerations(system, shape, L_c, rdot, gyro) -> sp.Matrix:
+    """r'' from d/dt dL_c/dr' - dL_c/dr = J B r' (+ the forces on r)."""
+    k = len(shape)
+    W = sp.Matrix(k, k, lambda i, j: sp.diff(L_c, rdot[i], rdot[j]))
+    rhs = []
+    for i, r in enumerate(shape):
+        p = sp.diff(L_c, rdot[i])
+        mixed = sum((sp.diff(p, s) * w for s, w in zip(shape, rdot)), sp.S.Zero)
+        rhs.append(sp.diff(L_c, r) - mixed + gyro[i])
+    if system.has_forces:
+        forces = dict(zip(system.coordinates, system.generalized_forces))
+        rhs = [e + forces[r] for e, r in zip(rhs, shape)]
+    return W.LUsolve(sp.Matrix(rhs)).applyfunc(cancel)
+
+
+#: Largest n for which the check forms P(xi_L) in closed form (the 3-D disc, n = 5: minutes).
+SYMBOLIC_CHECK_N = 3
+_POINTS, _DIGITS = 4, 30
+
+
+def _check(system, shape, on_m1, acc) -> Decision:
+    """The reduced r'' against the r'' of P(xi_L) on M_1: exactly (the closed form of
+    P(xi_L)) up to n = SYMBOLIC_CHECK_N, else at seeded points of M_1 in 30 digits (the
+    saddle-point system W a + mu^T lambda = F, mu a = -drift solved there)."""
+    n = system.n
+    index = {c: i for i, c in enumerate(system.coordinates)}
+    if n <= SYMBOLIC_CHECK_N:
+        from nhham.lagrangian.geometry import lagrangian_geometry
+
+        field = lagrangian_geometry(system, closed_form=True).projected_field
+        diff = [cancel(sp.together(field[n + index[r]].xreplace(on_m1) - a))
+                for r, a in zip(shape, acc)]
+        diff = [d if d == 0 else sp.simplify(d) for d in diff]
+        agrees = all(d == 0 for d in diff)
+        detail = ("the reduced accelerations lifted back (s' = -A r') equal those of P(xi_L) "
+                  "on M_1: the difference cancels" if agrees else
+                  "the reduced accelerations differ from P(xi_L)'s: " + "; ".join(
+                      f"{r}'': {d}" for r, d in zip(shape, diff) if d != 0))
+        return Decision(agrees, "exact", detail)
+    return _check_at_points(system, shape, on_m1, acc)
+
+
+def _check_at_points(system, shape, on_m1, acc) -> Decision:
+    import random
+
+    from nhham.lagrangian.geometry import lagrangian_geometry
+
+    ing = lagrangian_geometry(system).ingredients
+    n, m = system.n, system.m
+    index = {c: i for i, c in enumerate(system.coordinates)}
+    K = sp.zeros(n + m, n + m)
+    rng = random.Random(20261127)
+    worst = sp.S.Zero
+    values = dict(system.exact_parameter_values)
+    free = [v for v in on_m1]
+    for _ in range(_POINTS):
+        at = {p: sp.Float(rng.uniform(0.3, 1.3), _DIGITS) for p in system.parameters
+              if p not in values}
+        at.update({p: sp.Float(v, _DIGITS) for p, v in values.items()})
+        at.update({q: sp.Float(rng.uniform(0.3, 1.3), _DIGITS) for q in system.coordinates})
+        at.update({w: sp.Float(rng.uniform(-1, 1), _DIGITS) for w in system.velocities
+                   if w not in free})
+        at.update({w: e.xreplace(at).evalf(_DIGITS) for w, e in on_m1.items()})
+        K[:n, :n] = ing.W.xreplace(at).evalf(_DIGITS)
+        mu = ing.mu.xreplace(at).evalf(_DIGITS)
+        K[:n, n:], K[n:, :n] = mu.T, mu
+        rhs = sp.Matrix.vstack(ing.forcing.xreplace(at), -ing.drift.xreplace(at)).evalf(_DIGITS)
+        a = K.LUsolve(rhs)
+        for r, reduced in zip(shape, acc):
+            d = abs(a[index[r]] - reduced.xreplace(at).evalf(_DIGITS))
+            worst = max(worst, d / max(1, abs(a[index[r]])))
+    agrees = worst < sp.Float(10) ** (10 - _DIGITS)
+    return Decision(bool(agrees), "sampled",
+                    f"the reduced accelerations against P(xi_L)'s on M_1 at {_POINTS} seeded "
+                    f"points in {_DIGITS} digits (the saddle-point system solved there): "
+                    f"largest relative difference {float(worst):.3g}", samples=_POINTS)
