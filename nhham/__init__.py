@@ -46,6 +46,7 @@ _LAZY = by_module({
     "journeys.derivation": ("derive",),
     "journeys.comparison": ("compare",),
     "journeys.benchmark": ("bench",),
+    "journeys.reduction": ("reduce", "hamiltonize"),
     # the exceptions, rooted at NhhamError
     "errors": (
         "NhhamError", "InputError", "ParseError", "SceneError", "ValidationError",

@@ -37,6 +37,7 @@ from nhham.cli.envelope import (
     scene_info,
 )
 from nhham.cli.linearize_command import cmd_linearize
+from nhham.cli.reduce_command import cmd_hamiltonize, cmd_reduce
 from nhham.cli.options import check_options
 from nhham.render.text import Steps
 from nhham.errors import InputError, NhhamError, OutputUnwritable, UsageError
@@ -227,6 +228,8 @@ COMMANDS = {
     "bench": cmd_bench,
     "linearize": cmd_linearize,
     "sweep": cmd_sweep,
+    "reduce": cmd_reduce,
+    "hamiltonize": cmd_hamiltonize,
 }
 
 

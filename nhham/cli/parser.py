@@ -91,12 +91,14 @@ def build_parser() -> argparse.ArgumentParser:
         epilog=_EXIT_TEXT + ". Run `nhham COMMAND --help` for a command's options.")
     parser.add_argument("--version", action="version", version=f"nhham {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
-    from nhham.cli import linearize_command, sweep_command
+    from nhham.cli import linearize_command, reduce_command, sweep_command
 
     helps = dict(_HELP, linearize=linearize_command.LINEARIZE_HELP,
-                 sweep=sweep_command.SWEEP_HELP)
+                 sweep=sweep_command.SWEEP_HELP, reduce=reduce_command.REDUCE_HELP,
+                 hamiltonize=reduce_command.HAMILTONIZE_HELP)
     options = dict(_OPTIONS, linearize=linearize_command.add_arguments,
-                   sweep=sweep_command.add_arguments)
+                   sweep=sweep_command.add_arguments, reduce=reduce_command.add_arguments,
+                   hamiltonize=reduce_command.add_arguments)
     for name, (short, long, example) in helps.items():
         p = sub.add_parser(name, help=short, description=long,
                            epilog=f"example: {example}\n{_EXIT_TEXT}",

@@ -185,7 +185,7 @@ def _conformal_factor(Omega, z, k) -> tuple:
         else sp.FiniteSet(tuple(sp.S.Zero for _ in t))
     if solution == sp.S.EmptySet:
         return None, "the equations theta ^ Omega_nh = -d Omega_nh have no solution", None
-    theta = tuple(cancel(e) for e in next(iter(solution)))
+    theta = tuple(sp.simplify(cancel(e)) for e in next(iter(solution)))
     if any(e.free_symbols & set(t) for e in theta):  # pragma: no cover - injective for 2k >= 4
         return theta, "theta is not determined by the equations", None
     if any(e != 0 for e in theta[k:]) or any(e.free_symbols & set(z[k:]) for e in theta[:k]):

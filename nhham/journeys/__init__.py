@@ -17,6 +17,8 @@ journey functions, so that a point of a study is what the command gives there.
 :func:`linearize`         the stability of the ``[steady]`` motion, and sweeps
 :func:`simulate`          a run from ``[initial]``, with the ``[control]`` laws
 :func:`bench`             the work-precision study of the integrators
+:func:`reduce`            the Chaplygin reduction to the shape space
+:func:`hamiltonize`       Chaplygin's multiplier (Hamiltonian after a change of time?)
 ========================  =========================================================
 """
 
@@ -30,6 +32,7 @@ _LAZY = by_module({
     "stability": ("linearize",),
     "simulation": ("simulate",),
     "benchmark": ("bench",),
+    "reduction": ("reduce", "hamiltonize"),
 })
 
 __all__ = list(_LAZY)
