@@ -34,6 +34,8 @@ def add_arguments(p) -> None:
     """reduce, hamiltonize: the symmetry coordinates."""
     p.add_argument("--symmetry", default=None, metavar="S1,S2",
                    help="the symmetry coordinates s (default: found among the cyclic ones)")
+    p.add_argument("--latex", action="store_true",
+                   help="print LaTeX instead of text")
 
 
 def _symmetry(args):
@@ -49,7 +51,8 @@ def _run(args, steps, journey):
         scene = load_for(args, check_initial=False)
     args.loaded_scene = scene  # the envelope of a later failure names the scene
     answer = journey(scene, symmetry=_symmetry(args), steps=steps)
-    return CommandOutput(result=answer.to_dict(), text=answer.render, scene=scene_info(scene),
+    text = answer.latex_text if args.latex else answer.render
+    return CommandOutput(result=answer.to_dict(), text=text, scene=scene_info(scene),
                          warnings=list(answer.warnings), failure=answer.failure)
 
 

@@ -9,6 +9,8 @@ Hamiltonian (:mod:`nhham.hamiltonian.hamiltonization`).
 
 from __future__ import annotations
 
+import functools
+
 from nhham.journeys.answer import Answer, as_scene, quiet_steps
 
 __all__ = ["reduce", "hamiltonize"]
@@ -41,7 +43,7 @@ def reduce(scene, *, symmetry=None, steps=None) -> Answer:
     (['z'], True)
     """
     from nhham.lagrangian.chaplygin import chaplygin_reduction
-    from nhham.render.reduction import reduce_text
+    from nhham.render.reduction import reduce_latex, reduce_text
 
     scene = as_scene(scene)
     steps = quiet_steps(steps)
@@ -51,7 +53,8 @@ def reduce(scene, *, symmetry=None, steps=None) -> Answer:
     failure = None if red.check.value else (
         "the reduced field lifted back differs from P(xi_L); please report this scene as a bug")
     title = scene.name or str(scene.source)
-    return Answer("reduce", data, lambda: reduce_text(title, data), failure=failure,
+    return Answer("reduce", data, lambda: reduce_text(title, data),
+                  latex=functools.partial(reduce_latex, title, data), failure=failure,
                   payload={"reduction": red}, system=scene.system)
 
 
@@ -84,7 +87,7 @@ def hamiltonize(scene, *, symmetry=None, steps=None) -> Answer:
     """
     from nhham.hamiltonian.hamiltonization import hamiltonize as find
     from nhham.lagrangian.chaplygin import chaplygin_reduction
-    from nhham.render.reduction import hamiltonize_text
+    from nhham.render.reduction import hamiltonize_latex, hamiltonize_text
 
     scene = as_scene(scene)
     steps = quiet_steps(steps)
@@ -99,5 +102,5 @@ def hamiltonize(scene, *, symmetry=None, steps=None) -> Answer:
         f"(please report this scene)",)
     title = scene.name or str(scene.source)
     return Answer("hamiltonize", data, lambda: hamiltonize_text(title, data),
-                  warnings=warnings, payload={"hamiltonization": found, "reduction": red},
+                  latex=functools.partial(hamiltonize_latex, title, data), warnings=warnings, payload={"hamiltonization": found, "reduction": red},
                   system=scene.system)

@@ -2,9 +2,10 @@
 
 from __future__ import annotations
 
+from nhham.render import latex as tex
 from nhham.render.text import table
 
-__all__ = ["reduce_text", "hamiltonize_text"]
+__all__ = ["reduce_text", "hamiltonize_text", "reduce_latex", "hamiltonize_latex"]
 
 
 def reduce_text(title: str, data: dict) -> str:
@@ -49,3 +50,31 @@ def hamiltonize_text(title: str, data: dict) -> str:
             f"({', '.join(j['triple'])}): {j['value']}" for j in data["jacobiator_after"])
             or "0 (Poisson)"))
     return f"{title}: Chaplygin's multiplier\n" + table(rows)
+
+
+def reduce_latex(title: str, data: dict, parse) -> str:
+    """The reduced data in the notation of the literature (L_c, J_a, B^a, the reduced
+    equations' accelerations, the reconstruction)."""
+    shape, sym = data["shape_coordinates"], data["symmetry_coordinates"]
+    rows = [("L_c", tex.latex(parse(data["reduced_lagrangian"])))]
+    rows += [(rf"\dot{{{tex.name_latex(s)}}}", tex.latex(parse(e)))
+             for s, e in zip(sym, data["reconstruction"])]
+    rows += [(f"J_{{{tex.name_latex(s)}}}", tex.latex(parse(e)))
+             for s, e in zip(sym, data["momenta"])]
+    for s, B in zip(sym, data["curvature"]):
+        rows += [(f"B^{{{tex.name_latex(s)}}}_{{{tex.name_latex(shape[i])}"
+                  f"{tex.name_latex(shape[j])}}}", tex.latex(parse(B[i][j])))
+                 for i in range(len(shape)) for j in range(i + 1, len(shape)) if B[i][j] != "0"]
+    rows += [(rf"\ddot{{{tex.name_latex(r)}}}", tex.latex(parse(e)))
+             for r, e in zip(shape, data["accelerations"])]
+    return tex.text(f"{title}: Chaplygin reduction") + "\n" + tex.aligned(rows)
+
+
+def hamiltonize_latex(title: str, data: dict, parse) -> str:
+    """f with d(f Omega_nh) = 0, or the obstruction."""
+    head = tex.text(f"{title}: ")
+    if data["conformal_factor"] is None:
+        return head + tex.text("no conformal factor: " + data["obstruction"])
+    rows = [("f", tex.latex(parse(data["conformal_factor"]))),
+            (r"\rho", tex.latex(parse(data["invariant_measure_density"])))]
+    return head + r"d(f\,\Omega_{nh}) = 0" + "\n" + tex.aligned(rows)

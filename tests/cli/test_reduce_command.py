@@ -54,3 +54,11 @@ def test_a_scene_that_is_not_chaplygin_is_refused_in_one_line(capsys):
     status, out, err = run(capsys, "reduce", EXAMPLES / "pendulum_cartesian.toml")
     assert status == 2 and "not of Chaplygin type" in err
     assert len(err.strip().splitlines()) == 1
+
+
+def test_latex_of_the_particle_s_reduction_and_factor(capsys):
+    status, out, _ = run(capsys, "reduce", EXAMPLES / "nonholonomic_particle.toml", "--latex")
+    assert status == 0 and r"\ddot{x} &= - \frac{\dot{x} y \dot{y}}{y^{2} + 1}" in out
+    status, out, _ = run(capsys, "hamiltonize", EXAMPLES / "nonholonomic_particle.toml",
+                         "--latex")
+    assert status == 0 and r"f &= \frac{1}{\sqrt{y^{2} + 1}}" in out
