@@ -55,6 +55,11 @@ class ChaplyginReduction:
         J_a B^a_{ab} r'^b, the right-hand side of the reduced equations.
     accelerations : sympy.Matrix, shape (k, 1)
         r'' from the reduced equations.
+    momentum_equations : tuple of (sympy.Symbol, sympy.Expr, sympy.Expr)
+        For every shape coordinate r^c that L_c, J B r' and the forces do not contain
+        (a symmetry of the reduced system that is not horizontal): (r^c, p_c = dL_c/dr'^c,
+        dp_c/dt = (J B r')_c), the nonholonomic momentum equation (Bloch, Krishnaprasad,
+        Marsden & Murray 1996); dp_c/dt = 0 makes p_c a constant of the motion.
     check : Decision
         The reduced r'' against P(xi_L)'s on M_1 (s' = -A r'), decided exactly.
     """
@@ -69,6 +74,7 @@ class ChaplyginReduction:
     gyroscopic: sp.Matrix
     accelerations: sp.Matrix
     check: Decision
+    momentum_equations: tuple = ()
 
     @property
     def shape_velocities(self) -> tuple:
@@ -94,6 +100,8 @@ class ChaplyginReduction:
             "gyroscopic": [text(e) for e in self.gyroscopic],
             "accelerations": [text(e) for e in self.accelerations],
             "reconstruction": [text(e) for e in self.reconstruction],
+            "momentum_equations": [{"coordinate": text(c), "momentum": text(p),
+                                    "rate": text(r)} for c, p, r in self.momentum_equations],
             "check": {"agrees": bool(self.check.value), "method": self.check.method,
                       "detail": self.check.detail},
         }
@@ -149,13 +157,13 @@ def chaplygin_reduction(system, symmetry=None) -> ChaplyginReduction:
         sp.Matrix(k, k, lambda i, j: cancel(sp.diff(A[a, j], shape[i])
                                             - sp.diff(A[a, i], shape[j])))
         for a in range(len(symmetry)))
-    gyro = sp.Matrix([cancel(sum((J[a] * curvature[a][i, j] * rdot[j]
+    gyro = sp.Matrix([_tidy(sum((J[a] * curvature[a][i, j] * rdot[j]
                                   for a in range(len(symmetry)) for j in range(k)),
                                  sp.S.Zero)) for i in range(k)])
     acc = _reduced_accelerations(system, shape, L_c, rdot, gyro)
     check = _check(system, shape, on_m1, acc)
     return ChaplyginReduction(system, shape, tuple(symmetry), A, L_c, J, curvature, gyro,
-                              acc, check)
+                              acc, check, _momentum_equations(system, shape, L_c, rdot, gyro))
 
 
 def _split(system, symmetry=None) -> tuple:
@@ -212,6 +220,16 @@ def _split(system, symmetry=None) -> tuple:
                   f"any {m} of the cyclic coordinates {', '.join(map(str, cyclic))}"))
     _, group, A = min(found, key=lambda f: f[0])
     return group, A
+
+
+def _momentum_equations(system, shape, L_c, rdot, gyro) -> tuple:
+    """(r^c, dL_c/dr'^c, (J B r')_c) for the shape coordinates the reduced system does not
+    contain."""
+    used = set(L_c.free_symbols) | set().union(*(e.free_symbols for e in gyro))
+    if system.has_forces:
+        used |= set().union(*(sp.sympify(e).free_symbols for e in system.generalized_forces))
+    return tuple((r, _tidy(sp.diff(L_c, w)), g) for r, w, g in zip(shape, rdot, gyro)
+                 if r not in used)
 
 
 def _reduced_accelerations(system, shape, L_c, rdot, gyro) -> sp.Matrix:

@@ -20,6 +20,8 @@ def reduce_text(title: str, data: dict) -> str:
         rows += [(f"B^{s}_({shape[i]},{shape[j]})", B[i][j])
                  for i in range(len(shape)) for j in range(i + 1, len(shape)) if B[i][j] != "0"]
     rows += [(f"{r}''", e) for r, e in zip(shape, data["accelerations"])]
+    rows += [(f"d/dt p_{m['coordinate']}", f"{m['rate']}   (p_{m['coordinate']} = "
+              f"{m['momentum']})") for m in data["momentum_equations"]]
     check = data["check"]
     rows.append(("lifted field = P(xi_L)",
                  f"{'yes' if check['agrees'] else 'NO'} ({check['method']})"))

@@ -35,6 +35,10 @@ def test_the_nonholonomic_particle_reduces_as_by_hand():
     assert red.accelerations[1] == 0
     assert red.check.value and red.check.method == "exact"
     assert sp.simplify(red.reconstruction[0] - Y * XD) == 0   # z' = y x'
+    # x is cyclic in L_c and J B r': d/dt((1 + y^2) x') = y x' y' (its momentum equation)
+    (c, p, rate), = red.momentum_equations
+    assert str(c) == "x" and sp.simplify(p - (1 + Y**2) * XD) == 0
+    assert sp.simplify(rate - Y * XD * YD) == 0
 
 
 def test_the_sleigh_reduces_with_its_symmetry_y():
@@ -66,6 +70,14 @@ def test_the_3d_rolling_disc_reduces_to_the_closed_form():
                 -(10 * sp.cos(lean) * phid - 12 * sp.tan(lean) * psid) * thd_ / 6]
     for got, want in zip(red.accelerations, expected):
         assert sp.simplify(got - want) == 0
+    # yaw and spin are cyclic in L_c and J B r': p_spin = (3/2) m R^2 (psi' + phi' sin theta)
+    # with d/dt p_spin = -m R^2 theta' phi' cos theta (from the accelerations above)
+    momentum = {str(c): (p, r) for c, p, r in red.momentum_equations}
+    assert set(momentum) == {"yaw", "spin"}
+    p_spin, rate = momentum["spin"]
+    m = s.get("m") or next(v for e in red.momenta for v in e.free_symbols if v.name == "m")
+    assert sp.simplify(p_spin - sp.Rational(3, 2) * m * R**2 * (psid + phid * sp.sin(lean))) == 0
+    assert sp.simplify(rate + m * R**2 * thd_ * phid * sp.cos(lean)) == 0
     assert red.check.value and red.check.method == "sampled"
 
 
