@@ -81,16 +81,16 @@ def classify_warnings(analysis, classes=None) -> list:
 
 def _integrable_text(data: dict) -> str:
     """What the Frobenius test of ker mu says about the constraints themselves."""
-    verdict = data["integrable"]
     if "integrability" in data:  # nonlinear (Chetaev) constraints
         return data["integrability"]
-    if verdict is None:
+    if (verdict := data["integrable"]) is None:
         return "undecided"
     if not verdict:
         return "no (truly nonholonomic)"
-    if data["affine_parts"]:
-        return "yes, the linear parts (affine h(q) != 0: rheonomic, not holonomic)"
-    return "yes (holonomic in disguise)"
+    moving = [r["time_dependent"] for r in data["constraint_kinds"] if r["kind"] == "affine"]
+    if all(moving):  # h != 0 only where t enters: holonomic at each instant
+        return "yes (holonomic in disguise)" + " at each instant, moving with t" * bool(moving)
+    return "yes, the linear parts (affine h(q) != 0: rheonomic, not holonomic)"
 
 
 def classify_text(title: str, data: dict) -> str:
