@@ -70,3 +70,11 @@ def test_rattle_is_refused_with_the_reason_in_one_line(capsys):
     err = capsys.readouterr().err
     assert status == 2 and "does not take time-dependent L or constraints" in err
     assert len(err.strip().splitlines()) == 1
+
+
+def test_a_moving_holonomic_constraint_is_holonomic_at_each_instant(capsys):
+    """The bead's wire g = y cos t - x sin t is holonomic: its lift is affine only through
+    dg/dt, so the Frobenius answer is 'holonomic at each instant', not 'rheonomic, not
+    holonomic' (which is for an affine h that is not a time derivative)."""
+    status, text = run(capsys, "classify", BEAD)
+    assert status == 0 and "holonomic in disguise at each instant, moving with t" in text
