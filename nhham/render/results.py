@@ -89,7 +89,7 @@ def _integrable_text(data: dict) -> str:
         return "no (truly nonholonomic)"
     moving = [r["time_dependent"] for r in data["constraint_kinds"] if r["kind"] == "affine"]
     if all(moving):  # h != 0 only where t enters: holonomic at each instant
-        return "yes (holonomic in disguise)" + " at each instant, moving with t" * bool(moving)
+        return f"yes (holonomic in disguise{' at each instant, moving with t' * bool(moving)})"
     return "yes, the linear parts (affine h(q) != 0: rheonomic, not holonomic)"
 
 
