@@ -199,11 +199,7 @@ def _coordinates(system, values, missing, guesses, params) -> dict:
             f"initial: Newton's method from {start} found no point of the holonomic "
             f"constraints for {names}{at}: give a starting point, e.g. "
             f"{missing[0]} = {{ guess = 1.0 }}, or the values", key="initial")
-    if np.linalg.matrix_rank(jac, tol=_TOL * max(1.0, float(np.max(np.abs(jac))))) < \
-            len(missing):
-        raise InputError(f"initial: the holonomic constraints do not determine {names} "
-                         f"at the point found (their Jacobian in them is singular there): "
-                         f"give a value for one of them", key="initial")
+    _require_determined(jac, missing, "the holonomic constraints", "the point found")
     return {n: float(v) for n, v in zip(missing, x)}
 
 
@@ -304,12 +300,18 @@ def _velocities_by_newton(rows, at, missing, unknowns, guesses) -> dict:
             f"initial: Newton's method from {start} found no velocities {names} on the "
             f"constraints ({rows[worst][0]} not met): give another guess or the values",
             key="initial")
+    _require_determined(jac, missing, "the constraints", "the velocities found")
+    return {n: float(v) for n, v in zip(missing, x)}
+
+
+def _require_determined(jac, missing, which, where) -> None:
+    """Refuse values Newton's method found where the equations' Jacobian in them is
+    singular (they are not determined there)."""
     if np.linalg.matrix_rank(jac, tol=_TOL * max(1.0, float(np.max(np.abs(jac))))) < \
             len(missing):
-        raise InputError(f"initial: the constraints do not determine {names} at the "
-                         f"velocities found (their Jacobian in them is singular there): "
-                         f"give a value for one of them", key="initial")
-    return {n: float(v) for n, v in zip(missing, x)}
+        raise InputError(f"initial: {which} do not determine {', '.join(missing)} at "
+                         f"{where} (their Jacobian in them is singular there): give a "
+                         f"value for one of them", key="initial")
 
 
 def _related(related) -> str:
