@@ -150,7 +150,7 @@ def chaplygin_reduction(system, symmetry=None) -> ChaplyginReduction:
     rdot = sp.Matrix([vel[r] for r in shape])
     sdot = [vel[s] for s in symmetry]
     on_m1 = dict(zip(sdot, -A * rdot))
-    L_c = _tidy(sp.expand(system.lagrangian.xreplace(on_m1)))
+    L_c = _tidy(system.lagrangian.xreplace(on_m1))
     J = sp.Matrix([_tidy(sp.diff(system.lagrangian, w).xreplace(on_m1)) for w in sdot])
     k = len(shape)
     curvature = tuple(
@@ -250,9 +250,14 @@ def _reduced_accelerations(system, shape, L_c, rdot, gyro) -> sp.Matrix:
 def _tidy(expr) -> sp.Expr:
     """cancel, and sin^2 + cos^2 = 1 where the expression has them (the reduced data are
     read by people: the 3-D disc's accelerations shrink fourfold)."""
+    if sp.count_ops(expr) > TIDY_OPS:  # a Chaplygin sphere's: left as derived
+        return expr
     expr = cancel(expr)
     return sp.factor_terms(sp.trigsimp(expr)) if expr.has(sp.sin, sp.cos) else expr
 
+
+#: Largest expression (sympy operations) that is tidied (cancel, trigsimp) for reading.
+TIDY_OPS = 400
 
 #: Largest n for which the check forms P(xi_L) in closed form (the 3-D disc, n = 5: minutes).
 SYMBOLIC_CHECK_N = 3
