@@ -33,7 +33,9 @@ from typing import Any
 
 import sympy as sp
 
+from nhham.errors import InputError
 from nhham.lagrangian.algebra import cancel
+from nhham.system.expressions import to_text
 from nhham.system.naming import momentum_symbol
 
 __all__ = ["Hamiltonization", "hamiltonize"]
@@ -84,24 +86,24 @@ class Hamiltonization:
 
     def to_dict(self) -> dict:
         def jac(found):
-            return [{"triple": list(t), "value": str(v)} for t, v in found]
+            return [{"triple": list(t), "value": to_text(v)} for t, v in found]
 
         red = self.reduction
         return {
             "hamiltonizable": self.hamiltonizable,
             "conformal_factor": None if self.conformal_factor is None
-            else str(self.conformal_factor),
+            else to_text(self.conformal_factor),
             "invariant_measure_density": None if self.invariant_measure_density is None
-            else str(self.invariant_measure_density),
-            "divergence": None if self.divergence is None else str(self.divergence),
-            "theta": None if self.theta is None else [str(e) for e in self.theta],
+            else to_text(self.invariant_measure_density),
+            "divergence": None if self.divergence is None else to_text(self.divergence),
+            "theta": None if self.theta is None else [to_text(e) for e in self.theta],
             "jacobiator_before": jac(self.jacobiator_before),
             "jacobiator_after": jac(self.jacobiator_after) if self.hamiltonizable else None,
             "obstruction": self.obstruction,
-            "shape_coordinates": [str(r) for r in red.shape],
-            "symmetry_coordinates": [str(s) for s in red.symmetry],
-            "variables": [str(z) for z in self.variables],
-            "hamiltonian": str(self.hamiltonian),
+            "shape_coordinates": [to_text(r) for r in red.shape],
+            "symmetry_coordinates": [to_text(s) for s in red.symmetry],
+            "variables": [to_text(z) for z in self.variables],
+            "hamiltonian": to_text(self.hamiltonian),
         }
 
 
@@ -138,6 +140,9 @@ def hamiltonize(reduction) -> Hamiltonization:
     momenta = [momentum_symbol(r) for r in shape]
     z = shape + momenta
     W = sp.Matrix(k, k, lambda i, j: sp.diff(red.lagrangian, rdot[i], rdot[j]))
+    if any(e.free_symbols & set(rdot) for e in W):
+        raise InputError("hamiltonize: L_c is not quadratic in the shape velocities (its "
+                         "Legendre map would need a nonlinear inverse)", key="lagrangian")
     p_of_v = sp.Matrix([sp.diff(red.lagrangian, w) for w in rdot])
     # L_c quadratic in r' (mechanical): r' = W^{-1} (p - b)
     b = p_of_v.xreplace({w: 0 for w in rdot})

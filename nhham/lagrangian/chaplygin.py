@@ -29,6 +29,7 @@ import sympy as sp
 
 from nhham.errors import InputError
 from nhham.lagrangian.algebra import cancel
+from nhham.system.expressions import to_text
 from nhham.lagrangian.decision import Decision
 
 __all__ = ["ChaplyginReduction", "chaplygin_reduction"]
@@ -87,21 +88,20 @@ class ChaplyginReduction:
         return -self.connection * sp.Matrix(self.shape_velocities)
 
     def to_dict(self) -> dict:
-        text = str
         return {
-            "shape_coordinates": [text(r) for r in self.shape],
-            "symmetry_coordinates": [text(s) for s in self.symmetry],
-            "connection": [[text(e) for e in self.connection.row(i)]
+            "shape_coordinates": [to_text(r) for r in self.shape],
+            "symmetry_coordinates": [to_text(s) for s in self.symmetry],
+            "connection": [[to_text(e) for e in self.connection.row(i)]
                            for i in range(self.connection.rows)],
-            "reduced_lagrangian": text(self.lagrangian),
-            "momenta": [text(e) for e in self.momenta],
-            "curvature": [[[text(e) for e in B.row(i)] for i in range(B.rows)]
+            "reduced_lagrangian": to_text(self.lagrangian),
+            "momenta": [to_text(e) for e in self.momenta],
+            "curvature": [[[to_text(e) for e in B.row(i)] for i in range(B.rows)]
                           for B in self.curvature],
-            "gyroscopic": [text(e) for e in self.gyroscopic],
-            "accelerations": [text(e) for e in self.accelerations],
-            "reconstruction": [text(e) for e in self.reconstruction],
-            "momentum_equations": [{"coordinate": text(c), "momentum": text(p),
-                                    "rate": text(r)} for c, p, r in self.momentum_equations],
+            "gyroscopic": [to_text(e) for e in self.gyroscopic],
+            "accelerations": [to_text(e) for e in self.accelerations],
+            "reconstruction": [to_text(e) for e in self.reconstruction],
+            "momentum_equations": [{"coordinate": to_text(c), "momentum": to_text(p),
+                                    "rate": to_text(r)} for c, p, r in self.momentum_equations],
             "check": {"agrees": bool(self.check.value), "method": self.check.method,
                       "detail": self.check.detail},
         }
@@ -298,14 +298,13 @@ def _check_at_points(system, shape, on_m1, acc) -> Decision:
     rng = random.Random(20261127)
     worst = sp.S.Zero
     values = dict(system.exact_parameter_values)
-    free = [v for v in on_m1]
     for _ in range(_POINTS):
         at = {p: sp.Float(rng.uniform(0.3, 1.3), _DIGITS) for p in system.parameters
               if p not in values}
         at.update({p: sp.Float(v, _DIGITS) for p, v in values.items()})
         at.update({q: sp.Float(rng.uniform(0.3, 1.3), _DIGITS) for q in system.coordinates})
         at.update({w: sp.Float(rng.uniform(-1, 1), _DIGITS) for w in system.velocities
-                   if w not in free})
+                   if w not in on_m1})
         at.update({w: e.xreplace(at).evalf(_DIGITS) for w, e in on_m1.items()})
         K[:n, :n] = ing.W.xreplace(at).evalf(_DIGITS)
         mu = ing.mu.xreplace(at).evalf(_DIGITS)

@@ -68,3 +68,15 @@ def test_an_extra_free_coordinate_leaves_the_equations_without_solution():
     found = hamiltonize(chaplygin_reduction(system, symmetry=["z"]))
     assert not found.hamiltonizable and found.theta is None
     assert "no solution" in found.obstruction
+
+
+def test_a_reduced_lagrangian_that_is_not_quadratic_is_refused():
+    """L_c with x'^4: p = dL_c/dx' cannot be inverted by one linear solve; refused, not a
+    wrong H."""
+    import pytest
+
+    from nhham.errors import InputError
+
+    system = System(["x", "y", "z"], L3 + " + x_dot**4", ["z_dot - y*x_dot"])
+    with pytest.raises(InputError, match="not quadratic in the shape velocities"):
+        hamiltonize(chaplygin_reduction(system))

@@ -75,7 +75,7 @@ def test_the_3d_rolling_disc_reduces_to_the_closed_form():
     momentum = {str(c): (p, r) for c, p, r in red.momentum_equations}
     assert set(momentum) == {"yaw", "spin"}
     p_spin, rate = momentum["spin"]
-    m = s.get("m") or next(v for e in red.momenta for v in e.free_symbols if v.name == "m")
+    m = next(v for e in red.momenta for v in e.free_symbols if v.name == "m")
     assert sp.simplify(p_spin - sp.Rational(3, 2) * m * R**2 * (psid + phid * sp.sin(lean))) == 0
     assert sp.simplify(rate + m * R**2 * thd_ * phid * sp.cos(lean)) == 0
     assert red.check.value and red.check.method == "sampled"
