@@ -150,13 +150,12 @@ def hamiltonize(reduction) -> Hamiltonization:
     to_p = dict(zip(rdot, v_of_p))
     energy = sum((w * sp.diff(red.lagrangian, w) for w in rdot), sp.S.Zero) - red.lagrangian
     H = cancel(energy.xreplace(to_p))
-    J = [cancel(e.xreplace(to_p)) for e in red.momenta]
+    G = red.gyroscopic_form
     Omega = sp.zeros(2 * k, 2 * k)
     for a in range(k):
         Omega[a, k + a], Omega[k + a, a] = 1, -1
     for a, c in itertools.product(range(k), repeat=2):
-        Omega[a, c] = cancel(-sum((J[i] * red.curvature[i][a, c] for i in range(len(J))),
-                                  sp.S.Zero))
+        Omega[a, c] = cancel(-G[a, c].xreplace(to_p))
     theta, obstruction, f = _conformal_factor(Omega, z, k)
     Pi = (-Omega.inv()).applyfunc(cancel)
     before = _jacobiators(Pi, z)

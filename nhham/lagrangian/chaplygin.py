@@ -83,6 +83,14 @@ class ChaplyginReduction:
         return tuple(velocity[r] for r in self.shape)
 
     @property
+    def gyroscopic_form(self) -> sp.Matrix:
+        """G_{ab} = J_a B^a_{ab}, shape (k, k), antisymmetric: the reduced equations' right-hand
+        side is G r' and the compressed 2-form's dr^a ^ dr^b part is -1/2 G_{ab}."""
+        k, J = len(self.shape), self.momenta
+        return sp.Matrix(k, k, lambda i, j: sum((J[a] * B[i, j] for a, B in
+                                                  enumerate(self.curvature)), sp.S.Zero))
+
+    @property
     def reconstruction(self) -> sp.Matrix:
         """s' = -A r', shape (m, 1)."""
         return -self.connection * sp.Matrix(self.shape_velocities)
