@@ -176,3 +176,37 @@ def test_a_forked_child_does_not_wait_for_the_parents_build(held_compiler):
     _, status = os.waitpid(pid, 0)
     assert os.waitstatus_to_exitcode(status) == 0
     assert model.pending.wait(600) and model.pending.succeeded()  # the parent's own build
+
+
+def test_a_normal_exit_hands_the_unfinished_build_over(held_compiler):
+    """What a normal interpreter exit does: this process's compiler is stopped and a
+    builder of its own finishes the library, which the next model then loads at once
+    (without it, a command shorter than the compiler never gets its library)."""
+    from nhham.numerics.codegen import background
+
+    go, log = held_compiler
+    model = numeric_model(chaplygin_sleigh(), background=True)
+    for _ in range(3000):  # the worker has started the held compiler
+        if log.exists() and log.read_text().strip():
+            break
+        model.pending.wait(0.01)
+    group = int(log.read_text().split()[0])
+    builder = background._WORKER.exit()
+    assert builder is not None and model.pending.state == "stopped"
+    assert live_members(group) == []       # this process's compiler is gone
+    go.touch()                             # the builder's compiler may run now
+    assert builder.wait(600) == 0
+    later = numeric_model(chaplygin_sleigh(), background=True)
+    assert later.backend == "c" and later.pending is None
+    assert background._WORKER.exit() is None  # nothing left to hand over
+
+
+def test_an_interrupt_hands_nothing_over(held_compiler, monkeypatch):
+    """After Ctrl-C or a stop the user asked for everything to end: no builder starts."""
+    from nhham.numerics.codegen import background
+
+    started = []
+    monkeypatch.setattr(background, "hand_over", lambda jobs: started.append(jobs))
+    model = numeric_model(chaplygin_sleigh(), background=True)
+    stop_background_builds()
+    assert model.pending.state == "stopped" and started == []

@@ -9,8 +9,11 @@ the compiled code when the build finishes before the run does.
 One worker thread builds the queued libraries one at a time (one compiler at a time, so a
 process that makes many models does not start a compiler for each at once). Builds still
 queued or running when the interpreter exits are stopped: the compiler's process group is
-killed and its build directory removed (no compiler outlives the process, no half-written
-file is left; the library is simply built again by a later run). A synchronous request for
+killed and its build directory removed (no half-written file is left); at a normal exit they
+are then handed to a builder process of their own (:mod:`.handover`), so that a later run
+finds the library even when every run is shorter than the compiler; after an interrupt or
+a stop (:func:`stop_background_builds`) nothing is handed over and no compiler outlives
+the process. A synchronous request for
 a library being built in the background waits for that build instead of starting another
 (:func:`take_over`). Messages meant as warnings are kept in the outcome and issued by the
 thread that uses it (warnings from the worker thread would escape the caller's capture).
@@ -28,6 +31,7 @@ import warnings
 from nhham.numerics.codegen.build import (LibraryBuild, build_library, kill_group, load_library,
                                           signal_group)
 from nhham.numerics.codegen.cache import CompileCache
+from nhham.numerics.codegen.handover import hand_over
 from nhham.numerics.model import NumericsWarning
 
 __all__ = ["BackgroundBuild", "build_in_background", "take_over", "stop_background_builds"]
@@ -118,7 +122,7 @@ class _Worker:
                 self.thread.start()
                 # Registered now, after the cache was opened: exit handlers run last
                 # first, so the builds stop before a private cache directory is removed.
-                atexit.register(self.stop)
+                atexit.register(self.exit)
             self.wake.notify()
         return build
 
@@ -170,6 +174,15 @@ class _Worker:
             build._finish("stopped", None)
         self.__init__()  # type: ignore[misc]
 
+    def exit(self):
+        """At a normal interpreter exit: the unfinished builds go to a builder process of
+        their own (:mod:`.handover`), then this process's are stopped."""
+        with self.lock:
+            jobs = [(b.cache.directory, b.sources["c"]) for b in self.builds.values()
+                    if not b.cache.private and not self.closing]
+        self.stop()
+        return hand_over(jobs)
+
     def stop(self) -> None:
         with self.lock:
             self.closing = True
@@ -207,5 +220,6 @@ def take_over(sources) -> None:
 
 
 def stop_background_builds() -> None:
-    """Stop every queued and running background build (also run at interpreter exit)."""
+    """Stop every queued and running background build and hand nothing over (after an
+    interrupt or a stop; a normal interpreter exit hands the unfinished ones over)."""
     _WORKER.stop()
