@@ -30,7 +30,7 @@ from nhham.journeys.answer import Answer, as_scene, capture_warnings, quiet_step
 from nhham.lagrangian.jacobian import EXACT_DIGITS
 
 __all__ = ["linearize", "linearize_scene", "steady_linearization", "open_loop",
-           "check_steady_table",
+           "check_steady_table", "symmetry_generator",
            "steady_states", "law_mismatch", "METHODS", "EXACT_MAX_N", "EXACT_DIGITS"]
 
 #: How the Jacobian is formed: ``auto`` (exact for n <= :data:`EXACT_MAX_N`),
@@ -124,12 +124,14 @@ def linearize(scene, *args, method: str = "auto", sweep=None, model=None, steps=
         with steps.step(f"linearise ({method})"
                         + (" the closed loop ([control])" if scene.control else "")
                         + (f", sweep over {sweep[0]}" if sweep is not None else "")):
-            lin = steady_linearization(scene, system, model, method)
+            generator = symmetry_generator(scene, system, model)
+            lin = steady_linearization(scene, system, model, method, generator=generator)
             swept = None
             if sweep is not None:
                 name, values = sweep
                 swept = sweep_steady(model, scene.steady.values, name, values,
-                                     independent=lin.chart, family_of=scene.steady.family)
+                                     independent=lin.chart, family_of=scene.steady.family,
+                                     generator=generator)
         for u in () if swept is None else swept.unlocated:
             warnings.warn(f"--sweep: between {u.low:.10g} and {u.high:.10g}: {u.reason}; no "
                           f"crossing reported there", NhhamWarning)
@@ -198,7 +200,52 @@ def check_steady_table(scene) -> None:
                          key="steady")
 
 
-def steady_linearization(scene, system, model, method: str = "auto", independent=None):
+def symmetry_generator(scene, system, model):
+    """The scene's ``[symmetry]`` generator, checked to leave L, the constraints and the
+    forces of ``system`` invariant, for the numeric layer (None without the table).
+
+    Parameters
+    ----------
+    scene : Scene
+    system : System
+        The system linearised (``scene.steady_system()``).
+    model : NumericModel
+        Of ``system`` (the parameters' order of its kernels).
+
+    Returns
+    -------
+    nhham.numerics.relative.Generator or None
+
+    Raises
+    ------
+    InputError
+        (key ``symmetry``) the generator does not leave them invariant.
+    """
+    if scene.symmetry is None:
+        return None
+    from nhham.numerics.relative import Generator
+
+    _checked(system, scene.symmetry)
+    parameters = dict(zip(model.parameter_names, model.parameter_values))
+    coordinates = set(system.coordinates)
+    constant = not any(e.free_symbols & coordinates
+                       for e in scene.symmetry.field(system.coordinates))
+    return Generator(tuple(scene.symmetry.to_toml_table().items()),
+                     scene.symmetry.numeric([q.name for q in system.coordinates], parameters),
+                     tuple(parameters.values()), constant)
+
+
+@functools.lru_cache(maxsize=8)
+def _checked(system, symmetry) -> None:
+    """The invariance checks of ``symmetry`` on ``system`` (a System is hashed by identity),
+    once per pair: a study or a sweep asks at every point."""
+    from nhham.lagrangian.relative_symmetry import check_symmetry
+
+    check_symmetry(system, symmetry)
+
+
+def steady_linearization(scene, system, model, method: str = "auto", independent=None,
+                         generator=None):
     """The linearisation of ``system`` (``model``) about the scene's ``[steady]`` motion at
     the model's parameter values: its ``[control]`` laws checked there, the forces
     checked to be defined, the dependent coordinates and velocities solved, and the
@@ -214,6 +261,9 @@ def steady_linearization(scene, system, model, method: str = "auto", independent
     method : {"auto", "exact", "complex-step"}
     independent : sequence of str, optional
         The chart (default: chosen at the state).
+    generator : nhham.numerics.relative.Generator, optional
+        The scene's checked ``[symmetry]`` (:func:`symmetry_generator`): a motion along
+        it is linearised in co-moving variables (the complex-step Jacobian of X - w Xi).
 
     Returns
     -------
@@ -228,8 +278,14 @@ def steady_linearization(scene, system, model, method: str = "auto", independent
     check_forces_at(system, values, where="the [steady] motion")
     model, state = steady_state(model, values, independent)
     lin = linearize(model, state, family=scene.steady.family(model.parameters),
-                    independent=independent)
-    if method == "exact" or (method == "auto" and system.n <= EXACT_MAX_N):
+                    independent=independent, generator=generator)
+    turning = lin.relative is not None and lin.relative["turning"]
+    if turning and method == "exact":
+        raise InputError("--method exact: the [steady] motion is a relative equilibrium "
+                         "(it moves along the [symmetry] generator), whose state matrix (of "
+                         "X - w Xi) is formed by the complex step only; use --method auto or "
+                         "complex-step", key="method")
+    if not turning and (method == "exact" or (method == "auto" and system.n <= EXACT_MAX_N)):
         lin = _exact(scene, system, model, lin)
     return lin
 
@@ -305,7 +361,8 @@ def _exact(scene, system, model, lin):
         np.array([[float(sp.N(e, 20)) for e in ej.matrix.row(i)] for i in range(ej.matrix.rows)]),
         lin.neutral, lin.dependent, dict(lin.state), dict(lin.residuals),
         lin.acceleration_residual, tol=10.0 ** (-EXACT_DIGITS + 5) * scale, eigenvalues=ev,
-        exact_matrix=A, inputs=lin.inputs, B=lin.input_matrix)
+        exact_matrix=A, inputs=lin.inputs, B=lin.input_matrix,
+        relative=None if lin.relative is None else dict(lin.relative))
 
 
 def steady_states(scene, model, points) -> tuple:
