@@ -200,7 +200,7 @@ def check_steady_table(scene) -> None:
                          key="steady")
 
 
-def symmetry_generator(scene, system, model):
+def symmetry_generator(scene, system, model, check: bool = True):
     """The scene's ``[symmetry]`` generator, checked to leave L, the constraints and the
     forces of ``system`` invariant, for the numeric layer (None without the table).
 
@@ -211,6 +211,9 @@ def symmetry_generator(scene, system, model):
         The system linearised (``scene.steady_system()``).
     model : NumericModel
         Of ``system`` (the parameters' order of its kernels).
+    check : bool, optional
+        False: the checks were made by the caller (a study's preparation; its workers
+        build the generator again from the scene).
 
     Returns
     -------
@@ -225,7 +228,8 @@ def symmetry_generator(scene, system, model):
         return None
     from nhham.numerics.relative import Generator
 
-    _checked(system, scene.symmetry)
+    if check:
+        _checked(system, scene.symmetry)
     parameters = dict(zip(model.parameter_names, model.parameter_values))
     coordinates = set(system.coordinates)
     constant = not any(e.free_symbols & coordinates

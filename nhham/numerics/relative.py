@@ -23,7 +23,7 @@ from typing import Callable
 
 import numpy as np
 
-__all__ = ["Generator", "RelativeMotion", "spin_rate", "group_block"]
+__all__ = ["Generator", "RelativeMotion", "spin_rate", "spin_rates", "group_block"]
 
 # xi^A(q0) below this (relative to max |xi(q0)|) is a component xi does not move.
 _ZERO_TOL = 1e-12
@@ -131,6 +131,31 @@ def spin_rate(generator: Generator, y0, n: int, P=None) -> RelativeMotion:
     moved = np.abs(xi) > _ZERO_TOL * top
     w = float(np.dot(xi[moved], v0[moved]) / np.dot(xi[moved], xi[moved]))
     return RelativeMotion(w, v0 - w * xi, Xi)
+
+
+def spin_rates(generator: Generator, Y, n: int, P=None) -> tuple:
+    """:func:`spin_rate` at many states: (w (N,), Xi (N, 2n)), each row's parameters P
+    (N, parameters) or None.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from nhham.numerics.relative import Generator, spin_rates
+    >>> spin = Generator((("psi", "1"),), lambda Q, P: (np.tile([1.0, 0.0], (len(Q), 1)),
+    ...                                                np.zeros((len(Q), 2, 2))))
+    >>> spin_rates(spin, np.array([[0.0, 0.0, 3.0, 0.5], [0.0, 0.0, -1.0, 0.0]]), 2)[0]
+    array([ 3., -1.])
+    """
+    Y = np.atleast_2d(np.asarray(Y, dtype=float))
+    Xi = generator.lifted(Y[:, :n], Y[:, n:], P).real
+    xi = Xi[:, :n]
+    top = np.abs(xi).max(axis=1, initial=0.0)
+    moved = np.abs(xi) > _ZERO_TOL * top[:, None]
+    num = np.where(moved, xi * Y[:, n:], 0.0).sum(axis=1)
+    den = np.where(moved, xi * xi, 0.0).sum(axis=1)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        w = np.where(den > 0, num / np.where(den > 0, den, 1.0), 0.0)
+    return w, Xi
 
 
 def group_block(J, names, coordinates, keep, tol) -> list:
