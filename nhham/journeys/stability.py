@@ -30,7 +30,7 @@ from nhham.journeys.answer import Answer, as_scene, capture_warnings, quiet_step
 from nhham.lagrangian.jacobian import EXACT_DIGITS
 
 __all__ = ["linearize", "linearize_scene", "steady_linearization", "open_loop",
-           "check_steady_table", "symmetry_generator",
+           "check_steady_table", "symmetry_generator", "relative_generator",
            "steady_states", "law_mismatch", "METHODS", "EXACT_MAX_N", "EXACT_DIGITS"]
 
 #: How the Jacobian is formed: ``auto`` (exact for n <= :data:`EXACT_MAX_N`),
@@ -223,19 +223,93 @@ def symmetry_generator(scene, system, model, check: bool = True):
     ------
     InputError
         (key ``symmetry``) the generator does not leave them invariant.
+
+    Examples
+    --------
+    >>> from nhham import loads_scene, numeric_model
+    >>> from nhham.journeys.stability import symmetry_generator
+    >>> scene = loads_scene('''
+    ... coordinates = ["x", "y", "theta"]
+    ... lagrangian = "(x_dot**2 + y_dot**2 + theta_dot**2)/2"
+    ... constraints = ["y_dot*cos(theta) - x_dot*sin(theta)"]
+    ... [symmetry]
+    ... x = "-y"
+    ... y = "x"
+    ... theta = "1"
+    ... ''')
+    >>> symmetry_generator(scene, scene.system, numeric_model(scene.system)).text()
+    '(-y) d/dx + (x) d/dy + (1) d/dtheta'
     """
     if scene.symmetry is None:
         return None
-    from nhham.numerics.relative import Generator
+    return relative_generator(system, model, scene.symmetry, check=check)
 
+
+def relative_generator(system, model, symmetry, check: bool = True):
+    """A symmetry's generator for :func:`nhham.numerics.linearization.linearize` (its
+    ``generator``): how Python code declares what a scene's ``[symmetry]`` does.
+
+    Parameters
+    ----------
+    system : System
+    model : NumericModel
+        Of ``system``.
+    symmetry : Symmetry or mapping of str to (str or sympy.Expr)
+        xi by coordinate name (strings go through the safe parser, in the coordinates
+        and parameters).
+    check : bool, optional
+        Check the invariance of L, the constraints and the forces (default).
+
+    Returns
+    -------
+    nhham.numerics.relative.Generator
+
+    Raises
+    ------
+    InputError
+        (key ``symmetry``) not invariant, or an entry that is not a coordinate.
+
+    Examples
+    --------
+    The vertical rolling disk rolling in a circle about the origin (radius R phi'/w at the
+    turning rate w = 0.5; R = 1): a relative equilibrium of the rotation about the
+    vertical, the wheel angle moving besides (cyclic); every direction is neutral:
+
+    >>> from nhham import models, numeric_model
+    >>> from nhham.journeys.stability import relative_generator
+    >>> from nhham.numerics.linearization import linearize
+    >>> disk = models.rolling_disk()
+    >>> model = numeric_model(disk, backend="numpy")
+    >>> turn = relative_generator(disk, model, {"x": "-y", "y": "x", "theta": "1"})
+    >>> state = dict(x=0.0, y=-4.0, theta=0.0, phi=0.0, x_dot=2.0, y_dot=0.0,
+    ...              theta_dot=0.5, phi_dot=2.0)
+    >>> lin = linearize(model, state, generator=turn)
+    >>> lin.relative["rate"], lin.relative["group"], lin.coordinates
+    (0.5, ('x', 'y', 'theta'), ())
+    """
+    import sympy as sp
+
+    from nhham.numerics.relative import Generator
+    from nhham.system.symmetry import Symmetry, parse_symmetry
+
+    if not isinstance(symmetry, Symmetry):
+        names = [q.name for q in system.coordinates]
+        raw = {k: v if isinstance(v, str) else str(sp.sympify(v)) for k, v in symmetry.items()}
+        unknown = [k for k in raw if k not in names]
+        if unknown:
+            raise InputError(f"symmetry.{unknown[0]}: not a coordinate ({', '.join(names)})",
+                             key="symmetry")
+        parsed, problems = parse_symmetry(raw, names, [p.name for p in system.parameters])
+        if problems:
+            raise InputError(problems[0], key="symmetry")
+        symmetry = parsed
     if check:
-        _checked(system, scene.symmetry)
+        _checked(system, symmetry)
     parameters = dict(zip(model.parameter_names, model.parameter_values))
     coordinates = set(system.coordinates)
-    constant = not any(e.free_symbols & coordinates
-                       for e in scene.symmetry.field(system.coordinates))
-    return Generator(tuple(scene.symmetry.to_toml_table().items()),
-                     scene.symmetry.numeric([q.name for q in system.coordinates], parameters),
+    constant = not any(e.free_symbols & coordinates for e in symmetry.field(system.coordinates))
+    return Generator(tuple(symmetry.to_toml_table().items()),
+                     symmetry.numeric([q.name for q in system.coordinates], parameters),
                      tuple(parameters.values()), constant)
 
 

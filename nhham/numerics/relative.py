@@ -165,12 +165,16 @@ def group_block(J, names, coordinates, keep, tol) -> list:
 
     Examples
     --------
-    x' = w y, y' = -w x, z' = -z (x, y: a translation seen from a frame turning at w):
+    x' = w y, y' = -w x (a translation seen from a frame turning at w), a velocity u with
+    u' = -u + x: the others do not depend on x, y:
 
     >>> import numpy as np
     >>> from nhham.numerics.relative import group_block
-    >>> J = np.array([[0.0, 2.0, 0.0], [-2.0, 0.0, 0.0], [0.0, 0.0, -1.0]])
-    >>> group_block(J, ("x", "y", "z"), ("x", "y", "z"), [0, 1, 2], 1e-12)
+    >>> J = np.array([[0.0, 2.0, 0.0], [-2.0, 0.0, 0.0], [1.0, 0.0, -1.0]])
+    >>> group_block(J, ("x", "y", "u"), ("x", "y"), [0, 1, 2], 1e-12)
+    []
+    >>> J[2, 0] = 0.0
+    >>> group_block(J, ("x", "y", "u"), ("x", "y"), [0, 1, 2], 1e-12)
     [0, 1]
     """
     S = [j for j in keep if names[j] in coordinates]

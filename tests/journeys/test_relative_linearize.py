@@ -101,3 +101,28 @@ def test_a_bad_symmetry_table_is_refused_naming_its_key(table, key):
     with pytest.raises(InputError) as info:
         loads_scene(sphere(symmetry=table))
     assert key in str(info.value) and info.value.key.startswith("symmetry")
+
+
+@pytest.mark.parametrize("module", ["nhham.numerics.relative", "nhham.system.symmetry",
+                                    "nhham.lagrangian.relative_symmetry"])
+def test_the_new_modules_examples_run(module):
+    """Their names are not in ``nhham.__all__`` (tests/test_examples.py): run here."""
+    import doctest
+    import importlib
+
+    result = doctest.testmod(importlib.import_module(module),
+                             optionflags=doctest.ELLIPSIS | doctest.NORMALIZE_WHITESPACE)
+    assert result.failed == 0 and result.attempted > 0
+
+
+def test_the_journey_s_generator_examples_run():
+    import doctest
+
+    from nhham.journeys import stability
+
+    finder, runner = doctest.DocTestFinder(recurse=False), doctest.DocTestRunner(
+        optionflags=doctest.ELLIPSIS | doctest.NORMALIZE_WHITESPACE)
+    for f in (stability.symmetry_generator, stability.relative_generator):
+        for test in finder.find(f, f.__name__, module=stability, globs={}):
+            runner.run(test)
+    assert runner.failures == 0 and runner.tries > 0
