@@ -190,7 +190,8 @@ def open_loop(scene, method: str = "auto", model=None, independent=None):
 
     check_steady_table(scene)
     model = numeric_model(scene.system) if model is None else model
-    return steady_linearization(scene, scene.system, model, method, independent)
+    return steady_linearization(scene, scene.system, model, method, independent,
+                                generator=symmetry_generator(scene, scene.system, model))
 
 
 def check_steady_table(scene) -> None:
@@ -359,10 +360,10 @@ def steady_linearization(scene, system, model, method: str = "auto", independent
                     independent=independent, generator=generator)
     turning = lin.relative is not None and lin.relative["turning"]
     if turning and method == "exact":
-        raise InputError("--method exact: the [steady] motion is a relative equilibrium "
-                         "(it moves along the [symmetry] generator), whose state matrix (of "
-                         "X - w Xi) is formed by the complex step only; use --method auto or "
-                         "complex-step", key="method")
+        raise InputError("method exact (--exact): the [steady] motion is a relative "
+                         "equilibrium (it moves along the [symmetry] generator), whose state "
+                         "matrix (of X - w Xi) is formed by the complex step only; leave the "
+                         "method to auto or use --numeric", key="method")
     if not turning and (method == "exact" or (method == "auto" and system.n <= EXACT_MAX_N)):
         lin = _exact(scene, system, model, lin)
     return lin

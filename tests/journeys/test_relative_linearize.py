@@ -126,3 +126,26 @@ def test_the_journey_s_generator_examples_run():
         for test in finder.find(f, f.__name__, module=stability, globs={}):
             runner.run(test)
     assert runner.failures == 0 and runner.tries > 0
+
+
+def test_json_and_the_exact_method(capsys, tmp_path):
+    """``--json`` carries ``relative_equilibrium`` (valid against the schema); ``--method
+    exact`` (``--exact``) is refused on a relative equilibrium naming the option."""
+    import json
+
+    import jsonschema
+
+    from nhham.render.schema import output_schema
+
+    path = tmp_path / "sphere.toml"
+    path.write_text(sphere())
+    status = main(["linearize", str(path), "--json"])
+    env = json.loads(capsys.readouterr().out)
+    assert status == 0
+    jsonschema.validate(env, output_schema())
+    rel = env["result"]["relative_equilibrium"]
+    assert rel["generator"] == {"yaw": "1", "x": "-y", "y": "x"} and rel["rate"] == 2.0
+    assert rel["frame"].startswith("co-moving") and rel["group"] == ["x", "y"]
+    status = main(["linearize", str(path), "--exact"])
+    err = capsys.readouterr().err
+    assert status == 2 and "--exact" in err and "relative equilibrium" in err
