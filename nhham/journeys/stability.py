@@ -304,23 +304,24 @@ def relative_generator(system, model, symmetry, check: bool = True):
         if problems:
             raise InputError(problems[0], key="symmetry")
         symmetry = parsed
-    if check:
-        _checked(system, symmetry)
+    checked = _checked(system, symmetry) if check else None
     parameters = dict(zip(model.parameter_names, model.parameter_values))
     coordinates = set(system.coordinates)
     constant = not any(e.free_symbols & coordinates for e in symmetry.field(system.coordinates))
     return Generator(tuple(symmetry.to_toml_table().items()),
                      symmetry.numeric([q.name for q in system.coordinates], parameters),
-                     tuple(parameters.values()), constant)
+                     tuple(parameters.values()), constant,
+                     () if checked is None else tuple((label, d.method)
+                                                      for label, d in checked.decisions))
 
 
 @functools.lru_cache(maxsize=8)
-def _checked(system, symmetry) -> None:
+def _checked(system, symmetry):
     """The invariance checks of ``symmetry`` on ``system`` (a System is hashed by identity),
     once per pair: a study or a sweep asks at every point."""
     from nhham.lagrangian.relative_symmetry import check_symmetry
 
-    check_symmetry(system, symmetry)
+    return check_symmetry(system, symmetry)
 
 
 def steady_linearization(scene, system, model, method: str = "auto", independent=None,

@@ -210,6 +210,7 @@ def _relative_dict(relative) -> dict:
             "frame": ("co-moving (the Jacobian of X - w Xi)" if relative["turning"]
                       else "the Jacobian of X (w = 0, or xi constant: X - w Xi has X's)"),
             "group": list(relative["group"]),
+            "invariance": dict(relative.get("invariance", {})),
             "group_eigenvalues": [[float(z.real), float(z.imag)]
                                   for z in relative["group_eigenvalues"]]}
 
@@ -511,7 +512,7 @@ def _from_jacobian(model, y0, chart, J, moved_jacobian, neutral, family, step, r
     if relative is not None:
         block = J[np.ix_(group, group)]
         info = {"generator": relative[0].to_dict(), "rate": relative[1].rate,
-                "turning": turning,
+                "turning": turning, "invariance": dict(relative[0].checked),
                 "group": tuple(chart_names[i] for i in group),
                 "group_eigenvalues": tuple(_sorted(np.linalg.eigvals(block)) if group
                                            else ())}

@@ -48,6 +48,10 @@ class Generator:
         xi's components do not depend on the coordinates (a translation of cyclic
         coordinates): Xi has no derivative, X - w Xi has X's Jacobian, and a motion along
         xi is the steady motion of cyclic coordinates that ``linearize`` always took.
+    checked : tuple of (str, str)
+        ``(what, how it was decided)`` for each invariance the symbolic side checked
+        (``("lagrangian", "exact")``, ``("constraints[0]", "exact")``...); empty when
+        unchecked.
 
     Examples
     --------
@@ -69,6 +73,7 @@ class Generator:
     evaluate: Callable
     parameters: tuple = ()
     constant: bool = False
+    checked: tuple = ()
 
     def lifted(self, Q, V, P=None) -> np.ndarray:
         """Xi at the states (Q, V) (K, n) each: (xi(q), D(q) v), shape (K, 2n)."""

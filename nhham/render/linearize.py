@@ -80,6 +80,10 @@ def _relative_rows(relative) -> list:
     """The rows saying that the state matrix is X - w Xi's (a relative equilibrium)."""
     xi = " + ".join(f"({e}) d/d{q}" for q, e in relative["generator"].items())
     rows = [("symmetry", f"xi = {xi} ([symmetry])")]
+    checked = relative.get("invariance") or {}
+    if checked:
+        how = ", ".join(sorted(set(checked.values())))
+        rows.append(("invariant", f"{', '.join(checked)} ({how})"))
     if relative["rate"] == 0.0:
         return rows + [("relative equilibrium", "no: the motion does not move along xi "
                         "(w = 0), the state matrix is X's")]

@@ -146,6 +146,8 @@ def test_json_and_the_exact_method(capsys, tmp_path):
     rel = env["result"]["relative_equilibrium"]
     assert rel["generator"] == {"yaw": "1", "x": "-y", "y": "x"} and rel["rate"] == 2.0
     assert rel["frame"].startswith("co-moving") and rel["group"] == ["x", "y"]
+    assert rel["invariance"] == {"lagrangian": "exact", "constraints[0]": "exact",
+                                 "constraints[1]": "exact"}
     status = main(["linearize", str(path), "--exact"])
     err = capsys.readouterr().err
     assert status == 2 and "--exact" in err and "relative equilibrium" in err
