@@ -87,9 +87,9 @@ HEADER = """\
 #   -16.6853003465 +- 50.2457307462i: asymptotically stable. At w = -40 (--set w=-40) the
 #   negatives (time reversal): unstable. At w = 0: +-19.0361156878i, +-47.03879623i.
 # `nhham linearize --sweep w=-100:100:41`: stable for w above w_c = 23.5599084053 (the
-#   crossing to Re < 0 of the eigenvalue +-i w_c); the other direction is never stable:
-#   at -w_c its second pair crosses to Re > 0, and at w = 0 the two directions exchange
-#   their unstable pair.
+#   crossing to Re < 0 of the eigenvalue pair +-i w_c); the other direction is never
+#   stable: one pair has Re > 0 for -w_c < w < 0, both below -w_c. At w = 0 (rocking
+#   without spin, Re = 0) the two pairs exchange: crossings at -w_c, 0, 0 and w_c.
 # Independent values: a KanesMethod model of the same body in body-frame speeds
 #   (tests/numerics/rattleback_kane.py) gives the same four eigenvalues to 1e-8 at
 #   w = +-40 and w_c = 23.559908405269 (tests/numerics/test_relative_equilibria.py).
