@@ -30,7 +30,7 @@ from nhham.journeys.answer import Answer, as_scene, capture_warnings, quiet_step
 from nhham.lagrangian.jacobian import EXACT_DIGITS
 
 __all__ = ["linearize", "linearize_scene", "steady_linearization", "open_loop",
-           "check_steady_table",
+           "check_steady_table", "symmetry_generator", "relative_generator",
            "steady_states", "law_mismatch", "METHODS", "EXACT_MAX_N", "EXACT_DIGITS"]
 
 #: How the Jacobian is formed: ``auto`` (exact for n <= :data:`EXACT_MAX_N`),
@@ -124,12 +124,14 @@ def linearize(scene, *args, method: str = "auto", sweep=None, model=None, steps=
         with steps.step(f"linearise ({method})"
                         + (" the closed loop ([control])" if scene.control else "")
                         + (f", sweep over {sweep[0]}" if sweep is not None else "")):
-            lin = steady_linearization(scene, system, model, method)
+            generator = symmetry_generator(scene, system, model)
+            lin = steady_linearization(scene, system, model, method, generator=generator)
             swept = None
             if sweep is not None:
                 name, values = sweep
                 swept = sweep_steady(model, scene.steady.values, name, values,
-                                     independent=lin.chart, family_of=scene.steady.family)
+                                     independent=lin.chart, family_of=scene.steady.family,
+                                     generator=generator)
         for u in () if swept is None else swept.unlocated:
             warnings.warn(f"--sweep: between {u.low:.10g} and {u.high:.10g}: {u.reason}; no "
                           f"crossing reported there", NhhamWarning)
@@ -188,7 +190,8 @@ def open_loop(scene, method: str = "auto", model=None, independent=None):
 
     check_steady_table(scene)
     model = numeric_model(scene.system) if model is None else model
-    return steady_linearization(scene, scene.system, model, method, independent)
+    return steady_linearization(scene, scene.system, model, method, independent,
+                                generator=symmetry_generator(scene, scene.system, model))
 
 
 def check_steady_table(scene) -> None:
@@ -198,7 +201,131 @@ def check_steady_table(scene) -> None:
                          key="steady")
 
 
-def steady_linearization(scene, system, model, method: str = "auto", independent=None):
+def symmetry_generator(scene, system, model, check: bool = True):
+    """The scene's ``[symmetry]`` generator, checked to leave L, the constraints and the
+    forces of ``system`` invariant, for the numeric layer (None without the table).
+
+    Parameters
+    ----------
+    scene : Scene
+    system : System
+        The system linearised (``scene.steady_system()``).
+    model : NumericModel
+        Of ``system`` (the parameters' order of its kernels).
+    check : bool, optional
+        False: the checks were made by the caller (a study's preparation; its workers
+        build the generator again from the scene).
+
+    Returns
+    -------
+    nhham.numerics.relative.Generator or None
+
+    Raises
+    ------
+    InputError
+        (key ``symmetry``) the generator does not leave them invariant.
+
+    Examples
+    --------
+    >>> from nhham import loads_scene, numeric_model
+    >>> from nhham.journeys.stability import symmetry_generator
+    >>> scene = loads_scene('''
+    ... coordinates = ["x", "y", "theta"]
+    ... lagrangian = "(x_dot**2 + y_dot**2 + theta_dot**2)/2"
+    ... constraints = ["y_dot*cos(theta) - x_dot*sin(theta)"]
+    ... [symmetry]
+    ... x = "-y"
+    ... y = "x"
+    ... theta = "1"
+    ... ''')
+    >>> symmetry_generator(scene, scene.system, numeric_model(scene.system)).text()
+    '(-y) d/dx + (x) d/dy + (1) d/dtheta'
+    """
+    if scene.symmetry is None:
+        return None
+    return relative_generator(system, model, scene.symmetry, check=check)
+
+
+def relative_generator(system, model, symmetry, check: bool = True):
+    """A symmetry's generator for :func:`nhham.numerics.linearization.linearize` (its
+    ``generator``): how Python code declares what a scene's ``[symmetry]`` does.
+
+    Parameters
+    ----------
+    system : System
+    model : NumericModel
+        Of ``system``.
+    symmetry : Symmetry or mapping of str to (str or sympy.Expr)
+        xi by coordinate name (strings go through the safe parser, in the coordinates
+        and parameters).
+    check : bool, optional
+        Check the invariance of L, the constraints and the forces (default).
+
+    Returns
+    -------
+    nhham.numerics.relative.Generator
+
+    Raises
+    ------
+    InputError
+        (key ``symmetry``) not invariant, or an entry that is not a coordinate.
+
+    Examples
+    --------
+    The vertical rolling disk rolling in a circle about the origin (radius R phi'/w at the
+    turning rate w = 0.5; R = 1): a relative equilibrium of the rotation about the
+    vertical, the wheel angle moving besides (cyclic); every direction is neutral:
+
+    >>> from nhham import models, numeric_model
+    >>> from nhham.journeys.stability import relative_generator
+    >>> from nhham.numerics.linearization import linearize
+    >>> disk = models.rolling_disk()
+    >>> model = numeric_model(disk, backend="numpy")
+    >>> turn = relative_generator(disk, model, {"x": "-y", "y": "x", "theta": "1"})
+    >>> state = dict(x=0.0, y=-4.0, theta=0.0, phi=0.0, x_dot=2.0, y_dot=0.0,
+    ...              theta_dot=0.5, phi_dot=2.0)
+    >>> lin = linearize(model, state, generator=turn)
+    >>> lin.relative["rate"], lin.relative["group"], lin.coordinates
+    (0.5, ('x', 'y', 'theta'), ())
+    """
+    import sympy as sp
+
+    from nhham.numerics.relative import Generator
+    from nhham.system.symmetry import Symmetry, parse_symmetry
+
+    if not isinstance(symmetry, Symmetry):
+        names = [q.name for q in system.coordinates]
+        raw = {k: v if isinstance(v, str) else str(sp.sympify(v)) for k, v in symmetry.items()}
+        unknown = [k for k in raw if k not in names]
+        if unknown:
+            raise InputError(f"symmetry.{unknown[0]}: not a coordinate ({', '.join(names)})",
+                             key="symmetry")
+        parsed, problems = parse_symmetry(raw, names, [p.name for p in system.parameters])
+        if problems:
+            raise InputError(problems[0], key="symmetry")
+        symmetry = parsed
+    checked = _checked(system, symmetry) if check else None
+    parameters = dict(zip(model.parameter_names, model.parameter_values))
+    coordinates = set(system.coordinates)
+    constant = not any(e.free_symbols & coordinates for e in symmetry.field(system.coordinates))
+    return Generator(tuple(symmetry.to_toml_table().items()),
+                     symmetry.numeric([q.name for q in system.coordinates], parameters),
+                     tuple(parameters.values()), constant,
+                     () if checked is None else tuple((label, d.method)
+                                                      for label, d in checked.decisions))
+
+
+@functools.lru_cache(maxsize=8)
+def _checked(system, symmetry):
+    """The invariance checks of ``symmetry`` on ``system`` (a System is hashed by identity),
+    once per pair: a study or a sweep asks at every point."""
+    from nhham.lagrangian.relative_symmetry import check_symmetry
+
+    return check_symmetry(system, symmetry)
+
+
+def steady_linearization(scene, system, model, method: str = "auto", independent=None,
+                         generator=None):
     """The linearisation of ``system`` (``model``) about the scene's ``[steady]`` motion at
     the model's parameter values: its ``[control]`` laws checked there, the forces
     checked to be defined, the dependent coordinates and velocities solved, and the
@@ -214,6 +341,9 @@ def steady_linearization(scene, system, model, method: str = "auto", independent
     method : {"auto", "exact", "complex-step"}
     independent : sequence of str, optional
         The chart (default: chosen at the state).
+    generator : nhham.numerics.relative.Generator, optional
+        The scene's checked ``[symmetry]`` (:func:`symmetry_generator`): a motion along
+        it is linearised in co-moving variables (the complex-step Jacobian of X - w Xi).
 
     Returns
     -------
@@ -228,8 +358,14 @@ def steady_linearization(scene, system, model, method: str = "auto", independent
     check_forces_at(system, values, where="the [steady] motion")
     model, state = steady_state(model, values, independent)
     lin = linearize(model, state, family=scene.steady.family(model.parameters),
-                    independent=independent)
-    if method == "exact" or (method == "auto" and system.n <= EXACT_MAX_N):
+                    independent=independent, generator=generator)
+    turning = lin.relative is not None and lin.relative["turning"]
+    if turning and method == "exact":
+        raise InputError("method exact (--exact): the [steady] motion is a relative "
+                         "equilibrium (it moves along the [symmetry] generator), whose state "
+                         "matrix (of X - w Xi) is formed by the complex step only; leave the "
+                         "method to auto or use --numeric", key="method")
+    if not turning and (method == "exact" or (method == "auto" and system.n <= EXACT_MAX_N)):
         lin = _exact(scene, system, model, lin)
     return lin
 
@@ -305,7 +441,8 @@ def _exact(scene, system, model, lin):
         np.array([[float(sp.N(e, 20)) for e in ej.matrix.row(i)] for i in range(ej.matrix.rows)]),
         lin.neutral, lin.dependent, dict(lin.state), dict(lin.residuals),
         lin.acceleration_residual, tol=10.0 ** (-EXACT_DIGITS + 5) * scale, eigenvalues=ev,
-        exact_matrix=A, inputs=lin.inputs, B=lin.input_matrix)
+        exact_matrix=A, inputs=lin.inputs, B=lin.input_matrix,
+        relative=None if lin.relative is None else dict(lin.relative))
 
 
 def steady_states(scene, model, points) -> tuple:

@@ -31,6 +31,7 @@ from nhham.numerics.chart import (Chart, ComplexField, chart_jacobians, input_ja
                                   lift)
 from nhham.numerics.linearization import (EIGENVALUE_TOLERANCE, ON_TOLERANCE, STEP,
                                           Linearization, divide_family)
+from nhham.numerics.relative import spin_rates
 from nhham.numerics.saddle import solve_saddle
 
 __all__ = ["ChartChoice", "LinearizationBatch", "Spectrum", "linearize_batch", "STATUS_TEXT"]
@@ -159,7 +160,7 @@ class LinearizationBatch:
 
 
 def linearize_batch(model, states, parameters=None, *, reference: Linearization | ChartChoice,
-                    families=None, step: float = STEP) -> LinearizationBatch:
+                    families=None, step: float = STEP, generator=None) -> LinearizationBatch:
     """Linearise the constrained dynamics at N steady states in the reference's chart.
 
     Parameters
@@ -181,6 +182,11 @@ def linearize_batch(model, states, parameters=None, *, reference: Linearization 
         needed when the reference divided one out (a ``d/d<p>`` in its ``neutral``).
     step : float, optional
         The imaginary step.
+    generator : nhham.numerics.relative.Generator, optional
+        A symmetry the steady motions move along (a scene's checked ``[symmetry]``): each
+        state's rate w from its velocities, "steady" meaning X = w Xi there, and the
+        Jacobians those of X - w Xi, as :func:`~nhham.numerics.linearization.linearize`
+        forms them.
 
     Returns
     -------
@@ -214,7 +220,8 @@ def linearize_batch(model, states, parameters=None, *, reference: Linearization 
     # bicycle's upright pitch): dependent coordinates and velocities solved in the chart;
     # where that fails the state stays as given and is "not on M_1" below
     Y, _ = lift(cf, chart, Y, P)
-    status, cres, ares = _check_states(cf, Y, P, model)
+    rates, lifted = (None, None) if generator is None else spin_rates(generator, Y, model.n, P)
+    status, cres, ares = _check_states(cf, Y, P, model, rates, lifted)
     d = len(reference.coordinates)
     r = len(model.input_names)
     A = np.full((N, d, d), np.nan)
@@ -222,12 +229,15 @@ def linearize_batch(model, states, parameters=None, *, reference: Linearization 
     ok = np.flatnonzero(status == 0)
     if ok.size and columns:
         try:
-            J = chart_jacobians(cf, chart, Y[ok], step, P[ok].T, columns=columns)
+            J = chart_jacobians(cf, chart, Y[ok], step, P[ok].T, columns=columns,
+                                generator=generator,
+                                rates=None if rates is None else rates[ok])
             Bfull = input_jacobians(cf, chart, Y[ok], step, model, P[ok].T)
         except (ComputationError, np.linalg.LinAlgError):
             J, Bfull = None, None
         if J is None:  # one singular state spoils the batch: the states one by one
-            J, Bfull, bad = _one_by_one(cf, chart, Y[ok], P[ok], step, columns, model)
+            J, Bfull, bad = _one_by_one(cf, chart, Y[ok], P[ok], step, columns, model,
+                                        generator, None if rates is None else rates[ok])
             status[ok[bad]] = 3
             ok, J, Bfull = ok[~bad], J[~bad], Bfull[~bad]
         Ak = J[:, columns, :]
@@ -254,9 +264,10 @@ def _chart(model, names) -> Chart:
                  tuple(i for i in range(n) if i not in iv))
 
 
-def _check_states(cf, Y, P, model):
+def _check_states(cf, Y, P, model, rates=None, lifted=None):
     """(status, scaled constraint residual, max |a|) at each state, as ``linearize``
-    decides "on M_1" and "steady" (relative tolerance ON_TOLERANCE)."""
+    decides "on M_1" and "steady" (relative tolerance ON_TOLERANCE; with ``rates``: the
+    accelerations less w times the lift's, X = w Xi)."""
     n, k = cf.n, cf.k
     N = Y.shape[0]
     Q, V = Y[:, :n], Y[:, n:]
@@ -274,6 +285,8 @@ def _check_states(cf, Y, P, model):
     on = np.flatnonzero(status == 0)
     if on.size:
         a, singular = _accelerations(W[on], F[on], mu[on], drift[on], n)
+        if rates is not None:
+            a = a - rates[on, None] * lifted[on, n:]
         ares[on] = np.abs(a).max(axis=1, initial=0.0)
         scale = np.maximum(1.0, np.abs(Y[on]).max(axis=1))
         status[on[~(ares[on] <= ON_TOLERANCE * scale ** 2)]] = 2
@@ -300,7 +313,7 @@ def _accelerations(W, F, mu, drift, n):
     return a, singular
 
 
-def _one_by_one(cf, chart, Y, P, step, columns, model):
+def _one_by_one(cf, chart, Y, P, step, columns, model, generator=None, rates=None):
     """The Jacobians state by state: (J, B, singular mask)."""
     d = len(chart.iq) + len(chart.iv)
     r = len(model.input_names)
@@ -309,7 +322,8 @@ def _one_by_one(cf, chart, Y, P, step, columns, model):
     bad = np.zeros(Y.shape[0], dtype=bool)
     for i in range(Y.shape[0]):
         try:
-            J[i] = chart_jacobians(cf, chart, Y[i:i + 1], step, P[i:i + 1].T, columns)[0]
+            J[i] = chart_jacobians(cf, chart, Y[i:i + 1], step, P[i:i + 1].T, columns,
+                                   generator, None if rates is None else rates[i:i + 1])[0]
             B[i] = input_jacobians(cf, chart, Y[i:i + 1], step, model, P[i:i + 1].T)[0]
         except (ComputationError, np.linalg.LinAlgError):
             bad[i] = True

@@ -13,6 +13,7 @@ step dF/dx_j = Im F(x + i h e_j) / h: exact to rounding. Shared by
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -215,13 +216,15 @@ def choose_chart(model, y0, independent) -> Chart:
     return Chart(tuple(iq), tuple(sorted(dq)), tuple(iv), tuple(sorted(dv)))
 
 
-def reduced_field(cf, chart, q0, X, p=None, positions=True, v0=None):
+def reduced_field(cf, chart, q0, X, p=None, positions=True, v0=None, shift=None):
     """F(x) for chart points X (K, d) complex, lifted onto M_1; q0: the coordinates the
     dependent ones start from, (n,) or one row per point (K, n); p: as for
     :meth:`ComplexField.pieces`. ``positions=False``: the points' coordinates are those of
     q0 (already on Q_1: only velocities moved), so no Newton iteration is needed. ``v0``:
     the velocities Newton's method starts the dependent ones from, with a nonlinear
-    constraint (its branch)."""
+    constraint (its branch). ``shift``: ``shift(Q, V) -> (K, 2n)``, a field on the lifted
+    states subtracted from the constrained one (w Xi of a relative equilibrium:
+    :mod:`nhham.numerics.relative`), in the chart's components."""
     n = cf.n
     K = X.shape[0]
     iq, dq, iv, dv = (list(a) for a in (chart.iq, chart.dq, chart.iv, chart.dv))
@@ -253,6 +256,10 @@ def reduced_field(cf, chart, q0, X, p=None, positions=True, v0=None):
         rhs = -(np.einsum("kij,kj->ki", mu[:, :, iv], V[:, iv]) + h)
         V[:, dv] = np.linalg.solve(mu[:, :, dv], rhs[..., None])[..., 0]
     a = cf.accelerations(Q, V, p)
+    if shift is not None:
+        s = shift(Q, V)
+        return np.concatenate([V[:, iq] - s[:, iq], a[:, iv] - s[:, [n + i for i in iv]]],
+                              axis=1)
     return np.concatenate([V[:, iq], a[:, iv]], axis=1)
 
 
@@ -375,12 +382,15 @@ def input_jacobians(cf, chart, Y, step, model, P=None):
     return np.swapaxes(F.imag.reshape(N, r, d), 1, 2) / step
 
 
-def chart_jacobian(cf, chart, y, step):
-    """The complex-step Jacobian of the chart's field at the state y."""
-    return chart_jacobians(cf, chart, y[None, :], step)[0]
+def chart_jacobian(cf, chart, y, step, moving=None):
+    """The complex-step Jacobian of the chart's field at the state y (of X - w Xi with
+    ``moving = (generator, w)``)."""
+    rates = None if moving is None else np.array([moving[1]])
+    return chart_jacobians(cf, chart, y[None, :], step, generator=None if moving is None
+                           else moving[0], rates=rates)[0]
 
 
-def chart_jacobians(cf, chart, Y, step, P=None, columns=None):
+def chart_jacobians(cf, chart, Y, step, P=None, columns=None, generator=None, rates=None):
     """The complex-step Jacobians of the chart's field at the states Y (N, 2n), in
     batches of up to BATCH_STATES states (d points each).
 
@@ -391,6 +401,9 @@ def chart_jacobians(cf, chart, Y, step, P=None, columns=None):
     columns : sequence of int, optional
         The chart variables to differentiate in (default all d): the result has one
         column per entry, shape (N, d, len(columns)).
+    generator : nhham.numerics.relative.Generator, optional
+        With ``rates`` (N,): the Jacobians of X - w Xi, w each state's rate (a relative
+        equilibrium in co-moving variables).
     """
     # each state's parameters as a row (the layout of the compiled kernels)
     rows = None if P is None else np.array(
@@ -399,12 +412,13 @@ def chart_jacobians(cf, chart, Y, step, P=None, columns=None):
     if Y.shape[0] > BATCH_STATES:
         return np.concatenate([_jacobians(cf, chart, Y[i:i + BATCH_STATES], step,
                                           None if rows is None else rows[i:i + BATCH_STATES],
-                                          columns)
+                                          columns, generator,
+                                          None if rates is None else rates[i:i + BATCH_STATES])
                                for i in range(0, Y.shape[0], BATCH_STATES)])
-    return _jacobians(cf, chart, Y, step, rows, columns)
+    return _jacobians(cf, chart, Y, step, rows, columns, generator, rates)
 
 
-def _jacobians(cf, chart, Y, step, rows, columns):
+def _jacobians(cf, chart, Y, step, rows, columns, generator=None, rates=None):
     """:func:`chart_jacobians` on one batch; ``rows``: (N, parameters) or None."""
     n, N = cf.n, Y.shape[0]
     cols = list(chart.iq) + [n + i for i in chart.iv]
@@ -420,8 +434,17 @@ def _jacobians(cf, chart, Y, step, rows, columns):
         X = (np.repeat(Y[:, cols].astype(complex), c, axis=0)
              + 1j * step * np.tile(np.eye(d)[group], (N, 1)))
         p = None if rows is None else np.repeat(rows, c, axis=0)
+        shift = None
+        if generator is not None:
+            w = np.repeat(np.asarray(rates, dtype=float), c)[:, None]
+            shift = functools.partial(_moving, generator, w, p)
         F = reduced_field(cf, chart, np.repeat(Y[:, :n], c, axis=0), X, p, positions,
-                          v0=np.repeat(Y[:, n:], c, axis=0))
+                          v0=np.repeat(Y[:, n:], c, axis=0), shift=shift)
         out[:, :, [columns.index(j) for j in group]] = np.swapaxes(
             F.imag.reshape(N, c, d), 1, 2) / step
     return out
+
+
+def _moving(generator, w, p, Q, V):
+    """w Xi at the lifted states (rows of Q, V), each row its own rate w (K, 1)."""
+    return w * generator.lifted(Q, V, p)

@@ -47,6 +47,7 @@ from nhham.autonomy import require_autonomous
 from nhham.errors import ComputationError, InconsistentInitialDataError, InputError
 from nhham.numerics.chart import (ComplexField, chart_jacobian, chart_jacobians, choose_chart,
                                   input_jacobians)
+from nhham.numerics.relative import group_block, spin_rate
 
 if TYPE_CHECKING:  # the exact matrix comes from the symbolic side; numerics never imports it
     import sympy
@@ -118,6 +119,12 @@ class Linearization:
     input_matrix : ndarray, shape (d, len(inputs))
         B of x' = A x + B u in the variables of :attr:`matrix`, the inputs at their
         steady values (complex-step derivative in each input, exact to rounding).
+    relative : mapping or None
+        For a relative equilibrium (a steady motion along a symmetry's generator xi,
+        :mod:`nhham.numerics.relative`): ``generator`` ({coordinate: expression}),
+        ``rate`` (w), ``group`` (the chart coordinates divided out as the group's
+        directions) and ``group_eigenvalues`` (their block's eigenvalues in co-moving
+        variables); :attr:`matrix` is then the Jacobian of X - w Xi. None otherwise.
 
     Examples
     --------
@@ -151,6 +158,7 @@ class Linearization:
     exact_matrix: sympy.Matrix | None = None
     inputs: tuple = ()
     input_matrix: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
+    relative: Mapping | None = None
 
     def state_space(self):
         """``scipy.signal.StateSpace(A, B, I, 0)``: the linearisation as a system with the
@@ -189,15 +197,28 @@ class Linearization:
             **({} if not self.inputs else
                {"inputs": list(self.inputs),
                 "input_matrix": [[float(x) for x in row] for row in self.input_matrix]}),
+            **({} if self.relative is None else
+               {"relative_equilibrium": _relative_dict(self.relative)}),
             **({} if self.exact_matrix is None else
                {"matrix_exact": [[str(x) for x in self.exact_matrix.row(i)]
                                  for i in range(self.exact_matrix.rows)]}),
         }
 
 
+def _relative_dict(relative) -> dict:
+    return {"generator": dict(relative["generator"]), "rate": float(relative["rate"]),
+            "frame": ("co-moving (the Jacobian of X - w Xi)" if relative["turning"]
+                      else "the Jacobian of X (w = 0, or xi constant: X - w Xi has X's)"),
+            "group": list(relative["group"]),
+            "invariance": dict(relative.get("invariance", {})),
+            "group_eigenvalues": [[float(z.real), float(z.imag)]
+                                  for z in relative["group_eigenvalues"]]}
+
+
 def linearization_result(A, coords, method, precision, chart_names, J, removed, dependent,
                          state, residuals, worst, tol=None, eigenvalues=None,
-                         exact_matrix=None, inputs=(), B=None) -> "Linearization":
+                         exact_matrix=None, inputs=(), B=None,
+                         relative=None) -> "Linearization":
     """Eigenvalues and the stability verdict of a state matrix, as a :class:`Linearization`.
 
     ``A`` is the state matrix in the variables ``coords``; ``eigenvalues``
@@ -230,7 +251,8 @@ def linearization_result(A, coords, method, precision, chart_names, J, removed, 
         dependent=tuple(dependent), state=MappingProxyType(state),
         residuals=MappingProxyType(residuals), acceleration_residual=worst,
         exact_matrix=exact_matrix, inputs=tuple(inputs),
-        input_matrix=np.zeros((A.shape[0], 0)) if B is None else B)
+        input_matrix=np.zeros((A.shape[0], 0)) if B is None else B,
+        relative=None if relative is None else MappingProxyType(dict(relative)))
 
 
 def _sorted(ev):
@@ -242,7 +264,8 @@ def _sorted(ev):
 # ------------------------------------------------------------------ public
 def linearize(model, state, *, independent: Sequence[str] | None = None,
               neutral: bool | Sequence[str] = True, step: float = STEP,
-              family: Mapping[str, Mapping[str, float]] | None = None) -> Linearization:
+              family: Mapping[str, Mapping[str, float]] | None = None,
+              generator=None) -> Linearization:
     """Linearise the constrained dynamics about a steady state on M_1.
 
     Parameters
@@ -269,6 +292,12 @@ def linearize(model, state, *, independent: Sequence[str] | None = None,
         A tangent that the state matrix maps to zero is a neutral direction
         (a neighbouring steady motion) and is divided out as well; it is
         listed in ``neutral`` as ``d/d<parameter>``.
+    generator : nhham.numerics.relative.Generator, optional
+        The tangent lift Xi of a symmetry's generator xi (checked to leave L, the
+        constraints and the forces invariant by the caller: a scene's ``[symmetry]``).
+        The state may then move along xi: v0 = w xi(q0) + a motion of cyclic
+        coordinates, with X(y0) = w Xi(y0) (a relative equilibrium); X - w Xi is
+        linearised (co-moving variables) and the group's directions divided out.
 
     Returns
     -------
@@ -278,7 +307,7 @@ def linearize(model, state, *, independent: Sequence[str] | None = None,
     ------
     InconsistentInitialDataError
         The state is not on M_1 or not steady (the message shows the
-        residuals).
+        residuals); with a generator: not a relative equilibrium along it.
     ComputationError
         A constraint or the saddle-point matrix is singular at the state.
 
@@ -297,19 +326,32 @@ def linearize(model, state, *, independent: Sequence[str] | None = None,
                          f"got {type(model).__name__}", key="model")
     y0 = model.state(state)
     _check_inputs(model)
-    residuals, worst = _check_steady(model, y0)
+    P = np.asarray(model.parameter_values, dtype=float)[:, None]
+    motion = None if generator is None else spin_rate(generator, y0, model.n, P.T)
+    residuals, worst = _check_steady(model, y0, motion)
     chart = choose_chart(model, y0, independent)
     cf = ComplexField(model)
-    J = chart_jacobian(cf, chart, y0, step)
+    if motion is None:
+        J = chart_jacobian(cf, chart, y0, step)
+    else:
+        J = chart_jacobians(cf, chart, y0[None, :], step, P, generator=generator,
+                            rates=np.array([motion.rate]))[0]
     B = input_jacobians(cf, chart, y0[None, :], step, model)[0]
-    moved = _moved_along(y0, model.n)
-    return _from_jacobian(model, y0, chart, J, lambda: chart_jacobian(cf, chart, moved, step),
-                          neutral, family, step, residuals, worst, B)
+    moved = _moved_along(y0, model.n, None if motion is None else motion.rest)
+
+    def moved_jacobian():
+        if motion is None:
+            return chart_jacobian(cf, chart, moved, step)
+        return chart_jacobians(cf, chart, moved[None, :], step, P, generator=generator,
+                               rates=np.array([motion.rate]))[0]
+
+    return _from_jacobian(model, y0, chart, J, moved_jacobian, neutral, family, step,
+                          residuals, worst, B, None if motion is None else (generator, motion))
 
 
 def linearize_many(models: Sequence, states: Sequence, independent: Sequence[str], *,
                    neutral: bool | Sequence[str] = True, step: float = STEP,
-                   families: Sequence | None = None) -> list:
+                   families: Sequence | None = None, generator=None) -> list:
     """:func:`linearize` at many (model, state) pairs in one chart, the complex-step
     Jacobians of all of them in one batch of the generated numpy kernel.
 
@@ -327,6 +369,8 @@ def linearize_many(models: Sequence, states: Sequence, independent: Sequence[str
         As for :func:`linearize`.
     families : sequence of mappings, optional
         The ``family`` of each state.
+    generator : nhham.numerics.relative.Generator, optional
+        As for :func:`linearize` (each state its own rate w).
 
     Returns
     -------
@@ -350,28 +394,33 @@ def linearize_many(models: Sequence, states: Sequence, independent: Sequence[str
         return []
     _check_inputs(models[0])
     Y = np.array([m.state(s) for m, s in zip(models, states)])
-    checks = [_check_steady(m, y) for m, y in zip(models, Y)]
+    P = np.array([m.parameter_values for m in models], dtype=float).T
+    n = models[0].n
+    motions = [None if generator is None else spin_rate(generator, y, n, P[:, [i]].T)
+               for i, y in enumerate(Y)]
+    checks = [_check_steady(m, y, mo) for m, y, mo in zip(models, Y, motions)]
     charts = {choose_chart(m, y, independent) for m, y in zip(models, Y)}
     if len(charts) != 1:  # pragma: no cover - the names fix the chart
         raise ComputationError("linearize: the chart differs between the states")
     (chart,) = charts
     cf = ComplexField(models[0])
-    P = np.array([m.parameter_values for m in models], dtype=float).T
-    J = chart_jacobians(cf, chart, Y, step, P)
-    n = models[0].n
-    moved = [_moved_along(y, n) for y in Y]
+    rates = None if generator is None else np.array([0.0 if mo is None else mo.rate
+                                                     for mo in motions])
+    J = chart_jacobians(cf, chart, Y, step, P, generator=generator, rates=rates)
+    moved = [_moved_along(y, n, None if mo is None else mo.rest) for y, mo in zip(Y, motions)]
     at = [i for i, y in enumerate(moved) if y is not None]
     J1: list = [None] * len(models)
     if at:
         for i, Ji in zip(at, chart_jacobians(cf, chart, np.array([moved[i] for i in at]),
-                                               step, P[:, at])):
+                                               step, P[:, at], generator=generator,
+                                               rates=None if rates is None else rates[at])):
             J1[i] = Ji
     families = families or [None] * len(models)
     B = input_jacobians(cf, chart, Y, step, models[0], P)
     return [_from_jacobian(m, y, chart, Ji, lambda J1i=J1i: J1i, neutral, fam, step, res, worst,
-                           Bi)
-            for m, y, Ji, J1i, fam, (res, worst), Bi
-            in zip(models, Y, J, J1, families, checks, B)]
+                           Bi, None if mo is None else (generator, mo))
+            for m, y, Ji, J1i, fam, (res, worst), Bi, mo
+            in zip(models, Y, J, J1, families, checks, B, motions)]
 
 
 def _check_inputs(model):
@@ -384,46 +433,74 @@ def _check_inputs(model):
     require_autonomous("linearize", model.time_slot is not None)
 
 
-def _check_steady(model, y0):
-    """(residuals, largest acceleration) at a state checked to be on M_1 and steady."""
+def _check_steady(model, y0, motion=None):
+    """(residuals, largest acceleration) at a state checked to be on M_1 and steady (with
+    ``motion``: X(y0) = w Xi(y0), the accelerations those of the group motion)."""
     n, names = model.n, model.names
     residuals = _check_on_manifold(model, y0)
     acc = model.rhs(0.0, y0)[n:]
+    if motion is not None:
+        acc = acc - motion.rate * motion.lifted[n:]
     scale = max(1.0, float(np.abs(y0).max()))
     worst = float(np.abs(acc).max(initial=0.0))
     if worst > ON_TOLERANCE * scale ** 2:
         listed = ", ".join(f"{names[n + i]}' = {acc[i]:.3g}" for i in np.argsort(-np.abs(acc))[:4]
                            if abs(acc[i]) > ON_TOLERANCE * scale ** 2)
+        if motion is not None:
+            raise InconsistentInitialDataError(
+                f"steady: the state is not a relative equilibrium along the [symmetry] "
+                f"generator (w = {motion.rate:.6g}): the accelerations minus w times its lift "
+                f"are {listed} (largest {worst:.3g}; they vanish on a motion "
+                f"q(t) = exp(t w xi) q0)")
         raise InconsistentInitialDataError(
             f"steady: the state is not steady: accelerations {listed} (largest {worst:.3g}; "
             f"a steady motion has every acceleration zero)")
     return residuals, worst
 
 
+#: How a scene declares the symmetry a steady motion follows (the refusals say it).
+DECLARE_HINT = ("declare the symmetry the motion follows in a [symmetry] table of the scene "
+                "(its generator xi by coordinate, e.g. yaw = \"1\", x = \"-y\", y = \"x\" for "
+                "the rotation about the vertical), and linearize linearises in co-moving "
+                "variables")
+
+
 def _from_jacobian(model, y0, chart, J, moved_jacobian, neutral, family, step, residuals,
-                   worst, B=None):
+                   worst, B=None, relative=None):
     """The Linearization from the chart's Jacobian J at y0; ``moved_jacobian()`` gives it
-    at the state moved along the motion (asked only when the state moves)."""
+    at the state moved along the motion (asked only when the state moves); ``relative``:
+    (generator, RelativeMotion) of a relative equilibrium (J is then X - w Xi's)."""
     n, names = model.n, model.names
     scale = max(1.0, float(np.abs(y0).max()))
     chart_names = tuple(names[i] for i in chart.iq) + tuple(names[n + i] for i in chart.iv)
     dependent = tuple(names[i] for i in chart.dq) + tuple(names[n + i] for i in chart.dv)
-    keep, removed = _neutral_directions(J, chart_names, neutral)
-    moving = [names[i] for i in range(n) if abs(y0[n + i]) > ON_TOLERANCE * scale]
+    # a constant xi (cyclic coordinates) leaves X's Jacobian and today's quotient
+    turning = relative is not None and relative[1].rate != 0.0 and not relative[0].constant
+    coordinates = set(names[:n]) if turning else set()
+    keep, removed, group = _neutral_directions(J, chart_names, neutral, coordinates)
+    velocity = y0[n:] if relative is None else relative[1].rest
+    moving = [names[i] for i in range(n) if abs(velocity[i]) > ON_TOLERANCE * scale]
     not_cyclic = [s for s in moving if s not in removed]
+    if not_cyclic and relative is not None:
+        _not_along(relative, not_cyclic, "the dynamics depends on them")
     if not_cyclic:
         raise InconsistentInitialDataError(
             f"steady: the coordinates {', '.join(not_cyclic)} move at the state but the dynamics "
-            f"depends on them (or they are dependent), so the motion is not steady")
+            f"depends on them (or they are dependent), so the motion is not steady; if it is "
+            f"a relative equilibrium, {DECLARE_HINT}")
     if moving:
         change = float(np.abs(moved_jacobian() - J).max(initial=0.0))
         if change > _INVARIANCE_TOL * max(1.0, float(np.abs(J).max(initial=0.0))):
+            if relative is not None:
+                _not_along(relative, moving, f"the linearised dynamics changes along that "
+                           f"motion (by {change:.3g} over the first half radian or unit)")
             raise InconsistentInitialDataError(
                 f"steady: the motion moves {', '.join(moving)} and the linearised dynamics "
                 f"changes along it (by {change:.3g} over the first half radian or unit), so the "
                 f"state matrix at this point does not describe its stability; linearize needs "
-                f"coordinates in which every moving one is cyclic (a rotation about the "
-                f"vertical that also turns the constraints is not)")
+                f"coordinates in which every moving one is cyclic, or, for a motion along a "
+                f"symmetry group (a rotation about the vertical that also turns the "
+                f"constraints): {DECLARE_HINT}")
     A = J[np.ix_(keep, keep)]
     # the neutral directions are a quotient: B keeps the rows that A keeps
     Bk = None if B is None else B[keep, :]
@@ -431,20 +508,37 @@ def _from_jacobian(model, y0, chart, J, moved_jacobian, neutral, family, step, r
     if family and neutral is not False:
         A, kept_names, extra, Bk = divide_family(A, kept_names, family, Bk)
         removed = tuple(removed) + tuple(extra)
+    info = None
+    if relative is not None:
+        block = J[np.ix_(group, group)]
+        info = {"generator": relative[0].to_dict(), "rate": relative[1].rate,
+                "turning": turning, "invariance": dict(relative[0].checked),
+                "group": tuple(chart_names[i] for i in group),
+                "group_eigenvalues": tuple(_sorted(np.linalg.eigvals(block)) if group
+                                           else ())}
     return linearization_result(A, tuple(kept_names), "complex-step",
                    f"float64, complex-step Jacobian (step {step:g}i, exact to rounding), "
                    f"LAPACK eigenvalues", chart_names, J, removed, dependent,
                    dict(zip(names, map(float, y0))), residuals, worst,
-                   inputs=model.input_names, B=Bk)
+                   inputs=model.input_names, B=Bk, relative=info)
 
 
-def _moved_along(y0, n):
+def _not_along(relative, moving, why):
+    generator, motion = relative
+    raise InconsistentInitialDataError(
+        f"steady: the velocities are not along the [symmetry] generator "
+        f"xi = {generator.text()} (w = {motion.rate:.6g}) plus cyclic coordinates: "
+        f"{', '.join(moving)} move besides the group motion and {why}")
+
+
+def _moved_along(y0, n, rest=None):
     """y(t) = (q0 + t v0, v0), the steady motion itself, moved until some coordinate has
-    changed by 1/2; None when nothing moves. A steady motion whose moving coordinates are
+    changed by 1/2; None when nothing moves (``rest``: the velocity besides a symmetry
+    group's motion, in place of v0: the flow of X - w Xi). A steady motion whose moving coordinates are
     cyclic has the same Jacobian all along; zero Jacobian columns at y0 alone do not show
     that (the spinning Chaplygin sphere: the yaw column vanishes, but turning the yaw
     turns the constraints' velocity block)."""
-    v0 = y0[n:]
+    v0 = y0[n:] if rest is None else rest
     top = float(np.abs(v0).max(initial=0.0))
     if top <= ON_TOLERANCE * max(1.0, float(np.abs(y0).max())):
         return None
@@ -489,32 +583,44 @@ def divide_family(A, names, family, B=None):
     return A, names, removed, B
 
 
-def _neutral_directions(J, chart_names, neutral):
+def _neutral_directions(J, chart_names, neutral, coordinates=frozenset()):
+    """(kept indices, removed names, group indices): the chart variables divided out.
+    ``coordinates``: the names of Q's coordinates when X - w Xi is linearised, whose
+    group block (:func:`~nhham.numerics.relative.group_block`) is divided out too."""
     d = J.shape[0]
     keep = list(range(d))
     scale = max(1.0, float(np.abs(J).max(initial=0.0)))
     if neutral is False:
-        return keep, ()
+        return keep, (), []
     if neutral is True:
-        removed = []
+        removed: list = []
+        group: list = []
         changed = True
         while changed:
-            changed = False
-            for j in list(keep):
-                if np.abs(J[np.ix_(keep, [j])]).max(initial=0.0) <= _NEUTRAL_TOL * scale:
+            changed = _zero_columns(J, keep, removed, chart_names, scale)
+            block = group_block(J, chart_names, coordinates, keep, _NEUTRAL_TOL * scale)
+            if block:
+                group += block
+                for j in block:
                     keep.remove(j)
                     removed.append(chart_names[j])
-                    changed = True
-        return keep, tuple(removed)
+                changed = True
+        return keep, tuple(removed), sorted(group)
     wanted = list(neutral)
     unknown = [s for s in wanted if s not in chart_names]
     if unknown:
         raise InputError(f"linearize: neutral: {', '.join(unknown)} not in the chart "
                          f"({', '.join(chart_names)})")
     pending = [chart_names.index(s) for s in wanted]
+    group = []
     while pending:
         zero = [j for j in pending
                 if np.abs(J[np.ix_(keep, [j])]).max(initial=0.0) <= _NEUTRAL_TOL * scale]
+        if not zero and coordinates:
+            block = [j for j in group_block(J, chart_names, coordinates, keep,
+                                            _NEUTRAL_TOL * scale) if j in pending]
+            zero = block if block and set(block) <= set(pending) else []
+            group += zero
         if not zero:
             raise InputError(f"linearize: neutral: the dynamics depends on "
                              f"{', '.join(chart_names[j] for j in pending)} at this state; "
@@ -522,6 +628,18 @@ def _neutral_directions(J, chart_names, neutral):
         for j in zero:
             keep.remove(j)
             pending.remove(j)
-    return keep, tuple(wanted)
+    return keep, tuple(wanted), sorted(group)
 
 
+def _zero_columns(J, keep, removed, chart_names, scale) -> bool:
+    """Remove (repeatedly) the kept variables whose column vanishes in the kept rows."""
+    found = False
+    changed = True
+    while changed:
+        changed = False
+        for j in list(keep):
+            if np.abs(J[np.ix_(keep, [j])]).max(initial=0.0) <= _NEUTRAL_TOL * scale:
+                keep.remove(j)
+                removed.append(chart_names[j])
+                changed = found = True
+    return found

@@ -171,7 +171,7 @@ def steady_state(model, values: Mapping[str, float], independent=None, *,
 
 def sweep_steady(model, state_of: Callable[[Mapping[str, float]], Mapping[str, float]],
                  parameter: str, values: Sequence[float] | np.ndarray, *, independent=None,
-                 xtol: float = 1e-12, family_of=None) -> Sweep:
+                 xtol: float = 1e-12, family_of=None, generator=None) -> Sweep:
     """:func:`sweep` of a steady motion that moves with a parameter.
 
     Parameters
@@ -189,6 +189,9 @@ def sweep_steady(model, state_of: Callable[[Mapping[str, float]], Mapping[str, f
     xtol : float, optional
     family_of : callable, optional
         ``{parameter: value} -> family`` (see :func:`linearize`).
+    generator : nhham.numerics.relative.Generator, optional
+        A symmetry the steady motions move along (see :func:`linearize`): each value
+        linearised in co-moving variables at its own rate w.
 
     Returns
     -------
@@ -231,20 +234,22 @@ def sweep_steady(model, state_of: Callable[[Mapping[str, float]], Mapping[str, f
     grid = np.asarray(values, dtype=float)
     if grid.size == 0:
         raise InputError(f"--sweep: no values of {parameter!r} to sweep", key="--sweep")
-    first = linearize(*model_and_state(grid[0], independent), independent=independent)
+    first = linearize(*model_and_state(grid[0], independent), independent=independent,
+                      generator=generator)
     chart = first.chart
     neutral = list(first.neutral)
     for value in (grid[len(grid) // 2], grid[-1]):
-        lin = linearize(*model_and_state(value, chart), independent=chart)
+        lin = linearize(*model_and_state(value, chart), independent=chart, generator=generator)
         neutral = [s for s in neutral if s in lin.neutral]
 
     def at(value):
         return linearize(*model_and_state(value, chart), independent=chart,
-                         neutral=neutral, family=fam(value))
+                         neutral=neutral, family=fam(value), generator=generator)
 
     def at_all(values):
         pairs = [model_and_state(v, chart) for v in values]
         return linearize_many([m for m, _ in pairs], [s for _, s in pairs], chart,
-                              neutral=neutral, families=[fam(v) for v in values])
+                              neutral=neutral, families=[fam(v) for v in values],
+                              generator=generator)
 
     return sweep(at, parameter, grid, xtol=xtol, linearize_all=at_all)

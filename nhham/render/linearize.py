@@ -47,6 +47,8 @@ def linearize_text(title, scene, lin, swept, opened=None) -> str:
         ("coordinates", ", ".join(lin.coordinates)),
         ("verdict", lin.verdict + (" (closed loop)" if closed else "")),
     ]
+    if lin.relative is not None:
+        rows += _relative_rows(lin.relative)
     if closed:
         rows += [("control", "; ".join(f"{u} = {to_text(law)}"
                                        for u, law in scene.control.items())),
@@ -72,6 +74,31 @@ def linearize_text(title, scene, lin, swept, opened=None) -> str:
         else:
             lines.append("  no crossings")
     return "\n".join(lines)
+
+
+def _relative_rows(relative) -> list:
+    """The rows saying that the state matrix is X - w Xi's (a relative equilibrium)."""
+    xi = " + ".join(f"({e}) d/d{q}" for q, e in relative["generator"].items())
+    rows = [("symmetry", f"xi = {xi} ([symmetry])")]
+    checked = relative.get("invariance") or {}
+    if checked:
+        how = ", ".join(sorted(set(checked.values())))
+        rows.append(("invariant", f"{', '.join(checked)} ({how})"))
+    if relative["rate"] == 0.0:
+        return rows + [("relative equilibrium", "no: the motion does not move along xi "
+                        "(w = 0), the state matrix is X's")]
+    if not relative["turning"]:
+        return rows + [("relative equilibrium",
+                        f"v = w xi with w = {relative['rate']:.10g} and xi constant (cyclic "
+                        f"coordinates): the state matrix is X's")]
+    rows.append(("relative equilibrium",
+                 f"yes: v = w xi(q) with w = {relative['rate']:.10g}; co-moving variables "
+                 f"(the state matrix is X - w Xi's)"))
+    if relative["group"]:
+        ev = ", ".join(f"{z.real:.6g}{z.imag:+.6g}i" for z in relative["group_eigenvalues"])
+        rows.append(("group directions", f"{', '.join(relative['group'])} divided out "
+                     f"(their block turns at w: eigenvalues {ev})"))
+    return rows
 
 
 def _matrices(lin, title) -> list:

@@ -68,7 +68,8 @@ def prepare(scene, model, design, *, along: str | None = None, run_options=None,
         No ``[steady]`` table, a swept name that is not a parameter (or is an input), an
         ``along`` that is not a grid dimension.
     """
-    from nhham.journeys.stability import check_steady_table, steady_linearization
+    from nhham.journeys.stability import (check_steady_table, steady_linearization,
+                                          symmetry_generator)
     from nhham.numerics.linearization import linearize
 
     check_steady_table(scene)
@@ -89,6 +90,7 @@ def prepare(scene, model, design, *, along: str | None = None, run_options=None,
     elif along not in design.dims:
         raise InputError(f"--along: {along!r} is not swept (swept: {', '.join(design.dims)})",
                          key="--along")
+    generator = symmetry_generator(scene, system, model)   # checked once, here
     probes = sorted({0, design.size // 2, design.size - 1})
     found: list = []
     problems: list = []
@@ -101,7 +103,8 @@ def prepare(scene, model, design, *, along: str | None = None, run_options=None,
             # the command's linearisation there (laws and forces checked), numerically
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")   # a probe's notes are not the study's
-                lin = steady_linearization(scene, system, m, "complex-step", chart)
+                lin = steady_linearization(scene, system, m, "complex-step", chart,
+                                           generator=generator)
             state = np.array([lin.state[name] for name in m.names])
             found.append((m, state, scene.steady.family(m.parameters), lin))
         except (InputError, ComputationError) as exc:
@@ -118,7 +121,8 @@ def prepare(scene, model, design, *, along: str | None = None, run_options=None,
         # is in A's kernel, at no other U)
         family = {p: t for p, t in (family or {}).items() if f"d/d{p}" in common}
         lin = linearize(m, state, independent=lin.chart, family=family or None,
-                        neutral=[s for s in common if not s.startswith("d/d")])
+                        neutral=[s for s in common if not s.startswith("d/d")],
+                        generator=generator)
     choice = ChartChoice.of(lin)
     options = {"chart": list(choice.chart), "neutral": list(choice.neutral),
                "coordinates": list(choice.coordinates), "along": along,
@@ -172,7 +176,8 @@ def evaluate(study, ctx, region, until: float | None = None) -> dict:
     flat = {k: v.ravel() for k, v in values.items()}
     Y, P, bad, missed = steady_states(scene, model, flat)
     batch = linearize_batch(model, Y, P, reference=choice,
-                            families=_families(scene, model, P, choice))
+                            families=_families(scene, model, P, choice),
+                            generator=_generator(scene, model))
     status = batch.status.copy()
     status[bad] = 1
     status[missed] = 2   # not a steady motion of the closed loop: the command refuses it
@@ -197,6 +202,13 @@ def evaluate(study, ctx, region, until: float | None = None) -> dict:
     if opts["along"] is not None:
         out.update(_boundaries(study, scene, model, choice, region, values, batch, bad))
     return out
+
+
+def _generator(scene, model):
+    """The scene's ``[symmetry]`` for the batch (checked by :func:`prepare`)."""
+    from nhham.journeys.stability import symmetry_generator
+
+    return symmetry_generator(scene, scene.steady_system(), model, check=False)
 
 
 def _families(scene, model, P, choice):
@@ -306,7 +318,8 @@ def _spectra(scene, model, choice, points) -> list:
     Y, P, bad, missed = steady_states(scene, model, points)
     bad = bad | missed
     batch = linearize_batch(model, Y, P, reference=choice,
-                            families=_families(scene, model, P, choice))
+                            families=_families(scene, model, P, choice),
+                            generator=_generator(scene, model))
     return [None if bad[i] else batch.spectrum(i) for i in range(len(Y))]
 
 

@@ -54,6 +54,7 @@ from nhham.system.scene_structure import (
     validate_structure,
 )
 from nhham.system.steady import parse_steady
+from nhham.system.symmetry import parse_symmetry
 
 if TYPE_CHECKING:
     from nhham.system.description import System
@@ -112,6 +113,9 @@ class Scene:
     values_set : mapping of str to float
         The parameter values given when loading (``values=``, ``--set``), replacing the
         scene's.
+    symmetry : nhham.system.symmetry.Symmetry or None
+        The ``[symmetry]`` generator xi (its invariance is checked where it is used:
+        ``nhham linearize``), or None.
 
     Examples
     --------
@@ -147,6 +151,7 @@ class Scene:
     initial_solved: tuple = ()
     initial_problem: Exception | None = None
     values_set: Mapping = field(default_factory=lambda: MappingProxyType({}))
+    symmetry: object = None
 
     def checked_initial(self, project: bool = False) -> Mapping:
         """The initial state, completed and checked against the constraints.
@@ -360,6 +365,7 @@ def loads_scene(text: str, source: str = "<string>", *, check_initial: bool = Tr
         initial_solved=solved,
         initial_problem=problem,
         values_set=MappingProxyType(dict(values or {})),
+        symmetry=expressions.get("[symmetry]"),
     )
     if check_initial and given is not None:
         scene.checked_initial()
@@ -456,6 +462,11 @@ def _parse_expressions(spec: SceneSpec) -> dict:
     problems.extend(steady_problems)
     if steady is not None:
         parsed["[steady]"] = steady
+    symmetry, symmetry_problems = parse_symmetry(spec.symmetry, spec.coordinates,
+                                                 spec.parameters)
+    problems.extend(symmetry_problems)
+    if symmetry is not None:
+        parsed["[symmetry]"] = symmetry
     parsed["[contacts]"], contact_problems = parse_contacts(
         spec.contacts, lambda text, where: parse_expression(text, table, where=where),
         len(spec.constraints), len(spec.holonomic))

@@ -18,7 +18,7 @@ __all__ = ["dump_scene"]
 
 # -------------------------------------------------------------------- dump
 def dump_scene(system, initial=None, simulate=None, *, description: str = "",
-               steady=None, contacts=()) -> str:
+               steady=None, contacts=(), symmetry=None) -> str:
     """Write a system (and optional initial data and options) as scene TOML.
 
     Parameters
@@ -33,6 +33,8 @@ def dump_scene(system, initial=None, simulate=None, *, description: str = "",
         The ``[steady]`` table (numbers, or expressions in the parameters).
     contacts : sequence of ContactPoint, optional
         The ``[contacts.<name>]`` tables (:mod:`nhham.system.contacts`).
+    symmetry : Symmetry or mapping of str to str, optional
+        The ``[symmetry]`` table (the generator xi by coordinate).
 
     The system's ``inputs``, ``forces`` (by coordinate) and ``dissipation`` are written
     too; control laws are not part of a System (a scene's ``[control]``).
@@ -102,6 +104,11 @@ def dump_scene(system, initial=None, simulate=None, *, description: str = "",
             else:
                 text = _toml_float(float(sp.sympify(v)), k)
             lines.append(f"{_toml_key(k)} = {text}")
+    if symmetry is not None:
+        table = (symmetry.to_toml_table() if hasattr(symmetry, "to_toml_table")
+                 else dict(symmetry))
+        lines += ["", "[symmetry]"]
+        lines.extend(f"{_toml_key(k)} = {toml_string(str(v))}" for k, v in table.items())
     for contact in contacts:
         lines += ["", f"[contacts.{_toml_key(contact.name)}]",
                   f"velocity = {_toml_array([to_text(e) for e in contact.velocity])}",

@@ -27,6 +27,7 @@ from nhham.system.initial_solve import initial_entry
 from nhham.system.naming import acceleration_symbol, momentum_symbol, velocity_symbol
 from nhham.system.scene_numbers import finite_number, type_name
 from nhham.system.steady import state_table, steady_structure
+from nhham.system.symmetry import symmetry_structure
 
 __all__ = ["SceneSpec", "SimulateOptions", "validate_structure", "scene_error",
            "simulate_option_problem", "key_path", "check_keys", "toml_string", "MIN_RTOL",
@@ -42,7 +43,7 @@ MAX_FIXED_STEPS = 10**8
 _TOP_KEYS = (
     "name", "description", "coordinates", "parameters", "symbolic_parameters",
     "lagrangian", "constraints", "holonomic", "initial", "simulate", "steady", "contacts",
-    "forces", "dissipation", "inputs", "control",
+    "forces", "dissipation", "inputs", "control", "symmetry",
 )
 _REQUIRED_KEYS = ("coordinates", "lagrangian")
 
@@ -123,6 +124,7 @@ class SceneSpec:
     dissipation: str | None = None
     inputs: tuple = ()
     control: Mapping | None = None
+    symmetry: Mapping | None = None
 
 
 def validate_structure(data: dict, source: str) -> SceneSpec:
@@ -163,11 +165,12 @@ def validate_structure(data: dict, source: str) -> SceneSpec:
     simulate = _simulate_table(data.get("simulate"), problems)
     steady = steady_structure(data.get("steady"), coordinates, problems, inputs)
     contacts = contacts_structure(data.get("contacts"), problems)
+    symmetry = symmetry_structure(data.get("symmetry"), coordinates, problems)
     if problems:
         raise scene_error(source, problems)
     return SceneSpec(source, name, description, tuple(coordinates), parameters, lagrangian,
                  tuple(constraints), tuple(holonomic), initial, simulate, steady, contacts,
-                 forces, dissipation, tuple(inputs), control)
+                 forces, dissipation, tuple(inputs), control, symmetry)
 
 
 def scene_error(source: str, problems: list[str]) -> SceneError:

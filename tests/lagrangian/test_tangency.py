@@ -38,10 +38,11 @@ EXAMPLES = sorted((Path(__file__).resolve().parents[2] / "examples").glob("*.tom
 # The four-bar cart (n = 6, W dense through the loop) is as slow there; its points route is
 # checked by tests/lagrangian/test_curved.py. The forced variants of the bicycle and the
 # differential drive have the same W, mu and tangency ranks (forces do not enter C); the
-# bicycle in the benchmark's parameters is the bicycle.
+# bicycle in the benchmark's parameters is the bicycle. The rattleback (n = 5, sqrt in L and
+# the constraints) is the Chaplygin sphere's kind; its numbers: test_relative_equilibria.py.
 GALLERY = {"chaplygin_sphere", "differential_drive", "rolling_disc_3d", "whipple_bicycle",
            "curvilinear_pair", "four_bar_cart", "bicycle_steer_control",
-           "differential_drive_motors", "whipple_bicycle_benchmark"}
+           "differential_drive_motors", "whipple_bicycle_benchmark", "rattleback"}
 # The ball on a sphere (a curved M_1) takes 20 s on the symbolic route; its answer is known
 # without it: W is positive definite and the rows of mu independent, so C = -mu W^-1 mu^T is
 # negative definite: rank m, and stage 1 adds nothing (test_ball_on_sphere_... below).
