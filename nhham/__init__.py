@@ -97,7 +97,7 @@ _LAZY = by_module({
     "numerics.linearization": ("linearize_many", "Linearization"),
     "numerics.batch_linearization": ("linearize_batch", "LinearizationBatch", "ChartChoice"),
     "numerics.steady_sweep": ("sweep_steady", "Sweep"),
-    "journeys.stability": ("linearize", "open_loop", "linearize_scene"),
+    "journeys.stability": ("linearize", "open_loop", "linearize_scene", "relative_generator"),
     # parameter studies on Dask (the study extra)
     "study.sweep": ("sweep", "SweepResult"),
     "study.plots": ("plot_study", "plot_stability_map", "plot_ensemble", "plot_cases"),
