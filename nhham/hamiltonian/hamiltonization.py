@@ -16,7 +16,16 @@ has a solution theta that is closed and depends on r alone (then f = exp of its
 potential): on 2k >= 4 dimensions wedging with a nondegenerate 2-form is injective on
 one-forms, so the linear equations decide theta uniquely when they can be solved. Then
 f^(k-1) times the Liouville volume is an invariant measure of X. Everything is decided
-exactly (sympy), with the Jacobiator of the bracket before and after rescaling.
+exactly, with the Jacobiator of the bracket before and after rescaling.
+
+Two routes, both in the velocity coordinates (r, r') where the equations need no inverse
+of the Legendre map (:mod:`nhham.hamiltonian.hamiltonization_points`): the closed form
+(sympy's linsolve, theta carried to (r, p)) when Omega_nh is small, else a decision at an
+exact point first (a proof of "no factor" by one nonzero value), the closed form only when
+the point refutes nothing. With L_c quadratic in r' the components of the equations with
+a dp leg force theta's dp part to vanish and read theta_a W_bc - theta_b W_ac =
+dG_ab/dr'^c (G = J_a B^a): for k = 2 they always have a solution, for k >= 3 they are a
+condition, which the Chaplygin sphere on T*SO(3) and the 3-D disc fail.
 
 Forms are arrays: a 2-form is the antisymmetric matrix Omega with
 Omega = 1/2 Omega_ij dz^i ^ dz^j, its exterior derivative has the components
@@ -228,7 +237,7 @@ def _at_a_point(red, eqs, verdict) -> Hamiltonization:
             "depends on p": "theta depends on the momenta p (its dp part or its "
                             "coefficients)",
             "not closed": "theta is not closed"}[verdict.proof]
-    obstruction = f"{lead}: decided at an exact point ({verdict.detail})"
+    obstruction = f"{lead}: decided at an exact point: {verdict.detail}"
     decision = Decision(False, "exact", f"{_POINT}: {verdict.detail}; the point: "
                         f"{verdict.point}")
     Omega = _two_form(eqs, to_p, tidy=False)
@@ -292,7 +301,8 @@ def _conformal_factor(eqs, to_p, z, k) -> tuple:
     theta_r = (dr part) - (dp/dr)^T theta_p."""
     size = 2 * k
     t = sp.symbols(f"theta0:{size}")
-    equations = [cancel(sum((a * x for a, x in zip(row, t)), sp.S.Zero) - rhs)
+    # coefficient by coefficient: cheaper than cancelling the rows with theta inside
+    equations = [sum((cancel(a) * x for a, x in zip(row, t)), sp.S.Zero) - cancel(rhs)
                  for row, rhs in zip(eqs.A, eqs.b)]
     equations = [e for e in equations if e != 0]
     solution = sp.linsolve(equations, t) if equations \

@@ -251,14 +251,17 @@ def _verdict(eqs, env, A, b, rows) -> PointVerdict:
         with_dp = [t for t, tr in enumerate(eqs.triples) if max(tr) >= k]
         part = exact_rank([augmented[t] for t in with_dp])[0] > exact_rank(
             [A[t] for t in with_dp])[0]
-        which = (" (already its components with a dp leg: theta's dp part must vanish, and "
-                 "then theta_a W_bc - theta_b W_ac = dG_ab/dr'^c has no solution)"
-                 if part else "")
-        return PointVerdict("no solution", f"the equations are inconsistent at the exact "
-                            f"point, where Omega_nh is nondegenerate{which}", None,
-                            jac, where, env)
+        which = ("; already its components with a dp leg are: they make theta's dp part "
+                 "vanish, and then theta_a W_bc - theta_b W_ac = dG_ab/dr'^c has no "
+                 "solution" if part else "")
+        return PointVerdict("no solution", f"inconsistent at an exact point where "
+                            f"Omega_nh is nondegenerate{which}", None, jac, where, env)
     square = [A[t] for t in rows]
     theta = [x[0] for x in exact_solve(square, [[b[t]] for t in rows])]
+    # With L_c quadratic in r' (the caller's condition) the next two cannot happen: the
+    # dr^dr'^dr' rows force theta's dr' part to vanish (W invertible, k >= 2) and the
+    # dr^dr^dr' rows, theta_a W_bc - theta_b W_ac = dG_ab/dr'^c, are free of r' (G is
+    # affine in r'). They stay as proofs for any other L_c.
     if any(theta[k:]):
         return PointVerdict("dp part", "theta has a dp part at the exact point",
                             tuple(theta), jac, where, env)
@@ -270,7 +273,7 @@ def _verdict(eqs, env, A, b, rows) -> PointVerdict:
     curl = [(a, c, d[a][c] - d[c][a]) for a, c in itertools.combinations(range(k), 2)]
     if any(x for _, _, x in curl):
         shown = "; ".join(f"d{z[a]}^d{z[c]}: {x}" for a, c, x in curl if x)
-        return PointVerdict("not closed", f"d theta != 0 at the exact point ({shown}), "
+        return PointVerdict("not closed", f"d theta != 0 at an exact point ({shown}), "
                             f"where theta has no dp part and its coefficients no "
                             f"p-derivative", tuple(theta), jac, where, env,
                             tuple(((a, c), x) for a, c, x in curl))
