@@ -45,6 +45,7 @@ import sympy as sp
 from nhham.errors import InputError
 from nhham.hamiltonian.hamiltonization_points import (
     decide_at_a_point,
+    fibre_obstruction,
     jacobiators,
     velocity_equations,
 )
@@ -267,6 +268,9 @@ def _closed_form(red, eqs) -> Hamiltonization:
     theta, obstruction, f = _conformal_factor(eqs, to_p, z, k)
     Pi = _bracket(Omega, k)
     before = _jacobiators(Pi, z)
+    if theta is None and k >= 2:  # theta's dp part vanishes: the dp-leg components say why
+        reason = fibre_obstruction(eqs.shape, before)
+        obstruction += f": {reason}" if reason else ""
     after = _jacobiators((Pi / f).applyfunc(cancel), z) if f is not None else ()
     density = divergence = None
     if f is not None:

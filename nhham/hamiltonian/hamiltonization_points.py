@@ -45,7 +45,7 @@ from nhham.settings import SEED
 from nhham.system.naming import momentum_symbol
 
 __all__ = ["VelocityEquations", "velocity_equations", "PointVerdict", "decide_at_a_point",
-           "jacobiators", "Program_at"]
+           "jacobiators", "Program_at", "fibre_obstruction"]
 
 #: Points drawn before the decision gives up (a zero denominator or Omega_v degenerate at
 #: each of them).
@@ -254,6 +254,8 @@ def _verdict(eqs, env, A, b, rows) -> PointVerdict:
         which = ("; already its components with a dp leg are: they make theta's dp part "
                  "vanish, and then theta_a W_bc - theta_b W_ac = dG_ab/dr'^c has no "
                  "solution" if part else "")
+        reason = fibre_obstruction(eqs.shape, jac)
+        which += f" ({reason} at the point)" if reason else ""
         return PointVerdict("no solution", f"inconsistent at an exact point where "
                             f"Omega_nh is nondegenerate{which}", None, jac, where, env)
     square = [A[t] for t in rows]
@@ -279,6 +281,44 @@ def _verdict(eqs, env, A, b, rows) -> PointVerdict:
                             tuple(((a, c), x) for a, c, x in curl))
     return PointVerdict(None, "nothing refuted at the exact point", tuple(theta),
                         jac, where, env, tuple(((a, c), x) for a, c, x in curl))
+
+
+def fibre_obstruction(shape, found) -> str:
+    """Why the equations with a dp leg fail, read off a nonzero Jacobiator, or "".
+
+    With theta's dp part forced to vanish (k >= 2), the dr^a ^ dr^b ^ dp_c component of
+    theta ^ Omega_nh = -d Omega_nh for c other than a, b reads 0 = dG_ab/dp_c, and
+    dG_ab/dp_c is minus the Jacobiator of (r^c, p_a, p_b): one such Jacobiator that is
+    not zero proves that the equations have no solution.
+
+    Parameters
+    ----------
+    shape : sequence of sympy.Symbol
+    found : sequence of (tuple of str, value)
+        Jacobiators known not to vanish (identically, or at an exact point).
+
+    Returns
+    -------
+    str
+
+    Examples
+    --------
+    >>> import sympy as sp
+    >>> print(fibre_obstruction(sp.symbols("yaw lean spin"),
+    ...                         [(("lean", "p_yaw", "p_spin"), 1)])[:51])
+    its dyaw^dspin^dp_lean component reads 0 = dG_(yaw,
+    """
+    names = [str(x) for x in shape]
+    momenta = {str(momentum_symbol(x)): str(x) for x in shape}
+    for triple, _ in found:
+        c, pa, pb = triple
+        if c in names and pa in momenta and pb in momenta and c not in (momenta[pa],
+                                                                        momenta[pb]):
+            a, b = momenta[pa], momenta[pb]
+            pc = str(momentum_symbol(shape[names.index(c)]))
+            return (f"its d{a}^d{b}^d{pc} component reads 0 = dG_({a}, {b})/d{pc}, but that "
+                    f"derivative is minus the Jacobiator of ({c}, {pa}, {pb}), not zero")
+    return ""
 
 
 def _derivatives(eqs, env, theta, rows, square) -> list:

@@ -121,15 +121,23 @@ def test_the_chaplygin_marble_on_t_star_so3_has_no_factor():
         "the equations theta ^ Omega_nh = -d Omega_nh have no solution: decided at an "
         "exact point")
     assert "already its components with a dp leg" in found.obstruction
+    assert "component reads 0 = dG_(" in found.obstruction
     assert found.theta is None and found.conformal_factor is None
     assert found.jacobiator_before  # proved nonzero at the point: not Poisson
     assert found.to_dict()["decision"]["route"] == "exact point"
 
 
 def test_the_rolling_disc_has_no_solution_at_an_exact_point():
-    """The 3-D disc (shape yaw, lean, spin): no solution, already in the dp-leg components,
-    at an exact point (the command's closed form on the reduced data says the same:
-    examples/rolling_disc_3d.toml)."""
+    """The 3-D disc (shape yaw, lean, spin; L_c and J in examples/rolling_disc_3d.toml's
+    conventions): by hand G = m R^2 cos(lean) lean' dyaw^dspin and W_lean,lean = 5 m R^2/4
+    with no lean cross terms, so dG_(yaw, spin)/dp_lean = (4/5) cos(lean). With theta's dp
+    part zero the dyaw^dspin^dp_lean component of the equations reads 0 = (4/5) cos(lean):
+    no solution. At the exact point: the same, with the Jacobiator of
+    (lean, p_yaw, p_spin) = -(4/5) cos(lean) there."""
     red = reduced_by_hand("examples/rolling_disc_3d.toml", ["x", "y"])
     verdict = decide_at_a_point(velocity_equations(red), red.system)
+    lean = next(s for s in verdict.env if str(s) == "lean")
+    hand, = evaluate([-sp.Rational(4, 5) * sp.cos(lean)], verdict.env)
     assert verdict.proof == "no solution" and "dp leg" in verdict.detail
+    assert dict(verdict.jacobiator)[("lean", "p_yaw", "p_spin")] == hand
+    assert "dyaw^dspin^dp_lean component reads 0" in verdict.detail
