@@ -238,7 +238,10 @@ def _at_a_point(red, eqs, verdict) -> Hamiltonization:
             "depends on p": "theta depends on the momenta p (its dp part or its "
                             "coefficients)",
             "not closed": "theta is not closed"}[verdict.proof]
-    obstruction = f"{lead}: decided at an exact point: {verdict.detail}"
+    values = red.system.parameter_values
+    scope = (" (the parameters at the scene's values: " + ", ".join(
+        f"{p} = {v}" for p, v in values.items()) + ")") if values else ""
+    obstruction = f"{lead}: decided at an exact point{scope}: {verdict.detail}"
     decision = Decision(False, "exact", f"{_POINT}: {verdict.detail}; the point: "
                         f"{verdict.point}")
     Omega = _two_form(eqs, to_p, tidy=False)
