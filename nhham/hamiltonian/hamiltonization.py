@@ -191,7 +191,8 @@ def hamiltonize(reduction, *, part=None) -> Hamiltonization:
 
 
 #: Largest Omega_nh (sympy operations of its upper triangle in (r, r')) solved in closed
-#: form before a decision at an exact point (the 3-D disc: 94; a Chaplygin sphere: 464).
+#: form before a decision at an exact point (the sleigh: 63; the 3-D disc: 87; the Chaplygin
+#: sphere: 423).
 CLOSED_FORM_OPS = 200
 
 _CLOSED = "closed form"
