@@ -32,6 +32,11 @@ def sleigh():
     return chaplygin_reduction(models.chaplygin_sleigh(), symmetry=["y"])
 
 
+@functools.lru_cache(maxsize=1)
+def sleigh_hamiltonized():
+    return hamiltonize(sleigh())
+
+
 def theta_in_momenta(red):
     """theta ^ Omega_nh = -d Omega_nh solved in (r, p): r' = W^{-1} p, Omega_nh =
     [[-G(r, p), 1], [-1, 0]] (the definition in the module docstring), sympy's linsolve."""
@@ -57,7 +62,7 @@ def test_theta_in_velocity_coordinates_equals_theta_in_momenta():
     solution of the equations written in (r, p)."""
     for red in (chaplygin_reduction(System(["x", "y", "z"], L3, ["z_dot - y*x_dot"])),
                 sleigh()):
-        found = hamiltonize(red)
+        found = hamiltonize(red) if red is not sleigh() else sleigh_hamiltonized()
         assert found.route == "closed form"
         expected = theta_in_momenta(red)
         assert all(sp.simplify(a - b) == 0 for a, b in zip(found.theta, expected))
@@ -141,3 +146,35 @@ def test_the_rolling_disc_has_no_solution_at_an_exact_point():
     assert verdict.proof == "no solution" and "dp leg" in verdict.detail
     assert dict(verdict.jacobiator)[("lean", "p_yaw", "p_spin")] == hand
     assert "dyaw^dspin^dp_lean component reads 0" in verdict.detail
+
+
+def test_the_route_follows_the_size_and_a_point_that_refutes_nothing_leaves_it_to_the_closed_form(
+        monkeypatch):
+    """With every Omega_nh counted as large: the particle's point refutes nothing, so the
+    closed form finds f = (1 + y^2)^(-1/2) (route closed form); the sleigh's point proves
+    d theta != 0 (route exact point, theta not given)."""
+    from nhham.hamiltonian import hamiltonization
+
+    monkeypatch.setattr(hamiltonization, "CLOSED_FORM_OPS", 0)
+    particle = hamiltonize(chaplygin_reduction(System(["x", "y", "z"], L3, ["z_dot - y*x_dot"])))
+    y = next(s for s in particle.conformal_factor.free_symbols if str(s) == "y")
+    assert particle.route == "closed form" and particle.hamiltonizable
+    assert sp.simplify(particle.conformal_factor - 1 / sp.sqrt(1 + y**2)) == 0
+    found = hamiltonize(sleigh())
+    assert found.route == "exact point" and not found.hamiltonizable and found.theta is None
+    assert found.obstruction.startswith("theta is not closed: decided at an exact point")
+    assert [t for t, _ in found.jacobiator_before] == [("x", "p_x", "p_theta"),
+                                                        ("theta", "p_x", "p_theta")]
+
+
+def test_the_decision_record_follows_the_schema():
+    """The JSON key decision of both routes against nhham's output schema."""
+    import jsonschema
+
+    import nhham
+
+    schema = nhham.output_schema()
+    part = dict(schema["$defs"]["hamiltonize"]["properties"]["decision"], **{"$defs": schema["$defs"]})
+    for found in (sleigh_hamiltonized(),
+                  hamiltonize(reduced_by_hand("examples/rolling_disc_3d.toml", ["x", "y"]))):
+        jsonschema.validate(found.to_dict()["decision"], part)
