@@ -212,10 +212,18 @@ def _legendre(red, eqs, *, tidy=True) -> dict:
 
 
 def _energy(red, eqs, to_p, tidy=True) -> sp.Expr:
+    """H_c(r, p); untidied: 1/2 (p - b)^T adj W (p - b) / det W - L_c(r, 0), the energy of
+    L_c = 1/2 r'^T W r' + b r' + L_c(r, 0) without substituting r' into each term."""
+    if not tidy:
+        zero = {w: 0 for w in eqs.velocities}
+        shifted = sp.Matrix([momentum_symbol(r) for r in eqs.shape]) \
+            - sp.Matrix(eqs.momenta).xreplace(zero)
+        W = sp.Matrix(eqs.W)
+        quadratic = (shifted.T * W.adjugate() * shifted)[0, 0]
+        return quadratic / (2 * W.det(method="berkowitz")) - red.lagrangian.xreplace(zero)
     energy = sum((w * sp.diff(red.lagrangian, w) for w in eqs.velocities), sp.S.Zero) \
         - red.lagrangian
-    energy = energy.xreplace(to_p)
-    return cancel(energy) if tidy else energy
+    return cancel(energy.xreplace(to_p))
 
 
 def _two_form(eqs, to_p, tidy=True) -> sp.Matrix:
