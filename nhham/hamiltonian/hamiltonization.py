@@ -16,7 +16,16 @@ has a solution theta that is closed and depends on r alone (then f = exp of its
 potential): on 2k >= 4 dimensions wedging with a nondegenerate 2-form is injective on
 one-forms, so the linear equations decide theta uniquely when they can be solved. Then
 f^(k-1) times the Liouville volume is an invariant measure of X. Everything is decided
-exactly (sympy), with the Jacobiator of the bracket before and after rescaling.
+exactly, with the Jacobiator of the bracket before and after rescaling.
+
+Two routes, both in the velocity coordinates (r, r') where the equations need no inverse
+of the Legendre map (:mod:`nhham.hamiltonian.hamiltonization_points`): the closed form
+(sympy's linsolve, theta carried to (r, p)) when Omega_nh is small, else a decision at an
+exact point first (a proof of "no factor" by one nonzero value), the closed form only when
+the point refutes nothing. With L_c quadratic in r' the components of the equations with
+a dp leg force theta's dp part to vanish and read theta_a W_bc - theta_b W_ac =
+dG_ab/dr'^c (G = J_a B^a): for k = 2 they always have a solution, for k >= 3 they are a
+condition, which the Chaplygin sphere on T*SO(3) and the 3-D disc fail.
 
 Forms are arrays: a 2-form is the antisymmetric matrix Omega with
 Omega = 1/2 Omega_ij dz^i ^ dz^j, its exterior derivative has the components
@@ -34,7 +43,14 @@ from typing import Any
 import sympy as sp
 
 from nhham.errors import InputError
+from nhham.hamiltonian.hamiltonization_points import (
+    decide_at_a_point,
+    fibre_obstruction,
+    jacobiators,
+    velocity_equations,
+)
 from nhham.lagrangian.algebra import cancel
+from nhham.lagrangian.decision import Decision
 from nhham.system.expressions import to_text
 from nhham.system.naming import momentum_symbol
 
@@ -69,6 +85,15 @@ class Hamiltonization:
         f^(k-1) (times dr dp): div(f^(k-1) X) = 0 checked exactly.
     divergence : sympy.Expr or None
         div(f^(k-1) X), simplified (0 when the measure is invariant).
+    decision : Decision
+        How the verdict was reached (method ``exact``: the closed form, or a proof at an
+        exact point), with the detail.
+    route : {"closed form", "exact point"}
+        In the route "exact point" ``theta`` is None, ``hamiltonian`` and ``two_form`` are
+        left as formed (r' = adj W (p - b) / det W, not cancelled), and
+        ``jacobiator_before`` lists the triples whose Jacobiator is nonzero at the point
+        (a proof; the others vanish there, which proves nothing), each written in the
+        velocity coordinates (r, r') (composed with the Legendre map), as formed.
     """
 
     reduction: Any
@@ -83,6 +108,8 @@ class Hamiltonization:
     jacobiator_after: tuple
     invariant_measure_density: sp.Expr | None
     divergence: sp.Expr | None
+    decision: Decision
+    route: str
 
     def to_dict(self) -> dict:
         def jac(found):
@@ -104,16 +131,26 @@ class Hamiltonization:
             "symmetry_coordinates": [to_text(s) for s in red.symmetry],
             "variables": [to_text(z) for z in self.variables],
             "hamiltonian": to_text(self.hamiltonian),
+            "decision": {"route": self.route, **self.decision.to_dict(value=False)},
         }
 
 
-def hamiltonize(reduction) -> Hamiltonization:
+def hamiltonize(reduction, *, part=None) -> Hamiltonization:
     """Decide whether a Chaplygin reduction has a conformal factor, and find it.
+
+    The equations are formed in the velocity coordinates (r, r')
+    (:mod:`nhham.hamiltonian.hamiltonization_points`): no inverse of the Legendre map is
+    needed for them. Where Omega_nh is small (``CLOSED_FORM_OPS``) they are solved in
+    closed form; otherwise they are first decided at an exact point, where one nonzero
+    value proves that no factor exists, and the closed form is sought only when the point
+    refutes nothing.
 
     Parameters
     ----------
     reduction : ChaplyginReduction
         From :func:`nhham.lagrangian.chaplygin.chaplygin_reduction`.
+    part : callable, optional
+        Called with the name of each part as it begins (a command's progress).
 
     Returns
     -------
@@ -134,31 +171,118 @@ def hamiltonize(reduction) -> Hamiltonization:
     >>> found.jacobiator_before, found.jacobiator_after   # {p_x, p_y} = J, dJ/dp_x
     (((('x', 'p_x', 'p_y'), -y/(y**2 + 1)),), ())
     """
+    say = part or (lambda what: None)
     red = reduction
-    shape, rdot = list(red.shape), list(red.shape_velocities)
-    k = len(shape)
-    momenta = [momentum_symbol(r) for r in shape]
-    z = shape + momenta
+    rdot = list(red.shape_velocities)
+    k = len(rdot)
     W = sp.Matrix(k, k, lambda i, j: sp.diff(red.lagrangian, rdot[i], rdot[j]))
     if any(e.free_symbols & set(rdot) for e in W):
         raise InputError("hamiltonize: L_c is not quadratic in the shape velocities (its "
                          "Legendre map would need a nonlinear inverse)", key="lagrangian")
-    p_of_v = sp.Matrix([sp.diff(red.lagrangian, w) for w in rdot])
-    # L_c quadratic in r' (mechanical): r' = W^{-1} (p - b)
-    b = p_of_v.xreplace({w: 0 for w in rdot})
-    v_of_p = W.LUsolve(sp.Matrix(momenta) - b).applyfunc(cancel)
-    to_p = dict(zip(rdot, v_of_p))
-    energy = sum((w * sp.diff(red.lagrangian, w) for w in rdot), sp.S.Zero) - red.lagrangian
-    H = cancel(energy.xreplace(to_p))
-    G = red.gyroscopic_form
+    say("theta ^ Omega_nh = -d Omega_nh in the velocity coordinates (r, r')")
+    eqs = velocity_equations(red)
+    if eqs.size() > CLOSED_FORM_OPS:
+        say("the equations at an exact point")
+        verdict = decide_at_a_point(eqs, red.system)
+        if verdict is not None and verdict.proof is not None:
+            return _at_a_point(red, eqs, verdict)
+    say("theta in closed form, the factor and the Jacobiators")
+    return _closed_form(red, eqs)
+
+
+#: Largest Omega_nh (sympy operations of its upper triangle in (r, r')) solved in closed
+#: form before a decision at an exact point (the sleigh: 63; the 3-D disc: 87; the Chaplygin
+#: sphere: 423).
+CLOSED_FORM_OPS = 200
+
+_CLOSED = "closed form"
+_POINT = "exact point"
+
+
+def _legendre(red, eqs, *, tidy=True) -> dict:
+    """r' = W^{-1} (p - b) as a substitution (cancelled when ``tidy``; else adj W / det W
+    as formed, for large data that are only printed)."""
+    momenta = sp.Matrix([momentum_symbol(r) for r in eqs.shape])
+    b = sp.Matrix(eqs.momenta).xreplace({w: 0 for w in eqs.velocities})
+    if tidy:
+        v_of_p = eqs.W.LUsolve(momenta - b).applyfunc(cancel)
+    else:
+        v_of_p = eqs.W.adjugate() * (momenta - b) / eqs.W.det(method="berkowitz")
+    return dict(zip(eqs.velocities, v_of_p))
+
+
+def _energy(red, eqs, to_p, tidy=True) -> sp.Expr:
+    """H_c(r, p); untidied: 1/2 (p - b)^T adj W (p - b) / det W - L_c(r, 0), the energy of
+    L_c = 1/2 r'^T W r' + b r' + L_c(r, 0) without substituting r' into each term."""
+    if not tidy:
+        zero = {w: 0 for w in eqs.velocities}
+        shifted = sp.Matrix([momentum_symbol(r) for r in eqs.shape]) \
+            - sp.Matrix(eqs.momenta).xreplace(zero)
+        W = sp.Matrix(eqs.W)
+        quadratic = (shifted.T * W.adjugate() * shifted)[0, 0]
+        return quadratic / (2 * W.det(method="berkowitz")) - red.lagrangian.xreplace(zero)
+    energy = sum((w * sp.diff(red.lagrangian, w) for w in eqs.velocities), sp.S.Zero) \
+        - red.lagrangian
+    return cancel(energy.xreplace(to_p))
+
+
+def _two_form(eqs, to_p, tidy=True) -> sp.Matrix:
+    """Omega_nh on T*S: [[-G(r, p), 1], [-1, 0]]."""
+    k = eqs.k
     Omega = sp.zeros(2 * k, 2 * k)
     for a in range(k):
         Omega[a, k + a], Omega[k + a, a] = 1, -1
     for a, c in itertools.product(range(k), repeat=2):
-        Omega[a, c] = cancel(-G[a, c].xreplace(to_p))
-    theta, obstruction, f = _conformal_factor(Omega, z, k)
-    Pi = (-Omega.inv()).applyfunc(cancel)
+        g = -eqs.gyroscopic[a, c].xreplace(to_p)
+        Omega[a, c] = cancel(g) if tidy else g
+    return Omega
+
+
+def _at_a_point(red, eqs, verdict) -> Hamiltonization:
+    """The verdict of an exact point that proved the obstruction."""
+    to_p = _legendre(red, eqs, tidy=False)
+    z = eqs.shape + tuple(momentum_symbol(r) for r in eqs.shape)
+    lead = {"no solution": "the equations theta ^ Omega_nh = -d Omega_nh have no solution",
+            "dp part": "theta depends on the momenta p (its dp part)",
+            "depends on p": "theta depends on the momenta p (its dp part or its "
+                            "coefficients)",
+            "not closed": "theta is not closed"}[verdict.proof]
+    values = red.system.parameter_values
+    scope = (" (the parameters at the scene's values: " + ", ".join(
+        f"{p} = {v}" for p, v in values.items()) + ")") if values else ""
+    obstruction = f"{lead}: decided at an exact point{scope}: {verdict.detail}"
+    decision = Decision(False, "exact", f"{_POINT}: {verdict.detail}; the point: "
+                        f"{verdict.point}")
+    Omega = _two_form(eqs, to_p, tidy=False)
+    before = _jacobiators_in_velocities(eqs, [t for t, _ in verdict.jacobiator])
+    return Hamiltonization(red, z, _energy(red, eqs, to_p, tidy=False),
+                           Omega, False, None, None, obstruction,
+                           before, (), None, None, decision, _POINT)
+
+
+def _jacobiators_in_velocities(eqs, triples) -> tuple:
+    """The Jacobiators of ``triples`` in closed form in (r, r') (composed with Leg), as
+    formed: W^{-1} = adj W / det W."""
+    det = sp.Dummy("det")
+    W = sp.Matrix(eqs.W)
+    inverse = (W.adjugate() / det).tolist()
+    found = jacobiators(eqs, list, lambda _: inverse, triples)
+    value_of_det = W.det(method="berkowitz")
+    return tuple((t, v.xreplace({det: value_of_det})) for t, v in found)
+
+
+def _closed_form(red, eqs) -> Hamiltonization:
+    k = eqs.k
+    to_p = _legendre(red, eqs)
+    z = list(eqs.shape) + [momentum_symbol(r) for r in eqs.shape]
+    H = _energy(red, eqs, to_p)
+    Omega = _two_form(eqs, to_p)
+    theta, obstruction, f = _conformal_factor(eqs, to_p, z, k)
+    Pi = _bracket(Omega, k)
     before = _jacobiators(Pi, z)
+    if theta is None and k >= 2:  # theta's dp part vanishes: the dp-leg components say why
+        reason = fibre_obstruction(eqs.shape, before)
+        obstruction += f": {reason}" if reason else ""
     after = _jacobiators((Pi / f).applyfunc(cancel), z) if f is not None else ()
     density = divergence = None
     if f is not None:
@@ -166,32 +290,48 @@ def hamiltonize(reduction) -> Hamiltonization:
         X = Pi * sp.Matrix([sp.diff(H, w) for w in z])
         divergence = sp.simplify(sum((sp.diff(density * X[i], w) for i, w in enumerate(z)),
                                      sp.S.Zero))
+    decision = Decision(f is not None and not after, "exact",
+                        f"{_CLOSED}: theta ^ Omega_nh = -d Omega_nh solved in the velocity "
+                        f"coordinates (r, r') and carried to (r, p)")
     return Hamiltonization(red, tuple(z), H, Omega, f is not None and not after, theta, f,
-                           obstruction, before, after, density, divergence)
+                           obstruction, before, after, density, divergence, decision, _CLOSED)
+
+
+def _bracket(Omega, k) -> sp.Matrix:
+    """Pi = -Omega^{-1} of Omega = [[-G, 1], [-1, 0]]: [[0, 1], [-1, G]], i.e.
+    {r^a, p_b} = delta_ab and {p_a, p_b} = G_ab (no inverse formed)."""
+    Pi = sp.zeros(2 * k, 2 * k)
+    for a in range(k):
+        Pi[a, k + a], Pi[k + a, a] = 1, -1
+    Pi[k:, k:] = -Omega[:k, :k]
+    return Pi
 
 
 def _three_indices(size):
     return itertools.combinations(range(size), 3)
 
 
-def _conformal_factor(Omega, z, k) -> tuple:
-    """(theta or None, obstruction or None, f or None) from theta ^ Omega = -d Omega."""
+def _conformal_factor(eqs, to_p, z, k) -> tuple:
+    """(theta or None, obstruction or None, f or None) from theta ^ Omega = -d Omega,
+    solved in (r, r') and carried to (r, p): theta_p = W^{-1} (dr' part),
+    theta_r = (dr part) - (dp/dr)^T theta_p."""
     size = 2 * k
-    if size < 4:  # a 2-form on a surface is closed: f = 1
-        return (sp.S.Zero, sp.S.Zero), None, sp.S.One
     t = sp.symbols(f"theta0:{size}")
-    eqs = []
-    for i, j, l in _three_indices(size):
-        d = sp.diff(Omega[j, l], z[i]) + sp.diff(Omega[l, i], z[j]) + sp.diff(Omega[i, j], z[l])
-        wedge = t[i] * Omega[j, l] + t[j] * Omega[l, i] + t[l] * Omega[i, j]
-        eqs.append(cancel(wedge + d))
-    solution = sp.linsolve([e for e in eqs if e != 0], t) if any(e != 0 for e in eqs) \
+    # coefficient by coefficient: cheaper than cancelling the rows with theta inside
+    equations = [sum((cancel(a) * x for a, x in zip(row, t)), sp.S.Zero) - cancel(rhs)
+                 for row, rhs in zip(eqs.A, eqs.b)]
+    equations = [e for e in equations if e != 0]
+    solution = sp.linsolve(equations, t) if equations \
         else sp.FiniteSet(tuple(sp.S.Zero for _ in t))
     if solution == sp.S.EmptySet:
         return None, "the equations theta ^ Omega_nh = -d Omega_nh have no solution", None
-    theta = tuple(sp.simplify(cancel(e)) for e in next(iter(solution)))
-    if any(e.free_symbols & set(t) for e in theta):  # pragma: no cover - injective for 2k >= 4
-        return theta, "theta is not determined by the equations", None
+    theta_v = next(iter(solution))
+    if any(e.free_symbols & set(t) for e in theta_v):  # pragma: no cover - injective, 2k >= 4
+        return theta_v, "theta is not determined by the equations", None
+    theta_p = eqs.W.LUsolve(sp.Matrix(theta_v[k:]))
+    dpdr = sp.Matrix(k, k, lambda c, d: sp.diff(eqs.momenta[c], eqs.shape[d]))
+    theta_r = sp.Matrix(theta_v[:k]) - dpdr.T * theta_p
+    theta = tuple(sp.simplify(cancel(e.xreplace(to_p))) for e in list(theta_r) + list(theta_p))
     if any(e != 0 for e in theta[k:]) or any(e.free_symbols & set(z[k:]) for e in theta[:k]):
         return theta, "theta depends on the momenta p (its dp part or its coefficients)", None
     dtheta = [cancel(sp.diff(theta[b], z[a]) - sp.diff(theta[a], z[b]))
@@ -202,6 +342,13 @@ def _conformal_factor(Omega, z, k) -> tuple:
                           zip(itertools.combinations(range(k), 2), dtheta) if e != 0)
         return theta, f"theta is not closed: d theta = {shown}", None
     return theta, None, sp.simplify(sp.exp(_potential(theta[:k], z[:k])))
+
+
+def _jacobiator(Pi, z, i, j, l) -> sp.Expr:
+    """{{z_i, z_j}, z_l} + cyclic, as formed."""
+    value = sum((Pi[i, m] * sp.diff(Pi[j, l], z[m]) + Pi[j, m] * sp.diff(Pi[l, i], z[m])
+                 + Pi[l, m] * sp.diff(Pi[i, j], z[m]) for m in range(len(z))), sp.S.Zero)
+    return -value  # the sum is {a, {b, c}} + cyclic = -({{a, b}, c} + cyclic)
 
 
 def _potential(theta, r) -> sp.Expr:
@@ -220,9 +367,7 @@ def _jacobiators(Pi, z) -> tuple:
     size = len(z)
     found = []
     for i, j, l in _three_indices(size):
-        value = sum((Pi[i, m] * sp.diff(Pi[j, l], z[m]) + Pi[j, m] * sp.diff(Pi[l, i], z[m])
-                     + Pi[l, m] * sp.diff(Pi[i, j], z[m]) for m in range(size)), sp.S.Zero)
-        value = cancel(-value)  # the sum is {a, {b, c}} + cyclic = -({{a, b}, c} + cyclic)
+        value = cancel(_jacobiator(Pi, z, i, j, l))
         if value != 0:
             found.append(((str(z[i]), str(z[j]), str(z[l])), sp.simplify(value)))
     return tuple(found)

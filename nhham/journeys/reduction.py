@@ -94,7 +94,7 @@ def hamiltonize(scene, *, symmetry=None, steps=None) -> Answer:
     with steps.step("Chaplygin reduction, and its check against P(xi_L)"):
         red = chaplygin_reduction(scene.system, symmetry)
     with steps.step("theta ^ Omega_nh = -d Omega_nh, the factor and the Jacobiators"):
-        found = find(red)
+        found = find(red, part=steps.part)
     data = found.to_dict()
     data["reduction_check"] = red.to_dict()["check"]
     warnings = () if found.divergence in (None, 0) else (
