@@ -416,3 +416,15 @@ def test_from_mechanics_of_the_same_bodies(kane, scene):
         for model in (ours, theirs):
             got = model.with_parameters(F=F, tau=tau).rhs(0.0, y)[4:]
             np.testing.assert_allclose(got, a, rtol=0, atol=1e-12 * max(1.0, abs(a).max()))
+
+
+def test_initial_with_velocities_that_are_not_independent_is_refused(tmp_path):
+    """Issue 34 item 4: x_dot and y_dot given at theta = 0 (constraints[0] fixes y_dot from
+    x_dot) leave theta_dot and phi_dot open: exit 2, one line naming both."""
+    head, tail = SCENE.read_text().split("[initial]\n")
+    path = tmp_path / "dependent.toml"
+    path.write_text(head + "[initial]\n" + tail.replace("phi_dot = 0.0\n", "y_dot = 0.1\n", 1))
+    rc, out, err = run_inprocess("simulate", str(path), "--t-end", "0.1")
+    assert rc == 2 and out == "" and err.count("\n") == 1
+    assert "theta_dot, phi_dot are not fixed" in err
+    assert "(constraints[0] relates x_dot, y_dot)" in err
