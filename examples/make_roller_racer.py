@@ -67,6 +67,7 @@ def mechanics_system(forces=True):
               me.RigidBody("rear", C2, B2, m2, (me.inertia(B2, 0, 0, I2), C2))]
     v1, v2 = C1.pos_from(O).dt(N), C2.pos_from(O).dt(N)
     msys = me.System(N, O)
+    msys.contact_velocities = {"front": v1.to_matrix(N), "rear": v2.to_matrix(N)}
     msys.add_coordinates(x, y, theta, phi)
     msys.add_bodies(*bodies)
     msys.add_nonholonomic_constraints(v1.dot(B1.y), v2.dot(B2.y))
@@ -88,6 +89,22 @@ def build(values=None, forces=True):
     return System(system.coordinates, sp.trigsimp(sp.expand(system.lagrangian)),
                   constraints=tidy, parameters=values, name=system.name,
                   forces=q, inputs=system.inputs)
+
+
+def contacts():
+    """The wheel pairs' contact points, at the centres C1 and C2: their velocities (the
+    material velocity of the axle's midpoint) and the no-slip constraint each carries."""
+    from nhham.system.contacts import ContactPoint
+
+    msys, _ = mechanics_system()
+    t = me.dynamicsymbols._t
+    plain = {qi.diff(t): sp.Symbol(f"{qi.func.__name__}_dot") for qi in msys.q}
+    plain.update({qi: sp.Symbol(qi.func.__name__) for qi in msys.q})
+    out = []
+    for j, (name, v) in enumerate(msys.contact_velocities.items()):
+        components = [sp.trigsimp(sp.expand(e.subs(plain))) for e in v]
+        out.append(ContactPoint(name, tuple(components), (f"constraints[{j}]",)))
+    return out
 
 
 STEADY = {"F": "2*c*U", "tau": "0", "x": "0", "y": "0", "theta": "0", "phi": "0",
@@ -116,7 +133,9 @@ HEADER = """\
 # What `nhham simulate` does from [initial] (only x_dot and phi_dot given with the
 #   coordinates: y_dot and theta_dot are solved from the constraints and named): the joint
 #   straightens and the racer runs on at speed U (end states against KanesMethod and
-#   solve_ivp to 1e-8 in tests/numerics/test_roller_racer.py).
+#   solve_ivp to 1e-8 in tests/numerics/test_roller_racer.py). [contacts]: the side forces
+#   of the wheel pairs at C1 and C2 (against the momentum balance of the whole racer to
+#   1e-12; a planar model, so simulate warns that each point's velocity map has rank 2).
 """
 
 
@@ -127,7 +146,7 @@ def main(argv):
     from nhham.system.scene_dump import dump_scene
 
     # dump_scene writes no [control] (not part of a System): appended before [simulate].
-    text = dump_scene(build(), simulate=SIMULATE, steady=STEADY)
+    text = dump_scene(build(), simulate=SIMULATE, steady=STEADY, contacts=contacts())
     head, tail = text.split("\n[simulate]\n")
     control = "".join(f'{k} = "{v}"\n' for k, v in CONTROL.items())
     initial = "".join(f"{k} = {v!r}\n" for k, v in INITIAL.items())
