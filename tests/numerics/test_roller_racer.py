@@ -303,6 +303,25 @@ def test_linearisation_of_the_open_and_closed_loop(kane, scene, linearized):
     assert max(np.linalg.eigvals(A[np.ix_(keep, keep)]).real) > 0    # free joint: unstable
 
 
+def test_sweep_finds_where_the_servo_damps_the_joint(kane, scene):
+    """linearize --sweep kd: the joint's pair crosses the imaginary axis where the servo's
+    damping cancels the free joint's, kd = A[phi', phi'] / B[phi', tau] of the open loop
+    (KanesMethod's Jacobian; the closed loop's phi'' row is A's minus kd B's in phi')."""
+    from nhham.journeys import linearize
+
+    A, B = my_jacobian(kane, scene)
+    edge = A[5, 5] / B[5, 1]
+    swept = linearize(load_scene(SCENE), sweep=("kd", np.linspace(-0.01, 0.02, 7))
+                      ).payload["sweep"]
+    assert [c.kind for c in swept.crossings] == ["complex"]
+    assert swept.crossings[0].value == pytest.approx(edge, abs=1e-8)
+    assert swept.crossings[0].direction == -1        # stable above the edge
+    # the crossing pair: the closed loop's phi row there, lambda^2 = A[phi', phi] - kp B
+    pv = named(scene)
+    omega = np.sqrt(-(A[5, 3] - pv["kp"] * B[5, 1]))
+    assert abs(swept.crossings[0].eigenvalue.imag) == pytest.approx(omega, rel=1e-8)
+
+
 def test_state_space_widths(linearized):
     """Issue 34 item 8: the closed loop has no external input (B of width 0); the open
     loop has one column per input (F, tau)."""
