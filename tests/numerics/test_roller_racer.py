@@ -182,10 +182,28 @@ def _generalized_forces(kane, p, y, inputs):
     return P1 @ force1 + P2 @ force2 + np.array([0, 0, 0, tau])
 
 
+def poisson_bracket(kane, p, y):
+    """{Psi_1, Psi_2}(q, p) with Psi_i = mu_i(q) W(q)^-1 p, at the momenta p = W v of the
+    state y (the q-derivatives by five-point differences at fixed p)."""
+    q, v = y[:4], y[4:]
+    mu = np.array(kane.mu(q, v, p, (0.0, 0.0)), dtype=float)
+    W = np.array(kane.W(q, v, p, (0.0, 0.0)), dtype=float)
+    pm = W @ v
+
+    def psi(qq):
+        return (np.array(kane.mu(qq, v, p, (0.0, 0.0)), dtype=float)
+                @ np.linalg.solve(np.array(kane.W(qq, v, p, (0.0, 0.0)), dtype=float), pm))
+
+    dpsi_dq = np.column_stack([derivative(psi, q, k) for k in range(4)])
+    dpsi_dp = mu @ np.linalg.inv(W)
+    return dpsi_dq[0] @ dpsi_dp[1] - dpsi_dp[0] @ dpsi_dq[1]
+
+
 def test_classify_verdict(kane, scene):
     """C = -mu W^-1 mu^T has rank 2 (W > 0, mu of rank 2); ker mu is not involutive (the
     bracket of two fields in it leaves it); on T*Q, Psi_i(q, p) = mu_i W^-1 p, and
-    {Psi_1, Psi_2} != 0 at a point of M_1: both second class."""
+    {Psi_1, Psi_2} != 0 at a point of M_1: both second class. With point masses
+    (I1 = I2 = 0, by --set) the bracket vanishes: both first class, still not integrable."""
     rc, out, err = run_inprocess("classify", str(SCENE), "--json")
     assert rc == 0, err
     r = json.loads(out)["result"]
@@ -197,15 +215,13 @@ def test_classify_verdict(kane, scene):
     W = np.array(kane.W(q, v, p, inputs), dtype=float)
     Wi = np.linalg.inv(W)
     assert np.linalg.matrix_rank(mu @ Wi @ mu.T) == 2
-    pm = W @ v
-    dpsi_dp = mu @ Wi
-    def psi(qq):     # Psi(q, p) at the fixed momenta p
-        return (np.array(kane.mu(qq, v, p, inputs), dtype=float)
-                @ np.linalg.solve(np.array(kane.W(qq, v, p, inputs), dtype=float), pm))
-
-    dpsi_dq = np.column_stack([derivative(psi, q, k) for k in range(4)])
-    bracket = dpsi_dq[0] @ dpsi_dp[1] - dpsi_dp[0] @ dpsi_dq[1]
-    assert abs(bracket) > 1e-3
+    assert abs(poisson_bracket(kane, p, y)) > 1e-3
+    assert abs(poisson_bracket(kane, p[:1] + (0.0,) + p[2:3] + (0.0,) + p[4:], y)) < 1e-9
+    rc, out, err = run_inprocess("classify", str(SCENE), "--set", "I1=0", "--set", "I2=0",
+                                 "--json")
+    assert rc == 0, err
+    r0 = json.loads(out)["result"]
+    assert (r0["integrable"], r0["first_class"], r0["second_class"]) == (False, 2, 0), r0
     assert _involutive(kane) is False
     assert r["integrable"] is False, r
     assert (r["first_class"], r["second_class"]) == (0, 2), r
