@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import ctypes
 import itertools
+import os
 import threading
 from dataclasses import dataclass
 from types import MappingProxyType
@@ -129,8 +130,15 @@ class CompiledRHS:
             import importlib.machinery
             import importlib.util
 
-            loader = importlib.machinery.ExtensionFileLoader("nhham_ext", path)
-            spec = importlib.util.spec_from_file_location("nhham_ext", path, loader=loader)
+            # One module name per library: CPython keeps a single-phase extension under its
+            # name in sys.modules, and loading a library a second time (another model of
+            # the same system) refills the module of that name from its first load's dict.
+            # Under the one name "nhham_ext" that module was another system's, whose rhs
+            # then read this model's parameter block in its own layout. The entry point is
+            # found by the name's last component (PyInit_nhham_ext).
+            name = f"nhham_compiled.{os.path.splitext(os.path.basename(path))[0]}.nhham_ext"
+            loader = importlib.machinery.ExtensionFileLoader(name, path)
+            spec = importlib.util.spec_from_file_location(name, path, loader=loader)
             if spec is None:  # a path without a loadable suffix
                 raise ImportError(f"not a loadable extension module: {path}")
             ext = importlib.util.module_from_spec(spec)

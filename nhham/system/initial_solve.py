@@ -278,7 +278,10 @@ def _velocities(system, values, missing, params, guesses=None) -> dict:
             f"constraints and the velocities given: give "
             + ("its value" if one else f"values for {len(missing) - rank} of them")
             + _related(related), key="initial")
-    x = np.linalg.lstsq(A, -b, rcond=None)[0]
+    # LU where A is square (full rank here): a velocity that the constraints fix at 0 comes
+    # out as 0 (the roller racer's y_dot = 0 at theta = 0 was 2.7e-17 from the SVD of lstsq)
+    x = (np.linalg.solve(A, -b) if A.shape[0] == A.shape[1]
+         else np.linalg.lstsq(A, -b, rcond=None)[0])
     residual = A @ x + b
     bad = [(lab, float(r)) for (lab, _), r in zip(rows, residual) if abs(r) > _TOL * scale]
     if bad:
@@ -286,7 +289,7 @@ def _velocities(system, values, missing, params, guesses=None) -> dict:
             f"initial: the velocities given over-determine {', '.join(missing)}: "
             + "; ".join(f"{lab} = {r:.6g}" for lab, r in bad) + " with them solved"
             + (_related(related) or "; leave one more velocity out"), key="initial")
-    return {n: float(v) for n, v in zip(missing, x)}
+    return {n: float(v) + 0.0 for n, v in zip(missing, x)}   # + 0.0: no "-0"
 
 
 def _velocities_by_newton(rows, at, missing, unknowns, guesses) -> dict:
