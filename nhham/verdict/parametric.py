@@ -145,7 +145,14 @@ def parametric_classification(system, *, positive: Sequence = (),
                     continue
                 remaining = tuple(p for p in params if p not in total)
                 clock.start("run " + " and ".join(f"{short(e)} = 0" for e in full))
-                verdict, sub_comps, sub_notes, _, _ = examine(spec, remaining, **opts)
+                try:
+                    verdict, sub_comps, sub_notes, _, _ = examine(spec, remaining, **opts)
+                except InputError as exc:  # this case only (a secondary constraint in an
+                    # input): the other cases stand; BudgetExceeded is no InputError
+                    clock.done(0)
+                    nodes.append((full, total, _not_classified(exc), verdict_here,
+                                  comp.reasons))
+                    continue
                 clock.done(len(sub_comps) if depth + 1 < max_depth else 0)
                 notes.extend(sub_notes)
                 nodes.append((full, total, verdict, verdict_here, comp.reasons))
@@ -174,6 +181,13 @@ def parametric_classification(system, *, positive: Sequence = (),
         warnings=tuple(warnings), parameters=params, positive=tuple(declared),
         values=MappingProxyType(values), held=MappingProxyType(
             {p: original.parameter_values[p] for p in held}))
+
+
+def _not_classified(exc) -> Verdict:
+    """The verdict of a case that nhham cannot classify (status ``invalid``, the reason)."""
+    return Verdict(status="invalid", regular=None, rank_C=None, stages=0, free_multipliers=0,
+                   integrable=None, first_class=None, second_class=None,
+                   note=f"not classified in this case: {exc}")
 
 
 def classifying_parameters(system) -> tuple:

@@ -32,8 +32,9 @@ class Verdict:
     Attributes
     ----------
     status : {"determined", "underdetermined", "inconsistent", "invalid"}
-        ``"invalid"`` where nhham does not apply (the Lagrangian is singular, or the
-        system description fails validation); ``note`` says why.
+        ``"invalid"`` where nhham does not apply (the Lagrangian is singular, the
+        system description fails validation, or a secondary constraint depends on an
+        input); ``note`` says why.
     regular : bool or None
         C regular on M_1.
     rank_C : int or None

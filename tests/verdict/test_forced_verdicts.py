@@ -37,3 +37,23 @@ def test_every_case_keeps_the_force_and_no_case_splits_an_input():
     assert stages[("b - 1",)] == 2
     assert stages[("b - 1", "k")] == 3
     assert all("u" not in key for conds in stages for key in conds)
+
+
+def test_a_case_whose_secondary_constraint_holds_an_input_is_not_classified_alone():
+    """C = 1 - b^2 by hand (W = diag(1, 1, -1), mu = (0, 1, b)); at b = +-1 the tangency
+    condition reads q2'' + b q3'' = q1 + u (the multiplier drops out): a secondary
+    constraint in the input u, which nhham does not take. Those two cases are reported as
+    not classified, with the reason; the generic verdict stands (the run used to stop)."""
+    import nhham
+
+    system = nhham.System(["q1", "q2", "q3"], "(q1_dot**2 + q2_dot**2 - q3_dot**2)/2",
+                          ["q2_dot + b*q3_dot"], parameters={"b": 0.5},
+                          forces={"q2": "u + q1"}, inputs=["u"])
+    verdicts = nhham.parametric_classification(system)
+    assert verdicts.generic.status == "determined" and verdicts.generic.rank_C == 1
+    assert sorted(str(c.conditions[0]) for c in verdicts.cases) == ["b + 1", "b - 1"]
+    for case in verdicts.cases:
+        assert case.verdict.status == "invalid"
+        assert "not classified in this case" in case.verdict.note
+        assert "q1 + u depends on u" in case.verdict.note
+    assert verdicts.scene_case is None        # b = 0.5 is generic
