@@ -210,3 +210,21 @@ def test_an_interrupt_hands_nothing_over(held_compiler, monkeypatch):
     model = numeric_model(chaplygin_sleigh(), background=True)
     stop_background_builds()
     assert model.pending.state == "stopped" and started == []
+
+
+def test_a_build_stopped_while_queued_is_forgotten(held_compiler):
+    """A build still queued when the builds stop is gone from the worker's books: the same
+    model asked for again starts a new build instead of finding the stopped one (whose
+    withdrawal by a synchronous build crashed: it was in the books but not in the queue)."""
+    from nhham import models
+    from nhham.numerics.codegen import background
+
+    go, _ = held_compiler
+    running = numeric_model(chaplygin_sleigh(), background=True)
+    queued = numeric_model(models.rolling_disk(), background=True)  # behind the held one
+    assert queued.pending.state == "queued"
+    stop_background_builds()
+    assert running.pending.state == queued.pending.state == "stopped"
+    assert background._WORKER.builds == {}
+    go.touch()
+    assert numeric_model(models.rolling_disk()).backend == "c"

@@ -187,6 +187,8 @@ class _Worker:
         with self.lock:
             self.closing = True
             queued, self.queue = list(self.queue), collections.deque()
+            for build in queued:  # a later request of the same source starts afresh
+                self.builds.pop(build.sources["c"], None)
             process, thread = self.process, self.thread
             self.wake.notify_all()
         for build in queued:
