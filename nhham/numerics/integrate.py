@@ -259,8 +259,7 @@ class SimulationResult:
         if self.singularity is not None:
             lines.append(f"  where it stopped, {self.singularity.describe()}")
         lines += [f"  warning: {w}" for w in self.warnings]
-        lines.append("  final state: " + ", ".join(f"{k} = {v:.10g}"
-                                                  for k, v in self.final_state.items()))
+        lines.append(_final_state(self.final_state))
         return "\n".join(lines)
 
     def save(self, path) -> str:
@@ -689,3 +688,21 @@ def _initial_state(model, y0, project_initial, tol):
             f"onto M_1")
     outcome = model.project(y)
     return outcome.y, outcome
+
+
+def _final_state(state) -> str:
+    """``final state: x = ..., y = ...`` packed into lines of the terminal's width (COLUMNS
+    first), a value never split from its name."""
+    import shutil
+
+    room = max(60, shutil.get_terminal_size((100, 24)).columns)
+    head = "  final state: "
+    items = [f"{k} = {v:.10g}" for k, v in state.items()]
+    lines, line = [], head
+    for i, item in enumerate(items):
+        piece = item + ("," if i < len(items) - 1 else "")
+        if len(line) + len(piece) > room and line != head:
+            lines.append(line.rstrip())
+            line = " " * len(head)
+        line += piece + " "
+    return "\n".join(lines + [line.rstrip()])

@@ -33,12 +33,12 @@ def linearization_data(lin) -> dict:
 
 def linearize_text(title, scene, lin, swept, opened=None) -> str:
     """The text report of ``nhham linearize``."""
-    from nhham.render.text import table
+    from nhham.render.text import paragraph, table
     from nhham.system.expressions import to_text
 
     closed = opened is not None
-    lines = [f"{title}: linearisation about the [steady] motion"
-             + (", the loop closed by its [control] laws" if closed else "")]
+    lines = [paragraph(f"{title}: linearisation about the [steady] motion"
+                       + (", the loop closed by its [control] laws" if closed else ""))]
     rows = [
         ("method", lin.method),
         ("independent (chart)", ", ".join(lin.chart)),

@@ -3,7 +3,7 @@
 
 from __future__ import annotations
 
-from nhham.render.text import expr_text, table
+from nhham.render.text import expr_text, paragraph, table
 
 __all__ = ["parametric_data", "parametric_text"]
 
@@ -41,8 +41,8 @@ def parametric_text(title: str, pv, data: dict) -> str:
     """The text report of a ``ParametricVerdict`` (``data``: its :func:`parametric_data`)."""
     names = ", ".join(data["parameters"]) or "(none)"
     pos = ", ".join(data["positive"])
-    lines = [f"{title}: verdicts for every value of the parameters {names}"
-             + (f" (declared positive: {pos})" if pos else "")]
+    lines = [paragraph(f"{title}: verdicts for every value of the parameters {names}"
+                       + (f" (declared positive: {pos})" if pos else ""))]
     if data["held"]:
         lines.append("held at their values: " + ", ".join(
             f"{k} = {v:g}" for k, v in data["held"].items())

@@ -94,7 +94,8 @@ def _integrable_text(data: dict) -> str:
 
 
 def classify_text(title: str, data: dict) -> str:
-    lines = [f"{title}: n = {data['n']} coordinates, m = {data['m']} velocity constraints"]
+    lines = [paragraph(f"{title}: n = {data['n']} coordinates, "
+                       f"m = {data['m']} velocity constraints")]
     free = data["free_multipliers"]
     rows = [
         ("C regular on M_1", "yes" if data["regular"] else "no"),
@@ -501,7 +502,7 @@ def compare_text(title: str, report, dirac) -> str:
     """The reports' own lines, each wrapped (and elided) to the width of the terminal."""
     from nhham.render.layout import width, wrap
 
-    lines = [f"{title}: Lagrangian vs Hamiltonian"]
+    lines = [paragraph(f"{title}: Lagrangian vs Hamiltonian")]
     for line in [report.describe()] + ([] if dirac is None else [dirac.describe()]):
         for part in line.splitlines():
             hang = " " * (len(part) - len(part.lstrip()) + 4)

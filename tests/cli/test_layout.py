@@ -65,3 +65,21 @@ def test_a_line_breaks_between_tokens_never_inside_a_name_or_a_number():
 def test_a_name_longer_than_the_line_is_kept_whole():
     assert layout.wrap("a" * 80, 30) == ["a" * 80]
     assert layout.wrap("x*" + "b" * 40 + "*y", 30) == ["x*", "b" * 40, "*y"]
+
+
+def test_report_headings_and_the_final_state_keep_the_width(monkeypatch, capsys):
+    """At COLUMNS=80 the headings of classify and linearize and simulate's final state
+    wrap (the roller racer's: 95, 128 and 196 characters on one line), every value next to
+    its name; only the one-line warnings on stderr may be longer."""
+    from nhham.__main__ import run
+
+    monkeypatch.setenv("COLUMNS", "80")
+    scene = "examples/roller_racer.toml"
+    for argv in (["classify", scene], ["linearize", scene],
+                 ["simulate", scene, "--t-end", "0.5"]):
+        assert run(argv) == 0
+        out = capsys.readouterr().out
+        assert max(map(len, out.splitlines())) <= 80, argv
+    state = out[out.index("final state:"):]
+    names = re.findall(r"(\w+) = [-\d.e+]+", state)
+    assert names == ["x", "y", "theta", "phi", "x_dot", "y_dot", "theta_dot", "phi_dot"]
