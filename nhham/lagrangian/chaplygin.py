@@ -103,6 +103,24 @@ class ChaplyginReduction:
         """s' = -A r', shape (m, 1)."""
         return -self.connection * sp.Matrix(self.shape_velocities)
 
+    @property
+    def lift(self) -> dict:
+        """The symmetry velocities on M_1, s' = -A r' (a map of symbols)."""
+        velocity = dict(zip(self.system.coordinates, self.system.velocities))
+        return dict(zip([velocity[s] for s in self.symmetry], self.reconstruction))
+
+    @property
+    def stages(self) -> tuple:
+        return (self,)
+
+    def stage_dict(self) -> dict:
+        """This step alone: the symmetry it reduced (the JSON ``stages`` entry)."""
+        return {"shape_coordinates": [to_text(r) for r in self.shape],
+                "reduced_coordinates": [to_text(s) for s in self.symmetry],
+                "by": "symmetry", "level": {},
+                "connection": [[to_text(e) for e in self.connection.row(i)]
+                               for i in range(self.connection.rows)]}
+
     def to_dict(self) -> dict:
         return {
             "shape_coordinates": [to_text(r) for r in self.shape],
@@ -123,6 +141,8 @@ class ChaplyginReduction:
                                     "rate": to_text(r)} for c, p, r in self.momentum_equations],
             "check": {"agrees": bool(self.check.value), "method": self.check.method,
                       "detail": self.check.detail},
+            "level": {},
+            "stages": [self.stage_dict()],
         }
 
 
@@ -296,7 +316,7 @@ def solve_for(mu, cols, coordinates) -> tuple | None:
     return key, A, a
 
 
-def momentum_equations(shape, rdot, L_c, right, constraints=None) -> tuple:
+def momentum_equations(shape, rdot, L_c, right, constraints=None, tidy=None) -> tuple:
     """(r^c, dL_c/dr'^c, its rate) for the shape coordinates that L_c, the right-hand side
     G r' + Q and the constraints left on the shape space do not contain, and that no such
     constraint moves (their column is zero): d/dt dL_c/dr'^c = (G r' + Q)_c.
@@ -306,17 +326,17 @@ def momentum_equations(shape, rdot, L_c, right, constraints=None) -> tuple:
     >>> x, y, xd, yd = sp.symbols("x y x_dot y_dot")
     >>> momentum_equations((x, y), (xd, yd), ((1 + y**2)*xd**2 + yd**2)/2,
     ...                    sp.Matrix([y*xd*yd, -y*xd**2]))
-    ((x, x_dot*(y**2 + 1), x_dot*y*y_dot),)
+    ((x, x_dot*y**2 + x_dot, x_dot*y*y_dot),)
     """
     a = constraints if constraints is not None else sp.zeros(0, len(shape))
     used = set(L_c.free_symbols) | set().union(*(e.free_symbols for e in right))
     used |= set().union(*(e.free_symbols for e in a))
-    return tuple((r, _tidy(sp.diff(L_c, w)), right[i]) for i, (r, w) in
+    return tuple((r, (tidy or _tidy)(sp.diff(L_c, w)), right[i]) for i, (r, w) in
                  enumerate(zip(shape, rdot))
                  if r not in used and all(a[j, i] == 0 for j in range(a.rows)))
 
 
-def _reduced_accelerations(L_c, shape, rdot, right, constraints=None) -> sp.Matrix:
+def _reduced_accelerations(L_c, shape, rdot, right, constraints=None, tidy=None) -> sp.Matrix:
     """r'' from d/dt dL_c/dr' - dL_c/dr = right (+ a^T lambda with a r' = 0 when
     constraints a remain on the shape space: the saddle-point system in r'', lambda)."""
     k = len(shape)
@@ -327,14 +347,14 @@ def _reduced_accelerations(L_c, shape, rdot, right, constraints=None) -> sp.Matr
         mixed = sum((sp.diff(p, s) * w for s, w in zip(shape, rdot)), sp.S.Zero)
         rhs.append(sp.diff(L_c, r) - mixed + right[i])
     if constraints is None or constraints.rows == 0:
-        return W.LUsolve(sp.Matrix(rhs)).applyfunc(_tidy)
+        return W.LUsolve(sp.Matrix(rhs)).applyfunc(tidy or _tidy)
     a, m2 = constraints, constraints.rows
     # a r'' + (d/dt a) r' = 0
     drift = [-sum((sp.diff(a[i, j], r) * w * rdot[j] for j in range(k)
                    for r, w in zip(shape, rdot)), sp.S.Zero) for i in range(m2)]
     K = sp.zeros(k + m2, k + m2)
     K[:k, :k], K[:k, k:], K[k:, :k] = W, a.T, a
-    return K.LUsolve(sp.Matrix(rhs + drift))[:k, :].applyfunc(_tidy)
+    return K.LUsolve(sp.Matrix(rhs + drift))[:k, :].applyfunc(tidy or _tidy)
 
 
 def _reduced_forces(system, shape, symmetry, A, on_m1) -> sp.Matrix:
