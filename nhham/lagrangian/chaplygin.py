@@ -194,8 +194,8 @@ def chaplygin_reduction(system, symmetry=None) -> ChaplyginReduction:
     curvature = curvatures(A, shape)
     gyro = (gyroscopic_form(J, curvature) * rdot).applyfunc(_tidy)
     forces = _reduced_forces(system, shape, symmetry, A, on_m1)
-    acc = _reduced_accelerations(L_c, shape, rdot, gyro + forces, rest)
-    check = _check(system, shape, on_m1, acc)
+    acc = reduced_accelerations(L_c, shape, rdot, gyro + forces, rest)
+    check = check_reduction(system, shape, on_m1, acc)
     return ChaplyginReduction(system, shape, tuple(symmetry), A, L_c, J, curvature, gyro,
                               acc, check, forces, rest,
                               momentum_equations(shape, rdot, L_c, gyro + forces, rest))
@@ -336,9 +336,17 @@ def momentum_equations(shape, rdot, L_c, right, constraints=None, tidy=None) -> 
                  if r not in used and all(a[j, i] == 0 for j in range(a.rows)))
 
 
-def _reduced_accelerations(L_c, shape, rdot, right, constraints=None, tidy=None) -> sp.Matrix:
+def reduced_accelerations(L_c, shape, rdot, right, constraints=None, tidy=None) -> sp.Matrix:
     """r'' from d/dt dL_c/dr' - dL_c/dr = right (+ a^T lambda with a r' = 0 when
-    constraints a remain on the shape space: the saddle-point system in r'', lambda)."""
+    constraints a remain on the shape space: the saddle-point system in r'', lambda).
+
+    Examples
+    --------
+    >>> y, xd, yd = sp.symbols("y x_dot y_dot")
+    >>> reduced_accelerations(((1 + y**2)*xd**2 + yd**2)/2, (sp.Symbol("x"), y), (xd, yd),
+    ...                       [y*xd*yd, -y*xd**2]).T
+    Matrix([[-x_dot*y*y_dot/(y**2 + 1), 0]])
+    """
     k = len(shape)
     W = sp.Matrix(k, k, lambda i, j: sp.diff(L_c, rdot[i], rdot[j]))
     rhs = []
@@ -386,10 +394,22 @@ SYMBOLIC_CHECK_N = 3
 _POINTS, _DIGITS = 4, 30
 
 
-def _check(system, shape, on_m1, acc) -> Decision:
+def check_reduction(system, shape, on_m1, acc) -> Decision:
     """The reduced r'' against the r'' of P(xi_L) on M_1: exactly (the closed form of
     P(xi_L)) up to n = SYMBOLIC_CHECK_N, else at seeded points of M_1 in 30 digits (the
-    saddle-point system W a + mu^T lambda = F, mu a = -drift solved there)."""
+    saddle-point system W a + mu^T lambda = F, mu a = -drift solved there).
+
+    Examples
+    --------
+    >>> from nhham import System
+    >>> particle = System(["x", "y", "z"], "(x_dot**2 + y_dot**2 + z_dot**2)/2",
+    ...                   ["z_dot - y*x_dot"])
+    >>> x, y, z = particle.coordinates
+    >>> xd, yd, zd = particle.velocities
+    >>> check_reduction(particle, (x, y), {zd: y*xd},
+    ...                 sp.Matrix([-xd*y*yd/(1 + y**2), 0])).value
+    True
+    """
     n = system.n
     index = {c: i for i, c in enumerate(system.coordinates)}
     if n <= SYMBOLIC_CHECK_N:

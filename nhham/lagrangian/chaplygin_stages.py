@@ -41,7 +41,8 @@ import sympy as sp
 from nhham.errors import InputError
 from nhham.lagrangian.algebra import cancel, normal_form
 from nhham.lagrangian.chaplygin import (
-    TIDY_OPS, _check, _reduced_accelerations, curvatures, gyroscopic_form, momentum_equations,
+    TIDY_OPS, check_reduction, curvatures, gyroscopic_form, momentum_equations,
+    reduced_accelerations,
     solve_for,
 )
 from nhham.lagrangian.decision import Decision
@@ -264,11 +265,11 @@ def reduce_again(reduction, coordinates, *, level=None) -> ChaplyginStage:
     if level is not None:
         rest = a  # none: _level_rows refuses constraints left on the shape space
     gyro = (restricted + (gyroscopic_form(J2, B2) if B2 else sp.zeros(len(shape)))) * rdot2
-    acc = _reduced_accelerations(L2, shape, rdot2, gyro + forces, rest if rest.rows else None,
+    acc = reduced_accelerations(L2, shape, rdot2, gyro + forces, rest if rest.rows else None,
                                  tidy=_tidy_small)
     lift_here = dict(zip(cdot, -A2 * rdot2))
     lift = {**{w: e.xreplace(lift_here) for w, e in reduction.lift.items()}, **lift_here}
-    check = _check(reduction.system, shape, lift, acc)
+    check = check_reduction(reduction.system, shape, lift, acc)
     levels = tuple((x, sp.S.Zero) for x in c) if level is not None else ()
     return ChaplyginStage(reduction, shape, tuple(c), A2, L2, J2, B2, restricted, forces,
                           rest, acc, check, levels,

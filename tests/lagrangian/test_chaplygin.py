@@ -130,7 +130,7 @@ def test_forces_reduce_with_the_virtual_displacements_of_the_symmetry():
 
     old = red.shape_forces.copy()
     old[0], old[1] = sleigh.forces[0], 0
-    acc = module._reduced_accelerations(red.lagrangian, red.shape,
+    acc = module.reduced_accelerations(red.lagrangian, red.shape,
                                         red.shape_velocities, red.gyroscopic + old)
     on_m1 = dict(zip([s["y_dot"]], red.reconstruction))
     assert not module._check_at_points(sleigh, red.shape, on_m1, acc).value
