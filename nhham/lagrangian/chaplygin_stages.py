@@ -262,8 +262,8 @@ def reduce_again(reduction, coordinates, *, level=None) -> ChaplyginStage:
     B2 = curvatures(A2, shape)
     restricted = (T.T * G.xreplace(on) * T).applyfunc(_tidy)
     forces = (T.T * Q.xreplace(on)).applyfunc(_tidy)
-    if level is not None:
-        rest = a  # none: _level_rows refuses constraints left on the shape space
+    if level is not None:  # none left: _level_rows refuses constraints on the shape space
+        rest = sp.zeros(0, len(shape))
     gyro = (restricted + (gyroscopic_form(J2, B2) if B2 else sp.zeros(len(shape)))) * rdot2
     acc = reduced_accelerations(L2, shape, rdot2, gyro + forces, rest if rest.rows else None,
                                  tidy=_tidy_small)

@@ -87,6 +87,9 @@ def test_the_chaplygin_ball_on_the_zero_level_has_borisov_mamaev_s_multiplier(sp
     assert [str(s) for s in stage.symmetry] == ["x", "y", "yaw"]
     assert stage.momenta == sp.Matrix([0]) and stage.level == ((stage.eliminated[0], 0),)
     assert stage.check.value and stage.check.method == "sampled"
+    data = stage.to_dict()
+    assert data["level"] == {"yaw": "0"} and data["shape_constraints"] == []
+    assert [s["by"] for s in data["stages"]] == ["symmetry", "momentum level"]
     assert_factor(stage, literature(stage, rubber=False))
 
 
