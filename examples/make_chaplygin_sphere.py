@@ -68,6 +68,20 @@ HEADER = """\
 # Energy is conserved (L = T, the constraints are linear). Reference for the model:
 #   S. A. Chaplygin, "On a ball's rolling on a horizontal plane" (1903); A. V. Borisov,
 #   I. S. Mamaev, "Rolling of a rigid body on a plane and sphere", Regul. Chaotic Dyn. 7 (2002).
+# What `nhham reduce` finds: symmetry x, y (the contact point), shape yaw, pitch, roll; the
+#   reduced field lifted back is P(xi_L) at 30-digit points (6 s); the yaw momentum
+#   equation has rate 0: p_yaw, the vertical angular momentum about the contact point
+#   (M, gamma), is conserved.
+# Second step: `nhham reduce --symmetry x,y --level yaw=0` reduces yaw on the level
+#   (M, gamma) = 0 (the results hold on that level only): shape pitch, roll, J2 = p_yaw = 0,
+#   gyroscopic form T^T G T; the lifted field is P(xi_L) at points of M_1 on the level.
+#   There theta ^ Omega_nh = -d Omega_nh solves to theta = d ln (1 - D (gamma, A gamma))^(-1/2)
+#   (D = m r^2, A = (I + D E)^-1, gamma the vertical in the body frame), Borisov and
+#   Mamaev's multiplier (Math. Notes 70 (2001)), decided exactly in
+#   tests/lagrangian/test_chaplygin_stages.py. `nhham hamiltonize` itself does not reach
+#   that verdict yet: its general symbolic route runs out of the default budget (600 s,
+#   exit 3) in the step theta ^ Omega_nh = -d Omega_nh (with the parameters' exact values
+#   put in it ends after 4 min with "theta is not closed", its d theta not recognised as 0).
 """
 
 

@@ -34,6 +34,13 @@ def add_arguments(p) -> None:
     """reduce, hamiltonize: the symmetry coordinates."""
     p.add_argument("--symmetry", default=None, metavar="S1,S2",
                    help="the symmetry coordinates s (default: found among the cyclic ones)")
+    p.add_argument("--then", default=None, metavar="C1,C2",
+                   help="a second step: reduce these shape coordinates of the first step "
+                        "by the constraints left on the shape space (e.g. the rubber ball's "
+                        "no twist), or by their momentum level with --level")
+    p.add_argument("--level", default=None, metavar="C=0",
+                   help="reduce C on the level p_C = 0 of its conserved momentum (the "
+                        "results then hold on that level only); implies --then C")
     p.add_argument("--latex", action="store_true",
                    help="print LaTeX instead of text")
 
@@ -43,6 +50,25 @@ def _symmetry(args):
                                                if s.strip()]
 
 
+def _names(text):
+    return None if text is None else [s.strip() for s in text.split(",") if s.strip()]
+
+
+def _level(args):
+    """--level C=V,... as {C: V}; a malformed item exits 2 naming the option."""
+    from nhham.errors import InputError
+
+    if args.level is None:
+        return None
+    found = {}
+    for item in _names(args.level) or [""]:
+        name, sep, value = item.partition("=")
+        if not sep or not name.strip() or not value.strip():
+            raise InputError(f"--level: expected C=VALUE, got {item!r}", key="level")
+        found[name.strip()] = value.strip()
+    return found
+
+
 def _run(args, steps, journey):
     from nhham.cli.envelope import CommandOutput, scene_info
     from nhham.cli.loading import load_for
@@ -50,7 +76,8 @@ def _run(args, steps, journey):
     with steps.step(f"load scene {args.scene}"):
         scene = load_for(args, check_initial=False)
     args.loaded_scene = scene  # the envelope of a later failure names the scene
-    answer = journey(scene, symmetry=_symmetry(args), steps=steps)
+    answer = journey(scene, symmetry=_symmetry(args), then=_names(args.then),
+                     level=_level(args), steps=steps)
     text = answer.latex_text if args.latex else answer.render
     return CommandOutput(result=answer.to_dict(), text=text, scene=scene_info(scene),
                          warnings=list(answer.warnings), failure=answer.failure)

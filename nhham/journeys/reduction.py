@@ -13,10 +13,54 @@ import functools
 
 from nhham.journeys.answer import Answer, as_scene, quiet_steps
 
-__all__ = ["reduce", "hamiltonize"]
+__all__ = ["reduce", "hamiltonize", "reduction_of"]
 
 
-def reduce(scene, *, symmetry=None, steps=None) -> Answer:
+def reduction_of(system, *, symmetry=None, then=None, level=None, steps=None):
+    """The first Chaplygin step, and a second one when ``then`` or ``level`` is given.
+
+    Parameters
+    ----------
+    system : System
+    symmetry : sequence of str, optional
+        The first step's symmetry coordinates.
+    then : sequence of str, optional
+        Shape coordinates to reduce next, by the constraints left on the shape space, or by
+        their momentum level when ``level`` names them.
+    level : mapping of str to str or number, optional
+        Momentum levels p_c = value (only 0); its names are reduced when ``then`` is None.
+    steps : Steps, optional
+
+    Returns
+    -------
+    ChaplyginReduction or ChaplyginStage
+
+    Examples
+    --------
+    >>> from nhham import System
+    >>> red = reduction_of(System(["x", "y", "z"], "(x_dot**2 + y_dot**2 + z_dot**2)/2",
+    ...                           ["z_dot - y*x_dot", "x_dot - y_dot"]), symmetry=["z"],
+    ...                    then=["x"])
+    >>> red.shape, red.symmetry
+    ((y,), (z, x))
+    """
+    from nhham.lagrangian.chaplygin import chaplygin_reduction
+    from nhham.lagrangian.chaplygin_stages import reduce_again
+
+    steps = quiet_steps(steps)
+    with steps.step("Chaplygin reduction, and its check against P(xi_L)"):
+        red = chaplygin_reduction(system, symmetry)
+    if then is None and level:
+        then = list(level)
+    if then:
+        what = f"on the level {', '.join(f'p_{c} = {v}' for c, v in level.items())}" \
+            if level else "by the constraints left on the shape space"
+        with steps.step(f"second step: {', '.join(then)} {what}, and its check"):
+            red = reduce_again(red, list(then), level=level)
+    return red
+
+
+def reduce(scene, *, symmetry=None, then=None, level=None, steps=None) -> Answer:
     """The Chaplygin reduction of a scene (``nhham reduce``).
 
     Parameters
@@ -24,6 +68,8 @@ def reduce(scene, *, symmetry=None, steps=None) -> Answer:
     scene : Scene, System or str
     symmetry : sequence of str, optional
         The symmetry coordinates (default: found among the cyclic ones).
+    then, level : optional
+        A second step (:func:`reduction_of`): its coordinates, and their momentum levels.
     steps : Steps, optional
 
     Returns
@@ -31,7 +77,9 @@ def reduce(scene, *, symmetry=None, steps=None) -> Answer:
     Answer
         ``data``: ``shape_coordinates``, ``symmetry_coordinates``, ``connection`` (A with
         s' = -A r'), ``reduced_lagrangian``, ``momenta`` (J), ``curvature`` (B^a),
-        ``gyroscopic`` (J B r'), ``accelerations``, ``reconstruction``, ``check``;
+        ``gyroscopic`` (J B r'), ``accelerations``, ``reconstruction``, ``check``,
+        ``forces``, ``shape_constraints``, ``level`` and ``stages`` (every step; the other
+        keys describe the last);
         ``failure`` when the lifted field is not P(xi_L) (a defect to report).
 
     Examples
@@ -42,13 +90,10 @@ def reduce(scene, *, symmetry=None, steps=None) -> Answer:
     >>> answer.data["symmetry_coordinates"], answer.data["check"]["agrees"]
     (['z'], True)
     """
-    from nhham.lagrangian.chaplygin import chaplygin_reduction
     from nhham.render.reduction import reduce_latex, reduce_text
 
     scene = as_scene(scene)
-    steps = quiet_steps(steps)
-    with steps.step("Chaplygin reduction, and its check against P(xi_L)"):
-        red = chaplygin_reduction(scene.system, symmetry)
+    red = reduction_of(scene.system, symmetry=symmetry, then=then, level=level, steps=steps)
     data = red.to_dict()
     failure = None if red.check.value else (
         "the reduced field lifted back differs from P(xi_L); please report this scene as a bug")
@@ -58,7 +103,7 @@ def reduce(scene, *, symmetry=None, steps=None) -> Answer:
                   payload={"reduction": red}, system=scene.system)
 
 
-def hamiltonize(scene, *, symmetry=None, steps=None) -> Answer:
+def hamiltonize(scene, *, symmetry=None, then=None, level=None, steps=None) -> Answer:
     """Whether a Chaplygin scene is Hamiltonian after a change of time
     (``nhham hamiltonize``).
 
@@ -66,6 +111,9 @@ def hamiltonize(scene, *, symmetry=None, steps=None) -> Answer:
     ----------
     scene : Scene, System or str
     symmetry : sequence of str, optional
+    then, level : optional
+        A second step (:func:`reduction_of`); on a momentum level the answer is about the
+        motion on that level only.
     steps : Steps, optional
 
     Returns
@@ -75,7 +123,7 @@ def hamiltonize(scene, *, symmetry=None, steps=None) -> Answer:
         ``invariant_measure_density`` (f^(k-1)), ``divergence``, ``theta``,
         ``jacobiator_before``, ``jacobiator_after``, ``obstruction``,
         ``shape_coordinates``, ``symmetry_coordinates``, ``variables``, ``hamiltonian``,
-        and the reduction's ``reduction_check``.
+        the reduction's ``reduction_check``, ``level`` and ``stages``.
 
     Examples
     --------
@@ -85,18 +133,24 @@ def hamiltonize(scene, *, symmetry=None, steps=None) -> Answer:
     >>> answer.data["hamiltonizable"], answer.data["conformal_factor"]
     (True, '1/sqrt(y**2 + 1)')
     """
+    from nhham.errors import InputError
     from nhham.hamiltonian.hamiltonization import hamiltonize as find
-    from nhham.lagrangian.chaplygin import chaplygin_reduction
     from nhham.render.reduction import hamiltonize_latex, hamiltonize_text
 
     scene = as_scene(scene)
     steps = quiet_steps(steps)
-    with steps.step("Chaplygin reduction, and its check against P(xi_L)"):
-        red = chaplygin_reduction(scene.system, symmetry)
+    red = reduction_of(scene.system, symmetry=symmetry, then=then, level=level, steps=steps)
+    if red.constraints.rows:
+        # Omega_nh on T*S has no room for them: the reduced motion is not the one of L_c
+        raise InputError("hamiltonize: constraints are left on the shape space ("
+                         + ", ".join(red.to_dict()["shape_constraints"]) + " = 0); reduce "
+                         "by them with then (--then)", key="then")
     with steps.step("theta ^ Omega_nh = -d Omega_nh, the factor and the Jacobiators"):
         found = find(red, part=steps.part)
     data = found.to_dict()
-    data["reduction_check"] = red.to_dict()["check"]
+    reduced = red.to_dict()
+    data["reduction_check"] = reduced["check"]
+    data["level"], data["stages"] = reduced["level"], reduced["stages"]
     warnings = () if found.divergence in (None, 0) else (
         f"div(f^(k-1) X) = {found.divergence} is not zero: the measure is not invariant "
         f"(please report this scene)",)

@@ -13,7 +13,8 @@ J_a = dL/ds'^a at s' = -A r' and the curvature B^a_{ab} = d_a A^a_b - d_b A^a_a,
 
     d/dt dL_c/dr'^a - dL_c/dr^a = J_a B^a_{ab} r'^b,
 
-and s is reconstructed by s' = -A r'. (By hand: the variations obey ds = -A dr, so the
+and s is reconstructed by s' = -A r'. Forces Q enter as Q_r - A^T Q_s at s' = -A r' (the
+virtual displacements obey ds = -A dr). (By hand: the variations obey ds = -A dr, so the
 Lagrange–d'Alembert equation is [EL(L)]_r - A^T d/dt J = 0; writing it in L_c the terms
 d/dt J cancel and the curvature is what is left.) The reduced accelerations lifted back
 must equal those of P(xi_L) on M_1: :func:`chaplygin_reduction` checks that exactly.
@@ -53,7 +54,8 @@ class ChaplyginReduction:
     curvature : tuple of sympy.Matrix, each (k, k)
         B^a_{ab} = d A^a_b/d r^a - d A^a_a/d r^b, one per symmetry coordinate.
     gyroscopic : sympy.Matrix, shape (k, 1)
-        J_a B^a_{ab} r'^b, the right-hand side of the reduced equations.
+        J_a B^a_{ab} r'^b, the right-hand side of the reduced equations (with the
+        forces below).
     accelerations : sympy.Matrix, shape (k, 1)
         r'' from the reduced equations.
     momentum_equations : tuple of (sympy.Symbol, sympy.Expr, sympy.Expr)
@@ -63,6 +65,12 @@ class ChaplyginReduction:
         Marsden & Murray 1996); dp_c/dt = 0 makes p_c a constant of the motion.
     check : Decision
         The reduced r'' against P(xi_L)'s on M_1 (s' = -A r'), decided exactly.
+    shape_forces : sympy.Matrix, shape (k, 1)
+        The forces on r, Q_r - A^T Q_s at s' = -A r' (virtual displacements ds = -A dr).
+    constraints : sympy.Matrix, shape (m - m', k)
+        a(r) with a r' = 0: the constraints left on the shape space when fewer symmetry
+        coordinates than constraints were named (the reduced equations then carry
+        a^T lambda; :func:`nhham.lagrangian.chaplygin_stages.reduce_again` takes them).
     """
 
     system: Any
@@ -75,6 +83,8 @@ class ChaplyginReduction:
     gyroscopic: sp.Matrix
     accelerations: sp.Matrix
     check: Decision
+    shape_forces: sp.Matrix
+    constraints: sp.Matrix
     momentum_equations: tuple = ()
 
     @property
@@ -86,14 +96,30 @@ class ChaplyginReduction:
     def gyroscopic_form(self) -> sp.Matrix:
         """G_{ab} = J_a B^a_{ab}, shape (k, k), antisymmetric: the reduced equations' right-hand
         side is G r' and the compressed 2-form's dr^a ^ dr^b part is -1/2 G_{ab}."""
-        k, J = len(self.shape), self.momenta
-        return sp.Matrix(k, k, lambda i, j: sum((J[a] * B[i, j] for a, B in
-                                                  enumerate(self.curvature)), sp.S.Zero))
+        return gyroscopic_form(self.momenta, self.curvature)
 
     @property
     def reconstruction(self) -> sp.Matrix:
         """s' = -A r', shape (m, 1)."""
         return -self.connection * sp.Matrix(self.shape_velocities)
+
+    @property
+    def lift(self) -> dict:
+        """The symmetry velocities on M_1, s' = -A r' (a map of symbols)."""
+        velocity = dict(zip(self.system.coordinates, self.system.velocities))
+        return dict(zip([velocity[s] for s in self.symmetry], self.reconstruction))
+
+    @property
+    def stages(self) -> tuple:
+        return (self,)
+
+    def stage_dict(self) -> dict:
+        """This step alone: the symmetry it reduced (the JSON ``stages`` entry)."""
+        return {"shape_coordinates": [to_text(r) for r in self.shape],
+                "reduced_coordinates": [to_text(s) for s in self.symmetry],
+                "by": "symmetry", "level": {},
+                "connection": [[to_text(e) for e in self.connection.row(i)]
+                               for i in range(self.connection.rows)]}
 
     def to_dict(self) -> dict:
         return {
@@ -108,10 +134,15 @@ class ChaplyginReduction:
             "gyroscopic": [to_text(e) for e in self.gyroscopic],
             "accelerations": [to_text(e) for e in self.accelerations],
             "reconstruction": [to_text(e) for e in self.reconstruction],
+            "forces": [to_text(e) for e in self.shape_forces],
+            "shape_constraints": [to_text(e) for e in self.constraints * sp.Matrix(
+                self.shape_velocities)],
             "momentum_equations": [{"coordinate": to_text(c), "momentum": to_text(p),
                                     "rate": to_text(r)} for c, p, r in self.momentum_equations],
             "check": {"agrees": bool(self.check.value), "method": self.check.method,
                       "detail": self.check.detail},
+            "level": {},
+            "stages": [self.stage_dict()],
         }
 
 
@@ -151,7 +182,7 @@ def chaplygin_reduction(system, symmetry=None) -> ChaplyginReduction:
     [ 0, 1],
     [-1, 0]]), Matrix([[-x_dot*y*y_dot/(y**2 + 1), 0]]), True)
     """
-    symmetry, A = _split(system, symmetry)
+    symmetry, A, rest = _split(system, symmetry)
     q, v = list(system.coordinates), list(system.velocities)
     shape = tuple(c for c in q if c not in symmetry)
     vel = dict(zip(q, v))
@@ -160,18 +191,46 @@ def chaplygin_reduction(system, symmetry=None) -> ChaplyginReduction:
     on_m1 = dict(zip(sdot, -A * rdot))
     L_c = _tidy(system.lagrangian.xreplace(on_m1))
     J = sp.Matrix([_tidy(sp.diff(system.lagrangian, w).xreplace(on_m1)) for w in sdot])
-    k = len(shape)
-    curvature = tuple(
-        sp.Matrix(k, k, lambda i, j: cancel(sp.diff(A[a, j], shape[i])
-                                            - sp.diff(A[a, i], shape[j])))
-        for a in range(len(symmetry)))
-    gyro = sp.Matrix([_tidy(sum((J[a] * curvature[a][i, j] * rdot[j]
-                                  for a in range(len(symmetry)) for j in range(k)),
-                                 sp.S.Zero)) for i in range(k)])
-    acc = _reduced_accelerations(system, shape, L_c, rdot, gyro)
-    check = _check(system, shape, on_m1, acc)
+    curvature = curvatures(A, shape)
+    gyro = (gyroscopic_form(J, curvature) * rdot).applyfunc(_tidy)
+    forces = _reduced_forces(system, shape, symmetry, A, on_m1)
+    acc = reduced_accelerations(L_c, shape, rdot, gyro + forces, rest)
+    check = check_reduction(system, shape, on_m1, acc)
     return ChaplyginReduction(system, shape, tuple(symmetry), A, L_c, J, curvature, gyro,
-                              acc, check, _momentum_equations(system, shape, L_c, rdot, gyro))
+                              acc, check, forces, rest,
+                              momentum_equations(shape, rdot, L_c, gyro + forces, rest))
+
+
+def curvatures(A, shape) -> tuple:
+    """B^a_{ab} = d A^a_b/d r^a - d A^a_a/d r^b, one (k, k) matrix per row of A.
+
+    Examples
+    --------
+    >>> x, y = sp.symbols("x y")
+    >>> curvatures(sp.Matrix([[-y, 0]]), (x, y))
+    (Matrix([
+    [ 0, 1],
+    [-1, 0]]),)
+    """
+    k = len(shape)
+    return tuple(sp.Matrix(k, k, lambda i, j: cancel(sp.diff(A[a, j], shape[i])
+                                                     - sp.diff(A[a, i], shape[j])))
+                 for a in range(A.rows))
+
+
+def gyroscopic_form(J, curvature) -> sp.Matrix:
+    """J_a B^a, shape (k, k).
+
+    Examples
+    --------
+    >>> gyroscopic_form(sp.Matrix([2]), (sp.Matrix([[0, 1], [-1, 0]]),))
+    Matrix([
+    [ 0, 2],
+    [-2, 0]])
+    """
+    k = curvature[0].rows if curvature else 0
+    return sp.Matrix(k, k, lambda i, j: sum((J[a] * B[i, j] for a, B in enumerate(curvature)),
+                                            sp.S.Zero))
 
 
 def _split(system, symmetry=None) -> tuple:
@@ -192,17 +251,18 @@ def _split(system, symmetry=None) -> tuple:
     for e in list(system.phi) + (list(system.generalized_forces) if system.has_forces else []):
         used |= sp.sympify(e).free_symbols
     cyclic = [c for c in system.coordinates if c not in used]
-    if len(cyclic) < m:
+    if symmetry is None and len(cyclic) < m:
         refuse(f"{m} constraint(s) need as many cyclic coordinates (absent from L, the "
                f"constraints and the forces); found {len(cyclic)}"
-               + (f" ({', '.join(map(str, cyclic))})" if cyclic else ""))
+               + (f" ({', '.join(map(str, cyclic))}; name fewer with symmetry to keep the "
+                  f"other constraints on the shape space)" if cyclic else ""))
     mu = system.mu
     index = {c: i for i, c in enumerate(system.coordinates)}
     if symmetry is not None:
         named = {str(c): c for c in system.coordinates}
         unknown = [s for s in symmetry if s not in named]
-        if unknown or len(symmetry) != m:
-            refuse(f"symmetry: {m} coordinate(s) of the system expected, got "
+        if unknown or not 0 < len(symmetry) <= m:
+            refuse(f"symmetry: 1 to {m} coordinate(s) of the system expected, got "
                    f"{', '.join(symmetry) or 'none'}")
         not_cyclic = [s for s in symmetry if named[s] not in cyclic]
         if not_cyclic:
@@ -213,46 +273,108 @@ def _split(system, symmetry=None) -> tuple:
         groups = list(itertools.combinations(cyclic, m))
     found = []
     for group in groups:
-        cols = [index[c] for c in group]
-        mu_s = mu.extract(list(range(m)), cols)
-        det = cancel(mu_s.det())
-        if det != 0:
-            rest = [i for i in range(system.n) if i not in cols]
-            A = (mu_s.inv() * mu.extract(list(range(m)), rest)).applyfunc(cancel)
-            # prefer s' solved everywhere (det mu_s constant), then the simplest A
-            found.append(((bool(det.free_symbols & set(system.coordinates)),
-                           sp.count_ops(A)), group, A))
+        solved = solve_for(mu, [index[c] for c in group], system.coordinates)
+        if solved is not None:
+            found.append((solved[0], group, solved[1], solved[2]))
     if not found:
         refuse("the constraints do not solve for the velocities of "
                + ("the symmetry coordinates given" if symmetry is not None else
                   f"any {m} of the cyclic coordinates {', '.join(map(str, cyclic))}"))
-    _, group, A = min(found, key=lambda f: f[0])
-    return group, A
+    _, group, A, rest = min(found, key=lambda f: f[0])
+    return group, A, rest
 
 
-def _momentum_equations(system, shape, L_c, rdot, gyro) -> tuple:
-    """(r^c, dL_c/dr'^c, (J B r')_c) for the shape coordinates the reduced system does not
-    contain."""
-    used = set(L_c.free_symbols) | set().union(*(e.free_symbols for e in gyro))
-    if system.has_forces:
-        used |= set().union(*(sp.sympify(e).free_symbols for e in system.generalized_forces))
-    return tuple((r, _tidy(sp.diff(L_c, w)), g) for r, w, g in zip(shape, rdot, gyro)
-                 if r not in used)
+def solve_for(mu, cols, coordinates) -> tuple | None:
+    """(rank key, A, a) when m' = len(cols) rows of mu r' + mu_s s' = 0 solve for the
+    velocities of the columns cols (s' = -A r'), a: the other rows with s' eliminated,
+    a r' = 0 (constraints left on the shape space); None when no rows do.
+
+    Examples
+    --------
+    >>> x, y, z = sp.symbols("x y z")
+    >>> key, A, a = solve_for(sp.Matrix([[-y, 0, 1], [1, 1, 0]]), [2], (x, y, z))
+    >>> A, a
+    (Matrix([[-y, 0]]), Matrix([[1, 1]]))
+    """
+    m, n = mu.rows, mu.cols
+    rest_cols = [i for i in range(n) if i not in cols]
+    found = []
+    for rows in itertools.combinations(range(m), len(cols)):
+        mu_s = mu.extract(list(rows), cols)
+        det = cancel(mu_s.det())
+        if det != 0:
+            A = (mu_s.inv() * mu.extract(list(rows), rest_cols)).applyfunc(cancel)
+            # prefer s' solved everywhere (det mu_s constant), then the simplest A
+            found.append(((bool(det.free_symbols & set(coordinates)), sp.count_ops(A)),
+                          rows, A))
+    if not found:
+        return None
+    key, rows, A = min(found, key=lambda f: f[0])
+    others = [i for i in range(m) if i not in rows]
+    a = (mu.extract(others, rest_cols) - mu.extract(others, cols) * A).applyfunc(cancel) \
+        if others else sp.zeros(0, len(rest_cols))
+    return key, A, a
 
 
-def _reduced_accelerations(system, shape, L_c, rdot, gyro) -> sp.Matrix:
-    """r'' from d/dt dL_c/dr' - dL_c/dr = J B r' (+ the forces on r)."""
+def momentum_equations(shape, rdot, L_c, right, constraints=None, tidy=None) -> tuple:
+    """(r^c, dL_c/dr'^c, its rate) for the shape coordinates that L_c, the right-hand side
+    G r' + Q and the constraints left on the shape space do not contain, and that no such
+    constraint moves (their column is zero): d/dt dL_c/dr'^c = (G r' + Q)_c.
+
+    Examples
+    --------
+    >>> x, y, xd, yd = sp.symbols("x y x_dot y_dot")
+    >>> momentum_equations((x, y), (xd, yd), ((1 + y**2)*xd**2 + yd**2)/2,
+    ...                    sp.Matrix([y*xd*yd, -y*xd**2]))
+    ((x, x_dot*y**2 + x_dot, x_dot*y*y_dot),)
+    """
+    a = constraints if constraints is not None else sp.zeros(0, len(shape))
+    used = set(L_c.free_symbols) | set().union(*(e.free_symbols for e in right))
+    used |= set().union(*(e.free_symbols for e in a))
+    return tuple((r, (tidy or _tidy)(sp.diff(L_c, w)), right[i]) for i, (r, w) in
+                 enumerate(zip(shape, rdot))
+                 if r not in used and all(a[j, i] == 0 for j in range(a.rows)))
+
+
+def reduced_accelerations(L_c, shape, rdot, right, constraints=None, tidy=None) -> sp.Matrix:
+    """r'' from d/dt dL_c/dr' - dL_c/dr = right (+ a^T lambda with a r' = 0 when
+    constraints a remain on the shape space: the saddle-point system in r'', lambda).
+
+    Examples
+    --------
+    >>> y, xd, yd = sp.symbols("y x_dot y_dot")
+    >>> reduced_accelerations(((1 + y**2)*xd**2 + yd**2)/2, (sp.Symbol("x"), y), (xd, yd),
+    ...                       [y*xd*yd, -y*xd**2]).T
+    Matrix([[-x_dot*y*y_dot/(y**2 + 1), 0]])
+    """
     k = len(shape)
     W = sp.Matrix(k, k, lambda i, j: sp.diff(L_c, rdot[i], rdot[j]))
     rhs = []
     for i, r in enumerate(shape):
         p = sp.diff(L_c, rdot[i])
         mixed = sum((sp.diff(p, s) * w for s, w in zip(shape, rdot)), sp.S.Zero)
-        rhs.append(sp.diff(L_c, r) - mixed + gyro[i])
-    if system.has_forces:
-        forces = dict(zip(system.coordinates, system.generalized_forces))
-        rhs = [e + forces[r] for e, r in zip(rhs, shape)]
-    return W.LUsolve(sp.Matrix(rhs)).applyfunc(_tidy)
+        rhs.append(sp.diff(L_c, r) - mixed + right[i])
+    if constraints is None or constraints.rows == 0:
+        return W.LUsolve(sp.Matrix(rhs)).applyfunc(tidy or _tidy)
+    a, m2 = constraints, constraints.rows
+    # a r'' + (d/dt a) r' = 0
+    drift = [-sum((sp.diff(a[i, j], r) * w * rdot[j] for j in range(k)
+                   for r, w in zip(shape, rdot)), sp.S.Zero) for i in range(m2)]
+    K = sp.zeros(k + m2, k + m2)
+    K[:k, :k], K[:k, k:], K[k:, :k] = W, a.T, a
+    return K.LUsolve(sp.Matrix(rhs + drift))[:k, :].applyfunc(tidy or _tidy)
+
+
+def _reduced_forces(system, shape, symmetry, A, on_m1) -> sp.Matrix:
+    """The forces on r: the virtual displacements obey ds = -A dr, so Q_r - A^T Q_s, at
+    s' = -A r' (forces may depend on the velocities)."""
+    k = len(shape)
+    if not system.has_forces:
+        return sp.zeros(k, 1)
+    Q = dict(zip(system.coordinates, system.generalized_forces))
+    Q_r = sp.Matrix([Q[r] for r in shape])
+    Q_s = sp.Matrix([Q[s] for s in symmetry])
+    return (Q_r - A.T * Q_s).xreplace(on_m1).applyfunc(_tidy)
 
 
 def _tidy(expr) -> sp.Expr:
@@ -272,10 +394,22 @@ SYMBOLIC_CHECK_N = 3
 _POINTS, _DIGITS = 4, 30
 
 
-def _check(system, shape, on_m1, acc) -> Decision:
+def check_reduction(system, shape, on_m1, acc) -> Decision:
     """The reduced r'' against the r'' of P(xi_L) on M_1: exactly (the closed form of
     P(xi_L)) up to n = SYMBOLIC_CHECK_N, else at seeded points of M_1 in 30 digits (the
-    saddle-point system W a + mu^T lambda = F, mu a = -drift solved there)."""
+    saddle-point system W a + mu^T lambda = F, mu a = -drift solved there).
+
+    Examples
+    --------
+    >>> from nhham import System
+    >>> particle = System(["x", "y", "z"], "(x_dot**2 + y_dot**2 + z_dot**2)/2",
+    ...                   ["z_dot - y*x_dot"])
+    >>> x, y, z = particle.coordinates
+    >>> xd, yd, zd = particle.velocities
+    >>> check_reduction(particle, (x, y), {zd: y*xd},
+    ...                 sp.Matrix([-xd*y*yd/(1 + y**2), 0])).value
+    True
+    """
     n = system.n
     index = {c: i for i, c in enumerate(system.coordinates)}
     if n <= SYMBOLIC_CHECK_N:

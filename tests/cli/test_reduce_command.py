@@ -62,3 +62,65 @@ def test_latex_of_the_particle_s_reduction_and_factor(capsys):
     status, out, _ = run(capsys, "hamiltonize", EXAMPLES / "nonholonomic_particle.toml",
                          "--latex")
     assert status == 0 and r"f &= \frac{1}{\sqrt{y^{2} + 1}}" in out
+
+
+TWO_CONSTRAINTS = """\
+name = "particle with a second constraint"
+coordinates = ["x", "y", "z"]
+lagrangian = "(x_dot**2 + y_dot**2 + z_dot**2)/2"
+constraints = ["z_dot - y*x_dot", "x_dot - y_dot"]
+"""
+
+
+def test_a_second_step_by_the_constraint_left_on_the_shape_space(capsys, tmp_path):
+    """z' = y x' and x' = y': --symmetry z leaves x' - y' = 0 on (x, y); --then x reduces
+    by it: L_c2 = (2 + y^2) y'^2/2, so y'' = -y y'^2/(2 + y^2) (by hand: d/dt((2 + y^2) y')
+    = y y'^2). hamiltonize refuses the first step alone (a constraint is left)."""
+    scene = tmp_path / "two.toml"
+    scene.write_text(TWO_CONSTRAINTS)
+    status, out, err = run(capsys, "reduce", scene, "--symmetry", "z", "--then", "x", "--json")
+    assert status == 0, err
+    envelope = json.loads(out)
+    jsonschema.validate(envelope, nhham.output_schema())
+    result = envelope["result"]
+    assert result["shape_coordinates"] == ["y"] and result["symmetry_coordinates"] == ["z", "x"]
+    assert [s["by"] for s in result["stages"]] == ["symmetry", "constraint"]
+    assert result["stages"][0]["reduced_coordinates"] == ["z"] and result["level"] == {}
+    acc = nhham.parse_expression(result["accelerations"][0], envelope["scene"]["names"])
+    y, yd = sorted(acc.free_symbols, key=str)
+    assert sp.simplify(acc + y * yd**2 / (2 + y**2)) == 0 and result["check"]["agrees"]
+    status, text, _ = run(capsys, "reduce", scene, "--symmetry", "z", "--then", "x")
+    assert "step 2" in text and "reduce x by constraint; shape y" in text
+    status, _, err = run(capsys, "hamiltonize", scene, "--symmetry", "z")
+    assert status == 2 and "constraints are left on the shape space" in err
+    status, out, err = run(capsys, "hamiltonize", scene, "--symmetry", "z", "--then", "x",
+                           "--json")
+    assert status == 0, err
+    result = json.loads(out)["result"]
+    assert result["hamiltonizable"] and len(result["stages"]) == 2   # k = 1: f = 1
+
+
+def test_bad_stage_options_exit_2_naming_the_option(capsys):
+    particle = EXAMPLES / "nonholonomic_particle.toml"
+    for argv, why in [(["--then", "w"], "then: w not a shape coordinate"),
+                      (["--level", "x"], "--level: expected C=VALUE"),
+                      (["--level", "x=0"], "level: p_x is not conserved"),
+                      (["--level", "y=0"], "then: y is not cyclic"),
+                      (["--then", "x"], "then: no constraint is left")]:
+        status, _, err = run(capsys, "reduce", particle, *argv)
+        assert status == 2 and why in err and len(err.strip().splitlines()) == 1, err
+
+
+def test_the_rubber_ball_reduces_in_two_steps(capsys):
+    """x, y by the rolling constraints, then yaw by the no-twist constraint
+    (yaw' = -sin(pitch) roll'); hand values: tests/lagrangian/test_chaplygin_stages.py."""
+    status, out, err = run(capsys, "reduce", EXAMPLES / "rubber_ball.toml", "--symmetry",
+                           "x,y", "--then", "yaw", "--json")
+    assert status == 0, err
+    envelope = json.loads(out)
+    jsonschema.validate(envelope, nhham.output_schema())
+    result = envelope["result"]
+    assert result["shape_coordinates"] == ["pitch", "roll"]
+    assert result["stages"][0]["shape_coordinates"] == ["yaw", "pitch", "roll"]
+    assert result["reconstruction"] == ["-roll_dot*sin(pitch)"]
+    assert result["check"]["agrees"]

@@ -98,3 +98,39 @@ def test_a_system_that_is_not_chaplygin_is_refused_saying_why(system, why):
 def test_a_symmetry_that_is_not_cyclic_is_refused():
     with pytest.raises(InputError, match="symmetry: y not cyclic"):
         chaplygin_reduction(particle(), symmetry=["y"])
+
+
+def test_forces_reduce_with_the_virtual_displacements_of_the_symmetry():
+    """A sleigh pushed along its axis (thrust F) with a drag -k v on its centre: shape
+    (x, theta), symmetry y (dy = -A dr), so the force on r is Q_r - A^T Q_y at
+    y' = -A r'. By hand in the forward speed u = (x' + a w sin theta)/cos theta and
+    w = theta': m u' = m a w^2 + F - k u, (I + m a^2) w' = -a w (m u + k a) (the lateral
+    drag k a w at the centre has the arm a about the blade), and x' = u cos theta -
+    a w sin theta gives x'' = (F - k u) cos theta/m - u w sin theta + a^2 w sin theta
+    (m u + k a)/(I + m a^2). Adding Q_x alone (without -A^T Q_y, the old reduction) is
+    caught by the check against P(xi_L)."""
+    sleigh = System(["x", "y", "theta"], "m*(x_dot**2 + y_dot**2)/2 + I*theta_dot**2/2",
+                    ["-sin(theta)*x_dot + cos(theta)*y_dot - a*theta_dot"],
+                    forces={"x": "F*cos(theta) - k*x_dot", "y": "F*sin(theta) - k*y_dot"},
+                    parameters=["m", "I", "a", "F", "k"])
+    red = chaplygin_reduction(sleigh, symmetry=["y"])
+    s = {str(v): v for v in set(sleigh.parameters) | set(sleigh.coordinates)
+         | set(sleigh.velocities)}
+    m, I, a, F, k, th = s["m"], s["I"], s["a"], s["F"], s["k"], s["theta"]
+    w, xd = s["theta_dot"], s["x_dot"]
+    u = (xd + a * w * sp.sin(th)) / sp.cos(th)
+    xdd = ((F - k * u) * sp.cos(th) / m - u * w * sp.sin(th)
+           + a**2 * w * sp.sin(th) * (m * u + k * a) / (I + m * a**2))
+    wd = -a * w * (m * u + k * a) / (I + m * a**2)
+    assert sp.simplify(red.accelerations[0] - xdd) == 0
+    assert sp.simplify(red.accelerations[1] - wd) == 0
+    assert red.check.value and red.check.method == "exact"
+    # the old reduced force Q_x (y' left in it, no -A^T Q_y): the check says no
+    from nhham.lagrangian import chaplygin as module
+
+    old = red.shape_forces.copy()
+    old[0], old[1] = sleigh.forces[0], 0
+    acc = module.reduced_accelerations(red.lagrangian, red.shape,
+                                        red.shape_velocities, red.gyroscopic + old)
+    on_m1 = dict(zip([s["y_dot"]], red.reconstruction))
+    assert not module._check_at_points(sleigh, red.shape, on_m1, acc).value
