@@ -49,7 +49,7 @@ from nhham.hamiltonian.hamiltonization_points import (
     jacobiators,
     velocity_equations,
 )
-from nhham.lagrangian.algebra import cancel
+from nhham.lagrangian.algebra import cancel, normal_form
 from nhham.lagrangian.decision import Decision
 from nhham.system.expressions import to_text
 from nhham.system.naming import momentum_symbol
@@ -186,6 +186,9 @@ def hamiltonize(reduction, *, part=None) -> Hamiltonization:
         verdict = decide_at_a_point(eqs, red.system)
         if verdict is not None and verdict.proof is not None:
             return _at_a_point(red, eqs, verdict)
+    if k == 2 and eqs.size() > CLOSED_FORM_OPS:
+        say("theta on a surface, its closedness and the factor (normal forms)")
+        return _on_a_large_surface(red, eqs)
     say("theta in closed form, the factor and the Jacobiators")
     return _closed_form(red, eqs)
 
@@ -277,24 +280,60 @@ def _closed_form(red, eqs) -> Hamiltonization:
     z = list(eqs.shape) + [momentum_symbol(r) for r in eqs.shape]
     H = _energy(red, eqs, to_p)
     Omega = _two_form(eqs, to_p)
-    theta, obstruction, f = _conformal_factor(eqs, to_p, z, k)
+    theta, obstruction, f = _conformal_factor(eqs, to_p, z, k, Omega,
+                                              red.system.parameter_values)
     Pi = _bracket(Omega, k)
     before = _jacobiators(Pi, z)
     if theta is None and k >= 2:  # theta's dp part vanishes: the dp-leg components say why
         reason = fibre_obstruction(eqs.shape, before)
         obstruction += f": {reason}" if reason else ""
-    after = _jacobiators((Pi / f).applyfunc(cancel), z) if f is not None else ()
+    after = _rescaled_jacobiators(Pi, z, theta[:k]) if f is not None else ()
     density = divergence = None
     if f is not None:
-        density = sp.simplify(f ** (k - 1))
-        X = Pi * sp.Matrix([sp.diff(H, w) for w in z])
-        divergence = sp.simplify(sum((sp.diff(density * X[i], w) for i, w in enumerate(z)),
-                                     sp.S.Zero))
-    decision = Decision(f is not None and not after, "exact",
-                        f"{_CLOSED}: theta ^ Omega_nh = -d Omega_nh solved in the velocity "
-                        f"coordinates (r, r') and carried to (r, p)")
+        density = f ** (k - 1) if f.is_Mul or f.is_Pow else sp.simplify(f ** (k - 1))
+        divergence = _divergence(Pi, H, z, theta[:k], k)
+    how = ("theta read off Omega_nh (k = 2: theta = -d omega/dp_2 dr^1 + d omega/dp_1 dr^2, "
+           "omega = Omega_nh(r^1, r^2)); d theta and the Jacobiators decided by the normal "
+           "form modulo sin^2 + cos^2 = 1") if k == 2 else (
+        "theta ^ Omega_nh = -d Omega_nh solved in the velocity coordinates (r, r') and "
+        "carried to (r, p)")
+    decision = Decision(f is not None and not after, "exact", f"{_CLOSED}: {how}")
     return Hamiltonization(red, tuple(z), H, Omega, f is not None and not after, theta, f,
                            obstruction, before, after, density, divergence, decision, _CLOSED)
+
+
+def _on_a_large_surface(red, eqs) -> Hamiltonization:
+    """k = 2 with a large Omega_nh (the second steps of the Chaplygin and rubber balls):
+    G = G(r, r') is linear in r', so with g_c = dG_12/dr'^c and r' = W^{-1} (p - b),
+    theta_1 = dG_12/dp_2 = (g W^{-1})_2 and theta_2 = -dG_12/dp_1 = -(g W^{-1})_1
+    (no inverse Legendre map cancelled: adj W / det W, then one normal form each). The
+    only Jacobiators of Pi = [[0, 1], [-1, G]] that can be nonzero are
+    J(r^c, p_1, p_2) = -dG_12/dp_c, i.e. theta_2 and -theta_1; after rescaling they vanish
+    by the theorem (theta solves theta ^ Omega = -d Omega exactly, so d(f Omega) =
+    f (theta ^ Omega + d Omega) = 0 once theta is closed), and f is then an invariant
+    density (the Liouville measure of f Omega_nh, preserved by X/f)."""
+    k = 2
+    z = tuple(eqs.shape) + tuple(momentum_symbol(r) for r in eqs.shape)
+    W = sp.Matrix(eqs.W)
+    det, adj = W.det(method="berkowitz"), W.adjugate()
+    g = [sp.diff(eqs.gyroscopic[0, 1], w) for w in eqs.velocities]
+    if any(e.free_symbols & set(eqs.velocities) for e in g):  # pragma: no cover - G is J B
+        raise InputError("hamiltonize: the gyroscopic form is not linear in the shape "
+                         "velocities", key="lagrangian")
+    theta = (_tidy((g[0] * adj[0, 1] + g[1] * adj[1, 1]) / det),
+             _tidy(-(g[0] * adj[0, 0] + g[1] * adj[1, 0]) / det), sp.S.Zero, sp.S.Zero)
+    before = tuple(((str(z[c]), str(z[2]), str(z[3])), value)
+                   for c, value in ((0, theta[1]), (1, -theta[0])) if value != 0)
+    _, obstruction, f = _closed_and_exact(theta, z, k, red.system.parameter_values)
+    to_p = _legendre(red, eqs, tidy=False)
+    how = ("theta read off Omega_nh (k = 2: theta = (g W^-1)_2 dr^1 - (g W^-1)_1 dr^2, "
+           "g = dG_12/dr'); d theta decided by the normal form modulo sin^2 + cos^2 = 1; "
+           "the rescaled bracket Poisson and f an invariant density by the theorem "
+           "(d(f Omega_nh) = 0)")
+    return Hamiltonization(red, z, _energy(red, eqs, to_p, tidy=False),
+                           _two_form(eqs, to_p, tidy=False), f is not None, theta, f,
+                           obstruction, before, (), f, sp.S.Zero if f is not None else None,
+                           Decision(f is not None, "exact", f"{_CLOSED}: {how}"), _CLOSED)
 
 
 def _bracket(Omega, k) -> sp.Matrix:
@@ -311,10 +350,12 @@ def _three_indices(size):
     return itertools.combinations(range(size), 3)
 
 
-def _conformal_factor(eqs, to_p, z, k) -> tuple:
+def _conformal_factor(eqs, to_p, z, k, Omega, values) -> tuple:
     """(theta or None, obstruction or None, f or None) from theta ^ Omega = -d Omega,
     solved in (r, r') and carried to (r, p): theta_p = W^{-1} (dr' part),
-    theta_r = (dr part) - (dp/dr)^T theta_p."""
+    theta_r = (dr part) - (dp/dr)^T theta_p; for k = 2 read off Omega directly."""
+    if k == 2:
+        return _closed_and_exact(_theta_on_a_surface(Omega, z), z, k, values)
     size = 2 * k
     t = sp.symbols(f"theta0:{size}")
     # coefficient by coefficient: cheaper than cancelling the rows with theta inside
@@ -331,17 +372,145 @@ def _conformal_factor(eqs, to_p, z, k) -> tuple:
     theta_p = eqs.W.LUsolve(sp.Matrix(theta_v[k:]))
     dpdr = sp.Matrix(k, k, lambda c, d: sp.diff(eqs.momenta[c], eqs.shape[d]))
     theta_r = sp.Matrix(theta_v[:k]) - dpdr.T * theta_p
-    theta = tuple(sp.simplify(cancel(e.xreplace(to_p))) for e in list(theta_r) + list(theta_p))
-    if any(e != 0 for e in theta[k:]) or any(e.free_symbols & set(z[k:]) for e in theta[:k]):
+    theta = tuple(_tidy(e.xreplace(to_p)) for e in list(theta_r) + list(theta_p))
+    return _closed_and_exact(theta, z, k, values)
+
+
+def _theta_on_a_surface(Omega, z) -> tuple:
+    """theta for k = 2 (by hand: with omega = Omega[r1, r2], the dr^dr^dp components of
+    theta ^ Omega = -d Omega read theta_1 = -d omega/dp_2, theta_2 = d omega/dp_1, and the
+    dp^dp ones make the dp part 0): no linear solve."""
+    omega = Omega[0, 1]
+    return (_tidy(-sp.diff(omega, z[3])), _tidy(sp.diff(omega, z[2])), sp.S.Zero, sp.S.Zero)
+
+
+def _closed_and_exact(theta, z, k, values) -> tuple:
+    """(theta, obstruction, f): theta free of p and closed (decided by the normal form
+    modulo sin^2 + cos^2 = 1), then f = exp of its potential."""
+    if any(not _vanishes(e) for e in theta[k:]) or any(
+            e.free_symbols & set(z[k:]) for e in theta[:k]):
         return theta, "theta depends on the momenta p (its dp part or its coefficients)", None
-    dtheta = [cancel(sp.diff(theta[b], z[a]) - sp.diff(theta[a], z[b]))
-              for a, b in itertools.combinations(range(k), 2)]
-    dtheta = [e if e == 0 else sp.simplify(e) for e in dtheta]
-    if any(e != 0 for e in dtheta):
-        shown = "; ".join(f"d{z[a]}^d{z[b]}: {e}" for (a, b), e in
-                          zip(itertools.combinations(range(k), 2), dtheta) if e != 0)
+    pairs = list(itertools.combinations(range(k), 2))
+    dtheta = [sp.diff(theta[b], z[a]) - sp.diff(theta[a], z[b]) for a, b in pairs]
+    open_ = [((a, b), e) for (a, b), e in zip(pairs, dtheta) if not _vanishes(e)]
+    if open_:
+        shown = "; ".join(f"d{z[a]}^d{z[b]}: {_tidy(e)}" for (a, b), e in open_)
         return theta, f"theta is not closed: d theta = {shown}", None
-    return theta, None, sp.simplify(sp.exp(_potential(theta[:k], z[:k])))
+    return theta, None, _factor(theta[:k], z[:k], values)
+
+
+def _tidy(e) -> sp.Expr:
+    """The normal form modulo sin^2 + cos^2 = 1 (cancelled), or e cancelled."""
+    form = normal_form(e)
+    return cancel(e) if form is e else form
+
+
+def _vanishes(e) -> bool:
+    """e == 0 as a function, decided exactly: its normal form modulo sin^2 + cos^2 = 1
+    (a normal form: zero exactly when e is), else cancel and simplify."""
+    e = sp.sympify(e)
+    if e == 0:
+        return True
+    form = normal_form(e)
+    if form is not e:
+        return form == 0
+    return sp.simplify(cancel(e)) == 0
+
+
+def _factor(theta, r, values) -> sp.Expr:
+    """f = exp(phi) with d phi = theta: first as a product of powers of the irreducible
+    factors P_j of theta's denominators (theta = sum c_j d ln P_j, the constants c_j from
+    exact values, the identity checked exactly), else by integration."""
+    found = _logarithmic_potential(theta, r, values)
+    if found is not None:
+        return found
+    return sp.simplify(sp.exp(_potential(theta, r)))
+
+
+def _logarithmic_potential(theta, r, values):
+    factors = []
+    for e in theta:
+        _, den = sp.fraction(sp.together(e))
+        for base, _ in sp.factor_list(den)[1]:
+            if base.free_symbols & set(r) and base not in factors:
+                factors.append(base)
+    if not factors:
+        return None
+    c = sp.symbols(f"c0:{len(factors)}")
+    logs = [[sp.diff(P, x) / P for P in factors] for x in r]
+    residual = [t - sum((cj * g for cj, g in zip(c, row)), sp.S.Zero)
+                for t, row in zip(theta, logs)]
+    equations = []
+    points = _rational_points(r, theta, 2 * len(factors) + 2)
+    if not points:
+        return None
+    for point in points:
+        equations += [e.xreplace(point) for e in residual]
+    solution = sp.linsolve([e for e in equations if e.free_symbols & set(c)], c)
+    if not solution or solution == sp.S.EmptySet:
+        return None
+    values = next(iter(solution))
+    if any(v.free_symbols for v in values):
+        return None
+    if not all(_vanishes(e.xreplace(dict(zip(c, values)))) for e in residual):
+        return None
+    # each factor with the sign it has at a point, the parameters at their values (f > 0;
+    # f is defined up to a constant)
+    at = dict(values.items()) if hasattr(values, "items") else {}
+    signs = [sp.sign(P.xreplace(points[0]).xreplace(at)) for P in factors]
+    signs = [sg if sg.is_number else 1 for sg in signs]
+    return sp.Mul(*((sg * P) ** v for P, v, sg in zip(factors, values, signs) if v != 0))
+
+
+def _rational_points(r, exprs, count):
+    """``count`` exact points where sin and cos of every r are rational (Pythagorean:
+    t -> (2t, 1 - t^2)/(1 + t^2)) and the expressions are defined."""
+    import random
+
+    rng = random.Random(20261127)
+    trig = set().union(*(e.atoms(sp.sin, sp.cos) for e in exprs))
+    if any(a.args[0] not in r for a in trig):  # sin(2 u), sin(u + v): not by this route
+        return []
+    out: list = []
+    for _ in range(20 * count):
+        if len(out) == count:
+            break
+        point = {}
+        for x in r:  # x and (cos x, sin x) are algebraically independent: drawn apart
+            t = sp.Rational(rng.randint(1, 97), rng.randint(98, 199))
+            point.update({sp.sin(x): 2 * t / (1 + t ** 2), sp.cos(x): (1 - t ** 2) / (1 + t ** 2)})
+            point[x] = sp.Rational(rng.randint(1, 97), 53)
+        values = [e.xreplace(point) for e in exprs]
+        if not any(v.has(sp.zoo, sp.nan, sp.oo) for v in values):
+            out.append(point)
+    return out
+
+
+def _rescaled_jacobiators(Pi, z, theta) -> tuple:
+    """The Jacobiators of Pi/f with df = f theta (f a function of r; 1/f's derivatives
+    -theta/f): f^2 J(Pi/f) is formed and decided by the normal form."""
+    k = len(theta)
+    F = sp.Function("F")(*z[:k])
+    f_value = sp.Dummy("f")
+    rescaled = Pi / F
+    found = []
+    for i, j, l in _three_indices(len(z)):
+        value = _jacobiator(rescaled, z, i, j, l) * F ** 2
+        value = value.xreplace({sp.Derivative(F, z[a]): F * theta[a] for a in range(k)})
+        value = cancel(value.xreplace({F: f_value}))
+        assert not value.has(f_value), value  # f^2 J(Pi/f) is free of f once df = f theta
+        if not _vanishes(value):
+            found.append(((str(z[i]), str(z[j]), str(z[l])), _tidy(value)))
+    return tuple(found)
+
+
+def _divergence(Pi, H, z, theta, k) -> sp.Expr:
+    """div(f^(k-1) X) / f^(k-1) = (k - 1) theta . X_r + div X (X = Pi dH), in normal form:
+    0 when f^(k-1) is an invariant density."""
+    X = Pi * sp.Matrix([sp.diff(H, w) for w in z])
+    value = sum(((k - 1) * theta[a] * X[a] for a in range(k)), sp.S.Zero) + sum(
+        (sp.diff(X[i], w) for i, w in enumerate(z)), sp.S.Zero)
+    return sp.S.Zero if _vanishes(value) else _tidy(value)
 
 
 def _jacobiator(Pi, z, i, j, l) -> sp.Expr:

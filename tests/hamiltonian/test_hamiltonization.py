@@ -80,3 +80,23 @@ def test_a_reduced_lagrangian_that_is_not_quadratic_is_refused():
     system = System(["x", "y", "z"], L3 + " + x_dot**4", ["z_dot - y*x_dot"])
     with pytest.raises(InputError, match="not quadratic in the shape velocities"):
         hamiltonize(chaplygin_reduction(system))
+
+
+def test_the_large_surface_route_gives_the_closed_forms_values(monkeypatch):
+    """The k = 2 route for a large Omega_nh (theta from g W^-1, the Jacobiators read off
+    theta, no Legendre inverse cancelled), forced on the particle: f = (1 + y^2)^(-1/2) and
+    the Jacobiator (x, p_x, p_y) = -y/(1 + y^2) by hand; the sleigh (a != 0): not closed."""
+    import nhham.hamiltonian.hamiltonization as H
+    from nhham import System
+    from nhham.lagrangian.chaplygin import chaplygin_reduction
+
+    monkeypatch.setattr(H, "CLOSED_FORM_OPS", -1)
+    particle = System(["x", "y", "z"], "(x_dot**2 + y_dot**2 + z_dot**2)/2", ["z_dot - y*x_dot"])
+    found = H.hamiltonize(chaplygin_reduction(particle))
+    y = found.reduction.shape[1]
+    assert found.hamiltonizable and "theorem" in found.decision.detail
+    assert sp.simplify(found.conformal_factor ** 2 * (1 + y ** 2)) == 1
+    ((triple, value),) = found.jacobiator_before
+    assert triple == ("x", "p_x", "p_y") and sp.simplify(value + y / (1 + y ** 2)) == 0
+    found = H.hamiltonize(chaplygin_reduction(models.chaplygin_sleigh(), symmetry=["y"]))
+    assert not found.hamiltonizable and found.obstruction.startswith("theta is not closed")

@@ -111,7 +111,8 @@ def reduced_by_hand(scene, symmetry) -> ChaplyginReduction:
     J = sp.Matrix([sp.diff(system.lagrangian, w).xreplace(solved) for w in sdot])
     L_c = system.lagrangian.xreplace(solved)
     return ChaplyginReduction(system, tuple(shape), tuple(sym), A, L_c, J, B, sp.zeros(k, 1),
-                              sp.zeros(k, 1), Decision(True, "exact", "not checked here"))
+                              sp.zeros(k, 1), Decision(True, "exact", "not checked here"),
+                              sp.zeros(k, 1), sp.zeros(0, k))
 
 
 def test_the_chaplygin_marble_on_t_star_so3_has_no_factor():
