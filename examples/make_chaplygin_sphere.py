@@ -64,7 +64,11 @@ HEADER = """\
 #   dynamics depends on (spinning about a vertical principal axis turns the yaw, which turns
 #   the rolling constraints; rolling about a horizontal one turns the roll), so no constant
 #   state matrix describes them in this chart: linearize refuses such a [steady] table with
-#   that message (tests/cli/test_linearize_command.py).
+#   that message (tests/cli/test_linearize_command.py), unless a [symmetry] table declares
+#   the rotation about the vertical (yaw = "1", x = "-y", y = "x"): then the spin at rate w
+#   about a vertical principal axis is a relative equilibrium, linearised in co-moving
+#   variables: +-i w and +-w sqrt((I2 - I3)(I3 - I1)/((I1 + m r^2)(I2 + m r^2))) by hand
+#   (tests/journeys/test_relative_linearize.py).
 # Energy is conserved (L = T, the constraints are linear). Reference for the model:
 #   S. A. Chaplygin, "On a ball's rolling on a horizontal plane" (1903); A. V. Borisov,
 #   I. S. Mamaev, "Rolling of a rigid body on a plane and sphere", Regul. Chaotic Dyn. 7 (2002).
