@@ -57,7 +57,7 @@ from nhham.numerics.diagnostics import (Diagnostics, Singularity, singularity_at
 from nhham.numerics.nullspace import describe_kkt_solve
 from nhham.numerics.model import (LibraryReady, NumericModel, NumericsWarning,
                                   ProjectionOutcome)
-from nhham.numerics.run import Deadline, Run
+from nhham.numerics.run import Deadline, Run, final_state_text
 from nhham.numerics.methods import DEFAULT_METHOD, METHODS, Method, lookup, names
 from nhham.numerics.scipy_loop import DenseOutput, run_scipy
 from nhham.numerics.simulate_options import (AdaptiveOptions, FixedStepOptions, MethodOptions,
@@ -259,7 +259,7 @@ class SimulationResult:
         if self.singularity is not None:
             lines.append(f"  where it stopped, {self.singularity.describe()}")
         lines += [f"  warning: {w}" for w in self.warnings]
-        lines.append(_final_state(self.final_state))
+        lines.append(final_state_text(self.final_state))
         return "\n".join(lines)
 
     def save(self, path) -> str:
@@ -689,20 +689,3 @@ def _initial_state(model, y0, project_initial, tol):
     outcome = model.project(y)
     return outcome.y, outcome
 
-
-def _final_state(state) -> str:
-    """``final state: x = ..., y = ...`` packed into lines of the terminal's width (COLUMNS
-    first), a value never split from its name."""
-    import shutil
-
-    room = max(60, shutil.get_terminal_size((100, 24)).columns)
-    head = "  final state: "
-    items = [f"{k} = {v:.10g}" for k, v in state.items()]
-    lines, line = [], head
-    for i, item in enumerate(items):
-        piece = item + ("," if i < len(items) - 1 else "")
-        if len(line) + len(piece) > room and line != head:
-            lines.append(line.rstrip())
-            line = " " * len(head)
-        line += piece + " "
-    return "\n".join(lines + [line.rstrip()])

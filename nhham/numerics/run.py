@@ -16,7 +16,7 @@ import numpy as np
 
 from nhham.numerics.status import Status
 
-__all__ = ["Run", "report_progress", "PAUSE_SECONDS", "Deadline"]
+__all__ = ["Run", "report_progress", "PAUSE_SECONDS", "Deadline", "final_state_text"]
 
 #: Wall time after which the compiled loops hand control back to Python: a signal
 #: (Ctrl-C, the command's ``--budget``) is handled within this, never after a long run
@@ -105,3 +105,27 @@ def report_progress(t, t0, t1, reported):
     if tenths > reported:
         print(f"  t = {t:.6g} ({10 * tenths}%)", file=sys.stderr, flush=True)
     return max(reported, tenths)
+
+
+def final_state_text(state) -> str:
+    """``final state: x = ..., y = ...`` packed into lines of the terminal's width (COLUMNS
+    first), a value never split from its name.
+
+    Examples
+    --------
+    >>> print(final_state_text({"x": 1.0, "x_dot": 0.5}))
+      final state: x = 1, x_dot = 0.5
+    """
+    import shutil
+
+    room = max(60, shutil.get_terminal_size((100, 24)).columns)
+    head = "  final state: "
+    items = [f"{k} = {v:.10g}" for k, v in state.items()]
+    lines, line = [], head
+    for i, item in enumerate(items):
+        piece = item + ("," if i < len(items) - 1 else "")
+        if len(line) + len(piece) > room and line != head:
+            lines.append(line.rstrip())
+            line = " " * len(head)
+        line += piece + " "
+    return "\n".join(lines + [line.rstrip()])

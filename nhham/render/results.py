@@ -94,8 +94,7 @@ def _integrable_text(data: dict) -> str:
 
 
 def classify_text(title: str, data: dict) -> str:
-    lines = [paragraph(f"{title}: n = {data['n']} coordinates, "
-                       f"m = {data['m']} velocity constraints")]
+    lines = [paragraph(f"{title}: n = {data['n']} coordinates, m = {data['m']} velocity constraints")]
     free = data["free_multipliers"]
     rows = [
         ("C regular on M_1", "yes" if data["regular"] else "no"),

@@ -40,9 +40,14 @@ EXAMPLES = sorted((Path(__file__).resolve().parents[2] / "examples").glob("*.tom
 # differential drive have the same W, mu and tangency ranks (forces do not enter C); the
 # bicycle in the benchmark's parameters is the bicycle. The rattleback (n = 5, sqrt in L and
 # the constraints) is the Chaplygin sphere's kind; its numbers: test_relative_equilibria.py.
+# So is the rubber ball (the sphere with a third, no-twist constraint); its reductions are
+# checked against P(xi_L) in test_chaplygin_stages.py. The roller racer (W coupled through
+# both angles) takes minutes too; its verdict is checked against KanesMethod in
+# tests/numerics/test_roller_racer.py.
 GALLERY = {"chaplygin_sphere", "differential_drive", "rolling_disc_3d", "whipple_bicycle",
            "curvilinear_pair", "four_bar_cart", "bicycle_steer_control",
-           "differential_drive_motors", "whipple_bicycle_benchmark", "rattleback"}
+           "differential_drive_motors", "whipple_bicycle_benchmark", "rattleback",
+           "rubber_ball", "roller_racer"}
 # The ball on a sphere (a curved M_1) takes 20 s on the symbolic route; its answer is known
 # without it: W is positive definite and the rows of mu independent, so C = -mu W^-1 mu^T is
 # negative definite: rank m, and stage 1 adds nothing (test_ball_on_sphere_... below).
