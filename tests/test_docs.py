@@ -103,7 +103,9 @@ def test_tutorial_notebook_runs_and_shows_its_stored_outputs(name):
     is what the notebook stores (timings, addresses and the backend aside; numbers to
     1e-6): a stale stored output fails (rerun execute.py to refresh them)."""
     pytest.importorskip("matplotlib")
-    env = dict(os.environ, MPLBACKEND="Agg")
+    # laid out at the width of piped output, as the stored outputs are (xdist's workers
+    # set COLUMNS to their own terminal's)
+    env = dict(os.environ, MPLBACKEND="Agg", COLUMNS="100")
     proc = subprocess.run([sys.executable, str(DOCS / "tutorials" / "execute.py"), "--stdout",
                            name], capture_output=True, text=True, timeout=600, cwd=ROOT,
                           env=env)
