@@ -48,8 +48,7 @@ class Report:
         self.title, self.text, self.latex, self.html = title, text, latex, html
 
     def __repr__(self) -> str:
-        first = self.text.splitlines()[0] if self.text else self.title
-        return f"<nhham report: {first}>"
+        return f"<nhham report: {_heading(self.text) if self.text else self.title}>"
 
     def __str__(self) -> str:
         return self.text
@@ -89,6 +88,18 @@ def _html_table(rows, header=None) -> str:
     head = f"<tr>{cells(header, 'th')}</tr>" if header else ""
     body = "".join(f"<tr>{cells(r, 'td')}</tr>" for r in rows)
     return f"<table>{head}{body}</table>"
+
+
+def _heading(text: str) -> str:
+    """The text's heading on one line: its first line, and where the width wrapped it (a
+    first line filled to the width), the next line, indented by the hang."""
+    from nhham.render.layout import width
+
+    lines = text.splitlines()
+    wrapped = len(lines) > 1 and width() - 20 < len(lines[0]) <= width() \
+        and lines[1].startswith("  ") \
+        and not lines[1].startswith("   ") and "  " not in lines[1].strip()
+    return f"{lines[0]} {lines[1].strip()}" if wrapped else lines[0]
 
 
 def report(obj) -> Report:
