@@ -111,10 +111,12 @@ def test_bad_stage_options_exit_2_naming_the_option(capsys):
         assert status == 2 and why in err and len(err.strip().splitlines()) == 1, err
 
 
-def test_the_rubber_ball_reduces_in_two_steps(capsys):
+def test_the_rubber_ball_reduces_in_two_steps_and_the_command_finds_its_factor(capsys):
     """x, y by the rolling constraints, then yaw by the no-twist constraint
-    (yaw' = -sin(pitch) roll'); hand values: tests/lagrangian/test_chaplygin_stages.py."""
-    status, out, err = run(capsys, "reduce", EXAMPLES / "rubber_ball.toml", "--symmetry",
+    (yaw' = -sin(pitch) roll', the second stage's connection (0, sin(pitch))); hamiltonize
+    reaches EKMR's verdict, f^-2 proportional to (gamma, A gamma) (hand values and the
+    exact identity: tests/lagrangian/test_chaplygin_stages.py; here at two points)."""
+    status, out, err = run(capsys, "hamiltonize", EXAMPLES / "rubber_ball.toml", "--symmetry",
                            "x,y", "--then", "yaw", "--json")
     assert status == 0, err
     envelope = json.loads(out)
@@ -122,5 +124,18 @@ def test_the_rubber_ball_reduces_in_two_steps(capsys):
     result = envelope["result"]
     assert result["shape_coordinates"] == ["pitch", "roll"]
     assert result["stages"][0]["shape_coordinates"] == ["yaw", "pitch", "roll"]
-    assert result["reconstruction"] == ["-roll_dot*sin(pitch)"]
-    assert result["check"]["agrees"]
+    assert result["stages"][1]["connection"] == [["0", "sin(pitch)"]]
+    assert result["reduction_check"]["agrees"]
+    assert result["hamiltonizable"] is True and result["jacobiator_after"] == []
+    # f^-2 / (gamma, A gamma) is one constant: gamma = (-sin r cos p, sin p, cos p cos r)
+    f = sp.sympify(result["conformal_factor"])
+    m, r, I1, I2, I3 = 1.0, 0.5, 0.08, 0.1, 0.12
+    D = m * r ** 2
+    ratios = []
+    for pitch, roll in ((0.3, -0.7), (1.1, 0.4)):
+        gamma = (-sp.sin(roll) * sp.cos(pitch), sp.sin(pitch), sp.cos(pitch) * sp.cos(roll))
+        gAg = sum(g ** 2 / (I + D) for g, I in zip(gamma, (I1, I2, I3)))
+        at = {sp.Symbol(k): v for k, v in dict(m=m, r=r, I1=I1, I2=I2, I3=I3, pitch=pitch,
+                                               roll=roll).items()}
+        ratios.append(float((f ** -2).xreplace(at) / gAg))
+    assert abs(ratios[0] / ratios[1] - 1) < 1e-12
