@@ -122,28 +122,34 @@ class ChaplyginReduction:
                                for i in range(self.connection.rows)]}
 
     def to_dict(self) -> dict:
-        return {
-            "shape_coordinates": [to_text(r) for r in self.shape],
-            "symmetry_coordinates": [to_text(s) for s in self.symmetry],
-            "connection": [[to_text(e) for e in self.connection.row(i)]
-                           for i in range(self.connection.rows)],
-            "reduced_lagrangian": to_text(self.lagrangian),
-            "momenta": [to_text(e) for e in self.momenta],
-            "curvature": [[[to_text(e) for e in B.row(i)] for i in range(B.rows)]
-                          for B in self.curvature],
-            "gyroscopic": [to_text(e) for e in self.gyroscopic],
-            "accelerations": [to_text(e) for e in self.accelerations],
-            "reconstruction": [to_text(e) for e in self.reconstruction],
-            "forces": [to_text(e) for e in self.shape_forces],
-            "shape_constraints": [to_text(e) for e in self.constraints * sp.Matrix(
-                self.shape_velocities)],
-            "momentum_equations": [{"coordinate": to_text(c), "momentum": to_text(p),
-                                    "rate": to_text(r)} for c, p, r in self.momentum_equations],
-            "check": {"agrees": bool(self.check.value), "method": self.check.method,
-                      "detail": self.check.detail},
-            "level": {},
-            "stages": [self.stage_dict()],
-        }
+        return reduced_data(self, {}, [self.stage_dict()])
+
+
+def reduced_data(red, level: dict, stages: list) -> dict:
+    """The JSON data of a reduction (first step or a further one): ``level`` and ``stages``
+    are the step's own."""
+    return {
+        "shape_coordinates": [to_text(r) for r in red.shape],
+        "symmetry_coordinates": [to_text(s) for s in red.symmetry],
+        "connection": [[to_text(e) for e in red.connection.row(i)]
+                       for i in range(red.connection.rows)],
+        "reduced_lagrangian": to_text(red.lagrangian),
+        "momenta": [to_text(e) for e in red.momenta],
+        "curvature": [[[to_text(e) for e in B.row(i)] for i in range(B.rows)]
+                      for B in red.curvature],
+        "gyroscopic": [to_text(e) for e in red.gyroscopic],
+        "accelerations": [to_text(e) for e in red.accelerations],
+        "reconstruction": [to_text(e) for e in red.reconstruction],
+        "forces": [to_text(e) for e in red.shape_forces],
+        "shape_constraints": [to_text(e) for e in red.constraints * sp.Matrix(
+            red.shape_velocities)],
+        "momentum_equations": [{"coordinate": to_text(c), "momentum": to_text(p),
+                                "rate": to_text(r)} for c, p, r in red.momentum_equations],
+        "check": {"agrees": bool(red.check.value), "method": red.check.method,
+                  "detail": red.check.detail},
+        "level": level,
+        "stages": stages,
+    }
 
 
 def chaplygin_reduction(system, symmetry=None) -> ChaplyginReduction:

@@ -42,7 +42,7 @@ from nhham.errors import InputError
 from nhham.lagrangian.algebra import cancel, normal_form
 from nhham.lagrangian.chaplygin import (
     TIDY_OPS, check_reduction, curvatures, gyroscopic_form, momentum_equations,
-    reduced_accelerations,
+    reduced_accelerations, reduced_data,
     solve_for,
 )
 from nhham.lagrangian.decision import Decision
@@ -153,28 +153,8 @@ class ChaplyginStage:
                                for i in range(self.connection.rows)]}
 
     def to_dict(self) -> dict:
-        rdot = sp.Matrix(self.shape_velocities)
-        return {
-            "shape_coordinates": [to_text(r) for r in self.shape],
-            "symmetry_coordinates": [to_text(s) for s in self.symmetry],
-            "connection": [[to_text(e) for e in self.connection.row(i)]
-                           for i in range(self.connection.rows)],
-            "reduced_lagrangian": to_text(self.lagrangian),
-            "momenta": [to_text(e) for e in self.momenta],
-            "curvature": [[[to_text(e) for e in B.row(i)] for i in range(B.rows)]
-                          for B in self.curvature],
-            "gyroscopic": [to_text(e) for e in self.gyroscopic],
-            "accelerations": [to_text(e) for e in self.accelerations],
-            "reconstruction": [to_text(e) for e in self.reconstruction],
-            "forces": [to_text(e) for e in self.shape_forces],
-            "shape_constraints": [to_text(e) for e in self.constraints * rdot],
-            "momentum_equations": [{"coordinate": to_text(c), "momentum": to_text(p),
-                                    "rate": to_text(r)} for c, p, r in self.momentum_equations],
-            "check": {"agrees": bool(self.check.value), "method": self.check.method,
-                      "detail": self.check.detail},
-            "level": {to_text(c): to_text(v) for c, v in self.level},
-            "stages": [s.stage_dict() for s in self.stages],
-        }
+        return reduced_data(self, {to_text(c): to_text(v) for c, v in self.level},
+                            [s.stage_dict() for s in self.stages])
 
 
 def _velocities(system, coordinates) -> list:
