@@ -32,8 +32,9 @@ from nhham.system.mechanics import from_mechanics  # noqa: E402
 VALUES = {"m": 1.0, "r": 0.5, "I1": 0.08, "I2": 0.1, "I3": 0.12}
 
 
-def build(values=None):
-    """The nhham System of the Chaplygin sphere (parameters m, r, I1, I2, I3)."""
+def build(values=None, twist: bool = True):
+    """The nhham System of the Chaplygin sphere (parameters m, r, I1, I2, I3); with
+    ``twist=False`` the rubber ball (no spin about the vertical either)."""
     yaw, pitch, roll, x, y = me.dynamicsymbols("yaw pitch roll x y")
     m, r, I1, I2, I3 = sp.symbols("m r I1 I2 I3")
     N = me.ReferenceFrame("N")
@@ -46,8 +47,11 @@ def build(values=None):
     L = me.Lagrangian(N, ball)
     contact = C.vel(N) + B.ang_vel_in(N).cross(-r * N.z)
     nonhol = [contact.dot(N.x), contact.dot(N.y)]
+    if not twist:
+        nonhol.append(sp.simplify(B.ang_vel_in(N).dot(N.z)))
     return from_mechanics(L, [yaw, pitch, roll, x, y], nonhol_coneqs=nonhol,
-                          parameters=dict(values or VALUES), name="Chaplygin sphere")
+                          parameters=dict(values or VALUES),
+                          name="Chaplygin sphere" if twist else "rubber ball")
 
 
 HEADER = """\

@@ -18,35 +18,17 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-import sympy as sp
-from sympy.physics import mechanics as me
-
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
+from make_chaplygin_sphere import VALUES, build as sphere  # noqa: E402
 from scene_output import write_example  # noqa: E402
-from nhham.system.mechanics import from_mechanics  # noqa: E402
-
-VALUES = {"m": 1.0, "r": 0.5, "I1": 0.08, "I2": 0.1, "I3": 0.12}
 
 
 def build(values=None):
-    """The nhham System of the rubber ball (parameters m, r, I1, I2, I3)."""
-    yaw, pitch, roll, x, y = me.dynamicsymbols("yaw pitch roll x y")
-    m, r, I1, I2, I3 = sp.symbols("m r I1 I2 I3")
-    N = me.ReferenceFrame("N")
-    B = N.orientnew("B", "Body", [yaw, pitch, roll], "ZXY")
-    O = me.Point("O")
-    O.set_vel(N, 0)
-    C = O.locatenew("C", x * N.x + y * N.y + r * N.z)
-    C.set_vel(N, C.pos_from(O).dt(N))
-    ball = me.RigidBody("ball", C, B, m, (me.inertia(B, I1, I2, I3), C))
-    L = me.Lagrangian(N, ball)
-    contact = C.vel(N) + B.ang_vel_in(N).cross(-r * N.z)
-    nonhol = [contact.dot(N.x), contact.dot(N.y),
-              sp.simplify(B.ang_vel_in(N).dot(N.z))]
-    return from_mechanics(L, [yaw, pitch, roll, x, y], nonhol_coneqs=nonhol,
-                          parameters=dict(values or VALUES), name="rubber ball")
+    """The nhham System of the rubber ball (parameters m, r, I1, I2, I3): the Chaplygin
+    sphere's model (examples/make_chaplygin_sphere.py) with omega . N.z = 0 added."""
+    return sphere(values, twist=False)
 
 
 HEADER = """\

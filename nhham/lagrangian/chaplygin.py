@@ -89,8 +89,7 @@ class ChaplyginReduction:
 
     @property
     def shape_velocities(self) -> tuple:
-        velocity = dict(zip(self.system.coordinates, self.system.velocities))
-        return tuple(velocity[r] for r in self.shape)
+        return tuple(velocities_of(self.system, self.shape))
 
     @property
     def gyroscopic_form(self) -> sp.Matrix:
@@ -123,6 +122,12 @@ class ChaplyginReduction:
 
     def to_dict(self) -> dict:
         return reduced_data(self, {}, [self.stage_dict()])
+
+
+def velocities_of(system, coordinates) -> list:
+    """The system's velocity symbols of ``coordinates``, in their order."""
+    velocity = dict(zip(system.coordinates, system.velocities))
+    return [velocity[c] for c in coordinates]
 
 
 def reduced_data(red, level: dict, stages: list) -> dict:

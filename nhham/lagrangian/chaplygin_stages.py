@@ -42,7 +42,7 @@ from nhham.errors import InputError
 from nhham.lagrangian.algebra import cancel, normal_form
 from nhham.lagrangian.chaplygin import (
     TIDY_OPS, check_reduction, curvatures, gyroscopic_form, momentum_equations,
-    reduced_accelerations, reduced_data,
+    reduced_accelerations, reduced_data, velocities_of,
     solve_for,
 )
 from nhham.lagrangian.decision import Decision
@@ -114,8 +114,7 @@ class ChaplyginStage:
 
     @property
     def shape_velocities(self) -> tuple:
-        velocity = dict(zip(self.system.coordinates, self.system.velocities))
-        return tuple(velocity[r] for r in self.shape)
+        return tuple(velocities_of(self.system, self.shape))
 
     @property
     def gyroscopic_form(self) -> sp.Matrix:
@@ -136,7 +135,7 @@ class ChaplyginStage:
     @property
     def lift(self) -> dict:
         """Every reduced velocity (all steps) in terms of r~'."""
-        here = dict(zip(_velocities(self.system, self.eliminated), self.reconstruction))
+        here = dict(zip(velocities_of(self.system, self.eliminated), self.reconstruction))
         return {**{w: e.xreplace(here) for w, e in self.previous.lift.items()}, **here}
 
     @property
@@ -156,10 +155,6 @@ class ChaplyginStage:
         return reduced_data(self, {to_text(c): to_text(v) for c, v in self.level},
                             [s.stage_dict() for s in self.stages])
 
-
-def _velocities(system, coordinates) -> list:
-    velocity = dict(zip(system.coordinates, system.velocities))
-    return [velocity[c] for c in coordinates]
 
 
 def reduce_again(reduction, coordinates, *, level=None) -> ChaplyginStage:
