@@ -5,7 +5,7 @@ Layers form a tree, each importing only the layers listed for it in :data:`MAY_I
 ``hamiltonian`` < ``verdict``, and beside it ``numerics`` (on ``lagrangian``, through its
 bridge); ``render`` (text, LaTeX, JSON and figures of results) on both; ``journeys`` (what
 a user does with a scene) on ``render``; ``study`` on ``journeys``; ``cli`` on top.
-The top-level modules ``errors``, ``settings``, ``lazy``, ``budget`` and ``autonomy`` are the
+The top-level modules ``errors``, ``settings``, ``lazy``, ``budget``, ``progress`` and ``autonomy`` are the
 base: every layer may import them and they import nothing of the package's layers. ``nhham/__init__.py`` (the
 public API, re-exported) and ``nhham/__main__.py`` are exempt. Rules:
 
@@ -61,7 +61,7 @@ MAY_IMPORT = {
             "journeys", "study"),
 }
 LAYERS = tuple(MAY_IMPORT)
-BASE = ("errors", "settings", "lazy", "budget", "autonomy")
+BASE = ("errors", "settings", "lazy", "budget", "progress", "autonomy")
 EXEMPT = ("nhham", "nhham.__main__")
 NUMERICS = "nhham.numerics"
 BRIDGE = "nhham.numerics.codegen"

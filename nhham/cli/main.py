@@ -41,6 +41,7 @@ from nhham.cli.reduce_command import cmd_hamiltonize, cmd_reduce
 from nhham.cli.options import check_options
 from nhham.render.text import Steps
 from nhham.errors import InputError, NhhamError, OutputUnwritable, UsageError
+from nhham.progress import reporting
 from nhham.lagrangian.engine import Policy
 from nhham.cli.parser import COMMAND_LINE, METHODS, build_parser, unknown_options
 from nhham.numerics.methods import DEFAULT_METHOD, FAMILY_OPTIONS, lookup
@@ -264,7 +265,7 @@ def main(argv=None) -> int:
         args.policy = _policy(args)
         # sweep keeps to its --budget itself: what finished is kept and reported
         alarm = None if args.command == "sweep" else args.policy.budget
-        with capture_warnings() as caught, time_budget(alarm, steps):
+        with capture_warnings() as caught, time_budget(alarm, steps), reporting(steps):
             out = COMMANDS[args.command](args, steps)
             if not isinstance(out, CommandOutput):  # a plain dict (JSON) or text
                 out = CommandOutput(result=out if isinstance(out, dict) else {},

@@ -33,6 +33,7 @@ import sympy as sp
 from nhham.errors import ComputationError
 from nhham.lagrangian.algebra import cancel
 from nhham.lagrangian.geometry import lagrangian_geometry
+from nhham.progress import part
 from nhham.settings import PARAMETER_BOX, SEED
 from nhham.system.description import System
 from nhham.system.evaluation import Backend, numeric_function
@@ -228,15 +229,15 @@ class LegendreMap:
         raise NoClosedFormInverseError(self.inverse_statement)
 
     def _linear_inverse(self) -> dict:
+        # v = W^-1 (p - a) = S (p - a) / delta with S = delta W^-1 the fraction-free
+        # adjugate of the geometry (one home): no LU solve of nested fractions, whose
+        # cancellation grows without bound on a dense trigonometric W (Euler angles).
         zero = {v: 0 for v in self.velocities}
-        a = self.momenta.xreplace(zero)
-        rhs = sp.Matrix(self.momentum_symbols) - a
-        W = self.hessian
-        if W.is_diagonal():
-            sol = [rhs[i] / W[i, i] for i in range(self.n)]
-        else:
-            sol = list(W.LUsolve(rhs))
-        return {v: sp.cancel(s) for v, s in zip(self.velocities, sol)}
+        rhs = sp.Matrix(self.momentum_symbols) - self.momenta.xreplace(zero)
+        with part("Legendre inverse v(q, p) by the adjugate of W"):
+            S = self._geometry.scaled_inverse
+            numerators = S.apply(rhs)
+            return {v: cancel(numerators[i] / S.scale) for i, v in enumerate(self.velocities)}
 
     def _closed_form_inverse(self):
         """Per-component closed-form solve when p_A depends on v^A only."""

@@ -36,7 +36,7 @@ from nhham.hamiltonian.brackets import BracketAlgebra, numeric_bracket_matrix
 from nhham.hamiltonian.legendre import LegendreMap
 from nhham.lagrangian.algebra import cancel
 from nhham.lagrangian.engine import Policy, policy_of
-from nhham.lagrangian.geometry import ConstraintMatrixRank
+from nhham.lagrangian.geometry import ConstraintMatrixRank, lagrangian_geometry
 from nhham.lagrangian.projection import Projection, time_rates
 from nhham.lagrangian.submanifold import Submanifold
 from nhham.settings import SEED
@@ -157,18 +157,17 @@ class HamiltonianSide(ConstraintMatrixRank):
 
     @cached_property
     def symbolic_affordable(self) -> bool:
-        """True when symbolic work on T*Q is cheap: an exact Legendre inverse and W
-        diagonal, independent of q, or n <= 3.
+        """True when symbolic work on T*Q is cheap: an exact Legendre inverse and W^-1
+        small in closed form (``LagrangianGeometry.closed_form_affordable``: W diagonal or
+        free of the state, or its scaled inverse small: the size of the work, not n).
 
-        A q-dependent, non-diagonal W (the N-link snake, the rolling ball)
-        makes W^{-1} and everything transported by it large; the "auto"
-        methods of the classification and the cross-check then go numeric.
+        A large q-dependent, non-diagonal W (the N-link snake, the rolling ball, a rigid
+        body in Euler angles) makes W^{-1} and everything transported by it large; the
+        "auto" methods of the classification and the cross-check then go to points.
         """
-        leg = self.legendre
-        W = leg.hessian
         # The cheap test on W first: the exact-inverse test builds polynomials.
-        simple = W.is_diagonal() or not (W.free_symbols & set(self.coordinates)) or self.n <= 3
-        return simple and leg.has_exact_inverse
+        return lagrangian_geometry(self.system).closed_form_affordable \
+            and self.legendre.has_exact_inverse
 
     @cached_property
     def algebra(self) -> BracketAlgebra:

@@ -29,7 +29,7 @@ from typing import Any
 import sympy as sp
 
 from nhham.errors import InputError
-from nhham.lagrangian.algebra import cancel
+from nhham.lagrangian.algebra import cancel, normal_form
 from nhham.system.expressions import to_text
 from nhham.lagrangian.decision import Decision
 
@@ -224,8 +224,8 @@ def curvatures(A, shape) -> tuple:
     [-1, 0]]),)
     """
     k = len(shape)
-    return tuple(sp.Matrix(k, k, lambda i, j: cancel(sp.diff(A[a, j], shape[i])
-                                                     - sp.diff(A[a, i], shape[j])))
+    return tuple(sp.Matrix(k, k, lambda i, j: _tidy(sp.diff(A[a, j], shape[i])
+                                                    - sp.diff(A[a, i], shape[j])))
                  for a in range(A.rows))
 
 
@@ -394,21 +394,25 @@ def _tidy(expr) -> sp.Expr:
     if sp.count_ops(expr) > TIDY_OPS:  # a Chaplygin sphere's: left as derived
         return expr
     expr = cancel(expr)
-    return sp.factor_terms(sp.trigsimp(expr)) if expr.has(sp.sin, sp.cos) else expr
+    if not expr.has(sp.sin, sp.cos):
+        return expr
+    # Polynomial arithmetic modulo sin^2 + cos^2 = 1 (bounded by the terms), not sympy's
+    # trigsimp, whose search took 10 s on a rigid body's reduced data in Euler angles.
+    return min((sp.factor_terms(e) for e in (expr, normal_form(expr))), key=sp.count_ops)
 
 
 #: Largest expression (sympy operations) that is tidied (cancel, trigsimp) for reading.
 TIDY_OPS = 400
 
-#: Largest n for which the check forms P(xi_L) in closed form (the 3-D disc, n = 5: minutes).
-SYMBOLIC_CHECK_N = 3
 _POINTS, _DIGITS = 4, 30
 
 
 def check_reduction(system, shape, on_m1, acc) -> Decision:
     """The reduced r'' against the r'' of P(xi_L) on M_1: exactly (the closed form of
-    P(xi_L)) up to n = SYMBOLIC_CHECK_N, else at seeded points of M_1 in 30 digits (the
-    saddle-point system W a + mu^T lambda = F, mu a = -drift solved there).
+    P(xi_L)) where W^-1 is small in closed form (``closed_form_affordable``: the size of
+    W, not n; the 3-D disc's took minutes, a rigid body's in Euler angles as long), else
+    at seeded points of M_1 in 30 digits (the saddle-point system W a + mu^T lambda = F,
+    mu a = -drift solved there).
 
     Examples
     --------
@@ -421,11 +425,11 @@ def check_reduction(system, shape, on_m1, acc) -> Decision:
     ...                 sp.Matrix([-xd*y*yd/(1 + y**2), 0])).value
     True
     """
+    from nhham.lagrangian.geometry import lagrangian_geometry
+
     n = system.n
     index = {c: i for i, c in enumerate(system.coordinates)}
-    if n <= SYMBOLIC_CHECK_N:
-        from nhham.lagrangian.geometry import lagrangian_geometry
-
+    if lagrangian_geometry(system).closed_form_affordable:
         field = lagrangian_geometry(system, closed_form=True).projected_field
         diff = [cancel(sp.together(field[n + index[r]].xreplace(on_m1) - a))
                 for r, a in zip(shape, acc)]

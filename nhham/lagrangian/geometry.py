@@ -31,7 +31,8 @@ from functools import cached_property
 import sympy as sp
 
 from nhham.settings import SEED
-from nhham.lagrangian.adjugate import ScaledInverse, scaled_inverse
+from nhham.lagrangian.adjugate import (CLOSED_FORM_OPS, ScaledInverse, closed_form_size,
+                                       scaled_inverse)
 from nhham.lagrangian.algebra import solve_linear
 from nhham.lagrangian.decision import Decision, DecisionSettings
 from nhham.lagrangian.engine import Policy, policy_of
@@ -363,14 +364,16 @@ class LagrangianGeometry(ConstraintMatrixRank):
     # --------------------------------------------------------- solves with W
     @cached_property
     def closed_form_affordable(self) -> bool:
-        """True when W^-1 in closed form is cheap: W diagonal, independent of q, or n <= 3.
+        """True when W^-1 in closed form is small: W diagonal or free of the state, or
+        δ W⁻¹ of at most :data:`~nhham.lagrangian.adjugate.CLOSED_FORM_OPS` operations
+        (:func:`~nhham.lagrangian.adjugate.closed_form_size`: bounded by the size of W,
+        not by n).
 
-        Beyond, the closed forms (ξ_L, Z_i, C, λ, P(ξ_L)) are formed only when asked
+        Otherwise the closed forms (ξ_L, Z_i, C, λ, P(ξ_L)) are formed only when asked
         for; decisions are made at points.
         """
-        W = self.hessian
-        return self.n <= 3 or self._W_is_diagonal or not (
-            W.free_symbols & set(self.system.coordinates))
+        size = closed_form_size(self.hessian, self.state, lambda: self.scaled_inverse)
+        return size is not None and size <= CLOSED_FORM_OPS
 
     @cached_property
     def _W_is_diagonal(self):

@@ -135,15 +135,16 @@ class Steps:
     def step(self, what: str):
         if self.progress:
             print(f"nhham: {what} ...", file=sys.stderr, flush=True)
-        start = time.perf_counter()
+        start, at = time.perf_counter(), len(self.records)
         outer, self.current = self.current, what
         opened, self.opened = self.opened, what
         try:
             yield
         finally:
             self.current, self.opened = outer, opened
-        # Only finished steps are recorded (a budget that runs out interrupts one).
-        self.records.append((what, time.perf_counter() - start))
+        # Only finished steps are recorded (a budget that runs out interrupts one), each
+        # before the parts it contains (nhham.progress).
+        self.records.insert(at, (what, time.perf_counter() - start))
 
     def part(self, what: str, note: str = "") -> None:
         """A part of the open step begins (a run of a long step): the step's name in a

@@ -23,6 +23,7 @@ from nhham.lagrangian.exceptional import (
 )
 from nhham.lagrangian.engine import Policy, policy_of
 from nhham.settings import SEED, check_options
+from nhham.progress import part
 from nhham.verdict.results import MAX_DEPTH, NEAR, ValuesVerdict, Verdict, exact_value
 from nhham.verdict.substitution import branches, compose, rebuild
 
@@ -167,21 +168,25 @@ def examine(system, params, *, policy, points, values=None, near=NEAR):
     vanish at those exact values (``hits``) and those within relative distance
     ``near`` of vanishing (``close``).
     """
-    analysis = analyze_constraints(system, policy=policy)
-    integrable = analysis.integrable
+    with part("constraint algorithm on TQ (stages, ranks on M_k)"):
+        analysis = analyze_constraints(system, policy=policy)
+    with part("integrability (Frobenius)"):
+        integrable = analysis.integrable
     cls = None
     if analysis.status != "inconsistent":
-        cls = classify_constraints(analysis, policy=policy)
+        with part("first and second class on T*Q (brackets of the final constraints)"):
+            cls = classify_constraints(analysis, policy=policy)
     # The second-class set the classification chose (for generic parameters when it
     # decided symbolically): at values where B drops rank its minor is the datum.
     second = (tuple(cls.second_class_indices) if cls is not None
               and tuple(cls.labels) == tuple(analysis.final_labels) else None)
     data = ExceptionalData(system, analysis, policy.seed, points, second_class=second)
     comps, hits, close = (), [], []
-    if params:
-        comps = exceptional_components(data.symbolic(tuple(params)), tuple(params))
-    if values:
-        hits, close = data.at_values(values, near)
+    with part("exceptional parameter values (where a decision's datum vanishes)"):
+        if params:
+            comps = exceptional_components(data.symbolic(tuple(params)), tuple(params))
+        if values:
+            hits, close = data.at_values(values, near)
     first = second = None
     if cls is not None:
         first, second = int(cls.first_class), int(cls.second_class)
