@@ -44,20 +44,17 @@ from nhham.lagrangian.algebra import POLYNOMIAL_ERRORS, trig_normal
 from nhham.lagrangian.graphs import connected_components
 
 __all__ = ["ScaledInverse", "scaled_inverse", "divide_out", "scale_factors",
-           "closed_form_size", "CLOSED_FORM_OPS"]
+           "closed_form_size", "CLOSED_FORM_WORK"]
 
 #: Closed forms of W^-1 (P(xi_L), lambda, C, H = E_L o Leg^-1 and all that is transported
-#: by Leg^-1) are formed when delta W^-1 and delta together have at most this many
-#: operations. The size of the work, not n: a dense 3 x 3 trigonometric W (a rigid body in
-#: Euler angles, 333 operations) makes every transported bracket a cancellation of minutes,
-#: a 2 x 2 one (a cart with a pendulum, ~20) does not.
-CLOSED_FORM_OPS = 40
+#: by Leg^-1) are formed when the operations of delta and delta W^-1 times n (every
+#: transported field and bracket has n such components) are at most this. The size of the
+#: work, not n alone: a dense 3 x 3 trigonometric W (a rigid body in Euler angles, 333
+#: operations: 999) makes every transported bracket a cancellation of minutes; a ball's
+#: 5 x 5 one (23: 115) turns a 2 s cross-check into 15 s; a 2 x 2 one (a cart with a
+#: pendulum, 21: 42) costs nothing.
+CLOSED_FORM_WORK = 100
 
-#: Before an adjugate is formed to measure it: the most terms its determinants may expand
-#: to, by the bound of :func:`determinant_terms` (a rigid body in Euler angles: 41, its
-#: adjugate formed in 0.05 s; the rattleback: 2,427 and 19 s; the Whipple bicycle: 2e10,
-#: minutes and gigabytes). Past it the inverse is not small anyway.
-ESTIMATE_TERMS = 64
 
 
 @dataclass(frozen=True)
@@ -143,15 +140,16 @@ def scaled_inverse(W: sp.Matrix, state) -> ScaledInverse:
     return ScaledInverse(scale, tuple(blocks), W.rows)
 
 
-def closed_form_size(W: sp.Matrix, state, scaled=None) -> int | None:
+def closed_form_size(W: sp.Matrix, state, scaled=None, max_terms: int = 64) -> int | None:
     """The size (operations) of W^-1 in closed form, or None when it is too large to form.
 
     0 when W is diagonal or free of the state (its inverse divides entrywise, or is a
     matrix of numbers and parameters); else the operations of delta and delta W^-1
-    (:func:`scaled_inverse`, formed only when :func:`determinant_terms` bounds each
-    block's determinant by :data:`ESTIMATE_TERMS` terms). ``scaled``: a callable
-    returning the :class:`ScaledInverse` when it is to be formed (the geometry's cached
-    one), default :func:`scaled_inverse`.
+    (:func:`scaled_inverse`), formed only when :func:`determinant_terms` bounds every
+    block's determinant by ``max_terms`` terms (a rigid body in Euler angles: 41, its
+    adjugate formed in 0.05 s; the rattleback: 2,716 and 19 s; the Whipple bicycle: 7e10,
+    minutes and gigabytes). ``scaled``: a callable returning the :class:`ScaledInverse`
+    when it is to be formed (the geometry's cached one), default :func:`scaled_inverse`.
 
     Examples
     --------
@@ -160,13 +158,15 @@ def closed_form_size(W: sp.Matrix, state, scaled=None) -> int | None:
     >>> W = sp.Matrix([[2*m, m*l*sp.cos(th)], [m*l*sp.cos(th), m*l**2]])
     >>> closed_form_size(W, [th])
     21
+    >>> closed_form_size(W, [th], max_terms=1) is None    # det W: up to 2 terms
+    True
     """
     state = set(state)
     if not (W.free_symbols & state) or all(W[i, j] == 0 for i in range(W.rows)
                                             for j in range(W.cols) if i != j):
         return 0
     for idx in _diagonal_blocks(W):
-        if determinant_terms(W.extract(idx, idx)) > ESTIMATE_TERMS:
+        if determinant_terms(W.extract(idx, idx)) > max_terms:
             return None
     S = scaled() if scaled is not None else scaled_inverse(W, state)
     return sum(sp.count_ops(e) for e in S.matrix() if e != 0) + sp.count_ops(S.scale)
@@ -179,7 +179,7 @@ def determinant_terms(Wk: sp.Matrix) -> int:
     k = Wk.rows
     counts = [[_terms(Wk[i, j]) for j in range(k)] for i in range(k)]
     if k > 20:  # pragma: no cover - 2^k states; such a block is never small
-        return ESTIMATE_TERMS + 1
+        return 2 ** 64
     perm = {0: 1}
     for i in range(k):
         nxt: dict = {}

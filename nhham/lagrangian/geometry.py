@@ -31,7 +31,7 @@ from functools import cached_property
 import sympy as sp
 
 from nhham.settings import SEED
-from nhham.lagrangian.adjugate import (CLOSED_FORM_OPS, ScaledInverse, closed_form_size,
+from nhham.lagrangian.adjugate import (CLOSED_FORM_WORK, ScaledInverse, closed_form_size,
                                        scaled_inverse)
 from nhham.lagrangian.algebra import solve_linear
 from nhham.lagrangian.decision import Decision, DecisionSettings
@@ -365,15 +365,19 @@ class LagrangianGeometry(ConstraintMatrixRank):
     @cached_property
     def closed_form_affordable(self) -> bool:
         """True when W^-1 in closed form is small: W diagonal or free of the state, or
-        δ W⁻¹ of at most :data:`~nhham.lagrangian.adjugate.CLOSED_FORM_OPS` operations
-        (:func:`~nhham.lagrangian.adjugate.closed_form_size`: bounded by the size of W,
-        not by n).
+        n times the operations of δ W⁻¹ at most
+        :data:`~nhham.lagrangian.adjugate.CLOSED_FORM_WORK`
+        (:func:`~nhham.lagrangian.adjugate.closed_form_size`: bounded by the size of the
+        work, not by n alone).
 
         Otherwise the closed forms (ξ_L, Z_i, C, λ, P(ξ_L)) are formed only when asked
         for; decisions are made at points.
         """
-        size = closed_form_size(self.hessian, self.state, lambda: self.scaled_inverse)
-        return size is not None and size <= CLOSED_FORM_OPS
+        # A determinant of more than CLOSED_FORM_WORK / 2n terms (bounded before it is
+        # formed) leaves no room for the adjugate: not formed.
+        size = closed_form_size(self.hessian, self.state, lambda: self.scaled_inverse,
+                                max_terms=CLOSED_FORM_WORK // (2 * self.n))
+        return size is not None and size * self.n <= CLOSED_FORM_WORK
 
     @cached_property
     def _W_is_diagonal(self):

@@ -159,8 +159,9 @@ def test_curved_M1_classification_is_decided_at_points(monkeypatch):
     """A q-dependent, non-diagonal W on a curved M_1 with an odd number of constraints:
     the rank of B is proved at a point over F_p (the combination's coefficients at float
     points, M_1 having no rational points) instead of falling back to sampling. (Its
-    W^-1 is small, 11 operations: the route at points is forced by a size bound of 0.)"""
-    monkeypatch.setattr("nhham.lagrangian.geometry.CLOSED_FORM_OPS", 0)
+    W^-1 is small, 11 operations times n = 4: the route at points is forced by a bound
+    of 0.)"""
+    monkeypatch.setattr("nhham.lagrangian.geometry.CLOSED_FORM_WORK", 0)
     system = nhham.loads_scene(
         (SCENES / "rotor_on_sphere.toml").read_text().replace(
             "J*(phi_dot + x_dot)**2/2", "J*(phi_dot + z*x_dot)**2/2"), check_initial=False
