@@ -28,6 +28,7 @@ gave is silently changed.
 
 from __future__ import annotations
 
+import dataclasses
 import os
 import tomllib
 from dataclasses import dataclass, field
@@ -42,14 +43,22 @@ from nhham.system.expressions import parse_expression
 from nhham.system.initial import initial_residuals
 from nhham.system.initial_solve import InitialData, complete_initial, parse_initial
 from nhham.system.naming import TIME, velocity_symbol
-from nhham.system.scene_numbers import scene_number, toml_float, with_values
+from nhham.system.scene_numbers import (
+    resolve_parameters,
+    scene_number,
+    toml_float,
+    with_values,
+)
 from nhham.system.scene_structure import (
     BARE_KEY,
     MAX_FIXED_STEPS,
     MIN_RTOL,
     SceneSpec,
     SimulateOptions,
+    scene_error,
     simulate_option_problem,
+    simulate_options_at,
+    split_unread,
     toml_string,
     validate_structure,
 )
@@ -71,10 +80,52 @@ __all__ = [
     "scene_number",
     "toml_string",
     "BARE_KEY",
+    "UnreadTable",
 ]
 
 #: Largest scene file accepted, checked before parsing.
 MAX_SCENE_BYTES = 2 * 1024 * 1024
+
+class UnreadTable:
+    """A table of the scene with problems, in place of its content: reading it raises
+    them (a :class:`~nhham.errors.SceneError` naming the key), so that only the commands
+    that read the table refuse the scene (``[simulate]`` stops simulate, not classify).
+
+    Examples
+    --------
+    >>> from nhham import loads_scene
+    >>> scene = loads_scene('''
+    ... coordinates = ["x"]
+    ... lagrangian = "x_dot**2/2"
+    ... [simulate]
+    ... t_end = -1.0
+    ... ''', source="s.toml")
+    >>> scene.system.n                      # classify, derive... read the system
+    1
+    >>> scene.simulate.t_end                # simulate reads [simulate]
+    Traceback (most recent call last):
+    ...
+    nhham.errors.SceneError: s.toml: simulate.t_end: must be positive, got -1.0
+    """
+
+    __slots__ = ("error",)
+
+    def __init__(self, error: InputError):
+        object.__setattr__(self, "error", error)
+
+    def __getattr__(self, name):
+        if name.startswith("__"):   # copy, pickle: not a read of the table
+            raise AttributeError(name)
+        raise self.error
+
+    def _refuse(self, *args, **kwargs):
+        raise self.error
+
+    __bool__ = __iter__ = __len__ = __getitem__ = __contains__ = _refuse
+
+    def __repr__(self):
+        return f"UnreadTable({str(self.error)!r})"
+
 
 @dataclass(frozen=True)
 class Scene:
@@ -117,6 +168,10 @@ class Scene:
         The ``[symmetry]`` generator xi (its invariance is checked where it is used:
         ``nhham linearize``), or None.
 
+    A table that only some commands read (``[initial]``, ``[simulate]``, ``[steady]``,
+    ``[symmetry]``, ``[contacts]``, ``[control]``) and that has problems is an
+    :class:`UnreadTable` here: the problems are raised when it is read.
+
     Examples
     --------
     A bead on a line driven along y' = x': y' is left out of ``[initial]`` and solved.
@@ -141,12 +196,12 @@ class Scene:
     name: str
     description: str
     system: "System"
-    initial: Mapping[str, float] | None
-    simulate: SimulateOptions
+    initial: "Mapping[str, float] | UnreadTable | None"
+    simulate: "SimulateOptions | UnreadTable"
     source: str
     steady: object = None
     contacts: tuple = ()
-    control: Mapping = field(default_factory=lambda: MappingProxyType({}))
+    control: "Mapping | UnreadTable" = field(default_factory=lambda: MappingProxyType({}))
     initial_given: object = None
     initial_solved: tuple = ()
     initial_problem: Exception | None = None
@@ -178,7 +233,7 @@ class Scene:
             raise self.initial_problem
         if not project:
             initial_residuals(self)
-        assert self.initial is not None
+        assert isinstance(self.initial, Mapping)   # completed: an unread one raised above
         return self.initial
 
     def steady_system(self) -> "System":
@@ -341,31 +396,52 @@ def loads_scene(text: str, source: str = "<string>", *, check_initial: bool = Tr
     """
     data = _parse_toml(text, source)
     spec = with_values(validate_structure(data, source), values)
-    expressions = _parse_expressions(spec)
+    problems: list[str] = []
+    spec = dataclasses.replace(spec, parameters=resolve_parameters(spec.parameters, problems))
+    if problems:
+        raise scene_error(source, problems)
+    expressions, unparsed = _parse_expressions(spec)
+    unread = dict(spec.unread)
+    simulate, problems = simulate_options_at(spec.simulate, spec.parameters)
+    if problems:
+        unread["simulate"] = tuple(unread.get("simulate", ())) + tuple(problems)
+    # a table's structure and its expressions are checked in turn: one kind of error each
+    unread_tables = {t: UnreadTable(scene_error(source, list(ps))) for t, ps in unread.items()}
+    unread_tables.update({t: UnreadTable(_parse_error(list(ps))) for t, ps in unparsed.items()})
     system = _build_system(spec, expressions, drop_redundant)
-    given: InitialData | None = expressions.get("[initial]")
-    initial, solved, problem = None, (), None
-    if given is not None:
+    given: InitialData | UnreadTable | None = expressions.get("[initial]")
+    initial: Mapping | UnreadTable | None = None
+    solved: tuple = ()
+    problem: Exception | None = None
+    if "initial" in unread_tables:
+        given = initial = unread_tables["initial"]
+        problem = unread_tables["initial"].error
+    elif isinstance(given, InitialData):
         try:
             state, solved = complete_initial(system, given)
             initial = MappingProxyType(state)
         except InputError as exc:  # raised where the initial data are used
             problem = exc
+
+    def table(name, key, default=None):
+        return unread_tables.get(name, expressions.get(key, default))
+
     scene = Scene(
         name=spec.name,
         description=spec.description,
         system=system,
         initial=initial,
-        simulate=spec.simulate,
+        simulate=unread_tables.get("simulate", simulate),
         source=source,
-        steady=expressions.get("[steady]"),
-        contacts=expressions.get("[contacts]", ()),
-        control=MappingProxyType(expressions.get("[control]", {})),
+        steady=table("steady", "[steady]"),
+        contacts=table("contacts", "[contacts]", ()),
+        control=unread_tables.get("control",
+                                  MappingProxyType(expressions.get("[control]", {}))),
         initial_given=given,
         initial_solved=solved,
         initial_problem=problem,
         values_set=MappingProxyType(dict(values or {})),
-        symmetry=expressions.get("[symmetry]"),
+        symmetry=table("symmetry", "[symmetry]"),
     )
     if check_initial and given is not None:
         scene.checked_initial()
@@ -408,8 +484,9 @@ def _symbol_table(spec: SceneSpec) -> dict:
     return table
 
 
-def _parse_expressions(spec: SceneSpec) -> dict:
-    """Parse every expression; raise one ParseError listing every failure."""
+def _parse_expressions(spec: SceneSpec) -> tuple[dict, dict]:
+    """Parse every expression; raise one ParseError listing every failure of what every
+    command reads; return (parsed, {table: problems} of the tables only some read)."""
     table = _symbol_table(spec)
     items = [("lagrangian", spec.lagrangian)]
     items += [(f"constraints[{i}]", c) for i, c in enumerate(spec.constraints)]
@@ -471,15 +548,21 @@ def _parse_expressions(spec: SceneSpec) -> dict:
         spec.contacts, lambda text, where: parse_expression(text, table, where=where),
         len(spec.constraints), len(spec.holonomic))
     problems.extend(contact_problems)
+    problems, unread = split_unread(problems)
     if problems:
-        if len(problems) == 1:
-            error = ParseError(problems[0], key=key_of(problems[0]))
-        else:
-            error = ParseError(f"{len(problems)} problems:\n"
-                               + "\n".join(f"  - {p}" for p in problems), key=key_of(problems[0]))
-        error.problems = tuple(problems)
-        raise error
-    return parsed
+        raise _parse_error(problems)
+    return parsed, unread
+
+
+def _parse_error(problems: list) -> ParseError:
+    """One ParseError listing every problem (its key: the first one's)."""
+    if len(problems) == 1:
+        error = ParseError(problems[0], key=key_of(problems[0]))
+    else:
+        error = ParseError(f"{len(problems)} problems:\n"
+                           + "\n".join(f"  - {p}" for p in problems), key=key_of(problems[0]))
+    error.problems = tuple(problems)
+    return error
 
 
 def _declare_hint(name: str | None, inputs=()) -> str:

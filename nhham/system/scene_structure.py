@@ -14,24 +14,31 @@ import difflib
 import math
 import re
 import unicodedata
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, field, fields
+from types import MappingProxyType
 from functools import partial
 from typing import Mapping
 
 import sympy as sp
 
-from nhham.errors import SceneError, key_of
+from nhham.errors import InputError, SceneError, key_of
 from nhham.system.contacts import contacts_structure
 from nhham.system.expressions import RESERVED_NAMES
 from nhham.system.initial_solve import initial_entry
 from nhham.system.naming import acceleration_symbol, momentum_symbol, velocity_symbol
-from nhham.system.scene_numbers import finite_number, type_name
+from nhham.system.scene_numbers import (
+    expression_value,
+    finite_number,
+    number_or_expression,
+    type_name,
+)
 from nhham.system.steady import state_table, steady_structure
 from nhham.system.symmetry import symmetry_structure
 
 __all__ = ["SceneSpec", "SimulateOptions", "validate_structure", "scene_error",
-           "simulate_option_problem", "key_path", "check_keys", "toml_string", "MIN_RTOL",
-           "MAX_FIXED_STEPS", "BARE_KEY"]
+           "simulate_option_problem", "simulate_options_at", "key_path", "check_keys",
+           "toml_string", "table_of", "MIN_RTOL", "MAX_FIXED_STEPS", "BARE_KEY",
+           "READ_BY_COMMANDS"]
 
 #: Smallest relative tolerance the adaptive methods honour in float64 (scipy raises a
 #: smaller one to this): 100 machine epsilons.
@@ -46,6 +53,12 @@ _TOP_KEYS = (
     "forces", "dissipation", "inputs", "control", "symmetry",
 )
 _REQUIRED_KEYS = ("coordinates", "lagrangian")
+
+#: The tables only some commands read (``[simulate]`` by simulate and bench, ``[steady]``
+#: by linearize...): their problems are kept with the scene and raised when a command reads
+#: the table, so that a command that does not read it runs (:class:`nhham.system.scene.
+#: UnreadTable`). The others make the system: every command needs them.
+READ_BY_COMMANDS = ("initial", "simulate", "steady", "symmetry", "contacts", "control")
 
 # Names people reach for that difflib would not match (a hint, never applied).
 _TOP_ALIASES = {
@@ -117,7 +130,7 @@ class SceneSpec:
     constraints: tuple
     holonomic: tuple
     initial: Mapping | None
-    simulate: SimulateOptions
+    simulate: Mapping   # as given: numbers, expression strings and the method's name
     steady: Mapping | None = None
     contacts: Mapping | None = None
     forces: Mapping | str | None = None   # a table by coordinate, or a 1-form
@@ -125,10 +138,12 @@ class SceneSpec:
     inputs: tuple = ()
     control: Mapping | None = None
     symmetry: Mapping | None = None
+    unread: Mapping = field(default_factory=dict)   # table -> its problems (READ_BY_COMMANDS)
 
 
 def validate_structure(data: dict, source: str) -> SceneSpec:
-    """Check keys, types and names; raise one SceneError listing every problem."""
+    """Check keys, types and names; raise one SceneError listing every problem of the
+    tables every command reads (the others' problems are kept in ``unread``)."""
     problems: list[str] = []
     check_keys(data, "", _TOP_KEYS, _TOP_ALIASES, problems)
     for key in _REQUIRED_KEYS:
@@ -166,11 +181,39 @@ def validate_structure(data: dict, source: str) -> SceneSpec:
     steady = steady_structure(data.get("steady"), coordinates, problems, inputs)
     contacts = contacts_structure(data.get("contacts"), problems)
     symmetry = symmetry_structure(data.get("symmetry"), coordinates, problems)
+    problems, unread = split_unread(problems)
     if problems:
         raise scene_error(source, problems)
+    if "initial" in unread:
+        initial = None
+    tables = dict(simulate=simulate, steady=steady, contacts=contacts, control=control,
+                  symmetry=symmetry)
+    tables.update({t: ({} if t == "simulate" else None) for t in unread if t in tables})
     return SceneSpec(source, name, description, tuple(coordinates), parameters, lagrangian,
-                 tuple(constraints), tuple(holonomic), initial, simulate, steady, contacts,
-                 forces, dissipation, tuple(inputs), control, symmetry)
+                     tuple(constraints), tuple(holonomic), initial, tables["simulate"] or {},
+                     tables["steady"], tables["contacts"], forces, dissipation,
+                     tuple(inputs), tables["control"], tables["symmetry"],
+                     MappingProxyType(unread))
+
+
+def table_of(problem: str) -> str | None:
+    """The top-level key a problem names (``simulate`` for ``simulate.t_end: ...``)."""
+    key = key_of(problem)
+    return None if key is None else re.split(r"[.\[]", key, maxsplit=1)[0]
+
+
+def split_unread(problems) -> tuple[list, dict]:
+    """(problems of the tables every command reads, {table: its problems} for the tables
+    of :data:`READ_BY_COMMANDS`)."""
+    fatal: list = []
+    unread: dict = {}
+    for p in problems:
+        table = table_of(p)
+        if table in READ_BY_COMMANDS:
+            unread.setdefault(table, []).append(p)
+        else:
+            fatal.append(p)
+    return fatal, {t: tuple(ps) for t, ps in unread.items()}
 
 
 def scene_error(source: str, problems: list[str]) -> SceneError:
@@ -298,7 +341,10 @@ def _parameter_table(value, problems) -> dict:
         path = key_path("parameters", key)
         if not _check_name(key, path, problems):
             continue
-        number = finite_number(item, path, problems)
+        if isinstance(item, str):   # an expression in the others, evaluated when loading
+            number = number_or_expression(item, path, problems)
+        else:
+            number = finite_number(item, path, problems)
         if number is not None:
             result[key] = number
     return result
@@ -338,12 +384,15 @@ def _initial_table(value, coordinates, problems):
                        section="initial", path=partial(key_path, "initial"), required=False)
 
 
-def _simulate_table(value, problems) -> SimulateOptions:
+def _simulate_table(value, problems) -> dict:
+    """``[simulate]`` as given: the method's name, and numbers or expression strings in
+    the parameters for the others (evaluated and range-checked by
+    :func:`simulate_options_at`)."""
     if value is None:
-        return SimulateOptions()
+        return {}
     if not isinstance(value, dict):
         problems.append(f"simulate: expected a table, got {type_name(value)}")
-        return SimulateOptions()
+        return {}
     check_keys(value, "simulate", _SIMULATE_KEYS, _SIMULATE_ALIASES, problems)
     options = {}
     for key in _SIMULATE_KEYS:
@@ -357,15 +406,40 @@ def _simulate_table(value, problems) -> SimulateOptions:
                 problems.append(f"{path}: expected a method name, got {type_name(value[key])}"
                                 if not isinstance(value[key], str) else f"{path}: empty method name")
             continue
-        number = finite_number(value[key], path, problems)
-        if number is None:
+        number = number_or_expression(value[key], path, problems)
+        if number is not None:
+            options[key] = number
+    return options
+
+
+def simulate_options_at(raw: Mapping, values: dict) -> tuple[SimulateOptions, list]:
+    """The ``[simulate]`` options at the parameter values (``values``: name -> float or
+    None), each expression evaluated and every value range-checked
+    (:func:`simulate_option_problem`); returns (options, problems).
+
+    >>> simulate_options_at({"t_end": "7*pi/Omega", "rtol": 1e-9}, {"Omega": 7.0})
+    (SimulateOptions(t_end=3.141592653589793, method=None, rtol=1e-09, atol=None, step=None, max_step=None), [])
+    """
+    options, problems = {}, []
+    for key in _SIMULATE_KEYS:
+        if key not in raw:
+            continue
+        if key == "method":
+            options[key] = raw[key]
+            continue
+        path = f"simulate.{key}"
+        try:
+            number = expression_value(raw[key], values, path)
+        except InputError as exc:
+            problems.append(str(exc))
             continue
         problem = simulate_option_problem(key, number, options.get("t_end"))
         if problem:
-            problems.append(f"{path}: {problem}")
+            written = f" (= {raw[key]})" if isinstance(raw[key], str) else ""
+            problems.append(f"{path}: {problem}{written}")
             continue
         options[key] = number
-    return SimulateOptions(**options)
+    return SimulateOptions(**options), problems
 
 
 def simulate_option_problem(key: str, value: float, t_end: float | None = None) -> str | None:

@@ -274,12 +274,22 @@ def test_usage_errors_print_the_envelope(schema):
 @pytest.mark.parametrize("scene,key", [
     ("imaginary_log.toml", "lagrangian"), ("fullwidth_name.toml", "lagrangian"),
     ("sign_in_lagrangian.toml", "lagrangian"), ("huge_expansion.toml", "lagrangian"),
-    ("simulate_rtol_below_epsilon.toml", "simulate.rtol"), ("unknown_name.toml", "lagrangian"),
+    ("unknown_name.toml", "lagrangian"),
 ])
 def test_bad_scenes_print_the_envelope(scene, key, schema):
     rc, out, err = in_process("derive", BAD / scene, "--json")
     env = assert_failure(rc, out, err, schema, 2, "input", key)
     assert env["result"] is None and env["scene"] is None
+
+
+def test_a_bad_table_stops_only_the_commands_that_read_it(schema):
+    """[simulate] is read by simulate (exit 2 naming simulate.rtol), not by derive."""
+    scene = BAD / "simulate_rtol_below_epsilon.toml"
+    rc, out, err = in_process("derive", scene, "--json")
+    assert rc == 0 and one_envelope(out, schema)["error"] is None
+    rc, out, err = in_process("simulate", scene, "--json")
+    env = assert_failure(rc, out, err, schema, 2, "input", "simulate.rtol")
+    assert env["result"] is None
 
 
 def test_holonomic_constraint_without_real_solution_is_bad_input(schema):

@@ -99,7 +99,7 @@ def test_refusals(capsys, tmp_path, case, words):
 ])
 def test_a_bad_symmetry_table_is_refused_naming_its_key(table, key):
     with pytest.raises(InputError) as info:
-        loads_scene(sphere(symmetry=table))
+        loads_scene(sphere(symmetry=table)).symmetry.field   # raised where it is read
     assert key in str(info.value) and info.value.key.startswith("symmetry")
 
 

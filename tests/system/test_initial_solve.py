@@ -109,7 +109,7 @@ def test_a_value_needs_the_parameters_it_uses():
 
 def test_a_value_may_not_use_a_coordinate():
     with pytest.raises(ParseError) as info:
-        disk('theta = 0.0\ntheta_dot = "x"\nphi_dot = 1.0\n')
+        disk('theta = 0.0\ntheta_dot = "x"\nphi_dot = 1.0\n').checked_initial()
     assert "initial.theta_dot: unknown name 'x'" in str(info.value)
 
 

@@ -4,6 +4,7 @@ is checked in test_initial.py, writing them in test_scene_dump.py)."""
 from __future__ import annotations
 
 import dataclasses
+import math
 import pathlib
 import shutil
 import tomllib
@@ -152,7 +153,7 @@ def test_bad_scene(filename, tmp_path, monkeypatch):
     shutil.copy(BAD / filename, tmp_path / filename)
     monkeypatch.chdir(tmp_path)
     with pytest.raises(error_class) as info:
-        load_scene(filename)
+        read_every_table(load_scene(filename))
     assert type(info.value) is error_class, f"{type(info.value).__name__}: {info.value}"
     message = str(info.value)
     for fragment in expected["contains"]:
@@ -163,10 +164,50 @@ def test_bad_scene(filename, tmp_path, monkeypatch):
     assert sorted(p.name for p in tmp_path.iterdir()) == [filename]
 
 
+def read_every_table(scene):
+    """Read the tables only some commands read (their problems are raised then)."""
+    scene.simulate.given()
+    if scene.initial_given is not None:
+        scene.checked_initial()
+    for table in (scene.steady, scene.symmetry):
+        if table is not None:
+            table.expressions
+    tuple(scene.contacts), dict(scene.control)
+    return scene
+
+
 def test_scene_errors_list_every_problem():
+    """Every problem of what all commands read at once; a table only some read (here
+    [simulate]) is refused when read, with its own problems."""
     with pytest.raises(SceneError) as info:
         load_scene(BAD / "several_problems.toml")
-    assert len(info.value.problems) == 3
+    assert len(info.value.problems) == 2
+    assert not any("simulate" in p for p in info.value.problems)
+    scene = loads_scene((BAD / "several_problems.toml").read_text().replace(
+        "m = nan", "m = 1.0").replace("holonomc", "holonomic"))
+    assert scene.system.n == 4
+    with pytest.raises(SceneError, match="simulate.methd: unknown key; did you mean 'method'"):
+        scene.simulate.given()
+
+
+def test_a_number_may_be_an_expression_in_the_parameters():
+    """t_end = 7 pi/Omega and I = m a^2, evaluated at the values (--set too); a broken
+    [simulate] does not stop what does not read it."""
+    text = DISK.replace("I1 = 0.5", 'I1 = "m*R**2/2"') + '\n[simulate]\nt_end = "7*pi/m"\n'
+    scene = loads_scene(text)
+    assert scene.system.parameter_values[I1] == 0.5
+    assert scene.simulate.t_end == pytest.approx(7 * math.pi)
+    scene = loads_scene(text, values={"m": 2.0})
+    assert scene.system.parameter_values[I1] == 1.0
+    assert scene.simulate.t_end == pytest.approx(3.5 * math.pi)
+    bad = loads_scene(text.replace("7*pi/m", "-7*pi/m"))
+    assert bad.system.n == 4
+    with pytest.raises(SceneError, match=r"simulate.t_end: must be positive.*-7\*pi/m"):
+        bad.simulate.t_end
+    with pytest.raises(SceneError, match="parameters.I1.*depends on itself"):
+        loads_scene(text.replace('"m*R**2/2"', '"I1/2"'))
+    with pytest.raises(SceneError, match="parameters.I1.*uses R, which has no value"):
+        loads_scene(text.replace(", R = 1.0 }", ' }\nsymbolic_parameters = ["R"]'))
 
 
 def test_parse_errors_list_every_expression():
