@@ -205,7 +205,10 @@ def test_every_notebook_is_listed_and_stored_with_its_outputs():
 
 
 @pytest.mark.parametrize("module", ["nhham.render.latex", "nhham.cli.envelope", "nhham.render.display",
-                                    "nhham.system.expressions", "nhham.render.plotting"])
+                                    "nhham.system.expressions", "nhham.render.plotting",
+                                    "nhham.system.scene_keys", "nhham.system.scene_numbers",
+                                    "nhham.system.scene_structure", "nhham.system.scene",
+                                    "nhham.progress", "nhham.lagrangian.adjugate"])
 def test_docstring_examples(module):
     mod = importlib.import_module(module)
     result = doctest.testmod(mod, optionflags=doctest.ELLIPSIS)

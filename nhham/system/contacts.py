@@ -33,7 +33,10 @@ from nhham.errors import ParseError
 from nhham.system.expressions import derivative
 
 __all__ = ["ContactPoint", "contacts_structure", "parse_contacts", "contact_rows",
-           "velocity_jacobian"]
+           "velocity_jacobian", "CONTACT_KEYS"]
+
+#: The keys of a ``[contacts.<name>]`` table.
+CONTACT_KEYS = ("velocity", "constraints")
 
 
 @dataclass(frozen=True)
@@ -87,7 +90,7 @@ def contacts_structure(value, problems) -> Mapping | None:
         if not isinstance(table, dict):
             problems.append(f"{path}: expected a table with velocity and constraints")
             continue
-        unknown = sorted(set(table) - {"velocity", "constraints"})
+        unknown = sorted(set(table) - set(CONTACT_KEYS))
         if unknown:
             problems.append(f"{path}.{unknown[0]}: unknown key (expected velocity, "
                             f"constraints)")

@@ -26,6 +26,7 @@ from nhham.system.contacts import contacts_structure
 from nhham.system.expressions import RESERVED_NAMES
 from nhham.system.initial_solve import initial_entry
 from nhham.system.naming import acceleration_symbol, momentum_symbol, velocity_symbol
+from nhham.system.scene_keys import EVERY_COMMAND, SCENE_KEYS, top_level_keys
 from nhham.system.scene_numbers import (
     expression_value,
     finite_number,
@@ -47,18 +48,16 @@ MIN_RTOL = 100 * 2.0 ** -52
 #: Most steps a fixed-step run may take (t_end / step): every step is stored.
 MAX_FIXED_STEPS = 10**8
 
-_TOP_KEYS = (
-    "name", "description", "coordinates", "parameters", "symbolic_parameters",
-    "lagrangian", "constraints", "holonomic", "initial", "simulate", "steady", "contacts",
-    "forces", "dissipation", "inputs", "control", "symmetry",
-)
-_REQUIRED_KEYS = ("coordinates", "lagrangian")
+# One home for the keys: the scene format's reference (docs/scene.rst is made from it).
+_TOP_KEYS = top_level_keys()
+_REQUIRED_KEYS = tuple(k.name for k in SCENE_KEYS if k.required)
 
 #: The tables only some commands read (``[simulate]`` by simulate and bench, ``[steady]``
 #: by linearize...): their problems are kept with the scene and raised when a command reads
 #: the table, so that a command that does not read it runs (:class:`nhham.system.scene.
 #: UnreadTable`). The others make the system: every command needs them.
-READ_BY_COMMANDS = ("initial", "simulate", "steady", "symmetry", "contacts", "control")
+READ_BY_COMMANDS = tuple(k.name for k in SCENE_KEYS
+                         if k.name in _TOP_KEYS and k.read_by != EVERY_COMMAND)
 
 # Names people reach for that difflib would not match (a hint, never applied).
 _TOP_ALIASES = {

@@ -169,9 +169,10 @@ def read_every_table(scene):
     scene.simulate.given()
     if scene.initial_given is not None:
         scene.checked_initial()
-    for table in (scene.steady, scene.symmetry):
-        if table is not None:
-            table.expressions
+    if scene.steady is not None:
+        scene.steady.expressions
+    if scene.symmetry is not None:
+        scene.symmetry.components
     tuple(scene.contacts), dict(scene.control)
     return scene
 
