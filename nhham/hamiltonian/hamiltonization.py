@@ -49,7 +49,8 @@ from nhham.hamiltonian.hamiltonization_points import (
     jacobiators,
     velocity_equations,
 )
-from nhham.lagrangian.algebra import cancel, normal_form
+from nhham.lagrangian.algebra import cancel, normal_form, tidy_light
+from nhham.lagrangian.chaplygin import TIDY_OPS
 from nhham.lagrangian.decision import Decision
 from nhham.system.expressions import to_text
 from nhham.system.naming import momentum_symbol
@@ -271,7 +272,8 @@ def _jacobiators_in_velocities(eqs, triples) -> tuple:
     inverse = (W.adjugate() / det).tolist()
     found = jacobiators(eqs, list, lambda _: inverse, triples)
     value_of_det = W.det(method="berkowitz")
-    return tuple((t, v.xreplace({det: value_of_det})) for t, v in found)
+    # shown to people: the cheap reductions modulo sin^2 + cos^2 = 1 where small enough
+    return tuple((t, tidy_light(v.xreplace({det: value_of_det}), TIDY_OPS)) for t, v in found)
 
 
 def _closed_form(red, eqs) -> Hamiltonization:

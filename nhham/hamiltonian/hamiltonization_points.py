@@ -274,13 +274,30 @@ def _verdict(eqs, env, A, b, rows) -> PointVerdict:
                             tuple(theta), jac, where, env)
     curl = [(a, c, d[a][c] - d[c][a]) for a, c in itertools.combinations(range(k), 2)]
     if any(x for _, _, x in curl):
-        shown = "; ".join(f"d{z[a]}^d{z[c]}: {x}" for a, c, x in curl if x)
+        shown = "; ".join(f"d{z[a]}^d{z[c]} = {short_number(x)}" for a, c, x in curl if x)
         return PointVerdict("not closed", f"d theta != 0 at an exact point ({shown}), "
                             f"where theta has no dp part and its coefficients no "
                             f"p-derivative", tuple(theta), jac, where, env,
                             tuple(((a, c), x) for a, c, x in curl))
     return PointVerdict(None, "nothing refuted at the exact point", tuple(theta),
                         jac, where, env, tuple(((a, c), x) for a, c, x in curl))
+
+
+def short_number(x) -> str:
+    """An exact value as a reader takes it in: itself when short, else its leading digits
+    (a rational of 200 digits says no more than that it is not 0).
+
+    >>> short_number(3) , short_number(__import__("fractions").Fraction(10**40 + 1, 3 * 10**39))
+    ('3', '3.33333 (exact: a rational of 41/40 digits)')
+    """
+    text = str(x)
+    if len(text) <= 24:
+        return text
+    try:
+        num, den = (int(part) for part in text.split("/")) if "/" in text else (int(text), 1)
+    except ValueError:  # not a rational's text (a value mod p): say what it is
+        return f"{text[:12]}..."
+    return f"{num / den:.6g} (exact: a rational of {len(str(abs(num)))}/{len(str(den))} digits)"
 
 
 def fibre_obstruction(shape, found) -> str:

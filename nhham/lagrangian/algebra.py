@@ -54,15 +54,20 @@ def cancel(expr) -> sp.Expr:
 def tidy(expr) -> sp.Expr:
     """Cancel, and where sines and cosines remain reduce modulo sin^2 + cos^2 = 1.
 
-    cos^2(u) is rewritten as 1 - sin^2(u) in numerator and denominator (a normal
-    form modulo the identity) and the result is cancelled again; it is kept only
-    if it is shorter. Much cheaper than ``trigsimp`` on large expressions.
+    Two reductions are tried, each polynomial arithmetic on the terms (much cheaper than
+    ``trigsimp`` on large expressions): cos^2(u) -> 1 - sin^2(u) everywhere
+    (:func:`trig_normal`), and per angle whichever of cos^2 -> 1 - sin^2 and
+    sin^2 -> 1 - cos^2 leaves fewer terms (:func:`normal_form`: (sin^2 + cos^2)/cos^2 is
+    1/cos^2); the shortest of the three forms is kept.
     """
     expr = cancel(expr)
     if not expr.has(sp.sin, sp.cos):
         return expr
+    forms = [expr, normal_form(expr)]
     alt = trig_normal(expr)
-    return alt if alt is not None and sp.count_ops(alt) < sp.count_ops(expr) else expr
+    if alt is not None:
+        forms.append(alt)
+    return min(forms, key=sp.count_ops)
 
 
 def tidy_light(expr, limit: int = 150) -> sp.Expr:

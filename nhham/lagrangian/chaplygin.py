@@ -29,7 +29,7 @@ from typing import Any
 import sympy as sp
 
 from nhham.errors import InputError
-from nhham.lagrangian.algebra import cancel, normal_form
+from nhham.lagrangian.algebra import cancel, tidy
 from nhham.system.expressions import to_text
 from nhham.lagrangian.decision import Decision
 
@@ -247,7 +247,7 @@ def gyroscopic_form(J, curvature) -> sp.Matrix:
 def _split(system, symmetry=None) -> tuple:
     """(symmetry coordinates, A) or InputError saying why the system is not Chaplygin."""
     def refuse(why):
-        raise InputError(f"reduce: not of Chaplygin type: {why}", key="constraints")
+        raise InputError(f"the system is not of Chaplygin type: {why}", key="constraints")
 
     if system.holonomic:
         refuse("it has holonomic constraints (eliminate them with coordinates on Q first)")
@@ -393,12 +393,10 @@ def _tidy(expr) -> sp.Expr:
     read by people: the 3-D disc's accelerations shrink fourfold)."""
     if sp.count_ops(expr) > TIDY_OPS:  # a Chaplygin sphere's: left as derived
         return expr
-    expr = cancel(expr)
-    if not expr.has(sp.sin, sp.cos):
-        return expr
     # Polynomial arithmetic modulo sin^2 + cos^2 = 1 (bounded by the terms), not sympy's
     # trigsimp, whose search took 10 s on a rigid body's reduced data in Euler angles.
-    return min((sp.factor_terms(e) for e in (expr, normal_form(expr))), key=sp.count_ops)
+    expr = tidy(expr)
+    return sp.factor_terms(expr) if expr.has(sp.sin, sp.cos) else expr
 
 
 #: Largest expression (sympy operations) that is tidied (cancel, trigsimp) for reading.
