@@ -550,22 +550,27 @@ class ExceptionalData:
 
 def _relative_distance(v0, nonzero, shifted, values) -> float:
     """Relative distance of the values to where a datum vanishes: over its nonzero terms,
-    the largest |P| / |grad P| (every term must vanish there), over |values|.
+    the largest 1 / |(p_i dP/dp_i) / P| (every term must vanish there), to first order the
+    smallest change of the parameters, each relative to its own value, that makes it
+    vanish.
 
-    Scale-free: each term enters through its logarithmic derivative
-    (P(x + h) - P(x)) / (h P(x)), formed in the field of the values before it becomes
-    a float, so a determinant of a large system (|P| beyond 1e308 or below 1e-308) neither
-    overflows nor underflows. Raises ZeroDivisionError when a float64 value is not
-    usable (zero by underflow, or not finite): the caller then works in a wider field.
+    Free of units: a parameter's unit changes neither p_i dP/dp_i / P nor the distance
+    (dividing an absolute |P| / |grad P| by |values| mixed the units: m = 1e30 kg put a
+    sleigh "near" a singular C whose condition number is 1). Each term enters through its
+    logarithmic derivative (P(x + h) - P(x)) / (h P(x)), formed in the field of the values
+    before it becomes a float, so a determinant of a large system (|P| beyond 1e308 or
+    below 1e-308) neither overflows nor underflows. Raises ZeroDivisionError when a float64
+    value is not usable (zero by underflow, or not finite): the caller then works in a
+    wider field.
     """
-    scale = math.hypot(*(float(x) for x in values.values())) or 1.0
     worst = 0.0
     for i, val in enumerate(v0):
         if not nonzero[i]:
             continue
-        slope = math.hypot(*(_log_slope(vals[i], val, h) for h, vals in shifted.values()))
+        slope = math.hypot(*(_log_slope(vals[i], val, h) * abs(float(values[p]))
+                             for p, (h, vals) in shifted.items()))
         worst = max(worst, 1.0 / slope if slope else math.inf)
-    return worst / scale
+    return worst
 
 
 def _log_slope(moved, value, h) -> float:

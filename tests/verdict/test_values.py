@@ -53,8 +53,9 @@ def shift_fields(monkeypatch) -> list:
 
 
 def test_values_near_an_exceptional_set_are_warned_about(monkeypatch):
-    """By hand: C is singular on the plane I1 = I2, at distance |I1 - I2| / sqrt(2) from
-    (I1, I2, k) = (0.5, 0.5 + 1e-10, 2), relative to |(I1, I2, k)| = sqrt(4.5): 3.3e-11.
+    """By hand: C is singular on the plane I1 = I2. The smallest change of the parameters,
+    each relative to its own value, that reaches it from (I1, I2, k) = (0.5, 0.5 + 1e-10, 2)
+    is, to first order, |I1 - I2| / sqrt(I1^2 + I2^2) = 1e-10 / 0.7071 = 1.4e-10.
     float64 finds the values near and the estimate is made again in 200-bit; for far
     values float64 is enough."""
     from nhham.lagrangian import exceptional
@@ -63,7 +64,7 @@ def test_values_near_an_exceptional_set_are_warned_about(monkeypatch):
     near = classification_at_values(two_bodies({"I1": 0.5, "I2": 0.5 + 1e-10, "k": 2.0}))
     assert near.conditions == () and near.verdict.regular
     (warning,) = near.warnings
-    assert "relative distance 3.3e-11" in warning and "C singular" in warning
+    assert "relative distance 1.4e-10" in warning and "C singular" in warning
     assert exceptional.SHIFT_FIELD in fields and FLOAT64 in fields
     fields.clear()
     far = classification_at_values(two_bodies({"I1": 0.5, "I2": 0.7, "k": 2.0}))
@@ -102,3 +103,18 @@ def test_an_angle_within_rounding_of_pi_over_2_is_named():
                in w for w in near)
     assert len(near) == 1  # every decision taken at points with the values: nothing else
     assert not any("pi/2" in w for w in classification_at_values(incline(0.3)).warnings)
+
+
+def test_the_distance_to_an_exceptional_set_is_free_of_units():
+    """The sleigh's C = -(1/m + a^2/I) is -1 at m = 1e30 kg (cond C = 1): no warning (the
+    distance divided by |values| put it at 2.5e-31); and the same values in grams and
+    centimetres are as far as in kilograms and metres."""
+    from nhham import load_scene
+
+    heavy = load_scene("examples/chaplygin_sleigh.toml", values={"m": 1e30})
+    assert classification_at_values(heavy.system).warnings == ()
+    near = {"I1": 0.5, "I2": 0.5 + 1e-10, "k": 2.0}
+    scaled = {"I1": 0.5e7, "I2": (0.5 + 1e-10) * 1e7, "k": 2.0 * 1e3}   # g cm^2, g
+    warning, = classification_at_values(two_bodies(near)).warnings
+    again, = classification_at_values(two_bodies(scaled)).warnings
+    assert "relative distance 1.4e-10" in warning and "relative distance 1.4e-10" in again
