@@ -200,6 +200,26 @@ class NumericModel:
     nonlinear = property(lambda self: self.layout.get("nonlinear_constraints", False))
 
     @property
+    def energy_change(self) -> str:
+        """Why E_L is not conserved along the motion, or "" where it is (then the energy
+        drift measures a method's error; otherwise the energy balance residual
+        max |E(t) - E(0) - int P dt| does, DESIGN.md §2).
+
+        >>> from nhham import models, numeric_model
+        >>> numeric_model(models.chaplygin_sleigh(), backend="numpy").energy_change
+        ''
+        """
+        if self.forced:
+            return "the forces do work"
+        if self.time_in_geometry:
+            return f"{self.timed_key} depends on t"
+        if self.nonlinear:
+            return "the reaction of a nonlinear (Chetaev) constraint may do work"
+        if not self.linear_constraints:
+            return "the reactions of the affine constraints do work (lambda . h)"
+        return ""
+
+    @property
     def names(self) -> tuple:
         return self.coordinate_names + self.velocity_names
 

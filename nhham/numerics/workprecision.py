@@ -111,12 +111,12 @@ class WorkPrecisionResult:
         What the reference is, in words.
     skipped : tuple of (method, setting, reason)
         Settings not run (a looser one of the same method was already slow).
-    forced : bool
-        The system has forces, t in L or a constraint, or a nonlinear (Chetaev)
-        constraint whose reaction does work: energy is not conserved, and the table shows
-        the energy balance residual max |E(t) - E(0) - ∫ P dt| (P the power of the
-        applied, dissipative and constraint forces, and -dL/dt) instead of the energy
-        drift.
+    forced : str
+        Why the energy is not conserved ("" where it is: ``NumericModel.energy_change``):
+        the system has forces, t in L or a constraint, affine constraints whose reactions
+        do work, or a nonlinear (Chetaev) one; the table then shows the energy balance
+        residual max |E(t) - E(0) - ∫ P dt| (P the power of the applied, dissipative and
+        constraint forces, and -dL/dt) instead of the energy drift, and says why.
     kkt_solve : {"saddle", "null-space", "mixed"}
         Which solve gave the constrained accelerations at the initial state and the
         reference's end (:func:`nhham.numerics.nullspace.needs_null_space`).
@@ -133,7 +133,7 @@ class WorkPrecisionResult:
     backend: str
     reference: str = ""
     skipped: tuple = ()
-    forced: bool = False
+    forced: str = ""
     kkt_solve: str = "saddle"
     kkt_ratio_max: float = 1.0
 
@@ -177,6 +177,9 @@ class WorkPrecisionResult:
                  f"{self.reference_error_estimate:.1e}, {self.reference_wall_time_s:.3g} s); "
                  f"{describe_kkt_solve(self.kkt_solve, self.kkt_ratio_max)}",
                  "", self.table(), ""]
+        if self.forced:
+            lines.append(f"energy balance, not drift: the energy is not conserved here "
+                         f"({self.forced}); the balance residual measures each method's error")
         if self.skipped:
             lines.append("skipped: " + "; ".join(f"{m} {s} ({why})"
                                                  for m, s, why in self.skipped))
@@ -320,8 +323,7 @@ def work_precision(system_or_model, y0, t_span, *, methods=None, tolerances=DEFA
     ratio = diagonal_ratio(model.geometry(np.array([y_init, y_ref], dtype=float))[0])
     return WorkPrecisionResult(tuple(rows), model.name, (t0, t1), digits, ref_error, ref_time,
                                model.backend, ref_text, tuple(skipped),
-                               forced=model.forced or model.time_in_geometry
-                               or model.nonlinear,
+                               forced=model.energy_change,
                                kkt_solve=kkt_solve_name(ratio > KKT_RATIO),
                                kkt_ratio_max=float(np.nanmax(ratio)))
 

@@ -661,6 +661,7 @@ def bench_data(result) -> dict:
             "rows": rows, "time_to_solution": tts,
             "kkt_solve": str(result.kkt_solve),
             "kkt_ratio_max": json_number(result.kkt_ratio_max),
+            "energy_change": str(result.forced),
             "skipped": [{"method": m, "setting": s, "reason": why}
                         for m, s, why in result.skipped]}
 
@@ -676,7 +677,7 @@ def bench_failure_data(t_span, reference_digits: int) -> dict:
     return {"t_span": [float(x) for x in t_span], "backend": "none", "reference": "none",
             "reference_digits": int(reference_digits), "reference_error_estimate": None,
             "reference_wall_time_s": None, "rows": [], "time_to_solution": [], "skipped": [],
-            "kkt_solve": None, "kkt_ratio_max": None, "plot": None}
+            "kkt_solve": None, "kkt_ratio_max": None, "energy_change": None, "plot": None}
 
 
 def forces_text(system, forces) -> str:

@@ -69,3 +69,24 @@ def test_reference_failure_is_a_numerical_failure_saying_what():
     with pytest.raises(NumericalFailure, match=r"reference solution stopped at t = 0 .*C = "
                                                r"-mu W\^-1 mu\^T is singular"):
         work_precision(model, [0.0, 0.0, 0.0, 1.0, 1.0, -1.0], (0, 1.0), quick=True)
+
+
+def test_an_affine_constraint_shows_the_energy_balance_and_says_why():
+    """y' = w x on a spring in x. By hand: the reaction is -lambda (0, 1), so x'' = -x and
+    y'' = -lambda = w x' (lambda = -w x'); its power -lambda y' = w^2 x x', so E = (x'^2 +
+    y'^2 + x^2)/2 changes by w^2 (x^2 - x0^2)/2 (x = cos t: up to 2 at w = 2) while the
+    balance E - int P dt stays. The table measures each method by the balance and says why;
+    y' = w x' (h = 0) conserves E."""
+    system = nhham.System(["x", "y"], "(x_dot**2 + y_dot**2 - x**2)/2", ["y_dot - w*x"],
+                          parameters={"w": 2.0})
+    model = numeric_model(system, backend="numpy")
+    assert "affine constraints do work" in model.energy_change
+    assert numeric_model(nhham.System(["x", "y"], "(x_dot**2 + y_dot**2 - x**2)/2",
+                                      ["y_dot - w*x_dot"], parameters={"w": 2.0}),
+                         backend="numpy").energy_change == ""
+    y0 = model.state({"x": 1.0, "y": 0.0, "x_dot": 0.0, "y_dot": 2.0})
+    wp = work_precision(model, y0, (0, 3.0), quick=True, methods=["DOP853"], min_time=0.0)
+    assert "| energy balance |" in wp.table() and "affine constraints do work" in wp.describe()
+    drift = [r.energy_drift for r in wp.rows]
+    balance = [r.energy_balance_residual for r in wp.rows]
+    assert min(drift) > 0.1 and max(balance) < 1e-4   # the drift is the physics, not error
