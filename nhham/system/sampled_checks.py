@@ -321,7 +321,12 @@ def check_regular_lagrangian(system):
 
 
 def _singular_message(W, rank, null):
-    direction = f"; null direction {list(null[0])}" if null else ""
+    if len(null) == 1:
+        direction = f"; null direction {list(null[0])}"
+    elif null:  # every direction of the kernel: one alone would hide the others
+        direction = f"; null directions {', '.join(str(list(v)) for v in null)}"
+    else:
+        direction = ""
     return (
         f"lagrangian: the Hessian W = d2L/dv dv is singular (rank {rank} of {W.rows}"
         f"{direction}); singular Lagrangians are outside the paper's scope"

@@ -110,7 +110,11 @@ def test_singular_hessian_reports_rank_and_null_direction():
     with pytest.raises(SingularLagrangianError) as err:
         nhham.System(["x", "y"], (xd + yd) ** 2 / 2)
     msg = str(err.value)
-    assert "rank 1 of 2" in msg and "null direction" in msg and "lagrangian" in msg
+    assert "rank 1 of 2" in msg and "null direction [-1, 1]" in msg and "lagrangian" in msg
+    # a 2-D kernel: both directions, by hand (d2L/dv dv = diag(1, 0, 0))
+    with pytest.raises(SingularLagrangianError,
+                       match=r"rank 1 of 3; null directions \[0, 1, 0\], \[0, 0, 1\]"):
+        nhham.System(["x", "y", "z"], "x_dot**2/2 + y*z")
 
 
 def test_singular_hessian_depending_on_q():
