@@ -208,7 +208,9 @@ def test_every_notebook_is_listed_and_stored_with_its_outputs():
                                     "nhham.system.expressions", "nhham.render.plotting",
                                     "nhham.system.scene_keys", "nhham.system.scene_numbers",
                                     "nhham.system.scene_structure", "nhham.system.scene",
-                                    "nhham.progress", "nhham.lagrangian.adjugate"])
+                                    "nhham.progress", "nhham.lagrangian.adjugate",
+                                    "nhham.journeys.reduction", "nhham.lagrangian.chaplygin",
+                                    "nhham.hamiltonian.hamiltonization_points"])
 def test_docstring_examples(module):
     mod = importlib.import_module(module)
     result = doctest.testmod(mod, optionflags=doctest.ELLIPSIS)

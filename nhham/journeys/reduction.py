@@ -13,7 +13,7 @@ import functools
 
 from nhham.journeys.answer import Answer, as_scene, quiet_steps
 
-__all__ = ["reduce", "hamiltonize", "reduction_of"]
+__all__ = ["reduce", "hamiltonize", "reduction_of", "connection_warnings"]
 
 
 def reduction_of(system, *, symmetry=None, then=None, level=None, steps=None):
@@ -100,7 +100,70 @@ def reduce(scene, *, symmetry=None, then=None, level=None, steps=None) -> Answer
     title = scene.name or str(scene.source)
     return Answer("reduce", data, lambda: reduce_text(title, data),
                   latex=functools.partial(reduce_latex, title, data), failure=failure,
+                  warnings=connection_warnings(scene, red),
                   payload={"reduction": red}, system=scene.system)
+
+
+def connection_warnings(scene, red) -> tuple:
+    """A warning where the scene's own motion ([steady], [initial]) lies where the
+    connection is singular (a factor of A's denominators vanishes there: the reduced data
+    do not describe that motion), naming the factor and the other symmetry coordinates.
+
+    Examples
+    --------
+    >>> from nhham import loads_scene
+    >>> scene = loads_scene('''
+    ... coordinates = ["x", "y", "z"]
+    ... lagrangian = "(x_dot**2 + y_dot**2 + z_dot**2)/2"
+    ... constraints = ["sin(x)*z_dot - y_dot"]
+    ... [initial]
+    ... x = 0.0
+    ... y = 0.0
+    ... z = 0.0
+    ... x_dot = 1.0
+    ... y_dot = 0.0
+    ... z_dot = 0.0
+    ... ''')
+    >>> print(reduce(scene, symmetry=["z"]).warnings[0])    # doctest: +NORMALIZE_WHITESPACE
+    the connection is singular at the [initial] state: sin(x) = 0 there (z' = -A r' is not
+    solved there); the reduction does not describe that motion: choose other symmetry
+    coordinates with --symmetry (the constraints also solve for: y)
+    """
+    import sympy as sp
+
+    from nhham.lagrangian.chaplygin import singular_factors, symmetry_choices
+
+    factors = singular_factors(red.connection, red.shape)
+    if not factors:
+        return ()
+    values = {p.name: v for p, v in scene.system.parameter_values.items()}
+    states = []
+    try:
+        if scene.steady is not None:
+            states.append(("[steady] motion", scene.steady.values(values)))
+    except Exception:  # noqa: BLE001 - an unreadable table is the reading command's to report
+        pass
+    try:
+        if scene.initial is not None:
+            states.append(("[initial] state", dict(scene.initial)))
+    except Exception:  # noqa: BLE001
+        pass
+    out = []
+    for where, state in states:
+        point = {sp.Symbol(k): v for k, v in {**values, **state}.items()}
+        zero = [f for f in factors if abs(complex(f.xreplace(point).evalf())) <= 1e-9]
+        if not zero:
+            continue
+        names = ", ".join(str(s) for s in red.symmetry)
+        others = [", ".join(g) for g in symmetry_choices(scene.system)
+                  if set(g) != {str(s) for s in red.symmetry}]
+        out.append(f"the connection is singular at the {where}: "
+                   f"{', '.join(f'{f} = 0' for f in zero)} there ({names}' = -A r' is not "
+                   f"solved there); the reduction does not describe that motion: choose "
+                   f"other symmetry coordinates with --symmetry"
+                   + (f" (the constraints also solve for: {'; '.join(others)})" if others
+                      else ""))
+    return tuple(out)
 
 
 def hamiltonize(scene, *, symmetry=None, then=None, level=None, steps=None) -> Answer:
@@ -151,9 +214,9 @@ def hamiltonize(scene, *, symmetry=None, then=None, level=None, steps=None) -> A
     reduced = red.to_dict()
     data["reduction_check"] = reduced["check"]
     data["level"], data["stages"] = reduced["level"], reduced["stages"]
-    warnings = () if found.divergence in (None, 0) else (
+    warnings = connection_warnings(scene, red) + (() if found.divergence in (None, 0) else (
         f"div(f^(k-1) X) = {found.divergence} is not zero: the measure is not invariant "
-        f"(please report this scene)",)
+        f"(please report this scene)",))
     title = scene.name or str(scene.source)
     return Answer("hamiltonize", data, lambda: hamiltonize_text(title, data),
                   latex=functools.partial(hamiltonize_latex, title, data), warnings=warnings, payload={"hamiltonization": found, "reduction": red},

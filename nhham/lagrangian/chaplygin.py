@@ -33,7 +33,7 @@ from nhham.lagrangian.algebra import cancel, tidy
 from nhham.system.expressions import to_text
 from nhham.lagrangian.decision import Decision
 
-__all__ = ["ChaplyginReduction", "chaplygin_reduction"]
+__all__ = ["singular_factors", "symmetry_choices", "ChaplyginReduction", "chaplygin_reduction"]
 
 
 @dataclass(frozen=True)
@@ -258,17 +258,12 @@ def _split(system, symmetry=None) -> tuple:
     m = system.m
     if m == 0:
         refuse("it has no velocity constraint")
-    used = set(system.lagrangian.free_symbols)
-    for e in list(system.phi) + (list(system.generalized_forces) if system.has_forces else []):
-        used |= sp.sympify(e).free_symbols
-    cyclic = [c for c in system.coordinates if c not in used]
+    cyclic = _cyclic(system)
     if symmetry is None and len(cyclic) < m:
         refuse(f"{m} constraint(s) need as many cyclic coordinates (absent from L, the "
                f"constraints and the forces); found {len(cyclic)}"
                + (f" ({', '.join(map(str, cyclic))}; name fewer with symmetry to keep the "
                   f"other constraints on the shape space)" if cyclic else ""))
-    mu = system.mu
-    index = {c: i for i, c in enumerate(system.coordinates)}
     if symmetry is not None:
         named = {str(c): c for c in system.coordinates}
         unknown = [s for s in symmetry if s not in named]
@@ -282,17 +277,73 @@ def _split(system, symmetry=None) -> tuple:
         groups = [tuple(named[s] for s in symmetry)]
     else:
         groups = list(itertools.combinations(cyclic, m))
-    found = []
-    for group in groups:
-        solved = solve_for(mu, [index[c] for c in group], system.coordinates)
-        if solved is not None:
-            found.append((solved[0], group, solved[1], solved[2]))
+    found = _solved(system, groups)
     if not found:
         refuse("the constraints do not solve for the velocities of "
                + ("the symmetry coordinates given" if symmetry is not None else
                   f"any {m} of the cyclic coordinates {', '.join(map(str, cyclic))}"))
     _, group, A, rest = min(found, key=lambda f: f[0])
     return group, A, rest
+
+
+def singular_factors(connection, shape) -> tuple:
+    """The factors of the connection's denominators that depend on the shape: A(r), the
+    reduced data and the reconstruction s' = -A r' are singular where one vanishes (the
+    constraints do not solve for s' there), so the reduction does not describe a motion
+    that reaches it; other symmetry coordinates may (:func:`symmetry_choices`).
+
+    >>> x, y = sp.symbols("x y")
+    >>> singular_factors(sp.Matrix([[-y/sp.sin(x)**2, 0]]), (x, y))
+    (sin(x),)
+    """
+    shape = set(shape)
+    found: dict = {}
+    for entry in connection:
+        _, den = sp.fraction(sp.together(entry))
+        for factor in sp.Mul.make_args(sp.factor_terms(den)):
+            base = factor.base if factor.is_Pow else factor
+            if base.free_symbols & shape:
+                found.setdefault(sp.srepr(base), base)
+    return tuple(found.values())
+
+
+def symmetry_choices(system) -> tuple:
+    """Every set of symmetry coordinates the reduction can take (cyclic coordinates whose
+    velocities the constraints solve for), the simplest connection first, as tuples of
+    names.
+
+    >>> from nhham import System
+    >>> symmetry_choices(System(["x", "y", "z"], "(x_dot**2 + y_dot**2 + z_dot**2)/2",
+    ...                         ["z_dot - x_dot"]))
+    (('x',), ('z',))
+    """
+    try:
+        _split(system)
+    except InputError:
+        return ()
+    found = _solved(system, itertools.combinations(_cyclic(system), system.m))
+    return tuple(tuple(str(c) for c in group)
+                 for _, group, _, _ in sorted(found, key=lambda f: f[0]))
+
+
+def _cyclic(system) -> list:
+    """The coordinates absent from L, the constraints and the forces."""
+    used = set(system.lagrangian.free_symbols)
+    for e in list(system.phi) + (list(system.generalized_forces) if system.has_forces else []):
+        used |= sp.sympify(e).free_symbols
+    return [c for c in system.coordinates if c not in used]
+
+
+def _solved(system, groups) -> list:
+    """(key, group, A, a) for each group of coordinates whose velocities the constraints
+    solve for (:func:`solve_for`)."""
+    index = {c: i for i, c in enumerate(system.coordinates)}
+    found = []
+    for group in groups:
+        solved = solve_for(system.mu, [index[c] for c in group], system.coordinates)
+        if solved is not None:
+            found.append((solved[0], tuple(group), solved[1], solved[2]))
+    return found
 
 
 def solve_for(mu, cols, coordinates) -> tuple | None:

@@ -201,9 +201,8 @@ class NumericModel:
 
     @property
     def energy_change(self) -> str:
-        """Why E_L is not conserved along the motion, or "" where it is (then the energy
-        drift measures a method's error; otherwise the energy balance residual
-        max |E(t) - E(0) - int P dt| does, DESIGN.md §2).
+        """Why E_L is not conserved, or "" where it is (else the energy balance residual
+        max |E(t) - E(0) - int P dt| measures a method's error, DESIGN.md §2).
 
         >>> from nhham import models, numeric_model
         >>> numeric_model(models.chaplygin_sleigh(), backend="numpy").energy_change
@@ -213,10 +212,9 @@ class NumericModel:
             return "the forces do work"
         if self.time_in_geometry:
             return f"{self.timed_key} depends on t"
-        if self.nonlinear:
-            return "the reaction of a nonlinear (Chetaev) constraint may do work"
-        if not self.linear_constraints:
-            return "the reactions of the affine constraints do work (lambda . h)"
+        if self.nonlinear or not self.linear_constraints:
+            return ("the reaction of a nonlinear (Chetaev) constraint may do work" if
+                    self.nonlinear else "the reactions of the affine constraints do work")
         return ""
 
     @property

@@ -660,8 +660,7 @@ def bench_data(result) -> dict:
             "reference_wall_time_s": json_number(result.reference_wall_time_s),
             "rows": rows, "time_to_solution": tts,
             "kkt_solve": str(result.kkt_solve),
-            "kkt_ratio_max": json_number(result.kkt_ratio_max),
-            "energy_change": str(result.forced),
+            "kkt_ratio_max": json_number(result.kkt_ratio_max), "energy_change": str(result.forced),
             "skipped": [{"method": m, "setting": s, "reason": why}
                         for m, s, why in result.skipped]}
 

@@ -139,3 +139,28 @@ def test_the_rubber_ball_reduces_in_two_steps_and_the_command_finds_its_factor(c
                                                roll=roll).items()}
         ratios.append(float((f ** -2).xreplace(at) / gAg))
     assert abs(ratios[0] / ratios[1] - 1) < 1e-12
+
+
+def test_a_connection_singular_on_the_scenes_motion_is_warned_about(tmp_path, capsys):
+    """sin(x) z' = y': with z as the symmetry, A = (0, -1/sin(x)) is singular at x = 0,
+    where the [initial] state is (by hand: z' = y'/sin(x) is not defined there); the
+    warning names the factor and y, which the constraint also solves for (y' = sin(x) z',
+    regular everywhere: no warning)."""
+    scene = tmp_path / "s.toml"
+    scene.write_text('''coordinates = ["x", "y", "z"]
+lagrangian = "(x_dot**2 + y_dot**2 + z_dot**2)/2"
+constraints = ["sin(x)*z_dot - y_dot"]
+[initial]
+x = 0.0
+y = 0.0
+z = 0.0
+x_dot = 1.0
+y_dot = 0.0
+z_dot = 0.0
+''')
+    assert main(["reduce", str(scene), "--symmetry", "z"]) == 0
+    err = capsys.readouterr().err
+    assert "the connection is singular at the [initial] state: sin(x) = 0" in err
+    assert "the constraints also solve for: y" in err
+    assert main(["reduce", str(scene), "--symmetry", "y"]) == 0
+    assert "singular" not in capsys.readouterr().err
