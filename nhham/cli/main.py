@@ -130,7 +130,7 @@ def _simulate_options(args, scene):
 
     opts = scene.simulate.given()
     given = {k: getattr(args, k) for k in ("method", "rtol", "atol", "step", "t_end", "max_step",
-                                           "save_every", "max_points")
+                                           "save_every", "max_points", "t_eval")
              if getattr(args, k, None) is not None}
     opts.update(given)
     method = opts.get("method", DEFAULT_METHOD)
@@ -153,7 +153,43 @@ def _simulate_options(args, scene):
     if getattr(args, "projection", False):
         opts["projection"] = True
     t_end = opts.pop("t_end", 10.0)
+    if getattr(args, "t_eval", None) is not None:
+        opts["t_eval"] = output_times(args.t_eval, t_end)
     return t_end, opts
+
+
+def output_times(text: str, t_end: float):
+    """``--t-eval``: ``T0:T1:N`` (N equally spaced times, ends included) or ``T,T,...``,
+    as an increasing array within [0, t_end] (UsageError naming ``--t-eval`` otherwise).
+
+    >>> output_times("0:1:5", 10.0)
+    array([0.  , 0.25, 0.5 , 0.75, 1.  ])
+    >>> output_times("0.5, 2", 10.0)
+    array([0.5, 2. ])
+    """
+    import numpy as np
+
+    def refuse(why):
+        raise UsageError(f"--t-eval: {why}, got {text!r}", key="--t-eval")
+
+    try:
+        if ":" in text:
+            start, stop, count = text.split(":")
+            n = int(count)
+            if n < 1:
+                refuse("N must be at least 1")
+            times = np.linspace(float(start), float(stop), n)
+        else:
+            times = np.array([float(x) for x in text.split(",") if x.strip()])
+    except ValueError:
+        refuse("expected T0:T1:N or a list T,T,... of numbers")
+    if not times.size or not np.all(np.isfinite(times)):
+        refuse("expected finite times")
+    if np.any(np.diff(times) <= 0):
+        refuse("the times must increase")
+    if times[0] < 0 or times[-1] > t_end * (1 + 1e-12):
+        refuse(f"the times must lie within [0, t_end = {t_end:g}]")
+    return times
 
 
 def cmd_simulate(args, steps) -> CommandOutput:

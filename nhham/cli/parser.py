@@ -205,6 +205,10 @@ def _add_simulate_options(p) -> None:
     p.add_argument("--output", metavar="FILE", default=None,
                    help="write the trajectory (the kept states): .npz (numpy) or "
                         "otherwise CSV")
+    p.add_argument("--t-eval", dest="t_eval", default=None, metavar="T0:T1:N|T,T,...",
+                   help="the times at which states are output: N equally spaced from T0 to T1, "
+                        "or a list (adaptive methods; within [0, t_end], increasing); e.g. "
+                        "--t-eval 0:10:101")
     p.add_argument("--save-every", dest="save_every", type=int, default=None,
                    metavar="J", help="keep every J-th step and the last (default: 1)")
     p.add_argument("--max-points", dest="max_points", type=int, default=None,

@@ -65,3 +65,28 @@ def test_budget_value_reads_seconds_or_none():
 
 def test_docstring_examples():
     assert doctest.testmod(options).failed == 0
+
+
+def test_t_eval_chooses_the_output_times(tmp_path, capsys):
+    """--t-eval 0:20:5 stores the states at t = 0, 5, 10, 15, 20 (the sleigh's [simulate]
+    t_end), the energy conserved there; times outside [0, t_end], decreasing, or
+    for a fixed-step method are refused naming --t-eval."""
+    import numpy as np
+
+    from nhham.cli.main import main, output_times
+
+    out = tmp_path / "run.csv"
+    assert main(["simulate", "examples/chaplygin_sleigh.toml", "--t-eval", "0:20:5",
+                 "--output", str(out)]) == 0
+    data = np.genfromtxt(out, delimiter=",", names=True)
+    assert np.allclose(data["t"], [0, 5, 10, 15, 20], atol=0)
+    # the sleigh (m = 1, I = 0.25, a = 0.5): the energy is conserved
+    assert np.allclose(data["energy"], data["energy"][0], rtol=1e-9)
+    for bad, why in (("0:30:5", "within"), ("3,1", "increase"), ("0:1:0", "at least 1"),
+                     ("x", "expected")):
+        with pytest.raises(UsageError, match=f"--t-eval: .*{why}"):
+            output_times(bad, 20.0)
+    capsys.readouterr()
+    assert main(["simulate", "examples/chaplygin_sleigh.toml", "--method", "rk4", "--step",
+                 "0.1", "--t-eval", "0:2:3"]) == 2
+    assert "--t-eval" in capsys.readouterr().err
