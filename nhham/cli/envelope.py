@@ -95,7 +95,11 @@ class CommandOutput:
         Warnings of the computation (one line each).
     failure : str or None
         When the computation did not succeed: one line saying why and what to
-        do. The command then exits :data:`EXIT_NOT_SUCCEEDED`.
+        do. The command then exits with the status of ``failure_kind``.
+    failure_kind : str
+        The ``error.kind`` of a failure (:data:`ERROR_KINDS`): ``failed`` (exit 3), or
+        ``interrupted`` (a run stopped by Ctrl-C that kept its states: exit 130, the
+        output printed all the same).
     """
 
     result: dict
@@ -103,6 +107,7 @@ class CommandOutput:
     scene: dict | None = None
     warnings: list = field(default_factory=list)
     failure: str | None = None
+    failure_kind: str = "failed"
 
     def render_text(self) -> str:
         return self.text() if callable(self.text) else str(self.text)

@@ -25,7 +25,7 @@ import traceback
 
 from nhham.cli.budget import BudgetExceeded, time_budget
 from nhham.cli.envelope import (
-    EXIT_NOT_SUCCEEDED,
+    ERROR_KINDS,
     EXIT_OK,
     CommandOutput,
     FailureReport,
@@ -213,8 +213,13 @@ def cmd_simulate(args, steps) -> CommandOutput:
         with steps.step(f"plot {args.plot}"):
             fig = plot_trajectory(result, title=f"{_title(scene, args)}: {result.method}")
             data["plot"] = save_figure(fig, args.plot)
+    from nhham.numerics.status import Status
+
+    # a Ctrl-C stopped the run: what it computed is printed and written, then exit 130
+    kind = "interrupted" if result.status == Status.INTERRUPTED else "failed"
     return CommandOutput(result=data, text=answer.render, scene=scene_info(scene),
-                         warnings=list(answer.warnings), failure=answer.failure)
+                         warnings=list(answer.warnings), failure=answer.failure,
+                         failure_kind=kind)
 
 
 def _control_laws(args) -> dict:
@@ -342,7 +347,7 @@ def main(argv=None) -> int:
 
 
 def _print_output(args, out, text, warnings, steps) -> int:
-    error = None if not out.failure else error_info("failed", out.failure)
+    error = None if not out.failure else error_info(out.failure_kind, out.failure)
     if getattr(args, "json", False):
         print_json(envelope(args.command, out.result, scene=out.scene, warnings=warnings,
                             error=error))
@@ -354,5 +359,5 @@ def _print_output(args, out, text, warnings, steps) -> int:
         print(steps.render(), file=sys.stderr)
     if out.failure:
         print(f"nhham: {one_line(out.failure)}", file=sys.stderr)
-        return EXIT_NOT_SUCCEEDED
+        return ERROR_KINDS[out.failure_kind]
     return EXIT_OK

@@ -19,7 +19,7 @@ import numpy as np
 from nhham.numerics.methods import names
 from nhham.numerics.run import PAUSE_SECONDS, Run, report_progress
 from nhham.numerics.scipy_loop import SCIPY_METHODS, WORK_ATOL, eval_failure
-from nhham.numerics.status import Status
+from nhham.numerics.status import STOPPED, Status
 
 __all__ = ["COMPILED_METHODS", "run_compiled"]
 
@@ -125,11 +125,11 @@ def run_compiled(model, y0, t0, t1, method, *, rtol, atol, max_step, first_step,
         if status != Status.PAUSED:
             break
         if deadline is not None and deadline.passed():
-            status = Status.TIME_LIMIT
+            status = deadline.stop_status()
             break
     if t_eval is None:
         recorder.close(float(state[0]), state[2:2 + nz])
-    message = (deadline.message(float(state[0])) if status == Status.TIME_LIMIT else
+    message = (deadline.message(float(state[0])) if status in STOPPED else
                _message(status, method, float(state[0]), fail, n2))
     T, Y, work = recorder.result(n2)
     failed = None if np.isnan(fail[0]) else fail[1:1 + n2].copy()

@@ -151,7 +151,8 @@ def simulate_many(model, y0, t_span, *, parameters=None, method: str = DEFAULT_M
         else:
             res = simulate(m, (t0, t1), Y0[i], method=method, rtol=rtol, atol=atol,
                            max_step=max_step, projection=projection, t_eval=t_eval,
-                           warn=False, time_limit=None if deadline is None else
+                           warn=False, time_limit=None if deadline is None
+                           or deadline.seconds == float("inf") else
                            max(deadline.remaining(), 1e-3))
             T, Y, W = res.t, res.y, None
             code, message, fev, steps = res.status, res.message, res.nfev, res.nsteps

@@ -57,7 +57,7 @@ from nhham.numerics.diagnostics import (Diagnostics, Singularity, singularity_at
 from nhham.numerics.nullspace import describe_kkt_solve
 from nhham.numerics.model import (LibraryReady, NumericModel, NumericsWarning,
                                   ProjectionOutcome)
-from nhham.numerics.run import Deadline, Run, final_state_text
+from nhham.numerics.run import Deadline, Run, final_state_text, interruptible
 from nhham.numerics.methods import DEFAULT_METHOD, METHODS, Method, lookup, names
 from nhham.numerics.scipy_loop import DenseOutput, run_scipy
 from nhham.numerics.simulate_options import (AdaptiveOptions, FixedStepOptions, MethodOptions,
@@ -83,10 +83,9 @@ class SimulationResult:
         As in scipy: ``y[i]`` is the i-th state variable over time (names in
         :attr:`names`: coordinates then velocities). ``states`` gives (K, 2n).
     status : Status
-        An int-valued enum: 0 success; 1 a terminal event stopped the run; -1 step
-        failure; -2 NaN/overflow (run stopped); -3 singular saddle-point system; -4
-        Newton/projection failure; -5 stopped at ``time_limit``. The trajectory up to the
-        failure is kept.
+        0 success; 1 a terminal event stopped the run; -1 step failure; -2 NaN/overflow;
+        -3 singular saddle-point system; -4 Newton/projection failure; -5 stopped at
+        ``time_limit``; -6 interrupted (Ctrl-C). The trajectory up to there is kept.
     message : str
     success : bool
         ``status >= 0``, as in scipy.
@@ -468,6 +467,28 @@ def simulate(system_or_model, t_span, y0, *, method: str | Method = DEFAULT_METH
         residual_tol = 1e-11 if common.projection or spec.keeps_constraints else 1e-8
     start = time.perf_counter()
     deadline = Deadline.after(common.time_limit)
+    with interruptible():   # a Ctrl-C stops the run keeping its states (INTERRUPTED)
+        run, model, recorder = _run_loop(model, spec, own, common, y_init, t0, t1, recorder,
+                                         settings, deadline, compiled_loop, loop,
+                                         scipy_features, callables)
+    wall = time.perf_counter() - start
+    storage = None if spec.reference else recorder.storage(common.t_eval is not None)
+    result = _result(model, run, spec.name, settings, wall, residual_tol, initial,
+                     common.warn, storage)
+    if callables:
+        result = replace(result, controls=MappingProxyType(dict(callables)))
+    if not contacts:
+        return result
+    from nhham.numerics.contact_forces import contact_forces
+
+    return replace(result, contact_forces=contact_forces(
+        system_or_model, contacts, result.states, result.multipliers.T,
+        parameters=dict(zip(model.parameter_names, model.parameter_values))))
+
+
+def _run_loop(model, spec, own, common, y_init, t0, t1, recorder, settings, deadline,
+              compiled_loop, loop, scipy_features, callables):
+    """(run, model, recorder): the run in its loop, again compiled if the build wins."""
     while True:
         try:
             if compiled_loop:
@@ -498,19 +519,7 @@ def simulate(system_or_model, t_span, y0, *, method: str | Method = DEFAULT_METH
             compiled_loop = _use_compiled_loop(model, spec, loop, scipy_features)
             settings.update(backend=model.backend, backend_note=model.backend_note)
             recorder = _recorder(model, spec, common)
-    wall = time.perf_counter() - start
-    storage = None if spec.reference else recorder.storage(common.t_eval is not None)
-    result = _result(model, run, spec.name, settings, wall, residual_tol, initial,
-                     common.warn, storage)
-    if callables:
-        result = replace(result, controls=MappingProxyType(dict(callables)))
-    if not contacts:
-        return result
-    from nhham.numerics.contact_forces import contact_forces
-
-    return replace(result, contact_forces=contact_forces(
-        system_or_model, contacts, result.states, result.multipliers.T,
-        parameters=dict(zip(model.parameter_names, model.parameter_values))))
+    return run, model, recorder
 
 
 def _adaptive(own, common, deadline) -> dict:

@@ -57,7 +57,7 @@ import numpy as np
 from nhham.errors import InputError
 from nhham.numerics.run import PAUSE_SECONDS, Run, report_progress
 from nhham.numerics.saddle import solve_saddle
-from nhham.numerics.status import NumericalFailure, Status
+from nhham.numerics.status import STOPPED, NumericalFailure, Status
 from nhham.numerics.storage import Recorder, default_max_points
 
 __all__ = ["FixedStepRun", "rattle", "rattle4", "rk4", "rattle_step"]
@@ -335,7 +335,7 @@ def _run_fixed(step_fn, recorder, y0, t0, t1, h, progress=False, deadline=None):
             if progress:
                 reported = report_progress(t, t0, t1, reported)
             if deadline is not None and i < N and deadline.passed():
-                status, message = Status.TIME_LIMIT, deadline.message(t)
+                status, message = deadline.stop_status(), deadline.message(t)
                 break
     except NumericalFailure as exc:
         status, message = exc.status, str(exc)
@@ -448,13 +448,13 @@ def _compiled_rattle(model, st, y0, t0, t1, h, recorder, composition, progress, 
         if status != Status.PAUSED:
             break
         if deadline is not None and deadline.passed():
-            status = Status.TIME_LIMIT
+            status = deadline.stop_status()
             break
     done, newton = int(info[0]), int(info[1])
     recorder.close(t0 + h * done, y)
     T, Y, _ = recorder.result(2 * model.n)
     msg = status.message if status == 0 else deadline.message(t0 + h * done) if (
-        status == Status.TIME_LIMIT) else (
+        status in STOPPED) else (
         f"{status.message} in the RATTLE step at t = {t0 + (done + 1) * h:.6g} "
         f"(step {done + 1}){_REDUCE_THE_STEP.get(status, '')}; the run was stopped")
     # A step costs about one field evaluation plus one per Newton iteration.

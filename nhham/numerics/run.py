@@ -8,15 +8,21 @@ are columns, as in scipy: ``y`` has shape (2n, K). No sympy here.
 
 from __future__ import annotations
 
+import math
+import signal
 import sys
+import threading
 import time
+from contextlib import contextmanager
 from dataclasses import dataclass
+from typing import Iterator
 
 import numpy as np
 
 from nhham.numerics.status import Status
 
-__all__ = ["Run", "report_progress", "PAUSE_SECONDS", "Deadline", "final_state_text"]
+__all__ = ["Run", "report_progress", "PAUSE_SECONDS", "Deadline", "interruptible",
+           "final_state_text"]
 
 #: Wall time after which the compiled loops hand control back to Python: a signal
 #: (Ctrl-C, the command's ``--budget``) is handled within this, never after a long run
@@ -77,26 +83,72 @@ class Run:
 
 @dataclass(frozen=True)
 class Deadline:
-    """The wall-time limit of a run (``simulate(time_limit=...)``): the loops look at it
-    after every step (Python) or every return of the compiled loop (every few ms)."""
+    """When a run stops early: its wall-time limit (``simulate(time_limit=...)``; inf for
+    none) or a Ctrl-C inside :func:`interruptible`. The loops look at it after every step
+    (Python) or every return of the compiled loop (every few ms) and stop with
+    :meth:`stop_status`, keeping what they computed."""
 
     seconds: float
     end: float
 
     @classmethod
-    def after(cls, seconds) -> "Deadline | None":
-        return None if seconds is None else cls(float(seconds), time.perf_counter() + seconds)
+    def after(cls, seconds) -> "Deadline":
+        if seconds is None:
+            return cls(math.inf, math.inf)
+        return cls(float(seconds), time.perf_counter() + seconds)
 
     def passed(self) -> bool:
-        return time.perf_counter() > self.end
+        return _INTERRUPTED.is_set() or time.perf_counter() > self.end
 
     def remaining(self) -> float:
         """Seconds left (negative once passed)."""
         return self.end - time.perf_counter()
 
+    def stop_status(self) -> Status:
+        """INTERRUPTED after a Ctrl-C, else TIME_LIMIT."""
+        return Status.INTERRUPTED if _INTERRUPTED.is_set() else Status.TIME_LIMIT
+
     def message(self, t) -> str:
+        if _INTERRUPTED.is_set():
+            return (f"interrupted (Ctrl-C) at t = {t:.6g}, before the end of the interval; "
+                    f"the states up to there are kept")
         return (f"stopped at the time limit of {self.seconds:g} s (wall time) at t = {t:.6g}, "
                 f"before the end of the interval")
+
+
+#: Set by the first Ctrl-C inside :func:`interruptible`.
+_INTERRUPTED = threading.Event()
+
+
+@contextmanager
+def interruptible() -> Iterator[None]:
+    """A Ctrl-C in this block stops the run at the loops' next look at their
+    :class:`Deadline` (status ``INTERRUPTED``), keeping the states computed; a second one
+    interrupts at once (KeyboardInterrupt). Off the main thread (no signals) nothing
+    changes.
+
+    Examples
+    --------
+    >>> with interruptible():
+    ...     Deadline.after(None).passed()
+    False
+    """
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+
+    def first(signum, frame):
+        if _INTERRUPTED.is_set():
+            raise KeyboardInterrupt
+        _INTERRUPTED.set()
+
+    _INTERRUPTED.clear()
+    previous = signal.signal(signal.SIGINT, first)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
+        _INTERRUPTED.clear()
 
 
 def report_progress(t, t0, t1, reported):

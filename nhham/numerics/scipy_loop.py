@@ -229,7 +229,7 @@ def run_scipy(model, y0, t0, t1, method, *, rtol, atol, max_step, first_step, t_
                 status, message = Status.EVENT, Status.EVENT.message
                 break
             if deadline is not None and deadline.passed():
-                status, message = Status.TIME_LIMIT, deadline.message(solver.t)
+                status, message = deadline.stop_status(), deadline.message(solver.t)
                 break
     except NumericalFailure as exc:
         status, message, failed = exc.status, str(exc), exc.state

@@ -14,7 +14,7 @@ import enum
 
 from nhham.errors import ComputationError
 
-__all__ = ["Status", "NumericalFailure", "c_defines"]
+__all__ = ["Status", "NumericalFailure", "c_defines", "STOPPED"]
 
 
 class Status(enum.IntEnum):
@@ -34,6 +34,7 @@ class Status(enum.IntEnum):
     SINGULAR = -3
     NOT_CONVERGED = -4
     TIME_LIMIT = -5
+    INTERRUPTED = -6
 
     @property
     def message(self) -> str:
@@ -50,7 +51,12 @@ _MESSAGES = {
     Status.SINGULAR: "singular saddle-point system",
     Status.NOT_CONVERGED: "Newton iteration or projection did not converge",
     Status.TIME_LIMIT: "stopped at the time limit (wall time) before the end of the interval",
+    Status.INTERRUPTED: "interrupted (Ctrl-C) before the end of the interval",
 }
+
+#: Stopped from outside (a time limit, a Ctrl-C), not by the run: what it computed is kept
+#: and good.
+STOPPED = frozenset({Status.TIME_LIMIT, Status.INTERRUPTED})
 
 
 class NumericalFailure(ComputationError):

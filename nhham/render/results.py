@@ -623,16 +623,16 @@ def simulation_failure(result, scene_path: str, free_multipliers=()) -> str:
         return (f"simulation stopped {where}: {why}{what}, so the multipliers are not "
                 f"determined; run `nhham classify {scene_path}` to see the free multipliers "
                 f"or secondary constraints, or where the rank of C drops")
+    if code == -6:
+        return f"interrupted (Ctrl-C) {where}: the states up to there are in the output"
     if code == -2:
         return (f"simulation stopped {where}: the state became non-finite; check the "
                 f"parameters and [initial] data, or try a smaller --max-step")
     if code == -4:
-        todo = ("a smaller --step" if result.settings.get("step") is not None else
-                "a smaller --rtol or --max-step")
+        todo = "a smaller --step" if result.settings.get("step") else "a smaller --rtol or --max-step"
         return (f"simulation stopped {where}: the Newton iteration of the step (or of the "
                 f"projection onto the constraints) did not converge; try {todo}")
-    stiff = ("" if lookup(result.method).stiff else
-             f"--method {names(lambda m: m.stiff)[0]} or ")
+    stiff = "" if lookup(result.method).stiff else f"--method {names(lambda m: m.stiff)[0]} or "
     return f"simulation stopped {where}: {result.message}; try {stiff}a looser --rtol"
 
 

@@ -1,5 +1,6 @@
 """What every integration loop hands back (nhham.numerics.run): a run stopped at its
-wall-time limit keeps its trajectory; progress is reported by tenths of the interval."""
+wall-time limit or by a Ctrl-C keeps its trajectory; progress is reported by tenths of the
+interval."""
 
 from __future__ import annotations
 
@@ -27,6 +28,34 @@ def test_time_limit_stops_a_run_and_keeps_it(method, options):
     assert len(res.t) == res.y.shape[1] >= 2
 
 
+@pytest.mark.parametrize("method, options", [("DOP853", {}), ("Radau", {}),
+                                             ("rattle", {"step": 0.01})])
+def test_a_ctrl_c_stops_a_run_and_keeps_it(method, options):
+    """SIGINT during the run (a timer thread sends it to this process): the loop stops at
+    its next look (Status.INTERRUPTED), the states so far kept and on the disk's exact
+    motion (theta' and phi' constant); SIGINT is handled as before afterwards."""
+    import os
+    import signal
+    import threading
+
+    from test_exact_solutions import rolling_disk, rolling_disk_exact
+
+    model = numeric_model(rolling_disk())
+    y0, _ = rolling_disk_exact(np.array(0.0))
+    before = signal.getsignal(signal.SIGINT)
+    timer = threading.Timer(0.3, os.kill, (os.getpid(), signal.SIGINT))
+    timer.start()
+    try:
+        res = simulate(model, (0, 1e7), y0, method=method, warn=False, save_every=1000,
+                       **options)
+    finally:
+        timer.cancel()
+    assert res.status.name == "INTERRUPTED" and not res.success
+    assert "interrupted (Ctrl-C) at t = " in res.message and 0 < res.t[-1] < 1e7
+    assert np.allclose(res.y[6], y0[6]) and np.allclose(res.y[7], y0[7])
+    assert signal.getsignal(signal.SIGINT) is before
+
+
 def test_progress_is_reported_once_a_tenth(capsys):
     """Over [2, 4]: t = 2.5 is 25% done (the 20% mark, once), 3.1 passes 50%, and an
     earlier time reports nothing again."""
@@ -41,7 +70,8 @@ def test_progress_is_reported_once_a_tenth(capsys):
 
 
 def test_a_deadline():
-    assert Deadline.after(None) is None
+    never = Deadline.after(None)
+    assert not never.passed() and never.seconds == float("inf")
     later = Deadline.after(1e6)
     assert not later.passed() and later.seconds == 1e6
     assert later.message(2.5) == ("stopped at the time limit of 1e+06 s (wall time) at t = 2.5, "
