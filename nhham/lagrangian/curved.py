@@ -110,8 +110,16 @@ class CurvedChart:
     def describe(self) -> str:
         """What the chart solves, for the decisions' scope."""
         names = ", ".join(q.name for q in self.dependent)
-        return (f"the holonomic constraint{'s' if len(self.constraints) > 1 else ''} solved "
+        # a velocity (<q>_dot: no coordinate may have that name) makes a Chetaev chart
+        kind = "constraint" if any(q.name.endswith("_dot") for q in self.involved) \
+            else "holonomic constraint"
+        return (f"the {kind}{'s' if len(self.constraints) > 1 else ''} solved "
                 f"for {names} over F_p")
+
+    @property
+    def involved(self) -> frozenset:
+        """The symbols of the constraints."""
+        return frozenset().union(*(sp.sympify(g).free_symbols for g in self.constraints))
 
     def degree_env(self) -> dict:
         """Degree bounds of the dependent coordinates in the lifted variables: an angle

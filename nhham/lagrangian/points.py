@@ -127,10 +127,20 @@ class PointSampler:
         self.circle = tuple(p for p in circle if self.fixed.get(p))
         self.drawn = tuple(p for p in parameters if p not in values)
         self.rng = random.Random(seed)
-        self.solved, self.chart = _charts(self.coordinates, holonomic, modular,
-                                          (*context, *affine))
-        self.affine = tuple(sp.sympify(e) for e in affine)
+        affine = tuple(sp.sympify(e) for e in affine)
         vels = self.velocities
+        nonlinear = [e for e in affine
+                     if any(c.free_symbols & set(vels) for c in jacobian_row(e, vels))]
+        if nonlinear and not modular:
+            raise NotExact(f"the velocity constraint {short(nonlinear[0])} = 0 is not affine "
+                           f"(Chetaev): M_1 is curved in the velocities, with points over "
+                           f"F_p only")
+        # Chetaev's constraints join the chart: their dependent velocities are roots of
+        # polynomials over F_p (the chart's smooth points: d phi/d v of full rank there)
+        self.solved, self.chart = _charts(self.coordinates, holonomic, modular,
+                                          (*context, *affine),
+                                          affine if nonlinear else (), vels)
+        self.affine = () if nonlinear else affine
         self.mu = mu if mu is not None else [jacobian_row(e, vels) for e in self.affine]
         self.h = [e.xreplace({v: 0 for v in vels}) for e in self.affine]
         self.dependent: tuple | None = None
@@ -225,6 +235,9 @@ class PointSampler:
             circ = Degree(2, {key: (2, 1)})
             deg[s] = Angle(Degree(1), circ, circ)
         if self.chart is not None:
+            for v in self.velocities:   # drawn before a chart that solves for some of them
+                if v in self.chart.involved and v not in dependent:
+                    env[v], deg[v] = self._draw(), Degree(1)
             found = self.chart.solve(env, self.rng)
             if found is None:
                 return None
@@ -240,7 +253,8 @@ class PointSampler:
         vels = self.velocities
         if not self.affine:
             for v in vels:
-                env[v], deg[v] = self._draw(), Degree(1)
+                if v not in env:
+                    env[v], deg[v] = self._draw(), Degree(1)
             self._den_degree = 0
             return ExactPoint(env, deg)
         return self._velocities(env, deg)
@@ -337,9 +351,9 @@ def exact_sampler(manifold, seed: int, *, modular: bool = False) -> PointSampler
                             context=(system.lagrangian,))
     if tuple(manifold.fibre) != tuple(system.velocities):
         raise NotExact("exact points are drawn in TQ and Q")
-    _refuse_nonlinear(system, equations)
     if equations == set(holonomic) | set(system.phi):
         return PointSampler.on_M1(system, seed, modular=modular)
+    _refuse_nonlinear(system, equations)
     solved, affine = _split(system, manifold.equations)
     return PointSampler(system.coordinates, system.velocities, system.parameters, values,
                         solved, affine, seed, modular=modular,
@@ -366,17 +380,20 @@ def _split(system, constraints):
     return holonomic, affine
 
 
-def _charts(coordinates, holonomic, modular, context):
-    """(coordinates solved linearly, the curved chart of the rest or None)."""
+def _charts(coordinates, holonomic, modular, context, velocity_constraints=(),
+            velocities=()):
+    """(coordinates solved linearly, the curved chart of the rest or None); the velocity
+    constraints given (Chetaev's, nonlinear in v) join the chart with the velocities as
+    its unknowns too."""
     solved, unsolved = solve_for_coordinates(coordinates, holonomic)
-    if not unsolved:
+    if not unsolved and not velocity_constraints:
         return solved, None
     if not modular:
         raise NotExact(f"the holonomic constraint {short(unsolved[0])} = 0 is not linear "
                        f"in a coordinate with a constant coefficient: M is curved, with "
                        f"points over F_p only")
-    rest = [sp.sympify(g).xreplace(solved) for g in unsolved]
-    free = [q for q in coordinates if q not in solved]
+    rest = [sp.sympify(g).xreplace(solved) for g in (*unsolved, *velocity_constraints)]
+    free = [q for q in coordinates if q not in solved] + list(velocities)
     return solved, curved_chart(rest, free, context)
 
 

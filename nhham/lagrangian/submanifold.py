@@ -692,9 +692,11 @@ def has_real_point(system, constraints, policy: Policy) -> bool:
 
 @functools.lru_cache(maxsize=32)
 def _has_real_point(system, constraints, precision, seed) -> bool:
+    # a chart with Chetaev's constraints lives in TQ: look there
+    in_tq = any(sp.sympify(g).free_symbols & set(system.velocities) for g in constraints)
     try:
         Submanifold(system, constraints, precision=precision, samples=1, seed=seed,
-                    fibre=()).points()
+                    fibre=system.velocities if in_tq else ()).points()
     except ComputationError:
         return False
     return True

@@ -82,3 +82,22 @@ def test_every_constraint_of_M1_is_labelled_by_kind_and_time():
                      ("holonomic[0].lift", "affine", True),
                      ("holonomic[1].lift", "linear", False),
                      ("constraints[0]", "linear", False), ("constraints[1]", "affine", True)]
+
+
+def test_chetaev_decisions_are_exact_at_points_over_F_p():
+    """M_1 of a Chetaev constraint is curved in the velocities: its points over F_p (the
+    dependent velocity a root mod p) prove a full rank (the isokinetic particle:
+    C = -c^2/m on M_1; it was sampled). By
+    hand: L = (x'^2 - y'^2)/2 (W = diag(1, -1)) and phi = (x'^2 - y'^2)/2 give
+    mu = (x', -y'), C = -mu W^-1 mu^T = -(x'^2 - y'^2) = -2 phi: zero on M_1 (the exact
+    reduction sees it)."""
+    analysis = analyze_constraints(nhham.System(["x", "y"], m * (xd**2 + yd**2) / 2
+                                                - m * g * y, [(xd**2 + yd**2 - 2) / 2],
+                                                parameters={m: 1.0, g: 9.81}))
+    rank = analysis.stages[0].decisions[0].decision
+    assert analysis.regular and rank.method == "exact" and "over F_p" in rank.detail
+    assert "M is curved (the constraint solved for" in rank.detail
+    null = analyze_constraints(nhham.System(["x", "y"], (xd**2 - yd**2) / 2,
+                                            [(xd**2 - yd**2) / 2]))
+    decision = null.stages[0].decisions[0].decision
+    assert not null.regular and null.rank_C == 0 and decision.method == "exact"
