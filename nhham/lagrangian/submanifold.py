@@ -679,22 +679,18 @@ class Submanifold:
 
 
 def has_real_point(system, constraints, policy: Policy) -> bool:
-    """Whether {g = 0} in Q (``constraints``: holonomic g, the curved ones of a chart)
-    has a real point, found by Newton projection from seeded starts.
-
-    Points over F_p lie over the algebraic closure of Q and say nothing of that
-    (x^2 + y^2 + 1 = 0 has them). The constraints a chart leaves out are linear in a
-    coordinate with a constant coefficient: they have a real solution at every real
-    point of these. Memoised per system and constraints.
-    """
+    """Whether {g = 0} (the curved constraints of a chart: in Q, or in TQ with Chetaev's)
+    has a real point, found by Newton projection from seeded starts. Points over F_p lie
+    over the algebraic closure of Q and say nothing of that (x^2 + y^2 + 1 = 0 has them).
+    The constraints a chart leaves out are linear in a coordinate with a constant
+    coefficient: they have a real solution at every real point of these. Memoised."""
     return _has_real_point(system, tuple(constraints), policy.precision, policy.seed)
 
 
 @functools.lru_cache(maxsize=32)
 def _has_real_point(system, constraints, precision, seed) -> bool:
-    # a chart with Chetaev's constraints lives in TQ: look there
     in_tq = any(sp.sympify(g).free_symbols & set(system.velocities) for g in constraints)
-    try:
+    try:  # a chart with Chetaev's constraints lives in TQ: look there
         Submanifold(system, constraints, precision=precision, samples=1, seed=seed,
                     fibre=system.velocities if in_tq else ()).points()
     except ComputationError:
