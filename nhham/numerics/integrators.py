@@ -38,6 +38,13 @@ reversible integrable problems (Modin & Verdier, "What makes nonholonomic
 integrators work?", Numer. Math. 145 (2020) 405-435, explain why and show
 problems where it fails).
 
+With t in L or a constraint, each half kick reads the model at its grid point's time and
+the inner constraint at t + h/2; with constraints nonlinear in v (Chetaev's rule) the rows
+read (q, v): the reaction's direction mu = d phi/d v at (q0, v0) and (q1, v1), the inner
+constraint phi(q_m, (q1 - q0)/h) = 0, and (v1, lam1) by Newton's method. Both keep the
+step symmetric (so of order 2) and phi = 0 to round-off at the grid points; they run in
+the Python stepper (:meth:`_RattleStepper._step_extended`), not the compiled loop.
+
 Restrictions: L must be quadratic in v without linear terms
 (``model.quadratic``); otherwise :class:`~nhham.errors.InputError` is raised.
 The nonlinear equations are solved by Newton's method: for constant W only
@@ -106,13 +113,22 @@ class _RattleStepper:
         self.nfev = 0
         self.newton = 0
         self.lam_guess = None
-        if model.constant_W:
+        if model.constant_W and not self.extended:
             self.W = model.geometry(np.zeros(model.n))[0]
 
-    def step(self, y0, h):
+    def step(self, y0, h, t=0.0):
+        """(y1, lam1) after one step of size h from y0 at the time t."""
+        if self.extended:
+            return self._step_extended(y0, h, t)
         if self.model.constant_W:
             return self._step_constant(y0, h)
         return self._step_general(y0, h)
+
+    @property
+    def extended(self) -> bool:
+        """t in L or a constraint, or a constraint nonlinear in v (Chetaev): the step of
+        :meth:`_step_extended` (the Python stepper; the compiled loop takes neither)."""
+        return self.model.time_in_geometry or self.model.nonlinear
 
     # ---------------------------------------------------- residual pieces
     def _r3(self, q0, q1, h):
@@ -275,6 +291,119 @@ class _RattleStepper:
         self.lam_guess = lam1
         return np.concatenate([q1, v1]), lam1
 
+    # ------------------------------------------ t and Chetaev's constraints
+    def _geometry(self, model, q, v):
+        """W, mu, h, g of ``model`` at q, the constraints' rows at (q, v) when they read v
+        (mu v + h = phi(q, v) whatever phi); q and v of the same shape."""
+        if not self.model.nonlinear:
+            return model.geometry(q)
+        return model.geometry(np.concatenate([q, v], axis=-1))
+
+    def _residual_extended(self, Z, q0, p0, W0, mu0, h, models):
+        """The step's equations for a batch Z (K, 2n+m) of (p_h, q1, lam0), each model at
+        its own time (t0, t0 + h/2, t0 + h): the kick with the reaction direction at
+        (q0, v0), the drift, and phi(q_m, (q1 - q0)/h) = 0 at the midpoint (g(q1) = 0 for
+        the holonomic rows): as the affine scheme, with mu and h read at (q, v)."""
+        n, k = self.n, self.k
+        m0, mm, m1 = models
+        P, Q1, Lam = Z[:, :n], Z[:, n:2 * n], Z[:, 2 * n:]
+        U0 = np.linalg.solve(W0, P.T).T
+        Lq0 = m0.lagrangian_q(np.concatenate([np.broadcast_to(q0, U0.shape), U0], axis=1))
+        Qm, Um = 0.5 * (q0 + Q1), (Q1 - q0) / h
+        # W reads q only; where the constraints read v they are read at the mean velocity
+        # (v = 0 may be singular for them: sqrt(x'^2 + y'^2))
+        W1, _, _, g1 = self._geometry(m1, Q1, Um)
+        U1 = np.linalg.solve(W1, P[..., None])[..., 0]
+        R1 = P - p0 - 0.5 * h * (Lq0 - Lam @ mu0)
+        R2 = Q1 - q0 - 0.5 * h * (U0 + U1)
+        _, mu_m, h_m, _ = self._geometry(mm, Qm, Um)
+        R3 = np.einsum("kij,kj->ki", mu_m, Um) + h_m
+        if k:
+            R3[:, :k] = g1
+        return np.concatenate([R1, R2, R3], axis=1)
+
+    def _step_extended(self, y0, h, t):
+        """One step of the scheme with t in L or the constraints, or constraints nonlinear
+        in v (Chetaev's rule: the reaction along mu = d phi/d v). Each half kick takes the
+        reaction's direction at its own grid point, (q0, v0) and (q1, v1), and the inner
+        constraint is phi(q_m, (q1 - q0)/h, t + h/2) = 0: the step with -h from
+        (q1, v1) at t + h is the step's inverse (symmetric, so of even order: 2), and
+        phi(q1, v1, t + h) = 0 holds at the grid points."""
+        n, m = self.n, self.m
+        model = self.model
+        models = tuple(model.at_time(t + c * h) for c in (0.0, 0.5, 1.0))
+        q0, v0 = y0[:n], y0[n:]
+        W0, mu0, _, _ = self._geometry(models[0], q0, v0)
+        p0 = W0 @ v0
+        lam = self.lam_guess if self.lam_guess is not None else self._lambda_at(models[0], y0)
+        Lq = models[0].lagrangian_q(y0)
+        p_h = p0 + 0.5 * h * (Lq - mu0.T @ lam)
+        z = np.concatenate([p_h, q0 + h * np.linalg.solve(W0, p_h), lam])
+        scale = np.concatenate([np.full(n, 1.0 + np.max(np.abs(p0))),
+                                np.full(n, 1.0 + np.max(np.abs(q0))),
+                                np.full(m, 1.0 + np.max(np.abs(lam), initial=0.0))])
+        z = self._newton(lambda Z: self._residual_extended(Z, q0, p0, W0, mu0, h, models),
+                         z, scale)
+        p_h, q1 = z[:n], z[n:2 * n]
+        v1, lam1 = self._finish_extended(models[2], q1, p_h, h, (q1 - q0) / h)
+        self.lam_guess = lam1
+        return np.concatenate([q1, v1]), lam1
+
+    def _lambda_at(self, model, y0):
+        dy, lam, _, status = model.evaluate(y0)
+        self.nfev += 1
+        if status:
+            raise NumericalFailure(Status.SINGULAR, "singular saddle-point system at the "
+                                   "initial state")
+        return lam
+
+    def _newton(self, residual, z, scale):
+        """Newton's method on residual(Z) (batched) from z, with a finite-difference
+        Jacobian refreshed when the residual stops falling fast (relative test)."""
+        J, best = None, np.inf
+        for it in range(self.maxiter):
+            r = residual(z[None])[0]
+            err = float(np.max(np.abs(r) / scale))
+            _finite_or_fail(err)
+            if err <= self.tol:
+                return z
+            if it > 3 and err >= best:
+                _floor_or_fail(err)
+                return z
+            if J is None or err > 0.1 * best:
+                eps = np.sqrt(np.finfo(float).eps) * np.maximum(np.abs(z), scale)
+                R = residual(z[None, :] + np.diag(eps))
+                J = ((R - r[None, :]) / eps[:, None]).T
+            best = min(best, err)
+            z = z - np.linalg.solve(J, r)
+            self.newton += 1
+        raise NumericalFailure(Status.NOT_CONVERGED, f"Newton iteration of the RATTLE step "
+                               f"did not converge (residual {err:.3g}); reduce the step")
+
+    def _finish_extended(self, model, q1, p_h, h, mean):
+        """The second half kick and phi(q1, v1) = 0, (v1, lam1): a saddle solve for
+        constraints affine in v, Newton's method on (v1, lam1) for Chetaev's (mu read at
+        the v1 sought; W, free of v, at the step's mean velocity)."""
+        n, m = self.n, self.m
+        W1 = self._geometry(model, q1, mean)[0]
+        u1 = np.linalg.solve(W1, p_h)
+        rhs = p_h + 0.5 * h * model.lagrangian_q(np.concatenate([q1, u1]))
+        _, mu1, h1, _ = self._geometry(model, q1, u1)
+        v1, nu = solve_saddle(W1, mu1, rhs, -h1, null_space=False)
+        if not self.model.nonlinear or not m:
+            return v1, nu * (2.0 / h)
+
+        def residual(Z):   # W1 v + mu(q1, v)^T nu = rhs, phi(q1, v) = 0; lam1 = 2 nu/h
+            V, N = Z[:, :n], Z[:, n:]
+            _, mu, hh, _ = self._geometry(model, np.broadcast_to(q1, V.shape), V)
+            return np.concatenate([V @ W1.T + np.einsum("kij,ki->kj", mu, N) - rhs,
+                                   np.einsum("kij,kj->ki", mu, V) + hh], axis=1)
+
+        scale = np.concatenate([np.full(n, 1.0 + np.max(np.abs(rhs))),
+                                np.full(m, 1.0 + np.max(np.abs(nu), initial=0.0))])
+        z = self._newton(residual, np.concatenate([v1, nu]), scale)
+        return z[:n], z[n:] * (2.0 / h)
+
     def _fd_jacobian(self, z, r, q0, p0, W0, mu0, h, scale):
         eps = np.sqrt(np.finfo(float).eps) * np.maximum(np.abs(z), scale)
         Z = z[None, :] + np.diag(eps)
@@ -371,10 +500,11 @@ def rattle(model, y0, t0, t1, h, *, save_every: int = 1, tol=None, recorder=None
     """
     st = _RattleStepper(model, tol=tol)
     recorder = _recorder(recorder, 2 * model.n, save_every)
-    if _compiled_ok(model):
+    if _compiled_ok(st):
         return _compiled_rattle(model, st, y0, t0, t1, h, recorder, 0, progress, deadline)
-    _, status, msg, nsteps, hh = _run_fixed(lambda y, h: st.step(y, h)[0], recorder, y0,
-                                            t0, t1, h, progress, deadline)
+    clock = _Clock(t0)
+    _, status, msg, nsteps, hh = _run_fixed(lambda y, h: st.step(y, h, clock.tick(h))[0],
+                                            recorder, y0, t0, t1, h, progress, deadline)
     t, y, _ = recorder.result(2 * model.n)
     return Run(t, y, None, status, msg, st.nfev + nsteps + st.newton, nsteps,
                newton_iterations=st.newton, step=hh)
@@ -390,13 +520,15 @@ def rattle4(model, y0, t0, t1, h, *, save_every: int = 1, tol=None, recorder=Non
     """
     st = _RattleStepper(model, tol=tol)
     recorder = _recorder(recorder, 2 * model.n, save_every)
-    if _compiled_ok(model):
+    if _compiled_ok(st):
         return _compiled_rattle(model, st, y0, t0, t1, h, recorder, 1, progress, deadline)
+    clock = _Clock(t0)
 
     def step(y, h):
-        y = st.step(y, _G1 * h)[0]
-        y = st.step(y, _G2 * h)[0]
-        return st.step(y, _G1 * h)[0]
+        t = clock.tick(h)
+        y = st.step(y, _G1 * h, t)[0]
+        y = st.step(y, _G2 * h, t + _G1 * h)[0]
+        return st.step(y, _G1 * h, t + (_G1 + _G2) * h)[0]
 
     _, status, msg, nsteps, hh = _run_fixed(step, recorder, y0, t0, t1, h, progress, deadline)
     t, y, _ = recorder.result(2 * model.n)
@@ -404,11 +536,26 @@ def rattle4(model, y0, t0, t1, h, *, save_every: int = 1, tol=None, recorder=Non
                newton_iterations=st.newton, step=hh)
 
 
-def _compiled_ok(model):
+def _compiled_ok(stepper):
     """The compiled loop runs every model with a compiled library (constant W and W(q),
     nonholonomic and holonomic rows, either path: the step uses the geometry kernels
-    only); the Python stepper is the fallback of a model without one."""
-    return model.compiled is not None
+    only) but those with t in L or a constraint and Chetaev's constraints (the Python
+    stepper's extended step); the Python stepper is the fallback of a model without one."""
+    return stepper.model.compiled is not None and not stepper.extended
+
+
+class _Clock:
+    """The time of the grid point a fixed-step run is at (as :func:`_run_fixed` counts
+    its steps: t0 + i h, never a sum of steps)."""
+
+    def __init__(self, t0):
+        self.t0, self.steps = float(t0), 0
+
+    def tick(self, h) -> float:
+        """The time at the start of the next step."""
+        t = self.t0 + self.steps * h
+        self.steps += 1
+        return t
 
 
 _REDUCE_THE_STEP = {Status.NOT_CONVERGED: "; reduce the step"}

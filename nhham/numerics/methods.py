@@ -205,11 +205,11 @@ class Method:
 
 
 _CONSERVATIVE = "a structure-preserving scheme for conservative systems"
+# t in L or a constraint, and Chetaev's constraints, take the Python stepper's extended
+# step (symmetric, second order: nhham.numerics.integrators); forces that do work do not.
 _RATTLE: dict[str, Any] = dict(family="fixed-step", loops=("fixed",), keeps_constraints=True,
-               takes_forces=False, takes_time=False, needs_quadratic=True, carries_work=False,
-               background_build=False, forces_refused=_CONSERVATIVE,
-               nonlinear_refused="its discrete constraints and their multipliers are linear in "
-               "the velocities (mu(q) v + h(q) = 0 at every point of the scheme)")
+               takes_forces=False, needs_quadratic=True, carries_work=False,
+               background_build=False, forces_refused=_CONSERVATIVE)
 _SCIPY: dict[str, Any] = dict(family="adaptive", loops=("scipy",))
 _ERK: dict[str, Any] = dict(family="adaptive", loops=("compiled", "scipy"))
 

@@ -89,8 +89,14 @@ def prepare(scene, model, design, *, along=None, run_options=None, policy=None) 
     uses = set().union(*(e.free_symbols for e in scene.initial_given.given.values())) \
         if scene.initial_given is not None else set()
     complete = bool(scene.initial_solved) or any(s.name in swept for s in uses)
+    from nhham.system.scene_dump import dependent_velocities
+
+    # velocities [initial] gives that the constraints determine: off M_1 wherever a
+    # parameter they depend on moves (the summary's warning says to leave them out)
+    given = set(scene.initial_given.given) if scene.initial_given is not None else set()
+    fixed = sorted(given & dependent_velocities(scene.system, dict(scene.initial)))
     return {**opts, "initial": [float(x) for x in y0], "state_names": states,
-            "parameters": swept, "complete": complete}
+            "parameters": swept, "complete": complete, "given_dependent": fixed}
 
 
 def variables(design, options) -> dict:
@@ -244,7 +250,11 @@ def summary(ds) -> dict:
     err = np.abs(np.asarray(ds["energy_error"].values))[done]
     res = np.asarray(ds["constraint_residual"].values)[done]
     moved = np.asarray(ds["projection_distance"].values)[done]
+    import json
+
+    given = json.loads(ds.attrs.get("options", "{}")).get("given_dependent") or []
     return {"done_points": int(done.sum()), "failed_runs": int((done & ~success).sum()),
+            "given_dependent": list(given),
             "max_energy_error": float(np.nanmax(err)) if np.isfinite(err).any() else None,
             "max_constraint_residual": (float(np.nanmax(res)) if np.isfinite(res).any()
                                         else None),
@@ -257,9 +267,17 @@ def summary_warnings(s: dict) -> list:
     """The warnings a summary calls for (one line each)."""
     if not s["projected_starts"]:
         return []
+    why = ""
+    if s.get("given_dependent"):
+        names = ", ".join(s["given_dependent"])
+        why = (f": [initial] gives {names}, which the constraints determine; leave "
+               f"{'it' if len(s['given_dependent']) == 1 else 'them'} out and "
+               f"{'it is' if len(s['given_dependent']) == 1 else 'they are'} solved at "
+               f"every point instead")
     return [f"{s['projected_starts']} of {s['done_points']} initial states were off M_1 at "
             f"their point (its values or parameters) and were projected onto it (largest "
-            f"move {s['max_projection_distance']:.3g}; projection_distance in the results)"]
+            f"move {s['max_projection_distance']:.3g}; projection_distance in the "
+            f"results){why}"]
 
 
 def summary_rows(s: dict) -> list:

@@ -13,7 +13,7 @@ from nhham.errors import (
 from nhham.system.expressions import to_text
 from nhham.system.scene_structure import BARE_KEY, SimulateOptions, toml_string
 
-__all__ = ["dump_scene"]
+__all__ = ["dump_scene", "dependent_velocities"]
 
 
 # -------------------------------------------------------------------- dump
@@ -25,7 +25,11 @@ def dump_scene(system, initial=None, simulate=None, *, description: str = "",
     ----------
     system : nhham.system.System
     initial : mapping of str to float, optional
-        Initial value of every coordinate and velocity.
+        Initial value of every coordinate and velocity. The velocities the constraints
+        determine (the first ones, in the order of the coordinates, whose columns of mu
+        raise its rank at the state) are left out: the reader solves them again at any
+        parameter values (a full table would be off the constraints as soon as a
+        parameter moves: ``sweep --over`` would project every start).
     simulate : SimulateOptions or mapping, optional
         Simulation defaults.
     description : str, optional
@@ -91,9 +95,11 @@ def dump_scene(system, initial=None, simulate=None, *, description: str = "",
     if system.dissipation != 0:
         lines.append(f"dissipation = {toml_string(to_text(system.dissipation))}")
     if initial is not None:
+        dependent = dependent_velocities(system, initial)
         lines.append("")
         lines.append("[initial]")
-        lines.extend(f"{_toml_key(k)} = {_toml_float(v, k)}" for k, v in initial.items())
+        lines.extend(f"{_toml_key(k)} = {_toml_float(v, k)}" for k, v in initial.items()
+                     if k not in dependent)
     if steady is not None:
         table = steady.to_toml_table() if hasattr(steady, "to_toml_table") else dict(steady)
         lines.append("")
@@ -121,6 +127,45 @@ def dump_scene(system, initial=None, simulate=None, *, description: str = "",
             text = toml_string(value) if isinstance(value, str) else _toml_float(value, key)
             lines.append(f"{_toml_key(key)} = {text}")
     return "\n".join(lines) + "\n"
+
+
+def dependent_velocities(system, state) -> frozenset:
+    """The names of the velocities the constraints determine at ``state`` (name -> value):
+    scanning the velocities in order, each whose column of mu (the lifts of the holonomic
+    constraints first) raises its rank there. Empty when mu cannot be evaluated there
+    (a parameter without a value, a name missing from ``state``).
+
+    Examples
+    --------
+    >>> from nhham import models
+    >>> disk = models.rolling_disk()          # x' = R cos(theta) phi', y' = R sin(theta) phi'
+    >>> state = {"x": 0, "y": 0, "theta": 0.3, "phi": 0, "x_dot": 1.91, "y_dot": 0.59,
+    ...          "theta_dot": 1, "phi_dot": 2}
+    >>> sorted(dependent_velocities(disk, state))
+    ['x_dot', 'y_dot']
+    """
+    import numpy as np
+
+    if not system.mu.rows:
+        return frozenset()
+    point = {sp.Symbol(k): v for k, v in state.items()}
+    point.update(system.parameter_values)
+    if system.time is not None:
+        point.setdefault(system.time, 0.0)
+    try:
+        mu = np.array(system.mu.xreplace(point).evalf(), dtype=float)
+    except (TypeError, ValueError):
+        return frozenset()
+    if not np.all(np.isfinite(mu)):
+        return frozenset()
+    tol = 1e-9 * max(1.0, float(np.max(np.abs(mu))))
+    chosen: list = []
+    for j, v in enumerate(system.velocities):
+        if np.linalg.matrix_rank(mu[:, chosen + [j]], tol=tol) > len(chosen):
+            chosen.append(j)
+        if len(chosen) == mu.shape[0]:
+            break
+    return frozenset(system.velocities[j].name for j in chosen)
 
 
 def _toml_key(key: str) -> str:

@@ -91,3 +91,15 @@ def test_what_a_simulation_study_refuses(scene):
               workers=1)
     with pytest.raises(nhham.InputError, match="a study runs the adaptive methods"):
         sweep(scene, "simulate", ["a=0.2:0.8:2"], run_options={"method": "rk4"}, workers=1)
+
+
+def test_starts_projected_because_initial_gives_dependent_velocities_say_so(scene):
+    """[initial] gives x' and y', which the blade constraint determines (x' the first
+    velocity whose column of mu raises its rank): moving a = 0.5 puts the start off M_1
+    at a = 0.2 and 0.8, each projected, and the warning says to leave x' out."""
+    from nhham.study.ensemble import summary, summary_warnings
+
+    s = summary(sweep(scene, "simulate", ["a=0.2:0.8:3"], workers=1).dataset)
+    assert s["projected_starts"] == 2 and s["given_dependent"] == ["x_dot"]
+    (warning,) = summary_warnings(s)
+    assert "[initial] gives x_dot, which the constraints determine; leave it out" in warning
