@@ -228,15 +228,15 @@ def sweep(scene, what: str, over=(), *, samples_count: int | None = None,
         regions = chunk_slices(design.shape, chunk_points or kind.chunk_points,
                                first=along_axis)
         chunking = _chunking(regions, design)
+        written = [*var_spec["point"], *var_spec["line"], *var_spec.get("across", {})]
         if target is not None and target.resuming:
-            store = Store.resume(target, attrs)
+            store = Store.resume(target, attrs, written)
             regions = _resumed_regions(store, design, regions, chunk_points)
         else:
             store = Store.create(target, _template(design, var_spec, attrs,
                                                    None if target is None else chunking),
                                  chunking, _fills(var_spec))
-        done = store.done(regions, [*var_spec["point"], *var_spec["line"],
-                                    *var_spec.get("across", {})])
+        done = store.done(regions, written)
         pending = [r for r in regions if not done[r].all()]
         already = int(done.sum())
         counter = {"points": already}
