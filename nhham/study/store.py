@@ -14,8 +14,12 @@ written to its region (every chunk file written, also one equal to the fill), ``
 last. An interrupted study leaves a store whose ``done`` says which chunks are there, so
 :meth:`Store.resume` continues with the others and loses nothing; a resumed study must be
 the same one (the nhham version, the hash of the generated code, and its ``study_key``
-attribute: scene, kind, design and options), and a chunk marked done whose data files are
-missing is computed again. A netCDF output (``.nc``) is collected in
+attribute: scene, kind, design and options). A resumed store is read back, every chunk
+of it (about as long as reading the results once): a chunk file that cannot be decoded
+(truncated by a full disk or an interrupted copy) is removed, with the chunks of the
+other values of its points or lines, and named in a warning; a chunk marked done whose
+data files are missing (or were so removed) is computed again. Metadata or coordinates
+that cannot be read refuse the store, naming the file. A netCDF output (``.nc``) is collected in
 ``<out>.partial.zarr`` the same way and written as netCDF (by xarray, with the first
 engine that is installed: netCDF4, h5netcdf, scipy) when the study is complete. The
 metadata of a complete store is consolidated (``xarray.open_zarr`` reads it at once,
