@@ -172,7 +172,8 @@ def _started_apart(make):
     ended = threading.Event()
 
     def start():
-        signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+        if hasattr(signal, "pthread_sigmask"):   # not on Windows
+            signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
         try:
             made["value"] = make()
         except BaseException as exc:   # handed to the waiting thread

@@ -32,6 +32,7 @@ import errno
 import hashlib
 import json
 import os
+import re
 import warnings
 from itertools import product
 from pathlib import Path
@@ -42,7 +43,8 @@ from nhham.errors import InputError, NhhamWarning, OptionalDependencyError, Outp
 from nhham.study.target import (NETCDF_SUFFIXES, PARTIAL, ZARR_SUFFIXES, Target, remove,
                                 replace_store, unreadable_metadata)
 
-__all__ = ["Store", "study_key", "attrs_text", "xarray_module", "regions_of", "unwritable",
+__all__ = ["Store", "study_key", "attrs_text", "xarray_module", "zarr_module",
+           "MINIMUM_VERSIONS", "regions_of", "unwritable",
            "NETCDF_SUFFIXES", "ZARR_SUFFIXES"]
 
 
@@ -52,15 +54,57 @@ def study_key(attrs: dict) -> str:
     return hashlib.sha256("\0".join(parts).encode()).hexdigest()
 
 
+#: The oldest versions the study's results are tested with (the study extra's pins):
+#: zarr before 3.1.2 leaves a chunk equal to its fill value unwritten though xarray asks
+#: for every chunk (``write_empty_chunks``; a resumed study then takes its chunks for
+#: missing and computes them all again), and zarr 2 no longer runs under xarray 2026
+#: (``open_group() got an unexpected keyword argument 'zarr_format'``); xarray before
+#: 2026.1 cannot write the netCDF output (its names: numpy's StringDType) and before
+#: 2025.10 a one-dimensional study's lines (``region``).
+MINIMUM_VERSIONS = {"xarray": (2026, 1), "zarr": (3, 1, 2)}
+
+
 def xarray_module():
-    """xarray, or the error naming the extra that installs it."""
+    """xarray, or the error naming the extra that installs it (or a newer one)."""
     try:
         import xarray as xr
     except ImportError:
         raise OptionalDependencyError(
             "parameter studies store their results with xarray (and zarr); install the "
             "study extra: pip install 'nhham[study]'") from None
-    return xr
+    return _checked(xr, "xarray")
+
+
+def zarr_module():
+    """zarr, or the error naming the extra that installs it (or a newer one)."""
+    try:
+        import zarr
+    except ImportError:
+        raise OptionalDependencyError(
+            "parameter studies write their results with zarr; install the study extra: "
+            "pip install 'nhham[study]'") from None
+    return _checked(zarr, "zarr")
+
+
+def _checked(module, name: str):
+    """``module``, refused when it is older than :data:`MINIMUM_VERSIONS` says.
+
+    Examples
+    --------
+    >>> import types
+    >>> _checked(types.SimpleNamespace(__version__="2.18.7"), "zarr")
+    Traceback (most recent call last):
+    ...
+    nhham.errors.OptionalDependencyError: parameter studies need zarr >= 3.1.2 (this is 2.18.7); update the study extra: pip install -U 'nhham[study]'
+    """
+    version = str(getattr(module, "__version__", ""))
+    release = tuple(int(n) for n in re.findall(r"\d+", version.split("+")[0])[:3])
+    least = MINIMUM_VERSIONS[name]
+    if release and release < least:
+        raise OptionalDependencyError(
+            f"parameter studies need {name} >= {'.'.join(map(str, least))} (this is "
+            f"{version}); update the study extra: pip install -U 'nhham[study]'")
+    return module
 
 
 def unwritable(exc: OSError, where) -> OutputUnwritable:
@@ -112,6 +156,7 @@ class Store:
         """
         if target is None:
             return cls(None, template, _line_dims(template))
+        zarr_module()
         working = target.working
         remove(working)   # a study (check_out made sure): an abandoned replacement
         if target.in_place:
@@ -147,6 +192,7 @@ class Store:
         InputError
             Naming ``--resume`` and the file that cannot be read.
         """
+        zarr_module()
         working = target.working
         damaged = unreadable_metadata(working)
         if damaged:

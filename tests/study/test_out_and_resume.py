@@ -251,3 +251,21 @@ def test_a_damaged_store_is_refused_with_its_reason(tmp_path):
     with pytest.raises(nhham.InputError, match="is not a study nhham wrote") as info:
         sweep(SCENE, "linearize", OVER, workers=1, out=out, resume=True)
     assert info.value.key == "--out"
+
+
+def test_zarr_and_xarray_older_than_those_tested_are_refused_before_any_work(
+        monkeypatch, tmp_path, no_work):
+    """Issue 43 item 8: the pins allowed zarr 2.18, under which xarray 2026 cannot open a
+    store (TypeError: open_group() got an unexpected keyword argument 'zarr_format'),
+    and zarr 3.0 to 3.1.1 leave chunks equal to their fill unwritten (a resumed study
+    computes everything again). An installed zarr or xarray older than the study
+    extra's pins is named, exit 2, before any work."""
+    monkeypatch.setattr(zarr, "__version__", "2.18.7")
+    with pytest.raises(nhham.OptionalDependencyError,
+                       match=r"need zarr >= 3\.1\.2 \(this is 2\.18\.7\)") as info:
+        sweep(SCENE, "linearize", OVER, workers=1, out=tmp_path / "map.zarr")
+    assert isinstance(info.value, nhham.InputError)       # exit 2
+    monkeypatch.setattr(xr, "__version__", "2025.7.1")
+    with pytest.raises(nhham.OptionalDependencyError, match=r"need xarray >= 2026\.1 "):
+        sweep(SCENE, "linearize", OVER, workers=1)
+    assert not (tmp_path / "map.zarr").exists()
