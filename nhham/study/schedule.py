@@ -410,12 +410,10 @@ def _kill_workers(cluster) -> None:
     nanny is marked closing first: a running nanny starts another worker in place of one
     that died, whose start this process, exiting, would cut short (the new worker then
     prints a traceback after `nhham: interrupted`)."""
-    try:
-        from distributed.core import Status
-    except ImportError:   # pragma: no cover - distributed without Status
-        Status = None
+    from distributed.core import Status
+
     for nanny in list(getattr(cluster, "workers", {}).values()):
-        if Status is not None and hasattr(nanny, "status"):
+        if hasattr(nanny, "status"):
             nanny.status = Status.closing
         pid = getattr(getattr(getattr(nanny, "process", None), "process", None), "pid", None)
         if pid:

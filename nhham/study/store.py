@@ -329,8 +329,8 @@ class Store:
 
 
 class _ChunkFiles:
-    """The chunk files of a Zarr store's arrays (zarr 2 or 3, in the store's own layout of
-    keys): which are there, and which cannot be read back.
+    """The chunk files of a Zarr store's arrays (in the store's own layout of keys): which
+    are there, and which cannot be read back.
 
     ``names``: the arrays looked at (default: all those of the store); an array without
     elements has no file at all and is skipped. ``ds``: the store opened by xarray (the
@@ -355,13 +355,8 @@ class _ChunkFiles:
 
     def path(self, name: str, coords: tuple) -> Path:
         """The file of one chunk of ``name``."""
-        array = self.arrays[name]
-        metadata = getattr(array, "metadata", None)
-        if hasattr(metadata, "encode_chunk_key"):   # zarr 3 (stores of format 2 or 3)
-            key = metadata.encode_chunk_key(coords)
-        else:   # zarr 2: '.' or '/' between the coordinates
-            key = (getattr(array, "_dimension_separator", None) or ".").join(map(str, coords))
-        return self.working / name / key
+        # the store's own key encoding (format 3: c/0/1; format 2: 0.1)
+        return self.working / name / self.arrays[name].metadata.encode_chunk_key(coords)
 
     def all_there(self, region: tuple) -> bool:
         """Every file of ``region``'s chunks is on disk."""
