@@ -268,7 +268,8 @@ class Pool:
                                        silence_logs=logging.CRITICAL)
                 return Client(cluster), cluster
 
-            with progress.part(f"start a local Dask cluster of {workers} worker processes"):
+            processes = "1 worker process" if workers == 1 else f"{workers} worker processes"
+            with progress.part(f"start a local Dask cluster of {processes}"):
                 client, cluster = _started_apart(local_cluster)
             return cls(scheduler, workers, client, owned=(client, cluster))
         security = _security(scheduler) if scheme == "tls" else None

@@ -19,11 +19,11 @@ of it (about as long as reading the results once): a chunk file that cannot be d
 (truncated by a full disk or an interrupted copy) is removed, with the chunks of the
 other values of its points or lines, and named in a warning; a chunk marked done whose
 data files are missing (or were so removed) is computed again. Metadata or coordinates
-that cannot be read refuse the store, naming the file. A netCDF output (``.nc``) is collected in
-``<out>.partial.zarr`` the same way and written as netCDF (by xarray, with the first
-engine that is installed: netCDF4, h5netcdf, scipy) when the study is complete. The
-metadata of a complete store is consolidated (``xarray.open_zarr`` reads it at once,
-without a warning). Without a path the Dataset stays in memory.
+that cannot be read refuse the store, naming the file. A netCDF output (``.nc``) is
+collected in ``<out>.partial.zarr`` the same way and written as netCDF (by xarray, with
+the first engine that is installed: netCDF4, h5netcdf, scipy) when the study is
+complete. The metadata of a complete store is consolidated (``xarray.open_zarr`` reads
+it at once, without a warning). Without a path the Dataset stays in memory.
 """
 
 from __future__ import annotations
@@ -202,9 +202,9 @@ class Store:
             ds = _open(working)
             ds["done"]
         except Exception as exc:
-            files = _ChunkFiles(working)
-            for name, coords, why in files.unreadable()[:1]:   # an index's chunk: named
-                raise _damaged(working, files, name, coords, why) from None
+            damage = _unreadable_layout(working)   # an index's chunk, named
+            if damage is not None:
+                raise damage from None
             raise InputError(f"--resume: {working} cannot be read as a study "
                              f"({type(exc).__name__}: {exc}); give --overwrite to compute "
                              f"it again", key="--resume") from None
@@ -427,12 +427,23 @@ def _read_back(working: Path, ds, written: set) -> None:
             dims = ds[other].dims
             if {d for d in dims if d in design} == set(at):
                 remove(files.path(other, tuple(at.get(d, 0) for d in dims)))
-    shown = "; ".join(f"{files.path(name, coords).relative_to(working)}: {why}"
+    shown = "; ".join(f"{files.path(name, coords).relative_to(files.working)}: {why}"
                       for name, coords, why in broken[:3])
     more = f"; and {len(broken) - 3} more" if len(broken) > 3 else ""
     warnings.warn(f"--resume: {len(broken)} chunk file(s) of {working} cannot be read back "
                   f"({shown}{more}): removed, their points are computed again",
                   NhhamWarning, stacklevel=3)
+
+
+def _unreadable_layout(working: Path) -> InputError | None:
+    """The refusal naming the first chunk of the store that cannot be read back, if one
+    is found (None: none, or the store cannot even be listed)."""
+    try:
+        files = _ChunkFiles(working)
+        broken = files.unreadable()
+    except Exception:   # nothing more precise to say than the caller's reason
+        return None
+    return _damaged(working, files, *broken[0]) if broken else None
 
 
 def _damaged(working, files, name, coords, why) -> InputError:
