@@ -27,10 +27,12 @@
 
 ``workers`` is at most :func:`max_workers` (four per core available, at least 8).
 
-Ctrl-C during a study (SIGINT to the process group or to this process alone): the
-workers of a local cluster are made to ignore SIGINT when they start (only this process
-answers it), and on the interrupt they are killed, not closed politely (a polite close
-waits on workers in the middle of a chunk); :meth:`Pool.abandon`.
+Ctrl-C during a study (SIGINT to the process group or to this process alone), from the
+start of its workers on: the workers of a local cluster are started with SIGINT blocked
+(only this process answers it; :func:`_started_apart`), and on the interrupt they are
+killed, not closed politely (a polite close waits on workers in the middle of a chunk);
+:meth:`Pool.abandon`. An interrupt while the cluster starts waits for the start to end
+(a second or two), then kills its workers.
 
 A :class:`Pool` is started before the study is prepared and told the scene at once
 (:meth:`Pool.warm`), so each worker parses it and builds its model while this process
@@ -50,9 +52,9 @@ import signal
 import threading
 import time
 import warnings
-from contextlib import contextmanager
 from functools import partial
 
+from nhham import progress
 from nhham.errors import BudgetExceeded, InputError, NhhamWarning, OptionalDependencyError
 from nhham.study.stop import resume_chunks, stop_chunks
 from nhham.study.tasks import evaluate, warm
@@ -151,20 +153,45 @@ def _security(scheduler: str):
     return security
 
 
-@contextmanager
-def _sigint_ignored_by_children():
-    """Processes started in this block ignore SIGINT: it is ignored here meanwhile (a
-    child inherits an ignored signal through exec, and Python then leaves it ignored),
-    so Ctrl-C is this process's alone to answer and no worker prints a traceback. (A
-    Ctrl-C in the second or two the cluster takes to start is lost.)"""
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
-    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+def _started_apart(make):
+    """``make()`` (the start of a local cluster and its client) run in a thread of its own
+    whose SIGINT is blocked, while this thread waits for it.
+
+    The block is inherited by the threads the start makes (the cluster's event loop, the
+    nannies' process starters) and by the worker processes, through fork and exec (as
+    multiprocessing's resource tracker is protected): Ctrl-C is this process's alone to
+    answer and no worker prints a traceback, while this thread keeps its handler. A
+    Ctrl-C during the start raises KeyboardInterrupt here: the start is waited for (a
+    second Ctrl-C stops the wait; the workers exit with this process, which they watch),
+    its workers killed and its client and cluster closed without waiting, and the
+    interrupt goes on.
+    """
+    made: dict = {}
+    # an Event, not Thread.join: a join interrupted by Ctrl-C takes the thread for
+    # stopped (Python 3.11, bpo-45274), and a second join would not wait
+    ended = threading.Event()
+
+    def start():
+        if hasattr(signal, "pthread_sigmask"):   # not on Windows
+            signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+        try:
+            made["value"] = make()
+        except BaseException as exc:   # handed to the waiting thread
+            made["error"] = exc
+        finally:
+            ended.set()
+
+    threading.Thread(target=start, name="nhham: start a local cluster", daemon=True).start()
     try:
-        yield
-    finally:
-        signal.signal(signal.SIGINT, previous)
+        ended.wait()
+    except KeyboardInterrupt:
+        ended.wait()
+        if "value" in made:
+            Pool("processes", 0, made["value"][0], owned=made["value"]).abandon()
+        raise
+    if "error" in made:
+        raise made["error"]
+    return made["value"]
 
 
 def _quiet_resource_tracker() -> None:
@@ -231,14 +258,19 @@ class Pool:
             return cls(str(client.scheduler.address), _count(client, workers), client)
         if scheduler == "processes":
             _quiet_resource_tracker()
-            with _sigint_ignored_by_children():
+
+            def local_cluster():
                 cluster = LocalCluster(n_workers=workers, threads_per_worker=1,
                                        processes=True, dashboard_address=None,
                                        # the workers' heartbeats failing while the
                                        # cluster closes are logged as errors: not the
                                        # user's concern
                                        silence_logs=logging.CRITICAL)
-                client = Client(cluster)
+                return Client(cluster), cluster
+
+            processes = "1 worker process" if workers == 1 else f"{workers} worker processes"
+            with progress.part(f"start a local Dask cluster of {processes}"):
+                client, cluster = _started_apart(local_cluster)
             return cls(scheduler, workers, client, owned=(client, cluster))
         security = _security(scheduler) if scheme == "tls" else None
         timeout = CONNECT_TIMEOUT_S
@@ -375,8 +407,15 @@ def _silence_distributed() -> None:
 
 
 def _kill_workers(cluster) -> None:
-    """SIGKILL the worker processes of a local cluster (their nannies live here)."""
+    """SIGKILL the worker processes of a local cluster (their nannies live here). Each
+    nanny is marked closing first: a running nanny starts another worker in place of one
+    that died, whose start this process, exiting, would cut short (the new worker then
+    prints a traceback after `nhham: interrupted`)."""
+    from distributed.core import Status
+
     for nanny in list(getattr(cluster, "workers", {}).values()):
+        if hasattr(nanny, "status"):
+            nanny.status = Status.closing
         pid = getattr(getattr(getattr(nanny, "process", None), "process", None), "pid", None)
         if pid:
             try:

@@ -14,12 +14,16 @@ written to its region (every chunk file written, also one equal to the fill), ``
 last. An interrupted study leaves a store whose ``done`` says which chunks are there, so
 :meth:`Store.resume` continues with the others and loses nothing; a resumed study must be
 the same one (the nhham version, the hash of the generated code, and its ``study_key``
-attribute: scene, kind, design and options), and a chunk marked done whose data files are
-missing is computed again. A netCDF output (``.nc``) is collected in
-``<out>.partial.zarr`` the same way and written as netCDF (by xarray, with the first
-engine that is installed: netCDF4, h5netcdf, scipy) when the study is complete. The
-metadata of a complete store is consolidated (``xarray.open_zarr`` reads it at once,
-without a warning). Without a path the Dataset stays in memory.
+attribute: scene, kind, design and options). A resumed store is read back, every chunk
+of it (about as long as reading the results once): a chunk file that cannot be decoded
+(truncated by a full disk or an interrupted copy) is removed, with the chunks of the
+other values of its points or lines, and named in a warning; a chunk marked done whose
+data files are missing (or were so removed) is computed again. Metadata or coordinates
+that cannot be read refuse the store, naming the file. A netCDF output (``.nc``) is
+collected in ``<out>.partial.zarr`` the same way and written as netCDF (by xarray, with
+the first engine that is installed: netCDF4, h5netcdf, scipy) when the study is
+complete. The metadata of a complete store is consolidated (``xarray.open_zarr`` reads
+it at once, without a warning). Without a path the Dataset stays in memory.
 """
 
 from __future__ import annotations
@@ -28,17 +32,19 @@ import errno
 import hashlib
 import json
 import os
+import re
 import warnings
 from itertools import product
 from pathlib import Path
 
 import numpy as np
 
-from nhham.errors import InputError, OptionalDependencyError, OutputUnwritable
+from nhham.errors import InputError, NhhamWarning, OptionalDependencyError, OutputUnwritable
 from nhham.study.target import (NETCDF_SUFFIXES, PARTIAL, ZARR_SUFFIXES, Target, remove,
-                                replace_store)
+                                replace_store, unreadable_metadata)
 
-__all__ = ["Store", "study_key", "attrs_text", "xarray_module", "regions_of", "unwritable",
+__all__ = ["Store", "study_key", "attrs_text", "xarray_module", "zarr_module",
+           "MINIMUM_VERSIONS", "regions_of", "unwritable",
            "NETCDF_SUFFIXES", "ZARR_SUFFIXES"]
 
 
@@ -48,15 +54,57 @@ def study_key(attrs: dict) -> str:
     return hashlib.sha256("\0".join(parts).encode()).hexdigest()
 
 
+#: The oldest versions the study's results are tested with (the study extra's pins):
+#: zarr before 3.1.2 leaves a chunk equal to its fill value unwritten though xarray asks
+#: for every chunk (``write_empty_chunks``; a resumed study then takes its chunks for
+#: missing and computes them all again), and zarr 2 no longer runs under xarray 2026
+#: (``open_group() got an unexpected keyword argument 'zarr_format'``); xarray before
+#: 2026.1 cannot write the netCDF output (its names: numpy's StringDType) and before
+#: 2025.10 a one-dimensional study's lines (``region``).
+MINIMUM_VERSIONS = {"xarray": (2026, 1), "zarr": (3, 1, 2)}
+
+
 def xarray_module():
-    """xarray, or the error naming the extra that installs it."""
+    """xarray, or the error naming the extra that installs it (or a newer one)."""
     try:
         import xarray as xr
     except ImportError:
         raise OptionalDependencyError(
             "parameter studies store their results with xarray (and zarr); install the "
             "study extra: pip install 'nhham[study]'") from None
-    return xr
+    return _checked(xr, "xarray")
+
+
+def zarr_module():
+    """zarr, or the error naming the extra that installs it (or a newer one)."""
+    try:
+        import zarr
+    except ImportError:
+        raise OptionalDependencyError(
+            "parameter studies write their results with zarr; install the study extra: "
+            "pip install 'nhham[study]'") from None
+    return _checked(zarr, "zarr")
+
+
+def _checked(module, name: str):
+    """``module``, refused when it is older than :data:`MINIMUM_VERSIONS` says.
+
+    Examples
+    --------
+    >>> import types
+    >>> _checked(types.SimpleNamespace(__version__="2.18.7"), "zarr")
+    Traceback (most recent call last):
+    ...
+    nhham.errors.OptionalDependencyError: parameter studies need zarr >= 3.1.2 (this is 2.18.7); update the study extra: pip install -U 'nhham[study]'
+    """
+    version = str(getattr(module, "__version__", ""))
+    release = tuple(int(n) for n in re.findall(r"\d+", version.split("+")[0])[:3])
+    least = MINIMUM_VERSIONS[name]
+    if release and release < least:
+        raise OptionalDependencyError(
+            f"parameter studies need {name} >= {'.'.join(map(str, least))} (this is "
+            f"{version}); update the study extra: pip install -U 'nhham[study]'")
+    return module
 
 
 def unwritable(exc: OSError, where) -> OutputUnwritable:
@@ -108,6 +156,7 @@ class Store:
         """
         if target is None:
             return cls(None, template, _line_dims(template))
+        zarr_module()
         working = target.working
         remove(working)   # a study (check_out made sure): an abandoned replacement
         if target.in_place:
@@ -128,15 +177,34 @@ class Store:
         return cls(target, _open(working), _line_dims(template))
 
     @classmethod
-    def resume(cls, target: Target, attrs: dict) -> "Store":
-        """The store of the interrupted study at ``target.working``; refuses one that
-        cannot be read, made by another nhham or code, or by another study (naming what
-        differs)."""
+    def resume(cls, target: Target, attrs: dict, written=()) -> "Store":
+        """The store of the interrupted study at ``target.working``, every chunk read
+        back; refuses one whose metadata or layout (coordinates) cannot be read, made by
+        another nhham or code, or by another study (naming what differs).
+
+        ``written``: the variables each chunk writes. A chunk of one of them (or of
+        ``done``) that cannot be read back (truncated by a full disk or an interrupted
+        copy) is removed, so that it reads as never written: its points are computed
+        again, and a warning names it.
+
+        Raises
+        ------
+        InputError
+            Naming ``--resume`` and the file that cannot be read.
+        """
+        zarr_module()
         working = target.working
+        damaged = unreadable_metadata(working)
+        if damaged:
+            raise InputError(f"--resume: {working} cannot be read as a study ({damaged}); "
+                             f"give --overwrite to compute it again", key="--resume")
         try:
             ds = _open(working)
             ds["done"]
         except Exception as exc:
+            damage = _unreadable_layout(working)   # an index's chunk, named
+            if damage is not None:
+                raise damage from None
             raise InputError(f"--resume: {working} cannot be read as a study "
                              f"({type(exc).__name__}: {exc}); give --overwrite to compute "
                              f"it again", key="--resume") from None
@@ -157,6 +225,7 @@ class Store:
             raise InputError(f"--resume: {working} holds another study (its "
                              f"{', '.join(differs) or 'key'} differ(s)); give the same "
                              f"scene and options, or --overwrite", key="--resume")
+        _read_back(working, ds, {*written, "done"})
         return cls(target, ds, _line_dims(ds))
 
     # ------------------------------------------------------------ using
@@ -175,7 +244,7 @@ class Store:
         done = np.array(self.dataset["done"].values, dtype=bool)   # a copy
         if regions is None or self.target is None:
             return done
-        present = _ChunkFiles(self.working, self.dataset, names)
+        present = _ChunkFiles(self.working, names, self.dataset)
         for region in regions:
             if done[region].all() and not present.all_there(region):
                 done[region] = False
@@ -260,36 +329,128 @@ class Store:
 
 
 class _ChunkFiles:
-    """Which chunk files of a Zarr store are on disk (the store's own layout of keys)."""
+    """The chunk files of a Zarr store's arrays (in the store's own layout of keys): which
+    are there, and which cannot be read back.
 
-    def __init__(self, working: Path, ds, names=None):
+    ``names``: the arrays looked at (default: all those of the store); an array without
+    elements has no file at all and is skipped. ``ds``: the store opened by xarray (the
+    dimensions of its variables, for :meth:`key` and :meth:`all_there`).
+    """
+
+    #: At most this many bytes are decoded at once when a store is read back.
+    SLAB_BYTES = 64 * 2 ** 20
+
+    def __init__(self, working: Path, names=None, ds=None):
         self.working, self.ds = Path(working), ds
-        self.arrays: dict = {}
-        try:
-            import zarr
+        group = _group(working)
+        arrays = dict(group.arrays()) if names is None else {n: group[n] for n in names}
+        self.arrays: dict = {n: a for n, a in arrays.items() if np.prod(a.shape) > 0}
 
-            group = zarr.open_group(str(working), mode="r")
-            for name, var in ds.data_vars.items():
-                chunks = var.encoding.get("chunks")
-                if names is not None and name not in names or var.size == 0:
-                    continue   # not written by the chunks (or no file at all)
-                if chunks is not None:
-                    self.arrays[name] = (group[name].metadata, var.dims, tuple(chunks))
-        except Exception:   # a layout of keys not known here: nothing is checked
-            self.arrays = {}
-
-    def all_there(self, region: tuple) -> bool:
+    def key(self, name: str, region: tuple) -> tuple:
+        """The chunk of ``name`` holding ``region``'s values (its chunk coordinates)."""
         dims = self.ds["done"].dims
         starts = {d: s.start or 0 for d, s in zip(dims, region)}
-        for name, (meta, var_dims, chunks) in self.arrays.items():
-            coords = tuple(starts.get(d, 0) // c for d, c in zip(var_dims, chunks))
+        array = self.arrays[name]
+        return tuple(starts.get(d, 0) // c for d, c in zip(self.ds[name].dims, array.chunks))
+
+    def path(self, name: str, coords: tuple) -> Path:
+        """The file of one chunk of ``name``."""
+        # the store's own key encoding (format 3: c/0/1; format 2: 0.1)
+        return self.working / name / self.arrays[name].metadata.encode_chunk_key(coords)
+
+    def all_there(self, region: tuple) -> bool:
+        """Every file of ``region``'s chunks is on disk."""
+        return all(self.path(name, self.key(name, region)).exists() for name in self.arrays)
+
+    def unreadable(self) -> list:
+        """(name, chunk coordinates, why) of each chunk file that is there and cannot be
+        decoded (truncated, overwritten): every chunk is read back, a slab of chunks at a
+        time, and a slab that fails one chunk at a time."""
+        found = []
+        for name, array in self.arrays.items():
+            for coords, exc in _unreadable_blocks(array, self.SLAB_BYTES):
+                found.append((name, coords, f"{type(exc).__name__}: {exc}"))
+        return found
+
+
+def _unreadable_blocks(array, slab_bytes: int):
+    """(chunk coordinates, exception) of the chunks of a zarr ``array`` that cannot be
+    read. Slabs along the axis with the most chunks, of at most ``slab_bytes`` (at least
+    one chunk thick); a missing chunk reads as the fill value and is not one of them."""
+    grid = [-(-n // c) for n, c in zip(array.shape, array.chunks)]
+    if not grid:
+        try:
+            array[...]
+        except Exception as exc:
+            yield (), exc
+        return
+    axis = max(range(len(grid)), key=lambda a: grid[a])
+    itemsize = getattr(array.dtype, "itemsize", 0) or 8
+    layer = int(np.prod(array.shape)) * itemsize // max(grid[axis], 1)
+    step = max(1, slab_bytes // max(layer, 1))
+    chunk = array.chunks[axis]
+    for first in range(0, grid[axis], step):
+        last = min(first + step, grid[axis])
+        slab = [slice(None)] * len(grid)
+        slab[axis] = slice(first * chunk, min(last * chunk, array.shape[axis]))
+        try:
+            array[tuple(slab)]
+            continue
+        except Exception:
+            pass
+        ranges = [range(n) for n in grid]
+        ranges[axis] = range(first, last)
+        for coords in product(*ranges):
             try:
-                key = meta.encode_chunk_key(coords)
-            except Exception:
-                return True
-            if not (self.working / name / key).exists():
-                return False
-        return True
+                array.get_block_selection(coords)
+            except Exception as exc:
+                yield coords, exc
+
+
+def _read_back(working: Path, ds, written: set) -> None:
+    """Read back every chunk of the store at ``working``: one of the ``written``
+    variables that cannot be decoded is removed (it reads as never written), with the
+    chunks of the other written variables of the same points or lines (whose values go
+    together: a line's crossings and their count), and named in one warning; one of the
+    layout (coordinates) refuses the store."""
+    files = _ChunkFiles(working)
+    broken = files.unreadable()
+    for name, coords, why in broken:
+        if name not in written:
+            raise _damaged(working, files, name, coords, why)
+    if not broken:
+        return
+    design = ds["done"].dims
+    for name, coords, _ in broken:
+        at = {d: c for d, c in zip(ds[name].dims, coords) if d in design}
+        for other in written & set(files.arrays):
+            dims = ds[other].dims
+            if {d for d in dims if d in design} == set(at):
+                remove(files.path(other, tuple(at.get(d, 0) for d in dims)))
+    shown = "; ".join(f"{files.path(name, coords).relative_to(files.working)}: {why}"
+                      for name, coords, why in broken[:3])
+    more = f"; and {len(broken) - 3} more" if len(broken) > 3 else ""
+    warnings.warn(f"--resume: {len(broken)} chunk file(s) of {working} cannot be read back "
+                  f"({shown}{more}): removed, their points are computed again",
+                  NhhamWarning, stacklevel=3)
+
+
+def _unreadable_layout(working: Path) -> InputError | None:
+    """The refusal naming the first chunk of the store that cannot be read back, if one
+    is found (None: none, or the store cannot even be listed)."""
+    try:
+        files = _ChunkFiles(working)
+        broken = files.unreadable()
+    except Exception:   # nothing more precise to say than the caller's reason
+        return None
+    return _damaged(working, files, *broken[0]) if broken else None
+
+
+def _damaged(working, files, name, coords, why) -> InputError:
+    """The refusal of a store whose layout (a coordinate) cannot be read back."""
+    return InputError(f"--resume: {working} cannot be read as a study (its layout file "
+                      f"{files.path(name, coords)} cannot be read back: {why}); give "
+                      f"--overwrite to compute it again", key="--resume")
 
 
 def regions_of(shape: tuple, sizes: tuple) -> list:
@@ -297,6 +458,15 @@ def regions_of(shape: tuple, sizes: tuple) -> list:
     ranges = [range(0, n, s) for n, s in zip(shape, sizes)]
     return [tuple(slice(a, min(a + s, n)) for a, s, n in zip(starts, sizes, shape))
             for starts in product(*ranges)]
+
+
+def _group(working):
+    """The store's root group, read only."""
+    import zarr
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return zarr.open_group(str(working), mode="r")
 
 
 def _open(working):

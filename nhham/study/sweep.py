@@ -30,7 +30,8 @@ from nhham.study.lines import ACROSS_VARIABLES, LINE_VARIABLES, merged
 from nhham.study.points import (Axis, Design, check_seed, chunk_slices, grid, parse_over,
                                 parse_perturbation, samples)
 from nhham.study.schedule import check_scheduler
-from nhham.study.store import Store, attrs_text, regions_of, study_key
+from nhham.study.store import (Store, attrs_text, regions_of, study_key, xarray_module,
+                               zarr_module)
 from nhham.study.target import check_out
 from nhham.study.tasks import Study, keep_context
 
@@ -205,6 +206,9 @@ def sweep(scene, what: str, over=(), *, samples_count: int | None = None,
     # the results go, the scheduler and the workers
     design = _design(over, samples_count, sampler, seed, initial_perturbation, what)
     fixed = _set_values(values, design)
+    xarray_module()   # installed, and of the versions the results are tested with
+    if out is not None:
+        zarr_module()
     target = check_out(out, resume=resume, overwrite=overwrite)
     if client is None:   # (its warning, if any, is given once, by Pool.start)
         check_scheduler(scheduler, workers, warn=False)
@@ -228,15 +232,15 @@ def sweep(scene, what: str, over=(), *, samples_count: int | None = None,
         regions = chunk_slices(design.shape, chunk_points or kind.chunk_points,
                                first=along_axis)
         chunking = _chunking(regions, design)
+        written = [*var_spec["point"], *var_spec["line"], *var_spec.get("across", {})]
         if target is not None and target.resuming:
-            store = Store.resume(target, attrs)
+            store = Store.resume(target, attrs, written)
             regions = _resumed_regions(store, design, regions, chunk_points)
         else:
             store = Store.create(target, _template(design, var_spec, attrs,
                                                    None if target is None else chunking),
                                  chunking, _fills(var_spec))
-        done = store.done(regions, [*var_spec["point"], *var_spec["line"],
-                                    *var_spec.get("across", {})])
+        done = store.done(regions, written)
         pending = [r for r in regions if not done[r].all()]
         already = int(done.sum())
         counter = {"points": already}

@@ -18,6 +18,7 @@ store of another nhham version on ``--resume``.
 
 from __future__ import annotations
 
+import json
 import os
 import shutil
 import tempfile
@@ -27,14 +28,17 @@ from pathlib import Path
 
 from nhham.errors import InputError
 
-__all__ = ["Target", "check_out", "study_attrs", "replace_store", "remove", "PARTIAL",
-           "NETCDF_SUFFIXES", "ZARR_SUFFIXES", "STUDY_ATTRS"]
+__all__ = ["Target", "check_out", "study_attrs", "unreadable_metadata", "replace_store",
+           "remove", "PARTIAL", "NETCDF_SUFFIXES", "ZARR_SUFFIXES", "STUDY_ATTRS"]
 
 NETCDF_SUFFIXES = (".nc", ".nc4", ".netcdf")
 ZARR_SUFFIXES = (".zarr",)
 
 #: The suffix of the store a study is computed in when it is not written in place.
 PARTIAL = ".partial.zarr"
+
+#: The metadata files of a Zarr store (format 3; format 2).
+METADATA_FILES = ("zarr.json", ".zgroup", ".zattrs", ".zarray", ".zmetadata")
 
 #: The attributes every store nhham writes has (how a study is recognised).
 STUDY_ATTRS = ("scene", "what", "study_key", "nhham_version")
@@ -101,6 +105,11 @@ def check_out(out, *, resume: bool = False, overwrite: bool = False) -> Target |
         raise InputError(f"--out: cannot write in {str(folder)!r} ({problem})", key="--out")
     for p in (path, partial):
         if p.exists() and study_attrs(p) is None:
+            damaged = unreadable_metadata(p, arrays=False) if p.is_dir() else None
+            if damaged:   # a store whose own metadata is damaged: named
+                raise InputError(f"--out: {p} exists and {damaged}: nhham cannot tell "
+                                 f"whether it is a study it wrote; move it away or give "
+                                 f"another --out", key="--out")
             raise InputError(f"--out: {p} exists and is not a study nhham wrote (it has no "
                              f"study attributes); nhham replaces or resumes only its own "
                              f"results: move it away or give another --out", key="--out")
@@ -162,6 +171,38 @@ def study_attrs(path) -> dict | None:
     if not all(isinstance(attrs.get(k), str) for k in STUDY_ATTRS):
         return None
     return attrs
+
+
+def unreadable_metadata(path, arrays: bool = True) -> str | None:
+    """Why the metadata of the Zarr store at ``path`` cannot be read (naming the file:
+    one that is not JSON, or a folder of an array without one), or None. Read at the
+    store's top and (``arrays``) in each folder of it (nhham's stores are flat: one
+    folder an array).
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> store = pathlib.Path(tempfile.mkdtemp()) / "x.zarr"
+    >>> (store / "done").mkdir(parents=True)
+    >>> _ = (store / "zarr.json").write_text('{"zarr_format": 3, "node_type": "group"}')
+    >>> _ = (store / "done" / "zarr.json").write_text('{"zarr_format": 3, "node_')
+    >>> print(unreadable_metadata(store).split(store.name)[1])
+    /done/zarr.json is not JSON (Unterminated string starting at: line 1 column 20 (char 19))
+    """
+    path = Path(os.fspath(path))
+    format3 = (path / METADATA_FILES[0]).exists()
+    folders = sorted(p for p in path.iterdir() if p.is_dir()) if arrays else []
+    for folder in [path, *folders]:
+        files = [folder / n for n in METADATA_FILES if (folder / n).is_file()]
+        if not files and folder != path:
+            return (f"{folder / ('zarr.json' if format3 else '.zarray')} is missing (the "
+                    f"metadata of the array {folder.name})")
+        for file in files:
+            try:
+                json.loads(file.read_bytes())
+            except (OSError, ValueError) as exc:
+                return f"{file} is not JSON ({exc})"
+    return None
 
 
 def _unwritable(folder: Path) -> str | None:

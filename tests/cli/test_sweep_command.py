@@ -232,6 +232,77 @@ def test_ctrl_c_exits_130_at_once_keeping_what_finished(tmp_path, scheduler, to_
     assert not gone, f"worker processes left: {gone}"
 
 
+def test_ctrl_c_while_the_local_cluster_starts_exits_130_leaving_no_worker(tmp_path):
+    """Issue 43 item 8: SIGINT to the process group (as a terminal sends Ctrl-C) as soon
+    as the first worker process of the local cluster exists (the cluster takes a second
+    or more to start: its workers import dask and register). Before, the interrupt was
+    ignored until the cluster had started (lost: the study ran to its end, exit 0). Now:
+    exit 130 with one line, no process of the command left, nothing at --out; on its
+    terminal (a pseudo-terminal here) nhham had said that it was starting the cluster."""
+    import pty
+    import select
+
+    import psutil
+
+    out = tmp_path / "map.zarr"
+    args = [sys.executable, "-m", "nhham", "sweep", str(ROOT / "tests" / "study" / "scenes" /
+                                                     "sleigh_drag.toml"),
+            "--what", "linearize", "--over", "U=0.3:1.3:40", "--chunk", "1",
+            "--scheduler", "processes", "--workers", "2", "--out", str(out)]
+    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    reader, terminal = pty.openpty()
+    proc = subprocess.Popen(args, cwd=ROOT, env=env, stdout=subprocess.DEVNULL,
+                            stderr=terminal, start_new_session=True,
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    os.close(terminal)
+    said = b""
+
+    def read(wait):
+        nonlocal said
+        while select.select([reader], [], [], wait)[0]:
+            try:
+                said += os.read(reader, 4096)
+            except OSError:   # the command has closed its end
+                return
+
+    try:
+        deadline = time.time() + 120
+        while time.time() < deadline and proc.poll() is None and not any(
+                "spawn_main" in " ".join(_command_line(p))
+                for p in psutil.Process(proc.pid).children(recursive=True)):
+            read(0.02)
+        assert proc.poll() is None, "the command ended before its cluster started"
+        os.killpg(proc.pid, signal.SIGINT)
+        status = proc.wait(timeout=60)
+        read(0.2)
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.wait()
+        os.close(reader)
+    lines = said.decode().replace("\r", "").splitlines()
+    assert status == 130, lines
+    assert lines[-1] == "nhham: interrupted" and "Traceback" not in said.decode(), said.decode()
+    assert "nhham:   start a local Dask cluster of 2 worker processes" in lines
+    left = [p for p in psutil.process_iter(["pid"]) if _session(p) == proc.pid]
+    assert not psutil.wait_procs(left, timeout=10)[1], f"processes left: {left}"
+    assert not out.exists()
+
+
+def _command_line(process) -> list:
+    try:
+        return process.cmdline()
+    except Exception:   # gone meanwhile, or not ours to read
+        return []
+
+
+def _session(process) -> int | None:
+    try:
+        return os.getsid(process.pid)
+    except OSError:   # gone meanwhile
+        return None
+
+
 def test_the_budget_bounds_connecting_and_plain_tcp_off_this_machine_is_warned_once(capsys,
                                                                                    tmp_path):
     import socket

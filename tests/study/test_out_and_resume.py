@@ -192,6 +192,32 @@ def test_chunks_marked_done_whose_data_are_missing_are_computed_again(tmp_path, 
     _same(in_memory, resumed.dataset)
 
 
+def _truncated(path):
+    """Half of a file, as a full disk or an interrupted copy leaves it."""
+    path.write_bytes(path.read_bytes()[:path.stat().st_size // 2])
+
+
+def test_chunks_that_cannot_be_read_back_are_computed_again_and_named(tmp_path, in_memory):
+    """Issue 43 item 5: a complete store (chunks of 7 points: every line along w is in
+    three pieces) with three chunk files truncated: the spectral abscissa of the points w
+    7..13 at d index 2, the crossing counts of the line at d index 4 (its three pieces,
+    21 points: a line's crossings and count go together) and ``done`` of w 14..20 at d
+    index 0. Before, --resume found it complete (0 computed) and it could not be read."""
+    out = tmp_path / "map.zarr"
+    sweep(SCENE, "linearize", OVER, workers=1, out=out, chunk_points=7)
+    for name in ("spectral_abscissa/c/1/2", "boundary_count/c/4", "done/c/2/0"):
+        _truncated(out / name)
+    with pytest.warns(nhham.NhhamWarning, match="3 chunk file.s. of .* cannot be read "
+                                                "back .*their points are computed again"
+                      ) as caught:
+        resumed = sweep(SCENE, "linearize", OVER, workers=1, out=out, resume=True)
+    message = str(caught[0].message)
+    for name in ("spectral_abscissa/c/1/2", "boundary_count/c/4", "done/c/2/0"):
+        assert f"{name}: RuntimeError: Zstd decompression error" in message
+    assert resumed.complete and resumed.computed == 7 + 21 + 7
+    _same(in_memory, xr.open_zarr(out).load())
+
+
 def test_another_chunk_size_is_refused_and_none_resumes_with_the_store_s(tmp_path,
                                                                          in_memory):
     out = _stopped_store(tmp_path)
@@ -205,12 +231,41 @@ def test_another_chunk_size_is_refused_and_none_resumes_with_the_store_s(tmp_pat
 
 
 def test_a_damaged_store_is_refused_with_its_reason(tmp_path):
+    """Metadata or coordinates that cannot be read: refused, naming the file."""
     out = _stopped_store(tmp_path)
-    (out / "done" / "zarr.json").unlink()
-    with pytest.raises(nhham.InputError, match="cannot be read as a study") as info:
-        sweep(SCENE, "linearize", OVER, workers=1, out=out, chunk_points=21, resume=True)
-    assert info.value.key == "--resume"
+    for name, fragment in [("w/c/0", "its layout file .*/w/c/0 cannot be read back: "
+                                     ".*Zstd decompression error"),
+                           ("done/zarr.json", "done/zarr.json is not JSON")]:
+        _truncated(out / name)
+        with pytest.raises(nhham.InputError, match="cannot be read as a study .*"
+                                                   + fragment) as info:
+            sweep(SCENE, "linearize", OVER, workers=1, out=out, chunk_points=21,
+                  resume=True)
+        assert info.value.key == "--resume"
+    _truncated(out / "zarr.json")      # the attributes: not recognisable as a study
+    with pytest.raises(nhham.InputError, match="map.zarr/zarr.json is not JSON .*cannot "
+                                               "tell whether it is a study") as info:
+        sweep(SCENE, "linearize", OVER, workers=1, out=out, resume=True)
+    assert info.value.key == "--out"
     (out / "zarr.json").unlink()       # no attributes left: not recognisable as a study
     with pytest.raises(nhham.InputError, match="is not a study nhham wrote") as info:
         sweep(SCENE, "linearize", OVER, workers=1, out=out, resume=True)
     assert info.value.key == "--out"
+
+
+def test_zarr_and_xarray_older_than_those_tested_are_refused_before_any_work(
+        monkeypatch, tmp_path, no_work):
+    """Issue 43 item 8: the pins allowed zarr 2.18, under which xarray 2026 cannot open a
+    store (TypeError: open_group() got an unexpected keyword argument 'zarr_format'),
+    and zarr 3.0 to 3.1.1 leave chunks equal to their fill unwritten (a resumed study
+    computes everything again). An installed zarr or xarray older than the study
+    extra's pins is named, exit 2, before any work."""
+    monkeypatch.setattr(zarr, "__version__", "2.18.7")
+    with pytest.raises(nhham.OptionalDependencyError,
+                       match=r"need zarr >= 3\.1\.2 \(this is 2\.18\.7\)") as info:
+        sweep(SCENE, "linearize", OVER, workers=1, out=tmp_path / "map.zarr")
+    assert isinstance(info.value, nhham.InputError)       # exit 2
+    monkeypatch.setattr(xr, "__version__", "2025.7.1")
+    with pytest.raises(nhham.OptionalDependencyError, match=r"need xarray >= 2026\.1 "):
+        sweep(SCENE, "linearize", OVER, workers=1)
+    assert not (tmp_path / "map.zarr").exists()
