@@ -31,7 +31,8 @@ from nhham.lagrangian.jacobian import EXACT_DIGITS
 
 __all__ = ["linearize", "linearize_scene", "steady_linearization", "open_loop",
            "check_steady_table", "symmetry_generator", "relative_generator",
-           "steady_states", "law_mismatch", "METHODS", "EXACT_MAX_N", "EXACT_DIGITS"]
+           "steady_states", "law_mismatch", "sweep_reference", "steady_batch", "sweep_scene",
+           "METHODS", "EXACT_MAX_N", "EXACT_DIGITS"]
 
 #: How the Jacobian is formed: ``auto`` (exact for n <= :data:`EXACT_MAX_N`),
 #: ``exact`` (symbolic, implicit differentiation), ``complex-step``.
@@ -99,7 +100,6 @@ def linearize(scene, *args, method: str = "auto", sweep=None, model=None, steps=
     """
     from nhham.numerics.codegen import numeric_model
     from nhham.numerics.model import NumericModel
-    from nhham.numerics.steady_sweep import sweep_steady
     from nhham.render.linearize import linearize_data, linearize_text
 
     if isinstance(scene, NumericModel):   # the model-level function, renamed
@@ -128,10 +128,7 @@ def linearize(scene, *args, method: str = "auto", sweep=None, model=None, steps=
             lin = steady_linearization(scene, system, model, method, generator=generator)
             swept = None
             if sweep is not None:
-                name, values = sweep
-                swept = sweep_steady(model, scene.steady.values, name, values,
-                                     independent=lin.chart, family_of=scene.steady.family,
-                                     generator=generator)
+                swept = sweep_scene(scene, system, model, *sweep, generator=generator)
         for u in () if swept is None else swept.unlocated:
             warnings.warn(f"--sweep: between {u.low:.10g} and {u.high:.10g}: {u.reason}; no "
                           f"crossing reported there", NhhamWarning)
@@ -481,6 +478,132 @@ def steady_states(scene, model, points) -> tuple:
     Y[bad] = 0.0
     P[bad] = np.where(np.isfinite(P[bad]), P[bad], 0.0)
     return Y, P, bad, missed
+
+
+def sweep_reference(scene, system, model, points, generator=None) -> tuple:
+    """The chart and the neutral directions of a sweep or a study, decided once: the
+    command's linearisation (its laws and forces checked, complex-step) at each probe
+    point, the first's chart, the directions neutral at every probe
+    (:func:`~nhham.numerics.steady_sweep.common_reference`).
+
+    Parameters
+    ----------
+    scene : Scene
+    system : System
+        ``scene.steady_system()``.
+    model : NumericModel
+        Of ``system``.
+    points : sequence of mappings
+        The probes' parameter values (``{name: value}``).
+    generator : Generator, optional
+        The scene's checked ``[symmetry]``.
+
+    Returns
+    -------
+    (ChartChoice, list of str)
+        The reference and the probes where the command refused (their messages).
+
+    Raises
+    ------
+    InputError
+        (key ``steady``) no probe linearises.
+    """
+    from nhham.errors import ComputationError
+    from nhham.numerics.linearization import linearize as at_state
+    from nhham.numerics.steady_sweep import common_reference
+
+    found: list = []
+    problems: list = []
+    for params in points:
+        m = model.with_parameters(**params)
+        try:
+            # the command's linearisation there (laws and forces checked), numerically
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")   # a probe's notes are not the sweep's
+                lin = steady_linearization(scene, system, m, "complex-step",
+                                           found[0][2].chart if found else None,
+                                           generator=generator)
+            found.append((m, scene.steady.family(m.parameters), lin))
+        except (InputError, ComputationError) as exc:
+            problems.append(f"at {params}: {exc}")
+    if not found:
+        raise InputError("linearize: the [steady] motion is not steady (or not on M_1) at "
+                         "any probe point: " + "; ".join(problems), key="steady")
+    m, family, first = found[0]
+    state = np.array([first.state[name] for name in m.names])
+
+    def relinearize(neutral, keep):
+        return at_state(m, state, independent=first.chart, neutral=neutral,
+                        family={p: t for p, t in (family or {}).items() if p in keep} or None,
+                        generator=generator)
+
+    return common_reference([lin for _, _, lin in found], relinearize), problems
+
+
+def steady_batch(scene, model, choice, points, generator=None) -> tuple:
+    """The linearisations of the ``[steady]`` motion at many parameter points in the
+    reference's chart, as a study and a sweep take them.
+
+    Parameters
+    ----------
+    scene : Scene
+    model : NumericModel
+        Of ``scene.steady_system()``.
+    choice : ChartChoice
+        The reference (:func:`sweep_reference`).
+    points : mapping of str to ndarray, shape (N,)
+        Swept parameter -> its values.
+    generator : Generator, optional
+
+    Returns
+    -------
+    (LinearizationBatch, ndarray of bool)
+        The batch, its ``status`` 1 where an entry of ``[steady]`` is not a finite number
+        and 2 where a ``[control]`` law misses its input's steady value (the command
+        refuses both); and that mask.
+    """
+    from dataclasses import replace
+
+    from nhham.numerics.batch_linearization import linearize_batch
+
+    Y, P, bad, missed = steady_states(scene, model, points)
+    families = None
+    if any(s.startswith("d/d") for s in choice.neutral):
+        families = [scene.steady.family(dict(zip(model.parameter_names, p))) for p in P]
+    batch = linearize_batch(model, Y, P, reference=choice, families=families,
+                            generator=generator)
+    status = batch.status.copy()
+    status[bad] = 1
+    status[missed] = 2   # not a steady motion of the closed loop: the command refuses it
+    out = bad | missed
+    verdicts = np.where(out, -1, batch.verdicts).astype(np.int8)
+    return replace(batch, status=status, verdicts=verdicts), out
+
+
+def sweep_scene(scene, system, model, name, values, generator=None):
+    """``nhham linearize --sweep``: the scene's ``[steady]`` motion along one parameter,
+    the reference decided at the first, middle and last values and every value (and
+    every value the crossing finder asks for) linearised as a study's points are
+    (:func:`sweep_reference`, :func:`steady_batch`).
+
+    Returns
+    -------
+    nhham.numerics.steady_sweep.Sweep
+    """
+    from nhham.numerics.steady_sweep import check_swept, probe_values, sweep_batches
+
+    check_swept(model, name)
+    grid = np.asarray(values, dtype=float)
+    if grid.size == 0:
+        raise InputError(f"--sweep: no values of {name!r} to sweep", key="--sweep")
+    choice, _ = sweep_reference(scene, system, model,
+                                [{name: v} for v in probe_values(grid)], generator)
+
+    def batch_at(vals):
+        return steady_batch(scene, model, choice, {name: np.asarray(vals, dtype=float)},
+                            generator)[0]
+
+    return sweep_batches(name, grid, batch_at, choice.coordinates)
 
 
 def law_mismatch(scene, model, Y, P, steady) -> np.ndarray:

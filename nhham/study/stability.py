@@ -41,8 +41,8 @@ import warnings
 import numpy as np
 
 from nhham.errors import ComputationError, InputError
-from nhham.journeys.stability import steady_states
-from nhham.numerics.batch_linearization import ChartChoice, linearize_batch
+from nhham.journeys.stability import steady_batch
+from nhham.numerics.batch_linearization import ChartChoice
 from nhham.study.lines import ACROSS_VARIABLES, LINE_VARIABLES
 
 __all__ = ["prepare", "variables", "evaluate", "summary", "summary_warnings", "summary_rows",
@@ -68,9 +68,8 @@ def prepare(scene, model, design, *, along: str | None = None, run_options=None,
         No ``[steady]`` table, a swept name that is not a parameter (or is an input), an
         ``along`` that is not a grid dimension.
     """
-    from nhham.journeys.stability import (check_steady_table, steady_linearization,
+    from nhham.journeys.stability import (check_steady_table, sweep_reference,
                                           symmetry_generator)
-    from nhham.numerics.linearization import linearize
 
     check_steady_table(scene)
     system = scene.steady_system()
@@ -92,38 +91,15 @@ def prepare(scene, model, design, *, along: str | None = None, run_options=None,
                          key="--along")
     generator = symmetry_generator(scene, system, model)   # checked once, here
     probes = sorted({0, design.size // 2, design.size - 1})
-    found: list = []
-    problems: list = []
+    points = []
     for flat in probes:
         region = tuple(slice(i, i + 1) for i in np.unravel_index(flat, design.shape))
-        params = {k: float(v.ravel()[0]) for k, v in design.values(region).items()}
-        m = model.with_parameters(**params)
-        try:
-            chart = found[0][3].chart if found else None
-            # the command's linearisation there (laws and forces checked), numerically
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore")   # a probe's notes are not the study's
-                lin = steady_linearization(scene, system, m, "complex-step", chart,
-                                           generator=generator)
-            state = np.array([lin.state[name] for name in m.names])
-            found.append((m, state, scene.steady.family(m.parameters), lin))
-        except (InputError, ComputationError) as exc:
-            problems.append(f"at {params}: {exc}")
-    if not found:
-        raise InputError("--what linearize: the [steady] motion is not steady (or not on M_1) "
-                         "at any probe point: " + "; ".join(problems), key="steady")
-    # One chart and the directions neutral at every probe (a direction can be neutral
-    # at an isolated value only, e.g. the yaw rate of a disc at rest).
-    m, state, family, lin = found[0]
-    common = [s for s in lin.neutral if all(s in f[3].neutral for f in found)]
-    if len(common) != len(lin.neutral):
-        # a family tangent divided out at every probe only (the sleigh's speed at U = 0
-        # is in A's kernel, at no other U)
-        family = {p: t for p, t in (family or {}).items() if f"d/d{p}" in common}
-        lin = linearize(m, state, independent=lin.chart, family=family or None,
-                        neutral=[s for s in common if not s.startswith("d/d")],
-                        generator=generator)
-    choice = ChartChoice.of(lin)
+        points.append({k: float(v.ravel()[0]) for k, v in design.values(region).items()})
+    try:
+        choice, _ = sweep_reference(scene, system, model, points, generator)
+    except InputError as exc:
+        raise InputError(f"--what linearize: {exc}".replace("linearize: ", "", 1),
+                         key="steady") from None
     options = {"chart": list(choice.chart), "neutral": list(choice.neutral),
                "coordinates": list(choice.coordinates), "along": along,
                "inputs": list(model.input_names)}
@@ -174,17 +150,11 @@ def evaluate(study, ctx, region, until: float | None = None) -> dict:
     values = study.design.values(region)
     shape = next(iter(values.values())).shape if values else ()
     flat = {k: v.ravel() for k, v in values.items()}
-    Y, P, bad, missed = steady_states(scene, model, flat)
-    batch = linearize_batch(model, Y, P, reference=choice,
-                            families=_families(scene, model, P, choice),
-                            generator=_generator(scene, model))
-    status = batch.status.copy()
-    status[bad] = 1
-    status[missed] = 2   # not a steady motion of the closed loop: the command refuses it
-    bad = bad | missed
+    batch, bad = steady_batch(scene, model, choice, flat, _generator(scene, model))
+    status = batch.status
     out = {
-        "stable": batch.stable & ~bad,
-        "verdict": np.where(bad, -1, batch.verdicts).astype(np.int8),
+        "stable": batch.stable,
+        "verdict": batch.verdicts,
         "spectral_abscissa": np.where(bad, np.nan, batch.spectral_abscissa),
         "eigenvalue_real": batch.eigenvalues.real,
         "eigenvalue_imag": batch.eigenvalues.imag,
@@ -196,7 +166,7 @@ def evaluate(study, ctx, region, until: float | None = None) -> dict:
     if opts["inputs"]:
         out["input_matrix"] = batch.input_matrices
     out = {k: np.asarray(v).reshape(shape + np.asarray(v).shape[1:]) for k, v in out.items()}
-    missing = (bad | (batch.status != 0)).reshape(shape)
+    missing = (batch.status != 0).reshape(shape)
     for k in ("eigenvalue_real", "eigenvalue_imag", "state_matrix"):
         out[k][missing] = np.nan
     if opts["along"] is not None:
@@ -209,14 +179,6 @@ def _generator(scene, model):
     from nhham.journeys.stability import symmetry_generator
 
     return symmetry_generator(scene, scene.steady_system(), model, check=False)
-
-
-def _families(scene, model, P, choice):
-    """Each point's tangents of the steady family, where the chart divides one out."""
-    if not any(s.startswith("d/d") for s in choice.neutral):
-        return None
-    names = model.parameter_names
-    return [scene.steady.family(dict(zip(names, p))) for p in P]
 
 
 def _boundaries(study, scene, model, choice, region, values, batch, bad) -> dict:
@@ -264,9 +226,7 @@ def _line_crossings(study, scene, model, choice, region, values, batch, bad, axi
     index = np.arange(int(np.prod(shape))).reshape(shape)
     # the unstable eigenvalues counted for the whole chunk at once; a spectrum is made
     # only where a line's count changes (the search reads nothing else)
-    with np.errstate(invalid="ignore"):
-        positive = (batch.eigenvalues.real > batch.tolerances[:, None]).sum(axis=1)
-    counts = np.where(bad | (batch.status != 0), -1, positive)
+    counts = batch.unstable_counts
     lines, fixed, line_counts = [], [], []
     for line in np.ndindex(*rest):
         at = line[:a] + (slice(None),) + line[a:]
@@ -315,14 +275,8 @@ class _Spectra:
 def _spectra(scene, model, choice, points) -> list:
     """The spectra at many points (``points``: swept name -> values), None where there is
     no linearisation."""
-    Y, P, bad, missed = steady_states(scene, model, points)
-    bad = bad | missed
-    batch = linearize_batch(model, Y, P, reference=choice,
-                            families=_families(scene, model, P, choice),
-                            generator=_generator(scene, model))
-    return [None if bad[i] else batch.spectrum(i) for i in range(len(Y))]
-
-
+    batch, _ = steady_batch(scene, model, choice, points, _generator(scene, model))
+    return [batch.spectrum(i) for i in range(batch.status.size)]
 
 
 def summary(ds) -> dict:
