@@ -28,6 +28,7 @@ import numpy as np
 from nhham.errors import InputError, NhhamWarning
 from nhham.journeys.answer import Answer, as_scene, capture_warnings, quiet_steps
 from nhham.lagrangian.jacobian import EXACT_DIGITS
+from nhham.numerics.quotient import MOMENTUM, ORBIT
 
 __all__ = ["linearize", "linearize_scene", "steady_linearization", "open_loop",
            "check_steady_table", "symmetry_generator", "relative_generator",
@@ -198,7 +199,7 @@ def check_steady_table(scene) -> None:
                          key="steady")
 
 
-def symmetry_generator(scene, system, model, check: bool = True):
+def symmetry_generator(scene, system, model, check: bool = True, conserved: bool = False):
     """The scene's ``[symmetry]`` generator, checked to leave L, the constraints and the
     forces of ``system`` invariant, for the numeric layer (None without the table).
 
@@ -212,6 +213,9 @@ def symmetry_generator(scene, system, model, check: bool = True):
     check : bool, optional
         False: the checks were made by the caller (a study's preparation; its workers
         build the generator again from the scene).
+    conserved : bool, optional
+        With ``check=False``: the caller found the symmetry's momentum conserved
+        (``Generator.momentum`` not None).
 
     Returns
     -------
@@ -240,10 +244,11 @@ def symmetry_generator(scene, system, model, check: bool = True):
     """
     if scene.symmetry is None:
         return None
-    return relative_generator(system, model, scene.symmetry, check=check)
+    return relative_generator(system, model, scene.symmetry, check=check, conserved=conserved)
 
 
-def relative_generator(system, model, symmetry, check: bool = True):
+def relative_generator(system, model, symmetry, check: bool = True,
+                       conserved: bool = False):
     """A symmetry's generator for :func:`nhham.numerics.linearization.linearize` (its
     ``generator``): how Python code declares what a scene's ``[symmetry]`` does.
 
@@ -256,7 +261,10 @@ def relative_generator(system, model, symmetry, check: bool = True):
         xi by coordinate name (strings go through the safe parser, in the coordinates
         and parameters).
     check : bool, optional
-        Check the invariance of L, the constraints and the forces (default).
+        Check the invariance of L, the constraints and the forces (default), and whether
+        the symmetry's momentum is conserved.
+    conserved : bool, optional
+        Without the checks: whether the momentum is conserved (decided by the caller).
 
     Returns
     -------
@@ -304,12 +312,41 @@ def relative_generator(system, model, symmetry, check: bool = True):
     checked = _checked(system, symmetry) if check else None
     parameters = dict(zip(model.parameter_names, model.parameter_values))
     coordinates = set(system.coordinates)
-    constant = not any(e.free_symbols & coordinates for e in symmetry.field(system.coordinates))
+    field = symmetry.field(system.coordinates)
+    constant = not any(e.free_symbols & coordinates for e in field)
+    if checked is not None:
+        momentum = checked.momentum
+    else:   # the caller decided whether it is conserved (a study's preparation)
+        momentum = sum((sp.diff(system.lagrangian, v) * e
+                        for v, e in zip(system.velocities, field)), sp.S.Zero) \
+            if conserved else None
     return Generator(tuple(symmetry.to_toml_table().items()),
                      symmetry.numeric([q.name for q in system.coordinates], parameters),
                      tuple(parameters.values()), constant,
                      () if checked is None else tuple((label, d.method)
-                                                      for label, d in checked.decisions))
+                                                      for label, d in checked.decisions),
+                     _momentum_function(system, momentum, parameters))
+
+
+def _momentum_function(system, momentum, parameters):
+    """``J(Q, V, P) -> (K,)`` in numpy (complex welcome) from the conserved momentum's
+    expression, None without one."""
+    if momentum is None:
+        return None
+    import sympy as sp
+
+    q, v = list(system.coordinates), list(system.velocities)
+    p = [sp.Symbol(k) for k in parameters]
+    f = sp.lambdify([q, v, p], momentum, modules="numpy")
+    values = np.array([np.nan if x is None else float(x) for x in parameters.values()])
+
+    def J(Q, V, P=None):
+        K = np.atleast_2d(Q).shape[0]
+        rows = np.broadcast_to(values if P is None else np.atleast_2d(P), (K, values.size))
+        return np.broadcast_to(f(list(np.atleast_2d(Q).T), list(np.atleast_2d(V).T),
+                                 list(rows.T)), (K,))
+
+    return J
 
 
 @functools.lru_cache(maxsize=8)
@@ -362,7 +399,14 @@ def steady_linearization(scene, system, model, method: str = "auto", independent
                          "equilibrium (it moves along the [symmetry] generator), whose state "
                          "matrix (of X - w Xi) is formed by the complex step only; leave the "
                          "method to auto or use --numeric", key="method")
-    if not turning and (method == "exact" or (method == "auto" and system.n <= EXACT_MAX_N)):
+    level = MOMENTUM in lin.neutral
+    if level and method == "exact":
+        raise InputError("method exact (--exact): the [symmetry]'s momentum is conserved and "
+                         "its level is divided out, whose differential on M_1 is formed by the "
+                         "complex step only; leave the method to auto or use --numeric",
+                         key="method")
+    if not (turning or level) and (method == "exact"
+                                   or (method == "auto" and system.n <= EXACT_MAX_N)):
         lin = _exact(scene, system, model, lin)
     return lin
 
@@ -408,16 +452,32 @@ def _exact(scene, system, model, lin):
     keep = [i for i, s in enumerate(ej.chart) if s not in lin.neutral]
     A = ej.matrix.extract(keep, keep)
     names = [ej.chart[i] for i in keep]
+    done: list = []   # the quotients taken: (names then, pivot, vector)
     for label in lin.neutral:
-        if not label.startswith("d/d"):
+        if label == ORBIT:   # Xi(y0) in the chart, exactly
+            v = _exact_orbit(scene, system, state, point, done[0][0] if done else names)
+        elif label.startswith("d/d"):   # a tangent of the steady family
+            p = sp.Symbol(label[3:])
+            v = [sp.diff(scene.steady.expressions[s], p).xreplace(point)
+                 for s in done[0][0]] if done else \
+                [sp.diff(scene.steady.expressions[s], p).xreplace(point) for s in names]
+            if done:   # the original variables: carried into the quotient below
+                v = dict(zip(done[0][0], v))
+        else:
             continue
-        p = sp.Symbol(label[3:])   # a tangent of the steady family, divided out exactly
-        t = sp.Matrix([sp.diff(scene.steady.expressions[s], p).xreplace(point) for s in names])
+        if isinstance(v, dict):   # its class in the quotients taken before
+            for before, j, t in done:
+                w = [v[s] for s in before]
+                w = [w[i] - w[j] / t[j] * t[i] for i in range(len(before))]
+                v = {s: w[i] for i, s in enumerate(before) if i != j}
+            v = [v[s] for s in names]
+        t = sp.Matrix(v)
         j = max(range(len(names)), key=lambda i: abs(float(t[i])))
         T = sp.eye(len(names))
         T[:, j] = t
         B = T.LUsolve(A * T)
         rest = [i for i in range(len(names)) if i != j]
+        done.append((list(names), j, list(t)))
         A, names = B.extract(rest, rest), [names[i] for i in rest]
     with mpmath.workdps(EXACT_DIGITS + 10):
         M = mpmath.matrix([[mpmath.mpmathify(sp.N(e, EXACT_DIGITS + 10)) for e in A.row(i)]
@@ -439,7 +499,26 @@ def _exact(scene, system, model, lin):
         lin.neutral, lin.dependent, dict(lin.state), dict(lin.residuals),
         lin.acceleration_residual, tol=10.0 ** (-EXACT_DIGITS + 5) * scale, eigenvalues=ev,
         exact_matrix=A, inputs=lin.inputs, B=lin.input_matrix,
-        relative=None if lin.relative is None else dict(lin.relative))
+        relative=None if lin.relative is None else dict(lin.relative),
+        kkt=(lin.kkt_solve, lin.kkt_ratio), implied=lin.implied)
+
+
+def _exact_orbit(scene, system, state, point, names):
+    """The [symmetry]'s orbit direction Xi(y0) = (xi(q0), D xi(q0) v0), exactly, as a
+    mapping from the chart variables (of the chart before any quotient) to its
+    components."""
+    import sympy as sp
+
+    q = system.coordinates
+    xi = [e.xreplace(point) for e in scene.symmetry.field(q)]
+    at = {sp.Symbol(k): v for k, v in state.items()}
+    components = {}
+    for A, qa in enumerate(q):
+        components[qa.name] = xi[A].xreplace(at)
+        components[system.velocities[A].name] = sum(
+            (sp.diff(xi[A], qb) * system.velocities[B] for B, qb in enumerate(q)),
+            sp.S.Zero).xreplace(at)
+    return {s: components[s] for s in names}
 
 
 def steady_states(scene, model, points) -> tuple:

@@ -136,6 +136,11 @@ class Linearization:
         saddle-point solve) or ``"null-space"`` (:mod:`nhham.numerics.nullspace`).
     kkt_ratio : float
         The quantity that decides it (:func:`nhham.numerics.nullspace.diagonal_ratio`).
+    implied : tuple of str
+        Neutral directions (``orbit(xi)``, ``d/d<p>``, ``level(J)``) not divided out
+        because the chart variables removed span them already (the orbit of a robot at
+        rest, whose heading and trailer angle are neutral there): a sweep's reference
+        counts them as neutral at this state.
 
     Examples
     --------
@@ -173,6 +178,7 @@ class Linearization:
     margins: np.ndarray = field(default_factory=lambda: np.zeros(0))
     kkt_solve: str = "saddle"
     kkt_ratio: float = 1.0
+    implied: tuple = ()
 
     def state_space(self):
         """``scipy.signal.StateSpace(A, B, I, 0)``: the linearisation as a system with the
@@ -208,6 +214,7 @@ class Linearization:
             "steady_state": dict(self.state),
             "residuals": dict(self.residuals),
             "acceleration_residual": self.acceleration_residual,
+            "margins": [float(x) for x in self.margins],
             "kkt_solve": self.kkt_solve,
             "kkt_ratio": float(self.kkt_ratio),
             **({} if not self.inputs else
@@ -226,6 +233,8 @@ def _relative_dict(relative) -> dict:
             "frame": ("co-moving (the Jacobian of X - w Xi)" if relative["turning"]
                       else "the Jacobian of X (w = 0, or xi constant: X - w Xi has X's)"),
             "group": list(relative["group"]),
+            "orbit": bool(relative.get("orbit", False)),
+            "momentum": bool(relative.get("momentum", False)),
             "invariance": dict(relative.get("invariance", {})),
             "group_eigenvalues": [[float(z.real), float(z.imag)]
                                   for z in relative["group_eigenvalues"]]}
@@ -234,7 +243,8 @@ def _relative_dict(relative) -> dict:
 def linearization_result(A, coords, method, precision, chart_names, J, removed, dependent,
                          state, residuals, worst, tol=None, eigenvalues=None,
                          exact_matrix=None, inputs=(), B=None,
-                         relative=None, margins=None, kkt=("saddle", 1.0)) -> "Linearization":
+                         relative=None, margins=None, kkt=("saddle", 1.0),
+                         implied=()) -> "Linearization":
     """Eigenvalues and the stability verdict of a state matrix, as a :class:`Linearization`.
 
     ``A`` is the state matrix in the variables ``coords``; ``eigenvalues``
@@ -279,7 +289,8 @@ def linearization_result(A, coords, method, precision, chart_names, J, removed, 
         exact_matrix=exact_matrix, inputs=tuple(inputs),
         input_matrix=np.zeros((A.shape[0], 0)) if B is None else B,
         relative=None if relative is None else MappingProxyType(dict(relative)),
-        margins=np.asarray(margins, dtype=float), kkt_solve=kkt[0], kkt_ratio=float(kkt[1]))
+        margins=np.asarray(margins, dtype=float), kkt_solve=kkt[0], kkt_ratio=float(kkt[1]),
+        implied=tuple(implied))
 
 
 # ------------------------------------------------------------------ public
@@ -365,8 +376,8 @@ def linearize(model, state, *, independent: Sequence[str] | None = None,
 
     J = jacobian(y0)
     moved = _moved_along(y0, model.n, None if motion is None else motion.rest)
-    choice, info = _decide(cf, model, y0, P, chart, J, lambda: jacobian(moved), neutral,
-                           family, step, generator, motion)
+    choice, info, implied = _decide(cf, model, y0, P, chart, J, lambda: jacobian(moved),
+                                    neutral, family, step, generator, motion)
     # the state matrix, its quotient and its spectrum: a batch of one
     batch = linearize_batch(model, y0[None, :], P.T, reference=choice, families=[family],
                             step=step, generator=generator, build=False)
@@ -382,7 +393,8 @@ def linearize(model, state, *, independent: Sequence[str] | None = None,
         dict(zip(names, map(float, y0))), residuals, worst, tol=float(batch.tolerances[0]),
         eigenvalues=batch.eigenvalues[0], inputs=model.input_names,
         B=batch.input_matrices[0], relative=info, margins=batch.margins[0],
-        kkt=("null-space" if batch.null_space[0] else "saddle", float(batch.kkt_ratios[0])))
+        kkt=("null-space" if batch.null_space[0] else "saddle", float(batch.kkt_ratios[0])),
+        implied=implied)
 
 
 def linearize_many(models: Sequence, states: Sequence, independent: Sequence[str], *,
@@ -536,10 +548,18 @@ def _decide(cf, model, y0, P, chart, J, moved_jacobian, neutral, family, step, g
     labels = [s for s in labels if wanted is None or s in wanted]
     taken: list = []
     coords = kept
+    implied = []
     if labels:
-        vectors = step_vectors(cf, chart, y0[None, :], P.T, step, kept, labels, [family],
-                               generator, None if motion is None else motion.lifted[None, :])
-        _, _, coords, taken = divide(J[np.ix_(keep, keep)], None, kept, vectors[0])
+        full = step_vectors(cf, chart, y0[None, :], P.T, step, list(chart_names), labels,
+                            [family], generator,
+                            None if motion is None else motion.lifted[None, :])[0]
+        vectors = [(label, None if v is None else v[keep]) for label, v in full]
+        _, _, coords, taken = divide(J[np.ix_(keep, keep)], None, kept, vectors)
+        # a direction inside the span of the chart variables removed (the orbit of a
+        # robot at rest, whose heading and trailer angle are both neutral there)
+        implied = [label for label, v in full if v is not None and label not in taken
+                   and np.abs(v).max(initial=0.0) > 0.0 and np.abs(v[keep]).max(initial=0.0)
+                   <= 1e-9 * np.abs(v).max(initial=0.0)]
     info = None
     if motion is not None:
         block = J[np.ix_(group, group)]
@@ -549,7 +569,8 @@ def _decide(cf, model, y0, P, chart, J, moved_jacobian, neutral, family, step, g
                 "orbit": ORBIT in taken, "momentum": MOMENTUM in taken,
                 "group_eigenvalues": tuple(sort_eigenvalues(np.linalg.eigvals(block))
                                            if group else ())}
-    return ChartChoice(chart_names, tuple(removed) + tuple(taken), tuple(coords)), info
+    return ChartChoice(chart_names, tuple(removed) + tuple(taken), tuple(coords)), info, \
+        tuple(implied)
 
 
 def _not_along(relative, moving, why):

@@ -290,9 +290,16 @@ def common_reference(probes: Sequence, relinearize: Callable):
     """
     from nhham.numerics.batch_linearization import ChartChoice
 
+    from nhham.numerics.quotient import is_axis
+
     first = probes[0]
-    common = [s for s in first.neutral if all(s in lin.neutral for lin in probes)]
-    if len(common) != len(first.neutral):
+    labels = list(dict.fromkeys(s for lin in probes for s in (*lin.neutral, *lin.implied)))
+    # a chart variable neutral at every probe; another direction divided out or implied
+    # by the variables removed at every probe, and divided out at one
+    common = [s for s in labels if all(s in lin.neutral or (not is_axis(s) and s in lin.implied)
+                                       for lin in probes)
+              and (is_axis(s) or any(s in lin.neutral for lin in probes))]
+    if common != list(first.neutral):
         first = relinearize(common, {s[3:] for s in common if s.startswith("d/d")})
     return ChartChoice.of(first)
 
@@ -316,8 +323,13 @@ def sweep_batches(parameter: str, values, batch_at: Callable, coordinates, *,
     failed = np.flatnonzero(batch.status != 0)
     if failed.size:
         i = int(failed[0])
-        raise InputError(f"--sweep: at {parameter} = {grid[i]:g} the [steady] motion has no "
-                         f"linearisation: {STATUS_TEXT[int(batch.status[i])]}", key="steady")
+        why = {1: "no state of M_1 near the table's at these parameter values (the "
+                  "dependent coordinates and velocities not solved from the constraints, "
+                  "or an entry not a finite number)",
+               2: "the motion is not steady at these parameter values (or a [control] law "
+                  "does not give its input's [steady] value)"}.get(
+                      int(batch.status[i]), STATUS_TEXT.get(int(batch.status[i]), ""))
+        raise InputError(f"[steady]: {why} ({parameter} = {grid[i]:g})", key="steady")
     spectra = [batch.spectrum(i) for i in range(grid.size)]
     finder = CrossingFinder([(grid, spectra)], xtol=xtol,
                             counts=[batch.unstable_counts.tolist()])

@@ -102,7 +102,8 @@ def prepare(scene, model, design, *, along: str | None = None, run_options=None,
                          key="steady") from None
     options = {"chart": list(choice.chart), "neutral": list(choice.neutral),
                "coordinates": list(choice.coordinates), "along": along,
-               "inputs": list(model.input_names)}
+               "inputs": list(model.input_names),
+               "momentum": generator is not None and generator.momentum is not None}
     across = across_of(design, along)
     if across is not None:   # crossings located along the grid's second axis too
         options["across"] = across
@@ -150,7 +151,7 @@ def evaluate(study, ctx, region, until: float | None = None) -> dict:
     values = study.design.values(region)
     shape = next(iter(values.values())).shape if values else ()
     flat = {k: v.ravel() for k, v in values.items()}
-    batch, bad = steady_batch(scene, model, choice, flat, _generator(scene, model))
+    batch, bad = steady_batch(scene, model, choice, flat, _generator(scene, model, opts))
     status = batch.status
     out = {
         "stable": batch.stable,
@@ -174,11 +175,13 @@ def evaluate(study, ctx, region, until: float | None = None) -> dict:
     return out
 
 
-def _generator(scene, model):
-    """The scene's ``[symmetry]`` for the batch (checked by :func:`prepare`)."""
+def _generator(scene, model, options):
+    """The scene's ``[symmetry]`` for the batch (checked by :func:`prepare`, which found
+    whether its momentum is conserved)."""
     from nhham.journeys.stability import symmetry_generator
 
-    return symmetry_generator(scene, scene.steady_system(), model, check=False)
+    return symmetry_generator(scene, scene.steady_system(), model, check=False,
+                              conserved=bool(options.get("momentum")))
 
 
 def _boundaries(study, scene, model, choice, region, values, batch, bad) -> dict:
@@ -239,7 +242,7 @@ def _line_crossings(study, scene, model, choice, region, values, batch, bad, axi
     while finder.requests:
         points = {k: np.array([dict(fixed[line], **{dims[a]: x})[k]
                                for line, x in finder.requests]) for k in values}
-        finder.supply(_spectra(scene, model, choice, points))
+        finder.supply(_spectra(study, scene, model, choice, points))
     search = finder.result()
     value, kind, direction, count, unlocated_count = names
     out = {value: np.full(rest + (CROSSINGS,), np.nan),
@@ -272,10 +275,11 @@ class _Spectra:
         return None if self.bad[j] else self.batch.spectrum(j)
 
 
-def _spectra(scene, model, choice, points) -> list:
+def _spectra(study, scene, model, choice, points) -> list:
     """The spectra at many points (``points``: swept name -> values), None where there is
     no linearisation."""
-    batch, _ = steady_batch(scene, model, choice, points, _generator(scene, model))
+    batch, _ = steady_batch(scene, model, choice, points,
+                            _generator(scene, model, study.options))
     return [batch.spectrum(i) for i in range(batch.status.size)]
 
 
