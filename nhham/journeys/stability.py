@@ -619,7 +619,7 @@ def sweep_reference(scene, system, model, points, generator=None) -> tuple:
     return common_reference([lin for _, _, lin in found], relinearize), problems
 
 
-def steady_batch(scene, model, choice, points, generator=None) -> tuple:
+def steady_batch(scene, model, choice, points, generator=None, build: bool = True) -> tuple:
     """The linearisations of the ``[steady]`` motion at many parameter points in the
     reference's chart, as a study and a sweep take them.
 
@@ -633,6 +633,10 @@ def steady_batch(scene, model, choice, points, generator=None) -> tuple:
     points : mapping of str to ndarray, shape (N,)
         Swept parameter -> its values.
     generator : Generator, optional
+    build : bool, optional
+        Compile the complex kernels now if the compile cache has none (a study's
+        thousands of points; a command's sweep evaluates them by numpy until then: the
+        same expressions).
 
     Returns
     -------
@@ -650,7 +654,7 @@ def steady_batch(scene, model, choice, points, generator=None) -> tuple:
     if any(s.startswith("d/d") for s in choice.neutral):
         families = [scene.steady.family(dict(zip(model.parameter_names, p))) for p in P]
     batch = linearize_batch(model, Y, P, reference=choice, families=families,
-                            generator=generator)
+                            generator=generator, build=build)
     status = batch.status.copy()
     status[bad] = 1
     status[missed] = 2   # not a steady motion of the closed loop: the command refuses it
@@ -680,7 +684,7 @@ def sweep_scene(scene, system, model, name, values, generator=None):
 
     def batch_at(vals):
         return steady_batch(scene, model, choice, {name: np.asarray(vals, dtype=float)},
-                            generator)[0]
+                            generator, build=False)[0]
 
     return sweep_batches(name, grid, batch_at, choice.coordinates)
 

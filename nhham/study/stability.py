@@ -139,7 +139,32 @@ def variables(design, options) -> dict:
                  "boundary_count": ((), np.int16, -1),
                  "boundary_unlocated": ((), np.int16, -1)}
     return {"point": point, "line": lines, "across": across_variables(design, options),
-            "coords": extra}
+            "coords": extra, "attrs": _code_meanings(lines)}
+
+
+def _code_meanings(lines) -> dict:
+    """The meanings of the integer codes (CF's ``flag_values``/``flag_meanings``, and
+    each code in words), as the variables' attributes."""
+    from nhham.numerics.batch_linearization import STATUS_TEXT
+    from nhham.numerics.spectra import VERDICT_TEXT
+
+    def flags(table, names):
+        return {"flag_values": list(table), "flag_meanings": " ".join(names),
+                "description": "; ".join(f"{k}: {v}" for k, v in table.items())}
+
+    out = {"verdict": flags(VERDICT_TEXT, ["stable", "unstable", "undecided"]),
+           "status": flags(STATUS_TEXT, ["linearised", "not_on_M1", "not_steady",
+                                         "singular"])}
+    kinds = {0: "a real eigenvalue through 0 (divergence)",
+             1: "a complex pair through the imaginary axis (flutter, Hopf)",
+             -1: "no crossing"}
+    directions = {1: "an eigenvalue's real part turns positive as the value grows",
+                  -1: "turns negative", 0: "no crossing"}
+    for prefix in ("boundary", "boundary_across"):
+        out[f"{prefix}_kind"] = flags(kinds, ["real", "complex", "none"])
+        out[f"{prefix}_direction"] = flags(directions, ["destabilising", "stabilising",
+                                                        "none"])
+    return out
 
 
 def evaluate(study, ctx, region, until: float | None = None) -> dict:
