@@ -439,7 +439,9 @@ def _exact(scene, system, model, lin):
     from nhham.lagrangian.jacobian import exact_jacobian, exact_number
     from nhham.numerics.linearization import linearization_result
 
-    params = {p.name: exact_number(v) for p, v in system.parameter_values.items()}
+    # the model's values (a model passed in with other values than the scene's)
+    params = {p.name: exact_number(model.parameters.get(p.name, v))
+              for p, v in system.parameter_values.items()}
     params.update({u: exact_number(model.parameters[u]) for u in model.input_names})
     point = {sp.Symbol(k): v for k, v in params.items()}
     state = {}
