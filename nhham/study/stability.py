@@ -205,6 +205,8 @@ def _generator(scene, model, options):
     whether its momentum is conserved)."""
     from nhham.journeys.stability import symmetry_generator
 
+    if scene.symmetry is None:   # (no closed loop built for nothing)
+        return None
     return symmetry_generator(scene, scene.steady_system(), model, check=False,
                               conserved=bool(options.get("momentum")))
 
