@@ -129,7 +129,8 @@ def linearize(scene, *args, method: str = "auto", sweep=None, model=None, steps=
             lin = steady_linearization(scene, system, model, method, generator=generator)
             swept = None
             if sweep is not None:
-                swept = sweep_scene(scene, system, model, *sweep, generator=generator)
+                name, values = sweep
+                swept = sweep_scene(scene, system, model, name, values, generator=generator)
         for u in () if swept is None else swept.unlocated:
             warnings.warn(f"--sweep: between {u.low:.10g} and {u.high:.10g}: {u.reason}; no "
                           f"crossing reported there", NhhamWarning)

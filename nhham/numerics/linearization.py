@@ -36,7 +36,6 @@ system's purely imaginary spectrum, where linearisation cannot decide).
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 from types import MappingProxyType
 from typing import TYPE_CHECKING, Mapping, Sequence
@@ -45,8 +44,7 @@ import numpy as np
 
 from nhham.autonomy import require_autonomous
 from nhham.errors import ComputationError, InconsistentInitialDataError, InputError
-from nhham.numerics.chart import (ComplexField, chart_jacobians, choose_chart,
-                                  input_jacobians)
+from nhham.numerics.chart import (ComplexField, chart_jacobians, choose_chart)
 from nhham.numerics.quotient import MOMENTUM, ORBIT, divide, is_axis
 from nhham.numerics.relative import group_block, spin_rate
 from nhham.numerics.spectra import EIGENVALUE_TOLERANCE, sort_eigenvalues, spectra, verdicts

@@ -52,7 +52,7 @@ def _left(label: str) -> bool:
     return label == MOMENTUM
 
 
-def divide(A, B, names, steps, *, required: bool = False) -> tuple:
+def divide(A, B, names, steps, *, required: bool = False) -> tuple | None:
     """Divide the kernel vectors ``steps`` out of A, in order.
 
     Parameters
@@ -101,7 +101,7 @@ def divide(A, B, names, steps, *, required: bool = False) -> tuple:
         left = _left(label)
         residual = (np.inf if norm == 0.0 else
                     float(np.abs(v @ A if left else A @ v).max(initial=0.0)))
-        if not residual <= KERNEL_TOL * scale * norm:
+        if v is None or not residual <= KERNEL_TOL * scale * norm:
             if required:
                 return None
             continue

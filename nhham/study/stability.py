@@ -36,11 +36,10 @@ the second axis the same five as ``boundary_across``, ``boundary_across_kind``,
 
 from __future__ import annotations
 
-import warnings
 
 import numpy as np
 
-from nhham.errors import ComputationError, InputError
+from nhham.errors import InputError
 from nhham.journeys.stability import steady_batch
 from nhham.numerics.batch_linearization import ChartChoice
 from nhham.study.lines import ACROSS_VARIABLES, LINE_VARIABLES
