@@ -29,16 +29,24 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from typing import TYPE_CHECKING
+
 from nhham.errors import ComputationError
-from nhham.numerics.chart import (Chart, ComplexField, chart_gradients, chart_jacobians,
-                                  input_jacobians, lift)
-from nhham.numerics.linearization import ON_TOLERANCE, STEP, Linearization
+from nhham.numerics.chart import (STEP, Chart, ComplexField, chart_gradients,
+                                  chart_jacobians, input_jacobians, lift)
 from nhham.numerics.quotient import MOMENTUM, ORBIT, divide, is_axis
 from nhham.numerics.relative import spin_rates
 from nhham.numerics.saddle import solve_saddle
 from nhham.numerics.spectra import spectra, unstable_counts
 
-__all__ = ["ChartChoice", "LinearizationBatch", "Spectrum", "linearize_batch", "STATUS_TEXT"]
+if TYPE_CHECKING:   # a reference may be a Linearization (the batch reads three fields)
+    from nhham.numerics.linearization import Linearization
+
+__all__ = ["ChartChoice", "LinearizationBatch", "Spectrum", "linearize_batch", "STATUS_TEXT",
+           "ON_TOLERANCE", "check_states", "step_vectors"]
+
+#: Relative tolerance for "on M_1" and "steady" (residual / natural size).
+ON_TOLERANCE = 1e-9
 
 #: Status of a state (``LinearizationBatch.status``): what each code means.
 STATUS_TEXT = {0: "linearised", 1: "not on M_1", 2: "not steady",
@@ -78,7 +86,7 @@ class ChartChoice:
     coordinates: tuple
 
     @classmethod
-    def of(cls, lin: Linearization) -> "ChartChoice":
+    def of(cls, lin: "Linearization") -> "ChartChoice":
         return cls(tuple(lin.chart), tuple(lin.neutral), tuple(lin.coordinates))
 
 
@@ -121,7 +129,7 @@ class LinearizationBatch:
     input_matrices : ndarray, shape (N, d, len(inputs))
         B of x' = A x + B u.
     margins : ndarray, shape (N, d)
-        |Re| at or below each eigenvalue's margin counts as 0
+        ``|Re|`` at or below each eigenvalue's margin counts as 0
         (:func:`nhham.numerics.spectra.spectra`).
     null_space : ndarray of bool, shape (N,)
         Where the accelerations came from the null-space solve
@@ -186,7 +194,8 @@ class LinearizationBatch:
         return out
 
 
-def linearize_batch(model, states, parameters=None, *, reference: Linearization | ChartChoice,
+def linearize_batch(model, states, parameters=None, *,
+                    reference: "Linearization | ChartChoice",
                     families=None, step: float = STEP, generator=None,
                     build: bool = True) -> LinearizationBatch:
     """Linearise the constrained dynamics at N steady states in the reference's chart.

@@ -22,9 +22,12 @@ from nhham.errors import ComputationError, InputError
 from nhham.numerics.kernels import columns
 from nhham.numerics.nullspace import needs_null_space, solve_null_space
 
-__all__ = ["BATCH_STATES", "Chart", "ComplexField", "chart_jacobian", "chart_jacobians",
+__all__ = ["BATCH_STATES", "STEP", "Chart", "ComplexField", "chart_jacobian", "chart_jacobians",
            "chart_gradients", "choose_chart", "dependent_velocities", "greedy_columns",
            "input_jacobians", "lift", "lifted_states", "reduced_field"]
+
+#: Imaginary step of the complex-step derivative.
+STEP = 1e-30
 
 # States per batch of the generated numpy kernel: large enough to spread one call's
 # overhead over many states, small enough to bound its temporaries (10^4 states of the

@@ -44,7 +44,9 @@ import numpy as np
 
 from nhham.autonomy import require_autonomous
 from nhham.errors import ComputationError, InconsistentInitialDataError, InputError
-from nhham.numerics.chart import (ComplexField, chart_jacobians, choose_chart)
+from nhham.numerics.batch_linearization import (ON_TOLERANCE, ChartChoice, check_states,
+                                                linearize_batch, step_vectors)
+from nhham.numerics.chart import STEP, ComplexField, chart_jacobians, choose_chart
 from nhham.numerics.quotient import MOMENTUM, ORBIT, divide, is_axis
 from nhham.numerics.relative import group_block, spin_rate
 from nhham.numerics.spectra import EIGENVALUE_TOLERANCE, sort_eigenvalues, spectra, verdicts
@@ -54,12 +56,6 @@ if TYPE_CHECKING:  # the exact matrix comes from the symbolic side; numerics nev
 
 __all__ = ["Linearization", "linearize", "linearize_many", "linearization_result", "STEP",
            "ON_TOLERANCE", "EIGENVALUE_TOLERANCE"]
-
-#: Imaginary step of the complex-step derivative.
-STEP = 1e-30
-
-#: Relative tolerance for "on M_1" and "steady" (residual / natural size).
-ON_TOLERANCE = 1e-9
 
 # A Jacobian column is zero (a neutral direction) below this, relative to max |J|.
 _NEUTRAL_TOL = 1e-10
@@ -355,8 +351,6 @@ def linearize(model, state, *, independent: Sequence[str] | None = None,
     >>> lin.coordinates, lin.eigenvalues.round(12), lin.stable
     (('theta_dot',), array([-2.+0.j]), True)
     """
-    from nhham.numerics.batch_linearization import linearize_batch
-
     if not hasattr(model, "kernels"):
         raise InputError(f"linearize: expected a NumericModel (nhham.numeric_model(system)), "
                          f"got {type(model).__name__}", key="model")
@@ -458,8 +452,6 @@ def _check_steady(cf, model, y0, P, motion=None):
     ``motion``: X(y0) = w Xi(y0), the accelerations those of the group motion): the
     batch's decision (:func:`~nhham.numerics.batch_linearization.check_states`), said
     with the names."""
-    from nhham.numerics.batch_linearization import check_states
-
     n, names = model.n, model.names
     checks = check_states(cf, y0[None, :], P,
                           None if motion is None else np.array([motion.rate]),
@@ -503,8 +495,6 @@ def _decide(cf, model, y0, P, chart, J, moved_jacobian, neutral, family, step, g
             motion):
     """The neutral directions at y0 from the full Jacobian J of the chart (and, when the
     state moves, checked along the motion): (ChartChoice, relative-equilibrium info)."""
-    from nhham.numerics.batch_linearization import ChartChoice, step_vectors
-
     n, names = model.n, model.names
     chart_names = tuple(names[i] for i in chart.iq) + tuple(names[n + i] for i in chart.iv)
     # a constant xi (cyclic coordinates) leaves X's Jacobian and today's quotient

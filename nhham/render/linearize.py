@@ -55,7 +55,8 @@ def linearize_text(title, scene, lin, swept, opened=None) -> str:
                                        for u, law in scene.control.items())),
                  ("open loop", opened.verdict + " (inputs held at their [steady] values)")]
     rows.append(("precision", lin.precision))
-    rows.append(("accelerations", describe_kkt_solve(lin.kkt_solve, lin.kkt_ratio)))
+    if lin.kkt_solve != "saddle":   # the usual solve is said in the JSON only (as simulate)
+        rows.append(("accelerations", describe_kkt_solve(lin.kkt_solve, lin.kkt_ratio)))
     lines.append(table(rows))
     lines += _matrices(lin, "state matrix" + (" of the closed loop" if closed else ""))
     if closed:

@@ -40,7 +40,7 @@ from __future__ import annotations
 import numpy as np
 
 from nhham.errors import InputError
-from nhham.journeys.stability import steady_batch
+from nhham.journeys.steady import steady_batch
 from nhham.numerics.batch_linearization import ChartChoice
 from nhham.study.lines import ACROSS_VARIABLES, LINE_VARIABLES
 
@@ -67,8 +67,8 @@ def prepare(scene, model, design, *, along: str | None = None, run_options=None,
         No ``[steady]`` table, a swept name that is not a parameter (or is an input), an
         ``along`` that is not a grid dimension.
     """
-    from nhham.journeys.stability import (check_steady_table, sweep_reference,
-                                          symmetry_generator)
+    from nhham.journeys.stability import check_steady_table, symmetry_generator
+    from nhham.journeys.steady import sweep_reference
 
     check_steady_table(scene)
     system = scene.steady_system()

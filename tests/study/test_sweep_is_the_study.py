@@ -3,7 +3,7 @@ scene with a ``[steady]`` table (issue 43, item 3): the same verdict at every gr
 the same eigenvalues, the same crossings (value to 1e-9, kind, direction) and the same
 intervals left unlocated. Both take one reference (the first, middle and last values)
 and their spectra from one batch implementation
-(:func:`nhham.journeys.stability.sweep_reference`, :func:`~nhham.journeys.stability.steady_batch`);
+(:func:`nhham.journeys.steady.sweep_reference`, :func:`~nhham.journeys.steady.steady_batch`);
 this test keeps it so.
 
 The scenes cover a touching eigenvalue and a crossing in one grid interval (the forced
