@@ -135,7 +135,8 @@ class LinearizationBatch:
         Where the accelerations came from the null-space solve
         (:func:`nhham.numerics.nullspace.needs_null_space`), not the saddle-point one.
     kkt_ratios : ndarray, shape (N,)
-        The quantity that decides it (:func:`nhham.numerics.nullspace.kkt_ratio`).
+        The quantity that decides it (:func:`nhham.numerics.nullspace.diagonal_ratio`:
+        max W_AA / min W_AA).
 
     Examples
     --------
@@ -354,7 +355,7 @@ def check_states(cf, Y, P, rates=None, lifted=None) -> StateChecks:
     (residuals by their natural size; accelerations against max(1, max |y|)^2; with
     ``rates`` (N,) and ``lifted`` Xi (N, 2n): the accelerations less w times the lift's,
     X = w Xi). The one decision of a single linearisation and of a batch."""
-    from nhham.numerics.nullspace import KKT_RATIO, kkt_ratio
+    from nhham.numerics.nullspace import KKT_RATIO, diagonal_ratio
 
     n, k = cf.n, cf.k
     N = Y.shape[0]
@@ -371,7 +372,7 @@ def check_states(cf, Y, P, rates=None, lifted=None) -> StateChecks:
     status[~(cres <= ON_TOLERANCE)] = 1
     ares = np.full(N, np.nan)
     acc = np.full((N, n), np.nan)
-    ratio = np.asarray(kkt_ratio(W, mu))   # the decision of needs_null_space
+    ratio = np.asarray(diagonal_ratio(W))   # the decision of needs_null_space
     on = np.flatnonzero(status == 0)
     if on.size:
         a, singular = _accelerations(W[on], F[on], mu[on], drift[on], n)

@@ -117,14 +117,13 @@ class ComplexField:
         """The accelerations at the complex states of the complex step (imaginary parts of
         the order of its h), by the one decision of
         :func:`~nhham.numerics.nullspace.needs_null_space`: LU on the complex saddle-point
-        matrix [[W, mu^T], [mu, 0]], or where the constraints' scaled weights spread more
-        than KKT_RATIO (:func:`~nhham.numerics.nullspace.kkt_ratio`; a
+        matrix [[W, mu^T], [mu, 0]], or where W's diagonal spans more than KKT_RATIO (a
         complex LU lost the derivative of a small acceleration at extreme mass ratios as
         the real one loses the acceleration) the null-space solve of K0 z0 = r0 and
         K0 z1 = r1 - K1 z0 for K = K0 + i K1, z = z0 + i z1, dropping K1 z1 (h^2 = 1e-60
         against z0: below rounding)."""
         W, F, mu, drift, _, _ = self.pieces(Q, V, p)
-        ill = np.asarray(needs_null_space(W.real, mu.real), dtype=bool)
+        ill = np.asarray(needs_null_space(W.real), dtype=bool)
         a = np.empty(F.shape, dtype=complex)
         try:
             with np.errstate(all="ignore"):

@@ -19,7 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from nhham.numerics.model import COND_C_WARN
-from nhham.numerics.nullspace import KKT_RATIO, kkt_ratio, kkt_solve_name
+from nhham.numerics.nullspace import KKT_RATIO, diagonal_ratio, kkt_solve_name
 
 __all__ = ["Diagnostics", "trajectory_diagnostics", "Singularity", "singularity_at"]
 
@@ -79,8 +79,8 @@ class Diagnostics:
         Which solve gave the constrained accelerations at those states (the decision of
         :func:`nhham.numerics.nullspace.needs_null_space`; "mixed": some states each).
     kkt_ratio_max : float
-        The largest :func:`~nhham.numerics.nullspace.kkt_ratio` there (the null-space
-        solve above :data:`~nhham.numerics.nullspace.KKT_RATIO`).
+        The largest max W_AA / min W_AA there (the null-space solve above
+        :data:`~nhham.numerics.nullspace.KKT_RATIO`).
     """
 
     energy: np.ndarray
@@ -186,10 +186,10 @@ def trajectory_diagnostics(model, t, y, work=None, *, residual_tol: float = 1e-8
 
 
 def _w_conditions(model, Y):
-    """(K, 2): cond(W) (as ``model.cond_W``) and the KKT ratio at the states Y (K, 2n),
+    """(K, 2): cond(W) (as ``model.cond_W``) and max W_AA / min W_AA at the states Y (K, 2n),
     from one evaluation of W."""
-    W, mu = model.geometry(Y)[:2]
-    return np.column_stack([np.linalg.cond(W), kkt_ratio(W, mu)])
+    W = model.geometry(Y)[0]
+    return np.column_stack([np.linalg.cond(W), diagonal_ratio(W)])
 
 
 def _scaled_conditions(model, Y):

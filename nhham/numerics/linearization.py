@@ -129,8 +129,8 @@ class Linearization:
         How the constrained accelerations were solved at the state: ``"saddle"`` (the
         saddle-point solve) or ``"null-space"`` (:mod:`nhham.numerics.nullspace`).
     kkt_ratio : float
-        The quantity that decides it (:func:`nhham.numerics.nullspace.kkt_ratio`,
-        unchanged by a change of units).
+        The quantity that decides it (:func:`nhham.numerics.nullspace.diagonal_ratio`,
+        max W_AA / min W_AA: it moves with the units of the coordinates).
     implied : tuple of str
         Neutral directions (``orbit(xi)``, ``d/d<p>``, ``level(J)``) not divided out
         because the chart variables removed span them already (the orbit of a robot at

@@ -56,7 +56,7 @@ def solve_saddle(W, mu, top, bottom, *, null_space: bool | None = None):
     solved by :func:`~nhham.numerics.nullspace.solve_null_space` instead. Raises
     numpy.linalg.LinAlgError if exactly singular.
     """
-    ill = needs_null_space(W, mu) if null_space is None else False
+    ill = needs_null_space(W) if null_space is None else False
     if np.any(ill):
         if np.ndim(ill) == 0:
             return solve_null_space(W, mu, top, bottom)
@@ -108,28 +108,6 @@ def _refined(K, rhs, z):
     return z
 
 
-def _kkt_ratio(flat, diagonal, base, n, m) -> float:
-    """:func:`~nhham.numerics.nullspace.kkt_ratio` of one state from the kernel's flat
-    output (W's diagonal at ``diagonal``, mu's rows from ``base``), in plain Python."""
-    d = [abs(flat[i]) for i in diagonal]
-    if max(d) > 0.0 and min(d) == 0.0:
-        return math.inf
-    inv = [1.0 / x if x > 0.0 else 1.0 for x in d]
-    worst = 1.0
-    for r in range(m):
-        row = [flat[base + r * n + j] for j in range(n)]
-        if sum(1 for x in row if x != 0.0) < 2:
-            continue
-        t = [x * x * w for x, w in zip(row, inv)]
-        total = sum(t)
-        for j in range(n):
-            if row[j] != 0.0:
-                others = sum(t[:j]) + sum(t[j + 1:])
-                if others > 0.0:
-                    worst = max(worst, total / others)
-    return worst
-
-
 class SingleStateSolver:
     """The saddle solve for one state with as few numpy calls as possible.
 
@@ -164,8 +142,8 @@ class SingleStateSolver:
         self.forced = bool(layout.get("forced", False))
 
     def __call__(self, flat, y, a2, b2):
-        if self.m and _kkt_ratio(flat, self.diag_list, self.mu.start, self.n,
-                                 self.m) > KKT_RATIO:   # needs_null_space, without numpy
+        w = [abs(flat[i]) for i in self.diag_list]
+        if w and max(w) > KKT_RATIO * min(w):  # needs_null_space, without numpy
             return self._null_space(flat, y, a2, b2)
         if self.N <= 10:
             return self._python(flat, y, a2, b2)
@@ -183,8 +161,8 @@ class SingleStateSolver:
         return mu, muv, bottom
 
     def _null_space(self, flat, y, a2, b2):
-        """The solve of :func:`~nhham.numerics.nullspace.solve_null_space` (the
-        constraints' scaled weights spread more than KKT_RATIO)."""
+        """The solve of :func:`~nhham.numerics.nullspace.solve_null_space` (W's diagonal
+        spans more than KKT_RATIO)."""
         n, m = self.n, self.m
         out = np.array(flat, dtype=float)
         v = y[n:]

@@ -31,7 +31,8 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 from nhham.numerics.diagnostics import singularity_at
-from nhham.numerics.nullspace import KKT_RATIO, describe_kkt_solve, kkt_ratio, kkt_solve_name
+from nhham.numerics.nullspace import (KKT_RATIO, describe_kkt_solve, diagonal_ratio,
+                                      kkt_solve_name)
 from nhham.numerics.integrate import simulate
 from nhham.numerics.methods import DEFAULT_METHOD, lookup, names
 from nhham.numerics.model import NumericModel, NumericsWarning
@@ -120,7 +121,7 @@ class WorkPrecisionResult:
         Which solve gave the constrained accelerations at the initial state and the
         reference's end (:func:`nhham.numerics.nullspace.needs_null_space`).
     kkt_ratio_max : float
-        The larger :func:`~nhham.numerics.nullspace.kkt_ratio` of the two.
+        The larger max W_AA / min W_AA of the two.
     """
 
     rows: tuple
@@ -316,7 +317,7 @@ def work_precision(system_or_model, y0, t_span, *, methods=None, tolerances=DEFA
         warnings.warn(f"the reference error estimate {ref_error:.1e} is not 100 times "
                       f"below the smallest error {min(finite):.1e}; {advice}", NumericsWarning,
                       stacklevel=2)
-    ratio = kkt_ratio(*model.geometry(np.array([y_init, y_ref], dtype=float))[:2])
+    ratio = diagonal_ratio(model.geometry(np.array([y_init, y_ref], dtype=float))[0])
     return WorkPrecisionResult(tuple(rows), model.name, (t0, t1), digits, ref_error, ref_time,
                                model.backend, ref_text, tuple(skipped),
                                forced=model.forced or model.time_in_geometry

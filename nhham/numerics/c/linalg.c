@@ -312,41 +312,19 @@ lu:
 }
 
 /* [[W, mu^T], [mu, 0]] [x; y] = [top; bottom] with the first mm rows of mu (row stride
-   NQ), W symmetric: the one decision of nhham.numerics.nullspace.needs_null_space. For
-   each row with two or more coordinates, t_B = mu_B^2 / |W_BB| and 1/p_A = sum t /
-   sum_(B != A) t: where one coordinate carries a row, 1/p_A > NHHAM_KKT_RATIO
-   (nhham.numerics.nullspace.kkt_ratio, unchanged by the units), or a diagonal entry of W
-   is 0 beside a nonzero one, the saddle solve's relative error in an acceleration, up to
-   eps / p_A, is above ~1e-12 and the null-space solve takes over; otherwise
-   ksolve_saddle. Returns 0, or 1 when the matrix is singular. */
+   NQ), W symmetric: the one decision of nhham.numerics.nullspace.needs_null_space. Where
+   W's diagonal spans more than NHHAM_KKT_RATIO (max W_AA > ratio * min W_AA) the saddle
+   solve's relative error in an acceleration, up to eps * max W_AA / min W_AA, is above
+   ~1e-12 and the null-space solve takes over; otherwise ksolve_saddle. Returns 0, or 1
+   when the matrix is singular. */
 HOT int ksolve(int mm, const double *W, const double *mu, const double *top,
                const double *bottom, double *x, double *y) {
-    double inv[NQ], t[NQ];
-    double dhi = 0.0, dlo = INFINITY;
+    double hi = 0.0, lo = INFINITY;
     for (int i = 0; i < NQ; ++i) {
         const double a = fabs(W[i * NQ + i]);
-        if (a > dhi) dhi = a;
-        if (a < dlo) dlo = a;
-        inv[i] = a > 0.0 ? 1.0 / a : 1.0;
+        if (a > hi) hi = a;
+        if (a < lo) lo = a;
     }
-    if (dhi > 0.0 && dlo == 0.0) return nullspace_solve(mm, W, mu, top, bottom, x, y);
-    for (int r = 0; r < mm; ++r) {
-        int count = 0;
-        double total = 0.0;
-        for (int j = 0; j < NQ; ++j) {
-            const double c = mu[r * NQ + j];
-            t[j] = c * c * inv[j];
-            total += t[j];
-            count += c != 0.0;
-        }
-        if (count < 2) continue;
-        for (int j = 0; j < NQ; ++j) {
-            if (mu[r * NQ + j] == 0.0) continue;
-            double others = 0.0;
-            for (int b = 0; b < NQ; ++b) if (b != j) others += t[b];
-            if (others > 0.0 && total > NHHAM_KKT_RATIO * others)
-                return nullspace_solve(mm, W, mu, top, bottom, x, y);
-        }
-    }
+    if (hi > NHHAM_KKT_RATIO * lo) return nullspace_solve(mm, W, mu, top, bottom, x, y);
     return ksolve_saddle(mm, W, mu, top, bottom, x, y);
 }
