@@ -12,7 +12,8 @@ systems (n <= :data:`EXACT_MAX_N`) get the exact Jacobian
 :data:`EXACT_DIGITS` digits; larger ones the complex-step Jacobian. With
 ``--sweep`` the parameter P takes COUNT values from START to STOP (the steady
 state moves with it when its ``[steady]`` entries use P), and the crossings of
-the imaginary axis are located by Brent's method. ``--plot`` draws the root
+the imaginary axis are located (:mod:`nhham.numerics.crossings`, from the same
+batches as ``nhham sweep --what linearize``). ``--plot`` draws the root
 locus (needs the optional matplotlib extra; no global backend is set).
 
 JSON (the ``result`` of the envelope, schema ``$defs/linearize``):

@@ -13,8 +13,9 @@ sweep moves one parameter (the steady motion with it) and locates where an eigen
 crosses the imaginary axis (:func:`~nhham.numerics.crossings.crossings_many`).
 
 A study (``nhham sweep --what linearize``) linearises its points with
-:func:`steady_states` and :func:`law_mismatch` of this module, as the command's sweep
-does.
+:func:`~nhham.journeys.steady.sweep_reference` and
+:func:`~nhham.journeys.steady.steady_batch`, as the command's sweep
+(:func:`sweep_scene`) does.
 """
 
 from __future__ import annotations
@@ -27,23 +28,18 @@ import numpy as np
 
 from nhham.errors import InputError, NhhamWarning
 from nhham.journeys.answer import Answer, as_scene, capture_warnings, quiet_steps
+from nhham.journeys.steady import (EXACT_MAX_N, law_mismatch, steady_batch,
+                                   steady_linearization, steady_states, sweep_reference)
 from nhham.lagrangian.jacobian import EXACT_DIGITS
 
 __all__ = ["linearize", "linearize_scene", "steady_linearization", "open_loop",
            "check_steady_table", "symmetry_generator", "relative_generator",
-           "steady_states", "law_mismatch", "METHODS", "EXACT_MAX_N", "EXACT_DIGITS"]
+           "steady_states", "law_mismatch", "sweep_reference", "steady_batch", "sweep_scene",
+           "METHODS", "EXACT_MAX_N", "EXACT_DIGITS"]
 
 #: How the Jacobian is formed: ``auto`` (exact for n <= :data:`EXACT_MAX_N`),
 #: ``exact`` (symbolic, implicit differentiation), ``complex-step``.
 METHODS = ("auto", "exact", "complex-step")
-
-#: Relative distance of a ``[control]`` law's value from its input's ``[steady]`` value
-#: above which the motion is not a steady motion of the closed loop (one point and many).
-LAW_TOL = 1e-9
-
-#: Largest number of coordinates for which ``auto`` uses the exact Jacobian.
-EXACT_MAX_N = 4
-
 
 
 def linearize(scene, *args, method: str = "auto", sweep=None, model=None, steps=None,
@@ -99,7 +95,6 @@ def linearize(scene, *args, method: str = "auto", sweep=None, model=None, steps=
     """
     from nhham.numerics.codegen import numeric_model
     from nhham.numerics.model import NumericModel
-    from nhham.numerics.steady_sweep import sweep_steady
     from nhham.render.linearize import linearize_data, linearize_text
 
     if isinstance(scene, NumericModel):   # the model-level function, renamed
@@ -129,9 +124,7 @@ def linearize(scene, *args, method: str = "auto", sweep=None, model=None, steps=
             swept = None
             if sweep is not None:
                 name, values = sweep
-                swept = sweep_steady(model, scene.steady.values, name, values,
-                                     independent=lin.chart, family_of=scene.steady.family,
-                                     generator=generator)
+                swept = sweep_scene(scene, system, model, name, values, generator=generator)
         for u in () if swept is None else swept.unlocated:
             warnings.warn(f"--sweep: between {u.low:.10g} and {u.high:.10g}: {u.reason}; no "
                           f"crossing reported there", NhhamWarning)
@@ -201,7 +194,7 @@ def check_steady_table(scene) -> None:
                          key="steady")
 
 
-def symmetry_generator(scene, system, model, check: bool = True):
+def symmetry_generator(scene, system, model, check: bool = True, conserved: bool = False):
     """The scene's ``[symmetry]`` generator, checked to leave L, the constraints and the
     forces of ``system`` invariant, for the numeric layer (None without the table).
 
@@ -215,6 +208,9 @@ def symmetry_generator(scene, system, model, check: bool = True):
     check : bool, optional
         False: the checks were made by the caller (a study's preparation; its workers
         build the generator again from the scene).
+    conserved : bool, optional
+        With ``check=False``: the caller found the symmetry's momentum conserved
+        (``Generator.momentum`` not None).
 
     Returns
     -------
@@ -243,10 +239,11 @@ def symmetry_generator(scene, system, model, check: bool = True):
     """
     if scene.symmetry is None:
         return None
-    return relative_generator(system, model, scene.symmetry, check=check)
+    return relative_generator(system, model, scene.symmetry, check=check, conserved=conserved)
 
 
-def relative_generator(system, model, symmetry, check: bool = True):
+def relative_generator(system, model, symmetry, check: bool = True,
+                       conserved: bool = False):
     """A symmetry's generator for :func:`nhham.numerics.linearization.linearize` (its
     ``generator``): how Python code declares what a scene's ``[symmetry]`` does.
 
@@ -259,7 +256,10 @@ def relative_generator(system, model, symmetry, check: bool = True):
         xi by coordinate name (strings go through the safe parser, in the coordinates
         and parameters).
     check : bool, optional
-        Check the invariance of L, the constraints and the forces (default).
+        Check the invariance of L, the constraints and the forces (default), and whether
+        the symmetry's momentum is conserved.
+    conserved : bool, optional
+        Without the checks: whether the momentum is conserved (decided by the caller).
 
     Returns
     -------
@@ -307,12 +307,41 @@ def relative_generator(system, model, symmetry, check: bool = True):
     checked = _checked(system, symmetry) if check else None
     parameters = dict(zip(model.parameter_names, model.parameter_values))
     coordinates = set(system.coordinates)
-    constant = not any(e.free_symbols & coordinates for e in symmetry.field(system.coordinates))
+    field = symmetry.field(system.coordinates)
+    constant = not any(e.free_symbols & coordinates for e in field)
+    if checked is not None:
+        momentum = checked.momentum
+    else:   # the caller decided whether it is conserved (a study's preparation)
+        momentum = sum((sp.diff(system.lagrangian, v) * e
+                        for v, e in zip(system.velocities, field)), sp.S.Zero) \
+            if conserved else None
     return Generator(tuple(symmetry.to_toml_table().items()),
                      symmetry.numeric([q.name for q in system.coordinates], parameters),
                      tuple(parameters.values()), constant,
                      () if checked is None else tuple((label, d.method)
-                                                      for label, d in checked.decisions))
+                                                      for label, d in checked.decisions),
+                     _momentum_function(system, momentum, parameters))
+
+
+def _momentum_function(system, momentum, parameters):
+    """``J(Q, V, P) -> (K,)`` in numpy (complex welcome) from the conserved momentum's
+    expression, None without one."""
+    if momentum is None:
+        return None
+    import sympy as sp
+
+    q, v = list(system.coordinates), list(system.velocities)
+    p = [sp.Symbol(k) for k in parameters]
+    f = sp.lambdify([q, v, p], momentum, modules="numpy")
+    values = np.array([np.nan if x is None else float(x) for x in parameters.values()])
+
+    def J(Q, V, P=None):
+        K = np.atleast_2d(Q).shape[0]
+        rows = np.broadcast_to(values if P is None else np.atleast_2d(P), (K, values.size))
+        return np.broadcast_to(f(list(np.atleast_2d(Q).T), list(np.atleast_2d(V).T),
+                                 list(rows.T)), (K,))
+
+    return J
 
 
 @functools.lru_cache(maxsize=8)
@@ -324,196 +353,30 @@ def _checked(system, symmetry):
     return check_symmetry(system, symmetry)
 
 
-def steady_linearization(scene, system, model, method: str = "auto", independent=None,
-                         generator=None):
-    """The linearisation of ``system`` (``model``) about the scene's ``[steady]`` motion at
-    the model's parameter values: its ``[control]`` laws checked there, the forces
-    checked to be defined, the dependent coordinates and velocities solved, and the
-    Jacobian exact where ``method`` says (``auto``: n <= :data:`EXACT_MAX_N`).
-
-    Parameters
-    ----------
-    scene : Scene
-    system : System
-        ``scene.steady_system()`` (the closed loop) or ``scene.system`` (the open loop).
-    model : NumericModel
-        Of ``system``, at the parameter values wanted.
-    method : {"auto", "exact", "complex-step"}
-    independent : sequence of str, optional
-        The chart (default: chosen at the state).
-    generator : nhham.numerics.relative.Generator, optional
-        The scene's checked ``[symmetry]`` (:func:`symmetry_generator`): a motion along
-        it is linearised in co-moving variables (the complex-step Jacobian of X - w Xi).
+def sweep_scene(scene, system, model, name, values, generator=None):
+    """``nhham linearize --sweep``: the scene's ``[steady]`` motion along one parameter,
+    the reference decided at the first, middle and last values and every value (and
+    every value the crossing finder asks for) linearised as a study's points are
+    (:func:`sweep_reference`, :func:`steady_batch`).
 
     Returns
     -------
-    Linearization
+    nhham.numerics.steady_sweep.Sweep
     """
-    from nhham.numerics.linearization import linearize
-    from nhham.numerics.steady_sweep import steady_state
-    from nhham.system.force_checks import check_forces_at
+    from nhham.numerics.steady_sweep import check_swept, probe_values, sweep_batches
 
-    values = scene.steady.values(model.parameters)
-    _check_laws_at(scene, system, model, values)
-    check_forces_at(system, values, where="the [steady] motion")
-    model, state = steady_state(model, values, independent)
-    lin = linearize(model, state, family=scene.steady.family(model.parameters),
-                    independent=independent, generator=generator)
-    turning = lin.relative is not None and lin.relative["turning"]
-    if turning and method == "exact":
-        raise InputError("method exact (--exact): the [steady] motion is a relative "
-                         "equilibrium (it moves along the [symmetry] generator), whose state "
-                         "matrix (of X - w Xi) is formed by the complex step only; leave the "
-                         "method to auto or use --numeric", key="method")
-    if not turning and (method == "exact" or (method == "auto" and system.n <= EXACT_MAX_N)):
-        lin = _exact(scene, system, model, lin)
-    return lin
+    check_swept(model, name)
+    grid = np.asarray(values, dtype=float)
+    if grid.size == 0:
+        raise InputError(f"--sweep: no values of {name!r} to sweep", key="--sweep")
+    choice, _ = sweep_reference(scene, system, model,
+                                [{name: v} for v in probe_values(grid)], generator)
 
+    def batch_at(vals):
+        return steady_batch(scene, model, choice, {name: np.asarray(vals, dtype=float)},
+                            generator, build=False)[0]
 
-def _check_laws_at(scene, system, model, values) -> None:
-    """Each [control] law closed in ``system`` gives its input's [steady] value (when the
-    table gives one) at the steady state: else the motion is not one of the closed loop."""
-    import sympy as sp
-
-    closed = {u: law for u, law in scene.control.items() if u not in model.input_names
-              and u in values}
-    if not closed or system is scene.system:
-        return
-    point = {sp.Symbol(k): sp.Float(v) for k, v in {**model.parameters, **values}.items()}
-    for u, law in sorted(closed.items()):
-        value = complex(sp.sympify(law).xreplace(point).evalf())
-        want = values[u]
-        if abs(value - want) > LAW_TOL * max(1.0, abs(want)):
-            raise InputError(f"control.{u}: the law gives {value.real:.10g} at the [steady] "
-                             f"motion, where [steady] gives {u} = {want:.10g}: the motion is "
-                             f"not a steady motion of the closed loop", key="control")
-
-
-def _exact(scene, system, model, lin):
-    """The same linearisation with the exact Jacobian in the numeric chart."""
-    import mpmath
-    import numpy as np
-    import sympy as sp
-
-    from nhham.lagrangian.jacobian import exact_jacobian, exact_number
-    from nhham.numerics.linearization import linearization_result
-
-    params = {p.name: exact_number(v) for p, v in system.parameter_values.items()}
-    params.update({u: exact_number(model.parameters[u]) for u in model.input_names})
-    point = {sp.Symbol(k): v for k, v in params.items()}
-    state = {}
-    for name, expr in scene.steady.expressions.items():
-        if name not in model.names:   # an input's steady value
-            continue
-        value = sp.sympify(expr).xreplace(point)
-        state[name] = value if value.is_number else exact_number(float(value.evalf()))
-    ej = exact_jacobian(system, state, params, lin.chart)
-    keep = [i for i, s in enumerate(ej.chart) if s not in lin.neutral]
-    A = ej.matrix.extract(keep, keep)
-    names = [ej.chart[i] for i in keep]
-    for label in lin.neutral:
-        if not label.startswith("d/d"):
-            continue
-        p = sp.Symbol(label[3:])   # a tangent of the steady family, divided out exactly
-        t = sp.Matrix([sp.diff(scene.steady.expressions[s], p).xreplace(point) for s in names])
-        j = max(range(len(names)), key=lambda i: abs(float(t[i])))
-        T = sp.eye(len(names))
-        T[:, j] = t
-        B = T.LUsolve(A * T)
-        rest = [i for i in range(len(names)) if i != j]
-        A, names = B.extract(rest, rest), [names[i] for i in rest]
-    with mpmath.workdps(EXACT_DIGITS + 10):
-        M = mpmath.matrix([[mpmath.mpmathify(sp.N(e, EXACT_DIGITS + 10)) for e in A.row(i)]
-                           for i in range(A.rows)]) if A.rows else None
-        ev = []
-        if A.rows:
-            E = mpmath.eig(M, left=False, right=False)
-            # mpmath returns (E, ER, EL) for a 1 x 1 matrix
-            ev = [complex(z) for z in (E[0] if isinstance(E, tuple) else E)]
-    Af = np.array([[float(sp.N(e, 20)) for e in A.row(i)] for i in range(A.rows)]).reshape(
-        A.rows, A.rows)
-    scale = max(1.0, float(np.abs(Af).max(initial=0.0)))
-    return linearization_result(
-        Af, tuple(names), "exact",
-        f"exact symbolic Jacobian (implicit differentiation of the saddle-point system, "
-        f"exact arithmetic on the parameter values as decimals), eigenvalues by mpmath at "
-        f"{EXACT_DIGITS} digits", ej.chart,
-        np.array([[float(sp.N(e, 20)) for e in ej.matrix.row(i)] for i in range(ej.matrix.rows)]),
-        lin.neutral, lin.dependent, dict(lin.state), dict(lin.residuals),
-        lin.acceleration_residual, tol=10.0 ** (-EXACT_DIGITS + 5) * scale, eigenvalues=ev,
-        exact_matrix=A, inputs=lin.inputs, B=lin.input_matrix,
-        relative=None if lin.relative is None else dict(lin.relative))
-
-
-def steady_states(scene, model, points) -> tuple:
-    """The ``[steady]`` states at many parameter points, as a study linearises them.
-
-    Parameters
-    ----------
-    scene : Scene
-    model : NumericModel
-        Of ``scene.steady_system()``.
-    points : mapping of str to ndarray, shape (N,)
-        Swept parameter -> its values (the others at the model's values).
-
-    Returns
-    -------
-    (Y, P, bad, missed)
-        ``Y`` (N, 2n) the steady states, ``P`` (N, parameters) every parameter's value
-        (inputs at their ``[steady]`` values), ``bad`` (N,) where an entry of ``[steady]``
-        is not a finite real number, ``missed`` (N,) where a ``[control]`` law does not
-        give its input's ``[steady]`` value (:func:`law_mismatch`): no steady motion of the
-        closed loop there, which ``nhham linearize`` refuses.
-    """
-    names = model.parameter_names
-    N = len(next(iter(points.values()))) if points else 1
-    P = np.tile(np.asarray(model.parameter_values, dtype=float), (N, 1))
-    for k, v in points.items():
-        P[:, names.index(k)] = v
-    params = {k: P[:, i] for i, k in enumerate(names)}
-    steady = scene.steady.arrays(params)
-    for u in model.input_names:
-        if u in steady:
-            P[:, names.index(u)] = steady[u]
-    Y = np.column_stack([steady[s] for s in model.names])
-    bad = ~np.isfinite(Y).all(axis=1) | ~np.isfinite(P).all(axis=1)
-    missed = law_mismatch(scene, model, Y, P, steady) & ~bad
-    Y[bad] = 0.0
-    P[bad] = np.where(np.isfinite(P[bad]), P[bad], 0.0)
-    return Y, P, bad, missed
-
-
-def law_mismatch(scene, model, Y, P, steady) -> np.ndarray:
-    """Where a ``[control]`` law closed in ``model`` does not give its input's ``[steady]``
-    value (relative :data:`LAW_TOL`, as :func:`steady_linearization` checks one point).
-
-    Parameters
-    ----------
-    Y : ndarray, shape (N, 2n)
-    P : ndarray, shape (N, parameters)
-    steady : mapping of str to ndarray, shape (N,)
-        The ``[steady]`` entries at the points.
-
-    Returns
-    -------
-    ndarray of bool, shape (N,)
-    """
-    import sympy as sp
-
-    closed = {u: law for u, law in scene.control.items() if u not in model.input_names
-              and u in steady}
-    out = np.zeros(len(Y), dtype=bool)
-    if not closed:
-        return out
-    names = list(model.parameter_names) + list(model.names)
-    columns = np.column_stack([P, Y])
-    for u, law in sorted(closed.items()):
-        f = sp.lambdify([sp.Symbol(n) for n in names], sp.sympify(law), modules="numpy")
-        with np.errstate(all="ignore"):
-            value = np.broadcast_to(np.asarray(f(*columns.T), dtype=complex), out.shape)
-        want = np.asarray(steady[u], dtype=float)
-        out |= ~(np.abs(value - want) <= LAW_TOL * np.maximum(1.0, np.abs(want)))
-    return out
+    return sweep_batches(name, grid, batch_at, choice.coordinates)
 
 
 def linearize_scene(scene, method: str = "auto", sweep=None, model=None) -> tuple:

@@ -10,7 +10,10 @@ The tangent lift Xi = xi^A d/dq^A + (d xi^A/d q^B) v^B d/dv^A of the generator x
   (L_Xi F)_A = Xi(Q_A) + Q_B d xi^B/d q^A, is 0 on TQ.
 
 Then Xi commutes with the constrained field on M_1, and a motion along xi is a relative
-equilibrium that ``nhham linearize`` linearises in co-moving variables. Each test is a
+equilibrium that ``nhham linearize`` linearises in co-moving variables. Its momentum
+J = (dL/dv^A) xi^A is conserved (Noether) when besides the reactions do no work along xi
+(d phi_i/d v . xi = 0 on M_1 for every velocity constraint) and neither do the forces
+(Q . xi = 0 on M_1): ``linearize`` then divides out its level as well. Each test is a
 decision of the engine (:meth:`Submanifold.vanishes`: exact reduction, else exact points
 with an error bound, else sampled points) on M_1, or on TQ (the system without its
 constraints); a failing one is refused naming ``symmetry`` and what is not invariant.
@@ -41,11 +44,15 @@ class SymmetryCheck:
     decisions : tuple of (str, Decision)
         ``("lagrangian", ...)``, ``("constraints[i]", ...)``, ``("holonomic[k]", ...)``,
         ``("forces.<q>", ...)``: each invariance test.
+    momentum : sympy.Expr or None
+        J = (dL/dv) . xi where it is conserved (no reaction and no force along xi on
+        M_1), else None.
     """
 
     generator: tuple
     lift: sp.Matrix
     decisions: tuple
+    momentum: sp.Expr | None = None
 
     def methods(self) -> str:
         """How the tests were decided, in a few words."""
@@ -114,7 +121,25 @@ def check_symmetry(system, symmetry) -> SymmetryCheck:
             f"vanish{' on M_1' if any(f.startswith(('constraints', 'holonomic')) for f in failed) else ''}); "
             f"a [symmetry] must leave L, the constraints and the forces invariant",
             key="symmetry")
-    return SymmetryCheck(tuple(xi), Xc, tuple(decisions))
+    return SymmetryCheck(tuple(xi), Xc, tuple(decisions), _momentum(system, xi, M1))
+
+
+def _momentum(system, xi, M1):
+    """J = (dL/dv) . xi when no reaction and no force does work along xi on M_1 (each a
+    decision of the engine; the first that fails ends the tests), else None."""
+    velocities = system.velocities
+    # the holonomic constraints' lifts give xi(g), zero on M_1 already
+    powers = [sum((sp.diff(phi, v) * e for v, e in zip(velocities, xi)), sp.S.Zero)
+              for phi in system.phi]
+    powers.append(sum((Q * e for Q, e in zip(system.generalized_forces, xi)), sp.S.Zero))
+    # at the parameter values (a damping coefficient c = 0 does no work)
+    values = {p: sp.nsimplify(v, rational=True) for p, v in system.parameter_values.items()
+              if v is not None}
+    for power in powers:
+        power = sp.expand(sp.sympify(power).xreplace(values))
+        if power != 0 and not _on(M1, power).value:
+            return None
+    return sum((sp.diff(system.lagrangian, v) * e for v, e in zip(velocities, xi)), sp.S.Zero)
 
 
 def _labels(system) -> list:

@@ -1,23 +1,26 @@
-"""Linearisations at many steady states at once: the fast path of parameter studies.
+"""Linearisations at steady states, one or many at once: the one implementation of the
+state matrices, their neutral directions divided out, their spectra and verdicts.
 
 :func:`~nhham.numerics.linearization.linearize` decides the chart and the neutral
-directions at each state and checks them (the Jacobian in every chart variable, and
-again along the motion). A study evaluates thousands of states of one family, so
-:func:`linearize_batch` takes those decisions from a *reference* linearisation (made at
-probe states by the caller) and computes, for all states in one batch of the generated
-kernel, only what changes from state to state:
+directions at its state and checks them (the Jacobian in every chart variable, and
+again along the motion), then takes its state matrix from :func:`linearize_batch` as a
+batch of one. A study or a sweep takes those decisions once from a *reference*
+linearisation (made at probe states by the caller) and computes, for all states in one
+batch of the generated kernel, only what changes from state to state:
 
 - whether the state is on M_1 and steady (scaled residuals and the largest
-  acceleration, as ``linearize`` checks them), as a status per state instead of an
-  exception;
-- the complex-step Jacobian columns of the kept variables only (the reference's
-  ``coordinates``, before any tangent of the steady family is divided out), so the
-  bicycle needs 4 columns per state instead of the 2 x 10 of ``linearize``;
-- the eigenvalues (LAPACK, batched) and the verdict with ``linearize``'s tolerance.
+  acceleration), as a status per state (``linearize`` raises with the same numbers);
+- the complex-step Jacobian columns of the variables kept (the reference's ``chart``
+  less the variables it deleted), so the bicycle needs 4 columns per state instead of
+  the 2 x 10 of ``linearize``'s decisions;
+- the vectors of the other neutral directions at each state (the [symmetry]'s orbit,
+  the steady family's tangents, the level of a conserved momentum) and the quotient by
+  them (:func:`nhham.numerics.quotient.divide`);
+- the eigenvalues, their margins and the verdict (:func:`nhham.numerics.spectra.spectra`).
 
 The neutral directions are the reference's: the caller checks them at its probes (a
-column zero at one state of a smooth family is zero at its neighbours only generically).
-No sympy.
+column zero at one state of a smooth family is zero at its neighbours only generically);
+a state where a direction is not in the kernel has status 3. No sympy.
 """
 
 from __future__ import annotations
@@ -26,19 +29,29 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from typing import TYPE_CHECKING
+
 from nhham.errors import ComputationError
-from nhham.numerics.chart import (Chart, ComplexField, chart_jacobians, input_jacobians,
-                                  lift)
-from nhham.numerics.linearization import (EIGENVALUE_TOLERANCE, ON_TOLERANCE, STEP,
-                                          Linearization, divide_family)
+from nhham.numerics.chart import (STEP, Chart, ComplexField, chart_gradients,
+                                  chart_jacobians, input_jacobians, lift)
+from nhham.numerics.quotient import MOMENTUM, ORBIT, divide, is_axis
 from nhham.numerics.relative import spin_rates
 from nhham.numerics.saddle import solve_saddle
+from nhham.numerics.spectra import spectra, unstable_counts
 
-__all__ = ["ChartChoice", "LinearizationBatch", "Spectrum", "linearize_batch", "STATUS_TEXT"]
+if TYPE_CHECKING:   # a reference may be a Linearization (the batch reads three fields)
+    from nhham.numerics.linearization import Linearization
+
+__all__ = ["ChartChoice", "LinearizationBatch", "Spectrum", "linearize_batch", "STATUS_TEXT",
+           "ON_TOLERANCE", "check_states", "step_vectors"]
+
+#: Relative tolerance for "on M_1" and "steady" (residual / natural size).
+ON_TOLERANCE = 1e-9
 
 #: Status of a state (``LinearizationBatch.status``): what each code means.
 STATUS_TEXT = {0: "linearised", 1: "not on M_1", 2: "not steady",
-               3: "singular (the saddle-point matrix or a constraint at the state)"}
+               3: "singular (the saddle-point matrix or a constraint at the state, or a "
+                  "neutral direction of the reference not in the kernel there)"}
 
 
 @dataclass(frozen=True)
@@ -51,7 +64,9 @@ class ChartChoice:
     chart : tuple of str
         The independent coordinates and velocities.
     neutral : tuple of str
-        Chart variables removed (and ``d/d<p>`` tangents divided out).
+        The neutral directions divided out, in order (:mod:`nhham.numerics.quotient`):
+        chart variables deleted, then ``orbit(xi)``, ``d/d<p>`` tangents and
+        ``level(J)``.
     coordinates : tuple of str
         The variables of the state matrices.
 
@@ -71,16 +86,18 @@ class ChartChoice:
     coordinates: tuple
 
     @classmethod
-    def of(cls, lin: Linearization) -> "ChartChoice":
+    def of(cls, lin: "Linearization") -> "ChartChoice":
         return cls(tuple(lin.chart), tuple(lin.neutral), tuple(lin.coordinates))
 
 
 @dataclass(frozen=True)
 class Spectrum:
-    """Eigenvalues and the tolerance of their verdict (what locating a crossing reads)."""
+    """Eigenvalues with the tolerance of their verdict and each one's margin (what
+    locating a crossing reads; :mod:`nhham.numerics.spectra`)."""
 
     eigenvalues: np.ndarray
     tolerance: float
+    margins: np.ndarray | None = None
 
 
 @dataclass(frozen=True)
@@ -97,10 +114,11 @@ class LinearizationBatch:
         Sorted as in :class:`~nhham.numerics.linearization.Linearization` (decreasing
         real part, then imaginary part); NaN where ``status`` is not 0.
     verdicts : ndarray of int8, shape (N,)
-        1 asymptotically stable (every Re < -tol), 0 unstable (some Re > tol), -1 not
-        decided by linearisation (or not linearised).
+        1 asymptotically stable (every Re < -margin), 0 unstable (some Re > margin), -1
+        not decided by linearisation (or not linearised)
+        (:data:`nhham.numerics.spectra.VERDICT_TEXT`).
     tolerances : ndarray, shape (N,)
-        ``|Re| <=`` this counts as 0 (``1e-9 max(1, max |A|)``, as ``linearize``).
+        ``1e-9 max(1, max |A|)``.
     status : ndarray of int8, shape (N,)
         0 linearised; 1 not on M_1; 2 not steady; 3 singular (:data:`STATUS_TEXT`).
     constraint_residuals : ndarray, shape (N,)
@@ -110,6 +128,15 @@ class LinearizationBatch:
     inputs : tuple of str
     input_matrices : ndarray, shape (N, d, len(inputs))
         B of x' = A x + B u.
+    margins : ndarray, shape (N, d)
+        ``|Re|`` at or below each eigenvalue's margin counts as 0
+        (:func:`nhham.numerics.spectra.spectra`).
+    null_space : ndarray of bool, shape (N,)
+        Where the accelerations came from the null-space solve
+        (:func:`nhham.numerics.nullspace.needs_null_space`), not the saddle-point one.
+    kkt_ratios : ndarray, shape (N,)
+        The quantity that decides it (:func:`nhham.numerics.nullspace.diagonal_ratio`:
+        max W_AA / min W_AA).
 
     Examples
     --------
@@ -136,17 +163,26 @@ class LinearizationBatch:
     acceleration_residuals: np.ndarray
     inputs: tuple
     input_matrices: np.ndarray
+    margins: np.ndarray
+    null_space: np.ndarray
+    kkt_ratios: np.ndarray
 
     @property
     def stable(self) -> np.ndarray:
         """Boolean (N,): asymptotically stable."""
         return self.verdicts == 1
 
+    @property
+    def unstable_counts(self) -> np.ndarray:
+        """(N,): the eigenvalues with Re above their margin (-1: not linearised); what a
+        crossing of the imaginary axis changes (:mod:`nhham.numerics.crossings`)."""
+        return np.where(self.status == 0, unstable_counts(self.eigenvalues, self.margins), -1)
+
     def spectrum(self, i: int) -> Spectrum | None:
         """The eigenvalues of state ``i`` with their tolerance (None: not linearised)."""
         if self.status[i] != 0:
             return None
-        return Spectrum(self.eigenvalues[i], float(self.tolerances[i]))
+        return Spectrum(self.eigenvalues[i], float(self.tolerances[i]), self.margins[i])
 
     @property
     def spectral_abscissa(self) -> np.ndarray:
@@ -159,8 +195,10 @@ class LinearizationBatch:
         return out
 
 
-def linearize_batch(model, states, parameters=None, *, reference: Linearization | ChartChoice,
-                    families=None, step: float = STEP, generator=None) -> LinearizationBatch:
+def linearize_batch(model, states, parameters=None, *,
+                    reference: "Linearization | ChartChoice",
+                    families=None, step: float = STEP, generator=None,
+                    build: bool = True) -> LinearizationBatch:
     """Linearise the constrained dynamics at N steady states in the reference's chart.
 
     Parameters
@@ -186,7 +224,10 @@ def linearize_batch(model, states, parameters=None, *, reference: Linearization 
         A symmetry the steady motions move along (a scene's checked ``[symmetry]``): each
         state's rate w from its velocities, "steady" meaning X = w Xi there, and the
         Jacobians those of X - w Xi, as :func:`~nhham.numerics.linearization.linearize`
-        forms them.
+        forms them; needed when the reference divided out its orbit or momentum.
+    build : bool, optional
+        Compile the complex kernels now (default: worth it for a study's thousands of
+        states, not for one linearisation).
 
     Returns
     -------
@@ -208,20 +249,25 @@ def linearize_batch(model, states, parameters=None, *, reference: Linearization 
     N = Y.shape[0]
     P = (np.tile(np.asarray(model.parameter_values, dtype=float), (N, 1)) if parameters is None
          else np.atleast_2d(np.asarray(parameters, dtype=float)))
-    chart = _chart(model, reference.chart)
+    chart = chart_of(model, reference.chart)
+    steps = [s for s in reference.neutral if not is_axis(s)]
     kept = [s for s in reference.chart if s not in reference.neutral]
     columns = [reference.chart.index(s) for s in kept]
-    divided = [s for s in reference.neutral if s.startswith("d/d")]
+    divided = [s for s in steps if s.startswith("d/d")]
     if divided and families is None:
         raise ComputationError("linearize_batch: the reference divided out "
                                f"{', '.join(divided)}; give the families")
-    cf = ComplexField(model, build=True)   # a study's thousands of states
+    if (ORBIT in steps or MOMENTUM in steps) and generator is None:
+        raise ComputationError("linearize_batch: the reference divided out the [symmetry]'s "
+                               "orbit or momentum; give the generator")
+    cf = ComplexField(model, build=build)
     # the steady motion where the parameters moved it (a swept fork offset moves the
     # bicycle's upright pitch): dependent coordinates and velocities solved in the chart;
     # where that fails the state stays as given and is "not on M_1" below
     Y, _ = lift(cf, chart, Y, P)
     rates, lifted = (None, None) if generator is None else spin_rates(generator, Y, model.n, P)
-    status, cres, ares = _check_states(cf, Y, P, model, rates, lifted)
+    checked = check_states(cf, Y, P, rates, lifted)
+    status = checked.status
     d = len(reference.coordinates)
     r = len(model.input_names)
     A = np.full((N, d, d), np.nan)
@@ -242,19 +288,29 @@ def linearize_batch(model, states, parameters=None, *, reference: Linearization 
             ok, J, Bfull = ok[~bad], J[~bad], Bfull[~bad]
         Ak = J[:, columns, :]
         Bk = Bfull[:, columns, :]
-        if divided:
-            Ak, Bk, lost = _divide(Ak, Bk, kept, [families[i] for i in ok], divided)
+        if steps:
+            vectors = step_vectors(cf, chart, Y[ok], P[ok], step, kept, steps,
+                                   [families[i] for i in ok] if divided else None,
+                                   generator, None if lifted is None else lifted[ok])
+            Ak, Bk, lost = _quotients(Ak, Bk, kept, steps, vectors, d)
             status[ok[lost]] = 3
             ok, Ak, Bk = ok[~lost], Ak[~lost], Bk[~lost]
         A[ok], B[ok] = Ak, Bk
     elif ok.size:
         A[ok] = np.zeros((ok.size, 0, 0))
-    eig, verdict, tol = _spectra(A, ok)
+    eig = np.full((N, d), np.nan + 0j)
+    margins = np.full((N, d), np.nan)
+    verdict = np.full(N, -1, dtype=np.int8)
+    tol = np.full(N, np.nan)
+    if ok.size:
+        eig[ok], margins[ok], tol[ok], verdict[ok] = spectra(A[ok])
     return LinearizationBatch(tuple(reference.coordinates), A, eig, verdict, tol, status,
-                              cres, ares, tuple(model.input_names), B)
+                              checked.constraint_residuals, checked.acceleration_residuals,
+                              tuple(model.input_names), B, margins, checked.null_space,
+                              checked.kkt_ratios)
 
 
-def _chart(model, names) -> Chart:
+def chart_of(model, names) -> Chart:
     """The Chart whose independent variables are ``names``."""
     n = model.n
     own = model.names
@@ -264,10 +320,43 @@ def _chart(model, names) -> Chart:
                  tuple(i for i in range(n) if i not in iv))
 
 
-def _check_states(cf, Y, P, model, rates=None, lifted=None):
-    """(status, scaled constraint residual, max |a|) at each state, as ``linearize``
-    decides "on M_1" and "steady" (relative tolerance ON_TOLERANCE; with ``rates``: the
-    accelerations less w times the lift's, X = w Xi)."""
+@dataclass(frozen=True)
+class StateChecks:
+    """Whether states are on M_1 and steady (:func:`check_states`).
+
+    Attributes
+    ----------
+    status : ndarray of int8, shape (N,)
+        0, 1 (not on M_1), 2 (not steady), 3 (singular), as :data:`STATUS_TEXT`.
+    scaled : ndarray, shape (N, m + k)
+        |phi_i| / (1 + |mu_i| |v| + |h_i|), |g_a| / (1 + |grad g_a| |q|).
+    constraint_residuals : ndarray, shape (N,)
+        Their largest.
+    accelerations : ndarray, shape (N, n)
+        The constrained accelerations (less w times the lift's: X - w Xi), NaN where not
+        on M_1.
+    acceleration_residuals : ndarray, shape (N,)
+        ``max |a|``.
+    null_space : ndarray of bool, shape (N,)
+    kkt_ratios : ndarray, shape (N,)
+    """
+
+    status: np.ndarray
+    scaled: np.ndarray
+    constraint_residuals: np.ndarray
+    accelerations: np.ndarray
+    acceleration_residuals: np.ndarray
+    null_space: np.ndarray
+    kkt_ratios: np.ndarray
+
+
+def check_states(cf, Y, P, rates=None, lifted=None) -> StateChecks:
+    """Whether each state is on M_1 and steady, to the relative tolerance ON_TOLERANCE
+    (residuals by their natural size; accelerations against max(1, max |y|)^2; with
+    ``rates`` (N,) and ``lifted`` Xi (N, 2n): the accelerations less w times the lift's,
+    X = w Xi). The one decision of a single linearisation and of a batch."""
+    from nhham.numerics.nullspace import KKT_RATIO, diagonal_ratio
+
     n, k = cf.n, cf.k
     N = Y.shape[0]
     Q, V = Y[:, :n], Y[:, n:]
@@ -282,16 +371,20 @@ def _check_states(cf, Y, P, model, rates=None, lifted=None):
     cres = scaled.max(axis=1, initial=0.0)
     status[~(cres <= ON_TOLERANCE)] = 1
     ares = np.full(N, np.nan)
+    acc = np.full((N, n), np.nan)
+    ratio = np.asarray(diagonal_ratio(W))   # the decision of needs_null_space
     on = np.flatnonzero(status == 0)
     if on.size:
         a, singular = _accelerations(W[on], F[on], mu[on], drift[on], n)
         if rates is not None:
             a = a - rates[on, None] * lifted[on, n:]
+        acc[on] = a
         ares[on] = np.abs(a).max(axis=1, initial=0.0)
         scale = np.maximum(1.0, np.abs(Y[on]).max(axis=1))
         status[on[~(ares[on] <= ON_TOLERANCE * scale ** 2)]] = 2
         status[on[singular]] = 3
-    return status, cres, ares
+    return StateChecks(status, scaled, cres, acc, ares,
+                       np.atleast_1d(ratio > KKT_RATIO), np.atleast_1d(ratio))
 
 
 def _accelerations(W, F, mu, drift, n):
@@ -330,44 +423,54 @@ def _one_by_one(cf, chart, Y, P, step, columns, model, generator=None, rates=Non
     return J, B, bad
 
 
-def _divide(A, B, names, families, divided):
-    """Each state's tangents of the steady family divided out, as ``linearize`` does:
-    (A, B, lost), ``lost`` where a tangent is not in that state's kernel of A (its rows
-    are NaN: no matrix of the reference's size)."""
-    wanted = {s[3:] for s in divided}
-    d = A.shape[1] - len(divided)
+def step_vectors(cf, chart, Y, P, step, kept, steps, families=None, generator=None,
+                 lifted=None) -> list:
+    """The vectors of the non-axis neutral directions ``steps`` at each state, in the
+    variables ``kept`` (:mod:`nhham.numerics.quotient`): one list of (label, vector or
+    None) per state. ``orbit(xi)``: Xi(y) in the chart (``lifted`` (N, 2n)); ``d/d<p>``:
+    ``families[i][p]``; ``level(J)``: dJ along M_1 in the chart (complex step through the
+    lift, :func:`~nhham.numerics.chart.chart_gradients`), J the generator's momentum."""
+    n = cf.n
+    names = list(chart_names(cf, chart))
+    where = [names.index(s) for s in kept]
+    cols = list(chart.iq) + [n + i for i in chart.iv]
+    orbit = None if lifted is None or ORBIT not in steps else lifted[:, cols][:, where]
+    level = None
+    if MOMENTUM in steps and generator is not None and generator.momentum is not None:
+        level = chart_gradients(cf, chart, Y, step, P.T, generator.momentum, where)
+    out = []
+    for i in range(Y.shape[0]):
+        row = []
+        for label in steps:
+            if label == ORBIT:
+                row.append((label, None if orbit is None else orbit[i]))
+            elif label == MOMENTUM:
+                row.append((label, None if level is None else level[i]))
+            else:
+                tangent = (families[i] or {}).get(label[3:]) if families is not None else None
+                row.append((label, None if tangent is None else
+                            np.array([float(tangent.get(s, 0.0)) for s in kept])))
+        out.append(row)
+    return out
+
+
+def chart_names(cf, chart) -> tuple:
+    """The chart's variables' names (coordinates, then velocities)."""
+    names = cf.names
+    return (tuple(names[i] for i in chart.iq) + tuple(names[cf.n + i] for i in chart.iv))
+
+
+def _quotients(A, B, names, steps, vectors, d):
+    """Each state's quotient by the reference's steps (all required): (A, B, lost),
+    ``lost`` where a step does not hold at that state (its rows are NaN: no matrix of
+    the reference's size)."""
     outA = np.full((A.shape[0], d, d), np.nan)
     outB = np.full((A.shape[0], d, B.shape[2]), np.nan)
     lost = np.zeros(A.shape[0], dtype=bool)
-    for i, (Ai, Bi, fam) in enumerate(zip(A, B, families)):
-        fam = {p: t for p, t in (fam or {}).items() if p in wanted}
-        Ai, _, removed, Bi = divide_family(Ai, list(names), fam, Bi)
-        if len(removed) != len(divided):
+    for i in range(A.shape[0]):
+        done = divide(A[i], B[i], names, vectors[i], required=True)
+        if done is None or done[0].shape[0] != d:
             lost[i] = True
             continue
-        outA[i], outB[i] = Ai, Bi
+        outA[i], outB[i] = done[0], done[1]
     return outA, outB, lost
-
-
-def _spectra(A, ok):
-    """(eigenvalues sorted, verdicts, tolerances) of the state matrices ``A[ok]``."""
-    N, d = A.shape[0], A.shape[1]
-    eig = np.full((N, d), np.nan + 0j)
-    verdict = np.full(N, -1, dtype=np.int8)
-    tol = np.full(N, np.nan)
-    if not ok.size:
-        return eig, verdict, tol
-    Ak = A[ok]
-    tol[ok] = EIGENVALUE_TOLERANCE * np.maximum(1.0, np.abs(Ak).max(axis=(1, 2), initial=0.0))
-    if not d:
-        return eig, verdict, tol
-    ev = np.linalg.eigvals(Ak)
-    order = np.lexsort((-ev.imag, -np.round(ev.real, 12)), axis=-1)
-    ev = np.take_along_axis(ev, order, axis=-1)
-    eig[ok] = ev
-    top = ev.real.max(axis=1)
-    v = np.full(ok.size, -1, dtype=np.int8)
-    v[top < -tol[ok]] = 1
-    v[top > tol[ok]] = 0
-    verdict[ok] = v
-    return eig, verdict, tol

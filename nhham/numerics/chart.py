@@ -22,9 +22,12 @@ from nhham.errors import ComputationError, InputError
 from nhham.numerics.kernels import columns
 from nhham.numerics.nullspace import needs_null_space, solve_null_space
 
-__all__ = ["BATCH_STATES", "Chart", "ComplexField", "chart_jacobian", "chart_jacobians",
-           "choose_chart", "dependent_velocities", "greedy_columns", "input_jacobians", "lift",
-           "reduced_field"]
+__all__ = ["BATCH_STATES", "STEP", "Chart", "ComplexField", "chart_jacobian", "chart_jacobians",
+           "chart_gradients", "choose_chart", "dependent_velocities", "greedy_columns",
+           "input_jacobians", "lift", "lifted_states", "reduced_field"]
+
+#: Imaginary step of the complex-step derivative.
+STEP = 1e-30
 
 # States per batch of the generated numpy kernel: large enough to spread one call's
 # overhead over many states, small enough to bound its temporaries (10^4 states of the
@@ -42,6 +45,7 @@ class ComplexField:
 
     def __init__(self, model, build: bool = False):
         self.n, self.m, self.k = model.n, model.m, model.k
+        self.names = tuple(model.names)
         # a nonlinear (Chetaev) constraint: mu and h read (q, v), the dependent velocities
         # are solved by Newton's method (dependent_velocities)
         self.nonlinear = bool(getattr(model, "nonlinear", False))
@@ -226,6 +230,21 @@ def reduced_field(cf, chart, q0, X, p=None, positions=True, v0=None, shift=None)
     states subtracted from the constrained one (w Xi of a relative equilibrium:
     :mod:`nhham.numerics.relative`), in the chart's components."""
     n = cf.n
+    iq, iv = list(chart.iq), list(chart.iv)
+    Q, V = lifted_states(cf, chart, q0, X, p, positions, v0)
+    a = cf.accelerations(Q, V, p)
+    if shift is not None:
+        s = shift(Q, V)
+        return np.concatenate([V[:, iq] - s[:, iq], a[:, iv] - s[:, [n + i for i in iv]]],
+                              axis=1)
+    return np.concatenate([V[:, iq], a[:, iv]], axis=1)
+
+
+def lifted_states(cf, chart, q0, X, p=None, positions=True, v0=None) -> tuple:
+    """(Q, V) (K, n) complex: the chart points X (K, d) lifted onto M_1 (the arguments as
+    for :func:`reduced_field`): the dependent coordinates by Newton's method on the
+    holonomic constraints, the dependent velocities from the velocity constraints."""
+    n = cf.n
     K = X.shape[0]
     iq, dq, iv, dv = (list(a) for a in (chart.iq, chart.dq, chart.iv, chart.dv))
     Q = np.array(np.broadcast_to(q0, (K, n)), dtype=complex)
@@ -255,12 +274,7 @@ def reduced_field(cf, chart, q0, X, p=None, positions=True, v0=None, shift=None)
         mu, h, _ = cf.geometry(Q, p) if geometry is None else geometry
         rhs = -(np.einsum("kij,kj->ki", mu[:, :, iv], V[:, iv]) + h)
         V[:, dv] = np.linalg.solve(mu[:, :, dv], rhs[..., None])[..., 0]
-    a = cf.accelerations(Q, V, p)
-    if shift is not None:
-        s = shift(Q, V)
-        return np.concatenate([V[:, iq] - s[:, iq], a[:, iv] - s[:, [n + i for i in iv]]],
-                              axis=1)
-    return np.concatenate([V[:, iq], a[:, iv]], axis=1)
+    return Q, V
 
 
 def lift(cf, chart, Y, P=None, iterations: int = 30) -> tuple:
@@ -418,13 +432,15 @@ def chart_jacobians(cf, chart, Y, step, P=None, columns=None, generator=None, ra
     return _jacobians(cf, chart, Y, step, rows, columns, generator, rates)
 
 
-def _jacobians(cf, chart, Y, step, rows, columns, generator=None, rates=None):
-    """:func:`chart_jacobians` on one batch; ``rows``: (N, parameters) or None."""
+def _jacobians(cf, chart, Y, step, rows, columns, generator=None, rates=None, function=None):
+    """:func:`chart_jacobians` on one batch; ``rows``: (N, parameters) or None;
+    ``function``: ``function(Q, V, P) -> (K, r)`` evaluated at the lifted states in place
+    of the field (its derivatives in the chart, shape (N, r, len(columns)))."""
     n, N = cf.n, Y.shape[0]
     cols = list(chart.iq) + [n + i for i in chart.iv]
     d = len(cols)
     columns = list(range(d)) if columns is None else list(columns)
-    out = np.empty((N, d, len(columns)))
+    out = None
     # coordinate columns move the dependent coordinates (Newton); velocity columns do not
     for group, positions in (([j for j in columns if j < len(chart.iq)], True),
                              ([j for j in columns if j >= len(chart.iq)], False)):
@@ -434,15 +450,32 @@ def _jacobians(cf, chart, Y, step, rows, columns, generator=None, rates=None):
         X = (np.repeat(Y[:, cols].astype(complex), c, axis=0)
              + 1j * step * np.tile(np.eye(d)[group], (N, 1)))
         p = None if rows is None else np.repeat(rows, c, axis=0)
-        shift = None
-        if generator is not None:
-            w = np.repeat(np.asarray(rates, dtype=float), c)[:, None]
-            shift = functools.partial(_moving, generator, w, p)
-        F = reduced_field(cf, chart, np.repeat(Y[:, :n], c, axis=0), X, p, positions,
-                          v0=np.repeat(Y[:, n:], c, axis=0), shift=shift)
+        q0, v0 = np.repeat(Y[:, :n], c, axis=0), np.repeat(Y[:, n:], c, axis=0)
+        if function is not None:
+            Q, V = lifted_states(cf, chart, q0, X, p, positions, v0)
+            F = np.asarray(function(Q, V, p)).reshape(N * c, -1)
+        else:
+            shift = None
+            if generator is not None:
+                w = np.repeat(np.asarray(rates, dtype=float), c)[:, None]
+                shift = functools.partial(_moving, generator, w, p)
+            F = reduced_field(cf, chart, q0, X, p, positions, v0=v0, shift=shift)
+        if out is None:
+            out = np.empty((N, F.shape[1], len(columns)))
         out[:, :, [columns.index(j) for j in group]] = np.swapaxes(
-            F.imag.reshape(N, c, d), 1, 2) / step
-    return out
+            F.imag.reshape(N, c, F.shape[1]), 1, 2) / step
+    return np.empty((N, d if function is None else 0, 0)) if out is None else out
+
+
+def chart_gradients(cf, chart, Y, step, P=None, function=None, columns=None):
+    """The complex-step derivatives in the chart's variables of ``function(Q, V, P) ->
+    (K,)`` (complex-analytic, numpy) along M_1 at the states Y (N, 2n): each chart
+    variable moved, the dependent coordinates and velocities following it (the lift).
+    Shape (N, len(columns)); ``P``, ``columns`` as for :func:`chart_jacobians`."""
+    rows = None if P is None else np.array(
+        [np.broadcast_to(np.asarray(v, dtype=float), (Y.shape[0],)) for v in P],
+        dtype=float).reshape(-1, Y.shape[0]).T
+    return _jacobians(cf, chart, Y, step, rows, columns, function=function)[:, 0, :]
 
 
 def _moving(generator, w, p, Q, V):

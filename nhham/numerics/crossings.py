@@ -8,28 +8,36 @@ together (one batch of spectra per round).
 Right by construction
 ---------------------
 A bracket [a, b] is an interval whose ends differ in the number of eigenvalues with
-Re > tolerance (the count). The search keeps that property at every step: a new value
-x replaces the end whose count it shares; a count equal to neither splits the bracket in
-two (several crossings in one interval). The count alone decides, except inside the
-tolerance band (an eigenvalue with |Re| <= tolerance at x), where the sign of a smooth
-function g of the spectrum does:
+Re above their margin (the count; :func:`nhham.numerics.spectra.unstable_counts`: the
+verdict's tolerance, or an eigenvalue's error estimate where that is larger, in a
+cluster at 0). The search keeps that property at every step: a new value x replaces the
+end whose count it shares; a count equal to neither splits the bracket in two (several
+crossings in one interval). The count alone decides, except inside the band (an
+eigenvalue within its margin of the axis at x), where the sign of a smooth function g of
+the characteristic polynomial lambda^k p(lambda) does (k eigenvalues on the axis at both
+ends of the grid interval, structural zeros, are left out):
 
-- an odd change of the count: g = det A = prod(lambda), whose sign is (-1)^(number of
-  negative real eigenvalues), so it changes sign exactly when a real eigenvalue passes
-  through 0;
-- an even change: g = the Hurwitz determinant Delta_(n-1) up to its sign,
-  prod_(i<j)(lambda_i + lambda_j), which changes sign when a complex pair crosses the
+- an odd change of the count: g = p(0), the product of the other eigenvalues up to its
+  sign, which changes sign exactly when a real eigenvalue passes through 0;
+- an even change: g = the Hurwitz determinant Delta_(n-1) of p, prod_(i<j)(lambda_i +
+  lambda_j) up to its sign, which changes sign when a complex pair crosses the
   imaginary axis (the factor 2 Re lambda) and stays continuous when a pair collides on
   the real axis.
 
-g's regula falsi (Illinois) proposes the next value; where g is inconsistent with the
-count the bracket is bisected. A crossing is reported only where an eigenvalue is on
-the imaginary axis to the spectrum's tolerance (checked at the reported value); a count
-change with no eigenvalue on the axis (a jump of the linearisation, a value with no
-spectrum) is returned as :class:`Unlocated` with the reason. A touch (an eigenvalue
-reaching the axis and going back) changes no count and is no crossing. Eigenvalues on
-the axis at both ends of a grid interval (structural zeros) are left out of g and of the
-check.
+g is formed from the coefficients, which rounding perturbs by eps only, even where it
+perturbs clustered eigenvalues by eps^(1/3). Its regula falsi (Illinois) proposes the
+next value; a bisection follows two steps that did not halve the bracket (g is flat
+where an eigenvalue touches 0 beside the crossing, in the same grid interval), and
+where g is inconsistent with the count the bracket is bisected. A crossing is reported
+only where the bracket is narrower than ``xtol`` and an eigenvalue is on the imaginary
+axis at its end; one within ``xtol`` of a grid value with an eigenvalue on the axis is
+put at that value. Its kind is what crosses: an odd change of the count is a real
+eigenvalue (a pair +-sigma meeting at 0 and leaving along the imaginary axis included),
+an even one a complex pair (or two real eigenvalues at once, where the one on the axis
+is real). A count change with no eigenvalue on the axis (a jump of the linearisation, a
+value with no spectrum, a bracket not narrowed within the evaluations allowed) is
+returned as :class:`Unlocated` with the reason. A touch (an eigenvalue reaching the axis
+and going back) changes no count and is no crossing.
 """
 
 from __future__ import annotations
@@ -40,12 +48,17 @@ from typing import Callable, Sequence
 
 import numpy as np
 
+from nhham.numerics.spectra import unstable_counts
+
 __all__ = ["Crossing", "CrossingSearch", "CrossingFinder", "Unlocated", "crossings",
            "crossings_many"]
 
 #: Bound on the spectra one bracket may ask for (bisection from a width of 1e6 to 1e-12
 #: takes 60; a split bracket shares its parent's bound).
 MAX_EVALUATIONS = 200
+
+# Illinois halves an end's g no further than this (its sign must survive).
+_TINY = 1e-280
 
 
 @dataclass(frozen=True)
@@ -158,9 +171,8 @@ class CrossingFinder:
             for i in range(len(values) - 1):
                 if None in (line[i], line[i + 1]) or line[i] == line[i + 1]:
                     continue
-                sa, sb = spectra[i], spectra[i + 1]
-                gen = _search(float(values[i]), float(values[i + 1]), sa, sb,
-                              _structural(sa, sb), xtol, [MAX_EVALUATIONS])
+                gen = _interval(float(values[i]), float(values[i + 1]), spectra[i],
+                                spectra[i + 1], xtol)
                 searches.append((k, gen))
         self._active = [(k, gen, x) for k, gen in searches
                         if (x := self._step(k, gen, None)) is not None]
@@ -222,50 +234,83 @@ def crossings_many(spectra_at: Callable, lines: Sequence, *, xtol: float = 1e-12
     return finder.result()
 
 
+def _margins(s):
+    """Each eigenvalue's margin (:mod:`nhham.numerics.spectra`), or the spectrum's
+    tolerance for every one."""
+    ev = np.asarray(s.eigenvalues)
+    margins = getattr(s, "margins", None)
+    return np.full(ev.shape, float(s.tolerance)) if margins is None else np.asarray(margins)
+
+
 def _count(s):
     if s is None:
         return None
     ev = np.asarray(s.eigenvalues)
     if not np.all(np.isfinite(ev)):
         return None
-    return int(np.sum(ev.real > s.tolerance))
+    return int(unstable_counts(ev, _margins(s)))
 
 
 def _structural(sa, sb) -> int:
-    """How many eigenvalues are 0 (to the tolerance) at both ends: left out of g."""
-    za = int(np.sum(np.abs(np.asarray(sa.eigenvalues)) <= sa.tolerance))
-    zb = int(np.sum(np.abs(np.asarray(sb.eigenvalues)) <= sb.tolerance))
+    """How many eigenvalues are 0 (to their margin) at both ends: left out of g."""
+    za = int(np.sum(np.abs(np.asarray(sa.eigenvalues)) <= _margins(sa)))
+    zb = int(np.sum(np.abs(np.asarray(sb.eigenvalues)) <= _margins(sb)))
     return min(za, zb)
 
 
-def _moving(s, structural):
-    """The eigenvalues less the ``structural`` ones nearest 0."""
-    ev = np.asarray(s.eigenvalues, dtype=complex)
-    if structural:
-        ev = ev[np.argsort(np.abs(ev), kind="stable")[structural:]]
-    return ev
-
-
 def _log_g(s, structural, odd):
-    """(sign, log|g|) of det A (``odd``) or prod_(i<j)(lambda_i + lambda_j)."""
-    ev = _moving(s, structural)
+    """(sign, log|g|) of g, from the characteristic polynomial lambda^k p(lambda) of the
+    spectrum (k = ``structural``): ``odd``: p(0), the product of the other eigenvalues up
+    to its sign; else the Hurwitz determinant Delta_(n-1) of p, prod_(i<j)(lambda_i +
+    lambda_j) up to its sign (Orlando). Both are polynomials in the coefficients, which
+    the eigenvalues of a backward stable solver give to rounding even where the
+    eigenvalues themselves are not (a cluster at 0)."""
+    ev = np.asarray(s.eigenvalues, dtype=complex)
+    c = np.real(np.poly(ev)) if ev.size else np.ones(1)
+    p = c[:c.size - structural] if structural else c
     if odd:
-        f = ev
-    else:
-        i, j = np.triu_indices(ev.size, 1)
-        f = ev[i] + ev[j]
-    if not f.size:
+        g = float(p[-1])
+        return (0.0, -math.inf) if g == 0 else (math.copysign(1.0, g), math.log(abs(g)))
+    n = p.size - 1
+    if n < 2:
         return 1.0, 0.0
-    if np.any(f == 0):
-        return 0.0, -math.inf
-    # conjugate pairs make the product real: its sign from the summed angles
-    angle = float(np.sum(np.angle(f)))
-    return (1.0 if math.cos(angle) > 0 else -1.0), float(np.sum(np.log(np.abs(f))))
+    # the Hurwitz matrix H_ij = p_(2j - i + 1) (p_0 the leading coefficient), order n - 1
+    H = np.zeros((n - 1, n - 1))
+    for i in range(n - 1):
+        for j in range(n - 1):
+            k = 2 * j - i + 1
+            if 0 <= k <= n:
+                H[i, j] = p[k]
+    sign, log = np.linalg.slogdet(H)
+    return (0.0, -math.inf) if sign == 0 else (float(sign), float(log))
 
 
 def _near_axis(s, structural):
-    ev = _moving(s, structural)
-    return ev[np.abs(ev.real) <= s.tolerance]
+    """The eigenvalues on the imaginary axis to their margin, less the ``structural``
+    ones nearest 0."""
+    ev = np.asarray(s.eigenvalues, dtype=complex)
+    margins = _margins(s)
+    order = np.argsort(np.abs(ev), kind="stable")[structural:]
+    ev, margins = ev[order], margins[order]
+    near = np.abs(ev.real) <= margins
+    return ev[near], margins[near]
+
+
+def _interval(a, b, sa, sb, xtol):
+    """The search of one grid interval (:func:`_search`), a crossing found within
+    ``xtol`` of an end where an eigenvalue is on the axis put at that end: the rocking
+    rattleback's pairs exchange at w = 0 exactly, not at -6.5e-16 and 0."""
+    structural = _structural(sa, sb)
+    found = yield from _search(a, b, sa, sb, structural, xtol, [MAX_EVALUATIONS])
+    out = []
+    for item in found:
+        if isinstance(item, Crossing):
+            for end, s in ((a, sa), (b, sb)):
+                if (abs(item.value - end) <= xtol and item.value != end
+                        and _near_axis(s, structural)[0].size):
+                    item = Crossing(end, item.kind, item.eigenvalue, item.direction)
+        out.append(item)
+    return out
 
 
 def _search(a, b, sa, sb, structural, xtol, budget):
@@ -274,27 +319,32 @@ def _search(a, b, sa, sb, structural, xtol, budget):
     ca, cb = _count(sa), _count(sb)
     odd = (cb - ca) % 2 == 1
     (sga, lga), (sgb, lgb) = _log_g(sa, structural, odd), _log_g(sb, structural, odd)
+    # at an end with an eigenvalue on the axis, g is 0 to rounding and its sign is
+    # noise: the crossing is at that end or inside, so g has the other end's other sign
+    band_a, band_b = (_near_axis(s, structural)[0].size > 0 for s in (sa, sb))
+    if band_a and not band_b and sgb:
+        sga = -sgb
+    elif band_b and not band_a and sga:
+        sgb = -sga
     ref = max(lga, lgb) if math.isfinite(max(lga, lgb)) else 0.0
 
     def value(sign, log):
         return 0.0 if sign == 0 else sign * math.exp(max(-700.0, min(700.0, log - ref)))
 
-    def root(g, s):     # g = 0 with an eigenvalue on the axis (not a false root of g)
-        return g == 0 and _near_axis(s, structural).size > 0
-
     ga, gb = value(sga, lga), value(sgb, lgb)
-    if root(ga, sa) or root(gb, sb):
-        return [_verified(a, b, sa, sb, ca, cb, structural, odd)]
     falsi = ga * gb < 0
     side = 0
+    # Regula falsi stalls where g is flat (an eigenvalue touching 0 beside the crossing
+    # makes g ~ (x - touch)^2 there): a step that does not halve the bracket twice in a
+    # row is followed by a bisection, so at most three steps halve it.
+    slow = 0
     while b - a > xtol + 4 * np.finfo(float).eps * max(abs(a), abs(b)):
         if budget[0] <= 0:
-            found = _verified(a, b, sa, sb, ca, cb, structural, odd)
-            return [found if isinstance(found, Crossing) else
-                    Unlocated(a, b, f"not narrowed to {xtol:g} within {MAX_EVALUATIONS} "
+            return [Unlocated(a, b, f"not narrowed to {xtol:g} within {MAX_EVALUATIONS} "
                                     f"evaluations")]
         budget[0] -= 1
-        x = b - gb * (b - a) / (gb - ga) if falsi else 0.5 * (a + b)
+        width = b - a
+        x = b - gb * (b - a) / (gb - ga) if falsi and slow < 2 else 0.5 * (a + b)
         if not a < x < b:
             x = 0.5 * (a + b)
         # after a bisection step g may bracket again (a false root of g left behind)
@@ -309,52 +359,63 @@ def _search(a, b, sa, sb, structural, xtol, budget):
             right = yield from _search(x, b, s, sb, structural, xtol, budget)
             return left + right
         gx = value(*_log_g(s, structural, odd))
-        if root(gx, s):
-            a = b = x
-            sa = sb = s
-            break
-        if falsi and gx != 0 and _near_axis(s, structural).size:
+        if falsi and gx != 0 and _near_axis(s, structural)[0].size:
             to_a = np.sign(gx) == np.sign(ga)     # in the band, g decides
         else:
+            # g = 0 (an eigenvalue exactly at 0: a touch as well as a crossing) says
+            # nothing of the side: the count does
             to_a = c == ca
-            if falsi and (gx == 0 or (np.sign(gx) == np.sign(ga)) != to_a):
+            if gx == 0 and falsi:
+                # the end keeps its sign: g still changes sign in the bracket (at its
+                # end x, when x is the crossing)
+                gx = math.copysign(2 * _TINY, ga if to_a else gb)
+            elif falsi and gx != 0 and (np.sign(gx) == np.sign(ga)) != to_a:
                 # g disagrees with the count: this step and the next bisect
                 a, sa, ga, b, sb, gb = ((x, s, gx, b, sb, gb) if to_a else
                                         (a, sa, ga, x, s, gx))
-                falsi, side = False, 0
+                falsi, side, slow = False, 0, 0
                 continue
         if to_a:
             a, sa, ga = x, s, gx
-            if side == 1:   # Illinois: the other end kept twice, halve its value
-                gb /= 2
+            if side == 1 and abs(gb) > _TINY:   # Illinois: the other end kept twice,
+                gb /= 2                              # halve its value (never to 0: its sign decides)
             side = 1
         else:
             b, sb, gb = x, s, gx
-            if side == -1:
+            if side == -1 and abs(ga) > _TINY:
                 ga /= 2
             side = -1
+        slow = slow + 1 if b - a > 0.5 * width else 0
     return [_verified(a, b, sa, sb, ca, cb, structural, odd)]
 
 
 def _verified(a, b, sa, sb, ca, cb, structural, odd):
-    """The crossing at the end of [a, b] where an eigenvalue is on the imaginary axis,
-    or why there is none."""
+    """The crossing at the end of the (narrow) bracket [a, b] where an eigenvalue is on
+    the imaginary axis, or why there is none. The kind is what crosses: a change of the
+    count by an odd number is a real eigenvalue through 0 (a complex pair changes it by
+    two), whatever the eigenvalues near 0 at the ends look like (a real pair +-sigma
+    meeting at 0 and leaving along the imaginary axis is a divergence: at the end past
+    the collision they are +-i omega, omega tiny); an even change is a complex pair, or
+    two real eigenvalues at once where the one on the axis is real."""
     best = None
     for x, s in ((a, sa), (b, sb)):
-        near = _near_axis(s, structural)
+        near, margins = _near_axis(s, structural)
         if not near.size:
             continue
-        real = near[np.abs(near.imag) <= s.tolerance]
-        pair = near[near.imag > s.tolerance]
-        # the kind the count's parity calls for first
-        pick = (real if real.size else pair) if odd else (pair if pair.size else real)
-        z = pick[np.argmin(np.abs(pick.real))]
-        if best is None or abs(z.real) < abs(best[1].real):
-            best = (x, z, s.tolerance)
+        if odd:   # the eigenvalue nearest 0
+            i = int(np.argmin(np.abs(near)))
+        else:     # a pair nearest the axis, else a real one
+            pair = np.abs(near.imag) > margins
+            pool = np.flatnonzero(pair) if pair.any() else np.arange(near.size)
+            i = int(pool[np.argmin(np.abs(near.real[pool]))])
+        z, m = near[i], margins[i]
+        key = abs(z) if odd else abs(z.real)
+        if best is None or key < best[0]:
+            best = (key, x, z, m)
     if best is None:
         return Unlocated(a, b, f"the number of eigenvalues with Re > 0 changes from {ca} to "
                                f"{cb} within [{a:.17g}, {b:.17g}] but none is on the "
                                f"imaginary axis there (the linearisation jumps)")
-    x, z, tol = best
-    kind = "real" if abs(z.imag) <= tol else "complex"
+    _, x, z, m = best
+    kind = "real" if odd or abs(z.imag) <= m else "complex"
     return Crossing(float(x), kind, complex(z.real, abs(z.imag)), 1 if cb > ca else -1)

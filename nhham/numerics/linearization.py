@@ -36,7 +36,6 @@ system's purely imaginary spectrum, where linearisation cannot decide).
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 from types import MappingProxyType
 from typing import TYPE_CHECKING, Mapping, Sequence
@@ -45,24 +44,18 @@ import numpy as np
 
 from nhham.autonomy import require_autonomous
 from nhham.errors import ComputationError, InconsistentInitialDataError, InputError
-from nhham.numerics.chart import (ComplexField, chart_jacobian, chart_jacobians, choose_chart,
-                                  input_jacobians)
+from nhham.numerics.batch_linearization import (ON_TOLERANCE, ChartChoice, check_states,
+                                                linearize_batch, step_vectors)
+from nhham.numerics.chart import STEP, ComplexField, chart_jacobians, choose_chart
+from nhham.numerics.quotient import MOMENTUM, ORBIT, divide, is_axis
 from nhham.numerics.relative import group_block, spin_rate
+from nhham.numerics.spectra import EIGENVALUE_TOLERANCE, sort_eigenvalues, spectra, verdicts
 
 if TYPE_CHECKING:  # the exact matrix comes from the symbolic side; numerics never imports it
     import sympy
 
 __all__ = ["Linearization", "linearize", "linearize_many", "linearization_result", "STEP",
-           "ON_TOLERANCE"]
-
-#: |Re lambda| <= this * max(1, max |A|) counts as zero in a stability verdict.
-EIGENVALUE_TOLERANCE = 1e-9
-
-#: Imaginary step of the complex-step derivative.
-STEP = 1e-30
-
-#: Relative tolerance for "on M_1" and "steady" (residual / natural size).
-ON_TOLERANCE = 1e-9
+           "ON_TOLERANCE", "EIGENVALUE_TOLERANCE"]
 
 # A Jacobian column is zero (a neutral direction) below this, relative to max |J|.
 _NEUTRAL_TOL = 1e-10
@@ -85,10 +78,10 @@ class Linearization:
     eigenvalues : ndarray of complex, shape (d,)
         Eigenvalues of A, sorted by decreasing real part, then imaginary part.
     stable : bool or None
-        True: every real part < -tol (asymptotically stable); False: one
-        real part > tol (unstable); None: undecided by linearisation.
+        True: every real part below minus its margin (asymptotically stable); False:
+        one above its margin (unstable); None: undecided by linearisation.
     spectrally_stable : bool
-        No real part exceeds tol.
+        No real part exceeds its margin.
     verdict : str
         The verdict in words.
     method : str
@@ -97,13 +90,20 @@ class Linearization:
         How the numbers were obtained and the tolerance of the verdict.
     tolerance : float
         ``|Re lambda|`` at or below this counts as zero.
+    margins : ndarray, shape (d,)
+        Each eigenvalue's: its ``|Re|`` at or below this counts as zero (the tolerance,
+        or its error estimate where larger: an eigenvalue in a cluster at 0,
+        :mod:`nhham.numerics.spectra`).
     chart : tuple of str
         All independent coordinates and velocities (before removing neutral
         directions).
     full_matrix : ndarray
         The Jacobian in the full chart.
     neutral : tuple of str
-        Chart variables removed as neutral directions (eigenvalue 0 each).
+        The neutral directions divided out (eigenvalue 0 each), in order
+        (:mod:`nhham.numerics.quotient`): chart variables removed, ``orbit(xi)`` (the
+        ``[symmetry]``'s orbit), ``d/d<p>`` (the steady family's tangent), ``level(J)``
+        (the level of a conserved momentum).
     dependent : tuple of str
         Coordinates and velocities solved from the constraints.
     state : mapping of str to float
@@ -125,6 +125,17 @@ class Linearization:
         ``rate`` (w), ``group`` (the chart coordinates divided out as the group's
         directions) and ``group_eigenvalues`` (their block's eigenvalues in co-moving
         variables); :attr:`matrix` is then the Jacobian of X - w Xi. None otherwise.
+    kkt_solve : str
+        How the constrained accelerations were solved at the state: ``"saddle"`` (the
+        saddle-point solve) or ``"null-space"`` (:mod:`nhham.numerics.nullspace`).
+    kkt_ratio : float
+        The quantity that decides it (:func:`nhham.numerics.nullspace.diagonal_ratio`,
+        max W_AA / min W_AA: it moves with the units of the coordinates).
+    implied : tuple of str
+        Neutral directions (``orbit(xi)``, ``d/d<p>``, ``level(J)``) not divided out
+        because the chart variables removed span them already (the orbit of a robot at
+        rest, whose heading and trailer angle are neutral there): a sweep's reference
+        counts them as neutral at this state.
 
     Examples
     --------
@@ -159,6 +170,10 @@ class Linearization:
     inputs: tuple = ()
     input_matrix: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
     relative: Mapping | None = None
+    margins: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    kkt_solve: str = "saddle"
+    kkt_ratio: float = 1.0
+    implied: tuple = ()
 
     def state_space(self):
         """``scipy.signal.StateSpace(A, B, I, 0)``: the linearisation as a system with the
@@ -194,6 +209,9 @@ class Linearization:
             "steady_state": dict(self.state),
             "residuals": dict(self.residuals),
             "acceleration_residual": self.acceleration_residual,
+            "margins": [float(x) for x in self.margins],
+            "kkt_solve": self.kkt_solve,
+            "kkt_ratio": float(self.kkt_ratio),
             **({} if not self.inputs else
                {"inputs": list(self.inputs),
                 "input_matrix": [[float(x) for x in row] for row in self.input_matrix]}),
@@ -210,6 +228,8 @@ def _relative_dict(relative) -> dict:
             "frame": ("co-moving (the Jacobian of X - w Xi)" if relative["turning"]
                       else "the Jacobian of X (w = 0, or xi constant: X - w Xi has X's)"),
             "group": list(relative["group"]),
+            "orbit": bool(relative.get("orbit", False)),
+            "momentum": bool(relative.get("momentum", False)),
             "invariance": dict(relative.get("invariance", {})),
             "group_eigenvalues": [[float(z.real), float(z.imag)]
                                   for z in relative["group_eigenvalues"]]}
@@ -218,47 +238,54 @@ def _relative_dict(relative) -> dict:
 def linearization_result(A, coords, method, precision, chart_names, J, removed, dependent,
                          state, residuals, worst, tol=None, eigenvalues=None,
                          exact_matrix=None, inputs=(), B=None,
-                         relative=None) -> "Linearization":
+                         relative=None, margins=None, kkt=("saddle", 1.0),
+                         implied=()) -> "Linearization":
     """Eigenvalues and the stability verdict of a state matrix, as a :class:`Linearization`.
 
     ``A`` is the state matrix in the variables ``coords``; ``eigenvalues``
-    may be given (e.g. computed with more digits), otherwise LAPACK's.
+    may be given (e.g. computed with more digits; their margins then ``tol``), otherwise
+    LAPACK's with their margins (:func:`nhham.numerics.spectra.spectra`).
     ``tol`` (default 1e-9 max(1, max |A|)) is the real part counted as zero.
-    The other arguments are stored as the attributes of the same names.
+    ``kkt``: (the acceleration solve's name, its ratio). The other arguments are stored
+    as the attributes of the same names.
     """
-    if eigenvalues is not None:
-        ev = np.asarray(eigenvalues, dtype=complex)
-    else:
-        ev = np.linalg.eigvals(A) if A.size else np.zeros(0, dtype=complex)
-    ev = _sorted(ev)
-    tol = EIGENVALUE_TOLERANCE * max(1.0, float(np.abs(A).max(initial=0.0))) if tol is None else tol
-    top = float(ev.real.max()) if ev.size else -math.inf
+    A = np.asarray(A, dtype=float)
+    if eigenvalues is None:
+        e, m, t, _ = spectra(A[None], None if tol is None else [tol])
+        ev, margins, tol = e[0], m[0], float(t[0])
+    elif margins is None:   # computed elsewhere (with more digits): the tolerance each
+        ev = sort_eigenvalues(np.asarray(eigenvalues, dtype=complex))
+        tol = (EIGENVALUE_TOLERANCE * max(1.0, float(np.abs(A).max(initial=0.0)))
+               if tol is None else tol)
+        margins = np.full(ev.shape, float(tol))
+    else:                   # a batch's: sorted, with their margins
+        ev, margins = np.asarray(eigenvalues, dtype=complex), np.asarray(margins, float)
+    code = int(verdicts(ev[None], margins[None])[0])
     if not ev.size:
         stable, verdict = None, "no non-neutral directions: linearisation cannot decide"
-    elif top < -tol:
+    elif code == 1:
         stable, verdict = True, "asymptotically stable (every eigenvalue has Re < 0)"
-    elif top > tol:
+    elif code == 0:
         stable, verdict = False, "unstable (an eigenvalue has Re > 0)"
     else:
         stable = None
         verdict = ("spectrally stable: the largest real part is 0 to the tolerance; "
                    "linearisation cannot decide")
+    wide = int(np.sum(margins > tol))
+    note = (f" ({wide} eigenvalue(s) in a cluster at 0 to {float(margins.max()):.1e}, "
+            f"their rounding error)" if wide else "")
     return Linearization(
         coordinates=coords, matrix=A, eigenvalues=ev, stable=stable,
-        spectrally_stable=bool(top <= tol), verdict=verdict, method=method,
-        precision=f"{precision}; |Re| <= {tol:.1e} counts as 0", tolerance=tol,
+        spectrally_stable=bool(np.all(ev.real <= margins)), verdict=verdict, method=method,
+        precision=f"{precision}; |Re| <= {tol:.1e} counts as 0{note}", tolerance=float(tol),
         chart=tuple(chart_names), full_matrix=J, neutral=tuple(removed),
         dependent=tuple(dependent), state=MappingProxyType(state),
         residuals=MappingProxyType(residuals), acceleration_residual=worst,
         exact_matrix=exact_matrix, inputs=tuple(inputs),
         input_matrix=np.zeros((A.shape[0], 0)) if B is None else B,
-        relative=None if relative is None else MappingProxyType(dict(relative)))
-
-
-def _sorted(ev):
-    ev = np.asarray(ev, dtype=complex)
-    order = np.lexsort((-ev.imag, -np.round(ev.real, 12)))
-    return ev[order]
+        relative=None if relative is None else MappingProxyType(dict(relative)),
+        margins=np.asarray(margins, dtype=float), kkt_solve=kkt[0], kkt_ratio=float(kkt[1]),
+        implied=tuple(implied))
 
 
 # ------------------------------------------------------------------ public
@@ -280,9 +307,10 @@ def linearize(model, state, *, independent: Sequence[str] | None = None,
         dependent ones chosen greedily from the left among well-conditioned
         columns of dg/dq and mu (velocities of dependent coordinates first).
     neutral : bool or sequence of str, optional
-        True (default): remove every neutral direction (zero Jacobian
-        column); False: keep all; a sequence: remove those names (checked to
-        be neutral).
+        True (default): divide out every neutral direction (a zero Jacobian column, the
+        ``[symmetry]``'s orbit, a family tangent, a conserved momentum's level:
+        :mod:`nhham.numerics.quotient`); False: keep all; a sequence: those labels
+        (chart variables checked to be neutral; the others where they hold).
     step : float, optional
         The imaginary step (default 1e-30).
     family : mapping of str to mapping of str to float, optional
@@ -297,7 +325,9 @@ def linearize(model, state, *, independent: Sequence[str] | None = None,
         constraints and the forces invariant by the caller: a scene's ``[symmetry]``).
         The state may then move along xi: v0 = w xi(q0) + a motion of cyclic
         coordinates, with X(y0) = w Xi(y0) (a relative equilibrium); X - w Xi is
-        linearised (co-moving variables) and the group's directions divided out.
+        linearised (co-moving variables) and the group's directions divided out: the
+        orbit Xi(y0) (for w = 0 as for w != 0) and, where the symmetry's momentum is
+        conserved, its level.
 
     Returns
     -------
@@ -328,32 +358,44 @@ def linearize(model, state, *, independent: Sequence[str] | None = None,
     _check_inputs(model)
     P = np.asarray(model.parameter_values, dtype=float)[:, None]
     motion = None if generator is None else spin_rate(generator, y0, model.n, P.T)
-    residuals, worst = _check_steady(model, y0, motion)
-    chart = choose_chart(model, y0, independent)
     cf = ComplexField(model)
-    if motion is None:
-        J = chart_jacobian(cf, chart, y0, step)
-    else:
-        J = chart_jacobians(cf, chart, y0[None, :], step, P, generator=generator,
-                            rates=np.array([motion.rate]))[0]
-    B = input_jacobians(cf, chart, y0[None, :], step, model)[0]
+    residuals, worst = _check_steady(cf, model, y0, P.T, motion)
+    chart = choose_chart(model, y0, independent)
+    rates = None if motion is None else np.array([motion.rate])
+
+    def jacobian(y):
+        return chart_jacobians(cf, chart, y[None, :], step, P, generator=generator,
+                               rates=rates)[0]
+
+    J = jacobian(y0)
     moved = _moved_along(y0, model.n, None if motion is None else motion.rest)
-
-    def moved_jacobian():
-        if motion is None:
-            return chart_jacobian(cf, chart, moved, step)
-        return chart_jacobians(cf, chart, moved[None, :], step, P, generator=generator,
-                               rates=np.array([motion.rate]))[0]
-
-    return _from_jacobian(model, y0, chart, J, moved_jacobian, neutral, family, step,
-                          residuals, worst, B, None if motion is None else (generator, motion))
+    choice, info, implied = _decide(cf, model, y0, P, chart, J, lambda: jacobian(moved),
+                                    neutral, family, step, generator, motion)
+    # the state matrix, its quotient and its spectrum: a batch of one
+    batch = linearize_batch(model, y0[None, :], P.T, reference=choice, families=[family],
+                            step=step, generator=generator, build=False)
+    if batch.status[0] != 0:
+        raise ComputationError("linearize: the linearisation failed at the state (a neutral "
+                               "direction not in the kernel, or a singular solve)")
+    n, names = model.n, model.names
+    dependent = tuple(names[i] for i in chart.dq) + tuple(names[n + i] for i in chart.dv)
+    return linearization_result(
+        batch.matrices[0], choice.coordinates, "complex-step",
+        f"float64, complex-step Jacobian (step {step:g}i, exact to rounding), LAPACK "
+        f"eigenvalues", choice.chart, J, choice.neutral, dependent,
+        dict(zip(names, map(float, y0))), residuals, worst, tol=float(batch.tolerances[0]),
+        eigenvalues=batch.eigenvalues[0], inputs=model.input_names,
+        B=batch.input_matrices[0], relative=info, margins=batch.margins[0],
+        kkt=("null-space" if batch.null_space[0] else "saddle", float(batch.kkt_ratios[0])),
+        implied=implied)
 
 
 def linearize_many(models: Sequence, states: Sequence, independent: Sequence[str], *,
                    neutral: bool | Sequence[str] = True, step: float = STEP,
                    families: Sequence | None = None, generator=None) -> list:
-    """:func:`linearize` at many (model, state) pairs in one chart, the complex-step
-    Jacobians of all of them in one batch of the generated numpy kernel.
+    """:func:`linearize` at many (model, state) pairs in one chart, each deciding its
+    neutral directions (a family of states with one set of decisions: a reference and
+    :func:`~nhham.numerics.batch_linearization.linearize_batch`).
 
     Parameters
     ----------
@@ -390,37 +432,9 @@ def linearize_many(models: Sequence, states: Sequence, independent: Sequence[str
     >>> [lin.eigenvalues.round(12) for lin in lins]    # -m a u / (I + m a**2)
     [array([-2.+0.j]), array([-1.6+0.j])]
     """
-    if not models:
-        return []
-    _check_inputs(models[0])
-    Y = np.array([m.state(s) for m, s in zip(models, states)])
-    P = np.array([m.parameter_values for m in models], dtype=float).T
-    n = models[0].n
-    motions = [None if generator is None else spin_rate(generator, y, n, P[:, [i]].T)
-               for i, y in enumerate(Y)]
-    checks = [_check_steady(m, y, mo) for m, y, mo in zip(models, Y, motions)]
-    charts = {choose_chart(m, y, independent) for m, y in zip(models, Y)}
-    if len(charts) != 1:  # pragma: no cover - the names fix the chart
-        raise ComputationError("linearize: the chart differs between the states")
-    (chart,) = charts
-    cf = ComplexField(models[0])
-    rates = None if generator is None else np.array([0.0 if mo is None else mo.rate
-                                                     for mo in motions])
-    J = chart_jacobians(cf, chart, Y, step, P, generator=generator, rates=rates)
-    moved = [_moved_along(y, n, None if mo is None else mo.rest) for y, mo in zip(Y, motions)]
-    at = [i for i, y in enumerate(moved) if y is not None]
-    J1: list = [None] * len(models)
-    if at:
-        for i, Ji in zip(at, chart_jacobians(cf, chart, np.array([moved[i] for i in at]),
-                                               step, P[:, at], generator=generator,
-                                               rates=None if rates is None else rates[at])):
-            J1[i] = Ji
     families = families or [None] * len(models)
-    B = input_jacobians(cf, chart, Y, step, models[0], P)
-    return [_from_jacobian(m, y, chart, Ji, lambda J1i=J1i: J1i, neutral, fam, step, res, worst,
-                           Bi, None if mo is None else (generator, mo))
-            for m, y, Ji, J1i, fam, (res, worst), Bi, mo
-            in zip(models, Y, J, J1, families, checks, B, motions)]
+    return [linearize(m, s, independent=independent, neutral=neutral, step=step, family=f,
+                      generator=generator) for m, s, f in zip(models, states, families)]
 
 
 def _check_inputs(model):
@@ -433,17 +447,29 @@ def _check_inputs(model):
     require_autonomous("linearize", model.time_slot is not None)
 
 
-def _check_steady(model, y0, motion=None):
+def _check_steady(cf, model, y0, P, motion=None):
     """(residuals, largest acceleration) at a state checked to be on M_1 and steady (with
-    ``motion``: X(y0) = w Xi(y0), the accelerations those of the group motion)."""
+    ``motion``: X(y0) = w Xi(y0), the accelerations those of the group motion): the
+    batch's decision (:func:`~nhham.numerics.batch_linearization.check_states`), said
+    with the names."""
     n, names = model.n, model.names
-    residuals = _check_on_manifold(model, y0)
-    acc = model.rhs(0.0, y0)[n:]
-    if motion is not None:
-        acc = acc - motion.rate * motion.lifted[n:]
-    scale = max(1.0, float(np.abs(y0).max()))
-    worst = float(np.abs(acc).max(initial=0.0))
-    if worst > ON_TOLERANCE * scale ** 2:
+    checks = check_states(cf, y0[None, :], P,
+                          None if motion is None else np.array([motion.rate]),
+                          None if motion is None else motion.lifted[None, :])
+    status = int(checks.status[0])
+    raw = model.residuals(y0)
+    if status == 1:
+        listed = "; ".join(f"{nm} = {r:.3g}" for nm, r, sc in
+                           zip(model.residual_names, raw, checks.scaled[0])
+                           if not sc <= ON_TOLERANCE)
+        raise InconsistentInitialDataError(f"steady: the state is not on M_1: {listed}")
+    if status == 3:
+        raise ComputationError("linearize: the saddle-point matrix [[W, mu^T], [mu, 0]] is "
+                               "singular at the state (C singular: M_f is not M_1 here)")
+    acc = checks.accelerations[0]
+    worst = float(checks.acceleration_residuals[0])
+    if status == 2:
+        scale = max(1.0, float(np.abs(y0).max()))
         listed = ", ".join(f"{names[n + i]}' = {acc[i]:.3g}" for i in np.argsort(-np.abs(acc))[:4]
                            if abs(acc[i]) > ON_TOLERANCE * scale ** 2)
         if motion is not None:
@@ -455,7 +481,7 @@ def _check_steady(model, y0, motion=None):
         raise InconsistentInitialDataError(
             f"steady: the state is not steady: accelerations {listed} (largest {worst:.3g}; "
             f"a steady motion has every acceleration zero)")
-    return residuals, worst
+    return {nm: float(r) for nm, r in zip(model.residual_names, raw)}, worst
 
 
 #: How a scene declares the symmetry a steady motion follows (the refusals say it).
@@ -465,22 +491,22 @@ DECLARE_HINT = ("declare the symmetry the motion follows in a [symmetry] table o
                 "variables")
 
 
-def _from_jacobian(model, y0, chart, J, moved_jacobian, neutral, family, step, residuals,
-                   worst, B=None, relative=None):
-    """The Linearization from the chart's Jacobian J at y0; ``moved_jacobian()`` gives it
-    at the state moved along the motion (asked only when the state moves); ``relative``:
-    (generator, RelativeMotion) of a relative equilibrium (J is then X - w Xi's)."""
+def _decide(cf, model, y0, P, chart, J, moved_jacobian, neutral, family, step, generator,
+            motion):
+    """The neutral directions at y0 from the full Jacobian J of the chart (and, when the
+    state moves, checked along the motion): (ChartChoice, relative-equilibrium info)."""
     n, names = model.n, model.names
-    scale = max(1.0, float(np.abs(y0).max()))
     chart_names = tuple(names[i] for i in chart.iq) + tuple(names[n + i] for i in chart.iv)
-    dependent = tuple(names[i] for i in chart.dq) + tuple(names[n + i] for i in chart.dv)
     # a constant xi (cyclic coordinates) leaves X's Jacobian and today's quotient
-    turning = relative is not None and relative[1].rate != 0.0 and not relative[0].constant
+    turning = motion is not None and motion.rate != 0.0 and not generator.constant
     coordinates = set(names[:n]) if turning else set()
-    keep, removed, group = _neutral_directions(J, chart_names, neutral, coordinates)
-    velocity = y0[n:] if relative is None else relative[1].rest
+    axes = neutral if isinstance(neutral, bool) else [s for s in neutral if is_axis(s)]
+    keep, removed, group = _neutral_directions(J, chart_names, axes, coordinates)
+    scale = max(1.0, float(np.abs(y0).max()))
+    velocity = y0[n:] if motion is None else motion.rest
     moving = [names[i] for i in range(n) if abs(velocity[i]) > ON_TOLERANCE * scale]
     not_cyclic = [s for s in moving if s not in removed]
+    relative = None if motion is None else (generator, motion)
     if not_cyclic and relative is not None:
         _not_along(relative, not_cyclic, "the dynamics depends on them")
     if not_cyclic:
@@ -501,26 +527,39 @@ def _from_jacobian(model, y0, chart, J, moved_jacobian, neutral, family, step, r
                 f"coordinates in which every moving one is cyclic, or, for a motion along a "
                 f"symmetry group (a rotation about the vertical that also turns the "
                 f"constraints): {DECLARE_HINT}")
-    A = J[np.ix_(keep, keep)]
-    # the neutral directions are a quotient: B keeps the rows that A keeps
-    Bk = None if B is None else B[keep, :]
-    kept_names = [chart_names[i] for i in keep]
-    if family and neutral is not False:
-        A, kept_names, extra, Bk = divide_family(A, kept_names, family, Bk)
-        removed = tuple(removed) + tuple(extra)
+    kept = [chart_names[i] for i in keep]
+    # the other neutral directions: the orbit, the family's tangents, the momentum's level
+    wanted = (None if neutral is True else set() if neutral is False
+              else {s for s in neutral if not is_axis(s)})
+    labels = ([ORBIT] if generator is not None else []) + \
+        [f"d/d{p}" for p in (family or {})] + \
+        ([MOMENTUM] if generator is not None and generator.momentum is not None else [])
+    labels = [s for s in labels if wanted is None or s in wanted]
+    taken: list = []
+    coords = kept
+    implied = []
+    if labels:
+        full = step_vectors(cf, chart, y0[None, :], P.T, step, list(chart_names), labels,
+                            [family], generator,
+                            None if motion is None else motion.lifted[None, :])[0]
+        vectors = [(label, None if v is None else v[keep]) for label, v in full]
+        _, _, coords, taken = divide(J[np.ix_(keep, keep)], None, kept, vectors)
+        # a direction inside the span of the chart variables removed (the orbit of a
+        # robot at rest, whose heading and trailer angle are both neutral there)
+        implied = [label for label, v in full if v is not None and label not in taken
+                   and np.abs(v).max(initial=0.0) > 0.0 and np.abs(v[keep]).max(initial=0.0)
+                   <= 1e-9 * np.abs(v).max(initial=0.0)]
     info = None
-    if relative is not None:
+    if motion is not None:
         block = J[np.ix_(group, group)]
-        info = {"generator": relative[0].to_dict(), "rate": relative[1].rate,
-                "turning": turning, "invariance": dict(relative[0].checked),
+        info = {"generator": generator.to_dict(), "rate": motion.rate,
+                "turning": turning, "invariance": dict(generator.checked),
                 "group": tuple(chart_names[i] for i in group),
-                "group_eigenvalues": tuple(_sorted(np.linalg.eigvals(block)) if group
-                                           else ())}
-    return linearization_result(A, tuple(kept_names), "complex-step",
-                   f"float64, complex-step Jacobian (step {step:g}i, exact to rounding), "
-                   f"LAPACK eigenvalues", chart_names, J, removed, dependent,
-                   dict(zip(names, map(float, y0))), residuals, worst,
-                   inputs=model.input_names, B=Bk, relative=info)
+                "orbit": ORBIT in taken, "momentum": MOMENTUM in taken,
+                "group_eigenvalues": tuple(sort_eigenvalues(np.linalg.eigvals(block))
+                                           if group else ())}
+    return ChartChoice(chart_names, tuple(removed) + tuple(taken), tuple(coords)), info, \
+        tuple(implied)
 
 
 def _not_along(relative, moving, why):
@@ -534,10 +573,10 @@ def _not_along(relative, moving, why):
 def _moved_along(y0, n, rest=None):
     """y(t) = (q0 + t v0, v0), the steady motion itself, moved until some coordinate has
     changed by 1/2; None when nothing moves (``rest``: the velocity besides a symmetry
-    group's motion, in place of v0: the flow of X - w Xi). A steady motion whose moving coordinates are
-    cyclic has the same Jacobian all along; zero Jacobian columns at y0 alone do not show
-    that (the spinning Chaplygin sphere: the yaw column vanishes, but turning the yaw
-    turns the constraints' velocity block)."""
+    group's motion, in place of v0: the flow of X - w Xi). A steady motion whose moving
+    coordinates are cyclic has the same Jacobian all along; zero Jacobian columns at y0
+    alone do not show that (the spinning Chaplygin sphere: the yaw column vanishes, but
+    turning the yaw turns the constraints' velocity block)."""
     v0 = y0[n:] if rest is None else rest
     top = float(np.abs(v0).max(initial=0.0))
     if top <= ON_TOLERANCE * max(1.0, float(np.abs(y0).max())):
@@ -545,42 +584,6 @@ def _moved_along(y0, n, rest=None):
     y1 = y0.astype(float).copy()
     y1[:n] += 0.5 / top * v0
     return y1
-
-
-def _check_on_manifold(model, y0) -> dict:
-    res = model.residuals(y0)
-    scaled = model.scaled_residuals(y0)
-    names = model.residual_names
-    bad = [(nm, r) for nm, r, s in zip(names, res, scaled) if not s <= ON_TOLERANCE]
-    if bad:
-        listed = "; ".join(f"{nm} = {r:.3g}" for nm, r in bad)
-        raise InconsistentInitialDataError(f"steady: the state is not on M_1: {listed}")
-    return {nm: float(r) for nm, r in zip(names, res)}
-
-
-def divide_family(A, names, family, B=None):
-    """Divide out the tangents of the steady family that A maps to zero (and change B's
-    basis with A's)."""
-    removed = []
-    for parameter, tangent in family.items():
-        if not A.size:
-            break
-        t = np.array([float(tangent.get(s, 0.0)) for s in names])
-        norm = np.abs(t).max(initial=0.0)
-        scale = max(1.0, float(np.abs(A).max(initial=0.0)))
-        if norm == 0.0 or np.abs(A @ t).max() > 1e-7 * scale * norm:
-            continue
-        j = int(np.argmax(np.abs(t)))
-        T = np.eye(len(names))
-        T[:, j] = t
-        AT = np.linalg.solve(T, A @ T)
-        keep = [i for i in range(len(names)) if i != j]
-        A = AT[np.ix_(keep, keep)]
-        if B is not None:
-            B = np.linalg.solve(T, B)[keep, :]
-        names = [names[i] for i in keep]
-        removed.append(f"d/d{parameter}")
-    return A, names, removed, B
 
 
 def _neutral_directions(J, chart_names, neutral, coordinates=frozenset()):

@@ -52,6 +52,10 @@ class Generator:
         ``(what, how it was decided)`` for each invariance the symbolic side checked
         (``("lagrangian", "exact")``, ``("constraints[0]", "exact")``...); empty when
         unchecked.
+    momentum : callable or None
+        ``momentum(Q, V, P) -> (K,)``: J = (dL/dv) . xi at the rows of Q, V (complex
+        welcome) with the parameter rows P (or None), where J is conserved (xi in the
+        constraint distribution, no force along it: Noether); None otherwise.
 
     Examples
     --------
@@ -74,6 +78,7 @@ class Generator:
     parameters: tuple = ()
     constant: bool = False
     checked: tuple = ()
+    momentum: Callable | None = None
 
     def lifted(self, Q, V, P=None) -> np.ndarray:
         """Xi at the states (Q, V) (K, n) each: (xi(q), D(q) v), shape (K, 2n)."""

@@ -11,9 +11,10 @@ import numpy as np
 
 from nhham.errors import InputError
 from nhham.numerics.crossings import crossings
-from nhham.numerics.linearization import Linearization, linearize, linearize_many
+from nhham.numerics.linearization import Linearization, linearize
 
-__all__ = ["Sweep", "steady_state", "sweep", "sweep_steady", "with_steady_inputs"]
+__all__ = ["Sweep", "steady_state", "sweep", "sweep_steady", "sweep_batches",
+           "common_reference", "probe_values", "check_swept", "with_steady_inputs"]
 
 
 @dataclass(frozen=True)
@@ -172,7 +173,10 @@ def steady_state(model, values: Mapping[str, float], independent=None, *,
 def sweep_steady(model, state_of: Callable[[Mapping[str, float]], Mapping[str, float]],
                  parameter: str, values: Sequence[float] | np.ndarray, *, independent=None,
                  xtol: float = 1e-12, family_of=None, generator=None) -> Sweep:
-    """:func:`sweep` of a steady motion that moves with a parameter.
+    """:func:`sweep` of a steady motion that moves with a parameter: the chart and the
+    neutral directions decided at the first, middle and last values
+    (:func:`common_reference`), every value then linearised in one batch
+    (:func:`~nhham.numerics.batch_linearization.linearize_batch`), as a study does.
 
     Parameters
     ----------
@@ -209,13 +213,13 @@ def sweep_steady(model, state_of: Callable[[Mapping[str, float]], Mapping[str, f
     >>> [(c.value, c.kind) for c in swept.crossings]
     [(0.0, 'real')]
     """
-    if parameter in model.input_names:
-        raise InputError(f"--sweep: {parameter!r} is an input, whose steady value the "
-                         f"[steady] table gives; sweep a parameter that its entry uses (e.g. "
-                         f"u = \"u0\" in [steady], then --sweep u0=...)", key="--sweep")
-    if parameter not in model.parameter_names:
-        raise InputError(f"--sweep: {parameter!r} is not a parameter of the scene "
-                         f"(parameters: {', '.join(model.parameter_names) or 'none'})")
+    from nhham.numerics.batch_linearization import linearize_batch
+
+    check_swept(model, parameter)
+    grid = np.asarray(values, dtype=float)
+    if grid.size == 0:
+        raise InputError(f"--sweep: no values of {parameter!r} to sweep", key="--sweep")
+
     def model_and_state(value, chart=independent):
         m = model.with_parameters(**{parameter: value})
         try:
@@ -224,32 +228,115 @@ def sweep_steady(model, state_of: Callable[[Mapping[str, float]], Mapping[str, f
             raise InputError(f"{exc} ({parameter} = {value:g})", key=exc.key) from None
 
     def fam(value):
-        if family_of is None:
-            return None
-        return family_of(model.with_parameters(**{parameter: value}).parameters)
+        return None if family_of is None else family_of(
+            model.with_parameters(**{parameter: value}).parameters)
 
-    # One chart and one set of neutral directions for every value: those
-    # found neutral at the first, middle and last values (a direction can be
-    # neutral at an isolated value only, e.g. the yaw rate of a disc at rest).
+    probes = probe_values(grid)
+    first = linearize(*model_and_state(probes[0]), independent=independent,
+                      family=fam(probes[0]), generator=generator)
+    lins = [first] + [linearize(*model_and_state(v, first.chart), independent=first.chart,
+                                family=fam(v), generator=generator) for v in probes[1:]]
+    choice = common_reference(lins, lambda neutral, keep: linearize(
+        *model_and_state(probes[0], first.chart), independent=first.chart, neutral=neutral,
+        family={p: t for p, t in (fam(probes[0]) or {}).items() if p in keep} or None,
+        generator=generator))
+
+    def batch_at(vals):
+        pairs = [model_and_state(v, choice.chart) for v in vals]
+        Y = np.array([m.state(st) for m, st in pairs])
+        P = np.array([m.parameter_values for m, _ in pairs], dtype=float)
+        return linearize_batch(model, Y, P, reference=choice, families=[fam(v) for v in vals],
+                               generator=generator, build=False)
+
+    return sweep_batches(parameter, grid, batch_at, choice.coordinates, xtol=xtol)
+
+
+def check_swept(model, parameter: str) -> None:
+    """Refuse an input or a name that is not a parameter (key ``--sweep``)."""
+    if parameter in model.input_names:
+        raise InputError(f"--sweep: {parameter!r} is an input, whose steady value the "
+                         f"[steady] table gives; sweep a parameter that its entry uses (e.g. "
+                         f"u = \"u0\" in [steady], then --sweep u0=...)", key="--sweep")
+    if parameter not in model.parameter_names:
+        raise InputError(f"--sweep: {parameter!r} is not a parameter of the scene "
+                         f"(parameters: {', '.join(model.parameter_names) or 'none'})",
+                         key="--sweep")
+
+
+def probe_values(values) -> list:
+    """Where a sweep's (or a study's line's) reference is decided: the first, middle and
+    last values."""
+    grid = np.asarray(values, dtype=float).ravel()
+    return [float(grid[i]) for i in sorted({0, grid.size // 2, grid.size - 1})]
+
+
+def common_reference(probes: Sequence, relinearize: Callable):
+    """One chart and one set of neutral directions for a family of steady motions: the
+    first probe's chart and the directions neutral at every probe (a direction can be
+    neutral at an isolated value only: the yaw rate of a disc at rest, the speed of a
+    sleigh with drag at U = 0).
+
+    Parameters
+    ----------
+    probes : sequence of Linearization
+        At the probe values, in the first's chart.
+    relinearize : callable
+        ``(neutral labels, family parameters kept) -> Linearization`` at the first probe,
+        called when the first divided out more than the others.
+
+    Returns
+    -------
+    ChartChoice
+    """
+    from nhham.numerics.batch_linearization import ChartChoice
+
+    from nhham.numerics.quotient import is_axis
+
+    first = probes[0]
+    labels = list(dict.fromkeys(s for lin in probes for s in (*lin.neutral, *lin.implied)))
+    # a chart variable neutral at every probe; another direction divided out or implied
+    # by the variables removed at every probe, and divided out at one
+    common = [s for s in labels if all(s in lin.neutral or (not is_axis(s) and s in lin.implied)
+                                       for lin in probes)
+              and (is_axis(s) or any(s in lin.neutral for lin in probes))]
+    if common != list(first.neutral):
+        first = relinearize(common, {s[3:] for s in common if s.startswith("d/d")})
+    return ChartChoice.of(first)
+
+
+def sweep_batches(parameter: str, values, batch_at: Callable, coordinates, *,
+                  xtol: float = 1e-12) -> Sweep:
+    """The eigenvalues along ``values`` and the crossings between them, every spectrum
+    from ``batch_at(values) -> LinearizationBatch`` (the grid in one batch, then the
+    values the crossing finder asks for, a batch per round).
+
+    Raises
+    ------
+    InputError
+        (key ``steady``) a grid value where the steady motion has no linearisation.
+    """
+    from nhham.numerics.batch_linearization import STATUS_TEXT
+    from nhham.numerics.crossings import CrossingFinder
+
     grid = np.asarray(values, dtype=float)
-    if grid.size == 0:
-        raise InputError(f"--sweep: no values of {parameter!r} to sweep", key="--sweep")
-    first = linearize(*model_and_state(grid[0], independent), independent=independent,
-                      generator=generator)
-    chart = first.chart
-    neutral = list(first.neutral)
-    for value in (grid[len(grid) // 2], grid[-1]):
-        lin = linearize(*model_and_state(value, chart), independent=chart, generator=generator)
-        neutral = [s for s in neutral if s in lin.neutral]
-
-    def at(value):
-        return linearize(*model_and_state(value, chart), independent=chart,
-                         neutral=neutral, family=fam(value), generator=generator)
-
-    def at_all(values):
-        pairs = [model_and_state(v, chart) for v in values]
-        return linearize_many([m for m, _ in pairs], [s for _, s in pairs], chart,
-                              neutral=neutral, families=[fam(v) for v in values],
-                              generator=generator)
-
-    return sweep(at, parameter, grid, xtol=xtol, linearize_all=at_all)
+    batch = batch_at(grid)
+    failed = np.flatnonzero(batch.status != 0)
+    if failed.size:
+        i = int(failed[0])
+        why = {1: "no state of M_1 near the table's at these parameter values (the "
+                  "dependent coordinates and velocities not solved from the constraints, "
+                  "or an entry not a finite number)",
+               2: "the motion is not steady at these parameter values (or a [control] law "
+                  "does not give its input's [steady] value)"}.get(
+                      int(batch.status[i]), STATUS_TEXT.get(int(batch.status[i]), ""))
+        raise InputError(f"[steady]: {why} ({parameter} = {grid[i]:g})", key="steady")
+    spectra = [batch.spectrum(i) for i in range(grid.size)]
+    finder = CrossingFinder([(grid, spectra)], xtol=xtol,
+                            counts=[batch.unstable_counts.tolist()])
+    while finder.requests:
+        more = batch_at(np.array([x for _, x in finder.requests]))
+        finder.supply([more.spectrum(i) for i in range(more.status.size)])
+    found = finder.result()
+    stable = tuple({1: True, 0: False}.get(int(v)) for v in batch.verdicts)
+    return Sweep(parameter, grid, tuple(batch.eigenvalues), stable, found.crossings[0],
+                 tuple(coordinates), found.unlocated[0])

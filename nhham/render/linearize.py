@@ -33,6 +33,7 @@ def linearization_data(lin) -> dict:
 
 def linearize_text(title, scene, lin, swept, opened=None) -> str:
     """The text report of ``nhham linearize``."""
+    from nhham.numerics.nullspace import describe_kkt_solve
     from nhham.render.text import paragraph, table
     from nhham.system.expressions import to_text
 
@@ -54,6 +55,8 @@ def linearize_text(title, scene, lin, swept, opened=None) -> str:
                                        for u, law in scene.control.items())),
                  ("open loop", opened.verdict + " (inputs held at their [steady] values)")]
     rows.append(("precision", lin.precision))
+    if lin.kkt_solve != "saddle":   # the usual solve is said in the JSON only (as simulate)
+        rows.append(("accelerations", describe_kkt_solve(lin.kkt_solve, lin.kkt_ratio)))
     lines.append(table(rows))
     lines += _matrices(lin, "state matrix" + (" of the closed loop" if closed else ""))
     if closed:
@@ -84,6 +87,12 @@ def _relative_rows(relative) -> list:
     if checked:
         how = ", ".join(sorted(set(checked.values())))
         rows.append(("invariant", f"{', '.join(checked)} ({how})"))
+    divided = [what for key, what in (("orbit", "its orbit Xi(y0) (orbit(xi))"),
+                                      ("momentum", "the level of its conserved momentum "
+                                                   "J = (dL/dv) . xi (level(J))"))
+               if relative.get(key)]
+    if divided:
+        rows.append(("symmetry divided out", " and ".join(divided)))
     if relative["rate"] == 0.0:
         return rows + [("relative equilibrium", "no: the motion does not move along xi "
                         "(w = 0), the state matrix is X's")]

@@ -36,13 +36,12 @@ the second axis the same five as ``boundary_across``, ``boundary_across_kind``,
 
 from __future__ import annotations
 
-import warnings
 
 import numpy as np
 
-from nhham.errors import ComputationError, InputError
-from nhham.journeys.stability import steady_states
-from nhham.numerics.batch_linearization import ChartChoice, linearize_batch
+from nhham.errors import InputError
+from nhham.journeys.steady import steady_batch
+from nhham.numerics.batch_linearization import ChartChoice
 from nhham.study.lines import ACROSS_VARIABLES, LINE_VARIABLES
 
 __all__ = ["prepare", "variables", "evaluate", "summary", "summary_warnings", "summary_rows",
@@ -68,9 +67,8 @@ def prepare(scene, model, design, *, along: str | None = None, run_options=None,
         No ``[steady]`` table, a swept name that is not a parameter (or is an input), an
         ``along`` that is not a grid dimension.
     """
-    from nhham.journeys.stability import (check_steady_table, steady_linearization,
-                                          symmetry_generator)
-    from nhham.numerics.linearization import linearize
+    from nhham.journeys.stability import check_steady_table, symmetry_generator
+    from nhham.journeys.steady import sweep_reference
 
     check_steady_table(scene)
     system = scene.steady_system()
@@ -92,41 +90,19 @@ def prepare(scene, model, design, *, along: str | None = None, run_options=None,
                          key="--along")
     generator = symmetry_generator(scene, system, model)   # checked once, here
     probes = sorted({0, design.size // 2, design.size - 1})
-    found: list = []
-    problems: list = []
+    points = []
     for flat in probes:
         region = tuple(slice(i, i + 1) for i in np.unravel_index(flat, design.shape))
-        params = {k: float(v.ravel()[0]) for k, v in design.values(region).items()}
-        m = model.with_parameters(**params)
-        try:
-            chart = found[0][3].chart if found else None
-            # the command's linearisation there (laws and forces checked), numerically
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore")   # a probe's notes are not the study's
-                lin = steady_linearization(scene, system, m, "complex-step", chart,
-                                           generator=generator)
-            state = np.array([lin.state[name] for name in m.names])
-            found.append((m, state, scene.steady.family(m.parameters), lin))
-        except (InputError, ComputationError) as exc:
-            problems.append(f"at {params}: {exc}")
-    if not found:
-        raise InputError("--what linearize: the [steady] motion is not steady (or not on M_1) "
-                         "at any probe point: " + "; ".join(problems), key="steady")
-    # One chart and the directions neutral at every probe (a direction can be neutral
-    # at an isolated value only, e.g. the yaw rate of a disc at rest).
-    m, state, family, lin = found[0]
-    common = [s for s in lin.neutral if all(s in f[3].neutral for f in found)]
-    if len(common) != len(lin.neutral):
-        # a family tangent divided out at every probe only (the sleigh's speed at U = 0
-        # is in A's kernel, at no other U)
-        family = {p: t for p, t in (family or {}).items() if f"d/d{p}" in common}
-        lin = linearize(m, state, independent=lin.chart, family=family or None,
-                        neutral=[s for s in common if not s.startswith("d/d")],
-                        generator=generator)
-    choice = ChartChoice.of(lin)
+        points.append({k: float(v.ravel()[0]) for k, v in design.values(region).items()})
+    try:
+        choice, _ = sweep_reference(scene, system, model, points, generator)
+    except InputError as exc:
+        raise InputError(f"--what linearize: {exc}".replace("linearize: ", "", 1),
+                         key="steady") from None
     options = {"chart": list(choice.chart), "neutral": list(choice.neutral),
                "coordinates": list(choice.coordinates), "along": along,
-               "inputs": list(model.input_names)}
+               "inputs": list(model.input_names),
+               "momentum": generator is not None and generator.momentum is not None}
     across = across_of(design, along)
     if across is not None:   # crossings located along the grid's second axis too
         options["across"] = across
@@ -162,7 +138,32 @@ def variables(design, options) -> dict:
                  "boundary_count": ((), np.int16, -1),
                  "boundary_unlocated": ((), np.int16, -1)}
     return {"point": point, "line": lines, "across": across_variables(design, options),
-            "coords": extra}
+            "coords": extra, "attrs": _code_meanings(lines)}
+
+
+def _code_meanings(lines) -> dict:
+    """The meanings of the integer codes (CF's ``flag_values``/``flag_meanings``, and
+    each code in words), as the variables' attributes."""
+    from nhham.numerics.batch_linearization import STATUS_TEXT
+    from nhham.numerics.spectra import VERDICT_TEXT
+
+    def flags(table, names):
+        return {"flag_values": list(table), "flag_meanings": " ".join(names),
+                "description": "; ".join(f"{k}: {v}" for k, v in table.items())}
+
+    out = {"verdict": flags(VERDICT_TEXT, ["stable", "unstable", "undecided"]),
+           "status": flags(STATUS_TEXT, ["linearised", "not_on_M1", "not_steady",
+                                         "singular"])}
+    kinds = {0: "a real eigenvalue through 0 (divergence)",
+             1: "a complex pair through the imaginary axis (flutter, Hopf)",
+             -1: "no crossing"}
+    directions = {1: "an eigenvalue's real part turns positive as the value grows",
+                  -1: "turns negative", 0: "no crossing"}
+    for prefix in ("boundary", "boundary_across"):
+        out[f"{prefix}_kind"] = flags(kinds, ["real", "complex", "none"])
+        out[f"{prefix}_direction"] = flags(directions, ["destabilising", "stabilising",
+                                                        "none"])
+    return out
 
 
 def evaluate(study, ctx, region, until: float | None = None) -> dict:
@@ -174,17 +175,11 @@ def evaluate(study, ctx, region, until: float | None = None) -> dict:
     values = study.design.values(region)
     shape = next(iter(values.values())).shape if values else ()
     flat = {k: v.ravel() for k, v in values.items()}
-    Y, P, bad, missed = steady_states(scene, model, flat)
-    batch = linearize_batch(model, Y, P, reference=choice,
-                            families=_families(scene, model, P, choice),
-                            generator=_generator(scene, model))
-    status = batch.status.copy()
-    status[bad] = 1
-    status[missed] = 2   # not a steady motion of the closed loop: the command refuses it
-    bad = bad | missed
+    batch, bad = steady_batch(scene, model, choice, flat, _generator(scene, model, opts))
+    status = batch.status
     out = {
-        "stable": batch.stable & ~bad,
-        "verdict": np.where(bad, -1, batch.verdicts).astype(np.int8),
+        "stable": batch.stable,
+        "verdict": batch.verdicts,
         "spectral_abscissa": np.where(bad, np.nan, batch.spectral_abscissa),
         "eigenvalue_real": batch.eigenvalues.real,
         "eigenvalue_imag": batch.eigenvalues.imag,
@@ -196,7 +191,7 @@ def evaluate(study, ctx, region, until: float | None = None) -> dict:
     if opts["inputs"]:
         out["input_matrix"] = batch.input_matrices
     out = {k: np.asarray(v).reshape(shape + np.asarray(v).shape[1:]) for k, v in out.items()}
-    missing = (bad | (batch.status != 0)).reshape(shape)
+    missing = (batch.status != 0).reshape(shape)
     for k in ("eigenvalue_real", "eigenvalue_imag", "state_matrix"):
         out[k][missing] = np.nan
     if opts["along"] is not None:
@@ -204,19 +199,15 @@ def evaluate(study, ctx, region, until: float | None = None) -> dict:
     return out
 
 
-def _generator(scene, model):
-    """The scene's ``[symmetry]`` for the batch (checked by :func:`prepare`)."""
+def _generator(scene, model, options):
+    """The scene's ``[symmetry]`` for the batch (checked by :func:`prepare`, which found
+    whether its momentum is conserved)."""
     from nhham.journeys.stability import symmetry_generator
 
-    return symmetry_generator(scene, scene.steady_system(), model, check=False)
-
-
-def _families(scene, model, P, choice):
-    """Each point's tangents of the steady family, where the chart divides one out."""
-    if not any(s.startswith("d/d") for s in choice.neutral):
+    if scene.symmetry is None:   # (no closed loop built for nothing)
         return None
-    names = model.parameter_names
-    return [scene.steady.family(dict(zip(names, p))) for p in P]
+    return symmetry_generator(scene, scene.steady_system(), model, check=False,
+                              conserved=bool(options.get("momentum")))
 
 
 def _boundaries(study, scene, model, choice, region, values, batch, bad) -> dict:
@@ -264,9 +255,7 @@ def _line_crossings(study, scene, model, choice, region, values, batch, bad, axi
     index = np.arange(int(np.prod(shape))).reshape(shape)
     # the unstable eigenvalues counted for the whole chunk at once; a spectrum is made
     # only where a line's count changes (the search reads nothing else)
-    with np.errstate(invalid="ignore"):
-        positive = (batch.eigenvalues.real > batch.tolerances[:, None]).sum(axis=1)
-    counts = np.where(bad | (batch.status != 0), -1, positive)
+    counts = batch.unstable_counts
     lines, fixed, line_counts = [], [], []
     for line in np.ndindex(*rest):
         at = line[:a] + (slice(None),) + line[a:]
@@ -279,7 +268,7 @@ def _line_crossings(study, scene, model, choice, region, values, batch, bad, axi
     while finder.requests:
         points = {k: np.array([dict(fixed[line], **{dims[a]: x})[k]
                                for line, x in finder.requests]) for k in values}
-        finder.supply(_spectra(scene, model, choice, points))
+        finder.supply(_spectra(study, scene, model, choice, points))
     search = finder.result()
     value, kind, direction, count, unlocated_count = names
     out = {value: np.full(rest + (CROSSINGS,), np.nan),
@@ -312,17 +301,12 @@ class _Spectra:
         return None if self.bad[j] else self.batch.spectrum(j)
 
 
-def _spectra(scene, model, choice, points) -> list:
+def _spectra(study, scene, model, choice, points) -> list:
     """The spectra at many points (``points``: swept name -> values), None where there is
     no linearisation."""
-    Y, P, bad, missed = steady_states(scene, model, points)
-    bad = bad | missed
-    batch = linearize_batch(model, Y, P, reference=choice,
-                            families=_families(scene, model, P, choice),
-                            generator=_generator(scene, model))
-    return [None if bad[i] else batch.spectrum(i) for i in range(len(Y))]
-
-
+    batch, _ = steady_batch(scene, model, choice, points,
+                            _generator(scene, model, study.options))
+    return [batch.spectrum(i) for i in range(batch.status.size)]
 
 
 def summary(ds) -> dict:

@@ -471,6 +471,9 @@ def _template(design, spec, attrs, chunking=None):
     coords = {k: v for k, v in coords.items()
               if k in used or (isinstance(v, tuple) and v[0] in used)}
     ds = xr.Dataset(data, coords=coords, attrs=attrs)
+    for name, meaning in spec.get("attrs", {}).items():   # what a variable's codes mean
+        if name in ds:
+            ds[name].attrs.update(meaning)
     return ds
 
 

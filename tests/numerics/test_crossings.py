@@ -61,6 +61,21 @@ def test_a_touch_is_not_a_boundary_and_the_crossing_is_found():
     assert found.unlocated == ((),)
 
 
+def test_a_touch_and_a_crossing_inside_one_grid_interval():
+    """The forced sleigh of issue 43 (tests/study/scenes/forced_sleigh.toml): yaw
+    -(m a U + c)/J through 0 at U* = -c/(m a) = -0.375 and drag -3 k U^2/m touching 0 at
+    U = 0, both inside the grid interval [-0.45, 0.05]. g = det A is flat at the touch
+    (g ~ U^2): regula falsi crept to U = 5.6e-31 and the touch was reported as the
+    crossing; a bisection after two slow steps keeps the bracket on U*."""
+    m, I, a, c, k = 2.0, 0.15, 0.4, 0.3, 0.5
+    J = I + m * a ** 2
+    A = diag(lambda U: -(m * a * U + c) / J, lambda U: -3 * k * U ** 2 / m)
+    found = find(A, np.linspace(-1.45, 1.55, 7))
+    assert [(x.kind, x.direction) for x in found.crossings[0]] == [("real", -1)]
+    assert abs(found.crossings[0][0].value + 0.375) < 1e-12
+    assert found.unlocated == ((),)
+
+
 def test_a_pair_colliding_on_the_real_axis_then_a_real_root_crossing():
     """lambda^2 + 2 lambda + (5 - 10 p): a complex pair for p < 0.4, two real roots after,
     the larger -1 + sqrt(10 p - 4) through 0 at p = 0.5 (det = 5 - 10 p), all inside one
