@@ -77,3 +77,21 @@ def test_simulate_takes_the_users_names_and_solves_the_rest():
     final = dict(zip(answer.data["state"], answer.data["y_final"]))
     assert final["x"] == pytest.approx(4 * math.sin(1.0), abs=1e-8)
     assert as_scene(disk, initial=given).initial_solved == ("x_dot", "y_dot")
+
+
+def test_linearize_takes_a_steady_motion_by_the_users_names():
+    """A cart on a spring (k = 8, m = 2) with a pendulum-free mate constrained to follow
+    it, y' = x', in u-form with u = 2 x' (a speed that is not a q'): at rest the
+    eigenvalues are +-i sqrt(k/(2 m)) = +-i sqrt(2) (both masses move, the spring pulls
+    one); the steady table gives x, y and u only, y' is solved."""
+    x, y = me.dynamicsymbols("x y")
+    u = me.dynamicsymbols("u")
+    m, k = sp.symbols("m k")
+    cart = nhham.from_mechanics(m * (x.diff(t)**2 + y.diff(t)**2) / 2 - k * x**2 / 2, [x, y],
+                                u=[u], kd_eqs=[2 * x.diff(t) - u],
+                                velocity_constraints=[y.diff(t) - u / 2],
+                                parameters={m: 2.0, k: 8.0})
+    answer = nhham.linearize(cart, steady={x: 0, y: 0, u: 0})
+    eig = sorted(complex(re, im).imag for re, im in answer.data["eigenvalues"]
+                 if abs(complex(re, im)) > 1e-9)
+    assert eig == pytest.approx([-math.sqrt(2), math.sqrt(2)], abs=1e-12)
