@@ -106,34 +106,93 @@ class Answer:
         return self.text()
 
 
-def as_scene(scene_or_system, **load_options):
-    """A :class:`~nhham.system.scene.Scene` from a scene, a scene file's path or a
-    ``System`` (wrapped in a scene without tables).
+def as_scene(scene_or_system, *, initial=None, steady=None, **load_options):
+    """A :class:`~nhham.system.scene.Scene` from a scene, a scene file's path, a ``System``
+    or a ``sympy.physics.mechanics.System`` (wrapped in a scene; ``initial`` and
+    ``steady`` give its tables).
 
     Parameters
     ----------
-    scene_or_system : Scene, System, str or Path
+    scene_or_system : Scene, System, sympy.physics.mechanics.System, str or Path
+    initial, steady : mapping, optional
+        The ``[initial]`` and ``[steady]`` tables, keyed by nhham's names, dynamicsymbols
+        ``q(t)``, ``q(t).diff(t)`` or a mechanics model's speeds ``u(t)``
+        (:mod:`nhham.system.state_keys`); only the independent entries are needed, the
+        others are solved (a steady motion's inputs are given too). They replace the
+        scene's.
     **load_options
-        For :func:`nhham.load_scene` when a path is given (e.g. ``values=``).
+        For :func:`nhham.load_scene` when a path is given (e.g. ``values=``; for a
+        mechanics System, ``values`` are its parameters' values).
 
     Raises
     ------
     InputError
-        Anything else.
+        Anything else, or tables that name something the system does not have.
+
+    Examples
+    --------
+    >>> from nhham import System
+    >>> scene = as_scene(System(["x", "y"], "(x_dot**2 + y_dot**2)/2", ["y_dot - 2*x_dot"]),
+    ...                  steady={"x": 0, "y": 0, "x_dot": 1})
+    >>> {k: float(v) for k, v in scene.steady.expressions.items()}
+    {'x': 0.0, 'y': 0.0, 'x_dot': 1.0, 'y_dot': 2.0}
     """
+    import dataclasses as _dc
+
     from nhham.system.description import System
     from nhham.system.scene import Scene, SimulateOptions, load_scene
 
+    from nhham.system.state_keys import as_system
+
+    scene_or_system, speeds = as_system(scene_or_system, load_options.get("values"))
     if isinstance(scene_or_system, Scene):
-        return scene_or_system
-    if isinstance(scene_or_system, (str, Path)):
-        return load_scene(scene_or_system, **load_options)
-    if isinstance(scene_or_system, System):
-        return Scene(name=scene_or_system.name, description="", system=scene_or_system,
-                     initial=None,
-                     simulate=SimulateOptions(), source="<System>")
-    raise InputError(f"expected a Scene, a System or a scene file's path, got "
-                     f"{type(scene_or_system).__name__}")
+        scene = scene_or_system
+    elif isinstance(scene_or_system, (str, Path)):
+        scene = load_scene(scene_or_system, **load_options)
+    elif isinstance(scene_or_system, System):
+        scene = Scene(name=scene_or_system.name, description="", system=scene_or_system,
+                      initial=None, simulate=SimulateOptions(), source="<System>")
+    else:
+        raise InputError(f"expected a Scene, a System or a scene file's path, got "
+                         f"{type(scene_or_system).__name__}")
+    if initial is not None:
+        scene = _dc.replace(scene, **_initial_table(scene.system, initial, speeds))
+    if steady is not None:
+        scene = _dc.replace(scene, steady=_steady_table(scene.system, steady, speeds))
+    return scene
+
+
+def _initial_table(system, mapping, speeds) -> dict:
+    """The Scene fields of an [initial] given in Python (solved as a scene's is)."""
+    from types import MappingProxyType
+
+    from nhham.system.initial_solve import InitialData
+    from nhham.system.state_keys import completed_state, state_entries
+
+    given = state_entries(system, mapping, speeds=speeds)
+    state, solved = completed_state(system, given)
+    return {"initial": MappingProxyType(state), "initial_solved": solved,
+            "initial_given": InitialData(MappingProxyType(given), MappingProxyType({})),
+            "initial_problem": None}
+
+
+def _steady_table(system, mapping, speeds):
+    """A [steady] given in Python: the entries given (expressions in the parameters), the
+    others solved at the parameters' values; the inputs' values passed through."""
+    from types import MappingProxyType
+
+    import sympy as sp
+
+    from nhham.system.state_keys import completed_state, state_entries
+    from nhham.system.steady import SteadyState
+
+    given = state_entries(system, mapping, speeds=speeds, where="steady", inputs=True)
+    names = {u.name for u in system.inputs}
+    state, _ = completed_state(system, {k: v for k, v in given.items() if k not in names},
+                               where="steady")
+    exprs = {k: given.get(k, sp.Float(v)) for k, v in state.items()}
+    exprs.update({k: v for k, v in given.items() if k in names})
+    return SteadyState(MappingProxyType(exprs))
 
 
 def quiet_steps(steps=None):

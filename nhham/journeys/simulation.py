@@ -17,7 +17,7 @@ __all__ = ["simulate", "closed_loop", "initial_state", "initial_at"]
 
 def simulate(scene, *, t_end: float | None = None, options: Mapping | None = None,
              project_initial: bool = False, control: Mapping | None = None,
-             steps=None) -> Answer:
+             initial: Mapping | None = None, steps=None) -> Answer:
     """A run of the scene's constrained dynamics (``nhham simulate``).
 
     Parameters
@@ -35,6 +35,10 @@ def simulate(scene, *, t_end: float | None = None, options: Mapping | None = Non
         state off it.
     control : mapping of str to str, optional
         Laws of inputs (``{"u": "-k*x"}``), replacing the scene's ``[control]`` ones.
+    initial : mapping, optional
+        The ``[initial]`` table, replacing the scene's: keyed by nhham's names,
+        dynamicsymbols or a mechanics model's speeds, the dependent entries solved
+        (:func:`~nhham.journeys.answer.as_scene`).
     steps : Steps, optional
 
     Returns
@@ -66,7 +70,7 @@ def simulate(scene, *, t_end: float | None = None, options: Mapping | None = Non
     from nhham.numerics.methods import DEFAULT_METHOD
     from nhham.render.results import simulation_data, simulation_failure
 
-    scene = as_scene(scene, check_initial=False)
+    scene = as_scene(scene, initial=initial, check_initial=False)
     steps = quiet_steps(steps)
     opts = dict(options or {})
     y0, solved = initial_state(scene, project_initial, steps)

@@ -43,7 +43,7 @@ METHODS = ("auto", "exact", "complex-step")
 
 
 def linearize(scene, *args, method: str = "auto", sweep=None, model=None, steps=None,
-              **kwargs) -> Any:
+              steady=None, **kwargs) -> Any:
     """The stability of a scene's ``[steady]`` motion (``nhham linearize``).
 
     Parameters
@@ -57,6 +57,11 @@ def linearize(scene, *args, method: str = "auto", sweep=None, model=None, steps=
     model : NumericModel, optional
         A model of ``scene.steady_system()`` to reuse.
     steps : Steps, optional
+    steady : mapping, optional
+        The ``[steady]`` table, replacing the scene's (a System's: its only one), keyed by
+        nhham's names, dynamicsymbols ``q(t)``, ``q(t).diff(t)`` or the speeds of the
+        mechanics model it came from; only the independent entries, the others solved at
+        the parameter values (:func:`~nhham.journeys.answer.as_scene`).
 
     Returns
     -------
@@ -105,7 +110,7 @@ def linearize(scene, *args, method: str = "auto", sweep=None, model=None, steps=
                       "(the old form goes in the next release)", DeprecationWarning,
                       stacklevel=2)
         return at_state(scene, *args, **kwargs)
-    scene = as_scene(scene, check_initial=False)
+    scene = as_scene(scene, steady=steady, check_initial=False)
     steps = quiet_steps(steps)
     if method not in METHODS:
         raise InputError(f"linearize: method {method!r} is not one of {', '.join(METHODS)}",

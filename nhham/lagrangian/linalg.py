@@ -288,7 +288,13 @@ def field_det(M: DomainMatrix):
     """det M; in floating point by elimination with partial pivoting (sympy's
     fraction-free elimination divides by rounded, possibly tiny, pivots)."""
     if isinstance(M, FloatMatrix):
-        return float(np.linalg.det(M.a)) if M.shape[0] else 1.0
+        if not M.shape[0]:
+            return 1.0
+        # a large system's determinant overflows float64 (the 48-link snake's did, with
+        # numpy's warning shown to the user): +-inf then, which the caller takes to a
+        # wider field (exceptional.FLOAT_MARGIN), not a warning
+        with np.errstate(over="ignore", under="ignore"):
+            return float(np.linalg.det(M.a))
     K = M.domain
     if K.is_FiniteField:
         # On machine-size residues: sympy's elements invert by an extended gcd per division.

@@ -306,21 +306,20 @@ def simulate(system_or_model, t_span, y0, *, method: str | Method = DEFAULT_METH
 
     Parameters
     ----------
-    system_or_model : nhham.System or NumericModel
+    system_or_model : nhham.System, sympy.physics.mechanics.System or NumericModel
     t_span : (float, float)
-        Start and end (as in :func:`scipy.integrate.solve_ivp`: ``t_span`` before
-        ``y0``).
+        Start and end (``t_span`` before ``y0``, as in scipy's ``solve_ivp``).
     y0 : mapping or array_like
-        ``{name: value}`` for every coordinate and velocity, or shape (2n,).
+        Shape (2n,), or ``{name: value}``: with a System the names may be dynamicsymbols
+        or a mechanics model's speeds, and only the independent entries are needed
+        (:mod:`nhham.system.state_keys`).
     method : str or Method
         One of :data:`~nhham.numerics.methods.METHODS` (see the module docstring).
     options : RunOptions, optional
         The options every method takes (below); a keyword overrides its field.
     method_options : AdaptiveOptions, FixedStepOptions or ReferenceOptions, optional
-        The options of the method's family (below); a keyword overrides its field.
-        An option the method does not take is refused, and so is a fixed-step method
-        without ``step``
-        (:func:`~nhham.numerics.simulate_options.check_method_options`).
+        The options of the method's family (below); a keyword overrides its field; one
+        the method does not take is refused, as a fixed-step method without ``step``.
 
     Other Parameters
     ----------------
@@ -369,10 +368,9 @@ def simulate(system_or_model, t_span, y0, *, method: str | Method = DEFAULT_METH
         while numpy integrates; when the build finishes first the run starts again on
         the compiled code. ``result.settings["backend"]`` (and ``"backend_note"``) say
         which ran; both give the same steps up to round-off.
-    warn : bool
-        Issue the diagnostics' warnings as :class:`NumericsWarning`.
-    progress : bool
-        Report progress on stderr (each tenth of t_span; not the reference method).
+    warn, progress : bool
+        Warn of the diagnostics (:class:`NumericsWarning`); report each tenth of t_span
+        on stderr (not the reference method).
     loop : {"auto", "compiled", "scipy"}
         RK23, RK45, DOP853: ``"auto"`` runs the whole integration as one
         compiled loop when the model has the compiled backend (saddle path),
@@ -380,8 +378,7 @@ def simulate(system_or_model, t_span, y0, *, method: str | Method = DEFAULT_METH
         impossible); ``"scipy"`` always uses scipy's loop. Both give the same
         steps up to round-off. ``result.settings["loop"]`` says which ran.
     time_limit : float, optional
-        Seconds of wall time after which the run stops with ``Status.TIME_LIMIT`` (a
-        failure that keeps the trajectory so far; not the reference method).
+        Wall seconds after which the run stops (``Status.TIME_LIMIT``, keeping it so far).
     contacts : sequence of ContactPoint, optional
         Contact points (a scene's ``contacts``; a System must be given): the forces of
         their constraints at the stored states are in ``result.contact_forces``
@@ -436,6 +433,9 @@ def simulate(system_or_model, t_span, y0, *, method: str | Method = DEFAULT_METH
     """
     spec = lookup(method)
     common, own = split_options(spec, options, method_options, **keywords)
+    if hasattr(y0, "keys") and not isinstance(system_or_model, NumericModel):
+        from nhham.numerics.codegen import system_and_state  # the user's names, solved
+        system_or_model, y0 = system_and_state(system_or_model, y0)
     contacts, controls = common.contacts, common.controls
     if contacts and isinstance(system_or_model, NumericModel):
         raise InputError("simulate: contacts need the System (its constraints' velocity "

@@ -84,6 +84,11 @@ class System:
     inputs : sequence of str or sympy.Symbol, optional
         Names of inputs u (controls): symbols the forces may use, set at run time
         (``simulate``'s control laws, ``linearize``'s B).
+    speeds : mapping, optional
+        The generalized speeds of the ``sympy.physics.mechanics`` model it was made from
+        (:func:`~nhham.system.mechanics.from_mechanics` fills it): ``{u(t): u as an
+        expression in the coordinates and velocities}``, so that a state may be given by
+        them (:mod:`nhham.system.state_keys`).
 
     Raises
     ------
@@ -138,6 +143,7 @@ class System:
     forces: tuple[sp.Expr, ...] = field(init=False)
     dissipation: sp.Expr = field(init=False)
     inputs: tuple[sp.Symbol, ...] = field(init=False)
+    speeds: Mapping = field(init=False, repr=False)
 
     def __init__(
         self,
@@ -151,6 +157,7 @@ class System:
         forces: Mapping | Sequence | None = None,
         dissipation=None,
         inputs: Sequence = (),
+        speeds: Mapping | None = None,
     ):
         # Long on purpose: every check appends to one list of problems, so that the
         # user sees them all at once, in the order the pieces were given.
@@ -212,7 +219,7 @@ class System:
         _set_fields(self, name=str(name), coordinates=coords, velocities=vels,
                     parameters=params, parameter_values=MappingProxyType(dict(values)),
                     lagrangian=lag, holonomic=hols, forces=applied, dissipation=diss,
-                    inputs=ins)
+                    inputs=ins, speeds=MappingProxyType(dict(speeds or {})))
 
         kept, dropped, mu = check_dependence(self, cons, hols, drop_redundant)
         if mu is not None and not dropped:

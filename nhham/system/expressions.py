@@ -53,6 +53,8 @@ __all__ = [
     "CONSTANTS",
     "RESERVED_NAMES",
     "MAX_EXPRESSION_LENGTH",
+    "CHARACTERS_PER_NAME",
+    "expression_limit",
     "parse_expression",
     "to_text",
     "short",
@@ -88,8 +90,14 @@ CONSTANTS: Mapping[str, sp.Expr] = {"pi": sp.pi}
 #: literals ``True``/``False``/``None`` (which the parser never sees as names).
 RESERVED_NAMES = frozenset(FUNCTIONS) | frozenset(CONSTANTS) | {"True", "False", "None"}
 
-#: Longest expression text accepted (characters).
+#: Longest expression text accepted (characters) whatever the model: a bound on hostile
+#: input. A model's own expressions grow with its names (the 64-link snake's Lagrangian:
+#: 128,739 characters over 260 names), so the bound is this or :data:`CHARACTERS_PER_NAME`
+#: times the names an expression may use, whichever is larger; ``NHHAM_MAX_EXPRESSION``
+#: (characters) raises it further. Parsing stays linear in the text, and the other bounds
+#: (nesting, numbers, expansion) hold at any length.
 MAX_EXPRESSION_LENGTH = 100_000
+CHARACTERS_PER_NAME = 2_000
 
 # Deepest nesting of sub-expressions the tree walker follows. Sums, products
 # and sign chains are flattened iteratively, so only genuinely nested input
@@ -168,14 +176,29 @@ def parse_expression(text: str, symbols: Mapping[str, sp.Symbol] | Iterable,
         raise
 
 
+def expression_limit(names: int) -> int:
+    """The longest expression text accepted over a table of ``names`` names (see
+    :data:`MAX_EXPRESSION_LENGTH`).
+
+    >>> expression_limit(4), expression_limit(260)
+    (100000, 520000)
+    """
+    import os
+
+    limit = max(MAX_EXPRESSION_LENGTH, CHARACTERS_PER_NAME * names)
+    raised = os.environ.get("NHHAM_MAX_EXPRESSION", "")
+    return max(limit, int(raised)) if raised.strip().isdigit() else limit
+
+
 def _parse(text, symbols, where) -> sp.Expr:
     if not isinstance(text, str):
         raise ParseError(f"{where}: expected an expression string, got {type(text).__name__}")
     symbols = _symbol_table(symbols)
-    if len(text) > MAX_EXPRESSION_LENGTH:
+    limit = expression_limit(len(symbols))
+    if len(text) > limit:
         raise ParseError(
-            f"{where}: expression too long ({len(text)} characters; "
-            f"at most {MAX_EXPRESSION_LENGTH} are accepted)"
+            f"{where}: expression too long ({len(text)} characters; at most {limit} are "
+            f"accepted for {len(symbols)} names; NHHAM_MAX_EXPRESSION=CHARACTERS raises it)"
         )
     if "#" in text:
         # Comments would silently swallow the rest of a multi-line expression.

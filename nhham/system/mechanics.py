@@ -335,6 +335,8 @@ def _from_pieces(lagrangian, q, hol_coneqs, nonhol_coneqs, parameters, name, *, 
     if to_q:
         lagrangian = lagrangian.xreplace(to_q)
         vcons = [c.xreplace(to_q) for c in vcons]
+    rename = plain_map(coords, t)
+    speeds = {s: sp.sympify(e).xreplace(rename) for s, e in to_q.items()}
     return _from_lagrangian(lagrangian, coords, list(hol_coneqs) + list(configuration_constraints),
                             list(nonhol_coneqs) + vcons, parameters, name,
                             hol_labels=[f"hol_coneqs[{i}]" for i in range(len(hol_coneqs))]
@@ -342,11 +344,13 @@ def _from_pieces(lagrangian, q, hol_coneqs, nonhol_coneqs, parameters, name, *, 
                                for i in range(len(configuration_constraints))],
                             nonhol_labels=[f"nonhol_coneqs[{i}]" for i in range(len(nonhol_coneqs))]
                             + [f"{labels['velocity']}[{i}]" for i in range(len(vcons))],
-                            drop_redundant=drop_redundant, forces=forces, inputs=plain_inputs)
+                            drop_redundant=drop_redundant, forces=forces, inputs=plain_inputs,
+                            speeds=speeds)
 
 
 def _from_lagrangian(lagrangian, coords, hols, nonhols, parameters, name, hol_labels,
-                     nonhol_labels, drop_redundant=False, forces=None, inputs=()) -> System:
+                     nonhol_labels, drop_redundant=False, forces=None, inputs=(),
+                     speeds=None) -> System:
     """The System of L and the constraints in dynamicsymbols; ``forces``: Q per coordinate
     already in plain symbols (or None), ``inputs``: the plain input symbols."""
     t = me.dynamicsymbols._t
@@ -380,6 +384,7 @@ def _from_lagrangian(lagrangian, coords, hols, nonhols, parameters, name, hol_la
             drop_redundant=drop_redundant,
             forces=applied,
             inputs=tuple(inputs),
+            speeds=speeds,
         )
     except ValidationError as exc:  # System's constraints[i] are the user's labels
         names = {"constraints": nonhol_labels, "holonomic": hol_labels}

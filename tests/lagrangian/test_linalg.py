@@ -75,3 +75,19 @@ def test_a_list_matrix_without_rows_keeps_its_width():
     assert K.shape == (2, 2) and K.rows == W.rows
     with pytest.raises(ValueError):
         W.hstack(ListMatrix([[MPQ(1)]]))
+
+
+def test_a_float_determinant_beyond_the_range_is_inf_without_a_warning():
+    """det diag(1e200, 1e200, 1e200) overflows float64: +inf, no numpy RuntimeWarning
+    (the 48-link snake's classify showed one); the wider field takes it from there."""
+    import warnings
+
+    import numpy as np
+
+    from nhham.lagrangian.linalg import FloatMatrix, field_det
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert field_det(FloatMatrix(np.diag([1e200] * 3))) == float("inf")
+        assert field_det(FloatMatrix(np.diag([-1e200, 1e200, 1e200]))) == float("-inf")
+    assert field_det(FloatMatrix(np.diag([2.0, 3.0]))) == 6.0

@@ -63,7 +63,7 @@ def test_system_is_a_dataclass_of_its_normalised_fields():
     names = [f.name for f in dataclasses.fields(nhham.System)]
     assert names == ["name", "coordinates", "velocities", "parameters", "parameter_values",
                      "lagrangian", "holonomic", "constraints", "dropped", "constraint_labels",
-                     "forces", "dissipation", "inputs"]
+                     "forces", "dissipation", "inputs", "speeds"]
     assert s.constraints == (zd,) and s.constraint_labels == ("constraints[0]",)
     assert [d.label for d in s.dropped] == ["constraints[1]"]
     # identity equality and hash: a system is a key of caches

@@ -264,6 +264,26 @@ def test_too_long_text_is_refused_before_parsing():
     text = "x+" * (MAX_EXPRESSION_LENGTH // 2) + "x"
     message = parse_error(text)
     assert "expression too long" in message and str(MAX_EXPRESSION_LENGTH) in message
+    assert "NHHAM_MAX_EXPRESSION" in message
+
+
+def test_the_length_bound_grows_with_the_names_and_can_be_raised(monkeypatch):
+    """A model's expression of 130,000 characters over 311 names is accepted (the 64-link
+    snake's Lagrangian has 128,739 over 260); the same length over 14 names is not, unless
+    NHHAM_MAX_EXPRESSION raises the bound."""
+    names = {f"q{i}": sp.Symbol(f"q{i}") for i in range(300)}
+    group = "+".join(f"q{i % 300}**2*q{(i + 1) % 300}" for i in range(1000))  # 12,000 chars
+    text = "+".join(f"c{j}*({group})" for j in range(11))
+    names.update({f"c{j}": sp.Symbol(f"c{j}") for j in range(11)})
+    assert len(text) > 130_000
+    assert parse_expression(text, names) != 0
+    few = "+".join(f"c{j}*({'+'.join(['(x + y + z)**2'] * 900)})" for j in range(11))
+    assert len(few) > 130_000
+    small = {n: sp.Symbol(n) for n in ["x", "y", "z", *(f"c{j}" for j in range(11))]}
+    with pytest.raises(ParseError, match="at most 100000 are accepted for 14 names"):
+        parse_expression(few, small)
+    monkeypatch.setenv("NHHAM_MAX_EXPRESSION", "200000")
+    assert parse_expression(few, small) != 0
 
 
 @pytest.mark.parametrize(

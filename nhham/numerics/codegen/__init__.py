@@ -42,7 +42,8 @@ from nhham.numerics.codegen.emit import (cached_sources, generate_sources, remem
 from nhham.numerics.kernels import GeneratedKernels
 from nhham.numerics.model import NumericModel, NumericsWarning
 
-__all__ = ["numeric_model", "generate_sources", "compile_c", "c_compiler", "cache_location"]
+__all__ = ["numeric_model", "generate_sources", "compile_c", "c_compiler", "cache_location",
+           "system_and_state"]
 
 _BACKENDS = ("numpy", "c", "auto")
 _PATHS = ("saddle", "closed_form")
@@ -198,3 +199,17 @@ def _parameter_values(system, overrides) -> dict:
             f"parameters: no numeric value for {', '.join(missing)} (needed for numbers)")
     return values
 
+
+def system_and_state(obj, y0) -> tuple:
+    """(System, state) for :func:`nhham.simulate` from a System or a
+    ``sympy.physics.mechanics`` System and a state keyed by any of the user's names
+    (dynamicsymbols, speeds, nhham's), the entries left out solved as a scene's
+    ``[initial]`` ones (:mod:`nhham.system.state_keys`): the one bridge from sympy's
+    names to the numbers. A full state in nhham's names is passed through unchanged."""
+    from nhham.system.state_keys import as_system, completed_state
+
+    system, speeds = as_system(obj)
+    names = {s.name for s in (*system.coordinates, *system.velocities)}
+    if all(isinstance(k, str) for k in y0) and set(y0) == names:
+        return system, y0
+    return system, completed_state(system, y0, speeds=speeds)[0]
