@@ -32,7 +32,6 @@ from __future__ import annotations
 
 import ast
 import difflib
-import functools
 import io
 import keyword
 import math
@@ -46,6 +45,7 @@ from sympy.printing.str import StrPrinter
 
 from nhham.errors import BudgetExceeded, ParseError
 from nhham.settings import COMPILER_LOCK
+from nhham.system.derivative import derivative
 from nhham.system.numbers import complex_string, number_problems
 
 __all__ = [
@@ -690,34 +690,3 @@ def short(expr, limit: int = 80) -> str:
     """``str(expr)`` cut to ``limit`` characters (with ``...``), for messages."""
     text = str(expr)
     return text if len(text) <= limit else text[:limit - 3] + "..."
-
-
-@functools.lru_cache(maxsize=16384)
-def derivative(expr: sp.Expr, x: sp.Symbol) -> sp.Expr:
-    """d expr / d x by the sum, product, power and chain rules (sin, cos).
-
-    The same derivative as ``expr.diff(x)`` (its fallback for any other node),
-    without what makes sympy's ``diff`` slow on the entries of mechanical systems: a
-    ``Derivative`` object per factor, also for factors free of x, and assumption
-    queries on every result; only the factors that contain x are differentiated.
-    Memoised (expressions are immutable): the analysis, the check at the parameter
-    values, the classes and the cross-check differentiate the same rows again.
-    """
-    if x not in expr.free_symbols:
-        return sp.S.Zero
-    if expr.is_Symbol:
-        return sp.S.One
-    if expr.is_Add:
-        return sp.Add(*[derivative(a, x) for a in expr.args if x in a.free_symbols])
-    if expr.is_Mul:
-        args = expr.args
-        return sp.Add(*[sp.Mul(*args[:i], derivative(a, x), *args[i + 1:])
-                        for i, a in enumerate(args) if x in a.free_symbols])
-    if expr.is_Pow and x not in expr.exp.free_symbols:
-        base, k = expr.args
-        return k * base ** (k - 1) * derivative(base, x)
-    if isinstance(expr, sp.sin):
-        return sp.cos(expr.args[0]) * derivative(expr.args[0], x)
-    if isinstance(expr, sp.cos):
-        return -sp.sin(expr.args[0]) * derivative(expr.args[0], x)
-    return expr.diff(x)
