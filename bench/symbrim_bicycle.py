@@ -189,7 +189,7 @@ def main():
         want = np.linalg.eigvals(benchmark_state_matrix(float(v), meijaard))
         diff = pairing_difference(got, want)
         worst = max(worst, diff)
-        table2 = TABLE_2.get(float(v)) if not args.bundled else None
+        table2 = TABLE_2.get(float(v))
         rows.append((v, np.sort_complex(got), np.sort_complex(want), diff,
                      None if table2 is None else pairing_difference(got, table2)))
 

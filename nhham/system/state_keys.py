@@ -99,7 +99,7 @@ def completed_state(system, mapping: Mapping, *, speeds: Mapping | None = None,
     """
     given = state_entries(system, mapping, speeds=speeds, where=where)
     return complete_initial(system, InitialData(MappingProxyType(given),
-                                                MappingProxyType({})))
+                                                MappingProxyType({})), where=where)
 
 
 def as_system(thing, values=None) -> tuple:
