@@ -123,6 +123,25 @@ def test_linearize_takes_a_mechanics_systems_speeds_as_its_steady_motion():
     assert answer.data["stable"] is True        # Re < 0: asymptotically stable
 
 
+def test_a_swept_parameter_moves_the_entries_solved_from_the_given_ones():
+    """The sleigh heading theta = pi/4 with x' = u1 = c given: y' = x' (the blade's
+    normal is (-1, 1)/sqrt 2) is solved, and the forward speed is v0 = sqrt 2 c, so by
+    the formula above the eigenvalue is -m a v0 / (I + m a^2) = -sqrt(2) c. The chart
+    holds y' (not the given x'): at each swept c it must be solved again from x' = c
+    (before, y' kept its value at c = 1 and the three points gave -sqrt 2 alike)."""
+    system, (x, y, th), (u1, u2, u3), values = sleigh_system()
+    c = sp.Symbol("c")
+    sleigh = nhham.from_mechanics(system, parameters={**values, c: 1.0})
+    model = nhham.numeric_model(sleigh, backend="numpy")
+    answer = nhham.linearize(sleigh, steady={x: 0, y: 0, th: sp.pi / 4, u1: c, u3: 0},
+                             model=model, sweep=("c", [0.5, 1.0, 2.0]))
+    assert "y_dot" in answer.data["chart"] and "x_dot" not in answer.data["chart"]
+    swept = answer.payload["sweep"]
+    assert swept.coordinates == ("theta_dot",)
+    assert [complex(e[0]) for e in swept.eigenvalues] == [
+        pytest.approx(-math.sqrt(2) * cv, abs=1e-9) for cv in (0.5, 1.0, 2.0)]
+
+
 def test_a_steady_table_left_short_is_named_steady():
     """Errors of a steady motion given in Python name the steady table, not [initial]."""
     system, (x, y, th), (u1, u2, u3), values = sleigh_system()
