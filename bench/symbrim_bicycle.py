@@ -39,6 +39,12 @@ Usage::
     python bench/symbrim_bicycle.py                # v = 0..10, 11 speeds, numpy kernels
     python bench/symbrim_bicycle.py --bundled      # bicycleparameters' rounded file
     python bench/symbrim_bicycle.py --backend auto # nhham's default (C when it compiles)
+    python bench/symbrim_bicycle.py --sweep 101    # also linearize(..., sweep=("v", ...))
+
+``--sweep N`` adds a Symbol v to the parameters (value 5), writes the rear wheel's rate
+u6 = -v/rR, and lets ``linearize(..., sweep=("v", linspace(0, 10, N)))`` find where an
+eigenvalue crosses the imaginary axis (the weave and capsize speeds, against the paper's
+4.29238253634111 and 6.02426201538837); the other entries are solved again at each v.
 
 Exits 2 with one line naming the package when symbrim or bicycleparameters is missing.
 """
@@ -59,6 +65,9 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "tests"))
+
+#: Meijaard et al. (2007), section 5: the weave and capsize speeds of the benchmark.
+WEAVE, CAPSIZE = 4.29238253634111, 6.02426201538837
 
 #: Table 2 of Meijaard et al. (2007): the eigenvalues at v = 0 and v = 5 m/s.
 TABLE_2 = {
@@ -151,6 +160,8 @@ def main():
                     help="bicycleparameters' Benchmark file as it is (rounded fork inertia)")
     ap.add_argument("--backend", choices=("numpy", "auto"), default="numpy",
                     help="the numeric model's kernels (auto: C when a compiler works)")
+    ap.add_argument("--sweep", type=int, default=0, metavar="N",
+                    help="also sweep v over N values in [0, 10] (v a parameter)")
     args = ap.parse_args()
     t_all, c_all = time.perf_counter(), time.process_time()
     sb, bp = require("symbrim", "bicycleparameters")
@@ -231,10 +242,36 @@ def main():
         print(f"| nhham.linearize, later calls (median of {len(calls) - 1}; min-max) | "
               + " | ".join(f"{statistics.median(x):.2f} s ({x[0]:.2f}-{x[-1]:.2f})"
                            for x in later) + " |")
-    print(f"| the whole of main (imports of symbrim, nhham... included) | "
+    print(f"| main so far (imports of symbrim, nhham... included) | "
           f"{time.perf_counter() - t_all:.1f} s | {time.process_time() - c_all:.1f} s |")
     print(f"largest eigenvalue difference vs the closed form, all {len(rows)} speeds: "
           f"{worst:.1e}")
+    if args.sweep:
+        sweep_speed(nhham, sp, np, system, values, bike, args)
+
+
+def sweep_speed(nhham, sp, np, system, values, bike, args):
+    """``linearize(..., sweep=("v", ...))`` with v a parameter: the crossings."""
+    v = sp.Symbol("v")
+    swept_bike, (wall, cpu) = clock(
+        lambda: nhham.from_mechanics(system, parameters={**values, v: 5.0}))
+    model, (m_wall, m_cpu) = clock(lambda: nhham.numeric_model(swept_bike,
+                                                               backend=args.backend))
+    q, u = bike.q, bike.u
+    steady = {qi: 0 for i, qi in enumerate(q) if i != 4}
+    steady.update({u[3]: 0, u[6]: 0, u[5]: -v / bike.rear_wheel.radius})
+    grid = np.linspace(0.0, 10.0, args.sweep)
+    answer, (s_wall, s_cpu) = clock(lambda: nhham.linearize(
+        swept_bike, steady=steady, model=model, sweep=("v", grid)))
+    swept = answer.payload["sweep"]
+    print()
+    print(f"linearize(..., sweep=('v', {args.sweep} values in [0, 10])): "
+          f"{s_wall:.2f} s wall, {s_cpu:.2f} s CPU (before it, from_mechanics with v: "
+          f"{wall:.2f} s wall, {cpu:.2f} s CPU; numeric_model: {m_wall:.2f} s, {m_cpu:.2f} s); "
+          f"stable at {sum(1 for s in swept.stable if s)} of {len(grid)}")
+    for c, paper in zip(swept.crossings, (WEAVE, CAPSIZE)):
+        print(f"  crossing at v = {c.value:.11f} ({c.kind}); paper {paper:.11f}, "
+              f"difference {abs(c.value - paper):.1e}")
 
 
 if __name__ == "__main__":
