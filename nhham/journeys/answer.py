@@ -118,8 +118,8 @@ def as_scene(scene_or_system, *, initial=None, steady=None, **load_options):
         The ``[initial]`` and ``[steady]`` tables, keyed by nhham's names, dynamicsymbols
         ``q(t)``, ``q(t).diff(t)`` or a mechanics model's speeds ``u(t)``
         (:mod:`nhham.system.state_keys`); only the independent entries are needed, the
-        others are solved (a steady motion's inputs are given too). They replace the
-        scene's.
+        others are solved (a steady motion's at any parameter values it is asked at; its
+        inputs are given too). They replace the scene's.
     **load_options
         For :func:`nhham.load_scene` when a path is given (e.g. ``values=``; for a
         mechanics System, ``values`` are its parameters' values).
