@@ -118,8 +118,8 @@ def as_scene(scene_or_system, *, initial=None, steady=None, **load_options):
         The ``[initial]`` and ``[steady]`` tables, keyed by nhham's names, dynamicsymbols
         ``q(t)``, ``q(t).diff(t)`` or a mechanics model's speeds ``u(t)``
         (:mod:`nhham.system.state_keys`); only the independent entries are needed, the
-        others are solved (a steady motion's inputs are given too). They replace the
-        scene's.
+        others are solved (a steady motion's at any parameter values it is asked at; its
+        inputs are given too). They replace the scene's.
     **load_options
         For :func:`nhham.load_scene` when a path is given (e.g. ``values=``; for a
         mechanics System, ``values`` are its parameters' values).
@@ -178,21 +178,11 @@ def _initial_table(system, mapping, speeds) -> dict:
 
 def _steady_table(system, mapping, speeds):
     """A [steady] given in Python: the entries given (expressions in the parameters), the
-    others solved at the parameters' values; the inputs' values passed through."""
-    from types import MappingProxyType
+    others solved at the parameters' values, and again at others
+    (:func:`~nhham.system.state_keys.steady_table`); the inputs' values passed through."""
+    from nhham.system.state_keys import steady_table
 
-    import sympy as sp
-
-    from nhham.system.state_keys import completed_state, state_entries
-    from nhham.system.steady import SteadyState
-
-    given = state_entries(system, mapping, speeds=speeds, where="steady", inputs=True)
-    names = {u.name for u in system.inputs}
-    state, _ = completed_state(system, {k: v for k, v in given.items() if k not in names},
-                               where="steady")
-    exprs = {k: given.get(k, sp.Float(v)) for k, v in state.items()}
-    exprs.update({k: v for k, v in given.items() if k in names})
-    return SteadyState(MappingProxyType(exprs))
+    return steady_table(system, mapping, speeds=speeds)
 
 
 def quiet_steps(steps=None):

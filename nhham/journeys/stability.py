@@ -61,7 +61,8 @@ def linearize(scene, *args, method: str = "auto", sweep=None, model=None, steps=
         The ``[steady]`` table, replacing the scene's (a System's: its only one), keyed by
         nhham's names, dynamicsymbols ``q(t)``, ``q(t).diff(t)`` or the speeds of the
         mechanics model it came from; only the independent entries, the others solved at
-        the parameter values (:func:`~nhham.journeys.answer.as_scene`).
+        the parameter values, and again at each value of a ``sweep``
+        (:func:`~nhham.system.state_keys.steady_table`).
 
     Returns
     -------

@@ -112,11 +112,13 @@ def solved_text(values, solved) -> str:
 
 # ------------------------------------------------------------------ completion
 def complete_initial(system: "System", data: InitialData,
-                     values: Mapping | None = None) -> tuple[dict, tuple]:
+                     values: Mapping | None = None, *, where: str = "initial"
+                     ) -> tuple[dict, tuple]:
     """Every coordinate and velocity: the given values, the others solved.
 
     ``values`` (parameter name -> value) replace the system's parameter values (the
-    start at another point of a study, as ``--set`` gives it).
+    start at another point of a study, as ``--set`` gives it). ``where`` names the table
+    in messages and error keys (``"steady"`` for a steady motion given in Python).
 
     Returns
     -------
@@ -138,43 +140,44 @@ def complete_initial(system: "System", data: InitialData,
                    if p.name in given_values})
     if system.time is not None:  # a scene's runs start at t = 0
         params.setdefault(system.time, sp.Float(0))
-    values = {name: _number(name, expr, params) for name, expr in data.given.items()}
+    values = {name: _number(name, expr, params, where)
+              for name, expr in data.given.items()}
     q_names = [q.name for q in system.coordinates]
     v_names = [v.name for v in system.velocities]
     missing_q = [n for n in q_names if n not in values]
     missing_v = [n for n in v_names if n not in values]
     if missing_q:
-        values.update(_coordinates(system, values, missing_q, data.guesses, params))
+        values.update(_coordinates(system, values, missing_q, data.guesses, params, where))
     if missing_v:
-        values.update(_velocities(system, values, missing_v, params, data.guesses))
+        values.update(_velocities(system, values, missing_v, params, data.guesses, where))
     order = q_names + v_names
     return {n: values[n] for n in order}, tuple(n for n in order
                                                 if n in missing_q or n in missing_v)
 
 
-def _number(name, expr, params) -> float:
+def _number(name, expr, params, where) -> float:
     missing = sorted(s.name for s in expr.free_symbols if s not in params)
     if missing:
         raise MissingParameterValueError(
-            f"initial.{name}: no value for parameter {', '.join(map(repr, missing))} "
-            f"(give it in parameters or with --set)", key=f"initial.{name}")
+            f"{where}.{name}: no value for parameter {', '.join(map(repr, missing))} "
+            f"(give it in parameters or with --set)", key=f"{where}.{name}")
     try:
         value = complex(expr.xreplace(params).evalf())
     except (TypeError, ValueError, OverflowError, ZeroDivisionError):
         value = complex(math.nan)
     if value.imag or not math.isfinite(value.real):
-        raise InputError(f"initial.{name}: {expr} is not a finite real number at the "
-                         f"parameter values", key=f"initial.{name}")
+        raise InputError(f"{where}.{name}: {expr} is not a finite real number at the "
+                         f"parameter values", key=f"{where}.{name}")
     return value.real
 
 
-def _coordinates(system, values, missing, guesses, params) -> dict:
+def _coordinates(system, values, missing, guesses, params, where) -> dict:
     """The coordinates left out, by Newton's method on the holonomic constraints."""
     names = ", ".join(missing)
     if not system.holonomic:
-        raise InputError(f"initial: no value for {names}: only coordinates that holonomic "
+        raise InputError(f"{where}: no value for {names}: only coordinates that holonomic "
                          f"constraints determine may be left out, and the scene has none",
-                         key="initial")
+                         key=where)
     unknowns = [sp.Symbol(n) for n in missing]
     known = dict(params)
     known.update({sp.Symbol(n): sp.Float(v) for n, v in values.items()})
@@ -183,12 +186,12 @@ def _coordinates(system, values, missing, guesses, params) -> dict:
     eqs = [(lab, g) for lab, g in labelled if g.free_symbols & set(unknowns)]
     rest = sorted(s.name for _, g in eqs for s in g.free_symbols if s not in unknowns)
     if rest:  # a velocity cannot be in a holonomic constraint: a value is missing
-        raise InputError(f"initial: the holonomic constraints need {', '.join(rest)} to "
-                         f"solve {names}", key="initial")
+        raise InputError(f"{where}: the holonomic constraints need {', '.join(rest)} to "
+                         f"solve {names}", key=where)
     if len(eqs) < len(missing):
-        raise InputError(f"initial: {names} left out, but the holonomic constraints fix at "
+        raise InputError(f"{where}: {names} left out, but the holonomic constraints fix at "
                          f"most {len(eqs)} of them: give a value for the others",
-                         key="initial")
+                         key=where)
     x, r, jac = _newton([g for _, g in eqs], unknowns,
                         [guesses.get(n, 0.0) for n in missing])
     start = ", ".join(f"{n} = {guesses.get(n, 0.0):g}" for n in missing)
@@ -196,10 +199,10 @@ def _coordinates(system, values, missing, guesses, params) -> dict:
             np.max(np.abs(r)) > _TOL * max(1.0, float(np.max(np.abs(x)))):
         at = f" (residual {float(np.max(np.abs(r))):.3g})" if np.all(np.isfinite(r)) else ""
         raise InconsistentInitialDataError(
-            f"initial: Newton's method from {start} found no point of the holonomic "
+            f"{where}: Newton's method from {start} found no point of the holonomic "
             f"constraints for {names}{at}: give a starting point, e.g. "
-            f"{missing[0]} = {{ guess = 1.0 }}, or the values", key="initial")
-    _require_determined(jac, missing, "the holonomic constraints", "the point found")
+            f"{missing[0]} = {{ guess = 1.0 }}, or the values", key=where)
+    _require_determined(jac, missing, "the holonomic constraints", "the point found", where)
     return {n: float(v) for n, v in zip(missing, x)}
 
 
@@ -235,7 +238,7 @@ def _velocity_rows(system):
             if lab.startswith("constraints[") or lab.endswith("(time derivative)")]
 
 
-def _velocities(system, values, missing, params, guesses=None) -> dict:
+def _velocities(system, values, missing, params, guesses, where) -> dict:
     """The velocities left out, from the velocity-level constraints: exactly where they
     enter linearly, by Newton's method from the user's guesses where a nonlinear
     (Chetaev) constraint has them inside (its roots are branches: the guess picks one)."""
@@ -252,13 +255,13 @@ def _velocities(system, values, missing, params, guesses=None) -> dict:
         unguessed = [n for n in inside if n not in guesses]
         if unguessed:
             one = len(unguessed) == 1
-            raise InputError(f"initial: {', '.join(unguessed)} {'enters' if one else 'enter'} "
+            raise InputError(f"{where}: {', '.join(unguessed)} {'enters' if one else 'enter'} "
                              f"{lab} nonlinearly (a nonlinear constraint may have several "
                              f"roots): give {'its value' if one else 'their values'} or a "
                              f"starting point for Newton's method, e.g. "
-                             f"{unguessed[0]} = {{ guess = 1.0 }}", key="initial")
+                             f"{unguessed[0]} = {{ guess = 1.0 }}", key=where)
         if inside:
-            return _velocities_by_newton(rows, at, missing, unknowns, guesses)
+            return _velocities_by_newton(rows, at, missing, unknowns, guesses, where)
     A = np.array([[float(sp.diff(e, u)) for u in unknowns] for e in at],
                  dtype=float).reshape(len(rows), len(unknowns))
     b = np.array([float(e.xreplace(zero)) for e in at], dtype=float)
@@ -274,10 +277,10 @@ def _velocities(system, values, missing, params, guesses=None) -> dict:
         free = [n for j, n in enumerate(missing) if np.any(np.abs(vt[rank:, j]) > 1e-8)]
         one = len(free) == 1
         raise InputError(
-            f"initial: {', '.join(free)} {'is' if one else 'are'} not fixed by the "
+            f"{where}: {', '.join(free)} {'is' if one else 'are'} not fixed by the "
             f"constraints and the velocities given: give "
             + ("its value" if one else f"values for {len(missing) - rank} of them")
-            + _related(related), key="initial")
+            + _related(related), key=where)
     # LU where A is square (full rank here): a velocity that the constraints fix at 0 comes
     # out as 0 (the roller racer's y_dot = 0 at theta = 0 was 2.7e-17 from the SVD of lstsq)
     x = (np.linalg.solve(A, -b) if A.shape[0] == A.shape[1]
@@ -286,13 +289,13 @@ def _velocities(system, values, missing, params, guesses=None) -> dict:
     bad = [(lab, float(r)) for (lab, _), r in zip(rows, residual) if abs(r) > _TOL * scale]
     if bad:
         raise InconsistentInitialDataError(
-            f"initial: the velocities given over-determine {', '.join(missing)}: "
+            f"{where}: the velocities given over-determine {', '.join(missing)}: "
             + "; ".join(f"{lab} = {r:.6g}" for lab, r in bad) + " with them solved"
-            + (_related(related) or "; leave one more velocity out"), key="initial")
+            + (_related(related) or "; leave one more velocity out"), key=where)
     return {n: float(v) + 0.0 for n, v in zip(missing, x)}   # + 0.0: no "-0"
 
 
-def _velocities_by_newton(rows, at, missing, unknowns, guesses) -> dict:
+def _velocities_by_newton(rows, at, missing, unknowns, guesses, where) -> dict:
     names = ", ".join(missing)
     x, r, jac = _newton(at, unknowns, [guesses.get(n, 0.0) for n in missing])
     start = ", ".join(f"{n} = {guesses.get(n, 0.0):g}" for n in missing)
@@ -300,21 +303,21 @@ def _velocities_by_newton(rows, at, missing, unknowns, guesses) -> dict:
     if not np.all(np.isfinite(r)) or np.max(np.abs(r), initial=0.0) > _TOL * scale:
         worst = int(np.nanargmax(np.abs(r))) if np.any(np.isfinite(r)) else 0
         raise InconsistentInitialDataError(
-            f"initial: Newton's method from {start} found no velocities {names} on the "
+            f"{where}: Newton's method from {start} found no velocities {names} on the "
             f"constraints ({rows[worst][0]} not met): give another guess or the values",
-            key="initial")
-    _require_determined(jac, missing, "the constraints", "the velocities found")
+            key=where)
+    _require_determined(jac, missing, "the constraints", "the velocities found", where)
     return {n: float(v) for n, v in zip(missing, x)}
 
 
-def _require_determined(jac, missing, which, where) -> None:
+def _require_determined(jac, missing, which, at, where) -> None:
     """Refuse values Newton's method found where the equations' Jacobian in them is
     singular (they are not determined there)."""
     if np.linalg.matrix_rank(jac, tol=_TOL * max(1.0, float(np.max(np.abs(jac))))) < \
             len(missing):
-        raise InputError(f"initial: {which} do not determine {', '.join(missing)} at "
-                         f"{where} (their Jacobian in them is singular there): give a "
-                         f"value for one of them", key="initial")
+        raise InputError(f"{where}: {which} do not determine {', '.join(missing)} at "
+                         f"{at} (their Jacobian in them is singular there): give a "
+                         f"value for one of them", key=where)
 
 
 def _related(related) -> str:

@@ -29,7 +29,7 @@ from nhham.errors import InputError
 from nhham.system.expressions import parse_expression
 from nhham.system.initial_solve import InitialData, complete_initial
 
-__all__ = ["state_entries", "completed_state", "as_system"]
+__all__ = ["state_entries", "completed_state", "steady_table", "as_system"]
 
 
 def state_entries(system, mapping: Mapping, *, speeds: Mapping | None = None,
@@ -99,7 +99,65 @@ def completed_state(system, mapping: Mapping, *, speeds: Mapping | None = None,
     """
     given = state_entries(system, mapping, speeds=speeds, where=where)
     return complete_initial(system, InitialData(MappingProxyType(given),
-                                                MappingProxyType({})))
+                                                MappingProxyType({})), where=where)
+
+
+def steady_table(system, mapping: Mapping, *, speeds: Mapping | None = None):
+    """A steady motion from its independent entries: a
+    :class:`~nhham.system.steady.SteadyState` whose given entries keep their expressions
+    in the parameters and whose other entries are solved at the parameter values, and
+    solved again at any others (its ``solve``: a swept parameter moves the motion as the
+    entries given say, not as the values solved at the first point would).
+
+    Parameters
+    ----------
+    system : System
+    mapping : mapping
+        As for :func:`state_entries` (with the inputs' steady values).
+    speeds : mapping, optional
+        As for :func:`state_entries`.
+
+    Returns
+    -------
+    SteadyState
+
+    Raises
+    ------
+    InputError
+        As :func:`completed_state`, naming the ``steady`` table.
+
+    Examples
+    --------
+    A bead on the line y' = k x' moving at x' = c: y' = k c solved, and again at c = 2.
+
+    >>> from nhham import System
+    >>> bead = System(["x", "y"], "(x_dot**2 + y_dot**2)/2", ["y_dot - k*x_dot"],
+    ...               parameters={"k": 3.0, "c": 1.0})
+    >>> steady = steady_table(bead, {"x": 0, "y": 0, "x_dot": "c"})
+    >>> steady.values({"k": 3.0, "c": 1.0})["y_dot"], steady.values({"k": 3.0, "c": 2.0})["y_dot"]
+    (3.0, 6.0)
+    """
+    from nhham.system.steady import SteadyState
+
+    given = state_entries(system, mapping, speeds=speeds, where="steady", inputs=True)
+    names = {u.name for u in system.inputs}
+    state_given = {k: v for k, v in given.items() if k not in names}
+    state, solved = completed_state(system, state_given, where="steady")
+    exprs = {k: given.get(k, sp.Float(v)) for k, v in state.items()}
+    exprs.update({k: v for k, v in given.items() if k in names})
+    if not solved:
+        return SteadyState(MappingProxyType(exprs))
+    # Newton's method at other values starts from the point solved here
+    data = InitialData(MappingProxyType(state_given),
+                       MappingProxyType({n: state[n] for n in solved}))
+    base = {p.name: float(v) for p, v in system.parameter_values.items()}
+
+    def solve(parameters: Mapping[str, float]) -> Mapping[str, float]:
+        if all(float(parameters.get(k, v)) == v for k, v in base.items()):
+            return state
+        return complete_initial(system, data, parameters, where="steady")[0]
+
+    return SteadyState(MappingProxyType(exprs), solve=solve)
 
 
 def as_system(thing, values=None) -> tuple:

@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import difflib
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import cached_property
 from types import MappingProxyType
 from typing import Callable, Mapping
@@ -47,9 +47,20 @@ class SteadyState:
     ----------
     expressions : mapping of str to sympy.Expr
         State name -> value, in the order coordinates, velocities.
+    solve : callable or None
+        For a table whose entries were partly solved (a steady motion given in Python by
+        its independent entries, :func:`nhham.system.state_keys.steady_table`):
+        ``{parameter: value} -> {state name: float}``, the given entries evaluated and
+        the others solved again at those values, so that the motion moves with a swept
+        parameter as the user's entries say (``expressions`` then holds the solved
+        entries' values at the system's parameter values). Its family's tangents are
+        not formed (:meth:`family` is empty): a neighbouring steady motion the chart
+        does not remove stays a zero eigenvalue.
     """
 
     expressions: Mapping[str, sp.Expr]
+    solve: Callable[[Mapping[str, float]], Mapping[str, float]] | None = field(
+        default=None, compare=False, repr=False)
 
     def values(self, parameters: Mapping[str, float]) -> dict:
         """The state as ``{name: float}`` at the given parameter values.
@@ -66,8 +77,12 @@ class SteadyState:
         ParseError
             An entry is not a finite real number at these values.
         """
+        solved = {} if self.solve is None else self.solve(parameters)
         out = {}
         for name, expr in self.expressions.items():
+            if name in solved:
+                out[name] = float(solved[name])
+                continue
             if name in self._numbers:  # a number: the same at every parameter value
                 out[name] = self._numbers[name]
                 continue
@@ -95,6 +110,8 @@ class SteadyState:
         """
         shapes = {np.shape(v) for v in parameters.values()}
         shape = np.broadcast_shapes(*shapes) if shapes else ()
+        if self.solve is not None:
+            return self._arrays_by_point(parameters, shape)
         out = {}
         for name, expr in self.expressions.items():
             if name in self._numbers:
@@ -121,10 +138,28 @@ class SteadyState:
                                    modules="numpy"))
                 for name, e in self.expressions.items() if e.free_symbols}
 
+    def _arrays_by_point(self, parameters: Mapping, shape) -> dict:
+        """:meth:`arrays` of a table with solved entries: :meth:`values` at each point."""
+        from nhham.errors import NhhamError
+
+        every = {k: np.broadcast_to(np.asarray(v, dtype=float), shape)
+                 for k, v in parameters.items()}
+        out = {name: np.full(shape, np.nan) for name in self.expressions}
+        for index in np.ndindex(shape):
+            try:
+                point = self.values({k: float(v[index]) for k, v in every.items()})
+            except NhhamError:   # NaN: the caller says which points those are
+                continue
+            for name, value in point.items():
+                out[name][index] = value
+        return out
+
     def family(self, parameters: Mapping[str, float]) -> dict:
         """Tangents of the steady family: ``{p: {name: d value / d p}}`` for every
         parameter p the entries use, at the given parameter values (exact
-        derivatives, evaluated)."""
+        derivatives, evaluated); empty for a table with solved entries (``solve``)."""
+        if self.solve is not None:
+            return {}
         return {p: {name: 0.0 if d == 0 else _at(name, d, f, parameters)
                     for name, (d, f) in tangent.items()}
                 for p, tangent in self._derivatives.items()}

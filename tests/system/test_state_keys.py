@@ -95,3 +95,75 @@ def test_linearize_takes_a_steady_motion_by_the_users_names():
     eig = sorted(complex(re, im).imag for re, im in answer.data["eigenvalues"]
                  if abs(complex(re, im)) > 1e-9)
     assert eig == pytest.approx([-math.sqrt(2), math.sqrt(2)], abs=1e-12)
+
+
+def sleigh_system():
+    """The Chaplygin sleigh written as SymBRiM writes its bicycle: a
+    ``sympy.physics.mechanics.System`` with speeds u_i = q_i' (kdes u_i - q_i'), the
+    rolling constraint in the speeds (the contact P's velocity along the blade's normal),
+    the parameters' values keyed by their Symbols. Contact P at (x, y), heading theta,
+    mass centre G at a ahead of P, mass m, inertia I about G."""
+    x, y, th = me.dynamicsymbols("x y theta")
+    u1, u2, u3 = me.dynamicsymbols("u1:4")
+    m, I, a = sp.symbols("m I a")
+    N, O = me.ReferenceFrame("N"), me.Point("O")
+    B = N.orientnew("B", "Axis", (th, N.z))
+    B.set_ang_vel(N, u3 * N.z)
+    P = O.locatenew("P", x * N.x + y * N.y)
+    P.set_vel(N, u1 * N.x + u2 * N.y)
+    G = P.locatenew("G", a * B.x)
+    body = me.RigidBody("sleigh", G, B, m, (me.inertia(B, 0, 0, I), G))
+    system = me.System(N, O)
+    system.add_coordinates(x, y, th)
+    system.add_speeds(u1, u2, u3)
+    system.add_kdes(u1 - x.diff(t), u2 - y.diff(t), u3 - th.diff(t))
+    system.add_bodies(body)
+    system.add_nonholonomic_constraints(P.vel(N).dot(B.y))
+    return system, (x, y, th), (u1, u2, u3), {m: 2.0, I: 0.5, a: 0.5}
+
+
+def test_linearize_takes_a_mechanics_systems_speeds_as_its_steady_motion():
+    """By hand: in the blade's frame (forward speed v of P, rate w = theta')
+    m v' = m a w^2 and (I + m a^2) w' = -m a v w, so straight-ahead motion at v0 has,
+    besides the neutral directions, the one eigenvalue -m a v0 / (I + m a^2); with
+    v0 = u1 = 3 a = 1.5 (an expression in the model's Symbol a), m = 2, I = 0.5,
+    a = 0.5: -1.5. The speed u2 = y' is solved from the constraint."""
+    system, (x, y, th), (u1, u2, u3), values = sleigh_system()
+    a = sp.Symbol("a")
+    sleigh = nhham.from_mechanics(system, parameters=values)
+    assert set(sleigh.speeds) == {u1, u2, u3}
+    model = nhham.numeric_model(sleigh, backend="numpy")
+    answer = nhham.linearize(sleigh, steady={x: 0, y: 0, th: 0, u1: 3 * a, u3: 0},
+                             model=model)
+    nonzero = [complex(re, im) for re, im in answer.data["eigenvalues"]
+               if abs(complex(re, im)) > 1e-9]
+    assert nonzero == [pytest.approx(-1.5, abs=1e-9)]
+    assert answer.data["stable"] is True        # Re < 0: asymptotically stable
+
+
+def test_a_swept_parameter_moves_the_entries_solved_from_the_given_ones():
+    """The sleigh heading theta = pi/4 with x' = u1 = c given: y' = x' (the blade's
+    normal is (-1, 1)/sqrt 2) is solved, and the forward speed is v0 = sqrt 2 c, so by
+    the formula above the eigenvalue is -m a v0 / (I + m a^2) = -sqrt(2) c. The chart
+    holds y' (not the given x'): at each swept c it must be solved again from x' = c
+    (before, y' kept its value at c = 1 and the three points gave -sqrt 2 alike)."""
+    system, (x, y, th), (u1, u2, u3), values = sleigh_system()
+    c = sp.Symbol("c")
+    sleigh = nhham.from_mechanics(system, parameters={**values, c: 1.0})
+    model = nhham.numeric_model(sleigh, backend="numpy")
+    answer = nhham.linearize(sleigh, steady={x: 0, y: 0, th: sp.pi / 4, u1: c, u3: 0},
+                             model=model, sweep=("c", [0.5, 1.0, 2.0]))
+    assert "y_dot" in answer.data["chart"] and "x_dot" not in answer.data["chart"]
+    swept = answer.payload["sweep"]
+    assert swept.coordinates == ("theta_dot",)
+    assert [complex(e[0]) for e in swept.eigenvalues] == [
+        pytest.approx(-math.sqrt(2) * cv, abs=1e-9) for cv in (0.5, 1.0, 2.0)]
+
+
+def test_a_steady_table_left_short_is_named_steady():
+    """Errors of a steady motion given in Python name the steady table, not [initial]."""
+    system, (x, y, th), (u1, u2, u3), values = sleigh_system()
+    sleigh = nhham.from_mechanics(system, parameters=values)
+    with pytest.raises(InputError, match=r"^steady: no value for x") as caught:
+        as_scene(sleigh, steady={y: 0, th: 0, u1: 1, u3: 0})
+    assert caught.value.key == "steady"
