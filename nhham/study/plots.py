@@ -170,8 +170,9 @@ def plot_stability_map(ds, ax=None):
 
 
 def _verdict_bands(ax, x, verdict) -> None:
-    """Stretches of one verdict tinted as the map's cells: each point's stretch reaches
-    halfway to its neighbours; unstable ones stay untinted (the curve is above 0 there)."""
+    """Stretches of one verdict tinted as the map's cells (the unstable ones too, so that
+    every colour is in the legend): each point's stretch reaches halfway to its
+    neighbours."""
     order = np.argsort(x)
     x, verdict = np.asarray(x, dtype=float)[order], verdict[order]
     mid = (x[1:] + x[:-1]) / 2
@@ -182,7 +183,7 @@ def _verdict_bands(ax, x, verdict) -> None:
         if i < len(x) and verdict[i] == verdict[start]:
             continue
         value = verdict[start]
-        if value in (1, -1):
+        if value in (1, 0, -1):
             style = VERDICT_STYLE[int(value)]
             ax.axvspan(edges[start], edges[i], color=style["fill"], lw=0, zorder=0,
                        label=style["label"] if value not in labelled else "_nolegend_")

@@ -130,9 +130,10 @@ def test_a_map_without_crossings_labels_its_tint_without_warning():
 
 
 def test_one_parameter_bands_reach_halfway_to_the_neighbours():
-    """v = 1..5 with verdicts unstable, stable, stable, undecided, unstable: the stable
-    band spans 1.5..3.5 and the undecided one 3.5..4.5 (midpoints); the crossing at 1.5
-    is drawn in its kind's words with its value."""
+    """v = 1..5 with verdicts unstable, stable, stable, undecided, unstable: the unstable
+    bands span 1..1.5 and 4.5..5, the stable one 1.5..3.5 and the undecided one 3.5..4.5
+    (midpoints), each verdict once in the legend; the crossing at 1.5 is drawn in its
+    kind's words with its value."""
     ds = xr.Dataset({"done": (("v",), np.ones(5, dtype=bool)),
                      "verdict": (("v",), np.array([0, 1, 1, -1, 0], dtype=np.int8)),
                      "spectral_abscissa": (("v",), np.array([1.0, -1, -1, 0, 1])),
@@ -143,10 +144,12 @@ def test_one_parameter_bands_reach_halfway_to_the_neighbours():
         warnings.simplefilter("error")
         fig = plot_stability_map(ds)
     ax = fig.axes[0]
-    spans = {p.get_label(): p.get_x() for p in ax.patches}
-    assert set(spans) == {"stable (every Re < 0)", "undecided or not linearised"}
+    spans = {p.get_label() for p in ax.patches} - {"_nolegend_"}
+    assert spans == {"stable (every Re < 0)", "undecided or not linearised",
+                     "unstable (some Re > 0)"}
     bands = sorted((p.get_x(), p.get_x() + p.get_width()) for p in ax.patches)
-    assert bands == [pytest.approx((1.5, 3.5)), pytest.approx((3.5, 4.5))]
+    assert bands == [pytest.approx((1.0, 1.5)), pytest.approx((1.5, 3.5)),
+                     pytest.approx((3.5, 4.5)), pytest.approx((4.5, 5.0))]
     assert "complex pair crosses the imaginary axis (v = 1.5)" in legend_texts(ax)
 
 
