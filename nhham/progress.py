@@ -27,7 +27,13 @@ import time
 from contextlib import contextmanager
 from typing import Callable, Iterator
 
-__all__ = ["reporting", "part", "current"]
+from nhham.errors import BudgetExceeded
+
+__all__ = ["reporting", "part", "current", "SLOW"]
+
+#: Seconds after which a part that is short more often than not is shown on a terminal
+#: (``part(..., after=SLOW)``): a long run is announced, a quick one leaves no line.
+SLOW = 1.0
 
 _STEPS: contextvars.ContextVar = contextvars.ContextVar("nhham_steps", default=None)
 # The names of the parts open here, outermost first.
@@ -70,6 +76,10 @@ def part(what: str, note: str | Callable[[], str] = "", after: float = 0.0) -> I
             return
         with _reported(steps, what, opened, note, after):
             yield
+    except BudgetExceeded as exc:  # the innermost part it leaves is where it ran out
+        if not exc.part:
+            exc.part = current()
+        raise
     finally:
         _OPEN.reset(token)
 
