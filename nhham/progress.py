@@ -113,11 +113,12 @@ def _reported(steps, what: str, opened: tuple, note, after: float) -> Iterator[N
         timer = threading.Timer(after, lambda: steps.show(what, text(), depth))
         timer.daemon = True
         timer.start()
-    start = time.perf_counter()
+    start, at = time.perf_counter(), len(steps.records)
     try:
         yield
     finally:
         if timer is not None:
             timer.cancel()
         steps.current = outer
-    steps.records.append(("  " * (depth + 1) + what, time.perf_counter() - start))
+    # before the parts it contains, as a step is
+    steps.records.insert(at, ("  " * (depth + 1) + what, time.perf_counter() - start))

@@ -346,6 +346,7 @@ class _Search:
             if remaining_time() <= 0:  # the search's own budget: cut there
                 raise
             self.cut.append((f"{where}: {lower.describe()}",
+                             "a budget ran out" if share is None else
                              f"its share of the search's time, {share:.3g} s, ran out"))
             return
         self.clock.found(len(comps))
