@@ -282,8 +282,8 @@ class _Search:
         left = remaining_time()
         allowed = None if math.isinf(left) else left * (1 - REPORT_SHARE)
         why = (None if allowed is None else
-               f"the {allowed:.3g} s that the budget in force left it after the generic run "
-               f"ran out ({left - allowed:.2g} s more kept for the report)")
+               f"its {allowed:.3g} s ran out: the budget in force left {left:.3g} s after "
+               f"the generic run, {left - allowed:.2g} s of them kept for the report")
         try:
             if allowed is not None and allowed <= 0:
                 raise BudgetExceeded("the budget ran out with the generic run")

@@ -204,19 +204,17 @@ class SearchReport:
             return None
         left = []
         if self.pending:
-            left.append(f"{len(self.pending)} exceptional set{'s' if len(self.pending) != 1 else ''}"
-                        " found but not examined ("
-                        + "; ".join(", ".join(f"{short(e)} = 0" for e in eqs)
-                                    for eqs in self.pending[:4])
-                        + ("; ..." if len(self.pending) > 4 else "") + ")")
+            left.append(f"{len(self.pending)} exceptional set"
+                        f"{'s' if len(self.pending) != 1 else ''} found but not examined")
         if self.unsolved:
             left.append(f"{len(self.unsolved)} lower-dimensional search"
                         f"{'es' if len(self.unsolved) != 1 else ''} not made")
-        return ("the search for exceptional cases was cut: "
-                + "; ".join(f"{what} ({why})" for what, why in self.cut)
-                + ". The generic verdict is complete; the cases listed are those found "
-                "before the cut" + (": " + "; ".join(left) if left else "")
-                + ". Allow more time with a larger budget (the command's --budget)")
+        what, why = self.cut[0]
+        more = f" and {len(self.cut) - 1} more" if len(self.cut) > 1 else ""
+        return (f"the search for exceptional cases was cut during '{short(what, 120)}'{more} "
+                f"({why}): the generic verdict is complete, the cases listed are those "
+                f"found before the cut" + (f" ({', '.join(left)})" if left else "")
+                + "; allow more time with a larger budget (the command's --budget)")
 
 
 @dataclass(frozen=True)

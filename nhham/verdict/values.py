@@ -23,7 +23,7 @@ from nhham.lagrangian.exceptional import (
 )
 from nhham.lagrangian.engine import Policy, policy_of
 from nhham.settings import SEED, check_options
-from nhham.progress import part
+from nhham.progress import SLOW, part
 from nhham.verdict.results import MAX_DEPTH, NEAR, ValuesVerdict, Verdict, exact_value
 from nhham.verdict.substitution import branches, compose, rebuild
 
@@ -166,13 +166,13 @@ def classified(system, *, policy, points):
     Returns (Verdict, ExceptionalData): the data evaluate, when asked, what each generic
     decision assumed nonzero (:mod:`nhham.lagrangian.exceptional`).
     """
-    with part("constraint algorithm on TQ (stages, ranks on M_k)"):
+    with part("constraint algorithm on TQ (stages, ranks on M_k)", after=SLOW):
         analysis = analyze_constraints(system, policy=policy)
-    with part("integrability (Frobenius)"):
+    with part("integrability (Frobenius)", after=SLOW):
         integrable = analysis.integrable
     cls = None
     if analysis.status != "inconsistent":
-        with part("first and second class on T*Q (brackets of the final constraints)"):
+        with part("first and second class on T*Q (brackets of the final constraints)", after=SLOW):
             cls = classify_constraints(analysis, policy=policy)
     # The second-class set the classification chose (for generic parameters when it
     # decided symbolically): at values where B drops rank its minor is the datum.
