@@ -157,8 +157,10 @@ def _add_classify_options(p) -> None:
                    help="with --parametric: comma-separated parameters kept symbolic, the "
                         "others held at the scene's values ('all': every one); default: "
                         "those in L and the constraints, the ones that can change the "
-                        "verdict where C is regular (not those only in forces, dissipation "
-                        "or control laws)")
+                        "verdict where C is regular, and those in the forces or the "
+                        "dissipation where C is singular in a verdict found (the runs "
+                        "again with them, when the --budget leaves the time; else a "
+                        "warning with the estimate); never those only in control laws")
 
 
 def _add_derive_options(p) -> None:
