@@ -27,7 +27,8 @@ import sympy as sp
 from nhham.budget import remaining_time, time_budget
 from nhham.errors import BudgetExceeded, InputError
 from nhham.lagrangian.engine import Policy, policy_of
-from nhham.lagrangian.exceptional import POINTS, split_components
+from nhham.lagrangian.components import split_components
+from nhham.lagrangian.exceptional import POINTS
 from nhham.progress import SLOW, part
 from nhham.settings import SEED, check_options
 from nhham.system.expressions import short

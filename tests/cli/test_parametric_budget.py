@@ -108,7 +108,7 @@ def test_a_lower_dimensional_search_cut_by_its_share_leaves_the_others(monkeypat
     """mu = (0, 1, b): its maximal minors 1 and b have no common zero, a search of
     codimension > 1 (a Groebner basis, [1]) that finds nothing. Cut by its share, it is
     named; the cases of codimension 1 (a, b - 1, b + 1) are all there."""
-    from nhham.lagrangian.exceptional import LowerDimensional
+    from nhham.lagrangian.components import LowerDimensional
 
     def planted(self):
         raise BudgetExceeded("the budget of 1 s ran out")
