@@ -16,8 +16,6 @@ b - 1 = 0, b + 1 = 0 (C = 0).
 
 from __future__ import annotations
 
-import contextlib
-import io
 import json
 import time
 
@@ -26,18 +24,9 @@ import jsonschema
 import nhham
 from nhham.errors import BudgetExceeded
 from tests.cli.conftest import EXAMPLES
+from tests.cli.conftest import run_fresh as run
 
 SCENE = str(EXAMPLES / "parametric_null_constraint.toml")
-
-
-def run(*argv):
-    """The command in-process (not cached: the tests plant an expiry)."""
-    from nhham.cli.main import main
-
-    out, err = io.StringIO(), io.StringIO()
-    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        rc = main(list(argv))
-    return rc, out.getvalue(), err.getvalue()
 
 
 def expire_at_call(monkeypatch, module, name, call):

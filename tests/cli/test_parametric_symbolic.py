@@ -20,7 +20,7 @@ from nhham import loads_scene
 from nhham.render.text import Steps
 from nhham.errors import InputError
 from nhham.verdict.parametric import classifying_parameters, parametric_classification
-from tests.cli.conftest import run_inprocess
+from tests.cli.conftest import run_fresh, run_inprocess
 
 SCENE = """name = "issue 11, forced"
 coordinates = ["q1", "q2", "q3"]
@@ -192,22 +192,10 @@ def test_keeping_it_symbolic_beyond_the_budget_is_said_with_the_estimate(damper,
     from nhham.verdict import parametric
 
     monkeypatch.setattr(parametric._Clock, "spent", lambda self: 5000.0)
-    rc, out, err = _uncached("classify", damper, "--parametric", "--json")
+    rc, out, err = run_fresh("classify", damper, "--parametric", "--json")
     assert rc == 0
     r = json.loads(out)
     assert r["result"]["held"] == {"c": 0.5} and r["result"]["cases"] == []
     (warning,) = [w for w in r["warnings"] if "c enters the forces" in w]
     assert "about 5000 s or more" in warning and "--symbolic c" in warning
 
-
-def _uncached(*argv):
-    """The command in-process, not cached (a test that plants something)."""
-    import contextlib
-    import io
-
-    from nhham.cli.main import main
-
-    out, err = io.StringIO(), io.StringIO()
-    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        rc = main(list(argv))
-    return rc, out.getvalue(), err.getvalue()
