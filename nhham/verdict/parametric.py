@@ -173,14 +173,18 @@ def _needed(system, opts) -> ParametricVerdict:
     # The runs again with them symbolic: at least the time these took.
     estimate, left = pv.search.seconds, remaining_time()
     room = left * (1 - REPORT_SHARE)
-    if not pv.search.complete or estimate > room:
+    held = f"{why}, but {'they were' if len(forced) > 1 else 'it was'} held: "
+    insist = ("; give a larger budget (--budget) or --symbolic "
+              + ",".join(p.name for p in first + tuple(forced)))
+    if not pv.search.complete:
+        return _with(pv, warnings=(f"{held}the runs with {names} held were already cut "
+                                   f"by the budget" + insist,))
+    if estimate > room:
         return _with(pv, warnings=(
-            f"{why}, but {'they were' if len(forced) > 1 else 'it was'} held: keeping "
-            f"{'them' if len(forced) > 1 else 'it'} symbolic means the runs again, about "
-            f"{estimate:.0f} s or more (the runs with {names} held took {estimate:.1f} s), "
-            f"and {max(room, 0):.0f} s of the budget {'is' if room >= 1 else 'was'} left "
-            f"for it; give a larger budget (--budget) or --symbolic "
-            + ",".join(p.name for p in first + tuple(forced)),))
+            f"{held}keeping {'them' if len(forced) > 1 else 'it'} symbolic means the runs "
+            f"again, about {estimate:.0f} s or more (the runs with {names} held took "
+            f"{estimate:.1f} s), and {max(room, 0):.0f} s of the budget "
+            f"{'is' if room >= 1 else 'was'} left for it" + insist,))
     cut = None
     try:
         with part(f"the runs again with {names} symbolic ({why})", f"about {estimate:.0f} s",
@@ -196,6 +200,8 @@ def _needed(system, opts) -> ParametricVerdict:
                                    f"by the budget ({cut}), so "
                                    f"{'they are' if len(forced) > 1 else 'it is'} held "
                                    f"below",))
+    again = dataclasses.replace(again, search=dataclasses.replace(
+        again.search, seconds=pv.search.seconds + again.search.seconds))
     return _with(again, notes=(f"{names} kept symbolic: {why}",))
 
 
@@ -206,8 +212,8 @@ def _with(pv, warnings=(), notes=()) -> ParametricVerdict:
 
 
 def _singular_verdicts(pv) -> list:
-    """Where C is singular: "generic" and the cases' conditions."""
-    out = ["generic"] if pv.generic.regular is False else []
+    """Where C is singular: "for generic parameters" and the cases' conditions."""
+    out = ["for generic parameters"] if pv.generic.regular is False else []
     return out + [" and ".join(f"{short(e)} = 0" for e in c.conditions)
                   for c in pv.cases if c.verdict.regular is False]
 
