@@ -44,7 +44,8 @@ def search_data(report) -> dict:
             "allowed_s": None if report.allowed is None else round(report.allowed, 3),
             "cut": [{"search": what, "why": why} for what, why in report.cut],
             "pending": [[expr_text(e) for e in eqs] for eqs in report.pending],
-            "unsolved": list(report.unsolved)}
+            "unsolved": list(report.unsolved),
+            "failed": [{"search": what, "why": error} for what, error in report.failed]}
 
 
 def parametric_text(title: str, pv, data: dict) -> str:
@@ -82,8 +83,10 @@ def parametric_text(title: str, pv, data: dict) -> str:
             f"{k} = {v}" for k, v in data["values"].items()) + f": {where}")
     lines += [f"note: {n}" for n in data["notes"]]
     if not pv.search.complete:  # the warning says it too; here beside the cases it limits
-        lines.append("search cut: " + "; ".join(f"{what} ({why})" for what, why in
-                                                 pv.search.cut))
+        if pv.search.cut:
+            lines.append("search cut: " + "; ".join(f"{what} ({why})" for what, why in
+                                                     pv.search.cut))
+        lines += [f"run failed: {what} ({error})" for what, error in pv.search.failed]
         lines += [f"  not examined: {', '.join(f'{c} = 0' for c in eqs)}"
                   for eqs in data["search"]["pending"]]
         lines += [f"  not searched: {where}" for where in pv.search.unsolved]

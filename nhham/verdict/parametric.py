@@ -177,8 +177,8 @@ def _needed(system, opts) -> ParametricVerdict:
     insist = ("; give a larger budget (--budget) or --symbolic "
               + ",".join(p.name for p in first + tuple(forced)))
     if not pv.search.complete:
-        return _with(pv, warnings=(f"{held}the runs with {names} held were already cut "
-                                   f"by the budget" + insist,))
+        return _with(pv, warnings=(f"{held}the runs with {names} held did not complete "
+                                   f"(see the search's warning)" + insist,))
     if estimate > room:
         return _with(pv, warnings=(
             f"{held}keeping {'them' if len(forced) > 1 else 'it'} symbolic means the runs "
@@ -282,6 +282,7 @@ class _Search:
         self.pending: dict = {}      # (id of the node, index) -> conditions, not examined
         self.lower: deque = deque()  # (node, LowerDimensional), solved last
         self.cut: list = []
+        self.failed: list = []
 
     def explore(self, root, data) -> SearchReport:
         """Follow the components of every run from the generic one's ``data``, within
@@ -312,8 +313,9 @@ class _Search:
         if self.cut and not self.pending and not unsolved and allowed is not None \
                 and allowed <= 0:
             unsolved = ["the exceptional sets of the generic run"]
-        return SearchReport(complete=not self.cut, allowed=allowed, cut=tuple(self.cut),
-                            pending=tuple(self.pending.values()), unsolved=tuple(unsolved))
+        return SearchReport(complete=not self.cut and not self.failed, allowed=allowed,
+                            cut=tuple(self.cut), pending=tuple(self.pending.values()),
+                            unsolved=tuple(unsolved), failed=tuple(self.failed))
 
     def expand(self, node, data) -> None:
         """The components of ``node``'s exceptional sets, followed (those of codimension
@@ -401,13 +403,21 @@ class _Search:
 
     def classify(self, spec, total, full, node, comp):
         """One case's verdict, recorded; (its node, its data) to follow, or None."""
-        with self.clock.run("run " + " and ".join(f"{short(e)} = 0" for e in full)):
+        name = "run " + " and ".join(f"{short(e)} = 0" for e in full)
+        with self.clock.run(name):
             try:
                 verdict, data = classified(spec, **self.run)
             except InputError as exc:  # this case only (a secondary constraint in an
                 # input): the other cases stand; BudgetExceeded is no InputError
                 self.nodes.append((full, total, _not_classified(exc), node.verdict,
                                    comp.reasons))
+                return None
+            except BudgetExceeded:
+                raise
+            except Exception as exc:  # a failure of this run (the roller racer met a
+                # RecursionError in one): the generic verdict and the other cases stand,
+                # and the search is not complete
+                self.failed.append((name, f"{type(exc).__name__}: {short(str(exc), 200)}"))
                 return None
         self.nodes.append((full, total, verdict, node.verdict, comp.reasons))
         return _Node(spec, total, full, verdict, node.depth + 1), data

@@ -184,6 +184,9 @@ class SearchReport:
         Exceptional sets found but not examined (each a list of conditions = 0).
     unsolved : tuple of str
         The lower-dimensional searches not made (where, which data, their size).
+    failed : tuple of (str, str)
+        The runs of a case that failed (an error that is not the input's), with the
+        error: the other verdicts stand.
 
     Examples
     --------
@@ -197,9 +200,11 @@ class SearchReport:
     cut: tuple = ()
     pending: tuple = ()
     unsolved: tuple = ()
+    failed: tuple = ()
 
     def warning(self) -> str | None:
-        """One line when the search was cut: what, why, what was left (None if complete)."""
+        """One line when the search was cut or a run failed: what, why, what was left
+        (None if complete)."""
         if self.complete:
             return None
         left = []
@@ -209,12 +214,17 @@ class SearchReport:
         if self.unsolved:
             left.append(f"{len(self.unsolved)} lower-dimensional search"
                         f"{'es' if len(self.unsolved) != 1 else ''} not made")
-        what, why = self.cut[0]
-        more = f" and {len(self.cut) - 1} more" if len(self.cut) > 1 else ""
-        return (f"the search for exceptional cases was cut during '{short(what, 120)}'{more} "
-                f"({why}): the generic verdict is complete, the cases listed are those "
-                f"found before the cut" + (f" ({', '.join(left)})" if left else "")
-                + "; allow more time with a larger budget (the command's --budget)")
+        parts = []
+        if self.cut:
+            what, why = self.cut[0]
+            more = f" and {len(self.cut) - 1} more" if len(self.cut) > 1 else ""
+            parts.append(f"was cut during '{short(what, 120)}'{more} ({why})")
+        parts += [f"failed in '{short(what, 120)}' ({error})" for what, error in self.failed]
+        return ("the search for exceptional cases " + "; it ".join(parts)
+                + ": the generic verdict is complete, the cases listed are those found"
+                + (f" ({', '.join(left)})" if left else "")
+                + ("; allow more time with a larger budget (the command's --budget)"
+                   if self.cut else ""))
 
 
 @dataclass(frozen=True)

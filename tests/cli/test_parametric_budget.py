@@ -93,6 +93,39 @@ def test_an_expiry_before_the_generic_verdict_exits_3(monkeypatch):
     assert env["result"] is None and env["error"]["kind"] == "budget"
 
 
+def test_a_case_whose_run_fails_leaves_the_others(monkeypatch, schema):
+    """The roller racer met a RecursionError in the run of one case (I1 = -d1^2 m2,
+    I2 = d2^2 m2) and the command ended with an internal error, after minutes, without
+    the generic verdict. Planted here in the run of b - 1 = 0: the case b + 1 = 0 is
+    still examined (by hand C = 0 and xi_L(phi) = 0 there: underdetermined, 1 free
+    multiplier), and the failure is named."""
+    from nhham.verdict import parametric
+
+    real, calls = parametric.classified, []
+
+    def planted(*args, **kwargs):
+        calls.append(1)
+        if len(calls) == 2:
+            raise RecursionError("maximum recursion depth exceeded during compilation")
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(parametric, "classified", planted)
+    rc, out, err = run("classify", SCENE, "--parametric", "--json")
+    assert rc == 0
+    env = json.loads(out)
+    jsonschema.validate(env, schema)
+    r = env["result"]
+    assert r["generic"]["status"] == "determined"
+    assert [c["conditions"] for c in r["cases"]] == [["a"], ["b + 1"]]
+    v = r["cases"][1]["verdict"]
+    assert (v["status"], v["free_multipliers"]) == ("underdetermined", 1)
+    assert r["search"]["complete"] is False and r["search"]["cut"] == []
+    assert r["search"]["failed"] == [{"search": "run b - 1 = 0",
+                                      "why": "RecursionError: maximum recursion depth "
+                                             "exceeded during compilation"}]
+    assert any("failed in 'run b - 1 = 0' (RecursionError" in w for w in env["warnings"])
+
+
 def test_a_lower_dimensional_search_cut_by_its_share_leaves_the_others(monkeypatch):
     """mu = (0, 1, b): its maximal minors 1 and b have no common zero, a search of
     codimension > 1 (a Groebner basis, [1]) that finds nothing. Cut by its share, it is
