@@ -147,7 +147,9 @@ def _add_classify_options(p) -> None:
     p.add_argument("--parametric", action="store_true",
                    help="the verdict for generic parameters and every case (parameter "
                         "values given by polynomial equations) where it changes, with "
-                        "the case the scene's values fall in")
+                        "the case the scene's values fall in; the generic verdict comes "
+                        "first, and a search for cases the --budget cuts leaves the cases "
+                        "found, with a warning naming what was cut (exit 0)")
     p.add_argument("--positive", default=None, metavar="NAMES",
                    help="with --parametric: comma-separated parameters declared "
                         "positive; conditions without a real solution are dropped")
