@@ -364,13 +364,14 @@ class ExceptionalData:
             full = B.shape[0] and B.det()  # all second class, the usual case: no rref
             self._pivots["R"] = list(range(B.shape[0])) if full else list(B.rref()[1])
         R = self._pivots["R"]
-        if not R:
-            return []
-        if getattr(K, "is_FractionField", False):
+        if R and getattr(K, "is_FractionField", False):
             free = self._ring_bracket_minors(env0, K, R)
             if free is not None:
                 return free
-        return [field_det(B.extract(R, R)) for B in self._brackets(env0, K)]
+        mats = self._brackets(env0, K)  # first: a point not exact here is said so
+        if not R:
+            return []
+        return [field_det(B.extract(R, R)) for B in mats]
 
     def _ring_bracket_minors(self, env0, K, R):
         """det B_RR at the points of M_f with the parameters symbolic (K = Q(p)), formed

@@ -293,26 +293,18 @@ class _Search:
                f"its {allowed:.3g} s ran out: the budget in force left {left:.3g} s after "
                f"the generic run, {left - allowed:.2g} s of them kept for the report")
         try:
-            if allowed is not None and allowed <= 0:
-                raise BudgetExceeded("the budget ran out with the generic run")
-            with time_budget(allowed):
+            # (left <= 0: the budget in force is running out; its expiry ends the command)
+            with time_budget(None if allowed is None else max(allowed, 1e-3)):
                 self.expand(root, data)
                 while self.lower:
                     self.solve_lower(*self.lower.popleft())
         except BudgetExceeded as exc:
             if remaining_time() <= 0:  # the budget in force itself: nothing can be kept
                 raise
-            if allowed is not None and allowed <= 0:
-                self.cut.append(("the search for exceptional cases",
-                                 "the generic run left no time of the budget in force"))
-            else:
-                self.cut.append((exc.part or "the search for exceptional cases",
-                                 why or f"a budget ran out: {exc}"))
+            self.cut.append((exc.part or "the search for exceptional cases",
+                             why or f"a budget ran out: {exc}"))
         unsolved = [f"{node.name()}: where {'; '.join(lower.reasons)} (codimension > 1)"
                     for node, lower in self.lower]
-        if self.cut and not self.pending and not unsolved and allowed is not None \
-                and allowed <= 0:
-            unsolved = ["the exceptional sets of the generic run"]
         return SearchReport(complete=not self.cut and not self.failed, allowed=allowed,
                             cut=tuple(self.cut), pending=tuple(self.pending.values()),
                             unsolved=tuple(unsolved), failed=tuple(self.failed))
