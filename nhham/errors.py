@@ -275,7 +275,15 @@ class BudgetExceeded(NhhamError):
     Traceback (most recent call last):
         ...
     nhham.errors.BudgetExceeded: the budget of 0.05 s ran out
+
+    Attributes
+    ----------
+    part : str
+        The parts of the work open where it ran out (:func:`nhham.progress.current`,
+        set as it leaves the innermost one; "" outside every part).
     """
+
+    part: str = ""
 
 
 class ClosedFormTooLarge(ComputationError):

@@ -40,13 +40,13 @@ def _two_conditions():
 def test_exceptional_components_let_an_expiry_through(monkeypatch, call):
     """The lex Groebner basis and the solve beside it (issue 34: an expiry there dropped
     every component and the verdict said "generic" with exit 0)."""
-    from nhham.lagrangian import exceptional
+    from nhham.lagrangian import components
 
     values, params = _two_conditions()
-    assert exceptional._components(values, params)  # a = 1, b = 2: one component
+    assert components._components(values, params)  # a = 1, b = 2: one component
     monkeypatch.setattr(sp, call, _expire)
     with pytest.raises(BudgetExceeded, match="planted"):
-        exceptional._components(values, params)
+        components._components(values, params)
 
 
 class _Expiring(sp.Symbol):

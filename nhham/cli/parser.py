@@ -147,7 +147,9 @@ def _add_classify_options(p) -> None:
     p.add_argument("--parametric", action="store_true",
                    help="the verdict for generic parameters and every case (parameter "
                         "values given by polynomial equations) where it changes, with "
-                        "the case the scene's values fall in")
+                        "the case the scene's values fall in; the generic verdict comes "
+                        "first, and a search for cases the --budget cuts leaves the cases "
+                        "found, with a warning naming what was cut (exit 0)")
     p.add_argument("--positive", default=None, metavar="NAMES",
                    help="with --parametric: comma-separated parameters declared "
                         "positive; conditions without a real solution are dropped")
@@ -157,8 +159,10 @@ def _add_classify_options(p) -> None:
                    help="with --parametric: comma-separated parameters kept symbolic, the "
                         "others held at the scene's values ('all': every one); default: "
                         "those in L and the constraints, the ones that can change the "
-                        "verdict where C is regular (not those only in forces, dissipation "
-                        "or control laws)")
+                        "verdict where C is regular, and those in the forces or the "
+                        "dissipation where C is singular in a verdict found (the runs "
+                        "again with them, when the --budget leaves the time; else a "
+                        "warning with the estimate); never those only in control laws")
 
 
 def _add_derive_options(p) -> None:

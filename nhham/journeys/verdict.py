@@ -156,8 +156,11 @@ def classify_parametric(scene, *, policy: Policy | None = None, positive=(),
         Bound on the nesting of cases (default 3).
     symbolic : sequence of str, optional
         The parameters kept symbolic (``["all"]``: every one); the others are held at
-        their values. Default: those that can change the classification (in L and the
-        constraints) and those without a value (:func:`symbolic_names`).
+        their values. Default: those that nhham knows can change the classification:
+        those in L and the constraints, those without a value (:func:`symbolic_names`),
+        and those in the forces or the dissipation where C is singular in a verdict
+        found (:data:`~nhham.verdict.parametric.NEEDED`: the runs again with them
+        symbolic, when the budget allows; else a warning with the estimate).
     steps : Steps, optional
 
     Returns
@@ -184,16 +187,18 @@ def classify_parametric(scene, *, policy: Policy | None = None, positive=(),
     (['a - b'], 2)
     """
     from nhham.render.parametric import parametric_data, parametric_text
-    from nhham.verdict.parametric import parametric_classification
+    from nhham.verdict.parametric import NEEDED, parametric_classification
 
     scene = as_scene(scene, drop_redundant=True)
     steps = quiet_steps(steps)
+    # The runs are parts of the step (nhham.progress): named in a budget's message,
+    # listed by --verbose, shown on a terminal once the search has run a second.
     with steps.step("verdicts for every parameter value (generic run, exceptional sets, "
                     "one run per case)"):
         pv = parametric_classification(
             scene.system, positive=list(positive), max_depth=3 if depth is None else depth,
-            policy=policy, symbolic=symbolic_names(scene.system, symbolic),
-            progress=steps.part)
+            policy=policy,
+            symbolic=NEEDED if symbolic is None else symbolic_names(scene.system, symbolic))
     # The report forms what the runs left lazy (integrability, classes): a step of its own,
     # so that a budget running out there is named.
     with steps.step("the verdicts' report (integrability and classes of every case)"):
@@ -206,8 +211,9 @@ def classify_parametric(scene, *, policy: Policy | None = None, positive=(),
 def symbolic_names(system, names=None) -> list:
     """The parameters a parametric classification keeps symbolic (names).
 
-    None: :func:`~nhham.verdict.parametric.classifying_parameters`, and every parameter
-    without a value (it cannot be held); ``["all"]``: every parameter.
+    None: :func:`~nhham.verdict.parametric.needed_parameters` (those in L and the
+    constraints, and every parameter without a value: it cannot be held), the set the
+    default exploration starts from; ``["all"]``: every parameter.
 
     Raises
     ------
@@ -230,13 +236,11 @@ def symbolic_names(system, names=None) -> list:
     """
     import difflib
 
-    from nhham.verdict.parametric import classifying_parameters
+    from nhham.verdict.parametric import needed_parameters
 
     params = [p.name for p in system.declared_parameters]
     if names is None:
-        keep = set(classifying_parameters(system))
-        return [p.name for p in system.declared_parameters
-                if p in keep or p not in system.parameter_values]
+        return [p.name for p in needed_parameters(system)]
     names = [str(n).strip() for n in names if str(n).strip()]
     if names == ["all"]:
         return params

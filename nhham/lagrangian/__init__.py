@@ -11,7 +11,8 @@ constraint algorithm of Section 3) with ``records`` (its stages and result), ``a
 (:func:`analyze_constraints`, the Lagrangian entry point),
 ``integrability`` (Frobenius test of the constraint distribution),
 ``symmetries`` (Section 5), ``exceptional`` (the parameter values where a generic
-decision's datum vanishes; the verdicts built on them are in :mod:`nhham.verdict`).
+decision's datum vanishes, their ``components``; the verdicts built on them are in
+:mod:`nhham.verdict`).
 """
 
 from nhham.lazy import by_module, lazy_exports

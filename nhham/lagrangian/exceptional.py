@@ -30,7 +30,8 @@ Q(p): each value is a rational function of the parameters, and the exceptional s
 the common zero set of the numerators of the values, which is that of the coefficients
 of f (as a polynomial in the state) with probability ≥ 1 − D/2^62 per point. It is
 split into the irreducible factors of their gcd (components of codimension 1) and the
-solutions of what remains (lower-dimensional components). Every component is verified
+solutions of what remains (lower-dimensional components; :mod:`nhham.lagrangian.components`).
+Every component is verified
 by the case analysis (:mod:`nhham.verdict.parametric`), which runs the classification
 there.
 """
@@ -42,7 +43,6 @@ import contextvars
 import math
 import random
 from dataclasses import dataclass, field
-from functools import reduce
 from typing import Any, Sequence
 
 import numpy as np
@@ -52,9 +52,10 @@ from sympy import QQ
 from sympy.external.gmpy import MPQ
 from sympy.polys.domains import GF, RealField
 from sympy.polys.matrices import DomainMatrix
+from sympy.polys.polyerrors import CoercionFailed
 
-from nhham.errors import BudgetExceeded
 from nhham.lagrangian.analysis import ConstraintAnalysis
+from nhham.lagrangian.components import Condition, exceptional_components
 from nhham.lagrangian.domains import PRIME, Angle, NotExact, evaluate
 from nhham.lagrangian.formulas import bordered_matrix, frobenius_terms, lagrangian_bracket
 from nhham.lagrangian.linalg import (
@@ -67,8 +68,8 @@ from nhham.lagrangian.linalg import (
 from nhham.lagrangian.points import DRAW_BITS, ParameterFieldSampler, jacobian_row
 from nhham.lagrangian.submanifold import Submanifold
 from nhham.lagrangian.unexamined import unexamined_notes
+from nhham.progress import SLOW, part
 from nhham.settings import SEED
-from nhham.system.expressions import short
 
 __all__ = [
     "Condition",
@@ -94,25 +95,6 @@ SHIFT_FIELD = RealField(200)
 FLOAT_MARGIN = 1e4
 # Beyond this many maximal minors of mu, the m (n - m) + 1 next to the pivot block.
 MAX_MINORS = 120
-
-
-@dataclass(frozen=True)
-class Condition:
-    """One component of an exceptional set: polynomial equations in the parameters.
-
-    Attributes
-    ----------
-    equations : tuple of sympy.Expr
-        Each = 0, factored, in the scene's parameter names.
-    reasons : tuple of str
-        Which generic decisions fail there.
-    """
-
-    equations: tuple
-    reasons: tuple
-
-    def describe(self) -> str:
-        return ", ".join(f"{short(e)} = 0" for e in self.equations)
 
 
 def _nonzero_claim(value) -> bool:
@@ -381,11 +363,53 @@ class ExceptionalData:
                 (B,) = self._brackets(self.env(generic=True), MODULAR)
             full = B.shape[0] and B.det()  # all second class, the usual case: no rref
             self._pivots["R"] = list(range(B.shape[0])) if full else list(B.rref()[1])
-        mats = self._brackets(env0, K)
         R = self._pivots["R"]
+        if R and getattr(K, "is_FractionField", False):
+            free = self._ring_bracket_minors(env0, K, R)
+            if free is not None:
+                return free
+        mats = self._brackets(env0, K)  # first: a point not exact here is said so
         if not R:
             return []
         return [field_det(B.extract(R, R)) for B in mats]
+
+    def _ring_bracket_minors(self, env0, K, R):
+        """det B_RR at the points of M_f with the parameters symbolic (K = Q(p)), formed
+        without division in the polynomial ring of K, or None where an entry has a
+        parameter in a denominator.
+
+        In Q(p) every sum cancels a gcd of multivariate polynomials, which grows with
+        each step of W⁻¹ J_vᵀ and its products (the roller racer's 2 x 2 B did not end
+        in 300 s; this way it takes 0.2 s a point). With U = d W⁻¹ J_vᵀ from the
+        fraction-free solve W U = d J_vᵀ, the same formula at d J_q gives d² B
+        (:func:`~nhham.lagrangian.formulas.lagrangian_bracket` is quadratic in W⁻¹ J_vᵀ
+        and linear in J_q), so det B_RR = det(d² B_RR) / d^(2r): its numerator is that
+        determinant divided by its gcd with d^(2r), taken one gcd with d at a time (the
+        numerators of the values are what the exceptional set is made of).
+        """
+        ring = K.get_ring()
+        rows = self._bracket_rows()
+        out = []
+        for env in self._pts(list(self.analysis.final_constraints), env0, K, "f"):
+            cache = self._memo(env)
+            try:
+                Jq, Jv, W, M = (self._matrix(K, r, env, cache).convert_to(ring)
+                                for r in rows)
+            except CoercionFailed:
+                return None
+            if not W.det():
+                return None  # W singular at the point: the field route says so
+            # W U = d J_vᵀ without division (sympy's charpoly route fails on constant W)
+            U, d = W.solve_den(Jv.transpose(), method="rref")
+            scaled = lagrangian_bracket(Jq * d, Jv, W, M, solve=lambda _W, _X: U)
+            value = scaled.extract(R, R).det()
+            for _ in range(2 * len(R)):
+                g = ring.gcd(value, d)
+                if g == ring.one or not value:
+                    break
+                value = ring.exquo(value, g)
+            out.append(K.convert_from(value, ring))
+        return out
 
     def _unchecked_note(self) -> str:
         """What the verdict at the values rests on when M_1 has no exact points.
@@ -453,9 +477,12 @@ class ExceptionalData:
                                 "points of M_1 with symbolic parameters"):
             return out
         unexamined: list = []
-        for reason, fn in items:
+        for k, (reason, fn) in enumerate(items):
             try:
-                vals = fn(env0, K)
+                with part(f"where {reason}: values at exact points",
+                          f"datum {k + 1} of {len(items)}, {len(params)} parameters symbolic",
+                          after=SLOW):
+                    vals = fn(env0, K)
             except (NotExact, ZeroDivisionError) as exc:
                 unexamined.append((str(exc), reason))
                 continue
@@ -581,72 +608,6 @@ def _log_slope(moved, value, h) -> float:
         return (moved / value - 1.0) / float(h)
     step = h if isinstance(value, MPQ) else SHIFT_FIELD.convert(h)
     return float((moved - value) / (step * value))
-
-
-# ============================================================ the components
-def exceptional_components(data, params) -> tuple:
-    """Components of the union of the exceptional sets of every datum, deduplicated."""
-    found: dict = {}
-    for reason, values in data:
-        for eqs in _components(values, params):
-            key = tuple(sp.srepr(e) for e in eqs)
-            found.setdefault(key, (eqs, []))[1].append(reason)
-    return tuple(Condition(eqs, tuple(dict.fromkeys(reasons)))
-                 for eqs, reasons in found.values())
-
-
-def _components(values, params) -> list:
-    """Components of the common zero set of the numerators of ``values``."""
-    nums = [v.numer for v in values if v]
-    if not nums or not params:
-        return []
-    g = reduce(lambda a, b: a.gcd(b), nums)
-    out = []
-    if not g.is_ground:
-        _, factors = sp.factor_list(g.as_expr(), *params)
-        for f, _ in factors:
-            if f.free_symbols:
-                out.append((_normal(f),))
-    rest = [a.exquo(g) for a in nums]
-    if all(r.is_ground for r in rest):
-        return out
-    exprs = list(dict.fromkeys(r.as_expr() for r in rest))
-    try:
-        basis = sp.groebner(exprs, *params, order="lex")
-    except BudgetExceeded:  # an expiry is not a sympy failure: it must reach the command
-        raise
-    except Exception:  # pragma: no cover - sympy failure
-        return out
-    if list(basis.exprs) == [1]:
-        return out
-    try:
-        sols = sp.solve(list(basis.exprs), list(params), dict=True)
-    except BudgetExceeded:
-        raise
-    except Exception:  # pragma: no cover - sympy cannot solve: carry the relations
-        sols = None
-    if not sols:
-        out.append(tuple(_normal(e) for e in basis.exprs))
-        return out
-    for sol in sols:
-        eqs = tuple(_normal(sp.numer(sp.together(p - v))) for p, v in sol.items())
-        out.append(tuple(sorted(eqs, key=sp.default_sort_key)))
-    return out
-
-
-def _normal(expr):
-    """A factored polynomial with a positive leading coefficient, content removed."""
-    expr = sp.factor(sp.expand(expr))
-    c, rest = expr.as_coeff_Mul()
-    out = rest if c.is_number and c != 0 else expr
-    syms = sorted(out.free_symbols, key=sp.default_sort_key)
-    if syms:
-        try:
-            if sp.Poly(out, *syms).LC() < 0:
-                out = sp.factor(-out)
-        except sp.PolynomialError:  # pragma: no cover
-            pass
-    return out
 
 
 # ======================================================== signs and solving

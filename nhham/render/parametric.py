@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from nhham.render.text import expr_text, paragraph, table
 
-__all__ = ["parametric_data", "parametric_text"]
+__all__ = ["parametric_data", "parametric_text", "search_data"]
 
 
 def _verdict_data(v) -> dict:
@@ -34,7 +34,18 @@ def parametric_data(pv) -> dict:
         "dropped": [{"conditions": [expr_text(c) for c in eqs], "reason": why}
                     for eqs, why in pv.dropped],
         "notes": list(pv.notes),
+        "search": search_data(pv.search),
     }
+
+
+def search_data(report) -> dict:
+    """The JSON form of a :class:`~nhham.verdict.results.SearchReport`."""
+    return {"complete": report.complete, "seconds": round(report.seconds, 3),
+            "allowed_s": None if report.allowed is None else round(report.allowed, 3),
+            "cut": [{"search": what, "why": why} for what, why in report.cut],
+            "pending": [[expr_text(e) for e in eqs] for eqs in report.pending],
+            "unsolved": list(report.unsolved),
+            "failed": [{"search": what, "why": error} for what, error in report.failed]}
 
 
 def parametric_text(title: str, pv, data: dict) -> str:
@@ -71,4 +82,12 @@ def parametric_text(title: str, pv, data: dict) -> str:
         lines.append("scene values " + ", ".join(
             f"{k} = {v}" for k, v in data["values"].items()) + f": {where}")
     lines += [f"note: {n}" for n in data["notes"]]
+    if not pv.search.complete:  # the warning says it too; here beside the cases it limits
+        if pv.search.cut:
+            lines.append("search cut: " + "; ".join(f"{what} ({why})" for what, why in
+                                                     pv.search.cut))
+        lines += [f"run failed: {what} ({error})" for what, error in pv.search.failed]
+        lines += [f"  not examined: {', '.join(f'{c} = 0' for c in eqs)}"
+                  for eqs in data["search"]["pending"]]
+        lines += [f"  not searched: {where}" for where in pv.search.unsolved]
     return "\n".join(lines)

@@ -146,14 +146,19 @@ class Steps:
         # before the parts it contains (nhham.progress).
         self.records.insert(at, (what, time.perf_counter() - start))
 
-    def part(self, what: str, note: str = "") -> None:
+    def part(self, what: str, note: str = "", show: bool = True) -> None:
         """A part of the open step begins (a run of a long step): the step's name in a
-        budget's message gains ``what``; on a terminal ``what`` and ``note`` (progress,
-        an estimate) are shown."""
+        budget's message gains ``what``; on a terminal (``show``) ``what`` and ``note``
+        (progress, an estimate) are shown."""
         self.current = f"{self.opened}: {what}" if self.opened else what
+        if show:
+            self.show(what, note)
+
+    def show(self, what: str, note: str = "", depth: int = 0) -> None:
+        """On a terminal: ``what`` (a part at ``depth`` in the open parts) and ``note``."""
         if self.progress:
-            print(f"nhham:   {what}" + (f" ({note})" if note else ""), file=sys.stderr,
-                  flush=True)
+            print("nhham:   " + "  " * depth + what + (f" ({note})" if note else ""),
+                  file=sys.stderr, flush=True)
 
     def where(self) -> str:
         """The step running now, for a budget's message: the innermost open step, else

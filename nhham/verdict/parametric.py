@@ -13,16 +13,23 @@ names, or sympy assumptions on the parameter symbols) are dropped and reported.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
+from collections import deque
+from contextlib import contextmanager
+from dataclasses import dataclass
 from types import MappingProxyType
-from typing import Callable, Sequence
+from typing import Any, Callable, Iterator, Sequence
 
 import sympy as sp
 
+from nhham.budget import remaining_time, time_budget
 from nhham.errors import BudgetExceeded, InputError
-from nhham.lagrangian.exceptional import POINTS
 from nhham.lagrangian.engine import Policy, policy_of
+from nhham.lagrangian.components import split_components
+from nhham.lagrangian.exceptional import POINTS
+from nhham.progress import SLOW, part
 from nhham.settings import SEED, check_options
 from nhham.system.expressions import short
 from nhham.verdict.results import (
@@ -30,20 +37,22 @@ from nhham.verdict.results import (
     NEAR,
     Case,
     ParametricVerdict,
+    SearchReport,
     Verdict,
     exact_value,
 )
 from nhham.verdict.substitution import branches, canonical, compose, rebuild
-from nhham.verdict.values import examine
+from nhham.verdict.values import classified
 
-__all__ = ["parametric_classification", "classifying_parameters"]
+__all__ = ["parametric_classification", "classifying_parameters", "needed_parameters",
+           "NEEDED", "REPORT_SHARE"]
 
 
 def parametric_classification(system, *, positive: Sequence = (),
                               max_depth: int = MAX_DEPTH,
                               precision: int | None = None, seed: int = SEED,
                               near: float = NEAR, points: int = POINTS,
-                              policy: Policy | None = None, symbolic: Sequence | None = None,
+                              policy: Policy | None = None, symbolic=None,
                               progress: Callable[[str, str], None] | None = None
                               ) -> ParametricVerdict:
     """The verdict for generic parameters and every case where it changes.
@@ -69,11 +78,14 @@ def parametric_classification(system, *, positive: Sequence = (),
     policy : Policy, optional
         Every setting of the decisions (:class:`~nhham.lagrangian.engine.Policy`);
         default ``Policy()``.
-    symbolic : sequence of str or sympy.Symbol, optional
+    symbolic : sequence of str or sympy.Symbol, or NEEDED, optional
         The parameters kept symbolic; every other one is held at its value (it must have
         one) for the whole exploration. None (default): every parameter symbolic.
-        :func:`classifying_parameters` names those that can change the verdict where C is
-        regular.
+        :data:`NEEDED`: those that nhham knows can change the verdict
+        (:func:`needed_parameters`): then a parameter entering only the forces or the
+        dissipation is held unless C is singular in a verdict found with it held; where
+        it is, the exploration is made again with it symbolic, when the time the first
+        took fits in the budget in force (else a warning says so, with that estimate).
     progress : callable, optional
         ``progress(run, note)`` before each run of the classification: ``run`` names it
         (``"generic run"``, ``"run 3: b - 1 = 0"``), ``note`` tells the runs done, their
@@ -82,6 +94,13 @@ def parametric_classification(system, *, positive: Sequence = (),
     Returns
     -------
     ParametricVerdict
+        Its ``search`` says whether the search for cases was complete. Within a budget
+        (``nhham.time_budget``, the command's ``--budget``) the generic verdict is
+        formed first; the search gets what is left but a share kept for the report
+        (:data:`REPORT_SHARE`), follows the components of codimension 1 of every run
+        first and solves the lower-dimensional ones (a lex Gröbner basis each) last,
+        each with an equal share of the time then left. Cut by its budget, it keeps the
+        cases found, names what was cut and why, and adds a warning.
 
     Raises
     ------
@@ -106,68 +125,116 @@ def parametric_classification(system, *, positive: Sequence = (),
     declared = _declared_positive(system, positive)
     check_options("parametric_classification", near=near, max_depth=max_depth, points=points)
     policy = policy_of(policy, "parametric_classification", precision=precision, seed=seed)
-    held = _held_values(system, symbolic)
-    values = {p: v for p, v in system.parameter_values.items() if p not in held}
-    original, system = system, _holding(system, held)
+    opts = dict(positive=declared, max_depth=max_depth, near=near,
+                run=dict(policy=policy, points=points), progress=progress)
+    if isinstance(symbolic, str) and symbolic == NEEDED:
+        return _needed(system, opts)
+    return _explore(system, _held_values(system, symbolic), **opts)
+
+
+#: ``symbolic=NEEDED``: keep symbolic the parameters that can change the verdict.
+NEEDED = "needed"
+#: The share of the time a budget leaves after the generic verdict that the search for
+#: cases does not take: the report of the verdicts found is made in it.
+REPORT_SHARE = 0.1
+
+
+def needed_parameters(system) -> tuple:
+    """The parameters a parametric classification keeps symbolic first (``NEEDED``):
+    :func:`classifying_parameters` and every parameter without a value (it cannot be
+    held).
+
+    Examples
+    --------
+    >>> import nhham
+    >>> system = nhham.System(["x", "y"], "m*(x_dot**2 + y_dot**2)/2", ["x_dot - a*y"],
+    ...                       parameters={"m": 1.0, "a": 2.0, "c": 0.1},
+    ...                       dissipation="c*y_dot**2/2")
+    >>> needed_parameters(system)         # c enters the dissipation only
+    (m, a)
+    """
+    keep = set(classifying_parameters(system))
+    return tuple(p for p in system.declared_parameters
+                 if p in keep or p not in system.parameter_values)
+
+
+def _needed(system, opts) -> ParametricVerdict:
+    """``symbolic=NEEDED``: held force parameters become symbolic where a verdict has C
+    singular (there the forces enter the secondary constraints), when the time allows."""
+    first = needed_parameters(system)
+    pv = _explore(system, _held_values(system, first), held_note=False, **opts)
+    forced = [p for p in pv.held if p in _force_parameters(system)]
+    singular = _singular_verdicts(pv)
+    if not forced or not singular:
+        return pv
+    names = ", ".join(p.name for p in forced)
+    why = (f"{names} {'enters' if len(forced) == 1 else 'enter'} the forces, which enter "
+           f"the secondary constraints where C is singular ({'; '.join(singular)})")
+    # The runs again with them symbolic: at least the time these took.
+    estimate, left = pv.search.seconds, remaining_time()
+    room = left * (1 - REPORT_SHARE)
+    held = f"{why}, but {'they were' if len(forced) > 1 else 'it was'} held: "
+    insist = ("; give a larger budget (--budget) or --symbolic "
+              + ",".join(p.name for p in first + tuple(forced)))
+    if not pv.search.complete:
+        return _with(pv, warnings=(f"{held}the runs with {names} held did not complete "
+                                   f"(see the search's warning)" + insist,))
+    if estimate > room:
+        return _with(pv, warnings=(
+            f"{held}keeping {'them' if len(forced) > 1 else 'it'} symbolic means the runs "
+            f"again, about {estimate:.0f} s or more (the runs with {names} held took "
+            f"{estimate:.1f} s), and {max(room, 0):.0f} s of the budget "
+            f"{'is' if room >= 1 else 'was'} left for it" + insist,))
+    cut = None
+    try:
+        with part(f"the runs again with {names} symbolic ({why})", f"about {estimate:.0f} s",
+                  after=SLOW), time_budget(None if math.isinf(room) else room):
+            again = _explore(system, _held_values(system, first + tuple(forced)), **opts)
+        cut = again.search.warning()
+    except BudgetExceeded as exc:  # its generic run did not end in the room left
+        if remaining_time() <= 0:
+            raise
+        cut = f"{exc.part or 'the generic run'} ran out of the {room:.3g} s left"
+    if cut:
+        return _with(pv, warnings=(f"{why}; the runs again with {names} symbolic were cut "
+                                   f"by the budget ({cut}), so "
+                                   f"{'they are' if len(forced) > 1 else 'it is'} held "
+                                   f"below",))
+    again = dataclasses.replace(again, search=dataclasses.replace(
+        again.search, seconds=pv.search.seconds + again.search.seconds))
+    return _with(again, notes=(f"{names} kept symbolic: {why}",))
+
+
+def _with(pv, warnings=(), notes=()) -> ParametricVerdict:
+    """``pv`` with more warnings and notes."""
+    return dataclasses.replace(pv, warnings=tuple(pv.warnings) + tuple(warnings),
+                               notes=tuple(notes) + tuple(pv.notes))
+
+
+def _singular_verdicts(pv) -> list:
+    """Where C is singular: "for generic parameters" and the cases' conditions."""
+    out = ["for generic parameters"] if pv.generic.regular is False else []
+    return out + [" and ".join(f"{short(e)} = 0" for e in c.conditions)
+                  for c in pv.cases if c.verdict.regular is False]
+
+
+def _explore(original, held, *, positive, max_depth, near, run, progress, held_note=True
+             ) -> ParametricVerdict:
+    """The exploration with the parameters of ``held`` held at their values (``held_note``:
+    with a note when one could change a verdict found)."""
+    values = {p: v for p, v in original.parameter_values.items() if p not in held}
+    system = _holding(original, held)
     params = tuple(system.declared_parameters)
-    declared = [p for p in declared if p in params]
-    opts = dict(policy=policy, points=points)
+    declared = [p for p in positive if p in params]
     base = rebuild(system, {}, None)
-    signs = _sign_dummies(params, declared)
     clock = _Clock(progress)
-    clock.start("generic run")
-    generic, comps, notes, _, _ = examine(base, params, **opts)
-    clock.done(len(comps))
-    notes = list(notes)
-    nodes, dropped, seen = [], [], set()
-
-    def visit(sysm, sub, conditions, reasons_here, verdict_here, comps, depth):
-        for comp in comps:
-            clock.skip()  # this component is no longer pending (its runs are counted on)
-            full = tuple(conditions) + tuple(comp.equations)
-            why = _no_real_solution(comp.equations, signs)
-            if why:
-                dropped.append((full, why))
-                continue
-            for branch in branches(comp.equations, tuple(sysm.declared_parameters), signs):
-                total = compose(sub, branch)
-                why = _bad_substitution(total, signs)
-                if why:
-                    dropped.append((full, why))
-                    continue
-                key = canonical(total)
-                if key in seen:
-                    continue
-                seen.add(key)
-                spec = rebuild(system, total, None)
-                if isinstance(spec, Verdict):
-                    nodes.append((full, total, spec, verdict_here, comp.reasons))
-                    continue
-                remaining = tuple(p for p in params if p not in total)
-                clock.start("run " + " and ".join(f"{short(e)} = 0" for e in full))
-                try:
-                    verdict, sub_comps, sub_notes, _, _ = examine(spec, remaining, **opts)
-                except InputError as exc:  # this case only (a secondary constraint in an
-                    # input): the other cases stand; BudgetExceeded is no InputError
-                    clock.done(0)
-                    nodes.append((full, total, _not_classified(exc), verdict_here,
-                                  comp.reasons))
-                    continue
-                clock.done(len(sub_comps) if depth + 1 < max_depth else 0)
-                notes.extend(sub_notes)
-                nodes.append((full, total, verdict, verdict_here, comp.reasons))
-                if depth + 1 < max_depth:
-                    visit(spec, total, full, comp.reasons, verdict, sub_comps, depth + 1)
-                elif sub_comps:
-                    notes.append(
-                        f"depth bound {max_depth} hit: below "
-                        + ", ".join(f"{short(e)} = 0" for e in full)
-                        + " further exceptional sets were not explored ("
-                        + "; ".join(c.describe() for c in sub_comps) + ")")
-
-    visit(base, {}, (), (), generic, comps, 0)
-    cases = _order_cases(nodes)
-    notes += _held_note(original, held, [generic] + [c.verdict for c in cases])
+    with clock.run("generic run"):  # the generic verdict comes first, whatever follows
+        generic, data = classified(base, **run)
+    search = _Search(system, params, _sign_dummies(params, declared), clock, run, max_depth)
+    report = search.explore(_Node(base, {}, (), generic, 0), data)
+    cases = _order_cases(search.nodes)
+    notes = search.notes + (_held_note(original, held, [generic] + [c.verdict for c in cases])
+                            if held_note else [])
     scene_case, warnings = None, []
     if values:
         for i, case in enumerate(cases):
@@ -175,12 +242,177 @@ def parametric_classification(system, *, positive: Sequence = (),
                 scene_case = i
                 break
         warnings = _near_warnings([(c.conditions, c.verdict) for c in cases], values, near)
+    cut = report.warning()
     return ParametricVerdict(
         generic=generic, cases=tuple(cases), scene_case=scene_case,
-        dropped=tuple(_dedupe(dropped)), notes=tuple(dict.fromkeys(notes)),
-        warnings=tuple(warnings), parameters=params, positive=tuple(declared),
-        values=MappingProxyType(values), held=MappingProxyType(
-            {p: original.parameter_values[p] for p in held}))
+        dropped=tuple(_dedupe(search.dropped)), notes=tuple(dict.fromkeys(notes)),
+        warnings=tuple(warnings) + ((cut,) if cut else ()), parameters=params,
+        positive=tuple(declared), values=MappingProxyType(values),
+        held=MappingProxyType({p: original.parameter_values[p] for p in held}),
+        search=dataclasses.replace(report, seconds=clock.spent()))
+
+
+@dataclass(frozen=True)
+class _Node:
+    """A verdict of the exploration: its system, the substitution and conditions that
+    made it, and its depth (the generic run: 0)."""
+
+    system: Any
+    sub: dict
+    conditions: tuple
+    verdict: Verdict
+    depth: int
+
+    def name(self) -> str:
+        return ("the generic run" if not self.conditions else
+                "run " + " and ".join(f"{short(e)} = 0" for e in self.conditions))
+
+
+class _Search:
+    """The search for cases below the generic verdict: the verdicts found (``nodes``),
+    what was dropped, the notes, and within a budget what it left pending."""
+
+    def __init__(self, system, params, signs, clock, run, max_depth):
+        self.system, self.params, self.signs = system, params, signs
+        self.clock, self.run, self.max_depth = clock, run, max_depth
+        self.nodes: list = []
+        self.dropped: list = []
+        self.notes: list = []
+        self.seen: set = set()
+        self.pending: dict = {}      # (id of the node, index) -> conditions, not examined
+        self.lower: deque = deque()  # (node, LowerDimensional), solved last
+        self.cut: list = []
+        self.failed: list = []
+
+    def explore(self, root, data) -> SearchReport:
+        """Follow the components of every run from the generic one's ``data``, within
+        what the budget in force leaves (less :data:`REPORT_SHARE`)."""
+        left = remaining_time()
+        allowed = None if math.isinf(left) else left * (1 - REPORT_SHARE)
+        why = (None if allowed is None else
+               f"its {allowed:.3g} s ran out: the budget in force left {left:.3g} s after "
+               f"the generic run, {left - allowed:.2g} s of them kept for the report")
+        try:
+            # (left <= 0: the budget in force is running out; its expiry ends the command)
+            with time_budget(None if allowed is None else max(allowed, 1e-3)):
+                self.expand(root, data)
+                while self.lower:
+                    self.solve_lower(*self.lower.popleft())
+        except BudgetExceeded as exc:
+            if remaining_time() <= 0:  # the budget in force itself: nothing can be kept
+                raise
+            self.cut.append((exc.part or "the search for exceptional cases",
+                             why or f"a budget ran out: {exc}"))
+        unsolved = [f"{node.name()}: where {'; '.join(lower.reasons)} (codimension > 1)"
+                    for node, lower in self.lower]
+        return SearchReport(complete=not self.cut and not self.failed, allowed=allowed,
+                            cut=tuple(self.cut), pending=tuple(self.pending.values()),
+                            unsolved=tuple(unsolved), failed=tuple(self.failed))
+
+    def expand(self, node, data) -> None:
+        """The components of ``node``'s exceptional sets, followed (those of codimension
+        1 now, the others queued) or, at the depth bound, noted."""
+        remaining = tuple(p for p in self.params if p not in node.sub)
+        comps: tuple = ()
+        lower: tuple = ()
+        with part(f"exceptional parameter values of {node.name()} (where a decision's "
+                  f"datum vanishes)", after=SLOW):
+            if remaining:
+                comps, lower = split_components(data.symbolic(remaining), remaining)
+        self.notes.extend(data.notes)
+        if node.depth and node.depth >= self.max_depth:
+            if comps or lower:
+                self.notes.append(
+                    f"depth bound {self.max_depth} hit: below "
+                    + ", ".join(f"{short(e)} = 0" for e in node.conditions)
+                    + " further exceptional sets were not explored ("
+                    + "; ".join([c.describe() for c in comps]
+                                + [f"where {'; '.join(x.reasons)} in codimension > 1"
+                                   for x in lower]) + ")")
+            return
+        self.clock.found(len(comps))
+        self.lower.extend((node, x) for x in lower)
+        self.visit(node, comps)
+
+    def solve_lower(self, node, lower) -> None:
+        """The lower-dimensional components of one datum, with an equal share of the time
+        left among the searches of their kind still queued; followed when found."""
+        left = remaining_time()
+        share = None if math.isinf(left) else left / (len(self.lower) + 1)
+        where = f"{node.name()}: where {'; '.join(lower.reasons)} (codimension > 1)"
+        try:
+            with part(where, lower.describe, after=SLOW), time_budget(share):
+                comps = lower.solve()
+        except BudgetExceeded:
+            if remaining_time() <= 0:  # the search's own budget: cut there
+                raise
+            self.cut.append((f"{where}: {lower.describe()}",
+                             "a budget ran out" if share is None else
+                             f"its share of the search's time, {share:.3g} s, ran out"))
+            return
+        self.clock.found(len(comps))
+        self.visit(node, comps)
+
+    def visit(self, node, comps) -> None:
+        """Run the classification on each component (verified: its condition
+        substituted), then follow the components found there."""
+        keys = [(id(node), id(comps), k) for k in range(len(comps))]
+        for key, comp in zip(keys, comps):
+            self.pending[key] = tuple(node.conditions) + tuple(comp.equations)
+        for key, comp in zip(keys, comps):
+            self.clock.skip()  # this component is no longer pending (its runs are counted on)
+            children = self.examine(node, comp, self.pending[key])
+            del self.pending[key]  # examined: its verdicts are recorded
+            for child in children:
+                self.expand(*child)
+
+    def examine(self, node, comp, full) -> list:
+        """The verdicts on one component, recorded: [(node, data)] to follow."""
+        why = _no_real_solution(comp.equations, self.signs)
+        if why:
+            self.dropped.append((full, why))
+            return []
+        out = []
+        for branch in branches(comp.equations, tuple(node.system.declared_parameters),
+                               self.signs):
+            total = compose(node.sub, branch)
+            why = _bad_substitution(total, self.signs)
+            if why:
+                self.dropped.append((full, why))
+                continue
+            key = canonical(total)
+            if key in self.seen:
+                continue
+            self.seen.add(key)
+            spec = rebuild(self.system, total, None)
+            if isinstance(spec, Verdict):
+                self.nodes.append((full, total, spec, node.verdict, comp.reasons))
+                continue
+            child = self.classify(spec, total, full, node, comp)
+            if child is not None:
+                out.append(child)
+        return out
+
+    def classify(self, spec, total, full, node, comp):
+        """One case's verdict, recorded; (its node, its data) to follow, or None."""
+        name = "run " + " and ".join(f"{short(e)} = 0" for e in full)
+        with self.clock.run(name):
+            try:
+                verdict, data = classified(spec, **self.run)
+            except InputError as exc:  # this case only (a secondary constraint in an
+                # input): the other cases stand; BudgetExceeded is no InputError
+                self.nodes.append((full, total, _not_classified(exc), node.verdict,
+                                   comp.reasons))
+                return None
+            except BudgetExceeded:
+                raise
+            except Exception as exc:  # a failure of this run (the roller racer met a
+                # RecursionError in one): the generic verdict and the other cases stand,
+                # and the search is not complete
+                self.failed.append((name, f"{type(exc).__name__}: {short(str(exc), 200)}"))
+                return None
+        self.nodes.append((full, total, verdict, node.verdict, comp.reasons))
+        return _Node(spec, total, full, verdict, node.depth + 1), data
 
 
 def _not_classified(exc) -> Verdict:
@@ -208,9 +440,7 @@ def classifying_parameters(system) -> tuple:
 def _held_note(system, held, verdicts) -> list:
     """A note when a held parameter could change a verdict: one entering the forces or the
     dissipation, where C is singular (there they enter the secondary constraints)."""
-    forced = set(sp.sympify(system.dissipation).free_symbols)
-    for f in system.forces:
-        forced |= sp.sympify(f).free_symbols
+    forced = _force_parameters(system)
     names = sorted(p.name for p in held if p in forced)
     if not names or all(v.regular is not False for v in verdicts):
         return []
@@ -218,6 +448,15 @@ def _held_note(system, held, verdicts) -> list:
             f"constraints: the held {', '.join(names)} could change it there (keep "
             f"{'it' if len(names) == 1 else 'them'} symbolic: symbolic=, the command's "
             f"--symbolic)"]
+
+
+def _force_parameters(system) -> set:
+    """The parameters in the forces or the dissipation (those of a control law are not
+    in the system's forces: inputs stand there, generic)."""
+    forced = set(sp.sympify(system.dissipation).free_symbols)
+    for f in system.forces:
+        forced |= sp.sympify(f).free_symbols
+    return {p for p in system.declared_parameters if p in forced}
 
 
 def _held_values(system, symbolic) -> dict:
@@ -256,26 +495,41 @@ def _holding(system, held):
 
 
 class _Clock:
-    """Tells ``progress`` of each run: the runs done, their time, and an estimate of
-    what the runs known to be pending will take (more may appear below them)."""
+    """Tells of each run: ``progress`` at its start, and on a terminal (a part, shown once
+    the exploration has run :data:`~nhham.progress.SLOW` s) the runs done, their time, an
+    estimate of what the runs known to be pending will take (more may appear below
+    them) and the time left of the budget in force."""
 
     def __init__(self, progress):
         self.progress, self.runs, self.pending = progress, 0, 0
         self.begin = time.monotonic()
 
-    def start(self, what: str) -> None:
-        if self.progress is None:
-            return
-        spent = time.monotonic() - self.begin
+    def spent(self) -> float:
+        return time.monotonic() - self.begin
+
+    def note(self) -> str:
+        spent = self.spent()
         note = f"{self.runs} run{'s' if self.runs != 1 else ''} done in {spent:.1f} s"
         if self.runs:  # this run and those pending, at the mean time of a run so far
             note += (f"; about {spent / self.runs * (self.pending + 1):.0f} s for this run "
                      f"and the {self.pending} more known")
-        self.progress(what, note)
+        return note
 
-    def done(self, found: int) -> None:
+    def shown(self) -> str:
+        """The note as shown on a terminal (with the budget's time left)."""
+        left = remaining_time()
+        return self.note() + ("" if math.isinf(left) else f"; {left:.0f} s of the budget left")
+
+    @contextmanager
+    def run(self, what: str) -> Iterator[None]:
+        if self.progress is not None:
+            self.progress(what, self.note())
+        with part(what, self.shown, after=max(0.0, SLOW - self.spent())):
+            yield
         self.runs += 1
-        self.pending += found
+
+    def found(self, count: int) -> None:
+        self.pending += count
 
     def skip(self) -> None:
         self.pending = max(self.pending - 1, 0)

@@ -16,8 +16,8 @@ import sympy as sp
 
 from nhham.system.expressions import short
 
-__all__ = ["Verdict", "Case", "ParametricVerdict", "ValuesVerdict", "exact_value",
-           "NEAR", "MAX_DEPTH"]
+__all__ = ["Verdict", "Case", "ParametricVerdict", "SearchReport", "ValuesVerdict",
+           "exact_value", "NEAR", "MAX_DEPTH"]
 
 # Default relative distance below which parameter values count as "near" an exceptional set.
 NEAR = 1e-8
@@ -166,6 +166,68 @@ class Case:
 
 
 @dataclass(frozen=True)
+class SearchReport:
+    """How the search for the exceptional cases went (after the generic verdict).
+
+    Attributes
+    ----------
+    complete : bool
+        Every exceptional set found was followed (within the depth bound).
+    seconds : float
+        The time the whole classification took (the generic run and the search).
+    allowed : float or None
+        The seconds the search was given (what the budget in force left after the
+        generic run, less a share kept for the report); None: no budget in force.
+    cut : tuple of (str, str)
+        Each search that was cut: what was running, and why.
+    pending : tuple of tuple of sympy.Expr
+        Exceptional sets found but not examined (each a list of conditions = 0).
+    unsolved : tuple of str
+        The lower-dimensional searches not made (where, which data, their size).
+    failed : tuple of (str, str)
+        The runs of a case that failed (an error that is not the input's), with the
+        error: the other verdicts stand.
+
+    Examples
+    --------
+    >>> SearchReport().complete, SearchReport().warning()
+    (True, None)
+    """
+
+    complete: bool = True
+    seconds: float = 0.0
+    allowed: float | None = None
+    cut: tuple = ()
+    pending: tuple = ()
+    unsolved: tuple = ()
+    failed: tuple = ()
+
+    def warning(self) -> str | None:
+        """One line when the search was cut or a run failed: what, why, what was left
+        (None if complete)."""
+        if self.complete:
+            return None
+        left = []
+        if self.pending:
+            left.append(f"{len(self.pending)} exceptional set"
+                        f"{'s' if len(self.pending) != 1 else ''} found but not examined")
+        if self.unsolved:
+            left.append(f"{len(self.unsolved)} lower-dimensional search"
+                        f"{'es' if len(self.unsolved) != 1 else ''} not made")
+        parts = []
+        if self.cut:
+            what, why = self.cut[0]
+            more = f" and {len(self.cut) - 1} more" if len(self.cut) > 1 else ""
+            parts.append(f"was cut during '{short(what, 120)}'{more} ({why})")
+        parts += [f"failed in '{short(what, 120)}' ({error})" for what, error in self.failed]
+        return ("the search for exceptional cases " + "; it ".join(parts)
+                + ": the generic verdict is complete, the cases listed are those found"
+                + (f" ({', '.join(left)})" if left else "")
+                + ("; allow more time with a larger budget (the command's --budget)"
+                   if self.cut else ""))
+
+
+@dataclass(frozen=True)
 class ParametricVerdict:
     """Verdicts for every parameter value (see :func:`nhham.verdict.parametric.parametric_classification`).
 
@@ -192,6 +254,8 @@ class ParametricVerdict:
         The system's parameter values (of the parameters kept symbolic).
     held : Mapping
         The parameters held at their values (``symbolic=``), with those values.
+    search : SearchReport
+        Whether the search for cases was complete, and what a budget cut.
 
     Examples
     --------
@@ -219,6 +283,7 @@ class ParametricVerdict:
     positive: tuple
     values: Mapping = field(default_factory=dict)
     held: Mapping = field(default_factory=dict)
+    search: SearchReport = field(default_factory=SearchReport)
 
     @property
     def scene_verdict(self) -> Verdict:

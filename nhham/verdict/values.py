@@ -23,11 +23,11 @@ from nhham.lagrangian.exceptional import (
 )
 from nhham.lagrangian.engine import Policy, policy_of
 from nhham.settings import SEED, check_options
-from nhham.progress import part
+from nhham.progress import SLOW, part
 from nhham.verdict.results import MAX_DEPTH, NEAR, ValuesVerdict, Verdict, exact_value
 from nhham.verdict.substitution import branches, compose, rebuild
 
-__all__ = ["classification_at_values", "examine"]
+__all__ = ["classification_at_values", "classified", "examine"]
 
 def classification_at_values(system, *, max_depth: int = MAX_DEPTH, precision: int | None = None,
                              seed: int = SEED, near: float = NEAR,
@@ -158,35 +158,27 @@ def _close_warnings(close, values) -> list:
 
 
 # ================================================================= one run
-def examine(system, params, *, policy, points, values=None, near=NEAR):
+def classified(system, *, policy, points):
     """The ordinary classification of ``system`` (with the classes of its final
     constraints on T*Q, :func:`~nhham.hamiltonian.classification.classify_constraints`) and
     the data of its decisions.
 
-    Returns (Verdict, conditions, notes, hits, close): with ``params`` the exceptional
-    conditions in those parameters (kept symbolic); with ``values`` the data that
-    vanish at those exact values (``hits``) and those within relative distance
-    ``near`` of vanishing (``close``).
+    Returns (Verdict, ExceptionalData): the data evaluate, when asked, what each generic
+    decision assumed nonzero (:mod:`nhham.lagrangian.exceptional`).
     """
-    with part("constraint algorithm on TQ (stages, ranks on M_k)"):
+    with part("constraint algorithm on TQ (stages, ranks on M_k)", after=SLOW):
         analysis = analyze_constraints(system, policy=policy)
-    with part("integrability (Frobenius)"):
+    with part("integrability (Frobenius)", after=SLOW):
         integrable = analysis.integrable
     cls = None
     if analysis.status != "inconsistent":
-        with part("first and second class on T*Q (brackets of the final constraints)"):
+        with part("first and second class on T*Q (brackets of the final constraints)", after=SLOW):
             cls = classify_constraints(analysis, policy=policy)
     # The second-class set the classification chose (for generic parameters when it
     # decided symbolically): at values where B drops rank its minor is the datum.
     second = (tuple(cls.second_class_indices) if cls is not None
               and tuple(cls.labels) == tuple(analysis.final_labels) else None)
     data = ExceptionalData(system, analysis, policy.seed, points, second_class=second)
-    comps, hits, close = (), [], []
-    with part("exceptional parameter values (where a decision's datum vanishes)"):
-        if params:
-            comps = exceptional_components(data.symbolic(tuple(params)), tuple(params))
-        if values:
-            hits, close = data.at_values(values, near)
     first = second = None
     if cls is not None:
         first, second = int(cls.first_class), int(cls.second_class)
@@ -197,6 +189,23 @@ def examine(system, params, *, policy, points, values=None, near=NEAR):
         redundant=tuple(d.label for d in analysis.dropped),
         final_constraints=len(analysis.final_constraints), dimension=analysis.dimension,
         system=system, analysis=analysis, classes=cls)
+    return verdict, data
+
+
+def examine(system, params, *, policy, points, values=None, near=NEAR):
+    """The ordinary classification of ``system`` (:func:`classified`) and the data of its
+    decisions.
+
+    Returns (Verdict, conditions, notes, hits, close): with ``params`` the exceptional
+    conditions in those parameters (kept symbolic); with ``values`` the data that
+    vanish at those exact values (``hits``) and those within relative distance
+    ``near`` of vanishing (``close``).
+    """
+    verdict, data = classified(system, policy=policy, points=points)
+    comps, hits, close = (), [], []
+    with part("exceptional parameter values (where a decision's datum vanishes)"):
+        if params:
+            comps = exceptional_components(data.symbolic(tuple(params)), tuple(params))
+        if values:
+            hits, close = data.at_values(values, near)
     return verdict, comps, data.notes, hits, close
-
-

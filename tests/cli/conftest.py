@@ -30,8 +30,9 @@ HEAVY = {("compare", "snakeboard.toml"), ("compare", "whipple_bicycle.toml"),
          ("derive", "whipple_bicycle_benchmark.toml")}
 
 
-@functools.cache
-def run_inprocess(*argv):
+def run_fresh(*argv):
+    """(exit status, stdout, stderr) of the command in-process, run every time (a test
+    that plants something); :func:`run_inprocess` runs each once."""
     from nhham.cli.main import main
 
     out, err = io.StringIO(), io.StringIO()
@@ -41,6 +42,9 @@ def run_inprocess(*argv):
         except SystemExit as exc:  # argparse
             rc = exc.code
     return rc, out.getvalue(), err.getvalue()
+
+
+run_inprocess = functools.cache(run_fresh)
 
 
 def example_args(command, example):

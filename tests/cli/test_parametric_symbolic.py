@@ -20,7 +20,7 @@ from nhham import loads_scene
 from nhham.render.text import Steps
 from nhham.errors import InputError
 from nhham.verdict.parametric import classifying_parameters, parametric_classification
-from tests.cli.conftest import run_inprocess
+from tests.cli.conftest import run_fresh, run_inprocess
 
 SCENE = """name = "issue 11, forced"
 coordinates = ["q1", "q2", "q3"]
@@ -48,14 +48,28 @@ def test_classifying_parameters_are_those_of_L_and_the_constraints():
     assert [p.name for p in classifying_parameters(system)] == ["a", "b"]
 
 
-def test_by_default_a_parameter_only_in_the_forces_is_held(scene, schema):
+def test_by_default_a_force_parameter_is_symbolic_where_c_is_singular(scene, schema):
+    """C is singular at b = +-1, where the forces enter the secondary constraints: k is
+    kept symbolic by default (the runs again with it), and the cases are those without
+    it, as derived above (k cannot change a verdict). Before, k was held at 0.3 and a
+    note said it "could change" the verdict there."""
     rc, env, _ = run("classify", scene, "--parametric", "--json")
     assert rc == 0
     jsonschema.validate(env, schema)
     r = env["result"]
+    assert r["parameters"] == ["a", "b", "k"] and r["held"] == {}
+    assert sorted(c["conditions"] for c in r["cases"]) == [["a"], ["b + 1"], ["b - 1"]]
+    assert any(n.startswith("k kept symbolic: k enters the forces") for n in r["notes"])
+    assert r["search"]["complete"] is True and r["search"]["cut"] == []
+
+
+def test_symbolic_a_b_holds_k_with_a_note(scene):
+    """Held by the user: the note says k could change a verdict where C is singular."""
+    rc, env, _ = run("classify", scene, "--parametric", "--symbolic", "a,b", "--json")
+    assert rc == 0
+    r = env["result"]
     assert r["parameters"] == ["a", "b"] and r["held"] == {"k": 0.3}
     assert sorted(c["conditions"] for c in r["cases"]) == [["a"], ["b + 1"], ["b - 1"]]
-    # C is singular at b = +-1: there a force could enter the secondary constraints
     assert any("held k could change it" in n for n in r["notes"])
 
 
@@ -79,7 +93,7 @@ def test_symbolic_b_holds_a_so_w_is_never_singular(scene):
 
 
 def test_the_text_says_which_parameters_were_held(scene):
-    rc, text, _ = run("classify", scene, "--parametric")
+    rc, text, _ = run("classify", scene, "--parametric", "--symbolic", "a,b")
     assert rc == 0
     assert "verdicts for every value of the parameters a, b\n" in text
     assert "held at their values: k = 0.3 (--symbolic" in text
@@ -123,3 +137,65 @@ def test_a_part_of_a_step_is_shown_and_named_in_a_budget_message(capsys):
     assert steps.where() == "after 'verdicts', between steps"
     err = capsys.readouterr().err
     assert err == "nhham: verdicts ...\nnhham:   run b - 1 = 0 (1 run done in 0.5 s)\n"
+
+
+# ------------------------------------------------- the default set (issue 43, item 6)
+DAMPER = """name = "null constraint with a damper"
+coordinates = ["q1", "q2", "q3"]
+parameters = { c = 0.5 }
+lagrangian = "(q1_dot**2 + q2_dot**2 - q3_dot**2)/2"
+constraints = ["q2_dot + q3_dot"]
+dissipation = "c*q2_dot**2/2"
+"""
+
+
+@pytest.fixture(scope="module")
+def damper(tmp_path_factory):
+    path = tmp_path_factory.mktemp("damper") / "damper.toml"
+    path.write_text(DAMPER)
+    return str(path)
+
+
+def test_a_damper_on_a_null_constraint_gives_its_case_c_0_with_no_option(damper, schema):
+    """By hand: W = diag(1, 1, -1), mu = (0, 1, 1), so C = -mu W^-1 mu^T = -(1 - 1) = 0
+    for every c: C is singular. The damper's force is Q = -dR/dv = (0, -c q2', 0), and
+    with the reaction -lambda mu: q2'' = -c q2' - lambda, -q3'' = -lambda, so
+    d/dt (q2' + q3') = -c q2' (lambda cancels: C = 0).
+      c != 0: q2' = 0 is a secondary constraint (M_2: q2' = q3' = 0, dimension 4); its
+        tangency q2'' = -lambda = 0 fixes lambda: determined, 2 stages, 0 free
+        multipliers; on T*Q p_q2 = p_q3 = 0 are 2 first-class constraints.
+      c = 0: the condition vanishes, lambda is free: underdetermined, 1 stage, 1 free
+        multiplier, 1 first-class constraint.
+    Before, c entered the dissipation only and was held at 0.5: the report listed the
+    generic verdict alone, with a note that c "could change the verdict"."""
+    rc, env, _ = run("classify", damper, "--parametric", "--json")
+    assert rc == 0
+    jsonschema.validate(env, schema)
+    r = env["result"]
+    assert r["parameters"] == ["c"] and r["held"] == {}
+    g = r["generic"]
+    assert (g["regular"], g["status"], len(g["stages"]), g["free_multipliers"],
+            g["first_class"], g["second_class"]) == (False, "determined", 2, 0, 2, 0)
+    assert [c["conditions"] for c in r["cases"]] == [["c"]]
+    v = r["cases"][0]["verdict"]
+    assert (v["regular"], v["status"], len(v["stages"]), v["free_multipliers"],
+            v["first_class"]) == (False, "underdetermined", 1, 1, 1)
+    assert r["scene_case"] is None  # c = 0.5: generic
+    assert any(n.startswith("c kept symbolic") for n in r["notes"])
+
+
+def test_keeping_it_symbolic_beyond_the_budget_is_said_with_the_estimate(damper,
+                                                                        monkeypatch):
+    """A planted estimate: the runs with c held "took" 5000 s, more than the default
+    budget leaves (600 s): c stays held, and a warning says why, with the estimate and
+    the option that insists."""
+    from nhham.verdict import parametric
+
+    monkeypatch.setattr(parametric._Clock, "spent", lambda self: 5000.0)
+    rc, out, err = run_fresh("classify", damper, "--parametric", "--json")
+    assert rc == 0
+    r = json.loads(out)
+    assert r["result"]["held"] == {"c": 0.5} and r["result"]["cases"] == []
+    (warning,) = [w for w in r["warnings"] if "c enters the forces" in w]
+    assert "about 5000 s or more" in warning and "--symbolic c" in warning
+

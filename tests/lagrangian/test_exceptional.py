@@ -132,3 +132,35 @@ def test_exceptional_data_are_built_once_and_frozen():
     with generic._first_point_only():  # one point, without changing the object
         assert generic.points == 2 and generic._bracket_minor(generic.env(), QQ) == [4]
     assert len(generic._bracket_minor(generic.env(), QQ)) == 2
+
+
+def test_bracket_minor_with_symbolic_parameters_is_the_hand_numerator():
+    """The bracket datum in Q(m, a, b), formed without division (W⁻¹ by a fraction-free
+    solve: in Q(p) the gcds of the field arithmetic made the roller racer's 2 x 2 B run
+    past 300 s).
+
+    By hand: L = (m x'^2 + y'^2 + z'^2)/2, chi_1 = x' + a y, chi_2 = y' + b x; on T*Q
+    chi_1 = p_x/m + a y, chi_2 = p_y + b x, so {chi_1, chi_2} = a - b/m at every point and
+    det B = (a - b/m)^2 = (m a - b)^2 / m^2: the numerator is (m a - b)^2, without the
+    factor m of det W that the division-free form carries (d^2 B, d a divisor of m)."""
+    from sympy import QQ
+
+    from nhham import System
+    from nhham.lagrangian.exceptional import ExceptionalData
+    from nhham.lagrangian.linalg import field_det
+
+    system = System(["x", "y", "z"], "(m*x_dot**2 + y_dot**2 + z_dot**2)/2",
+                    ["x_dot + a*y", "y_dot + b*x"], parameters={"m": 1.0, "a": 1.0, "b": 2.0})
+    analysis = analyze_constraints(system)
+    data = ExceptionalData(system, analysis, 7, 3)
+    m, a, b = sp.symbols("m a b")
+    K = QQ.frac_field(m, a, b)
+    env0 = data.env(gens=dict(zip((m, a, b), K.gens)))
+    values = data._bracket_minor(env0, K)
+    assert len(values) == 3
+    for v in values:
+        assert sp.simplify(K.to_sympy(v) / (m * a - b) ** 2).is_number
+    # the field route, the formula with W⁻¹ in Q(p): (a - b/m)^2 itself
+    fields = [field_det(B.extract([0, 1], [0, 1])) for B in data._brackets(env0, K)]
+    assert all(sp.simplify(K.to_sympy(v) - (a - b / m) ** 2) == 0 for v in fields)
+
