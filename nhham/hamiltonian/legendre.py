@@ -264,11 +264,14 @@ class LegendreMap:
         return out
 
     def _round_trip_points(self, rng, count):
+        # sympy Floats, not Python floats: xreplace puts a value in as it is, and a
+        # momentum that is a bare velocity (p_A = v^A) would come back a float.
         pts = []
         for _ in range(count):
-            pt = {s: float(rng.uniform(-0.6, 0.6)) for s in self.coordinates + self.velocities}
+            pt = {s: sp.Float(rng.uniform(-0.6, 0.6)) for s in self.coordinates + self.velocities}
             for par in self.system.parameters:
-                pt[par] = self.system.parameter_values.get(par, float(rng.uniform(*PARAMETER_BOX)))
+                pt[par] = sp.Float(self.system.parameter_values.get(
+                    par, rng.uniform(*PARAMETER_BOX)))
             pts.append(pt)
         return pts
 
@@ -399,7 +402,7 @@ def _close(cand, v, p, pA, pt):
     """Round trip: v0 -> p0 = pA(v0) -> cand(p0) == v0 at a point."""
     try:
         p0 = complex(pA.xreplace(pt).evalf())
-        back = complex(cand.xreplace({**pt, p: p0.real}).evalf())
+        back = complex(cand.xreplace({**pt, p: sp.Float(p0.real)}).evalf())
     except (TypeError, ValueError, ZeroDivisionError):
         return False
     return abs(back.imag) < 1e-9 and abs(back.real - pt[v]) < 1e-9 * (1 + abs(pt[v]))

@@ -45,6 +45,8 @@ class ComplexField:
         # a nonlinear (Chetaev) constraint: mu and h read (q, v), the dependent velocities
         # are solved by Newton's method (dependent_velocities)
         self.nonlinear = bool(getattr(model, "nonlinear", False))
+        # and W of a Lagrangian not quadratic in v: the geometry kernel reads (q, v)
+        self.geometry_reads_v = bool(getattr(model, "geometry_reads_v", self.nonlinear))
         try:
             self._batch = model.kernels.functions["saddle"][1]
             self._geometry_batch = model.kernels.functions["geometry"][1]
@@ -101,11 +103,12 @@ class ComplexField:
 
     def geometry(self, Q, p=None, V=None):
         """mu, h, g at complex coordinates (rows of Q: shape (K, n)): the kernel of the
-        coordinates only (no F, no drift), for lifting points onto M_1; with a nonlinear
-        constraint it reads the velocities V (K, n) too."""
+        coordinates only (no F, no drift), for lifting points onto M_1; where the kernel
+        reads (q, v) (a nonlinear constraint, an L not quadratic in v) the velocities V
+        (K, n) too."""
         n, m, k = self.n, self.m, self.k
-        out = self._outputs("geometry", np.concatenate([Q, V], axis=1) if self.nonlinear
-                            else Q, p)
+        out = self._outputs("geometry", np.concatenate([Q, V], axis=1)
+                            if self.geometry_reads_v else Q, p)
         _, mu, h, g = columns(out, (n * n, m * n, m, k))
         return mu.reshape(out.shape[0], m, n), h, g
 
@@ -252,7 +255,7 @@ def reduced_field(cf, chart, q0, X, p=None, positions=True, v0=None, shift=None)
                                    "(a nonlinear constraint) did not converge")
     elif dv:
         # the last Newton iterate's mu and h: the step after it was below rounding
-        mu, h, _ = cf.geometry(Q, p) if geometry is None else geometry
+        mu, h, _ = cf.geometry(Q, p, V) if geometry is None else geometry
         rhs = -(np.einsum("kij,kj->ki", mu[:, :, iv], V[:, iv]) + h)
         V[:, dv] = np.linalg.solve(mu[:, :, dv], rhs[..., None])[..., 0]
     a = cf.accelerations(Q, V, p)
@@ -313,7 +316,7 @@ def lift(cf, chart, Y, P=None, iterations: int = 30) -> tuple:
         V[:, dv], singular = dependent_velocities(cf, Q, V, dv, P, iterations)
         ok[singular] = False
     elif dv:
-        mu, h, _ = cf.geometry(Q, P)
+        mu, h, _ = cf.geometry(Q, P, V)
         rhs = -(np.einsum("kij,kj->ki", mu[:, :, iv], V[:, iv]) + h)
         sol, singular = _solve_rows(mu[:, :, dv], rhs)
         V[:, dv] = sol

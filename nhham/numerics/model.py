@@ -196,8 +196,12 @@ class NumericModel:
     #: The first scene key whose expression uses t (``lagrangian``, ``constraints[0]``),
     #: or "" (t in the forces only, or not at all).
     timed_key = property(lambda self: self.layout.get("time_in_geometry") or "")
-    #: A constraint not affine in v (Chetaev's rule): the geometry kernel reads (q, v).
+    #: A constraint not affine in v (Chetaev's rule): velocities onto M_1 by Newton.
     nonlinear = property(lambda self: self.layout.get("nonlinear_constraints", False))
+    #: The geometry kernel reads (q, v): a nonlinear constraint's mu and h, or the W of a
+    #: Lagrangian not quadratic in v.
+    geometry_reads_v = property(lambda self: self.layout.get(
+        "geometry_reads_v", self.nonlinear))
 
     @property
     def names(self) -> tuple:
@@ -492,7 +496,7 @@ class NumericModel:
         """
         y = np.asarray(y, dtype=float)
         n, m, k = self.n, self.m, self.k
-        width = 2 * n if self.nonlinear else n  # (q, v) with a nonlinear constraint
+        width = 2 * n if self.geometry_reads_v else n
         if y.ndim == 1:
             out = self.kernels.scalar("geometry", y[:width].tolist(), self._plist)
         else:
@@ -627,7 +631,9 @@ class NumericModel:
             return v
         if self.nonlinear:
             return velocities_newton(self.geometry, q, v)
-        W, mu, h, _ = self.geometry(q)
+        # W(q, v) of an L not quadratic in v: the metric at the given velocities
+        W, mu, h, _ = self.geometry(np.concatenate([q, v], axis=-1) if self.geometry_reads_v
+                                    else q)
         for _ in range(2):
             r = (mu @ v[..., None])[..., 0] + h
             if not np.any(r):
@@ -640,7 +646,7 @@ class NumericModel:
         k = self.k
         best = np.inf
         for it in range(1, maxiter + 1):
-            W, mu, _, g = self.geometry(padded(q, self.nonlinear))
+            W, mu, _, g = self.geometry(padded(q, self.geometry_reads_v))
             err = float(np.max(np.abs(g)))
             scale = 1.0 + float(np.max(np.abs(q)))
             if err <= tol * scale:
@@ -650,7 +656,7 @@ class NumericModel:
             best = min(best, err)
             dq, _ = solve_saddle(W, mu[:k], np.zeros(self.n), -g)
             q = q + dq
-        W, mu, _, g = self.geometry(padded(q, self.nonlinear))
+        W, mu, _, g = self.geometry(padded(q, self.geometry_reads_v))
         err = float(np.max(np.abs(g)))
         if err <= max(tol, 1e-12) * (1.0 + float(np.max(np.abs(q)))):
             return q, maxiter

@@ -172,3 +172,34 @@ def test_loop_option_is_checked(sleigh):
     assert res.settings["loop"] == "scipy"
     auto = simulate(sleigh, (0, 1), sleigh_state(), warn=False)
     assert auto.settings["loop"] == ("compiled" if sleigh.backend == "c" else "scipy")
+
+
+@pytest.mark.parametrize("backend", ["numpy", "c"])
+def test_a_lagrangian_not_quadratic_in_v_with_a_constraint(backend):
+    """L = x'^4/12 + (x'^2 + y'^2)/2 with y' = x x': W = diag(1 + x'^2, 1) depends on v,
+    and the geometry kernel (W, mu, h) read q alone (an internal error, "name 'v0' is
+    not defined"). By hand: p_x = x'^3/3 + x', p_y = y' = x x', d p_x/dt = lambda x,
+    d p_y/dt = -lambda, so x'' (1 + x'^2 + x^2) = -x x'^2 and y' = x x'; against that
+    ODE integrated by scipy."""
+    import sympy as sp
+    from scipy.integrate import solve_ivp
+
+    from nhham import System
+
+    x, y, xd, yd = sp.symbols("x y x_dot y_dot")
+    system = System([x, y], xd ** 4 / 12 + (xd ** 2 + yd ** 2) / 2, [yd - x * xd])
+    model = numeric_model(system, backend=backend)
+    if backend == "c" and model.backend != "c":
+        pytest.skip("no C compiler")
+    y0 = np.array([0.3, 0.0, 0.8, 0.24])
+    res = simulate(model, (0, 2), y0, rtol=1e-11, atol=1e-12, warn=False)
+    assert res.success
+
+    def hand(t, s):
+        q, p, v = s
+        return [v, q * v, -q * v ** 2 / (1 + v ** 2 + q ** 2)]
+
+    ref = solve_ivp(hand, (0, 2), [0.3, 0.0, 0.8], method="DOP853", rtol=1e-12, atol=1e-13)
+    end = res.y[:, -1]
+    assert np.allclose([end[0], end[1], end[2]], ref.y[:, -1], rtol=1e-8, atol=1e-9)
+    assert abs(end[3] - end[0] * end[2]) < 1e-9   # on the constraint

@@ -8,13 +8,20 @@ sequences (so that the expression parser and System see hostile input).
 
 from __future__ import annotations
 
+import contextlib
+import io
 import json
 import math
+import os
 import string
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
 
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, event, given, settings
 from hypothesis import strategies as st
 
+from nhham.cli.main import main
 from nhham.errors import InputError
 from nhham.system.expressions import FUNCTIONS
 from nhham.system.scene import Scene, loads_scene
@@ -149,3 +156,167 @@ def test_random_expressions_in_valid_scenes(lagrangian, constraints, holonomic, 
 @given(st.text(alphabet=string.ascii_letters + string.digits + "_.-\"' []{}=#\n", max_size=200))
 def test_random_toml_like_text(text):
     load_or_input_error(text)
+
+
+# ------------------------------------------ well-formed scenes through the command
+# Scenes every reader accepts (names known, expressions well formed), built from the
+# pieces a mechanical system has: a kinetic energy with random coefficients, a potential,
+# sometimes a term not quadratic in v, constraints affine or not, holonomic ones, the
+# time t, parameters with values, [initial], [steady]; and a command with its options.
+# Whatever is drawn, the command ends in 0, 2 (bad input, one line naming it) or
+# 3 (did not succeed, one line saying why): never 1, an internal failure.
+_COORDINATES = ["x", "y", "z", "q1", "q2", "theta"]
+_PARAMETERS = ["m", "k", "a"]
+_UNARY = sorted(set(FUNCTIONS) - {"atan2"})
+_CONSTANTS = ["1", "2", "3", "1/2", "0.5", "pi"]
+
+
+def _expressions(atoms, depth: int):
+    """Expressions in ``atoms`` (names) of nesting at most ``depth``: the functions of the
+    scene reader's table, + - * /, integer and rational powers."""
+    leaf = st.sampled_from(list(atoms) + _CONSTANTS)
+    if depth == 0:
+        return leaf
+    sub = _expressions(atoms, depth - 1)
+    return st.one_of(
+        leaf,
+        st.builds("{}({})".format, st.sampled_from(_UNARY), sub),
+        st.builds("atan2({}, {})".format, sub, sub),
+        st.builds("({}) {} ({})".format, sub, st.sampled_from(["+", "-", "*", "/"]), sub),
+        st.builds("({})**{}".format, sub, st.sampled_from(["2", "3", "-1", "-2", "(1/2)"])),
+    )
+
+
+def _coefficient(q_expr, parameters):
+    """A coefficient of the kinetic energy: 1, a parameter, positive or random in q."""
+    return st.one_of(
+        st.just("1"),
+        st.sampled_from(parameters or ["2"]),
+        q_expr.map("(1 + ({})**2)".format),
+        q_expr.map("exp({})".format),
+        q_expr,
+    )
+
+
+@st.composite
+def _lagrangian(draw, coordinates, q_expr, qv_expr, parameters):
+    velocities = [f"{c}_dot" for c in coordinates]
+    terms = [f"{draw(_coefficient(q_expr, parameters))}*{v}**2/2" for v in velocities]
+    if len(velocities) > 1 and draw(st.booleans()):   # a cross term
+        i, j = draw(st.permutations(range(len(velocities))))[:2]
+        terms.append(f"({draw(q_expr)})*{velocities[i]}*{velocities[j]}/4")
+    if draw(st.booleans()):                            # gyroscopic: linear in v
+        terms.append(f"({draw(q_expr)})*{draw(st.sampled_from(velocities))}")
+    if draw(st.booleans()):                            # a potential
+        terms.append(f"-({draw(q_expr)})")
+    if draw(st.integers(0, 3)) == 0:                   # not quadratic in v
+        terms.append(draw(st.one_of(
+            st.sampled_from(velocities).map("{}**4/12".format), qv_expr)))
+    return " + ".join(terms)
+
+
+@st.composite
+def _constraint(draw, coordinates, q_expr, qv_expr):
+    velocities = [f"{c}_dot" for c in coordinates]
+    if draw(st.integers(0, 3)) == 0:                   # nonlinear in v (Chetaev)
+        return draw(qv_expr)
+    chosen = draw(st.lists(st.sampled_from(velocities), min_size=1, unique=True))
+    terms = [f"({draw(q_expr)})*{v}" if draw(st.booleans()) else v for v in chosen]
+    if draw(st.booleans()):                            # affine: h(q, t)
+        terms.append(f"({draw(q_expr)})")
+    return " + ".join(terms)
+
+
+_values = st.one_of(st.integers(-3, 3).map(float),
+                    st.floats(-3, 3, allow_nan=False).map(lambda x: round(x, 3)))
+
+
+@dataclass(frozen=True)
+class SceneCase:
+    """A drawn scene (TOML text) and the command line to run on it (without the file)."""
+
+    text: str
+    argv: tuple
+
+    def __str__(self):  # what Hypothesis prints of a failing example
+        return f"nhham {' '.join(self.argv)} SCENE with SCENE =\n{self.text}"
+
+
+@st.composite
+def well_formed_scenes(draw) -> SceneCase:
+    """A well-formed scene and a command line (classify, derive, compare, simulate,
+    linearize where a [steady] is drawn) with small budgets."""
+    coordinates = draw(st.lists(st.sampled_from(_COORDINATES), min_size=1, max_size=3,
+                                unique=True))
+    velocities = [f"{c}_dot" for c in coordinates]
+    parameters = draw(st.lists(st.sampled_from(_PARAMETERS), max_size=2, unique=True))
+    time = ["t"] if draw(st.booleans()) else []
+    depth = draw(st.integers(0, 2))
+    q_expr = _expressions(coordinates + parameters + time, depth)
+    qv_expr = _expressions(coordinates + velocities + parameters + time, depth)
+    values = {p: draw(st.one_of(_values, st.sampled_from([1.0, 2.0, 0.5]))) for p in parameters}
+    lines = [f"coordinates = {toml_value(coordinates)}",
+             f"parameters = {toml_value(values)}",
+             f"lagrangian = {json.dumps(draw(_lagrangian(coordinates, q_expr, qv_expr, parameters)))}",
+             f"constraints = {toml_value(draw(st.lists(_constraint(coordinates, q_expr, qv_expr), max_size=len(coordinates))))}"]
+    if len(coordinates) > 1 and draw(st.integers(0, 3)) == 0:
+        lines.append(f"holonomic = {toml_value([draw(q_expr)])}")
+    state = coordinates + velocities
+    if draw(st.booleans()):
+        initial = draw(st.lists(st.sampled_from(state), unique=True))
+        lines += ["[initial]"] + [f"{name} = {draw(_values)!r}" for name in initial]
+    steady = draw(st.integers(0, 4)) == 0
+    if steady:
+        lines += ["[steady]"] + [f"{name} = {draw(_values)!r}" for name in state]
+    command = draw(st.sampled_from(["classify", "derive", "compare", "simulate"]
+                                   + ["linearize"] * steady))
+    argv = [command, "--budget", "2"]
+    if draw(st.booleans()):
+        argv.append("--json")
+    if command == "classify" and draw(st.integers(0, 4)) == 0:
+        argv.append("--parametric")
+    if command == "derive":
+        argv += draw(st.sampled_from([[], ["--side", "hamiltonian"], ["--explicit"]]))
+    if command == "simulate":
+        argv += ["--t-end", repr(draw(st.sampled_from([0.1, 0.5, 1.0])))]
+        argv += draw(st.sampled_from([[], ["--method", "RK45"], ["--method", "rk4", "--step",
+                                      "0.05"], ["--method", "rattle", "--step", "0.05"],
+                                      ["--projection"], ["--project-initial"]]))
+    return SceneCase("\n".join(lines) + "\n", tuple(argv))
+
+
+def run_command(case: SceneCase, folder: Path) -> tuple[int, str, str]:
+    """Run the case's command in this process: (exit status, stdout, stderr)."""
+    scene = folder / "scene.toml"
+    scene.write_text(case.text, encoding="utf-8")
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        status = main([*case.argv, str(scene)])
+    return status, out.getvalue(), err.getvalue()
+
+
+def check_outcome(case: SceneCase, status: int, out: str, err: str) -> None:
+    """0, 2 or 3; a failure says in one line what is wrong (or why it did not succeed)."""
+    assert status in (0, 2, 3), f"exit {status}: {err.strip()}\n{case}"
+    if status == 0:
+        return
+    if "--json" in case.argv:
+        message = json.loads(out)["error"]["message"]
+    else:
+        message = err.strip().splitlines()[-1]
+    assert message.strip() and "\n" not in message.strip(), case
+    assert "Traceback" not in err, case
+
+
+FUZZ_EXAMPLES = int(os.environ.get("NHHAM_FUZZ_EXAMPLES", "200"))
+
+
+@settings(max_examples=FUZZ_EXAMPLES, deadline=None,
+          suppress_health_check=[HealthCheck.too_slow, HealthCheck.filter_too_much,
+                                 HealthCheck.data_too_large])
+@given(well_formed_scenes())
+def test_well_formed_scenes_end_in_0_2_or_3(case):
+    with tempfile.TemporaryDirectory() as folder:
+        status, out, err = run_command(case, Path(folder))
+    event(f"{case.argv[0]}: exit {status}")
+    check_outcome(case, status, out, err)

@@ -214,6 +214,9 @@ def _generate(system, path: str) -> dict:
     g = [R(e) for e in system.holonomic]
     qs = [rename[q] for q in system.coordinates]
     vs = [rename[v] for v in system.velocities]
+    # The geometry kernel reads (q, v) where its outputs depend on v: mu and h of a
+    # nonlinear constraint, or W of a Lagrangian not quadratic in v (W = d2L/dv dv).
+    geometry_v = nonlinear or any(e.free_symbols & set(vs) for e in W)
     L = R(system.lagrangian)
     # nhham's own derivative: sympy's diff spends most of its time on factors free of x
     lq = [derivative(L, q) for q in qs]
@@ -232,7 +235,7 @@ def _generate(system, path: str) -> dict:
                if powered else [])
     kernels = {
         "saddle": ("qv", W + F + mu + drift + h + g + applied),
-        "geometry": ("qv" if nonlinear else "q", W + mu + h + g),
+        "geometry": ("qv" if geometry_v else "q", W + mu + h + g),
         "energy": ("qv", [_energy(system, L, vs, W)]),
         "lq": ("qv", lq),
         "jphi": ("qv", jphi),
@@ -248,9 +251,10 @@ def _generate(system, path: str) -> dict:
     python = _python_module(kernels, printed, n, len(system.parameters))
     slot = system.time_slot
     c = _c_module(printed, n, m, k, len(system.parameters), path,
-                  forced=powered, time_slot=slot, geometry_v=nonlinear)
-    # the complex step's geometry kernel reads q only: none for nonlinear constraints
-    c_complex = "" if nonlinear else _c_complex_module(printed, n, m, k,
+                  forced=powered, time_slot=slot, newton_velocities=nonlinear,
+                  geometry_v=geometry_v)
+    # the complex step's geometry kernel reads q only: none where the geometry reads v
+    c_complex = "" if geometry_v else _c_complex_module(printed, n, m, k,
                                                        len(system.parameters),
                                                        forced=powered)
     layout = {
@@ -272,8 +276,10 @@ def _generate(system, path: str) -> dict:
         "input_names": tuple(u.name for u in system.inputs),
         "time_slot": slot,
         "complex_kernels": bool(c_complex),
-        # only with a nonlinear (Chetaev) constraint: the geometry kernel reads (q, v)
+        # only with a nonlinear (Chetaev) constraint: velocities onto M_1 by Newton
         **({"nonlinear_constraints": True} if nonlinear else {}),
+        # the geometry kernel reads (q, v): a nonlinear constraint, or W depending on v
+        **({"geometry_reads_v": True} if geometry_v else {}),
     }
     return {"python": python, "c": c, "c_complex": c_complex, "layout": layout}
 
@@ -390,7 +396,35 @@ class _ScalarPrinter(PythonCodePrinter):
 
 
 class _BatchPrinter(NumPyPrinter):
-    """Columns of a batch via ``numpy`` ufuncs."""
+    """Columns of a batch via ``numpy`` ufuncs; |x| and atan2 through the helpers of
+    :data:`_PY_COMPLEX_HELPERS`, which the complex step (the batch kernels on complex
+    arrays, where no compiled complex kernel exists) can differentiate."""
+
+    def _print_Abs(self, expr):
+        return f"nh_abs({self._print(expr.args[0])})"
+
+    def _print_atan2(self, expr):
+        return f"nh_atan2({self._print(expr.args[0])}, {self._print(expr.args[1])})"
+
+
+# numpy's abs of a complex array is its modulus and its arctan2 takes no complex arrays:
+# on complex states (the complex step) the first-order continuations the compiled
+# complex kernels use (nh_cabs, nh_catan2 of _COMPLEX_HELPERS), on real ones numpy's.
+_PY_COMPLEX_HELPERS = """
+
+def nh_abs(z):
+    if numpy.iscomplexobj(z):
+        return numpy.where(z.real < 0, -z, z)
+    return numpy.abs(z)
+
+
+def nh_atan2(y, x):
+    if not (numpy.iscomplexobj(y) or numpy.iscomplexobj(x)):
+        return numpy.arctan2(y, x)
+    yr, xr = numpy.real(y), numpy.real(x)
+    return numpy.arctan2(yr, xr) + 1j * ((xr * numpy.imag(y) - yr * numpy.imag(x))
+                                         / (xr * xr + yr * yr))
+"""
 
 
 def _python_module(kernels, printed, n, npar) -> str:
@@ -400,7 +434,7 @@ def _python_module(kernels, printed, n, npar) -> str:
         "import math",
         "import numpy",
         "import mpmath",
-        "",
+        _PY_COMPLEX_HELPERS,
     ]
     unpack_qv = _unpack(n, "qv")
     unpack_q = _unpack(n, "q")
@@ -606,7 +640,7 @@ def _c_complex_module(printed, n, m, k, npar, forced=False) -> str:
 
 
 def _c_module(printed, n, m, k, npar, path, forced=False, time_slot=None,
-              geometry_v=False) -> str:
+              newton_velocities=False, geometry_v=False) -> str:
     """The C translation unit: generated definitions and kernels, then the runtime files.
 
     Layout of the saddle kernel outputs (``out``): W (n*n, row-major), F (n), mu (m*n),
@@ -628,7 +662,7 @@ def _c_module(printed, n, m, k, npar, path, forced=False, time_slot=None,
         head.append(f"#define NHHAM_FORCED {n * n + n + m * n + 2 * m + k}")
     if time_slot is not None:
         head.append(f"#define NHHAM_TIME_SLOT {time_slot}")
-    if geometry_v:  # a nonlinear (Chetaev) constraint: the geometry kernel reads (q, v)
+    if newton_velocities:  # a nonlinear (Chetaev) constraint: mu and h read v
         head.append("#define NHHAM_GEOMETRY_V 1")
     if path == "closed_form":
         head.append("#define NHHAM_CLOSED_FORM 1")
