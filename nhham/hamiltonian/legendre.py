@@ -226,7 +226,10 @@ class LegendreMap:
             return self._linear_inverse()
         if kind == "closed-form":
             return self._closed_form
-        raise NoClosedFormInverseError(self.inverse_statement)
+        raise NoClosedFormInverseError(
+            f"{self.inverse_statement}; H and the fields on T*Q need v(q, p) in closed form: "
+            f"the Lagrangian side (derive --side lagrangian, simulate) does not, or write L "
+            f"with momenta solvable for the velocities (quadratic in them)", key="lagrangian")
 
     def _linear_inverse(self) -> dict:
         # v = W^-1 (p - a) = S (p - a) / delta with S = delta W^-1 the fraction-free

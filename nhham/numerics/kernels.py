@@ -78,8 +78,16 @@ class GeneratedKernels:
         return cls(MappingProxyType(funcs), MappingProxyType(sizes))
 
     def scalar(self, name, y, p) -> np.ndarray:
-        """Outputs of kernel ``name`` at one state (y: sequence of floats)."""
-        return np.array(self.functions[name][0](y, p), dtype=float)
+        """Outputs of kernel ``name`` at one state (y: sequence of floats).
+
+        IEEE arithmetic, as the compiled kernels and the batch ones: where Python's
+        ``math`` raises (log of a negative number, 1/0.0, an overflowing exp) the state
+        is evaluated by the batch kernel, whose NaN and inf the caller reports.
+        """
+        try:
+            return np.array(self.functions[name][0](y, p), dtype=float)
+        except (ValueError, ArithmeticError):
+            return self.batch(name, np.asarray(y, dtype=float)[None, :], p)[0]
 
     def batch(self, name, Y, p) -> np.ndarray:
         """Outputs at k states: Y (k, d) -> (k, size)."""

@@ -13,6 +13,7 @@ import io
 import json
 import math
 import os
+import re
 import string
 import tempfile
 from dataclasses import dataclass
@@ -242,12 +243,26 @@ class SceneCase:
         return f"nhham {' '.join(self.argv)} SCENE with SCENE =\n{self.text}"
 
 
+def _uses(names):
+    """Whether an expression uses one of ``names`` (a whole word: ``x`` is not in ``exp``)."""
+    pattern = re.compile(r"\b(" + "|".join(map(re.escape, names)) + r")\b")
+    return lambda text: pattern.search(text) is not None
+
+
 @st.composite
 def well_formed_scenes(draw) -> SceneCase:
     """A well-formed scene and a command line (classify, derive, compare, simulate,
-    linearize where a [steady] is drawn) with small budgets."""
+    linearize where a [steady] is drawn) with small budgets.
+
+    Drawn to reach the computations more often than the reader's refusals: as many
+    constraints as velocities only now and then, constraints and holonomic ones that
+    use the velocities and coordinates, an [initial] table for simulate giving the
+    coordinates; the refusals are still drawn (a parameter of value 0, 1/q on M_1, ...).
+    """
+    command = draw(st.sampled_from(["classify", "derive", "compare", "simulate", "linearize"]))
     coordinates = draw(st.lists(st.sampled_from(_COORDINATES), min_size=1, max_size=3,
                                 unique=True))
+    n = len(coordinates)
     velocities = [f"{c}_dot" for c in coordinates]
     parameters = draw(st.lists(st.sampled_from(_PARAMETERS), max_size=2, unique=True))
     time = ["t"] if draw(st.booleans()) else []
@@ -255,21 +270,25 @@ def well_formed_scenes(draw) -> SceneCase:
     q_expr = _expressions(coordinates + parameters + time, depth)
     qv_expr = _expressions(coordinates + velocities + parameters + time, depth)
     values = {p: draw(st.one_of(_values, st.sampled_from([1.0, 2.0, 0.5]))) for p in parameters}
+    holonomic = []
+    if n > 1 and draw(st.integers(0, 3)) == 0:
+        holonomic = [draw(q_expr.filter(_uses(coordinates)))]
+    room = n - len(holonomic) - (0 if draw(st.integers(0, 9)) == 0 else 1)
+    constraint = _constraint(coordinates, q_expr, qv_expr.filter(_uses(velocities)))
     lines = [f"coordinates = {toml_value(coordinates)}",
              f"parameters = {toml_value(values)}",
-             f"lagrangian = {json.dumps(draw(_lagrangian(coordinates, q_expr, qv_expr, parameters)))}",
-             f"constraints = {toml_value(draw(st.lists(_constraint(coordinates, q_expr, qv_expr), max_size=len(coordinates))))}"]
-    if len(coordinates) > 1 and draw(st.integers(0, 3)) == 0:
-        lines.append(f"holonomic = {toml_value([draw(q_expr)])}")
+             "lagrangian = " + json.dumps(draw(_lagrangian(coordinates, q_expr, qv_expr,
+                                                           parameters))),
+             f"constraints = {toml_value(draw(st.lists(constraint, max_size=max(room, 0))))}",
+             f"holonomic = {toml_value(holonomic)}"]
     state = coordinates + velocities
-    if draw(st.booleans()):
-        initial = draw(st.lists(st.sampled_from(state), unique=True))
-        lines += ["[initial]"] + [f"{name} = {draw(_values)!r}" for name in initial]
-    steady = draw(st.integers(0, 4)) == 0
-    if steady:
+    if draw(st.integers(0, 9)) < (9 if command == "simulate" else 3):
+        given = coordinates if draw(st.integers(0, 4)) else draw(st.lists(
+            st.sampled_from(coordinates), unique=True))
+        given = given + draw(st.lists(st.sampled_from(velocities), unique=True))
+        lines += ["[initial]"] + [f"{name} = {draw(_values)!r}" for name in given]
+    if command == "linearize" or draw(st.integers(0, 9)) == 0:
         lines += ["[steady]"] + [f"{name} = {draw(_values)!r}" for name in state]
-    command = draw(st.sampled_from(["classify", "derive", "compare", "simulate"]
-                                   + ["linearize"] * steady))
     argv = [command, "--budget", "2"]
     if draw(st.booleans()):
         argv.append("--json")
