@@ -9,7 +9,6 @@ sequences (so that the expression parser and System see hostile input).
 from __future__ import annotations
 
 import contextlib
-import gc
 import io
 import json
 import math
@@ -310,15 +309,8 @@ def run_command(case: SceneCase, folder: Path) -> tuple[int, str, str]:
     scene = folder / "scene.toml"
     scene.write_text(case.text, encoding="utf-8")
     out, err = io.StringIO(), io.StringIO()
-    # As in a process of its own: no garbage-collector callbacks (Hypothesis times the
-    # collector with one, where the --budget's alarm, raised there, would be printed by
-    # Python as "Exception ignored in ...", the command's budget still ending it).
-    callbacks, gc.callbacks[:] = gc.callbacks[:], []
-    try:
-        with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-            status = main([*case.argv, str(scene)])
-    finally:
-        gc.callbacks[:] = callbacks
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        status = main([*case.argv, str(scene)])
     return status, out.getvalue(), err.getvalue()
 
 
