@@ -259,9 +259,9 @@ def _velocities(system, values, missing, params, guesses=None) -> dict:
                              f"{unguessed[0]} = {{ guess = 1.0 }}", key="initial")
         if inside:
             return _velocities_by_newton(rows, at, missing, unknowns, guesses)
-    A = np.array([[float(sp.diff(e, u)) for u in unknowns] for e in at],
-                 dtype=float).reshape(len(rows), len(unknowns))
-    b = np.array([float(e.xreplace(zero)) for e in at], dtype=float)
+    A = np.array([[_real(sp.diff(e, u), lab) for u in unknowns] for (lab, _), e in
+                  zip(rows, at)], dtype=float).reshape(len(rows), len(unknowns))
+    b = np.array([_real(e.xreplace(zero), lab) for (lab, _), e in zip(rows, at)], dtype=float)
     scale = max(1.0, float(np.max(np.abs(A), initial=0.0)),
                 float(np.max(np.abs(b), initial=0.0)))
     # a constraint without a velocity left out relates given ones: not independent
@@ -290,6 +290,21 @@ def _velocities(system, values, missing, params, guesses=None) -> dict:
             + "; ".join(f"{lab} = {r:.6g}" for lab, r in bad) + " with them solved"
             + (_related(related) or "; leave one more velocity out"), key="initial")
     return {n: float(v) + 0.0 for n, v in zip(missing, x)}   # + 0.0: no "-0"
+
+
+def _real(value, label) -> float:
+    """A coefficient of ``label``'s row at the initial state as a float, or the
+    InputError that it is not a finite real number there (sqrt(x) at x = -2)."""
+    try:
+        number = complex(sp.sympify(value).evalf())
+    except (TypeError, ValueError):   # zoo, nan: no complex number
+        number = complex(math.nan)
+    if not (math.isfinite(number.real) and number.imag == 0.0):
+        raise InconsistentInitialDataError(
+            f"initial: {label} is not a finite real number at the initial state (one of "
+            f"its coefficients is {sp.sstr(sp.sympify(value).evalf(6))}); give [initial] "
+            f"values where it is defined", key="initial")
+    return number.real
 
 
 def _velocities_by_newton(rows, at, missing, unknowns, guesses) -> dict:
