@@ -307,7 +307,7 @@ class NumericModel:
         if self.compiled is not None:
             return self._evaluate_compiled(y, a2, b2)
         if y.ndim == 1:
-            out = self.kernels.functions["saddle"][0](y.tolist(), self._plist)
+            out = self.kernels.scalar_list("saddle", y.tolist(), self._plist)
             dy, lam, power, status = self._one(out, y, a2, b2)
             return dy, lam, power, Status(status)
         return self._evaluate_numpy(y, a2, b2)

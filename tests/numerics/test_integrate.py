@@ -203,3 +203,18 @@ def test_a_lagrangian_not_quadratic_in_v_with_a_constraint(backend):
     end = res.y[:, -1]
     assert np.allclose([end[0], end[1], end[2]], ref.y[:, -1], rtol=1e-8, atol=1e-9)
     assert abs(end[3] - end[0] * end[2]) < 1e-9   # on the constraint
+
+
+def test_an_overflow_in_the_numpy_kernels_stops_the_run_as_non_finite():
+    """x'' = e^x from x = 0, x' = sqrt(2): x'^2/2 - e^x = 0, so e^(-x/2) = 1 - t/sqrt(2)
+    and x reaches infinity at t* = sqrt(2). Python's math.exp raised OverflowError in the
+    numpy backend's single-state kernel (an internal error of the command); now the run
+    stops there as the compiled one does, keeping the finite part."""
+    from nhham import System
+
+    model = numeric_model(System(["x", "y"], "(x_dot**2 + y_dot**2)/2 + exp(x)", ["y_dot"]),
+                          backend="numpy")
+    with pytest.warns(NumericsWarning, match="run stopped"):
+        res = simulate(model, (0, 3), [0.0, 0.0, np.sqrt(2), 0.0], method="rk4", step=0.01)
+    assert not res.success and res.status == -2 and "non-finite" in res.message
+    assert np.all(np.isfinite(res.y)) and 1.3 < res.t[-1] < 1.6

@@ -397,7 +397,7 @@ class _ScalarPrinter(PythonCodePrinter):
 
 class _BatchPrinter(NumPyPrinter):
     """Columns of a batch via ``numpy`` ufuncs; |x| and atan2 through the helpers of
-    :data:`_PY_COMPLEX_HELPERS`, which the complex step (the batch kernels on complex
+    :data:`_PY_HELPERS`, which the complex step (the batch kernels on complex
     arrays, where no compiled complex kernel exists) can differentiate."""
 
     def _print_Abs(self, expr):
@@ -407,15 +407,38 @@ class _BatchPrinter(NumPyPrinter):
         return f"nh_atan2({self._print(expr.args[0])}, {self._print(expr.args[1])})"
 
 
-# numpy's abs of a complex array is its modulus and its arctan2 takes no complex arrays:
-# on complex states (the complex step) the first-order continuations the compiled
-# complex kernels use (nh_cabs, nh_catan2 of _COMPLEX_HELPERS), on real ones numpy's.
-_PY_COMPLEX_HELPERS = """
+class _MpPrinter(MpmathPrinter):
+    """mpmath, with exp, sinh and cosh of an argument beyond :data:`MP_EXP_BOUND` an
+    OverflowError (:data:`_PY_HELPERS`' ``nh_mp_bounded``): mpmath has no
+    overflow, and exp of exp(x) at the trial states of a run that blows up shifts a
+    mantissa by 10^57 bits (a MemoryError, or the machine's memory first)."""
+
+    def _bounded(self, expr):
+        return f"mpmath.{expr.func.__name__}(nh_mp_bounded({self._print(expr.args[0])}))"
+
+    _print_exp = _print_sinh = _print_cosh = _bounded
+
+
+#: |x| beyond which the mpmath kernels refuse exp(x), sinh(x), cosh(x): e^(10^5) is about
+#: 10^43429, far past double precision (whose states the reference reports), and cheap.
+MP_EXP_BOUND = 1e5
+
+# The generated Python module's helpers. numpy's abs of a complex array is its modulus and
+# its arctan2 takes no complex arrays: on complex states (the complex step) nh_abs and
+# nh_atan2 are the first-order continuations the compiled complex kernels use (nh_cabs,
+# nh_catan2 of _COMPLEX_HELPERS), on real ones numpy's. nh_mp_bounded: see _MpPrinter.
+_PY_HELPERS = """
 
 def nh_abs(z):
     if numpy.iscomplexobj(z):
         return numpy.where(z.real < 0, -z, z)
     return numpy.abs(z)
+
+
+def nh_mp_bounded(x):
+    if abs(x) > %r:
+        raise OverflowError("exp of %%s: beyond the range of the numbers" %% mpmath.nstr(x, 3))
+    return x
 
 
 def nh_atan2(y, x):
@@ -424,7 +447,7 @@ def nh_atan2(y, x):
     yr, xr = numpy.real(y), numpy.real(x)
     return numpy.arctan2(yr, xr) + 1j * ((xr * numpy.imag(y) - yr * numpy.imag(x))
                                          / (xr * xr + yr * yr))
-"""
+""" % MP_EXP_BOUND
 
 
 def _python_module(kernels, printed, n, npar) -> str:
@@ -434,7 +457,7 @@ def _python_module(kernels, printed, n, npar) -> str:
         "import math",
         "import numpy",
         "import mpmath",
-        _PY_COMPLEX_HELPERS,
+        _PY_HELPERS,
     ]
     unpack_qv = _unpack(n, "qv")
     unpack_q = _unpack(n, "q")
@@ -443,7 +466,7 @@ def _python_module(kernels, printed, n, npar) -> str:
         unpack = unpack_qv if args == "qv" else unpack_q
         lines += _py_scalar(name, unpack, npar, temps, reduced, _ScalarPrinter(
             {"fully_qualified_modules": True}), suffix="scalar")
-        lines += _py_scalar(name, unpack, npar, temps, reduced, MpmathPrinter(
+        lines += _py_scalar(name, unpack, npar, temps, reduced, _MpPrinter(
             {"fully_qualified_modules": True}), suffix="mp")
         lines += _py_batch(name, unpack, npar, temps, reduced)
     return "\n".join(lines) + "\n"
