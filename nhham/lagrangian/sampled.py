@@ -32,6 +32,7 @@ __all__ = [
     "zero_test",
     "best_block",
     "singular_values",
+    "is_finite",
 ]
 
 
@@ -128,6 +129,18 @@ def record(points, variables, limit=6):
 def is_affine(expr, vels):
     vset = set(vels)
     return all(not sp.diff(expr, v).free_symbols & vset for v in vels)
+
+
+def is_finite(S) -> bool:
+    """Whether every entry of a sampled matrix (floats, or mpmath numbers) is finite.
+
+    >>> is_finite(np.array([[1.0, 2.0]])), is_finite(np.array([[1.0, np.nan]]))
+    (True, False)
+    """
+    A = np.asarray(S)
+    if A.dtype != object:
+        return bool(np.all(np.isfinite(A)))
+    return all(mpmath.isfinite(x) for x in A.flat)
 
 
 def independent_rows(samples):

@@ -56,7 +56,7 @@ import mpmath
 import numpy as np
 import sympy as sp
 
-from nhham.errors import ComputationError, EmptySubmanifoldError
+from nhham.errors import ComputationError, EmptySubmanifoldError, InputError
 from nhham.lagrangian.algebra import cancel, solve_for_coordinates, solve_linear
 from nhham.lagrangian.decision import Decision
 from nhham.lagrangian.engine import Policy, decide
@@ -67,6 +67,7 @@ from nhham.lagrangian.sampled import (
     count_above,
     equilibrated,
     independent_rows,
+    is_finite,
     is_affine,
     record,
     relative_singular_values,
@@ -77,6 +78,7 @@ from nhham.lagrangian.sampled import (
 )
 from nhham.settings import PARAMETER_BOX, SEED, STATE_BOX, Precision
 from nhham.system.evaluation import numeric_function
+from nhham.system.expressions import short
 
 __all__ = ["Submanifold", "has_real_point"]
 
@@ -174,7 +176,7 @@ class Submanifold:
         vels = set(self.fibre)
         # Coordinates given linearly with a constant coefficient, repeatedly.
         sub, pending = solve_for_coordinates(self.system.coordinates, self.equations, vels)
-        pending = [sp.expand(e.xreplace(sub)) for e in pending]
+        pending = [self._defined(e, sp.expand(e.xreplace(sub)), sub) for e in pending]
         pending = [e for e in pending if e != 0]
         affine = [e for e in pending if is_affine(e, self.fibre) and e.free_symbols & vels]
         rest = [e for e in pending if e not in affine]
@@ -192,7 +194,11 @@ class Submanifold:
         vels = list(self.fibre)
         mu = sp.Matrix([[sp.diff(e, v) for v in vels] for e in affine])
         rest = sp.Matrix([e.xreplace({v: 0 for v in vels}) for e in affine])
-        samples = [self._numeric_matrix(mu, pt) for pt in self._raw_points(4)]
+        # where a one-form is not finite (log(x) at x < 0) a point says nothing
+        samples = [S for S in (self._numeric_matrix(mu, pt) for pt in self._raw_points(4))
+                   if is_finite(S)]
+        if not samples:
+            return {}, affine
         rows = independent_rows(samples)
         cols = best_columns([S[rows] for S in samples])
         if cols is None:
@@ -218,9 +224,31 @@ class Submanifold:
         return solve_linear(B, rhs, iszero=iszero)
 
     def reduce(self, expr) -> sp.Expr:
-        """``expr`` with solved variables substituted and rationally cancelled."""
+        """``expr`` with solved variables substituted and rationally cancelled.
+
+        Raises
+        ------
+        InputError
+            Where ``expr`` is not defined on M (1/x on M = {x = 0}: W or a constraint's
+            one-form singular on the constraint set).
+        """
         red = self.reduction
-        return cancel(sp.sympify(expr).xreplace(red.substitution))
+        expr = sp.sympify(expr)
+        return self._defined(expr, cancel(expr.xreplace(red.substitution)), red.substitution)
+
+    @staticmethod
+    def _defined(expr, value, substitution):
+        """``value``, the reduction of ``expr``, unless it is undefined on M (sympy's nan
+        or zoo: 1/x, atan2(0, 0) where M has x = 0): then the InputError saying so. No
+        sample point could give it a value either (every one is NaN: an SVD that does
+        not converge)."""
+        if not value.has(sp.nan, sp.zoo):
+            return value
+        solved = ", ".join(f"{k} = {short(v, 40)}" for k, v in substitution.items()
+                           if k in expr.free_symbols)
+        raise InputError(f"{short(expr, 80)} is not defined on the constraint set, where "
+                         f"{solved} (it becomes {short(value, 40)}): the Lagrangian's W or a "
+                         f"constraint is singular there; nhham needs them defined on M_1")
 
     # ------------------------------------------------------------ decisions
     @cached_property
@@ -393,10 +421,25 @@ class Submanifold:
                     out.append(Decision(0, "exact", "empty matrix"))
                     continue
                 index = np.array([where[e] for e in M], dtype=np.intp).reshape(M.shape)
+                values = [v[index] for v in flat]
+                keep = [i for i, S in enumerate(values) if is_finite(S)]
+                if not keep:
+                    raise self._nowhere_finite(M, values[0], len(points))
                 out.append(self._decide_rank(
-                    [v[index] for v in flat], points, resid, tol, zero,
-                    lambda index=index: [s[index] for s in sizes_at()]))
+                    [values[i] for i in keep], [points[i] for i in keep], resid, tol, zero,
+                    lambda index=index, keep=keep: [sizes_at()[i][index] for i in keep],
+                    skipped=len(points) - len(keep)))
         return out
+
+    def _nowhere_finite(self, M, value, count) -> InputError:
+        """The InputError that an entry of M is not finite at any of the ``count`` sample
+        points of this manifold (``value``: M at the first of them)."""
+        entry = next(e for e, x in zip(M, np.asarray(value).flat)
+                     if not is_finite(np.array([x])))
+        return InputError(f"{short(entry, 80)} is not finite at any of {count} points of the "
+                          f"constraint set (an overflow, or a function outside its domain: "
+                          f"the Lagrangian's W or a constraint is singular there); nhham "
+                          f"needs them defined on M_1")
 
     def _entries_at(self, entries, points) -> list:
         """The values of expressions at each point, one object array each (one lambdified
@@ -408,10 +451,10 @@ class Submanifold:
         """The working precision of the sampled arithmetic (mpmath's dps, or float64)."""
         return mpmath.workdps(self.precision) if self.precision else contextlib.nullcontext()
 
-    def _decide_rank(self, values, points, resid, tol, zero, sizes):
+    def _decide_rank(self, values, points, resid, tol, zero, sizes, skipped=0):
         """The rank from the values at the points; ``sizes()``: the entries' sizes at
         the points (:func:`value_scale`), asked only when rounding noise may need to be
-        set to 0."""
+        set to 0; ``skipped``: the points left out, where the matrix is not finite."""
         plain = [singular_values(S, self.precision) for S in values]
         ranks = [count_above(s, tol * max(float(s[0]) if len(s) else 0.0, 1.0))
                  for s in plain]
@@ -428,6 +471,9 @@ class Submanifold:
             relative = [relative_singular_values(s, floor=1.0) for s in plain]
         r = max(ranks)
         warnings = []
+        if skipped:
+            warnings.append(f"{skipped} sample point(s) skipped: the matrix is not finite "
+                            f"there")
         if len(set(ranks)) > 1:
             warnings.append(f"rank is not constant on M: ranks {ranks} at the samples")
         gaps = [sv[r - 1] for sv in relative if r >= 1]

@@ -126,3 +126,35 @@ def test_empty_submanifold_raises():
     s = System(["q1", "q2"], (v1**2 + v2**2) / 2)
     with pytest.raises(ComputationError):
         Submanifold(s, [q1**2 + 1], fibre=()).points()
+
+
+def test_an_expression_undefined_on_M_is_refused_by_name():
+    """z' - y'/x on M = {x = 0}: 1/x is not defined anywhere on M (sympy's zoo once x = 0
+    is substituted; every sample point was NaN, an SVD that did not converge)."""
+    from nhham.errors import InputError
+
+    z, zd = sp.symbols("z z_dot")
+    s = System(["x", "y", "z"], (xd**2 + yd**2 + zd**2) / 2, [zd - yd / x], ["x"])
+    M = Submanifold(s, (x,) + s.phi)   # M_1: the holonomic x = 0 and phi
+    with pytest.raises(InputError, match=r"z_dot - y_dot/x is not defined on the constraint "
+                                         r"set, where x = 0 \(it becomes zoo\*y_dot"):
+        M.reduction
+    assert M.with_equations([x]).reduce(yd / (1 + x)) == yd   # defined there: reduced
+
+
+def test_sampled_ranks_skip_points_where_the_matrix_is_not_finite():
+    """log(x) is NaN at the sample points with x < 0: those are left out and said; the
+    rank of [[log(x), 1]] is 1 at the others. log(-1 - x^2) is NaN at every point: the
+    entry is named."""
+    from nhham.errors import InputError
+
+    M = Submanifold(disk(), [])
+    (decision,) = M.sampled_ranks([sp.Matrix([[sp.log(x), 1]])])
+    assert decision.value == 1
+    skipped = sum(1 for pt in M.points()[0] if pt[x] < 0)
+    assert skipped and decision.samples == len(M.points()[0]) - skipped
+    assert f"{skipped} sample point(s) skipped: the matrix is not finite there" in \
+        decision.warnings
+    with pytest.raises(InputError, match=r"log\(-x\*\*2 - 1\) is not finite at any of 6 "
+                                         r"points of the constraint set"):
+        M.sampled_ranks([sp.Matrix([[sp.log(-1 - x**2), 1]])])
