@@ -260,15 +260,14 @@ def float_brackets(side, cons, analysis, precision, samples, seed) -> tuple:
     k, n = len(cons), system.n
     Mtq = Submanifold(system, tuple(cons), precision=precision, samples=samples, seed=seed,
                       exact=False)
-    points, resid = Mtq.points()
+    _, resid = Mtq.points()
     J = sp.Matrix([jacobian_row(c, list(q) + list(v)) for c in cons])
-    fW, fM, fJ = (Mtq.evaluator(geo.hessian), Mtq.evaluator(geo.mixed_hessian),
-                  Mtq.evaluator(J))
+    _, values = Mtq.finite_values([geo.hessian, geo.mixed_hessian, J])
     mats = []
-    for pt in points:
-        Jp = np.array(fJ(pt), dtype=float).reshape(k, 2 * n)
+    for W, Mx, Jp in values:
+        Jp = np.array(Jp, dtype=float).reshape(k, 2 * n)
         B = lagrangian_bracket(FloatMatrix(Jp[:, :n]), FloatMatrix(Jp[:, n:]),
-                               FloatMatrix(fW(pt)), FloatMatrix(fM(pt)))
+                               FloatMatrix(W), FloatMatrix(Mx))
         mats.append(B.a)
     return mats, resid
 

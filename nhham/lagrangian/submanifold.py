@@ -561,15 +561,18 @@ class Submanifold:
         z = [raw[s] for s in syms]
         if self.precision is None:
             z = np.array(z, dtype=float)
-            for _ in range(60):
+            # a start where an equation is not finite is dropped (below): numpy's warnings
+            # there would reach the user as the command's
+            with np.errstate(all="ignore"):
+                for _ in range(60):
+                    r = np.array(F(*z, *params), dtype=float).ravel()
+                    if not np.all(np.isfinite(r)):
+                        return None, None
+                    if np.max(np.abs(r)) < 1e-14 * (1 + np.max(np.abs(z))):
+                        break
+                    Jz = np.array(J(*z, *params), dtype=float)
+                    z = z - np.linalg.lstsq(Jz, r, rcond=None)[0]
                 r = np.array(F(*z, *params), dtype=float).ravel()
-                if not np.all(np.isfinite(r)):
-                    return None, None
-                if np.max(np.abs(r)) < 1e-14 * (1 + np.max(np.abs(z))):
-                    break
-                Jz = np.array(J(*z, *params), dtype=float)
-                z = z - np.linalg.lstsq(Jz, r, rcond=None)[0]
-            r = np.array(F(*z, *params), dtype=float).ravel()
             res = float(np.max(np.abs(r)))
             if not np.isfinite(res) or res > 1e-10 * (1 + float(np.max(np.abs(z)))):
                 return None, None
@@ -625,7 +628,8 @@ class Submanifold:
 
         The one route from expressions to numbers on the exact layers: compiled once
         (numpy in float64, mpmath at the manifold's precision); the result is a float
-        array (float64) or an object array of mpf, of the matrix's shape.
+        array (float64: NaN where an entry is not a real number, sqrt(x) at x < 0) or an
+        object array of mpf, of the matrix's shape.
         """
         matrix = sp.Matrix(matrix)
         f = self._lambdify([matrix])
@@ -633,8 +637,30 @@ class Submanifold:
 
         def at(point):
             value = self._matrix_at(f, point, shape)
-            return value.astype(float) if self.precision is None else value
+            if self.precision is not None:
+                return value
+            value = value.astype(complex)
+            return np.where(value.imag == 0, value.real, np.nan)
         return at
+
+    def finite_values(self, matrices: Sequence[sp.Matrix]) -> tuple[list, list]:
+        """The sample points of M where every matrix is finite (and real), and the
+        matrices' values there (:meth:`evaluator`): ``(points, [[value of each matrix]
+        at each point])``.
+
+        Raises
+        ------
+        InputError
+            No point has them all finite: the entry that is not is named.
+        """
+        points, _ = self.points()
+        fs = [self.evaluator(M) for M in matrices]
+        values = [[f(pt) for f in fs] for pt in points]
+        keep = [i for i, vals in enumerate(values) if all(is_finite(v) for v in vals)]
+        if not keep:
+            bad = next(j for j, v in enumerate(values[0]) if not is_finite(v))
+            raise self._nowhere_finite(sp.Matrix(matrices[bad]), values[0][bad], len(points))
+        return [points[i] for i in keep], [values[i] for i in keep]
 
     def _lambdify(self, exprs):
         return numeric_function(self.variables + self.system.parameters, exprs, self.precision)

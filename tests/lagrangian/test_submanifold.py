@@ -158,3 +158,18 @@ def test_sampled_ranks_skip_points_where_the_matrix_is_not_finite():
     with pytest.raises(InputError, match=r"log\(-x\*\*2 - 1\) is not finite at any of 6 "
                                          r"points of the constraint set"):
         M.sampled_ranks([sp.Matrix([[sp.log(-1 - x**2), 1]])])
+
+
+def test_finite_values_keep_the_points_where_the_matrices_are_real():
+    """sqrt(x) is not real at x < 0 (float() of a complex number was an internal error
+    in the bracket's sampled step): those points are left out, the values at the others
+    are sqrt(x) and x^2; sqrt(-1 - x^2) is real nowhere, and is named."""
+    from nhham.errors import InputError
+
+    M = Submanifold(disk(), [])
+    points, values = M.finite_values([sp.Matrix([[sp.sqrt(x)]]), sp.Matrix([[x**2]])])
+    assert points == [pt for pt in M.points()[0] if pt[x] >= 0] and points
+    for pt, (root, square) in zip(points, values):
+        assert root[0, 0] == pytest.approx(pt[x] ** 0.5) and square[0, 0] == pt[x] ** 2
+    with pytest.raises(InputError, match=r"sqrt\(-x\*\*2 - 1\) is not finite at any of 6"):
+        M.finite_values([sp.Matrix([[1, sp.sqrt(-1 - x**2)]])])
