@@ -195,7 +195,8 @@ class System:
 
         known = set(timed.values())
         for label, expr in [("lagrangian", lag)] + _labelled(cons, hols):
-            problems += expression_problems(label, expr, coords + vels, known)
+            # smooth in t too: nhham differentiates L and the constraints in it
+            problems += expression_problems(label, expr, coords + vels + (TIME,), known)
         forced = known | set(ins) | {TIME}
         for label, expr in _force_labels(applied, coords, diss):
             problems += expression_problems(label, expr, coords + vels + ins + (TIME,), forced)
