@@ -48,6 +48,7 @@ from nhham.errors import ComputationError, InconsistentInitialDataError, InputEr
 from nhham.numerics.chart import (ComplexField, chart_jacobian, chart_jacobians, choose_chart,
                                   input_jacobians)
 from nhham.numerics.relative import group_block, spin_rate
+from nhham.numerics.status import NumericalFailure, Status
 
 if TYPE_CHECKING:  # the exact matrix comes from the symbolic side; numerics never imports it
     import sympy
@@ -438,7 +439,13 @@ def _check_steady(model, y0, motion=None):
     ``motion``: X(y0) = w Xi(y0), the accelerations those of the group motion)."""
     n, names = model.n, model.names
     residuals = _check_on_manifold(model, y0)
-    acc = model.rhs(0.0, y0)[n:]
+    try:
+        acc = model.rhs(0.0, y0)[n:]
+    except NumericalFailure as exc:  # the user's state: no motion is defined there
+        raise InconsistentInitialDataError(
+            f"steady: the equations of motion are not defined at the state: "
+            f"{_undefined_there(model, y0, exc)}; choose a [steady] state where they are",
+            key="steady") from None
     if motion is not None:
         acc = acc - motion.rate * motion.lifted[n:]
     scale = max(1.0, float(np.abs(y0).max()))
@@ -545,6 +552,22 @@ def _moved_along(y0, n, rest=None):
     y1 = y0.astype(float).copy()
     y1[:n] += 0.5 / top * v0
     return y1
+
+
+def _undefined_there(model, y0, failure) -> str:
+    """Why the field is not defined at y0 (``failure``: the NumericalFailure of the
+    right-hand side there), in the words of the scene: W, the constraints, or C."""
+    with np.errstate(all="ignore"):
+        W, mu, h, _ = model.geometry(y0)
+        if not np.all(np.isfinite(W)):
+            return "the Hessian W = d2L/dv dv of the lagrangian is not finite there"
+        if np.linalg.matrix_rank(W) < model.n:
+            return "the Hessian W = d2L/dv dv of the lagrangian is singular there"
+        if not (np.all(np.isfinite(mu)) and np.all(np.isfinite(h))):
+            return "a constraint is not finite there"
+    if failure.status == Status.SINGULAR:
+        return "C = mu W^-1 mu^T is singular there (the multipliers are not determined)"
+    return "the field is not finite there (the lagrangian or a constraint leaves its domain)"
 
 
 def _check_on_manifold(model, y0) -> dict:

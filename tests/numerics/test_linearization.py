@@ -136,6 +136,29 @@ def test_pendulum_equilibria_and_exact_path():
     assert np.allclose(np.array(ej.matrix, dtype=float), bottom.full_matrix, atol=1e-13)
 
 
+@pytest.mark.parametrize("lagrangian, constraints, why", [
+    # W = diag(x, 1) at x = 0
+    ("x*x_dot**2/2 + y_dot**2/2", [], "the Hessian W = d2L/dv dv of the lagrangian is "
+                                       "singular there"),
+    # mu = (x, 0): C = mu W^-1 mu^T = x^2 vanishes at x = 0
+    ("(x_dot**2 + y_dot**2)/2", ["x*x_dot"], "C = mu W^-1 mu^T is singular there"),
+    # F = -dV/dx = -1/(2 sqrt(x)) at x = 0: 1/0
+    ("(x_dot**2 + y_dot**2)/2 - sqrt(x)", [], "the field is not finite there"),
+])
+def test_a_state_where_the_motion_is_not_defined_is_refused_saying_why(lagrangian,
+                                                                       constraints, why):
+    """The right-hand side's NumericalFailure at the user's [steady] state was an internal
+    failure (exit 1): it is bad input, saying which part is singular or not finite."""
+    import nhham
+
+    model = numeric_model(nhham.System(["x", "y"], lagrangian, constraints), backend="numpy")
+    with pytest.raises(InconsistentInitialDataError) as info:
+        linearize(model, dict(x=0.0, y=0.0, x_dot=0.0, y_dot=0.0))
+    assert str(info.value).startswith("steady: the equations of motion are not defined at "
+                                      f"the state: {why}")
+    assert info.value.key == "steady"
+
+
 def test_state_off_the_manifold_or_not_steady_is_refused():
     model = numeric_model(pendulum_cartesian(), backend="numpy")
     with pytest.raises(InconsistentInitialDataError, match=r"not on M_1: holonomic\[0\]"):
