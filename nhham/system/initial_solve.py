@@ -243,7 +243,7 @@ def _velocities(system, values, missing, params, guesses=None) -> dict:
     known = dict(params)
     known.update({sp.Symbol(n): sp.Float(v) for n, v in values.items()})
     rows = _velocity_rows(system)
-    at = [e.xreplace(known) for _, e in rows]
+    at = [_at_initial(e, known, lab) for lab, e in rows]
     zero = {u: 0 for u in unknowns}
     guesses = dict(guesses or {})
     for (lab, _), e in zip(rows, at):  # Chetaev: phi may have several roots in them
@@ -292,6 +292,21 @@ def _velocities(system, values, missing, params, guesses=None) -> dict:
     return {n: float(v) + 0.0 for n, v in zip(missing, x)}   # + 0.0: no "-0"
 
 
+def _at_initial(expr, known, label):
+    """``expr`` (``label``'s row) at the known initial values, or the InputError that it
+    is not defined there: sympy's atan2 of 1/0 compares NaN and raises a TypeError."""
+    try:
+        return expr.xreplace(known)
+    except TypeError:
+        raise _not_finite(label, "undefined") from None
+
+
+def _not_finite(label, value) -> InconsistentInitialDataError:
+    return InconsistentInitialDataError(
+        f"initial: {label} is not a finite real number at the initial state (one of its "
+        f"coefficients is {value}); give [initial] values where it is defined", key="initial")
+
+
 def _real(value, label) -> float:
     """A coefficient of ``label``'s row at the initial state as a float, or the
     InputError that it is not a finite real number there (sqrt(x) at x = -2)."""
@@ -300,10 +315,7 @@ def _real(value, label) -> float:
     except (TypeError, ValueError):   # zoo, nan: no complex number
         number = complex(math.nan)
     if not (math.isfinite(number.real) and number.imag == 0.0):
-        raise InconsistentInitialDataError(
-            f"initial: {label} is not a finite real number at the initial state (one of "
-            f"its coefficients is {sp.sstr(sp.sympify(value).evalf(6))}); give [initial] "
-            f"values where it is defined", key="initial")
+        raise _not_finite(label, sp.sstr(sp.sympify(value).evalf(6)))
     return number.real
 
 
