@@ -275,17 +275,21 @@ def well_formed_scenes(draw) -> SceneCase:
         holonomic = [draw(q_expr.filter(_uses(coordinates)))]
     room = n - len(holonomic) - (0 if draw(st.integers(0, 9)) == 0 else 1)
     constraint = _constraint(coordinates, q_expr, qv_expr.filter(_uses(velocities)))
+    constraints = draw(st.lists(constraint, max_size=max(room, 0)))
     lines = [f"coordinates = {toml_value(coordinates)}",
              f"parameters = {toml_value(values)}",
              "lagrangian = " + json.dumps(draw(_lagrangian(coordinates, q_expr, qv_expr,
                                                            parameters))),
-             f"constraints = {toml_value(draw(st.lists(constraint, max_size=max(room, 0))))}",
+             f"constraints = {toml_value(constraints)}",
              f"holonomic = {toml_value(holonomic)}"]
     state = coordinates + velocities
     if draw(st.integers(0, 9)) < (9 if command == "simulate" else 3):
-        given = coordinates if draw(st.integers(0, 4)) else draw(st.lists(
-            st.sampled_from(coordinates), unique=True))
-        given = given + draw(st.lists(st.sampled_from(velocities), unique=True))
+        if draw(st.integers(0, 3)):  # a value left out per constraint, solved by nhham
+            left_out = (draw(st.permutations(velocities))[:len(constraints) + len(holonomic)]
+                        + draw(st.permutations(coordinates))[:len(holonomic)])
+            given = [name for name in state if name not in left_out]
+        else:                        # any: what is missing or too much is refused
+            given = draw(st.lists(st.sampled_from(state), unique=True))
         lines += ["[initial]"] + [f"{name} = {draw(_values)!r}" for name in given]
     if command == "linearize" or draw(st.integers(0, 9)) == 0:
         lines += ["[steady]"] + [f"{name} = {draw(_values)!r}" for name in state]
