@@ -97,6 +97,8 @@ class GeneratedKernels:
         """Outputs at k states: Y (k, d) -> (k, size)."""
         Yt = np.ascontiguousarray(np.asarray(Y, dtype=float).T)
         out = np.zeros((self.sizes[name], Yt.shape[1]))
+        # numpy numbers, not Python floats: 1/t at t = 0 is inf, not a ZeroDivisionError
+        p = [np.asarray(v, dtype=float) for v in p]
         with np.errstate(all="ignore"):  # non-finite values are reported by the caller
             self.functions[name][1](Yt, p, out)
         return out.T

@@ -76,3 +76,8 @@ def test_the_scalar_python_kernels_keep_ieee_arithmetic():
     assert mu0 == np.inf and mu1 == 1.0 and h == 0.0
     W00, *rest = kernels.scalar("geometry", [2.0, 4.0], [])
     assert W00 == pytest.approx(2 + np.log(2.0)) and rest == [0, 0, 1.0, 0.25, 1.0, 0]
+    # a parameter slot (here the time) at 0 in 1/t: inf in the batch kernels too
+    timed = nhham.System([x], (2 + 1 / sp.Symbol("t")) * xd ** 2 / 2)
+    kernels = numeric_model(timed, backend="numpy").kernels
+    assert kernels.scalar("geometry", [1.0], [0.0]).tolist() == [np.inf]
+    assert kernels.scalar("geometry", [1.0], [0.5]).tolist() == [4.0]

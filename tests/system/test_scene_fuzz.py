@@ -243,10 +243,12 @@ class SceneCase:
         return f"nhham {' '.join(self.argv)} SCENE with SCENE =\n{self.text}"
 
 
-def _uses(names):
-    """Whether an expression uses one of ``names`` (a whole word: ``x`` is not in ``exp``)."""
-    pattern = re.compile(r"\b(" + "|".join(map(re.escape, names)) + r")\b")
-    return lambda text: pattern.search(text) is not None
+def _using(expressions, names):
+    """``expressions`` made to use one of ``names`` (a whole word: ``x`` is not in ``exp``):
+    one that uses none is multiplied by one of them (no filter: most draws would fail it)."""
+    uses = re.compile(r"\b(" + "|".join(map(re.escape, names)) + r")\b").search
+    return st.tuples(expressions, st.sampled_from(names)).map(
+        lambda pair: pair[0] if uses(pair[0]) else f"({pair[0]})*{pair[1]}")
 
 
 @st.composite
@@ -272,9 +274,9 @@ def well_formed_scenes(draw) -> SceneCase:
     values = {p: draw(st.one_of(_values, st.sampled_from([1.0, 2.0, 0.5]))) for p in parameters}
     holonomic = []
     if n > 1 and draw(st.integers(0, 3)) == 0:
-        holonomic = [draw(q_expr.filter(_uses(coordinates)))]
+        holonomic = [draw(_using(q_expr, coordinates))]
     room = n - len(holonomic) - (0 if draw(st.integers(0, 9)) == 0 else 1)
-    constraint = _constraint(coordinates, q_expr, qv_expr.filter(_uses(velocities)))
+    constraint = _constraint(coordinates, q_expr, _using(qv_expr, velocities))
     constraints = draw(st.lists(constraint, max_size=max(room, 0)))
     lines = [f"coordinates = {toml_value(coordinates)}",
              f"parameters = {toml_value(values)}",
