@@ -51,7 +51,7 @@ from nhham.errors import InconsistentInitialDataError, InputError
 from nhham.numerics.chetaev import padded, velocities_newton
 from nhham.numerics.kernels import (CompiledRHS, GeneratedKernels, ParameterBlock,
                                     baumgarte_terms, columns)
-from nhham.numerics.saddle import SingleStateSolver, cond_each, solve_saddle
+from nhham.numerics.saddle import SingleStateSolver, cond_each, condition, solve_saddle
 from nhham.numerics.status import NumericalFailure, Status
 
 __all__ = ["NumericModel", "NumericsWarning", "LibraryReady", "ProjectionOutcome",
@@ -554,10 +554,7 @@ class NumericModel:
 
     def cond_W(self, y):
         """2-norm condition number of W(q); float or (k,)."""
-        W = self.geometry(self._check(y))[0]
-        with np.errstate(all="ignore"):
-            c = np.linalg.cond(W)
-        return float(c) if np.ndim(c) == 0 else c
+        return condition(self.geometry(self._check(y))[0])
 
     def cond_C(self, y):
         """2-norm condition number of C = -mu W^{-1} mu^T; 1.0 when m = 0."""
@@ -569,7 +566,7 @@ class NumericModel:
             try:
                 X = np.linalg.solve(W, np.swapaxes(mu, -1, -2))
                 C = -mu @ X
-                c = np.linalg.cond(C)
+                c = condition(C)
             except np.linalg.LinAlgError:
                 c = np.inf if y.ndim == 1 else cond_each(W, mu)
         c = np.where(np.isfinite(c), c, np.inf)

@@ -218,3 +218,16 @@ def test_an_overflow_in_the_numpy_kernels_stops_the_run_as_non_finite():
         res = simulate(model, (0, 3), [0.0, 0.0, np.sqrt(2), 0.0], method="rk4", step=0.01)
     assert not res.success and res.status == -2 and "non-finite" in res.message
     assert np.all(np.isfinite(res.y)) and 1.3 < res.t[-1] < 1.6
+
+
+def test_a_run_from_a_state_where_W_is_infinite_stops_there():
+    """W = diag(1/(2t), 1) is infinite at t = 0: the run stops at its start (non-finite),
+    and the diagnostics of the state kept report cond(W) = inf (numpy's SVD of inf did
+    not converge: an internal error of the command)."""
+    from nhham import System
+
+    model = numeric_model(System(["x", "y"], "x_dot**2/(4*t) + y_dot**2/2"), backend="numpy")
+    with pytest.warns(NumericsWarning):
+        res = simulate(model, (0, 1), [0.0, 0.0, 1.0, 1.0])
+    assert not res.success and res.status == -2 and res.t.tolist() == [0.0]
+    assert res.cond_W_max == np.inf
