@@ -18,7 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from nhham.errors import ComputationError, InputError
+from nhham.errors import ComputationError, InconsistentInitialDataError, InputError
 from nhham.numerics.kernels import columns
 from nhham.numerics.nullspace import needs_null_space, solve_null_space
 
@@ -190,6 +190,10 @@ def choose_chart(model, y0, independent) -> Chart:
     n, m, k = model.n, model.m, model.k
     names = model.names
     _, mu, _, _ = model.geometry(y0)
+    if not np.all(np.isfinite(mu)):
+        raise InconsistentInitialDataError(
+            "steady: the constraints are not finite at the state (a function of theirs "
+            "outside its domain there); choose a [steady] state where they are", key="steady")
     G = mu[:k]  # rows of the complete lifts: dg/dq
     if independent is not None:
         unknown = [s for s in independent if s not in names]
@@ -208,12 +212,18 @@ def choose_chart(model, y0, independent) -> Chart:
                              "other coordinates or velocities at this state")
         return Chart(tuple(iq), tuple(dq), tuple(iv), tuple(dv))
     dq = greedy_columns(G, k, range(n)) if k else []
+    # the user's state: no chart of M_1 there is bad input, said with what to change
     if len(dq) < k:
-        raise ComputationError("linearize: the holonomic constraints are singular at the state")
+        raise InconsistentInitialDataError(
+            "steady: the holonomic constraints are singular at the state (their gradients "
+            "dependent: no coordinates solve them there); choose another [steady] state",
+            key="steady")
     order = list(dq) + [i for i in range(n) if i not in dq]
     dv = greedy_columns(mu, m, order) if m else []
     if len(dv) < m:
-        raise ComputationError("linearize: the constraint one-forms are dependent at the state")
+        raise InconsistentInitialDataError(
+            "steady: the constraint one-forms are dependent at the state (no velocities "
+            "solve them there); choose another [steady] state", key="steady")
     iq = [i for i in range(n) if i not in dq]
     iv = [i for i in range(n) if i not in dv]
     return Chart(tuple(iq), tuple(sorted(dq)), tuple(iv), tuple(sorted(dv)))

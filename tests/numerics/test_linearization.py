@@ -159,6 +159,23 @@ def test_a_state_where_the_motion_is_not_defined_is_refused_saying_why(lagrangia
     assert info.value.key == "steady"
 
 
+def test_a_state_where_the_constraints_have_no_chart_is_refused_saying_why():
+    """g = x^2 + y^2 at the origin: g = 0 and dg = 0, so no coordinate solves g = 0
+    there (a ComputationError: exit 1, then 3 with nothing to do). The user's state:
+    bad input, naming [steady] and what to change."""
+    import nhham
+
+    model = numeric_model(nhham.System(["x", "y", "z"], "(x_dot**2 + y_dot**2 + z_dot**2)/2",
+                                       holonomic=["x**2 + y**2"]), backend="numpy")
+    from nhham.numerics.steady_sweep import steady_state
+
+    with pytest.raises(InconsistentInitialDataError) as info:  # the [steady] table's lift
+        steady_state(model, dict(x=0.0, y=0.0, z=0.0, x_dot=0.0, y_dot=0.0, z_dot=0.0))
+    assert str(info.value).startswith("steady: the holonomic constraints are singular at the "
+                                      "state") and "choose another [steady] state" in str(info.value)
+    assert info.value.key == "steady"
+
+
 def test_state_off_the_manifold_or_not_steady_is_refused():
     model = numeric_model(pendulum_cartesian(), backend="numpy")
     with pytest.raises(InconsistentInitialDataError, match=r"not on M_1: holonomic\[0\]"):
