@@ -199,6 +199,24 @@ def test_a_closed_form_inverse_with_radicals_agrees_at_the_points():
     assert "the round trip agrees at the points" in check.detail
 
 
+def test_decimals_and_irrational_coefficients_agree():
+    """Found by the scene fuzz, each reported as "please report this scene as a bug":
+    W = e^0.125 (a float: sympy evaluates exp of a decimal), so the identities on TQ
+    leave rounding, 1e-16 exp(t) where both sides are 0, which they compare relative to
+    their size at the points; W = [[e, 1/8], [1/8, 1]] gives Leg^-1 o Leg - id with
+    coefficients 1/(16 e - 1), which the normal form kept and cancel takes to 0."""
+    import nhham
+
+    decimal = cross_check(nhham.System(
+        ["theta"], "exp(0.5**3)*theta_dot**2/2 + exp(t)*theta_dot - exp(t)"))
+    assert decimal.agree, decimal.describe()
+    assert not decimal.detail["field"].exact   # decided at the points
+    irrational = cross_check(nhham.System(
+        ["y", "theta"], "exp(1)*y_dot**2/2 + theta_dot**2/2 + y_dot*theta_dot/4 + y*theta_dot"))
+    assert irrational.agree and irrational.detail["legendre inverse"].exact, \
+        irrational.describe()
+
+
 def test_a_wrong_sign_is_detected(monkeypatch):
     """Flip the sign of Z^H: the field, the multipliers and C disagree."""
     def wrong(self):
