@@ -15,7 +15,7 @@ from typing import cast
 import numpy as np
 import sympy as sp
 
-from nhham.errors import BudgetExceeded, ComputationError, NhhamError
+from nhham.errors import BudgetExceeded, ComputationError, InputError, NhhamError
 from nhham.hamiltonian.brackets import connected_blocks
 from nhham.hamiltonian.classes import ConstraintClasses
 from nhham.hamiltonian.classes_sampled import classes_from_samples
@@ -266,9 +266,16 @@ def float_brackets(side, cons, analysis, precision, samples, seed) -> tuple:
     mats = []
     for W, Mx, Jp in values:
         Jp = np.array(Jp, dtype=float).reshape(k, 2 * n)
-        B = lagrangian_bracket(FloatMatrix(Jp[:, :n]), FloatMatrix(Jp[:, n:]),
-                               FloatMatrix(W), FloatMatrix(Mx))
+        try:
+            B = lagrangian_bracket(FloatMatrix(Jp[:, :n]), FloatMatrix(Jp[:, n:]),
+                                   FloatMatrix(W), FloatMatrix(Mx))
+        except ZeroDivisionError:  # W singular at this point: the bracket is not defined
+            continue
         mats.append(B.a)
+    if not mats:
+        raise InputError(f"the Hessian W = d2L/dv dv is singular at every one of "
+                         f"{len(values)} points of M_1 where it is finite: L is not regular "
+                         f"on the constraint set")
     return mats, resid
 
 

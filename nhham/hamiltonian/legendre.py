@@ -337,11 +337,13 @@ class LegendreMap:
                     v = v - be.solve(Wn, r)
                 except (np.linalg.LinAlgError, ZeroDivisionError) as exc:
                     raise ComputationError(
-                        f"numeric Legendre inverse: W is singular at q={list(q)}, v={list(v)}"
-                    ) from exc
+                        f"numeric Legendre inverse: W is singular at q = {_numbers(q)}, v = "
+                        f"{_numbers(v)}: L is not regular there (the Hamiltonian side needs "
+                        f"W invertible)") from exc
             raise ComputationError(
                 f"numeric Legendre inverse did not converge in {maxiter} Newton steps at "
-                f"q={list(q)}, p={list(p)} (residual {float(be.norm(r)):.3g})")
+                f"q = {_numbers(q)}, p = {_numbers(p)} (residual {float(be.norm(r)):.3g}): no "
+                f"velocity has these momenta near v = 0")
 
     # --------------------------------------------------------- transport
     @cached_property
@@ -399,6 +401,11 @@ class LegendreMap:
         """Leg^* omega for a 2-form on T*Q given by its matrix: J^T (Omega o Leg) J."""
         O = sp.Matrix(omega).applyfunc(self.pullback)
         return (self.jacobian.T * O * self.jacobian).applyfunc(sp.expand)
+
+
+def _numbers(values) -> str:
+    """A vector for a message: [0.608, 1.24] (not numpy's reprs)."""
+    return "[" + ", ".join(f"{float(x):.6g}" for x in values) + "]"
 
 
 def _close(cand, v, p, pA, pt):

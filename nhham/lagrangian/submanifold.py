@@ -344,14 +344,12 @@ class Submanifold:
             return rows, list(rows), Decision((rows, list(rows)), "exact",
                                               "the whole (square, regular) matrix")
         reduced = matrix.applyfunc(self.reduce if self.exact else cancel)
-        points = []
+        points: list = []
         if not reduced.free_symbols:
             samples = [np.array(reduced.evalf(), dtype=float)]
-        else:
-            points, _ = self.points()
-            f = self._lambdify([reduced])
-            samples = [np.array(self._matrix_at(f, pt, reduced.shape).astype(complex).real,
-                                dtype=float) for pt in points]
+        else:  # the points where it is finite and real (log(x) at x > 0)
+            points, values = self.finite_values([reduced])
+            samples = [np.array(value, dtype=float) for (value,) in values]
         rows, cols, score = best_block(samples, rank)
         if rows is None:
             raise ComputationError(

@@ -337,6 +337,11 @@ def linearize(model, state, *, independent: Sequence[str] | None = None,
     else:
         J = chart_jacobians(cf, chart, y0[None, :], step, P, generator=generator,
                             rates=np.array([motion.rate]))[0]
+    if not np.all(np.isfinite(J)):  # the user's state: no linearisation there
+        raise InconsistentInitialDataError(
+            "steady: the state matrix is not finite at the state (a derivative of the "
+            "lagrangian or of a constraint is not finite there: atan2(0, 0), sqrt at 0); "
+            "choose a [steady] state where the motion is smooth", key="steady")
     B = input_jacobians(cf, chart, y0[None, :], step, model)[0]
     moved = _moved_along(y0, model.n, None if motion is None else motion.rest)
 

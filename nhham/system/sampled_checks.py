@@ -320,12 +320,11 @@ def _combination(mu, rows, independent, i, vels):
         return {}
     A = mu.extract(independent, list(range(mu.cols)))  # k x n
     rng = np.random.default_rng(VALIDATION_SEED + 3)
-    for _ in range(8):  # a point where the rows are finite (log(x) at x > 0)
+    for _ in range(8):  # a point where the rows are finite and real (log(x) at x > 0)
         sample = {s: rng.uniform(*STATE_BOX) for s in A.free_symbols}
-        An = np.array(A.xreplace(sample).evalf(), dtype=complex)
+        An = _real(np.array(A.xreplace(sample).evalf(), dtype=complex))
         if np.all(np.isfinite(An)):
             break
-    An = An.real
     import scipy.linalg
 
     cols = sorted(scipy.linalg.qr(An, pivoting=True)[2][: len(independent)])

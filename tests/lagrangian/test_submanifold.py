@@ -173,3 +173,16 @@ def test_finite_values_keep_the_points_where_the_matrices_are_real():
         assert root[0, 0] == pytest.approx(pt[x] ** 0.5) and square[0, 0] == pt[x] ** 2
     with pytest.raises(InputError, match=r"sqrt\(-x\*\*2 - 1\) is not finite at any of 6"):
         M.finite_values([sp.Matrix([[1, sp.sqrt(-1 - x**2)]])])
+
+
+def test_a_regular_block_is_chosen_at_the_points_where_the_matrix_is_finite():
+    """[[log(x), 1]] has rank 1; at the points with x < 0 log(x) is NaN (np.linalg.norm
+    of it: an SVD that did not converge). The block is chosen at the others, and a
+    matrix finite nowhere is named."""
+    from nhham.errors import InputError
+
+    M = Submanifold(disk(), [], exact=False)
+    rows, cols, decision = M.regular_block(sp.Matrix([[sp.log(x), 1]]), 1)
+    assert rows == [0] and len(cols) == 1 and decision.method == "sampled"
+    with pytest.raises(InputError, match="is not finite at any of 6"):
+        M.regular_block(sp.Matrix([[sp.log(-1 - x**2), 1]]), 1)

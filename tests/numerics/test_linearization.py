@@ -176,6 +176,19 @@ def test_a_state_where_the_constraints_have_no_chart_is_refused_saying_why():
     assert info.value.key == "steady"
 
 
+def test_a_state_where_the_state_matrix_is_not_finite_is_refused():
+    """W = exp(atan2(asin z, asin z)): its derivative is 0/0 at z = 0 (sympy's is 0,
+    the complex step's NaN), and LAPACK refused the NaN matrix ("Array must not contain
+    infs or NaNs": an internal error)."""
+    import nhham
+
+    model = numeric_model(nhham.System(["z"], "exp(atan2(asin(z), asin(z)))*z_dot**2/2"),
+                          backend="numpy")
+    with pytest.raises(InconsistentInitialDataError, match="steady: the state matrix is not "
+                                                           "finite at the state"):
+        linearize(model, dict(z=0.0, z_dot=0.0))
+
+
 def test_state_off_the_manifold_or_not_steady_is_refused():
     model = numeric_model(pendulum_cartesian(), backend="numpy")
     with pytest.raises(InconsistentInitialDataError, match=r"not on M_1: holonomic\[0\]"):
