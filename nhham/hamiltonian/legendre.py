@@ -268,14 +268,16 @@ class LegendreMap:
 
     def _round_trip_points(self, rng, count):
         # sympy Floats, not Python floats: xreplace puts a value in as it is, and a
-        # momentum that is a bare velocity (p_A = v^A) would come back a float.
+        # momentum that is a bare velocity (p_A = v^A) would come back a float. Each point
+        # with its velocities reversed too: a branch that inverts Leg for one sign of v
+        # only (the cube root of p = v^3/3 chosen for v < 0) is no inverse.
         pts = []
         for _ in range(count):
             pt = {s: sp.Float(rng.uniform(-0.6, 0.6)) for s in self.coordinates + self.velocities}
             for par in self.system.parameters:
                 pt[par] = sp.Float(self.system.parameter_values.get(
                     par, rng.uniform(*PARAMETER_BOX)))
-            pts.append(pt)
+            pts += [pt, {**pt, **{v: -pt[v] for v in self.velocities}}]
         return pts
 
     # ----------------------------------------------------- numeric inverse
