@@ -56,29 +56,26 @@ import mpmath
 import numpy as np
 import sympy as sp
 
-from nhham.errors import ComputationError, EmptySubmanifoldError, InputError
-from nhham.lagrangian.algebra import cancel, solve_for_coordinates, solve_linear
+from nhham.errors import ComputationError, EmptySubmanifoldError
+from nhham.lagrangian.algebra import (cancel, defined_where, solve_for_coordinates,
+                                      solve_linear)
 from nhham.lagrangian.decision import Decision
 from nhham.lagrangian.engine import Policy, decide
 from nhham.lagrangian.quantities import Rank, Vanishing
 from nhham.lagrangian.sampled import (
     best_block,
     best_columns,
-    count_above,
-    equilibrated,
     independent_rows,
     is_finite,
     is_affine,
+    nowhere_finite,
+    rank_from_values,
     record,
-    relative_singular_values,
-    singular_values,
     value_scale,
-    without_noise,
     zero_test,
 )
 from nhham.settings import PARAMETER_BOX, SEED, STATE_BOX, Precision
 from nhham.system.evaluation import numeric_function
-from nhham.system.expressions import short
 
 __all__ = ["Submanifold", "has_real_point"]
 
@@ -176,7 +173,7 @@ class Submanifold:
         vels = set(self.fibre)
         # Coordinates given linearly with a constant coefficient, repeatedly.
         sub, pending = solve_for_coordinates(self.system.coordinates, self.equations, vels)
-        pending = [self._defined(e, sp.expand(e.xreplace(sub)), sub) for e in pending]
+        pending = [defined_where(e, sp.expand(e.xreplace(sub)), sub) for e in pending]
         pending = [e for e in pending if e != 0]
         affine = [e for e in pending if is_affine(e, self.fibre) and e.free_symbols & vels]
         rest = [e for e in pending if e not in affine]
@@ -234,21 +231,7 @@ class Submanifold:
         """
         red = self.reduction
         expr = sp.sympify(expr)
-        return self._defined(expr, cancel(expr.xreplace(red.substitution)), red.substitution)
-
-    @staticmethod
-    def _defined(expr, value, substitution):
-        """``value``, the reduction of ``expr``, unless it is undefined on M (sympy's nan
-        or zoo: 1/x, atan2(0, 0) where M has x = 0): then the InputError saying so. No
-        sample point could give it a value either (every one is NaN: an SVD that does
-        not converge)."""
-        if not value.has(sp.nan, sp.zoo):
-            return value
-        solved = ", ".join(f"{k} = {short(v, 40)}" for k, v in substitution.items()
-                           if k in expr.free_symbols)
-        raise InputError(f"{short(expr, 80)} is not defined on the constraint set, where "
-                         f"{solved} (it becomes {short(value, 40)}): the Lagrangian's W or a "
-                         f"constraint is singular there; nhham needs them defined on M_1")
+        return defined_where(expr, cancel(expr.xreplace(red.substitution)), red.substitution)
 
     # ------------------------------------------------------------ decisions
     @cached_property
@@ -422,22 +405,13 @@ class Submanifold:
                 values = [v[index] for v in flat]
                 keep = [i for i, S in enumerate(values) if is_finite(S)]
                 if not keep:
-                    raise self._nowhere_finite(M, values[0], len(points))
-                out.append(self._decide_rank(
-                    [values[i] for i in keep], [points[i] for i in keep], resid, tol, zero,
+                    raise nowhere_finite(M, values[0], len(points))
+                out.append(rank_from_values(
+                    [values[i] for i in keep], [points[i] for i in keep], self.variables,
+                    resid, tol, zero, self.precision,
                     lambda index=index, keep=keep: [sizes_at()[i][index] for i in keep],
                     skipped=len(points) - len(keep)))
         return out
-
-    def _nowhere_finite(self, M, value, count) -> InputError:
-        """The InputError that an entry of M is not finite at any of the ``count`` sample
-        points of this manifold (``value``: M at the first of them)."""
-        entry = next(e for e, x in zip(M, np.asarray(value).flat)
-                     if not is_finite(np.array([x])))
-        return InputError(f"{short(entry, 80)} is not finite at any of {count} points of the "
-                          f"constraint set (an overflow, or a function outside its domain: "
-                          f"the Lagrangian's W or a constraint is singular there); nhham "
-                          f"needs them defined on M_1")
 
     def _entries_at(self, entries, points) -> list:
         """The values of expressions at each point, one object array each (one lambdified
@@ -448,55 +422,6 @@ class Submanifold:
     def _arithmetic(self):
         """The working precision of the sampled arithmetic (mpmath's dps, or float64)."""
         return mpmath.workdps(self.precision) if self.precision else contextlib.nullcontext()
-
-    def _decide_rank(self, values, points, resid, tol, zero, sizes, skipped=0):
-        """The rank from the values at the points; ``sizes()``: the entries' sizes at
-        the points (:func:`value_scale`), asked only when rounding noise may need to be
-        set to 0; ``skipped``: the points left out, where the matrix is not finite."""
-        plain = [singular_values(S, self.precision) for S in values]
-        ranks = [count_above(s, tol * max(float(s[0]) if len(s) else 0.0, 1.0))
-                 for s in plain]
-        relative = [relative_singular_values(singular_values(equilibrated(S), self.precision))
-                    for S in values]
-        how = "plain"
-        if [count_above(s, tol) for s in relative] != ranks:
-            cleaned = [without_noise(S, size, zero) for S, size in zip(values, sizes())]
-            relative = [relative_singular_values(singular_values(equilibrated(S), self.precision))
-                        for S in cleaned]
-            ranks = [count_above(s, tol) for s in relative]
-            how = "equilibrated"
-        else:
-            relative = [relative_singular_values(s, floor=1.0) for s in plain]
-        r = max(ranks)
-        warnings = []
-        if skipped:
-            warnings.append(f"{skipped} sample point(s) skipped: the matrix is not finite "
-                            f"there")
-        if len(set(ranks)) > 1:
-            warnings.append(f"rank is not constant on M: ranks {ranks} at the samples")
-        gaps = [sv[r - 1] for sv in relative if r >= 1]
-        if gaps and min(gaps) < 1e3 * tol:
-            warnings.append(
-                f"smallest kept singular value ratio {min(gaps):.3g} is within 1e3 of the "
-                f"tolerance {tol:g}: the rank is doubtful at this precision"
-            )
-        dropped = [sv[r] for sv in relative if r < len(sv)]
-        if dropped and max(dropped) > zero:
-            warnings.append(
-                f"largest dropped singular value ratio {max(dropped):.3g} is above the zero "
-                f"level {zero:.3g} but below the tolerance {tol:g}: near-singular at this "
-                f"precision, the rank may be higher (try more digits)"
-            )
-        basis = ("relative tolerance" if how == "plain" else
-                 "singular values of the matrix equilibrated by rows and columns, rounding "
-                 "noise removed; relative tolerance")
-        return Decision(
-            r, "sampled", f"rank {r} at {len(points)} seeded points ({basis} {tol:g})",
-            precision=self.precision_label, samples=len(points),
-            singular_values=tuple(tuple(float(x) for x in s) for s in plain),
-            point_residual=resid, warnings=tuple(warnings),
-            points=record(points, self.variables),
-        )
 
     # ------------------------------------------------------------ sampling
     def points(self):
@@ -657,7 +582,7 @@ class Submanifold:
         keep = [i for i, vals in enumerate(values) if all(is_finite(v) for v in vals)]
         if not keep:
             bad = next(j for j, v in enumerate(values[0]) if not is_finite(v))
-            raise self._nowhere_finite(sp.Matrix(matrices[bad]), values[0][bad], len(points))
+            raise nowhere_finite(sp.Matrix(matrices[bad]), values[0][bad], len(points))
         return [points[i] for i in keep], [values[i] for i in keep]
 
     def _lambdify(self, exprs):

@@ -15,7 +15,9 @@ sin/cos are computed anyway are expanded first, see :func:`expand_angle_sums`):
 ``geometry(q)``
     W, mu, h, g: what projection onto M_1 and the structure-preserving integrator need.
     With a nonlinear (Chetaev) constraint it is ``geometry(q, v)``: mu = d phi/d v at
-    (q, v) and h = phi - mu v (so that mu v + h = phi), in the saddle kernel too.
+    (q, v) and h = phi - mu v (so that mu v + h = phi), in the saddle kernel too; and so
+    with a Lagrangian not quadratic in v, whose W depends on v (layout
+    ``geometry_reads_v``).
 ``energy(q, v)``
     E_L (v^T W v / 2 + V for L = v^T W v / 2 + b . v - V, read from the terms of L).
 ``lq(q, v)``, ``jphi(q, v)``
@@ -35,7 +37,8 @@ integrator) and C99 (the compiled backend). So the four agree expression by expr
 and nothing in the numerics layer calls ``sympy.lambdify`` or evaluates sympy objects.
 (The exact layers' own sampled decisions evaluate with ``lambdify``, below this layer.)
 
-The C text is the generated kernels followed by the C runtime, which lives in real files
+The Python text is :mod:`nhham.numerics.codegen.python_text`'s. The C text is the
+generated kernels followed by the C runtime, which lives in real files
 under ``nhham/numerics/c/`` (package data, see ``nhham.h`` there for the order).
 Parameters stay symbolic in the generated code and are passed at run time (``p``), so a
 parameter sweep reuses one compiled library.
@@ -51,10 +54,9 @@ from pathlib import Path
 
 import sympy as sp
 from sympy.printing.c import C99CodePrinter
-from sympy.printing.numpy import NumPyPrinter
-from sympy.printing.pycode import MpmathPrinter, PythonCodePrinter
 
 from nhham.lagrangian.geometry import lagrangian_geometry
+from nhham.numerics.codegen.python_text import python_module
 from nhham.numerics.nullspace import KKT_RATIO
 from nhham.numerics.status import c_defines
 from nhham.system.expressions import derivative
@@ -248,7 +250,7 @@ def _generate(system, path: str) -> dict:
 
     printed = {name: _cse(expand_angle_sums(outputs, qs))
                for name, (_, outputs) in kernels.items()}
-    python = _python_module(kernels, printed, n, len(system.parameters))
+    python = python_module(kernels, printed, n, len(system.parameters))
     slot = system.time_slot
     c = _c_module(printed, n, m, k, len(system.parameters), path,
                   forced=powered, time_slot=slot, newton_velocities=nonlinear,
@@ -388,131 +390,6 @@ def _cse(outputs):
     """Common subexpressions shared by all outputs of one kernel."""
     temps, reduced = sp.cse(list(outputs), symbols=sp.numbered_symbols("_t"), order="none")
     return temps, reduced
-
-
-# ------------------------------------------------------------- python text
-class _ScalarPrinter(PythonCodePrinter):
-    """Floats via ``math``; integer powers stay ``**`` (fast on floats)."""
-
-
-class _BatchPrinter(NumPyPrinter):
-    """Columns of a batch via ``numpy`` ufuncs; |x| and atan2 through the helpers of
-    :data:`_PY_HELPERS`, which the complex step (the batch kernels on complex
-    arrays, where no compiled complex kernel exists) can differentiate."""
-
-    def _print_Abs(self, expr):
-        return f"nh_abs({self._print(expr.args[0])})"
-
-    def _print_atan2(self, expr):
-        return f"nh_atan2({self._print(expr.args[0])}, {self._print(expr.args[1])})"
-
-
-class _MpPrinter(MpmathPrinter):
-    """mpmath, with exp, sinh and cosh of an argument beyond :data:`MP_EXP_BOUND` an
-    OverflowError (:data:`_PY_HELPERS`' ``nh_mp_bounded``): mpmath has no
-    overflow, and exp of exp(x) at the trial states of a run that blows up shifts a
-    mantissa by 10^57 bits (a MemoryError, or the machine's memory first)."""
-
-    def _bounded(self, expr):
-        return f"mpmath.{expr.func.__name__}(nh_mp_bounded({self._print(expr.args[0])}))"
-
-    _print_exp = _print_sinh = _print_cosh = _bounded
-
-
-#: |x| beyond which the mpmath kernels refuse exp(x), sinh(x), cosh(x): e^(10^5) is about
-#: 10^43429, far past double precision (whose states the reference reports), and cheap.
-MP_EXP_BOUND = 1e5
-
-# The generated Python module's helpers. numpy's abs of a complex array is its modulus and
-# its arctan2 takes no complex arrays: on complex states (the complex step) nh_abs and
-# nh_atan2 are the first-order continuations the compiled complex kernels use (nh_cabs,
-# nh_catan2 of _COMPLEX_HELPERS), on real ones numpy's. nh_mp_bounded: see _MpPrinter.
-_PY_HELPERS = """
-
-def nh_abs(z):
-    if numpy.iscomplexobj(z):
-        return numpy.where(z.real < 0, -z, z)
-    return numpy.abs(z)
-
-
-def nh_mp_bounded(x):
-    if abs(x) > %r:
-        raise OverflowError("exp of %%s: beyond the range of the numbers" %% mpmath.nstr(x, 3))
-    return x
-
-
-def nh_atan2(y, x):
-    if not (numpy.iscomplexobj(y) or numpy.iscomplexobj(x)):
-        return numpy.arctan2(y, x)
-    yr, xr = numpy.real(y), numpy.real(x)
-    return numpy.arctan2(yr, xr) + 1j * ((xr * numpy.imag(y) - yr * numpy.imag(x))
-                                         / (xr * xr + yr * yr))
-""" % MP_EXP_BOUND
-
-
-def _python_module(kernels, printed, n, npar) -> str:
-    lines = [
-        '"""Generated by nhham.numerics.codegen; do not edit. Kernels on scalars, batches, '
-        'mpmath."""',
-        "import math",
-        "import numpy",
-        "import mpmath",
-        _PY_HELPERS,
-    ]
-    unpack_qv = _unpack(n, "qv")
-    unpack_q = _unpack(n, "q")
-    for name, (args, _) in kernels.items():
-        temps, reduced = printed[name]
-        unpack = unpack_qv if args == "qv" else unpack_q
-        lines += _py_scalar(name, unpack, npar, temps, reduced, _ScalarPrinter(
-            {"fully_qualified_modules": True}), suffix="scalar")
-        lines += _py_scalar(name, unpack, npar, temps, reduced, _MpPrinter(
-            {"fully_qualified_modules": True}), suffix="mp")
-        lines += _py_batch(name, unpack, npar, temps, reduced)
-    return "\n".join(lines) + "\n"
-
-
-def _unpack(n, args):
-    names = [f"q{i}" for i in range(n)]
-    if args == "qv":
-        names += [f"v{i}" for i in range(n)]
-    return names
-
-
-def _param_line(npar, indent="    "):
-    if npar == 0:
-        return []
-    return [indent + ", ".join(f"p{i}" for i in range(npar)) + (",  = p" if npar == 1 else " = p")]
-
-
-def _py_scalar(name, unpack, npar, temps, reduced, printer, suffix):
-    out = [f"def {name}_{suffix}(y, p):"]
-    out.append("    " + ", ".join(unpack) + (",  = y" if len(unpack) == 1 else " = y")
-               + f"[:{len(unpack)}]")
-    out += _param_line(npar)
-    for sym, expr in temps:
-        out.append(f"    {sym} = {printer.doprint(expr)}")
-    out.append("    return [" + ", ".join(printer.doprint(e) for e in reduced) + "]")
-    out.append("")
-    return out
-
-
-def _py_batch(name, unpack, npar, temps, reduced):
-    printer = _BatchPrinter({"fully_qualified_modules": True})
-    out = [f"def {name}_batch(Y, p, out):",
-           "    # Y: (2n or n, k) contiguous rows; out: (len(outputs), k), zero on entry."]
-    for i, s in enumerate(unpack):
-        out.append(f"    {s} = Y[{i}]")
-    out += _param_line(npar)
-    for sym, expr in temps:
-        out.append(f"    {sym} = {printer.doprint(expr)}")
-    for j, e in enumerate(reduced):
-        if e == 0:
-            continue  # out is zero on entry
-        out.append(f"    out[{j}] = {printer.doprint(e)}")
-    out.append("    return out")
-    out.append("")
-    return out
 
 
 # ------------------------------------------------------------------ C text
