@@ -189,6 +189,19 @@ def test_a_state_where_the_state_matrix_is_not_finite_is_refused():
         linearize(model, dict(z=0.0, z_dot=0.0))
 
 
+def test_a_lagrangian_not_quadratic_in_v_linearises():
+    """L = x'^4/12 + (x'^2 + y'^2)/2 - x^2/2 with y' = x x': W depends on v, and the
+    chart's geometry kernel read q alone ("name 'v0' is not defined"). By hand:
+    x'' (1 + x'^2 + x^2) = -x - x x'^2, so at rest at 0 x'' = -x: eigenvalues +-i."""
+    import nhham
+
+    system = nhham.System(["x", "y"], "x_dot**4/12 + (x_dot**2 + y_dot**2)/2 - x**2/2",
+                          ["y_dot - x*x_dot"])
+    lin = linearize(numeric_model(system, backend="numpy"),
+                    dict(x=0.0, y=0.0, x_dot=0.0, y_dot=0.0))
+    assert np.allclose(sorted(lin.eigenvalues, key=lambda z: z.imag), [-1j, 1j], atol=1e-9)
+
+
 def test_state_off_the_manifold_or_not_steady_is_refused():
     model = numeric_model(pendulum_cartesian(), backend="numpy")
     with pytest.raises(InconsistentInitialDataError, match=r"not on M_1: holonomic\[0\]"):
