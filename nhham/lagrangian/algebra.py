@@ -35,10 +35,10 @@ __all__ = ["cancel", "tidy", "tidy_light", "trig_normal", "solve_linear", "block
 CLOSED_FORM_OPS = 300
 
 # Exceptions sympy's polynomial machinery raises on input it cannot treat as a
-# polynomial in its generators.
-POLYNOMIAL_ERRORS = (sp.PolynomialError, sp.polys.polyerrors.PolificationFailed, TypeError,
-                     ValueError, ZeroDivisionError, sp.polys.polyerrors.CoercionFailed,
-                     sp.polys.polyerrors.DomainError, NotImplementedError)
+# polynomial in its generators (all of its own rooted at BasePolynomialError: a division
+# with float coefficients, 1.0*x - 0.048..., fails with PolynomialDivisionFailed).
+POLYNOMIAL_ERRORS = (sp.polys.polyerrors.BasePolynomialError, TypeError, ValueError,
+                     ZeroDivisionError, NotImplementedError)
 
 
 def cancel(expr) -> sp.Expr:
