@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import math
 import signal
+import sys
 import threading
 import time
 import warnings
@@ -95,6 +96,8 @@ def time_budget(seconds: float | None, what: Callable[[], str] | None = None) ->
         raise BudgetExceeded(f"the budget of {total:g} s ran out{where}")
 
     previous = signal.signal(signal.SIGALRM, expire)
+    hook = sys.unraisablehook
+    sys.unraisablehook = _quiet_expiry(hook)
     signal.setitimer(signal.ITIMER_REAL, max(deadline - now, 1e-6), REPEAT_S)
     try:
         yield
@@ -102,6 +105,21 @@ def time_budget(seconds: float | None, what: Callable[[], str] | None = None) ->
         signal.setitimer(signal.ITIMER_REAL, 0)
         _DEADLINES.pop()
         signal.signal(signal.SIGALRM, previous)
+        sys.unraisablehook = hook
         if _DEADLINES:  # the outer budget runs on with what is left of it
             left = _DEADLINES[-1][0] - time.monotonic()
             signal.setitimer(signal.ITIMER_REAL, max(left, 1e-6), REPEAT_S)
+
+
+def _quiet_expiry(hook):
+    """``sys.unraisablehook`` that passes over an expiry raised where Python drops
+    exceptions (a garbage-collector callback, a weakref finaliser): the alarm repeats
+    until the block is left, so the budget still ends the work, and Python would print
+    "Exception ignored in ..." with a traceback among the command's one-line messages.
+    Any other unraisable exception goes to ``hook``."""
+
+    def quiet(unraisable):
+        if not isinstance(unraisable.exc_value, BudgetExceeded):
+            hook(unraisable)
+
+    return quiet

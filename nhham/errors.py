@@ -2,9 +2,11 @@
 
 Every error the library raises on purpose derives from :class:`NhhamError`.
 :class:`InputError` and its subclasses mean "the user's input is wrong" (the
-command exits with status 2); anything else rooted at :class:`NhhamError` is a
-failure to compute (status 1). :class:`UsageError` is the command line's
-share of bad input.
+command exits with status 2); :class:`ComputationError` and its subclasses mean
+"a computation could not be carried out" and :class:`BudgetExceeded` "the time
+bound ran out" (status 3: the message says why and what to do); an exception
+nhham did not raise on purpose is an internal failure (status 1).
+:class:`UsageError` is the command line's share of bad input.
 
 Every error may carry the key path or option it is about (``constraints[1]``,
 ``parameters.m``, ``--atol``) as :attr:`NhhamError.key`; the command's JSON
@@ -251,6 +253,9 @@ class OptionalDependencyError(InputError, ImportError):
 
 class ComputationError(NhhamError):
     """A computation could not be carried out (not the user's fault).
+
+    The command exits 3 with the message, which says why and what to do (error kind
+    ``computation``).
 
     Examples
     --------

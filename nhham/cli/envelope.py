@@ -72,11 +72,13 @@ EXIT_INTERRUPTED = 130
 
 #: ``error.kind`` of a failed command -> its exit status: ``usage`` (the command line)
 #: and ``input`` (the scene, its data) exit 2; ``internal`` exits 1; ``budget``
-#: (``--budget`` ran out) and ``failed`` (the computation ran but did not succeed;
-#: ``result`` says how) exit 3; ``interrupted`` (Ctrl-C) exits 130.
+#: (``--budget`` ran out), ``computation`` (a :class:`~nhham.errors.ComputationError`:
+#: a computation could not be carried out, no result) and ``failed`` (the computation
+#: ran but did not succeed; ``result`` says how) exit 3; ``interrupted`` (Ctrl-C)
+#: exits 130.
 ERROR_KINDS = {"usage": EXIT_INPUT, "input": EXIT_INPUT, "internal": EXIT_INTERNAL,
                "interrupted": EXIT_INTERRUPTED, "budget": EXIT_NOT_SUCCEEDED,
-               "failed": EXIT_NOT_SUCCEEDED}
+               "computation": EXIT_NOT_SUCCEEDED, "failed": EXIT_NOT_SUCCEEDED}
 
 
 @dataclass

@@ -40,7 +40,7 @@ from nhham.cli.linearize_command import cmd_linearize
 from nhham.cli.reduce_command import cmd_hamiltonize, cmd_reduce
 from nhham.cli.options import check_options
 from nhham.render.text import Steps
-from nhham.errors import InputError, NhhamError, OutputUnwritable, UsageError
+from nhham.errors import ComputationError, InputError, NhhamError, UsageError
 from nhham.progress import reporting
 from nhham.lagrangian.engine import Policy
 from nhham.cli.parser import COMMAND_LINE, METHODS, build_parser, unknown_options
@@ -323,8 +323,8 @@ def main(argv=None) -> int:
     except InputError as exc:
         return run.fail("usage" if isinstance(exc, UsageError) else "input", str(exc), exc.key,
                         warnings=caught)
-    except OutputUnwritable as exc:  # a full disk: the command ran; what it kept is said
-        return run.fail("failed", str(exc), exc.key, prefix="nhham: ", warnings=caught)
+    except ComputationError as exc:  # did not succeed (not the input's fault): why, what to do
+        return run.fail("computation", str(exc), exc.key, prefix="nhham: ", warnings=caught)
     except KeyboardInterrupt:
         return run.fail("interrupted", "interrupted", prefix="nhham: ", warnings=caught)
     except Exception as exc:  # internal failure: say so, traceback on request

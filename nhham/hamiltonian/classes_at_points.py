@@ -15,7 +15,7 @@ from typing import cast
 import numpy as np
 import sympy as sp
 
-from nhham.errors import BudgetExceeded, ComputationError, NhhamError
+from nhham.errors import BudgetExceeded, ComputationError, InputError, NhhamError
 from nhham.hamiltonian.brackets import connected_blocks
 from nhham.hamiltonian.classes import ConstraintClasses
 from nhham.hamiltonian.classes_sampled import classes_from_samples
@@ -260,16 +260,22 @@ def float_brackets(side, cons, analysis, precision, samples, seed) -> tuple:
     k, n = len(cons), system.n
     Mtq = Submanifold(system, tuple(cons), precision=precision, samples=samples, seed=seed,
                       exact=False)
-    points, resid = Mtq.points()
+    _, resid = Mtq.points()
     J = sp.Matrix([jacobian_row(c, list(q) + list(v)) for c in cons])
-    fW, fM, fJ = (Mtq.evaluator(geo.hessian), Mtq.evaluator(geo.mixed_hessian),
-                  Mtq.evaluator(J))
+    _, values = Mtq.finite_values([geo.hessian, geo.mixed_hessian, J])
     mats = []
-    for pt in points:
-        Jp = np.array(fJ(pt), dtype=float).reshape(k, 2 * n)
-        B = lagrangian_bracket(FloatMatrix(Jp[:, :n]), FloatMatrix(Jp[:, n:]),
-                               FloatMatrix(fW(pt)), FloatMatrix(fM(pt)))
+    for W, Mx, Jp in values:
+        Jp = np.array(Jp, dtype=float).reshape(k, 2 * n)
+        try:
+            B = lagrangian_bracket(FloatMatrix(Jp[:, :n]), FloatMatrix(Jp[:, n:]),
+                                   FloatMatrix(W), FloatMatrix(Mx))
+        except ZeroDivisionError:  # W singular at this point: the bracket is not defined
+            continue
         mats.append(B.a)
+    if not mats:
+        raise InputError(f"the Hessian W = d2L/dv dv is singular at every one of "
+                         f"{len(values)} points of M_1 where it is finite: L is not regular "
+                         f"on the constraint set")
     return mats, resid
 
 

@@ -273,12 +273,31 @@ def _numerically_regular(side, precision, samples, seed, tol) -> bool:
     be = Backend(precision)
     tol = be.default_tol() if tol is None else tol
     with be.context():
-        for x in M1.points()[0]:
-            C = side.numeric.point_from_tq(be, x).C
-            s = np.linalg.svd(np.asarray(C, dtype=float), compute_uv=False)
-            if s[-1] <= tol * max(s[0], 1.0):
-                return False
+        Cs = [side.numeric.point_from_tq(be, x).C for x in M1.points()[0]]
+    for C in _finite_samples(Cs, "C = mu W^-1 mu^T"):
+        s = np.linalg.svd(C, compute_uv=False)
+        if s[-1] <= tol * max(s[0], 1.0):
+            return False
     return True
+
+
+def _finite_samples(matrices, what: str) -> list:
+    """The matrices sampled at points of M_1 that are finite and real, as float arrays
+    (where one is not, the point is outside the domain of L or a constraint, log(q) at
+    q < 0, and says nothing); the InputError naming ``what`` when none is."""
+    kept = []
+    for S in matrices:
+        try:
+            A = np.asarray(S, dtype=float)
+        except TypeError:  # a complex value (mpmath's log of a negative number)
+            continue
+        if np.all(np.isfinite(A)):
+            kept.append(A)
+    if not kept:
+        raise InputError(f"{what} is not finite at any of {len(matrices)} points of M_1 (an "
+                         f"overflow, or a function outside its domain: the Lagrangian's W or "
+                         f"a constraint is singular there); nhham needs them defined on M_1")
+    return kept
 
 
 def _exact_affordable(side: HamiltonianSide) -> bool:
@@ -388,5 +407,7 @@ def _classify_sampled(side, cons, labels, analysis, tol, precision, samples, see
         for x in points:
             pt = num.point_from_tq(be, x)
             mats.append(num.bracket_matrix(be, pt, cons_tq))
+    if precision is None:  # float64: the points outside the domain of L left out
+        mats = _finite_samples(mats, "the bracket matrix {chi_a, chi_b}")
     return classes_from_samples(side, cons_tq, labels, analysis, mats, be, tol, resid,
                                  "the numeric bracket matrix")

@@ -89,8 +89,14 @@ class ComparisonPoints:
         The relative difference is |a - b| / max(1, |a|, |b|) (infinity
         norms): the quantity compared with the tolerance. Pairs where either
         side is not finite (a sample point where C is singular, outside the
-        domain of the dynamics) are skipped and counted in ``self.skipped``;
-        if every pair is skipped the comparison fails.
+        domain of the dynamics) are skipped and counted in ``self.skipped``.
+
+        Raises
+        ------
+        InputError
+            Every pair is skipped: the two sides are defined at no point of M_f (W
+            infinite on all of M_1, pi/q where q = 0 is imposed), which is no
+            disagreement between them.
         """
         worst_abs, worst_rel, ok, used = 0.0, 0.0, True, 0
         self.skipped = 0
@@ -112,7 +118,9 @@ class ComparisonPoints:
             worst_rel = max(worst_rel, d / scale)
             ok = ok and d <= self.tol * scale
         if self.skipped and not used:
-            return float("inf"), float("inf"), False
+            raise InputError(f"the two sides are not finite at any of {self.skipped} points "
+                             f"of M_f (the Lagrangian's W or a constraint is singular on "
+                             f"the constraint set); nhham needs them defined on M_1")
         return worst_abs, worst_rel, ok
 
     def note(self) -> str:

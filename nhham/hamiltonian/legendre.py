@@ -226,7 +226,10 @@ class LegendreMap:
             return self._linear_inverse()
         if kind == "closed-form":
             return self._closed_form
-        raise NoClosedFormInverseError(self.inverse_statement)
+        raise NoClosedFormInverseError(
+            f"{self.inverse_statement}; H and the fields on T*Q need v(q, p) in closed form: "
+            f"the Lagrangian side (derive --side lagrangian, simulate) does not, or write L "
+            f"with momenta solvable for the velocities (quadratic in them)", key="lagrangian")
 
     def _linear_inverse(self) -> dict:
         # v = W^-1 (p - a) = S (p - a) / delta with S = delta W^-1 the fraction-free
@@ -264,12 +267,17 @@ class LegendreMap:
         return out
 
     def _round_trip_points(self, rng, count):
+        # sympy Floats, not Python floats: xreplace puts a value in as it is, and a
+        # momentum that is a bare velocity (p_A = v^A) would come back a float. Each point
+        # with its velocities reversed too: a branch that inverts Leg for one sign of v
+        # only (the cube root of p = v^3/3 chosen for v < 0) is no inverse.
         pts = []
         for _ in range(count):
-            pt = {s: float(rng.uniform(-0.6, 0.6)) for s in self.coordinates + self.velocities}
+            pt = {s: sp.Float(rng.uniform(-0.6, 0.6)) for s in self.coordinates + self.velocities}
             for par in self.system.parameters:
-                pt[par] = self.system.parameter_values.get(par, float(rng.uniform(*PARAMETER_BOX)))
-            pts.append(pt)
+                pt[par] = sp.Float(self.system.parameter_values.get(
+                    par, rng.uniform(*PARAMETER_BOX)))
+            pts += [pt, {**pt, **{v: -pt[v] for v in self.velocities}}]
         return pts
 
     # ----------------------------------------------------- numeric inverse
@@ -331,11 +339,13 @@ class LegendreMap:
                     v = v - be.solve(Wn, r)
                 except (np.linalg.LinAlgError, ZeroDivisionError) as exc:
                     raise ComputationError(
-                        f"numeric Legendre inverse: W is singular at q={list(q)}, v={list(v)}"
-                    ) from exc
+                        f"numeric Legendre inverse: W is singular at q = {_numbers(q)}, v = "
+                        f"{_numbers(v)}: L is not regular there (the Hamiltonian side needs "
+                        f"W invertible)") from exc
             raise ComputationError(
                 f"numeric Legendre inverse did not converge in {maxiter} Newton steps at "
-                f"q={list(q)}, p={list(p)} (residual {float(be.norm(r)):.3g})")
+                f"q = {_numbers(q)}, p = {_numbers(p)} (residual {float(be.norm(r)):.3g}): no "
+                f"velocity has these momenta near v = 0")
 
     # --------------------------------------------------------- transport
     @cached_property
@@ -395,11 +405,16 @@ class LegendreMap:
         return (self.jacobian.T * O * self.jacobian).applyfunc(sp.expand)
 
 
+def _numbers(values) -> str:
+    """A vector for a message: [0.608, 1.24] (not numpy's reprs)."""
+    return "[" + ", ".join(f"{float(x):.6g}" for x in values) + "]"
+
+
 def _close(cand, v, p, pA, pt):
     """Round trip: v0 -> p0 = pA(v0) -> cand(p0) == v0 at a point."""
     try:
         p0 = complex(pA.xreplace(pt).evalf())
-        back = complex(cand.xreplace({**pt, p: p0.real}).evalf())
+        back = complex(cand.xreplace({**pt, p: sp.Float(p0.real)}).evalf())
     except (TypeError, ValueError, ZeroDivisionError):
         return False
     return abs(back.imag) < 1e-9 and abs(back.real - pt[v]) < 1e-9 * (1 + abs(pt[v]))

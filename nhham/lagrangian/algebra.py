@@ -22,9 +22,12 @@ from typing import Callable
 import sympy as sp
 from sympy.polys.rings import sring
 
+from nhham.errors import InputError
+from nhham.system.expressions import short
+
 __all__ = ["cancel", "tidy", "tidy_light", "trig_normal", "solve_linear", "block_inverse",
            "guard_closed_form", "CLOSED_FORM_OPS", "ring_fraction", "normal_form", "trig_reduce",
-           "solve_for_coordinates"]
+           "solve_for_coordinates", "defined_where"]
 
 #: A symbolic solve with an m x m matrix (m >= 2) of more operations than this is refused
 #: unless asked for: the car with a trailer (n = 4, C of 547 operations) takes 30 s, the
@@ -32,10 +35,10 @@ __all__ = ["cancel", "tidy", "tidy_light", "trig_normal", "solve_linear", "block
 CLOSED_FORM_OPS = 300
 
 # Exceptions sympy's polynomial machinery raises on input it cannot treat as a
-# polynomial in its generators.
-POLYNOMIAL_ERRORS = (sp.PolynomialError, sp.polys.polyerrors.PolificationFailed, TypeError,
-                     ValueError, ZeroDivisionError, sp.polys.polyerrors.CoercionFailed,
-                     sp.polys.polyerrors.DomainError, NotImplementedError)
+# polynomial in its generators (all of its own rooted at BasePolynomialError: a division
+# with float coefficients, 1.0*x - 0.048..., fails with PolynomialDivisionFailed).
+POLYNOMIAL_ERRORS = (sp.polys.polyerrors.BasePolynomialError, TypeError, ValueError,
+                     ZeroDivisionError, NotImplementedError)
 
 
 def cancel(expr) -> sp.Expr:
@@ -310,3 +313,22 @@ def solve_for_coordinates(coordinates, equations, skip=frozenset()) -> tuple[dic
             if progress:
                 break
     return sub, pending
+
+
+def defined_where(expr, value, substitution):
+    """``value``, ``expr`` reduced by ``substitution`` (:func:`solve_for_coordinates`),
+    unless it is undefined there (sympy's nan or zoo: 1/x, atan2(0, 0) where x = 0 is
+    substituted): then the InputError saying so. No sample point could give it a value
+    either (every one is NaN: an SVD that does not converge).
+
+    >>> x, y = sp.symbols("x y")
+    >>> defined_where(y / (1 + x), y, {x: 0})
+    y
+    """
+    if not value.has(sp.nan, sp.zoo):
+        return value
+    solved = ", ".join(f"{k} = {short(v, 40)}" for k, v in substitution.items()
+                       if k in expr.free_symbols)
+    raise InputError(f"{short(expr, 80)} is not defined on the constraint set, where "
+                     f"{solved} (it becomes {short(value, 40)}): the Lagrangian's W or a "
+                     f"constraint is singular there; nhham needs them defined on M_1")

@@ -313,16 +313,16 @@ def frobenius_sampled(system, labels, *, precision: int | None = None, samples: 
     m, n = mu.rows, len(q)
     Q1 = Submanifold(system, system.holonomic, precision=precision, samples=samples,
                      seed=seed, fibre=(), exact=False)
-    points, residual = Q1.points()
+    _, residual = Q1.points()
     grads = [[jacobian_row(mu[i, A], q) for A in range(n)] for i in range(m)]
     dmu = sp.Matrix([[grads[i][A][B] - grads[i][B][A] for A in range(n) for B in range(n)]
                      for i in range(m)])
-    f_mu, f_dmu = Q1.evaluator(mu), Q1.evaluator(dmu)
+    points, values = Q1.finite_values([mu, dmu])
     prec = Precision(precision)
     worst, doubtful, found = 0.0, False, None
-    for pt in points:
-        M = np.array(f_mu(pt), dtype=float)
-        D = np.array(f_dmu(pt), dtype=float).reshape(m, n, n)
+    for mu_at, dmu_at in values:
+        M = np.array(mu_at, dtype=float)
+        D = np.array(dmu_at, dtype=float).reshape(m, n, n)
         X = np.linalg.svd(M)[2][m:].T          # orthonormal basis of ker mu(q)
         for i in range(m):
             T = X.T @ D[i] @ X                  # T[a, b] = dmu_i(X_a, X_b) (up to sign)

@@ -15,8 +15,9 @@ import mpmath
 import numpy as np
 import sympy as sp
 
-from nhham.errors import BudgetExceeded
-from nhham.settings import STATE_BOX
+from nhham.errors import BudgetExceeded, InputError
+from nhham.lagrangian.decision import Decision
+from nhham.settings import STATE_BOX, Precision
 from nhham.system.expressions import short
 
 __all__ = [
@@ -32,6 +33,9 @@ __all__ = [
     "zero_test",
     "best_block",
     "singular_values",
+    "is_finite",
+    "nowhere_finite",
+    "rank_from_values",
 ]
 
 
@@ -128,6 +132,18 @@ def record(points, variables, limit=6):
 def is_affine(expr, vels):
     vset = set(vels)
     return all(not sp.diff(expr, v).free_symbols & vset for v in vels)
+
+
+def is_finite(S) -> bool:
+    """Whether every entry of a sampled matrix (floats, or mpmath numbers) is finite.
+
+    >>> is_finite(np.array([[1.0, 2.0]])), is_finite(np.array([[1.0, np.nan]]))
+    (True, False)
+    """
+    A = np.asarray(S)
+    if A.dtype != object:
+        return bool(np.all(np.isfinite(A)))
+    return all(mpmath.isfinite(x) for x in A.flat)
 
 
 def independent_rows(samples):
@@ -323,3 +339,78 @@ def singular_values(S, precision):
         s = mpmath.svd_r(A, compute_uv=False) if A.rows and A.cols else []
         vals = sorted((abs(x) for x in s), reverse=True)
         return vals
+
+
+def nowhere_finite(M, value, count) -> InputError:
+    """The InputError that an entry of the matrix M is not finite at any of the ``count``
+    sample points of a constraint set (``value``: M at the first of them), naming it."""
+    entry = next(e for e, x in zip(M, np.asarray(value).flat) if not is_finite(np.array([x])))
+    return InputError(f"{short(entry, 80)} is not finite at any of {count} points of the "
+                      f"constraint set (an overflow, or a function outside its domain: the "
+                      f"Lagrangian's W or a constraint is singular there); nhham needs them "
+                      f"defined on M_1")
+
+
+def rank_from_values(values, points, variables, resid, tol, zero, precision, sizes,
+                     skipped=0) -> Decision:
+    """The rank of a matrix from its values at sample points, whatever the units.
+
+    Parameters
+    ----------
+    values : list of arrays, each (r, c)
+        The matrix at each point (finite), float64 or mpmath numbers.
+    points : list of dict
+        The points (for the record); ``variables``: their coordinates and velocities.
+    resid : float
+        The points' constraint residual.
+    tol, zero : float
+        The rank tolerance and the level below which a value is rounding noise.
+    precision : int or None
+        float64 (None) or mpmath digits.
+    sizes : callable
+        ``sizes()``: the entries' sizes at the points (:func:`value_scale`), asked only
+        when rounding noise may need to be set to 0.
+    skipped : int
+        The points left out, where the matrix is not finite (said in the warnings).
+    """
+    plain = [singular_values(S, precision) for S in values]
+    ranks = [count_above(s, tol * max(float(s[0]) if len(s) else 0.0, 1.0)) for s in plain]
+    relative = [relative_singular_values(singular_values(equilibrated(S), precision))
+                for S in values]
+    how = "plain"
+    if [count_above(s, tol) for s in relative] != ranks:
+        cleaned = [without_noise(S, size, zero) for S, size in zip(values, sizes())]
+        relative = [relative_singular_values(singular_values(equilibrated(S), precision))
+                    for S in cleaned]
+        ranks = [count_above(s, tol) for s in relative]
+        how = "equilibrated"
+    else:
+        relative = [relative_singular_values(s, floor=1.0) for s in plain]
+    r = max(ranks)
+    warnings = []
+    if skipped:
+        warnings.append(f"{skipped} sample point(s) skipped: the matrix is not finite there")
+    if len(set(ranks)) > 1:
+        warnings.append(f"rank is not constant on M: ranks {ranks} at the samples")
+    gaps = [sv[r - 1] for sv in relative if r >= 1]
+    if gaps and min(gaps) < 1e3 * tol:
+        warnings.append(
+            f"smallest kept singular value ratio {min(gaps):.3g} is within 1e3 of the "
+            f"tolerance {tol:g}: the rank is doubtful at this precision"
+        )
+    dropped = [sv[r] for sv in relative if r < len(sv)]
+    if dropped and max(dropped) > zero:
+        warnings.append(
+            f"largest dropped singular value ratio {max(dropped):.3g} is above the zero "
+            f"level {zero:.3g} but below the tolerance {tol:g}: near-singular at this "
+            f"precision, the rank may be higher (try more digits)"
+        )
+    basis = ("relative tolerance" if how == "plain" else
+             "singular values of the matrix equilibrated by rows and columns, rounding "
+             "noise removed; relative tolerance")
+    return Decision(
+        r, "sampled", f"rank {r} at {len(points)} seeded points ({basis} {tol:g})",
+        precision=Precision(precision).label, samples=len(points),
+        singular_values=tuple(tuple(float(x) for x in s) for s in plain),
+        point_residual=resid, warnings=tuple(warnings), points=record(points, variables),
+    )

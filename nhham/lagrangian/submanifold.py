@@ -57,22 +57,21 @@ import numpy as np
 import sympy as sp
 
 from nhham.errors import ComputationError, EmptySubmanifoldError
-from nhham.lagrangian.algebra import cancel, solve_for_coordinates, solve_linear
+from nhham.lagrangian.algebra import (cancel, defined_where, solve_for_coordinates,
+                                      solve_linear)
 from nhham.lagrangian.decision import Decision
 from nhham.lagrangian.engine import Policy, decide
 from nhham.lagrangian.quantities import Rank, Vanishing
 from nhham.lagrangian.sampled import (
     best_block,
     best_columns,
-    count_above,
-    equilibrated,
     independent_rows,
+    is_finite,
     is_affine,
+    nowhere_finite,
+    rank_from_values,
     record,
-    relative_singular_values,
-    singular_values,
     value_scale,
-    without_noise,
     zero_test,
 )
 from nhham.settings import PARAMETER_BOX, SEED, STATE_BOX, Precision
@@ -174,7 +173,7 @@ class Submanifold:
         vels = set(self.fibre)
         # Coordinates given linearly with a constant coefficient, repeatedly.
         sub, pending = solve_for_coordinates(self.system.coordinates, self.equations, vels)
-        pending = [sp.expand(e.xreplace(sub)) for e in pending]
+        pending = [defined_where(e, sp.expand(e.xreplace(sub)), sub) for e in pending]
         pending = [e for e in pending if e != 0]
         affine = [e for e in pending if is_affine(e, self.fibre) and e.free_symbols & vels]
         rest = [e for e in pending if e not in affine]
@@ -192,7 +191,11 @@ class Submanifold:
         vels = list(self.fibre)
         mu = sp.Matrix([[sp.diff(e, v) for v in vels] for e in affine])
         rest = sp.Matrix([e.xreplace({v: 0 for v in vels}) for e in affine])
-        samples = [self._numeric_matrix(mu, pt) for pt in self._raw_points(4)]
+        # where a one-form is not finite (log(x) at x < 0) a point says nothing
+        samples = [S for S in (self._numeric_matrix(mu, pt) for pt in self._raw_points(4))
+                   if is_finite(S)]
+        if not samples:
+            return {}, affine
         rows = independent_rows(samples)
         cols = best_columns([S[rows] for S in samples])
         if cols is None:
@@ -218,9 +221,17 @@ class Submanifold:
         return solve_linear(B, rhs, iszero=iszero)
 
     def reduce(self, expr) -> sp.Expr:
-        """``expr`` with solved variables substituted and rationally cancelled."""
+        """``expr`` with solved variables substituted and rationally cancelled.
+
+        Raises
+        ------
+        InputError
+            Where ``expr`` is not defined on M (1/x on M = {x = 0}: W or a constraint's
+            one-form singular on the constraint set).
+        """
         red = self.reduction
-        return cancel(sp.sympify(expr).xreplace(red.substitution))
+        expr = sp.sympify(expr)
+        return defined_where(expr, cancel(expr.xreplace(red.substitution)), red.substitution)
 
     # ------------------------------------------------------------ decisions
     @cached_property
@@ -316,14 +327,12 @@ class Submanifold:
             return rows, list(rows), Decision((rows, list(rows)), "exact",
                                               "the whole (square, regular) matrix")
         reduced = matrix.applyfunc(self.reduce if self.exact else cancel)
-        points = []
+        points: list = []
         if not reduced.free_symbols:
             samples = [np.array(reduced.evalf(), dtype=float)]
-        else:
-            points, _ = self.points()
-            f = self._lambdify([reduced])
-            samples = [np.array(self._matrix_at(f, pt, reduced.shape).astype(complex).real,
-                                dtype=float) for pt in points]
+        else:  # the points where it is finite and real (log(x) at x > 0)
+            points, values = self.finite_values([reduced])
+            samples = [np.array(value, dtype=float) for (value,) in values]
         rows, cols, score = best_block(samples, rank)
         if rows is None:
             raise ComputationError(
@@ -393,9 +402,15 @@ class Submanifold:
                     out.append(Decision(0, "exact", "empty matrix"))
                     continue
                 index = np.array([where[e] for e in M], dtype=np.intp).reshape(M.shape)
-                out.append(self._decide_rank(
-                    [v[index] for v in flat], points, resid, tol, zero,
-                    lambda index=index: [s[index] for s in sizes_at()]))
+                values = [v[index] for v in flat]
+                keep = [i for i, S in enumerate(values) if is_finite(S)]
+                if not keep:
+                    raise nowhere_finite(M, values[0], len(points))
+                out.append(rank_from_values(
+                    [values[i] for i in keep], [points[i] for i in keep], self.variables,
+                    resid, tol, zero, self.precision,
+                    lambda index=index, keep=keep: [sizes_at()[i][index] for i in keep],
+                    skipped=len(points) - len(keep)))
         return out
 
     def _entries_at(self, entries, points) -> list:
@@ -407,52 +422,6 @@ class Submanifold:
     def _arithmetic(self):
         """The working precision of the sampled arithmetic (mpmath's dps, or float64)."""
         return mpmath.workdps(self.precision) if self.precision else contextlib.nullcontext()
-
-    def _decide_rank(self, values, points, resid, tol, zero, sizes):
-        """The rank from the values at the points; ``sizes()``: the entries' sizes at
-        the points (:func:`value_scale`), asked only when rounding noise may need to be
-        set to 0."""
-        plain = [singular_values(S, self.precision) for S in values]
-        ranks = [count_above(s, tol * max(float(s[0]) if len(s) else 0.0, 1.0))
-                 for s in plain]
-        relative = [relative_singular_values(singular_values(equilibrated(S), self.precision))
-                    for S in values]
-        how = "plain"
-        if [count_above(s, tol) for s in relative] != ranks:
-            cleaned = [without_noise(S, size, zero) for S, size in zip(values, sizes())]
-            relative = [relative_singular_values(singular_values(equilibrated(S), self.precision))
-                        for S in cleaned]
-            ranks = [count_above(s, tol) for s in relative]
-            how = "equilibrated"
-        else:
-            relative = [relative_singular_values(s, floor=1.0) for s in plain]
-        r = max(ranks)
-        warnings = []
-        if len(set(ranks)) > 1:
-            warnings.append(f"rank is not constant on M: ranks {ranks} at the samples")
-        gaps = [sv[r - 1] for sv in relative if r >= 1]
-        if gaps and min(gaps) < 1e3 * tol:
-            warnings.append(
-                f"smallest kept singular value ratio {min(gaps):.3g} is within 1e3 of the "
-                f"tolerance {tol:g}: the rank is doubtful at this precision"
-            )
-        dropped = [sv[r] for sv in relative if r < len(sv)]
-        if dropped and max(dropped) > zero:
-            warnings.append(
-                f"largest dropped singular value ratio {max(dropped):.3g} is above the zero "
-                f"level {zero:.3g} but below the tolerance {tol:g}: near-singular at this "
-                f"precision, the rank may be higher (try more digits)"
-            )
-        basis = ("relative tolerance" if how == "plain" else
-                 "singular values of the matrix equilibrated by rows and columns, rounding "
-                 "noise removed; relative tolerance")
-        return Decision(
-            r, "sampled", f"rank {r} at {len(points)} seeded points ({basis} {tol:g})",
-            precision=self.precision_label, samples=len(points),
-            singular_values=tuple(tuple(float(x) for x in s) for s in plain),
-            point_residual=resid, warnings=tuple(warnings),
-            points=record(points, self.variables),
-        )
 
     # ------------------------------------------------------------ sampling
     def points(self):
@@ -515,15 +484,18 @@ class Submanifold:
         z = [raw[s] for s in syms]
         if self.precision is None:
             z = np.array(z, dtype=float)
-            for _ in range(60):
+            # a start where an equation is not finite is dropped (below): numpy's warnings
+            # there would reach the user as the command's
+            with np.errstate(all="ignore"):
+                for _ in range(60):
+                    r = np.array(F(*z, *params), dtype=float).ravel()
+                    if not np.all(np.isfinite(r)):
+                        return None, None
+                    if np.max(np.abs(r)) < 1e-14 * (1 + np.max(np.abs(z))):
+                        break
+                    Jz = np.array(J(*z, *params), dtype=float)
+                    z = z - np.linalg.lstsq(Jz, r, rcond=None)[0]
                 r = np.array(F(*z, *params), dtype=float).ravel()
-                if not np.all(np.isfinite(r)):
-                    return None, None
-                if np.max(np.abs(r)) < 1e-14 * (1 + np.max(np.abs(z))):
-                    break
-                Jz = np.array(J(*z, *params), dtype=float)
-                z = z - np.linalg.lstsq(Jz, r, rcond=None)[0]
-            r = np.array(F(*z, *params), dtype=float).ravel()
             res = float(np.max(np.abs(r)))
             if not np.isfinite(res) or res > 1e-10 * (1 + float(np.max(np.abs(z)))):
                 return None, None
@@ -579,7 +551,8 @@ class Submanifold:
 
         The one route from expressions to numbers on the exact layers: compiled once
         (numpy in float64, mpmath at the manifold's precision); the result is a float
-        array (float64) or an object array of mpf, of the matrix's shape.
+        array (float64: NaN where an entry is not a real number, sqrt(x) at x < 0) or an
+        object array of mpf, of the matrix's shape.
         """
         matrix = sp.Matrix(matrix)
         f = self._lambdify([matrix])
@@ -587,8 +560,30 @@ class Submanifold:
 
         def at(point):
             value = self._matrix_at(f, point, shape)
-            return value.astype(float) if self.precision is None else value
+            if self.precision is not None:
+                return value
+            value = value.astype(complex)
+            return np.where(value.imag == 0, value.real, np.nan)
         return at
+
+    def finite_values(self, matrices: Sequence[sp.Matrix]) -> tuple[list, list]:
+        """The sample points of M where every matrix is finite (and real), and the
+        matrices' values there (:meth:`evaluator`): ``(points, [[value of each matrix]
+        at each point])``.
+
+        Raises
+        ------
+        InputError
+            No point has them all finite: the entry that is not is named.
+        """
+        points, _ = self.points()
+        fs = [self.evaluator(M) for M in matrices]
+        values = [[f(pt) for f in fs] for pt in points]
+        keep = [i for i, vals in enumerate(values) if all(is_finite(v) for v in vals)]
+        if not keep:
+            bad = next(j for j, v in enumerate(values[0]) if not is_finite(v))
+            raise nowhere_finite(sp.Matrix(matrices[bad]), values[0][bad], len(points))
+        return [points[i] for i in keep], [values[i] for i in keep]
 
     def _lambdify(self, exprs):
         return numeric_function(self.variables + self.system.parameters, exprs, self.precision)

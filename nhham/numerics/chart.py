@@ -18,7 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from nhham.errors import ComputationError, InputError
+from nhham.errors import ComputationError, InconsistentInitialDataError, InputError
 from nhham.numerics.kernels import columns
 from nhham.numerics.nullspace import needs_null_space, solve_null_space
 
@@ -49,6 +49,8 @@ class ComplexField:
         # a nonlinear (Chetaev) constraint: mu and h read (q, v), the dependent velocities
         # are solved by Newton's method (dependent_velocities)
         self.nonlinear = bool(getattr(model, "nonlinear", False))
+        # and W of a Lagrangian not quadratic in v: the geometry kernel reads (q, v)
+        self.geometry_reads_v = bool(getattr(model, "geometry_reads_v", self.nonlinear))
         try:
             self._batch = model.kernels.functions["saddle"][1]
             self._geometry_batch = model.kernels.functions["geometry"][1]
@@ -105,11 +107,12 @@ class ComplexField:
 
     def geometry(self, Q, p=None, V=None):
         """mu, h, g at complex coordinates (rows of Q: shape (K, n)): the kernel of the
-        coordinates only (no F, no drift), for lifting points onto M_1; with a nonlinear
-        constraint it reads the velocities V (K, n) too."""
+        coordinates only (no F, no drift), for lifting points onto M_1; where the kernel
+        reads (q, v) (a nonlinear constraint, an L not quadratic in v) the velocities V
+        (K, n) too."""
         n, m, k = self.n, self.m, self.k
-        out = self._outputs("geometry", np.concatenate([Q, V], axis=1) if self.nonlinear
-                            else Q, p)
+        out = self._outputs("geometry", np.concatenate([Q, V], axis=1)
+                            if self.geometry_reads_v else Q, p)
         _, mu, h, g = columns(out, (n * n, m * n, m, k))
         return mu.reshape(out.shape[0], m, n), h, g
 
@@ -191,6 +194,10 @@ def choose_chart(model, y0, independent) -> Chart:
     n, m, k = model.n, model.m, model.k
     names = model.names
     _, mu, _, _ = model.geometry(y0)
+    if not np.all(np.isfinite(mu)):
+        raise InconsistentInitialDataError(
+            "steady: the constraints are not finite at the state (a function of theirs "
+            "outside its domain there); choose a [steady] state where they are", key="steady")
     G = mu[:k]  # rows of the complete lifts: dg/dq
     if independent is not None:
         unknown = [s for s in independent if s not in names]
@@ -209,12 +216,18 @@ def choose_chart(model, y0, independent) -> Chart:
                              "other coordinates or velocities at this state")
         return Chart(tuple(iq), tuple(dq), tuple(iv), tuple(dv))
     dq = greedy_columns(G, k, range(n)) if k else []
+    # the user's state: no chart of M_1 there is bad input, said with what to change
     if len(dq) < k:
-        raise ComputationError("linearize: the holonomic constraints are singular at the state")
+        raise InconsistentInitialDataError(
+            "steady: the holonomic constraints are singular at the state (their gradients "
+            "dependent: no coordinates solve them there); choose another [steady] state",
+            key="steady")
     order = list(dq) + [i for i in range(n) if i not in dq]
     dv = greedy_columns(mu, m, order) if m else []
     if len(dv) < m:
-        raise ComputationError("linearize: the constraint one-forms are dependent at the state")
+        raise InconsistentInitialDataError(
+            "steady: the constraint one-forms are dependent at the state (no velocities "
+            "solve them there); choose another [steady] state", key="steady")
     iq = [i for i in range(n) if i not in dq]
     iv = [i for i in range(n) if i not in dv]
     return Chart(tuple(iq), tuple(sorted(dq)), tuple(iv), tuple(sorted(dv)))
@@ -271,7 +284,7 @@ def lifted_states(cf, chart, q0, X, p=None, positions=True, v0=None) -> tuple:
                                    "(a nonlinear constraint) did not converge")
     elif dv:
         # the last Newton iterate's mu and h: the step after it was below rounding
-        mu, h, _ = cf.geometry(Q, p) if geometry is None else geometry
+        mu, h, _ = cf.geometry(Q, p, V) if geometry is None else geometry
         rhs = -(np.einsum("kij,kj->ki", mu[:, :, iv], V[:, iv]) + h)
         V[:, dv] = np.linalg.solve(mu[:, :, dv], rhs[..., None])[..., 0]
     return Q, V
@@ -327,7 +340,7 @@ def lift(cf, chart, Y, P=None, iterations: int = 30) -> tuple:
         V[:, dv], singular = dependent_velocities(cf, Q, V, dv, P, iterations)
         ok[singular] = False
     elif dv:
-        mu, h, _ = cf.geometry(Q, P)
+        mu, h, _ = cf.geometry(Q, P, V)
         rhs = -(np.einsum("kij,kj->ki", mu[:, :, iv], V[:, iv]) + h)
         sol, singular = _solve_rows(mu[:, :, dv], rhs)
         V[:, dv] = sol

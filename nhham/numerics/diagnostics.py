@@ -20,6 +20,7 @@ import numpy as np
 
 from nhham.numerics.model import COND_C_WARN
 from nhham.numerics.nullspace import KKT_RATIO, diagonal_ratio, kkt_solve_name
+from nhham.numerics.saddle import condition
 
 __all__ = ["Diagnostics", "trajectory_diagnostics", "Singularity", "singularity_at"]
 
@@ -141,9 +142,10 @@ def trajectory_diagnostics(model, t, y, work=None, *, residual_tol: float = 1e-8
         work = _trapezoid_work(model, tf, Yf)
     else:
         work = np.asarray(work, dtype=float)[finite] if not np.all(finite) else np.asarray(work)
-    drift = np.abs(E - E[0])
-    e_drift = float(drift.max())
-    balance = float(np.max(np.abs(E - E[0] - work)))
+    with np.errstate(all="ignore"):  # an infinite energy (W not finite) drifts by NaN
+        drift = np.abs(E - E[0])
+        e_drift = float(drift.max())
+        balance = float(np.max(np.abs(E - E[0] - work)))
     idx = _cond_indices(len(tf))
     each = _at_times(model, tf[idx])
     with np.errstate(all="ignore"):
@@ -189,7 +191,7 @@ def _w_conditions(model, Y):
     """(K, 2): cond(W) (as ``model.cond_W``) and max W_AA / min W_AA at the states Y (K, 2n),
     from one evaluation of W."""
     W = model.geometry(Y)[0]
-    return np.column_stack([np.linalg.cond(W), diagonal_ratio(W)])
+    return np.column_stack([condition(W), diagonal_ratio(W)])
 
 
 def _scaled_conditions(model, Y):
@@ -200,7 +202,7 @@ def _scaled_conditions(model, Y):
     d = 1.0 / np.sqrt(np.where(dW > 0, dW, 1.0))
     Ws = W * d[:, :, None] * d[:, None, :]
     out = np.ones((len(Y), 2))
-    out[:, 0] = np.linalg.cond(Ws)
+    out[:, 0] = condition(Ws)
     if model.m:
         mus = mu * d[:, None, :]
         try:
@@ -209,7 +211,7 @@ def _scaled_conditions(model, Y):
             C = np.stack([mus[i] @ np.linalg.pinv(Ws[i]) @ mus[i].T for i in range(len(Y))])
         dC = np.abs(np.diagonal(C, axis1=1, axis2=2))
         e = 1.0 / np.sqrt(np.where(dC > 0, dC, 1.0))
-        out[:, 1] = np.linalg.cond(C * e[:, :, None] * e[:, None, :])
+        out[:, 1] = condition(C * e[:, :, None] * e[:, None, :])
     return np.where(np.isfinite(out), out, np.inf)
 
 

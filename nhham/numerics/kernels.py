@@ -79,12 +79,26 @@ class GeneratedKernels:
 
     def scalar(self, name, y, p) -> np.ndarray:
         """Outputs of kernel ``name`` at one state (y: sequence of floats)."""
-        return np.array(self.functions[name][0](y, p), dtype=float)
+        return np.array(self.scalar_list(name, y, p), dtype=float)
+
+    def scalar_list(self, name, y, p) -> list:
+        """:meth:`scalar` as a list of floats (the single-state solver's own form).
+
+        IEEE arithmetic, as the compiled kernels and the batch ones: where Python's
+        ``math`` raises (log of a negative number, 1/0.0, an overflowing exp) the state
+        is evaluated by the batch kernel, whose NaN and inf the caller reports.
+        """
+        try:
+            return self.functions[name][0](y, p)
+        except (ValueError, ArithmeticError):
+            return self.batch(name, np.asarray(y, dtype=float)[None, :], p)[0].tolist()
 
     def batch(self, name, Y, p) -> np.ndarray:
         """Outputs at k states: Y (k, d) -> (k, size)."""
         Yt = np.ascontiguousarray(np.asarray(Y, dtype=float).T)
         out = np.zeros((self.sizes[name], Yt.shape[1]))
+        # numpy numbers, not Python floats: 1/t at t = 0 is inf, not a ZeroDivisionError
+        p = [np.asarray(v, dtype=float) for v in p]
         with np.errstate(all="ignore"):  # non-finite values are reported by the caller
             self.functions[name][1](Yt, p, out)
         return out.T

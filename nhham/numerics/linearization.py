@@ -368,6 +368,11 @@ def linearize(model, state, *, independent: Sequence[str] | None = None,
                                rates=rates)[0]
 
     J = jacobian(y0)
+    if not np.all(np.isfinite(J)):  # the user's state: no linearisation there
+        raise InconsistentInitialDataError(
+            "steady: the state matrix is not finite at the state (a derivative of the "
+            "lagrangian or of a constraint is not finite there: atan2(0, 0), sqrt at 0); "
+            "choose a [steady] state where the motion is smooth", key="steady")
     moved = _moved_along(y0, model.n, None if motion is None else motion.rest)
     choice, info, implied = _decide(cf, model, y0, P, chart, J, lambda: jacobian(moved),
                                     neutral, family, step, generator, motion)
@@ -463,10 +468,13 @@ def _check_steady(cf, model, y0, P, motion=None):
                            zip(model.residual_names, raw, checks.scaled[0])
                            if not sc <= ON_TOLERANCE)
         raise InconsistentInitialDataError(f"steady: the state is not on M_1: {listed}")
-    if status == 3:
-        raise ComputationError("linearize: the saddle-point matrix [[W, mu^T], [mu, 0]] is "
-                               "singular at the state (C singular: M_f is not M_1 here)")
     acc = checks.accelerations[0]
+    if status == 3 or (status == 2 and not np.all(np.isfinite(acc))):
+        # the user's state: no motion is defined there (bad input, not a failure of ours)
+        raise InconsistentInitialDataError(
+            f"steady: the equations of motion are not defined at the state: "
+            f"{_undefined_there(model, y0, status == 3)}; choose a [steady] state where they "
+            f"are", key="steady")
     worst = float(checks.acceleration_residuals[0])
     if status == 2:
         scale = max(1.0, float(np.abs(y0).max()))
@@ -584,6 +592,22 @@ def _moved_along(y0, n, rest=None):
     y1 = y0.astype(float).copy()
     y1[:n] += 0.5 / top * v0
     return y1
+
+
+def _undefined_there(model, y0, singular) -> str:
+    """Why the field is not defined at y0, in the words of the scene: W, the constraints,
+    or C (``singular``: the saddle-point solve found its matrix singular)."""
+    with np.errstate(all="ignore"):
+        W, mu, h, _ = model.geometry(y0)
+        if not np.all(np.isfinite(W)):
+            return "the Hessian W = d2L/dv dv of the lagrangian is not finite there"
+        if np.linalg.matrix_rank(W) < model.n:
+            return "the Hessian W = d2L/dv dv of the lagrangian is singular there"
+        if not (np.all(np.isfinite(mu)) and np.all(np.isfinite(h))):
+            return "a constraint is not finite there"
+    if singular:
+        return "C = mu W^-1 mu^T is singular there (the multipliers are not determined)"
+    return "the field is not finite there (the lagrangian or a constraint leaves its domain)"
 
 
 def _neutral_directions(J, chart_names, neutral, coordinates=frozenset()):

@@ -51,7 +51,7 @@ from nhham.errors import InconsistentInitialDataError, InputError
 from nhham.numerics.chetaev import padded, velocities_newton
 from nhham.numerics.kernels import (CompiledRHS, GeneratedKernels, ParameterBlock,
                                     baumgarte_terms, columns)
-from nhham.numerics.saddle import SingleStateSolver, cond_each, solve_saddle
+from nhham.numerics.saddle import SingleStateSolver, cond_each, condition, solve_saddle
 from nhham.numerics.status import NumericalFailure, Status
 
 __all__ = ["NumericModel", "NumericsWarning", "LibraryReady", "ProjectionOutcome",
@@ -196,8 +196,12 @@ class NumericModel:
     #: The first scene key whose expression uses t (``lagrangian``, ``constraints[0]``),
     #: or "" (t in the forces only, or not at all).
     timed_key = property(lambda self: self.layout.get("time_in_geometry") or "")
-    #: A constraint not affine in v (Chetaev's rule): the geometry kernel reads (q, v).
+    #: A constraint not affine in v (Chetaev's rule): velocities onto M_1 by Newton.
     nonlinear = property(lambda self: self.layout.get("nonlinear_constraints", False))
+    #: The geometry kernel reads (q, v): a nonlinear constraint's mu and h, or the W of a
+    #: Lagrangian not quadratic in v.
+    geometry_reads_v = property(lambda self: self.layout.get(
+        "geometry_reads_v", self.nonlinear))
 
     @property
     def energy_change(self) -> str:
@@ -321,7 +325,7 @@ class NumericModel:
         if self.compiled is not None:
             return self._evaluate_compiled(y, a2, b2)
         if y.ndim == 1:
-            out = self.kernels.functions["saddle"][0](y.tolist(), self._plist)
+            out = self.kernels.scalar_list("saddle", y.tolist(), self._plist)
             dy, lam, power, status = self._one(out, y, a2, b2)
             return dy, lam, power, Status(status)
         return self._evaluate_numpy(y, a2, b2)
@@ -510,7 +514,7 @@ class NumericModel:
         """
         y = np.asarray(y, dtype=float)
         n, m, k = self.n, self.m, self.k
-        width = 2 * n if self.nonlinear else n  # (q, v) with a nonlinear constraint
+        width = 2 * n if self.geometry_reads_v else n
         if y.ndim == 1:
             out = self.kernels.scalar("geometry", y[:width].tolist(), self._plist)
         else:
@@ -568,10 +572,7 @@ class NumericModel:
 
     def cond_W(self, y):
         """2-norm condition number of W(q); float or (k,)."""
-        W = self.geometry(self._check(y))[0]
-        with np.errstate(all="ignore"):
-            c = np.linalg.cond(W)
-        return float(c) if np.ndim(c) == 0 else c
+        return condition(self.geometry(self._check(y))[0])
 
     def cond_C(self, y):
         """2-norm condition number of C = -mu W^{-1} mu^T; 1.0 when m = 0."""
@@ -583,7 +584,7 @@ class NumericModel:
             try:
                 X = np.linalg.solve(W, np.swapaxes(mu, -1, -2))
                 C = -mu @ X
-                c = np.linalg.cond(C)
+                c = condition(C)
             except np.linalg.LinAlgError:
                 c = np.inf if y.ndim == 1 else cond_each(W, mu)
         c = np.where(np.isfinite(c), c, np.inf)
@@ -645,7 +646,8 @@ class NumericModel:
             return v
         if self.nonlinear:
             return velocities_newton(self.geometry, q, v)
-        W, mu, h, _ = self.geometry(q)
+        # W(q, v) of an L not quadratic in v: the metric at the given velocities
+        W, mu, h, _ = self.geometry(np.concatenate([q, v], -1) if self.geometry_reads_v else q)
         for _ in range(2):
             r = (mu @ v[..., None])[..., 0] + h
             if not np.any(r):
@@ -655,10 +657,9 @@ class NumericModel:
         return v
 
     def _newton_positions(self, q, tol, maxiter):
-        k = self.k
-        best = np.inf
+        k, best = self.k, np.inf
         for it in range(1, maxiter + 1):
-            W, mu, _, g = self.geometry(padded(q, self.nonlinear))
+            W, mu, _, g = self.geometry(padded(q, self.geometry_reads_v))
             err = float(np.max(np.abs(g)))
             scale = 1.0 + float(np.max(np.abs(q)))
             if err <= tol * scale:
@@ -668,7 +669,7 @@ class NumericModel:
             best = min(best, err)
             dq, _ = solve_saddle(W, mu[:k], np.zeros(self.n), -g)
             q = q + dq
-        W, mu, _, g = self.geometry(padded(q, self.nonlinear))
+        W, mu, _, g = self.geometry(padded(q, self.geometry_reads_v))
         err = float(np.max(np.abs(g)))
         if err <= max(tol, 1e-12) * (1.0 + float(np.max(np.abs(q)))):
             return q, maxiter
@@ -678,9 +679,8 @@ class NumericModel:
 
 
 def _until_built(f, pending):
-    """``f``, until the ``pending`` build is over: then :class:`LibraryReady` if it
-    succeeded; if it failed numpy goes on, with a :class:`NumericsWarning` saying why.
-    One event test per call: nothing next to a numpy evaluation."""
+    """``f`` until ``pending`` is built (:class:`LibraryReady`; a failed build: numpy goes
+    on, with a :class:`NumericsWarning` saying why). One cheap test per call."""
     told = []
 
     def g(z):

@@ -86,6 +86,9 @@ class _MpField:
             self.p[self.slot] = z[-1]
         out = self.model.kernels.mp("saddle", z[:2 * n], self.p)
         self.nfev += 1
+        if any(isinstance(x, mpmath.mpc) or not mpmath.isfinite(x) for x in out):
+            # log or sqrt of a negative number (mpmath goes complex), 1/0, an overflow
+            raise OverflowError("the kernels are not finite real numbers at the state")
         N = n + m
         K = mpmath.zeros(N, N)
         rhs = mpmath.zeros(N, 1)
@@ -170,7 +173,11 @@ def _integrate(model, y0, t0, t1, digits, t_eval, tol, kmax, max_steps, progress
             target = T1 if outputs is None or oi >= len(outputs) else outputs[oi]
             clipped = direction * (t + H - target) >= 0
             Hs = target - t if clipped else H
-            result = _gbs_step(f, z, Hs, kmax, tol)
+            try:
+                result = _gbs_step(f, z, Hs, kmax, tol)
+            except (OverflowError, ValueError):
+                f(z)  # not finite at the state itself: the run stops (below)
+                result = None  # at a trial state of the step only: a shorter step
             if result is None:
                 H = Hs / 2
                 rejected += 1
@@ -196,6 +203,8 @@ def _integrate(model, y0, t0, t1, digits, t_eval, tol, kmax, max_steps, progress
                     H = Hs * mpmath.mpf("0.6")
     except ZeroDivisionError as exc:
         status, message = Status.SINGULAR, f"singular saddle-point system: {exc}"
+    except (OverflowError, ValueError) as exc:  # mpmath's exp of 1e60 has too many digits
+        status, message = Status.NONFINITE, f"{Status.NONFINITE.message}: {exc}"
     n2 = 2 * model.n
     y = np.array([[float(v) for v in zz[:n2]] for zz in zs]).T if zs else np.zeros((n2, 0))
     work = np.array([float(zz[n2]) for zz in zs])

@@ -20,7 +20,7 @@ from nhham.numerics.nullspace import (KKT_RATIO, diagonal_scaling, needs_null_sp
                                       solve_null_space)
 from nhham.numerics.status import Status
 
-__all__ = ["solve_saddle", "SingleStateSolver", "gauss", "cond_each"]
+__all__ = ["solve_saddle", "SingleStateSolver", "gauss", "cond_each", "condition"]
 
 
 def solve_saddle(W, mu, top, bottom, *, null_space: bool | None = None):
@@ -283,8 +283,28 @@ def cond_each(W, mu):
     for i in range(W.shape[0]):  # only after a batched solve failed: isolate bad states
         try:
             C = -mu[i] @ np.linalg.solve(W[i], mu[i].T)
-            out[i] = np.linalg.cond(C)
+            out[i] = condition(C)
         except np.linalg.LinAlgError:
             out[i] = np.inf
     return out
+
+
+def condition(A):
+    """The 2-norm condition number of a matrix, or of each of a batch (..., k, k): inf
+    where an entry is not finite (numpy's SVD of one does not converge: a state where
+    the Lagrangian leaves its domain) or the matrix is singular.
+
+    Examples
+    --------
+    >>> condition(np.diag([1.0, 4.0])), condition(np.array([[np.inf]]))
+    (4.0, inf)
+    >>> condition(np.array([np.eye(2), [[1.0, 0.0], [0.0, np.nan]]])).tolist()
+    [1.0, inf]
+    """
+    A = np.asarray(A, dtype=float)
+    finite = np.all(np.isfinite(A), axis=(-2, -1))
+    with np.errstate(all="ignore"):
+        c = np.linalg.cond(np.where(finite[..., None, None], A, 0.0))
+    c = np.where(finite & np.isfinite(c), c, np.inf)
+    return float(c) if np.ndim(c) == 0 else c
 

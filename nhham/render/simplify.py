@@ -127,6 +127,8 @@ def _grouped(poly, levels):
 def _factored(poly, levels=()):
     """(number, expression) with product ``poly``: factored when small (factors of
     several terms grouped by ``levels``), else the common monomial out."""
+    if poly.is_ground:  # a number (sympy's factor_list fails in a ring without generators)
+        return poly.ring.domain.to_sympy(poly.LC), sp.S.One
     if len(poly) <= _FACTOR_TERMS:
         try:
             # in a ring of the generators it has: the dense recursive factorisation

@@ -35,6 +35,7 @@ import sympy as sp
 from nhham.errors import NonAffineConstraintError, ValidationError
 from nhham.autonomy import time_slot
 from nhham.system.force_checks import dissipation_problems
+from nhham.system.numbers import value_problem
 from nhham.system.naming import TIME, as_symbol, velocity_symbol
 from nhham.system.sampled_checks import (
     DroppedConstraint,
@@ -201,10 +202,18 @@ class System:
 
         known = set(timed.values())
         for label, expr in [("lagrangian", lag)] + _labelled(cons, hols):
-            problems += expression_problems(label, expr, coords + vels, known)
+            # smooth in t too: nhham differentiates L and the constraints in it
+            problems += expression_problems(label, expr, coords + vels + (TIME,), known)
         forced = known | set(ins) | {TIME}
         for label, expr in _force_labels(applied, coords, diss):
             problems += expression_problems(label, expr, coords + vels + ins + (TIME,), forced)
+        if not problems:  # each expression a real, finite datum at the parameter values
+            for label, expr in ([("lagrangian", lag)] + _labelled(cons, hols)
+                                + _force_labels(applied, coords, diss)):
+                wrong = value_problem(expr, values)
+                if wrong:
+                    problems.append(f"{label}: {wrong}; give the parameters values where it "
+                                    f"is defined")
         for i, g in enumerate(hols):
             used = sorted(v.name for v in g.free_symbols & set(vels))
             if used:

@@ -54,8 +54,16 @@ def numeric_function(args: Sequence, exprs, precision: int | None = None,
         {"fully_qualified_modules": False, "inline": True, "allow_unknown_functions": True,
          "user_functions": {}, "order": "none"})
     modules = numeric_module(precision)
-    return sp.lambdify(list(args), exprs, cse=cse, printer=printer,
-                       modules=[_numpy_namespace()] if modules == "numpy" else modules)
+    f = sp.lambdify(list(args), exprs, cse=cse, printer=printer,
+                    modules=[_numpy_namespace()] if modules == "numpy" else modules)
+    if precision is not None:
+        return f
+
+    def ieee(*values):
+        # numpy numbers, not Python floats: y**(-1.0) at y = 0 is inf (which the callers
+        # read as "not finite there"), not a ZeroDivisionError
+        return f(*[np.float64(v) if type(v) is float else v for v in values])
+    return ieee
 
 
 @functools.cache

@@ -246,7 +246,7 @@ def _velocities(system, values, missing, params, guesses, where) -> dict:
     known = dict(params)
     known.update({sp.Symbol(n): sp.Float(v) for n, v in values.items()})
     rows = _velocity_rows(system)
-    at = [e.xreplace(known) for _, e in rows]
+    at = [_at_initial(e, known, lab, where) for lab, e in rows]
     zero = {u: 0 for u in unknowns}
     guesses = dict(guesses or {})
     for (lab, _), e in zip(rows, at):  # Chetaev: phi may have several roots in them
@@ -262,9 +262,10 @@ def _velocities(system, values, missing, params, guesses, where) -> dict:
                              f"{unguessed[0]} = {{ guess = 1.0 }}", key=where)
         if inside:
             return _velocities_by_newton(rows, at, missing, unknowns, guesses, where)
-    A = np.array([[float(sp.diff(e, u)) for u in unknowns] for e in at],
-                 dtype=float).reshape(len(rows), len(unknowns))
-    b = np.array([float(e.xreplace(zero)) for e in at], dtype=float)
+    A = np.array([[_real(sp.diff(e, u), lab, where) for u in unknowns] for (lab, _), e in
+                  zip(rows, at)], dtype=float).reshape(len(rows), len(unknowns))
+    b = np.array([_real(e.xreplace(zero), lab, where) for (lab, _), e in zip(rows, at)],
+                 dtype=float)
     scale = max(1.0, float(np.max(np.abs(A), initial=0.0)),
                 float(np.max(np.abs(b), initial=0.0)))
     # a constraint without a velocity left out relates given ones: not independent
@@ -293,6 +294,33 @@ def _velocities(system, values, missing, params, guesses, where) -> dict:
             + "; ".join(f"{lab} = {r:.6g}" for lab, r in bad) + " with them solved"
             + (_related(related) or "; leave one more velocity out"), key=where)
     return {n: float(v) + 0.0 for n, v in zip(missing, x)}   # + 0.0: no "-0"
+
+
+def _at_initial(expr, known, label, where):
+    """``expr`` (``label``'s row) at the known initial values, or the InputError that it
+    is not defined there: sympy's atan2 of 1/0 compares NaN and raises a TypeError."""
+    try:
+        return expr.xreplace(known)
+    except TypeError:
+        raise _not_finite(label, "undefined", where) from None
+
+
+def _not_finite(label, value, where) -> InconsistentInitialDataError:
+    return InconsistentInitialDataError(
+        f"{where}: {label} is not a finite real number at the {where} state (one of its "
+        f"coefficients is {value}); give [{where}] values where it is defined", key=where)
+
+
+def _real(value, label, where) -> float:
+    """A coefficient of ``label``'s row at the initial state as a float, or the
+    InputError that it is not a finite real number there (sqrt(x) at x = -2)."""
+    try:
+        number = complex(sp.sympify(value).evalf())
+    except (TypeError, ValueError):   # zoo, nan: no complex number
+        number = complex(math.nan)
+    if not (math.isfinite(number.real) and number.imag == 0.0):
+        raise _not_finite(label, sp.sstr(sp.sympify(value).evalf(6)), where)
+    return number.real
 
 
 def _velocities_by_newton(rows, at, missing, unknowns, guesses, where) -> dict:

@@ -13,7 +13,10 @@ import math
 
 import sympy as sp
 
-__all__ = ["number_problems", "complex_string"]
+__all__ = ["number_problems", "complex_string", "value_problem"]
+
+#: What a part of an expression may not become: 1/0, 0/0 (sympy's zoo, nan), infinity.
+_NOT_FINITE = (sp.zoo, sp.nan, sp.oo, -sp.oo)
 
 
 def number_problems(expr) -> list[str]:
@@ -94,3 +97,68 @@ def complex_string(number) -> str | None:
         return None
     return f"{re:.6g}{im:+.6g}i"
 
+
+
+def value_problem(expr, values) -> str | None:
+    """Why ``expr`` is no real, finite datum once the parameters take their ``values``, or
+    None: the smallest part that becomes infinite or undefined (``1/k``, ``atan2(k, k)``
+    at k = 0) or a constant that is not real (``sqrt(k)`` at k = -1), with the values it
+    uses. The parser and :func:`number_problems` see the written numbers only; the
+    numeric layer would meet NaN, or drop an imaginary part, at every point.
+
+    Parameters
+    ----------
+    expr : sympy.Expr
+    values : mapping of sympy.Symbol to float
+        The parameters' values (those without one stay symbols).
+
+    Returns
+    -------
+    str or None
+
+    >>> k, x = sp.symbols("k x")
+    >>> value_problem(x / sp.atan2(k, 2) + 1, {k: 0.0})
+    '1/atan2(k, 2) is not finite at k = 0 (it is zoo)'
+    >>> value_problem(x * sp.sqrt(k), {k: -1.0})
+    'sqrt(k) is not a real number at k = -1 (its value is 0+1i)'
+    >>> value_problem(x / k, {k: 2.0}) is None
+    True
+    """
+    root = sp.sympify(expr)
+    used = root.free_symbols & set(values)
+    if not used:
+        return None
+    exact = {p: sp.Rational(str(values[p])) for p in used}
+    # Only a function or a power other than a polynomial one can turn finite values into
+    # an infinite, undefined or complex one: those parts alone are evaluated (the whole
+    # of a large L at its values costs a quarter of a second), lowest first.
+    seen: set = set()
+    for node in sp.postorder_traversal(root):
+        if node in seen or not _partial(node) or not node.free_symbols & used:
+            continue
+        seen.add(node)
+        value = node.xreplace(exact)
+        if _bad_value(value):
+            at = ", ".join(f"{p.name} = {values[p]:g}" for p in
+                           sorted(node.free_symbols & used, key=lambda s: s.name))
+            complex_value = complex_string(value) if not value.free_symbols else None
+            if complex_value:
+                return (f"{sp.sstr(node)} is not a real number at {at} (its value is "
+                        f"{complex_value})")
+            return f"{sp.sstr(node)} is not finite at {at} (it is {sp.sstr(value)})"
+    return None
+
+
+def _partial(node) -> bool:
+    """A part that may be undefined where its arguments are finite: a function, or a
+    power other than a nonnegative integer one."""
+    if isinstance(node, sp.Pow):
+        return not (node.exp.is_Integer and node.exp >= 0)
+    return isinstance(node, sp.Function)
+
+
+def _bad_value(value) -> bool:
+    """Whether a part's value is infinite, undefined, or a constant that is not real."""
+    if value.has(*_NOT_FINITE):
+        return True
+    return not value.free_symbols and complex_string(value) is not None

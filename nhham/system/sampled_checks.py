@@ -30,7 +30,8 @@ from nhham.system.rank import float_rank, precise_ranks
 from nhham.system.velocities import one_forms
 
 __all__ = ["DroppedConstraint", "check_dependence", "check_regular_lagrangian",
-           "numeric_samples", "numeric", "sample_q", "evaluate_at", "NoFastEvaluation",
+           "numeric_samples", "numeric", "sample_q", "finite_samples", "evaluate_at",
+           "NoFastEvaluation",
            "VALIDATION_SEED", "VALIDATION_SAMPLES"]
 
 # Random points used for generic-rank decisions are drawn from this seed so
@@ -155,12 +156,61 @@ def numeric_samples(matrix, points, label="lagrangian"):
     rows, cols = matrix.shape
     if rows * cols and points:
         try:
-            values = evaluate_at(list(matrix), points).real
+            values = evaluate_at(list(matrix), points)
         except NoFastEvaluation:
             pass
         else:
-            return [values[:, k].reshape(rows, cols).astype(float) for k in range(len(points))]
+            values = _real(values)
+            return [values[:, k].reshape(rows, cols) for k in range(len(points))]
     return [numeric(matrix, p, label) for p in points]
+
+
+def _real(values):
+    """Complex values as floats, NaN where one is not real (outside a function's domain:
+    its real part would be a number the input never had)."""
+    return np.where(values.imag == 0, values.real, np.nan)
+
+
+def finite_samples(matrix, system, rng, labels):
+    """Seeded points of the state and the matrix's values there (``numeric_samples``),
+    only where every entry is finite: a point outside the domain of L or a constraint
+    (log(x) at x < 0) says nothing about a generic rank. Up to four draws of
+    :data:`VALIDATION_SAMPLES` points are made until that many are finite.
+
+    Parameters
+    ----------
+    matrix : sympy.Matrix
+    system : System
+    rng : numpy.random.Generator
+    labels : sequence of str
+        The key path of each row (for the refusal).
+
+    Returns
+    -------
+    (list of dict, list of ndarray)
+
+    Raises
+    ------
+    ValidationError
+        No point has every entry finite: the row of the first one that is not is named.
+    """
+    points, samples, first = [], [], None
+    for _ in range(4):
+        drawn = sample_q(system, rng, VALIDATION_SAMPLES)
+        for pt, S in zip(drawn, numeric_samples(matrix, drawn, labels[0])):
+            if np.all(np.isfinite(S)):
+                points.append(pt)
+                samples.append(S)
+            elif first is None:
+                first = S
+        if len(points) >= VALIDATION_SAMPLES:
+            break
+    if not points:
+        row = int(np.argwhere(~np.isfinite(first))[0][0])
+        raise ValidationError([f"{labels[row]}: {sp.sstr(matrix[row, :].tolist()[0])} is not "
+                               f"finite at any of {4 * VALIDATION_SAMPLES} random points of "
+                               f"the state; L and the constraints must be defined on it"])
+    return points[:VALIDATION_SAMPLES], samples[:VALIDATION_SAMPLES]
 
 
 def sample_q(system, rng, count):
@@ -176,9 +226,14 @@ def sample_q(system, rng, count):
 
 
 def numeric(matrix, sub, label="lagrangian"):
-    """Evaluate a symbolic matrix at a sample point; non-numeric results are input errors."""
+    """Evaluate a symbolic matrix at a sample point; non-numeric results are input errors.
+    An entry that is not a real number there (sqrt(x) at x < 0, atan2 of 1/0) is NaN."""
     try:
-        return np.array(matrix.xreplace(sub).evalf(), dtype=complex).real.astype(float)
+        value = matrix.xreplace(sub)
+    except TypeError:  # sympy compares NaN (atan2(0, 1/0)): undefined at this point
+        return np.full(matrix.shape, np.nan)
+    try:
+        return _real(np.array(value.evalf(), dtype=complex))
     except (TypeError, ValueError) as exc:
         raise ValidationError([
             f"{label}: cannot evaluate second derivatives at a sample point "
@@ -206,8 +261,7 @@ def check_dependence(system, cons, hols, drop_redundant):
     vels = system.velocities
     mu = one_forms(rows, vels)
     rng = np.random.default_rng(VALIDATION_SEED)
-    points = sample_q(system, rng, VALIDATION_SAMPLES)
-    samples = numeric_samples(mu, points)
+    points, samples = finite_samples(mu, system, rng, labels)
     independent: list[int] = []
     dependent: list[tuple[int, dict]] = []
     for i in range(len(rows)):
@@ -266,8 +320,11 @@ def _combination(mu, rows, independent, i, vels):
         return {}
     A = mu.extract(independent, list(range(mu.cols)))  # k x n
     rng = np.random.default_rng(VALIDATION_SEED + 3)
-    sample = {s: rng.uniform(*STATE_BOX) for s in A.free_symbols}
-    An = np.array(A.xreplace(sample).evalf(), dtype=float)
+    for _ in range(8):  # a point where the rows are finite and real (log(x) at x > 0)
+        sample = {s: rng.uniform(*STATE_BOX) for s in A.free_symbols}
+        An = _real(np.array(A.xreplace(sample).evalf(), dtype=complex))
+        if np.all(np.isfinite(An)):
+            break
     import scipy.linalg
 
     cols = sorted(scipy.linalg.qr(An, pivoting=True)[2][: len(independent)])
@@ -283,12 +340,20 @@ def _combination(mu, rows, independent, i, vels):
 
 
 def _vanishes_at(expr, points, tol=1e-9):
-    """True when ``expr`` is numerically zero at every sample point."""
+    """True when ``expr`` is numerically zero at every sample point where it is finite
+    (and at one at least)."""
+    finite = 0
     for pt in points:
-        value = complex(sp.sympify(sp.sympify(expr).xreplace(pt)).evalf())
+        try:
+            value = complex(sp.sympify(sp.sympify(expr).xreplace(pt)).evalf())
+        except (TypeError, ValueError):  # undefined there: says nothing
+            continue
+        if not (np.isfinite(value.real) and np.isfinite(value.imag)):
+            continue
+        finite += 1
         if abs(value) > tol * max(1.0, abs(value)):
             return False
-    return True
+    return finite > 0
 
 
 def check_regular_lagrangian(system):
@@ -304,8 +369,8 @@ def check_regular_lagrangian(system):
             raise SingularLagrangianError([_singular_message(W, rank, W.nullspace())])
         return
     rng = np.random.default_rng(VALIDATION_SEED + 1)
-    points = sample_q(system, rng, VALIDATION_SAMPLES)
-    ranks = [float_rank(S) for S in numeric_samples(W, points)]
+    points, samples = finite_samples(W, system, rng, ["lagrangian"] * n)
+    ranks = [float_rank(S) for S in samples]
     if max(ranks) < n:
         # A float64 deficiency may come from the units (m = 1e-16): confirm it.
         ranks = precise_ranks(W, points, [list(range(n))])

@@ -91,8 +91,8 @@ def expression_problems(label: str, expr: sp.Expr, state, known) -> list[str]:
     if kinks:
         problems.append(f"{label}: {', '.join(kinks[:3])} is not smooth (a kink or jump where "
                         f"its argument crosses 0); L and the constraints must be smooth in the "
-                        f"coordinates and velocities: write the branch that holds (x for Abs(x) "
-                        f"where x > 0)")
+                        f"coordinates and velocities (and the time t): write the branch that "
+                        f"holds (x for Abs(x) where x > 0)")
     size, part = expanded_size(expr)
     if size > MAX_EXPANDED_TERMS:
         problems.append(f"{label}: expands to about {size:.3g} terms (the largest part: "

@@ -342,3 +342,26 @@ def test_budget_and_failed_runs_print_the_envelope(schema):
     rc, out, err = in_process("simulate", EXAMPLES / "paper_3_1.toml", "--json")
     env = assert_failure(rc, out, err, schema, 3, "failed", None)
     assert env["result"]["success"] is False  # the run's result says how it stopped
+
+
+QUARTIC = """name = "not quadratic in v"
+coordinates = ["x", "y"]
+lagrangian = "x_dot**4/12 + x_dot**2/2 + y_dot**2/2 + x_dot*y_dot/4"
+constraints = ["y_dot - x*x_dot"]
+"""
+
+
+def test_a_computation_that_cannot_be_carried_out_exits_3_saying_what_to_do(tmp_path, schema):
+    """p_x = x'^3/3 + x' + y'/4 couples x' and y' through a cubic: no closed-form v(q, p),
+    so the Hamiltonian side cannot be formed. A ComputationError, not the user's fault
+    and not a bug: exit 3 (it was exit 1, "nhham: failed: NoClosedFormInverseError"),
+    kind "computation", the one line naming the Lagrangian side as what works."""
+    scene = tmp_path / "quartic.toml"
+    scene.write_text(QUARTIC, encoding="utf-8")
+    rc, out, err = in_process("derive", scene, "--side", "hamiltonian", "--json")
+    env = assert_failure(rc, out, err, schema, 3, "computation", "lagrangian")
+    assert env["result"] is None
+    assert err.startswith("nhham: p = dL/dv could not be solved for v in closed form")
+    assert "derive --side lagrangian" in err and "Traceback" not in err
+    rc, out, err = in_process("derive", scene)   # the Lagrangian side needs no inverse
+    assert rc == 0, err

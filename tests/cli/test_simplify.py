@@ -90,3 +90,14 @@ def test_a_factor_with_fewer_generators_is_grouped_in_the_whole_ring():
                                                        + d * py * c))
     assert sp.cancel(out - hand) == 0
     assert "**3" not in str(out)
+
+
+def test_a_denominator_that_leaves_a_number_after_the_common_factor():
+    """-(1 - m^2/16)/(3 - 3 m^2/16) is -1/3 as a function of m: the denominator left a
+    bare number 3 in a ring without generators, which sympy's factor_list cannot take
+    (an IndexError: an internal error of derive --explicit, met by the scene fuzz)."""
+    m = sp.Symbol("m")
+    # as derived (C of the scene): the sign outside, not spread over the numerator
+    expr = sp.Mul(-1, 1 - m**2 / 16, 1 / (3 - 3 * m**2 / 16), evaluate=False)
+    shown = display_form(expr, sp.symbols("q2_dot theta_dot q1_dot"))
+    assert shown == sp.Rational(-1, 3)

@@ -30,3 +30,19 @@ def test_odd_number_of_constraints_rank_proved_modulo_p(links):
     (coeffs,) = c.combination_coefficients
     (outside,) = [a for a in c.labels if a not in c.second_class_set]
     assert all(abs(x - 1.0) < 1e-12 for x in coeffs[outside])
+
+
+def test_W_singular_on_all_of_M1_is_refused_at_the_float_points():
+    """W = diag(2, theta'^2, e^theta) (k = 0): regular on TQ, singular wherever
+    theta' = 0, which is all of M_1. The bracket's float points met a singular solve (a
+    ZeroDivisionError: an internal error of derive); now the refusal says so."""
+    import nhham
+    from nhham.errors import InputError
+    from nhham.verdict.values import classification_at_values
+
+    system = nhham.System(["q1", "theta", "q2"], "2*q1_dot**2/2 + k*theta_dot**2/2 "
+                          "+ exp(theta)*q2_dot**2/2 + theta_dot**4/12", ["pi*theta_dot"],
+                          parameters={"k": 0.0})
+    with pytest.raises(InputError, match="W = d2L/dv dv is singular at every one of 6 points "
+                                         "of M_1"):
+        classification_at_values(system)

@@ -192,3 +192,16 @@ def test_every_model_classifies_consistently(name):
         assert len(c.first_class_combinations) == c.first_class
         B = c.bracket_matrix
         assert (B + B.T) == sp.zeros(k, k)
+
+
+def test_sampled_points_where_C_is_not_finite_are_left_out():
+    """W_theta = 1 + log(theta)^2 and x' = theta': M_1's equation is finite everywhere, but
+    at its sample points with theta < 0, C^H = -(1 + 1/W_theta) and the bracket matrix are
+    NaN (an SVD that did not converge: an internal error). Those points are left out; at
+    the others C^H != 0. One constraint: {phi, phi} = 0, first class. (atan2 in V: no exact
+    points, so float points decide.)"""
+    s = nhham.System(["x", "theta"],
+                     "(x_dot**2 + (1 + log(theta)**2)*theta_dot**2)/2 + atan2(x, 2)",
+                     ["x_dot - theta_dot"])
+    c = classify_constraints(s, method="sampled")
+    assert c.rank == 0 and c.first_class == 1

@@ -59,3 +59,14 @@ def test_constraint_matrix_at_a_point():
     expected = -np.array([[1 / pt[m] + k * c * c, k * c * s], [k * c * s, 1 / pt[m] + k * s * s]])
     C = lag_C(NumericLagrangian(system, args), Backend(None), vals)
     assert np.allclose(np.asarray(C, dtype=float), expected, rtol=1e-13, atol=1e-14)
+
+
+def test_sides_finite_at_no_point_are_refused_not_reported_as_a_disagreement():
+    """W_zz = pi/q where the holonomic q = 0 holds: every point of M_f had both sides
+    infinite, and the cross-check told the user to report a bug; it is the input's."""
+    from nhham.errors import InputError
+
+    s = ComparisonPoints(models.rolling_disk(), (), None, 3, 1, 1e-9)
+    with pytest.raises(InputError, match="not finite at any of 2 points of M_f"):
+        s.compare([(np.array([np.inf]), np.array([1.0])), (np.array([1.0]),
+                                                           np.array([np.nan]))])

@@ -252,3 +252,16 @@ def test_curvilinear_pair_reports_what_its_header_says():
     assert dict(a.multipliers) == {l1: q1, l2: q4}
     assert a.dimension == 6 and a.integrable is True
     assert sp.expand(a.blocks[0].run.scale - (1 + sp.Symbol("q5")**2)**2) == 0
+
+
+def test_a_block_with_decimal_entries_is_scaled():
+    """W = [[e^0.25, 1/8], [1/8, pi/q]]: e^0.25 is a float (sympy evaluates exp of a
+    decimal), and sympy's division of the lcm by the determinant fails in floating point
+    (PolynomialDivisionFailed: an internal error of compare). The quotient is then
+    cancelled: by hand delta W^-1 = adj W when delta = det W = e^0.25 pi/q - 1/64."""
+    q, v = sp.symbols("q v")
+    W = sp.Matrix([[sp.exp(sp.Float(0.25)), sp.Rational(1, 8)], [sp.Rational(1, 8), sp.pi / q]])
+    S = scaled_inverse(W, [q, v])
+    at = {q: sp.Float(0.7)}
+    inverse = (S.apply(sp.eye(2)) / S.scale).xreplace(at).evalf()
+    assert (inverse * W.xreplace(at) - sp.eye(2)).norm() < 1e-12

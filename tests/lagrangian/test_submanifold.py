@@ -126,3 +126,63 @@ def test_empty_submanifold_raises():
     s = System(["q1", "q2"], (v1**2 + v2**2) / 2)
     with pytest.raises(ComputationError):
         Submanifold(s, [q1**2 + 1], fibre=()).points()
+
+
+def test_an_expression_undefined_on_M_is_refused_by_name():
+    """z' - y'/x on M = {x = 0}: 1/x is not defined anywhere on M (sympy's zoo once x = 0
+    is substituted; every sample point was NaN, an SVD that did not converge)."""
+    from nhham.errors import InputError
+
+    z, zd = sp.symbols("z z_dot")
+    s = System(["x", "y", "z"], (xd**2 + yd**2 + zd**2) / 2, [zd - yd / x], ["x"])
+    M = Submanifold(s, (x,) + s.phi)   # M_1: the holonomic x = 0 and phi
+    with pytest.raises(InputError, match=r"z_dot - y_dot/x is not defined on the constraint "
+                                         r"set, where x = 0 \(it becomes zoo\*y_dot"):
+        M.reduction
+    assert M.with_equations([x]).reduce(yd / (1 + x)) == yd   # defined there: reduced
+
+
+def test_sampled_ranks_skip_points_where_the_matrix_is_not_finite():
+    """log(x) is NaN at the sample points with x < 0: those are left out and said; the
+    rank of [[log(x), 1]] is 1 at the others. log(-1 - x^2) is NaN at every point: the
+    entry is named."""
+    from nhham.errors import InputError
+
+    M = Submanifold(disk(), [])
+    (decision,) = M.sampled_ranks([sp.Matrix([[sp.log(x), 1]])])
+    assert decision.value == 1
+    skipped = sum(1 for pt in M.points()[0] if pt[x] < 0)
+    assert skipped and decision.samples == len(M.points()[0]) - skipped
+    assert f"{skipped} sample point(s) skipped: the matrix is not finite there" in \
+        decision.warnings
+    with pytest.raises(InputError, match=r"log\(-x\*\*2 - 1\) is not finite at any of 6 "
+                                         r"points of the constraint set"):
+        M.sampled_ranks([sp.Matrix([[sp.log(-1 - x**2), 1]])])
+
+
+def test_finite_values_keep_the_points_where_the_matrices_are_real():
+    """sqrt(x) is not real at x < 0 (float() of a complex number was an internal error
+    in the bracket's sampled step): those points are left out, the values at the others
+    are sqrt(x) and x^2; sqrt(-1 - x^2) is real nowhere, and is named."""
+    from nhham.errors import InputError
+
+    M = Submanifold(disk(), [])
+    points, values = M.finite_values([sp.Matrix([[sp.sqrt(x)]]), sp.Matrix([[x**2]])])
+    assert points == [pt for pt in M.points()[0] if pt[x] >= 0] and points
+    for pt, (root, square) in zip(points, values):
+        assert root[0, 0] == pytest.approx(pt[x] ** 0.5) and square[0, 0] == pt[x] ** 2
+    with pytest.raises(InputError, match=r"sqrt\(-x\*\*2 - 1\) is not finite at any of 6"):
+        M.finite_values([sp.Matrix([[1, sp.sqrt(-1 - x**2)]])])
+
+
+def test_a_regular_block_is_chosen_at_the_points_where_the_matrix_is_finite():
+    """[[log(x), 1]] has rank 1; at the points with x < 0 log(x) is NaN (np.linalg.norm
+    of it: an SVD that did not converge). The block is chosen at the others, and a
+    matrix finite nowhere is named."""
+    from nhham.errors import InputError
+
+    M = Submanifold(disk(), [], exact=False)
+    rows, cols, decision = M.regular_block(sp.Matrix([[sp.log(x), 1]]), 1)
+    assert rows == [0] and len(cols) == 1 and decision.method == "sampled"
+    with pytest.raises(InputError, match="is not finite at any of 6"):
+        M.regular_block(sp.Matrix([[sp.log(-1 - x**2), 1]]), 1)

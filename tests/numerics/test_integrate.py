@@ -172,3 +172,62 @@ def test_loop_option_is_checked(sleigh):
     assert res.settings["loop"] == "scipy"
     auto = simulate(sleigh, (0, 1), sleigh_state(), warn=False)
     assert auto.settings["loop"] == ("compiled" if sleigh.backend == "c" else "scipy")
+
+
+@pytest.mark.parametrize("backend", ["numpy", "c"])
+def test_a_lagrangian_not_quadratic_in_v_with_a_constraint(backend):
+    """L = x'^4/12 + (x'^2 + y'^2)/2 with y' = x x': W = diag(1 + x'^2, 1) depends on v,
+    and the geometry kernel (W, mu, h) read q alone (an internal error, "name 'v0' is
+    not defined"). By hand: p_x = x'^3/3 + x', p_y = y' = x x', d p_x/dt = lambda x,
+    d p_y/dt = -lambda, so x'' (1 + x'^2 + x^2) = -x x'^2 and y' = x x'; against that
+    ODE integrated by scipy."""
+    import sympy as sp
+    from scipy.integrate import solve_ivp
+
+    from nhham import System
+
+    x, y, xd, yd = sp.symbols("x y x_dot y_dot")
+    system = System([x, y], xd ** 4 / 12 + (xd ** 2 + yd ** 2) / 2, [yd - x * xd])
+    model = numeric_model(system, backend=backend)
+    if backend == "c" and model.backend != "c":
+        pytest.skip("no C compiler")
+    y0 = np.array([0.3, 0.0, 0.8, 0.24])
+    res = simulate(model, (0, 2), y0, rtol=1e-11, atol=1e-12, warn=False)
+    assert res.success
+
+    def hand(t, s):
+        q, p, v = s
+        return [v, q * v, -q * v ** 2 / (1 + v ** 2 + q ** 2)]
+
+    ref = solve_ivp(hand, (0, 2), [0.3, 0.0, 0.8], method="DOP853", rtol=1e-12, atol=1e-13)
+    end = res.y[:, -1]
+    assert np.allclose([end[0], end[1], end[2]], ref.y[:, -1], rtol=1e-8, atol=1e-9)
+    assert abs(end[3] - end[0] * end[2]) < 1e-9   # on the constraint
+
+
+def test_an_overflow_in_the_numpy_kernels_stops_the_run_as_non_finite():
+    """x'' = e^x from x = 0, x' = sqrt(2): x'^2/2 - e^x = 0, so e^(-x/2) = 1 - t/sqrt(2)
+    and x reaches infinity at t* = sqrt(2). Python's math.exp raised OverflowError in the
+    numpy backend's single-state kernel (an internal error of the command); now the run
+    stops there as the compiled one does, keeping the finite part."""
+    from nhham import System
+
+    model = numeric_model(System(["x", "y"], "(x_dot**2 + y_dot**2)/2 + exp(x)", ["y_dot"]),
+                          backend="numpy")
+    with pytest.warns(NumericsWarning, match="run stopped"):
+        res = simulate(model, (0, 3), [0.0, 0.0, np.sqrt(2), 0.0], method="rk4", step=0.01)
+    assert not res.success and res.status == -2 and "non-finite" in res.message
+    assert np.all(np.isfinite(res.y)) and 1.3 < res.t[-1] < 1.6
+
+
+def test_a_run_from_a_state_where_W_is_infinite_stops_there():
+    """W = diag(1/(2t), 1) is infinite at t = 0: the run stops at its start (non-finite),
+    and the diagnostics of the state kept report cond(W) = inf (numpy's SVD of inf did
+    not converge: an internal error of the command)."""
+    from nhham import System
+
+    model = numeric_model(System(["x", "y"], "x_dot**2/(4*t) + y_dot**2/2"), backend="numpy")
+    with pytest.warns(NumericsWarning):
+        res = simulate(model, (0, 1), [0.0, 0.0, 1.0, 1.0])
+    assert not res.success and res.status == -2 and res.t.tolist() == [0.0]
+    assert res.cond_W_max == np.inf

@@ -58,3 +58,26 @@ def test_cpython_entry_points_and_their_fallbacks():
     singular = numeric_model(nhham.System(["x", "y"], "(x_dot**2 + y_dot**2)/2",
                                           ["x*x_dot + y*y_dot"]))
     assert singular.field_function()(np.zeros(4)) == Status.SINGULAR
+
+
+def test_the_scalar_python_kernels_keep_ieee_arithmetic():
+    """W = 2 + log(x) and mu = (1/y, 1) out of their domains: Python's math raises
+    there (a ValueError, a ZeroDivisionError: internal errors of the command), C and
+    numpy give NaN and inf, which the numeric layer reports. By hand: log(-1) is NaN,
+    1/0 is inf."""
+    import sympy as sp
+
+    x, y, xd, yd = sp.symbols("x y x_dot y_dot")
+    system = nhham.System([x, y], (2 + sp.log(x)) * xd ** 2 / 2 + yd ** 2 / 2,
+                          [xd / y + yd])
+    kernels = numeric_model(system, backend="numpy").kernels
+    W00, W01, W10, W11, mu0, mu1, h = kernels.scalar("geometry", [-1.0, 0.0], [])
+    assert np.isnan(W00) and (W01, W10, W11) == (0.0, 0.0, 1.0)
+    assert mu0 == np.inf and mu1 == 1.0 and h == 0.0
+    W00, *rest = kernels.scalar("geometry", [2.0, 4.0], [])
+    assert W00 == pytest.approx(2 + np.log(2.0)) and rest == [0, 0, 1.0, 0.25, 1.0, 0]
+    # a parameter slot (here the time) at 0 in 1/t: inf in the batch kernels too
+    timed = nhham.System([x], (2 + 1 / sp.Symbol("t")) * xd ** 2 / 2)
+    kernels = numeric_model(timed, backend="numpy").kernels
+    assert kernels.scalar("geometry", [1.0], [0.0]).tolist() == [np.inf]
+    assert kernels.scalar("geometry", [1.0], [0.5]).tolist() == [4.0]

@@ -136,6 +136,72 @@ def test_pendulum_equilibria_and_exact_path():
     assert np.allclose(np.array(ej.matrix, dtype=float), bottom.full_matrix, atol=1e-13)
 
 
+@pytest.mark.parametrize("lagrangian, constraints, why", [
+    # W = diag(x, 1) at x = 0
+    ("x*x_dot**2/2 + y_dot**2/2", [], "the Hessian W = d2L/dv dv of the lagrangian is "
+                                       "singular there"),
+    # mu = (x, 0): C = mu W^-1 mu^T = x^2 vanishes at x = 0
+    ("(x_dot**2 + y_dot**2)/2", ["x*x_dot"], "C = mu W^-1 mu^T is singular there"),
+    # F = -dV/dx = -1/(2 sqrt(x)) at x = 0: 1/0
+    ("(x_dot**2 + y_dot**2)/2 - sqrt(x)", [], "the field is not finite there"),
+])
+def test_a_state_where_the_motion_is_not_defined_is_refused_saying_why(lagrangian,
+                                                                       constraints, why):
+    """The right-hand side's NumericalFailure at the user's [steady] state was an internal
+    failure (exit 1): it is bad input, saying which part is singular or not finite."""
+    import nhham
+
+    model = numeric_model(nhham.System(["x", "y"], lagrangian, constraints), backend="numpy")
+    with pytest.raises(InconsistentInitialDataError) as info:
+        linearize(model, dict(x=0.0, y=0.0, x_dot=0.0, y_dot=0.0))
+    assert str(info.value).startswith("steady: the equations of motion are not defined at "
+                                      f"the state: {why}")
+    assert info.value.key == "steady"
+
+
+def test_a_state_where_the_constraints_have_no_chart_is_refused_saying_why():
+    """g = x^2 + y^2 at the origin: g = 0 and dg = 0, so no coordinate solves g = 0
+    there (a ComputationError: exit 1, then 3 with nothing to do). The user's state:
+    bad input, naming [steady] and what to change."""
+    import nhham
+
+    model = numeric_model(nhham.System(["x", "y", "z"], "(x_dot**2 + y_dot**2 + z_dot**2)/2",
+                                       holonomic=["x**2 + y**2"]), backend="numpy")
+    from nhham.numerics.steady_sweep import steady_state
+
+    with pytest.raises(InconsistentInitialDataError) as info:  # the [steady] table's lift
+        steady_state(model, dict(x=0.0, y=0.0, z=0.0, x_dot=0.0, y_dot=0.0, z_dot=0.0))
+    assert str(info.value).startswith("steady: the holonomic constraints are singular at the "
+                                      "state") and "choose another [steady] state" in str(info.value)
+    assert info.value.key == "steady"
+
+
+def test_a_state_where_the_state_matrix_is_not_finite_is_refused():
+    """W = exp(atan2(asin z, asin z)): its derivative is 0/0 at z = 0 (sympy's is 0,
+    the complex step's NaN), and LAPACK refused the NaN matrix ("Array must not contain
+    infs or NaNs": an internal error)."""
+    import nhham
+
+    model = numeric_model(nhham.System(["z"], "exp(atan2(asin(z), asin(z)))*z_dot**2/2"),
+                          backend="numpy")
+    with pytest.raises(InconsistentInitialDataError, match="steady: the state matrix is not "
+                                                           "finite at the state"):
+        linearize(model, dict(z=0.0, z_dot=0.0))
+
+
+def test_a_lagrangian_not_quadratic_in_v_linearises():
+    """L = x'^4/12 + (x'^2 + y'^2)/2 - x^2/2 with y' = x x': W depends on v, and the
+    chart's geometry kernel read q alone ("name 'v0' is not defined"). By hand:
+    x'' (1 + x'^2 + x^2) = -x - x x'^2, so at rest at 0 x'' = -x: eigenvalues +-i."""
+    import nhham
+
+    system = nhham.System(["x", "y"], "x_dot**4/12 + (x_dot**2 + y_dot**2)/2 - x**2/2",
+                          ["y_dot - x*x_dot"])
+    lin = linearize(numeric_model(system, backend="numpy"),
+                    dict(x=0.0, y=0.0, x_dot=0.0, y_dot=0.0))
+    assert np.allclose(sorted(lin.eigenvalues, key=lambda z: z.imag), [-1j, 1j], atol=1e-9)
+
+
 def test_state_off_the_manifold_or_not_steady_is_refused():
     model = numeric_model(pendulum_cartesian(), backend="numpy")
     with pytest.raises(InconsistentInitialDataError, match=r"not on M_1: holonomic\[0\]"):

@@ -49,3 +49,17 @@ def test_chaplygin_sleigh_reference_integrator():
         u_num = mpmath.cos(yf[2]) * yf[3] + mpmath.sin(yf[2]) * yf[4]
         assert abs(u_num - u) < mpmath.mpf(10) ** -22
         assert abs(yf[5] - w) < mpmath.mpf(10) ** -22
+
+
+def test_a_state_beyond_the_range_of_the_numbers_stops_the_reference():
+    """V = -exp(exp(x)) at x = 200: exp(x) = 7e86, and mpmath, which has no overflow,
+    shifted a mantissa by 10^87 bits for exp of it (a MemoryError: an internal error of
+    the command). The run stops at its start, non-finite, keeping the initial state."""
+    import nhham
+    from nhham.numerics.reference import reference_solution
+    from nhham.numerics.status import Status
+
+    model = numeric_model(nhham.System(["x"], "x_dot**2/2 + exp(exp(x))"), backend="numpy")
+    ref = reference_solution(model, [200.0, 0.0], (0, 1), digits=20)
+    assert ref.status == Status.NONFINITE and "beyond the range" in ref.message
+    assert ref.t.tolist() == [0.0] and ref.y[:, 0].tolist() == [200.0, 0.0]

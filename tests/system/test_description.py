@@ -193,3 +193,27 @@ def test_numeric_parameters_missing_value():
     s = make(parameters=["m"])
     with pytest.raises(nhham.MissingParameterValueError, match="no numeric value for m"):
         s.numeric_parameters()
+
+
+def test_sample_points_outside_the_domain_of_L_are_left_out():
+    """W = diag(sqrt(x), 1): at the random points with x < 0 its entry is not real (its
+    real part, 0, was taken: a singular W there); those points are left out, and W is
+    regular at the others."""
+    system = nhham.System(["x", "y"], "sqrt(x)*x_dot**2/2 + y_dot**2/2", ["y_dot - x_dot"])
+    assert system.n == 2 and system.m == 1
+
+
+@pytest.mark.parametrize("lagrangian, constraint, key, part", [
+    # sqrt(-1 - x^2) is real nowhere: W was "singular" (its real part 0), misleadingly
+    ("sqrt(-1 - x**2)*x_dot**2/2 + y_dot**2/2", "y_dot", "lagrangian", "sqrt(-x**2 - 1)"),
+    # log(-1 - y^2) = log(1 + y^2) + i pi: its real part was used, silently
+    ("(x_dot**2 + y_dot**2)/2", "x_dot + log(-1 - y**2)*y_dot", "constraints[0]",
+     "log(-y**2 - 1)"),
+])
+def test_an_expression_defined_nowhere_on_the_state_is_refused_by_name(lagrangian, constraint,
+                                                                      key, part):
+    with pytest.raises(ValidationError) as info:
+        nhham.System(["x", "y"], lagrangian, [constraint])
+    assert str(info.value).startswith(f"{key}: ") and part in str(info.value)
+    assert "is not finite at any of 16 random points of the state" in str(info.value)
+    assert info.value.key == key

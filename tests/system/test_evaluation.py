@@ -60,3 +60,18 @@ def test_numeric_function_keeps_the_nesting():
     assert np.array(f(2.0, 3.0)).tolist() == [[2.0, 3.0], [6.0, 1.0]]
     with pytest.raises(ZeroDivisionError):
         object_solve(np.zeros((2, 2), dtype=object), np.ones(2, dtype=object))
+
+
+def test_numeric_functions_keep_ieee_arithmetic_on_python_floats():
+    """y**(-1.0) at y = 0.0: Python's float power raised ZeroDivisionError (an internal
+    error where a sample point met the pole); numpy's gives inf, which the callers read
+    as "not finite there"."""
+    import numpy as np
+    import sympy as sp
+
+    from nhham.system.evaluation import numeric_function
+
+    y = sp.Symbol("y")
+    f = numeric_function([y], [y ** -1.0, sp.sqrt(y)])
+    with np.errstate(all="ignore"):
+        assert f(0.0) == [np.inf, 0.0] and f(4.0) == [0.25, 2.0]

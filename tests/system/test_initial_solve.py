@@ -91,6 +91,44 @@ def test_velocities_that_over_determine_inconsistently_are_refused():
         "x_dot): leave one of each out")
 
 
+def test_a_velocity_solved_where_its_constraint_is_not_real_is_refused_by_name():
+    """sqrt(x) x' + y' = 0 at x = -2: the coefficient is i sqrt(2), so no real x' solves
+    it (float() of a complex number: an internal error)."""
+    text = """coordinates = ["x", "y"]
+lagrangian = "(x_dot**2 + y_dot**2)/2"
+constraints = ["sqrt(x)*x_dot + y_dot"]
+[initial]
+x = -2.0
+y = 0.0
+y_dot = 1.0
+"""
+    with pytest.raises(InconsistentInitialDataError) as info:
+        loads_scene(text)
+    assert str(info.value).startswith(
+        "initial: constraints[0] is not a finite real number at the initial state (one of "
+        "its coefficients is 1.41421*I)")
+    assert info.value.key == "initial"
+    scene = loads_scene(text.replace("x = -2.0", "x = 4.0"))   # x' = -y'/sqrt(4) = -1/2
+    assert scene.initial["x_dot"] == pytest.approx(-0.5, rel=1e-14)
+
+
+def test_a_constraint_undefined_at_the_initial_state_is_refused_by_name():
+    """atan2(y, 1/x) at x = 0, y = 0: sympy's atan2 of (0, zoo) compares NaN and raises a
+    TypeError (an internal error of the command)."""
+    text = """coordinates = ["x", "y"]
+lagrangian = "(x_dot**2 + y_dot**2)/2"
+constraints = ["x_dot + atan2(y, 1/x)*y_dot"]
+[initial]
+x = 0.0
+y = 0.0
+x_dot = 1.0
+"""
+    with pytest.raises(InconsistentInitialDataError,
+                       match=r"^initial: constraints\[0\] is not a finite real number at the "
+                             r"initial state"):
+        loads_scene(text)
+
+
 def test_loading_without_the_check_keeps_the_problem_for_where_the_data_are_used():
     scene = disk("theta = 0.0\nx_dot = 2.0\nphi_dot = 4.0\n", check_initial=False)
     assert scene.initial is None and scene.system.n == 4

@@ -42,3 +42,26 @@ def test_floats_beyond_double_precision():
 
 def test_docstring_examples():
     assert doctest.testmod(numbers).failed == 0
+
+
+@pytest.mark.parametrize("constraint, values, part", [
+    # atan2(0, 1/2) = 0, so 1/atan2(k, 1/2)^2 is 1/0 (sympy's zoo) at k = 0
+    ("x_dot/atan2(k, 0.5)**2 + y_dot", {"k": 0.0}, "atan2(k, 0.5)**(-2) is not finite at k = 0"),
+    # atan2(0, 0) is undefined (nan)
+    ("atan2(k, k)*x_dot + y_dot", {"k": 0.0}, "atan2(k, k) is not finite at k = 0"),
+    # log(k) at k = 0 is -infinity
+    ("x_dot + log(k)*y_dot", {"k": 0.0}, "log(k) is not finite at k = 0"),
+    # sqrt(-2) = i sqrt(2): the numbers would drop it
+    ("x_dot + sqrt(k)*y_dot", {"k": -2.0}, "sqrt(k) is not a real number at k = -2 (its value "
+                                            "is 0+1.41421i)"),
+])
+def test_an_expression_undefined_at_the_parameter_values_is_refused(constraint, values, part):
+    """Every sample point met NaN or inf there (an SVD that did not converge: an internal
+    error), or an imaginary part was dropped; the problem names the key and the part."""
+    import nhham
+
+    with pytest.raises(nhham.ValidationError) as info:
+        nhham.System(["x", "y"], "(x_dot**2 + y_dot**2)/2", [constraint], parameters=values)
+    assert str(info.value).startswith(f"constraints[0]: {part}")
+    assert info.value.key == "constraints[0]"
+    nhham.System(["x", "y"], "(x_dot**2 + y_dot**2)/2", [constraint], parameters={"k": 2.0})

@@ -74,6 +74,14 @@ def test_functions_without_a_derivative_of_the_state_are_refused(kink):
     assert error.key == "lagrangian" and "is not smooth" in str(error)
 
 
+def test_a_kink_in_the_time_is_refused():
+    """sign(t) in L: d/dt of it stays an unevaluated Derivative (sympy knows no sign of
+    t), which the generated code cannot print (an internal error of compare)."""
+    error = refused(lagrangian=L_free + (1 + sp.sign(sp.Symbol("t"))) * yd**2)
+    assert error.key == "lagrangian" and "sign(t) is not smooth" in str(error)
+    assert "(and the time t)" in str(error)
+
+
 def test_kinks_of_parameters_alone_are_fine():
     system = nhham.System(["x", "y"], m * (xd**2 + yd**2) / 2 - sp.Abs(R) * x,
                           [xd - sp.sign(R) * yd], parameters={"m": 1.0, "R": -2.0})

@@ -15,7 +15,9 @@ sin/cos are computed anyway are expanded first, see :func:`expand_angle_sums`):
 ``geometry(q)``
     W, mu, h, g: what projection onto M_1 and the structure-preserving integrator need.
     With a nonlinear (Chetaev) constraint it is ``geometry(q, v)``: mu = d phi/d v at
-    (q, v) and h = phi - mu v (so that mu v + h = phi), in the saddle kernel too.
+    (q, v) and h = phi - mu v (so that mu v + h = phi), in the saddle kernel too; and so
+    with a Lagrangian not quadratic in v, whose W depends on v (layout
+    ``geometry_reads_v``).
 ``energy(q, v)``
     E_L (v^T W v / 2 + V for L = v^T W v / 2 + b . v - V, read from the terms of L).
 ``lq(q, v)``, ``jphi(q, v)``
@@ -35,7 +37,8 @@ integrator) and C99 (the compiled backend). So the four agree expression by expr
 and nothing in the numerics layer calls ``sympy.lambdify`` or evaluates sympy objects.
 (The exact layers' own sampled decisions evaluate with ``lambdify``, below this layer.)
 
-The C text is the generated kernels followed by the C runtime, which lives in real files
+The Python text is :mod:`nhham.numerics.codegen.python_text`'s. The C text is the
+generated kernels followed by the C runtime, which lives in real files
 under ``nhham/numerics/c/`` (package data, see ``nhham.h`` there for the order).
 Parameters stay symbolic in the generated code and are passed at run time (``p``), so a
 parameter sweep reuses one compiled library.
@@ -51,10 +54,9 @@ from pathlib import Path
 
 import sympy as sp
 from sympy.printing.c import C99CodePrinter
-from sympy.printing.numpy import NumPyPrinter
-from sympy.printing.pycode import MpmathPrinter, PythonCodePrinter
 
 from nhham.lagrangian.geometry import lagrangian_geometry
+from nhham.numerics.codegen.python_text import python_module
 from nhham.numerics.nullspace import KKT_RATIO
 from nhham.numerics.status import c_defines
 from nhham.system.expressions import derivative
@@ -214,6 +216,9 @@ def _generate(system, path: str) -> dict:
     g = [R(e) for e in system.holonomic]
     qs = [rename[q] for q in system.coordinates]
     vs = [rename[v] for v in system.velocities]
+    # The geometry kernel reads (q, v) where its outputs depend on v: mu and h of a
+    # nonlinear constraint, or W of a Lagrangian not quadratic in v (W = d2L/dv dv).
+    geometry_v = nonlinear or any(e.free_symbols & set(vs) for e in W)
     L = R(system.lagrangian)
     # nhham's own derivative: sympy's diff spends most of its time on factors free of x
     lq = [derivative(L, q) for q in qs]
@@ -232,7 +237,7 @@ def _generate(system, path: str) -> dict:
                if powered else [])
     kernels = {
         "saddle": ("qv", W + F + mu + drift + h + g + applied),
-        "geometry": ("qv" if nonlinear else "q", W + mu + h + g),
+        "geometry": ("qv" if geometry_v else "q", W + mu + h + g),
         "energy": ("qv", [_energy(system, L, vs, W)]),
         "lq": ("qv", lq),
         "jphi": ("qv", jphi),
@@ -245,12 +250,13 @@ def _generate(system, path: str) -> dict:
 
     printed = {name: _cse(expand_angle_sums(outputs, qs))
                for name, (_, outputs) in kernels.items()}
-    python = _python_module(kernels, printed, n, len(system.parameters))
+    python = python_module(kernels, printed, n, len(system.parameters))
     slot = system.time_slot
     c = _c_module(printed, n, m, k, len(system.parameters), path,
-                  forced=powered, time_slot=slot, geometry_v=nonlinear)
-    # the complex step's geometry kernel reads q only: none for nonlinear constraints
-    c_complex = "" if nonlinear else _c_complex_module(printed, n, m, k,
+                  forced=powered, time_slot=slot, newton_velocities=nonlinear,
+                  geometry_v=geometry_v)
+    # the complex step's geometry kernel reads q only: none where the geometry reads v
+    c_complex = "" if geometry_v else _c_complex_module(printed, n, m, k,
                                                        len(system.parameters),
                                                        forced=powered)
     layout = {
@@ -272,8 +278,10 @@ def _generate(system, path: str) -> dict:
         "input_names": tuple(u.name for u in system.inputs),
         "time_slot": slot,
         "complex_kernels": bool(c_complex),
-        # only with a nonlinear (Chetaev) constraint: the geometry kernel reads (q, v)
+        # only with a nonlinear (Chetaev) constraint: velocities onto M_1 by Newton
         **({"nonlinear_constraints": True} if nonlinear else {}),
+        # the geometry kernel reads (q, v): a nonlinear constraint, or W depending on v
+        **({"geometry_reads_v": True} if geometry_v else {}),
     }
     return {"python": python, "c": c, "c_complex": c_complex, "layout": layout}
 
@@ -382,80 +390,6 @@ def _cse(outputs):
     """Common subexpressions shared by all outputs of one kernel."""
     temps, reduced = sp.cse(list(outputs), symbols=sp.numbered_symbols("_t"), order="none")
     return temps, reduced
-
-
-# ------------------------------------------------------------- python text
-class _ScalarPrinter(PythonCodePrinter):
-    """Floats via ``math``; integer powers stay ``**`` (fast on floats)."""
-
-
-class _BatchPrinter(NumPyPrinter):
-    """Columns of a batch via ``numpy`` ufuncs."""
-
-
-def _python_module(kernels, printed, n, npar) -> str:
-    lines = [
-        '"""Generated by nhham.numerics.codegen; do not edit. Kernels on scalars, batches, '
-        'mpmath."""',
-        "import math",
-        "import numpy",
-        "import mpmath",
-        "",
-    ]
-    unpack_qv = _unpack(n, "qv")
-    unpack_q = _unpack(n, "q")
-    for name, (args, _) in kernels.items():
-        temps, reduced = printed[name]
-        unpack = unpack_qv if args == "qv" else unpack_q
-        lines += _py_scalar(name, unpack, npar, temps, reduced, _ScalarPrinter(
-            {"fully_qualified_modules": True}), suffix="scalar")
-        lines += _py_scalar(name, unpack, npar, temps, reduced, MpmathPrinter(
-            {"fully_qualified_modules": True}), suffix="mp")
-        lines += _py_batch(name, unpack, npar, temps, reduced)
-    return "\n".join(lines) + "\n"
-
-
-def _unpack(n, args):
-    names = [f"q{i}" for i in range(n)]
-    if args == "qv":
-        names += [f"v{i}" for i in range(n)]
-    return names
-
-
-def _param_line(npar, indent="    "):
-    if npar == 0:
-        return []
-    return [indent + ", ".join(f"p{i}" for i in range(npar)) + (",  = p" if npar == 1 else " = p")]
-
-
-def _py_scalar(name, unpack, npar, temps, reduced, printer, suffix):
-    out = [f"def {name}_{suffix}(y, p):"]
-    out.append("    " + ", ".join(unpack) + (",  = y" if len(unpack) == 1 else " = y")
-               + f"[:{len(unpack)}]")
-    out += _param_line(npar)
-    for sym, expr in temps:
-        out.append(f"    {sym} = {printer.doprint(expr)}")
-    out.append("    return [" + ", ".join(printer.doprint(e) for e in reduced) + "]")
-    out.append("")
-    return out
-
-
-def _py_batch(name, unpack, npar, temps, reduced):
-    printer = _BatchPrinter({"fully_qualified_modules": True})
-    out = [f"def {name}_batch(Y, p, out):",
-           "    # Y: (2n or n, k) contiguous rows; out: (len(outputs), k), zero on entry."]
-    for i, s in enumerate(unpack):
-        out.append(f"    {s} = Y[{i}]")
-    out += _param_line(npar)
-    for sym, expr in temps:
-        out.append(f"    {sym} = {printer.doprint(expr)}")
-    for j, e in enumerate(reduced):
-        if e == 0:
-            continue  # out is zero on entry
-        out.append(f"    out[{j}] = {printer.doprint(e)}")
-    out.append("    return out")
-    out.append("")
-    return out
 
 
 # ------------------------------------------------------------------ C text
@@ -606,7 +540,7 @@ def _c_complex_module(printed, n, m, k, npar, forced=False) -> str:
 
 
 def _c_module(printed, n, m, k, npar, path, forced=False, time_slot=None,
-              geometry_v=False) -> str:
+              newton_velocities=False, geometry_v=False) -> str:
     """The C translation unit: generated definitions and kernels, then the runtime files.
 
     Layout of the saddle kernel outputs (``out``): W (n*n, row-major), F (n), mu (m*n),
@@ -628,7 +562,7 @@ def _c_module(printed, n, m, k, npar, path, forced=False, time_slot=None,
         head.append(f"#define NHHAM_FORCED {n * n + n + m * n + 2 * m + k}")
     if time_slot is not None:
         head.append(f"#define NHHAM_TIME_SLOT {time_slot}")
-    if geometry_v:  # a nonlinear (Chetaev) constraint: the geometry kernel reads (q, v)
+    if newton_velocities:  # a nonlinear (Chetaev) constraint: mu and h read v
         head.append("#define NHHAM_GEOMETRY_V 1")
     if path == "closed_form":
         head.append("#define NHHAM_CLOSED_FORM 1")
