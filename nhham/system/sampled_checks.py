@@ -232,14 +232,19 @@ def numeric(matrix, sub, label="lagrangian"):
         value = matrix.xreplace(sub)
     except TypeError:  # sympy compares NaN (atan2(0, 1/0)): undefined at this point
         return np.full(matrix.shape, np.nan)
+    except ValueError as exc:  # a Derivative (of Abs) wrt a velocity replaced by a number
+        raise _not_smooth(label, exc) from None
     try:
         return _real(np.array(value.evalf(), dtype=complex))
     except (TypeError, ValueError) as exc:
-        raise ValidationError([
-            f"{label}: cannot evaluate second derivatives at a sample point "
-            f"({' '.join(str(exc).split())}); the "
-            f"Lagrangian must be smooth in the velocities (no Abs, sign or other kinks)"
-        ]) from None
+        raise _not_smooth(label, exc) from None
+
+
+def _not_smooth(label, exc) -> ValidationError:
+    return ValidationError([
+        f"{label}: cannot evaluate second derivatives at a sample point "
+        f"({' '.join(str(exc).split())}); the "
+        f"Lagrangian must be smooth in the velocities (no Abs, sign or other kinks)"])
 
 
 def check_dependence(system, cons, hols, drop_redundant):
