@@ -50,6 +50,7 @@ from nhham.numerics.chart import STEP, ComplexField, chart_jacobians, choose_cha
 from nhham.numerics.quotient import MOMENTUM, ORBIT, divide, is_axis
 from nhham.numerics.relative import group_block, spin_rate
 from nhham.numerics.spectra import EIGENVALUE_TOLERANCE, sort_eigenvalues, spectra, verdicts
+from nhham.numerics.status import NumericalFailure
 
 if TYPE_CHECKING:  # the exact matrix comes from the symbolic side; numerics never imports it
     import sympy
@@ -369,10 +370,7 @@ def linearize(model, state, *, independent: Sequence[str] | None = None,
 
     J = jacobian(y0)
     if not np.all(np.isfinite(J)):  # the user's state: no linearisation there
-        raise InconsistentInitialDataError(
-            "steady: the state matrix is not finite at the state (a derivative of the "
-            "lagrangian or of a constraint is not finite there: atan2(0, 0), sqrt at 0); "
-            "choose a [steady] state where the motion is smooth", key="steady")
+        raise _not_smooth_there()
     moved = _moved_along(y0, model.n, None if motion is None else motion.rest)
     choice, info, implied = _decide(cf, model, y0, P, chart, J, lambda: jacobian(moved),
                                     neutral, family, step, generator, motion)
@@ -469,6 +467,8 @@ def _check_steady(cf, model, y0, P, motion=None):
                            if not sc <= ON_TOLERANCE)
         raise InconsistentInitialDataError(f"steady: the state is not on M_1: {listed}")
     acc = checks.accelerations[0]
+    if status == 2 and not np.all(np.isfinite(acc)) and _real_field_finite(model, y0):
+        raise _not_smooth_there()   # atan2(0, 0): 0 in real arithmetic, NaN in complex
     if status == 3 or (status == 2 and not np.all(np.isfinite(acc))):
         # the user's state: no motion is defined there (bad input, not a failure of ours)
         raise InconsistentInitialDataError(
@@ -592,6 +592,22 @@ def _moved_along(y0, n, rest=None):
     y1 = y0.astype(float).copy()
     y1[:n] += 0.5 / top * v0
     return y1
+
+
+def _not_smooth_there() -> InconsistentInitialDataError:
+    return InconsistentInitialDataError(
+        "steady: the state matrix is not finite at the state (a derivative of the "
+        "lagrangian or of a constraint is not finite there: atan2(0, 0), sqrt at 0); "
+        "choose a [steady] state where the motion is smooth", key="steady")
+
+
+def _real_field_finite(model, y0) -> bool:
+    """Whether the field is finite at y0 in real arithmetic (the complex step's was not)."""
+    try:
+        with np.errstate(all="ignore"):
+            return bool(np.all(np.isfinite(model.rhs(0.0, y0))))
+    except NumericalFailure:
+        return False
 
 
 def _undefined_there(model, y0, singular) -> str:

@@ -4,6 +4,7 @@ uninterrupted one."""
 
 import json
 import os
+import shutil
 import signal
 import subprocess
 import sys
@@ -78,6 +79,31 @@ def test_out_of_budget_exits_3_and_resume_finishes(capsys, tmp_path, monkeypatch
     assert result["summary"]["max_energy_error"] < 1e-7   # the energy balance closes
 
 
+def _killed_after_six(command, env, store) -> int:
+    """Run the study ``command`` and SIGKILL it once six points are done in ``store``:
+    the number of points done then."""
+    proc = subprocess.Popen(command, cwd=ROOT, env=env, stdout=subprocess.DEVNULL,
+                            stderr=subprocess.DEVNULL)
+    try:
+        deadline = time.time() + 120
+        while time.time() < deadline and proc.poll() is None:
+            time.sleep(0.05)
+            try:
+                done = int(xr.open_zarr(store, consolidated=False)["done"].sum())
+            except Exception:   # the store is being created
+                continue
+            if done >= 6:
+                break
+        if proc.poll() is None:
+            os.kill(proc.pid, signal.SIGKILL)
+            proc.wait()
+        assert proc.returncode in (0, -signal.SIGKILL), "the study failed"
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    return int(xr.open_zarr(store, consolidated=False)["done"].sum())
+
+
 def test_a_study_killed_mid_run_resumes_to_the_uninterrupted_result(tmp_path):
     """SIGKILL while chunks are being computed and written; --resume then computes only
     the chunks not marked done and gives the same arrays as a run that was not killed."""
@@ -86,26 +112,13 @@ def test_a_study_killed_mid_run_resumes_to_the_uninterrupted_result(tmp_path):
             "--over", "c=0.01:0.05:24", "--over", "tau=0.5,1", "--chunk", "2",
             "--t-end", "40", "--rtol", "1e-12", "--workers", "1"]
     env = dict(os.environ, PYTHONPATH=str(ROOT))
-    proc = subprocess.Popen(args + ["--out", str(killed)], cwd=ROOT, env=env,
-                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    try:
-        deadline = time.time() + 120
-        done = 0
-        while time.time() < deadline and proc.poll() is None:
-            time.sleep(0.05)
-            try:
-                done = int(xr.open_zarr(killed, consolidated=False)["done"].sum())
-            except Exception:   # the store is being created
-                continue
-            if done >= 6:
-                break
-        assert proc.poll() is None, "the study finished before it could be killed"
-        os.kill(proc.pid, signal.SIGKILL)
-        proc.wait()
-    finally:
-        if proc.poll() is None:
-            proc.kill()
-    partial = int(xr.open_zarr(killed, consolidated=False)["done"].sum())
+    # on a loaded machine the store can stay unreadable (being written) until the study
+    # ends: then the kill came too late, and the study is killed again from scratch
+    for attempt in range(3):
+        shutil.rmtree(killed, ignore_errors=True)
+        partial = _killed_after_six(args + ["--out", str(killed)], env, killed)
+        if partial < 48:
+            break
     assert 6 <= partial < 48
     resumed = subprocess.run(args + ["--out", str(killed), "--resume", "--json"], cwd=ROOT,
                              env=env, capture_output=True, text=True)
