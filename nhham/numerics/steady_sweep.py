@@ -9,6 +9,7 @@ from typing import Callable, Mapping, Sequence
 
 import numpy as np
 
+from nhham.autonomy import require_autonomous
 from nhham.errors import InputError
 from nhham.numerics.crossings import crossings
 from nhham.numerics.linearization import Linearization, linearize
@@ -152,6 +153,9 @@ def steady_state(model, values: Mapping[str, float], independent=None, *,
     from nhham.numerics.chart import ComplexField, choose_chart, lift
 
     model, state = with_steady_inputs(model, values)
+    # a steady motion of a system with t in L or the constraints: refused before the lift
+    # evaluates them (at t = 0, where 1/t is a ZeroDivisionError in the generated code)
+    require_autonomous("linearize_geometry", model.time_in_geometry, key=model.timed_key)
     names = model.names
     y = np.array([float(state[s]) for s in names])
     chart = choose_chart(model, y, independent)

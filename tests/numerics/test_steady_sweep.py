@@ -100,3 +100,19 @@ def test_crossings_many_batched_against_known_roots():
             # |(p - h)^3| <= tolerance within 1e-4 of h: the crossing is where the real
             # part is zero to the tolerance, so the bound is the cube root of it
             assert abs(hopf.value - h) < 2e-4 and abs(abs(hopf.eigenvalue.imag) - 2) < 1e-9
+
+
+def test_a_steady_state_of_a_time_dependent_lagrangian_is_refused_before_the_lift():
+    """L with 0.5/t: the lift onto M_1 evaluated the geometry at t = 0 and the generated
+    code divided by zero (an internal error of `linearize`, found by the scene fuzz). A
+    steady motion needs L autonomous: refused first, naming the lagrangian."""
+    import nhham
+    from nhham.errors import NhhamError
+    from nhham.numerics.steady_sweep import steady_state
+
+    system = nhham.System(["x", "y"], "(x_dot**2 + y_dot**2)/2 + (1/(2*t))*x_dot*y_dot",
+                          ["x_dot + y_dot - 1"])
+    model = nhham.numeric_model(system, backend="numpy")
+    with pytest.raises(NhhamError, match="depends on time t; a steady motion") as info:
+        steady_state(model, dict(x=0.0, y=0.0, x_dot=0.5, y_dot=0.5))
+    assert info.value.key == "lagrangian"
