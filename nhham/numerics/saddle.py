@@ -16,9 +16,11 @@ import math
 import numpy as np
 from scipy.linalg.lapack import dgesv
 
-from nhham.numerics.nullspace import (KKT_RATIO, diagonal_scaling, needs_null_space,
-                                      solve_null_space)
+from nhham.numerics.nullspace import (KKT_RATIO, REFINE_RATIO, constraint_error,
+                                      diagonal_scaling, needs_null_space, solve_null_space)
 from nhham.numerics.status import Status
+
+EPS = float(np.finfo(float).eps)
 
 __all__ = ["solve_saddle", "SingleStateSolver", "gauss", "cond_each", "condition"]
 
@@ -87,12 +89,14 @@ def _solve_scaled(W, mu, top, bottom):
     K[..., :n, n:] = np.swapaxes(mus, -1, -2)
     K[..., n:, :n] = mus
     rhs = np.concatenate([rhs_top, bottom * e], axis=-1)
-    z = _refined(K, rhs, np.linalg.solve(K, rhs[..., None])[..., 0])
+    z = _refined(K, rhs, np.linalg.solve(K, rhs[..., None])[..., 0], n)
     return z[..., :n] * d, z[..., n:] * e
 
 
-def _refined(K, rhs, z):
-    """``z`` after one step of iterative refinement where its residual is above rounding.
+def _refined(K, rhs, z, n):
+    """``z`` after one step of iterative refinement where the backward error of its
+    constraint rows (from ``n``) is above REFINE_RATIO eps
+    (:func:`~nhham.numerics.nullspace.constraint_error` of the scaled system K z = rhs).
 
     When the multipliers are much larger than the accelerations (mass ratios of 1e8),
     the accelerations come out of the LU solve with an absolute error of eps |lambda|,
@@ -100,8 +104,8 @@ def _refined(K, rhs, z):
     refinement step, on those states only, brings the residual back to rounding.
     """
     r = rhs - np.einsum("...ij,...j->...i", K, z)
-    scale = np.einsum("...ij,...j->...i", np.abs(K), np.abs(z)) + np.abs(rhs)
-    bad = np.any(np.abs(r) > 64 * np.finfo(float).eps * scale, axis=-1)
+    bad = np.asarray(constraint_error(K[..., n:, :n], z[..., :n], rhs[..., n:], r[..., n:])
+                     > REFINE_RATIO)
     if np.any(bad):
         z = z.copy()
         z[bad] += np.linalg.solve(K[bad], r[bad][..., None])[..., 0]
@@ -211,9 +215,11 @@ class SingleStateSolver:
                 row[j] = t
                 K[j][n + c] = t
             row[N] = rhs * e
+        K0 = [row[:] for row in K]   # gauss works in place; the residual needs K
         z = gauss(K, N)
         if z is None:
             return np.full(2 * n, np.nan), np.full(m, np.nan), math.nan, Status.SINGULAR
+        z = _refined_python(K0, z, n, N)
         a = [z[i] * d[i] for i in range(n)]
         lam = [z[n + c] * d[n + c] for c in range(m)]
         power = -sum(lam[c] * muv[c] for c in range(m))
@@ -245,11 +251,32 @@ class SingleStateSolver:
         _, _, z, info = dgesv(K, rhs * d)
         if info != 0:
             return np.full(2 * n, np.nan), np.full(m, np.nan), np.nan, Status.SINGULAR
-        z = z * d
+        z = _refined(K, rhs * d, z, n) * d
         dy = np.concatenate((v, z[:n]))
         lam = z[n:]
         power = -float(lam @ muv) + (float(out[-1]) if self.forced else 0.0)
         return dy, lam, power, (Status.SUCCESS if np.isfinite(dy).all() else Status.NONFINITE)
+
+
+def _refined_python(K, z, n, N) -> list:
+    """:func:`_refined` without numpy, for the scaled augmented N x (N+1) system K
+    (constraint rows from n) and its solution z."""
+    top = max((abs(v) for v in z[:n]), default=0.0)
+    worst = 0.0
+    for row in K[n:]:
+        r, terms = row[N], abs(row[N])
+        for j in range(n):
+            t = row[j] * z[j]
+            r -= t
+            terms += abs(t)
+        if r:
+            den = max(terms, max(abs(v) for v in row[:n]) * top)
+            worst = max(worst, abs(r) / den if den else math.inf)
+    if worst <= REFINE_RATIO * EPS:
+        return z
+    r = [row[N] - sum(row[j] * z[j] for j in range(N)) for row in K]
+    dz = gauss([row[:N] + [ri] for row, ri in zip(K, r)], N)
+    return z if dz is None else [zi + di for zi, di in zip(z, dz)]
 
 
 def gauss(K, N):

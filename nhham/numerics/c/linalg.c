@@ -311,12 +311,63 @@ lu:
     }
 }
 
+/* The backward error of (x, y) in [[W, mu^T], [mu, 0]] [x; y] = [top; bottom], in units
+   of eps, over the constraint rows mu x = bottom, as nhham.numerics.nullspace.
+   constraint_error: max_c |r_c| / max(|mu_c| |x| + |bottom_c|, max_j |mu_cj| d_j max_j
+   |x_j| / d_j), d = |W_AA|^-1/2. Free of units. */
+static double kkt_error(int mm, const double *W, const double *mu, const double *bottom,
+                        const double *x) {
+    double d[NQ], xs = 0.0, worst = 0.0;
+    for (int j = 0; j < NQ; ++j) {
+        const double w = fabs(W[j * NQ + j]);
+        d[j] = w > 0.0 ? 1.0 / sqrt(w) : 1.0;
+        const double t = fabs(x[j]) / d[j];
+        if (t > xs) xs = t;
+    }
+    for (int c = 0; c < mm; ++c) {
+        double r = bottom[c], terms = fabs(r), big = 0.0;
+        for (int b = 0; b < NQ; ++b) {
+            const double t = mu[c * NQ + b] * x[b], s = fabs(mu[c * NQ + b]) * d[b];
+            r -= t;
+            terms += fabs(t);
+            if (s > big) big = s;
+        }
+        if (r != 0.0) {
+            const double den = terms > big * xs ? terms : big * xs;
+            const double e = den > 0.0 ? fabs(r) / den : INFINITY;
+            if (!(e <= worst)) worst = e;   /* NaN counts */
+        }
+    }
+    return worst / 2.220446049250313e-16;
+}
+
+/* One step of iterative refinement of (x, y): the residual of every row, solved again. */
+static void kkt_refine(int mm, const double *W, const double *mu, const double *top,
+                       const double *bottom, double *x, double *y) {
+    double rt[NQ], rb[NCX], dx[NQ], dy[NCX];
+    for (int a = 0; a < NQ; ++a) {
+        double r = top[a];
+        for (int b = 0; b < NQ; ++b) r -= W[a * NQ + b] * x[b];
+        for (int c = 0; c < mm; ++c) r -= mu[c * NQ + a] * y[c];
+        rt[a] = r;
+    }
+    for (int c = 0; c < mm; ++c) {
+        double r = bottom[c];
+        for (int b = 0; b < NQ; ++b) r -= mu[c * NQ + b] * x[b];
+        rb[c] = r;
+    }
+    if (ksolve_saddle(mm, W, mu, rt, rb, dx, dy)) return;
+    for (int a = 0; a < NQ; ++a) x[a] += dx[a];
+    for (int c = 0; c < mm; ++c) y[c] += dy[c];
+}
+
 /* [[W, mu^T], [mu, 0]] [x; y] = [top; bottom] with the first mm rows of mu (row stride
    NQ), W symmetric: the one decision of nhham.numerics.nullspace.needs_null_space. Where
    W's diagonal spans more than NHHAM_KKT_RATIO (max W_AA > ratio * min W_AA) the saddle
    solve's relative error in an acceleration, up to eps * max W_AA / min W_AA, is above
-   ~1e-12 and the null-space solve takes over; otherwise ksolve_saddle. Returns 0, or 1
-   when the matrix is singular. */
+   ~1e-12 and the null-space solve takes over; otherwise ksolve_saddle, refined once where
+   the backward error of its constraint rows is above NHHAM_REFINE_RATIO eps (as the numpy
+   solves). Returns 0, or 1 when the matrix is singular. */
 HOT int ksolve(int mm, const double *W, const double *mu, const double *top,
                const double *bottom, double *x, double *y) {
     double hi = 0.0, lo = INFINITY;
@@ -326,5 +377,8 @@ HOT int ksolve(int mm, const double *W, const double *mu, const double *top,
         if (a < lo) lo = a;
     }
     if (hi > NHHAM_KKT_RATIO * lo) return nullspace_solve(mm, W, mu, top, bottom, x, y);
-    return ksolve_saddle(mm, W, mu, top, bottom, x, y);
+    if (ksolve_saddle(mm, W, mu, top, bottom, x, y)) return 1;
+    if (mm && kkt_error(mm, W, mu, bottom, x) > NHHAM_REFINE_RATIO)
+        kkt_refine(mm, W, mu, top, bottom, x, y);
+    return 0;
 }
