@@ -248,10 +248,11 @@ class SingleStateSolver:
         K = np.zeros(N * N)
         K[self.dst] = out[self.src]
         K = K.reshape(N, N) * np.multiply.outer(d, d)
-        _, _, z, info = dgesv(K, rhs * d)
+        rhs *= d
+        _, _, z, info = dgesv(K, rhs)
         if info != 0:
             return np.full(2 * n, np.nan), np.full(m, np.nan), np.nan, Status.SINGULAR
-        z = _refined(K, rhs * d, z, n) * d
+        z = _refined(K, rhs, z, n) * d
         dy = np.concatenate((v, z[:n]))
         lam = z[n:]
         power = -float(lam @ muv) + (float(out[-1]) if self.forced else 0.0)

@@ -12,6 +12,7 @@ from nhham.system.contacts import CONTACT_KEYS
 from nhham.system.scene import SimulateOptions, loads_scene
 from nhham.system.scene_keys import BASE, SCENE_KEYS, example_scene, reference, top_level_keys
 from nhham.system.scene_structure import READ_BY_COMMANDS
+from tests.system.test_scene import read_every_table
 
 DOCS = Path(__file__).resolve().parents[2] / "docs"
 NAMES = {k.name for k in SCENE_KEYS}
@@ -50,15 +51,7 @@ def test_the_tables_keys_match_the_reader():
 def test_every_example_loads_and_is_read(entry):
     """Each example, added to the base scene, loads, and its tables can be read (no
     problem is waiting where a command reads them)."""
-    scene = loads_scene(example_scene(entry))
-    scene.simulate.given()
-    tuple(scene.contacts), dict(scene.control)
-    if scene.initial_given is not None:
-        scene.checked_initial()
-    if scene.steady is not None:
-        scene.steady.expressions
-    if scene.symmetry is not None:
-        scene.symmetry.components
+    read_every_table(loads_scene(example_scene(entry)))
 
 
 def test_every_key_of_every_example_scene_is_on_the_page():
