@@ -40,6 +40,7 @@ from __future__ import annotations
 
 import contextlib
 import contextvars
+import functools
 import math
 import random
 from dataclasses import dataclass, field
@@ -335,9 +336,12 @@ class ExceptionalData:
             vals.extend(frobenius_terms(M, D, dep).values())
         return vals
 
+    @functools.cached_property
     def _bracket_rows(self) -> tuple:
         """(dchi/dq, dchi/dv, W, mixed Hessian) as rows, over the final constraints: the
-        arguments of :func:`~nhham.lagrangian.formulas.lagrangian_bracket`."""
+        arguments of :func:`~nhham.lagrangian.formulas.lagrangian_bracket`. Formed once:
+        every evaluation of the bracket datum reads them (the 64-link snake's 2 x 64 x 66
+        derivatives were formed seven times: its classify took 93 s, 63 s now)."""
         system, cons = self.system, list(self.analysis.final_constraints)
         geometry: Any = self.analysis.geometry   # a LagrangianGeometry (typed loosely there)
         Mx = [list(geometry.mixed_hessian.row(i)) for i in range(system.n)]
@@ -346,7 +350,7 @@ class ExceptionalData:
 
     def _brackets(self, env0, K, count=None):
         """B = ({chi_a, chi_b}_L) over the final constraints at points of M_f."""
-        rows = self._bracket_rows()
+        rows = self._bracket_rows
         mats = []
         pts = self._pts(list(self.analysis.final_constraints), env0, K, "f")
         for env in pts[:count]:
@@ -388,7 +392,7 @@ class ExceptionalData:
         numerators of the values are what the exceptional set is made of).
         """
         ring = K.get_ring()
-        rows = self._bracket_rows()
+        rows = self._bracket_rows
         out = []
         for env in self._pts(list(self.analysis.final_constraints), env0, K, "f"):
             cache = self._memo(env)
