@@ -467,9 +467,10 @@ def _check_steady(cf, model, y0, P, motion=None):
                            if not sc <= ON_TOLERANCE)
         raise InconsistentInitialDataError(f"steady: the state is not on M_1: {listed}")
     acc = checks.accelerations[0]
-    if status == 2 and not np.all(np.isfinite(acc)) and _real_field_finite(model, y0):
+    not_finite = status == 2 and not np.all(np.isfinite(acc))
+    if not_finite and _real_field_finite(model, y0):
         raise _not_smooth_there()   # atan2(0, 0): 0 in real arithmetic, NaN in complex
-    if status == 3 or (status == 2 and not np.all(np.isfinite(acc))):
+    if status == 3 or not_finite:
         # the user's state: no motion is defined there (bad input, not a failure of ours)
         raise InconsistentInitialDataError(
             f"steady: the equations of motion are not defined at the state: "

@@ -262,20 +262,22 @@ class SingleStateSolver:
 def _refined_python(K, z, n, N) -> list:
     """:func:`_refined` without numpy, for the scaled augmented N x (N+1) system K
     (constraint rows from n) and its solution z."""
+    def residual(row):
+        return row[N] - sum(row[j] * z[j] for j in range(N))
+
+    # the constraint rows on every call (their terms are their first n); the others only
+    # where a refinement step needs them
+    r = [residual(row) for row in K[n:]]
     top = max((abs(v) for v in z[:n]), default=0.0)
     worst = 0.0
-    for row in K[n:]:
-        r, terms = row[N], abs(row[N])
-        for j in range(n):
-            t = row[j] * z[j]
-            r -= t
-            terms += abs(t)
-        if r:
+    for row, rc in zip(K[n:], r):
+        if rc:
+            terms = abs(row[N]) + sum(abs(row[j] * z[j]) for j in range(n))
             den = max(terms, max(abs(v) for v in row[:n]) * top)
-            worst = max(worst, abs(r) / den if den else math.inf)
+            worst = max(worst, abs(rc) / den if den else math.inf)
     if worst <= REFINE_RATIO * EPS:
         return z
-    r = [row[N] - sum(row[j] * z[j] for j in range(N)) for row in K]
+    r = [residual(row) for row in K[:n]] + r
     dz = gauss([row[:N] + [ri] for row, ri in zip(K, r)], N)
     return z if dz is None else [zi + di for zi, di in zip(z, dz)]
 

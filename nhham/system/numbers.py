@@ -98,7 +98,6 @@ def complex_string(number) -> str | None:
     return f"{re:.6g}{im:+.6g}i"
 
 
-
 def value_problem(expr, values) -> str | None:
     """Why ``expr`` is no real, finite datum once the parameters take their ``values``, or
     None: the smallest part that becomes infinite or undefined (``1/k``, ``atan2(k, k)``
