@@ -62,6 +62,7 @@ COEFFICIENT_TERMS = 300
 
 __all__ = [
     "classify_constraints",
+    "classify_on",
     "final_constraints_of",
 ]
 
@@ -319,9 +320,56 @@ def _to_hamiltonian(side, cons):
 
 def _classify_exact(side, cons, labels, analysis, tol):
     cons_tq, chi = _to_hamiltonian(side, cons)
+    return classify_on(side.submanifold(chi), side.algebra, chi, labels, constraints_TQ=cons_tq,
+                       tol=tol, side=side, analysis=analysis)
+
+
+def classify_on(Mf: Submanifold, algebra, chi: Sequence, labels: Sequence[str], *,
+                constraints_TQ: Sequence | None = None, tol: float | None = None, side=None,
+                analysis=None) -> ConstraintClasses:
+    """First and second class of constraints ``chi`` in (q, p) on their zero set ``Mf``.
+
+    The exact classification: B_ab = {chi_a, chi_b} by ``algebra``, each entry's vanishing
+    and the rank of B decided on ``Mf`` (the decision engine), a maximal second-class set R
+    and the first-class combinations gamma_k. ``first_class`` is k - rank B: the number of
+    constraints given minus the second-class ones (a caller with a reducible set counts
+    independent ones itself, as the Dirac-Bergmann chain does).
+
+    Parameters
+    ----------
+    Mf : Submanifold
+        The zero set of ``chi`` in T*Q (``fibre`` the momenta).
+    algebra : BracketAlgebra
+    chi : sequence of sympy.Expr, length k
+    labels : sequence of str, length k
+    constraints_TQ : sequence of sympy.Expr, optional
+        The same constraints on TQ (default ``chi``).
+    tol : float, optional
+        Relative tolerance of sampled decisions.
+
+    Returns
+    -------
+    ConstraintClasses
+
+    Examples
+    --------
+    {q1, p1, p1 + p2}: rank B = 2 although no row of B vanishes; p1 + p2 - p1 = p2 is first
+    class.
+
+    >>> import sympy as sp
+    >>> from nhham import BracketAlgebra, Submanifold, System
+    >>> from nhham.hamiltonian.classification import classify_on
+    >>> s = System(["q1", "q2"], "q1_dot**2/2")
+    >>> q1, q2, p1, p2 = sp.symbols("q1 q2 p_q1 p_q2")
+    >>> M = Submanifold(s, [q1, p1, p1 + p2], fibre=(p1, p2))
+    >>> c = classify_on(M, BracketAlgebra((q1, q2), (p1, p2)), [q1, p1, p1 + p2], ["a", "b", "c"])
+    >>> c.second_class, c.first_class_combinations
+    (2, (p_q2,))
+    """
+    chi = tuple(chi)
+    cons_tq = tuple(chi if constraints_TQ is None else constraints_TQ)
     k = len(chi)
-    Mf = side.submanifold(chi)
-    B = side.algebra.bracket_matrix(chi).matrix
+    B = algebra.bracket_matrix(chi).matrix
     decisions: dict = {}
     Br = sp.zeros(k, k)
     nonzero = np.zeros((k, k), dtype=bool)

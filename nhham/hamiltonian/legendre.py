@@ -99,6 +99,9 @@ class LegendreMap:
 
     system: System
 
+    def __post_init__(self):
+        self.system.require_regular_lagrangian("the inverse Legendre map and H")
+
     @property
     def coordinates(self) -> tuple:
         return tuple(self.system.coordinates)

@@ -137,6 +137,7 @@ def lagrangian_geometry(system, precision: int | None = None, samples: int = 6,
     """
     policy = policy_of(policy, "lagrangian_geometry", precision=precision, samples=samples,
                        seed=seed)
+    system.require_regular_lagrangian("the Lagrangian geometry (xi_L, Z_i, C, P)")
     precision, samples, seed = policy.precision, policy.samples, policy.seed
     # Kept on the system itself (a cycle the collector frees with it); a weak-keyed
     # table would keep every system alive through its geometry's reference to it.

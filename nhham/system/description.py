@@ -32,7 +32,7 @@ from typing import Mapping, Sequence
 import numpy as np
 import sympy as sp
 
-from nhham.errors import NonAffineConstraintError, ValidationError
+from nhham.errors import NonAffineConstraintError, SingularLagrangianError, ValidationError
 from nhham.autonomy import time_slot
 from nhham.system.force_checks import dissipation_problems
 from nhham.system.numbers import value_problem
@@ -247,7 +247,12 @@ class System:
                 [f"constraints: m = {m} independent velocity constraints (holonomic ones "
                  f"counted by their complete lifts) but n = {n} coordinates; nhham needs m < n"]
             )
-        check_regular_lagrangian(self)
+        try:
+            check_regular_lagrangian(self)
+        except SingularLagrangianError as exc:
+            # Accepted: the Dirac-Bergmann chain answers it; the routes that need W^-1
+            # refuse it through require_regular_lagrangian.
+            self.__dict__["_singular_lagrangian"] = exc.problems[0]
 
     def __repr__(self):
         label = f"{self.name!r}, " if self.name else ""
@@ -255,6 +260,39 @@ class System:
         forced = (", forced" if self.has_forces else "") + forced
         return (f"System({label}n={self.n}, m={self.m}, holonomic={len(self.holonomic)}"
                 f"{forced})")
+
+    # ------------------------------------------------------------ regularity
+    @property
+    def regular_lagrangian(self) -> bool:
+        """True when W = d2L/dv dv is invertible (generic rank n); False for a singular
+        Lagrangian, which the Dirac-Bergmann chain answers (``DESIGN.md`` §2)."""
+        return "_singular_lagrangian" not in self.__dict__
+
+    def require_regular_lagrangian(self, what: str) -> None:
+        """Raise :class:`~nhham.errors.SingularLagrangianError` unless L is regular.
+
+        Parameters
+        ----------
+        what : str
+            What needs W invertible (``"simulate"``, ``"the Lagrangian geometry"``), named
+            in the message.
+
+        Examples
+        --------
+        >>> from nhham import System
+        >>> s = System(["x", "y"], "x_dot**2/2 - y")
+        >>> s.regular_lagrangian
+        False
+        >>> s.require_regular_lagrangian("simulate")   # doctest: +ELLIPSIS
+        Traceback (most recent call last):
+        ...
+        nhham.errors.SingularLagrangianError: lagrangian: the Hessian W = d2L/dv dv is singular (rank 1 of 2; null direction [0, 1]); simulate needs W invertible ...
+        """
+        message = self.__dict__.get("_singular_lagrangian")
+        if message is not None:
+            raise SingularLagrangianError([
+                f"{message}; {what} needs W invertible (a singular Lagrangian is answered "
+                f"by classify: the Dirac-Bergmann chain)"])
 
     # ----------------------------------------------------------------- sizes
     @property

@@ -399,5 +399,5 @@ def _singular_message(W, rank, null):
         direction = ""
     return (
         f"lagrangian: the Hessian W = d2L/dv dv is singular (rank {rank} of {W.rows}"
-        f"{direction}); singular Lagrangians are outside the paper's scope"
+        f"{direction})"
     )

@@ -108,6 +108,7 @@ def numeric_model(system, *, backend: str = "auto", path: str = "saddle",
         raise ValueError(f"backend must be one of {_BACKENDS}, got {backend!r}")
     if path not in _PATHS:
         raise ValueError(f"path must be one of {_PATHS}, got {path!r}")
+    system.require_regular_lagrangian("the numeric model (the accelerations)")
     values = _parameter_values(system, parameters)
     sources = _sources(system, path, cache_dir if backend != "numpy" else None)
     kernels = GeneratedKernels.from_source(sources["python"], sources["layout"])

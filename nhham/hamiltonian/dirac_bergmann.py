@@ -1,0 +1,451 @@
+"""The Dirac–Bergmann chain of a singular Lagrangian, and what it says on the final surface.
+
+Conventions (``DESIGN.md`` §2, "Singular Lagrangians"): the primary constraints phi_a and
+H_c come from :mod:`nhham.hamiltonian.primary`; the chain is the paper's constraint
+algorithm (:func:`nhham.lagrangian.algorithm.run_algorithm`) on T*Q with base field
+X_{H_c} and one field per multiplier, X_{phi_a} (``u_<a>``) and X_g for the scene's
+holonomic g (``lambda_<i>``), X_f(chi) = {chi, f}:
+
+    0 = {chi, H_c} + u^a {chi, phi_a} + lambda^i {chi, g_i}      on M_k,
+
+every "vanishes on M_k" and every rank decided by the decision engine (``Submanifold``
+of T*Q, recorded). On the final surface M_f:
+
+* B_ab = {chi_a, chi_b}; rank B = the number of second-class constraints (the rank, never
+  a zero-row rule); the independent constraints number rho = 2n - dim M_f (a reducible
+  set such as x, p, x p counts 2); first class = rho - rank B;
+* irregular constraints (gradient zero on M_f) are named, and the degrees of freedom
+  (2n - 2 FC - SC) / 2 are stated only when there is none;
+* gauge generators by Castellani's chain from each primary first-class combination;
+* the Dirac bracket of the phase coordinates over a maximal second-class set.
+
+The verdict is at the scene's parameter values: they are put in exactly (as rationals)
+before anything is derived; parameters without a value stay symbolic.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from fractions import Fraction
+from functools import cached_property
+
+import sympy as sp
+
+from nhham.errors import InputError
+from nhham.hamiltonian.brackets import BracketAlgebra, DiracBracket
+from nhham.hamiltonian.classes import ConstraintClasses
+from nhham.hamiltonian.classification import classify_on
+from nhham.hamiltonian.primary import LegendreImage, legendre_image
+from nhham.lagrangian.algebra import cancel
+from nhham.lagrangian.decision import Decision
+from nhham.lagrangian.engine import Policy
+from nhham.lagrangian.records import AlgorithmRun
+from nhham.lagrangian.submanifold import Submanifold
+from nhham.system.naming import multiplier_symbol
+
+__all__ = ["DiracBergmann", "GaugeGenerator", "dirac_bergmann", "at_parameter_values"]
+
+
+@dataclass(frozen=True)
+class GaugeGenerator:
+    """G = sum_k eps^(k) G_k, generating delta z = {z, G} (Castellani).
+
+    Attributes
+    ----------
+    parameter : sympy.Symbol
+        The gauge parameter eps (its k-th time derivative is ``eps^(k)``).
+    terms : tuple of (int, sympy.Expr)
+        (k, G_k), highest derivative first; G_K is a primary first-class combination.
+    transformations : tuple of (sympy.Symbol, sympy.Expr)
+        (z, delta z) for every phase coordinate with a nonzero delta z.
+    checked : Decision
+        Every G_k first class on M_f (its brackets with every final constraint vanish).
+    """
+
+    parameter: sp.Symbol
+    terms: tuple
+    transformations: tuple
+    checked: Decision
+
+    @property
+    def expression(self) -> sp.Expr:
+        """sum_k eps^(k) G_k, the derivatives written ``eps_dot``, ``eps_ddot``, ..."""
+        return sum((derivative_symbol(self.parameter, k) * g for k, g in self.terms), sp.S.Zero)
+
+
+def derivative_symbol(eps: sp.Symbol, k: int) -> sp.Symbol:
+    """eps, eps_dot, eps_ddot, eps_d3ot ... as symbols."""
+    names = {0: "", 1: "_dot", 2: "_ddot"}
+    return sp.Symbol(eps.name + names.get(k, f"_d{k}ot"))
+
+
+@dataclass(frozen=True, eq=False)
+class DiracBergmann:
+    """The Dirac–Bergmann chain of a singular Lagrangian and its final surface (frozen).
+
+    Attributes
+    ----------
+    system : nhham.System
+        The system at the scene's parameter values (what the chain was run on).
+    image : LegendreImage
+        Primary constraints and H_c.
+    run : AlgorithmRun
+        The chain: stages (generations), final constraints, determined and free
+        multipliers, the decisions.
+    multipliers : tuple of sympy.Symbol
+        The multipliers of the holonomic g (``lambda_<i>``) then of the primaries (``u_<a>``).
+
+    Examples
+    --------
+    L = (q1' - q2)^2/2: p_q2 -> p_q1, both first class, no degree of freedom, and the
+    gauge symmetry delta q1 = eps, delta q2 = eps_dot.
+
+    >>> from nhham import System
+    >>> from nhham.hamiltonian.dirac_bergmann import dirac_bergmann
+    >>> db = dirac_bergmann(System(["q1", "q2"], "(q1_dot - q2)**2/2"))
+    >>> db.generations
+    ((p_q2,), (p_q1,))
+    >>> db.first_class, db.second_class, db.degrees_of_freedom
+    (2, 0, 0)
+    >>> db.gauge_generators[0].transformations
+    ((q1, eps_1), (q2, eps_1_dot))
+    """
+
+    system: object
+    image: LegendreImage
+    run: AlgorithmRun
+    multipliers: tuple
+    policy: Policy
+
+    # ------------------------------------------------------------------ chain
+    @property
+    def status(self) -> str:
+        return self.run.status
+
+    @property
+    def consistent(self) -> bool:
+        return self.run.status != "inconsistent"
+
+    @property
+    def n(self) -> int:
+        return self.system.n
+
+    @cached_property
+    def algebra(self) -> BracketAlgebra:
+        return BracketAlgebra(self.image.coordinates, self.image.momenta)
+
+    @property
+    def generation_labels(self) -> tuple:
+        """Labels of the constraints generation by generation (primary first)."""
+        stages = self.run.stages
+        if not stages:
+            return (tuple(self.run.final_labels),)
+        out = [tuple(stages[0].labels)]
+        out += [tuple(s.new_labels) for s in stages if s.new_labels]
+        return tuple(out)
+
+    @property
+    def generations(self) -> tuple:
+        """The constraints in (q, p), generation by generation (primary first)."""
+        named = self.named_constraints
+        return tuple(tuple(named[lab] for lab in gen) for gen in self.generation_labels)
+
+    @cached_property
+    def named_constraints(self) -> dict:
+        out = {}
+        for s in self.run.stages:
+            out.update(zip(s.labels, s.constraints))
+            out.update(zip(s.new_labels, s.new_constraints))
+        out.update(zip(self.run.final_labels, self.run.final_constraints))
+        return out
+
+    @property
+    def manifold(self) -> Submanifold | None:
+        """M_f in T*Q (None when the chain is inconsistent)."""
+        return self.run.manifold if self.consistent else None
+
+    # --------------------------------------------------------------- classes
+    @cached_property
+    def classes(self) -> ConstraintClasses | None:
+        """B_ab = {chi_a, chi_b} on M_f, its rank, R and the first-class combinations."""
+        if not self.consistent:
+            return None
+        return classify_on(self.manifold, self.algebra, self.run.final_constraints,
+                           self.run.final_labels, tol=self.policy.tol)
+
+    @property
+    def independent(self) -> int | None:
+        """rho = 2n - dim M_f, the number of independent constraints."""
+        if not self.consistent or self.run.dimension is None:
+            return None
+        return 2 * self.n - int(self.run.dimension)
+
+    @property
+    def second_class(self) -> int | None:
+        return None if self.classes is None else int(self.classes.rank)
+
+    @property
+    def first_class(self) -> int | None:
+        if self.classes is None or self.independent is None:
+            return None
+        return self.independent - self.second_class
+
+    @cached_property
+    def irregular_decisions(self) -> dict:
+        """{label: Decision that the gradient of chi vanishes on M_f} for every chi."""
+        if not self.consistent:
+            return {}
+        M = self.manifold
+        z = self.algebra.variables
+        out = {}
+        for lab, chi in zip(self.run.final_labels, self.run.final_constraints):
+            worst = None
+            for s in z:
+                d = M.vanishes(cancel(sp.diff(chi, s)), tol=self.policy.tol)
+                if not d.value:
+                    worst = d
+                    break
+                worst = d if worst is None or d.method == "sampled" else worst
+            out[lab] = worst
+        return out
+
+    @property
+    def irregular(self) -> tuple:
+        """Labels of the final constraints whose gradient vanishes on M_f (z^2, p^2)."""
+        return tuple(lab for lab, d in self.irregular_decisions.items() if d.value)
+
+    @property
+    def degrees_of_freedom(self):
+        """(2n - 2 FC - SC) / 2 (an int, or a Fraction when it is not whole), or None when
+        the chain is inconsistent or a constraint is irregular (the count would be wrong)."""
+        if self.first_class is None or self.irregular:
+            return None
+        dof = Fraction(2 * self.n - 2 * self.first_class - self.second_class, 2)
+        return int(dof) if dof.denominator == 1 else dof
+
+    # ------------------------------------------------------------- the motion
+    @cached_property
+    def hamiltonian(self) -> sp.Expr:
+        """H' = H_c + the determined multipliers times their constraints (free ones 0)."""
+        lam = dict(self.run.multipliers)
+        free = {s: 0 for s in self.run.free_multiplier_symbols}
+        H = self.image.canonical_hamiltonian
+        for sym, chi in zip(self.multipliers, self._multiplied):
+            if sym in lam:
+                H += sp.sympify(lam[sym]).xreplace(free) * chi
+        return cancel(H)
+
+    @property
+    def total_hamiltonian(self) -> sp.Expr:
+        """H_T = H_c + u^a phi_a (+ lambda^i g_i), every multiplier a symbol."""
+        return self.image.canonical_hamiltonian + sum(
+            (s * c for s, c in zip(self.multipliers, self._multiplied)), sp.S.Zero)
+
+    @property
+    def _multiplied(self) -> tuple:
+        return tuple(self.system.holonomic) + tuple(self.image.constraints)
+
+    @cached_property
+    def primary_first_class(self) -> tuple:
+        """A basis of the first-class combinations of the primary constraints (expressions
+        in (q, p)): the kernel of (B_ab) restricted to the primary columns, on M_f."""
+        if not self.consistent:
+            return ()
+        phis = list(self.image.constraints)
+        if not phis:
+            return ()
+        M = self.manifold
+        rows = [[M.reduce(self.algebra.bracket(chi, phi)) for phi in phis]
+                for chi in self.run.final_constraints]
+        kernel = sp.Matrix(rows).nullspace(simplify=True)
+        out = []
+        for k in kernel:
+            den = sp.lcm_list([sp.denom(sp.together(e)) for e in k])
+            out.append(cancel(sum((cancel(e * den) * f for e, f in zip(k, phis)), sp.S.Zero)))
+        return tuple(out)
+
+    @cached_property
+    def gauge_generators(self) -> tuple:
+        """One :class:`GaugeGenerator` per primary first-class combination (Castellani)."""
+        return tuple(self._castellani(g, sp.Symbol(f"eps_{i + 1}"))
+                     for i, g in enumerate(self.primary_first_class))
+
+    def _castellani(self, gamma, eps) -> GaugeGenerator:
+        """G_K = gamma, G_{k-1} = -{G_k, H'}; where -{G_0, H'} is a combination of the
+        primary first-class constraints and their first descendants, G_0 takes the primary
+        terms that make {G_0, H'} a primary one (the non-abelian case)."""
+        H, M = self.hamiltonian, self.manifold
+        pfc = list(self.primary_first_class)
+        descend = [cancel(-self.algebra.bracket(f, H)) for f in pfc]
+        gens = self.algebra.variables
+        chain = [gamma]
+        for _ in range(2 * self.n):
+            s = cancel(-self.algebra.bracket(chain[-1], H))
+            if s == 0 or _combination(s, pfc, gens) is not None:
+                break
+            if len(chain) > 1:
+                coeffs = _combination(s, pfc + descend, gens)
+                if coeffs is not None:
+                    # -{G_0 + alpha phi, H'} = s + alpha . descendants + (primary terms)
+                    alpha = coeffs[len(pfc):]
+                    chain[-1] = cancel(chain[-1] - sum((a * f for a, f in zip(alpha, pfc)),
+                                                       sp.S.Zero))
+                    break
+            chain.append(s)
+        K = len(chain) - 1
+        terms = tuple((K - i, g) for i, g in enumerate(chain))
+        G = sum((derivative_symbol(eps, k) * g for k, g in terms), sp.S.Zero)
+        moves = tuple((z, d) for z in gens if (d := cancel(self.algebra.bracket(z, G))) != 0)
+        checked = Decision(True, "exact", "no constraints")
+        for _, g in terms:
+            for chi in self.run.final_constraints:
+                d = M.vanishes(self.algebra.bracket(g, chi), tol=self.policy.tol)
+                if not d.value:
+                    checked = d
+                    break
+                checked = d if checked.detail == "no constraints" or d.method == "sampled" \
+                    else checked
+            if not checked.value:
+                break
+        return GaugeGenerator(parameter=eps, terms=terms, transformations=moves,
+                              checked=checked)
+
+    @cached_property
+    def dirac_bracket(self) -> sp.Matrix | None:
+        """{z_i, z_j}_D for z = (q, p) over the maximal second-class set, shape (2n, 2n);
+        the canonical matrix when there is no second-class constraint."""
+        if self.classes is None:
+            return None
+        second = self.classes.second_class_constraints or ()
+        z = self.algebra.variables
+        if not second:
+            return sp.Matrix(len(z), len(z), lambda i, j: self.algebra.bracket(z[i], z[j]))
+        D = DiracBracket(self.algebra, second)
+        return sp.Matrix(len(z), len(z), lambda i, j: sp.factor(D(z[i], z[j])))
+
+    # ----------------------------------------------------------------- report
+    @property
+    def warnings(self) -> tuple:
+        out = list(self.run.warnings)
+        if self.classes is not None:
+            out += list(self.classes.warnings)
+        if self.irregular:
+            out.append("irregular constraints (gradient zero on M_f): "
+                       + ", ".join(self.irregular) + "; the count of degrees of freedom "
+                       "(2n - 2 FC - SC)/2 does not apply")
+        for g in self.gauge_generators:
+            if not g.checked.value:
+                out.append(f"the gauge generator of {g.terms[0][1]} is not first class on "
+                           f"M_f ({g.checked.describe()}): Castellani's chain did not close")
+        return tuple(out)
+
+
+def _combination(expr, basis, gens):
+    """Coefficients c with expr = sum c_i basis_i (division with remainder 0), else None."""
+    if not basis:
+        return None
+    try:
+        quotients, remainder = sp.reduced(sp.expand(sp.numer(sp.together(expr))),
+                                          [sp.expand(b) for b in basis], *gens)
+    except (sp.PolynomialError, sp.polys.polyerrors.PolificationFailed, TypeError, ValueError):
+        return None
+    if remainder != 0:
+        return None
+    den = sp.denom(sp.together(expr))
+    return [cancel(qt / den) for qt in quotients]
+
+
+def at_parameter_values(system):
+    """``system`` with its parameter values put in exactly (as rationals: 9.81 -> 981/100);
+    parameters without a value stay symbols. The system itself when none has a value."""
+    from nhham.system.description import System
+
+    values = dict(system.parameter_values)
+    if not values:
+        return system
+    exact = {s: sp.Rational(repr(float(v))) for s, v in values.items()}
+    kept = [s.name for s in system.declared_parameters if s not in exact]
+    return System([q.name for q in system.coordinates],
+                  system.lagrangian.xreplace(exact),
+                  holonomic=[g.xreplace(exact) for g in system.holonomic],
+                  parameters=kept, name=system.name)
+
+
+def dirac_bergmann(system, *, policy: Policy | None = None,
+                   max_generations: int | None = None) -> DiracBergmann:
+    """Run the Dirac–Bergmann chain of ``system``'s singular Lagrangian at its values.
+
+    Parameters
+    ----------
+    system : nhham.System
+        A Lagrangian at most quadratic in v, with holonomic constraints or none.
+    policy : Policy, optional
+        The settings of every decision.
+    max_generations : int, optional
+        Bound on the generations (default 2n).
+
+    Returns
+    -------
+    DiracBergmann
+
+    Raises
+    ------
+    InputError
+        Velocity constraints, forces or a time-dependent L on a singular Lagrangian (not
+        built), naming the key.
+
+    Examples
+    --------
+    A Landau level, L = B x y' - k (x^2 + y^2)/2: two second-class primaries and the
+    Dirac bracket {x, y}_D = -1/B.
+
+    >>> from nhham import System
+    >>> from nhham.hamiltonian.dirac_bergmann import dirac_bergmann
+    >>> db = dirac_bergmann(System(["x", "y"], "B*x*y_dot - k*(x**2 + y**2)/2",
+    ...                            parameters={"B": 2.0, "k": 1.0}))
+    >>> db.generations, db.second_class, db.degrees_of_freedom
+    (((p_x, -2*x + p_y),), 2, 1)
+    >>> db.dirac_bracket[0, 1]
+    -1/2
+    """
+    from nhham.lagrangian.algorithm import run_algorithm
+
+    _refuse_unbuilt(system)
+    policy = policy or Policy()
+    at = at_parameter_values(system)
+    image = legendre_image(at)
+    q, p = image.coordinates, image.momenta
+    algebra = BracketAlgebra(q, p)
+    hol = tuple(at.holonomic)
+    multiplied = hol + tuple(image.constraints)
+    symbols = tuple(multiplier_symbol(i + 1) for i in range(len(hol))) + tuple(
+        sp.Symbol(f"u_{a + 1}") for a in range(len(image.constraints)))
+    fields = sp.Matrix([list(algebra.hamiltonian_field(f).T) for f in multiplied]) \
+        if multiplied else sp.zeros(0, 2 * at.n)
+    labels = tuple(f"holonomic[{i}]" for i in range(len(hol))) + tuple(
+        f"primary[{a}]" for a in range(len(image.constraints)))
+
+    def manifold(eqs):
+        return Submanifold(at, eqs, precision=policy.precision, samples=policy.samples,
+                           seed=policy.seed, fibre=p, exact=policy.exact)
+
+    run = run_algorithm(algebra.hamiltonian_field(image.canonical_hamiltonian), fields,
+                        multiplied, labels, manifold,
+                        max_stages=2 * at.n if max_generations is None else max_generations,
+                        multiplier_symbols=symbols, variables=q + p)
+    return DiracBergmann(system=at, image=image, run=run, multipliers=symbols, policy=policy)
+
+
+def _refuse_unbuilt(system) -> None:
+    """The parts of a singular system the chain does not take yet, each by its key."""
+    problems = []
+    if system.constraints:
+        problems.append("constraints: velocity constraints on a singular Lagrangian are not "
+                        "handled yet (the chain takes holonomic constraints)")
+    if system.has_forces:
+        problems.append("forces: forces on a singular Lagrangian are not handled yet")
+    if system.time is not None:
+        problems.append("lagrangian: a singular Lagrangian that depends on t is not "
+                        "handled yet")
+    if problems:
+        raise InputError("; ".join(problems), key=problems[0].split(":")[0])
