@@ -162,12 +162,15 @@ class ValidationError(InputError):
 
 
 class SingularLagrangianError(ValidationError):
-    """The Hessian W = d2L/dv dv is singular (outside the paper's scope).
+    """The Hessian W = d2L/dv dv is singular where W^-1 is needed.
+
+    A singular Lagrangian is a valid system (the Dirac-Bergmann chain of ``classify``
+    answers it); the routes that need W^-1 refuse it with this error.
 
     Examples
     --------
-    >>> from nhham import System
-    >>> System(["x", "y"], "x_dot**2/2")
+    >>> from nhham import System, lagrangian_geometry
+    >>> lagrangian_geometry(System(["x", "y"], "x_dot**2/2"))
     Traceback (most recent call last):
         ...
     nhham.errors.SingularLagrangianError: lagrangian: the Hessian W = d2L/dv dv is singular (rank 1 of 2; null direction [0, 1]); ...

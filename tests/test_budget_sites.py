@@ -152,7 +152,7 @@ def test_singular_lagrangian_message_lets_an_expiry_through(monkeypatch):
     q = sp.symbols("x y")
     L = "(x_dot + a*y_dot)**2/2"
     with pytest.raises(SingularLagrangianError):
-        System(list(q), L, parameters={"a": None})
+        System(list(q), L, parameters={"a": None}).require_regular_lagrangian("it")
     monkeypatch.setattr(sp.MutableDenseMatrix, "nullspace", _expire)
     with pytest.raises(BudgetExceeded, match="planted"):
         System(list(q), L, parameters={"a": None})

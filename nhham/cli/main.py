@@ -50,7 +50,7 @@ from nhham.numerics.simulate_options import check_method_options
 __all__ = ["main", "build_parser", "COMMANDS", "METHODS"]
 
 
-def _load(args, steps, drop_redundant=False):
+def _load(args, steps, drop_redundant=False, singular=False):
     from nhham.cli.loading import load_for
     from nhham.errors import RedundantConstraintError
 
@@ -58,7 +58,7 @@ def _load(args, steps, drop_redundant=False):
     with steps.step(f"load scene {args.scene}"):
         try:
             scene = load_for(args, check_initial=False, drop_redundant=drop_redundant
-                             or getattr(args, "drop_redundant", False))
+                             or getattr(args, "drop_redundant", False), singular=singular)
         except RedundantConstraintError as exc:  # the command's way to drop it
             raise RedundantConstraintError(
                 [p.replace(exc.ADVICE, "run with --drop-redundant to drop it")
@@ -92,7 +92,7 @@ def cmd_classify(args, steps) -> CommandOutput:
     integrability, classes); with ``--parametric`` the verdict for every value."""
     from nhham.journeys.verdict import classify, classify_parametric
 
-    scene = _load(args, steps, drop_redundant=True)
+    scene = _load(args, steps, drop_redundant=True, singular=True)
     if not getattr(args, "parametric", False):
         return _output(args, scene, classify(scene, policy=args.policy, steps=steps))
     if args.latex:

@@ -41,9 +41,11 @@ from nhham.lagrangian.decision import Decision
 from nhham.lagrangian.engine import Policy
 from nhham.lagrangian.records import AlgorithmRun
 from nhham.lagrangian.submanifold import Submanifold
-from nhham.system.naming import multiplier_symbol
+from nhham.system.naming import (gauge_parameter_symbol, multiplier_symbol,
+                                 primary_multiplier_symbol)
 
-__all__ = ["DiracBergmann", "GaugeGenerator", "dirac_bergmann", "at_parameter_values"]
+__all__ = ["DiracBergmann", "GaugeGenerator", "dirac_bergmann", "at_parameter_values",
+           "with_parameters"]
 
 
 @dataclass(frozen=True)
@@ -52,8 +54,9 @@ class GaugeGenerator:
 
     Attributes
     ----------
-    parameter : sympy.Symbol
-        The gauge parameter eps (its k-th time derivative is ``eps^(k)``).
+    index : int
+        a of the gauge parameter eps_a (its k-th time derivative
+        :func:`~nhham.system.naming.gauge_parameter_symbol` (a, k)).
     terms : tuple of (int, sympy.Expr)
         (k, G_k), highest derivative first; G_K is a primary first-class combination.
     transformations : tuple of (sympy.Symbol, sympy.Expr)
@@ -62,21 +65,20 @@ class GaugeGenerator:
         Every G_k first class on M_f (its brackets with every final constraint vanish).
     """
 
-    parameter: sp.Symbol
+    index: int
     terms: tuple
     transformations: tuple
     checked: Decision
 
     @property
+    def parameter(self) -> sp.Symbol:
+        """eps_a."""
+        return gauge_parameter_symbol(self.index)
+
+    @property
     def expression(self) -> sp.Expr:
         """sum_k eps^(k) G_k, the derivatives written ``eps_dot``, ``eps_ddot``, ..."""
-        return sum((derivative_symbol(self.parameter, k) * g for k, g in self.terms), sp.S.Zero)
-
-
-def derivative_symbol(eps: sp.Symbol, k: int) -> sp.Symbol:
-    """eps, eps_dot, eps_ddot, eps_d3ot ... as symbols."""
-    names = {0: "", 1: "_dot", 2: "_ddot"}
-    return sp.Symbol(eps.name + names.get(k, f"_d{k}ot"))
+        return sum((gauge_parameter_symbol(self.index, k) * g for k, g in self.terms), sp.S.Zero)
 
 
 @dataclass(frozen=True, eq=False)
@@ -104,7 +106,7 @@ class DiracBergmann:
     >>> from nhham.hamiltonian.dirac_bergmann import dirac_bergmann
     >>> db = dirac_bergmann(System(["q1", "q2"], "(q1_dot - q2)**2/2"))
     >>> db.generations
-    ((p_q2,), (p_q1,))
+    ((p_q2,), (-p_q1,))
     >>> db.first_class, db.second_class, db.degrees_of_freedom
     (2, 0, 0)
     >>> db.gauge_generators[0].transformations
@@ -230,7 +232,7 @@ class DiracBergmann:
         lam = dict(self.run.multipliers)
         free = {s: 0 for s in self.run.free_multiplier_symbols}
         H = self.image.canonical_hamiltonian
-        for sym, chi in zip(self.multipliers, self._multiplied):
+        for sym, chi in zip(self.multipliers, self.multiplied):
             if sym in lam:
                 H += sp.sympify(lam[sym]).xreplace(free) * chi
         return cancel(H)
@@ -239,10 +241,11 @@ class DiracBergmann:
     def total_hamiltonian(self) -> sp.Expr:
         """H_T = H_c + u^a phi_a (+ lambda^i g_i), every multiplier a symbol."""
         return self.image.canonical_hamiltonian + sum(
-            (s * c for s, c in zip(self.multipliers, self._multiplied)), sp.S.Zero)
+            (s * c for s, c in zip(self.multipliers, self.multiplied)), sp.S.Zero)
 
     @property
-    def _multiplied(self) -> tuple:
+    def multiplied(self) -> tuple:
+        """The functions the multipliers multiply: the holonomic g, then the phi_a."""
         return tuple(self.system.holonomic) + tuple(self.image.constraints)
 
     @cached_property
@@ -267,10 +270,9 @@ class DiracBergmann:
     @cached_property
     def gauge_generators(self) -> tuple:
         """One :class:`GaugeGenerator` per primary first-class combination (Castellani)."""
-        return tuple(self._castellani(g, sp.Symbol(f"eps_{i + 1}"))
-                     for i, g in enumerate(self.primary_first_class))
+        return tuple(self._castellani(g, i + 1) for i, g in enumerate(self.primary_first_class))
 
-    def _castellani(self, gamma, eps) -> GaugeGenerator:
+    def _castellani(self, gamma, index: int) -> GaugeGenerator:
         """G_K = gamma, G_{k-1} = -{G_k, H'}; where -{G_0, H'} is a combination of the
         primary first-class constraints and their first descendants, G_0 takes the primary
         terms that make {G_0, H'} a primary one (the non-abelian case)."""
@@ -294,7 +296,7 @@ class DiracBergmann:
             chain.append(s)
         K = len(chain) - 1
         terms = tuple((K - i, g) for i, g in enumerate(chain))
-        G = sum((derivative_symbol(eps, k) * g for k, g in terms), sp.S.Zero)
+        G = sum((gauge_parameter_symbol(index, k) * g for k, g in terms), sp.S.Zero)
         moves = tuple((z, d) for z in gens if (d := cancel(self.algebra.bracket(z, G))) != 0)
         checked = Decision(True, "exact", "no constraints")
         for _, g in terms:
@@ -307,7 +309,7 @@ class DiracBergmann:
                     else checked
             if not checked.value:
                 break
-        return GaugeGenerator(parameter=eps, terms=terms, transformations=moves,
+        return GaugeGenerator(index=index, terms=terms, transformations=moves,
                               checked=checked)
 
     @cached_property
@@ -355,20 +357,36 @@ def _combination(expr, basis, gens):
     return [cancel(qt / den) for qt in quotients]
 
 
+def with_parameters(system, sub=None, symbolic=()):
+    """``system`` with ``sub`` ({parameter: value}, put in exactly) and the parameters
+    named in ``symbolic`` without a value; the others keep theirs.
+
+    Examples
+    --------
+    >>> from nhham import System
+    >>> from nhham.hamiltonian.dirac_bergmann import with_parameters
+    >>> s = System(["x"], "a*x_dot**2/2 + b*x", parameters={"a": 1.0, "b": 2.0})
+    >>> t = with_parameters(s, {s.parameters[0]: 3}, symbolic=["b"])
+    >>> t.lagrangian, dict(t.parameter_values)
+    (b*x + 3*x_dot**2/2, {})
+    """
+    from nhham.system.description import System
+
+    sub = dict(sub or {})
+    if not sub and not symbolic:
+        return system
+    params = {p.name: (None if p.name in symbolic else system.parameter_values.get(p))
+              for p in system.declared_parameters if p not in sub}
+    return System([q.name for q in system.coordinates], system.lagrangian.xreplace(sub),
+                  holonomic=[g.xreplace(sub) for g in system.holonomic],
+                  parameters=params, name=system.name)
+
+
 def at_parameter_values(system):
     """``system`` with its parameter values put in exactly (as rationals: 9.81 -> 981/100);
     parameters without a value stay symbols. The system itself when none has a value."""
-    from nhham.system.description import System
-
-    values = dict(system.parameter_values)
-    if not values:
-        return system
-    exact = {s: sp.Rational(repr(float(v))) for s, v in values.items()}
-    kept = [s.name for s in system.declared_parameters if s not in exact]
-    return System([q.name for q in system.coordinates],
-                  system.lagrangian.xreplace(exact),
-                  holonomic=[g.xreplace(exact) for g in system.holonomic],
-                  parameters=kept, name=system.name)
+    return with_parameters(system, {s: sp.Rational(repr(float(v)))
+                                    for s, v in system.parameter_values.items()})
 
 
 def dirac_bergmann(system, *, policy: Policy | None = None,
@@ -404,7 +422,7 @@ def dirac_bergmann(system, *, policy: Policy | None = None,
     >>> db = dirac_bergmann(System(["x", "y"], "B*x*y_dot - k*(x**2 + y**2)/2",
     ...                            parameters={"B": 2.0, "k": 1.0}))
     >>> db.generations, db.second_class, db.degrees_of_freedom
-    (((p_x, -2*x + p_y),), 2, 1)
+    (((p_x, p_y - 2*x),), 2, 1)
     >>> db.dirac_bracket[0, 1]
     -1/2
     """
@@ -419,7 +437,7 @@ def dirac_bergmann(system, *, policy: Policy | None = None,
     hol = tuple(at.holonomic)
     multiplied = hol + tuple(image.constraints)
     symbols = tuple(multiplier_symbol(i + 1) for i in range(len(hol))) + tuple(
-        sp.Symbol(f"u_{a + 1}") for a in range(len(image.constraints)))
+        primary_multiplier_symbol(a + 1) for a in range(len(image.constraints)))
     fields = sp.Matrix([list(algebra.hamiltonian_field(f).T) for f in multiplied]) \
         if multiplied else sp.zeros(0, 2 * at.n)
     labels = tuple(f"holonomic[{i}]" for i in range(len(hol))) + tuple(
@@ -432,7 +450,7 @@ def dirac_bergmann(system, *, policy: Policy | None = None,
     run = run_algorithm(algebra.hamiltonian_field(image.canonical_hamiltonian), fields,
                         multiplied, labels, manifold,
                         max_stages=2 * at.n if max_generations is None else max_generations,
-                        multiplier_symbols=symbols, variables=q + p)
+                        multiplier_symbols=symbols, variables=q + p, points_are_motions=True)
     return DiracBergmann(system=at, image=image, run=run, multipliers=symbols, policy=policy)
 
 

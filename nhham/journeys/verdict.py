@@ -63,6 +63,8 @@ def classify(scene, *, policy: Policy | None = None, steps=None) -> Answer:
 
     scene = as_scene(scene, drop_redundant=True)
     steps = quiet_steps(steps)
+    if not scene.system.regular_lagrangian:
+        return singular_classify(scene, policy, steps)
     at = values_verdict(scene, policy, steps)
     analysis, classes = at.verdict.analysis, at.verdict.classes
     assert isinstance(analysis, ConstraintAnalysis)  # a valid verdict carries its analysis
@@ -83,6 +85,28 @@ def classify(scene, *, policy: Policy | None = None, steps=None) -> Answer:
                   latex=functools.partial(classify_latex, title, data),
                   warnings=tuple(classify_warnings(analysis, classes) + list(at.warnings)),
                   payload={"verdict": at}, system=scene.system)
+
+
+def singular_classify(scene, policy, steps) -> Answer:
+    """``classify`` of a singular Lagrangian: the Dirac-Bergmann chain at the values
+    (:func:`~nhham.hamiltonian.dirac_bergmann.dirac_bergmann`)."""
+    from nhham.hamiltonian.dirac_bergmann import dirac_bergmann
+    from nhham.render.singular import (singular_data, singular_latex, singular_text,
+                                       singular_warnings)
+
+    with steps.step("Dirac-Bergmann chain at the parameter values (primary constraints, "
+                    "generations, classes, gauge generators)"):
+        db = dirac_bergmann(scene.system, policy=policy)
+        data = singular_data(db)
+    for stage in db.run.stages:
+        for d in stage.decisions:
+            steps.note(f"generation {stage.index}: {d.describe()}")
+    data["parameter_case"] = None
+    title = scene.name or str(scene.source)
+    return Answer("classify", data, lambda: singular_text(title, data),
+                  latex=functools.partial(singular_latex, title, data),
+                  warnings=tuple(singular_warnings(db)), payload={"chain": db},
+                  system=scene.system)
 
 
 def values_verdict(scene, policy, steps):
@@ -191,6 +215,8 @@ def classify_parametric(scene, *, policy: Policy | None = None, positive=(),
 
     scene = as_scene(scene, drop_redundant=True)
     steps = quiet_steps(steps)
+    if not scene.system.regular_lagrangian:
+        return _singular_parametric(scene, policy, positive, depth, symbolic, steps)
     # The runs are parts of the step (nhham.progress): named in a budget's message,
     # listed by --verbose, shown on a terminal once the search has run a second.
     with steps.step("verdicts for every parameter value (generic run, exceptional sets, "
@@ -206,6 +232,27 @@ def classify_parametric(scene, *, policy: Policy | None = None, positive=(),
     title = scene.name or str(scene.source)
     return Answer("classify", data, functools.partial(parametric_text, title, pv, data),
                   warnings=tuple(pv.warnings), payload={"verdict": pv}, system=scene.system)
+
+
+def _singular_parametric(scene, policy, positive, depth, symbolic, steps) -> Answer:
+    """``classify --parametric`` of a singular Lagrangian: the chain with the parameters
+    symbolic (default every one) and the cases where its answer changes."""
+    from nhham.render.singular import singular_parametric_data, singular_parametric_text
+    from nhham.verdict.singular import singular_parametric
+
+    names = None if symbolic is None else symbolic_names(scene.system, symbolic)
+    with steps.step("Dirac-Bergmann chains for every parameter value (generic chain, "
+                    "exceptional factors, one chain per case)"):
+        pv = singular_parametric(scene.system, policy=policy, symbolic=names,
+                                 positive=positive, max_depth=3 if depth is None else depth)
+        data = singular_parametric_data(pv)
+    data["positive"] = list(positive)
+    title = scene.name or str(scene.source)
+    warnings = list(pv.generic.warnings) + [w for c in pv.cases if c.chain is not None
+                                            for w in c.chain.warnings]
+    return Answer("classify", data, functools.partial(singular_parametric_text, title, data),
+                  warnings=tuple(dict.fromkeys(warnings)), payload={"verdict": pv},
+                  system=scene.system)
 
 
 def symbolic_names(system, names=None) -> list:

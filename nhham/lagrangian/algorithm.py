@@ -60,7 +60,8 @@ def run_algorithm(base_field, vertical_fields, primary: Sequence, labels: Sequen
                   max_stages: int | None = None, multiplier_symbols: Sequence | None = None,
                   variables: Sequence | None = None, secondary_start: int = 0,
                   secondary_prefix: str = "secondary", scale=None,
-                  closed_fields: Callable | None = None, time=None) -> AlgorithmRun:
+                  closed_fields: Callable | None = None, time=None,
+                  points_are_motions: bool = False) -> AlgorithmRun:
     """Run the constraint algorithm (paper §3) for any number of constraints.
 
     Parameters
@@ -113,6 +114,11 @@ def run_algorithm(base_field, vertical_fields, primary: Sequence, labels: Sequen
         The time t when the system depends on it (``System.time``): the tangency rows
         gain ∂χ/∂t (δ ∂χ/∂t with ``scale``), the field on ℝ × TQ being ∂/∂t + ξ; t is a
         parameter of M_k without a value (``DESIGN.md`` §2).
+    points_are_motions : bool, optional
+        False (default): an M_f of dimension 0 is inconsistent (isolated points, no
+        motion of a system with external constraints). True: it is a final surface with
+        no degree of freedom (the Dirac-Bergmann chain: L = -V(q) rests at the critical
+        points of V).
 
     Returns
     -------
@@ -182,6 +188,7 @@ def run_algorithm(base_field, vertical_fields, primary: Sequence, labels: Sequen
     loop = _Loop(xi, Z, variables, lam, manifold_factory, graph, secondary_start,
                  secondary_prefix, scale=scale, closed_fields=closed_fields)
     loop.time = time
+    loop.points_are_motions = points_are_motions
     return loop.run(primary, labels, bound)
 
 
@@ -202,6 +209,7 @@ class _Loop:
         self.scale_factors = scale_factors(self.scale)
         self.closed_fields = closed_fields
         self.time = None  # the time t of a time-dependent system (run_algorithm's time)
+        self.points_are_motions = False  # run_algorithm's points_are_motions
 
     # ------------------------------------------------------------ tangency rows
     def row(self, chi):
@@ -481,6 +489,8 @@ class _Loop:
             self._collect(f"stage {k}: rank of the Jacobian of the final constraints", dec)
             rank, how = int(dec.value), f"Jacobian of rank {dec.value} ({dec.method})"
         dim = N - rank
+        if dim <= 0 and self.points_are_motions:
+            return 0, None
         if dim <= 0:
             return 0, (f"stage {k}: M_f = M_{k} has dimension 0 ({how}): isolated points, "
                        f"no motion")

@@ -16,7 +16,8 @@ def output_names(system) -> list:
     >>> output_names(models.rolling_disk())[:5]
     ['x', 'y', 'theta', 'phi', 'x_dot']
     """
-    from nhham.system.naming import momentum_symbol, multiplier_symbol
+    from nhham.system.naming import (gauge_parameter_symbol, momentum_symbol,
+                                     multiplier_symbol, primary_multiplier_symbol)
 
     coords = [q.name for q in system.coordinates]
     vels = [v.name for v in system.velocities]
@@ -24,6 +25,12 @@ def output_names(system) -> list:
     params = [p.name for p in system.parameters]
     multipliers = [multiplier_symbol(i + 1).name for i in range(max(system.m, len(
         getattr(system, "constraints", ()))))]
+    if not getattr(system, "regular_lagrangian", True):
+        # the Dirac-Bergmann chain's u^a and the gauge parameters with their derivatives
+        n = len(coords)
+        multipliers += [primary_multiplier_symbol(a + 1).name for a in range(n)]
+        multipliers += [gauge_parameter_symbol(a + 1, k).name for a in range(n)
+                        for k in range(4)]
     return list(dict.fromkeys(coords + vels + momenta + params + multipliers))
 
 

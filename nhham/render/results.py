@@ -21,7 +21,7 @@ from nhham.numerics.methods import lookup, names
 from nhham.system.chetaev import CHETAEV
 
 __all__ = [
-    "classify_data", "classify_text", "classify_latex",
+    "classify_data", "classify_text", "classify_latex", "classify_rows",
     "derive_data", "derive_text", "derive_latex",
     "implicit_data", "implicit_text", "implicit_latex",
     "compare_data", "compare_text", "compare_latex",
@@ -220,6 +220,11 @@ def classify_latex(title: str, data: dict, parse) -> str:
 
     ``parse`` reads an expression string of ``data`` back (the scene's names).
     """
+    return tex.aligned(classify_rows(title, data, parse))
+
+
+def classify_rows(title: str, data: dict, parse) -> list:
+    """The (left, right) rows of :func:`classify_latex`."""
     rows = [(tex.text(f"{title}: ") + rf"n = {data['n']},\ m = {data['m']}", None),
             (r"\operatorname{rank} C|_{M_1}", f"{data['rank_c']}"
              + (r"\ (\text{regular})" if data["regular"] else r"\ (\text{singular})")),
@@ -247,7 +252,7 @@ def classify_latex(title: str, data: dict, parse) -> str:
         rows.append((tex.text("first class (T*Q)"), tex.latex(parse(c))))
     if data["inconsistency"]:
         rows.append((tex.text("inconsistent"), tex.text(data["inconsistency"])))
-    return tex.aligned(rows)
+    return rows
 
 
 # ------------------------------------------------------------------ derive

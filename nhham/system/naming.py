@@ -51,3 +51,15 @@ def momentum_symbol(q: sp.Symbol) -> sp.Symbol:
 def multiplier_symbol(i: int) -> sp.Symbol:
     """The i-th Lagrange multiplier ``lambda_<i>`` (1-based)."""
     return sp.Symbol(f"lambda_{i}")
+
+
+def primary_multiplier_symbol(a: int) -> sp.Symbol:
+    """The multiplier ``u_<a>`` of the a-th primary constraint of a singular Lagrangian
+    (1-based): H_T = H_c + u^a phi_a."""
+    return sp.Symbol(f"u_{a}")
+
+
+def gauge_parameter_symbol(a: int, k: int = 0) -> sp.Symbol:
+    """The k-th time derivative of the a-th gauge parameter: ``eps_<a>``, ``eps_<a>_dot``,
+    ``eps_<a>_ddot``, then ``eps_<a>_d<k>ot``."""
+    return sp.Symbol(f"eps_{a}" + {0: "", 1: "_dot", 2: "_ddot"}.get(k, f"_d{k}ot"))

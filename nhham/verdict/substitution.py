@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import sympy as sp
 
-from nhham.errors import BudgetExceeded, NhhamError, SingularLagrangianError
+from nhham.errors import BudgetExceeded, NhhamError
 from nhham.system.description import System
 from nhham.verdict.results import Verdict
 
@@ -71,15 +71,17 @@ def rebuild(system, sub, values):
     x = (lambda e: sp.sympify(e).xreplace(sub)) if sub else sp.sympify
     try:
         # the forces, substituted as L is (the inputs and t stay what they are)
-        return System(system.coordinates, x(system.lagrangian),
+        rebuilt = System(system.coordinates, x(system.lagrangian),
                       [x(c) for c in system.constraints], [x(g) for g in system.holonomic],
                       parameters=params, name=system.name, drop_redundant=True,
                       forces=[x(f) for f in system.forces], dissipation=x(system.dissipation),
                       inputs=[u for u in system.inputs if u not in sub])
+        if rebuilt.regular_lagrangian:
+            return rebuilt
+        why = ("the Lagrangian is singular (det W = 0) there: classify a scene with these "
+               "values for its Dirac-Bergmann chain")
     except BudgetExceeded:  # an expiry says nothing about the system's validity
         raise
-    except SingularLagrangianError:
-        why = "the Lagrangian is singular (det W = 0): outside nhham's scope"
     except NhhamError as exc:
         why = f"the system is not valid there: {exc}"
     return Verdict(status="invalid", regular=None, rank_C=None, stages=0, free_multipliers=0,

@@ -106,21 +106,26 @@ def test_reaction_vanishing_at_points_of_m1_only_is_accepted():
     assert make(constraints=[xd * yd]).m == 1
 
 
-def test_singular_hessian_reports_rank_and_null_direction():
-    with pytest.raises(SingularLagrangianError) as err:
-        nhham.System(["x", "y"], (xd + yd) ** 2 / 2)
-    msg = str(err.value)
-    assert "rank 1 of 2" in msg and "null direction [-1, 1]" in msg and "lagrangian" in msg
+def test_singular_hessian_is_accepted_and_refused_where_w_inverse_is_needed():
+    s = nhham.System(["x", "y"], (xd + yd) ** 2 / 2)
+    assert s.regular_lagrangian is False
+    for build in (nhham.lagrangian_geometry, nhham.legendre_map):
+        with pytest.raises(SingularLagrangianError) as err:
+            build(s)
+        msg = str(err.value)
+        assert "rank 1 of 2" in msg and "null direction [-1, 1]" in msg and "lagrangian" in msg
+        assert "needs W invertible" in msg and "classify" in msg
     # a 2-D kernel: both directions, by hand (d2L/dv dv = diag(1, 0, 0))
     with pytest.raises(SingularLagrangianError,
                        match=r"rank 1 of 3; null directions \[0, 1, 0\], \[0, 0, 1\]"):
-        nhham.System(["x", "y", "z"], "x_dot**2/2 + y*z")
+        nhham.System(["x", "y", "z"], "x_dot**2/2 + y*z").require_regular_lagrangian("it")
+    assert nhham.System(["x", "y"], "(x_dot**2 + y_dot**2)/2").regular_lagrangian
 
 
 def test_singular_hessian_depending_on_q():
     # W = [[y^2, x y], [x y, x^2]] has rank 1 everywhere.
     with pytest.raises(SingularLagrangianError, match="rank 1 of 2"):
-        nhham.System(["x", "y"], (y * xd + x * yd) ** 2 / 2)
+        nhham.System(["x", "y"], (y * xd + x * yd) ** 2 / 2).require_regular_lagrangian("it")
 
 
 def test_m_not_less_than_n():

@@ -1,0 +1,239 @@
+"""``nhham classify`` of a singular Lagrangian: the Dirac–Bergmann chain as data and text.
+
+The data has the keys of every classify result (``$defs/classify`` of the schema: status,
+stages, final constraints, first and second class, ...) and those of the chain:
+``lagrangian_rank``, ``hamiltonian`` (H_c, H_T), ``generations`` (constraints in (q, p),
+primary first), ``independent``, ``degrees_of_freedom``, ``gauge_generators``,
+``irregular`` and ``dirac_bracket``.
+"""
+
+from __future__ import annotations
+
+from nhham.render import latex as tex
+from nhham.render.results import classify_rows
+from nhham.render.simplify import display_form
+from nhham.render.text import expr_text, paragraph, table
+
+__all__ = ["singular_data", "singular_text", "singular_latex", "singular_warnings",
+           "singular_parametric_data", "singular_parametric_text"]
+
+#: Why the Frobenius test says nothing here.
+NO_VELOCITY_CONSTRAINTS = ("not applicable: no velocity constraints (a singular Lagrangian: "
+                           "the Dirac-Bergmann chain)")
+
+
+def singular_data(db) -> dict:
+    """The ``result`` of ``nhham classify`` for a :class:`~nhham.hamiltonian.dirac_bergmann.
+    DiracBergmann` chain."""
+    run, image = db.run, db.image
+    momenta = image.momenta
+
+    def shown(c):
+        return expr_text(display_form(c, momenta))
+
+    stages = []
+    for s in run.stages:
+        d = s.to_dict(expressions=False)
+        d["constraints"] = [shown(c) for c in d["constraints"]]
+        stages.append(d)
+    first = run.stages[0] if run.stages else None
+    classes = db.classes
+    formed = classes is not None and classes.first_class_combinations is not None
+    combos = [shown(c) for c in classes.first_class_combinations] if formed else []
+    coefficients = [[{"label": lab, "coefficient": shown(c)} for lab, c in d.items()]
+                    for d in classes.combination_coefficients] if formed else None
+    return {
+        "n": int(db.n),
+        "m": 0,
+        "regular": bool(first is not None and first.rank == len(db.multipliers)),
+        "rank_c": int(first.rank) if first else 0,
+        "rank_c_method": (first.decisions[0].decision.method
+                          if first and first.decisions else "exact"),
+        "status": str(run.status),
+        "stages": stages,
+        "final_labels": list(run.final_labels),
+        "final_constraints": [shown(c) for c in run.final_constraints],
+        "free_multipliers": len(run.free_multiplier_symbols),
+        "free_multiplier_symbols": [s.name for s in run.free_multiplier_symbols],
+        "redundant": [],
+        "integrable": None,
+        "integrability": NO_VELOCITY_CONSTRAINTS,
+        "constraint_kinds": [{"label": f"holonomic[{i}]", "kind": "holonomic",
+                              "time_dependent": False}
+                             for i in range(len(db.system.holonomic))],
+        "first_class": db.first_class,
+        "second_class": db.second_class,
+        "second_class_set": [] if classes is None else list(classes.second_class_set),
+        "first_class_combinations": combos,
+        "first_class_coefficients": coefficients,
+        "inconsistency": run.inconsistency,
+        "lagrangian_rank": {"rank": int(image.rank), "n": int(db.n),
+                            "null_vectors": [[expr_text(e) for e in k]
+                                             for k in image.null_vectors]},
+        "hamiltonian": {"canonical": shown(image.canonical_hamiltonian),
+                        "total": expr_text(db.total_hamiltonian),
+                        "multipliers": [s.name for s in db.multipliers]},
+        "generations": [[shown(c) for c in gen] for gen in db.generations],
+        "generation_labels": [list(g) for g in db.generation_labels],
+        "independent": db.independent,
+        "degrees_of_freedom": _number(db.degrees_of_freedom),
+        "gauge_generators": [_generator(g, shown) for g in
+                             (db.gauge_generators if db.consistent else ())],
+        "irregular": list(db.irregular),
+        "dirac_bracket": _dirac(db),
+    }
+
+
+def _number(x):
+    if x is None or isinstance(x, int):
+        return x
+    return float(x)  # a Fraction: half-integer counts say something is off, shown as is
+
+
+def _generator(g, shown) -> dict:
+    return {"parameter": g.parameter.name,
+            "generator": expr_text(g.expression),
+            "terms": [{"derivative": int(k), "function": shown(f)} for k, f in g.terms],
+            "transformations": {str(z): expr_text(d) for z, d in g.transformations},
+            "first_class": g.checked.to_dict(value=True)}
+
+
+def _dirac(db):
+    D = db.dirac_bracket if db.consistent else None
+    if D is None:
+        return None
+    z = db.algebra.variables
+    return {"coordinates": [str(s) for s in z],
+            "matrix": [[expr_text(D[i, j]) for j in range(D.cols)] for i in range(D.rows)]}
+
+
+def singular_warnings(db) -> list:
+    return list(db.warnings)
+
+
+def singular_text(title: str, data: dict) -> str:
+    """The chain's report: the verdict, generations, classes, gauge generators, the Dirac
+    bracket's non-canonical entries."""
+    rank = data["lagrangian_rank"]
+    lines = [paragraph(f"{title}: n = {data['n']} coordinates, a singular Lagrangian "
+                       f"(rank W = {rank['rank']} of {rank['n']}): the Dirac-Bergmann chain")]
+    free = data["free_multipliers"]
+    rows = [("status", data["status"]),
+            ("generations", str(len(data["generations"]))),
+            ("free multipliers", f"{free}" + (f" ({', '.join(data['free_multiplier_symbols'])})"
+                                              if free else ""))]
+    if data["first_class"] is not None:
+        rows += [("independent constraints", str(data["independent"])),
+                 ("first class", str(data["first_class"])),
+                 ("second class", str(data["second_class"])),
+                 ("degrees of freedom", "not stated (irregular constraints)"
+                  if data["degrees_of_freedom"] is None else str(data["degrees_of_freedom"]))]
+        if data["irregular"]:
+            rows.append(("irregular", ", ".join(data["irregular"])))
+    lines.append(table(rows))
+    lines.append(f"H_c = {data['hamiltonian']['canonical']}")
+    lines.append("generations (in q, p):")
+    gens = []
+    for k, (labs, cons) in enumerate(zip(data["generation_labels"], data["generations"])):
+        for i, (lab, c) in enumerate(zip(labs, cons)):
+            gens.append((f"{k + 1}" + (" (primary)" if k == 0 else "") if i == 0 else "",
+                         lab, c))
+    lines.append(table(gens))
+    if data["first_class_combinations"]:
+        lines.append("first-class combinations (in q, p):")
+        lines.append(table([(f"gamma_{i + 1}", "=", c)
+                            for i, c in enumerate(data["first_class_combinations"])]))
+    if data["second_class_set"]:
+        lines.append("maximal second-class set: " + ", ".join(data["second_class_set"]))
+    if data["gauge_generators"]:
+        lines.append("gauge generators (delta z = {z, G}):")
+        rows = []
+        for g in data["gauge_generators"]:
+            moves = ", ".join(f"delta {z} = {d}" for z, d in g["transformations"].items())
+            rows += [(f"G({g['parameter']})", "=", g["generator"]), ("", "", moves)]
+        lines.append(table(rows))
+    dirac = data["dirac_bracket"]
+    if dirac and data["second_class"]:
+        z, M = dirac["coordinates"], dirac["matrix"]
+        n = len(z) // 2
+        rows = [(f"{{{z[i]}, {z[j]}}}_D", "=", M[i][j]) for i in range(len(z))
+                for j in range(i + 1, len(z)) if M[i][j] != ("1" if j == i + n else "0")]
+        lines.append("Dirac bracket (the entries that differ from the canonical ones):")
+        lines.append(table(rows) if rows else "  none")
+    if data["inconsistency"]:
+        lines.append(f"inconsistent: {data['inconsistency']}")
+    return "\n".join(lines)
+
+
+def singular_latex(title: str, data: dict, parse) -> str:
+    """classify's LaTeX rows with the chain's counts and gauge generators."""
+    rows = classify_rows(title, data, parse)
+    # the stage-1 rank is that of the primaries' brackets, not of a matrix C
+    rows[1] = (r"\operatorname{rank} \{\chi_j, \varphi_a\}|_{M_1}", f"{data['rank_c']}")
+    rows.insert(1, (r"\operatorname{rank} W", f"{data['lagrangian_rank']['rank']}"))
+    rows.append((r"H_c", tex.latex(parse(data["hamiltonian"]["canonical"]))))
+    if data["degrees_of_freedom"] is not None:
+        rows.append((tex.text("degrees of freedom"), str(data["degrees_of_freedom"])))
+    for g in data["gauge_generators"]:
+        rows.append((tex.text("gauge generator"), tex.latex(parse(g["generator"]))))
+    return tex.aligned(rows)
+
+
+# ------------------------------------------------------------------ --parametric
+def singular_parametric_data(pv) -> dict:
+    """The ``result`` of ``nhham classify --parametric`` for a singular Lagrangian (the
+    keys of ``$defs/classify_parametric``; each verdict a chain's classify result)."""
+    def verdict(db):
+        return {**singular_data(db), "note": None}
+
+    cases = []
+    for case in pv.cases:
+        v = verdict(case.chain) if case.chain is not None else {
+            "status": "invalid", "note": case.failure}
+        cases.append({"conditions": [expr_text(c) for c in case.conditions], "excluding": [],
+                      "reasons": list(case.reasons), "verdict": v})
+    return {
+        "parameters": [s.name for s in pv.symbolic],
+        "positive": [],
+        "values": {p.name: float(v) for p, v in pv.values.items()},
+        "held": {k: float(v) for k, v in pv.held.items()},
+        "generic": verdict(pv.generic),
+        "cases": cases,
+        "scene_case": pv.scene_case(),
+        "dropped": [],
+        "notes": [],
+        "search": {"complete": True, "seconds": round(pv.seconds, 3), "allowed_s": None,
+                   "cut": [], "pending": [], "unsolved": [], "failed": [
+                       {"search": ", ".join(c["conditions"]), "why": c["verdict"]["note"]}
+                       for c in cases if c["verdict"]["status"] == "invalid"]},
+    }
+
+
+def _verdict_line(v: dict) -> str:
+    if v["status"] == "invalid":
+        return f"invalid: {v['note']}"
+    if v["status"] == "inconsistent":
+        return "inconsistent"
+    dof = v["degrees_of_freedom"]
+    return (f"{v['status']}, {len(v['generations'])} generation(s), {v['first_class']} first "
+            f"class, {v['second_class']} second class, "
+            + ("degrees of freedom not stated (irregular)" if dof is None
+               else f"{dof} degree(s) of freedom"))
+
+
+def singular_parametric_text(title: str, data: dict) -> str:
+    """The generic chain and each case, a line each, then the scene's case."""
+    names = ", ".join(data["parameters"]) or "(none symbolic)"
+    lines = [paragraph(f"{title}: the Dirac-Bergmann chain for every value of the "
+                       f"parameters {names}")]
+    lines.append("generic (where no case below holds):")
+    lines.append(table([("verdict", _verdict_line(data["generic"]))]))
+    for i, case in enumerate(data["cases"]):
+        lines.append(f"case {i}: " + ", ".join(f"{c} = 0" for c in case["conditions"]))
+        lines.append(table([("verdict", _verdict_line(case["verdict"])),
+                            ("why", "; ".join(case["reasons"]))]))
+    if data["values"]:
+        shown = ", ".join(f"{k} = {v:g}" for k, v in data["values"].items())
+        where = "generic" if data["scene_case"] is None else f"case {data['scene_case']}"
+        lines.append(f"scene values {shown}: {where}")
+    return "\n".join(lines)
