@@ -30,7 +30,7 @@ taken over the second-class set, block by block
 from __future__ import annotations
 
 from dataclasses import replace
-from typing import Sequence
+from typing import Sequence, cast
 
 import numpy as np
 import sympy as sp
@@ -383,7 +383,7 @@ def classify_on(Mf: Submanifold, algebra, chi: Sequence, labels: Sequence[str], 
                 nonzero[a, b] = nonzero[b, a] = True
     rank_d = Mf.rank(Br, tol=tol) if k else Decision(0, "exact", "no constraints")
     decisions["rank"] = rank_d
-    r = int(rank_d.value)
+    r = int(cast(int, rank_d.value))
     samples_B = sample_matrix(Mf, Br) if r else ()
     R = principal_pivots(Br, samples_B, r, tol,
                           nonzero=lambda e: not Mf.vanishes(cancel(e), tol=tol).value)

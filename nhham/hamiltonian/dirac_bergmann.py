@@ -28,6 +28,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from fractions import Fraction
 from functools import cached_property
+from typing import TYPE_CHECKING
 
 import sympy as sp
 
@@ -43,6 +44,9 @@ from nhham.lagrangian.records import AlgorithmRun
 from nhham.lagrangian.submanifold import Submanifold
 from nhham.system.naming import (gauge_parameter_symbol, multiplier_symbol,
                                  primary_multiplier_symbol)
+
+if TYPE_CHECKING:
+    from nhham.system.description import System
 
 __all__ = ["DiracBergmann", "GaugeGenerator", "dirac_bergmann", "at_parameter_values",
            "with_parameters"]
@@ -96,6 +100,10 @@ class DiracBergmann:
         multipliers, the decisions.
     multipliers : tuple of sympy.Symbol
         The multipliers of the holonomic g (``lambda_<i>``) then of the primaries (``u_<a>``).
+    replaced : tuple of (str, sympy.Expr, sympy.Expr)
+        (label, given, regular equivalent) for each holonomic constraint given as an
+        irregular equation (x**2: its gradient vanishes where it holds), replaced by one
+        with the same zero set and a nonzero gradient (x) before the chain ran.
 
     Examples
     --------
@@ -113,11 +121,12 @@ class DiracBergmann:
     ((q1, eps_1), (q2, eps_1_dot))
     """
 
-    system: object
+    system: "System"
     image: LegendreImage
     run: AlgorithmRun
     multipliers: tuple
     policy: Policy
+    replaced: tuple = ()
 
     # ------------------------------------------------------------------ chain
     @property
@@ -154,7 +163,8 @@ class DiracBergmann:
 
     @cached_property
     def named_constraints(self) -> dict:
-        out = {}
+        """{label: constraint in (q, p)} of every constraint the chain met."""
+        out: dict = {}
         for s in self.run.stages:
             out.update(zip(s.labels, s.constraints))
             out.update(zip(s.new_labels, s.new_constraints))
@@ -162,9 +172,11 @@ class DiracBergmann:
         return out
 
     @property
-    def manifold(self) -> Submanifold | None:
-        """M_f in T*Q (None when the chain is inconsistent)."""
-        return self.run.manifold if self.consistent else None
+    def manifold(self) -> Submanifold:
+        """M_f in T*Q (the chain must be consistent)."""
+        if not self.consistent or self.run.manifold is None:
+            raise InputError(f"the chain is inconsistent: {self.run.inconsistency}")
+        return self.run.manifold
 
     # --------------------------------------------------------------- classes
     @cached_property
@@ -190,7 +202,7 @@ class DiracBergmann:
     def first_class(self) -> int | None:
         if self.classes is None or self.independent is None:
             return None
-        return self.independent - self.second_class
+        return self.independent - int(self.classes.rank)
 
     @cached_property
     def irregular_decisions(self) -> dict:
@@ -199,7 +211,7 @@ class DiracBergmann:
             return {}
         M = self.manifold
         z = self.algebra.variables
-        out = {}
+        out: dict = {}
         for lab, chi in zip(self.run.final_labels, self.run.final_constraints):
             worst = None
             for s in z:
@@ -213,13 +225,15 @@ class DiracBergmann:
 
     @property
     def irregular(self) -> tuple:
-        """Labels of the final constraints whose gradient vanishes on M_f (z^2, p^2)."""
+        """Labels of the final constraints whose gradient vanishes on M_f (z^2, p^2) that
+        no regular equivalent replaced."""
         return tuple(lab for lab, d in self.irregular_decisions.items() if d.value)
 
     @property
     def degrees_of_freedom(self):
         """(2n - 2 FC - SC) / 2 (an int, or a Fraction when it is not whole), or None when
-        the chain is inconsistent or a constraint is irregular (the count would be wrong)."""
+        the chain is inconsistent or a constraint is irregular (the count would be wrong).
+        A constraint replaced by its regular equivalent (``replaced``) is counted as that."""
         if self.first_class is None or self.irregular:
             return None
         dof = Fraction(2 * self.n - 2 * self.first_class - self.second_class, 2)
@@ -245,8 +259,10 @@ class DiracBergmann:
 
     @property
     def multiplied(self) -> tuple:
-        """The functions the multipliers multiply: the holonomic g, then the phi_a."""
-        return tuple(self.system.holonomic) + tuple(self.image.constraints)
+        """The functions the multipliers multiply: the holonomic g (their regular
+        equivalents), then the phi_a."""
+        return tuple(self.run.stages[0].constraints[:len(self.system.holonomic)]
+                     if self.run.stages else self.system.holonomic) + tuple(self.image.constraints)
 
     @cached_property
     def primary_first_class(self) -> tuple:
@@ -331,6 +347,10 @@ class DiracBergmann:
         out = list(self.run.warnings)
         if self.classes is not None:
             out += list(self.classes.warnings)
+        for lab, given, regular in self.replaced:
+            out.append(f"{lab}: {given} = 0 is irregular (its gradient vanishes where it "
+                       f"holds); the chain used {regular} = 0, the same zero set, and counts "
+                       f"degrees of freedom for it")
         if self.irregular:
             out.append("irregular constraints (gradient zero on M_f): "
                        + ", ".join(self.irregular) + "; the count of degrees of freedom "
@@ -426,7 +446,7 @@ def dirac_bergmann(system, *, policy: Policy | None = None,
     >>> db.dirac_bracket[0, 1]
     -1/2
     """
-    from nhham.lagrangian.algorithm import run_algorithm
+    from nhham.lagrangian.algorithm import run_algorithm, square_free
 
     _refuse_unbuilt(system)
     policy = policy or Policy()
@@ -434,7 +454,12 @@ def dirac_bergmann(system, *, policy: Policy | None = None,
     image = legendre_image(at)
     q, p = image.coordinates, image.momenta
     algebra = BracketAlgebra(q, p)
-    hol = tuple(at.holonomic)
+    state = set(q) | set(p)
+    replaced = tuple((f"holonomic[{i}]", g, square_free(g, state))
+                     for i, g in enumerate(at.holonomic)
+                     if not sp.cancel(square_free(g, state) / g).is_number)
+    regular = {lab: r for lab, _, r in replaced}
+    hol = tuple(regular.get(f"holonomic[{i}]", g) for i, g in enumerate(at.holonomic))
     multiplied = hol + tuple(image.constraints)
     symbols = tuple(multiplier_symbol(i + 1) for i in range(len(hol))) + tuple(
         primary_multiplier_symbol(a + 1) for a in range(len(image.constraints)))
@@ -451,7 +476,8 @@ def dirac_bergmann(system, *, policy: Policy | None = None,
                         multiplied, labels, manifold,
                         max_stages=2 * at.n if max_generations is None else max_generations,
                         multiplier_symbols=symbols, variables=q + p, points_are_motions=True)
-    return DiracBergmann(system=at, image=image, run=run, multipliers=symbols, policy=policy)
+    return DiracBergmann(system=at, image=image, run=run, multipliers=symbols, policy=policy,
+                         replaced=replaced)
 
 
 def _refuse_unbuilt(system) -> None:

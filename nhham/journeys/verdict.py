@@ -248,8 +248,8 @@ def _singular_parametric(scene, policy, positive, depth, symbolic, steps) -> Ans
         data = singular_parametric_data(pv)
     data["positive"] = list(positive)
     title = scene.name or str(scene.source)
-    warnings = list(pv.generic.warnings) + [w for c in pv.cases if c.chain is not None
-                                            for w in c.chain.warnings]
+    chains = [pv.generic] + [c.chain for c in pv.cases if c.chain is not None]
+    warnings = [w for chain in chains for w in chain.warnings]
     return Answer("classify", data, functools.partial(singular_parametric_text, title, data),
                   warnings=tuple(dict.fromkeys(warnings)), payload={"verdict": pv},
                   system=scene.system)

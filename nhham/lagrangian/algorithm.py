@@ -52,6 +52,7 @@ __all__ = [
     "run_algorithm",
     "constraint_kind",
     "rank_drop_warnings",
+    "square_free",
 ]
 
 
@@ -580,16 +581,26 @@ def _representative(M, psi):
     once, which leaves the zero set unchanged and keeps the constraint regular.
     """
     state = set(M.variables)
-    full = _essential(sp.numer(sp.together(psi)), state)
+    full = square_free(sp.numer(sp.together(psi)), state)
     if M.exact:
-        red = _essential(sp.numer(sp.together(M.reduce(psi))), state)
+        red = square_free(sp.numer(sp.together(M.reduce(psi))), state)
         if sp.count_ops(full) > 2 * sp.count_ops(red) + 5:
             full = red
     return full
 
 
-def _essential(expr, state):
-    """``expr`` without factors free of zeros, each remaining factor once."""
+def square_free(expr, state):
+    """``expr`` without factors free of zeros, each remaining factor once: the same zero
+    set, and a regular equation where ``expr`` was a power (x**2 -> x).
+
+    Examples
+    --------
+    >>> import sympy as sp
+    >>> from nhham.lagrangian.algorithm import square_free
+    >>> x, y, k = sp.symbols("x y k")
+    >>> square_free(-3*k*x**2*(y**2 + 1), {x, y})
+    -x
+    """
     if sp.count_ops(expr) > 200:
         return expr
     try:

@@ -79,7 +79,10 @@ def singular_data(db) -> dict:
         "degrees_of_freedom": _number(db.degrees_of_freedom),
         "gauge_generators": [_generator(g, shown) for g in
                              (db.gauge_generators if db.consistent else ())],
-        "irregular": list(db.irregular),
+        "irregular": [{"label": lab, "constraint": expr_text(g), "regular_equivalent":
+                       expr_text(r)} for lab, g, r in db.replaced]
+        + [{"label": lab, "constraint": shown(db.named_constraints[lab]),
+            "regular_equivalent": None} for lab in db.irregular],
         "dirac_bracket": _dirac(db),
     }
 
@@ -118,7 +121,7 @@ def singular_text(title: str, data: dict) -> str:
     lines = [paragraph(f"{title}: n = {data['n']} coordinates, a singular Lagrangian "
                        f"(rank W = {rank['rank']} of {rank['n']}): the Dirac-Bergmann chain")]
     free = data["free_multipliers"]
-    rows = [("status", data["status"]),
+    rows: list = [("status", data["status"]),
             ("generations", str(len(data["generations"]))),
             ("free multipliers", f"{free}" + (f" ({', '.join(data['free_multiplier_symbols'])})"
                                               if free else ""))]
@@ -128,12 +131,15 @@ def singular_text(title: str, data: dict) -> str:
                  ("second class", str(data["second_class"])),
                  ("degrees of freedom", "not stated (irregular constraints)"
                   if data["degrees_of_freedom"] is None else str(data["degrees_of_freedom"]))]
-        if data["irregular"]:
-            rows.append(("irregular", ", ".join(data["irregular"])))
+        for item in data["irregular"]:
+            regular = item["regular_equivalent"]
+            rows.append((f"irregular {item['label']}", f"{item['constraint']} = 0, "
+                         + (f"replaced by {regular} = 0 (the same zero set)" if regular
+                            else "no regular equivalent: no count")))
     lines.append(table(rows))
     lines.append(f"H_c = {data['hamiltonian']['canonical']}")
     lines.append("generations (in q, p):")
-    gens = []
+    gens: list = []
     for k, (labs, cons) in enumerate(zip(data["generation_labels"], data["generations"])):
         for i, (lab, c) in enumerate(zip(labs, cons)):
             gens.append((f"{k + 1}" + (" (primary)" if k == 0 else "") if i == 0 else "",
@@ -186,7 +192,7 @@ def singular_parametric_data(pv) -> dict:
     def verdict(db):
         return {**singular_data(db), "note": None}
 
-    cases = []
+    cases: list[dict] = []
     for case in pv.cases:
         v = verdict(case.chain) if case.chain is not None else {
             "status": "invalid", "note": case.failure}

@@ -19,12 +19,16 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import sympy as sp
 
 from nhham.errors import BudgetExceeded, NhhamError
 from nhham.lagrangian.algebra import cancel
 from nhham.lagrangian.engine import Policy
+
+if TYPE_CHECKING:
+    from nhham.hamiltonian.dirac_bergmann import DiracBergmann
 
 __all__ = ["SingularCase", "SingularParametric", "singular_parametric", "exceptional_factors"]
 
@@ -35,7 +39,7 @@ class SingularCase:
 
     conditions: tuple
     reasons: tuple
-    chain: object  # DiracBergmann, or None when the run failed
+    chain: "DiracBergmann | None"  # None when the run failed
     failure: str | None = None
 
 
@@ -56,7 +60,7 @@ class SingularParametric:
 
     symbolic: tuple
     held: dict
-    generic: object
+    generic: "DiracBergmann"
     cases: tuple
     seconds: float
     values: dict

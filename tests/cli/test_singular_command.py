@@ -1,0 +1,97 @@
+"""``nhham`` on the gallery of singular Lagrangians (``examples/singular``).
+
+The expected counts are the hand values of each scene's header (derived in
+tests/hamiltonian/test_dirac_bergmann.py); here the command's contract: exit codes, the
+JSON keys against the schema, the text, LaTeX, ``--parametric`` and the refusals.
+"""
+
+from __future__ import annotations
+
+import json
+
+import jsonschema
+import pytest
+
+from tests.cli.conftest import EXAMPLES, run_inprocess
+
+GALLERY = EXAMPLES / "singular"
+
+#: scene -> (status, generations, first class, second class, degrees of freedom, gauge
+#: generators), each by hand (the scene's header).
+HAND = {
+    "gauge_shift.toml": ("underdetermined", [1, 1], 2, 0, 0, 1),
+    "christ_lee.toml": ("underdetermined", [1, 1], 2, 0, 1, 1),
+    "landau_level.toml": ("determined", [2], 0, 2, 1, 0),
+    "proca_mode.toml": ("determined", [1, 1], 0, 2, 1, 0),
+    "pendulum_multiplier.toml": ("determined", [1, 1, 1, 1], 0, 4, 1, 0),
+    "inconsistent_force.toml": ("inconsistent", [1], None, None, None, 0),
+    "einbein_particle.toml": ("underdetermined", [1, 1], 2, 0, 3, 1),
+}
+
+
+def run(*argv):
+    rc, out, err = run_inprocess(*argv)
+    return rc, (json.loads(out) if out.strip().startswith("{") else out), err
+
+
+def test_the_gallery_is_the_table():
+    assert sorted(p.name for p in GALLERY.glob("*.toml")) == sorted(HAND)
+
+
+@pytest.mark.parametrize("name", sorted(HAND))
+def test_classify_json_by_hand(name, schema):
+    rc, env, err = run("classify", str(GALLERY / name), "--json")
+    assert rc == 0, err
+    jsonschema.validate(env, schema)
+    r = env["result"]
+    status, generations, fc, sc, dof, gauges = HAND[name]
+    assert r["status"] == status
+    assert [len(g) for g in r["generations"]] == generations
+    assert (r["first_class"], r["second_class"], r["degrees_of_freedom"]) == (fc, sc, dof)
+    assert len(r["gauge_generators"]) == gauges
+    assert r["lagrangian_rank"]["rank"] < r["n"]
+    names = env["scene"]["names"]
+    for g in r["gauge_generators"]:
+        assert g["parameter"] in names and g["first_class"]["value"] is True
+
+
+def test_classify_text_and_latex():
+    rc, text, _ = run("classify", str(GALLERY / "landau_level.toml"))
+    assert rc == 0
+    flat = " ".join(text.split())
+    assert "a singular Lagrangian (rank W = 0 of 2)" in flat
+    assert "{x, y}_D = -1/2" in flat and "degrees of freedom 1" in flat
+    rc, latex, err = run("classify", str(GALLERY / "gauge_shift.toml"), "--latex")
+    assert rc == 0, err
+    assert r"\operatorname{rank} W &= 1" in latex and r"\text{gauge generator}" in latex
+
+
+def test_the_headline_is_the_one_at_the_values():
+    # m = 0 makes the Proca mode a gauge system: the answer there, not the generic one.
+    rc, env, _ = run("classify", str(GALLERY / "proca_mode.toml"), "--set", "m=0", "--json")
+    assert rc == 0
+    r = env["result"]
+    assert (r["first_class"], r["second_class"], r["degrees_of_freedom"]) == (2, 0, 0)
+
+
+def test_parametric_finds_the_massless_case(schema):
+    rc, env, err = run("classify", "--parametric", str(GALLERY / "proca_mode.toml"), "--json")
+    assert rc == 0, err
+    jsonschema.validate(env, schema)
+    r = env["result"]
+    assert (r["generic"]["first_class"], r["generic"]["second_class"]) == (0, 2)
+    cases = {tuple(c["conditions"]): c["verdict"] for c in r["cases"]}
+    assert (cases[("m",)]["first_class"], cases[("m",)]["degrees_of_freedom"]) == (2, 0)
+    # m = 0 and k = 0: L = Az'^2/2, p_A0 alone first class, one degree of freedom
+    assert (cases[("m", "k")]["first_class"], cases[("m", "k")]["degrees_of_freedom"]) == (1, 1)
+    assert r["scene_case"] is None
+
+
+@pytest.mark.parametrize("command", ["derive", "compare", "simulate", "linearize", "bench",
+                                     "reduce"])
+def test_other_commands_refuse_a_singular_scene_in_one_line(command):
+    rc, out, err = run(command, str(GALLERY / "landau_level.toml"))
+    assert rc == 2
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and "singular" in lines[0] and f"nhham {command}" in lines[0]
+    assert "Traceback" not in err

@@ -1,0 +1,212 @@
+"""The Dirac–Bergmann chain against values worked out by hand (not from nhham).
+
+Each case is a textbook singular Lagrangian; the expected generations, classes, degrees
+of freedom, gauge transformations and Dirac brackets are derived in the comments.
+"""
+
+from pathlib import Path
+
+import pytest
+import sympy as sp
+
+from nhham import System, load_scene
+from nhham.errors import InputError, ValidationError
+from nhham.hamiltonian import dirac_bergmann as db_module
+from nhham.hamiltonian.dirac_bergmann import dirac_bergmann
+from nhham.hamiltonian.primary import legendre_image
+
+GALLERY = Path(__file__).resolve().parents[2] / "examples" / "singular"
+
+
+def chain(name, **values):
+    return dirac_bergmann(load_scene(GALLERY / name, values=values or None).system)
+
+
+def same_up_to_sign(found, expected):
+    """Each constraint equals the expected one up to a nonzero constant factor."""
+    assert len(found) == len(expected), (found, expected)
+    for f, e in zip(found, expected):
+        ratio = sp.cancel(sp.sympify(f) / sp.sympify(e))
+        assert ratio.is_number and ratio != 0, (f, e)
+
+
+S = sp.Symbol
+
+
+def test_gauge_shift_by_hand():
+    # L = (q1' - q2)^2/2: p1 = q1' - q2, p2 = 0. H_c = p1^2/2 + p1 q2.
+    # {p2, H_c} = -p1: secondary p1 = 0; {p1, H_c} = 0. B = 0: 2 first class, dof 0.
+    # Castellani: G = eps' p2 + eps p1, so delta q1 = eps, delta q2 = eps'.
+    db = chain("gauge_shift.toml")
+    same_up_to_sign(db.generations[0], [S("p_q2")])
+    same_up_to_sign(db.generations[1], [S("p_q1")])
+    assert (db.first_class, db.second_class, db.degrees_of_freedom) == (2, 0, 0)
+    (g,) = db.gauge_generators
+    assert dict(g.transformations) == {S("q1"): S("eps_1"), S("q2"): S("eps_1_dot")}
+    assert g.checked.value
+
+
+def test_christ_lee_by_hand():
+    # p_xi = 0 -> {p_xi, H_c} = -dH_c/dxi = -(x1 p2 - x2 p1) (H_c has xi (x1 p2 - x2 p1)):
+    # Gauss's law J = x1 p2 - x2 p1 = 0; {J, H_c} = 0 (V radial). 2 first class,
+    # dof (6 - 4)/2 = 1; G = eps' p_xi + eps J turns the plane: delta x1 = -eps x2.
+    db = chain("christ_lee.toml")
+    x1, x2, p1, p2 = S("x1"), S("x2"), S("p_x1"), S("p_x2")
+    same_up_to_sign(db.generations[1], [x1 * p2 - x2 * p1])
+    assert (db.first_class, db.second_class, db.degrees_of_freedom) == (2, 0, 1)
+    moves = dict(db.gauge_generators[0].transformations)
+    assert moves[S("xi")] == S("eps_1_dot")
+    assert sp.simplify(moves[x1] / moves[x2] + x2 / x1) == 0  # a rotation
+
+
+def test_landau_level_by_hand():
+    # L = B x y' - k r^2/2: p_x = 0, p_y = B x; {p_x, p_y - B x} = B: second class.
+    # {x, y}_D = -1/B; the Dirac flow of H = k r^2/2: x' = -k y/B, y' = k x/B, a
+    # rotation at the rate k/B. dof (4 - 2)/2 = 1.
+    db = chain("landau_level.toml")  # B = 2, k = 1
+    assert len(db.generations) == 1
+    assert (db.first_class, db.second_class, db.degrees_of_freedom) == (0, 2, 1)
+    z = db.algebra.variables
+    D = db.dirac_bracket
+    assert D[z.index(S("x")), z.index(S("y"))] == sp.Rational(-1, 2)
+    x, y = S("x"), S("y")
+    H = db.image.canonical_hamiltonian
+    flow = [sum(D[i, j] * sp.diff(H, z[j]) for j in range(4)) for i in (0, 1)]
+    assert sp.simplify(flow[0] + y / 2) == 0 and sp.simplify(flow[1] - x / 2) == 0
+
+
+def test_proca_mode_massive_and_massless():
+    # m != 0: p_A0 -> m^2 A0 - k p_Az (from {p_A0, H_c} = -dH/dA0), bracket m^2: second
+    # class, dof 1. m = 0: p_A0 -> p_Az, both first class, dof 0 (at the scene's values,
+    # not the generic answer).
+    massive = chain("proca_mode.toml")
+    assert (massive.first_class, massive.second_class, massive.degrees_of_freedom) == (0, 2, 1)
+    massless = chain("proca_mode.toml", m=0.0)
+    same_up_to_sign(massless.generations[1], [S("p_Az")])
+    assert (massless.first_class, massless.second_class,
+            massless.degrees_of_freedom) == (2, 0, 0)
+
+
+def test_pendulum_with_its_multiplier_by_hand():
+    # p_lam -> r^2 - 1 -> x p_x + y p_y -> lam r^2 + |p|^2 - g y (times 100): four
+    # generations, all second class, dof (6 - 4)/2 = 1;
+    # {x_i, p_j}_D = delta_ij - x_i x_j / r^2.
+    db = chain("pendulum_multiplier.toml")
+    x, y, px, py, lam = S("x"), S("y"), S("p_x"), S("p_y"), S("lam")
+    g = sp.Rational(981, 100)
+    same_up_to_sign([c for gen in db.generations for c in gen],
+                    [S("p_lam"), x**2 + y**2 - 1, x * px + y * py,
+                     lam * (x**2 + y**2) + px**2 + py**2 - g * y])
+    assert (db.first_class, db.second_class, db.degrees_of_freedom) == (0, 4, 1)
+    z = db.algebra.variables
+    D = db.dirac_bracket
+    r2 = x**2 + y**2
+    for qi in (x, y):
+        for pj, qj in ((px, x), (py, y)):
+            expected = (1 if qi == qj else 0) - qi * qj / r2
+            assert sp.simplify(D[z.index(qi), z.index(pj)] - expected) == 0
+
+
+def test_a_force_on_a_coordinate_without_inertia_is_inconsistent():
+    # L = x'^2/2 + y: p_y = 0 and {p_y, H_c} = {p_y, p_x^2/2 - y} = 1: 0 = 1.
+    db = chain("inconsistent_force.toml")
+    assert db.status == "inconsistent" and not db.consistent
+    assert "0 = 1" in db.run.inconsistency
+    assert db.first_class is None and db.degrees_of_freedom is None
+
+
+def test_einbein_particle_by_hand():
+    # p_e = 0 -> {p_e, H_c} = -(p.p + m^2)/2 (H_c = e (p.p + m^2)/2, metric -+++);
+    # both first class, dof (10 - 4)/2 = 3; G = eps' p_e + eps (p.p + m^2)/2.
+    db = chain("einbein_particle.toml")
+    p = [S(f"p_x{i}") for i in range(4)]
+    shell = -p[0]**2 + p[1]**2 + p[2]**2 + p[3]**2 + 1
+    same_up_to_sign(db.generations[1], [shell])
+    assert (db.first_class, db.second_class, db.degrees_of_freedom) == (2, 0, 3)
+    (g,) = db.gauge_generators
+    terms = dict(g.terms)
+    assert terms[1] == S("p_e") and sp.expand(terms[0] - shell / 2) == 0
+
+
+def first_class_by_zero_rows(classes):
+    """The rule of scripts that call a constraint first class when its row of brackets
+    vanishes: wrong where a combination is first class and no single constraint is."""
+    return len(classes.individually_first_class)
+
+
+def test_classes_are_counted_by_rank_not_by_zero_rows():
+    # L = x y' + x z': p_x = 0, p_y = x, p_z = x; H_c = 0. B = [[0, 1, 1], [-1, 0, 0],
+    # [-1, 0, 0]] has rank 2 and no zero row: 2 second class and p_y - p_z first class;
+    # dof (6 - 2 - 2)/2 = 1. The zero-row rule finds no first-class constraint.
+    db = dirac_bergmann(System(["x", "y", "z"], "x*y_dot + x*z_dot"))
+    assert (db.first_class, db.second_class, db.degrees_of_freedom) == (1, 2, 1)
+    assert first_class_by_zero_rows(db.classes) == 0  # the planted rule: it would fail
+    (gamma,) = db.primary_first_class
+    same_up_to_sign([gamma], [S("p_y") - S("p_z")])
+
+
+def test_an_irregular_constraint_is_replaced_by_its_regular_equivalent_and_said():
+    # L = (x'^2 + y'^2)/2 + w y with the holonomic x^2 = 0 (gradient 2x = 0 where it
+    # holds): replaced by x = 0. Then x -> p_x (-> lambda fixed), p_w -> y -> p_y -> w
+    # (-> u fixed): six second-class constraints, dof 0.
+    db = dirac_bergmann(System(["x", "y", "w"], "(x_dot**2 + y_dot**2)/2 + w*y",
+                               holonomic=["x**2"]))
+    assert [(lab, str(g), str(r)) for lab, g, r in db.replaced] == [("holonomic[0]", "x**2", "x")]
+    assert db.irregular == ()
+    assert (db.first_class, db.second_class, db.degrees_of_freedom) == (0, 6, 0)
+    assert any("x**2 = 0 is irregular" in w for w in db.warnings)
+
+
+def test_a_squared_secondary_is_kept_regular():
+    # {p_z, H_c} = -dH_c/dz = x^2 (H_c = |p|^2/2 - z x^2): stored as x = 0 (the same zero
+    # set, a regular equation), then p_x; p_z first class, (x, p_x) second class.
+    db = dirac_bergmann(System(["x", "y", "z"], "(x_dot**2 + y_dot**2)/2 + z*x**2"))
+    same_up_to_sign(db.generations[1], [S("x")])
+    assert db.irregular == ()
+    assert (db.first_class, db.second_class, db.degrees_of_freedom) == (1, 2, 1)
+
+
+def test_yang_mills_su2_homogeneous_fields():
+    # 12 coordinates A_i^a, B^a (= A_0^a); E_i^a = A_i^a' + eps_abc B^b A_i^c. Primary
+    # p_B^a, secondary Gauss's law; all 6 first class, dof (24 - 12)/2 = 6; G_0 carries
+    # the non-abelian term eps_abc B^b p_B^c so that {G_0, H} is primary.
+    A = [[S(f"A{i}{a}") for a in range(1, 4)] for i in range(1, 4)]
+    B = [S(f"B{a}") for a in range(1, 4)]
+    eps = sp.LeviCivita
+    E = [[S(f"A{i + 1}{a}_dot") + sum(eps(a, b, c) * B[b - 1] * A[i][c - 1]
+                                      for b in range(1, 4) for c in range(1, 4))
+          for a in range(1, 4)] for i in range(3)]
+    magnetic = sum(sum(eps(a, b, c) * A[i][b - 1] * A[j][c - 1]
+                       for b in range(1, 4) for c in range(1, 4))**2
+                   for i in range(3) for j in range(3) for a in range(1, 4))
+    L = sum(E[i][a]**2 for i in range(3) for a in range(3)) / 2 - magnetic / 4
+    db = dirac_bergmann(System([s.name for row in A for s in row] + [b.name for b in B], L))
+    assert [len(g) for g in db.generations] == [3, 3]
+    assert (db.first_class, db.second_class, db.degrees_of_freedom) == (6, 0, 6)
+    assert len(db.gauge_generators) == 3 and all(g.checked.value for g in db.gauge_generators)
+    g0 = dict(db.gauge_generators[0].terms)[0]
+    assert g0.coeff(S("B2") * S("p_B3")) != 0  # the non-abelian correction
+
+
+def test_legendre_image_by_hand():
+    # W = [[1, 1], [1, 1]] for L = (x' + y')^2/2 + x: ker W = (1, -1), phi = p_x - p_y;
+    # H_c = p^2/2 - x with p = p_x on the primary surface.
+    image = legendre_image(System(["x", "y"], "(x_dot + y_dot)**2/2 + x"))
+    assert image.rank == 1
+    same_up_to_sign(image.constraints, [S("p_x") - S("p_y")])
+    assert sp.expand(image.canonical_hamiltonian - (S("p_x")**2 / 2 - S("x"))) == 0
+
+
+def test_what_is_not_built_is_refused_by_key():
+    with pytest.raises(ValidationError, match="lagrangian: W .* depends on the velocities"):
+        legendre_image(System(["x", "y"], "sqrt(1 + x_dot**2) + y"))
+    with pytest.raises(InputError, match="constraints: velocity constraints"):
+        dirac_bergmann(System(["x", "y", "z"], "(x_dot**2 + y_dot**2)/2 + z*x",
+                              constraints=["x_dot - y_dot"]))
+
+
+def test_the_verdict_is_at_the_values_put_in_exactly():
+    s = System(["x", "y"], "B*x*y_dot", parameters={"B": 0.1})
+    db = dirac_bergmann(s)
+    same_up_to_sign(db.image.constraints, [S("p_x"), S("p_y") - S("x") / 10])
+    assert db_module.at_parameter_values(s).parameters == ()
