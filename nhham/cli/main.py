@@ -109,7 +109,8 @@ def cmd_derive(args, steps) -> CommandOutput:
     """The projected field, multipliers, C and energy (Lagrangian or Hamiltonian side)."""
     from nhham.journeys.derivation import derive
 
-    scene = _load(args, steps)
+    # a singular L: --side hamiltonian is the chain's motion, the journey refuses the rest
+    scene = _load(args, steps, singular=True)
     return _output(args, scene, derive(scene, side=args.side, explicit=args.explicit,
                                        policy=args.policy, steps=steps))
 

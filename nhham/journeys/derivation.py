@@ -63,6 +63,8 @@ def derive(scene, *, side: str = "lagrangian", explicit: bool = False,
     scene = as_scene(scene)
     steps = quiet_steps(steps)
     policy = Policy() if policy is None else policy
+    if not scene.system.regular_lagrangian:
+        return _singular(scene, side, policy, steps)
     if side == "lagrangian":
         from nhham.lagrangian.geometry import lagrangian_geometry
 
@@ -75,6 +77,32 @@ def derive(scene, *, side: str = "lagrangian", explicit: bool = False,
     else:
         answer = _lagrangian(scene, system, at, explicit, policy, steps)
     return with_case(_with_forces(answer, system), at)
+
+
+def _singular(scene, side, policy, steps) -> Answer:
+    """derive of a singular Lagrangian: on T*Q the motion the Dirac-Bergmann chain leaves
+    (the Lagrangian side, with the second-order condition, is not built: refused)."""
+    from nhham.hamiltonian.dirac_bergmann import dirac_bergmann
+    from nhham.render.singular import (singular_derive_data, singular_derive_latex,
+                                       singular_derive_text)
+
+    if side != "hamiltonian":
+        scene.system.require_regular_lagrangian(
+            "derive on TQ (the Lagrangian side of a singular L is not built; "
+            "--side hamiltonian gives the Dirac-Bergmann motion)")
+    with steps.step("Dirac-Bergmann chain at the parameter values"):
+        db = dirac_bergmann(scene.system, policy=policy)
+    if not db.consistent:
+        raise InputError(f"{scene.source}: the chain is inconsistent ({db.run.inconsistency});"
+                         f" there is no dynamics to derive (run `nhham classify "
+                         f"{scene.source}` for the generations)")
+    with steps.step("the motion on M_f, its multipliers and the Dirac bracket"):
+        data = singular_derive_data(db)
+    data["parameter_case"] = None
+    title = scene.name or str(scene.source)
+    return Answer("derive", data, functools.partial(singular_derive_text, title, data),
+                  latex=functools.partial(singular_derive_latex, data),
+                  warnings=tuple(db.warnings), system=scene.system)
 
 
 def _hamiltonian(scene, system, policy, steps) -> Answer:

@@ -12,10 +12,11 @@ from __future__ import annotations
 from nhham.render import latex as tex
 from nhham.render.results import classify_rows
 from nhham.render.simplify import display_form
-from nhham.render.text import expr_text, paragraph, table
+from nhham.render.text import expr_text, labelled, paragraph, table
 
 __all__ = ["singular_data", "singular_text", "singular_latex", "singular_warnings",
-           "singular_parametric_data", "singular_parametric_text"]
+           "singular_parametric_data", "singular_parametric_text", "singular_derive_data",
+           "singular_derive_text", "singular_derive_latex"]
 
 #: Why the Frobenius test says nothing here.
 NO_VELOCITY_CONSTRAINTS = ("not applicable: no velocity constraints (a singular Lagrangian: "
@@ -243,3 +244,78 @@ def singular_parametric_text(title: str, data: dict) -> str:
         where = "generic" if data["scene_case"] is None else f"case {data['scene_case']}"
         lines.append(f"scene values {shown}: {where}")
     return "\n".join(lines)
+
+
+# ------------------------------------------------------------------------ derive
+def singular_derive_data(db) -> dict:
+    """The ``result`` of ``nhham derive --side hamiltonian`` for a singular Lagrangian: the
+    motion z' = {z, H_c} + u^a {z, phi_a} (+ lambda^i {z, g_i}) with the multipliers the
+    chain determined put in and the free ones as symbols, H_c and H_T, the final
+    constraints and their bracket matrix, and the Dirac bracket of the phase coordinates."""
+    momenta = db.image.momenta
+
+    def shown(c):
+        return expr_text(display_form(c, momenta))
+
+    run = db.run
+    fixed = dict(run.multipliers)
+    classes = db.classes
+    B = classes.bracket_matrix if classes is not None else None
+    return {
+        "side": "hamiltonian",
+        "form": "explicit",
+        "state": [s.name for s in db.algebra.variables],
+        "field": [shown(f) for f in run.dynamics],
+        "multipliers": [shown(fixed.get(s, s)) for s in db.multipliers],
+        "multiplier_symbols": [s.name for s in db.multipliers],
+        "free_multiplier_symbols": [s.name for s in run.free_multiplier_symbols],
+        "constraint_matrix": ([[shown(B[i, j]) for j in range(B.cols)] for i in range(B.rows)]
+                              if B is not None else None),
+        "energy": shown(db.image.canonical_hamiltonian),
+        "energy_name": "H_c",
+        "total_hamiltonian": expr_text(db.total_hamiltonian),
+        "final_constraints": [shown(c) for c in run.final_constraints],
+        "status": run.status,
+        "dirac_bracket": _dirac(db),
+        "mass_matrix": None, "forcing": None, "constraint_jacobian": None,
+        "constraint_rhs": None, "contact_forces": None,
+    }
+
+
+def singular_derive_text(title: str, data: dict) -> str:
+    lines = [paragraph(f"{title}: the Hamiltonian motion of a singular Lagrangian on M_f "
+                       f"(z' = {{z, H_T}}, the multipliers the chain fixed put in)")]
+    lines.append(table([(f"{n}'", "=", t) for n, t in zip(data["state"], data["field"])]))
+    rows = [(s, "=", v) for s, v in zip(data["multiplier_symbols"], data["multipliers"])
+            if s != v]
+    if rows:
+        lines.append("multipliers fixed by the chain:")
+        lines.append(table(rows))
+    if data["free_multiplier_symbols"]:
+        lines.append("free multipliers (gauge): " + ", ".join(data["free_multiplier_symbols"]))
+    lines.append(labelled("canonical Hamiltonian H_c", data["energy"]))
+    lines.append(labelled("total Hamiltonian H_T", data["total_hamiltonian"]))
+    lines.append("final constraints: " + ", ".join(f"{c} = 0" for c in data["final_constraints"]))
+    dirac = data["dirac_bracket"]
+    if dirac:
+        z, M = dirac["coordinates"], dirac["matrix"]
+        lines.append("Dirac bracket {z_i, z_j}_D (nonzero entries, i < j):")
+        rows = [(f"{{{z[i]}, {z[j]}}}_D", "=", M[i][j]) for i in range(len(z))
+                for j in range(i + 1, len(z)) if M[i][j] != "0"]
+        lines.append(table(rows) if rows else "  none")
+    return "\n".join(lines)
+
+
+def singular_derive_latex(data: dict, parse) -> str:
+    """z' = ..., the multipliers, H_c and H_T."""
+    rows = []
+    for name, f in zip(data["state"], data["field"]):
+        head = (rf"\dot{{p}}_{{{tex.name_latex(name[2:])}}}" if name.startswith("p_")
+                else rf"\dot{{{tex.name_latex(name)}}}")
+        rows.append((head, tex.latex(parse(f))))
+    for s, v in zip(data["multiplier_symbols"], data["multipliers"]):
+        if s != v:
+            rows.append((tex.name_latex(s), tex.latex(parse(v))))
+    rows.append(("H_c", tex.latex(parse(data["energy"]))))
+    rows.append(("H_T", tex.latex(parse(data["total_hamiltonian"]))))
+    return tex.aligned(rows)

@@ -87,11 +87,39 @@ def test_parametric_finds_the_massless_case(schema):
     assert r["scene_case"] is None
 
 
-@pytest.mark.parametrize("command", ["derive", "compare", "simulate", "linearize", "bench",
-                                     "reduce"])
+@pytest.mark.parametrize("command", ["compare", "simulate", "linearize", "bench", "reduce"])
 def test_other_commands_refuse_a_singular_scene_in_one_line(command):
     rc, out, err = run(command, str(GALLERY / "landau_level.toml"))
     assert rc == 2
     lines = err.strip().splitlines()
     assert len(lines) == 1 and "singular" in lines[0] and f"nhham {command}" in lines[0]
     assert "Traceback" not in err
+
+
+def test_derive_on_tstar_q_gives_the_motion_by_hand(schema):
+    # Landau level, B = 2, k = 1: x' = -k y/B, y' = k x/B (the rotation), u fixed to them.
+    rc, env, err = run("derive", "--side", "hamiltonian", str(GALLERY / "landau_level.toml"),
+                       "--json")
+    assert rc == 0, err
+    jsonschema.validate(env, schema)
+    r = env["result"]
+    field = dict(zip(r["state"], r["field"]))
+    assert (field["x"], field["y"]) == ("-y/2", "x/2")
+    assert r["energy_name"] == "H_c" and r["free_multiplier_symbols"] == []
+    z, M = r["dirac_bracket"]["coordinates"], r["dirac_bracket"]["matrix"]
+    assert M[z.index("x")][z.index("y")] == "-1/2"
+    # a gauge system keeps its free multiplier in the motion: q2' = u_1
+    rc, env, _ = run("derive", "--side", "hamiltonian", str(GALLERY / "gauge_shift.toml"),
+                     "--json")
+    r = env["result"]
+    assert dict(zip(r["state"], r["field"]))["q2"] == "u_1" and r["free_multiplier_symbols"] == ["u_1"]
+    rc, latex, _ = run("derive", "--side", "hamiltonian", str(GALLERY / "gauge_shift.toml"),
+                       "--latex")
+    assert rc == 0 and "H_T" in latex
+
+
+def test_derive_refuses_the_lagrangian_side_and_an_inconsistent_chain():
+    rc, _, err = run("derive", str(GALLERY / "landau_level.toml"))
+    assert rc == 2 and "--side hamiltonian" in err and len(err.strip().splitlines()) == 1
+    rc, _, err = run("derive", "--side", "hamiltonian", str(GALLERY / "inconsistent_force.toml"))
+    assert rc == 2 and "inconsistent" in err and "0 = 1" in err

@@ -210,3 +210,17 @@ def test_the_verdict_is_at_the_values_put_in_exactly():
     db = dirac_bergmann(s)
     same_up_to_sign(db.image.constraints, [S("p_x"), S("p_y") - S("x") / 10])
     assert db_module.at_parameter_values(s).parameters == ()
+
+
+def test_from_mechanics_takes_a_singular_lagrangian():
+    from sympy.physics.mechanics import dynamicsymbols
+
+    from nhham import from_mechanics
+
+    x, y = dynamicsymbols("x y")
+    B, k = sp.symbols("B k")
+    s = from_mechanics(B * x * y.diff() - k * (x**2 + y**2) / 2, [x, y],
+                       parameters={"B": 2.0, "k": 1.0})
+    assert not s.regular_lagrangian
+    db = dirac_bergmann(s)
+    assert (db.second_class, db.degrees_of_freedom) == (2, 1)
