@@ -100,6 +100,15 @@ class DiracBergmann:
         multipliers, the decisions.
     multipliers : tuple of sympy.Symbol
         The multipliers of the holonomic g (``lambda_<i>``) then of the primaries (``u_<a>``).
+    base_field, vertical_fields : sympy.Matrix
+        X_{H_c} (2n x 1) and one row per multiplier: X_g, -mu_i d/dp for a velocity
+        constraint (its reaction), X_{phi_a}.
+    functions : tuple of sympy.Expr or None
+        What each multiplier multiplies in H_T (None for a velocity constraint's: its
+        reaction is no Hamiltonian field).
+    conditions : tuple of (str, sympy.Expr)
+        The velocity constraints phi_i(q, v) at v = dH_T/dp (affine in the u^a): conditions
+        on the motion (``run_algorithm``'s ``field_conditions``).
     replaced : tuple of (str, sympy.Expr, sympy.Expr)
         (label, given, regular equivalent) for each holonomic constraint given as an
         irregular equation (x**2: its gradient vanishes where it holds), replaced by one
@@ -125,8 +134,12 @@ class DiracBergmann:
     image: LegendreImage
     run: AlgorithmRun
     multipliers: tuple
+    base_field: sp.Matrix
+    vertical_fields: sp.Matrix
     policy: Policy
     replaced: tuple = ()
+    functions: tuple = ()
+    conditions: tuple = ()
 
     # ------------------------------------------------------------------ chain
     @property
@@ -234,35 +247,75 @@ class DiracBergmann:
         """(2n - 2 FC - SC) / 2 (an int, or a Fraction when it is not whole), or None when
         the chain is inconsistent or a constraint is irregular (the count would be wrong).
         A constraint replaced by its regular equivalent (``replaced``) is counted as that."""
-        if self.first_class is None or self.irregular:
-            return None
+        if self.first_class is None or self.irregular or self.conditions:
+            return None  # velocity constraints restrict the motion, not T*Q: no such count
         dof = Fraction(2 * self.n - 2 * self.first_class - self.second_class, 2)
         return int(dof) if dof.denominator == 1 else dof
 
     # ------------------------------------------------------------- the motion
     @cached_property
+    def fixed_multipliers(self) -> dict:
+        """{multiplier: expression} of those the chain determined on M_f (the free ones
+        appear in them as symbols): the last generation's block solved on M_f."""
+        if not self.consistent:
+            return {}
+        if not self.conditions:
+            return dict(self.run.multipliers)
+        row_labels, cols = self.run.stages[-1].block
+        if not cols:
+            return {}
+        A, b = self.rows(row_labels)
+        lam = list(self.multipliers)
+        index = [lam.index(s) for s in cols]
+        free = [i for i in range(len(lam)) if i not in index]
+        rhs = -(b + (A.extract(list(range(A.rows)), free) * sp.Matrix([lam[i] for i in free])
+                     if free else sp.zeros(A.rows, 1)))
+        sol = self.manifold.solve(A.extract(list(range(A.rows)), index), rhs)
+        return {s: cancel(sol[k]) for k, s in enumerate(cols)}
+
+    def rows(self, labels) -> tuple:
+        """(A, b) of the rows named: A_ji = Z_i(chi_j), b_j = X_{H_c}(chi_j) for a
+        constraint; the coefficients of the multipliers and the rest for a condition."""
+        named, conditions = self.named_constraints, dict(self.conditions)
+        zero = {s: 0 for s in self.multipliers}
+        A, b = [], []
+        for lab in labels:
+            if lab in conditions:
+                c = conditions[lab]
+                A.append([cancel(sp.diff(c, s)) for s in self.multipliers])
+                b.append(cancel(c.xreplace(zero)))
+                continue
+            grad = sp.Matrix([[sp.diff(named[lab], z) for z in self.algebra.variables]])
+            A.append([cancel((grad * self.vertical_fields.row(i).T)[0])
+                      for i in range(len(self.multipliers))])
+            b.append(cancel((grad * self.base_field)[0]))
+        return sp.Matrix(len(A), len(self.multipliers), lambda j, i: A[j][i]), sp.Matrix(b)
+
+    @cached_property
+    def motion(self) -> sp.Matrix:
+        """z' on M_f: X_{H_c} + lambda^i Z_i with the multipliers the chain fixed put in
+        (the free ones as symbols), shape (2n, 1)."""
+        lam = sp.Matrix(self.multipliers).xreplace(self.fixed_multipliers)
+        return (self.base_field + self.vertical_fields.T * lam).applyfunc(cancel)
+
+    @cached_property
     def hamiltonian(self) -> sp.Expr:
         """H' = H_c + the determined multipliers times their constraints (free ones 0)."""
-        lam = dict(self.run.multipliers)
+        lam = self.fixed_multipliers
         free = {s: 0 for s in self.run.free_multiplier_symbols}
         H = self.image.canonical_hamiltonian
-        for sym, chi in zip(self.multipliers, self.multiplied):
-            if sym in lam:
+        for sym, chi in zip(self.multipliers, self.functions):
+            if sym in lam and chi is not None:
                 H += sp.sympify(lam[sym]).xreplace(free) * chi
         return cancel(H)
 
     @property
     def total_hamiltonian(self) -> sp.Expr:
-        """H_T = H_c + u^a phi_a (+ lambda^i g_i), every multiplier a symbol."""
+        """H_T = H_c + u^a phi_a (+ lambda^i g_i), every multiplier a symbol (a velocity
+        constraint's reaction is not in it: no Hamiltonian field)."""
         return self.image.canonical_hamiltonian + sum(
-            (s * c for s, c in zip(self.multipliers, self.multiplied)), sp.S.Zero)
-
-    @property
-    def multiplied(self) -> tuple:
-        """The functions the multipliers multiply: the holonomic g (their regular
-        equivalents), then the phi_a."""
-        return tuple(self.run.stages[0].constraints[:len(self.system.holonomic)]
-                     if self.run.stages else self.system.holonomic) + tuple(self.image.constraints)
+            (s * c for s, c in zip(self.multipliers, self.functions) if c is not None),
+            sp.S.Zero)
 
     @cached_property
     def primary_first_class(self) -> tuple:
@@ -285,7 +338,10 @@ class DiracBergmann:
 
     @cached_property
     def gauge_generators(self) -> tuple:
-        """One :class:`GaugeGenerator` per primary first-class combination (Castellani)."""
+        """One :class:`GaugeGenerator` per primary first-class combination (Castellani);
+        none with velocity constraints (their reaction is no Hamiltonian field)."""
+        if self.conditions:
+            return ()
         return tuple(self._castellani(g, i + 1) for i, g in enumerate(self.primary_first_class))
 
     def _castellani(self, gamma, index: int) -> GaugeGenerator:
@@ -398,6 +454,7 @@ def with_parameters(system, sub=None, symbolic=()):
     params = {p.name: (None if p.name in symbolic else system.parameter_values.get(p))
               for p in system.declared_parameters if p not in sub}
     return System([q.name for q in system.coordinates], system.lagrangian.xreplace(sub),
+                  [c.xreplace(sub) for c in system.constraints],
                   holonomic=[g.xreplace(sub) for g in system.holonomic],
                   parameters=params, name=system.name)
 
@@ -460,32 +517,47 @@ def dirac_bergmann(system, *, policy: Policy | None = None,
                      if not sp.cancel(square_free(g, state) / g).is_number)
     regular = {lab: r for lab, _, r in replaced}
     hol = tuple(regular.get(f"holonomic[{i}]", g) for i, g in enumerate(at.holonomic))
-    multiplied = hol + tuple(image.constraints)
-    symbols = tuple(multiplier_symbol(i + 1) for i in range(len(hol))) + tuple(
+    # multipliers: lambda of the holonomic g, then of the velocity constraints, then u^a
+    vel = tuple(at.constraints)
+    functions = hol + (None,) * len(vel) + tuple(image.constraints)
+    symbols = tuple(multiplier_symbol(i + 1) for i in range(len(hol) + len(vel))) + tuple(
         primary_multiplier_symbol(a + 1) for a in range(len(image.constraints)))
-    fields = sp.Matrix([list(algebra.hamiltonian_field(f).T) for f in multiplied]) \
-        if multiplied else sp.zeros(0, 2 * at.n)
+    n = at.n
+    mu = [[sp.diff(c, v) for v in at.velocities] for c in vel]
+    rows = [list(algebra.hamiltonian_field(f).T) if f is not None
+            else [0] * n + [-e for e in mu[i - len(hol)]]
+            for i, f in enumerate(functions)]
+    fields = sp.Matrix(rows) if rows else sp.zeros(0, 2 * n)
     labels = tuple(f"holonomic[{i}]" for i in range(len(hol))) + tuple(
         f"primary[{a}]" for a in range(len(image.constraints)))
+    multiplied = tuple(f for f in functions if f is not None)
+    # v = dH_T/dp: the velocity constraints are conditions on the motion, affine in u
+    HT = image.canonical_hamiltonian + sum(
+        (s * f for s, f in zip(symbols, functions) if f is not None), sp.S.Zero)
+    v_of = {v: cancel(sp.diff(HT, pa)) for v, pa in zip(at.velocities, p)}
+    conditions = tuple((lab, cancel(c.xreplace(v_of)))
+                       for lab, c in zip(at.constraint_labels[len(at.holonomic):], vel))
 
     def manifold(eqs):
         return Submanifold(at, eqs, precision=policy.precision, samples=policy.samples,
                            seed=policy.seed, fibre=p, exact=policy.exact)
 
-    run = run_algorithm(algebra.hamiltonian_field(image.canonical_hamiltonian), fields,
-                        multiplied, labels, manifold,
-                        max_stages=2 * at.n if max_generations is None else max_generations,
-                        multiplier_symbols=symbols, variables=q + p, points_are_motions=True)
+    base = algebra.hamiltonian_field(image.canonical_hamiltonian)
+    run = run_algorithm(base, fields, multiplied, labels, manifold,
+                        max_stages=2 * n if max_generations is None else max_generations,
+                        multiplier_symbols=symbols, variables=q + p, points_are_motions=True,
+                        field_conditions=conditions)
     return DiracBergmann(system=at, image=image, run=run, multipliers=symbols, policy=policy,
-                         replaced=replaced)
+                         replaced=replaced, base_field=base, vertical_fields=fields,
+                         functions=functions, conditions=conditions)
 
 
 def _refuse_unbuilt(system) -> None:
     """The parts of a singular system the chain does not take yet, each by its key."""
     problems = []
-    if system.constraints:
-        problems.append("constraints: velocity constraints on a singular Lagrangian are not "
-                        "handled yet (the chain takes holonomic constraints)")
+    if not system.is_affine:
+        problems.append("constraints: a velocity constraint nonlinear in v (Chetaev) on a "
+                        "singular Lagrangian is not handled yet (affine ones are)")
     if system.has_forces:
         problems.append("forces: forces on a singular Lagrangian are not handled yet")
     if system.time is not None:

@@ -62,7 +62,8 @@ def run_algorithm(base_field, vertical_fields, primary: Sequence, labels: Sequen
                   variables: Sequence | None = None, secondary_start: int = 0,
                   secondary_prefix: str = "secondary", scale=None,
                   closed_fields: Callable | None = None, time=None,
-                  points_are_motions: bool = False) -> AlgorithmRun:
+                  points_are_motions: bool = False,
+                  field_conditions: Sequence = ()) -> AlgorithmRun:
     """Run the constraint algorithm (paper §3) for any number of constraints.
 
     Parameters
@@ -120,6 +121,14 @@ def run_algorithm(base_field, vertical_fields, primary: Sequence, labels: Sequen
         motion of a system with external constraints). True: it is a final surface with
         no degree of freedom (the Dirac-Bergmann chain: L = -V(q) rests at the critical
         points of V).
+    field_conditions : sequence of (str, sympy.Expr), optional
+        Conditions on the field X = ξ + λ^i Z_i itself, each an expression in the
+        variables affine in the multipliers (label, c): their rows (∂c/∂λ_i, c at λ = 0)
+        join the tangency rows at every stage, and their λ-free combinations become
+        constraints like the others. On T*Q for a singular L, a velocity constraint
+        φ(q, v) with v = ∂H_T/∂p (affine in the u^a) is one. With them the run's
+        ``projection`` (and so ``multipliers``) is None when the block uses such a row:
+        the caller solves its block.
 
     Returns
     -------
@@ -190,6 +199,9 @@ def run_algorithm(base_field, vertical_fields, primary: Sequence, labels: Sequen
                  secondary_prefix, scale=scale, closed_fields=closed_fields)
     loop.time = time
     loop.points_are_motions = points_are_motions
+    loop.field_conditions = tuple((str(lab), sp.sympify(c)) for lab, c in field_conditions)
+    for lab, c in loop.field_conditions:
+        loop.graph = loop.graph.with_node(lab, expr=c, stage=1, kind=constraint_kind(lab))
     return loop.run(primary, labels, bound)
 
 
@@ -211,6 +223,7 @@ class _Loop:
         self.closed_fields = closed_fields
         self.time = None  # the time t of a time-dependent system (run_algorithm's time)
         self.points_are_motions = False  # run_algorithm's points_are_motions
+        self.field_conditions: tuple = ()  # run_algorithm's field_conditions
 
     # ------------------------------------------------------------ tangency rows
     def row(self, chi):
@@ -231,6 +244,12 @@ class _Loop:
     def matrices(self, chis):
         A = sp.Matrix(len(chis), self.Z.rows, lambda j, i: self.row(chis[j])[1][i])
         b = sp.Matrix([self.row(c)[2] for c in chis]) if chis else sp.zeros(0, 1)
+        if self.field_conditions:  # conditions on the field: rows of their own
+            zero = {s: 0 for s in self.lam}
+            Ac = sp.Matrix([[cancel(sp.diff(c, s)) for s in self.lam]
+                            for _, c in self.field_conditions])
+            bc = sp.Matrix([cancel(c.xreplace(zero)) for _, c in self.field_conditions])
+            A, b = A.col_join(Ac), b.col_join(bc)
         return A, b
 
     # ------------------------------------------------------------------ the loop
@@ -269,6 +288,7 @@ class _Loop:
     def stage(self, k, M, chis, labs):
         """Process M_k: rank, block, conditions; returns (Stage, inconsistency or None)."""
         A, b = self.matrices(chis)
+        labs = list(labs) + [lab for lab, _ in self.field_conditions]  # the rows' names
         evidence = []
         rank_dec = M.rank(A)
         r = int(rank_dec.value)
@@ -277,12 +297,12 @@ class _Loop:
             self._collect(f"stage {k}: rank of (Z_i(chi_j))", rank_dec)
         rows, cols, choice = M.regular_block(A, r) if r else ([], [], None)
         if r:
-            if len(chis) > r or self.Z.rows > r:
+            if len(labs) > r or self.Z.rows > r:
                 # The block is a choice only when A is not square and regular.
                 evidence.append(Evidence(f"regular {r}x{r} block on M_{k}", choice,
                                          "rows " + ", ".join(labs[j] for j in rows)))
             self._rank_drop_check(k, M, A, rows, cols, chis)
-        others = [j for j in range(len(chis)) if j not in rows]
+        others = [j for j in range(len(labs)) if j not in rows]
         B = A.extract(rows, cols)
         coeffs = (solve_on(M, B.T, A.extract(others, cols).T)
                   if r and others else sp.zeros(r, len(others)))
@@ -313,7 +333,7 @@ class _Loop:
             new, new_labels, problem = self._accept(k, M, chis, candidates, evidence)
         aug = r + (1 if (new or problem) else 0)
         stage = Stage(
-            index=k, constraints=tuple(chis), labels=tuple(labs),
+            index=k, constraints=tuple(chis), labels=tuple(labs[:len(chis)]),
             new_constraints=tuple(new), new_labels=tuple(new_labels), rank=r,
             augmented_rank=aug,
             block=(tuple(labs[j] for j in rows), tuple(self.lam[i] for i in cols)),

@@ -296,6 +296,8 @@ class AlgorithmRun(ConstraintOutcome):
         if self.status == "inconsistent":
             return None
         rows, cols = list(self.block[0]), list(self.block[1])
+        if any(j >= len(self.final_constraints) for j in rows):
+            return None  # the block uses a condition on the field (run_algorithm's)
         N = len(self.variables)
         grads = gradient_rows([self.final_constraints[j] for j in rows], self.variables)
         xi, Z = self._loop_fields

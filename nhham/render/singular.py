@@ -78,6 +78,8 @@ def singular_data(db) -> dict:
         "generation_labels": [list(g) for g in db.generation_labels],
         "independent": db.independent,
         "degrees_of_freedom": _number(db.degrees_of_freedom),
+        "velocity_constraints": [{"label": lab, "condition": shown(c)}
+                                 for lab, c in db.conditions],
         "gauge_generators": [_generator(g, shown) for g in
                              (db.gauge_generators if db.consistent else ())],
         "irregular": [{"label": lab, "constraint": expr_text(g), "regular_equivalent":
@@ -130,8 +132,7 @@ def singular_text(title: str, data: dict) -> str:
         rows += [("independent constraints", str(data["independent"])),
                  ("first class", str(data["first_class"])),
                  ("second class", str(data["second_class"])),
-                 ("degrees of freedom", "not stated (irregular constraints)"
-                  if data["degrees_of_freedom"] is None else str(data["degrees_of_freedom"]))]
+                 ("degrees of freedom", _dof_text(data))]
         for item in data["irregular"]:
             regular = item["regular_equivalent"]
             rows.append((f"irregular {item['label']}", f"{item['constraint']} = 0, "
@@ -146,6 +147,10 @@ def singular_text(title: str, data: dict) -> str:
             gens.append((f"{k + 1}" + (" (primary)" if k == 0 else "") if i == 0 else "",
                          lab, c))
     lines.append(table(gens))
+    if data["velocity_constraints"]:
+        lines.append("velocity constraints at v = dH_T/dp (conditions on the motion, each "
+                     "fixing multipliers or adding constraints):")
+        lines.append(table([(c["label"], c["condition"]) for c in data["velocity_constraints"]]))
     if data["first_class_combinations"]:
         lines.append("first-class combinations (in q, p):")
         lines.append(table([(f"gamma_{i + 1}", "=", c)
@@ -170,6 +175,15 @@ def singular_text(title: str, data: dict) -> str:
     if data["inconsistency"]:
         lines.append(f"inconsistent: {data['inconsistency']}")
     return "\n".join(lines)
+
+
+def _dof_text(data: dict) -> str:
+    if data["degrees_of_freedom"] is not None:
+        return str(data["degrees_of_freedom"])
+    if data["velocity_constraints"]:
+        return ("not counted: velocity constraints restrict the motion on M_f, not T*Q "
+                "((2n - 2 FC - SC)/2 does not apply)")
+    return "not stated (irregular constraints)"
 
 
 def singular_latex(title: str, data: dict, parse) -> str:
@@ -258,14 +272,14 @@ def singular_derive_data(db) -> dict:
         return expr_text(display_form(c, momenta))
 
     run = db.run
-    fixed = dict(run.multipliers)
+    fixed = db.fixed_multipliers
     classes = db.classes
     B = classes.bracket_matrix if classes is not None else None
     return {
         "side": "hamiltonian",
         "form": "explicit",
         "state": [s.name for s in db.algebra.variables],
-        "field": [shown(f) for f in run.dynamics],
+        "field": [shown(f) for f in db.motion],
         "multipliers": [shown(fixed.get(s, s)) for s in db.multipliers],
         "multiplier_symbols": [s.name for s in db.multipliers],
         "free_multiplier_symbols": [s.name for s in run.free_multiplier_symbols],

@@ -125,15 +125,12 @@ def exceptional_factors(db) -> list:
         coeffs = [c for c in poly.coeffs()]
         add(sp.gcd_list(coeffs) if len(coeffs) > 1 else coeffs[0], reason)
 
-    multiplied = db.multiplied
     for stage in db.run.stages:
-        rows = [stage.labels.index(lab) for lab in stage.block[0]]
-        cols = [db.multipliers.index(s) for s in stage.block[1]]
+        rows, cols = stage.block
         if rows:
-            chis = [stage.constraints[j] for j in rows]
-            A = sp.Matrix(len(rows), len(cols),
-                          lambda r, c: db.algebra.bracket(chis[r], multiplied[cols[c]]))
-            add(A.det(method="berkowitz"),
+            A, _ = db.rows(rows)
+            index = [db.multipliers.index(s) for s in cols]
+            add(A.extract(list(range(A.rows)), index).det(method="berkowitz"),
                 f"the rank of generation {stage.index}'s brackets drops")
         for lab, c in zip(stage.new_labels, stage.new_constraints):
             add_content(c, f"{lab} degenerates")
