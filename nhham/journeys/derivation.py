@@ -223,7 +223,7 @@ def _with_forces(answer: Answer, system) -> Answer:
     """``answer`` with the generalized forces Q (dissipation included) and the inputs:
     ``generalized_forces`` (null without forces) and ``inputs``, and a text section (rows
     of the aligned block in LaTeX); the text names the field P(xi_L + F^v)."""
-    from nhham.render.results import forces_latex, forces_text
+    from nhham.render.forces import forces_latex, forces_text
     from nhham.render.text import expr_text
 
     inputs = [u.name for u in system.inputs]

@@ -683,23 +683,3 @@ def bench_failure_data(t_span, reference_digits: int) -> dict:
             "reference_wall_time_s": None, "rows": [], "time_to_solution": [], "skipped": [],
             "kkt_solve": None, "kkt_ratio_max": None, "energy_change": None, "plot": None}
 
-
-def forces_text(system, forces) -> str:
-    """The text section of the generalized forces Q (``forces``: their printed forms) and
-    the inputs."""
-    lines = [paragraph("generalized forces Q (in F; d/dt dL/dv - dL/dq = Q - mu^T "
-                       "lambda):"),
-             table([(f"Q[{q.name}]", "=", f) for q, f in zip(system.coordinates, forces)])]
-    if system.inputs:
-        lines.append(labelled("inputs", ", ".join(u.name for u in system.inputs)))
-    return "\n".join(lines)
-
-
-def forces_latex(body: str, system) -> str:
-    """``body`` (a LaTeX report ending in an aligned block) with the rows of Q and the
-    inputs added to its block."""
-    rows = [f"Q &= {tex.matrix_latex([[f] for f in system.generalized_forces])}"]
-    if system.inputs:
-        rows.append(tex.text("inputs: " + ", ".join(u.name for u in system.inputs)))
-    head, end = body.rsplit("\\end{aligned}", 1)
-    return head.rstrip("\n") + " \\\\\n" + " \\\\\n".join(rows) + "\n\\end{aligned}" + end
