@@ -271,11 +271,7 @@ class System:
     def require_regular_lagrangian(self, what: str) -> None:
         """Raise :class:`~nhham.errors.SingularLagrangianError` unless L is regular.
 
-        Parameters
-        ----------
-        what : str
-            What needs W invertible (``"simulate"``, ``"the Lagrangian geometry"``), named
-            in the message.
+        ``what`` (``"simulate"``) is named in the message.
 
         Examples
         --------
