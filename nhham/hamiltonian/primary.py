@@ -106,11 +106,7 @@ def legendre_image(system) -> LegendreImage:
     L = system.lagrangian
     W = sp.Matrix(system.hessian)
     if W.free_symbols & set(v):
-        raise ValidationError([
-            "lagrangian: W = d2L/dv dv depends on the velocities and is singular: the "
-            "primary constraints of an L that is not quadratic in v (elimination of v) are "
-            "not built; write L quadratic in v (for a relativistic particle the einbein form "
-            "x_dot**2/(2*e) - e*m**2/2)"])
+        return _eliminated(system, q, v, p)
     zero_v = {s: 0 for s in v}
     b = sp.Matrix([sp.diff(L, s) for s in v]).xreplace(zero_v)
     null = W.nullspace(simplify=True)
@@ -130,6 +126,61 @@ def legendre_image(system) -> LegendreImage:
     return LegendreImage(coordinates=q, momenta=p, rank=rank, null_vectors=vectors,
                          constraints=phis, canonical_hamiltonian=Hc,
                          block=(tuple(rows), tuple(cols)))
+
+
+def _eliminated(system, q, v, p) -> LegendreImage:
+    """The image of Leg for an L algebraic in v but not quadratic: each square root of an
+    expression in v is a new unknown s (s^2 = its radicand, s != 0), the equations
+    p = dL/dv and e = E_L are cleared of denominators (each != 0), and a lex Groebner basis
+    eliminates v, s (and the inverses that say "!= 0"): its elements free of them and of e
+    are the primary constraints, the one linear in e gives H_c."""
+    L = system.lagrangian
+    roots: dict = {}
+
+    def algebraic(expr):
+        expr = sp.sympify(expr)
+        for node in sp.preorder_traversal(expr):
+            if isinstance(node, sp.Pow) and node.exp.is_Rational and node.exp.q == 2 \
+                    and node.base.free_symbols & set(v) and node.base not in roots:
+                roots[node.base] = sp.Dummy(f"s{len(roots)}")
+        out = expr
+        for base, s in roots.items():
+            out = out.xreplace({sp.sqrt(base): s, 1 / sp.sqrt(base): 1 / s})
+            out = out.replace(lambda e, b=base: isinstance(e, sp.Pow) and e.base == b
+                              and e.exp.is_Rational and e.exp.q == 2,
+                              lambda e, s=s: s ** int(2 * e.exp))
+        return sp.together(out)
+
+    e = sp.Dummy("e")
+    energy = sum((s * sp.diff(L, s) for s in v), sp.S.Zero) - L
+    exprs = [algebraic(pa - sp.diff(L, s)) for pa, s in zip(p, v)] + [algebraic(e - energy)]
+    eqs, nonzero = [], list(roots.values())
+    for x in exprs:
+        num, den = sp.fraction(x)
+        eqs.append(sp.expand(num))
+        nonzero += [f for f, _ in sp.factor_list(den)[1] if f.free_symbols & (set(v) | set(roots.values()))]
+    eqs += [sp.expand(s**2 - base) for base, s in roots.items()]
+    if any(not x.is_polynomial(*v, *roots.values()) for x in eqs):
+        raise ValidationError([
+            "lagrangian: W depends on the velocities and L is not algebraic in them (square "
+            "roots and fractions only): the primary constraints cannot be found by "
+            "elimination"])
+    inverses = [sp.Dummy(f"w{i}") for i in range(len(nonzero))]
+    eqs += [sp.expand(1 - w * f) for w, f in zip(inverses, nonzero)]
+    hidden = inverses + list(v) + list(roots.values())
+    basis = sp.groebner(eqs, *hidden, e, *p, order="lex").exprs
+    free = [g for g in basis if not g.free_symbols & set(hidden)]
+    phis = tuple(_primitive(g) for g in free if e not in g.free_symbols)
+    energies = [g for g in free if e in g.free_symbols and sp.degree(g, e) == 1]
+    if not energies:
+        raise ValidationError([
+            "lagrangian: the energy E_L is not a function of (q, p) on the image of Leg "
+            "found by elimination (no element linear in it)"])
+    g = energies[0]
+    c = sp.diff(g, e)
+    Hc = cancel(-(g - c * e) / c)
+    return LegendreImage(coordinates=q, momenta=p, rank=len(q) - len(phis), null_vectors=(),
+                         constraints=phis, canonical_hamiltonian=Hc, block=((), ()))
 
 
 def _cleared(k) -> tuple:

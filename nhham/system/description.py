@@ -40,7 +40,8 @@ from nhham.system.naming import TIME, as_symbol, velocity_symbol
 from nhham.system.sampled_checks import (
     DroppedConstraint,
     check_dependence,
-    check_regular_lagrangian,
+    singular_message,
+    singular_rank,
 )
 from nhham.system.screening import coordinate_symbols, expression_problems
 from nhham.system.chetaev import AFFINE, constraint_kind, degenerate_reactions
@@ -247,12 +248,11 @@ class System:
                 [f"constraints: m = {m} independent velocity constraints (holonomic ones "
                  f"counted by their complete lifts) but n = {n} coordinates; nhham needs m < n"]
             )
-        try:
-            check_regular_lagrangian(self)
-        except SingularLagrangianError as exc:
+        rank = singular_rank(self)
+        if rank is not None:
             # Accepted: the Dirac-Bergmann chain answers it; the routes that need W^-1
-            # refuse it through require_regular_lagrangian.
-            self.__dict__["_singular_lagrangian"] = exc.problems[0]
+            # refuse it through require_regular_lagrangian (its message formed then).
+            self.__dict__["_singular_lagrangian"] = rank
 
     def __repr__(self):
         label = f"{self.name!r}, " if self.name else ""
@@ -284,10 +284,10 @@ class System:
         ...
         nhham.errors.SingularLagrangianError: lagrangian: the Hessian W = d2L/dv dv is singular (rank 1 of 2; null direction [0, 1]); simulate needs W invertible ...
         """
-        message = self.__dict__.get("_singular_lagrangian")
-        if message is not None:
+        rank = self.__dict__.get("_singular_lagrangian")
+        if rank is not None:
             raise SingularLagrangianError([
-                f"{message}; {what} needs W invertible (a singular Lagrangian is answered "
+                f"{singular_message(self, rank)}; {what} needs W invertible (a singular Lagrangian is answered "
                 f"by classify: the Dirac-Bergmann chain)"])
 
     # ----------------------------------------------------------------- sizes

@@ -4,7 +4,7 @@ Two properties of the input are decided at seeded random points of the state and
 the parameters (reproducible run to run): the constraint one-forms are independent
 (:func:`check_dependence`: a dependent row is refused, or dropped and recorded as a
 :class:`DroppedConstraint` with ``drop_redundant``), and the Lagrangian is regular
-(:func:`check_regular_lagrangian`: W = d2L/dv dv invertible). A float64 rank deficiency
+(:func:`singular_rank`: W = d2L/dv dv invertible or not). A float64 rank deficiency
 is confirmed in high precision before it is reported (units such as m = 1e-16).
 The values at the points come from one fast pass over the expression trees
 (:func:`numeric_samples`), with sympy's ``evalf`` as the fallback.
@@ -22,14 +22,13 @@ import sympy as sp
 from nhham.errors import (
     BudgetExceeded,
     RedundantConstraintError,
-    SingularLagrangianError,
     ValidationError,
 )
 from nhham.settings import PARAMETER_BOX, STATE_BOX
 from nhham.system.rank import float_rank, precise_ranks
 from nhham.system.velocities import one_forms
 
-__all__ = ["DroppedConstraint", "check_dependence", "check_regular_lagrangian",
+__all__ = ["DroppedConstraint", "check_dependence", "singular_rank", "singular_message",
            "numeric_samples", "numeric", "sample_q", "finite_samples", "evaluate_at",
            "NoFastEvaluation",
            "VALIDATION_SEED", "VALIDATION_SAMPLES"]
@@ -361,33 +360,35 @@ def _vanishes_at(expr, points, tol=1e-9):
     return finite > 0
 
 
-def check_regular_lagrangian(system):
-    """Raise unless the Lagrangian is regular: W = d2L/dv dv invertible (generic rank n;
-    singular at every sampled point raises). Not C's regularity on M_1, which is a
-    verdict (``LagrangianGeometry.regular``), never an input error."""
+def singular_rank(system) -> int | None:
+    """The generic rank of W = d2L/dv dv when it is below n (exact for a constant W, else
+    the largest at seeded points, confirmed in extended precision), None when W is
+    invertible."""
     W = system.hessian
     n = system.n
     if not W.free_symbols:
         rank = W.rank()
-        if rank < n:
-            W = sp.hessian(system.lagrangian, system.velocities)  # as the message always showed it
-            raise SingularLagrangianError([_singular_message(W, rank, W.nullspace())])
-        return
+        return rank if rank < n else None
     rng = np.random.default_rng(VALIDATION_SEED + 1)
     points, samples = finite_samples(W, system, rng, ["lagrangian"] * n)
     ranks = [float_rank(S) for S in samples]
     if max(ranks) < n:
         # A float64 deficiency may come from the units (m = 1e-16): confirm it.
         ranks = precise_ranks(W, points, [list(range(n))])
-    if max(ranks) < n:
-        W = sp.hessian(system.lagrangian, system.velocities)  # as the message always showed it
-        try:
-            null = W.nullspace(simplify=True)
-        except BudgetExceeded:
-            raise
-        except Exception:  # pragma: no cover - sympy failure; message still useful
-            null = []
-        raise SingularLagrangianError([_singular_message(W, max(ranks), null)])
+    return max(ranks) if max(ranks) < n else None
+
+
+def singular_message(system, rank: int) -> str:
+    """``lagrangian: the Hessian W ... is singular (rank r of n; null direction(s) ...)``:
+    the kernel of W named (a symbolic nullspace: formed only for the message)."""
+    W = sp.hessian(system.lagrangian, system.velocities)  # as the message always showed it
+    try:
+        null = W.nullspace(simplify=True) if W.free_symbols else W.nullspace()
+    except BudgetExceeded:
+        raise
+    except Exception:  # pragma: no cover - sympy failure; message still useful
+        null = []
+    return _singular_message(W, rank, null)
 
 
 def _singular_message(W, rank, null):

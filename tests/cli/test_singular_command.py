@@ -27,6 +27,7 @@ HAND = {
     "inconsistent_force.toml": ("inconsistent", [1], None, None, None, 0),
     "einbein_particle.toml": ("underdetermined", [1, 1], 2, 0, 3, 1),
     "lc_circuit.toml": ("determined", [1], 1, 0, None, 0),
+    "relativistic_particle.toml": ("underdetermined", [1], 1, 0, 3, 1),
 }
 
 

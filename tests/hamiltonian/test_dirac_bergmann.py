@@ -198,8 +198,9 @@ def test_legendre_image_by_hand():
 
 
 def test_what_is_not_built_is_refused_by_key():
-    with pytest.raises(ValidationError, match="lagrangian: W .* depends on the velocities"):
-        legendre_image(System(["x", "y"], "sqrt(1 + x_dot**2) + y"))
+    with pytest.raises(ValidationError, match="lagrangian: W depends on the velocities and "
+                                              "L is not algebraic"):
+        legendre_image(System(["x", "y"], "exp(x_dot) + y"))
     with pytest.raises(InputError, match="constraints: a velocity constraint nonlinear"):
         dirac_bergmann(System(["x", "y", "z"], "(x_dot**2 + y_dot**2)/2 + z*x",
                               constraints=["x_dot**2 + y_dot**2 - 1"]))
@@ -242,3 +243,25 @@ def test_an_inductor_capacitor_loop_oscillates_at_one_over_root_lc():
                    for a in (S("qC"), S("p_qL"))]).subs({S("ell"): ell, S("Cap"): cap})
     assert set(J.eigenvals()) == {sp.I / sp.sqrt(ell * cap), -sp.I / sp.sqrt(ell * cap)}
     assert db.degrees_of_freedom is None and db.gauge_generators == ()
+
+
+def test_relativistic_particle_by_elimination_of_the_velocities():
+    # L = -m sqrt(-x'.x') (metric -+++): p = m eta x'/s with s = sqrt(-x'.x'), so
+    # p.p = -m^2: one primary constraint p.p + m^2 = 0, and E_L = x'.p - L = -m s + m s = 0
+    # (Euler, degree 1): H_c = 0. No secondary; first class; dof (8 - 2)/2 = 3.
+    db = chain("relativistic_particle.toml")
+    p = [S(f"p_x{i}") for i in range(4)]
+    same_up_to_sign(db.image.constraints, [-p[0]**2 + p[1]**2 + p[2]**2 + p[3]**2 + 1])
+    assert db.image.canonical_hamiltonian == 0 and db.image.rank == 3
+    assert (len(db.generations), db.first_class, db.second_class,
+            db.degrees_of_freedom) == (1, 1, 0, 3)
+
+
+def test_a_square_root_lagrangian_with_a_potential():
+    # L = -sqrt(1 - x'^2) ... is regular; a singular one: L = -m sqrt(-x'.x') in 1 + 1
+    # dimensions with a field A = (0, B x0) (a charge): p1 - B x0 = m x1'/s, p0 = -m x0'/s:
+    # (p1 - B x0)^2 - p0^2 + m^2 = 0, H_c = 0; its bracket with itself is 0: first class.
+    db = dirac_bergmann(System(["x0", "x1"], "-sqrt(x0_dot**2 - x1_dot**2) + 2*x0*x1_dot"))
+    p0, p1, x0 = S("p_x0"), S("p_x1"), S("x0")
+    same_up_to_sign(db.image.constraints, [(p1 - 2 * x0)**2 - p0**2 + 1])
+    assert (db.first_class, db.second_class, db.degrees_of_freedom) == (1, 0, 1)
