@@ -146,17 +146,24 @@ def _case_row(study, which: int, values: dict) -> dict:
     ``values`` (the first point of the case met in this process)."""
     # a case's index means something only in its study (its cases, names and policy)
     key = (study.scene_text, repr(sorted(study.options.items())), which)
-    if key not in _ROWS:
+    if key in _ROWS:
+        return _ROWS[key]
+    point = key + (tuple(sorted(values.items())),)
+    if point not in _ROWS:
         # the point's values over those every point has (--set)
         given = {**dict(study.options.get("values") or {}), **values}
-        _ROWS[key] = command_row(study.scene_text, study.scene_source, given,
-                                 study.options.get("policy"))
-    return _ROWS[key]
+        row, singular = command_row(study.scene_text, study.scene_source, given,
+                                    study.options.get("policy"), with_kind=True)
+        # a singular L's chain answers point by point: its answer is not the case's
+        _ROWS[point if singular else key] = row
+    return _ROWS.get(key) or _ROWS[point]
 
 
-def command_row(scene_text: str, source: str, values: dict, policy=None) -> dict:
+def command_row(scene_text: str, source: str, values: dict, policy=None,
+                with_kind: bool = False):
     """The study's variables of ``nhham classify`` on the scene at ``values`` (a
-    parameter name -> value mapping, as ``--set`` gives them)."""
+    parameter name -> value mapping, as ``--set`` gives them); with ``with_kind``
+    (row, whether L is singular there: the Dirac-Bergmann chain answered)."""
     from nhham.journeys.verdict import classify
     from nhham.lagrangian.engine import Policy
     from nhham.system.scene import loads_scene
@@ -165,9 +172,10 @@ def command_row(scene_text: str, source: str, values: dict, policy=None) -> dict
         scene = loads_scene(scene_text, source, check_initial=False, drop_redundant=True,
                             values=values)
         data = classify(scene, policy=Policy(**policy) if policy else None).data
-    except InputError:   # the command refuses the system there (W singular, ...)
-        return dict.fromkeys(_FIELDS, -1) | {"status": STATUS_CODES["invalid"]}
-    return row_of(data)
+    except InputError:   # the command refuses the system there
+        row = dict.fromkeys(_FIELDS, -1) | {"status": STATUS_CODES["invalid"]}
+        return (row, False) if with_kind else row
+    return (row_of(data), "lagrangian_rank" in data) if with_kind else row_of(data)
 
 
 def row_of(data) -> dict:

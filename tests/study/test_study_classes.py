@@ -18,7 +18,11 @@ def test_points_on_exceptional_sets_get_their_verdict_not_the_generic_one(tmp_pa
         for j, a in enumerate(ds["a"].values):
             status = int(ds["status"].values[i, j])
             if a == 0:
-                assert status == STATUS_CODES["invalid"]
+                # W singular: the chain, point by point. p_q1 = 0 (u_1 free); the constraint
+                # at v = dH_T/dp is p_q2 - b p_q3 = 0, whose tangency gives
+                # lambda_1 (b**2 - 1) = 0: lambda_1 free too where b = +-1.
+                assert status == STATUS_CODES["underdetermined"]
+                assert ds["free_multipliers"].values[i, j] == (2 if abs(b) == 1 else 1)
             elif abs(b) == 1:
                 assert status == STATUS_CODES["underdetermined"]
                 assert ds["free_multipliers"].values[i, j] == 1 and ds["rank_C"].values[i, j] == 0
