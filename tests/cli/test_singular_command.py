@@ -28,6 +28,7 @@ HAND = {
     "einbein_particle.toml": ("underdetermined", [1, 1], 2, 0, 3, 1),
     "lc_circuit.toml": ("determined", [1], 1, 0, None, 0),
     "relativistic_particle.toml": ("underdetermined", [1], 1, 0, 3, 1),
+    "yang_mills_su2.toml": ("underdetermined", [3, 3], 6, 0, 6, 3),
 }
 
 
