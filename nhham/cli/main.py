@@ -120,7 +120,7 @@ def cmd_compare(args, steps) -> CommandOutput:
     """Lagrangian/Hamiltonian cross-check and the Dirac-versus-projected difference."""
     from nhham.journeys.comparison import compare
 
-    scene = _load(args, steps)
+    scene = _load(args, steps, singular=True)  # a singular L: the two chains compared
     return _output(args, scene, compare(scene, policy=args.policy, steps=steps))
 
 

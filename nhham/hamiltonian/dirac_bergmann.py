@@ -253,43 +253,11 @@ class DiracBergmann:
         return int(dof) if dof.denominator == 1 else dof
 
     # ------------------------------------------------------------- the motion
-    @cached_property
+    @property
     def fixed_multipliers(self) -> dict:
         """{multiplier: expression} of those the chain determined on M_f (the free ones
-        appear in them as symbols): the last generation's block solved on M_f."""
-        if not self.consistent:
-            return {}
-        if not self.conditions:
-            return dict(self.run.multipliers)
-        row_labels, cols = self.run.stages[-1].block
-        if not cols:
-            return {}
-        A, b = self.rows(row_labels)
-        lam = list(self.multipliers)
-        index = [lam.index(s) for s in cols]
-        free = [i for i in range(len(lam)) if i not in index]
-        rhs = -(b + (A.extract(list(range(A.rows)), free) * sp.Matrix([lam[i] for i in free])
-                     if free else sp.zeros(A.rows, 1)))
-        sol = self.manifold.solve(A.extract(list(range(A.rows)), index), rhs)
-        return {s: cancel(sol[k]) for k, s in enumerate(cols)}
-
-    def rows(self, labels) -> tuple:
-        """(A, b) of the rows named: A_ji = Z_i(chi_j), b_j = X_{H_c}(chi_j) for a
-        constraint; the coefficients of the multipliers and the rest for a condition."""
-        named, conditions = self.named_constraints, dict(self.conditions)
-        zero = {s: 0 for s in self.multipliers}
-        A, b = [], []
-        for lab in labels:
-            if lab in conditions:
-                c = conditions[lab]
-                A.append([cancel(sp.diff(c, s)) for s in self.multipliers])
-                b.append(cancel(c.xreplace(zero)))
-                continue
-            grad = sp.Matrix([[sp.diff(named[lab], z) for z in self.algebra.variables]])
-            A.append([cancel((grad * self.vertical_fields.row(i).T)[0])
-                      for i in range(len(self.multipliers))])
-            b.append(cancel((grad * self.base_field)[0]))
-        return sp.Matrix(len(A), len(self.multipliers), lambda j, i: A[j][i]), sp.Matrix(b)
+        appear in them as symbols)."""
+        return dict(self.run.multipliers) if self.consistent else {}
 
     @cached_property
     def motion(self) -> sp.Matrix:
@@ -396,6 +364,14 @@ class DiracBergmann:
             return sp.Matrix(len(z), len(z), lambda i, j: self.algebra.bracket(z[i], z[j]))
         D = DiracBracket(self.algebra, second)
         return sp.Matrix(len(z), len(z), lambda i, j: sp.factor(D(z[i], z[j])))
+
+    @cached_property
+    def equivalence(self):
+        """The Lagrangian chain on TQ and its comparison through Leg
+        (:func:`nhham.hamiltonian.equivalence.equivalence`); None when inconsistent."""
+        from nhham.hamiltonian.equivalence import equivalence
+
+        return equivalence(self) if self.consistent else None
 
     # ----------------------------------------------------------------- report
     @property

@@ -49,6 +49,8 @@ def compare(scene, *, policy: Policy | None = None, steps=None) -> Answer:
     scene = as_scene(scene)
     steps = quiet_steps(steps)
     policy = Policy() if policy is None else policy
+    if not scene.system.regular_lagrangian:
+        return _singular(scene, policy, steps)
     at = at_values(scene, policy, steps)
     system = scene.system if at is None else at.system
     # One T*Q side for both checks: its numeric layer is built once.
@@ -77,3 +79,33 @@ def compare(scene, *, policy: Policy | None = None, steps=None) -> Answer:
                     warnings=tuple(warnings), failure=failure,
                     payload={"report": report, "dirac": dirac}, system=scene.system)
     return with_case(answer, at)
+
+
+def _singular(scene, policy, steps) -> Answer:
+    """compare of a singular Lagrangian: the chain on TQ (q' = v built in) against the
+    Dirac-Bergmann chain through Leg (:mod:`nhham.hamiltonian.equivalence`)."""
+    import time
+
+    from nhham.errors import InputError
+    from nhham.hamiltonian.dirac_bergmann import dirac_bergmann
+    from nhham.render.singular import singular_compare_data, singular_compare_text
+
+    start = time.perf_counter()
+    with steps.step("Dirac-Bergmann chain at the parameter values"):
+        db = dirac_bergmann(scene.system, policy=policy)
+    if not db.consistent:
+        raise InputError(f"{scene.source}: the chain is inconsistent ({db.run.inconsistency});"
+                         f" there are no final manifolds to compare")
+    with steps.step("the chain on TQ and the comparison through Leg at points of M_f^L"):
+        db.equivalence
+    data = singular_compare_data(db, time.perf_counter() - start)
+    data["parameter_case"] = None
+    side = data["lagrangian_side"]
+    failure = None
+    if not data["agree"]:
+        failure = (f"not compared: {side['why_not']}" if side["why_not"] else
+                   "the Lagrangian and Hamiltonian chains disagree (see the checks); please "
+                   "report this scene as a bug")
+    title = scene.name or str(scene.source)
+    return Answer("compare", data, functools.partial(singular_compare_text, title, data),
+                  warnings=tuple(db.warnings), failure=failure, system=scene.system)

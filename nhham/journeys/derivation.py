@@ -80,26 +80,37 @@ def derive(scene, *, side: str = "lagrangian", explicit: bool = False,
 
 
 def _singular(scene, side, policy, steps) -> Answer:
-    """derive of a singular Lagrangian: on T*Q the motion the Dirac-Bergmann chain leaves
-    (the Lagrangian side, with the second-order condition, is not built: refused)."""
+    """derive of a singular Lagrangian: on TQ the motion of the constraint algorithm with
+    q' = v built in (:func:`~nhham.lagrangian.singular.lagrangian_chain`), on T*Q the one
+    the Dirac-Bergmann chain leaves."""
     from nhham.hamiltonian.dirac_bergmann import dirac_bergmann
     from nhham.render.singular import (singular_derive_data, singular_derive_latex,
                                        singular_derive_text)
 
-    if side != "hamiltonian":
-        scene.system.require_regular_lagrangian(
-            "derive on TQ (the Lagrangian side of a singular L is not built; "
-            "--side hamiltonian gives the Dirac-Bergmann motion)")
+    title = scene.name or str(scene.source)
+    if side == "lagrangian":
+        from nhham.hamiltonian.dirac_bergmann import at_parameter_values
+        from nhham.lagrangian.singular import lagrangian_chain
+        from nhham.render.singular import singular_lagrangian_derive_data
+
+        system = at_parameter_values(scene.system)
+        with steps.step("the constraint algorithm on TQ (q' = v built in) at the values"):
+            run = lagrangian_chain(system, policy=policy)
+        if run.status == "inconsistent":
+            raise _inconsistent(scene, run)
+        with steps.step("the motion on M_f and its multipliers"):
+            data = singular_lagrangian_derive_data(run, system)
+        data["parameter_case"] = None
+        return Answer("derive", data, functools.partial(singular_derive_text, title, data),
+                      latex=functools.partial(singular_derive_latex, data),
+                      warnings=tuple(run.warnings), system=scene.system)
     with steps.step("Dirac-Bergmann chain at the parameter values"):
         db = dirac_bergmann(scene.system, policy=policy)
     if not db.consistent:
-        raise InputError(f"{scene.source}: the chain is inconsistent ({db.run.inconsistency});"
-                         f" there is no dynamics to derive (run `nhham classify "
-                         f"{scene.source}` for the generations)")
+        raise _inconsistent(scene, db.run)
     with steps.step("the motion on M_f, its multipliers and the Dirac bracket"):
         data = singular_derive_data(db)
     data["parameter_case"] = None
-    title = scene.name or str(scene.source)
     return Answer("derive", data, functools.partial(singular_derive_text, title, data),
                   latex=functools.partial(singular_derive_latex, data),
                   warnings=tuple(db.warnings), system=scene.system)

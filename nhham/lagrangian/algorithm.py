@@ -469,6 +469,7 @@ class _Loop:
             fields=self._closed_fields(), manifold=M,
             scaled_fields=_constant_fields(self.xi, self.Z, self.scale) if self.scaled else None,
             denominator=self.scale if self.scaled else None, time=self.time,
+            field_conditions=self.field_conditions,
         )
 
     def _closed_fields(self):

@@ -247,6 +247,7 @@ class AlgorithmRun(ConstraintOutcome):
     scaled_fields: Callable | None = field(default=None, compare=False, repr=False)
     denominator: object = field(default=None, compare=False, repr=False)
     time: object = field(default=None, compare=False, repr=False)
+    field_conditions: tuple = field(default=(), compare=False, repr=False)
 
     @cached_property
     def scale(self) -> sp.Expr:
@@ -325,11 +326,48 @@ class AlgorithmRun(ConstraintOutcome):
         """Determined ``{λ^i: expression}`` (see the class docstring); the same from the
         scaled fields (δ cancels in λ_I = −B^{-1}(b_J + A[J, F] λ_F))."""
         cols = list(self.block[1])
-        if self.projection is None or not cols:
+        if self.status == "inconsistent" or not cols:
             return MappingProxyType({})
+        if self.projection is None:  # the block uses a condition on the field
+            return MappingProxyType(self._conditioned_multipliers())
         solved = self.projection.multipliers
         return MappingProxyType({self.multiplier_symbols[i]: tidy(solved[pos])
                                  for pos, i in enumerate(cols)})
+
+    def rows(self, labels) -> tuple:
+        """(A, b) of the rows named, A λ + b = 0: for a final constraint χ its tangency
+        row (A_ji = Z_i(χ), b_j = ξ(χ), unscaled fields), for a ``field_conditions``
+        entry c its coefficients of the multipliers and c at λ = 0."""
+        lam = list(self.multiplier_symbols)
+        zero = {s: 0 for s in lam}
+        named = dict(zip(self.final_labels, self.final_constraints))
+        conditions = dict(self.field_conditions)
+        xi, Z = self.base_field, self.vertical_fields
+        A, b = [], []
+        for lab in labels:
+            if lab in conditions:
+                c = conditions[lab]
+                A.append([cancel(sp.diff(c, s)) for s in lam])
+                b.append(cancel(c.xreplace(zero)))
+            else:
+                grad = gradient_rows([named[lab]], self.variables)
+                A.append([cancel((grad * Z.row(i).T)[0]) for i in range(len(lam))])
+                b.append(cancel((grad * xi)[0]))
+        return sp.Matrix(len(A), len(lam), lambda r, i: A[r][i]), sp.Matrix(b)
+
+    def _conditioned_multipliers(self) -> dict:
+        """λ_I from the last stage's block when it has rows of ``field_conditions``
+        (run_algorithm's), solved on M_f with the free λ as symbols."""
+        labels, cols = self.stages[-1].block
+        lam = list(self.multiplier_symbols)
+        A, b = self.rows(labels)
+        index = [lam.index(s) for s in cols]
+        free = [i for i in range(len(lam)) if i not in index]
+        rhs = -b
+        if free:
+            rhs -= A.extract(list(range(A.rows)), free) * sp.Matrix([lam[i] for i in free])
+        sol = solve_on(self.manifold, A.extract(list(range(A.rows)), index), rhs)
+        return {s: tidy(sol[k]) for k, s in enumerate(cols)}
 
     @cached_property
     def dynamics(self) -> sp.Matrix | None:

@@ -16,7 +16,7 @@ def output_names(system) -> list:
     >>> output_names(models.rolling_disk())[:5]
     ['x', 'y', 'theta', 'phi', 'x_dot']
     """
-    from nhham.system.naming import (gauge_parameter_symbol, momentum_symbol,
+    from nhham.system.naming import (acceleration_symbol, gauge_parameter_symbol, momentum_symbol,
                                      multiplier_symbol, primary_multiplier_symbol)
 
     coords = [q.name for q in system.coordinates]
@@ -29,6 +29,7 @@ def output_names(system) -> list:
         # the Dirac-Bergmann chain's u^a and the gauge parameters with their derivatives
         n = len(coords)
         multipliers += [primary_multiplier_symbol(a + 1).name for a in range(n)]
+        multipliers += [acceleration_symbol(q).name for q in system.coordinates]
         multipliers += [gauge_parameter_symbol(a + 1, k).name for a in range(n)
                         for k in range(4)]
     return list(dict.fromkeys(coords + vels + momenta + params + multipliers))

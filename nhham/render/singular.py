@@ -9,6 +9,8 @@ primary first), ``independent``, ``degrees_of_freedom``, ``gauge_generators``,
 
 from __future__ import annotations
 
+import sympy as sp
+
 from nhham.render import latex as tex
 from nhham.render.results import classify_rows
 from nhham.render.simplify import display_form
@@ -16,7 +18,8 @@ from nhham.render.text import expr_text, labelled, paragraph, table
 
 __all__ = ["singular_data", "singular_text", "singular_latex", "singular_warnings",
            "singular_parametric_data", "singular_parametric_text", "singular_derive_data",
-           "singular_derive_text", "singular_derive_latex"]
+           "singular_derive_text", "singular_derive_latex", "singular_compare_data",
+           "singular_compare_text", "singular_lagrangian_derive_data"]
 
 #: Why the Frobenius test says nothing here.
 NO_VELOCITY_CONSTRAINTS = ("not applicable: no velocity constraints (a singular Lagrangian: "
@@ -177,6 +180,73 @@ def singular_text(title: str, data: dict) -> str:
     return "\n".join(lines)
 
 
+# ----------------------------------------------------------------------- compare
+def singular_compare_data(db, seconds: float) -> dict:
+    """The ``result`` of ``nhham compare`` for a singular Lagrangian: the Lagrangian chain
+    on TQ against the Dirac-Bergmann chain through Leg (``$defs/compare``'s keys, the
+    three checks as ``checks``, the comparison itself as ``lagrangian_side``)."""
+    eq = db.equivalence
+    side = eq.to_dict()
+    into = all(d["value"] for d in side["into"])
+    onto = bool(side["ranks"]) and all(r == side["expected_rank"] for r in side["ranks"])
+    residual = None if side["why_not"] else side["motion_residual"]
+    checks = [
+        {"name": "leg_maps_final_manifolds", "agree": into and not side["why_not"],
+         "exact": all(d["method"] != "sampled" for d in side["into"]),
+         "max_abs_difference": None, "max_rel_difference": None, "samples": side["points"],
+         "detail": "every final constraint of T*Q pulled back by Leg vanishes on M_f^L",
+         "method": "exact" if all(d["method"] == "exact" for d in side["into"]) else "points"},
+        {"name": "leg_onto", "agree": onto, "exact": False, "max_abs_difference": None,
+         "max_rel_difference": None, "samples": side["points"],
+         "detail": f"the rank of Leg on T M_f^L is dim M_f^H = {side['expected_rank']} at "
+                   f"every point: {side['ranks']}", "method": "sampled"},
+        {"name": "motions_correspond", "agree": bool(eq.agree), "exact": False,
+         "max_abs_difference": None, "max_rel_difference": residual,
+         "samples": side["points"], "detail": "Leg_* of every Lagrangian motion is a "
+         "Hamiltonian one (the free directions included)", "method": "sampled"},
+    ]
+    run = eq.lagrangian
+
+    def stages(r):
+        return [] if r is None else [
+            {"index": s.index, "constraint_count": len(s.constraints), "rank": s.rank,
+             "augmented_rank": s.augmented_rank, "labels": list(s.labels)} for s in r.stages]
+
+    return {
+        "agree": bool(eq.agree), "exact": False, "max_abs_difference": None,
+        "max_rel_difference": residual, "samples": side["points"], "tolerance": 1e-8,
+        "precision": "float64", "method": "sampled", "checks": checks,
+        "lagrangian_stages": stages(run), "hamiltonian_stages": stages(db.run),
+        "lagrangian_status": None if run is None else run.status,
+        "hamiltonian_status": db.run.status, "wall_time_s": round(seconds, 3),
+        "skipped_points": 0, "dirac_vs_projected": None, "lagrangian_side": side,
+    }
+
+
+def singular_compare_text(title: str, data: dict) -> str:
+    return "\n".join([paragraph(f"{title}: the Lagrangian chain on TQ against the "
+                                 f"Dirac-Bergmann chain through Leg"),
+                       _lagrangian_side_text(data["lagrangian_side"])])
+
+
+def _lagrangian_side_text(side: dict) -> str:
+    """The chain on TQ and its comparison through Leg, a few lines."""
+    if side["why_not"]:
+        return paragraph(f"not compared: the chain on TQ did not run: {side['why_not']}")
+    into = all(d["value"] for d in side["into"])
+    onto = all(r == side["expected_rank"] for r in side["ranks"])
+    rows = [("status", f"{side['lagrangian_status']}, dim M_f = {side['lagrangian_dimension']}"
+             + (f", free accelerations {', '.join(side['free_accelerations'])}"
+                if side["free_accelerations"] else ""))]
+    rows += [(c["label"], c["constraint"]) for c in side["lagrangian_constraints"]]
+    rows += [("Leg(M_f^L) in M_f^H", "yes" if into else "no"),
+             ("onto (rank of Leg)", f"{'yes' if onto else 'no'} ({side['expected_rank']} "
+              f"at {side['points']} points)"),
+             ("motions correspond", f"{'yes' if side['agree'] else 'no'} (residual "
+              f"{side['motion_residual']:.1e})")]
+    return "Lagrangian side (TQ, q' = v built in):\n" + table(rows)
+
+
 def _dof_text(data: dict) -> str:
     if data["degrees_of_freedom"] is not None:
         return str(data["degrees_of_freedom"])
@@ -296,9 +366,39 @@ def singular_derive_data(db) -> dict:
     }
 
 
+def singular_lagrangian_derive_data(run, system) -> dict:
+    """``nhham derive`` (on TQ) of a singular Lagrangian: the motion of the chain on TQ
+    (q' = v, v' = a with the accelerations it fixed, the free ones as symbols), the
+    multipliers, E_L and the final constraints (the Lagrangian ones among them)."""
+    v = system.velocities
+
+    def shown(c):
+        return expr_text(display_form(c, v))
+
+    fixed = dict(run.multipliers)
+    energy = sum((s * sp.diff(system.lagrangian, s) for s in v), sp.S.Zero) - system.lagrangian
+    return {
+        "side": "lagrangian", "form": "explicit",
+        "state": [s.name for s in run.variables],
+        "field": [shown(f) for f in run.dynamics],
+        "multipliers": [shown(fixed.get(s, s)) for s in run.multiplier_symbols],
+        "multiplier_symbols": [s.name for s in run.multiplier_symbols],
+        "free_multiplier_symbols": [s.name for s in run.free_multiplier_symbols],
+        "constraint_matrix": None, "energy": shown(sp.expand(energy)), "energy_name": "E_L",
+        "final_constraints": [shown(c) for c in run.final_constraints],
+        "status": run.status, "mass_matrix": None, "forcing": None,
+        "constraint_jacobian": None, "constraint_rhs": None, "contact_forces": None,
+    }
+
+
 def singular_derive_text(title: str, data: dict) -> str:
-    lines = [paragraph(f"{title}: the Hamiltonian motion of a singular Lagrangian on M_f "
-                       f"(z' = {{z, H_T}}, the multipliers the chain fixed put in)")]
+    if data["side"] == "lagrangian":
+        what = ("the motion on TQ of a singular Lagrangian on M_f (q' = v, the "
+                "accelerations the chain on TQ fixed put in)")
+    else:
+        what = ("the Hamiltonian motion of a singular Lagrangian on M_f (z' = {z, H_T}, "
+                "the multipliers the chain fixed put in)")
+    lines = [paragraph(f"{title}: {what}")]
     lines.append(table([(f"{n}'", "=", t) for n, t in zip(data["state"], data["field"])]))
     rows = [(s, "=", v) for s, v in zip(data["multiplier_symbols"], data["multipliers"])
             if s != v]
@@ -307,10 +407,13 @@ def singular_derive_text(title: str, data: dict) -> str:
         lines.append(table(rows))
     if data["free_multiplier_symbols"]:
         lines.append("free multipliers (gauge): " + ", ".join(data["free_multiplier_symbols"]))
-    lines.append(labelled("canonical Hamiltonian H_c", data["energy"]))
-    lines.append(labelled("total Hamiltonian H_T", data["total_hamiltonian"]))
+    if data["side"] == "lagrangian":
+        lines.append(labelled("energy E_L", data["energy"]))
+    else:
+        lines.append(labelled("canonical Hamiltonian H_c", data["energy"]))
+        lines.append(labelled("total Hamiltonian H_T", data["total_hamiltonian"]))
     lines.append("final constraints: " + ", ".join(f"{c} = 0" for c in data["final_constraints"]))
-    dirac = data["dirac_bracket"]
+    dirac = data.get("dirac_bracket")
     if dirac:
         z, M = dirac["coordinates"], dirac["matrix"]
         lines.append("Dirac bracket {z_i, z_j}_D (nonzero entries, i < j):")
@@ -323,13 +426,22 @@ def singular_derive_text(title: str, data: dict) -> str:
 def singular_derive_latex(data: dict, parse) -> str:
     """z' = ..., the multipliers, H_c and H_T."""
     rows = []
-    for name, f in zip(data["state"], data["field"]):
-        head = (rf"\dot{{p}}_{{{tex.name_latex(name[2:])}}}" if name.startswith("p_")
-                else rf"\dot{{{tex.name_latex(name)}}}")
+    half = len(data["state"]) // 2
+    pairs = list(zip(data["state"], data["field"]))
+    for name, f in (pairs[half:] if data["side"] == "lagrangian" else pairs):
+        if data["side"] == "lagrangian":  # q' = v is implied: the accelerations
+            head = tex.name_latex(name[:-4] + "_ddot")
+        elif name.startswith("p_"):
+            head = rf"\dot{{p}}_{{{tex.name_latex(name[2:])}}}"
+        else:
+            head = rf"\dot{{{tex.name_latex(name)}}}"
         rows.append((head, tex.latex(parse(f))))
     for s, v in zip(data["multiplier_symbols"], data["multipliers"]):
         if s != v:
             rows.append((tex.name_latex(s), tex.latex(parse(v))))
-    rows.append(("H_c", tex.latex(parse(data["energy"]))))
-    rows.append(("H_T", tex.latex(parse(data["total_hamiltonian"]))))
+    if data["side"] == "lagrangian":
+        rows.append(("E_L", tex.latex(parse(data["energy"]))))
+    else:
+        rows.append(("H_c", tex.latex(parse(data["energy"]))))
+        rows.append(("H_T", tex.latex(parse(data["total_hamiltonian"]))))
     return tex.aligned(rows)

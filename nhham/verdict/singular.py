@@ -128,7 +128,7 @@ def exceptional_factors(db) -> list:
     for stage in db.run.stages:
         rows, cols = stage.block
         if rows:
-            A, _ = db.rows(rows)
+            A, _ = db.run.rows(rows)
             index = [db.multipliers.index(s) for s in cols]
             add(A.extract(list(range(A.rows)), index).det(method="berkowitz"),
                 f"the rank of generation {stage.index}'s brackets drops")
