@@ -58,7 +58,7 @@ def lagrangian_chain(system, *, policy: Policy | None = None,
     >>> from nhham.lagrangian.singular import lagrangian_chain
     >>> run = lagrangian_chain(System(["x", "y"], "2*x*y_dot - (x**2 + y**2)/2"))
     >>> run.status, run.final_constraints[:2], run.dimension
-    ('determined', (-x + 2*y_dot, -2*x_dot - y), 2)
+    ('determined', (x - 2*y_dot, 2*x_dot + y), 2)
     """
     from nhham.lagrangian.algorithm import run_algorithm
 

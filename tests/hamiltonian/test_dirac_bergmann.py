@@ -259,3 +259,29 @@ def test_a_square_root_lagrangian_with_a_potential():
     p0, p1, x0 = S("p_x0"), S("p_x1"), S("x0")
     same_up_to_sign(db.image.constraints, [(p1 - 2 * x0)**2 - p0**2 + 1])
     assert (db.first_class, db.second_class, db.degrees_of_freedom) == (1, 0, 1)
+
+
+def test_the_equivalence_check_fails_for_another_lagrangian():
+    # The Landau level's chain on T*Q (k = 1) against the chain on TQ of k = 3: the drift
+    # velocities differ (x' = -k y/B), so Leg(M_f^L) is not in M_f^H.
+    import dataclasses
+
+    from nhham.hamiltonian.equivalence import equivalence
+
+    db = dirac_bergmann(System(["x", "y"], "2*x*y_dot - (x**2 + y**2)/2"))
+    assert equivalence(db).agree
+    other = System(["x", "y"], "2*x*y_dot - 3*(x**2 + y**2)/2")
+    planted = equivalence(dataclasses.replace(db, system=other))
+    assert not planted.agree
+
+
+def test_the_lagrangian_chain_finds_the_second_order_constraints():
+    # L = B x y' - V: W = 0, so the Euler-Lagrange equations are the constraints
+    # B y' - V_x = 0 and -B x' - V_y = 0 (x' = -V_y/B, y' = V_x/B), which the chain on
+    # T*Q does not have (there they are conditions on the multipliers).
+    from nhham.lagrangian.singular import lagrangian_chain
+
+    run = lagrangian_chain(System(["x", "y"], "2*x*y_dot - (x**2 + y**2)/2"))
+    x, y, vx, vy = S("x"), S("y"), S("x_dot"), S("y_dot")
+    same_up_to_sign(run.final_constraints, [2 * vy - x, -2 * vx - y])
+    assert run.status == "determined" and run.dimension == 2
