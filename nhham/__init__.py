@@ -81,6 +81,10 @@ _LAZY = by_module({
     "hamiltonian.classes": ("ConstraintClasses",),
     "hamiltonian.dirac": ("dirac_bracket", "dirac_vs_projected"),
     "hamiltonian.crosscheck": ("cross_check",),
+    # singular Lagrangians: the Dirac-Bergmann chain and the chain on TQ
+    "hamiltonian.primary": ("legendre_image", "LegendreImage"),
+    "hamiltonian.dirac_bergmann": ("dirac_bergmann", "DiracBergmann"),
+    "lagrangian.singular": ("lagrangian_chain",),
     "hamiltonian.checks": ("CrossCheckReport",),
     # numbers
     "numerics.codegen": ("numeric_model",),
