@@ -27,7 +27,10 @@ print("""# SU(2) Yang-Mills mechanics: the gauge field constant in space (12 coo
 # secondaries Gauss's law G^a = eps_abc A_i^b p_Ai^c = 0 (the colour rotations of the
 # A_i); all six first class (the G^a close among themselves), 12 - 6 = 6 degrees of
 # freedom; three gauge generators eps_a_dot p_Ba + eps_a (G^a + g eps_abc B^b p_Bc), the
-# last term the non-abelian one.""")
+# last term the non-abelian one.
+# nhham compare: the chain on TQ (q' = v built in) ends on a manifold of dimension 21,
+# which Leg maps onto the final one of T*Q (dimension 18), motions included.
+# simulate, linearize, bench, sweep, reduce, hamiltonize: refused (exit 2).""")
 print('name = "SU(2) Yang-Mills mechanics (homogeneous fields)"')
 print("coordinates = [" + ", ".join(f'"{c}"' for c in coords) + "]")
 print(f'lagrangian = "{sp.expand(L)}"')

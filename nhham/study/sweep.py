@@ -360,6 +360,9 @@ def _load(text, source, what, fixed=()):
         raise InputError(str(exc).replace("values: ", "--set: ", 1), key="--set") from None
     if what == "simulate" and scene.initial_problem is not None:
         raise scene.initial_problem
+    # a study's verdicts come from the regular machinery (a point where W is singular is
+    # the chain's answer there; a scene singular throughout is refused)
+    scene.system.require_regular_lagrangian("nhham sweep")
     return scene
 
 

@@ -90,7 +90,7 @@ def test_parametric_finds_the_massless_case(schema):
     assert r["scene_case"] is None
 
 
-@pytest.mark.parametrize("command", ["simulate", "linearize", "bench", "reduce"])
+@pytest.mark.parametrize("command", ["simulate", "linearize", "bench", "reduce", "hamiltonize"])
 def test_other_commands_refuse_a_singular_scene_in_one_line(command):
     rc, out, err = run(command, str(GALLERY / "landau_level.toml"))
     assert rc == 2
@@ -149,3 +149,9 @@ def test_compare_says_when_the_tq_chain_cannot_run():
     # the square-root Lagrangian is not defined at most points of TQ (spacelike velocities)
     rc, _, err = run("compare", str(GALLERY / "relativistic_particle.toml"))
     assert rc == 3 and "not compared" in err
+
+
+def test_a_study_of_a_singular_scene_is_refused(tmp_path):
+    rc, _, err = run("sweep", str(GALLERY / "landau_level.toml"), "--what", "classify",
+                     "--over", "B=1:2:3", "--out", str(tmp_path / "s.zarr"))
+    assert rc == 2 and "nhham sweep needs W invertible" in err
