@@ -379,6 +379,11 @@ class DiracBergmann:
         out = list(self.run.warnings)
         if self.classes is not None:
             out += list(self.classes.warnings)
+        if self.image.rank_drops:
+            where = ", ".join(f"{f} = 0" for f in self.image.rank_drops)
+            out.insert(0, f"rank W is {self.image.rank} generically and may drop where "
+                          f"{where}: the primary constraints differ there, the answer is the "
+                          f"generic rank's")
         for lab, given, regular in self.replaced:
             out.append(f"{lab}: {given} = 0 is irregular (its gradient vanishes where it "
                        f"holds); the chain used {regular} = 0, the same zero set, and counts "

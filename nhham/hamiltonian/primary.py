@@ -47,6 +47,10 @@ class LegendreImage:
         H_c(q, p), defined on the primary surface.
     block : tuple of tuple of int
         (I, J): the rows and columns of the regular block of W that H_c was formed with.
+    rank_drops : tuple of sympy.Expr
+        The factors of det W_IJ that are not constant: where one vanishes, rank W may be
+        below ``rank`` (the primary constraints differ there; the chain answers for the
+        generic rank, and a factor of the parameters alone is a case of ``--parametric``).
 
     Examples
     --------
@@ -70,6 +74,7 @@ class LegendreImage:
     constraints: tuple
     canonical_hamiltonian: sp.Expr
     block: tuple
+    rank_drops: tuple = ()
 
 
 def legendre_image(system) -> LegendreImage:
@@ -123,9 +128,13 @@ def legendre_image(system) -> LegendreImage:
             vstar[v[c]] = cancel(sol[j])
     energy = sum((s * sp.diff(L, s) for s in v), sp.S.Zero) - L
     Hc = cancel(sp.expand(energy.xreplace(vstar)))
+    drops: tuple = ()
+    if rank:
+        det = sp.numer(sp.together(cancel(W.extract(rows, cols).det(method="berkowitz"))))
+        drops = tuple(f for f, _ in sp.factor_list(det)[1] if f.free_symbols)
     return LegendreImage(coordinates=q, momenta=p, rank=rank, null_vectors=vectors,
                          constraints=phis, canonical_hamiltonian=Hc,
-                         block=(tuple(rows), tuple(cols)))
+                         block=(tuple(rows), tuple(cols)), rank_drops=drops)
 
 
 def _eliminated(system, q, v, p) -> LegendreImage:

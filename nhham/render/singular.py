@@ -73,7 +73,8 @@ def singular_data(db) -> dict:
         "inconsistency": run.inconsistency,
         "lagrangian_rank": {"rank": int(image.rank), "n": int(db.n),
                             "null_vectors": [[expr_text(e) for e in k]
-                                             for k in image.null_vectors]},
+                                             for k in image.null_vectors],
+                            "drops_where": [expr_text(f) for f in image.rank_drops]},
         "hamiltonian": {"canonical": shown(image.canonical_hamiltonian),
                         "total": expr_text(db.total_hamiltonian),
                         "multipliers": [s.name for s in db.multipliers]},

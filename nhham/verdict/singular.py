@@ -8,7 +8,8 @@ answer may change where that function vanishes; those functions are
   ({chi_j, phi_a}) (the rank that fixed the multipliers),
 * the parameter factors of the content of each consistency condition and new constraint
   (where it degenerates: to a constant, or to nothing),
-* the parameter factors of det B_RR, the maximal second-class block on M_f.
+* the parameter factors of det B_RR, the maximal second-class block on M_f,
+* the parameter factors of det W_IJ (rank W drops).
 
 Each factor f = 0 is solved for one parameter; the chain runs again there (to a depth
 bound), and a case is kept where its answer (status, generations, classes, degrees of
@@ -125,6 +126,8 @@ def exceptional_factors(db) -> list:
         coeffs = [c for c in poly.coeffs()]
         add(sp.gcd_list(coeffs) if len(coeffs) > 1 else coeffs[0], reason)
 
+    for f in db.image.rank_drops:
+        add(f, "rank W drops")
     for stage in db.run.stages:
         rows, cols = stage.block
         if rows:

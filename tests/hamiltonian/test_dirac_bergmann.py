@@ -285,3 +285,20 @@ def test_the_lagrangian_chain_finds_the_second_order_constraints():
     x, y, vx, vy = S("x"), S("y"), S("x_dot"), S("y_dot")
     same_up_to_sign(run.final_constraints, [2 * vy - x, -2 * vx - y])
     assert run.status == "determined" and run.dimension == 2
+
+
+def test_where_rank_w_drops_is_said_and_a_parameter_makes_a_case():
+    # W = diag(x^2, 1, 0): rank 2, and 1 where x = 0 (said). W = diag(c, 1, 0): c = 0 is a
+    # case: L = y'^2/2 - z y, p_x and p_z primary; p_z -> y -> p_y -> z second class,
+    # p_x first class: dof (6 - 2 - 4)/2 = 0.
+    from nhham.verdict.singular import singular_parametric
+
+    db = dirac_bergmann(System(["x", "y", "z"], "x**2*x_dot**2/2 + y_dot**2/2 - z*y"))
+    assert db.image.rank_drops == (S("x"),)
+    assert any("may drop where x = 0" in w for w in db.warnings)
+    pv = singular_parametric(System(["x", "y", "z"], "c*x_dot**2/2 + y_dot**2/2 - z*y",
+                                    parameters={"c": 1.0}))
+    assert (pv.generic.first_class, pv.generic.second_class) == (0, 4)
+    [(conditions, chain)] = [(c.conditions, c.chain) for c in pv.cases]
+    assert conditions == (S("c"),)
+    assert (chain.first_class, chain.second_class, chain.degrees_of_freedom) == (1, 4, 0)
