@@ -84,6 +84,7 @@ _LAZY = by_module({
     # singular Lagrangians: the Dirac-Bergmann chain and the chain on TQ
     "hamiltonian.primary": ("legendre_image", "LegendreImage"),
     "hamiltonian.dirac_bergmann": ("dirac_bergmann", "DiracBergmann"),
+    "hamiltonian.phase_motion": ("phase_motion", "PhaseMotion"),
     "lagrangian.singular": ("lagrangian_chain",),
     "hamiltonian.checks": ("CrossCheckReport",),
     # numbers

@@ -30,7 +30,8 @@ print("""# SU(2) Yang-Mills mechanics: the gauge field constant in space (12 coo
 # last term the non-abelian one.
 # nhham compare: the chain on TQ (q' = v built in) ends on a manifold of dimension 21,
 # which Leg maps onto the final one of T*Q (dimension 18), motions included.
-# simulate, linearize, bench, sweep, reduce, hamiltonize: refused (exit 2).""")
+# simulate and linearize: refused naming the free multipliers u_1..u_3 (no [gauge]);
+# bench, sweep, reduce, hamiltonize: refused (exit 2).""")
 print('name = "SU(2) Yang-Mills mechanics (homogeneous fields)"')
 print("coordinates = [" + ", ".join(f'"{c}"' for c in coords) + "]")
 print(f'lagrangian = "{sp.expand(L)}"')

@@ -99,7 +99,7 @@ def cmd_linearize(args, steps):
     from nhham.journeys.stability import linearize
 
     with steps.step(f"load scene {args.scene}"):
-        scene = load_for(args, check_initial=False)  # [steady], not [initial]
+        scene = load_for(args, check_initial=False, singular=True)  # [steady], not [initial]
     args.loaded_scene = scene  # the envelope of a later failure names the scene
     sweep = parse_sweep(args.sweep) if args.sweep else None
     if args.plot and sweep is None:

@@ -197,18 +197,26 @@ def cmd_simulate(args, steps) -> CommandOutput:
     """Integrate the constrained dynamics from the scene's initial data."""
     from nhham.journeys.simulation import simulate
 
-    scene = _load(args, steps)
+    scene = _load(args, steps, singular=True)   # a singular L: the motion on M_f
     t_end, opts = _simulate_options(args, scene)
+    if not scene.system.regular_lagrangian:
+        for flag, given in (("--output", args.output), ("--plot", args.plot),
+                            ("--project-initial", args.project_initial),
+                            ("--control", _control_laws(args))):
+            if given:
+                raise UsageError(f"{flag}: not built for a singular Lagrangian's run (its "
+                                 f"state is (q, p) on M_f; --json has the final state)",
+                                 key=flag)
     answer = simulate(scene, t_end=t_end, options=opts, project_initial=args.project_initial,
                       control=_control_laws(args), steps=steps)
     data = answer.to_dict()
     data["output"] = None
     data["plot"] = None
-    result = answer.payload["result"]
-    if args.output:
+    result = answer.payload.get("result")   # None for a singular L (refused above)
+    if args.output and result is not None:
         with steps.step(f"write {args.output}"):
             data["output"] = str(result.save(args.output))
-    if args.plot:
+    if args.plot and result is not None:
         from nhham.render.plotting import plot_trajectory, save_figure
 
         with steps.step(f"plot {args.plot}"):
@@ -217,7 +225,8 @@ def cmd_simulate(args, steps) -> CommandOutput:
     from nhham.numerics.status import Status
 
     # a Ctrl-C stopped the run: what it computed is printed and written, then exit 130
-    kind = "interrupted" if result.status == Status.INTERRUPTED else "failed"
+    kind = ("interrupted" if result is not None and result.status == Status.INTERRUPTED
+            else "failed")
     return CommandOutput(result=data, text=answer.render, scene=scene_info(scene),
                          warnings=list(answer.warnings), failure=answer.failure,
                          failure_kind=kind)

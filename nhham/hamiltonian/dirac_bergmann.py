@@ -113,6 +113,9 @@ class DiracBergmann:
         (label, given, regular equivalent) for each holonomic constraint given as an
         irregular equation (x**2: its gradient vanishes where it holds), replaced by one
         with the same zero set and a nonzero gradient (x) before the chain ran.
+    gauge : tuple of sympy.Expr
+        Gauge conditions chi(q) = 0 (``gauge[i]``) that joined M_1 to fix the free
+        multipliers (no multiplier of their own); () for the chain of the Lagrangian alone.
 
     Examples
     --------
@@ -140,6 +143,7 @@ class DiracBergmann:
     replaced: tuple = ()
     functions: tuple = ()
     conditions: tuple = ()
+    gauge: tuple = ()
 
     # ------------------------------------------------------------------ chain
     @property
@@ -443,12 +447,16 @@ def with_parameters(system, sub=None, symbolic=()):
 def at_parameter_values(system):
     """``system`` with its parameter values put in exactly (as rationals: 9.81 -> 981/100);
     parameters without a value stay symbols. The system itself when none has a value."""
-    return with_parameters(system, {s: sp.Rational(repr(float(v)))
-                                    for s, v in system.parameter_values.items()})
+    return with_parameters(system, _exact_values(system))
+
+
+def _exact_values(system) -> dict:
+    """{parameter: its value as a rational} (9.81 -> 981/100)."""
+    return {s: sp.Rational(repr(float(v))) for s, v in system.parameter_values.items()}
 
 
 def dirac_bergmann(system, *, policy: Policy | None = None,
-                   max_generations: int | None = None) -> DiracBergmann:
+                   max_generations: int | None = None, gauge=()) -> DiracBergmann:
     """Run the Dirac–Bergmann chain of ``system``'s singular Lagrangian at its values.
 
     Parameters
@@ -459,6 +467,10 @@ def dirac_bergmann(system, *, policy: Policy | None = None,
         The settings of every decision.
     max_generations : int, optional
         Bound on the generations (default 2n).
+    gauge : sequence of sympy.Expr, optional
+        Gauge conditions chi(q) = 0 in the coordinates and parameters (a scene's
+        ``[gauge]``): they join M_1 as ``gauge[i]`` without a multiplier, so their tangency
+        fixes free multipliers or adds constraints; a complete gauge leaves none free.
 
     Returns
     -------
@@ -509,9 +521,11 @@ def dirac_bergmann(system, *, policy: Policy | None = None,
             else [0] * n + [-e for e in mu[i - len(hol)]]
             for i, f in enumerate(functions)]
     fields = sp.Matrix(rows) if rows else sp.zeros(0, 2 * n)
+    gauge = tuple(sp.sympify(c).xreplace(_exact_values(system)) for c in gauge)
     labels = tuple(f"holonomic[{i}]" for i in range(len(hol))) + tuple(
-        f"primary[{a}]" for a in range(len(image.constraints)))
-    multiplied = tuple(f for f in functions if f is not None)
+        f"primary[{a}]" for a in range(len(image.constraints))) + tuple(
+        f"gauge[{i}]" for i in range(len(gauge)))
+    multiplied = tuple(f for f in functions if f is not None) + gauge
     # v = dH_T/dp: the velocity constraints are conditions on the motion, affine in u
     HT = image.canonical_hamiltonian + sum(
         (s * f for s, f in zip(symbols, functions) if f is not None), sp.S.Zero)
@@ -530,7 +544,7 @@ def dirac_bergmann(system, *, policy: Policy | None = None,
                         field_conditions=conditions)
     return DiracBergmann(system=at, image=image, run=run, multipliers=symbols, policy=policy,
                          replaced=replaced, base_field=base, vertical_fields=fields,
-                         functions=functions, conditions=conditions)
+                         functions=functions, conditions=conditions, gauge=gauge)
 
 
 def _refuse_unbuilt(system) -> None:

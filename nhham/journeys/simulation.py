@@ -20,6 +20,9 @@ def simulate(scene, *, t_end: float | None = None, options: Mapping | None = Non
              initial: Mapping | None = None, steps=None) -> Answer:
     """A run of the scene's constrained dynamics (``nhham simulate``).
 
+    A singular Lagrangian runs the motion of its Dirac-Bergmann chain on M_f in T*Q
+    (:func:`~nhham.journeys.singular_motion.simulate_singular`).
+
     Parameters
     ----------
     scene : Scene or str
@@ -72,6 +75,14 @@ def simulate(scene, *, t_end: float | None = None, options: Mapping | None = Non
 
     scene = as_scene(scene, initial=initial, check_initial=False)
     steps = quiet_steps(steps)
+    if not scene.system.regular_lagrangian:   # the chain's motion on M_f in T*Q
+        from nhham.journeys.singular_motion import simulate_singular
+
+        if project_initial or control:
+            raise InputError(f"{'project_initial' if project_initial else 'control'}: not "
+                             f"built for a singular Lagrangian (its state is on M_f in T*Q)",
+                             key="--project-initial" if project_initial else "--control")
+        return simulate_singular(scene, t_end=t_end, options=options, steps=steps)
     opts = dict(options or {})
     y0, solved = initial_state(scene, project_initial, steps)
     t_end = float(t_end if t_end is not None else (scene.simulate.t_end or 10.0))

@@ -113,6 +113,15 @@ def linearize(scene, *args, method: str = "auto", sweep=None, model=None, steps=
         return at_state(scene, *args, **kwargs)
     scene = as_scene(scene, steady=steady, check_initial=False)
     steps = quiet_steps(steps)
+    if not scene.system.regular_lagrangian:   # the chain's motion on M_f in T*Q
+        from nhham.journeys.singular_motion import linearize_singular
+
+        if sweep is not None or method == "complex-step" or model is not None:
+            what = ("sweep" if sweep is not None else "model" if model is not None
+                    else "method")
+            raise InputError(f"{what}: not built for a singular Lagrangian (linearize takes "
+                             f"its equilibrium on M_f, exactly)", key=what)
+        return linearize_singular(scene, steps=steps)
     if method not in METHODS:
         raise InputError(f"linearize: method {method!r} is not one of {', '.join(METHODS)}",
                          key="method")

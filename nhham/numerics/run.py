@@ -159,8 +159,8 @@ def report_progress(t, t0, t1, reported):
     return max(reported, tenths)
 
 
-def final_state_text(state) -> str:
-    """``final state: x = ..., y = ...`` packed into lines of the terminal's width (COLUMNS
+def final_state_text(state, label: str = "final state") -> str:
+    """``<label>: x = ..., y = ...`` packed into lines of the terminal's width (COLUMNS
     first), a value never split from its name.
 
     Examples
@@ -171,7 +171,7 @@ def final_state_text(state) -> str:
     import shutil
 
     room = max(60, shutil.get_terminal_size((100, 24)).columns)
-    head = "  final state: "
+    head = f"  {label}: "
     items = [f"{k} = {v:.10g}" for k, v in state.items()]
     lines, line = [], head
     for i, item in enumerate(items):

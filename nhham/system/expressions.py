@@ -135,7 +135,7 @@ def parse_expression(text: str, symbols: Mapping[str, sp.Symbol] | Iterable,
         The expression, in Python syntax restricted to numbers, names,
         ``+ - * / **``, unary signs and calls of :data:`FUNCTIONS`. Line
         breaks count as spaces, so a long expression may span several lines.
-    symbols : mapping of str to sympy.Symbol, or iterable of names or Symbols
+    symbols : mapping of str to sympy.Symbol, or iterable of str or sympy.Symbol
         The symbol table: every name the expression may use besides the
         functions and ``pi`` (a list of names makes plain real-unassumed
         symbols; Symbols keep their assumptions). Python keywords (``lambda``)

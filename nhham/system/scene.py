@@ -167,9 +167,11 @@ class Scene:
     symmetry : nhham.system.symmetry.Symmetry or None
         The ``[symmetry]`` generator xi (its invariance is checked where it is used:
         ``nhham linearize``), or None.
+    gauge : tuple of sympy.Expr
+        The ``[gauge]`` conditions chi(q) = 0 of a singular Lagrangian (() without one).
 
     A table that only some commands read (``[initial]``, ``[simulate]``, ``[steady]``,
-    ``[symmetry]``, ``[contacts]``, ``[control]``) and that has problems is an
+    ``[symmetry]``, ``[contacts]``, ``[control]``, ``[gauge]``) and that has problems is an
     :class:`UnreadTable` here: the problems are raised when it is read.
 
     Examples
@@ -207,6 +209,7 @@ class Scene:
     initial_problem: Exception | None = None
     values_set: Mapping = field(default_factory=lambda: MappingProxyType({}))
     symmetry: object = None
+    gauge: object = ()
 
     def checked_initial(self, project: bool = False) -> Mapping:
         """The initial state, completed and checked against the constraints.
@@ -442,6 +445,7 @@ def loads_scene(text: str, source: str = "<string>", *, check_initial: bool = Tr
         initial_problem=problem,
         values_set=MappingProxyType(dict(values or {})),
         symmetry=table("symmetry", "[symmetry]"),
+        gauge=table("gauge", "[gauge]", ()),
     )
     if check_initial and given is not None:
         scene.checked_initial()
@@ -539,6 +543,17 @@ def _parse_expressions(spec: SceneSpec) -> tuple[dict, dict]:
     problems.extend(steady_problems)
     if steady is not None:
         parsed["[steady]"] = steady
+    if spec.gauge is not None:
+        gauge_table = {q: sp.Symbol(q) for q in spec.coordinates}
+        gauge_table.update({p: sp.Symbol(p) for p in spec.parameters})
+        conditions = []
+        for i, text in enumerate(spec.gauge):
+            try:
+                conditions.append(parse_expression(text, gauge_table,
+                                                   where=f"gauge.conditions[{i}]"))
+            except ParseError as exc:
+                problems.append(str(exc))
+        parsed["[gauge]"] = tuple(conditions)
     symmetry, symmetry_problems = parse_symmetry(spec.symmetry, spec.coordinates,
                                                  spec.parameters)
     problems.extend(symmetry_problems)

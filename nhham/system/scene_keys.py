@@ -156,6 +156,18 @@ SCENE_KEYS: tuple = (
              "and linearises a relative equilibrium about it.",
              expressions="coordinates, parameters", read_by=_STABILITY,
              example='[symmetry]\nx = "-y"\ny = "x"\ntheta = "1"'),
+    SceneKey("gauge", "table", "Gauge conditions of a singular Lagrangian whose "
+             "Dirac-Bergmann chain leaves multipliers free (first-class constraints): "
+             "``simulate`` and ``linearize`` add them to the chain, where they must fix every "
+             "multiplier; ``classify`` ignores them (the classes are the Lagrangian's).",
+             read_by=("simulate", "linearize"),
+             example='lagrangian = "((x_dot + theta*y)**2 + (y_dot - theta*x)**2)/2"\n'
+                     '[gauge]\nconditions = ["theta", "y"]'),
+    SceneKey("gauge.conditions", "array of expressions", "The conditions chi(q) = 0, "
+             "one string each.", expressions="coordinates, parameters",
+             read_by=("simulate", "linearize"),
+             example='lagrangian = "((x_dot + theta*y)**2 + (y_dot - theta*x)**2)/2"\n'
+                     '[gauge]\nconditions = ["theta", "y"]'),
     SceneKey("control", "table of input = expression", "Laws of the inputs, closing the "
              "loop that ``simulate`` integrates and ``linearize`` linearises (the open "
              "loop's (A, B) beside it).", expressions=_STATE_EXPRESSIONS,

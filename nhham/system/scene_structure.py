@@ -17,7 +17,7 @@ import unicodedata
 from dataclasses import dataclass, field, fields
 from types import MappingProxyType
 from functools import partial
-from typing import Mapping
+from typing import Any, Mapping
 
 import sympy as sp
 
@@ -137,6 +137,7 @@ class SceneSpec:
     inputs: tuple = ()
     control: Mapping | None = None
     symmetry: Mapping | None = None
+    gauge: tuple | None = None   # gauge conditions chi(q) = 0 of a singular L
     unread: Mapping = field(default_factory=dict)   # table -> its problems (READ_BY_COMMANDS)
 
 
@@ -180,18 +181,19 @@ def validate_structure(data: dict, source: str) -> SceneSpec:
     steady = steady_structure(data.get("steady"), coordinates, problems, inputs)
     contacts = contacts_structure(data.get("contacts"), problems)
     symmetry = symmetry_structure(data.get("symmetry"), coordinates, problems)
+    gauge = _gauge_table(data.get("gauge"), problems)
     problems, unread = split_unread(problems)
     if problems:
         raise scene_error(source, problems)
     if "initial" in unread:
         initial = None
-    tables = dict(simulate=simulate, steady=steady, contacts=contacts, control=control,
-                  symmetry=symmetry)
+    tables: dict[str, Any] = dict(simulate=simulate, steady=steady, contacts=contacts,
+                                  control=control, symmetry=symmetry, gauge=gauge)
     tables.update({t: ({} if t == "simulate" else None) for t in unread if t in tables})
     return SceneSpec(source, name, description, tuple(coordinates), parameters, lagrangian,
                      tuple(constraints), tuple(holonomic), initial, tables["simulate"] or {},
                      tables["steady"], tables["contacts"], forces, dissipation,
-                     tuple(inputs), tables["control"], tables["symmetry"],
+                     tuple(inputs), tables["control"], tables["symmetry"], tables["gauge"],
                      MappingProxyType(unread))
 
 
@@ -247,6 +249,27 @@ def _optional_string(data, key, problems) -> str:
         problems.append(f"{key}: expected a string, got {type_name(value)}")
         return ""
     return value
+
+
+def _gauge_table(value, problems) -> tuple | None:
+    """A raw ``[gauge]`` table: ``conditions``, a non-empty array of expression strings
+    (None without a table)."""
+    if value is None:
+        return None
+    if not isinstance(value, dict):
+        problems.append("gauge: expected a table with conditions = [\"expression\", ...] "
+                        "(gauge conditions chi(q) = 0)")
+        return None
+    check_keys(value, "gauge", ("conditions",), {}, problems)
+    items = value.get("conditions")
+    if not isinstance(items, list) or not items:
+        problems.append("gauge.conditions: expected a non-empty array of expression strings "
+                        "(each a gauge condition chi(q) = 0)")
+        return None
+    for i, item in enumerate(items):
+        if not isinstance(item, str):
+            problems.append(f"gauge.conditions[{i}]: expected a string, got {type_name(item)}")
+    return tuple(items)
 
 
 def _string_list(data, key, problems) -> list[str]:

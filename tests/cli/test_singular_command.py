@@ -90,7 +90,7 @@ def test_parametric_finds_the_massless_case(schema):
     assert r["scene_case"] is None
 
 
-@pytest.mark.parametrize("command", ["simulate", "linearize", "bench", "reduce", "hamiltonize"])
+@pytest.mark.parametrize("command", ["bench", "reduce", "hamiltonize"])
 def test_other_commands_refuse_a_singular_scene_in_one_line(command):
     rc, out, err = run(command, str(GALLERY / "landau_level.toml"))
     assert rc == 2
@@ -155,3 +155,47 @@ def test_a_study_of_a_singular_scene_is_refused(tmp_path):
     rc, _, err = run("sweep", str(GALLERY / "landau_level.toml"), "--what", "classify",
                      "--over", "B=1:2:3", "--out", str(tmp_path / "s.zarr"))
     assert rc == 2 and "nhham sweep needs W invertible" in err
+
+
+#: scenes of the gallery with [initial] (simulate) and [steady] (linearize)
+RUNS = ["christ_lee.toml", "einbein_particle.toml", "gauge_shift.toml", "landau_level.toml",
+        "lc_circuit.toml", "pendulum_multiplier.toml", "proca_mode.toml"]
+STEADY = ["landau_level.toml", "lc_circuit.toml", "pendulum_multiplier.toml", "proca_mode.toml"]
+
+
+@pytest.mark.parametrize("name", RUNS)
+def test_simulate_runs_the_motion_on_m_f(name, schema):
+    rc, env, err = run("simulate", str(GALLERY / name), "--t-end", "1", "--json")
+    assert rc == 0, err
+    jsonschema.validate(env, schema)
+    r = env["result"]
+    n = env["scene"]["n"] if "n" in env["scene"] else len(r["state"]) // 2
+    assert len(r["state"]) == 2 * n and r["state"][n].startswith("p_")
+    assert r["success"] and r["constraint_residual_rel_max"] < 1e-8
+    assert r["energy_drift_rel"] < 1e-8 and r["kkt_solve"] is None
+
+
+@pytest.mark.parametrize("name", STEADY)
+def test_linearize_on_m_f(name, schema):
+    rc, env, err = run("linearize", str(GALLERY / name), "--json")
+    assert rc == 0, err
+    jsonschema.validate(env, schema)
+    r = env["result"]
+    assert r["stable"] is None and r["method"] == "exact"
+    assert len(r["matrix"]) == len(r["eigenvalues"]) == len(r["chart"])
+    rc, out, err = run("linearize", str(GALLERY / name))
+    assert rc == 0 and "linearisation on the final surface M_f" in out
+
+
+def test_simulate_text_and_what_a_singular_run_refuses():
+    rc, out, err = run("simulate", str(GALLERY / "christ_lee.toml"), "--t-end", "1")
+    assert rc == 0, err
+    assert "gauge xi; x2 = 0" in out and "final state: x1 = " in out
+    for argv, key in ((["--output", "run.npz"], "--output"), (["--method", "rk4"], "method"),
+                      (["--project-initial"], "--project-initial")):
+        rc, out, err = run("simulate", str(GALLERY / "landau_level.toml"), *argv)
+        assert rc == 2 and key in err and len(err.strip().splitlines()) == 1, err
+    rc, out, err = run("simulate", str(GALLERY / "relativistic_particle.toml"))
+    assert rc == 2 and "u_1 are free" in err and "[gauge]" in err
+    rc, out, err = run("linearize", str(GALLERY / "landau_level.toml"), "--sweep", "k=1:2:3")
+    assert rc == 2 and "sweep" in err and "Traceback" not in err

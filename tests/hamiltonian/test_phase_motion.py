@@ -1,0 +1,158 @@
+"""The motion of a singular Lagrangian on M_f, run and linearised (``simulate`` and
+``linearize`` of a singular scene), against closed forms and second formulations derived
+by hand: the Euler-Lagrange equations of the same system in other coordinates, integrated
+here with scipy on their own."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+
+from nhham import loads_scene
+from nhham.errors import InputError
+from nhham.journeys.singular_motion import linearize_singular, simulate_singular
+from tests.cli.conftest import EXAMPLES
+
+GALLERY = EXAMPLES / "singular"
+TIGHT = {"rtol": 1e-11, "atol": 1e-13}
+
+
+def scene(text, **kw):
+    return loads_scene(text, check_initial=False, **kw)
+
+
+def final(answer):
+    return dict(zip(answer.data["state"], answer.data["y_final"]))
+
+
+def imaginary_parts(answer):
+    return sorted(round(im, 10) + 0.0 for _, im in answer.data["eigenvalues"])
+
+
+def test_landau_level_rotates_at_k_over_b():
+    # y' = k x/B, x' = -k y/B: x = cos(k t/B), y = sin(k t/B) from (1, 0).
+    s = scene("""
+coordinates = ["x", "y"]
+parameters = { B = 3.0, k = 2.0 }
+lagrangian = "B*x*y_dot - k*(x**2 + y**2)/2"
+[initial]
+x = 1.0
+y = 0.0
+""")
+    answer = simulate_singular(s, t_end=1.7, options=TIGHT)
+    z = final(answer)
+    assert z["x"] == pytest.approx(math.cos(2 * 1.7 / 3), abs=1e-9)
+    assert z["y"] == pytest.approx(math.sin(2 * 1.7 / 3), abs=1e-9)
+    assert z["p_y"] == pytest.approx(3 * z["x"], abs=1e-9)          # on M_f: p_y = B x
+    assert answer.data["singular"]["second_class"] == 2
+    assert answer.data["energy_drift_rel"] < 1e-9
+
+
+def test_christ_lee_in_its_gauge_is_the_radial_oscillator():
+    # xi = 0, x2 = 0: x1'' = -k x1^3 (the potential k r^4/4), integrated here on its own.
+    answer = simulate_singular(scene((GALLERY / "christ_lee.toml").read_text()),
+                               t_end=2.0, options=TIGHT)
+    ref = solve_ivp(lambda t, y: [y[1], -y[0] ** 3], (0, 2.0), [1.0, 0.0], rtol=1e-12,
+                    atol=1e-14)
+    z = final(answer)
+    assert z["x1"] == pytest.approx(ref.y[0, -1], abs=1e-8)
+    assert z["p_x1"] == pytest.approx(ref.y[1, -1], abs=1e-8)
+    assert (z["x2"], z["xi"], z["p_x2"]) == (0.0, 0.0, 0.0)
+    s = answer.data["singular"]
+    assert s["gauge"] == ["xi", "x2"] and (s["first_class"], s["second_class"]) == (0, 4)
+
+
+def test_pendulum_with_its_multiplier_is_the_pendulum():
+    # theta'' = -g sin(theta) (x = sin theta, y = -cos theta); the tension solved on M_f
+    # from [initial]: lam = g y - v^2 = -g cos(0.3) at rest.
+    answer = simulate_singular(scene((GALLERY / "pendulum_multiplier.toml").read_text()),
+                               t_end=1.3, options=TIGHT)
+    g = 9.81
+    ref = solve_ivp(lambda t, y: [y[1], -g * math.sin(y[0])], (0, 1.3), [0.3, 0.0],
+                    rtol=1e-12, atol=1e-14)
+    theta, omega = ref.y[:, -1]
+    z = final(answer)
+    assert z["x"] == pytest.approx(math.sin(theta), abs=1e-8)
+    assert z["y"] == pytest.approx(-math.cos(theta), abs=1e-8)
+    assert z["lam"] == pytest.approx(g * z["y"] - omega ** 2, abs=1e-7)
+    assert any("lam = -9.37185" in w for w in answer.warnings)
+
+
+def test_proca_and_lc_loop_oscillate_at_their_frequencies():
+    # Proca: Az'' = -(m^2 + k^2) Az, Az = cos(sqrt(2) t); LC: q'' = -q/(ell C), cos(t/sqrt 2).
+    proca = final(simulate_singular(scene((GALLERY / "proca_mode.toml").read_text()),
+                                    t_end=2.0, options=TIGHT))
+    assert proca["Az"] == pytest.approx(math.cos(math.sqrt(2) * 2), abs=1e-9)
+    assert proca["A0"] == pytest.approx(proca["p_Az"], abs=1e-12)   # A0 = k p/m^2
+    lc = final(simulate_singular(scene((GALLERY / "lc_circuit.toml").read_text()),
+                                 t_end=2.0, options=TIGHT))
+    assert lc["qL"] == pytest.approx(math.cos(2 / math.sqrt(2)), abs=1e-9)
+    assert lc["qC"] == pytest.approx(lc["qL"], abs=1e-12)           # q_L - q_C conserved
+
+
+def test_einbein_in_proper_time_moves_on_a_line():
+    answer = simulate_singular(scene((GALLERY / "einbein_particle.toml").read_text()),
+                               t_end=2.0, options=TIGHT)
+    z = final(answer)
+    assert (z["x0"], z["x1"], z["e"]) == pytest.approx((2.5, 1.5, 1.0), abs=1e-12)
+    assert answer.data["singular"]["first_class"] == 1   # p^2 + m^2: its multiplier is e
+
+
+@pytest.mark.parametrize("name, expected", [
+    ("landau_level.toml", [-0.5, 0.5]),                     # k/B
+    ("pendulum_multiplier.toml", [-math.sqrt(9.81), math.sqrt(9.81)]),
+    ("proca_mode.toml", [-math.sqrt(2), math.sqrt(2)]),     # sqrt(m^2 + k^2)
+    ("lc_circuit.toml", [-math.sqrt(0.5), 0.0, math.sqrt(0.5)]),  # 1/sqrt(ell C), q_L - q_C
+])
+def test_linearize_gives_the_frequencies_by_hand(name, expected):
+    answer = linearize_singular(scene((GALLERY / name).read_text()))
+    assert imaginary_parts(answer) == pytest.approx(expected, abs=1e-9)
+    assert all(abs(re) < 1e-9 for re, _ in answer.data["eigenvalues"])
+    assert answer.data["singular"]["tangent_residual"] < 1e-12
+
+
+def test_a_state_off_the_final_surface_is_refused_naming_the_constraint():
+    text = (GALLERY / "pendulum_multiplier.toml").read_text().replace(
+        'x_dot = 0.0\ny_dot = 0.0\n\n# linearize', 'x_dot = 0.0\ny_dot = 0.0\nlam = 1.0\n\n'
+        '# linearize', 1)
+    with pytest.raises(InputError, match=r"initial: the state is not on the final surface "
+                                         r".*secondary\[\d\] ="):
+        simulate_singular(scene(text), t_end=1.0)
+
+
+def test_free_multipliers_are_refused_until_a_gauge_fixes_them():
+    with pytest.raises(InputError, match=r"gauge: the multipliers u_1 are free"):
+        simulate_singular(scene((GALLERY / "relativistic_particle.toml").read_text()
+                                + "[initial]\nx0 = 0.0\n"), t_end=1.0)
+    # x1 = 0 does not fix the einbein's reparametrisation: u_1 stays free, said so
+    text = (GALLERY / "einbein_particle.toml").read_text().replace(
+        'conditions = ["e - 1"]', 'conditions = ["x1"]')
+    with pytest.raises(InputError, match=r"gauge: the gauge conditions x1 leave u_1 free"):
+        simulate_singular(scene(text), t_end=1.0)
+
+
+def test_an_inconsistent_chain_and_a_method_that_needs_w():
+    with pytest.raises(InputError, match="inconsistent"):
+        simulate_singular(scene((GALLERY / "inconsistent_force.toml").read_text()
+                                + "[initial]\nx = 0.0\n"), t_end=1.0)
+    with pytest.raises(InputError, match=r"simulate.method: rattle .* DOP853"):
+        simulate_singular(scene((GALLERY / "landau_level.toml").read_text()), t_end=1.0,
+                          options={"method": "rattle", "step": 0.1})
+
+
+def test_a_steady_state_that_moves_is_not_linearised():
+    text = (GALLERY / "landau_level.toml").read_text().replace(
+        "[steady]\nx = 0.0", "[steady]\nx = 1.0", 1)
+    with pytest.raises(InputError, match=r"steady: not an equilibrium .*y' = 0.5"):
+        linearize_singular(scene(text))
+
+
+def test_the_tangent_chart_matrix_is_similar_to_the_tangent_one():
+    answer = linearize_singular(scene((GALLERY / "pendulum_multiplier.toml").read_text()))
+    lin = answer.payload["linearization"]
+    assert np.sort_complex(np.linalg.eigvals(lin.matrix)) == pytest.approx(
+        np.sort_complex(np.linalg.eigvals(lin.tangent_matrix)), abs=1e-9)
+    assert lin.chart == ("x", "p_x")   # y, lam, p_y, p_lam are functions of them on M_f
