@@ -57,6 +57,7 @@ class PhaseLinearization:
     dependent: tuple
     matrix: np.ndarray
     tangent_matrix: np.ndarray
+    jacobian: np.ndarray
     rank: int
     tangent_residual: float
 
@@ -185,7 +186,7 @@ class PhaseMotion:
         return PhaseLinearization(
             chart=tuple(names[i] for i in chart),
             dependent=tuple(nm for i, nm in enumerate(names) if i not in set(chart)),
-            matrix=A, tangent_matrix=A_T, rank=rank, tangent_residual=residual)
+            matrix=A, tangent_matrix=A_T, jacobian=J, rank=rank, tangent_residual=residual)
 
 
 def _chart(T, floor: float = 1e-3) -> list:

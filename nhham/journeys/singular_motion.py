@@ -235,7 +235,8 @@ def linearize_singular(scene, *, steps=None) -> Answer:
 
     (0: q_L - q_C is conserved by the current law, a line of equilibria.)
     """
-    from nhham.numerics.spectra import VERDICT_TEXT, spectra
+    from nhham.numerics.linearization import linearization_result
+    from nhham.numerics.spectra import spectra
     from nhham.render.singular_motion import singular_linearize_data, singular_linearize_text
 
     steps = quiet_steps(steps)
@@ -255,16 +256,29 @@ def linearize_singular(scene, *, steps=None) -> Answer:
                          f"linearize takes a singular Lagrangian at rest (its relative "
                          f"equilibria are not built)", key="steady")
     with steps.step("linearise on M_f (exact Jacobian)"):
-        lin = motion.linearization(z)
-        A = lin.tangent_matrix
-        ev, margins, tolerance, verdict = (x[0] for x in spectra(A[None]))
-    if lin.rank != (motion.chain.independent or 0):
-        warnings.append(f"steady: the final constraints have rank {lin.rank} there, "
+        phase = motion.linearization(z)
+        # eigenvalues of the orthonormal form (better conditioned than the chart's)
+        ev, margins, tol, _ = spectra(phase.tangent_matrix[None])
+        lin = linearization_result(
+            phase.matrix, phase.chart, "symbolic",
+            "float64, the exact Jacobian of the motion restricted to T M_f, LAPACK "
+            "eigenvalues", phase.chart, phase.jacobian, (), phase.dependent,
+            dict(zip(motion.names, (float(x) for x in z))),
+            dict(zip(motion.labels, (float(r) for r in motion.constraints(z)))),
+            float(np.max(np.abs(rate), initial=0.0)), tol=float(tol[0]),
+            eigenvalues=ev[0], margins=margins[0])
+    if phase.rank != (motion.chain.independent or 0):
+        warnings.append(f"steady: the final constraints have rank {phase.rank} there, "
                         f"{motion.chain.independent} on M_f generically: the point is "
                         f"singular on M_f and the linearisation may not describe it")
-    data = singular_linearize_data(motion, lin, z, rate, ev, margins, float(tolerance),
-                                   int(verdict), VERDICT_TEXT[int(verdict)])
+    if phase.tangent_residual > 1e-12:
+        warnings.append(f"steady: the motion is not tangent to M_f there (|J T - T A| = "
+                        f"{phase.tangent_residual:.1e} relative): the state matrix is not "
+                        f"trustworthy")
+    data = singular_linearize_data(scene, lin, motion, phase)
     title = scene.name or str(scene.source)
-    return Answer("linearize", data, functools.partial(singular_linearize_text, title, data),
-                  warnings=tuple(warnings), payload={"linearization": lin, "motion": motion},
+    return Answer("linearize", data,
+                  functools.partial(singular_linearize_text, title, scene, lin, data),
+                  warnings=tuple(warnings),
+                  payload={"linearization": lin, "phase": phase, "motion": motion},
                   system=scene.system)

@@ -31,8 +31,9 @@ def linearization_data(lin) -> dict:
     return data
 
 
-def linearize_text(title, scene, lin, swept, opened=None) -> str:
-    """The text report of ``nhham linearize``."""
+def linearize_text(title, scene, lin, swept, opened=None, rows_before=()) -> str:
+    """The text report of ``nhham linearize`` (``rows_before``: (name, text) rows put first
+    in its table: a singular L's phase space)."""
     from nhham.numerics.nullspace import describe_kkt_solve
     from nhham.render.text import paragraph, table
     from nhham.system.expressions import to_text
@@ -41,6 +42,7 @@ def linearize_text(title, scene, lin, swept, opened=None) -> str:
     lines = [paragraph(f"{title}: linearisation about the [steady] motion"
                        + (", the loop closed by its [control] laws" if closed else ""))]
     rows = [
+        *rows_before,
         ("method", lin.method),
         ("independent (chart)", ", ".join(lin.chart)),
         ("dependent", ", ".join(lin.dependent) or "none"),

@@ -95,73 +95,31 @@ def singular_simulate_text(title: str, data: dict) -> str:
     return "\n".join(lines)
 
 
-def singular_linearize_data(motion, lin, z, rate, eigenvalues, margins, tolerance: float,
-                            verdict: int, verdict_text: str) -> dict:
-    """The ``result`` of ``nhham linearize`` at the equilibrium z on M_f."""
-    names = motion.names
-    stable = {1: True, 0: False}.get(verdict)
-    return {
-        "coordinates": list(lin.chart),
-        "matrix": [[float(x) + 0.0 for x in row] for row in lin.matrix],
-        "eigenvalues": [[float(e.real) + 0.0, float(e.imag) + 0.0] for e in eigenvalues],
-        "margins": [float(m) for m in margins],
-        "stable": stable,
-        "spectrally_stable": bool(np.all(eigenvalues.real <= margins)),
-        "verdict": verdict_text,
-        "method": "exact",
-        "precision": "float64, exact Jacobian of the motion on M_f, LAPACK eigenvalues of "
-                     f"its restriction to T M_f; |Re| <= {tolerance:.1e} counts as 0",
-        "tolerance": tolerance,
-        "chart": list(lin.chart),
-        "neutral": [],
-        "dependent": list(lin.dependent),
-        "steady_state": {k: float(v) for k, v in zip(names, z)},
-        "residuals": {lab: float(r) for lab, r in zip(motion.labels, motion.constraints(z))},
-        "acceleration_residual": float(np.max(np.abs(rate), initial=0.0)),
-        "sweep": None,
-        "plot": None,
-        "loop": "open",
-        "control": {},
-        "open_loop": None,
-        "singular": dict(_singular(motion), tangent_residual=lin.tangent_residual,
-                         rank=lin.rank),
-    }
+def singular_linearize_data(scene, lin, motion, phase) -> dict:
+    """The ``result`` of ``nhham linearize`` at an equilibrium on M_f: ``lin`` (a
+    :class:`~nhham.numerics.linearization.Linearization` in the chart of phase
+    coordinates) as for a regular L, and ``singular``."""
+    from nhham.render.linearize import linearize_data
+
+    data = linearize_data(scene, lin, None, None)
+    for key in ("kkt_solve", "kkt_ratio"):   # no constrained accelerations are solved
+        data.pop(key, None)
+    data["singular"] = dict(_singular(motion), tangent_residual=phase.tangent_residual,
+                            rank=phase.rank)
+    return data
 
 
-def singular_linearize_text(title: str, data: dict) -> str:
-    """The text report of ``nhham linearize`` on a singular Lagrangian."""
-    from nhham.render.text import paragraph, table
+def singular_linearize_text(title: str, scene, lin, data: dict) -> str:
+    """The text report of ``nhham linearize`` on a singular Lagrangian: the regular one,
+    said to be on M_f in T*Q, with the gauge and the tangency check."""
+    from nhham.render.linearize import linearize_text
 
     s = data["singular"]
-    rows = [("state", "(q, p) on M_f in T*Q, " + ", ".join(
-                f"{k} = {v:.10g}" for k, v in data["steady_state"].items())),
-            ("independent (chart)", ", ".join(data["chart"]) or "none"),
-            ("dependent", ", ".join(data["dependent"]) or "none"),
-            ("verdict", data["verdict"]),
-            ("precision", data["precision"]),
-            ("tangency", f"|J T - T A| = {s['tangent_residual']:.1e} (the motion tangent to "
-                         f"M_f)")]
+    rows = [("phase space", "(q, p) on the final surface M_f of the Dirac-Bergmann chain")]
     if s["gauge"]:
-        rows.insert(1, ("gauge", "; ".join(s["gauge"]) + " = 0"))
-    lines = [paragraph(f"{title}: linearisation on the final surface M_f of the "
-                       f"Dirac-Bergmann chain"), table(rows)]
-    # rounding shown as 0 (as linearize does for a regular L): --json has the values
-    floor = 1e-14 * max([1.0] + [abs(x) for row in data["matrix"] for x in row])
-    hidden = False
-
-    def num(x, spec):
-        nonlocal hidden
-        hidden |= 0 < abs(x) <= floor
-        return format(0.0 if abs(x) <= floor else x, spec)
-
-    if data["matrix"]:
-        lines.append("state matrix:")
-        lines.append(table([[num(x, ".10g") for x in row] for row in data["matrix"]],
-                           header=data["coordinates"]))
-    lines.append("eigenvalues:")
-    lines.append(table([(num(re, ".12g"), num(im, "+.12g") + "i")
-                        for re, im in data["eigenvalues"]] or [("none",)]))
-    if hidden:
-        lines.append(f"  (values of magnitude <= {floor:.1e} are shown as 0: rounding; --json "
-                     f"has them as computed)")
-    return "\n".join(lines)
+        rows.append(("gauge", "; ".join(s["gauge"]) + " = 0"))
+    rows.append(("tangency", "the motion is tangent to M_f there (|J T - T A| <= 1e-12)"
+                 if s["tangent_residual"] <= 1e-12 else
+                 f"|J T - T A| = {s['tangent_residual']:.1e}: the motion is not tangent to "
+                 f"M_f there to rounding"))
+    return linearize_text(title, scene, lin, None, rows_before=rows)

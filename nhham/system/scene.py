@@ -419,7 +419,8 @@ def loads_scene(text: str, source: str = "<string>", *, check_initial: bool = Tr
     if "initial" in unread_tables:
         given = initial = unread_tables["initial"]
         problem = unread_tables["initial"].error
-    elif isinstance(given, InitialData):
+    elif isinstance(given, InitialData) and system.regular_lagrangian:
+        # a singular L's [initial] is completed on the chain's M_f, by simulate
         try:
             state, solved = complete_initial(system, given)
             initial = MappingProxyType(state)
@@ -447,7 +448,7 @@ def loads_scene(text: str, source: str = "<string>", *, check_initial: bool = Tr
         symmetry=table("symmetry", "[symmetry]"),
         gauge=table("gauge", "[gauge]", ()),
     )
-    if check_initial and given is not None:
+    if check_initial and given is not None and system.regular_lagrangian:
         scene.checked_initial()
     return scene
 

@@ -181,10 +181,10 @@ def test_linearize_on_m_f(name, schema):
     assert rc == 0, err
     jsonschema.validate(env, schema)
     r = env["result"]
-    assert r["stable"] is None and r["method"] == "exact"
+    assert r["stable"] is None and r["method"] == "symbolic"
     assert len(r["matrix"]) == len(r["eigenvalues"]) == len(r["chart"])
     rc, out, err = run("linearize", str(GALLERY / name))
-    assert rc == 0 and "linearisation on the final surface M_f" in out
+    assert rc == 0 and "(q, p) on the final surface M_f" in out
 
 
 def test_simulate_text_and_what_a_singular_run_refuses():

@@ -152,7 +152,11 @@ def test_a_steady_state_that_moves_is_not_linearised():
 
 def test_the_tangent_chart_matrix_is_similar_to_the_tangent_one():
     answer = linearize_singular(scene((GALLERY / "pendulum_multiplier.toml").read_text()))
-    lin = answer.payload["linearization"]
+    lin = answer.payload["phase"]
     assert np.sort_complex(np.linalg.eigvals(lin.matrix)) == pytest.approx(
         np.sort_complex(np.linalg.eigvals(lin.tangent_matrix)), abs=1e-9)
     assert lin.chart == ("x", "p_x")   # y, lam, p_y, p_lam are functions of them on M_f
+    # the reported eigenvalues are those of the orthonormal form
+    reported = [complex(*e) for e in answer.data["eigenvalues"]]
+    assert sorted(reported, key=lambda e: e.imag) == pytest.approx(
+        sorted(np.linalg.eigvals(lin.tangent_matrix), key=lambda e: e.imag), abs=1e-12)
