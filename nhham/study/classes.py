@@ -55,6 +55,8 @@ def prepare(scene, model, design, *, along=None, run_options=None, policy=None) 
             raise InputError(f"--over: {name!r} is not a parameter with a value in the scene "
                              f"(parameters: {', '.join(values) or 'none'})", key="--over")
     fixed = {sp.Symbol(k): exact_value(v) for k, v in values.items() if k not in design.names}
+    if not system.regular_lagrangian:
+        return _singular_cases(system, design, policy)
     reduced = rebuild(system, {p: v for p, v in fixed.items() if p in system.parameters},
                       None)
     if not hasattr(reduced, "coordinates"):   # a Verdict: invalid at the fixed values
@@ -70,6 +72,31 @@ def prepare(scene, model, design, *, along=None, run_options=None, policy=None) 
         "notes": list(verdict.notes),
         "names": list(design.names),
         # the settings of the command run at a point of each case (its budget aside)
+        "policy": _policy_data(policy),
+    }
+
+
+def _singular_cases(system, design, policy) -> dict:
+    """:func:`prepare` for a singular Lagrangian: the cases of ``classify --parametric``
+    (the Dirac-Bergmann chain with the swept parameters symbolic), the most specific first
+    so that a point takes the first whose equations hold; every point's variables are the
+    chain's answer there (:func:`command_row`)."""
+    from nhham.render.singular import singular_data
+    from nhham.system.expressions import to_text
+    from nhham.verdict.singular import singular_parametric
+
+    found = singular_parametric(system, policy=policy, symbolic=list(design.names))
+    invalid = dict.fromkeys(_FIELDS, -1) | {"status": STATUS_CODES["invalid"]}
+    cases = sorted(found.cases, key=lambda c: -len(c.conditions))
+    return {
+        "generic": row_of(singular_data(found.generic)),
+        "cases": [{"conditions": [to_text(c) for c in case.conditions], "excluding": [],
+                   "verdict": invalid if case.chain is None else row_of(singular_data(case.chain)),
+                   "describe": case.failure or "; ".join(case.reasons)} for case in cases],
+        "generic_describe": "the Dirac-Bergmann chain with "
+                            + ", ".join(design.names) + " symbolic",
+        "notes": [],
+        "names": list(design.names),
         "policy": _policy_data(policy),
     }
 

@@ -360,9 +360,10 @@ def _load(text, source, what, fixed=()):
         raise InputError(str(exc).replace("values: ", "--set: ", 1), key="--set") from None
     if what == "simulate" and scene.initial_problem is not None:
         raise scene.initial_problem
-    # a study's verdicts come from the regular machinery (a point where W is singular is
-    # the chain's answer there; a scene singular throughout is refused)
-    scene.system.require_regular_lagrangian("nhham sweep")
+    # the numeric studies need W invertible; a classify study of a singular L takes the
+    # chain's cases (classes.prepare) and its answer at each point
+    if what != "classify":
+        scene.system.require_regular_lagrangian(f"nhham sweep --what {what}")
     return scene
 
 

@@ -287,8 +287,9 @@ class System:
         rank = self.__dict__.get("_singular_lagrangian")
         if rank is not None:
             raise SingularLagrangianError([
-                f"{singular_message(self, rank)}; {what} needs W invertible (a singular Lagrangian is answered "
-                f"by classify: the Dirac-Bergmann chain)"])
+                f"{singular_message(self, rank)}; {what} needs W invertible (the Dirac-Bergmann "
+                f"chain answers a singular Lagrangian in classify, derive, compare, simulate and "
+                f"linearize)"])
 
     # ----------------------------------------------------------------- sizes
     @property

@@ -151,10 +151,22 @@ def test_compare_says_when_the_tq_chain_cannot_run():
     assert rc == 3 and "not compared" in err
 
 
-def test_a_study_of_a_singular_scene_is_refused(tmp_path):
-    rc, _, err = run("sweep", str(GALLERY / "landau_level.toml"), "--what", "classify",
-                     "--over", "B=1:2:3", "--out", str(tmp_path / "s.zarr"))
-    assert rc == 2 and "nhham sweep needs W invertible" in err
+def test_a_classify_study_of_a_singular_scene_has_the_massless_case(tmp_path):
+    # Proca by hand: m != 0 two second class; m = 0 two first class (underdetermined)
+    import xarray as xr
+
+    out = tmp_path / "s.zarr"
+    rc, _, err = run("sweep", str(GALLERY / "proca_mode.toml"), "--what", "classify",
+                     "--over", "m=0:1:3", "--out", str(out), "--workers", "1")
+    assert rc == 0, err
+    ds = xr.open_zarr(out)
+    assert ds["first_class"].values.tolist() == [2, 0, 0]
+    assert ds["second_class"].values.tolist() == [0, 2, 2]
+    assert ds["status"].values.tolist() == [1, 0, 0]   # underdetermined, determined
+    assert ds["case"].values.tolist() == [0, -1, -1]
+    rc, _, err = run("sweep", str(GALLERY / "landau_level.toml"), "--what", "linearize",
+                     "--over", "B=1:2:3", "--out", str(tmp_path / "l.zarr"))
+    assert rc == 2 and "nhham sweep --what linearize needs W invertible" in err
 
 
 #: scenes of the gallery with [initial] (simulate) and [steady] (linearize)
