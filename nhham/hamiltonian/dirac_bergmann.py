@@ -311,8 +311,8 @@ class DiracBergmann:
     @cached_property
     def gauge_generators(self) -> tuple:
         """One :class:`GaugeGenerator` per primary first-class combination (Castellani);
-        none with velocity constraints (their reaction is no Hamiltonian field)."""
-        if self.conditions:
+        none with velocity constraints or forces (their terms are no Hamiltonian field)."""
+        if self.conditions or self.system.has_forces:
             return ()
         return tuple(self._castellani(g, i + 1) for i, g in enumerate(self.primary_first_class))
 
@@ -438,10 +438,13 @@ def with_parameters(system, sub=None, symbolic=()):
         return system
     params = {p.name: (None if p.name in symbolic else system.parameter_values.get(p))
               for p in system.declared_parameters if p not in sub}
+    forced = system.has_forces
     return System([q.name for q in system.coordinates], system.lagrangian.xreplace(sub),
                   [c.xreplace(sub) for c in system.constraints],
                   holonomic=[g.xreplace(sub) for g in system.holonomic],
-                  parameters=params, name=system.name)
+                  parameters=params, name=system.name,
+                  forces=[f.xreplace(sub) for f in system.forces] if forced else None,
+                  dissipation=system.dissipation.xreplace(sub) if forced else None)
 
 
 def at_parameter_values(system):
@@ -538,6 +541,17 @@ def dirac_bergmann(system, *, policy: Policy | None = None,
                            seed=policy.seed, fibre=p, exact=policy.exact)
 
     base = algebra.hamiltonian_field(image.canonical_hamiltonian)
+    if at.has_forces:   # p' gains Q(q, v), v = dH_c/dp + u^a dphi_a/dp: affine in the u^a
+        Q = at.generalized_forces
+        v_c = {v: cancel(sp.diff(image.canonical_hamiltonian, pa))
+               for v, pa in zip(at.velocities, p)}
+        base = base + sp.Matrix([0] * n + [cancel(f.xreplace(v_c)) for f in Q])
+        dQ = Q.jacobian(list(at.velocities))
+        for i in range(len(hol) + len(vel), len(functions)):   # the primaries' u^a
+            k = sp.Matrix([sp.diff(functions[i], pa) for pa in p])   # move v along k_a
+            push = list((dQ * k).xreplace(v_c))
+            rows[i] = rows[i][:n] + [cancel(a + b) for a, b in zip(rows[i][n:], push)]
+        fields = sp.Matrix(rows)
     run = run_algorithm(base, fields, multiplied, labels, manifold,
                         max_stages=2 * n if max_generations is None else max_generations,
                         multiplier_symbols=symbols, variables=q + p, points_are_motions=True,
@@ -550,11 +564,17 @@ def dirac_bergmann(system, *, policy: Policy | None = None,
 def _refuse_unbuilt(system) -> None:
     """The parts of a singular system the chain does not take yet, each by its key."""
     problems = []
+    if system.has_forces:
+        v = list(system.velocities)
+        Q = system.generalized_forces
+        if system.inputs:
+            problems.append("inputs: inputs on a singular Lagrangian are not handled yet")
+        elif any(sp.diff(f, a, b) != 0 for f in Q for a in v for b in v):
+            problems.append("forces: a force nonlinear in the velocities on a singular "
+                            "Lagrangian is not handled yet (forces affine in v are)")
     if not system.is_affine:
         problems.append("constraints: a velocity constraint nonlinear in v (Chetaev) on a "
                         "singular Lagrangian is not handled yet (affine ones are)")
-    if system.has_forces:
-        problems.append("forces: forces on a singular Lagrangian are not handled yet")
     if system.time is not None:
         problems.append("lagrangian: a singular Lagrangian that depends on t is not "
                         "handled yet")

@@ -141,6 +141,23 @@ class PhaseMotion:
         p = [sp.diff(s.lagrangian, v) for v in s.velocities]
         return numeric_function(tuple(s.coordinates) + tuple(s.velocities), p)
 
+    @property
+    def forced(self) -> bool:
+        """Whether forces do work (then H_c changes by their work, :meth:`power`)."""
+        return self.chain.system.has_forces
+
+    @cached_property
+    def _power(self) -> Callable:
+        s = self.chain.system
+        v = list(self.chain.motion[: self.n])
+        Q = s.generalized_forces.xreplace(dict(zip(s.velocities, v)))
+        return numeric_function(self.variables, sum((f * w for f, w in zip(Q, v)), sp.S.Zero))
+
+    def power(self, z) -> float:
+        """Q(q, v) . v at z, v the motion's velocities: dH_c/dt along the motion (0 without
+        forces; the reactions of the constraints do no work on M_f)."""
+        return float(self._power(*z)) if self.forced else 0.0
+
     def field(self, z) -> np.ndarray:
         """z' at z, shape (2n,)."""
         return np.asarray(self._field(*z), dtype=float).reshape(-1)

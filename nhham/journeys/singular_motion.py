@@ -181,8 +181,14 @@ def simulate_singular(scene, *, t_end: float | None = None, options: Mapping | N
     with capture_warnings() as caught:
         with steps.step(f"simulate the motion on M_f with {method.name}"):
             start = time.perf_counter()
-            sol = solve_ivp(lambda t, z: motion.field(z), (0.0, t_end), z0,
-                            method=method.load(), **run)
+            # with forces the work W' = Q . v rides along: H_c(t) - H_c(0) = W(t)
+            if motion.forced:
+                sol = solve_ivp(lambda t, y: np.append(motion.field(y[:-1]),
+                                                       motion.power(y[:-1])),
+                                (0.0, t_end), np.append(z0, 0.0), method=method.load(), **run)
+            else:
+                sol = solve_ivp(lambda t, z: motion.field(z), (0.0, t_end), z0,
+                                method=method.load(), **run)
             wall = time.perf_counter() - start
     data = singular_simulate_data(motion, sol, method.name, (0.0, t_end), wall,
                                   dict(run, method=method.name))

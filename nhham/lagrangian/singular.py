@@ -38,7 +38,7 @@ def lagrangian_chain(system, *, policy: Policy | None = None,
     ----------
     system : nhham.System
         At the values it is to be answered at (the Dirac–Bergmann chain passes its own);
-        affine velocity constraints and holonomic ones, no forces, no t.
+        affine velocity constraints, holonomic ones and forces, no t.
     policy : Policy, optional
     max_stages : int, optional
         Default 2n.
@@ -62,9 +62,9 @@ def lagrangian_chain(system, *, policy: Policy | None = None,
     """
     from nhham.lagrangian.algorithm import run_algorithm
 
-    if system.has_forces or system.time is not None or not system.is_affine:
+    if system.time is not None or not system.is_affine:
         raise InputError("the Lagrangian chain of a singular L takes affine and holonomic "
-                         "constraints without forces or t", key="lagrangian")
+                         "constraints and forces, without t", key="lagrangian")
     policy = policy or Policy()
     q, v = tuple(system.coordinates), tuple(system.velocities)
     n, m = len(q), len(system.phi)
@@ -77,6 +77,8 @@ def lagrangian_chain(system, *, policy: Policy | None = None,
     mu = sp.Matrix(system.mu) if m else sp.zeros(0, n)
     a, lm = sp.Matrix(acc), sp.Matrix(lam) if m else sp.zeros(0, 1)
     reaction = mu.T * lm if m else sp.zeros(n, 1)
+    if system.has_forces:   # d/dt dL/dv - dL/dq = Q - dR/dv (DESIGN.md §2)
+        F = F + system.generalized_forces
     euler = (W * a + reaction - F).applyfunc(cancel)
     conditions = tuple((f"euler_lagrange[{c.name}]", euler[A]) for A, c in enumerate(q))
     base = sp.Matrix(list(v) + [0] * n)

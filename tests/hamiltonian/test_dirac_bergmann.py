@@ -239,6 +239,38 @@ def test_an_inductor_capacitor_loop_oscillates_at_one_over_root_lc():
     assert db.degrees_of_freedom is None and db.gauge_generators == ()
 
 
+@pytest.mark.parametrize("resistor", ["qC", "qL"])
+def test_a_resistor_damps_the_loop_by_hand(resistor):
+    # R q'^2/2 on either branch: ell q'' + R q' + q/C = 0 (the current law makes the two
+    # currents one). On the capacitor's branch the force -R qC' = -R u_1 moves with the
+    # primary's multiplier: the tangency of p_qC fixes lambda_1 = R u_1 + qC/C.
+    ell, cap, R = sp.symbols("ell Cap R", positive=True)
+    db = dirac_bergmann(System(["qL", "qC"], "ell*qL_dot**2/2 - qC**2/(2*Cap)",
+                               constraints=["qL_dot - qC_dot"],
+                               parameters={"ell": None, "Cap": None, "R": None},
+                               dissipation=f"R*{resistor}_dot**2/2"))
+    u = db.fixed_multipliers[S("u_1")]
+    assert u == S("p_qL") / S("ell")
+    lam = db.fixed_multipliers[S("lambda_1")]
+    expected = S("qC") / S("Cap") + (S("R") * u if resistor == "qC" else 0)
+    assert sp.simplify(lam - expected) == 0
+    rate = dict(zip(db.algebra.variables, db.motion))
+    J = sp.Matrix([[sp.diff(rate[a], b) for b in (S("qC"), S("p_qL"))]
+                   for a in (S("qC"), S("p_qL"))]).subs({S("ell"): ell, S("Cap"): cap,
+                                                         S("R"): R})
+    s = sp.Symbol("s")
+    assert sp.simplify(J.charpoly(s).as_expr() - (s**2 + R / ell * s + 1 / (ell * cap))) == 0
+    assert db.gauge_generators == ()
+
+
+def test_a_force_nonlinear_in_v_and_inputs_are_refused_on_a_singular_l():
+    with pytest.raises(InputError, match="forces: a force nonlinear in the velocities"):
+        dirac_bergmann(System(["x", "y"], "x*y_dot - y**2/2", forces={"x": "-x_dot**3"}))
+    with pytest.raises(InputError, match="inputs: inputs on a singular Lagrangian"):
+        dirac_bergmann(System(["x", "y"], "x*y_dot - y**2/2", forces={"x": "F"},
+                              inputs=["F"]))
+
+
 def test_relativistic_particle_by_elimination_of_the_velocities():
     # L = -m sqrt(-x'.x') (metric -+++): p = m eta x'/s with s = sqrt(-x'.x'), so
     # p.p = -m^2: one primary constraint p.p + m^2 = 0, and E_L = x'.p - L = -m s + m s = 0

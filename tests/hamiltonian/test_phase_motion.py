@@ -160,3 +160,20 @@ def test_the_tangent_chart_matrix_is_similar_to_the_tangent_one():
     reported = [complex(*e) for e in answer.data["eigenvalues"]]
     assert sorted(reported, key=lambda e: e.imag) == pytest.approx(
         sorted(np.linalg.eigvals(lin.tangent_matrix), key=lambda e: e.imag), abs=1e-12)
+
+
+def test_a_resistor_loop_decays_as_the_damped_oscillator():
+    # ell q'' + R q' + q/C = 0 from q = 1, q' = 0 (ell = 1, C = 2, R = 0.4):
+    # q = exp(-g t) (cos(w t) + g/w sin(w t)), g = R/(2 ell), w^2 = 1/(ell C) - g^2;
+    # H_c falls by the resistor's work, which the run carries: the balance closes.
+    answer = simulate_singular(scene((GALLERY / "rlc_circuit.toml").read_text()),
+                               t_end=3.0, options=TIGHT)
+    g, w = 0.2, math.sqrt(0.5 - 0.04)
+    q = math.exp(-g * 3) * (math.cos(w * 3) + g / w * math.sin(w * 3))
+    z = final(answer)
+    assert z["qL"] == pytest.approx(q, abs=1e-9) and z["qC"] == pytest.approx(q, abs=1e-9)
+    assert answer.data["energy_drift"] > 0.1
+    assert answer.data["energy_balance_residual"] < 1e-9
+    lin = linearize_singular(scene((GALLERY / "rlc_circuit.toml").read_text()))
+    ev = sorted((complex(*e) for e in lin.data["eigenvalues"]), key=lambda e: e.imag)
+    assert ev == pytest.approx([complex(-g, -w), 0, complex(-g, w)], abs=1e-9)
