@@ -519,7 +519,13 @@ def dirac_bergmann(system, *, policy: Policy | None = None,
     symbols = tuple(multiplier_symbol(i + 1) for i in range(len(hol) + len(vel))) + tuple(
         primary_multiplier_symbol(a + 1) for a in range(len(image.constraints)))
     n = at.n
-    mu = [[sp.diff(c, v) for v in at.velocities] for c in vel]
+    # v = dH_T/dp: the velocity constraints are conditions on the motion, affine in u (a
+    # Chetaev one does not depend on the velocities along ker W: _refuse_unbuilt)
+    HT = image.canonical_hamiltonian + sum(
+        (s * f for s, f in zip(symbols, functions) if f is not None), sp.S.Zero)
+    v_of = {v: cancel(sp.diff(HT, pa)) for v, pa in zip(at.velocities, p)}
+    # the reaction -lambda dphi/dv (Chetaev's rule; mu(q) for an affine phi) at v(q, p)
+    mu = [[cancel(sp.diff(c, v).xreplace(v_of)) for v in at.velocities] for c in vel]
     rows = [list(algebra.hamiltonian_field(f).T) if f is not None
             else [0] * n + [-e for e in mu[i - len(hol)]]
             for i, f in enumerate(functions)]
@@ -529,10 +535,6 @@ def dirac_bergmann(system, *, policy: Policy | None = None,
         f"primary[{a}]" for a in range(len(image.constraints))) + tuple(
         f"gauge[{i}]" for i in range(len(gauge)))
     multiplied = tuple(f for f in functions if f is not None) + gauge
-    # v = dH_T/dp: the velocity constraints are conditions on the motion, affine in u
-    HT = image.canonical_hamiltonian + sum(
-        (s * f for s, f in zip(symbols, functions) if f is not None), sp.S.Zero)
-    v_of = {v: cancel(sp.diff(HT, pa)) for v, pa in zip(at.velocities, p)}
     conditions = tuple((lab, cancel(c.xreplace(v_of)))
                        for lab, c in zip(at.constraint_labels[len(at.holonomic):], vel))
 
@@ -573,10 +575,36 @@ def _refuse_unbuilt(system) -> None:
             problems.append("forces: a force nonlinear in the velocities on a singular "
                             "Lagrangian is not handled yet (forces affine in v are)")
     if not system.is_affine:
-        problems.append("constraints: a velocity constraint nonlinear in v (Chetaev) on a "
-                        "singular Lagrangian is not handled yet (affine ones are)")
+        _refuse_chetaev(system, problems)
     if system.time is not None:
         problems.append("lagrangian: a singular Lagrangian that depends on t is not "
                         "handled yet")
     if problems:
         raise InputError("; ".join(problems), key=problems[0].split(":")[0])
+
+
+def _refuse_chetaev(system, problems) -> None:
+    """A nonlinear (Chetaev) constraint is taken where it does not depend on the
+    velocities along ker W (d phi/dv . k = 0 for every null vector k of W, L quadratic in
+    v): then phi(q, dH_T/dp) and its reaction are free of the multipliers u^a. Otherwise
+    its conditions are nonlinear in the u^a: refused, naming the constraint."""
+    from nhham.system.chetaev import AFFINE
+
+    v = list(system.velocities)
+    W = sp.Matrix(system.hessian)
+    if any(sp.diff(e, w) != 0 for e in W for w in v):
+        problems.append("constraints: a nonlinear (Chetaev) velocity constraint on a "
+                        "Lagrangian not quadratic in v is not handled yet")
+        return
+    kernel = W.nullspace()
+    labels = system.constraint_labels[len(system.holonomic):]
+    kinds = system.constraint_kinds[len(system.complete_lifts):]
+    for lab, c, kind in zip(labels, system.constraints, kinds):
+        if kind == AFFINE:
+            continue
+        grad = [sp.diff(c, w) for w in v]
+        if any(sp.simplify(sum((g * e for g, e in zip(grad, k)), sp.S.Zero)) != 0
+               for k in kernel):
+            problems.append(f"{lab}: a nonlinear (Chetaev) constraint that depends on the "
+                            f"velocities along ker W is not handled yet (its conditions "
+                            f"would be nonlinear in the multipliers u)")

@@ -142,21 +142,32 @@ class PhaseMotion:
         return numeric_function(tuple(s.coordinates) + tuple(s.velocities), p)
 
     @property
-    def forced(self) -> bool:
-        """Whether forces do work (then H_c changes by their work, :meth:`power`)."""
-        return self.chain.system.has_forces
+    def does_work(self) -> bool:
+        """Whether forces or the velocity constraints' reactions may do work (then H_c
+        changes by it, :meth:`power`)."""
+        return self.chain.system.has_forces or bool(self.chain.conditions)
 
     @cached_property
     def _power(self) -> Callable:
-        s = self.chain.system
-        v = list(self.chain.motion[: self.n])
-        Q = s.generalized_forces.xreplace(dict(zip(s.velocities, v)))
-        return numeric_function(self.variables, sum((f * w for f, w in zip(Q, v)), sp.S.Zero))
+        s, chain = self.chain.system, self.chain
+        v = list(chain.motion[: self.n])
+        at_v = dict(zip(s.velocities, v))
+        P = sp.S.Zero
+        if s.has_forces:
+            P += sum((f * w for f, w in zip(s.generalized_forces.xreplace(at_v), v)), sp.S.Zero)
+        # the reaction -lambda_i dphi_i/dv of each velocity constraint (no H_T term)
+        lam = [sym for sym, f in zip(chain.multipliers, chain.functions) if f is None]
+        fixed = chain.fixed_multipliers
+        for sym, c in zip(lam, s.constraints):
+            mu = [sp.diff(c, w).xreplace(at_v) for w in s.velocities]
+            P -= fixed.get(sym, sym) * sum((a * w for a, w in zip(mu, v)), sp.S.Zero)
+        return numeric_function(self.variables, P)
 
     def power(self, z) -> float:
-        """Q(q, v) . v at z, v the motion's velocities: dH_c/dt along the motion (0 without
-        forces; the reactions of the constraints do no work on M_f)."""
-        return float(self._power(*z)) if self.forced else 0.0
+        """dH_c/dt along the motion at z: (Q - lambda_i dphi_i/dv) . v with the velocities
+        and multipliers of the motion (the primaries' and holonomic reactions do no work
+        on M_f); 0 when nothing does work."""
+        return float(self._power(*z)) if self.does_work else 0.0
 
     def field(self, z) -> np.ndarray:
         """z' at z, shape (2n,)."""

@@ -181,8 +181,8 @@ def simulate_singular(scene, *, t_end: float | None = None, options: Mapping | N
     with capture_warnings() as caught:
         with steps.step(f"simulate the motion on M_f with {method.name}"):
             start = time.perf_counter()
-            # with forces the work W' = Q . v rides along: H_c(t) - H_c(0) = W(t)
-            if motion.forced:
+            # the work W' = (Q - lambda dphi/dv) . v rides along: H_c(t) - H_c(0) = W(t)
+            if motion.does_work:
                 sol = solve_ivp(lambda t, y: np.append(motion.field(y[:-1]),
                                                        motion.power(y[:-1])),
                                 (0.0, t_end), np.append(z0, 0.0), method=method.load(), **run)

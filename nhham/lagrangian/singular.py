@@ -38,7 +38,8 @@ def lagrangian_chain(system, *, policy: Policy | None = None,
     ----------
     system : nhham.System
         At the values it is to be answered at (the Dirac–Bergmann chain passes its own);
-        affine velocity constraints, holonomic ones and forces, no t.
+        velocity constraints (affine or Chetaev: the reaction lambda dphi/dv), holonomic
+        ones and forces, no t.
     policy : Policy, optional
     max_stages : int, optional
         Default 2n.
@@ -62,8 +63,8 @@ def lagrangian_chain(system, *, policy: Policy | None = None,
     """
     from nhham.lagrangian.algorithm import run_algorithm
 
-    if system.time is not None or not system.is_affine:
-        raise InputError("the Lagrangian chain of a singular L takes affine and holonomic "
+    if system.time is not None:
+        raise InputError("the Lagrangian chain of a singular L takes velocity and holonomic "
                          "constraints and forces, without t", key="lagrangian")
     policy = policy or Policy()
     q, v = tuple(system.coordinates), tuple(system.velocities)

@@ -28,13 +28,13 @@ def singular_simulate_data(motion, sol, method: str, t_span, wall: float, settin
     """The ``result`` of ``nhham simulate`` for the run ``sol`` (scipy's OdeResult) of
     ``motion`` (a :class:`~nhham.hamiltonian.phase_motion.PhaseMotion`)."""
     Z = np.asarray(sol.y, dtype=float)
-    work = Z[-1] if motion.forced else np.zeros(Z.shape[1])
-    Z = Z[:-1] if motion.forced else Z
+    work = Z[-1] if motion.does_work else np.zeros(Z.shape[1])
+    Z = Z[:-1] if motion.does_work else Z
     residuals = np.array([np.max(np.abs(motion.constraints(z)), initial=0.0) for z in Z.T])
     scales = np.maximum(1.0, np.max(np.abs(Z), axis=0))
     energy = np.array([motion.energy(z) for z in Z.T])
     drift = float(np.max(np.abs(energy - energy[0]))) if energy.size else 0.0
-    balance = (float(np.max(np.abs(energy - energy[0] - work))) if motion.forced and energy.size
+    balance = (float(np.max(np.abs(energy - energy[0] - work))) if motion.does_work and energy.size
                else None)
     data = {
         "method": method,
@@ -90,8 +90,8 @@ def singular_simulate_text(title: str, data: dict) -> str:
         f"{data['wall_time_s']:.3g} s",
         f"  max residual of the final constraints {data['constraint_residual_max']:.2e} "
         f"(scaled {data['constraint_residual_rel_max']:.2e}; measured, not imposed)",
-        (f"  change of H_c (the energy) {data['energy_drift']:.2e}: the forces' work; energy "
-         f"balance residual {data['energy_balance_residual']:.2e}"
+        (f"  change of H_c (the energy) {data['energy_drift']:.2e}: the work of the forces and "
+         f"reactions; energy balance residual {data['energy_balance_residual']:.2e}"
          if data["energy_balance_residual"] is not None else
          f"  drift of H_c (the energy) {data['energy_drift']:.2e} (relative "
          f"{data['energy_drift_rel']:.2e})"),

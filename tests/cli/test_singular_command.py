@@ -28,6 +28,7 @@ HAND = {
     "einbein_particle.toml": ("underdetermined", [1, 1], 2, 0, 3, 1),
     "lc_circuit.toml": ("determined", [1], 1, 0, None, 0),
     "rlc_circuit.toml": ("determined", [1], 1, 0, None, 0),
+    "isokinetic_ring.toml": ("determined", [1, 2, 1, 1], 1, 4, None, 0),
     "relativistic_particle.toml": ("underdetermined", [1], 1, 0, 3, 1),
     "yang_mills_su2.toml": ("underdetermined", [3, 3], 6, 0, 6, 3),
 }
@@ -173,7 +174,8 @@ def test_a_classify_study_of_a_singular_scene_has_the_massless_case(tmp_path):
 
 #: scenes of the gallery with [initial] (simulate) and [steady] (linearize)
 RUNS = ["christ_lee.toml", "einbein_particle.toml", "gauge_shift.toml", "landau_level.toml",
-        "lc_circuit.toml", "pendulum_multiplier.toml", "proca_mode.toml", "rlc_circuit.toml"]
+        "lc_circuit.toml", "pendulum_multiplier.toml", "proca_mode.toml", "rlc_circuit.toml",
+        "isokinetic_ring.toml"]
 STEADY = ["landau_level.toml", "lc_circuit.toml", "pendulum_multiplier.toml", "proca_mode.toml",
           "rlc_circuit.toml"]
 

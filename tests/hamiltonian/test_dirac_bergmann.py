@@ -195,9 +195,26 @@ def test_what_is_not_built_is_refused_by_key():
     with pytest.raises(ValidationError, match="lagrangian: W depends on the velocities and "
                                               "L is not algebraic"):
         legendre_image(System(["x", "y"], "exp(x_dot) + y"))
-    with pytest.raises(InputError, match="constraints: a velocity constraint nonlinear"):
+    # a Chetaev constraint along ker W (z' here) would make the conditions nonlinear in u
+    with pytest.raises(InputError, match=r"constraints\[0\]: a nonlinear \(Chetaev\) "
+                                         r"constraint that depends on the velocities along"):
         dirac_bergmann(System(["x", "y", "z"], "(x_dot**2 + y_dot**2)/2 + z*x",
-                              constraints=["x_dot**2 + y_dot**2 - 1"]))
+                              constraints=["x_dot**2 + z_dot**2 - 1"]))
+
+
+def test_a_chetaev_constraint_off_ker_w_by_hand():
+    # L = (x'^2 + y'^2)/2 - g y + lam (x^2 + y^2 - 1)/2 with x'^2 + y'^2 = 1: on T*Q the
+    # speed is p_x^2 + p_y^2 - 1 (no u: lam' is not in it); generations (p_lam), (the speed
+    # and the ring), (x p_x + y p_y), (the one that fixes lam); 5 constraints, their 5 x 5
+    # bracket matrix antisymmetric of rank 4: 1 first-class combination, 4 second class.
+    db = dirac_bergmann(System(["x", "y", "lam"],
+                               "(x_dot**2 + y_dot**2)/2 - g*y + lam*(x**2 + y**2 - 1)/2",
+                               constraints=["x_dot**2 + y_dot**2 - 1"],
+                               parameters={"g": 9.81}))
+    assert [len(g) for g in db.generations] == [1, 2, 1, 1]
+    same_up_to_sign(db.generations[1], [S("p_x")**2 + S("p_y")**2 - 1,
+                                        S("x")**2 + S("y")**2 - 1])
+    assert (db.first_class, db.second_class, db.run.free_multiplier_symbols) == (1, 4, ())
 
 
 def test_the_verdict_is_at_the_values_put_in_exactly():

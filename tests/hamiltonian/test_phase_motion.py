@@ -177,3 +177,15 @@ def test_a_resistor_loop_decays_as_the_damped_oscillator():
     lin = linearize_singular(scene((GALLERY / "rlc_circuit.toml").read_text()))
     ev = sorted((complex(*e) for e in lin.data["eigenvalues"]), key=lambda e: e.imag)
     assert ev == pytest.approx([complex(-g, -w), 0, complex(-g, w)], abs=1e-9)
+
+
+def test_an_isokinetic_bead_goes_round_at_unit_speed():
+    # Chetaev's x'^2 + y'^2 = 1 on a ring (multiplier in L) against gravity: from the bottom
+    # with x' = 1, (x, y) = (sin t, -cos t); the tension there lam = -g - 1 (y'' = -g + lam y
+    # = 1); the reaction -lambda d(phi)/dv does work, which the balance carries.
+    answer = simulate_singular(scene((GALLERY / "isokinetic_ring.toml").read_text()),
+                               t_end=2.0, options=TIGHT)
+    z = final(answer)
+    assert (z["x"], z["y"]) == pytest.approx((math.sin(2), -math.cos(2)), abs=1e-8)
+    assert any("lam = -10.81" in w for w in answer.warnings)
+    assert answer.data["energy_drift"] > 1 and answer.data["energy_balance_residual"] < 1e-8
