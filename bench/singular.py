@@ -2,10 +2,12 @@
 
 For each scene of ``examples/singular`` it times ``classify`` (the chain, its classes,
 gauge generators and Dirac bracket: the command's journey, scene load included) and
-``classify --parametric``, in this process, medians of ``--runs`` runs after one warm-up,
-with the ratio to ``classify`` of the vertical rolling disk (the quick start's scene) timed
-the same way in the same process, and prints the answer (generations, first and second
-class, degrees of freedom) next to the time.
+``classify --parametric``, and where the scene has ``[initial]`` and ``[steady]`` tables
+``simulate`` (t_end = 10) and ``linearize`` (the motion on M_f), in this process, medians
+of ``--runs`` runs after one warm-up, with the ratio to ``classify`` of the vertical
+rolling disk (the quick start's scene) timed the same way in the same process, and prints
+the answer (generations, first and second class, degrees of freedom) next to the time.
+A refused run (a gauge system without ``[gauge]``) shows ``-``.
 
 Usage::
 
@@ -34,7 +36,10 @@ def median_time(fn, runs: int) -> float:
 
 
 def main() -> None:
+    from nhham.journeys.simulation import simulate
+    from nhham.journeys.stability import linearize
     from nhham.journeys.verdict import classify, classify_parametric
+    from nhham.system.scene import load_scene
 
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--runs", type=int, default=5)
@@ -48,8 +53,8 @@ def main() -> None:
     base = median_time(lambda: classify(disk), args.runs)
     print(f"baseline: classify rolling_disk.toml {base:.3f} s (median of {args.runs})")
     print("| scene | generations | FC | SC | dof | classify s | / disk | --parametric s "
-          "| cases |")
-    print("|---|---|---|---|---|---|---|---|---|")
+          "| cases | simulate s | linearize s |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|")
     for scene in scenes:
         path = str(scene)
         data = classify(path).data
@@ -57,8 +62,26 @@ def main() -> None:
         tp = median_time(lambda: classify_parametric(path), args.runs)
         cases = len(classify_parametric(path).data["cases"])
         gens = "+".join(str(len(g)) for g in data["generations"])
+        loaded = load_scene(path, check_initial=False)
+        ts = tl = "-"
+        if loaded.initial_given is not None and loaded.gauge is not None:
+            ts = _timed(lambda: simulate(load_scene(path, check_initial=False), t_end=10.0),
+                        args.runs)
+        if loaded.steady is not None:
+            tl = _timed(lambda: linearize(load_scene(path, check_initial=False)), args.runs)
         print(f"| {scene.stem} | {gens} | {data['first_class']} | {data['second_class']} | "
-              f"{data['degrees_of_freedom']} | {t:.3f} | {t / base:.1f} | {tp:.3f} | {cases} |")
+              f"{data['degrees_of_freedom']} | {t:.3f} | {t / base:.1f} | {tp:.3f} | {cases} "
+              f"| {ts} | {tl} |")
+
+
+def _timed(fn, runs: int) -> str:
+    """The median time as text, ``-`` where the command refuses the scene."""
+    from nhham.errors import InputError
+
+    try:
+        return f"{median_time(fn, runs):.3f}"
+    except InputError:
+        return "-"
 
 
 if __name__ == "__main__":
