@@ -311,8 +311,9 @@ class DiracBergmann:
     @cached_property
     def gauge_generators(self) -> tuple:
         """One :class:`GaugeGenerator` per primary first-class combination (Castellani);
-        none with velocity constraints or forces (their terms are no Hamiltonian field)."""
-        if self.conditions or self.system.has_forces:
+        none with velocity constraints or forces (their terms are no Hamiltonian field) or
+        with t in L (the chain would need the dG/dt terms)."""
+        if self.conditions or self.system.has_forces or self.system.time is not None:
             return ()
         return tuple(self._castellani(g, i + 1) for i, g in enumerate(self.primary_first_class))
 
@@ -557,7 +558,7 @@ def dirac_bergmann(system, *, policy: Policy | None = None,
     run = run_algorithm(base, fields, multiplied, labels, manifold,
                         max_stages=2 * n if max_generations is None else max_generations,
                         multiplier_symbols=symbols, variables=q + p, points_are_motions=True,
-                        field_conditions=conditions)
+                        field_conditions=conditions, time=at.time)
     return DiracBergmann(system=at, image=image, run=run, multipliers=symbols, policy=policy,
                          replaced=replaced, base_field=base, vertical_fields=fields,
                          functions=functions, conditions=conditions, gauge=gauge)
@@ -576,9 +577,6 @@ def _refuse_unbuilt(system) -> None:
                             "Lagrangian is not handled yet (forces affine in v are)")
     if not system.is_affine:
         _refuse_chetaev(system, problems)
-    if system.time is not None:
-        problems.append("lagrangian: a singular Lagrangian that depends on t is not "
-                        "handled yet")
     if problems:
         raise InputError("; ".join(problems), key=problems[0].split(":")[0])
 

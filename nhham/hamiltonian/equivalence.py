@@ -108,6 +108,8 @@ def equivalence(db) -> Equivalence:
     args = list(q) + list(v) + list(system.parameters)
     leg = numeric_function(args, momenta)
     jac = numeric_function(args, sp.Matrix(momenta).jacobian(list(q) + list(v)).tolist())
+    t = system.time   # Leg depends on t: Leg_* X = dLeg X + (0, dp/dt)
+    rate = numeric_function(args, [sp.diff(m, t) if t is not None else 0 for m in momenta])
     grads = numeric_function(args, sp.Matrix(run.final_constraints).jacobian(
         list(q) + list(v)).tolist()) if run.final_constraints else None
     lagrangian = _family(run, args)
@@ -131,6 +133,7 @@ def equivalence(db) -> Equivalence:
         L0, DL = lagrangian(x + par)
         H0, DH = hamiltonian(z + par)
         L0, DL = J @ L0, J @ DL
+        L0[n:] += np.asarray(rate(*x, *par), dtype=float).ravel()
         scale = max(1.0, np.abs(H0).max(), np.abs(L0).max())
         # the Hamiltonian free directions also move along Leg's fibre (the velocities
         # Leg forgets are coordinates of TQ): only the Lagrangian family is checked in it

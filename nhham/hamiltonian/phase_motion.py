@@ -110,42 +110,57 @@ class PhaseMotion:
         return tuple(s.name for s in self.variables)
 
     @property
+    def time(self):
+        """t when L or the constraints depend on it (every function then takes it), else
+        None."""
+        return self.chain.system.time
+
+    @cached_property
+    def _args(self) -> tuple:
+        return self.variables + ((self.time,) if self.time is not None else ())
+
+    def _at(self, z, t) -> tuple:
+        return (*z, t) if self.time is not None else tuple(z)
+
+    @property
     def labels(self) -> tuple:
         return tuple(self.chain.run.final_labels)
 
     @cached_property
     def _field(self) -> Callable:
-        return numeric_function(self.variables, list(self.chain.motion), cse=True)
+        return numeric_function(self._args, list(self.chain.motion), cse=True)
 
     @cached_property
     def _constraints(self) -> Callable:
-        return numeric_function(self.variables, list(self.chain.run.final_constraints))
+        return numeric_function(self._args, list(self.chain.run.final_constraints))
 
     @cached_property
     def _constraint_jacobian(self) -> Callable:
         phi = sp.Matrix(list(self.chain.run.final_constraints))
-        return numeric_function(self.variables, phi.jacobian(self.variables))
+        return numeric_function(self._args, phi.jacobian(self.variables))
 
     @cached_property
     def _jacobian(self) -> Callable:
-        return numeric_function(self.variables, self.chain.motion.jacobian(self.variables),
+        return numeric_function(self._args, self.chain.motion.jacobian(self.variables),
                                 cse=True)
 
     @cached_property
     def _energy(self) -> Callable:
-        return numeric_function(self.variables, self.chain.image.canonical_hamiltonian)
+        return numeric_function(self._args, self.chain.image.canonical_hamiltonian)
 
     @cached_property
     def _momenta(self) -> Callable:
         s = self.chain.system
         p = [sp.diff(s.lagrangian, v) for v in s.velocities]
-        return numeric_function(tuple(s.coordinates) + tuple(s.velocities), p)
+        return numeric_function(tuple(s.coordinates) + tuple(s.velocities)
+                                + ((self.time,) if self.time is not None else ()), p)
 
     @property
     def does_work(self) -> bool:
         """Whether forces or the velocity constraints' reactions may do work (then H_c
         changes by it, :meth:`power`)."""
-        return self.chain.system.has_forces or bool(self.chain.conditions)
+        return (self.chain.system.has_forces or bool(self.chain.conditions)
+                or self.time is not None)
 
     @cached_property
     def _power(self) -> Callable:
@@ -161,40 +176,52 @@ class PhaseMotion:
         for sym, c in zip(lam, s.constraints):
             mu = [sp.diff(c, w).xreplace(at_v) for w in s.velocities]
             P -= fixed.get(sym, sym) * sum((a * w for a, w in zip(mu, v)), sp.S.Zero)
-        return numeric_function(self.variables, P)
+        if self.time is not None:   # and dH_c/dt at fixed (q, p)
+            P += sp.diff(chain.image.canonical_hamiltonian, self.time)
+        return numeric_function(self._args, P)
 
-    def power(self, z) -> float:
+    def power(self, z, t: float = 0.0) -> float:
         """dH_c/dt along the motion at z: (Q - lambda_i dphi_i/dv) . v with the velocities
         and multipliers of the motion (the primaries' and holonomic reactions do no work
-        on M_f); 0 when nothing does work."""
-        return float(self._power(*z)) if self.does_work else 0.0
+        on M_f), plus dH_c/dt at fixed (q, p) with t in L; 0 when nothing does work."""
+        return float(self._power(*self._at(z, t))) if self.does_work else 0.0
 
-    def field(self, z) -> np.ndarray:
-        """z' at z, shape (2n,)."""
-        return np.asarray(self._field(*z), dtype=float).reshape(-1)
+    def field(self, z, t: float = 0.0) -> np.ndarray:
+        """z' at z (and t), shape (2n,)."""
+        return np.asarray(self._field(*self._at(z, t)), dtype=float).reshape(-1)
 
-    def constraints(self, z) -> np.ndarray:
-        """The final constraints at z, shape (r,) in the order of :attr:`labels`."""
+    def constraints(self, z, t: float = 0.0) -> np.ndarray:
+        """The final constraints at z (and t), shape (r,) in the order of :attr:`labels`."""
         if not self.labels:
             return np.zeros(0)
-        return np.asarray(self._constraints(*z), dtype=float).reshape(-1)
+        return np.asarray(self._constraints(*self._at(z, t)), dtype=float).reshape(-1)
 
-    def energy(self, z) -> float:
-        """H_c(z) (= E_L at the Legendre preimage on M_f)."""
-        return float(self._energy(*z))
+    def energy(self, z, t: float = 0.0) -> float:
+        """H_c(z, t) (= E_L at the Legendre preimage on M_f)."""
+        return float(self._energy(*self._at(z, t)))
 
-    def velocities(self, z) -> np.ndarray:
+    def velocities(self, z, t: float = 0.0) -> np.ndarray:
         """v = q' = dH_T/dp with the fixed multipliers, shape (n,)."""
-        return self.field(z)[: self.n]
+        return self.field(z, t)[: self.n]
 
-    def state(self, q, v) -> np.ndarray:
-        """z = Leg(q, v) = (q, dL/dv), shape (2n,)."""
+    def state(self, q, v, t: float = 0.0) -> np.ndarray:
+        """z = Leg(q, v) = (q, dL/dv) (at t), shape (2n,)."""
         q = np.asarray(q, dtype=float)
-        p = np.asarray(self._momenta(*q, *np.asarray(v, dtype=float)), dtype=float)
+        p = np.asarray(self._momenta(*self._at([*q, *np.asarray(v, dtype=float)], t)),
+                       dtype=float)
         return np.concatenate([q, p.reshape(-1)])
 
     def linearization(self, z) -> PhaseLinearization:
-        """The state matrix on M_f at the equilibrium z (see the module docstring)."""
+        """The state matrix on M_f at the equilibrium z (see the module docstring).
+
+        Raises
+        ------
+        InputError
+            With t in L (no equilibrium is a point of T*Q for all t), key ``steady``.
+        """
+        if self.time is not None:
+            raise InputError("steady: a singular Lagrangian with t has no steady state to "
+                             "linearise about (its motion depends on t)", key="steady")
         z = np.asarray(z, dtype=float)
         J = np.atleast_2d(np.asarray(self._jacobian(*z), dtype=float))
         N = 2 * self.n

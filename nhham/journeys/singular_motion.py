@@ -183,11 +183,11 @@ def simulate_singular(scene, *, t_end: float | None = None, options: Mapping | N
             start = time.perf_counter()
             # the work W' = (Q - lambda dphi/dv) . v rides along: H_c(t) - H_c(0) = W(t)
             if motion.does_work:
-                sol = solve_ivp(lambda t, y: np.append(motion.field(y[:-1]),
-                                                       motion.power(y[:-1])),
+                sol = solve_ivp(lambda t, y: np.append(motion.field(y[:-1], t),
+                                                       motion.power(y[:-1], t)),
                                 (0.0, t_end), np.append(z0, 0.0), method=method.load(), **run)
             else:
-                sol = solve_ivp(lambda t, z: motion.field(z), (0.0, t_end), z0,
+                sol = solve_ivp(lambda t, z: motion.field(z, t), (0.0, t_end), z0,
                                 method=method.load(), **run)
             wall = time.perf_counter() - start
     data = singular_simulate_data(motion, sol, method.name, (0.0, t_end), wall,
@@ -250,6 +250,9 @@ def linearize_singular(scene, *, steps=None) -> Answer:
         raise InputError("steady: linearize needs a [steady] table (an equilibrium: a value "
                          "for every coordinate and velocity)", key="steady")
     motion = _motion(scene, steps)
+    if motion.time is not None:
+        raise InputError("steady: a singular Lagrangian with t has no steady state to "
+                         "linearise about (its motion depends on t)", key="steady")
     params = {s.name: v for s, v in scene.system.parameter_values.items()}
     values = scene.steady.values(params)
     z, warnings = phase_state(motion, values, "steady")

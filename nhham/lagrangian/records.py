@@ -336,7 +336,7 @@ class AlgorithmRun(ConstraintOutcome):
 
     def rows(self, labels) -> tuple:
         """(A, b) of the rows named, A λ + b = 0: for a final constraint χ its tangency
-        row (A_ji = Z_i(χ), b_j = ξ(χ), unscaled fields), for a ``field_conditions``
+        row (A_ji = Z_i(χ), b_j = ξ(χ) (+ ∂χ/∂t with ``time``), unscaled fields), for a ``field_conditions``
         entry c its coefficients of the multipliers and c at λ = 0."""
         lam = list(self.multiplier_symbols)
         zero = {s: 0 for s in lam}
@@ -352,7 +352,8 @@ class AlgorithmRun(ConstraintOutcome):
             else:
                 grad = gradient_rows([named[lab]], self.variables)
                 A.append([cancel((grad * Z.row(i).T)[0]) for i in range(len(lam))])
-                b.append(cancel((grad * xi)[0]))
+                rate = sp.diff(named[lab], self.time) if self.time is not None else 0
+                b.append(cancel((grad * xi)[0] + rate))
         return sp.Matrix(len(A), len(lam), lambda r, i: A[r][i]), sp.Matrix(b)
 
     def _conditioned_multipliers(self) -> dict:

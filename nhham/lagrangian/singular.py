@@ -20,7 +20,6 @@ from __future__ import annotations
 
 import sympy as sp
 
-from nhham.errors import InputError
 from nhham.lagrangian.algebra import cancel
 from nhham.lagrangian.engine import Policy
 from nhham.lagrangian.records import AlgorithmRun
@@ -39,7 +38,7 @@ def lagrangian_chain(system, *, policy: Policy | None = None,
     system : nhham.System
         At the values it is to be answered at (the Dirac–Bergmann chain passes its own);
         velocity constraints (affine or Chetaev: the reaction lambda dphi/dv), holonomic
-        ones and forces, no t.
+        ones, forces and t.
     policy : Policy, optional
     max_stages : int, optional
         Default 2n.
@@ -63,16 +62,15 @@ def lagrangian_chain(system, *, policy: Policy | None = None,
     """
     from nhham.lagrangian.algorithm import run_algorithm
 
-    if system.time is not None:
-        raise InputError("the Lagrangian chain of a singular L takes velocity and holonomic "
-                         "constraints and forces, without t", key="lagrangian")
     policy = policy or Policy()
     q, v = tuple(system.coordinates), tuple(system.velocities)
     n, m = len(q), len(system.phi)
     L = system.lagrangian
     W = sp.Matrix(system.hessian)
+    t = system.time   # d/dt dL/dv has the term d2L/dv dt when L depends on t
     F = sp.Matrix([sp.diff(L, qb) - sum((sp.diff(L, qc, vb) * vc for qc, vc in zip(q, v)),
-                                        sp.S.Zero) for qb, vb in zip(q, v)])
+                                        sp.S.Zero) - (sp.diff(L, vb, t) if t is not None else 0)
+                   for qb, vb in zip(q, v)])
     acc = tuple(acceleration_symbol(c) for c in q)
     lam = tuple(multiplier_symbol(i + 1) for i in range(m))
     mu = sp.Matrix(system.mu) if m else sp.zeros(0, n)
@@ -95,4 +93,4 @@ def lagrangian_chain(system, *, policy: Policy | None = None,
                          max_stages=2 * n if max_stages is None else max_stages,
                          multiplier_symbols=acc + lam, variables=q + v,
                          secondary_prefix="lagrangian", points_are_motions=True,
-                         field_conditions=conditions)
+                         field_conditions=conditions, time=t)

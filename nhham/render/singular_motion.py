@@ -30,9 +30,10 @@ def singular_simulate_data(motion, sol, method: str, t_span, wall: float, settin
     Z = np.asarray(sol.y, dtype=float)
     work = Z[-1] if motion.does_work else np.zeros(Z.shape[1])
     Z = Z[:-1] if motion.does_work else Z
-    residuals = np.array([np.max(np.abs(motion.constraints(z)), initial=0.0) for z in Z.T])
+    residuals = np.array([np.max(np.abs(motion.constraints(z, t)), initial=0.0)
+                          for z, t in zip(Z.T, sol.t)])
     scales = np.maximum(1.0, np.max(np.abs(Z), axis=0))
-    energy = np.array([motion.energy(z) for z in Z.T])
+    energy = np.array([motion.energy(z, t) for z, t in zip(Z.T, sol.t)])
     drift = float(np.max(np.abs(energy - energy[0]))) if energy.size else 0.0
     balance = (float(np.max(np.abs(energy - energy[0] - work))) if motion.does_work and energy.size
                else None)
@@ -66,7 +67,7 @@ def singular_simulate_data(motion, sol, method: str, t_span, wall: float, settin
         "storage": None,
         "singularity": None,
         "singular": dict(_singular(motion),
-                         velocities_final=jsonable(motion.velocities(Z[:, -1])),
+                         velocities_final=jsonable(motion.velocities(Z[:, -1], sol.t[-1])),
                          energy_initial=json_number(float(energy[0]))),
     }
     return data
@@ -91,7 +92,7 @@ def singular_simulate_text(title: str, data: dict) -> str:
         f"  max residual of the final constraints {data['constraint_residual_max']:.2e} "
         f"(scaled {data['constraint_residual_rel_max']:.2e}; measured, not imposed)",
         (f"  change of H_c (the energy) {data['energy_drift']:.2e}: the work of the forces and "
-         f"reactions; energy balance residual {data['energy_balance_residual']:.2e}"
+         f"reactions (and dH_c/dt); energy balance residual {data['energy_balance_residual']:.2e}"
          if data["energy_balance_residual"] is not None else
          f"  drift of H_c (the energy) {data['energy_drift']:.2e} (relative "
          f"{data['energy_drift_rel']:.2e})"),

@@ -29,6 +29,7 @@ HAND = {
     "lc_circuit.toml": ("determined", [1], 1, 0, None, 0),
     "rlc_circuit.toml": ("determined", [1], 1, 0, None, 0),
     "isokinetic_ring.toml": ("determined", [1, 2, 1, 1], 1, 4, None, 0),
+    "driven_lc_circuit.toml": ("determined", [1], 1, 0, None, 0),
     "relativistic_particle.toml": ("underdetermined", [1], 1, 0, 3, 1),
     "yang_mills_su2.toml": ("underdetermined", [3, 3], 6, 0, 6, 3),
 }
@@ -138,7 +139,7 @@ def test_derive_on_tq_and_an_inconsistent_chain():
 
 @pytest.mark.parametrize("name", ["gauge_shift.toml", "landau_level.toml",
                                   "pendulum_multiplier.toml", "lc_circuit.toml",
-                                  "rlc_circuit.toml"])
+                                  "rlc_circuit.toml", "driven_lc_circuit.toml"])
 def test_compare_finds_the_two_chains_equivalent(name, schema):
     rc, env, err = run("compare", str(GALLERY / name), "--json")
     assert rc == 0, err
@@ -175,7 +176,7 @@ def test_a_classify_study_of_a_singular_scene_has_the_massless_case(tmp_path):
 #: scenes of the gallery with [initial] (simulate) and [steady] (linearize)
 RUNS = ["christ_lee.toml", "einbein_particle.toml", "gauge_shift.toml", "landau_level.toml",
         "lc_circuit.toml", "pendulum_multiplier.toml", "proca_mode.toml", "rlc_circuit.toml",
-        "isokinetic_ring.toml"]
+        "isokinetic_ring.toml", "driven_lc_circuit.toml"]
 STEADY = ["landau_level.toml", "lc_circuit.toml", "pendulum_multiplier.toml", "proca_mode.toml",
           "rlc_circuit.toml"]
 

@@ -288,6 +288,22 @@ def test_a_force_nonlinear_in_v_and_inputs_are_refused_on_a_singular_l():
                               inputs=["F"]))
 
 
+def test_a_landau_level_in_a_field_that_changes_with_t_by_hand():
+    # L = B(t) x y' - (x^2 + y^2)/2, B = 2 + sin t. Euler-Lagrange: y' = x/B and
+    # d/dt(B x) = -y, x' = -(y + B' x)/B: the tangency of p_y - B(t) x carries -B'(t) x.
+    # The chain on TQ agrees through Leg, whose dp/dt = B' x enters the push-forward.
+    t, x, y = S("t"), S("x"), S("y")
+    B = 2 + sp.sin(t)
+    db = dirac_bergmann(System(["x", "y"], "(2 + sin(t))*x*y_dot - (x**2 + y**2)/2"))
+    rate = dict(zip(db.algebra.variables, db.motion))
+    assert sp.simplify(rate[x] + (y + sp.cos(t) * x) / B) == 0
+    assert sp.simplify(rate[y] - x / B) == 0
+    assert sp.simplify(db.dirac_bracket[0, 1] + 1 / B) == 0
+    assert db.gauge_generators == ()
+    eq = db.equivalence
+    assert eq.agree, eq.to_dict()
+
+
 def test_relativistic_particle_by_elimination_of_the_velocities():
     # L = -m sqrt(-x'.x') (metric -+++): p = m eta x'/s with s = sqrt(-x'.x'), so
     # p.p = -m^2: one primary constraint p.p + m^2 = 0, and E_L = x'.p - L = -m s + m s = 0

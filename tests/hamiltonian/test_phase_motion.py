@@ -189,3 +189,20 @@ def test_an_isokinetic_bead_goes_round_at_unit_speed():
     assert (z["x"], z["y"]) == pytest.approx((math.sin(2), -math.cos(2)), abs=1e-8)
     assert any("lam = -10.81" in w for w in answer.warnings)
     assert answer.data["energy_drift"] > 1 and answer.data["energy_balance_residual"] < 1e-8
+
+
+def test_a_driven_loop_follows_the_forced_oscillator():
+    # ell q'' + q/Cap = E0 cos(w t) from q = 1 at rest: q = (1 - a) cos(t/sqrt(ell Cap))
+    # + a cos(w t), a = E0/(ell (1/(ell Cap) - w^2)); H_c = E_L depends on t, the run
+    # carries dH_c/dt and the balance closes.
+    answer = simulate_singular(scene((GALLERY / "driven_lc_circuit.toml").read_text()),
+                               t_end=3.0, options=TIGHT)
+    a = 0.5 / (0.5 - 1.5**2)
+    q = (1 - a) * math.cos(3 / math.sqrt(2)) + a * math.cos(1.5 * 3)
+    z = final(answer)
+    assert z["qC"] == pytest.approx(q, abs=1e-9) and z["qL"] == pytest.approx(q, abs=1e-9)
+    assert answer.data["energy_balance_residual"] < 1e-9
+    with pytest.raises(InputError, match="steady: a singular Lagrangian with t"):
+        linearize_singular(scene((GALLERY / "driven_lc_circuit.toml").read_text()
+                                 + "[steady]\nqL = 0.0\nqC = 0.0\nqL_dot = 0.0\n"
+                                   "qC_dot = 0.0\n"))
