@@ -207,6 +207,10 @@ def rank_certificate(manifold, reduced, sampled: Decision, size: int) -> Decisio
     r = cast(int, sampled.value)  # a sampled rank
     if r > size or manifold.reduction.residual:
         return None
+    # radicals (sqrt(1 - v^2)) make the Schur complement's cancellation unbounded: the
+    # sampled rank stands, said as sampled
+    if any(_radical(e) for e in reduced):
+        return None
     try:
         rows, cols, _ = manifold.regular_block(reduced, r)
     except ComputationError:
@@ -229,3 +233,9 @@ def rank_certificate(manifold, reduced, sampled: Decision, size: int) -> Decisio
         f"{short(det)} on M and its Schur complement vanishes on M",
         singular_values=sampled.singular_values, warnings=(warning,) if warning else (),
     )
+
+
+def _radical(expr) -> bool:
+    """Whether ``expr`` has a non-integer power (a root) of a non-constant expression."""
+    return any(e.is_Pow and not e.exp.is_Integer and not e.base.is_number
+               for e in sp.preorder_traversal(expr))

@@ -150,9 +150,21 @@ def test_compare_finds_the_two_chains_equivalent(name, schema):
 
 
 def test_compare_says_when_the_tq_chain_cannot_run():
-    # the square-root Lagrangian is not defined at most points of TQ (spacelike velocities)
-    rc, _, err = run("compare", str(GALLERY / "relativistic_particle.toml"))
+    # the ring's M_5 in TQ (lam' a coordinate there) has no regular block at its points
+    rc, _, err = run("compare", str(GALLERY / "isokinetic_ring.toml"))
     assert rc == 3 and "not compared" in err
+
+
+def test_compare_samples_tq_where_the_square_root_is_real(schema):
+    # L = -m sqrt(x0'^2 - |x'|^2) is real for timelike velocities only: the points of TQ
+    # are drawn there. Homogeneous of degree 1, W v = 0: the acceleration along v is free
+    # (the reparametrisation), and Leg maps M_f^L (dim 8) onto the mass shell (dim 7).
+    rc, env, err = run("compare", str(GALLERY / "relativistic_particle.toml"), "--json")
+    assert rc == 0, err
+    jsonschema.validate(env, schema)
+    r = env["result"]
+    assert r["agree"] is True
+    assert r["lagrangian_status"] == "underdetermined"
 
 
 def test_a_classify_study_of_a_singular_scene_has_the_massless_case(tmp_path):
