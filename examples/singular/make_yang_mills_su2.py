@@ -30,9 +30,21 @@ print("""# SU(2) Yang-Mills mechanics: the gauge field constant in space (12 coo
 # last term the non-abelian one.
 # nhham compare: the chain on TQ (q' = v built in) ends on a manifold of dimension 21,
 # which Leg maps onto the final one of T*Q (dimension 18), motions included.
-# simulate and linearize: refused naming the free multipliers u_1..u_3 (no [gauge]);
-# bench, sweep, reduce, hamiltonize: refused (exit 2).""")
+# simulate: in the temporal gauge B^a = 0 ([gauge]) the multipliers u_a = B^a' are fixed
+# (0) and Gauss's law is kept; diagonal fields A_i^a = delta_ia a_i stay diagonal and follow
+# the x^2 y^2 model a_1'' = -g^2 a_1 (a_2^2 + a_3^2) (and cyclically), energy conserved.
+# linearize (no [steady]), bench, sweep, reduce, hamiltonize: refused (exit 2).""")
 print('name = "SU(2) Yang-Mills mechanics (homogeneous fields)"')
 print("coordinates = [" + ", ".join(f'"{c}"' for c in coords) + "]")
 print(f'lagrangian = "{sp.expand(L)}"')
 print("\n[parameters]\ng = 1.0")
+print("\n# the temporal gauge A_0 = 0")
+print('[gauge]\nconditions = ["B1", "B2", "B3"]')
+diagonal = {"A11": 1.0, "A22": 0.5, "A33": 0.0}
+rates = {"A33_dot": 0.8}
+print("\n# diagonal fields (Gauss's law holds): the x^2 y^2 model")
+print("[initial]")
+for c in coords:
+    print(f"{c} = {diagonal.get(c, 0.0)}")
+for c in coords[:9]:
+    print(f"{c}_dot = {rates.get(c + '_dot', 0.0)}")

@@ -188,7 +188,7 @@ def test_a_classify_study_of_a_singular_scene_has_the_massless_case(tmp_path):
 #: scenes of the gallery with [initial] (simulate) and [steady] (linearize)
 RUNS = ["christ_lee.toml", "einbein_particle.toml", "gauge_shift.toml", "landau_level.toml",
         "lc_circuit.toml", "pendulum_multiplier.toml", "proca_mode.toml", "rlc_circuit.toml",
-        "isokinetic_ring.toml", "driven_lc_circuit.toml"]
+        "isokinetic_ring.toml", "driven_lc_circuit.toml", "yang_mills_su2.toml"]
 STEADY = ["landau_level.toml", "lc_circuit.toml", "pendulum_multiplier.toml", "proca_mode.toml",
           "rlc_circuit.toml"]
 
