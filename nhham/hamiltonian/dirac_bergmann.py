@@ -28,7 +28,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from fractions import Fraction
 from functools import cached_property
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, cast
 
 import sympy as sp
 
@@ -116,6 +116,10 @@ class DiracBergmann:
     gauge : tuple of sympy.Expr
         Gauge conditions chi(q) = 0 (``gauge[i]``) that joined M_1 to fix the free
         multipliers (no multiplier of their own); () for the chain of the Lagrangian alone.
+    velocities_as_state : tuple of sympy.Symbol
+        The u^a when they are state variables, not multipliers: a velocity constraint or a
+        force nonlinear in the velocities along ker W (``DESIGN.md`` §2); the chain then
+        runs on T*Q x R^r with the u_a' (``u_<a>_dot``) as multipliers. () otherwise.
 
     Examples
     --------
@@ -144,6 +148,7 @@ class DiracBergmann:
     functions: tuple = ()
     conditions: tuple = ()
     gauge: tuple = ()
+    velocities_as_state: tuple = ()
 
     # ------------------------------------------------------------------ chain
     @property
@@ -161,6 +166,20 @@ class DiracBergmann:
     @cached_property
     def algebra(self) -> BracketAlgebra:
         return BracketAlgebra(self.image.coordinates, self.image.momenta)
+
+    @property
+    def variables(self) -> tuple:
+        """The chain's state: (q, p), and the u^a where they are state variables."""
+        return tuple(self.algebra.variables) + tuple(self.velocities_as_state)
+
+    @property
+    def phase_constraints(self) -> tuple:
+        """(labels, constraints) of M_f free of the u^a: the constraints on T*Q, which the
+        classes are about (those with u fix the velocities along ker W)."""
+        u = set(self.velocities_as_state)
+        pairs = [(lab, c) for lab, c in zip(self.run.final_labels, self.run.final_constraints)
+                 if not (sp.sympify(c).free_symbols & u)]
+        return tuple(lab for lab, _ in pairs), tuple(c for _, c in pairs)
 
     @property
     def generation_labels(self) -> tuple:
@@ -201,14 +220,22 @@ class DiracBergmann:
         """B_ab = {chi_a, chi_b} on M_f, its rank, R and the first-class combinations."""
         if not self.consistent:
             return None
-        return classify_on(self.manifold, self.algebra, self.run.final_constraints,
-                           self.run.final_labels, tol=self.policy.tol)
+        labels, constraints = self.phase_constraints
+        return classify_on(self.manifold, self.algebra, constraints, labels,
+                           tol=self.policy.tol)
 
     @property
     def independent(self) -> int | None:
-        """rho = 2n - dim M_f, the number of independent constraints."""
+        """rho = 2n - dim M_f, the number of independent constraints (with the u^a as
+        state: the rank of the phase constraints' Jacobian in (q, p) on M_f)."""
         if not self.consistent or self.run.dimension is None:
             return None
+        if self.velocities_as_state:
+            _, constraints = self.phase_constraints
+            if not constraints:
+                return 0
+            J = sp.Matrix(list(constraints)).jacobian(list(self.algebra.variables))
+            return int(cast(int, self.manifold.rank(J, tol=self.policy.tol).value))
         return 2 * self.n - int(self.run.dimension)
 
     @property
@@ -229,7 +256,7 @@ class DiracBergmann:
         M = self.manifold
         z = self.algebra.variables
         out: dict = {}
-        for lab, chi in zip(self.run.final_labels, self.run.final_constraints):
+        for lab, chi in zip(*self.phase_constraints):
             worst = None
             for s in z:
                 d = M.vanishes(cancel(sp.diff(chi, s)), tol=self.policy.tol)
@@ -251,7 +278,8 @@ class DiracBergmann:
         """(2n - 2 FC - SC) / 2 (an int, or a Fraction when it is not whole), or None when
         the chain is inconsistent or a constraint is irregular (the count would be wrong).
         A constraint replaced by its regular equivalent (``replaced``) is counted as that."""
-        if self.first_class is None or self.irregular or self.conditions:
+        if (self.first_class is None or self.irregular or self.conditions
+                or self.velocities_as_state):
             return None  # velocity constraints restrict the motion, not T*Q: no such count
         dof = Fraction(2 * self.n - 2 * self.first_class - self.second_class, 2)
         return int(dof) if dof.denominator == 1 else dof
@@ -285,15 +313,18 @@ class DiracBergmann:
     def total_hamiltonian(self) -> sp.Expr:
         """H_T = H_c + u^a phi_a (+ lambda^i g_i), every multiplier a symbol (a velocity
         constraint's reaction is not in it: no Hamiltonian field)."""
-        return self.image.canonical_hamiltonian + sum(
+        H = self.image.canonical_hamiltonian + sum(
             (s * c for s, c in zip(self.multipliers, self.functions) if c is not None),
             sp.S.Zero)
+        # u^a as state: their primaries' terms are not multiplied by a multiplier
+        return H + sum((u * phi for u, phi in zip(self.velocities_as_state,
+                                                   self.image.constraints)), sp.S.Zero)
 
     @cached_property
     def primary_first_class(self) -> tuple:
         """A basis of the first-class combinations of the primary constraints (expressions
         in (q, p)): the kernel of (B_ab) restricted to the primary columns, on M_f."""
-        if not self.consistent:
+        if not self.consistent or self.velocities_as_state:
             return ()
         phis = list(self.image.constraints)
         if not phis:
@@ -313,7 +344,8 @@ class DiracBergmann:
         """One :class:`GaugeGenerator` per primary first-class combination (Castellani);
         none with velocity constraints or forces (their terms are no Hamiltonian field) or
         with t in L (the chain would need the dG/dt terms)."""
-        if self.conditions or self.system.has_forces or self.system.time is not None:
+        if (self.conditions or self.system.has_forces or self.system.time is not None
+                or self.velocities_as_state):
             return ()
         return tuple(self._castellani(g, i + 1) for i, g in enumerate(self.primary_first_class))
 
@@ -539,6 +571,12 @@ def dirac_bergmann(system, *, policy: Policy | None = None,
     conditions = tuple((lab, cancel(c.xreplace(v_of)))
                        for lab, c in zip(at.constraint_labels[len(at.holonomic):], vel))
 
+    u = symbols[len(hol) + len(vel):]
+    if _nonlinear_in(u, [c for _, c in conditions]
+                     + (list(at.generalized_forces.xreplace(v_of)) if at.has_forces else [])):
+        return _velocities_as_state(system, at, image, algebra, policy, hol, vel, symbols,
+                                    v_of, gauge, replaced, max_generations)
+
     def manifold(eqs):
         return Submanifold(at, eqs, precision=policy.precision, samples=policy.samples,
                            seed=policy.seed, fibre=p, exact=policy.exact)
@@ -564,45 +602,62 @@ def dirac_bergmann(system, *, policy: Policy | None = None,
                          functions=functions, conditions=conditions, gauge=gauge)
 
 
+def _nonlinear_in(u, exprs) -> bool:
+    """Whether an expression is not affine in the symbols ``u``."""
+    return any(sp.diff(e, a, b) != 0 for e in exprs for a in u for b in u)
+
+
+def _velocities_as_state(system, at, image, algebra, policy, hol, vel, symbols, v_of, gauge,
+                         replaced, max_generations) -> DiracBergmann:
+    """The chain with the u^a as state variables (``DESIGN.md`` §2): on T*Q x R^r the
+    field X_{H_c} + u^a X_{phi_a} + (0, Q(q, v)), the multipliers lambda (holonomic and
+    velocity reactions) and u_a' (d/du^a); the velocity constraints phi(q, v(q, p, u))
+    are constraints there, their tangency affine in the multipliers."""
+    from nhham.lagrangian.algorithm import run_algorithm
+
+    q, p = image.coordinates, image.momenta
+    n, r = at.n, len(image.constraints)
+    u = symbols[len(hol) + len(vel):]
+    lam = symbols[: len(hol) + len(vel)]
+    rates = tuple(sp.Symbol(f"{a.name}_dot") for a in u)   # u_a' (render/names reads them)
+    field = algebra.hamiltonian_field(image.canonical_hamiltonian)
+    for a, phi in zip(u, image.constraints):
+        field = field + a * algebra.hamiltonian_field(phi)
+    if at.has_forces:
+        field = field + sp.Matrix([0] * n + list(at.generalized_forces.xreplace(v_of)))
+    base = sp.Matrix([cancel(e) for e in field] + [0] * r)
+    rows = [list(algebra.hamiltonian_field(g).T) + [0] * r for g in hol]
+    for c in vel:   # the reaction -lambda dphi/dv at v(q, p, u)
+        rows.append([0] * n + [-cancel(sp.diff(c, w).xreplace(v_of)) for w in at.velocities]
+                    + [0] * r)
+    rows += [[0] * (2 * n) + [1 if b == a else 0 for b in range(r)] for a in range(r)]
+    fields = sp.Matrix(rows)
+    velocity_labels = at.constraint_labels[len(at.holonomic):]
+    primary = (hol + tuple(image.constraints)
+               + tuple(cancel(c.xreplace(v_of)) for c in vel) + gauge)
+    labels = (tuple(f"holonomic[{i}]" for i in range(len(hol)))
+              + tuple(f"primary[{a}]" for a in range(r)) + tuple(velocity_labels)
+              + tuple(f"gauge[{i}]" for i in range(len(gauge))))
+
+    def manifold(eqs):
+        return Submanifold(at, eqs, precision=policy.precision, samples=policy.samples,
+                           seed=policy.seed, fibre=tuple(p) + tuple(u), exact=policy.exact)
+
+    run = run_algorithm(base, fields, primary, labels, manifold,
+                        max_stages=2 * n + r if max_generations is None else max_generations,
+                        multiplier_symbols=lam + rates, variables=tuple(q) + tuple(p) + u,
+                        points_are_motions=True, time=at.time)
+    return DiracBergmann(system=at, image=image, run=run, multipliers=lam + rates,
+                         policy=policy, replaced=replaced, base_field=base,
+                         vertical_fields=fields,
+                         functions=hol + (None,) * (len(vel) + r), conditions=(),
+                         gauge=gauge, velocities_as_state=u)
+
+
 def _refuse_unbuilt(system) -> None:
     """The parts of a singular system the chain does not take yet, each by its key."""
     problems = []
-    if system.has_forces:
-        v = list(system.velocities)
-        Q = system.generalized_forces
-        if system.inputs:
-            problems.append("inputs: inputs on a singular Lagrangian are not handled yet")
-        elif any(sp.diff(f, a, b) != 0 for f in Q for a in v for b in v):
-            problems.append("forces: a force nonlinear in the velocities on a singular "
-                            "Lagrangian is not handled yet (forces affine in v are)")
-    if not system.is_affine:
-        _refuse_chetaev(system, problems)
+    if system.inputs:
+        problems.append("inputs: inputs on a singular Lagrangian are not handled yet")
     if problems:
         raise InputError("; ".join(problems), key=problems[0].split(":")[0])
-
-
-def _refuse_chetaev(system, problems) -> None:
-    """A nonlinear (Chetaev) constraint is taken where it does not depend on the
-    velocities along ker W (d phi/dv . k = 0 for every null vector k of W, L quadratic in
-    v): then phi(q, dH_T/dp) and its reaction are free of the multipliers u^a. Otherwise
-    its conditions are nonlinear in the u^a: refused, naming the constraint."""
-    from nhham.system.chetaev import AFFINE
-
-    v = list(system.velocities)
-    W = sp.Matrix(system.hessian)
-    if any(sp.diff(e, w) != 0 for e in W for w in v):
-        problems.append("constraints: a nonlinear (Chetaev) velocity constraint on a "
-                        "Lagrangian not quadratic in v is not handled yet")
-        return
-    kernel = W.nullspace()
-    labels = system.constraint_labels[len(system.holonomic):]
-    kinds = system.constraint_kinds[len(system.complete_lifts):]
-    for lab, c, kind in zip(labels, system.constraints, kinds):
-        if kind == AFFINE:
-            continue
-        grad = [sp.diff(c, w) for w in v]
-        if any(sp.simplify(sum((g * e for g, e in zip(grad, k)), sp.S.Zero)) != 0
-               for k in kernel):
-            problems.append(f"{lab}: a nonlinear (Chetaev) constraint that depends on the "
-                            f"velocities along ker W is not handled yet (its conditions "
-                            f"would be nonlinear in the multipliers u)")

@@ -89,6 +89,11 @@ def equivalence(db) -> Equivalence:
     from nhham.lagrangian.singular import lagrangian_chain
 
     system = db.system
+    if db.velocities_as_state:
+        return Equivalence(None, "the chain on T*Q carries the velocities along ker W as "
+                                 "state (a velocity constraint or a force nonlinear in them): "
+                                 "the comparison through Leg is not built for it", (), (),
+                           None, float("inf"), 0)
     try:
         run = lagrangian_chain(system, policy=db.policy)
         M = run.manifold

@@ -103,7 +103,8 @@ class PhaseMotion:
 
     @cached_property
     def variables(self) -> tuple:
-        return tuple(self.chain.algebra.variables)
+        """(q, p), and the velocities along ker W where the chain carries them as state."""
+        return tuple(self.chain.variables)
 
     @property
     def names(self) -> tuple:
@@ -159,7 +160,7 @@ class PhaseMotion:
     def does_work(self) -> bool:
         """Whether forces or the velocity constraints' reactions may do work (then H_c
         changes by it, :meth:`power`)."""
-        return (self.chain.system.has_forces or bool(self.chain.conditions)
+        return (self.chain.system.has_forces or bool(self.chain.system.constraints)
                 or self.time is not None)
 
     @cached_property
@@ -204,12 +205,29 @@ class PhaseMotion:
         """v = q' = dH_T/dp with the fixed multipliers, shape (n,)."""
         return self.field(z, t)[: self.n]
 
+    @cached_property
+    def _split(self) -> tuple:
+        """(v_c, K) in (q, p): v = v_c + K u, v_c = dH_c/dp, K's columns dphi_a/dp."""
+        chain = self.chain
+        qp = tuple(chain.algebra.variables) + ((self.time,) if self.time is not None else ())
+        momenta = chain.image.momenta
+        vc = [sp.diff(chain.image.canonical_hamiltonian, pa) for pa in momenta]
+        K = [[sp.diff(phi, pa) for phi in chain.image.constraints] for pa in momenta]
+        return numeric_function(qp, vc), numeric_function(qp, K)
+
     def state(self, q, v, t: float = 0.0) -> np.ndarray:
-        """z = Leg(q, v) = (q, dL/dv) (at t), shape (2n,)."""
-        q = np.asarray(q, dtype=float)
-        p = np.asarray(self._momenta(*self._at([*q, *np.asarray(v, dtype=float)], t)),
-                       dtype=float)
-        return np.concatenate([q, p.reshape(-1)])
+        """z = Leg(q, v) = (q, dL/dv) (at t), shape (2n,); with the velocities along ker W
+        as state, their u^a too (v - dH_c/dp = u^a dphi_a/dp, least squares), (2n + r,)."""
+        q, v = np.asarray(q, dtype=float), np.asarray(v, dtype=float)
+        p = np.asarray(self._momenta(*self._at([*q, *v], t)), dtype=float).reshape(-1)
+        z = np.concatenate([q, p])
+        if not self.chain.velocities_as_state:
+            return z
+        vc_f, K_f = self._split
+        vc = np.asarray(vc_f(*self._at(z, t)), dtype=float).reshape(-1)
+        K = np.asarray(K_f(*self._at(z, t)), dtype=float).reshape(self.n, -1)
+        u = np.linalg.lstsq(K, v - vc, rcond=None)[0]
+        return np.concatenate([z, u])
 
     def linearization(self, z) -> PhaseLinearization:
         """The state matrix on M_f at the equilibrium z (see the module docstring).

@@ -276,10 +276,11 @@ def linearize_singular(scene, *, steps=None) -> Answer:
             dict(zip(motion.labels, (float(r) for r in motion.constraints(z)))),
             float(np.max(np.abs(rate), initial=0.0)), tol=float(tol[0]),
             eigenvalues=ev[0], margins=margins[0])
-    if phase.rank != (motion.chain.independent or 0):
+    expected = len(motion.variables) - int(motion.chain.run.dimension or 0)
+    if phase.rank != expected:
         warnings.append(f"steady: the final constraints have rank {phase.rank} there, "
-                        f"{motion.chain.independent} on M_f generically: the point is "
-                        f"singular on M_f and the linearisation may not describe it")
+                        f"{expected} on M_f generically: the point is singular on M_f and "
+                        f"the linearisation may not describe it")
     if phase.tangent_residual > 1e-12:
         warnings.append(f"steady: the motion is not tangent to M_f there (|J T - T A| = "
                         f"{phase.tangent_residual:.1e} relative): the state matrix is not "

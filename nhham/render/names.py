@@ -29,6 +29,7 @@ def output_names(system) -> list:
         # the Dirac-Bergmann chain's u^a and the gauge parameters with their derivatives
         n = len(coords)
         multipliers += [primary_multiplier_symbol(a + 1).name for a in range(n)]
+        multipliers += [f"{primary_multiplier_symbol(a + 1).name}_dot" for a in range(n)]
         multipliers += [acceleration_symbol(q).name for q in system.coordinates]
         multipliers += [gauge_parameter_symbol(a + 1, k).name for a in range(n)
                         for k in range(4)]

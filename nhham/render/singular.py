@@ -83,7 +83,8 @@ def singular_data(db) -> dict:
         "independent": db.independent,
         "degrees_of_freedom": _number(db.degrees_of_freedom),
         "velocity_constraints": [{"label": lab, "condition": shown(c)}
-                                 for lab, c in db.conditions],
+                                 for lab, c in _velocity_constraints(db)],
+        "velocities_as_state": [u.name for u in db.velocities_as_state],
         "gauge_generators": [_generator(g, shown) for g in
                              (db.gauge_generators if db.consistent else ())],
         "irregular": [{"label": lab, "constraint": expr_text(g), "regular_equivalent":
@@ -117,6 +118,15 @@ def _dirac(db):
             "matrix": [[expr_text(D[i, j]) for j in range(D.cols)] for i in range(D.rows)]}
 
 
+def _velocity_constraints(db) -> list:
+    """(label, expression) of the velocity constraints at v = dH_T/dp: conditions on the
+    motion, or constraints on (q, p, u) where the u^a are state."""
+    if not db.velocities_as_state:
+        return list(db.conditions)
+    labels = db.system.constraint_labels[len(db.system.holonomic):]
+    return [(lab, db.named_constraints[lab]) for lab in labels if lab in db.named_constraints]
+
+
 def singular_warnings(db) -> list:
     return list(db.warnings)
 
@@ -144,14 +154,19 @@ def singular_text(title: str, data: dict) -> str:
                             else "no regular equivalent: no count")))
     lines.append(table(rows))
     lines.append(f"H_c = {data['hamiltonian']['canonical']}")
-    lines.append("generations (in q, p):")
+    state = data.get("velocities_as_state") or []
+    lines.append("generations (in q, p" + "".join(f", {u}" for u in state) + "):")
     gens: list = []
     for k, (labs, cons) in enumerate(zip(data["generation_labels"], data["generations"])):
         for i, (lab, c) in enumerate(zip(labs, cons)):
             gens.append((f"{k + 1}" + (" (primary)" if k == 0 else "") if i == 0 else "",
                          lab, c))
     lines.append(table(gens))
-    if data["velocity_constraints"]:
+    if data["velocity_constraints"] and state:
+        lines.append("velocity constraints at v = dH_c/dp + u^a dphi_a/dp (constraints on "
+                     f"(q, p, {', '.join(state)}): the velocities along ker W are state):")
+        lines.append(table([(c["label"], c["condition"]) for c in data["velocity_constraints"]]))
+    elif data["velocity_constraints"]:
         lines.append("velocity constraints at v = dH_T/dp (conditions on the motion, each "
                      "fixing multipliers or adding constraints):")
         lines.append(table([(c["label"], c["condition"]) for c in data["velocity_constraints"]]))
@@ -251,6 +266,10 @@ def _lagrangian_side_text(side: dict) -> str:
 def _dof_text(data: dict) -> str:
     if data["degrees_of_freedom"] is not None:
         return str(data["degrees_of_freedom"])
+    if data.get("velocities_as_state"):
+        return (f"not counted: the velocities along ker W ({', '.join(data['velocities_as_state'])}) "
+                f"are state variables of the chain (a velocity constraint or force nonlinear "
+                f"in them)")
     if data["velocity_constraints"]:
         return ("not counted: velocity constraints restrict the motion on M_f, not T*Q "
                 "((2n - 2 FC - SC)/2 does not apply)")
@@ -349,7 +368,7 @@ def singular_derive_data(db) -> dict:
     return {
         "side": "hamiltonian",
         "form": "explicit",
-        "state": [s.name for s in db.algebra.variables],
+        "state": [s.name for s in db.variables],
         "field": [shown(f) for f in db.motion],
         "multipliers": [shown(fixed.get(s, s)) for s in db.multipliers],
         "multiplier_symbols": [s.name for s in db.multipliers],

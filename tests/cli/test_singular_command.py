@@ -30,6 +30,8 @@ HAND = {
     "rlc_circuit.toml": ("determined", [1], 1, 0, None, 0),
     "isokinetic_ring.toml": ("determined", [1, 2, 1, 1], 1, 4, None, 0),
     "driven_lc_circuit.toml": ("determined", [1], 1, 0, None, 0),
+    "nonlinear_resistor.toml": ("determined", [2], 1, 0, None, 0),
+    "nonlinear_current_law.toml": ("determined", [2], 1, 0, None, 0),
     "relativistic_particle.toml": ("underdetermined", [1], 1, 0, 3, 1),
     "yang_mills_su2.toml": ("underdetermined", [3, 3], 6, 0, 6, 3),
 }
@@ -188,7 +190,8 @@ def test_a_classify_study_of_a_singular_scene_has_the_massless_case(tmp_path):
 #: scenes of the gallery with [initial] (simulate) and [steady] (linearize)
 RUNS = ["christ_lee.toml", "einbein_particle.toml", "gauge_shift.toml", "landau_level.toml",
         "lc_circuit.toml", "pendulum_multiplier.toml", "proca_mode.toml", "rlc_circuit.toml",
-        "isokinetic_ring.toml", "driven_lc_circuit.toml", "yang_mills_su2.toml"]
+        "isokinetic_ring.toml", "driven_lc_circuit.toml", "yang_mills_su2.toml",
+        "nonlinear_resistor.toml", "nonlinear_current_law.toml"]
 STEADY = ["landau_level.toml", "lc_circuit.toml", "pendulum_multiplier.toml", "proca_mode.toml",
           "rlc_circuit.toml"]
 
@@ -200,7 +203,9 @@ def test_simulate_runs_the_motion_on_m_f(name, schema):
     jsonschema.validate(env, schema)
     r = env["result"]
     n = env["scene"]["n"] if "n" in env["scene"] else len(r["state"]) // 2
-    assert len(r["state"]) == 2 * n and r["state"][n].startswith("p_")
+    assert r["state"][n].startswith("p_")
+    # (q, p), and the velocities along ker W where the chain carries them as state
+    assert len(r["state"]) == 2 * n + sum(s.startswith("u_") for s in r["state"])
     assert r["success"] and r["constraint_residual_rel_max"] < 1e-8
     assert r["kkt_solve"] is None
     if r["energy_balance_residual"] is None:   # no forces: H_c is conserved
