@@ -414,3 +414,26 @@ def rank_from_values(values, points, variables, resid, tol, zero, precision, siz
         singular_values=tuple(tuple(float(x) for x in s) for s in plain),
         point_residual=resid, warnings=tuple(warnings), points=record(points, variables),
     )
+
+
+def real_domain(L, args):
+    """``inside(point) -> bool``: L finite and real at the point (a dict over ``args``),
+    when L has a function real on part of the reals only (a non-integer power, a
+    logarithm, asin, acos, acosh, atanh: the square-root particle's sqrt(x0'^2 - |x'|^2));
+    None when it has none (every point is inside). Sample points of TQ are drawn inside."""
+    if not any((e.is_Pow and not e.exp.is_Integer and e.exp.is_number)
+               or e.func in (sp.log, sp.asin, sp.acos, sp.acosh, sp.atanh)
+               for e in sp.preorder_traversal(L)):
+        return None
+    from nhham.system.evaluation import numeric_function
+
+    f = numeric_function(args, L)
+
+    def inside(pt) -> bool:
+        with np.errstate(all="ignore"):
+            try:
+                value = complex(f(*[float(pt[s]) for s in args]))
+            except (ValueError, TypeError, ZeroDivisionError, OverflowError):
+                return False
+        return bool(np.isfinite(value.real) and value.imag == 0.0)
+    return inside

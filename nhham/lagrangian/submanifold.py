@@ -70,6 +70,7 @@ from nhham.lagrangian.sampled import (
     is_affine,
     nowhere_finite,
     rank_from_values,
+    real_domain,
     record,
     value_scale,
     zero_test,
@@ -442,8 +443,9 @@ class Submanifold:
         pts, worst = [], 0.0
         attempts = 0
         eqs = list(self.equations)
-        inside = self._domain()
-        # a Lagrangian real on part of TQ only (sqrt(1 - v^2)) needs more starts
+        # in TQ, where L is real (sqrt(1 - v^2) on part of it only: more starts)
+        inside = (real_domain(self.system.lagrangian, self.variables + self.system.parameters)
+                  if self.fibre == tuple(self.system.velocities) else None)
         for raw in self._raw_points(self.samples * (4 if inside is None else 40)):
             if len(pts) == self.samples:
                 break
@@ -464,27 +466,6 @@ class Submanifold:
                 f"equations without a real solution?)"
             )
         return pts, worst
-
-    def _domain(self):
-        """``inside(point) -> bool`` where M lies in TQ and L is real on part of it only
-        (a square root, a logarithm, an inverse trigonometric function of the state): the
-        points are drawn where L is finite and real. None otherwise (every point is)."""
-        if self.fibre != tuple(self.system.velocities):
-            return None
-        L = self.system.lagrangian
-        if not _restricted(L):
-            return None
-        args = list(self.variables) + list(self.system.parameters)
-        f = numeric_function(args, L)
-
-        def inside(pt) -> bool:
-            with np.errstate(all="ignore"):
-                try:
-                    value = complex(f(*[float(pt[s]) for s in args]))
-                except (ValueError, TypeError, ZeroDivisionError, OverflowError):
-                    return False
-            return bool(np.isfinite(value.real) and abs(value.imag) <= 0.0)
-        return inside
 
     def _raw_points(self, count):
         rng = np.random.default_rng(self.seed)
@@ -714,14 +695,3 @@ def _has_real_point(system, constraints, precision, seed) -> bool:
     except ComputationError:
         return False
     return True
-
-
-def _restricted(expr) -> bool:
-    """Whether ``expr`` has a function real on part of the reals only: a non-integer power
-    (a square root), a logarithm, an inverse sine or cosine, acosh, atanh."""
-    for e in sp.preorder_traversal(expr):
-        if e.is_Pow and not e.exp.is_Integer and e.exp.is_number:
-            return True
-        if e.func in (sp.log, sp.asin, sp.acos, sp.acosh, sp.atanh):
-            return True
-    return False
