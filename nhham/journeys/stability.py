@@ -130,7 +130,9 @@ def linearize(scene, *args, method: str = "auto", sweep=None, model=None, steps=
             # a law in t has no steady motion: said before a missing [steady] table
             system = scene.steady_system()
             check_steady_table(scene)
-            model = numeric_model(system) if model is None else model
+            # numpy answers a linearisation sooner than the compiler: the library is
+            # built in the background (and handed over at exit) for later runs
+            model = numeric_model(system, background=True) if model is None else model
         with steps.step(f"linearise ({method})"
                         + (" the closed loop ([control])" if scene.control else "")
                         + (f", sweep over {sweep[0]}" if sweep is not None else "")):
@@ -197,7 +199,7 @@ def open_loop(scene, method: str = "auto", model=None, independent=None):
     from nhham.numerics.codegen import numeric_model
 
     check_steady_table(scene)
-    model = numeric_model(scene.system) if model is None else model
+    model = numeric_model(scene.system, background=True) if model is None else model
     return steady_linearization(scene, scene.system, model, method, independent,
                                 generator=symmetry_generator(scene, scene.system, model))
 
