@@ -149,6 +149,7 @@ def simulate_singular(scene, *, t_end: float | None = None, options: Mapping | N
     from scipy.integrate import solve_ivp
 
     from nhham.numerics.methods import DEFAULT_METHOD, METHODS, lookup
+    from nhham.numerics.run import report_progress
     from nhham.render.singular_motion import singular_simulate_data, singular_simulate_text
 
     steps = quiet_steps(steps)
@@ -167,28 +168,31 @@ def simulate_singular(scene, *, t_end: float | None = None, options: Mapping | N
     motion = _motion(scene, steps)
     if scene.initial_given is None:
         raise InputError("initial: simulate needs an [initial] table", key="initial")
-    if not hasattr(scene.initial_given, "given"):
-        scene.initial_given.given  # an UnreadTable: raises its problems
+    given = scene.initial_given.given   # an UnreadTable raises its problems here
     values = {k: float(v.evalf(subs={s: scene.system.parameter_values[s]
                                      for s in v.free_symbols
                                      if s in scene.system.parameter_values}))
-              for k, v in scene.initial_given.given.items()}
+              for k, v in given.items()}
     z0, warnings = phase_state(motion, values, "initial")
     rtol, atol = float(opts.get("rtol", 1e-9)), float(opts.get("atol", 1e-12))
     run: dict = dict(rtol=rtol, atol=atol, max_step=float(opts.get("max_step", np.inf)))
     if opts.get("t_eval") is not None:
         run["t_eval"] = np.asarray(opts["t_eval"], dtype=float)
+    start = time.perf_counter()
+    reported = [0]
+
+    def rhs(t, y):
+        if steps.progress and time.perf_counter() - start > 1.0:   # a long run says so
+            reported[0] = report_progress(t, 0.0, t_end, reported[0])
+        # the work W' = (Q - lambda dphi/dv) . v rides along: H_c(t) - H_c(0) = W(t)
+        if motion.does_work:
+            return np.append(motion.field(y[:-1], t), motion.power(y[:-1], t))
+        return motion.field(y, t)
+
     with capture_warnings() as caught:
         with steps.step(f"simulate the motion on M_f with {method.name}"):
-            start = time.perf_counter()
-            # the work W' = (Q - lambda dphi/dv) . v rides along: H_c(t) - H_c(0) = W(t)
-            if motion.does_work:
-                sol = solve_ivp(lambda t, y: np.append(motion.field(y[:-1], t),
-                                                       motion.power(y[:-1], t)),
-                                (0.0, t_end), np.append(z0, 0.0), method=method.load(), **run)
-            else:
-                sol = solve_ivp(lambda t, z: motion.field(z, t), (0.0, t_end), z0,
-                                method=method.load(), **run)
+            sol = solve_ivp(rhs, (0.0, t_end), np.append(z0, 0.0) if motion.does_work else z0,
+                            method=method.load(), **run)
             wall = time.perf_counter() - start
     data = singular_simulate_data(motion, sol, method.name, (0.0, t_end), wall,
                                   dict(run, method=method.name))
