@@ -171,8 +171,10 @@ class PhaseMotion:
         P = sp.S.Zero
         if s.has_forces:
             P += sum((f * w for f, w in zip(s.generalized_forces.xreplace(at_v), v)), sp.S.Zero)
-        # the reaction -lambda_i dphi_i/dv of each velocity constraint (no H_T term)
-        lam = [sym for sym, f in zip(chain.multipliers, chain.functions) if f is None]
+        # the reaction -lambda_i dphi_i/dv of each velocity constraint (no H_T term); their
+        # multipliers follow the holonomic ones' (dirac_bergmann)
+        h = len(s.holonomic)
+        lam = chain.multipliers[h: h + len(s.constraints)]
         fixed = chain.fixed_multipliers
         for sym, c in zip(lam, s.constraints):
             mu = [sp.diff(c, w).xreplace(at_v) for w in s.velocities]
