@@ -118,9 +118,9 @@ def linearize(scene, *args, method: str = "auto", sweep=None, model=None, steps=
 
         if sweep is not None or method == "complex-step" or model is not None:
             what = ("sweep" if sweep is not None else "model" if model is not None
-                    else "method")
+                    else "method complex-step (--numeric)")
             raise InputError(f"{what}: not built for a singular Lagrangian (linearize takes "
-                             f"its equilibrium on M_f, exactly)", key=what)
+                             f"its equilibrium on M_f, exactly)", key=what.split()[0])
         return linearize_singular(scene, steps=steps)
     if method not in METHODS:
         raise InputError(f"linearize: method {method!r} is not one of {', '.join(METHODS)}",
