@@ -200,7 +200,7 @@ def cmd_simulate(args, steps) -> CommandOutput:
     scene = _load(args, steps, singular=True)   # a singular L: the motion on M_f
     t_end, opts = _simulate_options(args, scene)
     if not scene.system.regular_lagrangian:
-        for flag, given in (("--output", args.output), ("--plot", args.plot),
+        for flag, given in (("--plot", args.plot),
                             ("--project-initial", args.project_initial),
                             ("--control", _control_laws(args))):
             if given:
@@ -212,10 +212,11 @@ def cmd_simulate(args, steps) -> CommandOutput:
     data = answer.to_dict()
     data["output"] = None
     data["plot"] = None
-    result = answer.payload.get("result")   # None for a singular L (refused above)
-    if args.output and result is not None:
+    result = answer.payload.get("result")   # None for a singular L: its own "save"
+    if args.output:
         with steps.step(f"write {args.output}"):
-            data["output"] = str(result.save(args.output))
+            data["output"] = str(result.save(args.output) if result is not None
+                                 else answer.payload["save"](args.output))
     if args.plot and result is not None:
         from nhham.render.plotting import plot_trajectory, save_figure
 

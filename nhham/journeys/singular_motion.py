@@ -150,7 +150,8 @@ def simulate_singular(scene, *, t_end: float | None = None, options: Mapping | N
 
     from nhham.numerics.methods import DEFAULT_METHOD, METHODS, lookup
     from nhham.numerics.run import report_progress
-    from nhham.render.singular_motion import singular_simulate_data, singular_simulate_text
+    from nhham.render.singular_motion import (run_arrays, singular_simulate_data,
+                                              singular_simulate_text)
 
     steps = quiet_steps(steps)
     opts = dict(options or {})
@@ -201,9 +202,18 @@ def simulate_singular(scene, *, t_end: float | None = None, options: Mapping | N
         failure = (f"{method.name} stopped at t = {data['t_final']:.10g}: {sol.message}; try "
                    f"another method (--method Radau) or smaller tolerances")
     title = scene.name or str(scene.source)
+
+    def save(path) -> str:
+        """The run written as ``nhham simulate --output`` writes one (t, q, p, H_c)."""
+        from nhham.numerics.integrate import save_states
+
+        Z, work, energy = run_arrays(motion, sol)
+        return save_states(path, sol.t, Z, motion.names, energy, work)
+
     return Answer("simulate", data, functools.partial(singular_simulate_text, title, data),
                   warnings=tuple(warnings) + tuple(caught), failure=failure,
-                  payload={"solution": sol, "motion": motion}, system=scene.system)
+                  payload={"solution": sol, "motion": motion, "save": save},
+                  system=scene.system)
 
 
 def linearize_singular(scene, *, steps=None) -> Answer:

@@ -11,7 +11,7 @@ from nhham.render.schema import jsonable
 from nhham.settings import json_number
 
 __all__ = ["singular_simulate_data", "singular_simulate_text", "singular_linearize_data",
-           "singular_linearize_text"]
+           "singular_linearize_text", "run_arrays"]
 
 
 def _singular(motion) -> dict:
@@ -24,16 +24,23 @@ def _singular(motion) -> dict:
             "second_class": chain.second_class}
 
 
-def singular_simulate_data(motion, sol, method: str, t_span, wall: float, settings) -> dict:
-    """The ``result`` of ``nhham simulate`` for the run ``sol`` (scipy's OdeResult) of
-    ``motion`` (a :class:`~nhham.hamiltonian.phase_motion.PhaseMotion`)."""
+def run_arrays(motion, sol) -> tuple:
+    """(states (N, K), work (K,), H_c (K,)) of the run ``sol`` of ``motion``: the work of
+    the forces and reactions rides along as the last component where they may do any."""
     Z = np.asarray(sol.y, dtype=float)
     work = Z[-1] if motion.does_work else np.zeros(Z.shape[1])
     Z = Z[:-1] if motion.does_work else Z
+    energy = np.array([motion.energy(z, t) for z, t in zip(Z.T, sol.t)])
+    return Z, work, energy
+
+
+def singular_simulate_data(motion, sol, method: str, t_span, wall: float, settings) -> dict:
+    """The ``result`` of ``nhham simulate`` for the run ``sol`` (scipy's OdeResult) of
+    ``motion`` (a :class:`~nhham.hamiltonian.phase_motion.PhaseMotion`)."""
+    Z, work, energy = run_arrays(motion, sol)
     residuals = np.array([np.max(np.abs(motion.constraints(z, t)), initial=0.0)
                           for z, t in zip(Z.T, sol.t)])
     scales = np.maximum(1.0, np.max(np.abs(Z), axis=0))
-    energy = np.array([motion.energy(z, t) for z, t in zip(Z.T, sol.t)])
     drift = float(np.max(np.abs(energy - energy[0]))) if energy.size else 0.0
     balance = (float(np.max(np.abs(energy - energy[0] - work))) if motion.does_work and energy.size
                else None)

@@ -230,7 +230,7 @@ def test_simulate_text_and_what_a_singular_run_refuses():
     rc, out, err = run("simulate", str(GALLERY / "christ_lee.toml"), "--t-end", "1")
     assert rc == 0, err
     assert "gauge xi; x2 = 0" in out and "final state: x1 = " in out
-    for argv, key in ((["--output", "run.npz"], "--output"), (["--method", "rk4"], "method"),
+    for argv, key in ((["--plot", "run.png"], "--plot"), (["--method", "rk4"], "method"),
                       (["--project-initial"], "--project-initial")):
         rc, out, err = run("simulate", str(GALLERY / "landau_level.toml"), *argv)
         assert rc == 2 and key in err and len(err.strip().splitlines()) == 1, err
@@ -238,3 +238,21 @@ def test_simulate_text_and_what_a_singular_run_refuses():
     assert rc == 2 and "u_1 are free" in err and "[gauge]" in err
     rc, out, err = run("linearize", str(GALLERY / "landau_level.toml"), "--sweep", "k=1:2:3")
     assert rc == 2 and "sweep" in err and "Traceback" not in err
+
+
+def test_simulate_writes_the_run_of_a_singular_scene(tmp_path):
+    # the Landau level from (1, 0): x = cos(t/2), y = sin(t/2), p_y = B x, H_c = k r^2/2
+    import numpy as np
+
+    out = tmp_path / "run.csv"
+    rc, env, err = run("simulate", str(GALLERY / "landau_level.toml"), "--t-end", "2",
+                       "--rtol", "1e-11", "--atol", "1e-13", "--output", str(out), "--json")
+    assert rc == 0, err
+    assert env["result"]["output"] == str(out)
+    header = out.read_text().splitlines()[0].split(",")
+    assert header == ["t", "x", "y", "p_x", "p_y", "energy"]
+    rows = np.loadtxt(out, delimiter=",", skiprows=1)
+    t, x, y = rows[:, 0], rows[:, 1], rows[:, 2]
+    assert t[-1] == 2.0
+    assert np.max(np.abs(x - np.cos(t / 2))) < 1e-9 and np.max(np.abs(y - np.sin(t / 2))) < 1e-9
+    assert np.max(np.abs(rows[:, 4] - 2 * x)) < 1e-9 and np.allclose(rows[:, 5], 0.5)
