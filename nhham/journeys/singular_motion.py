@@ -205,7 +205,7 @@ def simulate_singular(scene, *, t_end: float | None = None, options: Mapping | N
 
     def save(path) -> str:
         """The run written as ``nhham simulate --output`` writes one (t, q, p, H_c)."""
-        from nhham.numerics.integrate import save_states
+        from nhham.numerics.storage import save_states
 
         Z, work, energy = run_arrays(motion, sol)
         return save_states(path, sol.t, Z, motion.names, energy, work)

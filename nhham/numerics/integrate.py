@@ -263,6 +263,8 @@ class SimulationResult:
 
     def save(self, path) -> str:
         """Write t and the states: ``.npz`` (numpy) or otherwise CSV with a header."""
+        from nhham.numerics.storage import save_states
+
         return save_states(path, self.t, self.y, self.names, self.energy, self.work)
 
     def summary(self) -> dict:
@@ -289,34 +291,6 @@ class SimulationResult:
                 "residual_before": p.residual_before, "residual_after": p.residual_after,
                 "displacement_q": p.displacement_q, "displacement_v": p.displacement_v}
         return out
-
-
-def save_states(path, t, y, names, energy, work) -> str:
-    """Write a run: ``.npz`` (``t``, ``y`` of shape (N, K), ``names``, ``energy``,
-    ``work``) or otherwise CSV (``t``, the states, ``energy`` by column, a header line).
-
-    Parameters
-    ----------
-    path : str or os.PathLike
-    t : ndarray, shape (K,)
-    y : ndarray, shape (N, K)
-        The states by row (``names``).
-    names : sequence of str
-    energy, work : ndarray, shape (K,)
-
-    Returns
-    -------
-    str
-        The path written.
-    """
-    path = str(path)
-    if path.endswith(".npz"):
-        np.savez(path, t=t, y=y, names=np.array(names), energy=energy, work=work)
-    else:
-        header = ",".join(("t",) + tuple(names) + ("energy",))
-        data = np.column_stack([t, np.asarray(y).T, energy])
-        np.savetxt(path, data, delimiter=",", header=header, comments="", fmt="%.17g")
-    return path
 
 
 def simulate(system_or_model, t_span, y0, *, method: str | Method = DEFAULT_METHOD,

@@ -25,7 +25,7 @@ import numpy as np
 from nhham.errors import InputError
 
 __all__ = ["STORE_BYTES", "Storage", "Recorder", "default_max_points", "storage_bytes",
-           "memory_text"]
+           "memory_text", "save_states"]
 
 #: Memory the stored states of a run may take by default (bytes): ``max_points``
 #: defaults to the number of states that fit.
@@ -213,3 +213,31 @@ class Recorder:
                        requested_stride=0 if t_eval else self.requested_stride,
                        max_points=self.max_points,
                        bytes=storage_bytes(self.count, self.width))
+
+
+def save_states(path, t, y, names, energy, work) -> str:
+    """Write a run: ``.npz`` (``t``, ``y`` of shape (N, K), ``names``, ``energy``,
+    ``work``) or otherwise CSV (``t``, the states, ``energy`` by column, a header line).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+    t : ndarray, shape (K,)
+    y : ndarray, shape (N, K)
+        The states by row (``names``).
+    names : sequence of str
+    energy, work : ndarray, shape (K,)
+
+    Returns
+    -------
+    str
+        The path written.
+    """
+    path = str(path)
+    if path.endswith(".npz"):
+        np.savez(path, t=t, y=y, names=np.array(names), energy=energy, work=work)
+    else:
+        header = ",".join(("t",) + tuple(names) + ("energy",))
+        data = np.column_stack([t, np.asarray(y).T, energy])
+        np.savetxt(path, data, delimiter=",", header=header, comments="", fmt="%.17g")
+    return path
