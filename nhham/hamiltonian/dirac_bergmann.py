@@ -575,11 +575,8 @@ def dirac_bergmann(system, *, policy: Policy | None = None,
     if _nonlinear_in(u, [c for _, c in conditions]
                      + (list(at.generalized_forces.xreplace(v_of)) if at.has_forces else [])):
         return _velocities_as_state(system, at, image, algebra, policy, hol, vel, symbols,
-                                    v_of, gauge, replaced, max_generations)
-
-    def manifold(eqs):
-        return Submanifold(at, eqs, precision=policy.precision, samples=policy.samples,
-                           seed=policy.seed, fibre=p, exact=policy.exact)
+                                    v_of, mu, gauge, replaced, max_generations)
+    manifold = _manifolds(at, policy, p)
 
     base = algebra.hamiltonian_field(image.canonical_hamiltonian)
     if at.has_forces:   # p' gains Q(q, v), v = dH_c/dp + u^a dphi_a/dp: affine in the u^a
@@ -607,8 +604,16 @@ def _nonlinear_in(u, exprs) -> bool:
     return any(sp.diff(e, a, b) != 0 for e in exprs for a in u for b in u)
 
 
-def _velocities_as_state(system, at, image, algebra, policy, hol, vel, symbols, v_of, gauge,
-                         replaced, max_generations) -> DiracBergmann:
+def _manifolds(at, policy, fibre):
+    """``manifold(equations)``: the M_k of the chain, Submanifolds over q and ``fibre``."""
+    def manifold(eqs):
+        return Submanifold(at, eqs, precision=policy.precision, samples=policy.samples,
+                           seed=policy.seed, fibre=tuple(fibre), exact=policy.exact)
+    return manifold
+
+
+def _velocities_as_state(system, at, image, algebra, policy, hol, vel, symbols, v_of, mu,
+                         gauge, replaced, max_generations) -> DiracBergmann:
     """The chain with the u^a as state variables (``DESIGN.md`` §2): on T*Q x R^r the
     field X_{H_c} + u^a X_{phi_a} + (0, Q(q, v)), the multipliers lambda (holonomic and
     velocity reactions) and u_a' (d/du^a); the velocity constraints phi(q, v(q, p, u))
@@ -627,9 +632,7 @@ def _velocities_as_state(system, at, image, algebra, policy, hol, vel, symbols, 
         field = field + sp.Matrix([0] * n + list(at.generalized_forces.xreplace(v_of)))
     base = sp.Matrix([cancel(e) for e in field] + [0] * r)
     rows = [list(algebra.hamiltonian_field(g).T) + [0] * r for g in hol]
-    for c in vel:   # the reaction -lambda dphi/dv at v(q, p, u)
-        rows.append([0] * n + [-cancel(sp.diff(c, w).xreplace(v_of)) for w in at.velocities]
-                    + [0] * r)
+    rows += [[0] * n + [-e for e in row] + [0] * r for row in mu]   # -lambda dphi/dv at v(u)
     rows += [[0] * (2 * n) + [1 if b == a else 0 for b in range(r)] for a in range(r)]
     fields = sp.Matrix(rows)
     velocity_labels = at.constraint_labels[len(at.holonomic):]
@@ -639,11 +642,7 @@ def _velocities_as_state(system, at, image, algebra, policy, hol, vel, symbols, 
               + tuple(f"primary[{a}]" for a in range(r)) + tuple(velocity_labels)
               + tuple(f"gauge[{i}]" for i in range(len(gauge))))
 
-    def manifold(eqs):
-        return Submanifold(at, eqs, precision=policy.precision, samples=policy.samples,
-                           seed=policy.seed, fibre=tuple(p) + tuple(u), exact=policy.exact)
-
-    run = run_algorithm(base, fields, primary, labels, manifold,
+    run = run_algorithm(base, fields, primary, labels, _manifolds(at, policy, tuple(p) + u),
                         max_stages=2 * n + r if max_generations is None else max_generations,
                         multiplier_symbols=lam + rates, variables=tuple(q) + tuple(p) + u,
                         points_are_motions=True, time=at.time)

@@ -231,6 +231,12 @@ class PhaseMotion:
         u = np.linalg.lstsq(K, v - vc, rcond=None)[0]
         return np.concatenate([z, u])
 
+    def require_autonomous(self) -> None:
+        """Raise InputError (key ``steady``) with t in L: no steady state to linearise."""
+        if self.time is not None:
+            raise InputError("steady: a singular Lagrangian with t has no steady state to "
+                             "linearise about (its motion depends on t)", key="steady")
+
     def linearization(self, z) -> PhaseLinearization:
         """The state matrix on M_f at the equilibrium z (see the module docstring).
 
@@ -239,9 +245,7 @@ class PhaseMotion:
         InputError
             With t in L (no equilibrium is a point of T*Q for all t), key ``steady``.
         """
-        if self.time is not None:
-            raise InputError("steady: a singular Lagrangian with t has no steady state to "
-                             "linearise about (its motion depends on t)", key="steady")
+        self.require_autonomous()
         z = np.asarray(z, dtype=float)
         J = np.atleast_2d(np.asarray(self._jacobian(*z), dtype=float))
         N = 2 * self.n

@@ -264,9 +264,7 @@ def linearize_singular(scene, *, steps=None) -> Answer:
         raise InputError("steady: linearize needs a [steady] table (an equilibrium: a value "
                          "for every coordinate and velocity)", key="steady")
     motion = _motion(scene, steps)
-    if motion.time is not None:
-        raise InputError("steady: a singular Lagrangian with t has no steady state to "
-                         "linearise about (its motion depends on t)", key="steady")
+    motion.require_autonomous()   # before the [steady] checks: their messages assume none
     params = {s.name: v for s, v in scene.system.parameter_values.items()}
     values = scene.steady.values(params)
     z, warnings = phase_state(motion, values, "steady")
