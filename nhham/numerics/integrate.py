@@ -614,10 +614,12 @@ def _check_model(spec, baumgarte, model):
         raise InputError(f"method {spec.name!r} takes no constraint nonlinear in the "
                          f"velocities: {spec.nonlinear_refused}; use an adaptive method "
                          f"such as {DEFAULT_METHOD}", key="method")
-    if spec.needs_quadratic and not model.quadratic:
-        raise InputError(f"method {spec.name!r} needs L = 1/2 v^T W(q) v - V(q) (no terms "
-                         f"linear in the velocities, W independent of v); use a scipy method "
-                         f"for this system", key="method")
+    if spec.needs_quadratic and not model.quadratic and not (
+            spec.takes_gyroscopic and model.layout.get("linear_terms")):
+        linear = "" if spec.takes_gyroscopic else "no terms linear in the velocities, "
+        raise InputError(f"method {spec.name!r} needs L = 1/2 v^T W(q) v - V(q) ({linear}W "
+                         f"independent of v); use a scipy method for this system",
+                         key="method")
     model.require_inputs()
     if baumgarte is not None:
         if len(baumgarte) != 2 or not all(math.isfinite(float(x)) and float(x) >= 0

@@ -35,6 +35,7 @@ def kernel_sizes(layout) -> dict:
         "lq": n,
         "jphi": m * n,
         "closed": n + m,
+        "linear": n,   # b(q) of L = v^T W v / 2 + b . v - V (layout "linear_terms")
     }
 
 

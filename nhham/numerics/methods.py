@@ -46,7 +46,7 @@ Examples
 >>> lookup("rk4").order
 4
 >>> names(lambda m: m.fixed_step)
-('rattle', 'rattle4', 'rk4')
+('rattle', 'rattle4', 'discrete_gradient', 'rk4')
 """
 
 from __future__ import annotations
@@ -104,7 +104,11 @@ class Method:
         t may enter L, the constraints and the forces (the stages set the time; rattle's
         scheme is built for an autonomous constrained field and refuses it).
     needs_quadratic : bool
-        L must be 1/2 v^T W(q) v - V(q).
+        L must be 1/2 v^T W(q) v - V(q) (with ``takes_gyroscopic``, 1/2 v^T W(q) v +
+        b(q) . v - V(q)).
+    takes_gyroscopic : bool
+        Terms linear in v (a magnetic or Coriolis term b(q) . v) are allowed beside
+        ``needs_quadratic``.
     stiff : bool
         Meant for stiff problems (advised when an explicit method gives up).
     batched_jacobian : bool
@@ -135,6 +139,7 @@ class Method:
     takes_forces: bool = True
     takes_time: bool = True
     needs_quadratic: bool = False
+    takes_gyroscopic: bool = False
     stiff: bool = False
     batched_jacobian: bool = False
     carries_work: bool = True
@@ -232,6 +237,14 @@ METHODS = MappingProxyType({m.name: m for m in (
            summary="nonholonomic RATTLE (Lobatto IIIA-IIIB with multipliers)", **_RATTLE),
     Method("rattle4", order=4, stepper="nhham.numerics.integrators:rattle4",
            summary="RATTLE composed by the triple jump", **_RATTLE),
+    Method("discrete_gradient", family="fixed-step", order=2,
+           stepper="nhham.numerics.discrete_gradient:energy_exact", loops=("fixed",),
+           keeps_constraints=True, needs_quadratic=True, takes_gyroscopic=True,
+           takes_forces=False, takes_time=False, background_build=False,
+           forces_refused="energy-exact for systems without applied forces, whose "
+                          "balance would need the applied force apart from the field",
+           nonlinear_refused="its reaction is built for constraints affine in v",
+           summary="energy-exact discrete gradient (Gonzalez), constraints kept at each step"),
     Method("rk4", family="fixed-step", order=4, stepper="nhham.numerics.integrators:rk4",
            loops=("fixed",), summary="classical Runge-Kutta 4"),
     Method("reference", family="reference", order=0,

@@ -182,6 +182,19 @@ def test_needs_quadratic_against_a_lagrangian_linear_in_the_velocities(name):
     """L = (x'^2 + y'^2)/2 + x y' with y' = x x': not of the form v^T W v / 2 - V."""
     system = nhham.System(["x", "y"], "(x_dot**2 + y_dot**2)/2 + x*y_dot", ["y_dot - x*x_dot"])
     y0 = [0.0, 0.0, 1.0, 0.0]
+    method = METHODS[name]
+    if method.needs_quadratic and not method.takes_gyroscopic:
+        with pytest.raises(InputError, match=r"1/2 v\^T W"):
+            _run(system, name, 0.2, y0)
+    else:
+        assert _run(system, name, 0.2, y0).success
+
+
+@pytest.mark.parametrize("name", ALL)
+def test_needs_quadratic_against_a_metric_that_depends_on_the_velocities(name):
+    """L = x'^4/12 + y'^2/2 with y' = x x': W = diag(x'^2, 1) reads v."""
+    system = nhham.System(["x", "y"], "x_dot**4/12 + y_dot**2/2", ["y_dot - x*x_dot"])
+    y0 = [0.0, 0.0, 1.0, 0.0]
     if METHODS[name].needs_quadratic:
         with pytest.raises(InputError, match=r"1/2 v\^T W"):
             _run(system, name, 0.2, y0)

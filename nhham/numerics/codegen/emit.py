@@ -242,6 +242,11 @@ def _generate(system, path: str) -> dict:
         "lq": ("qv", lq),
         "jphi": ("qv", jphi),
     }
+    # L = v^T W v / 2 + b . v - V with b != 0 (a gyroscopic term): p = W v + b(q), what
+    # the energy-exact integrator needs beside W (nhham.numerics.discrete_gradient)
+    parts, quadratic = system.quadratic_parts, _is_quadratic(system)
+    if parts is not None and not geometry_v and not quadratic:
+        kernels["linear"] = ("q", [R(e) for e in parts.b])
     if path == "closed_form":
         field = geom.projected_field
         acc = [R(field[n + i]) for i in range(n)]
@@ -267,7 +272,9 @@ def _generate(system, path: str) -> dict:
         "constraint_labels": tuple(system.constraint_labels),
         "holonomic_labels": tuple(f"holonomic[{i}]" for i in range(k)),
         "constant_W": not any(e.free_symbols & set(qs) for e in W),
-        "quadratic": _is_quadratic(system),
+        "quadratic": quadratic,
+        # L = v^T W(q) v / 2 + b(q) . v - V(q) with b != 0: the kernel "linear" gives b
+        "linear_terms": "linear" in kernels,
         "linear_constraints": system.is_linear,
         "name": system.name,
         "kernels": tuple(kernels),
