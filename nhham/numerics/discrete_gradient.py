@@ -160,7 +160,7 @@ class EnergyExactStepper:
     # -------------------------------------------------------------- step
     def step(self, y0, h):
         """(y1, reactions' work over the step) after one step of size h from y0 (q, v)."""
-        n, m, k = self.n, self.m, self.k
+        n, m = self.n, self.m
         q0 = y0[:n]
         p0 = self.momentum(y0)
         H0 = float(self.model.energy(y0))
