@@ -279,6 +279,8 @@ def energy_exact(model, y0, t0, t1, h, *, save_every: int = 1, tol=None, recorde
     st = EnergyExactStepper(model, tol=tol)
     n = model.n
     recorder = _recorder(recorder, 2 * n + 1, save_every)
+    if model.compiled is not None and model.compiled.has_dgrad():
+        return _compiled(model, st, y0, t0, t1, h, recorder, progress, deadline)
     total = [0.0]
 
     def step(y, hh):
@@ -290,3 +292,49 @@ def energy_exact(model, y0, t0, t1, h, *, save_every: int = 1, tol=None, recorde
                                             t0, t1, h, progress, deadline)
     t, y, work = recorder.result(2 * n)
     return Run(t, y, work, status, msg, st.nfev, nsteps, newton_iterations=st.newton, step=hh)
+
+
+def _compiled(model, st, y0, t0, t1, h, recorder, progress, deadline) -> Run:
+    """The compiled loop (``nhham_dgrad`` in ``nhham/numerics/c/dgrad.c``: the same
+    equations, guesses and Newton iterations), called until done: it returns every few
+    milliseconds (signals, the deadline) and when the recorder's room is full."""
+    from nhham.numerics.integrators import _grid
+    from nhham.numerics.run import PAUSE_SECONDS, report_progress
+    from nhham.numerics.status import STOPPED
+
+    N, h = _grid(t0, t1, h)
+    n, m, k = model.n, model.m, model.k
+    y = np.append(np.asarray(y0, dtype=float), 0.0)
+    recorder.add(t0, y)
+    nz = 2 * n + m + k
+    wsp = np.zeros(3 * nz + nz * nz)
+    info = np.zeros(5, dtype=np.int64)
+    pointer = model.parameter_block().pointer
+    reported = 0
+    while True:
+        before = int(info[0])
+        t_room, z_room = recorder.room()
+        status = Status(model.compiled.dgrad(y, h, N, recorder.stride, z_room, pointer, wsp,
+                                             st.tol, st.maxiter, PAUSE_SECONDS, info))
+        rows = int(info[2])
+        if rows:   # the steps after `before` that are multiples of the stride
+            s = recorder.stride
+            t_room[:rows] = t0 + h * ((before // s + 1) * s + s * np.arange(rows))
+            recorder.advance(rows)
+        if progress:
+            reported = report_progress(t0 + h * int(info[0]), t0, t1, reported)
+        if status != Status.PAUSED:
+            break
+        if deadline is not None and deadline.passed():
+            status = deadline.stop_status()
+            break
+    done, newton = int(info[0]), int(info[1])
+    recorder.close(t0 + h * done, y)
+    T, Y, work = recorder.result(2 * n)
+    msg = status.message if status == 0 else deadline.message(t0 + h * done) if (
+        status in STOPPED) else (
+        f"{status.message} in the energy-exact step at t = {t0 + (done + 1) * h:.6g} "
+        f"(step {done + 1}); reduce the step; the run was stopped")
+    # a step costs about four residuals (three kernel calls each) and a Jacobian
+    return Run(T, Y, work, status, msg, 3 * (newton + done), done, newton_iterations=newton,
+               step=h)

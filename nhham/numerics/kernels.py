@@ -36,6 +36,7 @@ def kernel_sizes(layout) -> dict:
         "jphi": m * n,
         "closed": n + m,
         "linear": n,   # b(q) of L = v^T W v / 2 + b . v - V (layout "linear_terms")
+        "potential": 1,   # V(q) of the same L
     }
 
 
@@ -137,6 +138,10 @@ class CompiledRHS:
         self._local = threading.local()
         lib.nhham_rattle.restype = ctypes.c_int
         lib.nhham_erk.restype = ctypes.c_int
+        # the energy-exact loop: only where L = v^T W v / 2 + b . v - V (NHHAM_DGRAD)
+        self._dgrad = getattr(lib, "nhham_dgrad", None)
+        if self._dgrad is not None:
+            self._dgrad.restype = ctypes.c_int
 
     @classmethod
     def load(cls, path, layout, extension=False) -> "CompiledRHS":
@@ -196,6 +201,23 @@ class CompiledRHS:
             c.c_void_p(lam.ctypes.data), c.c_void_p(wsp.ctypes.data), c.c_int(int(first)),
             c.c_double(tol), c.c_int(maxiter), c.c_double(pause_s),
             c.c_void_p(info.ctypes.data))
+
+    def has_dgrad(self) -> bool:
+        return self._dgrad is not None
+
+    def dgrad(self, y, h, nsteps, stride, out, pext, wsp, tol, maxiter, pause_s, info):
+        """One call of the compiled energy-exact loop (``nhham_dgrad``): steps from ``y``
+        (2n + 1: the state and the reactions' work, updated in place) until ``info[0] =
+        nsteps``, a failure or ``pause_s`` seconds; every stride-th step goes to the rows
+        of ``out``. ``wsp`` (3 NZD + NZD^2) and ``info`` (int64: steps done, Newton
+        iterations, rows stored by the call, guesses kept, Jacobian kept) are carried from
+        call to call. Returns the status."""
+        c = ctypes
+        return self._dgrad(
+            c.c_void_p(y.ctypes.data), c.c_double(h), c.c_long(nsteps), c.c_long(stride),
+            c.c_void_p(out.ctypes.data), c.c_long(out.shape[0]), pext,
+            c.c_void_p(wsp.ctypes.data), c.c_double(tol), c.c_int(maxiter),
+            c.c_double(pause_s), c.c_void_p(info.ctypes.data))
 
     def erk(self, info, tab, ws, iw, t_bound, rtol, max_step, projection, proj_tol,
             proj_maxiter, t_eval, out_t, out_z, stride, pause_s, pext):

@@ -7,8 +7,9 @@
         the status codes NHHAM_<NAME> of nhham.numerics.status.Status, and
         NHHAM_CLOSED_FORM on the closed-form path;
      2. this header;
-     3. the generated kernels saddle, geometry, lagr_q, jphi (and closed);
-     4. linalg.c, rhs.c, rattle.c, erk.c, then closed.c (closed-form path) or pyext.c
+     3. the generated kernels saddle, geometry, lagr_q, jphi (and closed; potential and
+        linear where L = v^T W v / 2 + b . v - V, NHHAM_DGRAD);
+     4. linalg.c, rhs.c, rattle.c, erk.c, dgrad.c, then closed.c (closed-form path) or pyext.c
         (saddle path; built as a CPython extension when NHHAM_PYEXT is defined).
 
    The files are package data (nhham/numerics/c/); the cache of compiled libraries is keyed
@@ -50,6 +51,12 @@ static void saddle(const double *y, const double *p, double *out);
 static void geometry(const double *y, const double *p, double *out);
 static void lagr_q(const double *y, const double *p, double *out);
 static void jphi(const double *y, const double *p, double *out);
+#ifdef NHHAM_DGRAD
+static void potential(const double *y, const double *p, double *out);
+#endif
+#ifdef NHHAM_LINEAR_TERMS
+static void linear(const double *y, const double *p, double *out);
+#endif
 #ifdef NHHAM_CLOSED_FORM
 static void closed(const double *y, const double *p, double *out);
 #endif

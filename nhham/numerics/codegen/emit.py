@@ -66,7 +66,7 @@ __all__ = ["generate_sources", "system_fingerprint", "expression_digest", "sourc
            "runtime_source", "RUNTIME_FILES"]
 
 #: The runtime files, in the order they follow the generated kernels (``nhham.h`` first).
-RUNTIME_FILES = ("linalg.c", "rhs.c", "rattle.c", "erk.c")
+RUNTIME_FILES = ("linalg.c", "rhs.c", "rattle.c", "erk.c", "dgrad.c")
 
 
 def generate_sources(system, path: str = "saddle") -> dict:
@@ -245,8 +245,10 @@ def _generate(system, path: str) -> dict:
     # L = v^T W v / 2 + b . v - V with b != 0 (a gyroscopic term): p = W v + b(q), what
     # the energy-exact integrator needs beside W (nhham.numerics.discrete_gradient)
     parts, quadratic = system.quadratic_parts, _is_quadratic(system)
-    if parts is not None and not geometry_v and not quadratic:
-        kernels["linear"] = ("q", [R(e) for e in parts.b])
+    if parts is not None and not geometry_v:   # what the energy-exact integrator reads
+        kernels["potential"] = ("q", [R(parts.V)])
+        if not quadratic:
+            kernels["linear"] = ("q", [R(e) for e in parts.b])
     if path == "closed_form":
         field = geom.projected_field
         acc = [R(field[n + i]) for i in range(n)]
@@ -574,6 +576,10 @@ def _c_module(printed, n, m, k, npar, path, forced=False, time_slot=None,
         head.append("#define NHHAM_GEOMETRY_V 1")
     if path == "closed_form":
         head.append("#define NHHAM_CLOSED_FORM 1")
+    if "potential" in printed:   # L = v^T W v / 2 + b . v - V: the energy-exact loop
+        head.append("#define NHHAM_DGRAD 1")
+    if "linear" in printed:
+        head.append("#define NHHAM_LINEAR_TERMS 1")
     lines = ["\n".join(head), c_defines(), runtime_source("nhham.h")]
     # Parameters may be unused; the (void) casts in the kernels keep compilers quiet.
     lines += _c_kernel("saddle", printed["saddle"], n, npar)
@@ -582,6 +588,9 @@ def _c_module(printed, n, m, k, npar, path, forced=False, time_slot=None,
     lines += _c_kernel("jphi", printed["jphi"], n, npar)
     if path == "closed_form":
         lines += _c_kernel("closed", printed["closed"], n, npar)
+    for name in ("potential", "linear"):
+        if name in printed:
+            lines += _c_kernel(name, printed[name], n, npar, with_v=False)
     lines += [runtime_source(name) for name in RUNTIME_FILES]
     lines.append(runtime_source("closed.c" if path == "closed_form" else "pyext.c"))
     return "\n".join(lines) + "\n"
