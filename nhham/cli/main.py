@@ -44,7 +44,7 @@ from nhham.errors import ComputationError, InputError, NhhamError, UsageError
 from nhham.progress import reporting
 from nhham.lagrangian.engine import Policy
 from nhham.cli.parser import COMMAND_LINE, METHODS, build_parser, unknown_options
-from nhham.numerics.methods import DEFAULT_METHOD, FAMILY_OPTIONS, lookup
+from nhham.numerics.methods import FAMILY_OPTIONS, lookup
 from nhham.numerics.simulate_options import check_method_options
 
 __all__ = ["main", "build_parser", "COMMANDS", "METHODS"]
@@ -134,17 +134,18 @@ def _simulate_options(args, scene):
                                            "save_every", "max_points", "t_eval")
              if getattr(args, k, None) is not None}
     opts.update(given)
-    method = opts.get("method", DEFAULT_METHOD)
+    method = opts.get("method", "auto")
     if method not in METHODS:
         raise InputError(f"method {method!r} (from the scene's [simulate] table) is not one of "
                          f"{', '.join(METHODS)}", key="simulate.method")
-    spec = lookup(method)
-    # The library's check, in the command's words; the scene's values of another
-    # family's options are left out (the command line's are refused).
-    flags = {"projection"} if getattr(args, "projection", False) else set()
-    check_method_options(spec, set(given) | flags, available=opts, spelling=COMMAND_LINE)
-    other = {k for family in FAMILY_OPTIONS.values() for k in family} - set(spec.options)
-    opts = {k: v for k, v in opts.items() if k not in other}
+    if method != "auto":   # auto chooses within the family of the options given
+        spec = lookup(method)
+        # The library's check, in the command's words; the scene's values of another
+        # family's options are left out (the command line's are refused).
+        flags = {"projection"} if getattr(args, "projection", False) else set()
+        check_method_options(spec, set(given) | flags, available=opts, spelling=COMMAND_LINE)
+        other = {k for family in FAMILY_OPTIONS.values() for k in family} - set(spec.options)
+        opts = {k: v for k, v in opts.items() if k not in other}
     if "step" in opts:
         where = "--step" if "step" in given else "simulate.step"
         problem = simulate_option_problem("step", opts["step"], opts.get("t_end", 10.0))

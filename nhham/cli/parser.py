@@ -13,15 +13,16 @@ from nhham.cli.envelope import (
 )
 from nhham.cli.options import DEFAULT_BUDGET, argparse_key, budget_value
 from nhham.errors import UsageError
-from nhham.numerics.methods import DEFAULT_METHOD, names
+from nhham.numerics.methods import names
 from nhham.numerics.simulate_options import Spelling
 
 __all__ = ["METHODS", "FIXED_STEP", "COMMAND_LINE", "build_parser", "add_common_arguments", "unknown_options"]
 
 
 #: Integration methods of ``nhham simulate`` (those of :func:`nhham.simulate`: the
-#: registry :data:`nhham.numerics.methods.METHODS`).
-METHODS = names()
+#: registry :data:`nhham.numerics.methods.METHODS`, and ``auto``:
+#: :mod:`nhham.numerics.method_choice`).
+METHODS = names() + ("auto",)
 
 
 FIXED_STEP = names(lambda m: m.fixed_step)
@@ -190,7 +191,8 @@ def _add_simulate_options(p) -> None:
     """simulate: method, tolerances, steps, output and memory."""
     p.add_argument("--method", default=None, choices=METHODS, metavar="METHOD",
                    help="one of " + ", ".join(METHODS) + " (default: the scene's, else "
-                        f"{DEFAULT_METHOD}); {_listed(FIXED_STEP)} need --step")
+                        f"auto: chosen from the system, the reason printed); "
+                        f"{_listed(FIXED_STEP)} need --step")
     p.add_argument("--rtol", type=float, default=None,
                    help="relative tolerance of adaptive methods (default: scene's, else "
                         "1e-9)")

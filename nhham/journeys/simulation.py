@@ -70,7 +70,6 @@ def simulate(scene, *, t_end: float | None = None, options: Mapping | None = Non
     (True, -0.416146837)
     """
     from nhham.numerics.integrate import simulate as integrate, storage_plan
-    from nhham.numerics.methods import DEFAULT_METHOD
     from nhham.render.results import simulation_data, simulation_failure
 
     scene = as_scene(scene, initial=initial, check_initial=False)
@@ -92,7 +91,7 @@ def simulate(scene, *, t_end: float | None = None, options: Mapping | None = Non
         from nhham.system.force_checks import check_forces_at
 
         check_forces_at(system, scene.initial, where="the initial state")
-    method = opts.get("method", DEFAULT_METHOD)
+    method = opts.setdefault("method", "auto")   # the command's default: chosen from the system
     with capture_warnings() as caught:
         plan = storage_plan(scene.system.n, method, opts.get("save_every", 1),
                             opts.get("max_points"))

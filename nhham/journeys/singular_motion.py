@@ -155,7 +155,9 @@ def simulate_singular(scene, *, t_end: float | None = None, options: Mapping | N
 
     steps = quiet_steps(steps)
     opts = dict(options or {})
-    method = lookup(opts.pop("method", DEFAULT_METHOD), key="simulate.method")
+    # the chain's motion runs the adaptive methods only: auto is DOP853 there
+    chosen = opts.pop("method", DEFAULT_METHOD)
+    method = lookup(DEFAULT_METHOD if chosen == "auto" else chosen, key="simulate.method")
     if "scipy" not in method.loops:
         usable = ", ".join(m.name for m in METHODS.values() if "scipy" in m.loops)
         raise InputError(f"simulate.method: {method.name} does not integrate a singular "

@@ -48,8 +48,9 @@ import math
 
 import numpy as np
 
-from nhham.numerics.run import Run
-from nhham.numerics.status import Status, NumericalFailure
+from nhham.numerics.integrators import fixed_recorder, run_fixed, step_grid
+from nhham.numerics.run import PAUSE_SECONDS, Run, report_progress
+from nhham.numerics.status import STOPPED, NumericalFailure, Status
 
 __all__ = ["energy_exact", "energy_exact_step", "EnergyExactStepper"]
 
@@ -274,11 +275,9 @@ def energy_exact(model, y0, t0, t1, h, *, save_every: int = 1, tol=None, recorde
     >>> bool(np.max(np.abs(E - E[0])) < 1e-14 * abs(E[0]))
     True
     """
-    from nhham.numerics.integrators import _recorder, _run_fixed
-
     st = EnergyExactStepper(model, tol=tol)
     n = model.n
-    recorder = _recorder(recorder, 2 * n + 1, save_every)
+    recorder = fixed_recorder(recorder, 2 * n + 1, save_every)
     if model.compiled is not None and model.compiled.has_dgrad():
         return _compiled(model, st, y0, t0, t1, h, recorder, progress, deadline)
     total = [0.0]
@@ -288,7 +287,7 @@ def energy_exact(model, y0, t0, t1, h, *, save_every: int = 1, tol=None, recorde
         total[0] += work
         return np.concatenate([y1, [total[0]]])
 
-    _, status, msg, nsteps, hh = _run_fixed(step, recorder, np.concatenate([y0, [0.0]]),
+    _, status, msg, nsteps, hh = run_fixed(step, recorder, np.concatenate([y0, [0.0]]),
                                             t0, t1, h, progress, deadline)
     t, y, work = recorder.result(2 * n)
     return Run(t, y, work, status, msg, st.nfev, nsteps, newton_iterations=st.newton, step=hh)
@@ -298,11 +297,7 @@ def _compiled(model, st, y0, t0, t1, h, recorder, progress, deadline) -> Run:
     """The compiled loop (``nhham_dgrad`` in ``nhham/numerics/c/dgrad.c``: the same
     equations, guesses and Newton iterations), called until done: it returns every few
     milliseconds (signals, the deadline) and when the recorder's room is full."""
-    from nhham.numerics.integrators import _grid
-    from nhham.numerics.run import PAUSE_SECONDS, report_progress
-    from nhham.numerics.status import STOPPED
-
-    N, h = _grid(t0, t1, h)
+    N, h = step_grid(t0, t1, h)
     n, m, k = model.n, model.m, model.k
     y = np.append(np.asarray(y0, dtype=float), 0.0)
     recorder.add(t0, y)

@@ -58,13 +58,14 @@ from nhham.numerics.nullspace import describe_kkt_solve
 from nhham.numerics.model import (LibraryReady, NumericModel, NumericsWarning,
                                   ProjectionOutcome)
 from nhham.numerics.run import Deadline, Run, final_state_text, interruptible
+from nhham.numerics.method_choice import choice_for
 from nhham.numerics.methods import DEFAULT_METHOD, METHODS, Method, lookup, names
 from nhham.numerics.scipy_loop import DenseOutput, run_scipy
 from nhham.numerics.simulate_options import (AdaptiveOptions, FixedStepOptions, MethodOptions,
                                              ReferenceOptions, RunOptions, split_options)
 from nhham.numerics.status import Status
 from nhham.numerics.storage import (Recorder, Storage, check_plan, default_max_points,
-                                    memory_text, storage_bytes)
+                                    storage_plan)
 
 __all__ = ["simulate", "SimulationResult", "METHODS", "RunOptions", "AdaptiveOptions",
            "FixedStepOptions", "ReferenceOptions", "storage_plan"]
@@ -236,8 +237,10 @@ class SimulationResult:
     def describe(self) -> str:
         """A few human-readable lines: status, cost and diagnostics."""
         d = self.diagnostics
+        chosen = self.settings.get("method_choice")
         lines = [
             f"{self.method}: {self.message} (status {self.status}) at t = {self.t[-1]:.6g}",
+            *([f"  chosen by auto: {chosen['reason']}"] if chosen else []),
             f"  steps {self.nsteps}, right-hand-side evaluations {self.nfev}, "
             f"wall time {self.wall_time_s:.3g} s, {self.settings.get('backend')} backend",
             f"  max constraint residual {d.constraint_residual_max:.2e} "
@@ -308,7 +311,8 @@ def simulate(system_or_model, t_span, y0, *, method: str | Method = DEFAULT_METH
         or a mechanics model's speeds, and only the independent entries are needed
         (:mod:`nhham.system.state_keys`).
     method : str or Method
-        One of :data:`~nhham.numerics.methods.METHODS` (see the module docstring).
+        One of :data:`~nhham.numerics.methods.METHODS`, or ``"auto"``: chosen from the
+        system (:mod:`nhham.numerics.method_choice`; ``settings["method_choice"]``).
     options : RunOptions, optional
         The options every method takes (below); a keyword overrides its field.
     method_options : AdaptiveOptions, FixedStepOptions or ReferenceOptions, optional
@@ -425,6 +429,12 @@ def simulate(system_or_model, t_span, y0, *, method: str | Method = DEFAULT_METH
     ...
     nhham.errors.InputError: rtol applies to the adaptive methods, not to the fixed-step ...
     """
+    if method == "auto":   # a method chosen from the system and the request
+        choice = choice_for(system_or_model, t_span, y0, options, method_options, keywords)
+        result = simulate(system_or_model, t_span, y0, method=choice.method, options=options,
+                          method_options=method_options, **{**choice.options, **keywords})
+        return replace(result, settings=MappingProxyType({**result.settings,
+                                                          "method_choice": choice.to_dict()}))
     spec = lookup(method)
     common, own = split_options(spec, options, method_options, **keywords)
     if hasattr(y0, "keys") and not isinstance(system_or_model, NumericModel):
@@ -630,26 +640,11 @@ def _check_model(spec, baumgarte, model):
             raise InputError("baumgarte: needs the saddle path (path='saddle')")
 
 
-def _width(n, spec) -> int:
-    """Numbers a loop keeps per state: the state, and the work of the forces
-    where the loop carries it."""
-    return 2 * n + (1 if spec.carries_work else 0)
-
-
-def storage_plan(n: int, method: str | Method, save_every: int = 1, max_points=None) -> str:
-    """What a run of ``method`` on n coordinates will keep, and the memory that takes at
-    most (without t_eval)."""
-    width = _width(n, lookup(method))
-    bound = default_max_points(width) if max_points is None else int(max_points)
-    kept = "every step" if save_every == 1 else f"one step in {save_every}"
-    return f"keeps {kept}, at most {bound} states: {memory_text(storage_bytes(bound, width))}"
-
-
 def _recorder(model, spec, common) -> Recorder:
     """Where the loop puts the states: the t_eval points (refused beyond max_points),
     or every save_every-th step within max_points."""
     t_eval, save_every, max_points = common.t_eval, common.save_every, common.max_points
-    width = _width(model.n, spec)
+    width = 2 * model.n + (1 if spec.carries_work else 0)
     bound = default_max_points(width) if max_points is None else int(max_points)
     if t_eval is not None and not spec.reference:
         points = len(np.atleast_1d(t_eval))

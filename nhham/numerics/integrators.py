@@ -67,7 +67,8 @@ from nhham.numerics.saddle import solve_saddle
 from nhham.numerics.status import STOPPED, NumericalFailure, Status
 from nhham.numerics.storage import Recorder, default_max_points
 
-__all__ = ["FixedStepRun", "rattle", "rattle4", "rk4", "rattle_step"]
+__all__ = ["FixedStepRun", "rattle", "rattle4", "rk4", "rattle_step", "step_grid", "run_fixed",
+           "fixed_recorder"]
 
 # The methods' records (order, what each takes) are in nhham.numerics.methods; a new
 # fixed-step scheme is a function with rk4's signature here and one record there.
@@ -84,7 +85,7 @@ _G2 = 1.0 - 2.0 * _G1
 FixedStepRun = Run
 
 
-def _grid(t0, t1, h):
+def step_grid(t0, t1, h):
     if not (h > 0 and math.isfinite(h)):
         raise InputError(f"step: a positive finite step is required for fixed-step methods, "
                          f"got {h!r}")
@@ -435,7 +436,7 @@ def rattle_step(model, y0, h):
     return y1
 
 
-def _recorder(recorder, width, save_every):
+def fixed_recorder(recorder, width, save_every):
     """The given recorder, or one keeping every ``save_every``-th step within the default
     bound."""
     if recorder is not None:
@@ -443,9 +444,9 @@ def _recorder(recorder, width, save_every):
     return Recorder(width, default_max_points(width), int(save_every))
 
 
-def _run_fixed(step_fn, recorder, y0, t0, t1, h, progress=False, deadline=None):
+def run_fixed(step_fn, recorder, y0, t0, t1, h, progress=False, deadline=None):
     """Steps of ``step_fn`` from y0; the kept states go into ``recorder``."""
-    N, h = _grid(t0, t1, h)
+    N, h = step_grid(t0, t1, h)
     y = np.asarray(y0, dtype=float).copy()
     recorder.add(t0, y)
     status, message = Status.SUCCESS, Status.SUCCESS.message
@@ -499,11 +500,11 @@ def rattle(model, y0, t0, t1, h, *, save_every: int = 1, tol=None, recorder=None
         Stop with ``Status.TIME_LIMIT`` when it has passed (:class:`~nhham.numerics.run.Deadline`).
     """
     st = _RattleStepper(model, tol=tol)
-    recorder = _recorder(recorder, 2 * model.n, save_every)
+    recorder = fixed_recorder(recorder, 2 * model.n, save_every)
     if _compiled_ok(st):
         return _compiled_rattle(model, st, y0, t0, t1, h, recorder, 0, progress, deadline)
     clock = _Clock(t0)
-    _, status, msg, nsteps, hh = _run_fixed(lambda y, h: st.step(y, h, clock.tick(h))[0],
+    _, status, msg, nsteps, hh = run_fixed(lambda y, h: st.step(y, h, clock.tick(h))[0],
                                             recorder, y0, t0, t1, h, progress, deadline)
     t, y, _ = recorder.result(2 * model.n)
     return Run(t, y, None, status, msg, st.nfev + nsteps + st.newton, nsteps,
@@ -519,7 +520,7 @@ def rattle4(model, y0, t0, t1, h, *, save_every: int = 1, tol=None, recorder=Non
     hold at every substep, hence at every grid point. Options as :func:`rattle`.
     """
     st = _RattleStepper(model, tol=tol)
-    recorder = _recorder(recorder, 2 * model.n, save_every)
+    recorder = fixed_recorder(recorder, 2 * model.n, save_every)
     if _compiled_ok(st):
         return _compiled_rattle(model, st, y0, t0, t1, h, recorder, 1, progress, deadline)
     clock = _Clock(t0)
@@ -530,7 +531,7 @@ def rattle4(model, y0, t0, t1, h, *, save_every: int = 1, tol=None, recorder=Non
         y = st.step(y, _G2 * h, t + _G1 * h)[0]
         return st.step(y, _G1 * h, t + (_G1 + _G2) * h)[0]
 
-    _, status, msg, nsteps, hh = _run_fixed(step, recorder, y0, t0, t1, h, progress, deadline)
+    _, status, msg, nsteps, hh = run_fixed(step, recorder, y0, t0, t1, h, progress, deadline)
     t, y, _ = recorder.result(2 * model.n)
     return Run(t, y, None, status, msg, st.nfev + 3 * nsteps + st.newton, nsteps,
                newton_iterations=st.newton, step=hh)
@@ -564,7 +565,7 @@ _REDUCE_THE_STEP = {Status.NOT_CONVERGED: "; reduce the step"}
 def _compiled_rattle(model, st, y0, t0, t1, h, recorder, composition, progress, deadline):
     """The compiled RATTLE loop, called until done (it returns every few milliseconds,
     so that signals are handled, and when the recorder's room is full)."""
-    N, h = _grid(t0, t1, h)
+    N, h = step_grid(t0, t1, h)
     y = np.array(y0, dtype=float)
     recorder.add(t0, y)
     try:
@@ -652,7 +653,7 @@ def rk4(model, y0, t0, t1, h, *, projection: bool = False, baumgarte=None,
         return z
 
     z0 = np.append(np.asarray(y0, dtype=float), 0.0)
-    recorder = _recorder(recorder, n2 + 1, save_every)
-    _, status, msg, nsteps, hh = _run_fixed(step, recorder, z0, t0, t1, h, progress, deadline)
+    recorder = fixed_recorder(recorder, n2 + 1, save_every)
+    _, status, msg, nsteps, hh = run_fixed(step, recorder, z0, t0, t1, h, progress, deadline)
     t, y, work = recorder.result(n2)
     return Run(t, y, work, status, msg, counter["nfev"], nsteps, step=hh)

@@ -127,6 +127,9 @@ class Method:
     quick_bench : bool
         One of the adaptive methods of the quick work-precision study
         (``nhham bench --quick``: one explicit, one implicit, one switching).
+    auto_for : tuple of str
+        The rules of ``method="auto"``'s decision table
+        (:data:`nhham.numerics.method_choice.RULES`) that choose it.
     """
 
     name: str
@@ -147,6 +150,7 @@ class Method:
     forces_refused: str = ""
     quick_bench: bool = False
     nonlinear_refused: str = ""
+    auto_for: tuple[str, ...] = ()
 
     def __post_init__(self):
         # The registry is data that other modules trust: an entry that contradicts
@@ -221,20 +225,22 @@ _ERK: dict[str, Any] = dict(family="adaptive", loops=("compiled", "scipy"))
 #: Every method, in the order the command line lists them (the default first).
 METHODS = MappingProxyType({m.name: m for m in (
     Method("DOP853", order=8, stepper="scipy.integrate:DOP853",
-           summary="explicit Runge-Kutta 8(5,3) (Dormand-Prince)", quick_bench=True, **_ERK),
+           summary="explicit Runge-Kutta 8(5,3) (Dormand-Prince)", quick_bench=True,
+           auto_for=("not mechanical", "short horizon", "tolerances given"), **_ERK),
     Method("RK45", order=5, stepper="scipy.integrate:RK45",
            summary="explicit Runge-Kutta 5(4) (Dormand-Prince)", **_ERK),
     Method("RK23", order=3, stepper="scipy.integrate:RK23",
            summary="explicit Runge-Kutta 3(2) (Bogacki-Shampine)", **_ERK),
     Method("Radau", order=5, stepper="scipy.integrate:Radau", stiff=True,
            batched_jacobian=True, quick_bench=True, summary="implicit Radau IIA of order 5",
-           **_SCIPY),
+           auto_for=("stiff",), **_SCIPY),
     Method("BDF", order=5, stepper="scipy.integrate:BDF", stiff=True, batched_jacobian=True,
            summary="implicit backward differentiation formulas, orders 1 to 5", **_SCIPY),
     Method("LSODA", order=12, stepper="scipy.integrate:LSODA", stiff=True, quick_bench=True,
            summary="Adams/BDF with automatic stiffness detection", **_SCIPY),
     Method("rattle", order=2, stepper="nhham.numerics.integrators:rattle",
-           summary="nonholonomic RATTLE (Lobatto IIIA-IIIB with multipliers)", **_RATTLE),
+           summary="nonholonomic RATTLE (Lobatto IIIA-IIIB with multipliers)",
+           auto_for=("reversible",), **_RATTLE),
     Method("rattle4", order=4, stepper="nhham.numerics.integrators:rattle4",
            summary="RATTLE composed by the triple jump", **_RATTLE),
     Method("discrete_gradient", family="fixed-step", order=2,
@@ -244,9 +250,10 @@ METHODS = MappingProxyType({m.name: m for m in (
            forces_refused="energy-exact for systems without applied forces, whose "
                           "balance would need the applied force apart from the field",
            nonlinear_refused="its reaction is built for constraints affine in v",
-           summary="energy-exact discrete gradient (Gonzalez), constraints kept at each step"),
+           summary="energy-exact discrete gradient (Gonzalez), constraints kept at each step",
+           auto_for=("mechanical",)),
     Method("rk4", family="fixed-step", order=4, stepper="nhham.numerics.integrators:rk4",
-           loops=("fixed",), summary="classical Runge-Kutta 4"),
+           loops=("fixed",), summary="classical Runge-Kutta 4", auto_for=("fixed step given",)),
     Method("reference", family="reference", order=0,
            stepper="nhham.numerics.reference:reference_solution", loops=("mpmath",),
            keeps_constraints=True,

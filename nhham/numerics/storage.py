@@ -25,7 +25,7 @@ import numpy as np
 from nhham.errors import InputError
 
 __all__ = ["STORE_BYTES", "Storage", "Recorder", "default_max_points", "storage_bytes",
-           "memory_text", "save_states"]
+           "memory_text", "save_states", "storage_plan"]
 
 #: Memory the stored states of a run may take by default (bytes): ``max_points``
 #: defaults to the number of states that fit.
@@ -213,6 +213,18 @@ class Recorder:
                        requested_stride=0 if t_eval else self.requested_stride,
                        max_points=self.max_points,
                        bytes=storage_bytes(self.count, self.width))
+
+
+def storage_plan(n: int, method, save_every: int = 1, max_points=None) -> str:
+    """What a run of ``method`` (a name or a Method) on n coordinates will keep, and the
+    memory that takes at most (without t_eval; "auto": the most a method keeps)."""
+    from nhham.numerics.methods import lookup
+
+    # the state, and the work of the forces where the loop carries it
+    width = 2 * n + (1 if method == "auto" or lookup(method).carries_work else 0)
+    bound = default_max_points(width) if max_points is None else int(max_points)
+    kept = "every step" if save_every == 1 else f"one step in {save_every}"
+    return f"keeps {kept}, at most {bound} states: {memory_text(storage_bytes(bound, width))}"
 
 
 def save_states(path, t, y, names, energy, work) -> str:

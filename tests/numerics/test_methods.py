@@ -69,7 +69,8 @@ def test_lookup_names_the_key_and_the_choices():
 
 
 def test_the_command_line_lists_the_registry():
-    assert COMMAND_METHODS == tuple(METHODS)
+    """The registry's methods, then ``auto`` (a choice among them: method_choice)."""
+    assert COMMAND_METHODS == tuple(METHODS) + ("auto",)
     assert ALL[0] == registry.DEFAULT_METHOD
 
 
