@@ -154,6 +154,9 @@ def _simulate_options(args, scene):
                                                                    key=where)
     if getattr(args, "projection", False):
         opts["projection"] = True
+    for key in ("symmetry", "then"):   # the reduction of method hamiltonized
+        if getattr(args, key, None) is not None:
+            opts[key] = [s.strip() for s in getattr(args, key).split(",") if s.strip()]
     t_end = opts.pop("t_end", 10.0)
     if getattr(args, "t_eval", None) is not None:
         opts["t_eval"] = output_times(args.t_eval, t_end)

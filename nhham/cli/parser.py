@@ -226,6 +226,12 @@ def _add_simulate_options(p) -> None:
                    help="project [initial] data that violate the constraints onto "
                         "M_1 (the constraints as given, velocity and holonomic) "
                         "instead of refusing them; the result says by how much")
+    p.add_argument("--symmetry", default=None, metavar="S1,S2",
+                   help="method hamiltonized: the reduction's symmetry coordinates, as "
+                        "hamiltonize takes them (default: found among the cyclic ones)")
+    p.add_argument("--then", default=None, metavar="C1,C2",
+                   help="method hamiltonized: a second reduction step, as hamiltonize "
+                        "takes it (e.g. the rubber ball's --symmetry x,y --then yaw)")
 
 
 def _add_bench_options(p) -> None:

@@ -70,6 +70,7 @@ def simulate(scene, *, t_end: float | None = None, options: Mapping | None = Non
     (True, -0.416146837)
     """
     from nhham.numerics.integrate import simulate as integrate, storage_plan
+    from nhham.numerics.methods import lookup
     from nhham.render.results import simulation_data, simulation_failure
 
     scene = as_scene(scene, initial=initial, check_initial=False)
@@ -92,6 +93,15 @@ def simulate(scene, *, t_end: float | None = None, options: Mapping | None = Non
 
         check_forces_at(system, scene.initial, where="the initial state")
     method = opts.setdefault("method", "auto")   # the command's default: chosen from the system
+    reduction = {key: opts.pop(key) for key in ("symmetry", "then") if key in opts}
+    if method != "auto" and lookup(method, key="simulate.method").needs_reduction:
+        # the scene's Hamiltonized reduction, as numeric functions
+        from nhham.journeys.hamiltonized_motion import hamiltonized_field
+
+        opts["reduced"] = hamiltonized_field(system, steps=steps, **reduction)[0]
+    elif reduction:
+        raise InputError(f"{', '.join(reduction)}: read by method hamiltonized only, not "
+                         f"{method}", key="--" + next(iter(reduction)))
     with capture_warnings() as caught:
         plan = storage_plan(scene.system.n, method, opts.get("save_every", 1),
                             opts.get("max_points"))

@@ -511,6 +511,8 @@ def _run_loop(model, spec, own, common, y_init, t0, t1, recorder, settings, dead
                         "deadline": deadline}
                 if spec.takes_projection:
                     opts.update(projection=common.projection, baumgarte=common.baumgarte)
+                if spec.needs_reduction:
+                    opts["reduced"] = common.reduced
                 run = spec.load()(model, y_init, t0, t1, float(own.step), **opts)
                 settings.update(step=run.step, newton_iterations=run.newton_iterations)
             else:

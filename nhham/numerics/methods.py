@@ -46,7 +46,7 @@ Examples
 >>> lookup("rk4").order
 4
 >>> names(lambda m: m.fixed_step)
-('rattle', 'rattle4', 'discrete_gradient', 'rk4')
+('rattle', 'rattle4', 'discrete_gradient', 'hamiltonized', 'rk4')
 """
 
 from __future__ import annotations
@@ -127,6 +127,9 @@ class Method:
     quick_bench : bool
         One of the adaptive methods of the quick work-precision study
         (``nhham bench --quick``: one explicit, one implicit, one switching).
+    needs_reduction : bool
+        It integrates a scene's Hamiltonized reduction (``reduced``: made by the
+        journey from the scene, :mod:`nhham.journeys.hamiltonized_motion`).
     auto_for : tuple of str
         The rules of ``method="auto"``'s decision table
         (:data:`nhham.numerics.method_choice.RULES`) that choose it.
@@ -150,6 +153,7 @@ class Method:
     forces_refused: str = ""
     quick_bench: bool = False
     nonlinear_refused: str = ""
+    needs_reduction: bool = False
     auto_for: tuple[str, ...] = ()
 
     def __post_init__(self):
@@ -252,6 +256,15 @@ METHODS = MappingProxyType({m.name: m for m in (
            nonlinear_refused="its reaction is built for constraints affine in v",
            summary="energy-exact discrete gradient (Gonzalez), constraints kept at each step",
            auto_for=("mechanical",)),
+    Method("hamiltonized", family="fixed-step", order=2,
+           stepper="nhham.numerics.hamiltonized:hamiltonized", loops=("fixed",),
+           keeps_constraints=True, needs_quadratic=True, takes_forces=False,
+           takes_time=False, carries_work=False, background_build=False,
+           needs_reduction=True, auto_for=("hamiltonizable",),
+           forces_refused="the integrator of a Hamiltonized reduction, which has no forces",
+           nonlinear_refused="a Chaplygin reduction has constraints linear in v",
+           summary="implicit midpoint in Chaplygin's time on a Hamiltonizable reduction, "
+                   "t and the group coordinates reconstructed"),
     Method("rk4", family="fixed-step", order=4, stepper="nhham.numerics.integrators:rk4",
            loops=("fixed",), summary="classical Runge-Kutta 4", auto_for=("fixed step given",)),
     Method("reference", family="reference", order=0,

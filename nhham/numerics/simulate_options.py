@@ -66,6 +66,7 @@ class RunOptions:
     time_limit: float | None = None
     contacts: Any = ()
     controls: Any = None
+    reduced: Any = None     # method hamiltonized: the scene's HamiltonizedField
 
 
 @dataclass(frozen=True)
