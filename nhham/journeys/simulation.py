@@ -94,11 +94,14 @@ def simulate(scene, *, t_end: float | None = None, options: Mapping | None = Non
         check_forces_at(system, scene.initial, where="the initial state")
     method = opts.setdefault("method", "auto")   # the command's default: chosen from the system
     reduction = {key: opts.pop(key) for key in ("symmetry", "then") if key in opts}
-    if method != "auto" and lookup(method, key="simulate.method").needs_reduction:
-        # the scene's Hamiltonized reduction, as numeric functions
+    if method == "auto" or lookup(method, key="simulate.method").needs_reduction:
+        # the scene's Hamiltonized reduction, as numeric functions (auto: tried on demand)
         from nhham.journeys.hamiltonized_motion import hamiltonized_field
 
-        opts["reduced"] = hamiltonized_field(system, steps=steps, **reduction)[0]
+        def reduce():
+            return hamiltonized_field(system, steps=steps, **reduction)[0]
+
+        opts["reduced"] = reduce if method == "auto" else reduce()
     elif reduction:
         raise InputError(f"{', '.join(reduction)}: read by method hamiltonized only, not "
                          f"{method}", key="--" + next(iter(reduction)))

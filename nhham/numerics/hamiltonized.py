@@ -185,6 +185,9 @@ def hamiltonized(model, y0, t0, t1, h, *, reduced=None, save_every: int = 1, rec
             v1, dP1 = _velocities(field, q1, P1)
             steps, newton = steps + 1, newton + it
             while j <= N and (grid[j] <= t_next or j == 0):
+                if not (recorder.keep(j) or j == N):   # only the states kept are formed
+                    j += 1
+                    continue
                 s = (grid[j] - t) / (t_next - t)
                 dt = t_next - t
                 h00, h10 = 2 * s ** 3 - 3 * s ** 2 + 1, s ** 3 - 2 * s ** 2 + s
@@ -192,9 +195,9 @@ def hamiltonized(model, y0, t0, t1, h, *, reduced=None, save_every: int = 1, rec
                 qj = h00 * q + h10 * dt * v_now + h01 * q1 + h11 * dt * v1
                 Pj = h00 * P + h10 * dt * dP_now + h01 * P1 + h11 * dt * dP1
                 vj = _velocities(field, qj, Pj)[0]
-                if recorder.keep(j) or j == 0:
-                    recorder.add(float(grid[j]), np.concatenate([qj, vj]))
                 y_last, j = np.concatenate([qj, vj]), j + 1
+                if j - 1 < N:
+                    recorder.add(float(grid[j - 1]), y_last)
             q, P, t, v_now, dP_now = q1, P1, t_next, v1, dP1
             if progress:
                 reported = report_progress(min(t, t1), t0, t1, reported)

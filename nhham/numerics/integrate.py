@@ -432,7 +432,7 @@ def simulate(system_or_model, t_span, y0, *, method: str | Method = DEFAULT_METH
     if method == "auto":   # a method chosen from the system and the request
         choice = choice_for(system_or_model, t_span, y0, options, method_options, keywords)
         result = simulate(system_or_model, t_span, y0, method=choice.method, options=options,
-                          method_options=method_options, **{**choice.options, **keywords})
+                          method_options=method_options, **{**keywords, **choice.options})
         return replace(result, settings=MappingProxyType({**result.settings,
                                                           "method_choice": choice.to_dict()}))
     spec = lookup(method)

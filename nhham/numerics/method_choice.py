@@ -14,12 +14,15 @@ The decision table (:data:`RULES`, the first that holds):
 ================ ========================================== ===================
 rule             when                                       method
 ================ ========================================== ===================
-stiff            sigma T > 1e4 and sigma > 1e3 x the rates   Radau
-                 of the other modes (and 1/T)
+stiff            sigma T > 1e4 and sigma > 1e3 x the largest Radau
+                 rate of the modes that decay slower (1e-3
+                 sigma): a fast transient beside a slow motion
 not mechanical   forces, inputs, t, Chetaev's constraints,   DOP853
                  L not of the mechanical form
 short horizon    fewer than 100 periods of the fastest       DOP853
                  motion
+hamiltonizable   long horizon, a scene whose reduction has   hamiltonized
+                 a conformal factor (tried within 20 s)
 reversible       long horizon, reversible                    rattle
 mechanical       long horizon, not reversible (a gyroscopic  discrete_gradient
                  term or affine constraints)
@@ -52,7 +55,7 @@ Examples
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Callable
 
 import numpy as np
@@ -63,6 +66,22 @@ __all__ = ["Facts", "MethodChoice", "RULES", "choose_method", "choice_for", "sce
 LONG_PERIODS = 100.0
 #: Steps a radian of the fastest motion for the fixed-step choices (h = STEP_FRACTION/rho).
 STEP_FRACTION = 0.05
+#: The longest ``auto`` waits for a Hamiltonization (symbolic) before it goes on without.
+HAMILTONIZE_SECONDS = 20.0
+
+
+def _try(reducer) -> tuple:
+    """(field, "") or (None, why): the reducer within HAMILTONIZE_SECONDS."""
+    from nhham.budget import time_budget
+    from nhham.errors import BudgetExceeded, NhhamError
+
+    try:
+        with time_budget(HAMILTONIZE_SECONDS):
+            return reducer(), ""
+    except BudgetExceeded:
+        return None, f"not decided within {HAMILTONIZE_SECONDS:g} s"
+    except NhhamError as exc:
+        return None, str(exc).split(": ", 1)[-1]
 
 
 @dataclass(frozen=True)
@@ -77,6 +96,8 @@ class Facts:
     stiffness: float
     periods: float
     horizon: float
+    hamiltonizable: bool | None = None
+    why_not_hamiltonizable: str = ""
 
     @property
     def stiff(self) -> bool:
@@ -85,9 +106,10 @@ class Facts:
     def to_dict(self) -> dict:
         return {"mechanical": self.mechanical, "reversible": self.reversible,
                 "not_mechanical_because": self.why_not_mechanical or None,
-                "fastest_rate": self.rho, "fastest_decay": self.sigma,
+                "fastest_rate": self.rho, "fastest_decay": self.sigma + 0.0,
                 "stiffness_ratio": self.stiffness, "periods": self.periods,
-                "stiff": self.stiff}
+                "stiff": self.stiff, "hamiltonizable": self.hamiltonizable,
+                "not_hamiltonizable_because": self.why_not_hamiltonizable or None}
 
 
 @dataclass(frozen=True)
@@ -115,13 +137,16 @@ def picked_by(rule: str) -> str:
 
 RULES = (
     Rule("stiff", lambda f: f.stiff,
-         lambda f: f"stiff: a decay rate {f.sigma:.3g} is {f.stiffness:.3g} times the other "
-                   f"rates (and 1/T), over {f.sigma * f.horizon:.3g} of its time constants"),
+         lambda f: f"stiff: a decay rate {f.sigma:.3g} is {f.stiffness:.3g} times the rates of "
+                   f"the slow motion, over {f.sigma * f.horizon:.3g} of its time constants"),
     Rule("not mechanical", lambda f: not f.mechanical,
          lambda f: f"{f.why_not_mechanical}: an adaptive method, the energy balance reported"),
     Rule("short horizon", lambda f: f.periods < LONG_PERIODS,
          lambda f: f"a short horizon ({f.periods:.3g} periods of the fastest motion): the most "
                    f"accurate at its cost"),
+    Rule("hamiltonizable", lambda f: f.periods >= LONG_PERIODS and bool(f.hamiltonizable),
+         lambda f: f"a long horizon ({f.periods:.3g} periods) on a Hamiltonizable reduction: "
+                   f"a symplectic method in Chaplygin's time keeps the energy bounded"),
     Rule("reversible", lambda f: f.periods >= LONG_PERIODS and f.reversible,
          lambda f: f"a long horizon ({f.periods:.3g} periods) on a reversible system: "
                    f"RATTLE keeps the energy error bounded at the least cost a step"),
@@ -146,7 +171,8 @@ class MethodChoice:
         return f"method auto: {self.method}{step}, {self.reason}"
 
     def to_dict(self) -> dict:
-        return {"method": self.method, "options": dict(self.options), "rule": self.rule,
+        options = {k: (v.factor_text if k == "reduced" else v) for k, v in self.options.items()}
+        return {"method": self.method, "options": options, "rule": self.rule,
                 "reason": self.reason,
                 "facts": None if self.facts is None else self.facts.to_dict()}
 
@@ -196,26 +222,37 @@ def scene_facts(model, y0, t_span) -> Facts:
     lam = _spectrum(model, y0)
     rho = float(np.max(np.abs(lam))) if lam.size else 0.0
     sigma = float(max(np.max(-lam.real), 0.0)) if lam.size else 0.0
-    others = [abs(x) for x in lam if -x.real <= 1e-3 * sigma] if sigma > 0 else []
-    slow = max(others + [1.0 / horizon]) if horizon > 0 else 1.0
+    # the rates of the motion beside the fast decay (none: the decay is the motion itself)
+    slow = max((abs(x) for x in lam if -x.real <= 1e-3 * sigma), default=0.0)
     return Facts(mechanical=not why, reversible=bool(reversible), why_not_mechanical=why,
                  rho=rho, sigma=sigma, stiffness=sigma / slow if slow > 0 else 0.0,
                  periods=rho * horizon / (2 * math.pi), horizon=horizon)
 
 
-def choose_method(model, y0, t_span, given=()) -> MethodChoice:
+def choose_method(model, y0, t_span, given=(), reducer=None) -> MethodChoice:
     """The method of ``method="auto"`` for a run of ``model`` from ``y0`` (2n,) over
     ``t_span``, by :data:`RULES`; ``given``: the options the user set (``step`` keeps the
-    choice among the fixed-step methods, ``rtol``/``atol`` among the adaptive ones)."""
+    choice among the fixed-step methods, ``rtol``/``atol`` among the adaptive ones);
+    ``reducer``: a callable giving the scene's Hamiltonized field (or raising NhhamError
+    with the obstruction), tried within :data:`HAMILTONIZE_SECONDS` for a long run of a
+    mechanical system only."""
     from nhham.numerics.methods import METHODS
 
     facts = scene_facts(model, y0, t_span)
     given = set(given)
     family = ("fixed-step" if "step" in given else
               "adaptive" if given & {"rtol", "atol", "max_step", "first_step"} else None)
+    field = None
+    if (reducer is not None and facts.mechanical and facts.periods >= LONG_PERIODS
+            and family != "adaptive"):
+        field, why = _try(reducer)
+        facts = replace(facts, hamiltonizable=field is not None, why_not_hamiltonizable=why)
     for rule in RULES:
         if rule.holds(facts) and family in (None, METHODS[rule.method].family):
-            return _with_step(rule.method, rule.name, rule.reason(facts), facts, given)
+            chosen = _with_step(rule.method, rule.name, rule.reason(facts), facts, given)
+            if METHODS[rule.method].needs_reduction:
+                chosen.options["reduced"] = field
+            return chosen
     if family == "fixed-step":   # forces, t, Chetaev, or a short horizon with a step given
         why = (facts.why_not_mechanical or f"a short horizon ({facts.periods:.3g} periods of "
                f"the fastest motion)")
@@ -246,7 +283,8 @@ def choice_for(system_or_model, t_span, y0, options=None, method_options=None,
     from nhham.numerics.simulate_options import FixedStepOptions
 
     keywords = dict(keywords or {})
-    given = set(keywords)
+    reducer = keywords.get("reduced", getattr(options, "reduced", None))
+    given = set(keywords) - {"reduced"}
     if isinstance(method_options, FixedStepOptions):
         given.add("step")
     elif method_options is not None:
@@ -259,4 +297,5 @@ def choice_for(system_or_model, t_span, y0, options=None, method_options=None,
             model, state = system_and_state(model, y0)
         backend = keywords.get("backend", getattr(options, "backend", None) or "auto")
         model = numeric_model(model, backend=backend, background=True)
-    return choose_method(model, model.state(state), t_span, given)
+    return choose_method(model, model.state(state), t_span, given,
+                         reducer=reducer if callable(reducer) else None)

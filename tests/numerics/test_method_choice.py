@@ -55,9 +55,33 @@ def test_four_kinds_of_scene_four_choices():
               choose_method(damped, [1.0, 0.0], span), choose_method(stiff, [1.0, 0.0], span)]
     assert [c.method for c in chosen] == ["rattle", "discrete_gradient", "DOP853", "Radau"]
     assert "not reversible" in chosen[1].reason and "applied forces" in chosen[2].reason
-    # x'' = -1e5 x' - x: lambda = -1e5 and -1e-5 (by hand): 1e5 against max(1e-5, 1/T)
+    # x'' = -1e5 x' - x: lambda = -1e5 and -1e-5 (by hand): a ratio of 1e10
     assert chosen[3].facts.sigma == pytest.approx(1e5, rel=1e-3)
-    assert chosen[3].facts.stiffness == pytest.approx(1e5 / 1e-4, rel=1e-3)
+    assert chosen[3].facts.stiffness == pytest.approx(1e10, rel=1e-3)
+
+
+def test_a_hamiltonizable_scene_is_run_in_chaplygins_time():
+    """The nonholonomic particle over a long horizon: the reducer gives a field, auto
+    takes it; where the reducer names an obstruction, the reversible rule follows and
+    the facts keep the reason."""
+    from nhham.errors import InputError
+    from nhham.journeys.hamiltonized_motion import hamiltonized_field
+
+    model, y0 = _scene_model("nonholonomic_particle")
+    system = nhham.load_scene(str(EXAMPLES / "nonholonomic_particle.toml")).system
+    chosen = choose_method(model, y0, (0.0, 1e5),
+                           reducer=lambda: hamiltonized_field(system)[0])
+    assert chosen.method == "hamiltonized" and chosen.facts.hamiltonizable
+    assert chosen.options["reduced"].factor_text == "1/sqrt(y**2 + 1)"
+
+    def refuse():
+        raise InputError("method hamiltonized: no conformal factor (theta is not closed)")
+
+    other = choose_method(model, y0, (0.0, 1e5), reducer=refuse)
+    assert other.method == "rattle" and other.facts.hamiltonizable is False
+    assert other.facts.why_not_hamiltonizable.startswith("no conformal factor")
+    # a short run does not look for a factor at all
+    assert choose_method(model, y0, (0.0, 10.0), reducer=refuse).facts.hamiltonizable is None
 
 
 def test_the_options_given_keep_the_family(spring):
@@ -79,7 +103,7 @@ def test_not_mechanical_names_why():
 def test_every_rule_is_reached():
     """The table's rules in order; a rule no system reaches would be dead data."""
     assert [r.name for r in RULES] == ["stiff", "not mechanical", "short horizon",
-                                       "reversible", "mechanical"]
+                                       "hamiltonizable", "reversible", "mechanical"]
 
 
 def test_simulate_auto_reports_the_choice(spring):
