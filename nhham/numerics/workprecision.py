@@ -330,8 +330,12 @@ def work_precision(system_or_model, y0, t_span, *, methods=None, tolerances=DEFA
 
 def _fixed_step_methods(model) -> list:
     """The fixed-step methods that take the model (RATTLE for conservative systems with L
-    quadratic, rk4 unless the forces depend on time)."""
-    return list(names(lambda m: m.fixed_step and (model.quadratic or not m.needs_quadratic)
+    quadratic, the discrete gradient also with a gyroscopic term, rk4 unless the forces
+    depend on time; not the Hamiltonized one, which needs the scene's reduction)."""
+    linear_terms = bool(model.layout.get("linear_terms"))
+    return list(names(lambda m: m.fixed_step and not m.needs_reduction
+                      and (model.quadratic or not m.needs_quadratic
+                           or (m.takes_gyroscopic and linear_terms))
                       and (not model.forced or m.takes_forces)
                       and (model.time_slot is None or m.takes_time)
                       and (not model.nonlinear or m.takes_nonlinear)))
