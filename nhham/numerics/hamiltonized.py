@@ -76,8 +76,10 @@ class HamiltonizedField:
     factor_text: str = ""
 
 
-def _midpoint(field, r0, P0, h, maxiter=30):
-    """(r1, P1, Newton iterations): the implicit midpoint rule for H~ from (r0, P0)."""
+def _midpoint(field, r0, P0, h, maxiter=30, kept=None):
+    """(r1, P1, Newton iterations): the implicit midpoint rule for H~ from (r0, P0);
+    ``kept`` (a dict) carries the last Jacobian from step to step (refreshed where the
+    iteration stops contracting ten-fold)."""
     k = len(r0)
     z0 = np.concatenate([r0, P0])
 
@@ -89,7 +91,8 @@ def _midpoint(field, r0, P0, h, maxiter=30):
     gr, gP = field.gradient(r0, P0)
     z = z0 + h * np.concatenate([gP, -gr])
     scale = 1.0 + np.abs(z0)
-    best, J = np.inf, None
+    kept = {} if kept is None else kept
+    best, J = np.inf, kept.get("J")
     for it in range(maxiter):
         r = residual(z)
         err = float(np.max(np.abs(r) / scale))
@@ -102,6 +105,7 @@ def _midpoint(field, r0, P0, h, maxiter=30):
             e = np.sqrt(np.finfo(float).eps) * np.maximum(np.abs(z), scale)
             J = np.column_stack([(residual(z + np.eye(2 * k)[j] * e[j]) - r) / e[j]
                                  for j in range(2 * k)])
+            kept["J"] = J
         best = min(best, err)
         z = z - np.linalg.solve(J, r)
     raise NumericalFailure(Status.NOT_CONVERGED, f"the implicit midpoint step did not "
@@ -174,12 +178,12 @@ def hamiltonized(model, y0, t0, t1, h, *, reduced=None, save_every: int = 1, rec
     P = field.factor(r) * np.asarray(field.momenta(r, v[shape]), dtype=float)
     htau = h * field.factor(r)
     v_now, dP_now = _velocities(field, q, P)
-    t, j, steps, newton, reported = t0, 0, 0, 0, 0
+    t, j, steps, newton, reported, jacobian = t0, 0, 0, 0, 0, {}
     status, message = Status.SUCCESS, Status.SUCCESS.message
     try:
         while j <= N:
             # grid points up to this step's end: cubic Hermite between (t, q, P) and the next
-            r1, P1, it = _midpoint(field, q[shape], P, htau)
+            r1, P1, it = _midpoint(field, q[shape], P, htau, kept=jacobian)
             q1 = _group_step(field, q, r1)
             t_next = t + htau / field.factor(0.5 * (q[shape] + r1))
             v1, dP1 = _velocities(field, q1, P1)
