@@ -170,7 +170,8 @@ static int dg_step(double *y, double h, const double *p, double tol, int maxiter
         if (st == 2) return NHHAM_NONFINITE;
         double err = 0.0;
         for (int i = 0; i < NZD; ++i) err = fmax(err, fabs(r[i]) / size[i]);
-        if (it > 3 && err >= best) { if (err > 1e-9) return NHHAM_NOT_CONVERGED; break; }
+        if (it > 3 && err >= 0.5 * best) { if (err > 1e-9) return NHHAM_NOT_CONVERGED; break; }
+        if (it == maxiter - 1) { if (err > 1e-12) return NHHAM_NOT_CONVERGED; break; }
         if (!*haveJ || err > 1e-9) {     /* Newton's method while far */
             const double root_eps = 1.4901161193847656e-08;
             double zj[NZD], rj[NZD], wj;
@@ -193,7 +194,6 @@ static int dg_step(double *y, double h, const double *p, double tol, int maxiter
         ++*newton;
         if (upd <= tol) break;    /* the update is at rounding */
     }
-    if (it == maxiter) return NHHAM_NOT_CONVERGED;
     /* v1 = W(q1)^-1 (p1 - b(q1)) */
     double v1[NQ], H1;
     if (dg_hamiltonian(z, z + NQ, p, geo, v1, &H1)) return NHHAM_SINGULAR;
