@@ -148,8 +148,8 @@ def main(argv=None):
                     continue
                 row = one_run(system, start, method, steps, h, reduced)
                 if isinstance(row, str):
-                    print(f"| {name} | {method} | {steps} | {h} | does not apply: {row} "
-                          f"| | | |", flush=True)
+                    said = row if row.startswith("stopped") else f"does not apply: {row}"
+                    print(f"| {name} | {method} | {steps} | {h} | {said} | | | |", flush=True)
                     break
                 wall, err, res, kind, run = row
                 extra = ""
