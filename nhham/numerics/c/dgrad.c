@@ -4,6 +4,8 @@
    EnergyExactStepper; the unknowns z = (q1, p1, lambda, nu). */
 #ifdef NHHAM_DGRAD
 #define NZD (2 * NQ + NC + NH)
+#define DG_ROUNDING 1e-13   /* nhham.numerics.discrete_gradient.ROUNDING */
+#define DG_FLOOR 1e-9       /* nhham.numerics.discrete_gradient.FLOOR */
 #define NGD (NQ * NQ + NC * NQ + NC + NH)
 
 /* b(q) of p = W v + b (zero without linear terms). */
@@ -46,7 +48,8 @@ static int dg_hamiltonian(const double *q, const double *P, const double *p, dou
 /* The residual (NZD) at z, and the reactions' work h h_m . lambda; returns 1 when a W is
    singular. As EnergyExactStepper.residual. */
 static int dg_residual(const double *q0, const double *P0, double H0, double h,
-                       const double *z, const double *p, double *r, double *work) {
+                       const double *z, const double *p, double *r, double *work,
+                       double *terms) {
     const double *Q1 = z, *P1 = z + NQ, *lam = z + 2 * NQ, *nu = z + 2 * NQ + NC;
     double geo1[NGD], geom[NGD], V1[NQ], Vm[NQ], Qm[NQ], Pm[NQ], H1, Hm, y[2 * NQ], gq[NQ];
     double dq[NQ], dp[NQ], dHq[NQ], dHp[NQ], w[NQ], c[NCX];
@@ -87,12 +90,17 @@ static int dg_residual(const double *q0, const double *P0, double H0, double h,
         for (int a = 0; a < NC; ++a) react += mum[a * NQ + j] * lam[a];
         r[j] = dq[j] - h * dHp[j];
         r[NQ + j] = dp[j] + h * dHq[j] + h * react;
+        if (terms) {
+            terms[j] = fabs(dq[j]) + h * fabs(dHp[j]);
+            terms[NQ + j] = fabs(dp[j]) + h * (fabs(dHq[j]) + fabs(react));
+        }
     }
     const double *mu1 = geo1 + NQ * NQ, *h1 = mu1 + NC * NQ, *g1 = h1 + NC;
     for (int a = 0; a < NC; ++a) {
-        double t = h1[a];
-        for (int j = 0; j < NQ; ++j) t += mu1[a * NQ + j] * V1[j];
+        double t = h1[a], ab = fabs(h1[a]);
+        for (int j = 0; j < NQ; ++j) { t += mu1[a * NQ + j] * V1[j]; ab += fabs(mu1[a * NQ + j] * V1[j]); }
         r[2 * NQ + a] = t;
+        if (terms) terms[2 * NQ + a] = ab;
     }
 #if NH > 0
     {   /* g(q1) = 0 by a position correction along W^-1 G^T made orthogonal to dH_q */
@@ -106,6 +114,7 @@ static int dg_residual(const double *q0, const double *P0, double H0, double h,
             e = qq > 0.0 ? e / qq : 0.0;
             for (int i = 0; i < NQ; ++i) r[i] += (D[i] - sq[i] * e) * nu[a];
             r[2 * NQ + NC + a] = g1[a];
+            if (terms) terms[2 * NQ + NC + a] = fabs(g1[a]);
         }
     }
 #else
@@ -120,6 +129,7 @@ static int dg_residual(const double *q0, const double *P0, double H0, double h,
 static int dg_step(double *y, double h, const double *p, double tol, int maxiter,
                    double *hist, long *nh, double *J, long *haveJ, long *newton) {
     double q0[NQ], P0[NQ], geo[NGD], b[NQ], z[NZD], r[NZD], scale[NZD], size[NZD], A[NZD * NZD];
+    double terms[NZD];
     double work = 0.0;
     for (int i = 0; i < NQ; ++i) q0[i] = y[i];
     geometry(q0, p, geo);
@@ -156,30 +166,60 @@ static int dg_step(double *y, double h, const double *p, double tol, int maxiter
         for (int a = 0; a < NC; ++a) z[2 * NQ + a] = out[2 * NQ + a];
         for (int a = 0; a < NH; ++a) z[2 * NQ + NC + a] = 0.0;
     }
-    double sq = 1.0, sp = 1.0, sl = 1.0;
-    for (int i = 0; i < NQ; ++i) { sq = fmax(sq, 1.0 + fabs(q0[i])); sp = fmax(sp, 1.0 + fabs(P0[i])); }
-    for (int a = 0; a < NC; ++a) sl = fmax(sl, 1.0 + fabs(z[2 * NQ + a]));
-    for (int i = 0; i < NQ; ++i) { scale[i] = sq; scale[NQ + i] = sp; size[i] = sq; size[NQ + i] = sp; }
-    for (int a = 0; a < NC; ++a) { scale[2 * NQ + a] = sl; size[2 * NQ + a] = sp; }
+    /* scales and row sizes one each, as EnergyExactStepper._scale and _row_size */
+    double sq = 1.0;
+    for (int i = 0; i < NQ; ++i) sq = fmax(sq, 1.0 + fabs(q0[i]));
+    for (int i = 0; i < NQ; ++i) {
+        scale[i] = size[i] = 1.0 + fabs(q0[i]);
+        scale[NQ + i] = size[NQ + i] = 1.0 + fabs(P0[i]);
+    }
+    {
+        const double *mu0 = geo + NQ * NQ, *h0 = mu0 + NC * NQ;
+        for (int a = 0; a < NC; ++a) {
+            double t = 1.0 + fabs(h0[a]);
+            for (int j = 0; j < NQ; ++j) t += fabs(mu0[a * NQ + j] * y[NQ + j]);
+            scale[2 * NQ + a] = 1.0 + fabs(z[2 * NQ + a]);
+            size[2 * NQ + a] = t;
+        }
+    }
     for (int a = 0; a < NH; ++a) { scale[2 * NQ + NC + a] = sq; size[2 * NQ + NC + a] = sq; }
+    double block[NZD];   /* each block's largest size (EnergyExactStepper._block_size) */
+    {
+        const int lo[4] = {0, NQ, 2 * NQ, 2 * NQ + NC}, hi[4] = {NQ, 2 * NQ, 2 * NQ + NC, NZD};
+        for (int b = 0; b < 4; ++b) {
+            double mx = 0.0;
+            for (int i = lo[b]; i < hi[b]; ++i) mx = fmax(mx, size[i]);
+            for (int i = lo[b]; i < hi[b]; ++i) block[i] = mx;
+        }
+    }
     double best = INFINITY;
-    int it;
+    int it, fresh = 0;
     for (it = 0; it < maxiter; ++it) {
-        int st = dg_residual(q0, P0, H0, h, z, p, r, &work);
+        int st = dg_residual(q0, P0, H0, h, z, p, r, &work, terms);
         if (st == 1) return NHHAM_SINGULAR;
         if (st == 2) return NHHAM_NONFINITE;
-        double err = 0.0;
-        for (int i = 0; i < NZD; ++i) err = fmax(err, fabs(r[i]) / size[i]);
-        if (it > 3 && err >= 0.5 * best) { if (err > 1e-9) return NHHAM_NOT_CONVERGED; break; }
-        if (it == maxiter - 1) { if (err > 1e-12) return NHHAM_NOT_CONVERGED; break; }
-        if (!*haveJ || err > 1e-9) {     /* Newton's method while far */
+        double err = 0.0, errb = 0.0;   /* by row; against each block's largest size */
+        for (int i = 0; i < NZD; ++i) {
+            err = fmax(err, fabs(r[i]) / fmax(size[i], terms[i]));
+            errb = fmax(errb, fabs(r[i]) / block[i]);
+        }
+        /* no longer halving: at rounding (DG_ROUNDING, relative), or stuck even with a
+           Jacobian of the last iterate */
+        if (it > 0 && err >= 0.5 * best) {
+            if (errb <= DG_ROUNDING || (fresh && errb <= DG_FLOOR)) break;
+            if (fresh) return NHHAM_NOT_CONVERGED;
+        }
+        if (it == maxiter - 1) { if (errb > DG_FLOOR) return NHHAM_NOT_CONVERGED; break; }
+        /* the last Jacobian is kept from step to step while it contracts ten-fold */
+        fresh = !*haveJ || (it > 0 && err > 0.1 * best && err > DG_ROUNDING);
+        if (fresh) {
             const double root_eps = 1.4901161193847656e-08;
             double zj[NZD], rj[NZD], wj;
             for (int j = 0; j < NZD; ++j) {
                 const double e = root_eps * fmax(fabs(z[j]), scale[j]);
                 for (int i = 0; i < NZD; ++i) zj[i] = z[i];
                 zj[j] += e;
-                st = dg_residual(q0, P0, H0, h, zj, p, rj, &wj);
+                st = dg_residual(q0, P0, H0, h, zj, p, rj, &wj, NULL);
                 if (st == 1) return NHHAM_SINGULAR;
                 if (st == 2) return NHHAM_NONFINITE;
                 for (int i = 0; i < NZD; ++i) J[i * NZD + j] = (rj[i] - r[i]) / e;
@@ -231,6 +271,11 @@ int nhham_dgrad(double *y, double h, long nsteps, long stride, double *out, long
         }
         status = dg_step(y, h, pext, tol, maxiter, wsp, &info[3], wsp + 3 * NZD, &info[4],
                          &info[1]);
+        if (status == NHHAM_NOT_CONVERGED) {   /* once more from the field's own guess */
+            info[3] = 0; info[4] = 0;
+            status = dg_step(y, h, pext, tol, maxiter, wsp, &info[3], wsp + 3 * NZD,
+                             &info[4], &info[1]);
+        }
         if (status) break;
         ++info[0];
         stepped = 1;
