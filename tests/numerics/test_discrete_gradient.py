@@ -155,4 +155,5 @@ def test_stepper_counts_and_newton_to_rounding(oscillator):
     for _ in range(50):
         y, work = st.step(y, 0.1)
         assert work == 0.0
-    assert st.newton <= 50 * 6 and st.nfev > 0
+    # a Jacobian kept from step to step: about eight iterations a step to rounding
+    assert st.newton <= 50 * 9 and st.nfev > 0
