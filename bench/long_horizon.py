@@ -130,6 +130,7 @@ def main(argv=None):
         if name[0] not in wanted:
             continue
         system, start = make()
+        nhham.numeric_model(system, backend="c")   # compiled now: the runs time the loops
         reduced = None
         for method in args.methods.split(","):
             if method == "hamiltonized":
