@@ -112,6 +112,20 @@ def one_run(system, start, method, steps, h, reduced=None):
     return run.wall_time_s, float(np.max(err)), res, kind, run
 
 
+def rows_from(path):
+    """The rows of a table this script printed (to draw it again without running)."""
+    rows = []
+    for line in open(path):
+        cells = [c.strip() for c in line.strip().strip("|").split("|")]
+        if len(cells) == 8:
+            try:
+                rows.append((cells[0], cells[1], int(cells[2]), float(cells[4]),
+                             float(cells[5]), float(cells[6])))
+            except ValueError:
+                continue
+    return rows
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--problems", default="a,b,c,d,e,f",
@@ -119,7 +133,12 @@ def main(argv=None):
     parser.add_argument("--methods", default=",".join(METHODS))
     parser.add_argument("--steps", default="100,10000")
     parser.add_argument("--plot", default=None, help="write the figure (matplotlib)")
+    parser.add_argument("--from-table", default=None, metavar="FILE",
+                        help="draw the figure from a table this script printed, no runs")
     args = parser.parse_args(argv)
+    if args.from_table:
+        _plot(rows_from(args.from_table), args.plot)
+        return
     wanted = set(args.problems.split(","))
     counts = [int(float(s)) for s in args.steps.split(",")]
     rows = []
@@ -173,24 +192,35 @@ def _plot(rows, path):
     import matplotlib.pyplot as plt
 
     names = list(dict.fromkeys(r[0] for r in rows))
-    fig, axes = plt.subplots(1, len(names), figsize=(3.6 * len(names), 3.4), squeeze=False)
+    cols = min(3, len(names))
+    nrows = -(-len(names) // cols)
+    fig, axes = plt.subplots(nrows, cols, figsize=(4.2 * cols, 3.4 * nrows), squeeze=False)
     markers = dict(zip(METHODS, "osD^vP"))
-    for ax, name in zip(axes[0], names):
-        for method in METHODS:
+    colours = dict(zip(METHODS, plt.rcParams["axes.prop_cycle"].by_key()["color"]))
+    for ax in axes.flat[len(names):]:
+        ax.set_visible(False)
+    for ax, name in zip(axes.flat, names):
+        for method in METHODS:   # one colour and marker per method in every panel
             mine = [r for r in rows if r[0] == name and r[1] == method]
             if not mine:
                 continue
             ax.loglog([max(r[3], 1e-5) for r in mine], [max(r[4], 1e-17) for r in mine],
-                      marker=markers[method], label=method)
+                      marker=markers[method], color=colours[method], label=method)
             for r in mine:
                 ax.annotate(f"1e{round(math.log10(r[2]))}", (max(r[3], 1e-5), max(r[4], 1e-17)),
                             fontsize=6, xytext=(2, 2), textcoords="offset points")
         ax.set_title(name, fontsize=9)
         ax.set_xlabel("wall time of the integration (s)")
         ax.grid(True, which="major", alpha=0.3)
-    axes[0][0].set_ylabel("max |E - E0| / |E0|")
-    axes[0][-1].legend(fontsize=7, loc="best")
-    fig.tight_layout()
+    for row in axes:
+        row[0].set_ylabel("max |E - E0| / |E0|")
+    handles = {}
+    for ax in axes.flat:
+        for line in ax.get_lines():
+            handles.setdefault(line.get_label(), line)
+    fig.legend(list(handles.values()), list(handles), loc="lower center",
+               ncol=len(handles), fontsize=8, frameon=False)
+    fig.tight_layout(rect=(0, 0.06, 1, 1))
     fig.savefig(path, dpi=110)
     print(f"\nfigure: {path}")
 
