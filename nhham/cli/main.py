@@ -138,6 +138,9 @@ def _simulate_options(args, scene):
     if method not in METHODS:
         raise InputError(f"method {method!r} (from the scene's [simulate] table) is not one of "
                          f"{', '.join(METHODS)}", key="simulate.method")
+    if method != "auto" and not lookup(method).needs_reduction:   # the scene's reduction
+        for key in ("symmetry", "then"):                            # is for hamiltonized
+            opts.pop(key, None)
     if method != "auto":   # auto chooses within the family of the options given
         spec = lookup(method)
         # The library's check, in the command's words; the scene's values of another

@@ -144,6 +144,16 @@ SCENE_KEYS: tuple = (
     SceneKey("simulate.max_step", "number or expression", "Largest step of the adaptive "
              "methods (> 0).", expressions=_PARAMETER_EXPRESSIONS, read_by=_SIMULATION,
              example="[simulate]\nmax_step = 0.1"),
+    SceneKey("simulate.symmetry", "list of coordinate names", "The symmetry coordinates "
+             "of the reduction that ``method = \"hamiltonized\"`` integrates (as ``nhham "
+             "hamiltonize --symmetry``; default: found among the cyclic ones).",
+             read_by=("simulate",),
+             example='[simulate]\nmethod = "hamiltonized"\nstep = 0.05\nsymmetry = ["x", "y"]'),
+    SceneKey("simulate.then", "list of coordinate names", "A second reduction step for "
+             "``method = \"hamiltonized\"`` (as ``nhham hamiltonize --then``: the rubber "
+             "ball's no-twist constraint).", read_by=("simulate",),
+             example='[simulate]\nmethod = "hamiltonized"\nstep = 0.05\n'
+                     'symmetry = ["x", "y"]\nthen = ["yaw"]'),
     SceneKey("steady", "table of state name (and input) = number or expression",
              "A steady (or relative steady) motion: a value for every coordinate, velocity "
              "and input; ``linearize`` checks it and linearises about it.",

@@ -95,6 +95,9 @@ class SimulateOptions:
         :data:`MAX_FIXED_STEPS` steps).
     max_step : float or None
         Largest step an adaptive method may take (> 0).
+    symmetry, then : tuple of str or None
+        The reduction of method ``hamiltonized`` (coordinate names, as ``nhham
+        hamiltonize --symmetry``, ``--then`` take them).
 
     :func:`simulate_option_problem` holds these ranges (the command's options too).
     """
@@ -105,6 +108,8 @@ class SimulateOptions:
     atol: float | None = None
     step: float | None = None
     max_step: float | None = None
+    symmetry: tuple | None = None
+    then: tuple | None = None
 
     def given(self) -> dict:
         """The options the scene gave, as ``{key: value}``."""
@@ -113,6 +118,8 @@ class SimulateOptions:
 
 
 _SIMULATE_KEYS = tuple(f.name for f in fields(SimulateOptions))
+#: Keys of ``[simulate]`` that name coordinates (the others are a method or numbers).
+_NAME_LISTS = ("symmetry", "then")
 
 
 # --------------------------------------------------------------- structure
@@ -428,6 +435,15 @@ def _simulate_table(value, problems) -> dict:
                 problems.append(f"{path}: expected a method name, got {type_name(value[key])}"
                                 if not isinstance(value[key], str) else f"{path}: empty method name")
             continue
+        if key in _NAME_LISTS:
+            names = value[key]
+            if isinstance(names, list) and names and all(
+                    isinstance(x, str) and x.strip() for x in names):
+                options[key] = tuple(x.strip() for x in names)
+            else:
+                problems.append(f"{path}: expected a list of coordinate names, got "
+                                f"{type_name(names)}")
+            continue
         number = number_or_expression(value[key], path, problems)
         if number is not None:
             options[key] = number
@@ -440,13 +456,13 @@ def simulate_options_at(raw: Mapping, values: dict) -> tuple[SimulateOptions, li
     (:func:`simulate_option_problem`); returns (options, problems).
 
     >>> simulate_options_at({"t_end": "7*pi/Omega", "rtol": 1e-9}, {"Omega": 7.0})
-    (SimulateOptions(t_end=3.141592653589793, method=None, rtol=1e-09, atol=None, step=None, max_step=None), [])
+    (SimulateOptions(t_end=3.141592653589793, method=None, rtol=1e-09, atol=None, step=None, max_step=None, symmetry=None, then=None), [])
     """
     options, problems = {}, []
     for key in _SIMULATE_KEYS:
         if key not in raw:
             continue
-        if key == "method":
+        if key == "method" or key in _NAME_LISTS:
             options[key] = raw[key]
             continue
         path = f"simulate.{key}"

@@ -117,3 +117,29 @@ def test_the_command_runs_it_and_refuses_where_there_is_no_factor():
     with pytest.raises(InputError, match="read by method hamiltonized only"):
         simulate_scene(str(EXAMPLES / "chaplygin_sleigh.toml"), t_end=1.0,
                        options={"method": "rk4", "step": 0.05, "symmetry": ["x"]})
+
+
+def test_a_scene_names_the_reduction_in_its_simulate_table(tmp_path):
+    """``[simulate]`` with method = "hamiltonized", symmetry and then: the command runs the
+    rubber ball's two steps from the table; another method leaves the table's reduction
+    out, and ``--symmetry`` given with it is refused naming the option."""
+    import json
+    import subprocess
+    import sys
+
+    text = (EXAMPLES / "rubber_ball.toml").read_text().split("[simulate]")[0]
+    scene = tmp_path / "ball.toml"
+    scene.write_text(text + '[simulate]\nt_end = 1.0\nmethod = "hamiltonized"\nstep = 0.05\n'
+                     'symmetry = ["x", "y"]\nthen = ["yaw"]\n')
+    run = subprocess.run([sys.executable, "-m", "nhham", "simulate", str(scene), "--json"],
+                         capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr
+    result = json.loads(run.stdout)["result"]
+    assert result["method"] == "hamiltonized" and result["constraint_residual_max"] < 1e-14
+    other = subprocess.run([sys.executable, "-m", "nhham", "simulate", str(scene), "--json",
+                            "--method", "rk4"], capture_output=True, text=True)
+    assert other.returncode == 0, other.stderr
+    refused = subprocess.run([sys.executable, "-m", "nhham", "simulate", str(scene),
+                              "--method", "rk4", "--symmetry", "x"],
+                             capture_output=True, text=True)
+    assert refused.returncode == 2 and "hamiltonized only" in refused.stderr
