@@ -168,6 +168,9 @@ def hamiltonized(model, y0, t0, t1, h, *, reduced=None, save_every: int = 1, rec
                          key="method")
     if not (h > 0 and math.isfinite(h)):
         raise InputError(f"step: a positive finite step is required, got {h!r}")
+    if not t1 > t0:   # Chaplygin's time runs with t: backwards would need f's sign turned
+        raise InputError(f"t_span: method 'hamiltonized' integrates forward in t, got "
+                         f"({t0!r}, {t1!r})", key="t_span")
     field, n = reduced, model.n
     shape = list(field.shape)
     N = max(1, int(math.ceil((t1 - t0) / h - 1e-9)))
