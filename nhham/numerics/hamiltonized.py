@@ -181,7 +181,8 @@ def hamiltonized(model, y0, t0, t1, h, *, reduced=None, save_every: int = 1, rec
     P = field.factor(r) * np.asarray(field.momenta(r, v[shape]), dtype=float)
     htau = h * field.factor(r)
     v_now, dP_now = _velocities(field, q, P)
-    t, j, steps, newton, reported, jacobian = t0, 0, 0, 0, 0, {}
+    t, j, steps, newton, reported = t0, 0, 0, 0, 0
+    jacobian: dict = {}   # the midpoint rule's last Jacobian, kept from step to step
     status, message = Status.SUCCESS, Status.SUCCESS.message
     try:
         while j <= N:
