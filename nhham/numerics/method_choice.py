@@ -36,8 +36,8 @@ at the lowest cost a step, and where the system is not reversible the energy-exa
 discrete gradient keeps the energy (or, with affine constraints, its balance with the
 reactions' work) to rounding. A fixed-step method takes the step 0.05/rho (about 125 steps
 a period of the fastest motion) unless one is given. With ``step`` given the choice is among
-the fixed-step methods (rk4 where neither structure-preserving one applies), with ``rtol``
-or ``atol`` among the adaptive ones.
+the fixed-step methods (rk4 where neither structure-preserving one applies), with ``rtol``,
+``atol``, ``t_eval``, ``dense_output`` or ``events`` among the adaptive ones.
 
 Examples
 --------
@@ -240,8 +240,10 @@ def choose_method(model, y0, t_span, given=(), reducer=None) -> MethodChoice:
 
     facts = scene_facts(model, y0, t_span)
     given = set(given)
+    # output at given times, dense output and events are the adaptive methods' own
     family = ("fixed-step" if "step" in given else
-              "adaptive" if given & {"rtol", "atol", "max_step", "first_step"} else None)
+              "adaptive" if given & {"rtol", "atol", "max_step", "first_step", "t_eval",
+                                     "dense_output", "events"} else None)
     field = None
     if (reducer is not None and facts.mechanical and facts.periods >= LONG_PERIODS
             and family != "adaptive"):

@@ -87,6 +87,10 @@ def test_a_hamiltonizable_scene_is_run_in_chaplygins_time():
 def test_the_options_given_keep_the_family(spring):
     long = (0.0, 1e4)
     assert choose_method(spring, [1.0, 0.0], long, {"rtol"}).method == "DOP853"
+    # output at given times is the adaptive methods' (a fixed-step one keeps its grid)
+    assert choose_method(spring, [1.0, 0.0], long, {"t_eval"}).method == "DOP853"
+    run = nhham.simulate(spring, long, [1.0, 0.0], method="auto", t_eval=[0.0, 5e3, 1e4])
+    assert run.method == "DOP853" and list(run.t) == [0.0, 5e3, 1e4]
     fixed = choose_method(spring, [1.0, 0.0], long, {"step"})
     assert fixed.method == "rattle" and fixed.options == {}      # the step given is kept
     damped = _model(nhham.System(["x"], "x_dot**2/2 - x**2/2", dissipation="x_dot**2/4"))
