@@ -37,7 +37,8 @@ discrete gradient keeps the energy (or, with affine constraints, its balance wit
 reactions' work) to rounding. A fixed-step method takes the step 0.05/rho (about 125 steps
 a period of the fastest motion) unless one is given. With ``step`` given the choice is among
 the fixed-step methods (rk4 where neither structure-preserving one applies), with ``rtol``,
-``atol``, ``t_eval``, ``dense_output`` or ``events`` among the adaptive ones.
+``atol``, ``t_eval``, ``dense_output``, ``events``, ``projection`` or ``baumgarte`` among
+the adaptive ones.
 
 Examples
 --------
@@ -240,10 +241,12 @@ def choose_method(model, y0, t_span, given=(), reducer=None) -> MethodChoice:
 
     facts = scene_facts(model, y0, t_span)
     given = set(given)
-    # output at given times, dense output and events are the adaptive methods' own
+    # output at given times, dense output, events and projection are the adaptive
+    # methods' (the structure-preserving ones keep their grid and their constraints)
     family = ("fixed-step" if "step" in given else
               "adaptive" if given & {"rtol", "atol", "max_step", "first_step", "t_eval",
-                                     "dense_output", "events"} else None)
+                                     "dense_output", "events", "projection",
+                                     "baumgarte"} else None)
     field = None
     if (reducer is not None and facts.mechanical and facts.periods >= LONG_PERIODS
             and family != "adaptive"):
