@@ -289,7 +289,8 @@ def choice_for(system_or_model, t_span, y0, options=None, method_options=None,
 
     keywords = dict(keywords or {})
     reducer = keywords.get("reduced", getattr(options, "reduced", None))
-    given = set(keywords) - {"reduced"}
+    # what was asked (projection=False or events=None ask for nothing)
+    given = {k for k, v in keywords.items() if v is not None and v is not False} - {"reduced"}
     if isinstance(method_options, FixedStepOptions):
         given.add("step")
     elif method_options is not None:
