@@ -48,9 +48,9 @@ import math
 
 import numpy as np
 
-from nhham.numerics.integrators import fixed_recorder, run_fixed, step_grid
-from nhham.numerics.run import PAUSE_SECONDS, Run, report_progress
-from nhham.numerics.status import STOPPED, NumericalFailure, Status
+from nhham.numerics.integrators import drive_compiled, fixed_recorder, run_fixed, step_grid
+from nhham.numerics.run import PAUSE_SECONDS, Run
+from nhham.numerics.status import NumericalFailure, Status
 
 __all__ = ["energy_exact", "energy_exact_step", "EnergyExactStepper"]
 
@@ -352,31 +352,14 @@ def _compiled(model, st, y0, t0, t1, h, recorder, progress, deadline) -> Run:
     wsp = np.zeros(3 * nz + nz * nz)
     info = np.zeros(5, dtype=np.int64)
     pointer = model.parameter_block().pointer
-    reported = 0
-    while True:
-        before = int(info[0])
-        t_room, z_room = recorder.room()
-        status = Status(model.compiled.dgrad(y, h, N, recorder.stride, z_room, pointer, wsp,
-                                             st.tol, st.maxiter, PAUSE_SECONDS, info))
-        rows = int(info[2])
-        if rows:   # the steps after `before` that are multiples of the stride
-            s = recorder.stride
-            t_room[:rows] = t0 + h * ((before // s + 1) * s + s * np.arange(rows))
-            recorder.advance(rows)
-        if progress:
-            reported = report_progress(t0 + h * int(info[0]), t0, t1, reported)
-        if status != Status.PAUSED:
-            break
-        if deadline is not None and deadline.passed():
-            status = deadline.stop_status()
-            break
-    done, newton = int(info[0]), int(info[1])
-    recorder.close(t0 + h * done, y)
+
+    def call(z_room):
+        return model.compiled.dgrad(y, h, N, recorder.stride, z_room, pointer, wsp, st.tol,
+                                    st.maxiter, PAUSE_SECONDS, info)
+
+    status, msg, done, newton = drive_compiled(call, recorder, y, t0, t1, h, info, progress,
+                                               deadline, "energy-exact")
     T, Y, work = recorder.result(2 * n)
-    msg = status.message if status == 0 else deadline.message(t0 + h * done) if (
-        status in STOPPED) else (
-        f"{status.message} in the energy-exact step at t = {t0 + (done + 1) * h:.6g} "
-        f"(step {done + 1}); reduce the step; the run was stopped")
     # a step costs about four residuals (three kernel calls each) and a Jacobian
     return Run(T, Y, work, status, msg, 3 * (newton + done), done, newton_iterations=newton,
                step=h)

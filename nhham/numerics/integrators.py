@@ -68,7 +68,7 @@ from nhham.numerics.status import STOPPED, NumericalFailure, Status
 from nhham.numerics.storage import Recorder, default_max_points
 
 __all__ = ["FixedStepRun", "rattle", "rattle4", "rk4", "rattle_step", "step_grid", "run_fixed",
-           "fixed_recorder"]
+           "fixed_recorder", "drive_compiled"]
 
 # The methods' records (order, what each takes) are in nhham.numerics.methods; a new
 # fixed-step scheme is a function with rk4's signature here and one record there.
@@ -562,9 +562,41 @@ class _Clock:
 _REDUCE_THE_STEP = {Status.NOT_CONVERGED: "; reduce the step"}
 
 
+def drive_compiled(call, recorder, y, t0, t1, h, info, progress, deadline, scheme) -> tuple:
+    """Call a compiled fixed-step loop until it is done: ``call(z_room)`` runs it into the
+    recorder's free rows and returns its status; it returns every few milliseconds (so
+    that signals and the deadline are handled) and when the room is full. ``info`` is its
+    int64 array [steps done, Newton iterations, rows stored by the call, ...]; ``y`` the
+    state it updates in place. Returns (status, message, steps done, Newton iterations);
+    the recorder is closed on the last state (``scheme`` names the step in a failure)."""
+    reported = 0
+    while True:
+        before = int(info[0])
+        t_room, z_room = recorder.room()
+        status = Status(call(z_room))
+        k = int(info[2])
+        if k:  # the rows are the steps after `before` that are multiples of the stride
+            s = recorder.stride
+            t_room[:k] = t0 + h * ((before // s + 1) * s + s * np.arange(k))
+            recorder.advance(k)
+        if progress:
+            reported = report_progress(t0 + h * int(info[0]), t0, t1, reported)
+        if status != Status.PAUSED:
+            break
+        if deadline is not None and deadline.passed():
+            status = deadline.stop_status()
+            break
+    done, newton = int(info[0]), int(info[1])
+    recorder.close(t0 + h * done, y)
+    msg = status.message if status == 0 else deadline.message(t0 + h * done) if (
+        status in STOPPED) else (
+        f"{status.message} in the {scheme} step at t = {t0 + (done + 1) * h:.6g} "
+        f"(step {done + 1}){_REDUCE_THE_STEP.get(status, '')}; the run was stopped")
+    return status, msg, done, newton
+
+
 def _compiled_rattle(model, st, y0, t0, t1, h, recorder, composition, progress, deadline):
-    """The compiled RATTLE loop, called until done (it returns every few milliseconds,
-    so that signals are handled, and when the recorder's room is full)."""
+    """The compiled RATTLE loop (:func:`drive_compiled`)."""
     N, h = step_grid(t0, t1, h)
     y = np.array(y0, dtype=float)
     recorder.add(t0, y)
@@ -576,35 +608,18 @@ def _compiled_rattle(model, st, y0, t0, t1, h, recorder, composition, progress, 
     wsp = np.empty(2 * model.n * model.n)
     info = np.zeros(3, dtype=np.int64)  # steps done, Newton iterations, rows stored
     pointer = model.parameter_block().pointer
-    first, reported = True, 0
-    while True:
-        before = int(info[0])
-        t_room, z_room = recorder.room()
-        status = Status(model.compiled.rattle(y, h, N, recorder.stride, composition,
-                                              not model.constant_W, z_room,
-                                              pointer, lam, wsp, first, st.tol, st.maxiter,
-                                              PAUSE_SECONDS, info))
-        first = False
-        k = int(info[2])
-        if k:  # the rows are the steps after `before` that are multiples of the stride
-            s = recorder.stride
-            steps = (before // s + 1) * s + s * np.arange(k)
-            t_room[:k] = t0 + h * steps
-            recorder.advance(k)
-        if progress:
-            reported = report_progress(t0 + h * int(info[0]), t0, t1, reported)
-        if status != Status.PAUSED:
-            break
-        if deadline is not None and deadline.passed():
-            status = deadline.stop_status()
-            break
-    done, newton = int(info[0]), int(info[1])
-    recorder.close(t0 + h * done, y)
+    first = [True]
+
+    def call(z_room):
+        status = model.compiled.rattle(y, h, N, recorder.stride, composition,
+                                       not model.constant_W, z_room, pointer, lam, wsp,
+                                       first[0], st.tol, st.maxiter, PAUSE_SECONDS, info)
+        first[0] = False
+        return status
+
+    status, msg, done, newton = drive_compiled(call, recorder, y, t0, t1, h, info, progress,
+                                               deadline, "RATTLE")
     T, Y, _ = recorder.result(2 * model.n)
-    msg = status.message if status == 0 else deadline.message(t0 + h * done) if (
-        status in STOPPED) else (
-        f"{status.message} in the RATTLE step at t = {t0 + (done + 1) * h:.6g} "
-        f"(step {done + 1}){_REDUCE_THE_STEP.get(status, '')}; the run was stopped")
     # A step costs about one field evaluation plus one per Newton iteration.
     return Run(T, Y, None, status, msg, st.nfev + done * (1 + composition * 2) + newton,
                done, newton_iterations=newton, step=h)
