@@ -11,6 +11,7 @@ factor the refusal names the obstruction.
 
 from __future__ import annotations
 
+import numpy as np
 import sympy as sp
 
 from nhham.errors import InputError
@@ -73,8 +74,6 @@ def hamiltonized_field(system, *, symmetry=None, then=None, level=None, steps=No
     f_f = sp.lambdify([r], f, **numeric)
     T_f = sp.lambdify([q], T, modules="numpy")
     m_f = sp.lambdify([r, rdot], momenta, **numeric)
-    import numpy as np
-
     def gradient(rv, Pv):
         out = g_f(list(rv), list(Pv))
         return np.asarray(out[:k], dtype=float), np.asarray(out[k:], dtype=float)

@@ -84,7 +84,6 @@ class EnergyExactStepper:
         self.work = 0.0
         self._J = None
         self._history: list = []
-        self.terms = np.zeros(0)
 
     # ------------------------------------------------------------ pieces
     def offset(self, Q):
@@ -111,7 +110,8 @@ class EnergyExactStepper:
 
     def residual(self, Z, q0, p0, H0, h):
         """The step's equations for a batch Z (K, 2n + m + k) of (q1, p1, lambda, nu);
-        also the work of the reactions along each (h h_m . lambda)."""
+        also the work of the reactions along each (h h_m . lambda) and the size of each
+        row's terms (K, 2n + m + k), which its rounding is relative to."""
         n, m, k = self.n, self.m, self.k
         Q1, P1, Lam, Nu = Z[:, :n], Z[:, n:2 * n], Z[:, 2 * n:2 * n + m], Z[:, 2 * n + m:]
         H1, V1, W1, mu1, h1, g1 = self._hamiltonian(Q1, P1)
@@ -136,11 +136,10 @@ class EnergyExactStepper:
         R2 = dp + h * dHq + h * react
         R3 = np.einsum("kij,kj->ki", mu1, V1) + h1
         R4 = np.zeros((Z.shape[0], 0))
-        # the size of each row's terms, its rounding relative to it (the stall test)
-        self.terms = np.concatenate([np.abs(dq) + h * np.abs(dHp),
-                                     np.abs(dp) + h * (np.abs(dHq) + np.abs(react)),
-                                     np.einsum("kij,kj->ki", np.abs(mu1), np.abs(V1))
-                                     + np.abs(h1), np.abs(g1)], axis=1)[0]
+        terms = np.concatenate([np.abs(dq) + h * np.abs(dHp),
+                                np.abs(dp) + h * (np.abs(dHq) + np.abs(react)),
+                                np.einsum("kij,kj->ki", np.abs(mu1), np.abs(V1))
+                                + np.abs(h1), np.abs(g1)], axis=1)
         if k:
             # g(q1) = 0 by a position correction along K G^T (G = the lifts' rows, the
             # first k of mu), made orthogonal to dH_q so that it does no work
@@ -154,7 +153,8 @@ class EnergyExactStepper:
             D = D - sq[:, :, None] * e[:, None, :]
             R1 = R1 + np.einsum("kja,ka->kj", D, Nu)
             R4 = g1
-        return np.concatenate([R1, R2, R3, R4], axis=1), h * np.sum(hm * Lam, axis=1)
+        return (np.concatenate([R1, R2, R3, R4], axis=1), h * np.sum(hm * Lam, axis=1),
+                terms)
 
     def _scale(self, q0, p0, lam):
         """The unknowns' scales, one each (the finite differences' steps and the update's
@@ -211,9 +211,9 @@ class EnergyExactStepper:
 
         best, work, fresh = np.inf, 0.0, False
         for it in range(self.maxiter):
-            r, wk = resid(z[None])
+            r, wk, terms = resid(z[None])
             r, work = r[0], float(wk[0])
-            err = float(np.max(np.abs(r) / np.maximum(size, self.terms)))
+            err = float(np.max(np.abs(r) / np.maximum(size, terms[0])))
             if not math.isfinite(err):
                 raise NumericalFailure(Status.NONFINITE, "non-finite residual in the Newton "
                                        "iteration of the energy-exact step; the run was stopped")

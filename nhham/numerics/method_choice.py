@@ -61,6 +61,8 @@ from typing import Callable
 
 import numpy as np
 
+from nhham.numerics.methods import METHODS
+
 __all__ = ["Facts", "MethodChoice", "RULES", "choose_method", "choice_for", "scene_facts"]
 
 #: Horizons of at least this many periods of the fastest motion are long.
@@ -129,8 +131,6 @@ class Rule:
 
 def picked_by(rule: str) -> str:
     """The one method of the registry that ``rule`` chooses."""
-    from nhham.numerics.methods import METHODS
-
     found = [m.name for m in METHODS.values() if rule in m.auto_for]
     assert len(found) == 1, (rule, found)   # the registry is data the table trusts
     return found[0]
@@ -237,8 +237,6 @@ def choose_method(model, y0, t_span, given=(), reducer=None) -> MethodChoice:
     ``reducer``: a callable giving the scene's Hamiltonized field (or raising NhhamError
     with the obstruction), tried within :data:`HAMILTONIZE_SECONDS` for a long run of a
     mechanical system only."""
-    from nhham.numerics.methods import METHODS
-
     facts = scene_facts(model, y0, t_span)
     given = set(given)
     # output at given times, dense output, events and projection are the adaptive
@@ -269,8 +267,6 @@ def choose_method(model, y0, t_span, given=(), reducer=None) -> MethodChoice:
 
 
 def _with_step(method, rule, reason, facts, given) -> MethodChoice:
-    from nhham.numerics.methods import METHODS
-
     options = {}
     if METHODS[method].fixed_step and "step" not in given:
         rate = facts.rho if facts.rho > 0 else 1.0 / max(facts.horizon, 1e-300)
