@@ -36,7 +36,7 @@ from nhham.numerics.chart import (STEP, Chart, ComplexField, chart_gradients,
                                   chart_jacobians, input_jacobians, lift)
 from nhham.numerics.quotient import MOMENTUM, ORBIT, divide, is_axis
 from nhham.numerics.relative import spin_rates
-from nhham.numerics.saddle import solve_saddle
+from nhham.numerics.nullspace import solve_null_space
 from nhham.numerics.spectra import spectra, unstable_counts
 
 if TYPE_CHECKING:   # a reference may be a Linearization (the batch reads three fields)
@@ -131,12 +131,10 @@ class LinearizationBatch:
     margins : ndarray, shape (N, d)
         ``|Re|`` at or below each eigenvalue's margin counts as 0
         (:func:`nhham.numerics.spectra.spectra`).
-    null_space : ndarray of bool, shape (N,)
-        Where the accelerations came from the null-space solve
-        (:func:`nhham.numerics.nullspace.needs_null_space`), not the saddle-point one.
     kkt_ratios : ndarray, shape (N,)
-        The quantity that decides it (:func:`nhham.numerics.nullspace.diagonal_ratio`:
-        max W_AA / min W_AA).
+        max W_AA / min W_AA (:func:`nhham.numerics.nullspace.diagonal_ratio`): the spread
+        of the masses in the scene's units, a diagnostic (the accelerations come from
+        the null-space solve at every state).
 
     Examples
     --------
@@ -164,7 +162,6 @@ class LinearizationBatch:
     inputs: tuple
     input_matrices: np.ndarray
     margins: np.ndarray
-    null_space: np.ndarray
     kkt_ratios: np.ndarray
 
     @property
@@ -306,8 +303,7 @@ def linearize_batch(model, states, parameters=None, *,
         eig[ok], margins[ok], tol[ok], verdict[ok] = spectra(A[ok])
     return LinearizationBatch(tuple(reference.coordinates), A, eig, verdict, tol, status,
                               checked.constraint_residuals, checked.acceleration_residuals,
-                              tuple(model.input_names), B, margins, checked.null_space,
-                              checked.kkt_ratios)
+                              tuple(model.input_names), B, margins, checked.kkt_ratios)
 
 
 def chart_of(model, names) -> Chart:
@@ -337,7 +333,6 @@ class StateChecks:
         on M_1.
     acceleration_residuals : ndarray, shape (N,)
         ``max |a|``.
-    null_space : ndarray of bool, shape (N,)
     kkt_ratios : ndarray, shape (N,)
     """
 
@@ -346,7 +341,6 @@ class StateChecks:
     constraint_residuals: np.ndarray
     accelerations: np.ndarray
     acceleration_residuals: np.ndarray
-    null_space: np.ndarray
     kkt_ratios: np.ndarray
 
 
@@ -355,7 +349,7 @@ def check_states(cf, Y, P, rates=None, lifted=None) -> StateChecks:
     (residuals by their natural size; accelerations against max(1, max |y|)^2; with
     ``rates`` (N,) and ``lifted`` Xi (N, 2n): the accelerations less w times the lift's,
     X = w Xi). The one decision of a single linearisation and of a batch."""
-    from nhham.numerics.nullspace import KKT_RATIO, diagonal_ratio
+    from nhham.numerics.nullspace import diagonal_ratio
 
     n, k = cf.n, cf.k
     N = Y.shape[0]
@@ -372,7 +366,7 @@ def check_states(cf, Y, P, rates=None, lifted=None) -> StateChecks:
     status[~(cres <= ON_TOLERANCE)] = 1
     ares = np.full(N, np.nan)
     acc = np.full((N, n), np.nan)
-    ratio = np.asarray(diagonal_ratio(W))   # the decision of needs_null_space
+    ratio = np.asarray(diagonal_ratio(W))
     on = np.flatnonzero(status == 0)
     if on.size:
         a, singular = _accelerations(W[on], F[on], mu[on], drift[on], n)
@@ -383,23 +377,21 @@ def check_states(cf, Y, P, rates=None, lifted=None) -> StateChecks:
         scale = np.maximum(1.0, np.abs(Y[on]).max(axis=1))
         status[on[~(ares[on] <= ON_TOLERANCE * scale ** 2)]] = 2
         status[on[singular]] = 3
-    return StateChecks(status, scaled, cres, acc, ares,
-                       np.atleast_1d(ratio > KKT_RATIO), np.atleast_1d(ratio))
+    return StateChecks(status, scaled, cres, acc, ares, np.atleast_1d(ratio))
 
 
 def _accelerations(W, F, mu, drift, n):
-    """(a, singular) of the saddle-point systems, one per state (the solve of
-    :func:`~nhham.numerics.saddle.solve_saddle`: its one decision between the saddle and
-    the null-space solve)."""
+    """(a, singular) of the saddle-point systems, one per state (the null-space solve,
+    :func:`~nhham.numerics.nullspace.solve_null_space`)."""
     singular = np.zeros(W.shape[0], dtype=bool)
     with np.errstate(all="ignore"):
         try:
-            a = solve_saddle(W, mu, F, -drift)[0]
+            a = solve_null_space(W, mu, F, -drift)[0]
         except np.linalg.LinAlgError:
             a = np.full(F.shape, np.nan)
             for i in range(W.shape[0]):
                 try:
-                    a[i] = solve_saddle(W[i], mu[i], F[i], -drift[i])[0]
+                    a[i] = solve_null_space(W[i], mu[i], F[i], -drift[i])[0]
                 except np.linalg.LinAlgError:
                     singular[i] = True
     a[singular] = 0.0

@@ -20,7 +20,7 @@ import numpy as np
 
 from nhham.errors import ComputationError, InconsistentInitialDataError, InputError
 from nhham.numerics.kernels import columns
-from nhham.numerics.nullspace import needs_null_space, solve_null_space
+from nhham.numerics.nullspace import solve_null_space
 
 __all__ = ["BATCH_STATES", "STEP", "Chart", "ComplexField", "chart_jacobian", "chart_jacobians",
            "chart_gradients", "choose_chart", "dependent_velocities", "greedy_columns",
@@ -118,40 +118,18 @@ class ComplexField:
 
     def accelerations(self, Q, V, p=None):
         """The accelerations at the complex states of the complex step (imaginary parts of
-        the order of its h), by the one decision of
-        :func:`~nhham.numerics.nullspace.needs_null_space`: LU on the complex saddle-point
-        matrix [[W, mu^T], [mu, 0]], or where W's diagonal spans more than KKT_RATIO (a
-        complex LU lost the derivative of a small acceleration at extreme mass ratios as
-        the real one loses the acceleration) the null-space solve of K0 z0 = r0 and
-        K0 z1 = r1 - K1 z0 for K = K0 + i K1, z = z0 + i z1, dropping K1 z1 (h^2 = 1e-60
-        against z0: below rounding)."""
+        the order of its h), by the null-space solve (:mod:`nhham.numerics.nullspace`, as
+        every solve of the accelerations) of K0 z0 = r0 and K0 z1 = r1 - K1 z0 for
+        K = K0 + i K1, z = z0 + i z1, dropping K1 z1 (h^2 = 1e-60 against z0: below
+        rounding). A complex LU would lose the derivative of a small acceleration at
+        extreme mass ratios as the real one loses the acceleration."""
         W, F, mu, drift, _, _ = self.pieces(Q, V, p)
-        ill = np.asarray(needs_null_space(W.real), dtype=bool)
-        a = np.empty(F.shape, dtype=complex)
         try:
             with np.errstate(all="ignore"):
-                if not ill.any():  # the common case: no copies
-                    return _complex_lu(W, F, mu, drift)
-                if not ill.all():
-                    ok = ~ill
-                    a[ok] = _complex_lu(W[ok], F[ok], mu[ok], drift[ok])
-                if ill.any():
-                    a[ill] = _split_null_space(W[ill], F[ill], mu[ill], drift[ill])
+                return _split_null_space(W, F, mu, drift)
         except np.linalg.LinAlgError:
             raise ComputationError("linearize: the saddle-point matrix [[W, mu^T], [mu, 0]] is "
                                    "singular at the state (C singular: M_f is not M_1 here)") from None
-        return a
-
-
-def _complex_lu(W, F, mu, drift):
-    """The accelerations of [[W, mu^T], [mu, 0]] [a; lambda] = [F; -drift], complex LU."""
-    n, m = W.shape[-1], mu.shape[1]
-    K = np.zeros((W.shape[0], n + m, n + m), dtype=complex)
-    K[:, :n, :n] = W
-    K[:, :n, n:] = np.swapaxes(mu, 1, 2)
-    K[:, n:, :n] = mu
-    rhs = np.concatenate([F, -drift], axis=1)
-    return np.linalg.solve(K, rhs[..., None])[..., 0][:, :n]
 
 
 def _split_null_space(W, F, mu, drift):

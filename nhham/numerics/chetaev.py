@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from nhham.numerics.saddle import solve_saddle
+from nhham.numerics.nullspace import solve_null_space
 
 __all__ = ["velocities_newton", "padded"]
 
@@ -58,6 +58,6 @@ def velocities_newton(geometry, q, v, maxiter: int = 50):
         if err == 0.0 or err >= best:
             break
         best = err
-        dv, _ = solve_saddle(W, mu, np.zeros_like(v), -r)
+        dv, _ = solve_null_space(W, mu, np.zeros_like(v), -r)
         v = v + dv
     return v

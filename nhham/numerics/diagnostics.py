@@ -19,7 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from nhham.numerics.model import COND_C_WARN
-from nhham.numerics.nullspace import KKT_RATIO, diagonal_ratio, kkt_solve_name
+from nhham.numerics.nullspace import KKT_SOLVE, diagonal_ratio
 from nhham.numerics.saddle import condition
 
 __all__ = ["Diagnostics", "trajectory_diagnostics", "Singularity", "singularity_at"]
@@ -76,12 +76,12 @@ class Diagnostics:
     cond_C_sampled : int
         Number of states at which cond was evaluated.
     warnings : tuple of str
-    kkt_solve : {"saddle", "null-space", "mixed"}
-        Which solve gave the constrained accelerations at those states (the decision of
-        :func:`nhham.numerics.nullspace.needs_null_space`; "mixed": some states each).
+    kkt_solve : str
+        The solve of the constrained accelerations: ``"null-space"``
+        (:mod:`nhham.numerics.nullspace`, at every state).
     kkt_ratio_max : float
-        The largest max W_AA / min W_AA there (the null-space solve above
-        :data:`~nhham.numerics.nullspace.KKT_RATIO`).
+        The largest max W_AA / min W_AA at those states: the spread of the masses in the
+        scene's units, a diagnostic.
     """
 
     energy: np.ndarray
@@ -96,7 +96,7 @@ class Diagnostics:
     cond_W_max: float
     cond_C_sampled: int
     warnings: tuple
-    kkt_solve: str = "saddle"
+    kkt_solve: str = KKT_SOLVE
     kkt_ratio_max: float = 1.0
 
 
@@ -182,7 +182,7 @@ def trajectory_diagnostics(model, t, y, work=None, *, residual_tol: float = 1e-8
                                        np.finfo(float).tiny),
         energy_balance_residual=balance,
         cond_C_max=cond_C_max, cond_W_max=cond_W_max, cond_C_sampled=int(len(idx)),
-        warnings=tuple(notes), kkt_solve=kkt_solve_name(ratio > KKT_RATIO),
+        warnings=tuple(notes),
         kkt_ratio_max=float(np.nanmax(ratio)) if ratio.size else 1.0,
     )
 

@@ -54,7 +54,6 @@ from nhham.errors import ComputationError, InconsistentInitialDataError, InputEr
 from nhham.numerics.compiled_loop import run_compiled
 from nhham.numerics.diagnostics import (Diagnostics, Singularity, singularity_at,
                                         trajectory_diagnostics)
-from nhham.numerics.nullspace import describe_kkt_solve
 from nhham.numerics.model import (LibraryReady, NumericModel, NumericsWarning,
                                   ProjectionOutcome)
 from nhham.numerics.run import Deadline, Run, final_state_text, interruptible
@@ -102,8 +101,8 @@ class SimulationResult:
     diagnostics : Diagnostics
         See :class:`nhham.numerics.diagnostics.Diagnostics`; its main fields are also
         attributes here (``constraint_residual_max``, ``energy_drift``,
-        ``energy_balance_residual``, ``cond_C_max``, ``cond_W_max``, ``kkt_solve``: which
-        solve gave the constrained accelerations, "saddle", "null-space" or "mixed").
+        ``energy_balance_residual``, ``cond_C_max``, ``cond_W_max``, ``kkt_solve``: the
+        solve of the constrained accelerations, "null-space").
     warnings : tuple of str
         Also issued as :class:`~nhham.numerics.model.NumericsWarning` unless
         ``warn=False`` was passed.
@@ -249,8 +248,6 @@ class SimulationResult:
             f"energy balance residual {d.energy_balance_residual:.2e}",
             f"  max cond(C) {d.cond_C_max:.3g}, max cond(W) {d.cond_W_max:.3g}",
         ]
-        if d.kkt_solve != "saddle":   # the usual solve is said in the JSON only
-            lines.append(f"  {describe_kkt_solve(d.kkt_solve, d.kkt_ratio_max)}")
         if self.storage is not None:
             lines.append(f"  {self.storage.describe(self.nsteps)}")
         if self.initial_projection is not None:

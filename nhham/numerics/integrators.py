@@ -179,13 +179,13 @@ class _RattleStepper:
         # A velocity-level solve: the saddle solve whatever W's diagonal (the null-space
         # solve keeps the O(1) v, not its small step increments, any better: measured on
         # a mass ratio of 1e16 it kept them 3-10x worse), as the compiled RATTLE step.
-        v1, nu = solve_saddle(W1, mu1, p_h + 0.5 * h * Lq1, -h1, null_space=False)
+        v1, nu = solve_saddle(W1, mu1, p_h + 0.5 * h * Lq1, -h1)
         # One step of iterative refinement of the constraint rows: LU is only
         # normwise backward stable, and with extreme mass ratios the rows of
         # mu would otherwise keep a residual far above round-off.
         r = mu1 @ v1 + h1
         if self.m and np.any(r):
-            dv, dnu = solve_saddle(W1, mu1, np.zeros(self.n), -r, null_space=False)
+            dv, dnu = solve_saddle(W1, mu1, np.zeros(self.n), -r)
             v1, nu = v1 + dv, nu + dnu
         return v1, nu * (2.0 / h)
 
@@ -390,7 +390,7 @@ class _RattleStepper:
         u1 = np.linalg.solve(W1, p_h)
         rhs = p_h + 0.5 * h * model.lagrangian_q(np.concatenate([q1, u1]))
         _, mu1, h1, _ = self._geometry(model, q1, u1)
-        v1, nu = solve_saddle(W1, mu1, rhs, -h1, null_space=False)
+        v1, nu = solve_saddle(W1, mu1, rhs, -h1)
         if not self.model.nonlinear or not m:
             return v1, nu * (2.0 / h)
 

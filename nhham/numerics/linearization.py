@@ -47,6 +47,7 @@ from nhham.errors import ComputationError, InconsistentInitialDataError, InputEr
 from nhham.numerics.batch_linearization import (ON_TOLERANCE, ChartChoice, check_states,
                                                 linearize_batch, step_vectors)
 from nhham.numerics.chart import STEP, ComplexField, chart_jacobians, choose_chart
+from nhham.numerics.nullspace import KKT_SOLVE
 from nhham.numerics.quotient import MOMENTUM, ORBIT, divide, is_axis
 from nhham.numerics.relative import group_block, spin_rate
 from nhham.numerics.spectra import EIGENVALUE_TOLERANCE, sort_eigenvalues, spectra, verdicts
@@ -127,11 +128,11 @@ class Linearization:
         directions) and ``group_eigenvalues`` (their block's eigenvalues in co-moving
         variables); :attr:`matrix` is then the Jacobian of X - w Xi. None otherwise.
     kkt_solve : str
-        How the constrained accelerations were solved at the state: ``"saddle"`` (the
-        saddle-point solve) or ``"null-space"`` (:mod:`nhham.numerics.nullspace`).
+        How the constrained accelerations were solved: ``"null-space"``
+        (:mod:`nhham.numerics.nullspace`, at every state).
     kkt_ratio : float
-        The quantity that decides it (:func:`nhham.numerics.nullspace.diagonal_ratio`,
-        max W_AA / min W_AA: it moves with the units of the coordinates).
+        max W_AA / min W_AA at the state (:func:`nhham.numerics.nullspace.diagonal_ratio`):
+        the spread of the masses in the scene's units, a diagnostic.
     implied : tuple of str
         Neutral directions (``orbit(xi)``, ``d/d<p>``, ``level(J)``) not divided out
         because the chart variables removed span them already (the orbit of a robot at
@@ -172,7 +173,7 @@ class Linearization:
     input_matrix: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
     relative: Mapping | None = None
     margins: np.ndarray = field(default_factory=lambda: np.zeros(0))
-    kkt_solve: str = "saddle"
+    kkt_solve: str = KKT_SOLVE
     kkt_ratio: float = 1.0
     implied: tuple = ()
 
@@ -389,7 +390,7 @@ def linearize(model, state, *, independent: Sequence[str] | None = None,
         dict(zip(names, map(float, y0))), residuals, worst, tol=float(batch.tolerances[0]),
         eigenvalues=batch.eigenvalues[0], inputs=model.input_names,
         B=batch.input_matrices[0], relative=info, margins=batch.margins[0],
-        kkt=("null-space" if batch.null_space[0] else "saddle", float(batch.kkt_ratios[0])),
+        kkt=(KKT_SOLVE, float(batch.kkt_ratios[0])),
         implied=implied)
 
 

@@ -25,12 +25,9 @@ Inputs u and the time t of the forces are parameter slots (``input_names``,
 :meth:`rhs` and the integration loops.
 
 The small linear systems are solved at run time; nothing is inverted
-symbolically. The numpy path solves the saddle matrix by LU after a symmetric
-scaling (unit diagonal of W, unit rows of mu); the compiled path by Cholesky
-of W and of the Schur complement mu W^-1 mu^T, falling back to that scaled LU
-when W is indefinite or nearly singular (see ``ksolve`` in
-``nhham/numerics/c/linalg.c`` and :mod:`nhham.numerics.saddle`); both by the null-space
-method where W's diagonal spans more than ``KKT_RATIO`` (:mod:`nhham.numerics.nullspace`).
+symbolically. The constrained accelerations and the projections onto the constraints
+by the null-space method (:mod:`nhham.numerics.nullspace`; in C ``ksolve`` in
+``nhham/numerics/c/linalg.c``), free of the coordinates' units.
 
 Failures are statuses of :class:`~nhham.numerics.status.Status` (``evaluate``) or a
 :class:`~nhham.numerics.status.NumericalFailure` carrying one (``rhs``, ``project``).
@@ -51,7 +48,8 @@ from nhham.errors import InconsistentInitialDataError, InputError
 from nhham.numerics.chetaev import padded, velocities_newton
 from nhham.numerics.kernels import (CompiledRHS, GeneratedKernels, ParameterBlock,
                                     baumgarte_terms, columns)
-from nhham.numerics.saddle import SingleStateSolver, cond_each, condition, solve_saddle
+from nhham.numerics.nullspace import solve_null_space
+from nhham.numerics.saddle import SingleStateSolver, cond_each, condition
 from nhham.numerics.status import NumericalFailure, Status
 
 __all__ = ["NumericModel", "NumericsWarning", "LibraryReady", "ProjectionOutcome",
@@ -466,7 +464,7 @@ class NumericModel:
             bottom = bottom - b2 * pad
         try:
             with np.errstate(all="ignore"):
-                a, lam = solve_saddle(W, mu, F, bottom)
+                a, lam = solve_null_space(W, mu, F, bottom)
         except np.linalg.LinAlgError:
             nan = np.full_like(y, np.nan)
             return nan, np.full(y.shape[:-1] + (self.m,), np.nan), np.nan, Status.SINGULAR
@@ -652,7 +650,7 @@ class NumericModel:
             r = (mu @ v[..., None])[..., 0] + h
             if not np.any(r):
                 break
-            dv, _ = solve_saddle(W, mu, np.zeros_like(v), -r)
+            dv, _ = solve_null_space(W, mu, np.zeros_like(v), -r)
             v = v + dv
         return v
 
@@ -667,7 +665,7 @@ class NumericModel:
             if it > 3 and err >= best:
                 break  # round-off floor reached: no further decrease
             best = min(best, err)
-            dq, _ = solve_saddle(W, mu[:k], np.zeros(self.n), -g)
+            dq, _ = solve_null_space(W, mu[:k], np.zeros(self.n), -g)
             q = q + dq
         W, mu, _, g = self.geometry(padded(q, self.geometry_reads_v))
         err = float(np.max(np.abs(g)))

@@ -1,8 +1,8 @@
-"""The constrained accelerations where the saddle-point solve loses them: the null-space solve.
+"""The constrained accelerations: the null-space solve of the saddle-point system.
 
-The saddle-point system ``[[W, mu^T], [mu, 0]] [a; lambda] = [F; b]`` is solved by the
-range-space method (C: Cholesky of W and of mu W^-1 mu^T) or by LU on the scaled matrix
-(numpy). Both are backward stable, yet both obtain an acceleration of a light coordinate
+The saddle-point system ``[[W, mu^T], [mu, 0]] [a; lambda] = [F; b]`` solved as it stands,
+by the range-space method (Cholesky of W and of mu W^-1 mu^T) or by LU on the scaled
+matrix, is backward stable, yet obtains an acceleration of a light coordinate
 tied by a constraint to a heavy one as a difference of nearly equal terms. With
 L = (a x'^2 + b y'^2)/2 + x and x' + y' = 1 (the model problem of this module):
 
@@ -23,22 +23,25 @@ Q2 of the kernel of mu D, and
     R lambda = Q1^T D (F - W a):
 
 the reduced matrix is D W D restricted to the kernel, no worse conditioned than D W D
-(interlacing), and the model problem's x'' = 1/(a + b) comes out to rounding. It costs a
-QR factorisation more than the saddle solve, so it is used only where the saddle solve's
-bound eps * ratio exceeds ``KKT_RATIO * eps`` (:func:`needs_null_space`, the one
-decision: :mod:`nhham.numerics.saddle` (the batched and the one-state solves), the complex
-step of :class:`nhham.numerics.chart.ComplexField` and ``ksolve`` in
-``nhham/numerics/c/linalg.c``, which reads the same threshold as ``NHHAM_KKT_RATIO``).
-The diagonal ratio moves with the units of the coordinates (x in millimetres multiplies
-W_xx by 1e-6) and misses a loss where W's diagonal is even (the isokinetic particle); the
-saddle solve's own residual does neither: every solve of the accelerations (the numpy
-ones, the one-state solve and ``ksolve``) is refined once where the backward error of its
-constraint rows (:func:`constraint_error`) passes ``REFINE_RATIO``. A null-space decision
-free of units that is neither blind nor costly is still to be found (issue 43's note;
-``bench/RESULTS.md``).
-RATTLE's velocity-level solve keeps the saddle solve (``solve_saddle(...,
-null_space=False)``, ``ksolve_saddle``): its unknown is the O(1) velocity, whose small
-step increments the null-space solve kept no better (3-10x worse at a mass ratio of 1e16).
+(interlacing), and the model problem's x'' = 1/(a + b) comes out to rounding.
+
+It is the solve of every constrained acceleration (the batched numpy solve
+:func:`solve_null_space`, the one-state solve of :mod:`nhham.numerics.saddle`, the
+complex step of :class:`nhham.numerics.chart.ComplexField` and ``ksolve`` in
+``nhham/numerics/c/linalg.c``): a choice between it and the saddle solve would have to
+be made from W and mu at one state, and none made there is free of units. The diagonal
+ratio moves with them (x in millimetres multiplies W_xx by 1e-6); in the scaled system
+(D W D, mu D), which a change of units leaves as it is, a light coordinate tied to a
+heavy one is the same as a coordinate almost walled by the geometry (a row [1, eps] of
+mu D), so a unit-free test flags both, and on the Whipple bicycle 99% of the states.
+Solving by null space everywhere is free of units by construction and costs a QR
+factorisation (bench/RESULTS.md, issue 43: the bicycle's compiled right-hand side
+1.9 -> 2.2 us a state, its accelerations 1.3e-12 -> 1.7e-14 of their size, the
+isokinetic particle's 4.2e-13 -> 4.4e-16). :func:`diagonal_ratio` stays a reported
+diagnostic (the spread of the masses in the scene's units), deciding nothing.
+RATTLE's velocity-level solve keeps the saddle solve (``solve_saddle``,
+``ksolve_saddle``): its unknown is the O(1) velocity, whose small step increments the
+null-space solve kept no better (3-10x worse at a mass ratio of 1e16).
 
 No sympy here.
 """
@@ -46,110 +49,32 @@ No sympy here.
 from __future__ import annotations
 
 import numpy as np
+from scipy.linalg.lapack import dgeqrf, dorgqr
 
-__all__ = ["KKT_RATIO", "REFINE_RATIO", "diagonal_ratio", "diagonal_scaling", "needs_null_space",
-           "solve_null_space", "householder_rows", "constraint_error", "kkt_solve_name",
-           "describe_kkt_solve", "KKT_SOLVES"]
+__all__ = ["diagonal_ratio", "diagonal_scaling", "solve_null_space", "solve_null_space_one",
+           "householder_rows", "KKT_SOLVE", "RANK_TOLERANCE"]
 
-#: Largest max W_AA / min W_AA solved by the saddle-point (range-space or LU) solve.
-#: There its relative error in an acceleration stays below about eps * KKT_RATIO
-#: = 2^-52 * 2^12 = 2^-40 ~ 9e-13 (measured on the model problem: 2e-12 at 1e4): under
-#: the adaptive methods' default rtol 1e-9 by three orders and at the scale of their
-#: default atol 1e-12. Every example scene lies below it (the differential drive,
-#: 3.1e3, the largest; the Whipple bicycle 7.8e2, the 8-link snake 24), so their solves
-#: and their speed are unchanged; above it the null-space solve keeps the accelerations
-#: to a few eps (the model problem at ratios 1e4 .. 1e16).
-KKT_RATIO = 4096.0
+#: A saddle-point matrix singular to rounding: a diagonal entry of R (the rows of mu D of
+#: unit length) at or below RANK_TOLERANCE n, or the reduced matrix's smallest |eigenvalue|
+#: at or below RANK_TOLERANCE n times its largest (64 eps: a few roundings of each of n
+#: terms). The LU of the saddle matrix it replaces tested for an exact zero pivot.
+RANK_TOLERANCE = 64 * float(np.finfo(float).eps)
 
-#: Above this backward error of the saddle solve's constraint rows (:func:`constraint_error`,
-#: in units of eps; free of units) every solve of the accelerations takes one step of
-#: iterative refinement: the promise of KKT_RATIO (2^-40) where the diagonal ratio does
-#: not see the loss. The isokinetic particle (W = I, ratio 1) reaches 1.4e7: its compiled
-#: accelerations lost 1.2e-8 of their size, the single-state ones 3e-9 (``python
-#: bench/kkt_units.py``); the Whipple bicycle's compiled range-space solve reaches 1.4e3
-#: and stays as it is (1.4e-12).
-REFINE_RATIO = 4096.0
-
-#: What results report (``kkt_solve``, also in the JSON): the one solve used at every
-#: state considered, or both ("mixed").
-KKT_SOLVES = ("saddle", "null-space", "mixed")
+#: What results report as ``kkt_solve`` (also in the JSON): the solve of the constrained
+#: accelerations, the same at every state.
+KKT_SOLVE = "null-space"
 
 
 def diagonal_ratio(W):
     """max_A |W_AA| / min_A |W_AA| of W (..., n, n): inf where a diagonal entry is 0 beside
-    a nonzero one, 1 where the diagonal is 0 or n = 0; ``ratio > KKT_RATIO`` exactly
-    where :func:`needs_null_space` (finite entries)."""
+    a nonzero one, 1 where the diagonal is 0 or n = 0. A diagnostic (the spread of the
+    masses in the scene's units): no solve depends on it."""
     d = np.abs(np.diagonal(np.asarray(W, dtype=float), axis1=-2, axis2=-1))
     if d.shape[-1] == 0:
         return np.ones(d.shape[:-1]) if d.ndim > 1 else 1.0
     hi, lo = d.max(axis=-1), d.min(axis=-1)
     with np.errstate(divide="ignore", invalid="ignore"):
         out = np.where(lo > 0, hi / np.where(lo > 0, lo, 1.0), np.where(hi > 0, np.inf, 1.0))
-    return float(out) if np.ndim(out) == 0 else out
-
-
-def needs_null_space(W):
-    """True where the saddle solve may lose an acceleration: max |W_AA| > KKT_RATIO
-    min |W_AA| (see :data:`KKT_RATIO`; a zero diagonal entry beside a nonzero one
-    counts, NaN does not). A bool, or a boolean array over the leading dimensions of W
-    (..., n, n). The C solve and :class:`~nhham.numerics.saddle.SingleStateSolver` test
-    the same inequality."""
-    d = np.abs(np.diagonal(np.asarray(W), axis1=-2, axis2=-1))
-    if d.shape[-1] == 0:
-        return np.zeros(d.shape[:-1], dtype=bool) if d.ndim > 1 else False
-    out = d.max(axis=-1) > KKT_RATIO * d.min(axis=-1)
-    return bool(out) if np.ndim(out) == 0 else out
-
-
-def kkt_solve_name(null_space) -> str:
-    """``"saddle"``, ``"null-space"`` or ``"mixed"`` (some states each) from the
-    decisions at a set of states (booleans: True for the null-space solve)."""
-    null_space = np.asarray(null_space, dtype=bool).ravel()
-    if not null_space.size or not null_space.any():
-        return "saddle"
-    return "null-space" if null_space.all() else "mixed"
-
-
-def describe_kkt_solve(name: str, ratio: float) -> str:
-    """One clause: which solve gave the constrained accelerations, and why."""
-    how = {"saddle": "the saddle-point solve", "null-space": "the null-space solve",
-           "mixed": "the saddle-point solve and, where W's diagonal spans more, the "
-                    "null-space solve"}[name]
-    return (f"constrained accelerations by {how} (largest max W_AA / min W_AA "
-            f"{ratio:.3g}; the null-space solve above {KKT_RATIO:.0f})")
-
-
-def constraint_error(mu_s, x_s, b_s, r=None):
-    """The backward error of a solution of the saddle-point system over its constraint
-    rows, in units of eps, from the scaled system: ``mu_s`` (..., m, n) the rows mu D
-    (any row scaling: the ratio is free of it), ``x_s`` (..., n) the scaled accelerations
-    D^-1 x (D = diag(W)^-1/2, :func:`diagonal_scaling`), ``b_s`` (..., m) the right-hand
-    sides, ``r`` the residual b_s - mu_s x_s when it is at hand.
-
-    Row c's residual is measured against its terms |mu_s,c| |x_s| + |b_s,c|, and at least
-    against max_j |mu_s,cj| max_j |x_s,j|: a row whose terms are all at rounding, beside
-    accelerations of size (a heading of exactly 0, where sin rounds to 1e-16), meets only
-    rounding. Free of units: a change of units scales a row's residual and its terms
-    alike, and not D^-1 x or mu D.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> # x' + y' = 1, W = diag(1, 1e16), unit force on x: x'' = 1e-16 lost to 0 (y'' = -1e-16)
-    >>> d = np.array([1.0, 1e-8])
-    >>> x = np.array([0.0, -1e-16])
-    >>> round(constraint_error(np.array([[1.0, 1.0]]) * d, x / d, np.zeros(1)))
-    45035996
-    """
-    if r is None:
-        r = b_s - np.einsum("...ij,...j->...i", mu_s, x_s)
-    amu, ax = np.abs(mu_s), np.abs(x_s)
-    terms = np.abs(b_s) + np.einsum("...ij,...j->...i", amu, ax)
-    floor = amu.max(axis=-1, initial=0.0) * ax.max(axis=-1, initial=0.0)[..., None]
-    with np.errstate(divide="ignore", invalid="ignore"):
-        each = np.where(r == 0, 0.0, np.abs(r) / np.maximum(terms, floor))
-    out = np.max(np.where(np.isfinite(each), each, np.inf), axis=-1,
-                 initial=0.0) / np.finfo(float).eps
     return float(out) if np.ndim(out) == 0 else out
 
 
@@ -166,7 +91,7 @@ def solve_null_space(W, mu, top, bottom):
 
     Parameters
     ----------
-    W : ndarray, shape (..., n, n)
+    W : ndarray, shape (..., n, n), symmetric
     mu : ndarray, shape (..., m, n), full row rank
     top : ndarray, shape (..., n)
     bottom : ndarray, shape (..., m)
@@ -179,7 +104,18 @@ def solve_null_space(W, mu, top, bottom):
     Raises
     ------
     numpy.linalg.LinAlgError
-        If mu is rank deficient or the reduced matrix singular (exactly).
+        If mu is rank deficient or the reduced matrix singular, to rounding
+        (:data:`RANK_TOLERANCE`), at any state of the batch.
+
+    Notes
+    -----
+    The rows of mu D are scaled to unit length first (the multipliers scaled back), so
+    that |R_cc| <= 1 measures how far row c is from the span of the others; the reduced
+    matrix H = Q2^T D W D Q2 (symmetric) is solved by LU, and its smallest |eigenvalue|
+    against the largest says how near it is to singular. Either
+    below ``RANK_TOLERANCE`` is a saddle-point matrix singular to rounding (the
+    constraints dependent, or C = 0: a free multiplier), which an exact test would miss
+    where the kernel's basis is irrational (1/sqrt(2)).
     """
     W, mu = np.asarray(W, dtype=float), np.asarray(mu, dtype=float)
     top, bottom = np.asarray(top, dtype=float), np.asarray(bottom, dtype=float)
@@ -188,20 +124,80 @@ def solve_null_space(W, mu, top, bottom):
     ts = top * d
     if m == 0:
         return np.linalg.solve(Ws, ts[..., None])[..., 0] * d, np.zeros(top.shape[:-1] + (0,))
-    Q, R1 = householder_rows(np.swapaxes(mu * d[..., None, :], -1, -2))
+    mus, e = _unit_rows(mu * d[..., None, :])
+    Q, R1 = householder_rows(np.swapaxes(mus, -1, -2))
     Q1, Q2 = Q[..., :, :m], Q[..., :, m:]
-    if np.any(np.abs(np.diagonal(R1, axis1=-2, axis2=-1)) == 0):
+    if np.any(np.abs(np.diagonal(R1, axis1=-2, axis2=-1)) <= RANK_TOLERANCE * n):
         raise np.linalg.LinAlgError("the constraints' one-forms are dependent")
     # the particular solution of (mu D) s = bottom of least length: s = Q1 R1^-T bottom
-    s = _mv(Q1, np.linalg.solve(np.swapaxes(R1, -1, -2), bottom[..., None])[..., 0])
+    s = _mv(Q1, np.linalg.solve(np.swapaxes(R1, -1, -2), (bottom * e)[..., None])[..., 0])
     Q2T = np.swapaxes(Q2, -1, -2)
-    H = Q2T @ Ws @ Q2
-    z = np.linalg.solve(H, _mv(Q2T, ts - _mv(Ws, s))[..., None])[..., 0] if n > m else \
-        np.zeros(s.shape[:-1] + (0,))
-    xs = s + _mv(Q2, z)
+    xs = s + _mv(Q2, _symmetric_solve(Q2T @ Ws @ Q2, _mv(Q2T, ts - _mv(Ws, s)), n)) \
+        if n > m else s
     # R1 y = Q1^T (D top - D W D xs): the multipliers from the force the motion leaves
     y = np.linalg.solve(R1, _mv(np.swapaxes(Q1, -1, -2), ts - _mv(Ws, xs))[..., None])[..., 0]
-    return xs * d, y
+    return xs * d, y * e
+
+
+def _unit_rows(A):
+    """(A with rows of unit length, the factors): rows of zeros stay (factor 1)."""
+    norms = np.sqrt(np.sum(A * A, axis=-1))
+    e = 1.0 / np.where(norms > 0, norms, 1.0)
+    return A * e[..., None], e
+
+
+def _symmetric_solve(H, r, n):
+    """H z = r for symmetric H (..., k, k) by LU; LinAlgError where min |eigenvalue| <=
+    RANK_TOLERANCE n max |eigenvalue| (the eigenvalues only tell: the eigenvector solve
+    is several eps less accurate than LU). NaN states give NaN."""
+    finite = np.all(np.isfinite(H), axis=(-2, -1))
+    if not np.all(finite):
+        H = np.where(finite[..., None, None], H, np.eye(H.shape[-1]))
+    aw = np.abs(np.linalg.eigvalsh(H))
+    if np.any(finite & (aw.min(axis=-1) <= RANK_TOLERANCE * n * aw.max(axis=-1))):
+        raise np.linalg.LinAlgError("the saddle-point matrix is singular (C singular)")
+    z = np.linalg.solve(H, r[..., None])[..., 0]
+    return np.where(finite[..., None], z, np.nan)
+
+
+def solve_null_space_one(W, mu, top, bottom):
+    """:func:`solve_null_space` for one state (W (n, n), mu (m, n), top (n,), bottom (m,)),
+    the same steps without the batch's bookkeeping: the solve of
+    :class:`~nhham.numerics.saddle.SingleStateSolver`.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> # x' + y' = 1, W = diag(1, 1e16), a unit force on x: x'' = 1/(1 + 1e16)
+    >>> x, y = solve_null_space_one(np.diag([1.0, 1e16]), np.array([[1.0, 1.0]]),
+    ...                             np.array([1.0, 0.0]), np.zeros(1))
+    >>> float(x[0] * (1 + 1e16))
+    1.0
+    """
+    n, m = W.shape[0], mu.shape[0]
+    diag = np.abs(np.diagonal(W))
+    d = 1.0 / np.sqrt(np.where(diag > 0, diag, 1.0))
+    Ws = W * np.multiply.outer(d, d)
+    ts = top * d
+    if m == 0:
+        return np.linalg.solve(Ws, ts) * d, np.zeros(0)
+    mus, e = _unit_rows(mu * d)
+    A = mus.T
+    # LAPACK's Householder QR after sorting the rows by size (Bjoerck's row sorting; the
+    # batch pivots a row per column, which takes a numpy call per column)
+    order = np.argsort(-np.abs(A).max(axis=1), kind="stable")
+    qr, tau, _, _ = dgeqrf(A[order])
+    R1 = np.triu(qr[:m])
+    if np.any(np.abs(np.diagonal(R1)) <= RANK_TOLERANCE * n):
+        raise np.linalg.LinAlgError("the constraints' one-forms are dependent")
+    Qs, _, _ = dorgqr(np.hstack([qr, np.zeros((n, n - m))]), np.concatenate([tau, np.zeros(n - m)]))
+    Q = np.empty((n, n))
+    Q[order] = Qs
+    Q1, Q2 = Q[:, :m], Q[:, m:]
+    s = Q1 @ np.linalg.solve(R1.T, bottom * e)
+    xs = s + Q2 @ _symmetric_solve(Q2.T @ Ws @ Q2, Q2.T @ (ts - Ws @ s), n) if n > m else s
+    y = np.linalg.solve(R1, Q1.T @ (ts - Ws @ xs))
+    return xs * d, y * e
 
 
 def _mv(A, x):

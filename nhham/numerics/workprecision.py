@@ -31,8 +31,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 from nhham.numerics.diagnostics import singularity_at
-from nhham.numerics.nullspace import (KKT_RATIO, describe_kkt_solve, diagonal_ratio,
-                                      kkt_solve_name)
+from nhham.numerics.nullspace import KKT_SOLVE, diagonal_ratio
 from nhham.numerics.integrate import simulate
 from nhham.numerics.methods import DEFAULT_METHOD, lookup, names
 from nhham.numerics.model import NumericModel, NumericsWarning
@@ -117,11 +116,12 @@ class WorkPrecisionResult:
         do work, or a nonlinear (Chetaev) one; the table then shows the energy balance
         residual max |E(t) - E(0) - ∫ P dt| (P the power of the applied, dissipative and
         constraint forces, and -dL/dt) instead of the energy drift, and says why.
-    kkt_solve : {"saddle", "null-space", "mixed"}
-        Which solve gave the constrained accelerations at the initial state and the
-        reference's end (:func:`nhham.numerics.nullspace.needs_null_space`).
+    kkt_solve : str
+        The solve of the constrained accelerations: ``"null-space"``
+        (:mod:`nhham.numerics.nullspace`).
     kkt_ratio_max : float
-        The larger max W_AA / min W_AA of the two.
+        The larger max W_AA / min W_AA at the initial state and the reference's end (the
+        spread of the masses in the scene's units, a diagnostic).
     """
 
     rows: tuple
@@ -134,7 +134,7 @@ class WorkPrecisionResult:
     reference: str = ""
     skipped: tuple = ()
     forced: str = ""
-    kkt_solve: str = "saddle"
+    kkt_solve: str = KKT_SOLVE
     kkt_ratio_max: float = 1.0
 
     def methods(self) -> tuple:
@@ -174,8 +174,7 @@ class WorkPrecisionResult:
         """The table and the time to solution at relative errors 1e-6 and 1e-10."""
         lines = [f"work-precision: {self.name or 'system'}, t in {list(self.t_span)}, backend "
                  f"{self.backend}; reference: {self.reference} (estimated error "
-                 f"{self.reference_error_estimate:.1e}, {self.reference_wall_time_s:.3g} s); "
-                 f"{describe_kkt_solve(self.kkt_solve, self.kkt_ratio_max)}",
+                 f"{self.reference_error_estimate:.1e}, {self.reference_wall_time_s:.3g} s)",
                  "", self.table(), ""]
         if self.forced:
             lines.append(f"energy balance, not drift: the energy is not conserved here "
@@ -324,7 +323,6 @@ def work_precision(system_or_model, y0, t_span, *, methods=None, tolerances=DEFA
     return WorkPrecisionResult(tuple(rows), model.name, (t0, t1), digits, ref_error, ref_time,
                                model.backend, ref_text, tuple(skipped),
                                forced=model.energy_change,
-                               kkt_solve=kkt_solve_name(ratio > KKT_RATIO),
                                kkt_ratio_max=float(np.nanmax(ratio)))
 
 

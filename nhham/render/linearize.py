@@ -34,7 +34,6 @@ def linearization_data(lin) -> dict:
 def linearize_text(title, scene, lin, swept, opened=None, rows_before=()) -> str:
     """The text report of ``nhham linearize`` (``rows_before``: (name, text) rows put first
     in its table: a singular L's phase space)."""
-    from nhham.numerics.nullspace import describe_kkt_solve
     from nhham.render.text import paragraph, table
     from nhham.system.expressions import to_text
 
@@ -57,8 +56,6 @@ def linearize_text(title, scene, lin, swept, opened=None, rows_before=()) -> str
                                        for u, law in scene.control.items())),
                  ("open loop", opened.verdict + " (inputs held at their [steady] values)")]
     rows.append(("precision", lin.precision))
-    if lin.kkt_solve != "saddle":   # the usual solve is said in the JSON only (as simulate)
-        rows.append(("accelerations", describe_kkt_solve(lin.kkt_solve, lin.kkt_ratio)))
     lines.append(table(rows))
     lines += _matrices(lin, "state matrix" + (" of the closed loop" if closed else ""))
     if closed:

@@ -1,6 +1,6 @@
-"""The saddle-point solve of the constrained field (nhham.numerics.saddle, and the compiled
-one in C) against systems solved by hand and against the symbolic field solved in
-40-digit mpmath."""
+"""The solves of the constrained field (nhham.numerics.saddle and nullspace, and the
+compiled one in C) against systems solved by hand and against the symbolic field solved
+in 40-digit mpmath."""
 
 from __future__ import annotations
 
@@ -11,7 +11,7 @@ import sympy as sp
 import nhham
 from nhham.lagrangian.geometry import lagrangian_geometry
 from nhham.numerics.codegen import c_compiler, numeric_model
-from nhham.numerics.saddle import cond_each, gauss, solve_saddle
+from nhham.numerics.saddle import cond_each, solve_saddle
 
 HAVE_CC = c_compiler() is not None
 
@@ -66,10 +66,10 @@ def _saddle_reference(system, ing, y):
                                      _nearly_singular_W], ids=["snake4", "Lorentzian",
                                                                 "nearly-singular-W"])
 def test_compiled_solver_every_branch_matches_symbolic_and_numpy(builder):
-    """The compiled saddle solve (Cholesky + Schur complement for positive
-    definite W; LU when W is indefinite or nearly singular) and the numpy path
-    give the symbolic field P(xi_L) and multipliers at points of M_1; batches
-    give the single-state values."""
+    """The compiled solve of the accelerations (the null-space solve, with an indefinite
+    or a nearly singular W too) and the numpy paths (one state, a batch) give the
+    symbolic field P(xi_L) and multipliers at points of M_1; batches give the
+    single-state values."""
     system = builder()
     ing = lagrangian_geometry(system).ingredients
     models = [numeric_model(system, backend="numpy")]
@@ -110,11 +110,8 @@ def test_a_saddle_system_solved_by_hand():
     assert np.allclose(xw, [0.5, 1.0]) and yw.shape == (0,)
 
 
-def test_gauss_and_the_condition_of_C():
-    """2 x + y = 3, x + 3 y = 5: x = 4/5, y = 7/5; a singular system gives None.
-    C = -mu W^-1 mu^T = -diag(1, 4) for W = Id, mu = diag(1, 2): cond 4; a singular W: inf."""
-    assert np.allclose(gauss([[2.0, 1.0, 3.0], [1.0, 3.0, 5.0]], 2), [0.8, 1.4])
-    assert gauss([[1.0, 2.0, 1.0], [2.0, 4.0, 2.0]], 2) is None
+def test_the_condition_of_C():
+    """C = -mu W^-1 mu^T = -diag(1, 4) for W = Id, mu = diag(1, 2): cond 4; a singular W: inf."""
     W = np.stack([np.eye(2), np.zeros((2, 2))])
     mu = np.stack([np.diag([1.0, 2.0])] * 2)
     assert np.allclose(cond_each(W, mu), [4.0, np.inf])

@@ -23,7 +23,7 @@ static int dg_wsolve(const double *W, const double *b, double *x) {
     double A[NQ * NQ];
     for (int i = 0; i < NQ * NQ; ++i) A[i] = W[i];
     for (int i = 0; i < NQ; ++i) x[i] = b[i];
-    return gsolve(NQ, A, x);
+    return gsolve(NQ, A, x, 0.0);
 }
 
 /* H = v^T W v / 2 + V(q) and v = W^-1 (P - b(q)) at (q, P); geo = geometry(q). */
@@ -228,7 +228,7 @@ static int dg_step(double *y, double h, const double *p, double tol, int maxiter
         }
         if (err < best) best = err;
         for (int i = 0; i < NZD * NZD; ++i) A[i] = J[i];
-        if (gsolve(NZD, A, r)) return NHHAM_SINGULAR;
+        if (gsolve(NZD, A, r, 0.0)) return NHHAM_SINGULAR;
         double upd = 0.0;
         for (int i = 0; i < NZD; ++i) { z[i] -= r[i]; upd = fmax(upd, fabs(r[i]) / scale[i]); }
         ++*newton;

@@ -1,13 +1,13 @@
 /* ---- small dense linear algebra (row-major) ---- */
 
 /* Solve A x = b (d x d) in place by LU with partial pivoting.
-   Returns 0 on success, 1 if a pivot is exactly zero. */
-static int gsolve(int d, double *A, double *b) {
+   Returns 0 on success, 1 if a pivot is at or below tol (0: exactly zero). */
+static int gsolve(int d, double *A, double *b, double tol) {
     for (int c = 0; c < d; ++c) {
         int piv = c;
         double best = fabs(A[c * d + c]);
         for (int r = c + 1; r < d; ++r) if (fabs(A[r * d + c]) > best) { best = fabs(A[r * d + c]); piv = r; }
-        if (best == 0.0) return 1;
+        if (best <= tol) return 1;
         if (piv != c) {
             for (int j = 0; j < d; ++j) { double t = A[c * d + j]; A[c * d + j] = A[piv * d + j]; A[piv * d + j] = t; }
             double t = b[c]; b[c] = b[piv]; b[piv] = t;
@@ -48,10 +48,32 @@ static int lu_solve(int mm, const double *W, const double *mu, const double *d,
         for (int k = 0; k < mm; ++k) K[(NQ + c) * nn + NQ + k] = 0.0;
         b[NQ + c] = bottom[c] * e[c];
     }
-    if (gsolve(nn, K, b)) return 1;
+    if (gsolve(nn, K, b, 0.0)) return 1;
     for (int i = 0; i < NQ; ++i) x[i] = b[i] * d[i];
     for (int c = 0; c < mm; ++c) y[c] = b[NQ + c] * e[c];
     return 0;
+}
+
+/* X <- Q X for X (NQ x cols, row stride cols), Q = P_0 H_0 .. P_{mm-1} H_{mm-1} the
+   reflections (v_c = V + c NQ, beta_c) and row swaps (piv) of nullspace_solve's QR: Q is
+   never formed (m reflections of NQ x cols against NQ^2 entries). */
+static void q_times(int mm, const double *V, const double *beta, const int *piv, double *X,
+                    int cols) {
+    for (int c = mm - 1; c >= 0; --c) {
+        const double *v = V + c * NQ;
+        for (int j = 0; j < cols; ++j) {
+            double sd = 0.0;
+            for (int i = c; i < NQ; ++i) sd += v[i] * X[i * cols + j];
+            sd *= beta[c];
+            for (int i = c; i < NQ; ++i) X[i * cols + j] -= sd * v[i];
+        }
+        if (piv[c] != c)
+            for (int j = 0; j < cols; ++j) {
+                const double u = X[c * cols + j];
+                X[c * cols + j] = X[piv[c] * cols + j];
+                X[piv[c] * cols + j] = u;
+            }
+    }
 }
 
 /* The null-space solve of [[W, mu^T], [mu, 0]] [x; y] = [top; bottom] (the steps of
@@ -60,18 +82,19 @@ static int lu_solve(int mm, const double *W, const double *mu, const double *d,
    D W D s) by LU, x = D (s + Q2 z), R y = Q1^T (D top - D W D D^-1 x). Where W's
    diagonal spans orders of magnitude (a light coordinate tied to a heavy one) it keeps
    the small accelerations that the saddle solve obtains as a difference of nearly equal
-   terms. Returns 0, or 1 when mu is rank deficient or the reduced matrix singular. */
+   terms. The rows of mu D are scaled to unit length first (y scaled back), so that
+   |R_cc| <= 1; mu counts as rank deficient where |R_cc| <= NHHAM_RANK_TOL NQ, and the
+   reduced matrix as singular where an LU pivot is at or below NHHAM_RANK_TOL NQ times
+   its largest entry (nhham.numerics.nullspace.RANK_TOLERANCE: singular to rounding).
+   Returns 0, or 1 when mu is rank deficient or the reduced matrix singular. */
+#define NHHAM_RANK_TOL (64 * 2.220446049250313e-16)
 #if defined(__GNUC__)
-#define COLD static __attribute__((noinline, cold))
-#else
-#define COLD static
+__attribute__((noinline))   /* one copy, not one per caller */
 #endif
-/* Kept out of line (COLD): the saddle path that ksolve inlines into every field
-   evaluation stays as small as before. */
-COLD int nullspace_solve(int mm, const double *W, const double *mu, const double *top,
+static int nullspace_solve(int mm, const double *W, const double *mu, const double *top,
                          const double *bottom, double *x, double *y) {
     enum { MX = NCX };
-    double d[NQ], Ws[NQ * NQ], A[NQ * MX], V[MX * NQ], beta[MX], Q[NQ * NQ];
+    double d[NQ], Ws[NQ * NQ], A[NQ * MX], V[MX * NQ], beta[MX], Q2[NQ * NQ];
     double s[NQ], t[NQ], WQ[NQ * NQ], H[NQ * NQ], z[NQ], w[MX];
     int piv[MX];
     const int r = NQ - mm;
@@ -81,8 +104,16 @@ COLD int nullspace_solve(int mm, const double *W, const double *mu, const double
     }
     for (int i = 0; i < NQ; ++i)
         for (int j = 0; j < NQ; ++j) Ws[i * NQ + j] = W[i * NQ + j] * d[i] * d[j];
-    for (int c = 0; c < mm; ++c)
-        for (int i = 0; i < NQ; ++i) A[i * MX + c] = mu[c * NQ + i] * d[i];
+    double e[MX];
+    for (int c = 0; c < mm; ++c) {
+        double nc = 0.0;
+        for (int i = 0; i < NQ; ++i) {
+            A[i * MX + c] = mu[c * NQ + i] * d[i];
+            nc += A[i * MX + c] * A[i * MX + c];
+        }
+        e[c] = nc > 0.0 ? 1.0 / sqrt(nc) : 1.0;
+        for (int i = 0; i < NQ; ++i) A[i * MX + c] *= e[c];
+    }
     /* Householder reflections H_c = I - beta_c v_c v_c^T with row pivoting (the swap P_c
        of rows c and piv_c first: the largest remaining entry of column c, so that a
        kernel direction near a coordinate axis keeps its small components to relative
@@ -100,7 +131,7 @@ COLD int nullspace_solve(int mm, const double *W, const double *mu, const double
             }
         for (int i = c; i < NQ; ++i) norm += A[i * MX + c] * A[i * MX + c];
         norm = sqrt(norm);
-        if (!(norm > 0.0)) return 1;
+        if (!(norm > NHHAM_RANK_TOL * NQ)) return 1;
         const double alpha = A[c * MX + c] >= 0.0 ? -norm : norm;
         for (int i = 0; i < NQ; ++i) v[i] = i < c ? 0.0 : A[i * MX + c];
         v[c] -= alpha;                 /* no cancellation: alpha has the other sign */
@@ -114,81 +145,68 @@ COLD int nullspace_solve(int mm, const double *W, const double *mu, const double
         }
         A[c * MX + c] = alpha;
     }
-    /* Q = P_0 H_0 .. P_{mm-1} H_{mm-1} explicitly (row-major): its first mm columns Q1,
-       the rest Q2. */
-    for (int i = 0; i < NQ; ++i)
-        for (int j = 0; j < NQ; ++j) Q[i * NQ + j] = i == j ? 1.0 : 0.0;
-    for (int c = mm - 1; c >= 0; --c) {
-        const double *v = V + c * NQ;
-        for (int j = 0; j < NQ; ++j) {
-            double sd = 0.0;
-            for (int i = c; i < NQ; ++i) sd += v[i] * Q[i * NQ + j];
-            sd *= beta[c];
-            for (int i = c; i < NQ; ++i) Q[i * NQ + j] -= sd * v[i];
-        }
-        if (piv[c] != c)
-            for (int j = 0; j < NQ; ++j) {
-                const double t = Q[c * NQ + j];
-                Q[c * NQ + j] = Q[piv[c] * NQ + j];
-                Q[piv[c] * NQ + j] = t;
-            }
-    }
-    /* R^T w = bottom (R = the upper triangle of A), s = Q1 w. */
+    /* R^T w = bottom (R = the upper triangle of A), s = Q1 w = Q [w; 0]. */
     for (int c = 0; c < mm; ++c) {
-        double a = bottom[c];
+        double a = bottom[c] * e[c];
         for (int k = 0; k < c; ++k) a -= A[k * MX + c] * w[k];
         w[c] = a / A[c * MX + c];
     }
-    for (int i = 0; i < NQ; ++i) {
-        double a = 0.0;
-        for (int c = 0; c < mm; ++c) a += Q[i * NQ + c] * w[c];
-        s[i] = a;
-    }
+    for (int i = 0; i < NQ; ++i) s[i] = i < mm ? w[i] : 0.0;
+    q_times(mm, V, beta, piv, s, 1);
     for (int i = 0; i < NQ; ++i) {
         double a = top[i] * d[i];
         for (int j = 0; j < NQ; ++j) a -= Ws[i * NQ + j] * s[j];
         t[i] = a;
     }
-    /* (Q2^T Ws Q2) z = Q2^T t. */
+    /* Q2 = Q [0; I] (NQ x r, row stride r); (Q2^T Ws Q2) z = Q2^T t. */
+    for (int i = 0; i < NQ; ++i)
+        for (int b = 0; b < r; ++b) Q2[i * r + b] = i == mm + b ? 1.0 : 0.0;
+    q_times(mm, V, beta, piv, Q2, r);
     for (int i = 0; i < NQ; ++i)
         for (int b = 0; b < r; ++b) {
             double a = 0.0;
-            for (int j = 0; j < NQ; ++j) a += Ws[i * NQ + j] * Q[j * NQ + mm + b];
-            WQ[i * NQ + b] = a;
+            for (int j = 0; j < NQ; ++j) a += Ws[i * NQ + j] * Q2[j * r + b];
+            WQ[i * r + b] = a;
         }
+    double hmax = 0.0;
     for (int a = 0; a < r; ++a) {
         double ra = 0.0;
-        for (int i = 0; i < NQ; ++i) ra += Q[i * NQ + mm + a] * t[i];
+        for (int i = 0; i < NQ; ++i) ra += Q2[i * r + a] * t[i];
         z[a] = ra;
         for (int b = 0; b < r; ++b) {
             double h = 0.0;
-            for (int i = 0; i < NQ; ++i) h += Q[i * NQ + mm + a] * WQ[i * NQ + b];
+            for (int i = 0; i < NQ; ++i) h += Q2[i * r + a] * WQ[i * r + b];
             H[a * r + b] = h;
+            if (fabs(h) > hmax) hmax = fabs(h);
         }
     }
-    if (r > 0 && gsolve(r, H, z)) return 1;
+    if (r > 0 && gsolve(r, H, z, NHHAM_RANK_TOL * NQ * hmax)) return 1;
     for (int i = 0; i < NQ; ++i) {
         double a = s[i];
-        for (int b = 0; b < r; ++b) a += Q[i * NQ + mm + b] * z[b];
+        for (int b = 0; b < r; ++b) a += Q2[i * r + b] * z[b];
         s[i] = a;                      /* D^-1 x */
         x[i] = a * d[i];
     }
-    /* R y = Q1^T (D top - Ws D^-1 x). */
+    /* R y = Q1^T (D top - Ws D^-1 x): the first mm entries of Q^T (...). */
     for (int i = 0; i < NQ; ++i) {
         double a = top[i] * d[i];
         for (int j = 0; j < NQ; ++j) a -= Ws[i * NQ + j] * s[j];
         t[i] = a;
     }
-    for (int c = 0; c < mm; ++c) {
-        double a = 0.0;
-        for (int i = 0; i < NQ; ++i) a += Q[i * NQ + c] * t[i];
-        w[c] = a;
+    for (int c = 0; c < mm; ++c) {      /* Q^T = H_{mm-1} P_{mm-1} .. H_0 P_0 */
+        const double *v = V + c * NQ;
+        if (piv[c] != c) { const double u = t[c]; t[c] = t[piv[c]]; t[piv[c]] = u; }
+        double sd = 0.0;
+        for (int i = c; i < NQ; ++i) sd += v[i] * t[i];
+        sd *= beta[c];
+        for (int i = c; i < NQ; ++i) t[i] -= sd * v[i];
     }
     for (int c = mm - 1; c >= 0; --c) {
-        double a = w[c];
+        double a = t[c];
         for (int k = c + 1; k < mm; ++k) a -= A[c * MX + k] * y[k];
         y[c] = a / A[c * MX + c];
     }
+    for (int c = 0; c < mm; ++c) y[c] *= e[c];
     return 0;
 }
 
@@ -311,74 +329,13 @@ lu:
     }
 }
 
-/* The backward error of (x, y) in [[W, mu^T], [mu, 0]] [x; y] = [top; bottom], in units
-   of eps, over the constraint rows mu x = bottom, as nhham.numerics.nullspace.
-   constraint_error: max_c |r_c| / max(|mu_c| |x| + |bottom_c|, max_j |mu_cj| d_j max_j
-   |x_j| / d_j), d = |W_AA|^-1/2. Free of units. */
-static double kkt_error(int mm, const double *W, const double *mu, const double *bottom,
-                        const double *x) {
-    double d[NQ], xs = 0.0, worst = 0.0;
-    for (int j = 0; j < NQ; ++j) {
-        const double w = fabs(W[j * NQ + j]);
-        d[j] = w > 0.0 ? 1.0 / sqrt(w) : 1.0;
-        const double t = fabs(x[j]) / d[j];
-        if (t > xs) xs = t;
-    }
-    for (int c = 0; c < mm; ++c) {
-        double r = bottom[c], terms = fabs(r), big = 0.0;
-        for (int b = 0; b < NQ; ++b) {
-            const double t = mu[c * NQ + b] * x[b], s = fabs(mu[c * NQ + b]) * d[b];
-            r -= t;
-            terms += fabs(t);
-            if (s > big) big = s;
-        }
-        if (r != 0.0) {
-            const double den = terms > big * xs ? terms : big * xs;
-            const double e = den > 0.0 ? fabs(r) / den : INFINITY;
-            if (!(e <= worst)) worst = e;   /* NaN counts */
-        }
-    }
-    return worst / 2.220446049250313e-16;
-}
-
-/* One step of iterative refinement of (x, y): the residual of every row, solved again. */
-static void kkt_refine(int mm, const double *W, const double *mu, const double *top,
-                       const double *bottom, double *x, double *y) {
-    double rt[NQ], rb[NCX], dx[NQ], dy[NCX];
-    for (int a = 0; a < NQ; ++a) {
-        double r = top[a];
-        for (int b = 0; b < NQ; ++b) r -= W[a * NQ + b] * x[b];
-        for (int c = 0; c < mm; ++c) r -= mu[c * NQ + a] * y[c];
-        rt[a] = r;
-    }
-    for (int c = 0; c < mm; ++c) {
-        double r = bottom[c];
-        for (int b = 0; b < NQ; ++b) r -= mu[c * NQ + b] * x[b];
-        rb[c] = r;
-    }
-    if (ksolve_saddle(mm, W, mu, rt, rb, dx, dy)) return;
-    for (int a = 0; a < NQ; ++a) x[a] += dx[a];
-    for (int c = 0; c < mm; ++c) y[c] += dy[c];
-}
-
 /* [[W, mu^T], [mu, 0]] [x; y] = [top; bottom] with the first mm rows of mu (row stride
-   NQ), W symmetric: the one decision of nhham.numerics.nullspace.needs_null_space. Where
-   W's diagonal spans more than NHHAM_KKT_RATIO (max W_AA > ratio * min W_AA) the saddle
-   solve's relative error in an acceleration, up to eps * max W_AA / min W_AA, is above
-   ~1e-12 and the null-space solve takes over; otherwise ksolve_saddle, refined once where
-   the backward error of its constraint rows is above NHHAM_REFINE_RATIO eps (as the numpy
-   solves). Returns 0, or 1 when the matrix is singular. */
+   NQ), W symmetric: the constrained accelerations and the projections onto the
+   constraints, by the null-space solve at every state (nhham.numerics.nullspace: free of
+   the coordinates' units, to rounding at any mass ratio); without constraints the
+   Cholesky solve of W (ksolve_saddle). Returns 0, or 1 when the matrix is singular. */
 HOT int ksolve(int mm, const double *W, const double *mu, const double *top,
                const double *bottom, double *x, double *y) {
-    double hi = 0.0, lo = INFINITY;
-    for (int i = 0; i < NQ; ++i) {
-        const double a = fabs(W[i * NQ + i]);
-        if (a > hi) hi = a;
-        if (a < lo) lo = a;
-    }
-    if (hi > NHHAM_KKT_RATIO * lo) return nullspace_solve(mm, W, mu, top, bottom, x, y);
-    if (ksolve_saddle(mm, W, mu, top, bottom, x, y)) return 1;
-    if (mm && kkt_error(mm, W, mu, bottom, x) > NHHAM_REFINE_RATIO)
-        kkt_refine(mm, W, mu, top, bottom, x, y);
-    return 0;
+    if (mm == 0) return ksolve_saddle(0, W, mu, top, bottom, x, y);
+    return nullspace_solve(mm, W, mu, top, bottom, x, y);
 }

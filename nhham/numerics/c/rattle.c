@@ -130,7 +130,7 @@ static int rattle_step(double *q, double *v, double h, double *lam, const double
                 for (int j = 0; j < NQ; ++j) s += Jq[c * NQ + j] * dq[j * NCX + e];
                 J[c * NC + e] = s;
             }
-        if (gsolve(NC, J, r)) return NHHAM_SINGULAR;
+        if (gsolve(NC, J, r, 0.0)) return NHHAM_SINGULAR;
         for (int c = 0; c < NC; ++c) lam[c] -= r[c];
         ++*newton;
     }
@@ -163,7 +163,7 @@ static int wsolve(const double *W, const double *b, double *x) {
     double A[NQ * NQ];
     for (int i = 0; i < NQ * NQ; ++i) A[i] = W[i];
     for (int i = 0; i < NQ; ++i) x[i] = b[i];
-    return gsolve(NQ, A, x);
+    return gsolve(NQ, A, x, 0.0);
 }
 
 /* The pieces of the residual at z = (p_h, q1, lam0): what depends on p_h (u0 = W0^-1
@@ -317,7 +317,7 @@ static int rattle_step_general(double *q, double *v, double h, double *lam, cons
         }
         if (err < best) best = err;
         for (int i = 0; i < NZG * NZG; ++i) A[i] = J[i];
-        if (gsolve(NZG, A, r)) return NHHAM_SINGULAR;
+        if (gsolve(NZG, A, r, 0.0)) return NHHAM_SINGULAR;
         for (int i = 0; i < NZG; ++i) z[i] -= r[i];
         ++*newton;
     }
@@ -347,7 +347,7 @@ int nhham_rattle(double *y, double h, long nsteps, long stride, int composition,
             double A[NQ * NQ], e[NQ];
             for (int i = 0; i < NQ * NQ; ++i) A[i] = W[i];
             for (int i = 0; i < NQ; ++i) e[i] = (i == c);
-            if (gsolve(NQ, A, e)) return NHHAM_SINGULAR;
+            if (gsolve(NQ, A, e, 0.0)) return NHHAM_SINGULAR;
             for (int i = 0; i < NQ; ++i) Winv[i * NQ + c] = e[i];
         }
     }

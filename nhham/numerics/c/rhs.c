@@ -1,7 +1,7 @@
 /* dy = (v, a), lam = multipliers, power = -lam . (mu v) (= dE/dt exactly).
    alpha2, beta2: Baumgarte terms (2 alpha, beta^2); zero for none.
-   The saddle-point system is solved by ksolve (scaled: backward stable at
-   extreme mass ratios). Returns NHHAM_SUCCESS, NHHAM_SINGULAR or NHHAM_NONFINITE
+   The saddle-point system is solved by ksolve (the null-space solve: the small
+   accelerations to rounding at extreme mass ratios, in any units). Returns NHHAM_SUCCESS, NHHAM_SINGULAR or NHHAM_NONFINITE
    (the codes of nhham.numerics.status.Status). */
 static int rhs_one(const double *y, const double *p, double alpha2, double beta2,
                    double *dy, double *lam, double *power) {

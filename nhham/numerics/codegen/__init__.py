@@ -9,10 +9,11 @@ it is loaded: :mod:`.cache`; builds in the background while numpy answers:
 methods take arrays of states and never touch sympy. The C runtime the generated kernels
 are compiled with lives in ``nhham/numerics/c/`` (package data):
 
-- the saddle solve ``ksolve``: Cholesky of W and of the Schur complement mu W^-1 mu^T
-  (W is positive definite for mechanical Lagrangians), LU with partial pivoting of the
-  scaled saddle matrix when W is indefinite or nearly singular, the null-space solve when
-  W's diagonal spans more than ``NHHAM_KKT_RATIO`` (``linalg.c``);
+- the solve of the accelerations ``ksolve``, by the null-space method (Householder QR of
+  (mu D)^T with row pivoting, the reduced matrix by LU); RATTLE's saddle solve
+  ``ksolve_saddle``: Cholesky of W and of the Schur complement mu W^-1 mu^T (W is
+  positive definite for mechanical Lagrangians), LU with partial pivoting of the scaled
+  saddle matrix when W is indefinite or nearly singular (``linalg.c``);
 - the right-hand side for one state and for a batch (``rhs.c``), the nonholonomic RATTLE
   loop, constant W or W(q) (``rattle.c``), and scipy's explicit Runge-Kutta methods (RK23,
   RK45, DOP853) as one loop with projection onto M_1 (``erk.c``, used by

@@ -57,7 +57,6 @@ from sympy.printing.c import C99CodePrinter
 
 from nhham.lagrangian.geometry import lagrangian_geometry
 from nhham.numerics.codegen.python_text import python_module
-from nhham.numerics.nullspace import KKT_RATIO, REFINE_RATIO
 from nhham.numerics.status import c_defines
 from nhham.system.expressions import derivative
 
@@ -565,8 +564,6 @@ def _c_module(printed, n, m, k, npar, path, forced=False, time_slot=None,
         f"#define NN {n + m}",
         f"#define NOUT {n * n + n + m * n + 3 * m + k + int(forced)}",
         f"#define NPAR {npar}",
-        f"#define NHHAM_KKT_RATIO {KKT_RATIO!r}  /* nhham.numerics.nullspace.KKT_RATIO */",
-        f"#define NHHAM_REFINE_RATIO {REFINE_RATIO!r}  /* nhham.numerics.nullspace.REFINE_RATIO */",
     ]
     if forced:  # the index of the applied power Q . v in the saddle kernel's outputs
         head.append(f"#define NHHAM_FORCED {n * n + n + m * n + 2 * m + k}")
