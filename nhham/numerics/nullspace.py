@@ -35,10 +35,11 @@ ratio moves with them (x in millimetres multiplies W_xx by 1e-6); in the scaled 
 heavy one is the same as a coordinate almost walled by the geometry (a row [1, eps] of
 mu D), so a unit-free test flags both, and on the Whipple bicycle 99% of the states.
 Solving by null space everywhere is free of units by construction and costs a QR
-factorisation (bench/RESULTS.md, issue 43: the bicycle's compiled right-hand side
-1.9 -> 2.2 us a state, its accelerations 1.3e-12 -> 1.7e-14 of their size, the
-isokinetic particle's 4.2e-13 -> 4.4e-16). :func:`diagonal_ratio` stays a reported
-diagnostic (the spread of the masses in the scene's units), deciding nothing.
+factorisation (bench/RESULTS.md, "One solve in any units": the bicycle's compiled
+right-hand side 1.95 -> 2.4 us a state, the 8-link snake's 1.07 -> 1.7 us, whole commands
+unchanged within their spread; the bicycle's accelerations 1.3e-12 -> 1.3e-14 of their
+size in C, the isokinetic particle's 4.2e-13 -> 6.6e-16). :func:`diagonal_ratio` stays a
+reported diagnostic (the spread of the masses in the scene's units), deciding nothing.
 RATTLE's velocity-level solve keeps the saddle solve (``solve_saddle``,
 ``ksolve_saddle``): its unknown is the O(1) velocity, whose small step increments the
 null-space solve kept no better (3-10x worse at a mass ratio of 1e16).
