@@ -210,7 +210,9 @@ def test_every_notebook_is_listed_and_stored_with_its_outputs():
                                     "nhham.system.scene_structure", "nhham.system.scene",
                                     "nhham.progress", "nhham.lagrangian.adjugate",
                                     "nhham.journeys.reduction", "nhham.lagrangian.chaplygin",
-                                    "nhham.hamiltonian.hamiltonization_points"])
+                                    "nhham.hamiltonian.hamiltonization_points",
+                                    "nhham.problems", "nhham.problems.measures",
+                                    "nhham.problems.runner"])
 def test_docstring_examples(module):
     mod = importlib.import_module(module)
     result = doctest.testmod(mod, optionflags=doctest.ELLIPSIS)

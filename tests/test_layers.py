@@ -57,8 +57,10 @@ MAY_IMPORT = {
     "journeys": ("system", "lagrangian", "hamiltonian", "verdict", "numerics", "render"),
     "study": ("system", "lagrangian", "hamiltonian", "verdict", "numerics", "render",
               "journeys"),
+    "problems": ("system", "lagrangian", "hamiltonian", "verdict", "numerics", "render",
+                 "journeys"),
     "cli": ("system", "lagrangian", "hamiltonian", "verdict", "numerics", "render",
-            "journeys", "study"),
+            "journeys", "study", "problems"),
 }
 LAYERS = tuple(MAY_IMPORT)
 BASE = ("errors", "settings", "lazy", "budget", "progress", "autonomy")

@@ -272,6 +272,13 @@ def cmd_bench(args, steps) -> CommandOutput:
                          warnings=list(answer.warnings), failure=answer.failure)
 
 
+def cmd_problems(args, steps) -> CommandOutput:
+    """The published problems (:mod:`nhham.cli.problems_command`, imported when it runs)."""
+    from nhham.cli.problems_command import cmd_problems as run
+
+    return run(args, steps)
+
+
 def cmd_sweep(args, steps) -> CommandOutput:
     """A parameter study (:mod:`nhham.cli.sweep_command`, imported when it runs)."""
     from nhham.cli.sweep_command import cmd_sweep as run
@@ -290,6 +297,7 @@ COMMANDS = {
     "sweep": cmd_sweep,
     "reduce": cmd_reduce,
     "hamiltonize": cmd_hamiltonize,
+    "problems": cmd_problems,
 }
 
 

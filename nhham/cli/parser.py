@@ -116,6 +116,9 @@ def build_parser() -> argparse.ArgumentParser:
                                "--set and swept by --over)" if name == "sweep" else ""))
         if name in options:
             options[name](p)
+    from nhham.cli.problems_command import add_parser
+
+    add_parser(sub, _EXIT_TEXT, budget_value)   # reads no scene: its own arguments
     return parser
 
 

@@ -42,7 +42,7 @@ from nhham.hamiltonian.classes_sampled import classes_from_samples, principal_pi
 from nhham.hamiltonian.classes_at_points import (
     BracketRank,
 )
-from nhham.hamiltonian.combinations import NotFormed, closed_form_combinations
+from nhham.hamiltonian.combinations import NotFormed, OutOfTime, closed_form_combinations
 from nhham.hamiltonian.reduced_combinations import reduced_combinations
 from nhham.hamiltonian.side import HamiltonianSide, hamiltonian_side
 from nhham.lagrangian.algebra import block_inverse, cancel
@@ -242,6 +242,8 @@ def _combinations(system, constraints, second_class) -> tuple:
     try:
         return closed_form_combinations(system, constraints, second_class,
                                         max_coefficient_terms=COEFFICIENT_TERMS)
+    except OutOfTime:
+        raise   # the last way takes the same steps: it would run out of time too
     except NotFormed:
         pass
     if system.n <= REDUCED_MAX_N:

@@ -68,6 +68,10 @@ class NotFormed(Exception):
     """The combinations cannot be formed in closed form here (the reason is the message)."""
 
 
+class OutOfTime(NotFormed):
+    """Given up at the time limit (a second attempt by the same steps would be too)."""
+
+
 def closed_form_combinations(system, constraints, second_class, max_terms: int = 20000,
                              time_limit: float = TIME_LIMIT,
                              max_coefficient_terms: int | None = None):
@@ -208,7 +212,7 @@ class _Context:
         if len(poly) > self.max_terms:
             raise NotFormed(f"a polynomial of more than {self.max_terms} terms")
         if time.process_time() > self.deadline:
-            raise NotFormed(f"not formed within {self.time_limit:g} s of CPU time")
+            raise OutOfTime(f"not formed within {self.time_limit:g} s of CPU time")
         return poly
 
     def mul(self, f, g):

@@ -1,0 +1,262 @@
+"""How nhham computes a published quantity: one function per kind, in :data:`MEASURES`.
+
+Each measure takes the problem's :class:`~nhham.problems.runner.Context` (its scene and
+compiled model, loaded once, at other parameter values on request), the quantity's
+``args`` (from ``catalog.toml``) and returns a :class:`Measured`: the value
+(a number, or a list of [re, im] pairs for a spectrum), the method that produced it and
+the seconds it took. Closed forms are evaluated by :func:`closed_form` at the scene's
+parameter values and initial data (``NAME_0`` for the initial value of a state ``NAME``).
+"""
+
+from __future__ import annotations
+
+import time
+import warnings
+from dataclasses import dataclass
+from typing import Any, Callable, Mapping
+
+import numpy as np
+
+__all__ = ["Measured", "MEASURES", "closed_form", "spectrum_error"]
+
+
+@dataclass(frozen=True)
+class Measured:
+    """nhham's value of a quantity.
+
+    Attributes
+    ----------
+    value : float or list
+        A number, or for a spectrum a list of [re, im] pairs.
+    method : str
+        What computed it (the command's route, the integrator and its tolerance).
+    time_s : float
+        Wall seconds of the computation (the scene loaded and compiled beforehand).
+    extra : mapping
+        What else the measure found (the IFToMM run's CPU time and file).
+    """
+
+    value: Any
+    method: str
+    time_s: float
+    extra: Mapping = None
+
+
+def _symbols(scene, t=None):
+    """Names a closed form may use: parameters, states, ``NAME_0`` and t."""
+    import sympy as sp
+
+    names = {p.name: p for p in scene.system.parameters}
+    names.update({s.name: s for s in scene.system.state})
+    names.update({f"{s.name}_0": sp.Symbol(f"{s.name}_0") for s in scene.system.state})
+    names["t"] = sp.Symbol("t")
+    return names
+
+
+def closed_form(scene, text, *, t=None, initial=None, values=None) -> float:
+    """The value of a closed form ``text`` (parsed against the scene's names, never
+    evaluated as Python) at the scene's parameter values, its initial data as ``NAME_0``
+    and time ``t``.
+
+    Examples
+    --------
+    >>> import nhham
+    >>> scene = nhham.loads_scene('coordinates = ["x"]\\nparameters = { g = 9.81, r = 0.26 }\\n'
+    ...                           'lagrangian = "x_dot**2/2"')
+    >>> round(closed_form(scene, "sqrt(g/(3*r))"), 12)
+    3.546478377218
+    """
+    import sympy as sp
+
+    from nhham.system.expressions import parse_expression
+
+    names = _symbols(scene)
+    expr = parse_expression(text, names, where="published")
+    sub = dict(scene.system.parameter_values)
+    sub.update({names[k]: v for k, v in (values or {}).items()})
+    sub.update({names[f"{k}_0"]: v for k, v in (initial or {}).items()})
+    if t is not None:
+        sub[names["t"]] = t
+    value = expr.xreplace({k: sp.Float(v, 30) for k, v in sub.items()}).evalf(30)
+    if value.free_symbols:
+        raise ValueError(f"closed form {text!r}: no value for {sorted(map(str, value.free_symbols))}")
+    return float(value)
+
+
+def spectrum_error(value, published) -> float:
+    """The largest distance between two spectra, matched greedily (nearest first)."""
+    got = [complex(*z) for z in value]
+    want = [complex(*z) for z in published]
+    worst = 0.0
+    for w in want:
+        j = int(np.argmin([abs(w - z) for z in got]))
+        worst = max(worst, abs(w - got.pop(j)))
+    return worst
+
+
+def _timed(fn):
+    start = time.perf_counter()
+    out = fn()
+    return out, time.perf_counter() - start
+
+
+def eigenvalues(context, args) -> Measured:
+    """The eigenvalues of ``nhham linearize`` at the scene's [steady] motion with the
+    ``parameter`` at ``value`` (a sweep of one value: the scene loaded once)."""
+    from nhham.journeys import linearize
+
+    sweep = (args["parameter"], np.array([float(args["value"])]))
+    answer, seconds = _timed(lambda: linearize(context.scene(), sweep=sweep,
+                                               model=context.model()))
+    data = answer.to_dict()
+    return Measured([[float(re), float(im)] for re, im in data["sweep"]["eigenvalues"][0]],
+                    f"linearize --sweep {args['parameter']}={args['value']:g} "
+                    f"({data['method']})", seconds)
+
+
+def crossing(context, args) -> Measured:
+    """Where ``nhham linearize --sweep`` finds the spectrum crossing the imaginary axis
+    (the first crossing of ``kind``, "real" or "complex", in the range)."""
+    from nhham.journeys import linearize
+
+    lo, hi, count = args["range"]
+    sweep = (args["parameter"], np.linspace(lo, hi, int(count)))
+    answer, seconds = _timed(lambda: linearize(context.scene(), sweep=sweep,
+                                               model=context.model()))
+    swept = answer.to_dict()["sweep"]
+    found = [c for c in swept["crossings"] if c["kind"] == args["kind"]]
+    if not found:
+        raise ValueError(f"no {args['kind']} crossing of {args['parameter']} in {lo}..{hi}")
+    value = float(found[0]["value"])
+    return Measured(value, f"linearize --sweep {args['parameter']}", seconds,
+                    extra={"floor": _crossing_floor(swept, value)})
+
+
+def _crossing_floor(swept, value) -> float:
+    """How well double precision places a crossing: the rounding of the spectrum (16 eps
+    of its largest |eigenvalue| there) over the slope of the crossing real part (from the
+    sweep's grid values on either side)."""
+    values = np.asarray(swept["values"], dtype=float)
+    i = int(np.clip(np.searchsorted(values, value), 1, len(values) - 1))
+    spectra = [np.array([complex(*z) for z in swept["eigenvalues"][j]]) for j in (i - 1, i)]
+    size = max(float(np.abs(s).max()) for s in spectra)
+    # the real parts nearest 0 on either side: the crossing pair's
+    re = [float(s.real[np.argmin(np.abs(s.real))]) for s in spectra]
+    slope = abs(re[1] - re[0]) / (values[i] - values[i - 1])
+    return 16 * float(np.finfo(float).eps) * size / slope if slope else float("inf")
+
+
+def _run(context, t_end, options=None, t_eval=None):
+    """The scene's [initial] motion to t_end (DOP853, rtol 1e-12, atol 1e-14)."""
+    import nhham
+
+    model = context.model()
+    y0 = context.initial()
+    opts = {"method": "DOP853", "rtol": 1e-12, "atol": 1e-14, **(options or {})}
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return nhham.simulate(model, (0.0, t_end), y0, warn=False, t_eval=t_eval, **opts)
+
+
+def _value_of(scene, text, state):
+    """An expression in the state names at one state (a mapping name -> value)."""
+    return closed_form(scene, text, values=state)
+
+
+def _state_at(result, i) -> dict:
+    return {name: float(result[name][i]) for name in result.names}
+
+
+def trajectory(context, args) -> Measured:
+    """An expression of the state at time ``t`` of the scene's [initial] motion."""
+    result, seconds = _timed(lambda: _run(context, args["t"]))
+    return Measured(_value_of(context.scene(), args["expression"], _state_at(result, -1)),
+                    "simulate DOP853 rtol 1e-12", seconds)
+
+
+def turning_rate(context, args) -> Measured:
+    """The mean rate at which the vector (``vector`` of two state names) turns over the
+    run to ``t``: its unwrapped angle's change over the time."""
+    grid = np.linspace(0.0, args["t"], 2001)
+    result, seconds = _timed(lambda: _run(context, args["t"], t_eval=grid))
+    u, v = (np.asarray(result[name]) for name in args["vector"])
+    angle = np.unwrap(np.arctan2(v, u))
+    return Measured(float((angle[-1] - angle[0]) / (grid[-1] - grid[0])),
+                    "simulate DOP853 rtol 1e-12", seconds)
+
+
+def mean_velocity(context, args) -> Measured:
+    """The mean velocity of the point (``vector``: two coordinates) over ``periods``
+    periods 2 pi/rate: its size, or with ``component`` that component."""
+    period = 2 * np.pi / closed_form(context.scene(), args["rate"])
+    t_end = args["periods"] * period
+    result, seconds = _timed(lambda: _run(context, t_end))
+    ends = np.array([[result[name][0], result[name][-1]] for name in args["vector"]])
+    mean = (ends[:, 1] - ends[:, 0]) / t_end
+    value = float(np.hypot(*mean)) if "component" not in args else float(mean[args["component"]])
+    return Measured(value, "simulate DOP853 rtol 1e-12", seconds)
+
+
+def classify(context, args) -> Measured:
+    """A field of ``nhham classify --json``'s result (with ``count``: its length)."""
+    from nhham.journeys import classify as run
+
+    if "classify" not in context.cache:   # every field from one run
+        context.cache["classify"] = _timed(lambda: run(context.scene()).to_dict())
+    data, seconds = context.cache["classify"]
+    value = data[args["field"]]
+    return Measured(len(value) if args.get("count") else value, "classify", seconds)
+
+
+def iftomm(context, args) -> Measured:
+    """The IFToMM maneuver's energy error 100 (max E - min E)/E_0 in % (:mod:`.iftomm`)."""
+    run = context.maneuver(args["maneuver"])
+    return Measured(run.energy_error_percent, f"simulate DOP853 rtol {context.iftomm_rtol:g}",
+                    run.integration_s, extra={"maneuver": run})
+
+
+def spin_reversal(context, args) -> Measured:
+    """The first time the state ``spin`` changes sign, from ``initial`` (given entries;
+    the rest from the constraints) at the parameters ``set``: DOP853 and, as the second
+    route, RK45 (both rtol 1e-12, atol 1e-14), on a grid of 1e-3 s refined by linear
+    interpolation. ``extra["reference"]``: the second route's time."""
+    import sympy as sp
+
+    import nhham
+    from nhham.system.initial_solve import InitialData, complete_initial
+
+    values = args.get("set")
+    scene, model = context.scene(values), context.model(values)
+    given = {k: sp.Float(v) for k, v in args["initial"].items()}
+    y0 = complete_initial(scene.system, InitialData(given=given), values)[0]
+    grid = np.linspace(0.0, args["t_end"], int(round(args["t_end"] * 1000)) + 1)
+    times = []
+    start = time.perf_counter()
+    for method in ("DOP853", "RK45"):
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            result = nhham.simulate(model, (0.0, args["t_end"]), y0, method=method,
+                                    rtol=1e-12, atol=1e-14, t_eval=grid, warn=False)
+        w = np.asarray(result[args["spin"]])
+        flips = np.flatnonzero(np.sign(w[1:]) != np.sign(w[:-1]))
+        if not flips.size:
+            raise ValueError(f"{args['spin']} keeps its sign to t = {args['t_end']}")
+        i = int(flips[0])
+        times.append(float(grid[i] - w[i] * (grid[i + 1] - grid[i]) / (w[i + 1] - w[i])))
+        if method == "DOP853":
+            seconds = time.perf_counter() - start
+    return Measured(times[0], "simulate DOP853 rtol 1e-12 (second route RK45 rtol 1e-12)",
+                    seconds, extra={"reference": times[1]})
+
+
+#: The measures by name: ``measure = "NAME"`` in ``catalog.toml``.
+MEASURES: Mapping[str, Callable] = {
+    "eigenvalues": eigenvalues,
+    "crossing": crossing,
+    "trajectory": trajectory,
+    "turning_rate": turning_rate,
+    "mean_velocity": mean_velocity,
+    "classify": classify,
+    "iftomm": iftomm,
+    "spin_reversal": spin_reversal,
+}
