@@ -119,13 +119,13 @@ class Benchmark:
         return self._runs[name, rtol]
 
     def _run(self, name, rtol) -> ManeuverRun:
-        import nhham
+        from nhham.numerics.integrate import simulate
 
         speed, roll_rate = MANEUVERS[name]
         grid = np.round(np.arange(0.0, T_END + DT / 2, DT), 12)
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            result = nhham.simulate(self.model, (0.0, T_END), self.initial_state(name),
+            result = simulate(self.model, (0.0, T_END), self.initial_state(name),
                                     method="DOP853", rtol=rtol, atol=1e-14, t_eval=grid,
                                     warn=False)
         if not result.success:

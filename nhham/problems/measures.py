@@ -39,7 +39,7 @@ class Measured:
     value: Any
     method: str
     time_s: float
-    extra: Mapping = None
+    extra: Mapping | None = None
 
 
 def _symbols(scene, t=None):
@@ -103,7 +103,7 @@ def _timed(fn):
 def eigenvalues(context, args) -> Measured:
     """The eigenvalues of ``nhham linearize`` at the scene's [steady] motion with the
     ``parameter`` at ``value`` (a sweep of one value: the scene loaded once)."""
-    from nhham.journeys import linearize
+    from nhham.journeys.stability import linearize
 
     sweep = (args["parameter"], np.array([float(args["value"])]))
     answer, seconds = _timed(lambda: linearize(context.scene(), sweep=sweep,
@@ -117,7 +117,7 @@ def eigenvalues(context, args) -> Measured:
 def crossing(context, args) -> Measured:
     """Where ``nhham linearize --sweep`` finds the spectrum crossing the imaginary axis
     (the first crossing of ``kind``, "real" or "complex", in the range)."""
-    from nhham.journeys import linearize
+    from nhham.journeys.stability import linearize
 
     lo, hi, count = args["range"]
     sweep = (args["parameter"], np.linspace(lo, hi, int(count)))
@@ -148,14 +148,14 @@ def _crossing_floor(swept, value) -> float:
 
 def _run(context, t_end, options=None, t_eval=None):
     """The scene's [initial] motion to t_end (DOP853, rtol 1e-12, atol 1e-14)."""
-    import nhham
+    from nhham.numerics.integrate import simulate
 
     model = context.model()
     y0 = context.initial()
     opts = {"method": "DOP853", "rtol": 1e-12, "atol": 1e-14, **(options or {})}
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        return nhham.simulate(model, (0.0, t_end), y0, warn=False, t_eval=t_eval, **opts)
+        return simulate(model, (0.0, t_end), y0, warn=False, t_eval=t_eval, **opts)
 
 
 def _value_of(scene, text, state):
@@ -199,7 +199,7 @@ def mean_velocity(context, args) -> Measured:
 
 def classify(context, args) -> Measured:
     """A field of ``nhham classify --json``'s result (with ``count``: its length)."""
-    from nhham.journeys import classify as run
+    from nhham.journeys.verdict import classify as run
 
     if "classify" not in context.cache:   # every field from one run
         context.cache["classify"] = _timed(lambda: run(context.scene()).to_dict())
@@ -222,7 +222,7 @@ def spin_reversal(context, args) -> Measured:
     interpolation. ``extra["reference"]``: the second route's time."""
     import sympy as sp
 
-    import nhham
+    from nhham.numerics.integrate import simulate
     from nhham.system.initial_solve import InitialData, complete_initial
 
     values = args.get("set")
@@ -235,7 +235,7 @@ def spin_reversal(context, args) -> Measured:
     for method in ("DOP853", "RK45"):
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            result = nhham.simulate(model, (0.0, args["t_end"]), y0, method=method,
+            result = simulate(model, (0.0, args["t_end"]), y0, method=method,
                                     rtol=1e-12, atol=1e-14, t_eval=grid, warn=False)
         w = np.asarray(result[args["spin"]])
         flips = np.flatnonzero(np.sign(w[1:]) != np.sign(w[:-1]))

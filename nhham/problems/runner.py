@@ -8,7 +8,6 @@ IFToMM bicycle ran, its maneuvers (:mod:`nhham.problems.iftomm`).
 from __future__ import annotations
 
 import contextlib
-import time
 from importlib import resources
 from dataclasses import dataclass, field
 from functools import cached_property
