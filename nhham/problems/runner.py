@@ -37,19 +37,19 @@ class Context:
         self.cache: dict = {}   # a measure's work shared by its quantities
 
     def scene(self, values=None):
-        import nhham
+        from nhham.system.scene import load_scene
 
         key = tuple(sorted((values or {}).items()))
         if key not in self._scenes:
             with resources.as_file(scene_path(self.problem)) as path:
-                self._scenes[key] = nhham.load_scene(str(path), values=dict(values or {}))
+                self._scenes[key] = load_scene(str(path), values=dict(values or {}))
         return self._scenes[key]
 
     @cached_property
     def _model(self):
-        import nhham
+        from nhham.numerics.codegen import numeric_model
 
-        return nhham.numeric_model(self.scene().system)
+        return numeric_model(self.scene().system)
 
     def model(self, values=None):
         return self._model.with_parameters(**values) if values else self._model
