@@ -29,6 +29,8 @@ from typing import Mapping
 
 import numpy as np
 
+from nhham.numerics.methods import DEFAULT_METHOD
+
 __all__ = ["MANEUVERS", "COLUMNS", "EXUDYN", "LIBRARY_BOUND", "ManeuverRun", "Benchmark",
            "write_results", "write_combined"]
 
@@ -126,7 +128,7 @@ class Benchmark:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             result = simulate(self.model, (0.0, T_END), self.initial_state(name),
-                                    method="DOP853", rtol=rtol, atol=1e-14, t_eval=grid,
+                                    method=DEFAULT_METHOD, rtol=rtol, atol=1e-14, t_eval=grid,
                                     warn=False)
         if not result.success:
             raise RuntimeError(f"IFToMM {name}: {result.message}")
@@ -142,7 +144,7 @@ class Benchmark:
                                    result["delta"], result["delta_dot"]])
         error = 100.0 * (E.max() - E.min()) / E[0]
         return ManeuverRun(name, speed, roll_rate, np.asarray(result.t), columns, float(error),
-                           float(result.wall_time_s), f"DOP853 rtol {rtol:g}")
+                           float(result.wall_time_s), f"{DEFAULT_METHOD} rtol {rtol:g}")
 
     def coarsest(self, bound=LIBRARY_BOUND,
                  tolerances=(1e-4, 1e-5, 1e-6, 1e-7, 1e-8)) -> dict | None:

@@ -191,7 +191,7 @@ def _row(prob: Problem, q: Quantity, context: Context) -> ProblemRow:
     published = q.published
     note = ""
     if published == "second route":   # no value read in the source: a second integrator's
-        published = measured.extra["reference"]
+        published = measured.extra["second_route"]
         note = "published: the second route's value (the source's not read)"
     elif isinstance(published, str):   # a closed form at the scene's values
         published = closed_form(context.scene(), published, t=q.args.get("t"),
