@@ -90,7 +90,7 @@ def test_the_classical_problems_are_within_their_precision(fast_report):
 @pytest.fixture(scope="module")
 def bicycle_report(tmp_path_factory):
     return run(["meijaard2007", "iftomm_bicycle"],
-               out_dir=tmp_path_factory.mktemp("iftomm"))
+               out_dir=tmp_path_factory.mktemp("iftomm"), coarsest=True)
 
 
 def test_the_benchmark_bicycle_against_table_2(bicycle_report):
