@@ -44,7 +44,7 @@ class Measured:
     extra: Mapping | None = None
 
 
-def _symbols(scene, t=None):
+def _symbols(scene):
     """Names a closed form may use: parameters, states, ``NAME_0`` and t."""
     import sympy as sp
 
