@@ -252,6 +252,28 @@ def spin_reversal(context, args) -> Measured:
                               f"1e-12)", seconds, extra={"second_route": times[1]})
 
 
+def acceleration(context, args) -> Measured:
+    """``sign`` times the acceleration of ``coordinate`` at the state whose independent
+    entries are ``given`` (the rest from the constraints): the field's own evaluation
+    (the compiled or generated right-hand side), computed once for every quantity."""
+    import sympy as sp
+
+    from nhham.system.initial_solve import InitialData, complete_initial
+
+    if "accelerations" not in context.cache:
+        start = time.perf_counter()
+        scene, model = context.scene(), context.model()
+        given = {k: sp.Float(v) for k, v in args["given"].items()}
+        state = complete_initial(scene.system, InitialData(given=given))[0]
+        dy = model.evaluate(model.state(state))[0]
+        names = [c.name for c in scene.system.coordinates]
+        context.cache["accelerations"] = (dict(zip(names, dy[model.n:].tolist())),
+                                          time.perf_counter() - start)
+    accelerations, seconds = context.cache["accelerations"]
+    return Measured(args.get("sign", 1.0) * accelerations[args["coordinate"]],
+                    "the constrained field at the state", seconds)
+
+
 #: The measures by name: ``measure = "NAME"`` in ``catalog.toml``.
 MEASURES: Mapping[str, Callable] = {
     "eigenvalues": eigenvalues,
@@ -262,4 +284,5 @@ MEASURES: Mapping[str, Callable] = {
     "classify": classify,
     "iftomm": iftomm,
     "spin_reversal": spin_reversal,
+    "acceleration": acceleration,
 }

@@ -28,12 +28,15 @@ ROUNDING = 16 * float(np.finfo(float).eps)
 
 class Context:
     """A problem's scene, loaded once, and its compiled model (other parameter values
-    by ``with_parameters``, no second build)."""
+    by ``with_parameters``, no second build); ``loaded`` shares both between the problems
+    of one run that name the same scene."""
 
-    def __init__(self, prob: Problem, iftomm_rtol: float = 1e-12):
+    def __init__(self, prob: Problem, iftomm_rtol: float = 1e-12, loaded: dict | None = None):
         self.problem = prob
         self.iftomm_rtol = iftomm_rtol
-        self._scenes: dict = {}
+        self._loaded = (loaded if loaded is not None else {}).setdefault(
+            prob.scene, {"scenes": {}})
+        self._scenes = self._loaded["scenes"]
         self.cache: dict = {}   # a measure's work shared by its quantities
 
     def scene(self, values=None):
@@ -45,11 +48,13 @@ class Context:
                 self._scenes[key] = load_scene(str(path), values=dict(values or {}))
         return self._scenes[key]
 
-    @cached_property
+    @property
     def _model(self):
         from nhham.numerics.codegen import numeric_model
 
-        return numeric_model(self.scene().system)
+        if "model" not in self._loaded:
+            self._loaded["model"] = numeric_model(self.scene().system)
+        return self._loaded["model"]
 
     def model(self, values=None):
         return self._model.with_parameters(**values) if values else self._model
@@ -251,9 +256,10 @@ def run(names: Sequence[str] | None = None, *, iftomm_rtol: float = 1e-12,
     chosen = [problem(n) for n in names] if names else list(problems())
     rows, maneuvers, files, best = [], [], [], None
     step = step or (lambda text: contextlib.nullcontext())
+    loaded: dict = {}
     for prob in chosen:
         with step(f"problem {prob.name}"):
-            context = Context(prob, iftomm_rtol)
+            context = Context(prob, iftomm_rtol, loaded)
             rows += [_row(prob, q, context) for q in prob.quantities]
             if any(q.measure == "iftomm" for q in prob.quantities):
                 maneuvers, best, written = _iftomm(context, out_dir, coarsest)

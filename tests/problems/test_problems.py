@@ -25,7 +25,8 @@ from nhham.problems.measures import closed_form, spectrum_error
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 SCHEMA = Path(__file__).resolve().parents[2] / "nhham" / "render" / "schemas" / \
     "output.schema.json"
-FAST = [p.name for p in problems() if p.name not in ("meijaard2007", "iftomm_bicycle")]
+BICYCLE = ("meijaard2007", "basu_mandal2007", "iftomm_bicycle")
+FAST = [p.name for p in problems() if p.name not in BICYCLE]
 
 
 def test_the_catalogue_has_fifteen_problems_each_cited_and_measurable():
@@ -89,7 +90,7 @@ def test_the_classical_problems_are_within_their_precision(fast_report):
 
 @pytest.fixture(scope="module")
 def bicycle_report(tmp_path_factory):
-    return run(["meijaard2007", "iftomm_bicycle"],
+    return run(["meijaard2007", "basu_mandal2007", "iftomm_bicycle"],
                out_dir=tmp_path_factory.mktemp("iftomm"), coarsest=True)
 
 
@@ -102,6 +103,19 @@ def test_the_benchmark_bicycle_against_table_2(bicycle_report):
     # Table 2 at v = 5: weave -0.775341882196 +- 4.464867713788i
     weave = [z for z in rows["eigenvalues at v = 5"].value if z[1] > 0]
     assert weave == [pytest.approx([-0.77534188219585, 4.46486771378823], abs=1e-12)]
+
+
+def test_a_nonlinear_state_against_basu_mandal_table_1(bicycle_report):
+    """Basu-Mandal et al. (2007), Table 1 (as DynamicistToolKit transcribes it): the six
+    angular accelerations at their state, to 1e-12 (the table's inputs have 13 decimals)."""
+    table = {"theta''": 0.8353281706379, "psi''": -7.8555281128244, "phi''": 0.1205543897884,
+             "psi_f''": -4.6198904039403, "beta_r''": 1.8472554144217,
+             "beta_f''": 2.4548072904550}
+    rows = {r.quantity.split(" ")[0]: r for r in bicycle_report.rows
+            if r.problem == "basu_mandal2007"}
+    assert set(rows) == set(table)
+    for name, value in table.items():
+        assert rows[name].value == pytest.approx(value, abs=1e-12), name
 
 
 def test_the_iftomm_maneuvers_and_their_files(bicycle_report):
