@@ -53,7 +53,7 @@ import numpy as np
 from scipy.linalg.lapack import dgeqrf, dorgqr
 
 __all__ = ["diagonal_ratio", "diagonal_scaling", "solve_null_space", "solve_null_space_one",
-           "householder_rows", "KKT_SOLVE", "RANK_TOLERANCE"]
+           "householder_rows", "sorted_rows_qr", "KKT_SOLVE", "RANK_TOLERANCE"]
 
 #: A saddle-point matrix singular to rounding: a diagonal entry of R (the rows of mu D of
 #: unit length) at or below RANK_TOLERANCE n, or the reduced matrix's smallest |eigenvalue|
@@ -87,7 +87,7 @@ def diagonal_scaling(W) -> tuple:
     return d, W * d[..., :, None] * d[..., None, :]
 
 
-def solve_null_space(W, mu, top, bottom):
+def solve_null_space(W, mu, top, bottom, *, qr=None):
     """Solve [[W, mu^T], [mu, 0]] [x; y] = [top; bottom] by the null-space method.
 
     Parameters
@@ -96,6 +96,10 @@ def solve_null_space(W, mu, top, bottom):
     mu : ndarray, shape (..., m, n), full row rank
     top : ndarray, shape (..., n)
     bottom : ndarray, shape (..., m)
+    qr : callable, optional
+        ``qr(A) -> (Q (..., n, n), R (..., m, m))`` of A = (mu D)^T with unit columns:
+        :func:`householder_rows` by default (a row pivot per column);
+        :func:`solve_null_space_one` passes LAPACK's QR after row sorting.
 
     Returns
     -------
@@ -126,7 +130,7 @@ def solve_null_space(W, mu, top, bottom):
     if m == 0:
         return np.linalg.solve(Ws, ts[..., None])[..., 0] * d, np.zeros(top.shape[:-1] + (0,))
     mus, e = _unit_rows(mu * d[..., None, :])
-    Q, R1 = householder_rows(np.swapaxes(mus, -1, -2))
+    Q, R1 = (qr or householder_rows)(np.swapaxes(mus, -1, -2))
     Q1, Q2 = Q[..., :, :m], Q[..., :, m:]
     if np.any(np.abs(np.diagonal(R1, axis1=-2, axis2=-1)) <= RANK_TOLERANCE * n):
         raise np.linalg.LinAlgError("the constraints' one-forms are dependent")
@@ -163,8 +167,8 @@ def _symmetric_solve(H, r, n):
 
 def solve_null_space_one(W, mu, top, bottom):
     """:func:`solve_null_space` for one state (W (n, n), mu (m, n), top (n,), bottom (m,)),
-    the same steps without the batch's bookkeeping: the solve of
-    :class:`~nhham.numerics.saddle.SingleStateSolver`.
+    its QR by LAPACK after sorting the rows by size (:func:`sorted_rows_qr`) rather than
+    a numpy call per column: the solve of :class:`~nhham.numerics.saddle.SingleStateSolver`.
 
     Examples
     --------
@@ -175,30 +179,21 @@ def solve_null_space_one(W, mu, top, bottom):
     >>> float(x[0] * (1 + 1e16))
     1.0
     """
-    n, m = W.shape[0], mu.shape[0]
-    diag = np.abs(np.diagonal(W))
-    d = 1.0 / np.sqrt(np.where(diag > 0, diag, 1.0))
-    Ws = W * np.multiply.outer(d, d)
-    ts = top * d
-    if m == 0:
-        return np.linalg.solve(Ws, ts) * d, np.zeros(0)
-    mus, e = _unit_rows(mu * d)
-    A = mus.T
-    # LAPACK's Householder QR after sorting the rows by size (Bjoerck's row sorting; the
-    # batch pivots a row per column, which takes a numpy call per column)
+    return solve_null_space(W, mu, top, bottom, qr=sorted_rows_qr)
+
+
+def sorted_rows_qr(A):
+    """(Q (n, n), R (m, m)) with A = Q [R; 0] for one A (n, m), n >= m: LAPACK's Householder
+    QR of A with its rows sorted by their largest entry (Bjoerck's row sorting, which
+    keeps the small components of a kernel direction near a coordinate axis as
+    :func:`householder_rows`' pivoting does)."""
+    n, m = A.shape
     order = np.argsort(-np.abs(A).max(axis=1), kind="stable")
     qr, tau, _, _ = dgeqrf(A[order])
-    R1 = np.triu(qr[:m])
-    if np.any(np.abs(np.diagonal(R1)) <= RANK_TOLERANCE * n):
-        raise np.linalg.LinAlgError("the constraints' one-forms are dependent")
     Qs, _, _ = dorgqr(np.hstack([qr, np.zeros((n, n - m))]), np.concatenate([tau, np.zeros(n - m)]))
     Q = np.empty((n, n))
     Q[order] = Qs
-    Q1, Q2 = Q[:, :m], Q[:, m:]
-    s = Q1 @ np.linalg.solve(R1.T, bottom * e)
-    xs = s + Q2 @ _symmetric_solve(Q2.T @ Ws @ Q2, Q2.T @ (ts - Ws @ s), n) if n > m else s
-    y = np.linalg.solve(R1, Q1.T @ (ts - Ws @ xs))
-    return xs * d, y * e
+    return Q, np.triu(qr[:m])
 
 
 def _mv(A, x):
