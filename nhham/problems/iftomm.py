@@ -94,17 +94,13 @@ class Benchmark:
     def initial_state(self, name) -> dict:
         """Maneuver ``name``'s initial state: upright, v0 and the roll rate, steer rate 0,
         the rest from the constraints."""
-        import sympy as sp
-
-        from nhham.system.initial_solve import InitialData, complete_initial
+        from nhham.problems.measures import completed_state
 
         if name not in self._initial:
             speed, roll_rate = MANEUVERS[name]
-            given = {c.name: sp.Float(0) for c in self.scene.system.coordinates}
-            given.update(x_dot=sp.Float(speed), phi_dot=sp.Float(roll_rate),
-                         delta_dot=sp.Float(0))
-            self._initial[name] = complete_initial(self.scene.system,
-                                                   InitialData(given=given))[0]
+            given = {c.name: 0.0 for c in self.scene.system.coordinates}
+            given.update(x_dot=speed, phi_dot=roll_rate, delta_dot=0.0)
+            self._initial[name] = completed_state(self.scene, given)
         return self._initial[name]
 
     def potential(self, Q):

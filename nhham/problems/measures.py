@@ -19,7 +19,7 @@ import numpy as np
 
 from nhham.numerics.methods import DEFAULT_METHOD
 
-__all__ = ["Measured", "MEASURES", "closed_form", "spectrum_error"]
+__all__ = ["Measured", "MEASURES", "closed_form", "completed_state", "spectrum_error"]
 
 
 @dataclass(frozen=True)
@@ -131,38 +131,44 @@ def crossing(context, args) -> Measured:
         raise ValueError(f"no {args['kind']} crossing of {args['parameter']} in {lo}..{hi}")
     value = float(found[0]["value"])
     return Measured(value, f"linearize --sweep {args['parameter']}", seconds,
-                    extra={"floor": _crossing_floor(swept, value)})
+                    extra={"floor": _crossing_floor(swept, found[0])})
 
 
-def _crossing_floor(swept, value) -> float:
+def _crossing_floor(swept, crossing) -> float:
     """How well double precision places a crossing: the rounding of the spectrum (16 eps
-    of its largest |eigenvalue| there) over the slope of the crossing real part (from the
-    sweep's grid values on either side)."""
+    of its largest |eigenvalue| there) over the slope of the crossing eigenvalue's real
+    part (the eigenvalue nearest the crossing's at the grid values on either side; 0,
+    no allowance, where that slope is 0)."""
     values = np.asarray(swept["values"], dtype=float)
-    i = int(np.clip(np.searchsorted(values, value), 1, len(values) - 1))
+    i = int(np.clip(np.searchsorted(values, crossing["value"]), 1, len(values) - 1))
+    at = complex(*crossing["eigenvalue"])
     spectra = [np.array([complex(*z) for z in swept["eigenvalues"][j]]) for j in (i - 1, i)]
     size = max(float(np.abs(s).max()) for s in spectra)
-    # the real parts nearest 0 on either side: the crossing pair's
-    re = [float(s.real[np.argmin(np.abs(s.real))]) for s in spectra]
+    re = [float(s[np.argmin(np.abs(s - at))].real) for s in spectra]
     slope = abs(re[1] - re[0]) / (values[i] - values[i - 1])
-    return 16 * float(np.finfo(float).eps) * size / slope if slope else float("inf")
+    return 16 * float(np.finfo(float).eps) * size / slope if slope else 0.0
 
 
-def _run(context, t_end, options=None, t_eval=None):
+def _run(context, t_end, t_eval=None):
     """The scene's [initial] motion to t_end (DOP853, rtol 1e-12, atol 1e-14)."""
     from nhham.numerics.integrate import simulate
 
-    model = context.model()
-    y0 = context.initial()
-    opts = {"method": DEFAULT_METHOD, "rtol": 1e-12, "atol": 1e-14, **(options or {})}
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        return simulate(model, (0.0, t_end), y0, warn=False, t_eval=t_eval, **opts)
+        return simulate(context.model(), (0.0, t_end), context.initial(), warn=False,
+                        t_eval=t_eval, method=DEFAULT_METHOD, rtol=1e-12, atol=1e-14)
 
 
-def _value_of(scene, text, state):
-    """An expression in the state names at one state (a mapping name -> value)."""
-    return closed_form(scene, text, values=state)
+def completed_state(scene, given, values=None) -> dict:
+    """The state whose independent entries are ``given`` (name -> number), the others
+    solved from the constraints (:func:`nhham.system.initial_solve.complete_initial`), at
+    the parameter ``values`` (default: the scene's)."""
+    import sympy as sp
+
+    from nhham.system.initial_solve import InitialData, complete_initial
+
+    data = InitialData(given={k: sp.Float(v) for k, v in given.items()})
+    return complete_initial(scene.system, data, values)[0]
 
 
 def _state_at(result, i) -> dict:
@@ -172,7 +178,7 @@ def _state_at(result, i) -> dict:
 def trajectory(context, args) -> Measured:
     """An expression of the state at time ``t`` of the scene's [initial] motion."""
     result, seconds = _timed(lambda: _run(context, args["t"]))
-    return Measured(_value_of(context.scene(), args["expression"], _state_at(result, -1)),
+    return Measured(closed_form(context.scene(), args["expression"], values=_state_at(result, -1)),
                     f"simulate {DEFAULT_METHOD} rtol 1e-12", seconds)
 
 
@@ -222,15 +228,11 @@ def spin_reversal(context, args) -> Measured:
     the rest from the constraints) at the parameters ``set``: by the two ``methods``
     (the second the second route; both rtol 1e-12, atol 1e-14), on a grid of 1e-3 s
     refined by linear interpolation. ``extra["second_route"]``: the second route's time."""
-    import sympy as sp
-
     from nhham.numerics.integrate import simulate
-    from nhham.system.initial_solve import InitialData, complete_initial
 
     values = args.get("set")
-    scene, model = context.scene(values), context.model(values)
-    given = {k: sp.Float(v) for k, v in args["initial"].items()}
-    y0 = complete_initial(scene.system, InitialData(given=given), values)[0]
+    model = context.model(values)
+    y0 = completed_state(context.scene(values), args["initial"], values)
     grid = np.linspace(0.0, args["t_end"], int(round(args["t_end"] * 1000)) + 1)
     times = []
     start = time.perf_counter()
@@ -256,15 +258,10 @@ def acceleration(context, args) -> Measured:
     """``sign`` times the acceleration of ``coordinate`` at the state whose independent
     entries are ``given`` (the rest from the constraints): the field's own evaluation
     (the compiled or generated right-hand side), computed once for every quantity."""
-    import sympy as sp
-
-    from nhham.system.initial_solve import InitialData, complete_initial
-
     if "accelerations" not in context.cache:
         start = time.perf_counter()
         scene, model = context.scene(), context.model()
-        given = {k: sp.Float(v) for k, v in args["given"].items()}
-        state = complete_initial(scene.system, InitialData(given=given))[0]
+        state = completed_state(scene, args["given"])
         dy = model.evaluate(model.state(state))[0]
         names = [c.name for c in scene.system.coordinates]
         context.cache["accelerations"] = (dict(zip(names, dy[model.n:].tolist())),
