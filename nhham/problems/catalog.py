@@ -50,7 +50,8 @@ class Quantity:
 
 @dataclass(frozen=True)
 class Problem:
-    """A published problem: its scene, its source and its quantities."""
+    """A published problem: its scene, its source and its quantities (``define``: names
+    its quantities use, as expressions in the scene's names: the source's variables)."""
 
     name: str
     title: str
@@ -60,6 +61,7 @@ class Problem:
     venue: str
     checked: str
     quantities: tuple = field(default_factory=tuple)
+    define: Mapping = field(default_factory=dict)
 
     @property
     def citation(self) -> str:
@@ -78,7 +80,8 @@ def problems() -> tuple:
                                     q.get("where", ""))
                            for q in entry["quantity"])
         out.append(Problem(entry["name"], entry["title"], entry["scene"], entry["authors"],
-                           entry["source"], entry["venue"], entry["checked"], quantities))
+                           entry["source"], entry["venue"], entry["checked"], quantities,
+                           dict(entry.get("define", {}))))
     return tuple(out)
 
 

@@ -19,7 +19,8 @@ import numpy as np
 
 from nhham.numerics.methods import DEFAULT_METHOD
 
-__all__ = ["Measured", "MEASURES", "closed_form", "completed_state", "spectrum_error"]
+__all__ = ["Measured", "MEASURES", "closed_form", "completed_state", "defined",
+           "spectrum_error"]
 
 
 @dataclass(frozen=True)
@@ -85,6 +86,47 @@ def closed_form(scene, text, *, t=None, initial=None, values=None) -> float:
     return float(value)
 
 
+def defined(context) -> dict:
+    """The problem's ``define`` table as expressions in the scene's names (name ->
+    sympy expression; each entry may use the entries before it)."""
+    import sympy as sp
+
+    from nhham.system.expressions import parse_expression
+
+    names = _symbols(context.scene())
+    out: dict = {}
+    for name, text in context.problem.define.items():
+        expr = parse_expression(text, {**names, **{k: sp.Symbol(k) for k in out}},
+                                where=f"define.{name}")
+        out[name] = expr.xreplace({sp.Symbol(k): v for k, v in out.items()})
+    return out
+
+
+def _parsed(context, texts, names, where):
+    """``texts`` parsed against the scene's and the ``define`` names (or ``names``), the
+    definitions substituted and the parameters at the scene's values."""
+    import sympy as sp
+
+    from nhham.system.expressions import parse_expression
+
+    table = {**_symbols(context.scene()), **{k: sp.Symbol(k) for k in defined(context)},
+             **{k: sp.Symbol(k) for k in names}}
+    sub = {sp.Symbol(k): v for k, v in defined(context).items() if k not in names}
+    values = {p: sp.Float(v) for p, v in context.scene().system.parameter_values.items()}
+    return [parse_expression(t, table, where=f"{where}[{i}]").xreplace(sub).xreplace(values)
+            for i, t in enumerate(texts)]
+
+
+def evaluator(context, texts):
+    """The expressions ``texts`` as a function of a state (name -> number or array)."""
+    import sympy as sp
+
+    state = list(context.scene().system.state)
+    f = sp.lambdify(state, _parsed(context, texts, (), "expression"), "numpy")
+    return lambda y: np.array(np.broadcast_arrays(*f(*[y[s.name] for s in state])),
+                              dtype=float)
+
+
 def spectrum_error(value, published) -> float:
     """The largest distance between two spectra, matched greedily (nearest first)."""
     got = [complex(*z) for z in value]
@@ -104,12 +146,14 @@ def _timed(fn):
 
 def eigenvalues(context, args) -> Measured:
     """The eigenvalues of ``nhham linearize`` at the scene's [steady] motion with the
-    ``parameter`` at ``value`` (a sweep of one value: the scene loaded once)."""
+    ``parameter`` at ``value`` (a sweep of one value: the scene loaded once), the other
+    parameters at the scene's values or ``set``."""
     from nhham.journeys.stability import linearize
 
     sweep = (args["parameter"], np.array([float(args["value"])]))
-    answer, seconds = _timed(lambda: linearize(context.scene(), sweep=sweep,
-                                               model=context.model()))
+    values = args.get("set")
+    answer, seconds = _timed(lambda: linearize(context.scene(values), sweep=sweep,
+                                               model=context.model(values)))
     data = answer.to_dict()
     return Measured([[float(re), float(im)] for re, im in data["sweep"]["eigenvalues"][0]],
                     f"linearize --sweep {args['parameter']}={args['value']:g} "
@@ -118,13 +162,15 @@ def eigenvalues(context, args) -> Measured:
 
 def crossing(context, args) -> Measured:
     """Where ``nhham linearize --sweep`` finds the spectrum crossing the imaginary axis
-    (the first crossing of ``kind``, "real" or "complex", in the range)."""
+    (the first crossing of ``kind``, "real" or "complex", in the range; the other
+    parameters at the scene's values or ``set``)."""
     from nhham.journeys.stability import linearize
 
     lo, hi, count = args["range"]
     sweep = (args["parameter"], np.linspace(lo, hi, int(count)))
-    answer, seconds = _timed(lambda: linearize(context.scene(), sweep=sweep,
-                                               model=context.model()))
+    values = args.get("set")
+    answer, seconds = _timed(lambda: linearize(context.scene(values), sweep=sweep,
+                                               model=context.model(values)))
     swept = answer.to_dict()["sweep"]
     found = [c for c in swept["crossings"] if c["kind"] == args["kind"]]
     if not found:
@@ -149,13 +195,14 @@ def _crossing_floor(swept, crossing) -> float:
     return 16 * float(np.finfo(float).eps) * size / slope if slope else 0.0
 
 
-def _run(context, t_end, t_eval=None):
-    """The scene's [initial] motion to t_end (DOP853, rtol 1e-12, atol 1e-14)."""
+def _run(context, t_end, t_eval=None, start=None):
+    """The scene's [initial] motion (or the motion from ``start``) to t_end (DOP853,
+    rtol 1e-12, atol 1e-14)."""
     from nhham.numerics.integrate import simulate
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        return simulate(context.model(), (0.0, t_end), context.initial(), warn=False,
+        return simulate(context.model(), (0.0, t_end), start or context.initial(), warn=False,
                         t_eval=t_eval, method=DEFAULT_METHOD, rtol=1e-12, atol=1e-14)
 
 
@@ -176,10 +223,21 @@ def _state_at(result, i) -> dict:
 
 
 def trajectory(context, args) -> Measured:
-    """An expression of the state at time ``t`` of the scene's [initial] motion."""
-    result, seconds = _timed(lambda: _run(context, args["t"]))
-    return Measured(closed_form(context.scene(), args["expression"], values=_state_at(result, -1)),
-                    f"simulate {DEFAULT_METHOD} rtol 1e-12", seconds)
+    """An expression (in the scene's names and the problem's ``define``) of the state at
+    time ``t`` of the scene's [initial] motion, or with ``initial`` (name -> number or
+    closed form in the scene's parameters and the numbers given) of that state completed
+    from the constraints; ``extra["initial"]`` is the state the closed form is read at."""
+    start = None
+    if "initial" in args:
+        scene = context.scene()
+        given = {k: v for k, v in args["initial"].items() if not isinstance(v, str)}
+        given.update({k: closed_form(scene, v, values=given)
+                      for k, v in args["initial"].items() if isinstance(v, str)})
+        start = completed_state(scene, given)
+    result, seconds = _timed(lambda: _run(context, args["t"], start=start))
+    value = float(evaluator(context, [args["expression"]])(_state_at(result, -1))[0])
+    return Measured(value, f"simulate {DEFAULT_METHOD} rtol 1e-12", seconds,
+                    extra={"initial": start} if start else None)
 
 
 def turning_rate(context, args) -> Measured:
@@ -271,6 +329,62 @@ def acceleration(context, args) -> Measured:
                     "the constrained field at the state", seconds)
 
 
+def integral_drift(context, args) -> Measured:
+    """The largest change of ``expression`` along the scene's [initial] motion to ``t``
+    (2001 samples), relative to its initial value: max |F(t) - F(0)| / |F(0)|."""
+    grid = np.linspace(0.0, args["t"], 2001)
+    result, seconds = _timed(lambda: _run(context, args["t"], t_eval=grid))
+    f = evaluator(context, [args["expression"]])(
+        {name: np.asarray(result[name]) for name in result.names})[0]
+    return Measured(float(np.max(np.abs(f - f[0])) / abs(f[0])),
+                    f"simulate {DEFAULT_METHOD} rtol 1e-12", seconds)
+
+
+def invariant_measure(context, args) -> Measured:
+    """How far the flow moves the measure rho d^N x: the ratio
+    nu(x(t)) |det du(t)/du(0)| / nu(x(0)), 1 for an invariant measure.
+
+    ``ambient`` names the coordinates x (in the problem's ``define``) in which the source
+    writes the density ``density`` (rho, in those names); ``integrals`` are functions of x
+    the motion keeps (|gamma|^2, a constraint), ``chart`` coordinates u on their level set,
+    so that the measure there has the density nu = rho / |det d(u, F)/dx|. The Jacobian
+    du(t)/du(0) is found by central differences (``step``, default 1e-5: an error of
+    about 1e-8, as step^2) of runs from the [initial] state with each entry of ``vary``
+    moved (the ``given`` entries kept, the rest completed from the constraints), to ``t``.
+    ``extra["note"]``: the same ratio for the density 1 (the check's contrast)."""
+    import sympy as sp
+
+    ambient = [sp.Symbol(name) for name in args["ambient"]]
+    names = args["ambient"]
+    chart = _parsed(context, args["chart"], names, "chart")
+    keep = _parsed(context, args["integrals"], names, "integrals")
+    rho = _parsed(context, [args["density"]], names, "density")[0]
+    det = sp.Matrix(chart + keep).jacobian(ambient).det()
+    density = sp.lambdify(ambient, [rho / sp.Abs(det), 1 / sp.Abs(det)], "numpy")
+    to_x = evaluator(context, args["ambient"])
+    to_u = sp.lambdify(ambient, chart, "numpy")
+    scene, base = context.scene(), context.initial()
+    given = {k: v for k, v in base.items() if k in args["given"]}
+    h = args.get("step", 1e-5)
+    start = time.perf_counter()
+
+    def ends(name, sign):
+        y0 = completed_state(scene, {**given, name: given[name] + sign * h})
+        y1 = _state_at(_run(context, args["t"], start=y0), -1)
+        return [np.array(to_u(*to_x(y)), dtype=float) for y in (y0, y1)]
+
+    columns = [[(p - m) / (2 * h) for p, m in zip(ends(name, 1), ends(name, -1))]
+               for name in args["vary"]]
+    jac0, jac1 = (np.column_stack([c[i] for c in columns]) for i in (0, 1))
+    final = _state_at(_run(context, args["t"], start=base), -1)
+    (rho0, lebesgue0), (rho1, lebesgue1) = (density(*to_x(y)) for y in (base, final))
+    growth = abs(np.linalg.det(jac1) / np.linalg.det(jac0))
+    return Measured(float(rho1 * growth / rho0), f"simulate {DEFAULT_METHOD} rtol 1e-12, "
+                    "central differences", time.perf_counter() - start,
+                    extra={"note": "with the density 1 instead: "
+                                   f"{lebesgue1 * growth / lebesgue0:.6g}"})
+
+
 #: The measures by name: ``measure = "NAME"`` in ``catalog.toml``.
 MEASURES: Mapping[str, Callable] = {
     "eigenvalues": eigenvalues,
@@ -282,4 +396,6 @@ MEASURES: Mapping[str, Callable] = {
     "iftomm": iftomm,
     "spin_reversal": spin_reversal,
     "acceleration": acceleration,
+    "integral_drift": integral_drift,
+    "invariant_measure": invariant_measure,
 }

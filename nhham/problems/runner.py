@@ -200,8 +200,10 @@ def _row(prob: Problem, q: Quantity, context: Context) -> ProblemRow:
         note = "published: the second route's value (the source's not read)"
     elif isinstance(published, str):   # a closed form at the scene's values
         published = closed_form(context.scene(), published, t=q.args.get("t"),
-                                initial=context.initial())
+                                initial=(measured.extra or {}).get("initial")
+                                or context.initial())
         note = f"closed form {q.published}"
+    note = "; ".join(filter(None, [note, (measured.extra or {}).get("note", "")]))
     if isinstance(published, list):
         err = spectrum_error(measured.value, published)
         size = max(abs(complex(*z)) for z in published)

@@ -81,11 +81,56 @@ def test_the_classical_problems_are_within_their_precision(fast_report):
     assert turntable.value == pytest.approx(2 / 7, rel=1e-10)
     drift = rows["ball_on_tilted_turntable", "mean drift speed 5 g sin(alpha)/(2 Omega), m/s"]
     assert drift.value == pytest.approx(5 * 9.81 * np.sin(0.05) / 2, rel=1e-10)
+    # the ball in the cylinder: z_c = -g/(k Omega^2), omega = sqrt(2/7) Omega, Omega = 20
+    cylinder = [r for (p, _), r in rows.items() if p == "ball_in_cylinder"][0]
+    z_c = -9.81 / (0.4 * 20.0 ** 2)
+    assert cylinder.value == pytest.approx(z_c * (1 - np.cos(20 * (2 / 7) ** 0.5 * 10.29)),
+                                           abs=1e-9)
     assert rows["deleon1996_example_3_2",
                 "stages of the constraint algorithm (M_1, M_2, M_3 = M_f)"].value == 3
     reversal = rows["rattleback_kane_levinson",
                     "time of the first spin reversal from spin -5 rad/s, s"]
     assert 2.0 < reversal.value < 2.7 and "second route" in reversal.note
+
+
+def test_the_rattleback_s_spins_hold_the_second_route_s_values():
+    """catalog.toml holds what the KanesMethod route prints (make_rattleback_references.py),
+    and with Kane & Levinson's parameters both spin directions have a growing pair."""
+    import sys
+
+    sys.path.insert(0, str(Path(__file__).resolve().parent))
+    from make_rattleback_references import references
+
+    quantities = {q.args["value"]: q for q in problem("rattleback_kane_levinson").quantities
+                  if q.measure == "eigenvalues"}
+    for w, pairs in references().items():
+        assert spectrum_error(quantities[w].published, pairs) < 1e-12, w
+        assert max(re for re, _ in pairs) > 0.2   # unstable either way round
+
+
+def test_a_wrong_density_or_a_wrong_steady_spin_is_caught(fast_report):
+    """The invariant-measure rows fail for a density the flow does not keep (the
+    exponent's sign turned, the plain volume), and the steady turning for a spin 1 %
+    off the relation: the checks can fail."""
+    from nhham.problems.measures import invariant_measure, trajectory
+    from nhham.problems.runner import Context
+
+    rows = {(r.problem, r.quantity.split(":")[0]): r for r in fast_report.rows}
+    veselova = problem("veselova")
+    wrong = dict(veselova.quantities[0].args,
+                 density="(g1**2/I1 + g2**2/I2 + g3**2/I3)**(-1/2)")
+    assert abs(invariant_measure(Context(veselova), wrong).value - 1) > 0.1
+    ball = rows["chaplygin_ball", "invariant measure rho = (1 - D (gamma, A gamma))^(-1/2)"]
+    assert ball.within and "with the density 1 instead: 0.9" in ball.note
+    disc = problem("rolling_disc_steady_turning")
+    args = disc.quantities[0].args
+    # the relation by hand at lean 0.1, yaw rate 0.5, g = 9.81, r = 0.26
+    spin = -5 * 0.5 * np.sin(0.1) / 6 - 2 * 9.81 * np.tan(0.1) / (3 * 0.5 * 0.26)
+    off = dict(args, initial=dict(args["initial"], spin_dot=1.01 * spin))
+    assert abs(trajectory(Context(disc), off).value - 0.1) > 1e-4
+    steady = trajectory(Context(disc), args)
+    assert steady.extra["initial"]["spin_dot"] == pytest.approx(spin, rel=1e-14)
+    assert steady.value == pytest.approx(0.1, abs=1e-9)
 
 
 @pytest.fixture(scope="module")
