@@ -51,6 +51,7 @@ from nhham.lagrangian.domains import (
 )
 from nhham.lagrangian.linalg import exact_rank, exact_solve
 from nhham.system.expressions import derivative, short
+from nhham.system.derivative import symbols_in
 
 __all__ = [
     "ExactPoint",
@@ -420,7 +421,7 @@ def circle_parameters(system) -> tuple:
 def jacobian_row(expr, symbols) -> list:
     """[d expr / d s for s in symbols], differentiating only where s occurs."""
     expr = sp.sympify(expr)
-    present = expr.free_symbols
+    present = symbols_in(expr)
     return [derivative(expr, s) if s in present else sp.S.Zero for s in symbols]
 
 

@@ -16,7 +16,20 @@ import functools
 
 import sympy as sp
 
-__all__ = ["derivative"]
+__all__ = ["derivative", "symbols_in"]
+
+
+@functools.lru_cache(maxsize=1 << 17)
+def symbols_in(expr: sp.Basic) -> frozenset:
+    """``expr.free_symbols``, memoised and built from the arguments' own (sympy walks
+    the whole tree again at every node: a derivative asks at each level, the quadratic
+    cost of a long row). Nodes with bound variables (Derivative, Integral, Lambda) ask
+    sympy."""
+    if expr.is_Atom:
+        return frozenset(expr.free_symbols)
+    if expr.is_Add or expr.is_Mul or expr.is_Pow or isinstance(expr, sp.Function):
+        return frozenset().union(*(symbols_in(a) for a in expr.args))
+    return frozenset(expr.free_symbols)
 
 
 @functools.lru_cache(maxsize=16384)
@@ -30,17 +43,17 @@ def derivative(expr: sp.Expr, x: sp.Symbol) -> sp.Expr:
     Memoised (expressions are immutable): the analysis, the check at the parameter
     values, the classes and the cross-check differentiate the same rows again.
     """
-    if x not in expr.free_symbols:
+    if x not in symbols_in(expr):
         return sp.S.Zero
     if expr.is_Symbol:
         return sp.S.One
     if expr.is_Add:
-        return sp.Add(*[derivative(a, x) for a in expr.args if x in a.free_symbols])
+        return sp.Add(*[derivative(a, x) for a in expr.args if x in symbols_in(a)])
     if expr.is_Mul:
         args = expr.args
         return sp.Add(*[sp.Mul(*args[:i], derivative(a, x), *args[i + 1:])
-                        for i, a in enumerate(args) if x in a.free_symbols])
-    if expr.is_Pow and x not in expr.exp.free_symbols:
+                        for i, a in enumerate(args) if x in symbols_in(a)])
+    if expr.is_Pow and x not in symbols_in(expr.exp):
         base, k = expr.args
         return k * base ** (k - 1) * derivative(base, x)
     if isinstance(expr, sp.sin):

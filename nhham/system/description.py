@@ -460,8 +460,8 @@ class System:
     @cached_property
     def h(self) -> sp.Matrix:
         """The m-vector h_i(q) = phi_i at v = 0."""
-        zero = {v: 0 for v in self.velocities}
-        return sp.Matrix([f.subs(zero) for f in self.phi]) if self.phi else sp.zeros(0, 1)
+        zero = {v: sp.S.Zero for v in self.velocities}   # symbols: xreplace (subs is slow)
+        return sp.Matrix([f.xreplace(zero) for f in self.phi]) if self.phi else sp.zeros(0, 1)
 
     @cached_property
     def h_vanishes(self) -> tuple[bool, ...]:

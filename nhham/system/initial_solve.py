@@ -249,9 +249,11 @@ def _velocities(system, values, missing, params, guesses, where) -> dict:
     at = [_at_initial(e, known, lab, where) for lab, e in rows]
     zero = {u: 0 for u in unknowns}
     guesses = dict(guesses or {})
-    for (lab, _), e in zip(rows, at):  # Chetaev: phi may have several roots in them
-        inside = sorted(u.name for u in unknowns if any(
-            sp.diff(e, w).free_symbols & {u} for w in unknowns))
+    gradients = [[sp.diff(e, u) if u in fs else sp.S.Zero for u in unknowns]
+                 for e, fs in ((e, e.free_symbols) for e in at)]   # d(phi_i)/d(u_j), once
+    for (lab, _), grad in zip(rows, gradients):  # Chetaev: phi may have several roots in them
+        inside_grad = set().union(*(g.free_symbols for g in grad))
+        inside = sorted(u.name for u in unknowns if u in inside_grad)
         unguessed = [n for n in inside if n not in guesses]
         if unguessed:
             one = len(unguessed) == 1
@@ -262,8 +264,8 @@ def _velocities(system, values, missing, params, guesses, where) -> dict:
                              f"{unguessed[0]} = {{ guess = 1.0 }}", key=where)
         if inside:
             return _velocities_by_newton(rows, at, missing, unknowns, guesses, where)
-    A = np.array([[_real(sp.diff(e, u), lab, where) for u in unknowns] for (lab, _), e in
-                  zip(rows, at)], dtype=float).reshape(len(rows), len(unknowns))
+    A = np.array([[_real(g, lab, where) for g in grad] for (lab, _), grad in
+                  zip(rows, gradients)], dtype=float).reshape(len(rows), len(unknowns))
     b = np.array([_real(e.xreplace(zero), lab, where) for (lab, _), e in zip(rows, at)],
                  dtype=float)
     scale = max(1.0, float(np.max(np.abs(A), initial=0.0)),
