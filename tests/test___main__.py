@@ -66,3 +66,29 @@ def test_a_stop_ends_the_process_after_stopping_the_builds(command, monkeypatch)
     with pytest.raises(Ended):  # no builds module loaded: nothing to stop
         entry.run([])
     assert stopped == [True]
+
+
+def test_the_script_runs_the_exit_handlers_then_ends_without_teardown(command, monkeypatch):
+    """script(): the status of run(), the exit handlers first (the background builds'
+    hand-over lives there), then os._exit; with a live non-daemon thread, sys.exit."""
+    import atexit
+    import threading
+
+    ran = []
+    monkeypatch.setattr(atexit, "_run_exitfuncs", lambda: ran.append("handlers"))
+    monkeypatch.setattr(entry.gc, "set_threshold", lambda *thresholds: None)
+    command(lambda argv: 2)
+    monkeypatch.setattr(sys, "argv", ["nhham"])
+    with pytest.raises(Ended) as info:
+        entry.script()
+    assert info.value.args == (2,) and ran == ["handlers"]
+    release = threading.Event()
+    worker = threading.Thread(target=release.wait)
+    worker.start()
+    try:
+        with pytest.raises(SystemExit) as stop:
+            entry.script()
+        assert stop.value.code == 2 and ran == ["handlers"]
+    finally:
+        release.set()
+        worker.join()

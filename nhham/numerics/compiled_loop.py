@@ -18,7 +18,7 @@ import numpy as np
 
 from nhham.numerics.methods import names
 from nhham.numerics.run import PAUSE_SECONDS, Run, report_progress
-from nhham.numerics.scipy_loop import SCIPY_METHODS, WORK_ATOL, eval_failure
+from nhham.numerics.scipy_loop import WORK_ATOL, eval_failure, scipy_solver
 from nhham.numerics.status import STOPPED, Status
 
 __all__ = ["COMPILED_METHODS", "run_compiled"]
@@ -31,8 +31,28 @@ _EXTRA_STAGES = 16  # DOP853's stages with the dense-output extras (SEXT in the 
 
 @cache
 def _coefficients(method):
-    """(info, coefficients) of scipy's class for ``nhham_erk`` (see its C comment)."""
-    cls = SCIPY_METHODS[method]
+    """(info, coefficients) of scipy's class for ``nhham_erk`` (see its C comment), read
+    from scipy once per scipy version and kept in the compile cache: importing
+    :mod:`scipy.integrate` costs half a second that a compiled run has no other use for."""
+    import scipy   # the package alone (light): its version keys the kept tableau
+
+    from nhham.numerics.codegen.cache import CompileCache
+
+    cache_ = CompileCache.open()
+    name = f"tableau_{method}_scipy_{scipy.__version__}"
+    kept = cache_.table(name)
+    if kept is None or set(kept) != {"info", "tab"}:
+        info, tab = _scipy_tableau(method)
+        cache_.keep_table(name, {"info": list(info), "tab": tab.tolist()})
+    else:
+        info, tab = tuple(int(i) for i in kept["info"]), np.array(kept["tab"], dtype=float)
+    tab.flags.writeable = False  # shared by every run (the C code only reads it)
+    return info, np.ascontiguousarray(tab)
+
+
+def _scipy_tableau(method):
+    """(info, coefficients) from scipy's solver class."""
+    cls = scipy_solver(method)
     s = cls.n_stages
     A = np.zeros((s, s))
     A0 = np.asarray(cls.A, dtype=float)
@@ -49,9 +69,8 @@ def _coefficients(method):
     tab = np.concatenate([A.ravel(), B, C, np.asarray(E, dtype=float), E3, P.ravel(),
                           np.asarray(Aext, dtype=float).ravel(), Cext,
                           np.asarray(D, dtype=float).ravel()])
-    tab.flags.writeable = False  # shared by every run (the C code only reads it)
     info = (s, int(dop), P.shape[1], cls.error_estimator_order)
-    return info, np.ascontiguousarray(tab)
+    return info, tab
 
 
 def _tableau(method):

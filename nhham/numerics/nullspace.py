@@ -50,7 +50,6 @@ No sympy here.
 from __future__ import annotations
 
 import numpy as np
-from scipy.linalg.lapack import dgeqrf, dorgqr
 
 __all__ = ["diagonal_ratio", "diagonal_scaling", "solve_null_space", "solve_null_space_one",
            "householder_rows", "sorted_rows_qr", "KKT_SOLVE", "RANK_TOLERANCE"]
@@ -187,6 +186,8 @@ def sorted_rows_qr(A):
     QR of A with its rows sorted by their largest entry (Bjoerck's row sorting, which
     keeps the small components of a kernel direction near a coordinate axis as
     :func:`householder_rows`' pivoting does)."""
+    from scipy.linalg.lapack import dgeqrf, dorgqr   # here: 0.2 s of import few runs need
+
     n, m = A.shape
     order = np.argsort(-np.abs(A).max(axis=1), kind="stable")
     qr, tau, _, _ = dgeqrf(A[order])

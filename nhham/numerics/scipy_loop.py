@@ -14,20 +14,30 @@ projected start. No sympy here.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cache
+from typing import TYPE_CHECKING
 
 import numpy as np
-from scipy.integrate import BDF, LSODA, OdeSolution  # restarted by their own rules
-from scipy.optimize import brentq
 
 from nhham.errors import BudgetExceeded, ComputationError, InputError
 from nhham.numerics.methods import METHODS
 from nhham.numerics.run import Run, report_progress
 from nhham.numerics.status import NumericalFailure, Status
 
-__all__ = ["SCIPY_METHODS", "WORK_ATOL", "DenseOutput", "run_scipy", "eval_failure"]
+if TYPE_CHECKING:
+    from scipy.integrate import OdeSolution
 
-#: The scipy solver class of each adaptive method (:data:`~nhham.numerics.methods.METHODS`).
-SCIPY_METHODS = {m.name: m.load() for m in METHODS.values() if m.scipy_name is not None}
+__all__ = ["scipy_solver", "WORK_ATOL", "DenseOutput", "run_scipy", "eval_failure"]
+
+
+@cache
+def scipy_solver(method: str):
+    """The scipy solver class of an adaptive method (:data:`~nhham.numerics.methods.METHODS`),
+    imported on first use: :mod:`scipy.integrate` takes half a second to import, and a run
+    in the compiled loop never needs it."""
+    if METHODS[method].scipy_name is None:
+        raise KeyError(method)
+    return METHODS[method].load()
 
 #: Absolute tolerance of the work integral that rides along as an extra state: it must
 #: not steer the step size (finite: scipy's numerical Jacobian scales by atol).
@@ -148,6 +158,8 @@ class _Events:
             direction = getattr(e, "direction", 0)
             if (up and direction >= 0 and g_new[i] != self.g[i]) or (
                     down and direction <= 0 and g_new[i] != self.g[i]):
+                from scipy.optimize import brentq
+
                 root = brentq(lambda s: e(s, dense(s)[:n2]), min(t_old, t), max(t_old, t),
                               xtol=4 * np.finfo(float).eps, rtol=4 * np.finfo(float).eps)
                 found.append((root, i))
@@ -186,7 +198,7 @@ def run_scipy(model, y0, t0, t1, method, *, rtol, atol, max_step, first_step, t_
     n2 = 2 * model.n
     counter = [0]
     fun = _make_fun(model, baumgarte, counter, controls)
-    cls = SCIPY_METHODS[method]
+    cls = scipy_solver(method)
     opts = _solver_options(method, n2, rtol, atol, max_step, first_step)
     z0 = np.append(y0, 0.0)
     t_eval = None if t_eval is None else np.asarray(t_eval, dtype=float)
@@ -239,6 +251,8 @@ def run_scipy(model, y0, t0, t1, method, *, rtol, atol, max_step, first_step, t_
         status, message = Status.NOT_CONVERGED, str(exc)
     store.close()
     T, Y, work = recorder.result(n2)
+    if dense_output and pieces:
+        from scipy.integrate import OdeSolution
     sol = DenseOutput(OdeSolution(knots, pieces), n2) if dense_output and pieces else None
     t_events, y_events = watch.results() if watch else (None, None)
     return Run(T, Y, work, status, message, counter[0], nsteps,
@@ -289,6 +303,8 @@ def _project_solver(solver, model, fun, cls, t1, opts):
     n2 = 2 * model.n
     z = solver.y.copy()
     z[:n2] = model.at_time(solver.t).project(z[:n2]).y  # M_1 at the step's time
+    from scipy.integrate import BDF, LSODA   # restarted by their own rules
+
     if isinstance(solver, LSODA):
         return _reset_lsoda(solver, z, fun, cls, t1, opts)
     solver.y = z

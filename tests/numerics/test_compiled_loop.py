@@ -137,3 +137,31 @@ def test_compiled_loops_resume_after_every_pause(monkeypatch, capsys, method, op
     assert whole.nsteps == paused.nsteps > 15 and whole.nfev == paused.nfev
     err = capsys.readouterr().err
     assert "(50%)" in err and "(100%)" in err
+
+
+@pytest.mark.parametrize("method", ["RK23", "RK45", "DOP853"])
+def test_the_kept_tableau_is_scipy_s_and_a_damaged_one_is_read_again(method, tmp_path,
+                                                                     monkeypatch):
+    """The coefficients the compiled loop reads from the cache are scipy's own, bit for
+    bit; a cache file changed after it was written is not trusted (its hash record)."""
+    import scipy.integrate
+
+    from nhham.numerics import compiled_loop
+
+    monkeypatch.setenv("NHHAM_CACHE", str(tmp_path))
+    compiled_loop._coefficients.cache_clear()
+    first = compiled_loop._coefficients(method)
+    kept = list(tmp_path.glob(f"tableau_{method}_*.json"))
+    assert len(kept) == 1
+    compiled_loop._coefficients.cache_clear()
+    again = compiled_loop._coefficients(method)   # read from the file
+    cls = getattr(scipy.integrate, method)
+    for info, tab in (first, again):
+        assert info[0] == cls.n_stages and info[3] == cls.error_estimator_order
+        assert np.array_equal(tab, compiled_loop._scipy_tableau(method)[1])
+    s = cls.n_stages
+    assert np.array_equal(again[1][s * s:s * s + s], np.asarray(cls.B, dtype=float))
+    kept[0].write_text(kept[0].read_text().replace("[", "[1.0, ", 2))
+    compiled_loop._coefficients.cache_clear()
+    assert np.array_equal(compiled_loop._coefficients(method)[1], first[1])
+    compiled_loop._coefficients.cache_clear()

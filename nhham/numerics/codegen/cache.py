@@ -242,11 +242,37 @@ class CompileCache:
     def keep_sources(self, key: str, sources: dict) -> None:
         """Keep a model's generated sources (and their hash record) under ``key``; a
         failure to write them (a full disk) is ignored."""
-        path = os.path.join(self.directory, f"sources_{key}.json")
+        self._keep_json(f"sources_{key}.json", sources)
+
+    def table(self, name: str) -> dict | None:
+        """Numbers kept by :meth:`keep_table` under ``name``, verified like a library, or
+        None (absent, unreadable or not to be trusted)."""
+        path = os.path.join(self.directory, f"{name}.json")
+        if not os.path.lexists(path):
+            return None
+        with self._locked(fcntl.LOCK_SH):
+            if self._verify(path) is not None:
+                return None
+            try:
+                with open(path, encoding="utf-8") as fh:
+                    data = json.load(fh)
+            except (OSError, ValueError):
+                return None
+        return data if isinstance(data, dict) else None
+
+    def keep_table(self, name: str, table: dict) -> None:
+        """Keep ``table`` (JSON numbers: floats round-trip exactly) under ``name``; a
+        failure to write it is ignored."""
+        self._keep_json(f"{name}.json", table)
+
+    def _keep_json(self, filename: str, data: dict) -> None:
+        """Write ``data`` as JSON to ``filename`` in the cache (staged, then moved in
+        with its hash record); a failure to write is ignored."""
+        path = os.path.join(self.directory, filename)
         with contextlib.suppress(OSError), self.build_directory() as build:
             staged = os.path.join(build, os.path.basename(path))
             with open(staged, "w", encoding="utf-8") as fh:
-                json.dump(sources, fh)
+                json.dump(data, fh)
             self._move_in(staged, path, 0o644)
 
     def failure(self, key: str) -> str | None:
