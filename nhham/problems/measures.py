@@ -109,9 +109,10 @@ def _parsed(context, texts, names, where):
 
     from nhham.system.expressions import parse_expression
 
-    table = {**_symbols(context.scene()), **{k: sp.Symbol(k) for k in defined(context)},
+    known = defined(context)
+    table = {**_symbols(context.scene()), **{k: sp.Symbol(k) for k in known},
              **{k: sp.Symbol(k) for k in names}}
-    sub = {sp.Symbol(k): v for k, v in defined(context).items() if k not in names}
+    sub = {sp.Symbol(k): v for k, v in known.items() if k not in names}
     values = {p: sp.Float(v) for p, v in context.scene().system.parameter_values.items()}
     return [parse_expression(t, table, where=f"{where}[{i}]").xreplace(sub).xreplace(values)
             for i, t in enumerate(texts)]
