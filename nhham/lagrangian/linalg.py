@@ -20,6 +20,7 @@ from sympy.polys.matrices import DomainMatrix
 from sympy.polys.matrices.exceptions import DMNonInvertibleMatrixError
 
 from nhham.lagrangian.domains import PRIME, Degree, ModP, Program, minor_degree
+from nhham.lagrangian.modular_program import ModularProgram
 from nhham.system.evaluation import Backend, flatten
 
 __all__ = [
@@ -457,10 +458,10 @@ class ModularBackend(Backend):
     def evaluate(self, f, values) -> np.ndarray:
         """``f``'s expressions at the exact point ``values``: no compilation, the sines
         and cosines of Angles exact."""
-        program = f.__dict__.get("_program")
+        program = f.__dict__.get("_modular_program")
         if program is None:  # compiled once per function: it is run at every point
-            program = f.__dict__["_program"] = Program(f.exprs)
-        out = [ModP.lift(x) for x in program.run(dict(zip(f.args, values)))]
+            program = f.__dict__["_modular_program"] = ModularProgram(Program(f.exprs))
+        out = [ModP(x) for x in program.run(dict(zip(f.args, values)))]
         return np.array(out, dtype=object)
 
     @property

@@ -24,8 +24,9 @@ The work done on hostile input is bounded: the text length, the nesting
 depth, the size of exact numbers and numeric powers are all capped, and every
 failure of the Python parser itself is reported as a ``ParseError``.
 
-:func:`to_text` is the inverse: it prints an expression in the scene's own
-names so that :func:`parse_expression` reads it back to an equal expression.
+:func:`to_text` is the inverse (:mod:`nhham.system.printing`, re-exported here): it
+prints an expression in the scene's own names so that :func:`parse_expression` reads it
+back to an equal expression.
 """
 
 from __future__ import annotations
@@ -41,12 +42,12 @@ import warnings
 from typing import Iterable, Mapping
 
 import sympy as sp
-from sympy.printing.str import StrPrinter
 
 from nhham.errors import BudgetExceeded, ParseError
 from nhham.settings import COMPILER_LOCK
 from nhham.system.derivative import derivative
 from nhham.system.numbers import complex_string, number_problems
+from nhham.system.printing import short, to_text
 
 __all__ = [
     "FUNCTIONS",
@@ -630,63 +631,3 @@ def _describe(node) -> str:
                 "bool": "a boolean", "NoneType": "None", "ellipsis": "'...'"}.get(
                     kind, f"a {kind} constant")
     return _NODE_NAMES.get(type(node), type(node).__name__)
-
-
-# --------------------------------------------------------------------- print
-class _ScenePrinter(StrPrinter):
-    """sympy's str printer, adjusted so the output parses back exactly.
-
-    Floats print with ``repr`` of the double (17 significant digits when
-    needed), and constants that sympy creates on its own print in terms of
-    the allowed functions: ``exp(1)`` instead of ``E``, ``sqrt(-1)`` instead
-    of ``I`` -- in a scene, ``E`` and ``I`` are ordinary names.
-    """
-
-    def _print_Float(self, expr):
-        if expr._prec == 53:  # a double: repr is the shortest exact form
-            value = float(expr)
-            if math.isfinite(value):
-                return repr(value)
-        return super()._print_Float(expr)
-
-    def _print_Exp1(self, expr):
-        return "exp(1)"
-
-    def _print_ImaginaryUnit(self, expr):
-        return "sqrt(-1)"
-
-
-_PRINTER = _ScenePrinter({"full_prec": True})
-# Sorting the terms of a sum costs three times the printing itself: entries longer than
-# this keep sympy's stored (deterministic) order; the shorter ones, read by eye, are sorted.
-_UNSORTED = _ScenePrinter({"full_prec": True, "order": "none"})
-SORTED_TEXT_LIMIT = 2000
-
-
-def to_text(expr) -> str:
-    """Print an expression so that :func:`parse_expression` reads it back.
-
-    Parameters
-    ----------
-    expr : sympy.Expr
-        An expression in the scene's symbols and the functions of
-        :data:`FUNCTIONS`.
-
-    Returns
-    -------
-    str
-        Text in the scene's own names (``Abs``, ``atan2``, ``sqrt``...);
-        ``parse_expression(to_text(e), table, ...) == e`` and, for names that
-        are not Python keywords or sympy constants, ``sympy.sympify`` reads it
-        back too. Terms are in sympy's printing order up to
-        :data:`SORTED_TEXT_LIMIT` characters, in its stored order beyond.
-    """
-    expr = sp.sympify(expr)
-    text = _UNSORTED.doprint(expr)
-    return _PRINTER.doprint(expr) if len(text) <= SORTED_TEXT_LIMIT else text
-
-
-def short(expr, limit: int = 80) -> str:
-    """``str(expr)`` cut to ``limit`` characters (with ``...``), for messages."""
-    text = str(expr)
-    return text if len(text) <= limit else text[:limit - 3] + "..."

@@ -402,7 +402,11 @@ def _cse(outputs):
 
 # ------------------------------------------------------------------ C text
 class _CPrinter(C99CodePrinter):
-    """C99 with small integer powers expanded to products (exact, faster)."""
+    """C99 with small integer powers expanded to products (exact, faster); the terms
+    in the expression's own order (sorting them is most of a printer's time)."""
+
+    def __init__(self, settings=None):
+        super().__init__({"order": "none", **(settings or {})})
 
     def _print_Pow(self, expr):
         b, e = expr.as_base_exp()
