@@ -48,6 +48,7 @@ from __future__ import annotations
 
 import functools
 import hashlib
+import re
 from collections import OrderedDict
 from importlib import resources
 from pathlib import Path
@@ -113,13 +114,46 @@ def source_key(system, path: str = "saddle") -> str:
 
 @functools.cache
 def code_digest() -> str:
-    """SHA-256 of nhham's source files (Python and the C runtime), read once."""
-    root = Path(__file__).resolve().parents[2]
+    """SHA-256 of the code the generated sources come from, read once: this module, the
+    nhham modules it imports (transitively, by their import lines: :func:`generator_files`)
+    and the C runtime. An edit elsewhere in nhham (a command, a renderer, the integrators)
+    leaves every model's sources valid."""
+    root = Path(__file__).resolve().parents[3]
     h = hashlib.sha256()
-    for f in sorted(root.rglob("*")):
-        if f.suffix in (".py", ".c", ".h") and "__pycache__" not in f.parts:
-            h.update(str(f.relative_to(root)).encode() + b"\0" + f.read_bytes())
+    for f in generator_files():
+        h.update(str(f.relative_to(root)).encode() + b"\0" + f.read_bytes())
     return h.hexdigest()
+
+
+#: ``from nhham.a.b import x, y`` and ``import nhham.a.b``, anywhere in a line (imports
+#: inside functions count: the geometry imports most of what it uses where it uses it).
+_IMPORT = re.compile(r"^[ \t]*(?:from[ \t]+(nhham(?:\.\w+)*)[ \t]+import[ \t]+"
+                     r"(\([^)]*\)|[\w \t,]*)|import[ \t]+(nhham(?:\.\w+)*))", re.MULTILINE)
+
+
+def generator_files() -> list:
+    """The source files :func:`code_digest` covers, sorted: from this module, every nhham
+    module reached through import lines (a name imported from a package brings the whole
+    package: its lazy table may lead anywhere in it), and ``nhham/numerics/c``."""
+    package = Path(__file__).resolve().parents[2]
+    seen: set = set()
+    todo = [Path(__file__).resolve()]
+    while todo:
+        f = todo.pop()
+        if f in seen:
+            continue
+        seen.add(f)
+        for m in _IMPORT.finditer(f.read_text(encoding="utf-8")):
+            parts = (m.group(1) or m.group(3)).split(".")[1:]
+            base = package.joinpath(*parts)
+            if base.with_suffix(".py").is_file():
+                todo.append(base.with_suffix(".py"))
+            elif base.is_dir():
+                todo += [p for p in base.rglob("*.py") if "__pycache__" not in p.parts]
+                todo += [base / f"{n}.py" for n in (m.group(2) or "").strip("()").replace(",", " ").split()
+                         if (base / f"{n}.py").is_file()]
+    runtime = [p for p in (package / "numerics" / "c").iterdir() if p.suffix in (".c", ".h")]
+    return sorted(seen | set(runtime))
 
 
 def sources_digest(sources: dict) -> str:
