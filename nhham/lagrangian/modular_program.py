@@ -4,9 +4,9 @@ The modular points of the exact decisions (:class:`~nhham.lagrangian.linalg.Modu
 run the same straight-line program at every point. Through :class:`~.domains.ModP` each
 product or sum allocates an object and dispatches on its operand's type: half a million
 of them for the bicycle's checks. Here the residues are Python integers, reduced once per
-operation; only the operations that may meet an angle (an :class:`~.domains.Angle`,
-whose sums and integer multiples stay angles) run the generic arithmetic, and sin, cos,
-tan, cot of an angle are read off its circle point as there. The values are those of
+operation; an operation that meets anything else (an :class:`~.domains.Angle`, whose sums
+and integer multiples stay angles, an exact rational not yet reduced, a function) runs
+the generic arithmetic on the objects Program.run would hold. The values are those of
 ``Program.run`` with ModP values: the same residues, the same exceptions
 (ZeroDivisionError where an inverse or a square root does not exist, NotExact where a
 function meets a value that is not an angle).
@@ -26,7 +26,9 @@ Examples
 
 from __future__ import annotations
 
-from nhham.lagrangian.domains import PRIME, Angle, ModP, NotExact
+from sympy.external.gmpy import MPQ
+
+from nhham.lagrangian.domains import PRIME, Angle, ModP, NotExact, square_root
 
 __all__ = ["ModularProgram"]
 
@@ -41,91 +43,90 @@ class ModularProgram:
 
     def __init__(self, program) -> None:
         self.program = program
-        self._plans: dict = {}
-
-    def _plan(self, angles: frozenset) -> list:
-        """Per operation whether its value may be an Angle (its symbol is one, or it is
-        a sum or product with such an operand): those run the generic arithmetic."""
-        plan: list = []
-        for kind, data, args in self.program.ops:
-            if kind == "symbol":
-                plan.append(data in angles)
-            elif kind in ("add", "mul"):
-                plan.append(any(plan[a] for a in args))
-            else:
-                plan.append(False)
-        return plan
 
     def run(self, env: dict) -> list:
         """The residues (ints in [0, p)) of the program's outputs at ``env`` (Symbol ->
         ModP, int, rational or Angle)."""
-        angles = frozenset(s for s, v in env.items() if isinstance(v, Angle))
-        plan = self._plans.get(angles)
-        if plan is None:
-            plan = self._plans[angles] = self._plan(angles)
-        ops = self.program.ops
-        values: list = []
+        values: list = []   # a residue (int), or an _Exact or Angle: see _object
         push = values.append
-        for i, (kind, data, args) in enumerate(ops):
-            if plan[i]:
-                push(_generic(kind, data, [_object(ops, values, a) for a in args], env))
-            elif kind == "mul":
+        for kind, data, args in self.program.ops:
+            if kind == "mul" and all(type(values[a]) is int for a in args):
                 out = 1
                 for a in args:
-                    out = out * _residue(values[a]) % PRIME
+                    out = out * values[a] % PRIME
                 push(out)
-            elif kind == "add":
-                push(sum(_residue(values[a]) for a in args) % PRIME)
+            elif kind == "add" and all(type(values[a]) is int for a in args):
+                push(sum(values[a] for a in args) % PRIME)
             elif kind == "symbol":
                 if data not in env:
                     raise NotExact(f"no exact value for {data}")
-                push(ModP.lift(env[data]).v)
+                push(_stored(env[data]))
             elif kind == "constant":
-                push(ModP.lift(data).v)
-            elif kind == "function":
-                a = args[0]
-                arg = values[a] if isinstance(values[a], Angle) else _object(ops, values, a)
-                push(ModP.lift(data(arg)).v)
-            elif kind == "root":
-                if ops[args[0]][0] == "constant":   # as square_root of a rational
-                    raise NotExact("sqrt has no exact value at a rational point")
-                root = pow(_residue(values[args[0]]), (PRIME + 1) // 4, PRIME)
-                if root * root % PRIME != _residue(values[args[0]]):
-                    raise ZeroDivisionError("not a square modulo p")
-                push(_power(root, data[1]))
-            else:
-                push(_power(_residue(values[args[0]]), data))
-        return [_residue(values[i]) for i in self.program.outputs]
+                push(_Exact(data))
+            elif kind in ("root", "power") and type(values[args[0]]) is int:
+                base, k = values[args[0]], data
+                if kind == "root":
+                    k, root = data[1], pow(base, (PRIME + 1) // 4, PRIME)
+                    if root * root % PRIME != base:
+                        raise ZeroDivisionError("not a square modulo p")
+                    base = root
+                push(_power(base, k))
+            else:   # an angle, an exact rational or a function: Program.run's arithmetic
+                push(_stored(_generic(kind, data, [_object(values[a]) for a in args])))
+        return [values[i] if type(values[i]) is int else _residue(_object(values[i]))
+                for i in self.program.outputs]
+
+
+class _Exact:
+    """A value Program.run keeps as an exact rational (a constant, a parameter fixed at a
+    rational value, or arithmetic among them): sqrt and sin/cos treat those differently
+    from residues, so it is not reduced until it meets one."""
+
+    __slots__ = ("value",)
+
+    def __init__(self, value) -> None:
+        self.value = value
+
+
+def _stored(value):
+    """A value as stored: a ModP as its residue, anything else wrapped or as it is."""
+    if isinstance(value, ModP):
+        return value.v
+    return value if isinstance(value, Angle) else _Exact(value)
+
+
+def _object(value):
+    """A stored value as Program.run holds it."""
+    if type(value) is int:
+        return ModP(value)
+    return value.value if isinstance(value, _Exact) else value
 
 
 def _residue(value) -> int:
-    """An operation's value as a residue (an Angle's polynomial value)."""
-    if isinstance(value, Angle):
-        return ModP.lift(value.value).v
-    return value
+    """An output as a residue: an Angle by its value (NotExact without one)."""
+    return ModP.lift(value.value if isinstance(value, Angle) else value).v
 
 
-def _object(ops, values, a):
-    """Operand ``a`` as the generic arithmetic takes it: a constant as written (an integer
-    multiple of an angle needs the integer), a residue as a ModP, an Angle as it is."""
-    value = values[a]
-    if isinstance(value, Angle):
-        return value
-    kind, data, _ = ops[a]
-    return data if kind == "constant" else ModP(value)
-
-
-def _generic(kind, data, operands, env):
-    """A sum, product or symbol that may be an Angle, as ``Program.run`` computes it."""
-    if kind == "symbol":
-        if data not in env:
-            raise NotExact(f"no exact value for {data}")
-        out = env[data]
-    else:
+def _generic(kind, data, operands):
+    """One operation on Program.run's values, as Program.run computes it."""
+    if kind in ("add", "mul"):
         out = 0 if kind == "add" else 1
         for x in operands:
             out = out + x if kind == "add" else out * x
-    return out if isinstance(out, Angle) else ModP.lift(out).v
+        return out
+    if kind == "function":
+        return data(operands[0])
+    base = operands[0]
+    if isinstance(base, Angle):
+        base = base.value
+    if kind == "root":
+        base, k = square_root(base), data[1]
+    else:
+        k = data
+    if k >= 0:
+        return base ** k
+    power = base ** (-k)
+    return power.inverse() if isinstance(power, ModP) else MPQ(1) / power
 
 
 def _power(base: int, k: int) -> int:

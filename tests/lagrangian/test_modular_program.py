@@ -6,6 +6,7 @@ import random
 
 import pytest
 import sympy as sp
+from sympy.external.gmpy import MPQ
 
 from nhham.lagrangian.domains import PRIME, Angle, ModP, NotExact, Program
 from nhham.lagrangian.modular_program import ModularProgram
@@ -45,14 +46,19 @@ EXPRESSIONS = [
     [sp.sqrt(2) * x],                                 # sqrt of a rational: NotExact
     [sp.cos(3 * q + x * 0) + sp.sin(q - r - q)],
     [(x + q) ** -3, sp.Rational(1, 2 ** 61 - 1) * x],  # denominator divisible by p
+    [sp.sqrt(y) * x, y ** 2 * x / (y + 1), y * y],    # y may be an exact rational
+    [sp.sin(y) + x, sp.cos(y * r)],                   # sin of an exact 0 is 0
 ]
 
 
 @pytest.mark.parametrize("exprs", EXPRESSIONS, ids=range(len(EXPRESSIONS)))
 def test_same_residues_and_exceptions_as_program_run(exprs):
     rng = random.Random(7)
-    for _ in range(20):
-        env = {x: ModP(rng.randrange(PRIME)), y: ModP(rng.randrange(1, 4)),
+    for i in range(30):
+        # y a residue, or (as a parameter fixed at the scene's value) an exact rational
+        exact_y = [MPQ(3, 2), 0, 4, MPQ(-1, 7)][i % 4] if i % 3 else None
+        env = {x: ModP(rng.randrange(PRIME)),
+               y: ModP(rng.randrange(1, 4)) if exact_y is None else exact_y,
                q: _angle(rng), r: _angle(rng, value=rng.random() < 0.7)}
         assert _modular(exprs, env) == _reference(exprs, env)
 
