@@ -62,8 +62,9 @@ from nhham.lagrangian.formulas import bordered_matrix, frobenius_terms, lagrangi
 from nhham.lagrangian.linalg import (
     FLOAT64,
     FloatMatrix,
+    LogDet,
     adjacent_column_sets,
-    field_det,
+    log_det,
     maximal_minors,
 )
 from nhham.lagrangian.points import DRAW_BITS, ParameterFieldSampler, jacobian_row
@@ -281,10 +282,10 @@ class ExceptionalData:
                 yield [self._matrix(K, rows, env, cache) for rows in a.data]
 
         if a.formula == "det":
-            return lambda env0, K: [field_det(self._matrix(K, a.data, env, self._memo(env)))
+            return lambda env0, K: [log_det(self._matrix(K, a.data, env, self._memo(env)))
                                     for env in points(env0, K)]
         if a.formula == "bordered det":
-            return lambda env0, K: [field_det(bordered_matrix(*mats))
+            return lambda env0, K: [log_det(bordered_matrix(*mats))
                                     for mats in matrices(env0, K)]
         if a.formula == "value":
             return lambda env0, K: [self._val(K, evaluate(a.data, env, self._memo(env))[0])
@@ -309,17 +310,24 @@ class ExceptionalData:
             # exactly where all do (rank mu < m), at a cost of m (n - m) + 1.
             subsets = None if math.comb(system.n, m) <= MAX_MINORS or pivots is None or \
                 len(pivots) < m else adjacent_column_sets(pivots, system.n)
-            vals += maximal_minors(M, pivots, subsets)
+            vals += maximal_minors(M, pivots, subsets, det=log_det)
         return vals
+
+    @functools.cached_property
+    def _dmu(self) -> list:
+        """d mu_i (dmu[i][A][B] = d mu_iB/dq^A - d mu_iA/dq^B): formed once, every
+        evaluation of the Frobenius datum (at the values and at each shift) reads it."""
+        system = self.system
+        m, n, q = system.m, system.n, system.coordinates
+        grads = [[jacobian_row(system.mu[i, A], q) for A in range(n)] for i in range(m)]
+        return [[[grads[i][B][A] - grads[i][A][B] for B in range(n)] for A in range(n)]
+                for i in range(m)]
 
     def _frobenius(self, eqs, env0, K):
         system = self.system
-        m, n = system.m, system.n
-        q = system.coordinates
+        m = system.m
         rows = [list(system.mu.row(i)) for i in range(m)]
-        grads = [[jacobian_row(system.mu[i, A], q) for A in range(n)] for i in range(m)]
-        dmu = [[[grads[i][B][A] - grads[i][A][B] for B in range(n)] for A in range(n)]
-               for i in range(m)]
+        dmu = self._dmu
         vals = []
         for env in self._pts(eqs, env0, K, 1):
             cache = self._memo(env)
@@ -375,7 +383,7 @@ class ExceptionalData:
         mats = self._brackets(env0, K)  # first: a point not exact here is said so
         if not R:
             return []
-        return [field_det(B.extract(R, R)) for B in mats]
+        return [log_det(B.extract(R, R)) for B in mats]
 
     def _ring_bracket_minors(self, env0, K, R):
         """det B_RR at the points of M_f with the parameters symbolic (K = Q(p)), formed
@@ -605,7 +613,15 @@ def _relative_distance(v0, nonzero, shifted, values) -> float:
 
 
 def _log_slope(moved, value, h) -> float:
-    """(moved - value) / (h value) as a float, computed in the field of the values."""
+    """(moved - value) / (h value) as a float, computed in the field of the values (a
+    float64 determinant by its logarithm: :class:`~nhham.lagrangian.linalg.LogDet`)."""
+    if isinstance(value, LogDet):
+        if not value or not math.isfinite(value.log):
+            raise ZeroDivisionError("a float64 determinant vanished or was not finite")
+        ratio = LogDet.of(moved) / value
+        if not math.isfinite(ratio):
+            raise ZeroDivisionError("a float64 determinant ratio was not finite")
+        return (ratio - 1.0) / float(h)
     if isinstance(value, float):
         if value == 0.0 or not (math.isfinite(value) and math.isfinite(moved)):
             raise ZeroDivisionError("a float64 value underflowed or overflowed")

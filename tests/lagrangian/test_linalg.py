@@ -91,3 +91,39 @@ def test_a_float_determinant_beyond_the_range_is_inf_without_a_warning():
         assert field_det(FloatMatrix(np.diag([1e200] * 3))) == float("inf")
         assert field_det(FloatMatrix(np.diag([-1e200, 1e200, 1e200]))) == float("-inf")
     assert field_det(FloatMatrix(np.diag([2.0, 3.0]))) == 6.0
+
+
+def test_log_det_keeps_a_large_determinant_and_its_ratio_in_range():
+    """log_det of a 60 x 60 matrix whose determinant is far beyond float64 (about
+    1e+1150) against the exact determinant of the same rationals: sign and logarithm,
+    and the ratio of two such determinants (what the nearness estimate forms) to 1e-10."""
+    import math
+    import random
+
+    import numpy as np
+    from sympy import QQ
+    from sympy.external.gmpy import MPQ
+    from sympy.polys.matrices import DomainMatrix
+
+    from nhham.lagrangian.exceptional import _log_slope
+    from nhham.lagrangian.linalg import FloatMatrix, LogDet, field_det, log_det
+
+    rng = random.Random(3)
+    n = 60
+    rows = [[MPQ(rng.randint(-10 ** 6, 10 ** 6) * 10 ** 14 + (10 ** 22 if i == j else 0))
+             for j in range(n)] for i in range(n)]
+    moved = [list(r) for r in rows]
+    moved[0][0] = moved[0][0] * MPQ(10001, 10000)
+    exact = DomainMatrix(rows, (n, n), QQ).det()
+    exact_moved = DomainMatrix(moved, (n, n), QQ).det()
+    got = log_det(FloatMatrix(np.array(rows, dtype=float)))
+    got_moved = log_det(FloatMatrix(np.array(moved, dtype=float)))
+    assert isinstance(got, LogDet) and got.sign == (1.0 if exact > 0 else -1.0)
+    digits = len(str(abs(int(exact)))) - 1
+    assert digits > 1100   # beyond float64: field_det gives inf
+    assert math.isinf(field_det(FloatMatrix(np.array(rows, dtype=float))))
+    assert got.log == pytest.approx(math.log(abs(int(exact))), rel=1e-12)
+    assert got_moved / got == pytest.approx(float(exact_moved / exact), rel=1e-10)
+    h = MPQ(1, 10 ** 4)
+    assert _log_slope(got_moved, got, h) == pytest.approx(
+        float((exact_moved - exact) / (h * exact)), rel=1e-6)
