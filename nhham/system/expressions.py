@@ -372,6 +372,7 @@ class _Builder:
         self.symbols = symbols
         self.renamed = renamed
         self.where = where
+        self.calls: dict = {}   # (function, arguments) -> value: a snake's L repeats them
 
     # Errors ---------------------------------------------------------------
     def fragment(self, node) -> str:
@@ -540,9 +541,12 @@ class _Builder:
             raise self.error(node, f"{ident} takes {count} argument{'s' if count > 1 else ''}, "
                                    f"got {len(node.args)}")
         args = [self.build(arg, depth + 1) for arg in node.args]
-        if ident == "sqrt":
-            self.check_root(node, args[0], sp.S.Half)
-        return self.real(node, FUNCTIONS[ident](*args))
+        key = (ident, *args)
+        if key not in self.calls:   # sympy evaluates sin(a - b) anew at every occurrence
+            if ident == "sqrt":
+                self.check_root(node, args[0], sp.S.Half)
+            self.calls[key] = self.real(node, FUNCTIONS[ident](*args))
+        return self.calls[key]
 
     def real(self, node, value):
         """``value``, refused when it is a constant that is not a real number."""

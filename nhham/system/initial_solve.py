@@ -34,6 +34,7 @@ from nhham.errors import (
     MissingParameterValueError,
     ParseError,
 )
+from nhham.system.derivative import derivative
 from nhham.system.expressions import parse_expression
 from nhham.system.scene_numbers import finite_number
 
@@ -249,7 +250,7 @@ def _velocities(system, values, missing, params, guesses, where) -> dict:
     at = [_at_initial(e, known, lab, where) for lab, e in rows]
     zero = {u: 0 for u in unknowns}
     guesses = dict(guesses or {})
-    gradients = [[sp.diff(e, u) if u in fs else sp.S.Zero for u in unknowns]
+    gradients = [[derivative(e, u) if u in fs else sp.S.Zero for u in unknowns]
                  for e, fs in ((e, e.free_symbols) for e in at)]   # d(phi_i)/d(u_j), once
     for (lab, _), grad in zip(rows, gradients):  # Chetaev: phi may have several roots in them
         inside_grad = set().union(*(g.free_symbols for g in grad))
