@@ -12,6 +12,7 @@ from __future__ import annotations
 import contextlib
 import itertools
 import math
+import operator
 
 import numpy as np
 from sympy import QQ
@@ -223,6 +224,11 @@ def backend_solve(backend):
     return lambda A, X: FloatMatrix(backend.solve(A.a, X.a))
 
 
+def _residues(rows) -> bool:
+    """Every entry is a :class:`~nhham.lagrangian.domains.ModP`."""
+    return all(type(x) is ModP for r in rows for x in r)
+
+
 class ListMatrix:
     """Rows of Python scalars (``MPQ``, :class:`~nhham.lagrangian.domains.ModP`,
     :class:`~nhham.lagrangian.domains.Degree`) with the part of the DomainMatrix
@@ -249,6 +255,13 @@ class ListMatrix:
 
     def __mul__(self, other) -> "ListMatrix":
         cols = [[r[j] for r in other.rows] for j in range(other.ncols)]
+        if _residues(self.rows) and _residues(cols):
+            # modulo p on the residues: an object per product and per sum was most of a
+            # large bracket's cost (the 64-link snake's classes)
+            a = [[x.v for x in r] for r in self.rows]
+            b = [[y.v for y in c] for c in cols]
+            return ListMatrix([[ModP(sum(map(operator.mul, row, col))) for col in b]
+                               for row in a], other.ncols)
         return ListMatrix([[sum((x * y for x, y in zip(row, col)), 0) for col in cols]
                            for row in self.rows], other.ncols)
 

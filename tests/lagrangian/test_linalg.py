@@ -127,3 +127,23 @@ def test_log_det_keeps_a_large_determinant_and_its_ratio_in_range():
     h = MPQ(1, 10 ** 4)
     assert _log_slope(got_moved, got, h) == pytest.approx(
         float((exact_moved - exact) / (h * exact)), rel=1e-6)
+
+
+def test_a_product_of_residue_matrices_is_the_product_of_their_modp_entries():
+    """ListMatrix's product on residues (plain integers) against the same product with
+    one entry an exact int, which takes the generic path (ModP objects throughout)."""
+    import random
+
+    from nhham.lagrangian.domains import PRIME, ModP
+    from nhham.lagrangian.linalg import ListMatrix
+
+    rng = random.Random(5)
+    A = [[ModP(rng.randrange(PRIME)) for _ in range(7)] for _ in range(5)]
+    B = [[ModP(rng.randrange(PRIME)) for _ in range(4)] for _ in range(7)]
+    fast = (ListMatrix(A) * ListMatrix(B)).rows
+    B_mixed = [list(r) for r in B]
+    B_mixed[0][0] = B[0][0].v   # an int: not all residues, so the generic sum of objects
+    slow = (ListMatrix(A) * ListMatrix(B_mixed)).rows
+    assert all(type(x) is ModP for r in fast for x in r)
+    assert fast == slow
+    assert fast[2][3] == ModP(sum(A[2][k].v * B[k][3].v for k in range(7)))
