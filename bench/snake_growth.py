@@ -13,6 +13,8 @@ Usage::
     python bench/snake_growth.py                       # N = 8 16 32 48 64
     python bench/snake_growth.py --sizes 8 16 --runs 3
     python bench/snake_growth.py --plot docs/snake_growth.png   # needs matplotlib
+    python bench/snake_growth.py --lm earlier.md   # LagrangesMethod's cells read from
+                                                   # an earlier table (nhham's measured)
 
 The table is Markdown (bench/RESULTS.md keeps it with the command that made it).
 """
@@ -35,8 +37,9 @@ from classify import LM_SCRIPT, _median_command  # noqa: E402
 SIZES = (8, 16, 32, 48, 64)
 
 
-def measure(sizes, runs, timeout) -> list:
-    """[(N, nhham (wall, CPU, MB) or None, LagrangesMethod (wall, CPU, MB) or None)]."""
+def measure(sizes, runs, timeout, lm_rows=None) -> list:
+    """[(N, nhham (wall, CPU, MB) or None, LagrangesMethod (wall, CPU, MB) or None)];
+    with ``lm_rows`` ({N: cell}), LagrangesMethod's side is taken from there."""
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
         for N in sizes:
@@ -45,10 +48,23 @@ def measure(sizes, runs, timeout) -> list:
                             str(path)], check=True, capture_output=True)
             nhham = _median_command([sys.executable, "-m", "nhham", "classify", str(path),
                                      "--json"], runs, timeout)
-            lm = _median_command([sys.executable, "-c", LM_SCRIPT, str(path)], runs, timeout)
+            lm = (lm_rows[N] if lm_rows is not None else
+                  _median_command([sys.executable, "-c", LM_SCRIPT, str(path)], runs, timeout))
             rows.append((N, nhham, lm))
             print(_row(rows[-1], timeout), flush=True)
     return rows
+
+
+def read_lm(path, timeout) -> dict:
+    """{N: (wall, CPU, 0) or None} from the LagrangesMethod column of an earlier table."""
+    out = {}
+    for line in Path(path).read_text().splitlines():
+        cells = [c.strip() for c in line.strip().strip("|").split("|")]
+        if len(cells) == 5 and cells[0].isdigit():
+            lm = cells[3]
+            out[int(cells[0])] = None if lm.startswith(">") else (
+                *map(float, lm.split(" / ")), 0.0)
+    return out
 
 
 def _cell(res, timeout) -> str:
@@ -100,13 +116,16 @@ def main(argv=None) -> int:
     ap.add_argument("--runs", type=int, default=1)
     ap.add_argument("--timeout", type=float, default=600.0)
     ap.add_argument("--plot", metavar="PNG")
+    ap.add_argument("--lm", metavar="TABLE", help="LagrangesMethod's cells from an earlier "
+                    "table of this script (its runs take minutes)")
     args = ap.parse_args(argv)
     load = os.getloadavg()[0]
     print(f"# snake growth: Python {platform.python_version()}, {os.cpu_count()} CPUs, load "
           f"average {load:.1f}; whole processes, median of {args.runs}: wall s / CPU s")
     print("| N | n | nhham classify --json | LagrangesMethod script | LM / nhham (CPU) |")
     print("|---|---|---|---|---|")
-    rows = measure(args.sizes, args.runs, args.timeout)
+    lm_rows = read_lm(args.lm, args.timeout) if args.lm else None
+    rows = measure(args.sizes, args.runs, args.timeout, lm_rows)
     if args.plot:
         plot(rows, args.timeout, args.plot)
         print(f"# plot: {args.plot}")
