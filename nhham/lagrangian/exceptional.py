@@ -323,11 +323,33 @@ class ExceptionalData:
         return [[[grads[i][B][A] - grads[i][A][B] for B in range(n)] for A in range(n)]
                 for i in range(m)]
 
+    @functools.cached_property
+    def _dmu_nonzero(self) -> list:
+        """The entries of :attr:`_dmu` that are not identically zero, per row A of each
+        d mu_i: [(B, expression)] (most are zero: a snake's mu_i involves its first i
+        links only, and the m n^2 entries were evaluated and converted one by one)."""
+        return [[[(B, e) for B, e in enumerate(row) if e != 0] for row in rows]
+                for rows in self._dmu]
+
+    def _dmu_at(self, K, env, cache) -> list:
+        """d mu at one point in K: the nonzero entries evaluated, the others K's zero."""
+        n, zero = self.system.n, self._val(K, 0)
+        out = []
+        for rows in self._dmu_nonzero:
+            block = []
+            for entries in rows:
+                row = [zero] * n
+                values = evaluate([e for _, e in entries], env, cache) if entries else ()
+                for (B, _), x in zip(entries, values):
+                    row[B] = self._val(K, x)
+                block.append(row)
+            out.append(block)
+        return out
+
     def _frobenius(self, eqs, env0, K):
         system = self.system
         m = system.m
         rows = [list(system.mu.row(i)) for i in range(m)]
-        dmu = self._dmu
         vals = []
         for env in self._pts(eqs, env0, K, 1):
             cache = self._memo(env)
@@ -339,8 +361,7 @@ class ExceptionalData:
             dep = self._pivots["dep"]
             if len(dep) < m:
                 continue
-            D = [[[self._val(K, x) for x in evaluate(r, env, cache)] for r in dmu[i]]
-                 for i in range(m)]
+            D = self._dmu_at(K, env, cache)
             vals.extend(frobenius_terms(M, D, dep).values())
         return vals
 
