@@ -57,11 +57,12 @@ from sympy.polys.polyerrors import CoercionFailed
 
 from nhham.lagrangian.analysis import ConstraintAnalysis
 from nhham.lagrangian.components import Condition, exceptional_components
-from nhham.lagrangian.domains import PRIME, Angle, NotExact, evaluate
+from nhham.lagrangian.domains import PRIME, Angle, ModP, NotExact, evaluate
 from nhham.lagrangian.formulas import bordered_matrix, frobenius_terms, lagrangian_bracket
 from nhham.lagrangian.linalg import (
     FLOAT64,
     FloatMatrix,
+    ListMatrix,
     LogDet,
     adjacent_column_sets,
     log_det,
@@ -384,7 +385,16 @@ class ExceptionalData:
         pts = self._pts(list(self.analysis.final_constraints), env0, K, "f")
         for env in pts[:count]:
             cache = self._memo(env)
-            mats.append(lagrangian_bracket(*(self._matrix(K, r, env, cache) for r in rows)))
+            if K.is_FiniteField:   # on residues (sympy's GF(p) elements: most of the cost)
+                B = lagrangian_bracket(*(ListMatrix([[ModP.lift(x) for x in
+                                                      evaluate(row, env, cache)]
+                                                     for row in r], len(r[0]) if r else 0)
+                                         for r in rows))
+                mats.append(DomainMatrix([[K(x.v) for x in row] for row in B.rows],
+                                         B.shape, K))
+            else:
+                mats.append(lagrangian_bracket(*(self._matrix(K, r, env, cache)
+                                                 for r in rows)))
         return mats
 
     def _bracket_minor(self, env0, K):

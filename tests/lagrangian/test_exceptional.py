@@ -164,3 +164,31 @@ def test_bracket_minor_with_symbolic_parameters_is_the_hand_numerator():
     fields = [field_det(B.extract([0, 1], [0, 1])) for B in data._brackets(env0, K)]
     assert all(sp.simplify(K.to_sympy(v) - (a - b / m) ** 2) == 0 for v in fields)
 
+
+
+def test_the_bracket_modulo_p_on_residues_is_the_bracket_in_gf_p():
+    """_brackets over GF(p) (formed on residues, ListMatrix of ModP) against the same
+    formula on sympy's GF(p) matrices, at the datum's own points; and by hand: with
+    L = (m x'^2 + y'^2 + z'^2)/2, chi_1 = x' + a y, chi_2 = y' + b x, {chi_1, chi_2} = a - b/m."""
+    from sympy.polys.matrices import DomainMatrix
+
+    from nhham import System
+    from nhham.lagrangian.exceptional import MODULAR, ExceptionalData
+    from nhham.lagrangian.domains import evaluate
+    from nhham.lagrangian.formulas import lagrangian_bracket
+
+    system = System(["x", "y", "z"], "(m*x_dot**2 + y_dot**2 + z_dot**2)/2",
+                    ["x_dot + a*y", "y_dot + b*x"], parameters={"m": 3.0, "a": 1.0, "b": 2.0})
+    data = ExceptionalData(system, analyze_constraints(system), 7, 3)
+    env0 = data.env(generic=True)
+    got = data._brackets(env0, MODULAR)
+    pts = data._pts(list(data.analysis.final_constraints), env0, MODULAR, "f")
+    assert len(got) == len(pts) == 3
+    for B, env in zip(got, pts):
+        cache = {}
+        want = lagrangian_bracket(*(DomainMatrix(
+            [[data._val(MODULAR, x) for x in evaluate(row, env, cache)] for row in r],
+            (len(r), len(r[0])), MODULAR) for r in data._bracket_rows))
+        assert B == want
+        m, a, b = (MODULAR(data._val(MODULAR, env[s])) for s in sp.symbols("m a b"))
+        assert B[0, 1].element == a - b / m
