@@ -416,9 +416,6 @@ def field_solve(A: DomainMatrix, B: DomainMatrix) -> DomainMatrix:
     bounds solve by :func:`degree_solve`). ZeroDivisionError where ``A`` is singular.
     """
     if isinstance(A, ListMatrix):
-        if _residues(A.rows) and _residues(B.rows):
-            X = _solve_mod([[x.v for x in r] for r in A.rows], [[x.v for x in r] for r in B.rows])
-            return ListMatrix([[ModP(x) for x in r] for r in X], B.ncols)
         return ListMatrix(exact_solve(A.rows, B.rows), B.ncols)
     if isinstance(A, FloatMatrix):
         try:
@@ -462,27 +459,8 @@ def _det_mod(rows, p: int) -> int:
     return det % p
 
 
-def _solve_mod(A, B) -> list:
-    """A^-1 B over F_p (p = PRIME) on residues (Gauss-Jordan); ZeroDivisionError where A
-    is singular modulo p."""
-    n = len(A)
-    rows = [list(a) + list(b) for a, b in zip(A, B)]
-    for c in range(n):
-        k = next((i for i in range(c, n) if rows[i][c]), None)
-        if k is None:
-            raise ZeroDivisionError("singular matrix modulo p")
-        rows[c], rows[k] = rows[k], rows[c]
-        inv = pow(rows[c][c], -1, PRIME)
-        pivot = rows[c] = [x * inv % PRIME for x in rows[c]]
-        for i in range(n):
-            f = rows[i][c] if i != c else 0
-            if f:
-                rows[i] = [(a - f * b) % PRIME for a, b in zip(rows[i], pivot)]
-    return [r[n:] for r in rows]
-
-
 def _ints_mod_p(rows):
-    return [[ModP.lift(x).v for x in row] for row in rows]
+    return [[x.v if type(x) is ModP else ModP.lift(x).v for x in row] for row in rows]
 
 
 def _rank_mod_p(rows):
