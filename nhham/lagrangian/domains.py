@@ -414,6 +414,31 @@ class Program:
             return ("function", _FUNCTIONS[e.func], args)
         raise NotExact(f"{e.func} cannot be evaluated exactly")
 
+    @staticmethod
+    def apply(kind: str, data, operands: list, env: dict):
+        """One operation (``kind``, ``data`` of :attr:`ops`) on its operands' values: what
+        :meth:`run` does at each step (sums and products inline there, for speed), and
+        what :class:`~nhham.lagrangian.modular_program.ModularProgram` does where its
+        residues meet an angle or an exact rational."""
+        if kind in ("add", "mul"):
+            out = 0 if kind == "add" else 1
+            for x in operands:
+                out = out + x if kind == "add" else out * x
+            return out
+        if kind == "function":
+            return data(operands[0])
+        base = operands[0]
+        if isinstance(base, Angle):
+            base = base.value
+        if kind == "root":
+            radicand, k = data
+            if isinstance(base, Degree) and RADICANDS in env:
+                env[RADICANDS][radicand] = base
+            base = square_root(base)
+        else:
+            k = data
+        return base ** k if k >= 0 else _inverse(base ** (-k))
+
     def run(self, env: dict) -> list:
         """The values at ``env`` (as :func:`evaluate` gives them)."""
         values: list = []
@@ -433,20 +458,8 @@ class Program:
                 out = env[data]
             elif kind == "constant":
                 out = data
-            elif kind == "function":
-                out = data(values[args[0]])
             else:
-                base = values[args[0]]
-                if isinstance(base, Angle):
-                    base = base.value
-                if kind == "root":
-                    radicand, k = data
-                    if isinstance(base, Degree) and RADICANDS in env:
-                        env[RADICANDS][radicand] = base
-                    base = square_root(base)
-                else:
-                    k = data
-                out = base ** k if k >= 0 else _inverse(base ** (-k))
+                out = Program.apply(kind, data, [values[a] for a in args], env)
             push(out)
         return [values[i].value if isinstance(values[i], Angle) else values[i]
                 for i in self.outputs]

@@ -26,9 +26,7 @@ Examples
 
 from __future__ import annotations
 
-from sympy.external.gmpy import MPQ
-
-from nhham.lagrangian.domains import PRIME, Angle, ModP, NotExact, square_root
+from nhham.lagrangian.domains import PRIME, Angle, ModP, NotExact, Program
 
 __all__ = ["ModularProgram"]
 
@@ -72,7 +70,8 @@ class ModularProgram:
                     base = root
                 push(_power(base, k))
             else:   # an angle, an exact rational or a function: Program.run's arithmetic
-                push(_stored(_generic(kind, data, [_object(values[a]) for a in args])))
+                push(_stored(Program.apply(kind, data, [_object(values[a]) for a in args],
+                                            env)))
         return [values[i] if type(values[i]) is int else _residue(_object(values[i]))
                 for i in self.program.outputs]
 
@@ -105,28 +104,6 @@ def _object(value):
 def _residue(value) -> int:
     """An output as a residue: an Angle by its value (NotExact without one)."""
     return ModP.lift(value.value if isinstance(value, Angle) else value).v
-
-
-def _generic(kind, data, operands):
-    """One operation on Program.run's values, as Program.run computes it."""
-    if kind in ("add", "mul"):
-        out = 0 if kind == "add" else 1
-        for x in operands:
-            out = out + x if kind == "add" else out * x
-        return out
-    if kind == "function":
-        return data(operands[0])
-    base = operands[0]
-    if isinstance(base, Angle):
-        base = base.value
-    if kind == "root":
-        base, k = square_root(base), data[1]
-    else:
-        k = data
-    if k >= 0:
-        return base ** k
-    power = base ** (-k)
-    return power.inverse() if isinstance(power, ModP) else MPQ(1) / power
 
 
 def _power(base: int, k: int) -> int:
