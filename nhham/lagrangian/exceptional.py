@@ -315,22 +315,16 @@ class ExceptionalData:
         return vals
 
     @functools.cached_property
-    def _dmu(self) -> list:
-        """d mu_i (dmu[i][A][B] = d mu_iB/dq^A - d mu_iA/dq^B): formed once, every
-        evaluation of the Frobenius datum (at the values and at each shift) reads it."""
+    def _dmu_nonzero(self) -> list:
+        """d mu_i (d mu_i[A][B] = d mu_iB/dq^A - d mu_iA/dq^B) by its entries that are not
+        identically zero, per row A of each d mu_i: [(B, expression)]. Formed once (every
+        evaluation of the Frobenius datum, at the values and at each shift, reads it);
+        most entries are zero (a snake's mu_i involves its first i links only)."""
         system = self.system
         m, n, q = system.m, system.n, system.coordinates
         grads = [[jacobian_row(system.mu[i, A], q) for A in range(n)] for i in range(m)]
-        return [[[grads[i][B][A] - grads[i][A][B] for B in range(n)] for A in range(n)]
-                for i in range(m)]
-
-    @functools.cached_property
-    def _dmu_nonzero(self) -> list:
-        """The entries of :attr:`_dmu` that are not identically zero, per row A of each
-        d mu_i: [(B, expression)] (most are zero: a snake's mu_i involves its first i
-        links only, and the m n^2 entries were evaluated and converted one by one)."""
-        return [[[(B, e) for B, e in enumerate(row) if e != 0] for row in rows]
-                for rows in self._dmu]
+        return [[[(B, e) for B in range(n) if (e := grads[i][B][A] - grads[i][A][B]) != 0]
+                 for A in range(n)] for i in range(m)]
 
     def _dmu_at(self, K, env, cache) -> list:
         """d mu at one point in K: the nonzero entries evaluated, the others K's zero."""

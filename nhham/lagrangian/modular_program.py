@@ -61,15 +61,9 @@ class ModularProgram:
                 push(_stored(env[data]))
             elif kind == "constant":
                 push(_Exact(data))
-            elif kind in ("root", "power") and type(values[args[0]]) is int:
-                base, k = values[args[0]], data
-                if kind == "root":
-                    k, root = data[1], pow(base, (PRIME + 1) // 4, PRIME)
-                    if root * root % PRIME != base:
-                        raise ZeroDivisionError("not a square modulo p")
-                    base = root
-                push(_power(base, k))
-            else:   # an angle, an exact rational or a function: Program.run's arithmetic
+            elif kind == "power" and type(values[args[0]]) is int:
+                push(_power(values[args[0]], data))
+            else:   # an angle, an exact rational, a function, a root: Program.run's own
                 push(_stored(Program.apply(kind, data, [_object(values[a]) for a in args],
                                             env)))
         return [values[i] if type(values[i]) is int else _residue(_object(values[i]))

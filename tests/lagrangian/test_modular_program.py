@@ -87,3 +87,18 @@ def test_bicycle_rows_at_modular_points():
         assert got == want
         assert sum(map(bool, got)) > len(exprs) // 2   # not a comparison of zeros
         compared += 1
+
+
+def test_values_by_hand():
+    """x = 3, q = 0 (cos q = 1, sin q = 0), y = 2: x^2/2 + cos(2q) = 11/2, sin(q + y) needs
+    sin y (not an angle: NotExact), sqrt(y^2 x^2) = 6 or -6 (the root that is a square),
+    (x - 3)^-1 has no inverse."""
+    env = {x: ModP(3), y: ModP(2), q: Angle(ModP(0), ModP(1), ModP(0))}
+    assert ModularProgram(Program([x ** 2 / 2 + sp.cos(2 * q)])).run(env) == [
+        11 * pow(2, -1, PRIME) % PRIME]
+    with pytest.raises(NotExact):
+        ModularProgram(Program([sp.sin(q + y)])).run(env)
+    root, = ModularProgram(Program([sp.sqrt(y ** 2 * x ** 2)])).run(env)
+    assert root in (6, PRIME - 6)
+    with pytest.raises(ZeroDivisionError):
+        ModularProgram(Program([1 / (x - 3)])).run(env)

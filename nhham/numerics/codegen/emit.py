@@ -127,8 +127,8 @@ def code_digest() -> str:
 
 #: ``from nhham.a.b import x, y`` and ``import nhham.a.b``, anywhere in a line (imports
 #: inside functions count: the geometry imports most of what it uses where it uses it).
-_IMPORT = re.compile(r"^[ \t]*(?:from[ \t]+(nhham(?:\.\w+)*)[ \t]+import[ \t]+"
-                     r"(\([^)]*\)|[\w \t,]*)|import[ \t]+(nhham(?:\.\w+)*))", re.MULTILINE)
+_IMPORT = re.compile(r"^[ \t]*(?:from[ \t]+(nhham(?:\.\w+)*)[ \t]+import\b"
+                     r"|import[ \t]+(nhham(?:\.\w+)*))", re.MULTILINE)
 
 
 def generator_files() -> list:
@@ -144,14 +144,12 @@ def generator_files() -> list:
             continue
         seen.add(f)
         for m in _IMPORT.finditer(f.read_text(encoding="utf-8")):
-            parts = (m.group(1) or m.group(3)).split(".")[1:]
+            parts = (m.group(1) or m.group(2)).split(".")[1:]
             base = package.joinpath(*parts)
             if base.with_suffix(".py").is_file():
                 todo.append(base.with_suffix(".py"))
             elif base.is_dir():
                 todo += [p for p in base.rglob("*.py") if "__pycache__" not in p.parts]
-                todo += [base / f"{n}.py" for n in (m.group(2) or "").strip("()").replace(",", " ").split()
-                         if (base / f"{n}.py").is_file()]
     runtime = [p for p in (package / "numerics" / "c").iterdir() if p.suffix in (".c", ".h")]
     return sorted(seen | set(runtime))
 
