@@ -86,3 +86,29 @@ def test_complex_kernels_build_with_sympy_s_constants():
     _, F, *_ = cf.pieces(np.array([[0.3 + 1e-30j]]), np.array([[0.0 + 0j]]))
     assert abs(F[0, 0].imag / 1e-30 - (-2 * np.pi)) < 1e-12   # dF/dx, F = -V'(x)
     assert abs(F[0, 0].real - (-(2 * np.pi * 0.3 + np.e))) < 1e-12
+
+
+def test_complex_kernels_are_compiled_at_O0_with_the_results_of_O2(monkeypatch):
+    """The complex kernels' level (-O0: GCC's register allocation at -O2 takes 18 s on the
+    bicycle's) changes no output bit: IEEE arithmetic at either level."""
+    from nhham.numerics.codegen.build import OPTIMIZE, OPTIMIZE_COMPLEX, Compilation, build
+    from nhham.numerics.codegen.cache import CompileCache
+    from nhham.numerics.kernels import ComplexKernels
+
+    monkeypatch.delenv("NHHAM_CFLAGS", raising=False)   # the suite's own -O0
+    model = numeric_model(_system())
+    assert (OPTIMIZE, OPTIMIZE_COMPLEX) == ("-O2", "-O0")
+    cache = CompileCache.open(None)
+    kernels = {}
+    for level in ("-O0", "-O2"):
+        job = Compilation.of(model.c_complex_source, tag="complex", optimize=level)
+        assert job.flags[0] == level and not any(f.startswith("-O") for f in job.flags[1:])
+        kernels[level] = ComplexKernels.load(build(cache, job), model.layout)
+    rng = np.random.default_rng(5)
+    Y = rng.uniform(-1, 1, (64, 6)) + 1j * rng.uniform(-1e-3, 1e-3, (64, 6))
+    P = np.array(model.parameter_values, dtype=float)
+    n, m, k = (model.layout[key] for key in "nmk")
+    read = n * n + n + m * n + 2 * m + k   # W, F, mu, drift, h, g (ComplexField.pieces)
+    a, b = (kernels[level].complex_batch("saddle", Y, P)[:, :read]
+            for level in ("-O0", "-O2"))
+    assert np.isfinite(a).all() and np.array_equal(a, b)

@@ -38,7 +38,14 @@ from nhham.numerics.kernels import CompiledRHS, ComplexKernels
 __all__ = ["c_compiler", "compile_c", "complex_kernels", "build_library", "find_library", "load_library",
            "pyext_flags", "Compilation", "LibraryBuild", "CompilerStopped"]
 
-_FLAGS = ("-O2", "-fno-math-errno", "-fcx-limited-range", "-shared", "-fPIC", "-std=c99")
+_FLAGS = ("-fno-math-errno", "-fcx-limited-range", "-shared", "-fPIC", "-std=c99")
+#: The optimisation level of the model's library (the integrators' inner loop).
+OPTIMIZE = "-O2"
+#: ... and of the complex-step kernels. GCC's register allocator spends 13-18 s at -O1 or
+#: -O2 on the bicycle's straight-line complex code (65 % of it assigning hard registers)
+#: and 0.6 s at -O0; the kernel runs 7.7 instead of 5.8 us a state, bit for bit the same
+#: (no fast-math: IEEE arithmetic at every level).
+OPTIMIZE_COMPLEX = "-O0"
 _TIMEOUT_S = 300
 
 
@@ -79,7 +86,8 @@ class Compilation:
     source : str
     compiler : str
     flags : tuple of str
-        The portable defaults, then ``$NHHAM_CFLAGS``, then the caller's.
+        The optimisation level, the portable defaults, then ``$NHHAM_CFLAGS``, then the
+        caller's (a later ``-O`` wins).
     key : str
         Hash of the source, compiler, flags, tag, platform and the cache format.
     extension : bool
@@ -93,8 +101,9 @@ class Compilation:
     extension: bool = False
 
     @classmethod
-    def of(cls, source: str, flags=(), tag: str = "", extension: bool = False):
-        """The compilation of ``source`` with the system compiler.
+    def of(cls, source: str, flags=(), tag: str = "", extension: bool = False,
+           optimize: str = OPTIMIZE):
+        """The compilation of ``source`` with the system compiler, at ``optimize``.
 
         Raises
         ------
@@ -106,7 +115,7 @@ class Compilation:
             why = "NHHAM_NO_CC is set" if os.environ.get("NHHAM_NO_CC") else \
                 "set CC, or install one"
             raise ComputationError(f"no C compiler found ({why})")
-        allflags = (*_FLAGS, *os.environ.get("NHHAM_CFLAGS", "").split(), *flags)
+        allflags = (optimize, *_FLAGS, *os.environ.get("NHHAM_CFLAGS", "").split(), *flags)
         parts = [source, cc, *allflags, tag, sys.platform, os.uname().machine, CACHE_FORMAT]
         key = hashlib.sha256("\0".join(parts).encode()).hexdigest()[:20]
         return cls(source, cc, allflags, key, extension)
@@ -344,11 +353,10 @@ def complex_kernels(model, build_now: bool = True) -> ComplexKernels | None:
     continuation), runs on numpy, no compiler is available, or they are not built and
     ``build_now`` is False: numpy then evaluates the complex step.
 
-    Only the complex step needs them, so the model's own library does not carry them:
-    their long straight-line complex code takes a C compiler several times longer than
-    the whole real library (the bicycle: 13 s against 3 s). A study, which evaluates
-    thousands of states, builds them (once: the cache keeps them); one linearisation,
-    a few evaluations, uses them when they are there and numpy otherwise.
+    Only the complex step needs them, so the model's own library does not carry them,
+    and they are compiled at :data:`OPTIMIZE_COMPLEX`. A study, which evaluates thousands
+    of states, builds them (once: the cache keeps them); one linearisation, a few
+    evaluations, uses them when they are there and numpy otherwise.
     """
     source = model.c_complex_source
     if not source or (model.compiled is None and model.pending is None):
@@ -360,7 +368,7 @@ def complex_kernels(model, build_now: bool = True) -> ComplexKernels | None:
         problems: list = []
         try:
             cache = CompileCache.open(None)
-            job = Compilation.of(source, tag="complex")
+            job = Compilation.of(source, tag="complex", optimize=OPTIMIZE_COMPLEX)
             path = build(cache, job, problems) if build_now else cache.lookup(job.key,
                                                                                problems)
             if path is None:   # not built yet: numpy now, perhaps compiled by a study
