@@ -4,6 +4,7 @@
   become 0);
 - :func:`tidy`: :func:`cancel`, then a normal form modulo sin^2 + cos^2 = 1
   when sines and cosines remain (kept only when shorter);
+- :func:`determinant`: Berkowitz's, for the callers that cancel it;
 - :func:`solve_linear`: A^{-1} B for a small square A of functions, never
   an explicit symbolic inverse of anything large;
 - :func:`block_inverse`: the inverse of a small block (closed forms for 1x1
@@ -20,14 +21,15 @@ import math
 from typing import Callable
 
 import sympy as sp
+from sympy.matrices.utilities import dotprodsimp
 from sympy.polys.rings import sring
 
 from nhham.errors import InputError
 from nhham.system.expressions import short
 
-__all__ = ["cancel", "tidy", "tidy_light", "trig_normal", "solve_linear", "block_inverse",
-           "guard_closed_form", "CLOSED_FORM_OPS", "ring_fraction", "normal_form", "trig_reduce",
-           "solve_for_coordinates", "defined_where"]
+__all__ = ["cancel", "determinant", "tidy", "tidy_light", "trig_normal", "solve_linear",
+           "block_inverse", "guard_closed_form", "CLOSED_FORM_OPS", "ring_fraction",
+           "normal_form", "trig_reduce", "solve_for_coordinates", "defined_where"]
 
 #: A symbolic solve with an m x m matrix (m >= 2) of more operations than this is refused
 #: unless asked for: the car with a trailer (n = 4, C of 547 operations) takes 30 s, the
@@ -52,6 +54,23 @@ def cancel(expr) -> sp.Expr:
         return sp.cancel(expr)
     except (sp.PolynomialError, TypeError):  # pragma: no cover - exotic functions
         return sp.expand(expr)
+
+
+def determinant(A: sp.Matrix) -> sp.Expr:
+    """det A by Berkowitz's algorithm, without sympy's simplification of every product
+    on the way (``dotprodsimp``: half the time of the snakeboard's full-rank proofs at
+    its values). The caller brings the result to a normal form (:func:`cancel`), which is
+    the same whatever the route.
+
+    Examples
+    --------
+    >>> import sympy as sp
+    >>> a, b = sp.symbols("a b")
+    >>> cancel(determinant(sp.Matrix([[a, b], [b / a, 1]])))
+    (a**2 - b**2)/a
+    """
+    with dotprodsimp(False):
+        return A.det(method="berkowitz")
 
 
 def tidy(expr) -> sp.Expr:

@@ -19,7 +19,7 @@ from typing import cast
 import sympy as sp
 
 from nhham.errors import ComputationError
-from nhham.lagrangian.algebra import cancel
+from nhham.lagrangian.algebra import cancel, determinant
 from nhham.lagrangian.decision import Decision
 from nhham.lagrangian.domains import Degree, evaluate, minor_degree
 from nhham.lagrangian.linalg import exact_rank
@@ -190,7 +190,7 @@ def exact_full_rank(manifold, reduced, size: int) -> Decision | None:
         return None
     square = reduced if reduced.rows == reduced.cols else (
         reduced * reduced.T if reduced.rows < reduced.cols else reduced.T * reduced)
-    det = cancel(square.det(method="berkowitz"))
+    det = cancel(determinant(square))
     verdict, warning = ((False, None) if det.is_number and det != 0
                         else manifold.exact_zero_test(det))
     if verdict is not False:
@@ -216,7 +216,7 @@ def rank_certificate(manifold, reduced, sampled: Decision, size: int) -> Decisio
     except ComputationError:
         return None
     B = reduced.extract(rows, cols)
-    det = cancel(B.det(method="berkowitz"))
+    det = cancel(determinant(B))
     verdict, warning = ((False, None) if det.is_number and det != 0
                         else manifold.exact_zero_test(det))
     if verdict is not False:
