@@ -335,9 +335,12 @@ def implicit_data(G) -> dict:
     entries of moderate size simplified for display)."""
     system = G.system
     group = system.velocities
+    seen: dict = {}   # W is symmetric: each entry above the diagonal is shown twice
 
     def shown(e):
-        return expr_text(display_form(e, group, limit=IMPLICIT_DISPLAY_LIMIT))
+        if e not in seen:
+            seen[e] = expr_text(display_form(e, group, limit=IMPLICIT_DISPLAY_LIMIT))
+        return seen[e]
 
     rhs = -G.drift if system.m else sp.zeros(0, 1)
     W, mu = G.hessian, system.mu
