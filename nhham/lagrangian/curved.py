@@ -330,17 +330,50 @@ def _chart(constraints, dependent, kinds) -> CurvedChart:
     for eq in equations:
         num = sp.fraction(sp.together(eq))[0]
         try:
-            poly = sp.Poly(sp.expand(num), *gens)
+            poly = _coefficients(sp.expand(num), gens)
         except sp.PolynomialError as exc:
             raise NotExact(f"not polynomial in {', '.join(q.name for q in dependent)}: "
                            f"{exc}") from exc
-        if any(s in gens for c in poly.coeffs() for s in c.free_symbols):
-            raise NotExact("a coefficient still depends on an unknown")
-        polys.append(dict(zip(poly.monoms(), poly.coeffs())))
-        degrees.append(poly.total_degree())
+        polys.append(poly)
+        degrees.append(max((sum(m) for m in poly), default=0))
     return CurvedChart(tuple(constraints), tuple(dependent),
                        tuple(k == "angle" for k in kinds), tuple(gens), tuple(polys),
                        tuple(degrees))
+
+
+def _coefficients(expanded, gens) -> dict:
+    """{exponents: coefficient} of an expanded polynomial in ``gens`` whose coefficients
+    are expressions in other symbols, monomials in lex order (as :class:`sympy.Poly`'s).
+
+    Read off the terms: a Poly over the expression domain simplifies every coefficient on
+    each operation (a third of a chart's time on the bicycle). Terms that sum to a zero
+    coefficient were combined by the expansion already.
+
+    Raises
+    ------
+    sympy.PolynomialError
+        A term is not a coefficient times a monomial in ``gens``.
+    """
+    index = {g: i for i, g in enumerate(gens)}
+    wanted = set(gens)
+    terms: dict = {}
+    for term in sp.Add.make_args(expanded):
+        if term == 0:
+            continue
+        coeff, monomial = term.as_independent(*gens, as_Add=False)
+        exponents = [0] * len(gens)
+        for base, k in monomial.as_powers_dict().items():
+            if base == 1:
+                continue
+            if base not in index or not (k.is_Integer and k > 0):
+                raise sp.PolynomialError(f"{base**k} contains an element of the set of "
+                                         f"generators.")
+            exponents[index[base]] += int(k)
+        if coeff.free_symbols & wanted:
+            raise sp.PolynomialError(f"{coeff} contains an element of the set of generators.")
+        terms.setdefault(tuple(exponents), []).append(coeff)
+    out = {m: sp.Add(*c) for m, c in terms.items()}
+    return {m: out[m] for m in sorted(out, reverse=True) if out[m] != 0}
 
 
 class _Rewrite:

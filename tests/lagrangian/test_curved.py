@@ -244,3 +244,29 @@ def test_the_rank_of_C_on_the_bicycles_M1_is_proved_without_a_symbolic_reduction
     decision = G.constraint_rank
     assert (decision.value, decision.method, decision.error_bound) == (5, "exact", 0.0)
     assert decision.scope.startswith("M is curved") and G.regular
+
+
+def test_chart_equations_are_read_off_their_terms_as_sympy_s_poly_reads_them():
+    """The chart's {exponents: coefficient} (read term by term) against sympy.Poly over
+    the expression domain: the same monomials in the same order, equal coefficients, and
+    the same refusal of a term that is not a monomial in the unknowns."""
+    from nhham.lagrangian.curved import _coefficients
+
+    t, w, a, x = sp.symbols("t w a x")
+    cases = [sp.expand((1 + t ** 2) ** 2 * sp.sin(x) * a - 3 * t * w ** 2 + w * sp.cos(x)
+                       - a * sp.sin(x) + 7),
+             sp.expand((a * t - sp.sqrt(2) * w) ** 3 + x * t),
+             a * sp.sin(x), sp.Integer(0)]
+    for e in cases:
+        got = _coefficients(e, [t, w])
+        poly = sp.Poly(e, t, w)
+        want = {m: c for m, c in zip(poly.monoms(), poly.coeffs()) if c != 0}
+        assert list(got) == list(want), e
+        assert all(sp.expand(got[m] - want[m]) == 0 for m in want), e
+    # t*x - t*x: the coefficient of t cancels, no zero entry is kept
+    assert _coefficients(sp.expand(t * (x + 1) - t * x), [t]) == {(1,): 1}
+    for bad in (sp.sin(t) * a + t, a / t + 1, sp.sqrt(t) + 1):
+        with pytest.raises(sp.PolynomialError):
+            sp.Poly(bad, t, w)
+        with pytest.raises(sp.PolynomialError):
+            _coefficients(sp.expand(bad), [t, w])
