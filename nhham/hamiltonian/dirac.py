@@ -5,7 +5,8 @@ projected field P(X_H) on M_f (Section 6 of the paper).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
+import functools
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 import sympy as sp
@@ -101,7 +102,8 @@ class DiracProjectedReport:
         X_D - X reduced on M_f, in (q, p) (None in sampled mode).
     dirac_field, projected_field : sympy.Matrix, shape (2n, 1), or None
         X_D = (z -> {z, H}_D) and X = X_H + lambda^j Z_j^H on M_f (None in
-        sampled mode).
+        sampled mode), brought to normal form when first read: the comparison needs
+        only their difference (two thirds of its cancellations went into them).
     decisions : tuple of Decision
         Per component of the difference: does it vanish on M_f.
     max_abs_difference : float
@@ -119,14 +121,26 @@ class DiracProjectedReport:
 
     equal: bool
     difference: sp.Matrix | None
-    dirac_field: sp.Matrix | None
-    projected_field: sp.Matrix | None
     decisions: tuple
     max_abs_difference: float
     samples: int
     notes: tuple
     classes: ConstraintClasses
     components: tuple = ()
+    #: (X_H, the Dirac correction, the multipliers' term) on M_f, per variable.
+    parts: tuple | None = field(default=None, repr=False, compare=False)
+
+    @functools.cached_property
+    def dirac_field(self) -> sp.Matrix | None:
+        if self.parts is None:
+            return None
+        return sp.Matrix([cancel(x - c) for x, c, _ in zip(*self.parts)])
+
+    @functools.cached_property
+    def projected_field(self) -> sp.Matrix | None:
+        if self.parts is None:
+            return None
+        return sp.Matrix([cancel(x + f) for x, _, f in zip(*self.parts)])
 
     def describe(self) -> str:
         if self.equal:
@@ -232,7 +246,7 @@ def dirac_vs_projected(system, *, precision=None, samples=6, seed=SEED,
         raise ComputationError(
             "dirac_vs_projected: C^H is singular on M_1; the projected field is a family "
             "(see nhham.lagrangian.algorithm) and the comparison is defined for regular systems only")
-    XD, X, diff = _fields_on_Mf(side, classes)
+    parts, diff = _fields_on_Mf(side, classes)
     _, _, Mf = _exact_parts(classes, "dirac_vs_projected")
     decisions = tuple(Mf.vanishes(d, tol=tol) for d in diff)
     reduced = sp.Matrix([0 if d.value else e for d, e in zip(decisions, diff)])
@@ -249,10 +263,10 @@ def dirac_vs_projected(system, *, precision=None, samples=6, seed=SEED,
     sampled = [S for S in sampled if np.all(np.isfinite(S))]
     worst = max((float(np.max(np.abs(S))) for S in sampled), default=0.0)
     return DiracProjectedReport(
-        equal=all(d.value for d in decisions), difference=reduced, dirac_field=XD,
-        projected_field=X, decisions=decisions, max_abs_difference=worst,
-        samples=len(sampled), notes=notes, classes=classes,
-        components=tuple(str(z) for z, e in zip(side.variables, reduced) if e != 0))
+        equal=all(d.value for d in decisions), difference=reduced, decisions=decisions,
+        max_abs_difference=worst, samples=len(sampled), notes=notes, classes=classes,
+        components=tuple(str(z) for z, e in zip(side.variables, reduced) if e != 0),
+        parts=parts)
 
 
 def _at_parameter_values(Mf, reduced, tol, variables):
@@ -327,7 +341,7 @@ def _dirac_vs_projected_at_points(side, classes, policy):
         return None
     decision = verdict.decision
     return DiracProjectedReport(
-        equal=bool(decision.value), difference=None, dirac_field=None, projected_field=None,
+        equal=bool(decision.value), difference=None,
         decisions=(decision,), max_abs_difference=math.nan, samples=decision.samples,
         notes=_gauge_note(classes), classes=classes, components=verdict.components)
 
@@ -367,14 +381,15 @@ def _dirac_vs_projected_sampled(side, classes, precision, samples, seed, tol):
         f"of M_f, tolerance {tol_:g}", precision=be.label, samples=used, max_abs=worst,
         point_residual=resid)
     return DiracProjectedReport(
-        equal=equal, difference=None, dirac_field=None, projected_field=None,
+        equal=equal, difference=None,
         decisions=(decision,), max_abs_difference=worst, samples=used,
         notes=_gauge_note(classes), classes=classes,
         components=() if equal else tuple(str(side.variables[i]) for i in sorted(above)))
 
 
 def _fields_on_Mf(side: HamiltonianSide, classes: ConstraintClasses):
-    """X_D, X and X_D - X on M_f, assembled from factors reduced on M_f first.
+    """((X_H, correction, multipliers' term) per variable, X_D - X) on M_f, assembled
+    from factors reduced on M_f first (X_D = X_H - correction, X = X_H + the term).
 
     {z, H}_D = {z, H} - {z, chi_a} (B^{-1})^{ab} {chi_b, H} and
     X = X_H + Z_j^H lambda^j; reducing the small factors before multiplying
@@ -400,7 +415,7 @@ def _fields_on_Mf(side: HamiltonianSide, classes: ConstraintClasses):
     XH = [Mf.reduce(e) for e in side.X_H]
     lam = [Mf.reduce(e) for e in side.multipliers]
     Z = side.vertical_fields
-    XD, X, diff = [], [], []
+    corrections, forces, diff = [], [], []
     for i, z in enumerate(side.variables):
         t = [Mf.reduce(alg.bracket(z, c)) for c in chi]
         corr = sp.S.Zero
@@ -412,7 +427,7 @@ def _fields_on_Mf(side: HamiltonianSide, classes: ConstraintClasses):
                     if inv[ia, ib] != 0 and s[b] != 0:
                         corr += t[a] * inv[ia, ib] * s[b]
         force = sum((Z[j, i] * lam[j] for j in range(side.m)), sp.S.Zero)
-        XD.append(cancel(XH[i] - corr))
-        X.append(cancel(XH[i] + force))
+        corrections.append(corr)
+        forces.append(force)
         diff.append(cancel(-corr - force))
-    return sp.Matrix(XD), sp.Matrix(X), sp.Matrix(diff)
+    return (tuple(XH), tuple(corrections), tuple(forces)), sp.Matrix(diff)

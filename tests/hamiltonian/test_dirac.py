@@ -62,6 +62,24 @@ def test_dirac_flow_equals_projected_field_for_the_pendulum():
     assert all(d.value for d in report.decisions)
 
 
+def test_the_two_fields_are_formed_when_read_and_differ_by_the_difference():
+    """X_D and X (formed on first reading) differ by the report's X_D - X on M_f; the
+    sleigh's one constraint is first class, so X_D = X_H there; the pendulum's X is the
+    side's projected field."""
+    for system, which in ((pendulum(), "projected"), (sleigh(), "dirac")):
+        report = dirac_vs_projected(system)
+        assert "dirac_field" not in vars(report)   # not formed until read
+        M, side = report.classes.manifold, report.classes.side
+        XD, X = report.dirac_field, report.projected_field
+        assert XD.shape == X.shape == (2 * len(side.coordinates), 1)
+        for d, x, diff in zip(XD, X, report.difference):
+            assert M.vanishes(d - x - diff).value
+        pairs = zip(X, side.projected_field) if which == "projected" else zip(XD, side.X_H)
+        for mine, theirs in pairs:
+            assert M.vanishes(mine - theirs).value
+    assert dirac_vs_projected(sleigh(), method="sampled").dirac_field is None
+
+
 def test_dirac_flow_differs_on_the_chaplygin_sleigh():
     s = sleigh()
     report = dirac_vs_projected(s)
