@@ -52,12 +52,14 @@ from nhham.lagrangian.domains import (
 from nhham.lagrangian.linalg import exact_rank, exact_solve
 from nhham.system.expressions import derivative, short
 from nhham.system.derivative import symbols_in
+from nhham.system.velocities import velocity_polynomial
 
 __all__ = [
     "ExactPoint",
     "PointSampler",
     "ParameterFieldSampler",
     "exact_sampler",
+    "velocity_free_part",
     "circle_parameters",
     "jacobian_row",
     "eliminate_coordinates",
@@ -130,8 +132,11 @@ class PointSampler:
         self.rng = random.Random(seed)
         affine = tuple(sp.sympify(e) for e in affine)
         vels = self.velocities
-        nonlinear = [e for e in affine
-                     if any(c.free_symbols & set(vels) for c in jacobian_row(e, vels))]
+        # mu (given: the system's one-forms, in the order of ``affine``) spares the
+        # derivatives; a Chetaev constraint's row still depends on v
+        rows = mu if mu is not None else [jacobian_row(e, vels) for e in affine]
+        nonlinear = [e for e, row in zip(affine, rows)
+                     if any(c.free_symbols & set(vels) for c in row)]
         if nonlinear and not modular:
             raise NotExact(f"the velocity constraint {short(nonlinear[0])} = 0 is not affine "
                            f"(Chetaev): M_1 is curved in the velocities, with points over "
@@ -143,7 +148,7 @@ class PointSampler:
                                           affine if nonlinear else (), vels)
         self.affine = () if nonlinear else affine
         self.mu = mu if mu is not None else [jacobian_row(e, vels) for e in self.affine]
-        self.h = [e.xreplace({v: 0 for v in vels}) for e in self.affine]
+        self.h = [velocity_free_part(e, vels) for e in self.affine]
         self.dependent: tuple | None = None
         self.rejected = 0
         self.modular = modular
@@ -359,6 +364,25 @@ def exact_sampler(manifold, seed: int, *, modular: bool = False) -> PointSampler
     return PointSampler(system.coordinates, system.velocities, system.parameters, values,
                         solved, affine, seed, modular=modular,
                         circle=circle_parameters(system), context=(system.lagrangian,))
+
+
+def velocity_free_part(expr, velocities) -> sp.Expr:
+    """h = phi at v = 0: the velocity-free terms of phi read off in one pass when phi is
+    affine in v (:func:`~nhham.system.velocities.velocity_polynomial`), else by setting
+    v = 0. The sampler evaluates it at exact points only: substituting 0 built every
+    subexpression anew (1.2 s on the 64-link snake's constraints, against 0.25 s).
+
+    Examples
+    --------
+    >>> import sympy as sp
+    >>> q, qd, a = sp.symbols("q q_dot a")
+    >>> velocity_free_part(sp.sin(q) * (a + qd) - 1, [qd])
+    a*sin(q) - 1
+    """
+    poly = velocity_polynomial(expr, velocities, 1)
+    if poly is None:
+        return expr.xreplace({v: sp.S.Zero for v in velocities})
+    return poly.get((), sp.S.Zero)
 
 
 def _split(system, constraints):
