@@ -131,3 +131,26 @@ def test_a_rank_drop_on_the_bicycle_contact_is_found_at_its_points():
     assert 0 < drop.error_bound < 1e-9 and "component" in drop.scope
     full = decide(Rank(sp.Matrix([[g + sp.Rational(3, 2), 1], [1, 1]])), Q1, Q1.policy)
     assert (full.value, full.method, full.error_bound) == (2, "exact", 0.0)
+
+
+def test_a_rank_deficient_at_random_points_of_F_p_is_not_cancelled():
+    """The relativistic particle's kind of matrix: rows proportional through a radical
+    (rank 1 of 2 everywhere), its determinant cancels to 0 only after seconds; rank 1
+    at random points over F_p says so first. A full-rank matrix of angles, and one with
+    a function F_p has no value of (exp), are not called deficient."""
+    from nhham.lagrangian.quantities import _deficient_at_random_points
+
+    x, y, v, w = sp.symbols("x y v w")
+    root = sp.sqrt(v ** 2 - w ** 2 + x ** 2)
+    proportional = sp.Matrix([[v / root, -w / root, x * sp.sin(y)],
+                              [v * root, -w * root, x * sp.sin(y) * root ** 2]])
+    assert sp.simplify(proportional.row(1) - root ** 2 * proportional.row(0)) == \
+        sp.zeros(1, 3)
+    assert _deficient_at_random_points(proportional, 2)
+    full = sp.Matrix([[sp.cos(y), sp.sin(y), x], [-sp.sin(y), sp.cos(y), v * root]])
+    assert not _deficient_at_random_points(full, 2)
+    assert not _deficient_at_random_points(sp.Matrix([[sp.exp(x), 0], [0, sp.exp(x)]]), 2)
+    # a polynomial matrix of rank 1 whose rows differ by a factor sin^2 + cos^2 - 1 + 2
+    trig = sp.Matrix([[x, y], [x * (sp.sin(y) ** 2 + sp.cos(y) ** 2 + 1),
+                               2 * y]])
+    assert _deficient_at_random_points(trig, 2)
