@@ -23,7 +23,8 @@ from scipy.optimize import brentq
 from nhham import InconsistentInitialDataError
 from nhham.numerics.codegen import numeric_model
 from nhham.numerics.chart import BATCH_STATES
-from nhham.numerics.linearization import linearize, linearize_many
+from nhham.numerics.codegen.build import complex_kernels
+from nhham.numerics.linearization import BUILD_COMPLEX_FROM, linearize, linearize_many
 from nhham.numerics.steady_sweep import sweep_steady
 from nhham.system.models import chaplygin_sleigh, pendulum_cartesian
 
@@ -79,6 +80,9 @@ def test_many_speeds_in_one_batch_are_the_single_linearisations(bicycle):
     first = linearize(models[0], states[0])
     many = linearize_many(models, states, first.chart,
                           families=[scene.steady.family(m.parameters) for m in models])
+    # over BUILD_COMPLEX_FROM states the complex-step kernels were compiled for them
+    assert len(speeds) >= BUILD_COMPLEX_FROM and model.compiled is not None
+    assert complex_kernels(model, build_now=False) is not None
     for v, lin in zip(speeds, many):
         assert matched(lin.eigenvalues, benchmark_eigenvalues(v)) < 1e-8, v
     for i in (0, BATCH_STATES - 1, BATCH_STATES, len(speeds) - 1):

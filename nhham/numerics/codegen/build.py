@@ -355,8 +355,9 @@ def complex_kernels(model, build_now: bool = True) -> ComplexKernels | None:
 
     Only the complex step needs them, so the model's own library does not carry them,
     and they are compiled at :data:`OPTIMIZE_COMPLEX`. A study, which evaluates thousands
-    of states, builds them (once: the cache keeps them); one linearisation, a few
-    evaluations, uses them when they are there and numpy otherwise.
+    of states, and ``linearize_many`` over many states build them (once: the cache keeps
+    them); one linearisation, a few evaluations, uses them when they are there and numpy
+    otherwise.
     """
     source = model.c_complex_source
     if not source or (model.compiled is None and model.pending is None):
