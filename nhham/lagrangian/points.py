@@ -52,14 +52,13 @@ from nhham.lagrangian.domains import (
 from nhham.lagrangian.linalg import exact_rank, exact_solve
 from nhham.system.expressions import derivative, short
 from nhham.system.derivative import symbols_in
-from nhham.system.velocities import velocity_polynomial
+from nhham.system.velocities import velocity_free_part
 
 __all__ = [
     "ExactPoint",
     "PointSampler",
     "ParameterFieldSampler",
     "exact_sampler",
-    "velocity_free_part",
     "circle_parameters",
     "jacobian_row",
     "eliminate_coordinates",
@@ -364,25 +363,6 @@ def exact_sampler(manifold, seed: int, *, modular: bool = False) -> PointSampler
     return PointSampler(system.coordinates, system.velocities, system.parameters, values,
                         solved, affine, seed, modular=modular,
                         circle=circle_parameters(system), context=(system.lagrangian,))
-
-
-def velocity_free_part(expr, velocities) -> sp.Expr:
-    """h = phi at v = 0: the velocity-free terms of phi read off in one pass when phi is
-    affine in v (:func:`~nhham.system.velocities.velocity_polynomial`), else by setting
-    v = 0. The sampler evaluates it at exact points only: substituting 0 built every
-    subexpression anew (1.2 s on the 64-link snake's constraints, against 0.25 s).
-
-    Examples
-    --------
-    >>> import sympy as sp
-    >>> q, qd, a = sp.symbols("q q_dot a")
-    >>> velocity_free_part(sp.sin(q) * (a + qd) - 1, [qd])
-    a*sin(q) - 1
-    """
-    poly = velocity_polynomial(expr, velocities, 1)
-    if poly is None:
-        return expr.xreplace({v: sp.S.Zero for v in velocities})
-    return poly.get((), sp.S.Zero)
 
 
 def _split(system, constraints):

@@ -45,7 +45,8 @@ from nhham.system.sampled_checks import (
 )
 from nhham.system.screening import coordinate_symbols, expression_problems
 from nhham.system.chetaev import AFFINE, constraint_kind, degenerate_reactions
-from nhham.system.velocities import QuadraticParts, one_forms, quadratic_parts
+from nhham.system.velocities import (QuadraticParts, one_forms, quadratic_parts,
+                                     velocity_free_part)
 
 __all__ = ["System", "DroppedConstraint"]
 
@@ -460,8 +461,8 @@ class System:
     @cached_property
     def h(self) -> sp.Matrix:
         """The m-vector h_i(q) = phi_i at v = 0."""
-        zero = {v: sp.S.Zero for v in self.velocities}   # symbols: xreplace (subs is slow)
-        return sp.Matrix([f.xreplace(zero) for f in self.phi]) if self.phi else sp.zeros(0, 1)
+        rows = [velocity_free_part(f, self.velocities) for f in self.phi]
+        return sp.Matrix(rows) if rows else sp.zeros(0, 1)
 
     @cached_property
     def h_vanishes(self) -> tuple[bool, ...]:

@@ -14,7 +14,8 @@ from dataclasses import dataclass
 import sympy as sp
 
 
-__all__ = ["QuadraticParts", "velocity_polynomial", "quadratic_parts", "one_forms", "non_affine_terms"]
+__all__ = ["QuadraticParts", "velocity_polynomial", "velocity_free_part", "quadratic_parts",
+           "one_forms", "non_affine_terms"]
 
 
 @dataclass(frozen=True)
@@ -150,6 +151,25 @@ def quadratic_parts(lagrangian, velocities) -> QuadraticParts | None:
         else:
             V = -c
     return QuadraticParts(sp.ImmutableMatrix(W), tuple(b), V)
+
+
+def velocity_free_part(expr, velocities) -> sp.Expr:
+    """h = phi at v = 0: the velocity-free terms of phi read off in one pass when phi is
+    affine in v (:func:`velocity_polynomial`, memoised), else by setting v = 0.
+    Substituting 0 builds every subexpression anew: 1.2 s on the 64-link snake's
+    constraints, against 0.25 s.
+
+    Examples
+    --------
+    >>> import sympy as sp
+    >>> q, qd, a = sp.symbols("q q_dot a")
+    >>> velocity_free_part(sp.sin(q) * (a + qd) - 1, [qd])
+    a*sin(q) - 1
+    """
+    poly = velocity_polynomial(expr, velocities, 1)
+    if poly is None:
+        return expr.xreplace({v: sp.S.Zero for v in velocities})
+    return poly.get((), sp.S.Zero)
 
 
 def one_forms(rows, vels) -> sp.Matrix:

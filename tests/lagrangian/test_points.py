@@ -41,17 +41,3 @@ def test_parameter_values_are_taken_as_exact_decimals():
     sampler = PointSampler((q1,), (), (m,), {m: 0.1}, (), (), seed=1)
     assert sampler.point().env[m] == MPQ(1, 10)
 
-
-def test_velocity_free_part_is_phi_at_v_zero():
-    """h = phi(q, 0) read off the terms, against substituting v = 0: affine constraints
-    (the snake's, a sleigh's with an offset), and a Chetaev one (v^2: substituted)."""
-    from nhham.lagrangian.points import velocity_free_part
-
-    q, r, qd, rd, a = sp.symbols("q r q_dot r_dot a")
-    vels = [qd, rd]
-    for phi in (sp.sin(q - r) * qd + a * sp.cos(r) * (rd - qd),
-                (a + qd) * sp.sin(q) - sp.cos(r) * (1 - rd) + a ** 2,
-                qd ** 2 + rd ** 2 - a * sp.sin(q), sp.Integer(3)):
-        got = velocity_free_part(phi, vels)
-        assert sp.expand(got - phi.subs({qd: 0, rd: 0})) == 0, phi
-        assert not got.free_symbols & set(vels)

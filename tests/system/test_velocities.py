@@ -5,7 +5,7 @@ written by hand, and what is not a polynomial of degree 2."""
 import pytest
 import sympy as sp
 
-from nhham.system.velocities import quadratic_parts, velocity_polynomial
+from nhham.system.velocities import quadratic_parts, velocity_free_part, velocity_polynomial
 
 
 def test_quadratic_parts_read_W_b_V():
@@ -34,3 +34,16 @@ def test_velocity_polynomial_keeps_degree_before_cancellation_out():
     poly = velocity_polynomial((xd + x) * (xd - x) - xd**2 + yd * sp.cos(x), (xd, yd), 2)
     assert poly == {(): -x**2, (1,): sp.cos(x)}
     assert velocity_polynomial(xd * yd, (xd, yd), 1) is None
+
+
+def test_velocity_free_part_is_phi_at_v_zero():
+    """h = phi(q, 0) read off the terms, against substituting v = 0: affine constraints
+    (the snake's, a sleigh's with an offset), and a Chetaev one (v^2: substituted)."""
+    q, r, qd, rd, a = sp.symbols("q r q_dot r_dot a")
+    vels = [qd, rd]
+    for phi in (sp.sin(q - r) * qd + a * sp.cos(r) * (rd - qd),
+                (a + qd) * sp.sin(q) - sp.cos(r) * (1 - rd) + a ** 2,
+                qd ** 2 + rd ** 2 - a * sp.sin(q), sp.Integer(3)):
+        got = velocity_free_part(phi, vels)
+        assert sp.expand(got - phi.subs({qd: 0, rd: 0})) == 0, phi
+        assert not got.free_symbols & set(vels)
