@@ -210,8 +210,9 @@ def _deficient_at_random_points(matrix, k: int, tries: int = 2) -> bool:
     symbol an angle with a value and a circle point of its own (seeded: the same points
     every run).
 
-    Then its maximal minors vanish identically but with probability at most about
-    tries * degree / p (p = 2^61 - 1), and :func:`exact_full_rank` has nothing to prove:
+    Then its maximal minors vanish identically (a nonzero one vanishes at both points
+    with probability at most about (degree / p)^tries, p = 2^61 - 1), and
+    :func:`exact_full_rank` has nothing to prove:
     cancelling the determinant of the relativistic particle's radicals took 2.6 s to
     find 0. False where the entries have no value over F_p (then the cancellation
     decides, as before).
