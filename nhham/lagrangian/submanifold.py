@@ -77,6 +77,7 @@ from nhham.lagrangian.sampled import (
 )
 from nhham.settings import PARAMETER_BOX, SEED, STATE_BOX, Precision
 from nhham.system.evaluation import numeric_function
+from nhham.system.velocities import velocity_free_part
 
 __all__ = ["Submanifold", "has_real_point"]
 
@@ -191,7 +192,7 @@ class Submanifold:
             return {}, []
         vels = list(self.fibre)
         mu = sp.Matrix([[sp.diff(e, v) for v in vels] for e in affine])
-        rest = sp.Matrix([e.xreplace({v: 0 for v in vels}) for e in affine])
+        rest = sp.Matrix([velocity_free_part(e, vels) for e in affine])
         # where a one-form is not finite (log(x) at x < 0) a point says nothing
         samples = [S for S in (self._numeric_matrix(mu, pt) for pt in self._raw_points(4))
                    if is_finite(S)]
