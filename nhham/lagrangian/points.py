@@ -146,7 +146,7 @@ class PointSampler:
                                           (*context, *affine),
                                           affine if nonlinear else (), vels)
         self.affine = () if nonlinear else affine
-        self.mu = mu if mu is not None else [jacobian_row(e, vels) for e in self.affine]
+        self.mu = rows if mu is not None or not nonlinear else []   # the rows of affine
         self.h = [velocity_free_part(e, vels) for e in self.affine]
         self.dependent: tuple | None = None
         self.rejected = 0

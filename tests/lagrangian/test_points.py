@@ -40,4 +40,3 @@ def test_parameter_values_are_taken_as_exact_decimals():
     m = sp.Symbol("m")
     sampler = PointSampler((q1,), (), (m,), {m: 0.1}, (), (), seed=1)
     assert sampler.point().env[m] == MPQ(1, 10)
-
