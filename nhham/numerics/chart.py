@@ -61,6 +61,9 @@ class ComplexField:
 
         self._compiled = complex_kernels(model, build_now=build)
         self._p = [float(x) for x in model.parameter_values]
+        # the compiled kernels read the parameters their expressions use
+        used = model.layout.get("kernel_parameters", range(len(self._p)))
+        self._used = None if len(used) == len(self._p) else list(used)
         n, m, k = self.n, self.m, self.k
         self.size = n * n + n + m * n + 3 * m + k + int(model.forced)
 
@@ -83,6 +86,8 @@ class ComplexField:
             else:
                 P = np.column_stack([np.broadcast_to(np.asarray(v, dtype=float),
                                                      (Y.shape[0],)) for v in p])
+            if self._used is not None:
+                P = P[..., self._used]
             with np.errstate(all="ignore"):
                 return self._compiled.complex_batch(name, Y, P)
         if rows:

@@ -283,7 +283,8 @@ class ComplexKernels:
         Parameters
         ----------
         Y : ndarray of complex, shape (k, 2n) (``saddle``) or (k, n) (``geometry``)
-        P : ndarray of float, shape (k, parameters) or (parameters,) (the same for all)
+        P : ndarray of float, shape (k, parameters) or (parameters,) (the same for all):
+            the parameters the library reads (layout ``kernel_parameters``)
 
         Returns
         -------
@@ -317,6 +318,10 @@ class ParameterBlock:
     def of(cls, parameters, a2: float = 0.0, b2: float = 0.0) -> "ParameterBlock":
         arr = np.array([*parameters, a2, b2], dtype=float)
         return cls(arr, ctypes.c_void_p(arr.ctypes.data), int(arr.ctypes.data))
+
+    def with_terms(self, a2: float, b2: float) -> "ParameterBlock":
+        """The same parameters with other Baumgarte terms."""
+        return ParameterBlock.of(self.array[:-2], a2, b2)
 
 
 def baumgarte_terms(baumgarte) -> tuple:

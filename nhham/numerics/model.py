@@ -160,7 +160,9 @@ class NumericModel:
         p = np.array(self.parameter_values, dtype=float)
         object.__setattr__(self, "_p", p if p.size else np.zeros(1))
         object.__setattr__(self, "_plist", [float(x) for x in self.parameter_values])
-        object.__setattr__(self, "_block0", ParameterBlock.of(self._plist))
+        # the compiled code reads the parameters its expressions use, in their order
+        used = self.layout.get("kernel_parameters", range(len(self._plist)))
+        object.__setattr__(self, "_block0", ParameterBlock.of([self._plist[i] for i in used]))
         ext = None
         if self.compiled is not None and self.path == "saddle":
             ext = self.compiled.ext
@@ -305,7 +307,7 @@ class NumericModel:
         """
         a2, b2 = baumgarte_terms(baumgarte)
         if self._ext is not None:
-            block = self._block0 if baumgarte is None else ParameterBlock.of(self._plist, a2, b2)
+            block = self._block0 if baumgarte is None else self._block0.with_terms(a2, b2)
             out = self._ext.evaluate(y, block.address)
             if out is not None:  # None: not one contiguous float state (handled below)
                 n2 = 2 * self.n
@@ -329,7 +331,7 @@ class NumericModel:
         return self._evaluate_numpy(y, a2, b2)
 
     def _evaluate_compiled(self, y, a2, b2):
-        block = self._block0 if (a2, b2) == (0.0, 0.0) else ParameterBlock.of(self._plist, a2, b2)
+        block = self._block0 if (a2, b2) == (0.0, 0.0) else self._block0.with_terms(a2, b2)
         n2 = 2 * self.n
         if y.ndim == 1:
             out, status = self.compiled.one(y, block.pointer)
@@ -348,7 +350,7 @@ class NumericModel:
         """The parameters (and Baumgarte terms) as the compiled code reads them."""
         if baumgarte is None:
             return self._block0
-        return ParameterBlock.of(self._plist, *baumgarte_terms(baumgarte))
+        return self._block0.with_terms(*baumgarte_terms(baumgarte))
 
     def field_function(self, baumgarte=None):
         """f(z) -> [dy, power] (2n + 1) at one state z of length 2n or 2n + 1

@@ -108,3 +108,56 @@ def test_the_code_digest_covers_the_generator_and_what_it_imports_only():
                 module = path.with_suffix(".py")
                 if module.is_file():
                     assert module in files, f"{f.name} imports {target}: not in the digest"
+
+
+def _bead_on_a_parabola(extra):
+    """m (x'^2 + y'^2)/2 - k x^2/2 with y' = a x x' and the force b sin(t) on x; ``extra``:
+    parameters that enter nothing."""
+    values = {"a": 0.5, "b": 0.3, **extra, "k": 2.0, "m": 1.5}
+    return nhham.System(["x", "y"], "m*(x_dot**2 + y_dot**2)/2 - k*x**2/2",
+                        constraints=["y_dot - a*x*x_dot"], parameters=values,
+                        forces={"x": "b*sin(t)"}, name="bead")
+
+
+def test_a_parameter_that_enters_nothing_leaves_the_compiled_library_alone():
+    """The C texts (so the library's key) read only the parameters the expressions use:
+    one more parameter, declared between the others, compiles nothing new, and the
+    numbers are the closed form's, t included (its slot moves in the C vector)."""
+    import math
+
+    import numpy as np
+
+    from nhham.numerics.codegen.emit import kernel_parameters
+
+    plain, more = _bead_on_a_parabola({}), _bead_on_a_parabola({"c": 7.0, "d": -1.0})
+    assert [p.name for p in more.parameters] == ["a", "b", "c", "d", "k", "m", "t"]
+    assert kernel_parameters(more) == (0, 1, 4, 5, 6)
+    models = [numeric_model(s, backend="numpy") for s in (plain, more)]
+    assert models[0].c_source == models[1].c_source
+    assert models[0].c_complex_source == models[1].c_complex_source
+    assert models[0].python_source != models[1].python_source  # c, d unpacked to "_"
+    if HAVE_CC:
+        models += [numeric_model(s, backend="c") for s in (plain, more)]
+        assert models[2].compiled.path == models[3].compiled.path
+    # x''(m + m a^2 x^2) = -k x + b sin t - m a^2 x x'^2, y'' = a x'^2 + a x x''
+    x, xd, t = 0.4, -0.8, 0.7
+    a, b, k, m = 0.5, 0.3, 2.0, 1.5
+    xdd = (-k * x + b * math.sin(t) - m * a * a * x * xd * xd) / (m + m * a * a * x * x)
+    want = [xd, a * x * xd, xdd, a * xd * xd + a * x * xdd]
+    for model in models:
+        y = model.state({"x": x, "y": 0.2, "x_dot": xd, "y_dot": a * x * xd})
+        np.testing.assert_allclose(model.rhs(t, y), want, rtol=1e-13, atol=1e-15)
+    if HAVE_CC:   # the compiled loop writes t into the C vector's own slot
+        from nhham.numerics.integrate import simulate
+
+        ends = [simulate(model, (0.0, 2.0), y, rtol=1e-10,
+                         atol=1e-12).y[:, -1] for model in models[2:]]
+        np.testing.assert_array_equal(ends[0], ends[1])
+        # the complex-step kernels read the same compact vector
+        from nhham.numerics.chart import ComplexField
+
+        Q, V = np.array([[x, 0.2]]), np.array([[xd, a * x * xd]])
+        compiled, numpy = ComplexField(models[3], build=True), ComplexField(models[1])
+        assert compiled.backend == "c" and numpy.backend == "numpy"
+        for got, ref in zip(compiled.pieces(Q, V), numpy.pieces(Q, V)):
+            np.testing.assert_allclose(got, ref, rtol=1e-14, atol=1e-15)

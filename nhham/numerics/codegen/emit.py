@@ -288,20 +288,26 @@ def _generate(system, path: str) -> dict:
 
     printed = {name: _cse(expand_angle_sums(outputs, qs))
                for name, (_, outputs) in kernels.items()}
-    python = python_module(kernels, printed, n, len(system.parameters))
+    # Python reads the whole parameter vector (unused slots unpacked to "_"); the C
+    # libraries read only the parameters the expressions use, so that a parameter that
+    # enters none of them leaves the C text, and the compiled library's key, unchanged.
+    used = kernel_parameters(system)
+    python = python_module(kernels, printed, n, [
+        f"p{used.index(i)}" if i in used else "_" for i in range(len(system.parameters))])
     slot = system.time_slot
-    c = _c_module(printed, n, m, k, len(system.parameters), path,
-                  forced=powered, time_slot=slot, newton_velocities=nonlinear,
-                  geometry_v=geometry_v)
+    c = _c_module(printed, n, m, k, len(used), path,
+                  forced=powered, time_slot=None if slot is None else used.index(slot),
+                  newton_velocities=nonlinear, geometry_v=geometry_v)
     # the complex step's geometry kernel reads q only: none where the geometry reads v
-    c_complex = "" if geometry_v else _c_complex_module(printed, n, m, k,
-                                                       len(system.parameters),
+    c_complex = "" if geometry_v else _c_complex_module(printed, n, m, k, len(used),
                                                        forced=powered)
     layout = {
         "n": n, "m": m, "k": k,
         "coordinate_names": tuple(q.name for q in system.coordinates),
         "velocity_names": tuple(v.name for v in system.velocities),
         "parameter_names": tuple(p.name for p in system.parameters),
+        # the positions in parameter_names of the parameters the C libraries read
+        "kernel_parameters": used,
         "constraint_labels": tuple(system.constraint_labels),
         "holonomic_labels": tuple(f"holonomic[{i}]" for i in range(k)),
         "constant_W": not any(e.free_symbols & set(qs) for e in W),
@@ -338,15 +344,36 @@ def _first_timed_key(system) -> str:
     return timed[0] if timed else ""
 
 
+def kernel_parameters(system) -> tuple:
+    """The positions in ``system.parameters`` of the parameters the kernels read: those in
+    the Lagrangian, the constraints or the forces, and the time slot; sorted.
+
+    Examples
+    --------
+    >>> from nhham import System
+    >>> s = System(["x"], "m*x_dot**2/2 - k*x**2/2", parameters=["c", "k", "m"])
+    >>> kernel_parameters(s)
+    (1, 2)
+    """
+    exprs = [system.lagrangian, *system.phi, *system.holonomic]
+    if system.has_forces:
+        exprs += list(system.generalized_forces)
+    present = set().union(*(sp.sympify(e).free_symbols for e in exprs))
+    return tuple(i for i, p in enumerate(system.parameters)
+                 if p in present or i == system.time_slot)
+
+
 def _renaming(system) -> dict:
-    """Map user symbols to safe generated names q0.., v0.., p0..
+    """Map user symbols to safe generated names q0.., v0.., p0.. (the parameters the
+    kernels read, :func:`kernel_parameters`, numbered in their order).
 
     User names may be Python keywords or C identifiers in use (``lambda``,
     ``I``); the generated code never sees them.
     """
     rename = {q: sp.Symbol(f"q{i}", real=True) for i, q in enumerate(system.coordinates)}
     rename.update({v: sp.Symbol(f"v{i}", real=True) for i, v in enumerate(system.velocities)})
-    rename.update({p: sp.Symbol(f"p{i}", real=True) for i, p in enumerate(system.parameters)})
+    rename.update({system.parameters[i]: sp.Symbol(f"p{j}", real=True)
+                   for j, i in enumerate(kernel_parameters(system))})
     return rename
 
 
