@@ -42,7 +42,8 @@ Usage::
     python bench/symbrim_bicycle.py --sweep 101    # also linearize(..., sweep=("v", ...))
 
 ``--sweep N`` adds a Symbol v to the parameters (value 5), writes the rear wheel's rate
-u6 = -v/rR, and lets ``linearize(..., sweep=("v", linspace(0, 10, N)))`` find where an
+u6 = -v/rR (v enters no expression of the model: with ``--backend auto`` its numeric model
+finds the library of the model without v), and lets ``linearize(..., sweep=("v", linspace(0, 10, N)))`` find where an
 eigenvalue crosses the imaginary axis (the weave and capsize speeds, against the paper's
 4.29238253634111 and 6.02426201538837); the other entries are solved again at each v.
 
@@ -247,11 +248,12 @@ def main():
     print(f"largest eigenvalue difference vs the closed form, all {len(rows)} speeds: "
           f"{worst:.1e}")
     if args.sweep:
-        sweep_speed(nhham, sp, np, system, values, bike, args)
+        sweep_speed(nhham, sp, np, system, values, bike, args, model)
 
 
-def sweep_speed(nhham, sp, np, system, values, bike, args):
-    """``linearize(..., sweep=("v", ...))`` with v a parameter: the crossings."""
+def sweep_speed(nhham, sp, np, system, values, bike, args, first):
+    """``linearize(..., sweep=("v", ...))`` with v a parameter: the crossings. v enters no
+    expression of the model: with C, the model of ``first`` (without v) has its library."""
     v = sp.Symbol("v")
     swept_bike, (wall, cpu) = clock(
         lambda: nhham.from_mechanics(system, parameters={**values, v: 5.0}))
@@ -269,6 +271,9 @@ def sweep_speed(nhham, sp, np, system, values, bike, args):
           f"{s_wall:.2f} s wall, {s_cpu:.2f} s CPU (before it, from_mechanics with v: "
           f"{wall:.2f} s wall, {cpu:.2f} s CPU; numeric_model: {m_wall:.2f} s, {m_cpu:.2f} s); "
           f"stable at {sum(1 for s in swept.stable if s)} of {len(grid)}")
+    if model.compiled is not None and first.compiled is not None:
+        same = model.compiled.path == first.compiled.path
+        print(f"the model with v on the library of the model without it: {same}")
     for c, paper in zip(swept.crossings, (WEAVE, CAPSIZE)):
         print(f"  crossing at v = {c.value:.11f} ({c.kind}); paper {paper:.11f}, "
               f"difference {abs(c.value - paper):.1e}")

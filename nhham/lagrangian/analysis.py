@@ -510,8 +510,9 @@ def _stage_one_at_points(view, geo, exprs, labels, lam, factory, policy):
     from nhham.lagrangian.tangency import Tangency
 
     m = len(view.phi)
-    verdict = decide(Tangency(view, geo.hessian, geo.forcing, exprs), factory(tuple(exprs)),
-                     policy)
+    # F formed only where a point's right-hand side is read (a proof modulo p is not)
+    tangency = Tangency(view, geo.hessian, lambda: geo.forcing, exprs)
+    verdict = decide(tangency, factory(tuple(exprs)), policy)
     if verdict is None:
         return None  # no exact points and small: the symbolic route decides exactly
     if any(d.warnings for d in (verdict.rank, verdict.consistent)):

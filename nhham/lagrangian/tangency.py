@@ -31,7 +31,7 @@ import sympy as sp
 from nhham.lagrangian.decision import Decision
 from nhham.lagrangian.domains import NotExact, evaluate, minor_degree
 from nhham.lagrangian.engine import Policy, decide
-from nhham.lagrangian.formulas import bordered_system, vertical_rows
+from nhham.lagrangian.formulas import bordered_matrix, bordered_system, vertical_rows
 from nhham.lagrangian.linalg import ListMatrix, exact_rank
 from nhham.lagrangian.points import jacobian_row
 from nhham.lagrangian.submanifold import Submanifold
@@ -123,7 +123,9 @@ class Tangency:
     def __init__(self, system, hessian, forcing, primary):
         self.system, self.v = system, tuple(system.velocities)
         self.n, self.m = len(system.coordinates), len(system.phi)
-        self.hessian, self.forcing = hessian, forcing
+        # forcing: the matrix F, or a function forming it: a proof modulo p reads K and
+        # J only, so F (the derivatives of W) is formed only where c is read
+        self.hessian, self._forcing = hessian, forcing
         self.chis = [sp.sympify(c) for c in primary]
         self.best_K = self.best_aug = self.best_J = -1
         self.block: tuple = ((), ())
@@ -155,6 +157,10 @@ class Tangency:
         return [list(self.hessian.row(i)) for i in range(self.n)]
 
     @cached_property
+    def forcing(self):
+        return self._forcing() if callable(self._forcing) else self._forcing
+
+    @cached_property
     def F(self) -> list:
         return list(self.forcing)
 
@@ -168,14 +174,19 @@ class Tangency:
             return [evaluate(row, env, cache) for row in matrix]
 
         W, mu, Jq, Jv = rows(self.W), rows(self.mu), rows(self.Jq), rows(self.Jv)
-        F = evaluate(self.F, env, cache)
         vel = [env[s] for s in self.v]
         n = self.n
-        Jt = None if self.Jt is None else _column(evaluate(self.Jt, env, cache))
-        K, c = bordered_system(ListMatrix(W), ListMatrix(mu, n), _column(F),
-                               ListMatrix(Jq, n) * _column(vel), ListMatrix(Jv, n), Jt)
+
+        def rhs():
+            F = evaluate(self.F, env, cache)
+            Jt = None if self.Jt is None else _column(evaluate(self.Jt, env, cache))
+            _, c = bordered_system(ListMatrix(W), ListMatrix(mu, n), _column(F),
+                                   ListMatrix(Jq, n) * _column(vel), ListMatrix(Jv, n), Jt)
+            return [x for x, in c.rows]
+
+        K = bordered_matrix(ListMatrix(W), ListMatrix(mu, n), ListMatrix(Jv, n))
         J = [a + b for a, b in zip(Jq, Jv)]
-        return K.rows, [x for x, in c.rows], J
+        return K.rows, _Deferred(rhs), J
 
     # ------------------------------------------------------------ modulo p
     @property
@@ -309,6 +320,24 @@ class Tangency:
             return None
         return tangency_sampled(self.system, self.hessian, self.forcing, self.chis,
                                 manifold.sampled_only())
+
+
+class _Deferred:
+    """A list formed on first use: the right-hand side c of a point, which a proof modulo
+    p does not read."""
+
+    def __init__(self, make):
+        self._make = make
+
+    @cached_property
+    def items(self) -> list:
+        return self._make()
+
+    def __iter__(self):
+        return iter(self.items)
+
+    def __len__(self):
+        return len(self.items)
 
 
 def _rank_decision(rank, full, error, count, what) -> Decision:
