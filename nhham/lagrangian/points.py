@@ -49,7 +49,7 @@ from nhham.lagrangian.domains import (
     evaluate,
     minor_degree,
 )
-from nhham.lagrangian.linalg import exact_rank, exact_solve
+from nhham.lagrangian.linalg import exact_rank, exact_solve, field_solve
 from nhham.system.expressions import derivative, short
 from nhham.system.derivative import symbols_in
 from nhham.system.velocities import velocity_free_part
@@ -475,7 +475,7 @@ class ParameterFieldSampler:
         self.dep = None
         if self.affine:
             self.mu = [jacobian_row(e, self.v) for e in eqs]
-            self.h = [e.xreplace({x: 0 for x in self.v}) for e in eqs]
+            self.h = [velocity_free_part(e, self.v) for e in eqs]
         else:
             # The cheap test first: the symbolic reduction of a large M_k with a holonomic
             # constraint no coordinate can be solved from linearly takes minutes, to end
@@ -529,7 +529,7 @@ class ParameterFieldSampler:
                                                for i in free), K.zero))] for k in range(m)],
                                (m, 1), K)
             try:
-                sol = block.lu_solve(rhs).to_list()
+                sol = field_solve(block, rhs).to_list()
             except BudgetExceeded:  # an expiry is not a singular point
                 raise
             except Exception as exc:  # singular at this point: draw again

@@ -147,3 +147,23 @@ def test_a_product_of_residue_matrices_is_the_product_of_their_modp_entries():
     assert all(type(x) is ModP for r in fast for x in r)
     assert fast == slow
     assert fast[2][3] == ModP(sum(A[2][k].v * B[k][3].v for k in range(7)))
+
+
+def test_field_solve_over_q_and_f_p_is_sympy_s_lu_solve():
+    """Over QQ by fraction-free elimination, over F_p on plain ints: the same solution as
+    sympy's lu_solve, and a singular matrix raises what lu_solve raises."""
+    from sympy import GF, QQ
+    from sympy.polys.matrices import DomainMatrix
+    from sympy.polys.matrices.exceptions import DMNonInvertibleMatrixError
+
+    from nhham.lagrangian.linalg import field_solve
+
+    rng = random.Random(3)
+    for K, draw in ((QQ, lambda: QQ(rng.randint(-99, 99), rng.randint(1, 99))),
+                    (GF(2 ** 61 - 1), lambda: GF(2 ** 61 - 1)(rng.randrange(2 ** 61)))):
+        A = DomainMatrix([[draw() for _ in range(7)] for _ in range(7)], (7, 7), K)
+        B = DomainMatrix([[draw() for _ in range(3)] for _ in range(7)], (7, 3), K)
+        assert field_solve(A, B) == A.lu_solve(B)
+        singular = DomainMatrix([[K(1), K(2)], [K(2), K(4)]], (2, 2), K)
+        with pytest.raises(DMNonInvertibleMatrixError):
+            field_solve(singular, DomainMatrix([[K(1)], [K(1)]], (2, 1), K))
