@@ -320,11 +320,9 @@ class ExceptionalData:
         identically zero, per row A of each d mu_i: [(B, expression)]. Formed once (every
         evaluation of the Frobenius datum, at the values and at each shift, reads it);
         most entries are zero (a snake's mu_i involves its first i links only)."""
-        system = self.system
-        m, n, q = system.m, system.n, system.coordinates
-        grads = [[jacobian_row(system.mu[i, A], q) for A in range(n)] for i in range(m)]
-        return [[[(B, e) for B in range(n) if (e := grads[i][B][A] - grads[i][A][B]) != 0]
-                 for A in range(n)] for i in range(m)]
+        from nhham.lagrangian.integrability import one_form_differentials
+
+        return one_form_differentials(self.system.mu, self.system.coordinates)
 
     def _dmu_at(self, K, env, cache) -> list:
         """d mu at one point in K: the nonzero entries evaluated, the others K's zero."""

@@ -26,6 +26,7 @@ sampled decision was doubtful at the chosen precision (see :mod:`nhham.lagrangia
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 from functools import cached_property
 
@@ -227,11 +228,17 @@ class Frobenius:
     @cached_property
     def dmu(self) -> list:
         """dmu[i][A][B] = d_A mu_iB - d_B mu_iA, formed once Q_1 has exact points."""
-        m, n = self.mu.rows, len(self.q)
-        grads = [[jacobian_row(self.mu[i, A], self.q) for A in range(n)] for i in range(m)]
-        # grads[i][B][A] = d mu_iB / d q^A
-        return [[[grads[i][B][A] - grads[i][A][B] for B in range(n)] for A in range(n)]
-                for i in range(m)]
+        n = len(self.q)
+        out = []
+        for rows in one_form_differentials(self.mu, self.q):
+            block = []
+            for entries in rows:
+                row = [sp.S.Zero] * n
+                for B, e in entries:
+                    row[B] = e
+                block.append(row)
+            out.append(block)
+        return out
 
     def reduced(self, manifold, policy):
         if len(self.q) <= policy.closed_form_size:
@@ -372,6 +379,33 @@ def not_applicable(system) -> Integrability:
     return Integrability(None, system.n - system.m, None, (), (), "not applicable", (),
                          mu=sp.Matrix(system.mu), coordinates=tuple(system.coordinates),
                          labels=tuple(labels))
+
+
+@functools.lru_cache(maxsize=8)
+def _differentials(mu: sp.ImmutableMatrix, q: tuple) -> tuple:
+    m, n = mu.shape
+    grads = [[jacobian_row(mu[i, A], q) for A in range(n)] for i in range(m)]
+    # grads[i][B][A] = d mu_iB / d q^A
+    return tuple(tuple(tuple((B, e) for B in range(n)
+                             if (e := grads[i][B][A] - grads[i][A][B]) != 0)
+                       for A in range(n)) for i in range(m))
+
+
+def one_form_differentials(mu, coordinates) -> tuple:
+    """d mu_i by its entries that are not identically zero: per i, per A, the pairs
+    (B, d_A mu_iB - d_B mu_iA) (the sign of
+    :func:`~nhham.lagrangian.formulas.frobenius_terms`). Memoised: the Frobenius test
+    and the check of the parameter values read the same ones (most entries are zero: a
+    snake's mu_i involves its first i links only).
+
+    Examples
+    --------
+    >>> import sympy as sp
+    >>> x, y, z = sp.symbols("x y z")
+    >>> one_form_differentials(sp.Matrix([[1, 0, -y]]), (x, y, z))  # dx - y dz
+    (((), ((2, -1),), ((1, 1),)),)
+    """
+    return _differentials(sp.ImmutableMatrix(mu), tuple(coordinates))
 
 
 def _distribution(system, labels):

@@ -224,9 +224,24 @@ def backend_solve(backend):
     return lambda A, X: FloatMatrix(backend.solve(A.a, X.a))
 
 
-def _residues(rows) -> bool:
-    """Every entry is a :class:`~nhham.lagrangian.domains.ModP`."""
-    return all(type(x) is ModP for r in rows for x in r)
+def _residue_rows(rows):
+    """(values, flags) when every entry is a :class:`~nhham.lagrangian.domains.ModP` or
+    an int: the entries as ints and, per row, whether it holds a residue; else None."""
+    values, flags = [], []
+    for r in rows:
+        row, mod = [], False
+        for x in r:
+            t = type(x)
+            if t is ModP:
+                row.append(x.v)
+                mod = True
+            elif t is int:
+                row.append(x)
+            else:
+                return None
+        values.append(row)
+        flags.append(mod)
+    return values, flags
 
 
 class ListMatrix:
@@ -255,13 +270,15 @@ class ListMatrix:
 
     def __mul__(self, other) -> "ListMatrix":
         cols = [[r[j] for r in other.rows] for j in range(other.ncols)]
-        if _residues(self.rows) and _residues(cols):
-            # modulo p on the residues: an object per product and per sum was most of a
-            # large bracket's cost (the 64-link snake's classes)
-            a = [[x.v for x in r] for r in self.rows]
-            b = [[y.v for y in c] for c in cols]
-            return ListMatrix([[ModP(sum(map(operator.mul, row, col))) for col in b]
-                               for row in a], other.ncols)
+        a = _residue_rows(self.rows)
+        b = a and _residue_rows(cols)
+        if a and b:
+            # on ints: an object per product and per sum was most of a large bracket's
+            # cost (the 64-link snake's classes). An entry is a residue where its row or
+            # column holds one (as the scalars' own operators give), else an exact int.
+            return ListMatrix([[ModP(x) if rm or cm else x for x, cm in zip(
+                (sum(map(operator.mul, row, col)) for col in b[0]), b[1])]
+                for row, rm in zip(*a)], other.ncols)
         return ListMatrix([[sum((x * y for x, y in zip(row, col)), 0) for col in cols]
                            for row in self.rows], other.ncols)
 

@@ -173,19 +173,22 @@ class Tangency:
         def rows(matrix):
             return [evaluate(row, env, cache) for row in matrix]
 
-        W, mu, Jq, Jv = rows(self.W), rows(self.mu), rows(self.Jq), rows(self.Jv)
+        W, mu, Jv = rows(self.W), rows(self.mu), rows(self.Jv)
         vel = [env[s] for s in self.v]
         n = self.n
+        # dchi/dq (its symbolic derivatives: the 64-link snake's 64 x 66) only when read
+        Jq = _Deferred(lambda: rows(self.Jq))
 
         def rhs():
             F = evaluate(self.F, env, cache)
             Jt = None if self.Jt is None else _column(evaluate(self.Jt, env, cache))
             _, c = bordered_system(ListMatrix(W), ListMatrix(mu, n), _column(F),
-                                   ListMatrix(Jq, n) * _column(vel), ListMatrix(Jv, n), Jt)
+                                   ListMatrix(list(Jq), n) * _column(vel), ListMatrix(Jv, n),
+                                   Jt)
             return [x for x, in c.rows]
 
         K = bordered_matrix(ListMatrix(W), ListMatrix(mu, n), ListMatrix(Jv, n))
-        J = [a + b for a, b in zip(Jq, Jv)]
+        J = _Deferred(lambda: [a + b for a, b in zip(Jq, Jv)])
         return K.rows, _Deferred(rhs), J
 
     # ------------------------------------------------------------ modulo p
@@ -217,8 +220,12 @@ class Tangency:
         K, _, J = value
         n, m = self.n, self.m
         rK, _, _ = exact_rank(K[:n] + [K[n + j] for j in moving])
-        rJ, _, _ = exact_rank(J)
-        if rK != n + m or rJ != len(self.chis):
+        if rK != n + m:
+            return None
+        # Those rows of K independent, the rows dchi/dv of the moving constraints are: when
+        # every constraint moves, the Jacobian [dchi/dq, dchi/dv] has full row rank.
+        rJ = len(self.chis) if len(moving) == len(self.chis) else exact_rank(list(J))[0]
+        if rJ != len(self.chis):
             return None
         how = "at a random point modulo the prime 2^61 - 1 (proof)"
         still = len(moving) < len(self.chis)
@@ -259,7 +266,7 @@ class Tangency:
             raise NotExact("W is singular at an exact point of M_1")
         rK, _, _ = exact_rank(K)
         rAug, _, _ = exact_rank([row + [x] for row, x in zip(K, c)])
-        rJ, _, _ = exact_rank(J)
+        rJ, _, _ = exact_rank(list(J))
         if rK > self.best_K:
             self.best_K = rK
             self.block = _block(K, n)
@@ -274,7 +281,7 @@ class Tangency:
     def _errors(self, degrees, count, error_bound):
         """Error bounds of: rank deficiency of K, vanishing conditions, Jacobian
         deficiency (None where the verdict is a proof)."""
-        K, c, J = degrees
+        K, c, J = degrees[0], degrees[1], list(degrees[2])
         aug = [row + [x] for row, x in zip(K, c)]
         n, m = self.n, self.m
 

@@ -167,3 +167,26 @@ def test_field_solve_over_q_and_f_p_is_sympy_s_lu_solve():
         singular = DomainMatrix([[K(1), K(2)], [K(2), K(4)]], (2, 2), K)
         with pytest.raises(DMNonInvertibleMatrixError):
             field_solve(singular, DomainMatrix([[K(1)], [K(1)]], (2, 1), K))
+
+
+def test_a_product_of_residues_and_ints_is_the_scalars_own():
+    """ListMatrix's product on ints (residues mixed with plain ints) gives what the
+    scalars' operators give, entry by entry: a residue where a row or column holds one,
+    an exact int elsewhere."""
+    from nhham.lagrangian.linalg import ListMatrix
+
+    rng = random.Random(5)
+
+    def draw(mod):
+        if mod and rng.random() < 0.5:
+            return ModP(rng.randrange(2 ** 61))
+        return rng.randint(-5, 2 ** 70)
+
+    A = [[draw(i != 1) for _ in range(4)] for i in range(3)]
+    B = [[draw(j == 2) for j in range(3)] for _ in range(4)]
+    got = (ListMatrix(A) * ListMatrix(B)).rows
+    for i in range(3):
+        for j in range(3):
+            want = sum((A[i][k] * B[k][j] for k in range(4)), 0)
+            assert type(got[i][j]) is type(want)
+            assert (got[i][j].v == want.v) if type(want) is ModP else got[i][j] == want
