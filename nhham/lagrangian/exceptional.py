@@ -315,11 +315,11 @@ class ExceptionalData:
         return vals
 
     @functools.cached_property
-    def _dmu_nonzero(self) -> list:
+    def _dmu_nonzero(self) -> tuple:
         """d mu_i (d mu_i[A][B] = d mu_iB/dq^A - d mu_iA/dq^B) by its entries that are not
-        identically zero, per row A of each d mu_i: [(B, expression)]. Formed once (every
-        evaluation of the Frobenius datum, at the values and at each shift, reads it);
-        most entries are zero (a snake's mu_i involves its first i links only)."""
+        identically zero, per row A of each d mu_i: ((B, expression), ...). Formed once
+        (every evaluation of the Frobenius datum, at the values and at each shift, reads
+        it; the Frobenius test too)."""
         from nhham.lagrangian.integrability import one_form_differentials
 
         return one_form_differentials(self.system.mu, self.system.coordinates)
