@@ -384,11 +384,16 @@ def not_applicable(system) -> Integrability:
 @functools.lru_cache(maxsize=8)
 def _differentials(mu: sp.ImmutableMatrix, q: tuple) -> tuple:
     m, n = mu.shape
-    grads = [[jacobian_row(mu[i, A], q) for A in range(n)] for i in range(m)]
-    # grads[i][B][A] = d mu_iB / d q^A
-    return tuple(tuple(tuple((B, e) for B in range(n)
-                             if (e := grads[i][B][A] - grads[i][A][B]) != 0)
-                       for A in range(n)) for i in range(m))
+    zero = sp.S.Zero
+    out = []
+    for i in range(m):
+        grads = [jacobian_row(mu[i, A], q) for A in range(n)]  # [B][A]: d mu_iB / d q^A
+        # most pairs are two zeros (jacobian_row's S.Zero): no subtraction for them
+        out.append(tuple(tuple((B, e) for B in range(n)
+                               if (grads[B][A] is not zero or grads[A][B] is not zero)
+                               and (e := grads[B][A] - grads[A][B]) != 0)
+                         for A in range(n)))
+    return tuple(out)
 
 
 def one_form_differentials(mu, coordinates) -> tuple:
