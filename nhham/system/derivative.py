@@ -58,7 +58,14 @@ def derivative(expr: sp.Expr, x: sp.Symbol) -> sp.Expr:
         base, k = expr.args
         return k * base ** (k - 1) * derivative(base, x)
     if isinstance(expr, sp.sin):
-        return sp.cos(expr.args[0]) * derivative(expr.args[0], x)
+        return _trig(sp.cos, expr.args[0]) * derivative(expr.args[0], x)
     if isinstance(expr, sp.cos):
-        return -sp.sin(expr.args[0]) * derivative(expr.args[0], x)
+        return -_trig(sp.sin, expr.args[0]) * derivative(expr.args[0], x)
     return expr.diff(x)
+
+
+@functools.lru_cache(maxsize=1 << 16)
+def _trig(f, u: sp.Expr) -> sp.Expr:
+    """f(u), built once: sympy's own cache (1,000 entries) is outgrown by a 64-link
+    snake's sin(theta_i - theta_j), whose evaluation is most of a derivative's cost."""
+    return f(u)
