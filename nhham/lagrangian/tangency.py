@@ -330,8 +330,8 @@ class Tangency:
 
 
 class _Deferred:
-    """A list formed on first use: the right-hand side c of a point, which a proof modulo
-    p does not read."""
+    """A list formed on first use: a point's right-hand side c, dchi/dq and Jacobian,
+    which a proof modulo p need not read."""
 
     def __init__(self, make):
         self._make = make
