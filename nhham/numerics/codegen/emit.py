@@ -59,6 +59,7 @@ from sympy.printing.c import C99CodePrinter
 from nhham.lagrangian.geometry import lagrangian_geometry
 from nhham.numerics.codegen.python_text import python_module
 from nhham.numerics.status import c_defines
+from nhham.system.derivative import symbols_in
 from nhham.system.expressions import derivative
 
 __all__ = ["generate_sources", "system_fingerprint", "expression_digest", "source_key",
@@ -358,7 +359,7 @@ def kernel_parameters(system) -> tuple:
     exprs = [system.lagrangian, *system.phi, *system.holonomic]
     if system.has_forces:
         exprs += list(system.generalized_forces)
-    present = set().union(*(sp.sympify(e).free_symbols for e in exprs))
+    present = set().union(*(symbols_in(sp.sympify(e)) for e in exprs))  # memoised
     return tuple(i for i, p in enumerate(system.parameters)
                  if p in present or i == system.time_slot)
 
