@@ -73,9 +73,15 @@ class GeneratedKernels:
             code = compile(source, "<nhham-generated>", "exec")
         exec(code, namespace)
         funcs = {}
+        # The kernels read the parameters their expressions use (layout
+        # "kernel_parameters"); callers hand the whole vector, taken apart here.
+        used = layout.get("kernel_parameters")
+        if used is not None and len(used) == len(layout["parameter_names"]):
+            used = None
         for name in layout["kernels"]:
-            funcs[name] = (namespace[f"{name}_scalar"], namespace[f"{name}_batch"],
-                           namespace[f"{name}_mp"])
+            fs = (namespace[f"{name}_scalar"], namespace[f"{name}_batch"],
+                  namespace[f"{name}_mp"])
+            funcs[name] = fs if used is None else _reading(fs, list(used))
         sizes = {k: v for k, v in kernel_sizes(layout).items() if k in funcs}
         return cls(MappingProxyType(funcs), MappingProxyType(sizes))
 
@@ -108,6 +114,15 @@ class GeneratedKernels:
     def mp(self, name, y, p) -> list:
         """Outputs at one state in mpmath arithmetic (y, p: mpf sequences)."""
         return self.functions[name][2](y, p)
+
+
+def _reading(functions, used) -> tuple:
+    """(scalar, batch, mp) kernels that take the whole parameter vector ``p`` and read
+    its entries ``used``."""
+    scalar, batch, mp = functions
+    return (lambda y, p: scalar(y, [p[i] for i in used]),
+            lambda Y, p, out: batch(Y, [p[i] for i in used], out),
+            lambda y, p: mp(y, [p[i] for i in used]))
 
 
 class CompiledRHS:

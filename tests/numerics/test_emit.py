@@ -44,7 +44,8 @@ def test_generated_sources_are_kept_by_content_not_by_identity():
 
     a, b = chaplygin_sleigh(), chaplygin_sleigh()
     assert a is not b and system_fingerprint(a) == system_fingerprint(b)
-    assert generate_sources(a) is generate_sources(b)
+    # the same texts (the objects: generated once), each with its system's layout
+    assert generate_sources(a)["python"] is generate_sources(b)["python"]
     assert system_fingerprint(a) != system_fingerprint(a, "closed_form")
     assert system_fingerprint(rolling_disk()) != system_fingerprint(a)
     ref = weakref.ref(a)
@@ -120,22 +121,26 @@ def _bead_on_a_parabola(extra):
 
 
 def test_a_parameter_that_enters_nothing_leaves_the_compiled_library_alone():
-    """The C texts (so the library's key) read only the parameters the expressions use:
-    one more parameter, declared between the others, compiles nothing new, and the
-    numbers are the closed form's, t included (its slot moves in the C vector)."""
+    """The kernels read only the parameters the expressions use: one more parameter,
+    declared between the others, generates and compiles nothing new (the sources and the
+    library shared), and the numbers are the closed form's, t included (its slot moves in
+    the kernels' vector), on numpy and C, in the compiled loop and the complex step."""
     import math
 
     import numpy as np
 
-    from nhham.numerics.codegen.emit import kernel_parameters
+    from nhham.numerics.codegen.emit import kernel_parameters, source_key
 
     plain, more = _bead_on_a_parabola({}), _bead_on_a_parabola({"c": 7.0, "d": -1.0})
     assert [p.name for p in more.parameters] == ["a", "b", "c", "d", "k", "m", "t"]
     assert kernel_parameters(more) == (0, 1, 4, 5, 6)
     models = [numeric_model(s, backend="numpy") for s in (plain, more)]
+    assert source_key(plain) == source_key(more)   # the sources are shared too
     assert models[0].c_source == models[1].c_source
     assert models[0].c_complex_source == models[1].c_complex_source
-    assert models[0].python_source != models[1].python_source  # c, d unpacked to "_"
+    assert models[0].python_source == models[1].python_source
+    assert models[1].parameter_names == ("a", "b", "c", "d", "k", "m", "t")
+    assert models[1].time_slot == 6 and models[0].time_slot == 4
     if HAVE_CC:
         models += [numeric_model(s, backend="c") for s in (plain, more)]
         assert models[2].compiled.path == models[3].compiled.path

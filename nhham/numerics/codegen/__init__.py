@@ -39,7 +39,7 @@ from nhham.numerics.codegen.build import (build_library, c_compiler, compile_c,
                                           find_library, load_library)
 from nhham.numerics.codegen.cache import CompileCache, cache_location
 from nhham.numerics.codegen.emit import (cached_sources, generate_sources, remember_sources,
-                                         source_key)
+                                         source_key, with_parameter_layout)
 from nhham.numerics.kernels import GeneratedKernels
 from nhham.numerics.model import NumericModel, NumericsWarning
 
@@ -111,7 +111,10 @@ def numeric_model(system, *, backend: str = "auto", path: str = "saddle",
         raise ValueError(f"path must be one of {_PATHS}, got {path!r}")
     system.require_regular_lagrangian("the numeric model (the accelerations)")
     values = _parameter_values(system, parameters)
-    sources = _sources(system, path, cache_dir if backend != "numpy" else None)
+    # the system's own parameters: sources are shared by systems that differ only in
+    # parameters no expression reads
+    sources = with_parameter_layout(_sources(system, path, cache_dir if backend != "numpy"
+                                             else None), system)
     kernels = GeneratedKernels.from_source(sources["python"], sources["layout"])
     compiled, note, pending = None, "numpy backend requested", None
     if backend in ("c", "auto"):

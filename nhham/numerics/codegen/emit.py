@@ -64,6 +64,7 @@ from nhham.system.expressions import derivative
 
 __all__ = ["generate_sources", "system_fingerprint", "expression_digest", "source_key",
            "sources_digest", "code_digest", "cached_sources", "remember_sources", "expand_angle_sums",
+           "kernel_parameters", "parameter_layout", "with_parameter_layout",
            "runtime_source", "RUNTIME_FILES"]
 
 #: The runtime files, in the order they follow the generated kernels (``nhham.h`` first).
@@ -87,7 +88,23 @@ def generate_sources(system, path: str = "saddle") -> dict:
     """
     key = source_key(system, path)
     cached = cached_sources(key)
-    return remember_sources(key, _generate(system, path)) if cached is None else cached
+    sources = remember_sources(key, _generate(system, path)) if cached is None else cached
+    return with_parameter_layout(sources, system)
+
+
+def parameter_layout(system) -> dict:
+    """The layout entries that name the whole parameter vector (the kernels read its
+    :func:`kernel_parameters`): the system's own, where sources are shared by systems
+    that differ in parameters no expression reads."""
+    return {"parameter_names": tuple(p.name for p in system.parameters),
+            "kernel_parameters": kernel_parameters(system),
+            "input_names": tuple(u.name for u in system.inputs),
+            "time_slot": system.time_slot}
+
+
+def with_parameter_layout(sources: dict, system) -> dict:
+    """``sources`` (not changed) with ``system``'s :func:`parameter_layout`."""
+    return {**sources, "layout": {**sources["layout"], **parameter_layout(system)}}
 
 
 def cached_sources(key: str) -> dict | None:
@@ -169,13 +186,15 @@ _SOURCES_KEPT = 64
 def system_fingerprint(system, path: str = "saddle") -> str:
     """A hash of everything the generated sources depend on.
 
-    The coordinates, parameters (with their assumptions), the Lagrangian, the affine
-    constraints phi (complete lifts first), the holonomic constraints, their labels, the
-    generalized forces, the name and the path; the expressions by their structure
-    (:func:`expression_digest`): equal expressions give equal fingerprints in any
-    process, however they were built.
+    The coordinates, the parameters the kernels read (:func:`kernel_parameters`, with
+    their assumptions: one that enters no expression changes nothing generated), the
+    Lagrangian, the affine constraints phi (complete lifts first), the holonomic
+    constraints, their labels, the generalized forces, the name and the path; the
+    expressions by their structure (:func:`expression_digest`): equal expressions give
+    equal fingerprints in any process, however they were built.
     """
-    exprs: tuple = (tuple(system.coordinates), tuple(system.parameters), system.lagrangian,
+    read = tuple(system.parameters[i] for i in kernel_parameters(system))
+    exprs: tuple = (tuple(system.coordinates), read, system.lagrangian,
                     tuple(system.phi), tuple(system.holonomic))
     if system.has_forces:
         exprs += (tuple(system.generalized_forces),)
@@ -289,12 +308,11 @@ def _generate(system, path: str) -> dict:
 
     printed = {name: _cse(expand_angle_sums(outputs, qs))
                for name, (_, outputs) in kernels.items()}
-    # Python reads the whole parameter vector (unused slots unpacked to "_"); the C
-    # libraries read only the parameters the expressions use, so that a parameter that
-    # enters none of them leaves the C text, and the compiled library's key, unchanged.
+    # The kernels read only the parameters the expressions use (the model hands them
+    # those values), so that a parameter that enters none of them changes no text: not
+    # the sources' key, not the compiled library's.
     used = kernel_parameters(system)
-    python = python_module(kernels, printed, n, [
-        f"p{used.index(i)}" if i in used else "_" for i in range(len(system.parameters))])
+    python = python_module(kernels, printed, n, len(used))
     slot = system.time_slot
     c = _c_module(printed, n, m, k, len(used), path,
                   forced=powered, time_slot=None if slot is None else used.index(slot),
@@ -306,9 +324,9 @@ def _generate(system, path: str) -> dict:
         "n": n, "m": m, "k": k,
         "coordinate_names": tuple(q.name for q in system.coordinates),
         "velocity_names": tuple(v.name for v in system.velocities),
-        "parameter_names": tuple(p.name for p in system.parameters),
-        # the positions in parameter_names of the parameters the C libraries read
-        "kernel_parameters": used,
+        # parameter_names, kernel_parameters (the positions in parameter_names of those
+        # the kernels read), input_names, time_slot: the system's own
+        **parameter_layout(system),
         "constraint_labels": tuple(system.constraint_labels),
         "holonomic_labels": tuple(f"holonomic[{i}]" for i in range(k)),
         "constant_W": not any(e.free_symbols & set(qs) for e in W),
@@ -322,8 +340,6 @@ def _generate(system, path: str) -> dict:
         # t in L or a constraint: the energy, residuals and conditions change with t;
         # the first scene key that uses it ("" for none)
         "time_in_geometry": _first_timed_key(system),
-        "input_names": tuple(u.name for u in system.inputs),
-        "time_slot": slot,
         "complex_kernels": bool(c_complex),
         # only with a nonlinear (Chetaev) constraint: velocities onto M_1 by Newton
         **({"nonlinear_constraints": True} if nonlinear else {}),
