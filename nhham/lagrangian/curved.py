@@ -206,10 +206,9 @@ class CurvedChart:
             if not angle:
                 point[q] = t
                 continue
-            one = 1 + t * t
-            if not one:
+            point[q] = Angle.on_circle(None, t)
+            if point[q] is None:
                 return None
-            point[q] = Angle(None, (1 - t * t) / one, 2 * t / one)
         return point
 
     def _on_M(self, env, point) -> bool:

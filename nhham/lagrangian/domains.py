@@ -87,6 +87,15 @@ class Angle:
     def __init__(self, r, c, s):
         self.r, self.c, self.s = r, c, s
 
+    @classmethod
+    def on_circle(cls, r, t) -> "Angle | None":
+        """The angle of value ``r`` at the unit circle's rational point of parameter t,
+        ((1 - t^2) / (1 + t^2), 2 t / (1 + t^2)); None where 1 + t^2 = 0 (over F_p)."""
+        one = 1 + t * t
+        if not one:
+            return None
+        return cls(r, (1 - t * t) / one, 2 * t / one)
+
     @property
     def value(self):
         """``r``; NotExact when the angle has only its circle point."""

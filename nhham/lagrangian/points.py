@@ -222,20 +222,17 @@ class PointSampler:
         env, deg = dict(self.fixed), {p: Degree(0) for p in self.fixed}
         dependent = () if self.chart is None else self.chart.dependent
         for p in self.circle:  # the value's (cos, sin) is transcendental: drawn
-            t = self._draw()
-            one = 1 + t * t
-            if not one:
+            env[p] = Angle.on_circle(self.fixed[p], self._draw())
+            if env[p] is None:   # 1 + t^2 = 0 modulo p
                 return None
-            env[p] = Angle(self.fixed[p], (1 - t * t) / one, 2 * t / one)
             circ = Degree(2, {("circle", p): (2, 1)})
             deg[p] = Angle(Degree(0), circ, circ)
         for s in self.drawn + tuple(q for q in self.coordinates
                                     if q not in self.solved and q not in dependent):
             t = self._draw()
-            one = 1 + t * t
-            if not one:
+            env[s] = Angle.on_circle(self._draw(), t)
+            if env[s] is None:
                 return None
-            env[s] = Angle(self._draw(), (1 - t * t) / one, 2 * t / one)
             key = ("circle", s)
             circ = Degree(2, {key: (2, 1)})
             deg[s] = Angle(Degree(1), circ, circ)
@@ -492,8 +489,7 @@ class ParameterFieldSampler:
 
     def _angle(self):
         t = self._draw()
-        one = 1 + t * t
-        return Angle(self._draw(), (1 - t * t) / one, 2 * t / one)
+        return Angle.on_circle(self._draw(), t)
 
     def point(self) -> dict:
         for _ in range(20):

@@ -224,10 +224,11 @@ def _deficient_at_random_points(matrix, k: int, tries: int = 2) -> bool:
         env = {}
         for x in symbols:
             t = ModP(rng.randrange(PRIME))
-            one = 1 + t * t
-            env[x] = Angle(ModP(rng.randrange(PRIME)), (1 - t * t) / one, 2 * t / one)
+            env[x] = Angle.on_circle(ModP(rng.randrange(PRIME)), t)
         cache: dict = {}
         try:
+            if None in env.values():   # 1 + t^2 = 0 modulo p
+                raise ZeroDivisionError
             rows = [evaluate(matrix.row(i), env, cache) for i in range(matrix.rows)]
         except ZeroDivisionError:
             continue

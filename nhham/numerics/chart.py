@@ -19,7 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from nhham.errors import ComputationError, InconsistentInitialDataError, InputError
-from nhham.numerics.kernels import columns
+from nhham.numerics.kernels import columns, read_parameters
 from nhham.numerics.nullspace import solve_null_space
 
 __all__ = ["BATCH_STATES", "STEP", "Chart", "ComplexField", "chart_jacobian", "chart_jacobians",
@@ -61,9 +61,7 @@ class ComplexField:
 
         self._compiled = complex_kernels(model, build_now=build)
         self._p = [float(x) for x in model.parameter_values]
-        # the compiled kernels read the parameters their expressions use
-        used = model.layout.get("kernel_parameters", range(len(self._p)))
-        self._used = None if len(used) == len(self._p) else list(used)
+        self._used = read_parameters(model.layout)   # what the compiled kernels read
         n, m, k = self.n, self.m, self.k
         self.size = n * n + n + m * n + 3 * m + k + int(model.forced)
 

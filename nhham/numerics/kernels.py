@@ -22,7 +22,7 @@ import numpy as np
 from nhham.settings import COMPILER_LOCK
 
 __all__ = ["GeneratedKernels", "CompiledRHS", "ComplexKernels", "kernel_sizes", "columns",
-           "ParameterBlock", "baumgarte_terms"]
+           "ParameterBlock", "baumgarte_terms", "read_parameters"]
 
 
 def kernel_sizes(layout) -> dict:
@@ -73,15 +73,11 @@ class GeneratedKernels:
             code = compile(source, "<nhham-generated>", "exec")
         exec(code, namespace)
         funcs = {}
-        # The kernels read the parameters their expressions use (layout
-        # "kernel_parameters"); callers hand the whole vector, taken apart here.
-        used = layout.get("kernel_parameters")
-        if used is not None and len(used) == len(layout["parameter_names"]):
-            used = None
+        used = read_parameters(layout)   # callers hand the whole vector, taken apart here
         for name in layout["kernels"]:
             fs = (namespace[f"{name}_scalar"], namespace[f"{name}_batch"],
                   namespace[f"{name}_mp"])
-            funcs[name] = fs if used is None else _reading(fs, list(used))
+            funcs[name] = fs if used is None else _reading(fs, used)
         sizes = {k: v for k, v in kernel_sizes(layout).items() if k in funcs}
         return cls(MappingProxyType(funcs), MappingProxyType(sizes))
 
@@ -114,6 +110,16 @@ class GeneratedKernels:
     def mp(self, name, y, p) -> list:
         """Outputs at one state in mpmath arithmetic (y, p: mpf sequences)."""
         return self.functions[name][2](y, p)
+
+
+def read_parameters(layout) -> list | None:
+    """The positions in the model's parameter vector of the entries the generated kernels
+    read (layout ``kernel_parameters``: those the expressions use, and the time slot);
+    None when they read every one."""
+    used = layout.get("kernel_parameters")
+    if used is None or len(used) == len(layout["parameter_names"]):
+        return None
+    return list(used)
 
 
 def _reading(functions, used) -> tuple:

@@ -47,7 +47,7 @@ import numpy as np
 from nhham.errors import InconsistentInitialDataError, InputError
 from nhham.numerics.chetaev import padded, velocities_newton
 from nhham.numerics.kernels import (CompiledRHS, GeneratedKernels, ParameterBlock,
-                                    baumgarte_terms, columns)
+                                    baumgarte_terms, columns, read_parameters)
 from nhham.numerics.nullspace import solve_null_space
 from nhham.numerics.saddle import SingleStateSolver, cond_each, condition
 from nhham.numerics.status import NumericalFailure, Status
@@ -160,9 +160,9 @@ class NumericModel:
         p = np.array(self.parameter_values, dtype=float)
         object.__setattr__(self, "_p", p if p.size else np.zeros(1))
         object.__setattr__(self, "_plist", [float(x) for x in self.parameter_values])
-        # the compiled code reads the parameters its expressions use, in their order
-        used = self.layout.get("kernel_parameters", range(len(self._plist)))
-        object.__setattr__(self, "_block0", ParameterBlock.of([self._plist[i] for i in used]))
+        used = read_parameters(self.layout)   # the compiled code reads these, in order
+        object.__setattr__(self, "_block0", ParameterBlock.of(
+            self._plist if used is None else [self._plist[i] for i in used]))
         ext = None
         if self.compiled is not None and self.path == "saddle":
             ext = self.compiled.ext
